@@ -1,0 +1,25 @@
+//! # fairline
+//!
+//! Shows and repairs the shape quality of surfaces: highlight lines on
+//! triangle meshes and B-spline surfaces, highlight-line fairing, the classic
+//! smoothing family, structure-line fairing of quad meshes and feature
+//! enhancement by vertex flow.
+//!
+//! The library never prints and never exits; every algorithm takes plain data
+//! and an options struct and returns a result plus a report. Data flows one
+//! way: [`io`] → [`mesh`] → [`geom`] → algorithms → [`io`] / [`render`].
+//!
+//! Conventions: f64 everywhere; faces are oriented counter-clockwise seen
+//! from outside, so normals point outward and a sphere of radius r has
+//! principal curvatures k1 = k2 = +1/r and mean curvature H = +1/r.
+
+pub mod bspline;
+pub mod geom;
+pub mod io;
+pub mod mesh;
+pub mod render;
+
+/// A 3-vector of f64 (position, normal, direction).
+pub type Vec3 = glam::DVec3;
+
+pub use mesh::{EdgeId, FaceId, HalfedgeId, MeshError, Soup, SurfaceMesh, VertexId};
