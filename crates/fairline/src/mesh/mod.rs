@@ -140,3 +140,6 @@ pub enum MeshError {
     #[error("mesh too large for 32-bit indices")]
     TooLarge,
 }
+
+#[cfg(test)]
+mod tests;
