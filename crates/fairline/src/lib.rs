@@ -20,11 +20,17 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod bspline;
+pub mod curves;
+pub mod enhance;
+pub mod fair;
 pub mod geom;
+pub mod highlight;
 pub mod io;
 pub mod mesh;
 pub mod render;
 pub mod shapes;
+pub mod smooth;
+pub mod solve;
 
 /// A 3-vector of f64 (position, normal, direction).
 pub type Vec3 = glam::DVec3;
