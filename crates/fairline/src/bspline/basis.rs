@@ -195,9 +195,10 @@ mod tests {
         assert_eq!(find_span(&knots, p, n, 4.0), 6);
         assert_eq!(find_span(&knots, p, n, 5.0), 6);
         // Unclamped with a repeated knot at the domain start.
-        let knots = [0.0, 1.0, 1.0, 2.0, 3.0, 4.0, 5.0];
+        let knots = [0.0, 1.0, 1.0, 1.0, 2.0, 3.0, 4.0];
         assert_eq!(find_span(&knots, 2, 4, 1.0), 3);
         assert_eq!(find_span(&knots, 2, 4, 0.5), 3);
+        assert_eq!(find_span(&knots, 2, 4, 2.0), 3);
     }
 
     #[test]

@@ -27,6 +27,8 @@ mod iges;
 mod json;
 mod surface;
 mod tessellate;
+#[cfg(test)]
+mod tests;
 
 pub use basis::{MAX_DEGREE, MAX_ORDER, find_span};
 pub use iges::{IgesError, IgesImport, IgesSurface, parse_iges, read_iges};

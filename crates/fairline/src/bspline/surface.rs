@@ -103,9 +103,18 @@ pub struct SurfaceBasis {
 /// Relative threshold below which `|Su × Sv|` counts as degenerate.
 const DEGENERATE: f64 = 1e-10;
 
-/// Parameter nudges (fractions of the domain width) tried at a degenerate
-/// point before giving up.
-const NUDGES: [f64; 4] = [1e-7, 1e-5, 1e-3, 1e-2];
+/// Parameter nudges (fractions of the domain width) tried for the normal at
+/// a degenerate point before giving up (the normal's error grows like
+/// ε / nudge, so the first nudge is tiny).
+const NORMAL_NUDGES: [f64; 4] = [1e-7, 1e-5, 1e-3, 1e-2];
+
+/// Curvature needs second derivatives against a well-conditioned frame: its
+/// error grows like ε / ratio² where `ratio = |Su × Sv| / max(|Su|, |Sv|)²`.
+/// Points with a ratio below this are treated as degenerate for curvature.
+const CURVATURE_REGULAR: f64 = 1e-5;
+
+/// Parameter nudges tried for curvature at a (nearly) degenerate point.
+const CURVATURE_NUDGES: [f64; 3] = [1e-4, 1e-3, 1e-2];
 
 fn check_degree(direction: Direction, degree: usize) -> Result<(), BSplineError> {
     if degree == 0 {
@@ -687,24 +696,37 @@ impl BSplineSurface {
         out
     }
 
-    /// Derivatives at `(u, v)`, or at the nearest of a few parameters nudged
-    /// towards the domain centre (by 1e-7, 1e-5, 1e-3, 1e-2 of the domain
-    /// width) if `Su × Sv` degenerates there (a pole or a collapsed edge).
-    /// `None` if every try is degenerate.
-    fn regular_derivatives(&self, u: f64, v: f64) -> Option<(SurfaceDerivatives, Vec3)> {
+    /// Derivatives at `(u, v)`, or at the first of a few parameters nudged
+    /// towards the domain centre (by the fractions `nudges` of the domain
+    /// width) if the point is degenerate, i.e. `|Su × Sv| <= tol · max(|Su|, |Sv|)²`
+    /// (a pole or a collapsed edge). `None` if every try is degenerate.
+    fn regular_derivatives(
+        &self,
+        u: f64,
+        v: f64,
+        tol: f64,
+        nudges: &[f64],
+    ) -> Option<(SurfaceDerivatives, Vec3)> {
+        let regular = |d: SurfaceDerivatives| {
+            let n = d.su.cross(d.sv).length();
+            let m = d.su.length_squared().max(d.sv.length_squared());
+            if n > tol * m {
+                d.normal().map(|nn| (d, nn))
+            } else {
+                None
+            }
+        };
         let (u, v) = self.clamp_parameters(u, v);
-        let d = self.derivatives(u, v);
-        if let Some(n) = d.normal() {
-            return Some((d, n));
+        if let Some(r) = regular(self.derivatives(u, v)) {
+            return Some(r);
         }
         let ([a, b], [c, e]) = (self.domain_u(), self.domain_v());
         let (uc, vc) = self.domain_center();
         let su = if u <= uc { 1.0 } else { -1.0 };
         let sv = if v <= vc { 1.0 } else { -1.0 };
-        NUDGES.iter().find_map(|&t| {
-            let d = self.derivatives(u + su * t * (b - a), v + sv * t * (e - c));
-            d.normal().map(|n| (d, n))
-        })
+        nudges
+            .iter()
+            .find_map(|&t| regular(self.derivatives(u + su * t * (b - a), v + sv * t * (e - c))))
     }
 
     /// Unit normal `Su × Sv / |Su × Sv|` (Nishiyama et al. Eq. (2.4)). At a
@@ -712,15 +734,19 @@ impl BSplineSurface {
     /// a pole) the normal of a nearby parameter (nudged towards the domain
     /// centre) is returned; `None` only if that fails too. Never NaN.
     pub fn normal(&self, u: f64, v: f64) -> Option<Vec3> {
-        self.regular_derivatives(u, v).map(|(_, n)| n)
+        self.regular_derivatives(u, v, DEGENERATE, &NORMAL_NUDGES)
+            .map(|(_, n)| n)
     }
 
     /// Principal curvatures, directions, mean and Gaussian curvature at
     /// `(u, v)` from the first (`E, F, G`) and second (`L, M, N`) fundamental
-    /// forms (see [`SurfaceDerivatives::curvature`]); degenerate points fall
-    /// back to a nearby parameter as in [`BSplineSurface::normal`].
+    /// forms (see [`SurfaceDerivatives::curvature`]). Where the parametrisation
+    /// is (nearly) degenerate, `|Su × Sv| <= 1e-5 · max(|Su|, |Sv|)²`, the
+    /// curvature of a parameter nudged towards the domain centre by 1e-4,
+    /// 1e-3 or 1e-2 of the domain width is returned instead (at a pole, the
+    /// limit is approached to that distance); `None` if all are degenerate.
     pub fn principal_curvatures(&self, u: f64, v: f64) -> Option<Curvature> {
-        self.regular_derivatives(u, v)
+        self.regular_derivatives(u, v, CURVATURE_REGULAR, &CURVATURE_NUDGES)
             .and_then(|(d, _)| d.curvature())
     }
 
@@ -802,11 +828,17 @@ impl SurfaceDerivatives {
 
     /// Curvature from the fundamental forms (do Carmo §3.3):
     /// `E = Su·Su, F = Su·Sv, G = Sv·Sv`, `L = Suu·N, M = Suv·N, N = Svv·N`,
-    /// `K = (LN - M²)/(EG - F²)`, `H = -(EN - 2FM + GL)/(2(EG - F²))`,
-    /// `k1,2 = H ± √(H² - K)`. The minus sign in `H` makes curvature positive
-    /// where the surface bends away from `N` (sphere with outward normal:
-    /// `+1/r`). Principal directions are the eigenvectors of the Weingarten
-    /// map `-I⁻¹ II`. `None` at a degenerate point.
+    /// with `K = (LN - M²)/(EG - F²)` and `H = -(EN - 2FM + GL)/(2(EG - F²))`.
+    /// The minus sign makes curvature positive where the surface bends away
+    /// from `N` (a sphere with outward normal has `+1/r`).
+    ///
+    /// Computed stably: the second fundamental form is expressed in the
+    /// orthonormal tangent frame `e1 = Su/|Su|`, `e2 = N × e1` as the
+    /// symmetric matrix `[[a, b], [b, c]]` (`a = -L/E`, …), whose eigenvalues
+    /// `k1,2 = (a+c)/2 ± √(((a-c)/2)² + b²)` and eigenvectors (angle
+    /// `½ atan2(2b, a - c)` from `e1`) are the principal curvatures and
+    /// directions; this keeps full precision at umbilic points, where
+    /// `H ± √(H² - K)` would lose half the digits. `None` at a degenerate point.
     pub fn curvature(&self) -> Option<Curvature> {
         let normal = self.normal()?;
         let e = self.su.dot(self.su);
@@ -815,38 +847,28 @@ impl SurfaceDerivatives {
         let l = self.suu.dot(normal);
         let m = self.suv.dot(normal);
         let n = self.svv.dot(normal);
-        let det = e * g - f * f;
-        if det <= 0.0 || !det.is_finite() {
+        let su_len = e.sqrt();
+        let perp = g - f * f / e;
+        if !(perp > 0.0 && su_len > 0.0) {
             return None;
         }
-        let gauss = (l * n - m * m) / det;
-        let mean = -(e * n - 2.0 * f * m + g * l) / (2.0 * det);
-        let disc = (mean * mean - gauss).max(0.0).sqrt();
-        let (k1, k2) = (mean + disc, mean - disc);
-        // Weingarten matrix W = -I⁻¹ II in the basis (Su, Sv).
-        let inv = 1.0 / det;
-        let w11 = -(g * l - f * m) * inv;
-        let w12 = -(g * m - f * n) * inv;
-        let w21 = -(e * m - f * l) * inv;
-        let w22 = -(e * n - f * m) * inv;
-        // Eigenvector of k1: rows of (W - k1 I) give (w12, k1 - w11) or (k1 - w22, w21).
-        let c1 = (w12, k1 - w11);
-        let c2 = (k1 - w22, w21);
-        let (a, b) = if c1.0 * c1.0 + c1.1 * c1.1 >= c2.0 * c2.0 + c2.1 * c2.1 {
-            c1
-        } else {
-            c2
-        };
-        let mut d1 = (a * self.su + b * self.sv).normalize_or_zero();
-        if d1 == Vec3::ZERO || disc <= 1e-12 * mean.abs().max(disc) {
-            // Umbilic (or numerically so): any tangent direction will do.
-            d1 = self.su.normalize_or_zero();
-            if d1 == Vec3::ZERO {
-                d1 = self.sv.normalize_or_zero();
-            }
-        }
+        // e1 = x1·(Su, Sv) with x1 = (1/|Su|, 0); e2 = (α, β)·(Su, Sv).
+        let beta = 1.0 / perp.sqrt();
+        let alpha = -f / e * beta;
+        let a = -l / e;
+        let b = -(alpha * l + beta * m) / su_len;
+        let c = -(alpha * alpha * l + 2.0 * alpha * beta * m + beta * beta * n);
+        let mean = 0.5 * (a + c);
+        let half = (0.5 * (a - c)).hypot(b);
+        let (k1, k2) = (mean + half, mean - half);
+        let gauss = a * c - b * b;
+        let e1 = self.su / su_len;
+        let e2 = normal.cross(e1);
+        let theta = 0.5 * (2.0 * b).atan2(a - c);
+        let d1 = theta.cos() * e1 + theta.sin() * e2;
         let d2 = normal.cross(d1);
-        let c = Curvature {
+        let finite = [k1, k2, mean, gauss].iter().all(|x| x.is_finite()) && d1.is_finite();
+        finite.then_some(Curvature {
             k1,
             k2,
             mean,
@@ -854,8 +876,6 @@ impl SurfaceDerivatives {
             d1,
             d2,
             normal,
-        };
-        let finite = [k1, k2, mean, gauss].iter().all(|x| x.is_finite());
-        finite.then_some(c)
+        })
     }
 }
