@@ -28,7 +28,7 @@ mod json;
 mod surface;
 mod tessellate;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 pub use basis::{MAX_DEGREE, MAX_ORDER, find_span};
 pub use iges::{IgesError, IgesImport, IgesSurface, parse_iges, read_iges};

@@ -74,7 +74,7 @@ pub fn tessellate(surface: &BSplineSurface, nu: usize, nv: usize) -> Tessellatio
         }
     }
     // Last resort for normals: area-weighted average of adjacent triangles.
-    if normals.iter().any(|n| *n == Vec3::ZERO) {
+    if normals.contains(&Vec3::ZERO) {
         let mut acc = vec![Vec3::ZERO; count];
         for t in &triangles {
             let [p, q, r] = t.map(|k| positions[k as usize]);
