@@ -998,7 +998,9 @@ mod tests {
             .max();
         assert_eq!(max_degree, Some(5));
         assert_eq!(imp.units.as_deref(), Some("MM"));
-        assert!(imp.trimmed > 0 && imp.trimmed <= 247);
+        // Every surface of this SolidWorks file is the base of a 144.
+        assert_eq!(imp.trimmed, 247);
+        assert!(imp.surfaces.iter().all(|s| s.trimmed && !s.transformed));
         let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
         for s in &imp.surfaces {
             let (a, b) = s.surface.control_bounding_box();

@@ -10,7 +10,7 @@ use std::ops::Range;
 use glam::DVec4;
 use rayon::prelude::*;
 
-use super::basis::{BasisDerivs, MAX_DEGREE, MAX_ORDER, basis_funs, ders_basis_funs, find_span};
+use super::basis::{BasisDerivs, MAX_DEGREE, MAX_ORDER, basis_funs, basis_funs_ders2, find_span};
 use super::{BSplineError, Direction};
 use crate::Vec3;
 
@@ -563,8 +563,8 @@ impl BSplineSurface {
         let span_v = find_span(&self.knots_v, self.degree_v, self.count_v, v);
         let mut du = [[0.0; MAX_ORDER]; 3];
         let mut dv = [[0.0; MAX_ORDER]; 3];
-        ders_basis_funs(span_u, u, self.degree_u, 2, &self.knots_u, &mut du);
-        ders_basis_funs(span_v, v, self.degree_v, 2, &self.knots_v, &mut dv);
+        basis_funs_ders2(span_u, u, self.degree_u, &self.knots_u, &mut du);
+        basis_funs_ders2(span_v, v, self.degree_v, &self.knots_v, &mut dv);
         SurfaceBasis {
             span_u,
             span_v,
