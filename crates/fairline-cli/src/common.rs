@@ -96,10 +96,18 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("expected WxH, got `{s}`"))?;
-    let w: u32 = w.trim().parse().map_err(|_| format!("bad width in `{s}`"))?;
-    let h: u32 = h.trim().parse().map_err(|_| format!("bad height in `{s}`"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad width in `{s}`"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad height in `{s}`"))?;
     if w == 0 || h == 0 || w > 16384 || h > 16384 {
-        return Err(format!("image size `{s}` must be between 1 and 16384 pixels"));
+        return Err(format!(
+            "image size `{s}` must be between 1 and 16384 pixels"
+        ));
     }
     Ok((w, h))
 }
@@ -164,8 +172,8 @@ pub fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<()> {
 
 /// Reads and parses a JSON file; errors name the file (and exit with 2).
 pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+    let text =
+        std::fs::read_to_string(path).map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
     serde_json::from_str(&text).map_err(|e| bad_input(format!("{}: {e}", path.display())))
 }
 

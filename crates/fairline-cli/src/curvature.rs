@@ -19,7 +19,9 @@ pub enum Method {
 /// k1 ≥ k2, signed: a sphere of radius r with outward normals gives +1/r.
 /// Polygon meshes are triangulated first (vertices unchanged).
 #[derive(clap::Args, Debug)]
-#[command(after_help = "Example:\n  fairline curvature spot.ply -o spot-curvature.ply --method rusinkiewicz --report r.json")]
+#[command(
+    after_help = "Example:\n  fairline curvature spot.ply -o spot-curvature.ply --method rusinkiewicz --report r.json"
+)]
 pub struct Args {
     /// Input mesh.
     pub mesh: PathBuf,
@@ -64,7 +66,8 @@ pub fn run(args: Args) -> Result<()> {
     });
     let mean = c.mean();
     let gauss = c.gauss();
-    let comp = |f: fn(&fairline::Vec3) -> f64, v: &[fairline::Vec3]| v.iter().map(f).collect::<Vec<f64>>();
+    let comp =
+        |f: fn(&fairline::Vec3) -> f64, v: &[fairline::Vec3]| v.iter().map(f).collect::<Vec<f64>>();
     let cols: Vec<(&str, Vec<f64>)> = vec![
         ("nx", comp(|v| v.x, &c.normals)),
         ("ny", comp(|v| v.y, &c.normals)),

@@ -45,7 +45,10 @@ pub fn run(args: Args) -> Result<()> {
     println!("vertices            {}", info.vertices);
     println!("faces               {} ({})", info.faces, sizes.join(", "));
     println!("edges               {}", info.edges);
-    println!("boundary edges      {} in {} loops", info.boundary_edges, info.boundary_loops);
+    println!(
+        "boundary edges      {} in {} loops",
+        info.boundary_edges, info.boundary_loops
+    );
     println!("components          {}", info.components);
     match info.genus {
         Some(g) => println!("genus               {g}"),
@@ -54,7 +57,12 @@ pub fn run(args: Args) -> Result<()> {
     println!("euler               {}", info.euler_characteristic);
     println!(
         "bbox                [{:.6}, {:.6}, {:.6}] – [{:.6}, {:.6}, {:.6}]",
-        info.bbox.min[0], info.bbox.min[1], info.bbox.min[2], info.bbox.max[0], info.bbox.max[1], info.bbox.max[2]
+        info.bbox.min[0],
+        info.bbox.min[1],
+        info.bbox.min[2],
+        info.bbox.max[0],
+        info.bbox.max[1],
+        info.bbox.max[2]
     );
     println!(
         "edge length         min {:.6}  mean {:.6}  max {:.6}",
@@ -63,10 +71,16 @@ pub fn run(args: Args) -> Result<()> {
     println!("area                {:.6}", info.area);
     let defects = [
         ("non-manifold edges", info.non_manifold_edges),
-        ("face incidences on non-manifold edges", info.non_manifold_edge_incidences),
+        (
+            "face incidences on non-manifold edges",
+            info.non_manifold_edge_incidences,
+        ),
         ("duplicate faces", info.duplicate_faces),
         ("non-manifold vertices", info.non_manifold_vertices),
-        ("inconsistently oriented edges", info.inconsistently_oriented_edges),
+        (
+            "inconsistently oriented edges",
+            info.inconsistently_oriented_edges,
+        ),
         ("invalid faces", info.invalid_faces),
         ("degenerate faces", info.degenerate_faces),
         ("isolated vertices", info.isolated_vertices),

@@ -44,7 +44,11 @@ fn main() {
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
-            let code = if e.use_stderr() { common::EXIT_BAD_INPUT } else { 0 };
+            let code = if e.use_stderr() {
+                common::EXIT_BAD_INPUT
+            } else {
+                0
+            };
             let _ = e.print();
             std::process::exit(code);
         }

@@ -20,7 +20,9 @@ fn tmp(name: &str) -> PathBuf {
 }
 
 fn data(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data").join(rel);
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data")
+        .join(rel);
     if p.exists() {
         Some(p)
     } else {
@@ -56,8 +58,18 @@ fn info_reports_contract_keys_and_defects() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     for key in [
-        "vertices", "faces", "face_sizes", "edges", "boundary_edges", "boundary_loops",
-        "non_manifold_edges", "components", "genus", "degenerate_faces", "bbox", "edge_length",
+        "vertices",
+        "faces",
+        "face_sizes",
+        "edges",
+        "boundary_edges",
+        "boundary_loops",
+        "non_manifold_edges",
+        "components",
+        "genus",
+        "degenerate_faces",
+        "bbox",
+        "edge_length",
     ] {
         assert!(v.get(key).is_some(), "missing key {key}");
     }
@@ -66,7 +78,10 @@ fn info_reports_contract_keys_and_defects() {
     assert_eq!(v["genus"], 0);
     // a non-manifold file is reported, not refused
     let nm = d.join("nm.obj");
-    write(&nm, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 1 1 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n");
+    write(
+        &nm,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 1 1 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
+    );
     let o = run(&["info", nm.to_str().unwrap(), "--json"]);
     assert!(o.status.success());
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -87,7 +102,12 @@ fn bad_input_exits_with_2_and_names_the_problem() {
     let f = d.join("broken.obj");
     write(&f, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
     let out = d.join("out.ply");
-    let o = run(&["curvature", f.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    let o = run(&[
+        "curvature",
+        f.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("broken.obj"), "{err}");
@@ -97,11 +117,21 @@ fn bad_input_exits_with_2_and_names_the_problem() {
     assert_eq!(o.status.code(), Some(2));
     // garbage PLY
     let g = d.join("garbage.ply");
-    write(&g, "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty float x\nend_header\n");
+    write(
+        &g,
+        "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty float x\nend_header\n",
+    );
     let o = run(&["info", g.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
     // bad vector syntax is a usage error
-    let o = run(&["render", f.to_str().unwrap(), "--png", "x.png", "--view", "1,2"]);
+    let o = run(&[
+        "render",
+        f.to_str().unwrap(),
+        "--png",
+        "x.png",
+        "--view",
+        "1,2",
+    ]);
     assert_eq!(o.status.code(), Some(2));
 }
 
@@ -109,7 +139,10 @@ fn bad_input_exits_with_2_and_names_the_problem() {
 fn convert_keeps_quads_and_refuses_to_overwrite_the_input() {
     let d = tmp("convert");
     let f = d.join("quad.obj");
-    write(&f, "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.1 0.2 0.30000000000000004\nf 1 2 3 4\nf 1 4 5\n");
+    write(
+        &f,
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.1 0.2 0.30000000000000004\nf 1 2 3 4\nf 1 4 5\n",
+    );
     for ext in ["ply", "off", "obj"] {
         let out = d.join(format!("quad-out.{ext}"));
         let o = run(&["convert", f.to_str().unwrap(), out.to_str().unwrap()]);
@@ -117,7 +150,10 @@ fn convert_keeps_quads_and_refuses_to_overwrite_the_input() {
         let o = run(&["info", out.to_str().unwrap(), "--json"]);
         let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         assert_eq!(v["face_sizes"]["4"], 1, "{ext}");
-        assert_eq!(v["bbox"]["max"][2], 0.30000000000000004, "{ext}: exact coordinates");
+        assert_eq!(
+            v["bbox"]["max"][2], 0.30000000000000004,
+            "{ext}: exact coordinates"
+        );
     }
     let before = std::fs::read(&f).unwrap();
     let o = run(&["convert", f.to_str().unwrap(), f.to_str().unwrap()]);
@@ -134,7 +170,11 @@ fn curvature_of_a_sphere_file_is_one_over_r() {
     let out = d.join("k.ply");
     let rep = d.join("r.json");
     let o = run(&[
-        "curvature", f.to_str().unwrap(), "-o", out.to_str().unwrap(), "--report",
+        "curvature",
+        f.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--report",
         rep.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -143,15 +183,26 @@ fn curvature_of_a_sphere_file_is_one_over_r() {
     let names: Vec<&str> = props.iter().map(|(n, _)| n.as_str()).collect();
     assert_eq!(
         names,
-        ["x", "y", "z", "nx", "ny", "nz", "k1", "k2", "mean", "gauss", "d1x", "d1y", "d1z", "d2x", "d2y", "d2z"]
+        [
+            "x", "y", "z", "nx", "ny", "nz", "k1", "k2", "mean", "gauss", "d1x", "d1y", "d1z",
+            "d2x", "d2y", "d2z"
+        ]
     );
     let k1 = &props[6].1;
     assert!(k1.iter().all(|k| (k - 0.5).abs() < 1e-6));
-    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(rep).unwrap()).unwrap();
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(rep).unwrap()).unwrap();
     assert_eq!(r["command"], "curvature");
     assert!(r["time_s"].as_f64().unwrap() >= 0.0);
     // meyer too
-    let o = run(&["curvature", f.to_str().unwrap(), "-o", out.to_str().unwrap(), "--method", "meyer"]);
+    let o = run(&[
+        "curvature",
+        f.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--method",
+        "meyer",
+    ]);
     assert!(o.status.success());
 }
 
@@ -162,8 +213,16 @@ fn render_writes_a_png_of_the_requested_size() {
     fairline::io::write_mesh(&f, &fairline::shapes::torus(1.0, 0.3, 40, 16)).unwrap();
     let png = d.join("t.png");
     let o = run(&[
-        "render", f.to_str().unwrap(), "--png", png.to_str().unwrap(), "--scalar", "gauss",
-        "--size", "320x200", "--view", "0,-1,-1",
+        "render",
+        f.to_str().unwrap(),
+        "--png",
+        png.to_str().unwrap(),
+        "--scalar",
+        "gauss",
+        "--size",
+        "320x200",
+        "--view",
+        "0,-1,-1",
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let img = fairline::render::Image::decode_png(&std::fs::read(&png).unwrap()).unwrap();
@@ -179,10 +238,16 @@ fn demo_writes_pictures_report_and_index() {
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["command"], "demo");
-    let err = r["sections"]["Sphere"]["rusinkiewicz_max_abs_error_k1"].as_f64().unwrap();
+    let err = r["sections"]["Sphere"]["rusinkiewicz_max_abs_error_k1"]
+        .as_f64()
+        .unwrap();
     assert!(err < 1e-6, "sphere curvature error {err}");
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
-    for img in ["sphere-mean-curvature.png", "torus-gauss.png", "quad-structure-lines.png"] {
+    for img in [
+        "sphere-mean-curvature.png",
+        "torus-gauss.png",
+        "quad-structure-lines.png",
+    ] {
         assert!(html.contains(img));
         assert!(out.join(img).exists());
     }

@@ -37,7 +37,9 @@ fn main() {
         fairline::io::write_ply_with_vertex_properties(&path, &soup, &[]).expect("write ply");
         let mb = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0) as f64 / 1e6;
         let t_read = median_secs(runs, || fairline::io::read_soup(&path).expect("read"));
-        let t_build = median_secs(runs, || fairline::SurfaceMesh::from_soup(&soup).expect("mesh"));
+        let t_build = median_secs(runs, || {
+            fairline::SurfaceMesh::from_soup(&soup).expect("mesh")
+        });
         let t_normals = median_secs(runs, || geom::vertex_normals(&mesh));
         let t_cot = median_secs(runs, || geom::cotangent_laplacian(&mesh));
         let t_areas = median_secs(runs, || geom::mixed_vertex_areas(&mesh));
