@@ -13,11 +13,25 @@
 //! from outside, so normals point outward and a sphere of radius r has
 //! principal curvatures k1 = k2 = +1/r and mean curvature H = +1/r.
 
+// `!(x > 0.0)` is the deliberate NaN-safe guard before a division: it is
+// true for NaN as well as for non-positive values.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// Numeric kernels index several parallel arrays with one loop variable.
+#![allow(clippy::needless_range_loop)]
+
 pub mod bspline;
+pub mod curves;
+pub mod enhance;
+pub mod fair;
 pub mod geom;
+pub mod highlight;
 pub mod io;
 pub mod mesh;
+// pub mod picture;
 pub mod render;
+pub mod shapes;
+pub mod smooth;
+pub mod solve;
 
 /// A 3-vector of f64 (position, normal, direction).
 pub type Vec3 = glam::DVec3;

@@ -1,1 +1,42 @@
-//! placeholder
+//! Differential geometry of meshes: normals, areas, Laplacians, curvature,
+//! triangle quality, energies and volume.
+//!
+//! One concept, one place: every algorithm of fairline takes these from here.
+//! Conventions: faces are counter-clockwise seen from outside; normals point
+//! outward; a sphere of radius r has k1 = k2 = H = +1/r and K = 1/r².
+//! Degenerate faces (zero area) contribute nothing to sums and are never
+//! divided by; a vertex whose normal cannot be defined gets the zero vector.
+
+mod areas;
+mod curvature;
+mod laplace;
+mod measures;
+mod normals;
+
+pub use areas::{barycentric_vertex_areas, face_areas, mixed_corner_areas, mixed_vertex_areas};
+pub use curvature::{
+    CurvatureMethod, PrincipalCurvatures, gaussian_curvature, mean_curvature,
+    mean_curvature_normals, principal_curvatures, principal_curvatures_meyer,
+    principal_curvatures_rusinkiewicz,
+};
+pub use laplace::{
+    LaplaceWeights, cotangent_laplacian, cotangents, edge_length_laplacian, halfedge_weights,
+    laplacian, laplacian_from_weights, uniform_laplacian,
+};
+pub use measures::{
+    corner_angles, edge_lengths, mean_edge_length, surface_area, triangle_qualities,
+    triangle_quality, volume, willmore_energy,
+};
+pub use normals::{face_normals, triangle_normal_area, vertex_normals, vertex_normals_max};
+
+/// Relative threshold below which a triangle counts as degenerate: its double
+/// area is at most `DEGENERATE_RELATIVE_AREA` times the sum of its squared
+/// edge lengths.
+pub const DEGENERATE_RELATIVE_AREA: f64 = 1e-14;
+
+/// Largest magnitude a cotangent is allowed to take (angles below about
+/// 1e-6 rad); keeps near-degenerate triangles from dominating a Laplacian.
+pub const COTANGENT_LIMIT: f64 = 1e6;
+
+#[cfg(test)]
+mod tests;

@@ -2,10 +2,12 @@
 //! topology queries, triangulation of polygons and structure lines of quad
 //! meshes.
 
+mod inspect;
 mod soup;
 mod surface_mesh;
 mod topology;
 
+pub use inspect::{BoundingBox, MeshInfo, Stats, inspect};
 pub use soup::{Soup, bounding_box};
 pub use surface_mesh::{BuildNotes, FaceHalfedges, Outgoing, SurfaceMesh};
 pub use topology::{
@@ -140,3 +142,6 @@ pub enum MeshError {
     #[error("mesh too large for 32-bit indices")]
     TooLarge,
 }
+
+#[cfg(test)]
+mod tests;

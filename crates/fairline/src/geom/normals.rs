@@ -1,0 +1,128 @@
+//! Face and vertex normals.
+
+use crate::Vec3;
+use crate::mesh::{FaceId, SurfaceMesh, VertexId};
+use rayon::prelude::*;
+
+/// Unit normal and area of the triangle (a, b, c), counter-clockwise.
+/// A degenerate triangle returns the zero vector and its (tiny) area.
+#[inline]
+pub fn triangle_normal_area(a: Vec3, b: Vec3, c: Vec3) -> (Vec3, f64) {
+    let n = (b - a).cross(c - a);
+    let len = n.length();
+    let scale = (b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared();
+    if len > super::DEGENERATE_RELATIVE_AREA * scale && len.is_finite() {
+        (n / len, 0.5 * len)
+    } else {
+        (Vec3::ZERO, 0.5 * len.min(f64::MAX))
+    }
+}
+
+/// Area vector of a face: half the Newell vector, i.e. area times unit
+/// normal for planar polygons (the cross product for triangles).
+#[inline]
+pub(crate) fn face_area_vector(mesh: &SurfaceMesh, f: FaceId) -> Vec3 {
+    let p = mesh.positions();
+    let h0 = mesh.face_halfedge(f);
+    let h1 = mesh.next(h0);
+    let h2 = mesh.next(h1);
+    if mesh.next(h2) == h0 {
+        let [a, b, c] = mesh.triangle(f).map(|v| p[v.idx()]);
+        return 0.5 * (b - a).cross(c - a);
+    }
+    // Newell: sum of cross products of consecutive vertices about the centroid.
+    let mut centroid = Vec3::ZERO;
+    let mut n = 0.0;
+    for v in mesh.face_vertices(f) {
+        centroid += p[v.idx()];
+        n += 1.0;
+    }
+    centroid /= n;
+    let mut s = Vec3::ZERO;
+    for h in mesh.face_halfedges(f) {
+        let a = p[mesh.from_vertex(h).idx()] - centroid;
+        let b = p[mesh.to_vertex(h).idx()] - centroid;
+        s += a.cross(b);
+    }
+    0.5 * s
+}
+
+/// Unit face normals (Newell normal for polygons); zero for degenerate faces.
+pub fn face_normals(mesh: &SurfaceMesh) -> Vec<Vec3> {
+    (0..mesh.face_count() as u32)
+        .into_par_iter()
+        .map(|f| face_area_vector(mesh, FaceId(f)).normalize_or_zero())
+        .collect()
+}
+
+/// Area-weighted vertex normals, Yong et al. Eq. (3):
+/// N_V = Σ A_T N_T / ‖Σ A_T N_T‖ over the faces T around V.
+///
+/// When the weighted sum vanishes (a vertex on a fold or only degenerate
+/// faces) the unweighted sum of unit face normals is tried; if that vanishes
+/// too, the normal is the zero vector. Isolated vertices get zero.
+pub fn vertex_normals(mesh: &SurfaceMesh) -> Vec<Vec3> {
+    let area_vectors: Vec<Vec3> = (0..mesh.face_count() as u32)
+        .into_par_iter()
+        .map(|f| face_area_vector(mesh, FaceId(f)))
+        .collect();
+    (0..mesh.vertex_count() as u32)
+        .into_par_iter()
+        .map(|v| {
+            let mut s = Vec3::ZERO;
+            for f in mesh.vertex_faces(VertexId(v)) {
+                s += area_vectors[f.idx()];
+            }
+            let n = s.normalize_or_zero();
+            if n != Vec3::ZERO {
+                return n;
+            }
+            let mut s = Vec3::ZERO;
+            for f in mesh.vertex_faces(VertexId(v)) {
+                s += area_vectors[f.idx()].normalize_or_zero();
+            }
+            s.normalize_or_zero()
+        })
+        .collect()
+}
+
+/// Vertex normals with the weights of Max (1999), "Weights for computing
+/// vertex normals from facet normals": N_V ∝ Σ (e1 × e2) / (|e1|² |e2|²)
+/// over the corners at V, with e1, e2 the two edges leaving V in that
+/// corner. Exact for vertices on a sphere, hence used by the curvature
+/// estimators (as trimesh2 does). Falls back to [`vertex_normals`] where the
+/// sum vanishes. Polygon corners are treated like triangle corners.
+pub fn vertex_normals_max(mesh: &SurfaceMesh) -> Vec<Vec3> {
+    let p = mesh.positions();
+    let fallback = std::sync::OnceLock::new();
+    let out: Vec<Vec3> = (0..mesh.vertex_count() as u32)
+        .into_par_iter()
+        .map(|v| {
+            let v = VertexId(v);
+            let x = p[v.idx()];
+            let mut s = Vec3::ZERO;
+            for h in mesh.outgoing(v) {
+                if mesh.is_boundary_halfedge(h) {
+                    continue;
+                }
+                let e1 = p[mesh.to_vertex(h).idx()] - x;
+                let e2 = p[mesh.from_vertex(mesh.prev(h)).idx()] - x;
+                let d = e1.length_squared() * e2.length_squared();
+                if d > 0.0 {
+                    s += e1.cross(e2) / d;
+                }
+            }
+            s.normalize_or_zero()
+        })
+        .collect();
+    out.iter()
+        .enumerate()
+        .map(|(i, n)| {
+            if *n != Vec3::ZERO || mesh.is_isolated(VertexId(i as u32)) {
+                *n
+            } else {
+                fallback.get_or_init(|| vertex_normals(mesh))[i]
+            }
+        })
+        .collect()
+}

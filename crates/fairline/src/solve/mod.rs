@@ -1,0 +1,28 @@
+//! Sparse linear solvers shared by every algorithm: sparse Cholesky with a
+//! reusable symbolic factorisation, normal equations of sparse least-squares
+//! problems, and triplet assembly.
+//!
+//! All matrices are faer `SparseColMat<usize, f64>`.
+
+mod cholesky;
+
+pub use cholesky::{CholeskySolver, least_squares, normal_matrix, sparse_from_triplets};
+
+use thiserror::Error;
+
+/// Why a linear solve failed.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum SolveError {
+    /// The matrix is not (numerically) symmetric positive definite.
+    #[error("matrix is not symmetric positive definite (Cholesky failed)")]
+    NotPositiveDefinite,
+    /// Sizes do not match.
+    #[error("dimension mismatch: {0}")]
+    Dimension(String),
+    /// The solution contains NaN or infinity.
+    #[error("the solution is not finite")]
+    NonFinite,
+    /// Out of memory or another failure inside faer.
+    #[error("sparse solver failure: {0}")]
+    Backend(String),
+}
