@@ -9,9 +9,6 @@
 //! of control points in that direction, and the parameter domain is
 //! `[knots[degree], knots[count]]`. The knot vector may be clamped or unclamped.
 
-// Index loops mirror the algorithms of Piegl & Tiller term by term.
-#![allow(clippy::needless_range_loop)]
-
 /// Largest supported degree in either direction (the size of the stack buffers).
 pub const MAX_DEGREE: usize = 15;
 

@@ -30,7 +30,7 @@ use crate::Vec3;
 #[derive(Debug, Error)]
 pub enum IgesError {
     /// The file could not be read.
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {}: {source}", path.display())]
     Read {
         /// The file.
         path: PathBuf,

@@ -10,7 +10,6 @@
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use serde_json::{Map, Value};
 use thiserror::Error;
@@ -22,7 +21,7 @@ use crate::Vec3;
 #[derive(Debug, Error)]
 pub enum SurfaceJsonError {
     /// The file could not be read.
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {}: {source}", path.display())]
     Read {
         /// The file.
         path: PathBuf,
@@ -30,12 +29,12 @@ pub enum SurfaceJsonError {
         source: std::io::Error,
     },
     /// The file could not be written.
-    #[error("cannot write {path}: {source}")]
+    #[error("cannot write {}: {source}", path.display())]
     Write {
         /// The file.
         path: PathBuf,
-        /// The OS error.
-        source: std::io::Error,
+        /// The error of [`crate::io::atomic_write`].
+        source: crate::io::IoError,
     },
     /// The text is not JSON (the message carries line and column).
     #[error("invalid JSON: {0}")]
@@ -136,24 +135,24 @@ fn surface_from_object(
             })
             .collect()
     };
-    let rows = |name: &str, v: &Value| -> Result<Vec<Value>, SurfaceJsonError> {
+    fn rows<'a>(k: usize, name: &str, v: &'a Value) -> Result<&'a [Value], SurfaceJsonError> {
         match v {
-            Value::Array(a) => Ok(a.clone()),
+            Value::Array(a) => Ok(a),
             _ => Err(field_error(k, name, "expected an array of rows")),
         }
-    };
+    }
     let degree_u = degree("degree_u")?;
     let degree_v = degree("degree_v")?;
     let knots_u = numbers("knots_u", get("knots_u")?)?;
     let knots_v = numbers("knots_v", get("knots_v")?)?;
     let mut net = Vec::new();
-    for (i, row) in rows("control_points", get("control_points")?)?
+    for (i, row) in rows(k, "control_points", get("control_points")?)?
         .iter()
         .enumerate()
     {
         let name = format!("control_points[{i}]");
         let mut r = Vec::new();
-        for (j, p) in rows(&name, row)?.iter().enumerate() {
+        for (j, p) in rows(k, &name, row)?.iter().enumerate() {
             let name = format!("control_points[{i}][{j}]");
             let xyz = numbers(&name, p)?;
             if xyz.len() != 3 {
@@ -171,7 +170,7 @@ fn surface_from_object(
         None | Some(Value::Null) => None,
         Some(w) => {
             let mut out = Vec::new();
-            for (i, row) in rows("weights", w)?.iter().enumerate() {
+            for (i, row) in rows(k, "weights", w)?.iter().enumerate() {
                 out.push(numbers(&format!("weights[{i}]"), row)?);
             }
             Some(out)
@@ -241,39 +240,13 @@ pub fn write_surfaces_json(
     write_atomic(path.as_ref(), surfaces_to_json(surfaces).as_bytes())
 }
 
-/// Writes `bytes` to a temporary file next to `path`, syncs it and renames it
-/// over `path`; on failure the temporary file is removed and `path` untouched.
+/// Writes `bytes` through [`crate::io::atomic_write`] (temporary file in the
+/// same directory, synced, then renamed; nothing is left behind on failure).
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SurfaceJsonError> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let err = |source| SurfaceJsonError::Write {
+    crate::io::atomic_write(path, |w| w.write_all(bytes)).map_err(|e| SurfaceJsonError::Write {
         path: path.to_path_buf(),
-        source,
-    };
-    let name = path
-        .file_name()
-        .ok_or_else(|| err(std::io::Error::other("the path has no file name")))?;
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let tmp = dir.join(format!(
-        ".{}.{}.{}.tmp",
-        name.to_string_lossy(),
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let result = (|| {
-        let mut f = fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        drop(f);
-        fs::rename(&tmp, path)
-    })();
-    if let Err(e) = result {
-        let _ = fs::remove_file(&tmp);
-        return Err(err(e));
-    }
-    Ok(())
+        source: e,
+    })
 }
 
 #[cfg(test)]

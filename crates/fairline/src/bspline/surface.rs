@@ -2,9 +2,6 @@
 //! geometry (Piegl & Tiller A3.5, A3.6, A4.3, A4.4; do Carmo §3.3 for the
 //! fundamental forms).
 
-// Index loops mirror the algorithms of Piegl & Tiller term by term.
-#![allow(clippy::needless_range_loop)]
-
 use std::ops::Range;
 
 use glam::DVec4;
