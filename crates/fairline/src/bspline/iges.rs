@@ -333,8 +333,40 @@ impl<'a> Iges<'a> {
     fn parameters(&self, k: usize) -> Result<Vec<(Param, usize)>, IgesError> {
         let e = &self.dir[k];
         let first = e.param_start - 1;
-        let count = e.param_lines.max(1);
-        if first < 0 || (first + count) as usize > self.params.len() {
+        if first < 0 || first as usize >= self.params.len() {
+            return Err(self.entity_error(
+                k,
+                e.line,
+                format!(
+                    "parameter data pointer {} lies outside the P section ({} records)",
+                    e.param_start,
+                    self.params.len()
+                ),
+            ));
+        }
+        // The records of this entity: those whose back-pointer (columns
+        // 66–72) names it; if the writer left no usable back-pointers, the
+        // directory's line count (field 14).
+        let de = (2 * k + 1) as i64;
+        let back = |r: &Record<'_>| -> Option<i64> {
+            std::str::from_utf8(&r.bytes[64..72])
+                .ok()?
+                .trim()
+                .parse()
+                .ok()
+        };
+        let first = first as usize;
+        let by_pointer = self.params[first..]
+            .iter()
+            .take_while(|r| back(r) == Some(de))
+            .count();
+        let count = if by_pointer > 0 {
+            by_pointer as i64
+        } else {
+            e.param_lines.max(1)
+        };
+        let first = first as i64;
+        if (first + count) as usize > self.params.len() {
             return Err(self.entity_error(
                 k,
                 e.line,
@@ -896,6 +928,15 @@ mod tests {
         assert_eq!(b.surface.weight(0, 1), 2.0);
         assert_eq!(b.surface.control_point(2, 1), Vec3::new(2.0, 1.0, 0.0));
         assert_eq!(b.surface.control_point(1, 1), Vec3::new(1.0, 1.0, 1.0));
+        // A wrong parameter line count (field 14) is overridden by the
+        // records' back-pointers.
+        let wrong = text.replacen(
+            "     128       0       0       3       0",
+            "     128       0       0       1       0",
+            1,
+        );
+        assert_ne!(wrong, text);
+        assert_eq!(parse_iges(&wrong).unwrap(), imp);
         // CRLF line ends and custom delimiters give the same result.
         assert_eq!(parse_iges(&text.replace('\n', "\r\n")).unwrap(), imp);
         let custom = sample_file(
