@@ -928,6 +928,12 @@ mod tests {
         assert_eq!(b.surface.weight(0, 1), 2.0);
         assert_eq!(b.surface.control_point(2, 1), Vec3::new(2.0, 1.0, 0.0));
         assert_eq!(b.surface.control_point(1, 1), Vec3::new(1.0, 1.0, 1.0));
+        // A Hollerith string continued on the next G record ("2HM" + "M,").
+        let shifted = GLOBAL.replacen("4Htest", "6Htest12", 1);
+        assert_eq!(&shifted[70..72], "HM");
+        let other = parse_iges(&sample_file(&shifted)).unwrap();
+        assert_eq!(other.units.as_deref(), Some("MM"));
+        assert_eq!(other.surfaces, imp.surfaces);
         // A wrong parameter line count (field 14) is overridden by the
         // records' back-pointers.
         let wrong = text.replacen(
@@ -1057,6 +1063,16 @@ mod tests {
             let (a, b) = s.surface.control_bounding_box();
             assert!(p.cmpge(a - tol).all() && p.cmple(b + tol).all());
             assert!(s.surface.derivatives(u, v).point.distance(p) <= tol);
+            // Tessellation and curvature never produce NaN.
+            let t = crate::bspline::tessellate(&s.surface, 6, 6);
+            assert!(t.positions.iter().all(|p| p.is_finite()));
+            assert!(t.normals.iter().all(|n| n.is_finite()));
+            assert!(t.normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-9));
+            for &[u, v] in &t.uv {
+                if let Some(c) = s.surface.principal_curvatures(u, v) {
+                    assert!(c.k1.is_finite() && c.k2.is_finite() && c.k1 >= c.k2);
+                }
+            }
         }
     }
 }

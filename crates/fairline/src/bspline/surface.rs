@@ -295,11 +295,11 @@ impl BSplineSurface {
         if count_u == 0 || count_v == 0 {
             return Err(BSplineError::EmptyControlNet);
         }
-        if points.len() != count_u * count_v {
+        if count_u.checked_mul(count_v) != Some(points.len()) {
             return Err(BSplineError::ControlPointCount {
                 count_u,
                 count_v,
-                expected: count_u * count_v,
+                expected: count_u.saturating_mul(count_v),
                 found: points.len(),
             });
         }

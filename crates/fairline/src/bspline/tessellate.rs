@@ -23,7 +23,8 @@ pub struct Tessellation {
 }
 
 /// Samples `surface` on a uniform grid of `nu × nv` vertices spanning its
-/// whole domain (values below 2 are raised to 2) and splits every grid cell
+/// whole domain (values below 2 are raised to 2, values above 65535 lowered
+/// to 65535 so that vertex indices fit in `u32`) and splits every grid cell
 /// into two triangles oriented consistently with `Su × Sv`: cell corners
 /// `a=(i,j), b=(i+1,j), c=(i+1,j+1), d=(i,j+1)` give `[a,b,c]` and `[a,c,d]`.
 ///
@@ -31,8 +32,8 @@ pub struct Tessellation {
 /// Tiller A3.6/A4.4); rows are evaluated in parallel with rayon and the
 /// output is deterministic.
 pub fn tessellate(surface: &BSplineSurface, nu: usize, nv: usize) -> Tessellation {
-    let nu = nu.max(2);
-    let nv = nv.max(2);
+    let nu = nu.clamp(2, 65535);
+    let nv = nv.clamp(2, 65535);
     let [u0, u1] = surface.domain_u();
     let [v0, v1] = surface.domain_v();
     let param = |t0: f64, t1: f64, k: usize, n: usize| {
