@@ -187,7 +187,11 @@ impl SurfaceMesh {
                     let g = other.0 as usize;
                     // Consistent when the two faces traverse the edge in
                     // opposite directions after flipping.
-                    let want = if me.1 == other.1 { 1 - flip[f] } else { flip[f] };
+                    let want = if me.1 == other.1 {
+                        1 - flip[f]
+                    } else {
+                        flip[f]
+                    };
                     if flip[g] == 2 {
                         flip[g] = want;
                         if want == 1 {
@@ -228,7 +232,11 @@ impl SurfaceMesh {
                     (soup.indices[s + k], s + k)
                 };
                 let e = corner_edge[c] as usize;
-                let h = if edge_lo_hi[e].0 == a { 2 * e } else { 2 * e + 1 };
+                let h = if edge_lo_hi[e].0 == a {
+                    2 * e
+                } else {
+                    2 * e + 1
+                };
                 if he_face[h] != NONE {
                     // cannot happen after orientation unless two faces share a
                     // directed edge, which orientation would have reported

@@ -6,7 +6,7 @@ use crate::Vec3;
 pub const DEFAULT_FOV_Y_DEG: f64 = 30.0;
 
 /// Fraction of the half-width/height left free around a framed object.
-const MARGIN: f64 = 0.06;
+pub(crate) const MARGIN: f64 = 0.06;
 
 /// How a [`Camera`] projects onto the image plane.
 #[derive(Clone, Copy, Debug, PartialEq)]

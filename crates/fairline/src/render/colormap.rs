@@ -251,12 +251,15 @@ impl Legend {
     ) {
         let pad = (4 * scale) as i64;
         let text_h = Image::text_height(scale) as i64;
-        let avail = h as i64 - 2 * pad - text_h - pad - Image::cap_height(scale) as i64;
+        let cap = Image::cap_height(scale) as i64;
+        // Gap between title and bar leaves room for the top tick label.
+        let gap = pad + cap;
+        let avail = h as i64 - 2 * pad - text_h - gap - cap;
         let bar_h = (avail.min((img.height as f64 * 0.6) as i64)).max(8);
-        let top = y + (h as i64 - bar_h - text_h - pad) / 2 + text_h + pad;
+        let top = y + (h as i64 - bar_h - text_h - gap) / 2 + text_h + gap;
         let bar_x = x + pad;
         let bar_w = Self::bar_width(scale) as i64;
-        img.draw_text(bar_x, top - text_h - pad, &self.title, text_colour, scale);
+        img.draw_text(bar_x, top - text_h - gap, &self.title, text_colour, scale);
         for r in 0..bar_h {
             let t = 1.0 - r as f64 / (bar_h - 1).max(1) as f64;
             let c = linear_to_srgb8(self.colormap.map(t));
@@ -268,7 +271,6 @@ impl Legend {
         img.fill_rect(bar_x - 1, top + bar_h, bar_w as u32 + 2, 1, frame);
         img.fill_rect(bar_x - 1, top - 1, 1, bar_h as u32 + 2, frame);
         img.fill_rect(bar_x + bar_w, top - 1, 1, bar_h as u32 + 2, frame);
-        let cap = Image::cap_height(scale) as i64;
         for (i, label) in self.labels().iter().enumerate() {
             let ty = top + (bar_h - 1) * i as i64 / 2;
             img.fill_rect(bar_x + bar_w, ty, 2 * scale, scale.max(1), frame);

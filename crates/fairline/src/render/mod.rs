@@ -238,8 +238,10 @@ pub struct RenderOptions {
     pub lighting: Lighting,
     /// Parallel instead of perspective projection (when `camera` is `None`).
     pub orthographic: bool,
-    /// Explicit camera; `None` frames the scene's bounding box with
-    /// [`Camera::framing`] (its `aspect` is replaced by the drawing area's).
+    /// Explicit camera (its `aspect` is replaced by the drawing area's);
+    /// `None` aims a [`Camera::framing`] camera at the centre of the scene's
+    /// bounding box and then moves it as close as the scene's points allow,
+    /// so the object fills the picture up to a small margin.
     pub camera: Option<Camera>,
     /// How far (as a fraction of the scene's bounding-box diagonal) a
     /// polyline or marker may lie behind the surface and still be drawn.
@@ -341,10 +343,14 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Image, RenderError>
                 c.aspect = aspect;
                 c
             }
-            None if opts.orthographic => {
-                Camera::framing_orthographic(lo, hi, opts.view_dir, opts.up, aspect)
+            None => {
+                let c = if opts.orthographic {
+                    Camera::framing_orthographic(lo, hi, opts.view_dir, opts.up, aspect)
+                } else {
+                    Camera::framing(lo, hi, opts.view_dir, opts.up, aspect)
+                };
+                tighten(c, scene, 0.5 * (lo + hi))
             }
-            None => Camera::framing(lo, hi, opts.view_dir, opts.up, aspect),
         };
         let diag = (hi - lo).length();
         let view = raster::render_view(scene, opts, &camera, rw, rh, diag);
@@ -377,9 +383,96 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Image, RenderError>
     Ok(img)
 }
 
-/// Font scale for an image size: 1 up to ~600 px, 2 for ~1200 px, ...
+/// Font scale for an image size: 1 below 600 px, 2 up to 1000 px, 3 for 1200 px, ...
 fn text_scale(w: u32, h: u32) -> u32 {
-    (w.min(h) / 500).clamp(1, 8)
+    ((w.min(h) + 200) / 400).clamp(1, 8)
+}
+
+/// Moves a framing camera (aimed at `centre`) as close as the scene's actual
+/// points allow, instead of the bounding-box corners, keeping the direction
+/// and the centre. Corners of an oblique box stick out far beyond most
+/// objects, so this makes the object fill the picture.
+fn tighten(mut cam: Camera, scene: &Scene, centre: Vec3) -> Camera {
+    use rayon::prelude::*;
+    let (hx, hy) = cam.half_extent();
+    let (f, r, u) = (cam.forward, cam.right, cam.up);
+    let k = 1.0 - camera::MARGIN;
+    let need = |p: &Vec3| -> f64 {
+        if !p.is_finite() {
+            return f64::MIN;
+        }
+        let v = *p - centre;
+        let (x, y, z) = (v.dot(r), v.dot(u), v.dot(f));
+        if cam.is_perspective() {
+            (x.abs() / (hx * k) - z).max(y.abs() / (hy * k) - z)
+        } else {
+            (x.abs() / cam.aspect).max(y.abs()) / k
+        }
+    };
+    let mut m = f64::MIN;
+    for mesh in &scene.meshes {
+        m = m.max(
+            mesh.positions
+                .par_iter()
+                .map(need)
+                .reduce(|| f64::MIN, f64::max),
+        );
+    }
+    for l in &scene.polylines {
+        m = m.max(l.points.iter().map(need).fold(f64::MIN, f64::max));
+    }
+    for p in &scene.points {
+        m = m.max(need(&p.position));
+    }
+    if !m.is_finite() {
+        return cam;
+    }
+    match cam.projection {
+        Projection::Perspective { .. } => {
+            let old = (cam.eye - centre).length();
+            // Keep every point in front of the near plane.
+            let min_z = scene_min_depth(scene, centre, f);
+            let dist = m.max(-min_z + 1e-3 * old).min(old);
+            if dist > 0.0 && dist.is_finite() {
+                cam.eye = centre - f * dist;
+                cam.near = (0.5 * (dist + min_z)).max(1e-9 * old);
+            }
+        }
+        Projection::Orthographic { half_height } => {
+            if m > 0.0 && m < half_height {
+                cam.projection = Projection::Orthographic { half_height: m };
+            }
+        }
+    }
+    cam
+}
+
+/// Smallest signed depth of any scene point relative to `centre` along `f`.
+fn scene_min_depth(scene: &Scene, centre: Vec3, f: Vec3) -> f64 {
+    use rayon::prelude::*;
+    let depth = |p: &Vec3| {
+        if p.is_finite() {
+            (*p - centre).dot(f)
+        } else {
+            f64::MAX
+        }
+    };
+    let mut m = f64::MAX;
+    for mesh in &scene.meshes {
+        m = m.min(
+            mesh.positions
+                .par_iter()
+                .map(depth)
+                .reduce(|| f64::MAX, f64::min),
+        );
+    }
+    for l in &scene.polylines {
+        m = m.min(l.points.iter().map(depth).fold(f64::MAX, f64::min));
+    }
+    for p in &scene.points {
+        m = m.min(depth(&p.position));
+    }
+    m
 }
 
 /// Dark text on light backgrounds, light text on dark ones.

@@ -75,22 +75,14 @@ fn sphere_covers_expected_fraction_and_is_centred() {
         }
     }
     let frac = count as f64 / (200.0 * 160.0);
-    // Expected disc: the sphere seen from distance d under half-angle asin(1/d).
-    let cam = Camera::framing(
-        p0 - Vec3::ONE,
-        p0 + Vec3::ONE,
-        opts.view_dir,
-        opts.up,
-        200.0 / 160.0,
-    );
-    let d = (cam.eye - p0).length();
-    let r_img = (1.0 / d).asin().tan() / (0.5 * DEFAULT_FOV_Y_DEG.to_radians()).tan() * 80.0;
-    let expected = std::f64::consts::PI * r_img * r_img / (200.0 * 160.0);
+    // The view is tightened to the object: the silhouette (a circle, seen
+    // from the front it is a disc) then touches the 6% margin in the
+    // narrower (vertical) direction: radius 0.94 * 80 px.
+    let r_img = (frac * 200.0 * 160.0 / std::f64::consts::PI).sqrt();
     assert!(
-        (frac - expected).abs() < 0.02 * expected,
-        "fraction {frac} expected {expected}"
+        (r_img - 0.94 * 80.0).abs() < 2.0,
+        "disc radius {r_img} (fraction {frac})"
     );
-    assert!(frac > 0.15, "sphere too small: {frac}");
     let (cx, cy) = (sx / count as f64, sy / count as f64);
     assert!(
         (cx - 100.0).abs() < 1.5 && (cy - 80.0).abs() < 1.5,
@@ -373,7 +365,7 @@ fn closed_mesh_has_no_cracks() {
     for y in 0..300u32 {
         for x in 0..300u32 {
             let d = ((x as f64 + 0.5 - cx).powi(2) + (y as f64 + 0.5 - cy).powi(2)).sqrt();
-            if d < 60.0 && is_bg(&img, x, y, bg) {
+            if d < 120.0 && is_bg(&img, x, y, bg) {
                 holes += 1;
             }
         }
