@@ -766,3 +766,44 @@ fn bspline_sphere_circle_helpers_sanity() {
     let a = PI / 4.0;
     assert!((p - Vec3::new(4.0 * a.cos(), 4.0 * a.sin(), 0.0)).length() < 1e-12);
 }
+
+#[test]
+#[ignore = "profiling aid"]
+fn bspline_profile_pieces() {
+    let mut rng = Rng::new(21);
+    let net = random_net(&mut rng, 21, 22);
+    let knots = |n: usize| {
+        let mut k = vec![0.0; 4];
+        k.extend((1..n - 3).map(|i| i as f64));
+        k.extend([(n - 3) as f64; 4]);
+        k
+    };
+    let s = BSplineSurface::new(3, 3, knots(21), knots(22), net, None).unwrap();
+    let n = 500;
+    let t = std::time::Instant::now();
+    let mut acc = 0.0;
+    for a in 0..n {
+        for b in 0..n {
+            let sb = s.basis(18.0 * a as f64 / 499.0, 19.0 * b as f64 / 499.0);
+            acc += sb.du[2][1] + sb.dv[1][2];
+        }
+    }
+    eprintln!("basis: {:.4} s ({acc})", t.elapsed().as_secs_f64());
+    let t = std::time::Instant::now();
+    let mut acc = Vec3::ZERO;
+    for a in 0..n {
+        for b in 0..n {
+            let d = s.derivatives(18.0 * a as f64 / 499.0, 19.0 * b as f64 / 499.0);
+            acc += d.suv + d.point;
+        }
+    }
+    eprintln!("derivatives: {:.4} s ({acc})", t.elapsed().as_secs_f64());
+    let t = std::time::Instant::now();
+    let mut acc = Vec3::ZERO;
+    for a in 0..n {
+        for b in 0..n {
+            acc += s.eval(18.0 * a as f64 / 499.0, 19.0 * b as f64 / 499.0);
+        }
+    }
+    eprintln!("eval: {:.4} s ({acc})", t.elapsed().as_secs_f64());
+}
