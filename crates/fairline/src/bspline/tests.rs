@@ -663,6 +663,20 @@ fn bspline_validation_errors_name_the_problem() {
     short[1].pop();
     let err = mk(2, 2, k3.clone(), k3.clone(), net(3, 3), Some(short)).unwrap_err();
     assert!(err.to_string().contains("row 1"), "{err}");
+    let two_rows = Some(vec![vec![1.0; 3]; 2]);
+    let err = mk(2, 2, k3.clone(), k3.clone(), net(3, 3), two_rows).unwrap_err();
+    assert_eq!(err.to_string(), "weights: 2 rows, the control net has 3");
+    let err = BSplineSurface::from_flat(
+        2,
+        2,
+        k3.clone(),
+        k3.clone(),
+        [3, 3],
+        vec![Vec3::ZERO; 9],
+        Some(vec![1.0; 8]),
+    )
+    .unwrap_err();
+    assert!(matches!(err, E::WeightShape { .. }), "{err}");
     assert!(matches!(
         BSplineSurface::from_flat(
             2,
@@ -765,45 +779,4 @@ fn bspline_sphere_circle_helpers_sanity() {
     let p = s.eval(0.125, 0.0);
     let a = PI / 4.0;
     assert!((p - Vec3::new(4.0 * a.cos(), 4.0 * a.sin(), 0.0)).length() < 1e-12);
-}
-
-#[test]
-#[ignore = "profiling aid"]
-fn bspline_profile_pieces() {
-    let mut rng = Rng::new(21);
-    let net = random_net(&mut rng, 21, 22);
-    let knots = |n: usize| {
-        let mut k = vec![0.0; 4];
-        k.extend((1..n - 3).map(|i| i as f64));
-        k.extend([(n - 3) as f64; 4]);
-        k
-    };
-    let s = BSplineSurface::new(3, 3, knots(21), knots(22), net, None).unwrap();
-    let n = 500;
-    let t = std::time::Instant::now();
-    let mut acc = 0.0;
-    for a in 0..n {
-        for b in 0..n {
-            let sb = s.basis(18.0 * a as f64 / 499.0, 19.0 * b as f64 / 499.0);
-            acc += sb.du[2][1] + sb.dv[1][2];
-        }
-    }
-    eprintln!("basis: {:.4} s ({acc})", t.elapsed().as_secs_f64());
-    let t = std::time::Instant::now();
-    let mut acc = Vec3::ZERO;
-    for a in 0..n {
-        for b in 0..n {
-            let d = s.derivatives(18.0 * a as f64 / 499.0, 19.0 * b as f64 / 499.0);
-            acc += d.suv + d.point;
-        }
-    }
-    eprintln!("derivatives: {:.4} s ({acc})", t.elapsed().as_secs_f64());
-    let t = std::time::Instant::now();
-    let mut acc = Vec3::ZERO;
-    for a in 0..n {
-        for b in 0..n {
-            acc += s.eval(18.0 * a as f64 / 499.0, 19.0 * b as f64 / 499.0);
-        }
-    }
-    eprintln!("eval: {:.4} s ({acc})", t.elapsed().as_secs_f64());
 }
