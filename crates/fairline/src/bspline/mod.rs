@@ -147,6 +147,13 @@ pub enum BSplineError {
         /// Knot index.
         index: usize,
     },
+    /// The knots span a range too large to subtract in f64 (`last - first`
+    /// overflows), which would make the basis functions NaN.
+    #[error("knot vector in {direction} spans a range too large for f64 arithmetic")]
+    KnotRangeOverflow {
+        /// Direction.
+        direction: Direction,
+    },
     /// The knot vector decreases.
     #[error("knot vector in {direction} decreases at index {index} ({previous} > {value})")]
     KnotDecreasing {

@@ -158,6 +158,9 @@ fn check_knots(
     if let Some(index) = knots.iter().position(|k| !k.is_finite()) {
         return Err(BSplineError::NonFiniteKnot { direction, index });
     }
+    if !(knots[knots.len() - 1] - knots[0]).is_finite() {
+        return Err(BSplineError::KnotRangeOverflow { direction });
+    }
     for index in 1..knots.len() {
         if knots[index] < knots[index - 1] {
             return Err(BSplineError::KnotDecreasing {

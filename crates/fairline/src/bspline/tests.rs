@@ -583,6 +583,17 @@ fn bspline_validation_errors_name_the_problem() {
             ..
         })
     ));
+    assert_eq!(
+        mk(
+            1,
+            2,
+            vec![-1e308, -1e308, 1e308, 1e308],
+            k3.clone(),
+            net(2, 3),
+            None
+        ),
+        Err(E::KnotRangeOverflow { direction: U })
+    );
     // Interior multiplicity 3 > p = 2.
     assert!(matches!(
         mk(
