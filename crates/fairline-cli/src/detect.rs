@@ -1,7 +1,7 @@
 //! `fairline detect`: irregular stretches of highlight lines turned into
 //! suggested fairing regions.
 
-use crate::common::{Report, bad_input, check_output, write_json};
+use crate::common::{Report, bad_input, check_output, spinner, write_json};
 use crate::highlight::{LightArgs, read_triangles, to_input_error};
 use anyhow::Result;
 use fairline::highlight::{DetectOptions, HighlightModel, detect_irregularities};
@@ -63,6 +63,7 @@ pub fn run(args: Args) -> Result<()> {
         ..DetectOptions::default()
     };
     let mut report = Report::new("detect");
+    let bar = spinner("detecting irregularities");
     let (lines, mut det) = report
         .time(|| -> Result<_, fairline::highlight::HighlightError> {
             let model = HighlightModel::new(&mesh, light, args.light.options())?;
@@ -71,6 +72,7 @@ pub fn run(args: Args) -> Result<()> {
             Ok((lines, det))
         })
         .map_err(to_input_error)?;
+    bar.finish_and_clear();
     if let Some(n) = args.max_regions {
         det.regions.truncate(n);
     }

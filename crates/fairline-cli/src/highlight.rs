@@ -2,7 +2,7 @@
 //! al. §2) or of concentric circular lights (Nishiyama et al. §2) on a
 //! triangle mesh, written as JSON or OBJ polylines.
 
-use crate::common::{Report, bad_input, check_output, parse_vec3, read_json};
+use crate::common::{Report, bad_input, check_output, parse_list, parse_vec3, read_json, spinner};
 use anyhow::Result;
 use fairline::highlight::{
     CircularLight, CircularLights, HighlightBands, HighlightError, HighlightLine, HighlightLines,
@@ -117,8 +117,8 @@ pub struct Args {
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z", requires_all = ["circle_center", "radii"])]
     pub circle_axis: Option<Vec3>,
     /// Radii of the circular lights, comma separated.
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_name = "R1,R2,..", requires_all = ["circle_center", "circle_axis"])]
-    pub radii: Option<Vec<f64>>,
+    #[arg(long, value_parser = parse_radii, allow_hyphen_values = true, value_name = "R1,R2,..", requires_all = ["circle_center", "circle_axis"])]
+    pub radii: Option<Radii>,
     /// Also compute highlight bands of this radius (mesh units).
     #[arg(long, value_name = "RHO")]
     pub band: Option<f64>,
@@ -128,6 +128,14 @@ pub struct Args {
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
+}
+
+/// A comma-separated list of radii.
+#[derive(Clone, Debug)]
+pub struct Radii(pub Vec<f64>);
+
+fn parse_radii(s: &str) -> Result<Radii, String> {
+    parse_list(s).map(Radii)
 }
 
 /// Output format of polylines.
@@ -247,7 +255,8 @@ pub fn run(args: Args) -> Result<()> {
     let mut report = Report::new("highlight");
     report.set("vertices", mesh.vertex_count());
     report.set("faces", mesh.face_count());
-    let (lines, bands, radii) = if let (Some(c), Some(t), Some(radii)) =
+    let bar = spinner("highlight lines");
+    let (lines, bands, radii) = if let (Some(c), Some(t), Some(Radii(radii))) =
         (args.circle_center, args.circle_axis, args.radii.clone())
     {
         let spec = CircularLights {
@@ -285,6 +294,7 @@ pub fn run(args: Args) -> Result<()> {
         report.set("light", json!({"kind": "linear", "array": light}));
         (lines, bands, None)
     };
+    bar.finish_and_clear();
     write_lines(&args.output, &lines, bands.as_ref(), radii.as_deref())?;
     report.set("summary", line_summary(&lines));
     report.set("lines", lines.lines.len());
