@@ -6,6 +6,8 @@
 mod common;
 mod convert;
 mod curvature;
+mod detect;
+mod highlight;
 mod info;
 
 use clap::{Parser, Subcommand};
@@ -30,6 +32,8 @@ enum Command {
     Info(info::Args),
     Convert(convert::Args),
     Curvature(curvature::Args),
+    Highlight(highlight::Args),
+    Detect(detect::Args),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -37,6 +41,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Info(a) => info::run(a),
         Command::Convert(a) => convert::run(a),
         Command::Curvature(a) => curvature::run(a),
+        Command::Highlight(a) => highlight::run(a),
+        Command::Detect(a) => detect::run(a),
     }
 }
 

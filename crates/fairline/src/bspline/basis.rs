@@ -158,77 +158,68 @@ pub fn ders_basis_funs(
     }
 }
 
-/// Derivative of the degree-`d` basis functions on knot span `span` from the
-/// degree-`d - 1` quantities `lower[r'] = X_{span-d+1+r', d-1}` (values or
-/// derivatives), Piegl & Tiller Eq. (2.9):
+/// Derivative of the degree-`d` basis functions on knot span `span`, in
+/// place: on entry `x[r'] = X_{span-d+1+r', d-1}` (values or derivatives of
+/// the degree `d - 1` functions, `d` entries), on exit `x[r]` is the
+/// derivative of `N_{span-d+r, d}` (`d + 1` entries), by Piegl & Tiller
+/// Eq. (2.9):
 /// `N'_{i,d} = d (N_{i,d-1} / (u_{i+d} - u_i) - N_{i+1,d-1} / (u_{i+d+1} - u_{i+1}))`.
-/// Writes `out[r]` for `i = span - d + r`, `r = 0..=d`. Every denominator used
-/// spans the non-empty knot span, so none is zero.
+/// Every denominator used spans the non-empty knot span, so none is zero.
 #[inline(always)]
-fn differentiate(
-    span: usize,
-    d: usize,
-    knots: &[f64],
-    lower: &[f64; MAX_ORDER],
-    out: &mut [f64; MAX_ORDER],
-) {
+fn differentiate(span: usize, d: usize, knots: &[f64], x: &mut [f64; MAX_ORDER]) {
     let df = d as f64;
-    let mut prev = 0.0; // lower[r-1] / (u_{span+r} - u_{span-d+r}) for the current r
+    // prev = x[r-1] / (u_{span+r} - u_{span-d+r}), the first term of N'_{span-d+r}.
+    let mut prev = 0.0;
     for r in 0..d {
-        let t = lower[r] / (knots[span + r + 1] - knots[span + r + 1 - d]);
-        out[r] = df * (prev - t);
+        let t = x[r] / (knots[span + r + 1] - knots[span + r + 1 - d]);
+        x[r] = df * (prev - t);
         prev = t;
     }
-    out[d] = df * prev;
+    x[d] = df * prev;
 }
 
 /// The non-zero basis functions and their first and second derivatives,
 /// like [`ders_basis_funs`] with `n = 2` (same output layout, rows beyond the
-/// degree zero), but cheaper: the triangular table of A2.2 is run once,
-/// keeping the degree `p-2` and `p-1` rows, and the derivatives follow from
-/// the derivative formula Eq. (2.9) applied once and twice — the same
-/// quantities A2.3 computes through its `a[k][j]` coefficients. This is the
-/// evaluation hot path; it is cross-checked against A2.3 in the tests.
+/// degree zero), but cheaper and with no scratch buffers: the triangular
+/// table of A2.2 is run once, keeping its degree `p-1` and `p-2` rows in
+/// `ders[1]` and `ders[2]`, and the derivatives follow from the derivative
+/// formula Eq. (2.9) applied in place once and twice — the same quantities
+/// A2.3 computes through its `a[k][j]` coefficients. This is the evaluation
+/// hot path; it is cross-checked against A2.3 in the tests.
 pub fn basis_funs_ders2(span: usize, u: f64, degree: usize, knots: &[f64], ders: &mut BasisDerivs) {
     let p = degree;
-    let mut left = [0.0; MAX_ORDER];
-    let mut right = [0.0; MAX_ORDER];
-    let mut n = [0.0; MAX_ORDER];
-    let mut deg1 = [0.0; MAX_ORDER]; // degree p-1
-    let mut deg2 = [0.0; MAX_ORDER]; // degree p-2
+    let [n, d1, d2] = ders;
     n[0] = 1.0;
     if p == 1 {
-        deg1[0] = 1.0;
+        d1[0] = 1.0;
+    } else if p == 2 {
+        d2[0] = 1.0;
     }
     for j in 1..=p {
-        left[j] = u - knots[span + 1 - j];
-        right[j] = knots[span + j] - u;
+        // left[k] = u - knots[span + 1 - k], right[k] = knots[span + k] - u.
         let mut saved = 0.0;
         for r in 0..j {
-            let temp = n[r] / (right[r + 1] + left[j - r]);
-            n[r] = saved + right[r + 1] * temp;
-            saved = left[j - r] * temp;
+            let right = knots[span + r + 1] - u;
+            let left = u - knots[span + 1 + r - j];
+            let temp = n[r] / (right + left);
+            n[r] = saved + right * temp;
+            saved = left * temp;
         }
         n[j] = saved;
         if j + 2 == p {
-            deg2[..=j].copy_from_slice(&n[..=j]);
+            d2[..=j].copy_from_slice(&n[..=j]);
         } else if j + 1 == p {
-            deg1[..=j].copy_from_slice(&n[..=j]);
+            d1[..=j].copy_from_slice(&n[..=j]);
         }
     }
-    if p == 2 {
-        deg2[0] = 1.0;
-    }
-    ders[0][..=p].copy_from_slice(&n[..=p]);
-    differentiate(span, p, knots, &deg1, &mut ders[1]);
     if p >= 2 {
-        // Derivatives of the degree p-1 functions, then once more.
-        let mut d1_lower = [0.0; MAX_ORDER];
-        differentiate(span, p - 1, knots, &deg2, &mut d1_lower);
-        differentiate(span, p, knots, &d1_lower, &mut ders[2]);
+        // Derivatives of the degree p-1 functions, then of degree p.
+        differentiate(span, p - 1, knots, d2);
+        differentiate(span, p, knots, d2);
     } else {
-        ders[2][..=p].fill(0.0);
+        d2[..=p].fill(0.0);
     }
+    differentiate(span, p, knots, d1);
 }
 
 #[cfg(test)]

@@ -1019,6 +1019,28 @@ mod tests {
     }
 
     #[test]
+    fn bspline_iges_never_panics_on_corrupted_input() {
+        let text = sample_file(GLOBAL).into_bytes();
+        let mut rng = crate::bspline::tests::Rng::new(99);
+        let alphabet = b"0123456789,;.-+EDH /#\n";
+        for _ in 0..3000 {
+            let mut t = text.clone();
+            for _ in 0..1 + (rng.unit() * 4.0) as usize {
+                let at = (rng.unit() * t.len() as f64) as usize % t.len();
+                let c = alphabet[(rng.unit() * alphabet.len() as f64) as usize % alphabet.len()];
+                t[at] = c;
+            }
+            if let Ok(imp) = parse_iges_bytes(&t) {
+                for s in &imp.surfaces {
+                    let (u, v) = s.surface.domain_center();
+                    let _ = s.surface.eval(u, v);
+                    let _ = s.surface.normal(u, v);
+                }
+            }
+        }
+    }
+
+    #[test]
     fn bspline_iges_impeller() {
         let path = concat!(
             env!("CARGO_MANIFEST_DIR"),

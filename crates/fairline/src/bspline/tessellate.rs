@@ -44,27 +44,20 @@ pub fn tessellate(surface: &BSplineSurface, nu: usize, nv: usize) -> Tessellatio
         }
     };
     let count = nu * nv;
-    let mut positions = vec![Vec3::ZERO; count];
-    let mut normals = vec![Vec3::ZERO; count];
-    let mut uv = vec![[0.0; 2]; count];
-    positions
-        .par_chunks_mut(nv)
-        .zip(normals.par_chunks_mut(nv))
-        .zip(uv.par_chunks_mut(nv))
-        .enumerate()
-        .for_each(|(a, ((pos, nor), uvs))| {
-            let u = param(u0, u1, a, nu);
-            for b in 0..nv {
-                let v = param(v0, v1, b, nv);
-                let d = surface.derivatives(u, v);
-                pos[b] = d.point;
-                nor[b] = d
-                    .normal()
-                    .or_else(|| surface.normal(u, v))
-                    .unwrap_or(Vec3::ZERO);
-                uvs[b] = [u, v];
-            }
-        });
+    let us: Vec<f64> = (0..nu).map(|a| param(u0, u1, a, nu)).collect();
+    let vs: Vec<f64> = (0..nv).map(|b| param(v0, v1, b, nv)).collect();
+    let derivs = surface.derivatives_grid(&us, &vs);
+    let uv: Vec<[f64; 2]> = (0..count).map(|k| [us[k / nv], vs[k % nv]]).collect();
+    let positions: Vec<Vec3> = derivs.iter().map(|d| d.point).collect();
+    let mut normals: Vec<Vec3> = derivs
+        .par_iter()
+        .zip(uv.par_iter())
+        .map(|(d, &[u, v])| {
+            d.normal()
+                .or_else(|| surface.normal(u, v))
+                .unwrap_or(Vec3::ZERO)
+        })
+        .collect();
     let idx = |a: usize, b: usize| (a * nv + b) as u32;
     let mut triangles = Vec::with_capacity(2 * (nu - 1) * (nv - 1));
     for a in 0..nu - 1 {
