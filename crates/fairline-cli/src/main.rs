@@ -7,6 +7,7 @@ mod common;
 mod convert;
 mod curvature;
 mod detect;
+mod enhance;
 mod highlight;
 mod info;
 
@@ -34,6 +35,7 @@ enum Command {
     Curvature(curvature::Args),
     Highlight(highlight::Args),
     Detect(detect::Args),
+    Enhance(enhance::Args),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -43,6 +45,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Curvature(a) => curvature::run(a),
         Command::Highlight(a) => highlight::run(a),
         Command::Detect(a) => detect::run(a),
+        Command::Enhance(a) => enhance::run(a),
     }
 }
 
