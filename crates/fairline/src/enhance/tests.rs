@@ -88,57 +88,77 @@ fn mean_feature_distance(pos: &[Vec3], radius: f64) -> f64 {
     d / pos.len() as f64
 }
 
-/// Closest-point distance from `p` to triangle (a, b, c) (Ericson,
-/// Real-Time Collision Detection §5.1.5).
-fn point_triangle_distance(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> f64 {
+/// Barycentric coordinates of the point of triangle (a, b, c) closest to
+/// `p` (Ericson, Real-Time Collision Detection §5.1.5).
+fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> [f64; 3] {
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));
     if d1 <= 0.0 && d2 <= 0.0 {
-        return p.distance(a);
+        return [1.0, 0.0, 0.0];
     }
     let bp = p - b;
     let (d3, d4) = (ab.dot(bp), ac.dot(bp));
     if d3 >= 0.0 && d4 <= d3 {
-        return p.distance(b);
+        return [0.0, 1.0, 0.0];
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return p.distance(a + ab * (d1 / (d1 - d3)));
+        let t = d1 / (d1 - d3);
+        return [1.0 - t, t, 0.0];
     }
     let cp = p - c;
     let (d5, d6) = (ab.dot(cp), ac.dot(cp));
     if d6 >= 0.0 && d5 <= d6 {
-        return p.distance(c);
+        return [0.0, 0.0, 1.0];
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return p.distance(a + ac * (d2 / (d2 - d6)));
+        let t = d2 / (d2 - d6);
+        return [1.0 - t, 0.0, t];
     }
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        return p.distance(b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
+        let t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return [0.0, 1.0 - t, t];
     }
     let denom = va + vb + vc;
     if !(denom.abs() > 0.0) {
-        return p.distance(a).min(p.distance(b)).min(p.distance(c));
+        return [1.0, 0.0, 0.0];
     }
-    p.distance(a + ab * (vb / denom) + ac * (vc / denom))
+    let (v, w) = (vb / denom, vc / denom);
+    [1.0 - v - w, v, w]
 }
 
-/// Largest distance from the points to the surface of `input` (brute force).
-fn max_distance_to_surface(input: &SurfaceMesh, points: &[Vec3]) -> f64 {
+/// For every point, its distance to the surface of `input` and the value of
+/// the per-vertex field `field` of `input` interpolated at the closest
+/// point (brute force over the faces).
+fn project_to_surface(input: &SurfaceMesh, points: &[Vec3], field: &[f64]) -> Vec<(f64, f64)> {
     let p = input.positions();
     points
         .iter()
         .map(|&x| {
-            input
-                .faces()
-                .map(|f| {
-                    let [a, b, c] = input.triangle(f).map(|v| p[v.idx()]);
-                    point_triangle_distance(x, a, b, c)
-                })
-                .fold(f64::INFINITY, f64::min)
+            let mut best = (f64::INFINITY, 0.0);
+            for f in input.faces() {
+                let t = input.triangle(f);
+                let [a, b, c] = t.map(|v| p[v.idx()]);
+                let w = closest_on_triangle(x, a, b, c);
+                let d = x.distance(w[0] * a + w[1] * b + w[2] * c);
+                if d < best.0 {
+                    let value = (0..3).map(|k| w[k] * field[t[k].idx()]).sum();
+                    best = (d, value);
+                }
+            }
+            best
         })
+        .collect()
+}
+
+/// Largest distance from the points to the surface of `input`.
+fn max_distance_to_surface(input: &SurfaceMesh, points: &[Vec3]) -> f64 {
+    let zero = vec![0.0; input.vertex_count()];
+    project_to_surface(input, points, &zero)
+        .iter()
+        .map(|d| d.0)
         .fold(0.0, f64::max)
 }
 
@@ -329,4 +349,56 @@ fn invalid_input_is_refused_and_trivial_input_is_returned_unchanged() {
     let out = enhance_features(&m, &EnhanceOptions::default().fixed(all)).unwrap();
     assert_eq!(out.positions, m.positions());
     assert_eq!(out.report.free_vertices, 0);
+}
+
+/// Loads a mesh of the shared data set, or says why not.
+fn shared_mesh(name: &str) -> Option<SurfaceMesh> {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/meshes/");
+    let path = std::path::Path::new(path).join(name);
+    if !path.exists() {
+        println!("skipped: ../shared/data not found");
+        return None;
+    }
+    Some(crate::io::read_mesh(&path).expect("shared mesh reads"))
+}
+
+#[test]
+fn real_meshes_gain_vertices_in_curved_regions_and_stay_close() {
+    for name in ["bob_small.ply", "spot.ply"] {
+        let Some(m) = shared_mesh(name) else { return };
+        let out = enhance_features(&m, &EnhanceOptions::default().lambda(0.5)).unwrap();
+        let c = principal_curvatures_rusinkiewicz(&m);
+        let total: Vec<f64> = (0..m.vertex_count())
+            .map(|i| c.k1[i].abs() + c.k2[i].abs())
+            .collect();
+        let free: Vec<usize> = m
+            .vertices()
+            .filter(|&v| !m.is_boundary_vertex(v))
+            .map(|v| v.idx())
+            .collect();
+        let moved: Vec<Vec3> = free.iter().map(|&i| out.positions[i]).collect();
+        let projected = project_to_surface(&m, &moved, &total);
+        let before = free.iter().map(|&i| total[i]).sum::<f64>() / free.len() as f64;
+        let after = projected.iter().map(|p| p.1).sum::<f64>() / free.len() as f64;
+        let e = out.report.edge_length;
+        let deviation = projected.iter().map(|p| p.0).fold(0.0, f64::max) / e;
+        let mean_dev = projected.iter().map(|p| p.0).sum::<f64>() / (e * free.len() as f64);
+        println!(
+            "{name}: {} vertices, mean |k1|+|k2| at the vertices {before:.4} -> {after:.4}, \
+             distance to input max {deviation:.3} ē mean {mean_dev:.4} ē, quality min {:.3} -> {:.3}, \
+             mean {:.3} -> {:.3}, flips repaired {}",
+            m.vertex_count(),
+            out.report.quality_before.min,
+            out.report.quality_after.min,
+            out.report.quality_before.mean,
+            out.report.quality_after.mean,
+            out.report.flipped_triangles
+        );
+        assert!(after > 1.01 * before, "{name}: {before} -> {after}");
+        assert!(
+            deviation < 0.5 && mean_dev < 0.1,
+            "{name}: {deviation} {mean_dev}"
+        );
+        assert_eq!(count_flips(&m, &out.positions), 0);
+    }
 }
