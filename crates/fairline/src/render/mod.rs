@@ -368,17 +368,17 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Image, RenderError>
             scale,
         );
     }
-    if legend_w > 0 {
-        if let Some(legend) = &scene.legend {
-            legend.draw(
-                &mut img,
-                (w - legend_w) as i64,
-                title_h as i64,
-                rh,
-                scale,
-                text_colour,
-            );
-        }
+    if legend_w > 0
+        && let Some(legend) = &scene.legend
+    {
+        legend.draw(
+            &mut img,
+            (w - legend_w) as i64,
+            title_h as i64,
+            rh,
+            scale,
+            text_colour,
+        );
     }
     Ok(img)
 }

@@ -273,10 +273,10 @@ pub(crate) fn render_view(
                 push_seg(&mut segs, pa, pb, hw, layer, line.color);
             }
         }
-        if n == 1 {
-            if let Some((pa, pb)) = clip_project(line.points[0], line.points[0]) {
-                push_seg(&mut segs, pa, pb, hw, layer, line.color);
-            }
+        if n == 1
+            && let Some((pa, pb)) = clip_project(line.points[0], line.points[0])
+        {
+            push_seg(&mut segs, pa, pb, hw, layer, line.color);
         }
         layer += 1;
     }
