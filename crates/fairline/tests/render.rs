@@ -215,6 +215,34 @@ fn render_sample_pictures() {
     );
     both.write_png(dir.join("side_by_side.png")).unwrap();
 
+    // 4b. Small picture, view parallel to the up hint, sequential map with legend.
+    let (hp, hn, ht) = panel(60);
+    let z: Vec<f64> = hp.iter().map(|p| p.z).collect();
+    let (hc, (zl, zh)) = scalar_colors(&z, Colormap::Viridis, None);
+    let scene = Scene {
+        meshes: vec![MeshLayer::new(&hp, &ht).with_normals(&hn).with_colors(&hc)],
+        legend: Some(Legend {
+            title: "height".into(),
+            colormap: Colormap::Viridis,
+            min: zl,
+            max: zh,
+        }),
+        title: Some("top view".into()),
+        ..Default::default()
+    };
+    let small = render(
+        &scene,
+        &RenderOptions {
+            width: 400,
+            height: 300,
+            view_dir: Vec3::NEG_Z,
+            up: Vec3::Z,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    small.write_png(dir.join("small_top_view.png")).unwrap();
+
     // 5. Font sheet.
     let mut sheet = Image::new(620, 130, [255, 255, 255, 255]);
     let chars: String = (32u8..=126).map(|c| c as char).collect();

@@ -83,7 +83,9 @@ pub struct MeshLayer<'a> {
     /// them); `None` shades each triangle flat with its face normal.
     pub normals: Option<&'a [Vec3]>,
     /// Per-vertex linear-light colours (0..1), interpolated across triangles
-    /// (e.g. from [`scalar_colors`]); `None` uses `base_color`.
+    /// (e.g. from [`scalar_colors`]); `None` uses `base_color`. Coloured
+    /// layers get a weaker specular highlight so it does not wash out the
+    /// colour map.
     pub colors: Option<&'a [[f32; 3]]>,
     /// Linear-light surface colour when `colors` is `None`.
     pub base_color: [f32; 3],

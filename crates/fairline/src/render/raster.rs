@@ -33,6 +33,9 @@ const MAX_BAND_SAMPLES: usize = 1 << 22;
 const GUARD: f64 = 262_144.0;
 /// Wireframe line width in output pixels.
 const WIRE_WIDTH_PX: f64 = 1.0;
+/// Specular factor on layers with per-vertex colours, so highlights do not
+/// wash out the colour map's values.
+const COLORED_SPECULAR: f64 = 0.3;
 /// Colour of back faces of one-sided layers (linear light).
 const BACK_FACE_COLOR: [f32; 3] = [0.16, 0.09, 0.05];
 
@@ -401,6 +404,8 @@ struct TriShade {
     wire: Option<[f32; 3]>,
     /// 1 / length of the edge opposite each vertex (samples).
     inv_len: [f64; 3],
+    /// Specular strength factor (reduced on colour-mapped layers).
+    spec_scale: f64,
     two_sided: bool,
 }
 
@@ -588,6 +593,11 @@ impl<'s, 'a> Ctx<'s, 'a> {
             base: m.base_color,
             wire: m.wireframe,
             inv_len: [1.0 / len(1, 2), 1.0 / len(2, 0), 1.0 / len(0, 1)],
+            spec_scale: if colors.is_some() {
+                COLORED_SPECULAR
+            } else {
+                1.0
+            },
             two_sided: m.two_sided,
         }
     }
@@ -655,7 +665,7 @@ impl<'s, 'a> Ctx<'s, 'a> {
             let hf = (l.fill + to_eye).normalize_or_zero();
             spec += 0.5 * l.specular * l.fill_i * n.dot(hf).max(0.0).powf(l.shininess);
         }
-        let (diffuse, spec) = (diffuse as f32, spec as f32);
+        let (diffuse, spec) = (diffuse as f32, (spec * t.spec_scale) as f32);
         for c in col.iter_mut() {
             *c = *c * diffuse + spec;
         }
