@@ -173,6 +173,22 @@ fn render_sample_pictures() {
     };
     let panel_img = render(&scene, &opts).unwrap();
     panel_img.write_png(dir.join("panel_lines.png")).unwrap();
+    // Close-up of the same scene: line anti-aliasing, joins and depth test.
+    let c0 = Vec3::new(0.0, 0.0, height(0.0, 0.0));
+    let close = RenderOptions {
+        width: 320,
+        height: 240,
+        camera: Some(Camera::framing(
+            c0 - Vec3::splat(0.25),
+            c0 + Vec3::splat(0.25),
+            opts.view_dir,
+            opts.up,
+            4.0 / 3.0,
+        )),
+        ..opts.clone()
+    };
+    let closeup = render(&scene, &close).unwrap();
+    closeup.write_png(dir.join("panel_closeup.png")).unwrap();
 
     // 3. Wireframe of a coarse torus and panel, plus one-sided back faces.
     let (cp, cn, ct) = torus(Vec3::ZERO, 1.0, 0.4, 36, 14);
