@@ -307,3 +307,59 @@ fn truncated_and_mutated_files_never_panic() {
         }
     }
 }
+
+/// Reading a 17 MB binary PLY (450k vertices, 900k triangles) takes at most
+/// 0.2 s in release builds. Run with
+/// `cargo test --release -p fairline --test io_formats -- --ignored`.
+#[test]
+#[ignore = "timing; run in release"]
+fn large_binary_ply_reads_fast() {
+    let n = 671; // 671² ≈ 450k vertices, 2·670² ≈ 898k triangles
+    let mut body = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            for c in [i as f32, j as f32, ((i * j) % 7) as f32] {
+                body.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+    }
+    let mut faces = 0;
+    for i in 0..n - 1 {
+        for j in 0..n - 1 {
+            let v = (i * n + j) as i32;
+            for t in [
+                [v, v + 1, v + n as i32],
+                [v + 1, v + n as i32 + 1, v + n as i32],
+            ] {
+                body.push(3);
+                for k in t {
+                    body.extend_from_slice(&k.to_le_bytes());
+                }
+                faces += 1;
+            }
+        }
+    }
+    let header = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\n\
+         property float y\nproperty float z\nelement face {faces}\n\
+         property list uchar int vertex_indices\nend_header\n",
+        n * n
+    );
+    let dir = temp_dir("large");
+    let path = dir.join("large.ply");
+    std::fs::write(&path, [header.as_bytes(), &body].concat()).unwrap();
+    let start = std::time::Instant::now();
+    let soup = read_soup(&path).unwrap();
+    let secs = start.elapsed().as_secs_f64();
+    println!(
+        "read {} bytes, {} vertices, {} faces in {secs:.3} s",
+        header.len() + body.len(),
+        soup.vertex_count(),
+        soup.face_count()
+    );
+    assert_eq!(soup.face_count(), faces);
+    std::fs::remove_dir_all(&dir).unwrap();
+    if !cfg!(debug_assertions) {
+        assert!(secs <= 0.2, "{secs} s");
+    }
+}
