@@ -314,7 +314,7 @@ fn truncated_and_mutated_files_never_panic() {
 #[test]
 #[ignore = "timing; run in release"]
 fn large_binary_ply_reads_fast() {
-    let n = 671; // 671² ≈ 450k vertices, 2·670² ≈ 898k triangles
+    let n: i32 = 671; // 671² ≈ 450k vertices, 2·670² ≈ 898k triangles
     let mut body = Vec::new();
     for i in 0..n {
         for j in 0..n {
@@ -326,11 +326,8 @@ fn large_binary_ply_reads_fast() {
     let mut faces = 0;
     for i in 0..n - 1 {
         for j in 0..n - 1 {
-            let v = (i * n + j) as i32;
-            for t in [
-                [v, v + 1, v + n as i32],
-                [v + 1, v + n as i32 + 1, v + n as i32],
-            ] {
+            let v = i * n + j;
+            for t in [[v, v + 1, v + n], [v + 1, v + n + 1, v + n]] {
                 body.push(3);
                 for k in t {
                     body.extend_from_slice(&k.to_le_bytes());
