@@ -6,10 +6,13 @@
 mod common;
 mod convert;
 mod curvature;
+mod demo;
 mod detect;
 mod enhance;
 mod highlight;
 mod info;
+mod render;
+mod surface;
 
 use clap::{Parser, Subcommand};
 
@@ -36,6 +39,8 @@ enum Command {
     Highlight(highlight::Args),
     Detect(detect::Args),
     Enhance(enhance::Args),
+    Render(render::Args),
+    Demo(demo::Args),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -46,6 +51,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Highlight(a) => highlight::run(a),
         Command::Detect(a) => detect::run(a),
         Command::Enhance(a) => enhance::run(a),
+        Command::Render(a) => render::run(a),
+        Command::Demo(a) => demo::run(a),
     }
 }
 
