@@ -1,6 +1,6 @@
 //! `fairline enhance`: feature enhancement by vertex flow (Ji et al. 2011).
 
-use crate::common::{Report, bad_input, check_output, read_json};
+use crate::common::{Report, bad_input, check_output, read_json, spinner};
 use anyhow::{Context, Result};
 use fairline::VertexId;
 use fairline::enhance::{EnhanceError, EnhanceOptions, enhance_features};
@@ -9,7 +9,7 @@ use fairline::mesh::SurfaceMesh;
 use fairline::render::{
     Colormap, Image, Legend, MeshLayer, RenderOptions, Scene, render, scalar_colors, side_by_side,
 };
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Moves the vertices of a triangle mesh from flat regions toward ridges
 /// and valleys (vertex flow, Ji et al. 2011) without changing the
@@ -50,12 +50,15 @@ pub struct Args {
 }
 
 #[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 struct FixedFile {
     vertices: Vec<u32>,
 }
 
 pub fn run(args: Args) -> Result<()> {
+    // every check that can refuse the input runs before anything is written
     check_output(&args.mesh, &args.output)?;
+    check_parent(&args.output)?;
     if let Some(png) = &args.png {
         if png
             .extension()
@@ -69,6 +72,11 @@ pub fn run(args: Args) -> Result<()> {
             )));
         }
         check_output(&args.mesh, png)?;
+        check_parent(png)?;
+    }
+    if let Some(report) = &args.report {
+        check_output(&args.mesh, report)?;
+        check_parent(report)?;
     }
     let mesh = fairline::io::read_mesh(&args.mesh)?;
     if !mesh.is_triangle_mesh() {
@@ -91,19 +99,33 @@ pub fn run(args: Args) -> Result<()> {
         .iterations(args.iterations)
         .fixed(fixed);
     let mut report = Report::new("enhance");
+    let bar = spinner("vertex flow");
     let result = report.time(|| enhance_features(&mesh, &options));
+    bar.finish_and_clear();
     let result = match result {
         Ok(r) => r,
-        Err(e @ (EnhanceError::InvalidOption(_) | EnhanceError::FixedVertexOutOfRange { .. })) => {
-            return Err(bad_input(e.to_string()));
+        Err(EnhanceError::FixedVertexOutOfRange { vertex, vertices }) => {
+            let file = args.fixed.as_deref().unwrap_or(Path::new("--fixed"));
+            return Err(bad_input(format!(
+                "{}: fixed vertex {vertex} does not exist; {} has {vertices} vertices (0 to {})",
+                file.display(),
+                args.mesh.display(),
+                vertices.saturating_sub(1)
+            )));
         }
+        Err(e @ EnhanceError::InvalidOption(_)) => return Err(bad_input(e.to_string())),
         Err(e) => return Err(e).context("vertex flow"),
     };
     let mut out = mesh.clone();
     out.set_positions(result.positions)?;
+    // the picture is made before anything is written
+    let image = match &args.png {
+        Some(_) => Some(picture(&mesh, &out, (900, 800))?),
+        None => None,
+    };
     fairline::io::write_mesh(&args.output, &out)?;
-    if let Some(png) = &args.png {
-        picture(&mesh, &out)?
+    if let (Some(png), Some(image)) = (&args.png, image) {
+        image
             .write_png(png)
             .with_context(|| format!("writing {}", png.display()))?;
     }
@@ -127,14 +149,33 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// Input and output side by side, smooth shaded, coloured by mean curvature
-/// on a common scale (the input's range), with wireframe.
-fn picture(input: &SurfaceMesh, output: &SurfaceMesh) -> Result<Image> {
+/// Refuses an output path whose folder does not exist (before any work, so
+/// that a failed run writes nothing).
+fn check_parent(path: &Path) -> Result<()> {
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => return Ok(()),
+    };
+    if parent.is_dir() {
+        Ok(())
+    } else {
+        Err(bad_input(format!(
+            "{}: folder {} does not exist",
+            path.display(),
+            parent.display()
+        )))
+    }
+}
+
+/// Input and output side by side, `size` pixels each, smooth shaded,
+/// coloured by mean curvature on a common scale (the input's range), with
+/// wireframe, so that the migration of vertices toward features shows.
+pub fn picture(input: &SurfaceMesh, output: &SurfaceMesh, size: (u32, u32)) -> Result<Image> {
     let h_in = principal_curvatures(input, CurvatureMethod::Rusinkiewicz).mean();
     let h_out = principal_curvatures(output, CurvatureMethod::Rusinkiewicz).mean();
     let (c_in, range) = scalar_colors(&h_in, Colormap::Coolwarm, None);
     let (c_out, _) = scalar_colors(&h_out, Colormap::Coolwarm, Some(range));
-    let opts = RenderOptions::with_size(900, 800);
+    let opts = RenderOptions::with_size(size.0, size.1);
     let panel = |mesh: &SurfaceMesh, colors: &[[f32; 3]]| -> Result<Image> {
         let triangles: Vec<[u32; 3]> = mesh
             .faces()
