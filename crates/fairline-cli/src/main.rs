@@ -6,9 +6,12 @@
 mod common;
 mod convert;
 mod curvature;
+mod demo;
 mod detect;
 mod highlight;
 mod info;
+mod render;
+mod surface;
 
 use clap::{Parser, Subcommand};
 
@@ -34,6 +37,8 @@ enum Command {
     Curvature(curvature::Args),
     Highlight(highlight::Args),
     Detect(detect::Args),
+    Render(render::Args),
+    Demo(demo::Args),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -43,6 +48,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Curvature(a) => curvature::run(a),
         Command::Highlight(a) => highlight::run(a),
         Command::Detect(a) => detect::run(a),
+        Command::Render(a) => render::run(a),
+        Command::Demo(a) => demo::run(a),
     }
 }
 
