@@ -103,7 +103,7 @@ pub fn read_triangles(path: &Path) -> Result<(SurfaceMesh, Option<Vec<FaceId>>)>
 /// polylines (groups lines, band_lower, band_upper).
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  fairline highlight spot.ply -o spot-lines.json\n  fairline highlight panel.obj --direction 0,1,0 --plane-normal 0,0,1 --plane-point 0,0,5 --spacing 0.1 -o lines.obj\n  fairline highlight panel.obj --circle-center 0,0,5 --circle-axis 0,0,1 --radii 1,2,3 --band 0.05 -o circles.json"
+    after_help = "Examples:\n  fairline highlight spot.ply -o spot-lines.json --png spot-lines.png\n  fairline highlight panel.obj --direction 0,1,0 --plane-normal 0,0,1 --plane-point 0,0,5 --spacing 0.1 -o lines.obj\n  fairline highlight panel.obj --circle-center 0,0,5 --circle-axis 0,0,1 --radii 1,2,3 --band 0.05 -o circles.json"
 )]
 pub struct Args {
     /// Input triangle (or polygon) mesh.
@@ -125,6 +125,13 @@ pub struct Args {
     /// Output polylines (.json or .obj).
     #[arg(short, long, value_name = "LINES.json|.obj")]
     pub output: PathBuf,
+    /// Picture of the lines on the shaded mesh.
+    #[arg(long, value_name = "IMG.png")]
+    pub png: Option<PathBuf>,
+    /// Viewing direction of the picture X,Y,Z (from the eye towards the
+    /// object; default: down the light-plane normal, slightly tilted).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    pub view: Option<Vec3>,
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
@@ -244,6 +251,10 @@ pub fn line_summary(lines: &HighlightLines) -> Value {
 pub fn run(args: Args) -> Result<()> {
     lines_format(&args.output)?;
     check_output(&args.mesh, &args.output)?;
+    if let Some(p) = &args.png {
+        crate::highlight_png::check_png(p)?;
+        check_output(&args.mesh, p)?;
+    }
     if let Some(b) = args.band
         && !(b > 0.0 && b.is_finite())
     {
@@ -256,6 +267,7 @@ pub fn run(args: Args) -> Result<()> {
     report.set("vertices", mesh.vertex_count());
     report.set("faces", mesh.face_count());
     let bar = spinner("highlight lines");
+    let view_up: (Vec3, Vec3);
     let (lines, bands, radii) = if let (Some(c), Some(t), Some(Radii(radii))) =
         (args.circle_center, args.circle_axis, args.radii.clone())
     {
@@ -275,6 +287,11 @@ pub fn run(args: Args) -> Result<()> {
                 Ok((lines, bands))
             })
             .map_err(to_input_error)?;
+        let axis = lights[0].axis();
+        view_up = (
+            -axis + 0.35 * axis.any_orthonormal_vector(),
+            axis.any_orthonormal_vector(),
+        );
         report.set("light", json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii}));
         (lines, bands, Some(radii))
     } else {
@@ -292,6 +309,10 @@ pub fn run(args: Args) -> Result<()> {
             })
             .map_err(to_input_error)?;
         report.set("light", json!({"kind": "linear", "array": light}));
+        view_up = (
+            crate::highlight_png::default_view(light.plane_normal(), light.across()),
+            light.across(),
+        );
         (lines, bands, None)
     };
     bar.finish_and_clear();
@@ -305,6 +326,26 @@ pub fn run(args: Args) -> Result<()> {
     report.set("nodes", lines.node_count());
     if let Some(b) = &bands {
         report.set("band", json!({"radius": b.radius, "lower_lines": b.lower.lines.len(), "upper_lines": b.upper.lines.len()}));
+    }
+    if let Some(png) = &args.png {
+        let mut all = lines.clone();
+        if let Some(b) = &bands {
+            all.lines.extend(b.lower.lines.iter().cloned());
+            all.lines.extend(b.upper.lines.iter().cloned());
+        }
+        let view = args.view.unwrap_or(view_up.0);
+        if !(view.length() > 0.0) {
+            return Err(bad_input("--view must not be the zero vector"));
+        }
+        let title = format!(
+            "{}: {} highlight lines",
+            args.mesh
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            lines.lines.len()
+        );
+        crate::highlight_png::write(png, &mesh, &all, &[], None, view, view_up.1, title)?;
     }
     report.write(args.report.as_deref())?;
     Ok(())

@@ -9,6 +9,7 @@ mod curvature;
 mod demo;
 mod detect;
 mod highlight;
+mod highlight_png;
 mod info;
 mod render;
 mod surface;

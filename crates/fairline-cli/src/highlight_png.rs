@@ -1,0 +1,100 @@
+//! Pictures for `highlight` and `detect`: highlight lines drawn over the
+//! smooth-shaded mesh, irregular stretches in a warning colour, suggested
+//! regions tinted.
+
+use crate::common::bad_input;
+use anyhow::Result;
+use fairline::SurfaceMesh;
+use fairline::Vec3;
+use fairline::highlight::HighlightLines;
+use fairline::mesh::FaceId;
+use fairline::picture::MeshView;
+use fairline::render::{PolylineLayer, RenderOptions, Scene, render};
+use std::path::Path;
+
+/// Dark ink for highlight lines (linear light).
+const LINE: [f32; 3] = [0.015, 0.02, 0.06];
+/// Warning colour for irregular stretches (linear light).
+const WARN: [f32; 3] = [0.95, 0.12, 0.02];
+/// Tint of faces in a suggested region (linear light).
+const REGION: [f32; 3] = [0.85, 0.55, 0.25];
+
+/// Checks that `path` names a .png file.
+pub fn check_png(path: &Path) -> Result<()> {
+    if path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"))
+    {
+        Ok(())
+    } else {
+        Err(bad_input(format!(
+            "{}: --png must name a .png file",
+            path.display()
+        )))
+    }
+}
+
+/// The default view for lights with plane normal Z: looking down −Z,
+/// tilted a little so the relief shows.
+pub fn default_view(z: Vec3, across: Vec3) -> Vec3 {
+    -z + 0.35 * across
+}
+
+/// Renders the mesh with `lines`, the `flagged` stretches and the
+/// `region` faces tinted, and writes the PNG.
+pub fn write(
+    path: &Path,
+    mesh: &SurfaceMesh,
+    lines: &HighlightLines,
+    flagged: &[Vec<Vec3>],
+    region: Option<&[FaceId]>,
+    view: Vec3,
+    up: Vec3,
+    title: String,
+) -> Result<()> {
+    let mv = MeshView::new(mesh);
+    let base = [0.55f32, 0.57, 0.60];
+    let mut colors = vec![base; mesh.vertex_count()];
+    if let Some(faces) = region {
+        for f in faces {
+            for v in mesh.triangle(*f) {
+                colors[v.idx()] = REGION;
+            }
+        }
+    }
+    let layer = mv.layer().with_colors(&colors);
+    let mut polylines: Vec<PolylineLayer> = lines
+        .lines
+        .iter()
+        .map(|l| PolylineLayer {
+            points: l.points.clone(),
+            closed: l.closed,
+            color: LINE,
+            width_px: 1.6,
+        })
+        .collect();
+    polylines.extend(flagged.iter().map(|pts| PolylineLayer {
+        points: pts.clone(),
+        closed: false,
+        color: WARN,
+        width_px: 3.5,
+    }));
+    let mut opts = RenderOptions::with_size(1200, 900);
+    opts.view_dir = view;
+    opts.up = if view.normalize_or_zero().cross(up).length() > 1e-3 {
+        up
+    } else {
+        view.any_orthonormal_vector()
+    };
+    let scene = Scene {
+        meshes: vec![layer],
+        polylines,
+        points: Vec::new(),
+        legend: None,
+        title: Some(title),
+    };
+    let image = render(&scene, &opts)?;
+    image.write_png(path)?;
+    Ok(())
+}
