@@ -66,6 +66,9 @@ pub fn run(args: Args) -> Result<()> {
         crate::highlight_png::check_png(p)?;
         check_output(&args.mesh, p)?;
     }
+    if args.view.is_some_and(|v| !(v.length() > 0.0)) {
+        return Err(bad_input("--view must not be the zero vector"));
+    }
     let (mesh, source) = read_triangles(&args.mesh)?;
     let light = args.light.light_array(&mesh)?;
     let opts = DetectOptions {
@@ -144,9 +147,6 @@ pub fn run(args: Args) -> Result<()> {
             light.plane_normal(),
             light.across(),
         ));
-        if !(view.length() > 0.0) {
-            return Err(bad_input("--view must not be the zero vector"));
-        }
         let title = format!(
             "{}: {} region(s)",
             args.mesh

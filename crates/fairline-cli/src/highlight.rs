@@ -255,6 +255,9 @@ pub fn run(args: Args) -> Result<()> {
         crate::highlight_png::check_png(p)?;
         check_output(&args.mesh, p)?;
     }
+    if args.view.is_some_and(|v| !(v.length() > 0.0)) {
+        return Err(bad_input("--view must not be the zero vector"));
+    }
     if let Some(b) = args.band
         && !(b > 0.0 && b.is_finite())
     {
@@ -334,9 +337,6 @@ pub fn run(args: Args) -> Result<()> {
             all.lines.extend(b.upper.lines.iter().cloned());
         }
         let view = args.view.unwrap_or(view_up.0);
-        if !(view.length() > 0.0) {
-            return Err(bad_input("--view must not be the zero vector"));
-        }
         let title = format!(
             "{}: {} highlight lines",
             args.mesh

@@ -82,6 +82,12 @@ fn plane_lines_at_known_positions_in_json_and_obj() {
     std::fs::write(&mesh, height_field_obj(21, |_, _| 0.0)).unwrap();
     let out = d.join("lines.json");
     let rep = d.join("r.json");
+    let lights = d.join("lights.json");
+    std::fs::write(
+        &lights,
+        r#"{"plane_point":[0,0,3],"plane_normal":[0,0,1],"direction":[1,0,0],"spacing":0.5}"#,
+    )
+    .unwrap();
     let o = run(&[
         "highlight",
         mesh.to_str().unwrap(),
@@ -111,6 +117,19 @@ fn plane_lines_at_known_positions_in_json_and_obj() {
     }
     let r = json(&rep);
     assert_eq!(r["command"], "highlight");
+    let png = d.join("lines.png");
+    let o = run(&[
+        "highlight",
+        mesh.to_str().unwrap(),
+        "--lights",
+        lights.to_str().unwrap(),
+        "-o",
+        d.join("l3.json").to_str().unwrap(),
+        "--png",
+        png.to_str().unwrap(),
+    ]);
+    ok(&o);
+    assert!(fairline::render::Image::decode_png(&std::fs::read(&png).unwrap()).is_ok());
     assert!(r["time_s"].as_f64().unwrap() >= 0.0);
     assert_eq!(r["lines"], 9);
     // OBJ output: one `l` per line
@@ -129,12 +148,6 @@ fn plane_lines_at_known_positions_in_json_and_obj() {
     let text = std::fs::read_to_string(&obj).unwrap();
     assert!(text.lines().filter(|l| l.starts_with("l ")).count() >= 8);
     // same light from a file gives byte-identical output
-    let lights = d.join("lights.json");
-    std::fs::write(
-        &lights,
-        r#"{"plane_point":[0,0,3],"plane_normal":[0,0,1],"direction":[1,0,0],"spacing":0.5}"#,
-    )
-    .unwrap();
     let out2 = d.join("lines2.json");
     let o = run(&[
         "highlight",
@@ -219,6 +232,24 @@ fn bad_input_exits_with_2_and_writes_nothing() {
         vec!["highlight", m, "--band", "-2", "-o", o_s],
         vec!["detect", m, "-o", d.join("r.obj").to_str().unwrap()],
         vec!["detect", m, "--threshold", "0", "-o", o_s],
+        vec![
+            "detect",
+            m,
+            "-o",
+            o_s,
+            "--png",
+            d.join("p.jpg").to_str().unwrap(),
+        ],
+        vec![
+            "highlight",
+            m,
+            "-o",
+            o_s,
+            "--png",
+            d.join("p.png").to_str().unwrap(),
+            "--view",
+            "0,0,0",
+        ],
     ] {
         let o = run(&args);
         assert_eq!(
@@ -253,6 +284,7 @@ fn detect_finds_the_bump_and_not_a_clean_field() {
         std::fs::write(&mesh, text).unwrap();
         let out = d.join(format!("{name}-region.json"));
         let rep = d.join(format!("{name}-report.json"));
+        let png = d.join(format!("{name}.png"));
         let o = run(&[
             "detect",
             mesh.to_str().unwrap(),
@@ -262,8 +294,24 @@ fn detect_finds_the_bump_and_not_a_clean_field() {
             out.to_str().unwrap(),
             "--report",
             rep.to_str().unwrap(),
+            "--png",
+            png.to_str().unwrap(),
         ]);
         ok(&o);
+        // the picture shows dark lines, and red stretches only with the bump
+        let img = fairline::render::Image::decode_png(&std::fs::read(&png).unwrap()).unwrap();
+        let dark = img
+            .pixels
+            .iter()
+            .filter(|p| p[0] < 60 && p[1] < 60 && p[2] < 90)
+            .count();
+        let red = img
+            .pixels
+            .iter()
+            .filter(|p| p[0] > 200 && p[1] < 110 && p[2] < 80)
+            .count();
+        assert!(dark > 1000, "{name}: {dark} dark pixels");
+        assert_eq!(red > 50, has_bump, "{name}: {red} red pixels");
         let faces = json(&out)["faces"].as_array().unwrap().len();
         let r = json(&rep);
         assert_eq!(r["command"], "detect");
