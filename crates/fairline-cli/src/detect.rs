@@ -66,7 +66,7 @@ pub fn run(args: Args) -> Result<()> {
         crate::highlight_png::check_png(p)?;
         check_output(&args.mesh, p)?;
     }
-    if args.view.is_some_and(|v| !(v.length() > 0.0)) {
+    if args.view.is_some_and(|v| v.length() == 0.0) {
         return Err(bad_input("--view must not be the zero vector"));
     }
     let (mesh, source) = read_triangles(&args.mesh)?;
@@ -159,12 +159,13 @@ pub fn run(args: Args) -> Result<()> {
         crate::highlight_png::write(
             png,
             &mesh,
-            &lines,
-            &stretches,
-            Some(&faces),
-            view,
-            light.across(),
-            title,
+            crate::highlight_png::Overlay {
+                lines: &lines,
+                flagged: &stretches,
+                region: Some(&faces),
+                view: (view, light.across()),
+                title,
+            },
         )?;
     }
     report.write(args.report.as_deref())?;

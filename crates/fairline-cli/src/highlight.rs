@@ -255,7 +255,7 @@ pub fn run(args: Args) -> Result<()> {
         crate::highlight_png::check_png(p)?;
         check_output(&args.mesh, p)?;
     }
-    if args.view.is_some_and(|v| !(v.length() > 0.0)) {
+    if args.view.is_some_and(|v| v.length() == 0.0) {
         return Err(bad_input("--view must not be the zero vector"));
     }
     if let Some(b) = args.band
@@ -345,7 +345,17 @@ pub fn run(args: Args) -> Result<()> {
                 .unwrap_or_default(),
             lines.lines.len()
         );
-        crate::highlight_png::write(png, &mesh, &all, &[], None, view, view_up.1, title)?;
+        crate::highlight_png::write(
+            png,
+            &mesh,
+            crate::highlight_png::Overlay {
+                lines: &all,
+                flagged: &[],
+                region: None,
+                view: (view, view_up.1),
+                title,
+            },
+        )?;
     }
     report.write(args.report.as_deref())?;
     Ok(())

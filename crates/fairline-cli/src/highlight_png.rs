@@ -41,18 +41,29 @@ pub fn default_view(z: Vec3, across: Vec3) -> Vec3 {
     -z + 0.35 * across
 }
 
-/// Renders the mesh with `lines`, the `flagged` stretches and the
-/// `region` faces tinted, and writes the PNG.
-pub fn write(
-    path: &Path,
-    mesh: &SurfaceMesh,
-    lines: &HighlightLines,
-    flagged: &[Vec<Vec3>],
-    region: Option<&[FaceId]>,
-    view: Vec3,
-    up: Vec3,
-    title: String,
-) -> Result<()> {
+/// What to draw over the mesh.
+pub struct Overlay<'a> {
+    /// Highlight lines (dark).
+    pub lines: &'a HighlightLines,
+    /// Irregular stretches (warning colour).
+    pub flagged: &'a [Vec<Vec3>],
+    /// Faces to tint.
+    pub region: Option<&'a [FaceId]>,
+    /// Viewing direction (eye towards object) and up hint.
+    pub view: (Vec3, Vec3),
+    /// Title at the top.
+    pub title: String,
+}
+
+/// Renders the mesh with the overlay and writes the PNG.
+pub fn write(path: &Path, mesh: &SurfaceMesh, overlay: Overlay<'_>) -> Result<()> {
+    let Overlay {
+        lines,
+        flagged,
+        region,
+        view: (view, up),
+        title,
+    } = overlay;
     let mv = MeshView::new(mesh);
     let base = [0.55f32, 0.57, 0.60];
     let mut colors = vec![base; mesh.vertex_count()];
