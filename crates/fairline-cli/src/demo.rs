@@ -127,7 +127,7 @@ fn write_index(out: &Path, sections: &[Section]) -> Result<()> {
         ));
     }
     html.push_str("</body></html>\n");
-    fairline::io::atomic_write(&out.join("index.html"), |w| {
+    fairline::io::atomic_write(out.join("index.html"), |w| {
         use std::io::Write;
         w.write_all(html.as_bytes())
     })?;
@@ -172,7 +172,7 @@ fn sphere_section(demo: &Demo) -> Result<Section> {
         "sphere-mean-curvature.png",
         false,
     )?;
-    fairline::io::write_mesh(&demo.out.join("sphere.ply"), &mesh)?;
+    fairline::io::write_mesh(demo.out.join("sphere.ply"), &mesh)?;
     Ok(Section {
         title: "Sphere".into(),
         text: "Icosphere of radius 1 (2562 vertices). Both estimators should give k1 = k2 = 1; the legend shows how close the mean curvature is.".into(),
@@ -237,7 +237,7 @@ fn wavy_section(demo: &Demo) -> Result<Section> {
         "wavy-mean-curvature.png",
         true,
     )?;
-    fairline::io::write_mesh(&demo.out.join("wavy.obj"), &mesh)?;
+    fairline::io::write_mesh(demo.out.join("wavy.obj"), &mesh)?;
     Ok(Section {
         title: "Wavy panel".into(),
         text: "A height field z = 0.2 sin 3x cos 2y, triangulated with alternating diagonals, coloured by mean curvature.".into(),
@@ -281,7 +281,7 @@ fn quad_section(demo: &Demo) -> Result<Section> {
         "quad-structure-lines.png",
         &mesh_picture(&mesh, &picture, &demo.opts)?,
     )?;
-    fairline::io::write_mesh(&demo.out.join("quad-saddle.obj"), &mesh)?;
+    fairline::io::write_mesh(demo.out.join("quad-saddle.obj"), &mesh)?;
     Ok(Section {
         title: "Quad grid".into(),
         text: "A 16 × 16 quad saddle z = 0.3 (x² − y²); its structure lines are traced straight through the regular vertices.".into(),

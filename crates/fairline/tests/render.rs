@@ -173,6 +173,22 @@ fn render_sample_pictures() {
     };
     let panel_img = render(&scene, &opts).unwrap();
     panel_img.write_png(dir.join("panel_lines.png")).unwrap();
+    // Close-up of the same scene: line anti-aliasing, joins and depth test.
+    let c0 = Vec3::new(0.0, 0.0, height(0.0, 0.0));
+    let close = RenderOptions {
+        width: 320,
+        height: 240,
+        camera: Some(Camera::framing(
+            c0 - Vec3::splat(0.25),
+            c0 + Vec3::splat(0.25),
+            opts.view_dir,
+            opts.up,
+            4.0 / 3.0,
+        )),
+        ..opts.clone()
+    };
+    let closeup = render(&scene, &close).unwrap();
+    closeup.write_png(dir.join("panel_closeup.png")).unwrap();
 
     // 3. Wireframe of a coarse torus and panel, plus one-sided back faces.
     let (cp, cn, ct) = torus(Vec3::ZERO, 1.0, 0.4, 36, 14);
@@ -214,6 +230,34 @@ fn render_sample_pictures() {
         &["before: perspective", "after: ortho (x=1.5e-3)"],
     );
     both.write_png(dir.join("side_by_side.png")).unwrap();
+
+    // 4b. Small picture, view parallel to the up hint, sequential map with legend.
+    let (hp, hn, ht) = panel(60);
+    let z: Vec<f64> = hp.iter().map(|p| p.z).collect();
+    let (hc, (zl, zh)) = scalar_colors(&z, Colormap::Viridis, None);
+    let scene = Scene {
+        meshes: vec![MeshLayer::new(&hp, &ht).with_normals(&hn).with_colors(&hc)],
+        legend: Some(Legend {
+            title: "height".into(),
+            colormap: Colormap::Viridis,
+            min: zl,
+            max: zh,
+        }),
+        title: Some("top view".into()),
+        ..Default::default()
+    };
+    let small = render(
+        &scene,
+        &RenderOptions {
+            width: 400,
+            height: 300,
+            view_dir: Vec3::NEG_Z,
+            up: Vec3::Z,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    small.write_png(dir.join("small_top_view.png")).unwrap();
 
     // 5. Font sheet.
     let mut sheet = Image::new(620, 130, [255, 255, 255, 255]);

@@ -293,12 +293,15 @@ pub fn write_ply_with_vertex_properties(
     atomic_write(path, |w| ply::write(w, soup, props))
 }
 
+/// Named per-vertex scalar properties, in file order.
+pub type VertexProperties = Vec<(String, Vec<f64>)>;
+
 /// Reads a PLY file and every scalar vertex property other than `x`, `y`,
 /// `z` (which are in the soup), by name and in file order, converted to f64.
 /// Such values may be NaN or infinite; coordinates may not.
 pub fn read_ply_vertex_properties(
     path: impl AsRef<Path>,
-) -> Result<(Soup, Vec<(String, Vec<f64>)>), IoError> {
+) -> Result<(Soup, VertexProperties), IoError> {
     let path = path.as_ref();
     let bytes = read_bytes(path)?;
     ply::read(&bytes, path, true)

@@ -305,7 +305,7 @@ pub(super) fn read(
     bytes: &[u8],
     path: &Path,
     collect: bool,
-) -> Result<(Soup, Vec<(String, Vec<f64>)>), IoError> {
+) -> Result<(Soup, super::VertexProperties), IoError> {
     if bytes.iter().all(|b| b.is_ascii_whitespace()) {
         return Err(format_err(path, Location::File, "empty file"));
     }

@@ -120,7 +120,7 @@ pub(crate) fn glyph(c: char) -> [u8; 5] {
     let index = if (FIRST as u32..=126).contains(&code) {
         (code - FIRST as u32) as usize
     } else {
-        ('?' as u8 - FIRST) as usize
+        (b'?' - FIRST) as usize
     };
     GLYPHS[index]
 }

@@ -83,7 +83,9 @@ pub struct MeshLayer<'a> {
     /// them); `None` shades each triangle flat with its face normal.
     pub normals: Option<&'a [Vec3]>,
     /// Per-vertex linear-light colours (0..1), interpolated across triangles
-    /// (e.g. from [`scalar_colors`]); `None` uses `base_color`.
+    /// (e.g. from [`scalar_colors`]); `None` uses `base_color`. Coloured
+    /// layers get a weaker specular highlight so it does not wash out the
+    /// colour map.
     pub colors: Option<&'a [[f32; 3]]>,
     /// Linear-light surface colour when `colors` is `None`.
     pub base_color: [f32; 3],
@@ -368,17 +370,17 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Image, RenderError>
             scale,
         );
     }
-    if legend_w > 0 {
-        if let Some(legend) = &scene.legend {
-            legend.draw(
-                &mut img,
-                (w - legend_w) as i64,
-                title_h as i64,
-                rh,
-                scale,
-                text_colour,
-            );
-        }
+    if legend_w > 0
+        && let Some(legend) = &scene.legend
+    {
+        legend.draw(
+            &mut img,
+            (w - legend_w) as i64,
+            title_h as i64,
+            rh,
+            scale,
+            text_colour,
+        );
     }
     Ok(img)
 }

@@ -24,13 +24,18 @@ use crate::Vec3;
 
 /// Sub-sample steps per sample in fixed point.
 const SUB: i64 = 256;
-/// Output rows per band.
+/// Output rows per band (fewer for very wide images, see [`MAX_BAND_SAMPLES`]).
 const BAND_ROWS: usize = 16;
+/// Upper bound on the samples of one band, to bound per-thread memory.
+const MAX_BAND_SAMPLES: usize = 1 << 22;
 /// Vertices further than this many samples outside the image are rejected
 /// (keeps the i64 edge functions far from overflow).
 const GUARD: f64 = 262_144.0;
 /// Wireframe line width in output pixels.
 const WIRE_WIDTH_PX: f64 = 1.0;
+/// Specular factor on layers with per-vertex colours, so highlights do not
+/// wash out the colour map's values.
+const COLORED_SPECULAR: f64 = 0.3;
 /// Colour of back faces of one-sided layers (linear light).
 const BACK_FACE_COLOR: [f32; 3] = [0.16, 0.09, 0.05];
 
@@ -142,6 +147,8 @@ struct Ctx<'s, 'a> {
     segs: Vec<Seg>,
     /// Extra depth rows above/below a band, in samples.
     margin: usize,
+    /// Output rows per band.
+    band_rows: usize,
     background: [f32; 3],
     light: Shading,
     /// Allowed depth of a line behind the surface (world units).
@@ -273,10 +280,10 @@ pub(crate) fn render_view(
                 push_seg(&mut segs, pa, pb, hw, layer, line.color);
             }
         }
-        if n == 1 {
-            if let Some((pa, pb)) = clip_project(line.points[0], line.points[0]) {
-                push_seg(&mut segs, pa, pb, hw, layer, line.color);
-            }
+        if n == 1
+            && let Some((pa, pb)) = clip_project(line.points[0], line.points[0])
+        {
+            push_seg(&mut segs, pa, pb, hw, layer, line.color);
         }
         layer += 1;
     }
@@ -317,6 +324,7 @@ pub(crate) fn render_view(
         tri_offset,
         segs,
         margin,
+        band_rows: (MAX_BAND_SAMPLES / (sw * s)).clamp(1, BAND_ROWS),
         background: opts.background,
         light: Shading {
             key: to_world(l.key_dir),
@@ -333,8 +341,9 @@ pub(crate) fn render_view(
     };
 
     // 2. Binning.
-    let band_s = BAND_ROWS * s;
-    let nbands = h.div_ceil(BAND_ROWS);
+    let band_rows = ctx.band_rows;
+    let band_s = band_rows * s;
+    let nbands = h.div_ceil(band_rows);
     let band_range = |y_lo: f64, y_hi: f64, extra: f64| -> (u32, u32) {
         let lo = ((y_lo - extra).floor().max(0.0)) as usize / band_s;
         let hi_f = (y_hi + extra).ceil();
@@ -373,7 +382,7 @@ pub(crate) fn render_view(
     // 3. Bands.
     let mut pixels = vec![[0u8; 4]; w * h];
     pixels
-        .par_chunks_mut(BAND_ROWS * w)
+        .par_chunks_mut(band_rows * w)
         .enumerate()
         .for_each(|(band, out)| ctx.render_band(band, tri_bins.get(band), seg_bins.get(band), out));
     Image {
@@ -395,6 +404,8 @@ struct TriShade {
     wire: Option<[f32; 3]>,
     /// 1 / length of the edge opposite each vertex (samples).
     inv_len: [f64; 3],
+    /// Specular strength factor (reduced on colour-mapped layers).
+    spec_scale: f64,
     two_sided: bool,
 }
 
@@ -427,8 +438,8 @@ impl<'s, 'a> Ctx<'s, 'a> {
     fn render_band(&self, band: usize, tris: &[u32], segs: &[u32], out: &mut [[u8; 4]]) {
         let s = self.s;
         let sw = self.sw;
-        let oy0 = band * BAND_ROWS;
-        let oy1 = (oy0 + BAND_ROWS).min(self.h);
+        let oy0 = band * self.band_rows;
+        let oy1 = (oy0 + self.band_rows).min(self.h);
         let (y0, y1) = (oy0 * s, oy1 * s);
         let ey0 = y0.saturating_sub(self.margin);
         let ey1 = (y1 + self.margin).min(self.sh);
@@ -582,6 +593,11 @@ impl<'s, 'a> Ctx<'s, 'a> {
             base: m.base_color,
             wire: m.wireframe,
             inv_len: [1.0 / len(1, 2), 1.0 / len(2, 0), 1.0 / len(0, 1)],
+            spec_scale: if colors.is_some() {
+                COLORED_SPECULAR
+            } else {
+                1.0
+            },
             two_sided: m.two_sided,
         }
     }
@@ -649,7 +665,7 @@ impl<'s, 'a> Ctx<'s, 'a> {
             let hf = (l.fill + to_eye).normalize_or_zero();
             spec += 0.5 * l.specular * l.fill_i * n.dot(hf).max(0.0).powf(l.shininess);
         }
-        let (diffuse, spec) = (diffuse as f32, spec as f32);
+        let (diffuse, spec) = (diffuse as f32, (spec * t.spec_scale) as f32);
         for c in col.iter_mut() {
             *c = *c * diffuse + spec;
         }
