@@ -161,6 +161,7 @@ pub fn run(args: Args) -> Result<()> {
             &mesh,
             crate::highlight_png::Overlay {
                 lines: &lines,
+                bands: None,
                 flagged: &stretches,
                 region: Some(&faces),
                 view: (view, light.across()),

@@ -30,7 +30,9 @@ pub struct LightArgs {
     /// Spacing s between lights (default: about 20 lights across the mesh).
     #[arg(long)]
     pub spacing: Option<f64>,
-    /// Light array JSON {"plane_point","plane_normal","direction","spacing"}.
+    /// Lights from JSON (DESIGN.md §5): a linear array
+    /// {"plane_point","plane_normal","direction","spacing"}, or (for
+    /// `highlight` only) circular lights {"center","axis","radii"}.
     #[arg(long, value_name = "FILE.json", conflicts_with_all = ["direction", "plane_normal", "plane_point", "spacing"])]
     pub lights: Option<PathBuf>,
     /// Smallest |Z·N| at which a vertex gets a highlight distance.
@@ -43,6 +45,12 @@ impl LightArgs {
     /// the given fields overridden.
     pub fn light_array(&self, mesh: &SurfaceMesh) -> Result<LightArray> {
         if let Some(path) = &self.lights {
+            if circular_file(path)?.is_some() {
+                return Err(bad_input(format!(
+                    "{}: circular lights are drawn by `fairline highlight` only; this command needs a linear light array {{\"plane_point\",\"plane_normal\",\"direction\",\"spacing\"}}",
+                    path.display()
+                )));
+            }
             return read_json::<LightArray>(path);
         }
         let (lo, hi) = fairline::mesh::bounding_box(mesh.positions())
@@ -60,6 +68,20 @@ impl LightArgs {
     /// Model options.
     pub fn options(&self) -> HighlightOptions {
         HighlightOptions::default().min_normal_cos(self.min_normal_cos)
+    }
+}
+
+/// The circular lights of a `--lights` file when it holds the circular form
+/// {"center","axis","radii"} of DESIGN.md §5 (recognised by its "center"
+/// key); `None` for any other JSON object (read as a linear array).
+pub fn circular_file(path: &Path) -> Result<Option<CircularLights>> {
+    let v: Value = read_json(path)?;
+    if v.get("center").is_some() {
+        let c: CircularLights =
+            serde_json::from_value(v).map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+        Ok(Some(c))
+    } else {
+        Ok(None)
     }
 }
 
@@ -111,7 +133,7 @@ pub struct Args {
     #[command(flatten)]
     pub light: LightArgs,
     /// Centre of the circular lights.
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z", requires_all = ["circle_axis", "radii"])]
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z", requires_all = ["circle_axis", "radii"], conflicts_with = "lights")]
     pub circle_center: Option<Vec3>,
     /// Axis of the circular lights.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z", requires_all = ["circle_center", "radii"])]
@@ -271,15 +293,23 @@ pub fn run(args: Args) -> Result<()> {
     report.set("faces", mesh.face_count());
     let bar = spinner("highlight lines");
     let view_up: (Vec3, Vec3);
-    let (lines, bands, radii) = if let (Some(c), Some(t), Some(Radii(radii))) =
-        (args.circle_center, args.circle_axis, args.radii.clone())
-    {
-        let spec = CircularLights {
+    let circular = match (args.circle_center, args.circle_axis, args.radii.clone()) {
+        (Some(c), Some(t), Some(Radii(radii))) => Some(CircularLights {
             center: c.to_array(),
             axis: t.to_array(),
-            radii: radii.clone(),
-        };
+            radii,
+        }),
+        _ => match &args.light.lights {
+            Some(path) => circular_file(path)?,
+            None => None,
+        },
+    };
+    let (lines, bands, radii) = if let Some(spec) = circular {
+        let radii = spec.radii.clone();
         let lights: Vec<CircularLight> = spec.lights().map_err(to_input_error)?;
+        if lights.is_empty() {
+            return Err(bad_input("circular lights need at least one radius"));
+        }
         let (lines, bands) = report
             .time(|| -> Result<_, HighlightError> {
                 let lines = circular_highlight_lines(&mesh, &lights)?;
@@ -331,11 +361,11 @@ pub fn run(args: Args) -> Result<()> {
         report.set("band", json!({"radius": b.radius, "lower_lines": b.lower.lines.len(), "upper_lines": b.upper.lines.len()}));
     }
     if let Some(png) = &args.png {
-        let mut all = lines.clone();
-        if let Some(b) = &bands {
-            all.lines.extend(b.lower.lines.iter().cloned());
+        let band_lines = bands.as_ref().map(|b| {
+            let mut all = b.lower.clone();
             all.lines.extend(b.upper.lines.iter().cloned());
-        }
+            all
+        });
         let view = args.view.unwrap_or(view_up.0);
         let title = format!(
             "{}: {} highlight lines",
@@ -349,7 +379,8 @@ pub fn run(args: Args) -> Result<()> {
             png,
             &mesh,
             crate::highlight_png::Overlay {
-                lines: &all,
+                lines: &lines,
+                bands: band_lines.as_ref(),
                 flagged: &[],
                 region: None,
                 view: (view, view_up.1),
