@@ -30,52 +30,79 @@ fn ms(s: f64) -> String {
     format!("{:.1}", s * 1e3)
 }
 
+/// CPU time (ns) used so far by all threads of this process (Linux
+/// /proc/self/task/*/schedstat; 0 elsewhere). The machine is shared, so
+/// wall times depend on the load; CPU time does much less.
+fn cpu_ns() -> u64 {
+    let Ok(dir) = std::fs::read_dir("/proc/self/task") else {
+        return 0;
+    };
+    dir.filter_map(|t| t.ok())
+        .filter_map(|t| std::fs::read_to_string(t.path().join("schedstat")).ok())
+        .filter_map(|s| s.split_whitespace().next()?.parse::<u64>().ok())
+        .sum()
+}
+
+/// "wall median (CPU per run)" in ms over `runs` calls of `f` after a warm-up.
+fn timed<T>(runs: usize, mut f: impl FnMut() -> T) -> String {
+    std::hint::black_box(f());
+    let c0 = cpu_ns();
+    let wall = median_secs(runs, f);
+    // median_secs makes one extra warm-up call
+    let cpu = (cpu_ns() - c0) as f64 * 1e-9 / (runs + 1) as f64;
+    format!("{} ({})", ms(wall), ms(cpu))
+}
+
 fn main() {
     let runs = runs(7);
     let opts = HighlightOptions::default();
     let sizes = sizes(&[110_000, 450_000, 1_000_000, 2_000_000]);
     let meshes: Vec<SurfaceMesh> = sizes.iter().map(|&n| test_surface(n)).collect();
 
-    println!("\nWhole model (normals + distances + nodes + polylines), median of {runs} runs\n");
+    println!(
+        "\nWhole model (normals + distances + nodes + polylines): wall median of {runs} runs (CPU time per run, all threads), ms\n"
+    );
     row(&[
         "vertices".into(),
         "normals ms".into(),
         "model (normals, distances, segments) ms".into(),
         "polylines ms".into(),
         "total ms".into(),
-        "ns / vertex".into(),
+        "CPU ns / vertex".into(),
         "lines".into(),
         "nodes".into(),
     ]);
     row(&vec!["---".to_string(); 8]);
     for mesh in &meshes {
         let light = light_for(mesh);
-        let t_norm = median_secs(runs, || geom::vertex_normals(mesh));
-        let t_model = median_secs(runs, || {
+        let t_norm = timed(runs, || geom::vertex_normals(mesh));
+        let t_model = timed(runs, || {
             HighlightModel::new(mesh, light, opts).expect("tri")
         });
         let model = HighlightModel::new(mesh, light, opts).expect("tri");
-        let t_lines = median_secs(runs, || model.lines(mesh));
-        let t_total = median_secs(runs, || {
+        let t_lines = timed(runs, || model.lines(mesh));
+        let c0 = cpu_ns();
+        let w_total = median_secs(runs, || {
             HighlightModel::new(mesh, light, opts)
                 .expect("tri")
                 .lines(mesh)
         });
+        let c_total = (cpu_ns() - c0) as f64 * 1e-9 / (runs + 1) as f64;
         let lines = model.lines(mesh);
         row(&[
             mesh.vertex_count().to_string(),
-            ms(t_norm),
-            ms(t_model),
-            ms(t_lines),
-            ms(t_total),
-            format!("{:.0}", t_total * 1e9 / mesh.vertex_count() as f64),
+            t_norm,
+            t_model,
+            t_lines,
+            format!("{} ({})", ms(w_total), ms(c_total)),
+            format!("{:.0}", c_total * 1e9 / mesh.vertex_count() as f64),
             lines.lines.len().to_string(),
             lines.node_count().to_string(),
         ]);
     }
 
     println!(
-        "\nIncremental update after moving a disc of vertices along their normals (median of {runs} runs)\n"
+        "\nIncremental update after moving a disc of vertices along their normals: wall median of {runs} runs (CPU per run), ms\n"
     );
     row(&[
         "vertices".into(),
@@ -117,7 +144,7 @@ fn main() {
         }
         only.sort_by(f64::total_cmp);
         both.sort_by(f64::total_cmp);
-        let t_full = median_secs(runs, || {
+        let t_full = timed(runs, || {
             HighlightModel::new(&moved_mesh, light, opts)
                 .expect("tri")
                 .lines(&moved_mesh)
@@ -128,11 +155,14 @@ fn main() {
             recomputed.to_string(),
             format!("{:.3}", only[only.len() / 2] * 1e3),
             ms(both[both.len() / 2]),
-            ms(t_full),
+            t_full,
         ]);
     }
 
-    println!("\nCircular lights (3 radii), bands and detection (median of {runs} runs)\n");
+    println!(
+        "\nCircular lights (3 radii), bands and detection: wall median (CPU per run), ms; {} runs for circular and detect\n",
+        runs.min(3)
+    );
     row(&[
         "vertices".into(),
         "circular, 3 radii ms".into(),
@@ -146,25 +176,21 @@ fn main() {
             .iter()
             .map(|&r| CircularLight::new(Vec3::new(0.0, 0.0, 3.0), Vec3::Z, r).expect("light"))
             .collect();
-        let t_circ = median_secs(runs, || {
+        let heavy = runs.min(3);
+        let t_circ = timed(heavy, || {
             circular_highlight_lines(mesh, &circles).expect("tri")
         });
         let model = HighlightModel::new(mesh, light, opts).expect("tri");
-        let t_band = median_secs(runs, || model.bands(mesh, 0.1 * light.spacing()));
+        let t_band = timed(runs, || model.bands(mesh, 0.1 * light.spacing()));
         let det_opts = DetectOptions {
             plane_normal: Some(light.plane_normal()),
             ..DetectOptions::default()
         };
-        let t_det = median_secs(runs, || {
+        let t_det = timed(heavy, || {
             let m = HighlightModel::new(mesh, light, opts).expect("tri");
             let lines = m.lines(mesh);
             detect_irregularities(mesh, &lines, light.spacing(), &det_opts).expect("detect")
         });
-        row(&[
-            mesh.vertex_count().to_string(),
-            ms(t_circ),
-            ms(t_band),
-            ms(t_det),
-        ]);
+        row(&[mesh.vertex_count().to_string(), t_circ, t_band, t_det]);
     }
 }
