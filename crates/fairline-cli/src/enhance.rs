@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 /// position of the input (internally normalised by the mean edge length).
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Example:\n  fairline enhance bob.ply --lambda 0.5 --mu 0.5 -o bob-enhanced.ply --report r.json --png bob-enhanced.png\n\nReport keys: flipped_triangles quality_before quality_after max_displacement histogram_before histogram_after timings."
+    after_help = "Example:\n  fairline enhance bob.ply --lambda 0.5 --mu 0.5 -o bob-enhanced.ply --report r.json --png bob-enhanced.png\n\nReport keys: flipped_triangles backtracked_vertices quality_before quality_after histogram_before histogram_after max_displacement max_distance_to_input timings."
 )]
 pub struct Args {
     /// Input triangle mesh (.obj .ply .off .stl).
@@ -143,6 +143,8 @@ pub fn run(args: Args) -> Result<()> {
     report.set("histogram_after", &r.quality_after.histogram);
     report.set("max_displacement", r.max_displacement);
     report.set("mean_displacement", r.mean_displacement);
+    report.set("max_distance_to_input", r.max_distance_to_input);
+    report.set("mean_distance_to_input", r.mean_distance_to_input);
     report.set("edge_length", r.edge_length);
     report.set("timings", &r.timings);
     report.write(args.report.as_deref())?;

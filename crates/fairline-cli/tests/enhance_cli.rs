@@ -64,6 +64,7 @@ fn enhance_writes_mesh_report_and_picture_and_keeps_constraints() {
         "quality_before",
         "quality_after",
         "max_displacement",
+        "max_distance_to_input",
         "histogram_before",
         "histogram_after",
         "timings",
