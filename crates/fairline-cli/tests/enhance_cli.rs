@@ -226,3 +226,28 @@ fn enhance_runs_on_a_real_coarse_mesh() {
     let n1 = fairline::geom::face_normals(&result);
     assert!(n0.iter().zip(&n1).all(|(a, b)| a.dot(*b) > 0.0));
 }
+
+/// `fairline demo` has a vertex-flow section: its picture is written and
+/// linked, and its numbers show vertices moving onto the rounded edges of
+/// the cube.
+#[test]
+fn demo_has_a_vertex_flow_section() {
+    let d = tmp("demo");
+    let out = d.join("demo");
+    let o = run(&["demo", "--out", s(&out), "--size", "320x240"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let v = &r["sections"]["Vertex flow"];
+    let before = v["share_on_rounded_edges_before"].as_f64().unwrap();
+    let after = v["share_on_rounded_edges_after"].as_f64().unwrap();
+    assert!(
+        after > before + 0.1,
+        "share on the rounded edges {before} -> {after}"
+    );
+    assert_eq!(v["flipped_triangles"].as_u64(), Some(0));
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("vertex-flow.png"));
+    let png = std::fs::read(out.join("vertex-flow.png")).unwrap();
+    assert!(png.starts_with(b"\x89PNG"));
+}
