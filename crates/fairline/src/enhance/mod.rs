@@ -238,9 +238,10 @@ pub struct EnhanceReport {
     /// Mean vertex displacement, in input units.
     pub mean_displacement: f64,
     /// Largest distance of a free vertex to the input surface around it, in
-    /// input units: the distance to the nearest input triangle of the
-    /// vertex's input 2-ring. It bounds the distance to the whole input
-    /// surface from above (another part of the surface may be nearer).
+    /// input units: input faces are searched ring by ring from the vertex's
+    /// input position until a ring brings no nearer face. It bounds the
+    /// distance to the whole input surface from above (another part of the
+    /// surface, e.g. across a thin part, may be nearer).
     pub max_distance_to_input: f64,
     /// Mean of the same distance over the free vertices, in input units.
     pub mean_distance_to_input: f64,
@@ -434,11 +435,18 @@ pub fn enhance_features(
     })
 }
 
+/// Rings of input faces searched at most by [`distance_to_input`].
+const DISTANCE_RINGS: usize = 16;
+
 /// Largest and mean distance of the `free` vertices at `positions` to the
-/// input triangles incident to their input one-ring (so covering the
-/// 2-ring): an upper bound of the distance to the input surface.
+/// input surface near them: the input faces are searched ring by ring
+/// around the vertex's input position (its incident faces, then those of
+/// its one-ring, ...) until a ring brings no nearer face (at most
+/// [`DISTANCE_RINGS`] rings). An upper bound of the distance to the whole
+/// input surface, which another part of the surface may come nearer to.
 fn distance_to_input(mesh: &SurfaceMesh, positions: &[Vec3], free: &[u32]) -> (f64, f64) {
     use rayon::prelude::*;
+    use std::collections::HashSet;
     let input = mesh.positions();
     let distances: Vec<f64> = free
         .par_iter()
@@ -446,12 +454,33 @@ fn distance_to_input(mesh: &SurfaceMesh, positions: &[Vec3], free: &[u32]) -> (f
             let v = VertexId(v);
             let x = positions[v.idx()];
             let mut best = f64::INFINITY;
-            for w in std::iter::once(v).chain(mesh.one_ring(v)) {
-                for f in mesh.vertex_faces(w) {
-                    let t = mesh.triangle(f).map(|u| input[u.idx()]);
-                    let b = crate::geom::closest_point_on_triangle(x, t[0], t[1], t[2]);
-                    best = best.min(x.distance(b[0] * t[0] + b[1] * t[1] + b[2] * t[2]));
+            let mut seen_vertices: HashSet<u32> = HashSet::from([v.0]);
+            let mut seen_faces = HashSet::new();
+            let mut frontier = vec![v];
+            for _ in 0..DISTANCE_RINGS {
+                let mut ring_best = f64::INFINITY;
+                let mut next = Vec::new();
+                for &w in &frontier {
+                    for f in mesh.vertex_faces(w) {
+                        if !seen_faces.insert(f.0) {
+                            continue;
+                        }
+                        let t = mesh.triangle(f).map(|u| input[u.idx()]);
+                        let b = crate::geom::closest_point_on_triangle(x, t[0], t[1], t[2]);
+                        let d = x.distance(b[0] * t[0] + b[1] * t[1] + b[2] * t[2]);
+                        ring_best = ring_best.min(d);
+                    }
+                    next.extend(mesh.one_ring(w).filter(|u| seen_vertices.insert(u.0)));
                 }
+                if ring_best < best {
+                    best = ring_best;
+                } else if best.is_finite() {
+                    break;
+                }
+                if next.is_empty() {
+                    break;
+                }
+                frontier = next;
             }
             if best.is_finite() { best } else { 0.0 }
         })

@@ -306,8 +306,8 @@ fn real_meshes_gain_vertices_in_curved_regions_and_stay_close() {
             out.report.flipped_triangles
         );
         assert!(after > 1.01 * before, "{name}: {before} -> {after}");
-        // the reported distance (to the nearest input triangle of the
-        // 2-ring) bounds the distance to the whole input from above (another
+        // the reported distance (to the input surface around the vertex)
+        // bounds the distance to the whole input from above (another
         // part of the surface, e.g. across an ear, may be nearer) and is
         // small too
         let true_max = projected.iter().map(|p| p.0).fold(0.0, f64::max);
@@ -337,4 +337,36 @@ fn real_meshes_gain_vertices_in_curved_regions_and_stay_close() {
         );
         assert_eq!(count_flips(&m, &out.positions), 0);
     }
+}
+
+#[test]
+fn flat_real_outline_slides_within_its_plane() {
+    // lego_open.ply: a flat open outline in the plane y = 0. Without
+    // curvature F_em vanishes and F_sd only holds the normal direction, so
+    // F_smo evens out the vertices within the plane: they may move by
+    // edge lengths, yet stay on the input surface; the boundary stays.
+    let Some(m) = shared_mesh("lego_open.ply") else {
+        return;
+    };
+    assert!(m.positions().iter().all(|p| p.y == 0.0));
+    let out = enhance_features(&m, &EnhanceOptions::default()).unwrap();
+    let e = out.report.edge_length;
+    assert!(out.report.max_displacement > e, "vertices slide");
+    for (v, (a, b)) in m.positions().iter().zip(&out.positions).enumerate() {
+        assert!(b.y.abs() <= 1e-12 * e, "vertex {v} left the plane: {b}");
+        if m.is_boundary_vertex(VertexId(v as u32)) {
+            assert_eq!(
+                a.to_array().map(f64::to_bits),
+                b.to_array().map(f64::to_bits)
+            );
+        }
+    }
+    let r = &out.report;
+    assert!(
+        r.max_distance_to_input <= 1e-12 * e,
+        "{}",
+        r.max_distance_to_input
+    );
+    assert_eq!(count_flips(&m, &out.positions), 0);
+    assert!(r.quality_after.mean > r.quality_before.mean);
 }
