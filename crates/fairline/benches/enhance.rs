@@ -16,26 +16,32 @@
 mod common;
 
 use common::{cpu_ns, row, runs, sizes};
-use fairline::enhance::{EnhanceOptions, enhance_features};
+use fairline::enhance::{EnhanceOptions, EnhanceSolver, enhance_features};
 use fairline::shapes::torus;
 use std::time::Instant;
 
 fn main() {
     let runs = runs(3).max(1);
-    let options = EnhanceOptions::default();
+    let solver = match std::env::var("FAIRLINE_BENCH_SOLVER").as_deref() {
+        Ok("direct") => EnhanceSolver::Direct,
+        _ => EnhanceSolver::Cg,
+    };
+    let options = EnhanceOptions::default().solver(solver);
     row(&[
         "vertices",
+        "solver",
         "median wall s",
         "CPU s per run",
         "curvature s",
         "assembly s",
         "factorisation s",
-        "solve s",
+        "solve s (CG iterations)",
         "repair s",
-        "factorisation share",
+        "other s",
+        "solve share",
     ]
     .map(String::from));
-    row(&["---"; 9].map(String::from));
+    row(&["---"; 11].map(String::from));
     for n in sizes(&[10_000, 100_000]) {
         let n_minor = ((n as f64 / 4.0).sqrt().round() as u32).max(3);
         let n_major = ((n as f64 / n_minor as f64).round() as u32).max(3);
@@ -45,22 +51,40 @@ fn main() {
         for _ in 0..runs {
             let t = Instant::now();
             let r = enhance_features(&mesh, &options).expect("enhance");
-            results.push((t.elapsed().as_secs_f64(), r.report.timings));
+            results.push((
+                t.elapsed().as_secs_f64(),
+                r.report.timings,
+                r.report.cg_iterations,
+            ));
         }
         let cpu = (cpu_ns() - c0) as f64 * 1e-9 / runs as f64;
         results.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let (median, t) = &results[results.len() / 2];
+        let (median, t, iterations) = &results[results.len() / 2];
         let f = |x: f64| format!("{x:.3}");
         row(&[
             mesh.vertex_count().to_string(),
+            format!("{solver:?}").to_lowercase(),
             f(*median),
             f(cpu),
             f(t.curvature_s),
             f(t.assembly_s),
             f(t.factorisation_s),
-            f(t.solve_s),
+            if *iterations > 0 {
+                format!("{} ({iterations})", f(t.solve_s))
+            } else {
+                f(t.solve_s)
+            },
             f(t.repair_s),
-            format!("{:.0} %", 100.0 * t.factorisation_s / t.total_s.max(1e-12)),
+            f(t.total_s
+                - t.curvature_s
+                - t.assembly_s
+                - t.factorisation_s
+                - t.solve_s
+                - t.repair_s),
+            format!(
+                "{:.0} %",
+                100.0 * (t.factorisation_s + t.solve_s) / t.total_s.max(1e-12)
+            ),
         ]);
     }
 }

@@ -4,8 +4,10 @@
 //!
 //! All matrices are faer `SparseColMat<usize, f64>`.
 
+mod cg;
 mod cholesky;
 
+pub use cg::{CgOptions, CgReport, normal_equations_cg};
 pub use cholesky::{CholeskySolver, least_squares, normal_matrix, sparse_from_triplets};
 
 use thiserror::Error;
