@@ -4,14 +4,16 @@
 //! flip repair: the whole computation of `fairline enhance` without file
 //! input/output), the CPU time per run (all threads; the machine is shared,
 //! so wall times depend on the load) and the phases of the median run with
-//! the share of the sparse Cholesky factorisation. Prints a Markdown table.
+//! the share of the linear solve (factorisation and triangular solves, or
+//! conjugate gradients). Prints a Markdown table.
 //!
 //! Run: `cargo bench -p fairline --bench enhance`
-//! (`FAIRLINE_BENCH_RUNS`, default 3, and `FAIRLINE_BENCH_SIZES`, default
-//! `10000,100000`, override runs and sizes). One million vertices does not
-//! fit a 24 GiB machine: the Cholesky factor of its 3M × 3M normal matrix
-//! (3 × 3 blocks over the 2-ring of each vertex) has 3.2 · 10⁹ nonzeros
-//! (26 GB) after the AMD ordering; see BENCHMARKS.md.
+//! (`FAIRLINE_BENCH_RUNS`, default 3, `FAIRLINE_BENCH_SIZES`, default
+//! `10000,100000`, and `FAIRLINE_BENCH_SOLVER`, `auto` (default), `cg` or
+//! `direct`, override runs, sizes and solver). One million vertices takes
+//! about 3.3 GB with conjugate gradients; the direct solver does not fit a
+//! 24 GiB machine there (the Cholesky factor of its 3M × 3M normal matrix
+//! has 3.2 · 10⁹ nonzeros, 26 GB); see BENCHMARKS.md.
 
 mod common;
 
@@ -24,7 +26,8 @@ fn main() {
     let runs = runs(3).max(1);
     let solver = match std::env::var("FAIRLINE_BENCH_SOLVER").as_deref() {
         Ok("direct") => EnhanceSolver::Direct,
-        _ => EnhanceSolver::Cg,
+        Ok("cg") => EnhanceSolver::Cg,
+        _ => EnhanceSolver::Auto,
     };
     let options = EnhanceOptions::default().solver(solver);
     row(&[

@@ -23,10 +23,45 @@
 //!   (Eq. (8)) weighted by μ_i = exp(−(|k_i1| + |k_i2|)) (Eq. (10)): three
 //!   rows per vertex.
 //!
-//! The 8n × 3n system (Eq. (20)) is assembled once per iteration in parallel
-//! and solved through a sparse Cholesky factorisation of its normal
-//! equations ([`crate::solve::normal_matrix`], [`crate::solve::CholeskySolver`],
-//! fill-reducing ordering by faer).
+//! The 8n × 3n system LX = b (Eq. (20), §4.3) is assembled once per
+//! iteration in parallel and solved in the least-squares sense, i.e. its
+//! normal equations (LᵀL + εI) X = Lᵀb + εp are solved (ε below), by one of
+//! two solvers ([`EnhanceSolver`]) that give the same solution:
+//!
+//! - **Direct** — what §4.3 does ("we compute the Cholesky factorization
+//!   for a 3n × 3n sparse matrix", TAUCS): [`crate::solve::normal_matrix`]
+//!   and [`crate::solve::CholeskySolver`] (faer, AMD ordering, supernodal).
+//!   LᵀL couples the three coordinates of each vertex with those of its
+//!   whole 2-ring (the F_em rows mix x, y, z over the 1-ring; only the
+//!   F_smo rows are per coordinate), so its factor fills in heavily:
+//!   1.3 · 10⁷ nonzeros at 10k vertices, 2.2 · 10⁸ at 100k, 3.2 · 10⁹ (26 GB)
+//!   at 1M; the factorisation was 84–91 % of the time and 1M did not fit.
+//! - **Conjugate gradients** — [`crate::solve::normal_equations_cg`]:
+//!   block-Jacobi (3 × 3 per vertex) preconditioned CG on the same normal
+//!   equations, matrix-free (LᵀL v = Lᵀ(L v), never formed), parallel and
+//!   deterministic, warm-started at the current positions (the solution is
+//!   within an edge length of them), stopped at a relative residual of
+//!   [`CG_TOLERANCE`] = 10⁻¹², at which the result equals the Cholesky one to
+//!   about 10⁻¹² of the bounding-box diagonal (tested to 10⁻⁸). The memory is
+//!   that of L (about 3 GB at 1M vertices). Where the curvature pins the
+//!   tangential motion (F_sd with d|k| > 0, F_em) CG converges in about 25
+//!   iterations at any size (tori of 10k–1M vertices); where it does not —
+//!   flat parts, where only the F_smo bi-Laplacian holds the tangential
+//!   motion — the count grows with the size of the flat part (rounded cube:
+//!   190 at 10k, about 1500 at 100k; the real scan `spot`, 2.9k vertices:
+//!   730), and the direct solve may be faster.
+//!
+//! The default, [`EnhanceSolver::Auto`], runs CG within a budget of
+//! [`AUTO_BUDGET`] √n iterations — about the cost of the factorisation,
+//! which grows like n^1.5 — and falls back to the direct solve when CG has
+//! not converged, up to [`AUTO_DIRECT_LIMIT`] free vertices (beyond, the
+//! factor does not fit in memory and CG continues). So smooth curved meshes
+//! meet the speed targets (BENCHMARKS.md, "Vertex flow") and meshes with
+//! large flat parts cost at most about twice the direct solve. (A two-level
+//! preconditioner with a piecewise-constant coarse space on vertex
+//! aggregates was tried and did not reduce the CG iterations on the
+//! rounded cube: such a coarse space does not approximate the bi-Laplacian's
+//! smooth modes.)
 //!
 //! **Normalisations.** Eq. (5) and Eq. (7) average F_em over the edges and
 //! F_sd over the vertices; fairline makes all three terms means over the
