@@ -288,11 +288,12 @@ impl QualityStats {
 pub struct EnhanceTimings {
     /// Principal curvatures (Rusinkiewicz).
     pub curvature_s: f64,
-    /// Rows of Eq. (20) and the normal matrix.
+    /// Rows of Eq. (20) (and the normal matrix, for the direct solver).
     pub assembly_s: f64,
-    /// Sparse Cholesky factorisation (symbolic analysis included).
+    /// Sparse Cholesky factorisation (symbolic analysis included; 0 when
+    /// conjugate gradients solved the system).
     pub factorisation_s: f64,
-    /// Triangular solves.
+    /// Conjugate gradients and the triangular solves of the direct solver.
     pub solve_s: f64,
     /// Flip detection and repair.
     pub repair_s: f64,
@@ -363,7 +364,9 @@ pub struct Enhanced {
 /// Returns the new positions (the connectivity is unchanged) and a report.
 ///
 /// Errors: non-triangle faces, λ ≤ 0, μ < 0, non-finite options, zero
-/// iterations or bins, fixed vertices out of range, a failed factorisation.
+/// iterations or bins, fixed vertices out of range, a failed factorisation,
+/// conjugate gradients that did not converge ([`EnhanceSolver::Cg`], or
+/// [`EnhanceSolver::Auto`] above [`AUTO_DIRECT_LIMIT`] free vertices).
 pub fn enhance_features(
     mesh: &SurfaceMesh,
     options: &EnhanceOptions,
