@@ -14,12 +14,17 @@ pub mod detect;
 mod light;
 mod linear;
 pub mod quartic;
+pub mod surface;
 
 pub use circular::{circular_highlight_bands, circular_highlight_lines};
 pub use contour::{HighlightLine, HighlightLines, NodeId};
 pub use detect::{DetectOptions, Detection, IrregularRegion, LineFairness, detect_irregularities};
 pub use light::{CircleApproach, CircularLight, CircularLights, LightArray};
 pub use linear::{HighlightModel, HighlightOptions, highlight_lines};
+pub use surface::{
+    SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight,
+    surface_highlight_lines,
+};
 
 use crate::mesh::MeshError;
 
