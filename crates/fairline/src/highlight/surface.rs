@@ -314,11 +314,6 @@ pub fn contour_field(
         GridEdge::U(a, b) => ((a, b), (a + 1, b)),
         GridEdge::V(a, b) => ((a, b), (a, b + 1)),
     };
-    let crossed = |e: GridEdge| {
-        let ((a0, b0), (a1, b1)) = ends(e);
-        let (x, y) = (at(a0, b0), at(a1, b1));
-        valid(x, y) && above(x.unwrap()) != above(y.unwrap())
-    };
     // Segments per cell (parallel over cell rows, deterministic order).
     let segments: Vec<[usize; 2]> = (0..nu - 1)
         .into_par_iter()
@@ -386,7 +381,7 @@ pub fn contour_field(
     let degree = |p: usize| adj[p].iter().filter(|&&q| q != usize::MAX).count();
     let mut used = vec![false; nodes.len()];
     let mut chains: Vec<(bool, Vec<usize>)> = Vec::new();
-    let mut walk = |start: usize, used: &mut Vec<bool>| -> (bool, Vec<usize>) {
+    let walk = |start: usize, used: &mut Vec<bool>| -> (bool, Vec<usize>) {
         let mut chain = vec![start];
         used[start] = true;
         let mut prev = usize::MAX;
