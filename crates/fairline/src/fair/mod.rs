@@ -1,1 +1,9 @@
-//! Placeholder: filled in by its issue.
+//! Fairing: circular-highlight fairing of B-spline surfaces (Nishiyama et
+//! al. §3) in [`surface`].
+
+pub mod surface;
+
+pub use surface::{
+    EndpointPair, Endpoints, FairIteration, SurfaceFairError, SurfaceFairOptions,
+    SurfaceFairReport, TargetCurve, endpoints_around, fair_surface, target_curves,
+};

@@ -292,10 +292,6 @@ pub fn contour_field(
     let at = |a: usize, b: usize| field.samples[a * nv + b];
     let above = |s: FieldSample| s.value >= level;
     let same_branch = |x: FieldSample, y: FieldSample| (x.branch - y.branch).cos() > 0.0;
-    let valid = |x: Option<FieldSample>, y: Option<FieldSample>| match (x, y) {
-        (Some(x), Some(y)) => same_branch(x, y),
-        _ => false,
-    };
     // Edge ids: U(a, b) -> a * nv + b; V(a, b) -> n_u_edges + a * (nv - 1) + b.
     let n_u_edges = (nu - 1) * nv;
     let edge_id = |e: GridEdge| match e {
@@ -509,3 +505,6 @@ fn refine_on_edge(
     }
     lerp(best.0)
 }
+
+#[cfg(test)]
+mod tests;
