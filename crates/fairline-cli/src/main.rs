@@ -8,10 +8,12 @@ mod convert;
 mod curvature;
 mod demo;
 mod detect;
+mod fair_surface;
 mod highlight;
 mod info;
 mod render;
 mod surface;
+mod surface_highlight;
 
 use clap::{Parser, Subcommand};
 
@@ -37,6 +39,7 @@ enum Command {
     Curvature(curvature::Args),
     Highlight(highlight::Args),
     Detect(detect::Args),
+    FairSurface(fair_surface::Args),
     Render(render::Args),
     Demo(demo::Args),
 }
@@ -48,6 +51,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Curvature(a) => curvature::run(a),
         Command::Highlight(a) => highlight::run(a),
         Command::Detect(a) => detect::run(a),
+        Command::FairSurface(a) => fair_surface::run(a),
         Command::Render(a) => render::run(a),
         Command::Demo(a) => demo::run(a),
     }

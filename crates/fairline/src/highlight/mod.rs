@@ -22,8 +22,8 @@ pub use detect::{DetectOptions, Detection, IrregularRegion, LineFairness, detect
 pub use light::{CircleApproach, CircularLight, CircularLights, LightArray};
 pub use linear::{HighlightModel, HighlightOptions, highlight_lines};
 pub use surface::{
-    SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight,
-    surface_highlight_lines,
+    SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight, linear_lights,
+    surface_highlight_lines, surface_signed_distance,
 };
 
 use crate::mesh::MeshError;

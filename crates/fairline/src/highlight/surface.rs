@@ -156,6 +156,52 @@ pub fn distance_field(
     DistanceField { us, vs, samples }
 }
 
+/// The lights m of a linear light array whose highlight lines can appear
+/// on the surface: every m between the smallest and largest highlight
+/// distance d_P / s sampled on an `n × n` grid (Yong et al. Eq. (1)–(2)),
+/// at most `max_lights` of them (the middle ones). Empty when no grid point
+/// sees the lights (|Z·N| < `min_cos` everywhere).
+pub fn linear_lights(
+    surface: &BSplineSurface,
+    array: LightArray,
+    min_cos: f64,
+    n: usize,
+    max_lights: usize,
+) -> Vec<SurfaceLight> {
+    let probe = SurfaceLight::Linear {
+        array,
+        index: 0,
+        min_cos,
+    };
+    let field = distance_field(surface, &probe, n, n);
+    let (lo, hi) = field
+        .samples
+        .iter()
+        .flatten()
+        .map(|s| s.value / array.spacing())
+        .filter(|x| x.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
+    if !(lo <= hi) || max_lights == 0 {
+        return Vec::new();
+    }
+    let (mut m0, mut m1) = (lo.ceil() as i64, hi.floor() as i64);
+    let count = (m1 - m0 + 1).max(0) as usize;
+    if count > max_lights {
+        let mid = (m0 + m1) / 2;
+        m0 = mid - (max_lights as i64) / 2;
+        m1 = m0 + max_lights as i64 - 1;
+    }
+    (m0..=m1)
+        .map(|index| SurfaceLight::Linear {
+            array,
+            index,
+            min_cos,
+        })
+        .collect()
+}
+
 /// Options of [`surface_highlight_lines`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfaceHighlightOptions {
@@ -276,7 +322,9 @@ enum GridEdge {
 /// - each point is refined along its grid edge by the Illinois variant of
 ///   regula falsi on the exact field until |d_s − level| ≤ `opts.tolerance`
 ///   (or `opts.max_refine_steps`); if the field becomes undefined inside
-///   the edge, the linear interpolation is kept.
+///   the edge, or the refinement finds no zero (the sign change is a jump
+///   of d_s, e.g. where the nearest root of the quartic switches), the
+///   point is dropped and its line split there.
 pub fn contour_field(
     surface: &BSplineSurface,
     light: &SurfaceLight,
@@ -412,8 +460,9 @@ pub fn contour_field(
             chains.push(walk(p, &mut used));
         }
     }
-    // Refine every node onto the level along its grid edge.
-    let refined: Vec<[f64; 2]> = nodes
+    // Refine every node onto the level along its grid edge; a crossing that
+    // is a jump of the field (no zero inside the edge) is dropped.
+    let refined: Vec<Option<[f64; 2]>> = nodes
         .par_iter()
         .map(|&id| {
             let e = edge_of(id);
@@ -425,11 +474,35 @@ pub fn contour_field(
             refine_on_edge(surface, light, level, p0, p1, f0, f1, opts)
         })
         .collect();
-    chains
+    let mut pieces: Vec<(bool, Vec<[f64; 2]>)> = Vec::new();
+    for (closed, chain) in chains {
+        if chain.iter().all(|&p| refined[p].is_some()) {
+            pieces.push((closed, chain.iter().filter_map(|&p| refined[p]).collect()));
+            continue;
+        }
+        // Split at dropped nodes; a loop is opened at its first dropped node.
+        let n = chain.len();
+        let shift = if closed {
+            chain
+                .iter()
+                .position(|&p| refined[p].is_none())
+                .unwrap_or(0)
+        } else {
+            0
+        };
+        let mut run: Vec<[f64; 2]> = Vec::new();
+        for k in 0..n {
+            match refined[chain[(shift + k) % n]] {
+                Some(p) => run.push(p),
+                None => pieces.push((false, std::mem::take(&mut run))),
+            }
+        }
+        pieces.push((false, run));
+    }
+    pieces
         .into_iter()
-        .filter(|(_, c)| c.len() >= 2)
-        .map(|(closed, chain)| {
-            let uv: Vec<[f64; 2]> = chain.iter().map(|&p| refined[p]).collect();
+        .filter(|(_, uv)| uv.len() >= 2)
+        .map(|(closed, uv)| {
             let points = uv.iter().map(|&[u, v]| surface.eval(u, v)).collect();
             SurfaceHighlightLine {
                 light: light_index,
@@ -446,6 +519,9 @@ pub fn contour_field(
 /// The point of the segment `p0 → p1` where the field equals `level`, with
 /// `f0 = field(p0) − level` and `f1 = field(p1) − level` of opposite signs:
 /// Illinois regula falsi on the exact field (safeguarded by the bracket).
+/// `None` when the sign change is a jump of the field rather than a zero
+/// (the best |f| found stays above 1e-6 of the end values and above the
+/// tolerance).
 #[allow(clippy::too_many_arguments)]
 fn refine_on_edge(
     surface: &BSplineSurface,
@@ -456,7 +532,7 @@ fn refine_on_edge(
     f0: f64,
     f1: f64,
     opts: &SurfaceHighlightOptions,
-) -> [f64; 2] {
+) -> Option<[f64; 2]> {
     let lerp = |t: f64| [p0[0] + t * (p1[0] - p0[0]), p0[1] + t * (p1[1] - p0[1])];
     let linear_t = |fa: f64, fb: f64, ta: f64, tb: f64| {
         let den = fa - fb;
@@ -467,10 +543,10 @@ fn refine_on_edge(
         }
     };
     if f0 == 0.0 {
-        return p0;
+        return Some(p0);
     }
     if f1 == 0.0 {
-        return p1;
+        return Some(p1);
     }
     let (mut ta, mut fa, mut tb, mut fb) = (0.0, f0, 1.0, f1);
     let mut best = (linear_t(fa, fb, ta, tb), f64::INFINITY);
@@ -479,7 +555,8 @@ fn refine_on_edge(
         let t = linear_t(fa, fb, ta, tb);
         let [u, v] = lerp(t);
         let Some(ft) = surface_signed_distance(surface, light, u, v).map(|d| d - level) else {
-            break;
+            // Undefined inside the edge: no reliable zero there.
+            return None;
         };
         if ft.abs() < best.1 {
             best = (t, ft.abs());
@@ -503,7 +580,10 @@ fn refine_on_edge(
             side = 1;
         }
     }
-    lerp(best.0)
+    // A true zero brings |f| down to the tolerance (or to rounding level on
+    // a collapsed bracket); a jump leaves it near the jump's size.
+    let accept = best.1 <= opts.tolerance.max(1e-6 * f0.abs().max(f1.abs()));
+    accept.then(|| lerp(best.0))
 }
 
 #[cfg(test)]
