@@ -17,7 +17,7 @@ use std::path::PathBuf;
 /// each region with its score, size, centre and the lines involved.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  fairline detect panel.obj -o region.json --report detect.json\n  fairline detect spot.ply --plane-normal 0,1,1 --spacing 0.02 -o region.json"
+    after_help = "Examples:\n  fairline detect panel.obj -o region.json --report detect.json\n  fairline detect spot.ply --plane-normal 0,1,1 --spacing 0.02 -o region.json --png detect.png"
 )]
 pub struct Args {
     /// Input triangle (or polygon) mesh.
@@ -36,6 +36,14 @@ pub struct Args {
     /// Output region JSON.
     #[arg(short, long, value_name = "REGION.json")]
     pub output: PathBuf,
+    /// Picture: highlight lines on the shaded mesh, irregular stretches in
+    /// red, suggested regions tinted orange.
+    #[arg(long, value_name = "IMG.png")]
+    pub png: Option<PathBuf>,
+    /// Viewing direction of the picture X,Y,Z (from the eye towards the
+    /// object; default: down the light-plane normal, slightly tilted).
+    #[arg(long, value_parser = crate::common::parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    pub view: Option<fairline::Vec3>,
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
@@ -54,6 +62,13 @@ pub fn run(args: Args) -> Result<()> {
         )));
     }
     check_output(&args.mesh, &args.output)?;
+    if let Some(p) = &args.png {
+        crate::highlight_png::check_png(p)?;
+        check_output(&args.mesh, p)?;
+    }
+    if args.view.is_some_and(|v| v.length() == 0.0) {
+        return Err(bad_input("--view must not be the zero vector"));
+    }
     let (mesh, source) = read_triangles(&args.mesh)?;
     let light = args.light.light_array(&mesh)?;
     let opts = DetectOptions {
@@ -122,6 +137,38 @@ pub fn run(args: Args) -> Result<()> {
     report.set("region_faces", all.len());
     report.set("regions", regions);
     report.set("flagged_lines", flagged);
+    if let Some(png) = &args.png {
+        let stretches: Vec<Vec<fairline::Vec3>> = det
+            .lines
+            .iter()
+            .flat_map(|l| l.stretches.iter().map(|s| s.points.clone()))
+            .collect();
+        let view = args.view.unwrap_or(crate::highlight_png::default_view(
+            light.plane_normal(),
+            light.across(),
+        ));
+        let title = format!(
+            "{}: {} region(s)",
+            args.mesh
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            det.regions.len()
+        );
+        let faces = det.all_faces();
+        crate::highlight_png::write(
+            png,
+            &mesh,
+            crate::highlight_png::Overlay {
+                lines: &lines,
+                bands: None,
+                flagged: &stretches,
+                region: Some(&faces),
+                view: (view, light.across()),
+                title,
+            },
+        )?;
+    }
     report.write(args.report.as_deref())?;
     Ok(())
 }

@@ -30,7 +30,9 @@ pub struct LightArgs {
     /// Spacing s between lights (default: about 20 lights across the mesh).
     #[arg(long)]
     pub spacing: Option<f64>,
-    /// Light array JSON {"plane_point","plane_normal","direction","spacing"}.
+    /// Lights from JSON (DESIGN.md §5): a linear array
+    /// {"plane_point","plane_normal","direction","spacing"}, or (for
+    /// `highlight` only) circular lights {"center","axis","radii"}.
     #[arg(long, value_name = "FILE.json", conflicts_with_all = ["direction", "plane_normal", "plane_point", "spacing"])]
     pub lights: Option<PathBuf>,
     /// Smallest |Z·N| at which a vertex gets a highlight distance.
@@ -43,6 +45,12 @@ impl LightArgs {
     /// the given fields overridden.
     pub fn light_array(&self, mesh: &SurfaceMesh) -> Result<LightArray> {
         if let Some(path) = &self.lights {
+            if circular_file(path)?.is_some() {
+                return Err(bad_input(format!(
+                    "{}: circular lights are drawn by `fairline highlight` only; this command needs a linear light array {{\"plane_point\",\"plane_normal\",\"direction\",\"spacing\"}}",
+                    path.display()
+                )));
+            }
             return read_json::<LightArray>(path);
         }
         let (lo, hi) = fairline::mesh::bounding_box(mesh.positions())
@@ -69,6 +77,20 @@ impl LightArgs {
     /// Model options.
     pub fn options(&self) -> HighlightOptions {
         HighlightOptions::default().min_normal_cos(self.min_normal_cos)
+    }
+}
+
+/// The circular lights of a `--lights` file when it holds the circular form
+/// {"center","axis","radii"} of DESIGN.md §5 (recognised by its "center"
+/// key); `None` for any other JSON object (read as a linear array).
+pub fn circular_file(path: &Path) -> Result<Option<CircularLights>> {
+    let v: Value = read_json(path)?;
+    if v.get("center").is_some() {
+        let c: CircularLights =
+            serde_json::from_value(v).map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+        Ok(Some(c))
+    } else {
+        Ok(None)
     }
 }
 
@@ -116,7 +138,7 @@ pub fn read_triangles(path: &Path) -> Result<(SurfaceMesh, Option<Vec<FaceId>>)>
 /// squares, refined onto the true zero; JSON lines carry "uv" and "points".
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  fairline highlight spot.ply -o spot-lines.json\n  fairline highlight panel.obj --direction 0,1,0 --plane-normal 0,0,1 --plane-point 0,0,5 --spacing 0.1 -o lines.obj\n  fairline highlight panel.obj --circle-center 0,0,5 --circle-axis 0,0,1 --radii 1,2,3 --band 0.05 -o circles.json\n  fairline highlight roof.json --circle-center 0,0,3 --circle-axis 0,0,1 --radii 0.8,1,1.2 --grid 300 -o lines.json --png lines.png --svg uv.svg"
+    after_help = "Examples:\n  fairline highlight spot.ply -o spot-lines.json --png spot-lines.png\n  fairline highlight panel.obj --direction 0,1,0 --plane-normal 0,0,1 --plane-point 0,0,5 --spacing 0.1 -o lines.obj\n  fairline highlight panel.obj --circle-center 0,0,5 --circle-axis 0,0,1 --radii 1,2,3 --band 0.05 -o circles.json\n  fairline highlight roof.json --circle-center 0,0,3 --circle-axis 0,0,1 --radii 0.8,1,1.2 --grid 300 -o lines.json --png lines.png --svg uv.svg"
 )]
 pub struct Args {
     /// Input triangle (or polygon) mesh.
@@ -124,7 +146,7 @@ pub struct Args {
     #[command(flatten)]
     pub light: LightArgs,
     /// Centre of the circular lights.
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z", requires_all = ["circle_axis", "radii"])]
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z", requires_all = ["circle_axis", "radii"], conflicts_with = "lights")]
     pub circle_center: Option<Vec3>,
     /// Axis of the circular lights.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z", requires_all = ["circle_center", "radii"])]
@@ -138,9 +160,13 @@ pub struct Args {
     /// Output polylines (.json or .obj).
     #[arg(short, long, value_name = "LINES.json|.obj")]
     pub output: PathBuf,
-    /// Picture of the shaded surface with the lines.
+    /// Picture of the lines on the shaded mesh (or surface).
     #[arg(long, value_name = "IMG.png")]
     pub png: Option<PathBuf>,
+    /// Viewing direction of the picture X,Y,Z (from the eye towards the
+    /// object; default: down the light-plane normal, slightly tilted).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    pub view: Option<Vec3>,
     /// B-spline surfaces: grid points per parameter direction on which d_s
     /// is sampled before contouring.
     #[arg(long, default_value_t = 200, value_name = "N")]
@@ -274,6 +300,13 @@ pub fn run(args: Args) -> Result<()> {
     }
     lines_format(&args.output)?;
     check_output(&args.mesh, &args.output)?;
+    if let Some(p) = &args.png {
+        crate::highlight_png::check_png(p)?;
+        check_output(&args.mesh, p)?;
+    }
+    if args.view.is_some_and(|v| v.length() == 0.0) {
+        return Err(bad_input("--view must not be the zero vector"));
+    }
     if let Some(b) = args.band
         && !(b > 0.0 && b.is_finite())
     {
@@ -286,15 +319,24 @@ pub fn run(args: Args) -> Result<()> {
     report.set("vertices", mesh.vertex_count());
     report.set("faces", mesh.face_count());
     let bar = spinner("highlight lines");
-    let (lines, bands, radii) = if let (Some(c), Some(t), Some(Radii(radii))) =
-        (args.circle_center, args.circle_axis, args.radii.clone())
-    {
-        let spec = CircularLights {
+    let view_up: (Vec3, Vec3);
+    let circular = match (args.circle_center, args.circle_axis, args.radii.clone()) {
+        (Some(c), Some(t), Some(Radii(radii))) => Some(CircularLights {
             center: c.to_array(),
             axis: t.to_array(),
-            radii: radii.clone(),
-        };
+            radii,
+        }),
+        _ => match &args.light.lights {
+            Some(path) => circular_file(path)?,
+            None => None,
+        },
+    };
+    let (lines, bands, radii) = if let Some(spec) = circular {
+        let radii = spec.radii.clone();
         let lights: Vec<CircularLight> = spec.lights().map_err(to_input_error)?;
+        if lights.is_empty() {
+            return Err(bad_input("circular lights need at least one radius"));
+        }
         let (lines, bands) = report
             .time(|| -> Result<_, HighlightError> {
                 let lines = circular_highlight_lines(&mesh, &lights)?;
@@ -305,6 +347,11 @@ pub fn run(args: Args) -> Result<()> {
                 Ok((lines, bands))
             })
             .map_err(to_input_error)?;
+        let axis = lights[0].axis();
+        view_up = (
+            -axis + 0.35 * axis.any_orthonormal_vector(),
+            axis.any_orthonormal_vector(),
+        );
         report.set("light", json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii}));
         (lines, bands, Some(radii))
     } else {
@@ -322,6 +369,10 @@ pub fn run(args: Args) -> Result<()> {
             })
             .map_err(to_input_error)?;
         report.set("light", json!({"kind": "linear", "array": light}));
+        view_up = (
+            crate::highlight_png::default_view(light.plane_normal(), light.across()),
+            light.across(),
+        );
         (lines, bands, None)
     };
     bar.finish_and_clear();
@@ -335,6 +386,34 @@ pub fn run(args: Args) -> Result<()> {
     report.set("nodes", lines.node_count());
     if let Some(b) = &bands {
         report.set("band", json!({"radius": b.radius, "lower_lines": b.lower.lines.len(), "upper_lines": b.upper.lines.len()}));
+    }
+    if let Some(png) = &args.png {
+        let band_lines = bands.as_ref().map(|b| {
+            let mut all = b.lower.clone();
+            all.lines.extend(b.upper.lines.iter().cloned());
+            all
+        });
+        let view = args.view.unwrap_or(view_up.0);
+        let title = format!(
+            "{}: {} highlight lines",
+            args.mesh
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            lines.lines.len()
+        );
+        crate::highlight_png::write(
+            png,
+            &mesh,
+            crate::highlight_png::Overlay {
+                lines: &lines,
+                bands: band_lines.as_ref(),
+                flagged: &[],
+                region: None,
+                view: (view, view_up.1),
+                title,
+            },
+        )?;
     }
     report.write(args.report.as_deref())?;
     Ok(())

@@ -10,6 +10,7 @@ mod demo;
 mod detect;
 mod fair_surface;
 mod highlight;
+mod highlight_png;
 mod info;
 mod render;
 mod surface;

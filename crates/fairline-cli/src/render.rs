@@ -1,9 +1,11 @@
 //! `fairline render`: pictures of meshes and surfaces.
 
 use crate::common::{Report, bad_input, parse_size, parse_vec3};
+use crate::highlight::{LightArgs, to_input_error};
 use anyhow::Result;
 use fairline::Vec3;
 use fairline::geom::{CurvatureMethod, principal_curvatures};
+use fairline::highlight::{DetectOptions, HighlightModel, detect_irregularities};
 use fairline::picture::{Picture, ScalarField, mesh_picture};
 use fairline::render::{Colormap, RenderOptions};
 use std::path::PathBuf;
@@ -23,10 +25,13 @@ pub enum Scalar {
 
 /// Renders a mesh (or a B-spline surface, tessellated) to PNG with a
 /// software rasteriser: smooth shading, optional curvature colouring with a
-/// legend, optional wireframe. Deterministic output.
+/// legend, optional wireframe, optional highlight lines of a linear light
+/// array (Yong et al. Algorithm 1; light options as for `highlight`, defaults
+/// from the bounding box) with the stretches `detect` finds irregular drawn
+/// in red over them. Deterministic output.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  fairline render spot.ply --png spot.png\n  fairline render spot.ply --png spot-mean.png --scalar mean --view 1,0.3,-0.5 --size 1600x1200"
+    after_help = "Examples:\n  fairline render spot.ply --png spot.png\n  fairline render spot.ply --png spot-mean.png --scalar mean --view 1,0.3,-0.5 --size 1600x1200\n  fairline render panel.obj --png panel-lines.png --highlight --plane-normal 0,0,1 --direction 0,1,0 --spacing 0.05"
 )]
 pub struct Args {
     /// Mesh (.obj .ply .off .stl) or surface (.json .igs).
@@ -46,6 +51,15 @@ pub struct Args {
     /// Draw the mesh edges.
     #[arg(long)]
     pub wireframe: bool,
+    /// Draw highlight lines on the shaded mesh; irregular stretches (as
+    /// `detect` finds them) in red.
+    #[arg(long)]
+    pub highlight: bool,
+    #[command(flatten)]
+    pub light: LightArgs,
+    /// With --highlight: flag where |κ − κ̄|·s exceeds this (see `detect`).
+    #[arg(long, default_value_t = DetectOptions::default().wiggle_threshold, requires = "highlight")]
+    pub threshold: f64,
     /// Surface index in a multi-surface file (default: all surfaces).
     #[arg(long)]
     pub surface: Option<usize>,
@@ -81,13 +95,45 @@ pub fn run(args: Args) -> Result<()> {
         )));
     }
     crate::common::check_output(&args.input, &args.png)?;
+    let l = &args.light;
+    if !args.highlight
+        && (l.direction.is_some()
+            || l.plane_normal.is_some()
+            || l.plane_point.is_some()
+            || l.spacing.is_some()
+            || l.lights.is_some()
+            || l.min_normal_cos != fairline::highlight::HighlightOptions::default().min_normal_cos)
+    {
+        return Err(bad_input(
+            "light options (--direction, --plane-normal, --plane-point, --spacing, --lights, --min-normal-cos) need --highlight",
+        ));
+    }
     let mesh = if crate::surface::is_surface_path(&args.input) {
         crate::surface::load_tessellated(&args.input, args.surface, 64)?
     } else {
         fairline::io::read_mesh(&args.input)?
     };
-    let opts = options(args.view, args.size)?;
+    let mut opts = options(args.view, args.size)?;
+    let tri;
+    let tri_mesh = if mesh.is_triangle_mesh() {
+        &mesh
+    } else {
+        tri = fairline::mesh::triangulate(&mesh).mesh;
+        &tri
+    };
+    let light = if args.highlight {
+        let light = args.light.light_array(tri_mesh)?;
+        if args.view.is_none() {
+            opts.view_dir =
+                crate::highlight_png::default_view(light.plane_normal(), light.across());
+            opts.up = light.across();
+        }
+        Some(light)
+    } else {
+        None
+    };
     let mut report = Report::new("render");
+    let mut summary = None;
     let image = report.time(|| -> Result<_> {
         let values;
         let mut picture = Picture {
@@ -100,15 +146,33 @@ pub fn run(args: Args) -> Result<()> {
             ),
             ..Default::default()
         };
-        if let Some(s) = args.scalar {
-            let tri;
-            let m = if mesh.is_triangle_mesh() {
-                &mesh
-            } else {
-                tri = fairline::mesh::triangulate(&mesh).mesh;
-                &tri
+        if let Some(light) = light {
+            let model = HighlightModel::new(tri_mesh, light, args.light.options())
+                .map_err(to_input_error)?;
+            let lines = model.lines(tri_mesh);
+            let det_opts = DetectOptions {
+                wiggle_threshold: args.threshold,
+                plane_normal: Some(light.plane_normal()),
+                ..DetectOptions::default()
             };
-            let c = principal_curvatures(m, CurvatureMethod::Rusinkiewicz);
+            let det = detect_irregularities(tri_mesh, &lines, light.spacing(), &det_opts)
+                .map_err(to_input_error)?;
+            let stretches: Vec<Vec<Vec3>> = det
+                .lines
+                .iter()
+                .flat_map(|l| l.stretches.iter().map(|s| s.points.clone()))
+                .collect();
+            picture.polylines = crate::highlight_png::line_layers(&lines, &stretches);
+            summary = Some(serde_json::json!({
+                "light": light,
+                "lines": lines.lines.len(),
+                "nodes": lines.node_count(),
+                "irregular_stretches": stretches.len(),
+                "regions": det.regions.len(),
+            }));
+        }
+        if let Some(s) = args.scalar {
+            let c = principal_curvatures(tri_mesh, CurvatureMethod::Rusinkiewicz);
             values = match s {
                 Scalar::K1 => c.k1.clone(),
                 Scalar::K2 => c.k2.clone(),
@@ -135,6 +199,9 @@ pub fn run(args: Args) -> Result<()> {
     report.set("faces", mesh.face_count());
     report.set("width", args.size.0);
     report.set("height", args.size.1);
+    if let Some(h) = summary {
+        report.set("highlight", h);
+    }
     report.write(args.report.as_deref())?;
     Ok(())
 }

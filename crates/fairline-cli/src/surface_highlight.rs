@@ -143,6 +143,9 @@ pub fn run(args: Args) -> Result<()> {
         check_ext(p, "svg", "--svg")?;
         check_output(&args.mesh, p)?;
     }
+    if args.view.is_some_and(|v| v.length() == 0.0) {
+        return Err(bad_input("--view must not be the zero vector"));
+    }
     if !(2..=4000).contains(&args.grid) {
         return Err(bad_input(format!(
             "--grid must be between 2 and 4000, got {}",
@@ -245,12 +248,11 @@ pub fn run(args: Args) -> Result<()> {
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default()
         );
-        let img = surface_picture(
-            &surfaces,
-            polylines(&all_lines, 2.0),
-            &title,
-            &RenderOptions::with_size(1200, 900),
-        )?;
+        let mut ropts = RenderOptions::with_size(1200, 900);
+        if let Some(v) = args.view {
+            ropts.view_dir = v;
+        }
+        let img = surface_picture(&surfaces, polylines(&all_lines, 2.0), &title, &ropts)?;
         img.write_png(p)?;
     }
     if let Some(p) = &args.svg {

@@ -82,6 +82,12 @@ fn plane_lines_at_known_positions_in_json_and_obj() {
     std::fs::write(&mesh, height_field_obj(21, |_, _| 0.0)).unwrap();
     let out = d.join("lines.json");
     let rep = d.join("r.json");
+    let lights = d.join("lights.json");
+    std::fs::write(
+        &lights,
+        r#"{"plane_point":[0,0,3],"plane_normal":[0,0,1],"direction":[1,0,0],"spacing":0.5}"#,
+    )
+    .unwrap();
     let o = run(&[
         "highlight",
         mesh.to_str().unwrap(),
@@ -111,6 +117,19 @@ fn plane_lines_at_known_positions_in_json_and_obj() {
     }
     let r = json(&rep);
     assert_eq!(r["command"], "highlight");
+    let png = d.join("lines.png");
+    let o = run(&[
+        "highlight",
+        mesh.to_str().unwrap(),
+        "--lights",
+        lights.to_str().unwrap(),
+        "-o",
+        d.join("l3.json").to_str().unwrap(),
+        "--png",
+        png.to_str().unwrap(),
+    ]);
+    ok(&o);
+    assert!(fairline::render::Image::decode_png(&std::fs::read(&png).unwrap()).is_ok());
     assert!(r["time_s"].as_f64().unwrap() >= 0.0);
     assert_eq!(r["lines"], 9);
     // OBJ output: one `l` per line
@@ -129,12 +148,6 @@ fn plane_lines_at_known_positions_in_json_and_obj() {
     let text = std::fs::read_to_string(&obj).unwrap();
     assert!(text.lines().filter(|l| l.starts_with("l ")).count() >= 8);
     // same light from a file gives byte-identical output
-    let lights = d.join("lights.json");
-    std::fs::write(
-        &lights,
-        r#"{"plane_point":[0,0,3],"plane_normal":[0,0,1],"direction":[1,0,0],"spacing":0.5}"#,
-    )
-    .unwrap();
     let out2 = d.join("lines2.json");
     let o = run(&[
         "highlight",
@@ -219,6 +232,24 @@ fn bad_input_exits_with_2_and_writes_nothing() {
         vec!["highlight", m, "--band", "-2", "-o", o_s],
         vec!["detect", m, "-o", d.join("r.obj").to_str().unwrap()],
         vec!["detect", m, "--threshold", "0", "-o", o_s],
+        vec![
+            "detect",
+            m,
+            "-o",
+            o_s,
+            "--png",
+            d.join("p.jpg").to_str().unwrap(),
+        ],
+        vec![
+            "highlight",
+            m,
+            "-o",
+            o_s,
+            "--png",
+            d.join("p.png").to_str().unwrap(),
+            "--view",
+            "0,0,0",
+        ],
     ] {
         let o = run(&args);
         assert_eq!(
@@ -253,6 +284,7 @@ fn detect_finds_the_bump_and_not_a_clean_field() {
         std::fs::write(&mesh, text).unwrap();
         let out = d.join(format!("{name}-region.json"));
         let rep = d.join(format!("{name}-report.json"));
+        let png = d.join(format!("{name}.png"));
         let o = run(&[
             "detect",
             mesh.to_str().unwrap(),
@@ -262,8 +294,24 @@ fn detect_finds_the_bump_and_not_a_clean_field() {
             out.to_str().unwrap(),
             "--report",
             rep.to_str().unwrap(),
+            "--png",
+            png.to_str().unwrap(),
         ]);
         ok(&o);
+        // the picture shows dark lines, and red stretches only with the bump
+        let img = fairline::render::Image::decode_png(&std::fs::read(&png).unwrap()).unwrap();
+        let dark = img
+            .pixels
+            .iter()
+            .filter(|p| p[0] < 60 && p[1] < 60 && p[2] < 90)
+            .count();
+        let red = img
+            .pixels
+            .iter()
+            .filter(|p| p[0] > 200 && p[1] < 110 && p[2] < 80)
+            .count();
+        assert!(dark > 1000, "{name}: {dark} dark pixels");
+        assert_eq!(red > 50, has_bump, "{name}: {red} red pixels");
         let faces = json(&out)["faces"].as_array().unwrap().len();
         let r = json(&rep);
         assert_eq!(r["command"], "detect");
@@ -283,7 +331,12 @@ fn detect_finds_the_bump_and_not_a_clean_field() {
 
 #[test]
 fn real_meshes() {
-    for rel in ["meshes/bunny_npm.obj", "meshes/spot.ply"] {
+    for rel in [
+        "meshes/bunny_npm.obj",
+        "meshes/spot.ply",
+        "meshes/bunny_zipper.ply",
+        "meshes/bob_small.ply",
+    ] {
         let Some(mesh) = data(rel) else { return };
         let d = tmp(&rel.replace('/', "-"));
         let out = d.join("lines.json");
@@ -308,5 +361,221 @@ fn real_meshes() {
         ok(&o);
         assert!(json(&reg)["faces"].is_array());
         assert!(json(&rep)["regions"].is_array());
+    }
+}
+
+/// Counts near-black line pixels and warning-red pixels of a picture.
+fn dark_and_red(png: &Path) -> (usize, usize) {
+    let img = fairline::render::Image::decode_png(&std::fs::read(png).unwrap()).unwrap();
+    let dark = img
+        .pixels
+        .iter()
+        .filter(|p| p[0] < 60 && p[1] < 60 && p[2] < 90)
+        .count();
+    let red = img
+        .pixels
+        .iter()
+        .filter(|p| p[0] > 200 && p[1] < 110 && p[2] < 80)
+        .count();
+    (dark, red)
+}
+
+#[test]
+fn render_highlight_draws_lines_and_marks_the_bump_red() {
+    let d = tmp("render");
+    let base = |x: f64, y: f64| 0.15 * (1.3 * x).sin() * (0.9 * y).cos();
+    let bump = move |x: f64, y: f64| {
+        base(x, y) + 0.01 * (-((x - 0.4).powi(2) + (y + 0.3).powi(2)) / 0.0144).exp()
+    };
+    let mut clean_dark = 0;
+    for (name, has_bump) in [("bump", true), ("clean", false)] {
+        let mesh = d.join(format!("{name}.obj"));
+        let text = if has_bump {
+            height_field_obj(161, bump)
+        } else {
+            height_field_obj(161, base)
+        };
+        std::fs::write(&mesh, text).unwrap();
+        let png = d.join(format!("{name}.png"));
+        let rep = d.join(format!("{name}.json"));
+        let o = run(&[
+            "render",
+            mesh.to_str().unwrap(),
+            "--png",
+            png.to_str().unwrap(),
+            "--highlight",
+            "--spacing",
+            "0.1",
+            "--size",
+            "800x600",
+            "--report",
+            rep.to_str().unwrap(),
+        ]);
+        ok(&o);
+        let (dark, red) = dark_and_red(&png);
+        assert!(dark > 1000, "{name}: {dark} dark pixels");
+        assert_eq!(red > 50, has_bump, "{name}: {red} red pixels");
+        clean_dark = dark;
+        let r = json(&rep);
+        assert_eq!(r["command"], "render");
+        assert_eq!(r["highlight"]["light"]["spacing"], 0.1);
+        // 4 units across the light direction at spacing 0.1: ~40 lines
+        let lines = r["highlight"]["lines"].as_u64().unwrap();
+        assert!(lines >= 38, "{name}: {lines} lines");
+        assert_eq!(r["highlight"]["regions"].as_u64().unwrap() > 0, has_bump);
+    }
+    // a plain render has no highlight lines: only the title is dark
+    let png = d.join("plain.png");
+    ok(&run(&[
+        "render",
+        d.join("clean.obj").to_str().unwrap(),
+        "--png",
+        png.to_str().unwrap(),
+        "--size",
+        "800x600",
+    ]));
+    let (dark, red) = dark_and_red(&png);
+    assert_eq!(red, 0);
+    assert!(10 * dark < clean_dark, "{dark} vs {clean_dark}");
+    // light options without --highlight are a usage error, nothing written
+    let png = d.join("bad.png");
+    let o = run(&[
+        "render",
+        d.join("clean.obj").to_str().unwrap(),
+        "--png",
+        png.to_str().unwrap(),
+        "--spacing",
+        "0.1",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!png.exists());
+}
+
+#[test]
+fn circular_lights_from_a_json_file() {
+    let d = tmp("circle-json");
+    let mesh = d.join("plane.obj");
+    std::fs::write(&mesh, height_field_obj(41, |_, _| 0.0)).unwrap();
+    let lights = d.join("circles.json");
+    std::fs::write(
+        &lights,
+        r#"{"center":[0,0,2],"axis":[0,0,1],"radii":[0.5,1]}"#,
+    )
+    .unwrap();
+    let (a, b) = (d.join("a.json"), d.join("b.json"));
+    ok(&run(&[
+        "highlight",
+        mesh.to_str().unwrap(),
+        "--lights",
+        lights.to_str().unwrap(),
+        "-o",
+        a.to_str().unwrap(),
+    ]));
+    ok(&run(&[
+        "highlight",
+        mesh.to_str().unwrap(),
+        "--circle-center",
+        "0,0,2",
+        "--circle-axis",
+        "0,0,1",
+        "--radii",
+        "0.5,1",
+        "-o",
+        b.to_str().unwrap(),
+    ]));
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    let v = json(&a);
+    assert_eq!(v["lines"].as_array().unwrap().len(), 2);
+    assert_eq!(v["lines"][1]["radius"], 1.0);
+    // circular lights make no sense to `detect`; empty radii are refused
+    let out = d.join("r.json");
+    let o = run(&[
+        "detect",
+        mesh.to_str().unwrap(),
+        "--lights",
+        lights.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("circular"));
+    std::fs::write(&lights, r#"{"center":[0,0,2],"axis":[0,0,1],"radii":[]}"#).unwrap();
+    let o = run(&[
+        "highlight",
+        mesh.to_str().unwrap(),
+        "--lights",
+        lights.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!out.exists());
+}
+
+/// lego_open.ply is a flat outline in the plane y = 0. Lights above it
+/// along +z see it edge-on (Z·N = 0): no nodes. Lights in a plane with
+/// normal ±y give straight lines at z = A0.z − m·s (Z × H = −z).
+#[test]
+fn real_flat_outline_gives_straight_lines_or_none() {
+    let Some(mesh) = data("meshes/lego_open.ply") else {
+        return;
+    };
+    let d = tmp("lego");
+    let out = d.join("l.json");
+    ok(&run(&[
+        "highlight",
+        mesh.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]));
+    assert!(json(&out)["lines"].as_array().unwrap().is_empty());
+    let rep = d.join("r.json");
+    ok(&run(&[
+        "highlight",
+        mesh.to_str().unwrap(),
+        "--plane-normal",
+        "0,1,0",
+        "--direction",
+        "1,0,0",
+        "--spacing",
+        "0.05",
+        "-o",
+        out.to_str().unwrap(),
+        "--report",
+        rep.to_str().unwrap(),
+    ]));
+    let a0z = json(&rep)["light"]["array"]["plane_point"][2]
+        .as_f64()
+        .unwrap();
+    let lines = json(&out)["lines"].as_array().unwrap().clone();
+    // the outline spans z in [-0.5, 0.25]: 15 lights cross it
+    let mut indices: Vec<i64> = lines.iter().map(|l| l["index"].as_i64().unwrap()).collect();
+    indices.dedup();
+    assert!(indices.len() >= 14, "{indices:?}");
+    for l in &lines {
+        let m = l["index"].as_f64().unwrap();
+        for p in l["points"].as_array().unwrap() {
+            let z = p[2].as_f64().unwrap();
+            assert!((z - (a0z - 0.05 * m)).abs() < 1e-9, "line {m}: z {z}");
+        }
+    }
+}
+
+#[test]
+fn non_manifold_real_meshes_are_refused_with_the_edge_named() {
+    for rel in ["meshes/bunny_res4.ply", "meshes/elephant_nonmanifold.obj"] {
+        let Some(mesh) = data(rel) else { return };
+        let d = tmp(&rel.replace('/', "-"));
+        let out = d.join("x.json");
+        for cmd in ["highlight", "detect"] {
+            let o = run(&[cmd, mesh.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+            assert_eq!(o.status.code(), Some(2), "{cmd} {rel}");
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(
+                err.contains("non-manifold") && err.contains("edge ("),
+                "{err}"
+            );
+            assert!(!out.exists());
+        }
     }
 }

@@ -1,61 +1,196 @@
-//! Benchmark of the highlight line model (Yong et al. Algorithm 1): normals,
-//! distances, nodes and polylines on smooth height fields of about 112k,
-//! 450k and 900k vertices. Prints median wall times over several runs.
+//! Benchmarks of highlight lines (Yong et al. Algorithm 1) on smooth,
+//! irregularly triangulated height fields of about 110k, 450k, 1M and 2M
+//! vertices: the whole model (normals, distances, nodes, polylines), the
+//! incremental update after a local change of a few hundred vertices,
+//! circular lights (Nishiyama et al. Eq. (2.18) per vertex), bands and
+//! irregularity detection. Prints Markdown tables of median wall times.
 //!
 //! Run: `cargo bench -p fairline --bench highlight`
+//! (`FAIRLINE_BENCH_RUNS`, `FAIRLINE_BENCH_SIZES` override runs and sizes).
 
+mod common;
+
+use common::{median_secs, row, runs, sizes, test_surface};
 use fairline::Vec3;
 use fairline::geom;
-use fairline::highlight::{HighlightModel, HighlightOptions, LightArray};
-use fairline::shapes;
-use std::time::Instant;
+use fairline::highlight::{
+    CircularLight, DetectOptions, HighlightModel, HighlightOptions, LightArray,
+    circular_highlight_lines, detect_irregularities,
+};
+use fairline::mesh::{SurfaceMesh, VertexId, bounding_box};
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
+fn light_for(mesh: &SurfaceMesh) -> LightArray {
+    let (lo, hi) = bounding_box(mesh.positions()).expect("vertices");
+    // about 40 lights across the panel: a dense array, as used for judging
+    let l = LightArray::default_for(lo, hi, None);
+    l.with_spacing(l.spacing() / 2.0).expect("spacing")
+}
+
+fn ms(s: f64) -> String {
+    format!("{:.1}", s * 1e3)
+}
+
+/// CPU time (ns) used so far by all threads of this process (Linux
+/// /proc/self/task/*/schedstat; 0 elsewhere). The machine is shared, so
+/// wall times depend on the load; CPU time does much less.
+fn cpu_ns() -> u64 {
+    let Ok(dir) = std::fs::read_dir("/proc/self/task") else {
+        return 0;
+    };
+    dir.filter_map(|t| t.ok())
+        .filter_map(|t| std::fs::read_to_string(t.path().join("schedstat")).ok())
+        .filter_map(|s| s.split_whitespace().next()?.parse::<u64>().ok())
+        .sum()
+}
+
+/// "wall median (CPU per run)" in ms over `runs` calls of `f` after a warm-up.
+fn timed<T>(runs: usize, mut f: impl FnMut() -> T) -> String {
+    std::hint::black_box(f());
+    let c0 = cpu_ns();
+    let wall = median_secs(runs, f);
+    // median_secs makes one extra warm-up call
+    let cpu = (cpu_ns() - c0) as f64 * 1e-9 / (runs + 1) as f64;
+    format!("{} ({})", ms(wall), ms(cpu))
 }
 
 fn main() {
-    let runs = 11;
-    println!("highlight model (normals + distances + nodes + polylines), median of {runs} runs");
+    let runs = runs(7);
+    let opts = HighlightOptions::default();
+    let sizes = sizes(&[110_000, 450_000, 1_000_000, 2_000_000]);
+    let meshes: Vec<SurfaceMesh> = sizes.iter().map(|&n| test_surface(n)).collect();
+
     println!(
-        "{:>10} {:>10} {:>12} {:>12} {:>12} {:>8} {:>8}",
-        "vertices", "faces", "normals ms", "model ms", "total ms", "lines", "nodes"
+        "\nWhole model (normals + distances + nodes + polylines): wall median of {runs} runs (CPU time per run, all threads), ms\n"
     );
-    for n in [335u32, 670, 948] {
-        let mesh = shapes::height_field(n, n, (-2.0, 2.0), (-2.0, 2.0), |x, y| {
-            0.3 * (1.3 * x).sin() * (0.9 * y).cos() + 0.1 * (x * y).cos()
+    row(&[
+        "vertices".into(),
+        "normals ms".into(),
+        "model (normals, distances, segments) ms".into(),
+        "polylines ms".into(),
+        "total ms".into(),
+        "CPU ns / vertex".into(),
+        "lines".into(),
+        "nodes".into(),
+    ]);
+    row(&vec!["---".to_string(); 8]);
+    for mesh in &meshes {
+        let light = light_for(mesh);
+        let t_norm = timed(runs, || geom::vertex_normals(mesh));
+        let t_model = timed(runs, || {
+            HighlightModel::new(mesh, light, opts).expect("tri")
         });
-        let light =
-            LightArray::default_for(Vec3::new(-2.0, -2.0, -0.4), Vec3::new(2.0, 2.0, 0.4), None);
-        let opts = HighlightOptions::default();
-        let mut t_norm = Vec::new();
-        let mut t_model = Vec::new();
-        let mut t_total = Vec::new();
-        let mut counts = (0, 0);
-        for _ in 0..runs {
-            let t0 = Instant::now();
-            let normals = geom::vertex_normals(&mesh);
-            t_norm.push(t0.elapsed().as_secs_f64() * 1e3);
-            std::hint::black_box(normals);
-            let t0 = Instant::now();
-            let model = HighlightModel::new(&mesh, light, opts).expect("triangle mesh");
-            let t1 = Instant::now();
-            let lines = model.lines(&mesh);
-            let t2 = Instant::now();
-            t_model.push((t1 - t0).as_secs_f64() * 1e3);
-            t_total.push((t2 - t0).as_secs_f64() * 1e3);
-            counts = (lines.lines.len(), lines.node_count());
+        let model = HighlightModel::new(mesh, light, opts).expect("tri");
+        let t_lines = timed(runs, || model.lines(mesh));
+        let c0 = cpu_ns();
+        let w_total = median_secs(runs, || {
+            HighlightModel::new(mesh, light, opts)
+                .expect("tri")
+                .lines(mesh)
+        });
+        let c_total = (cpu_ns() - c0) as f64 * 1e-9 / (runs + 1) as f64;
+        let lines = model.lines(mesh);
+        row(&[
+            mesh.vertex_count().to_string(),
+            t_norm,
+            t_model,
+            t_lines,
+            format!("{} ({})", ms(w_total), ms(c_total)),
+            format!("{:.0}", c_total * 1e9 / mesh.vertex_count() as f64),
+            lines.lines.len().to_string(),
+            lines.node_count().to_string(),
+        ]);
+    }
+
+    println!(
+        "\nIncremental update after moving a disc of vertices along their normals: wall median of {runs} runs (CPU per run), ms\n"
+    );
+    row(&[
+        "vertices".into(),
+        "moved".into(),
+        "recomputed".into(),
+        "update ms".into(),
+        "update + polylines ms".into(),
+        "full rebuild + polylines ms".into(),
+    ]);
+    row(&vec!["---".to_string(); 6]);
+    for mesh in &meshes {
+        let light = light_for(mesh);
+        let p = mesh.positions();
+        // the ~300 vertices nearest to a point of the panel
+        let c = Vec3::new(0.3, -0.2, 0.0);
+        let mut by_dist: Vec<(f64, u32)> = p
+            .iter()
+            .enumerate()
+            .map(|(i, q)| (((q.x - c.x).powi(2) + (q.y - c.y).powi(2)), i as u32))
+            .collect();
+        by_dist.select_nth_unstable_by(300, |a, b| a.0.total_cmp(&b.0));
+        let moved: Vec<VertexId> = by_dist[..300].iter().map(|&(_, i)| VertexId(i)).collect();
+        let normals = geom::vertex_normals(mesh);
+        let mut moved_mesh = mesh.clone();
+        for &v in &moved {
+            moved_mesh.positions_mut()[v.idx()] += 1e-3 * normals[v.idx()];
         }
-        println!(
-            "{:>10} {:>10} {:>12.2} {:>12.2} {:>12.2} {:>8} {:>8}",
-            mesh.vertex_count(),
-            mesh.face_count(),
-            median(t_norm),
-            median(t_model),
-            median(t_total),
-            counts.0,
-            counts.1
-        );
+        let base = HighlightModel::new(mesh, light, opts).expect("tri");
+        let mut recomputed = 0;
+        let mut only = Vec::new();
+        let mut both = Vec::new();
+        for _ in 0..runs {
+            let mut m = base.clone();
+            let t = std::time::Instant::now();
+            recomputed = m.update(&moved_mesh, &moved).expect("update");
+            only.push(t.elapsed().as_secs_f64());
+            std::hint::black_box(m.lines(&moved_mesh));
+            both.push(t.elapsed().as_secs_f64());
+        }
+        only.sort_by(f64::total_cmp);
+        both.sort_by(f64::total_cmp);
+        let t_full = timed(runs, || {
+            HighlightModel::new(&moved_mesh, light, opts)
+                .expect("tri")
+                .lines(&moved_mesh)
+        });
+        row(&[
+            mesh.vertex_count().to_string(),
+            moved.len().to_string(),
+            recomputed.to_string(),
+            format!("{:.3}", only[only.len() / 2] * 1e3),
+            ms(both[both.len() / 2]),
+            t_full,
+        ]);
+    }
+
+    println!(
+        "\nCircular lights (3 radii), bands and detection: wall median (CPU per run), ms; {} runs for circular and detect\n",
+        runs.min(3)
+    );
+    row(&[
+        "vertices".into(),
+        "circular, 3 radii ms".into(),
+        "linear bands ±ρ ms".into(),
+        "detect (model + detection) ms".into(),
+    ]);
+    row(&vec!["---".to_string(); 4]);
+    for mesh in &meshes {
+        let light = light_for(mesh);
+        let circles: Vec<CircularLight> = [0.3, 0.6, 0.9]
+            .iter()
+            .map(|&r| CircularLight::new(Vec3::new(0.0, 0.0, 3.0), Vec3::Z, r).expect("light"))
+            .collect();
+        let heavy = runs.min(3);
+        let t_circ = timed(heavy, || {
+            circular_highlight_lines(mesh, &circles).expect("tri")
+        });
+        let model = HighlightModel::new(mesh, light, opts).expect("tri");
+        let t_band = timed(runs, || model.bands(mesh, 0.1 * light.spacing()));
+        let det_opts = DetectOptions {
+            plane_normal: Some(light.plane_normal()),
+            ..DetectOptions::default()
+        };
+        let t_det = timed(heavy, || {
+            let m = HighlightModel::new(mesh, light, opts).expect("tri");
+            let lines = m.lines(mesh);
+            detect_irregularities(mesh, &lines, light.spacing(), &det_opts).expect("detect")
+        });
+        row(&[mesh.vertex_count().to_string(), t_circ, t_band, t_det]);
     }
 }

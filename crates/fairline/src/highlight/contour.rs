@@ -295,41 +295,55 @@ pub(crate) fn node_position(
 /// Chains segments into polylines (open lines first from their end nodes,
 /// then loops), deterministically: nodes are visited in key order.
 /// Duplicate segments (a highlight edge seen from both triangles) count once.
+///
+/// One sort of the 2·#segments segment ends by node key gives both the node
+/// numbering and each node's incident segments (the run of equal keys), so
+/// no search structure is built.
 pub(crate) fn chain(
     segments: &[Segment],
     position: impl Fn(NodeId) -> Vec3 + Sync,
 ) -> HighlightLines {
-    let mut pairs: Vec<(Key, Key)> = segments.iter().map(|s| (s.a, s.b)).collect();
-    pairs.par_sort_unstable();
-    pairs.dedup();
-    let mut keys: Vec<Key> = Vec::with_capacity(2 * pairs.len());
-    for &(a, b) in &pairs {
-        keys.push(a);
-        keys.push(b);
+    // Only a segment between two vertex nodes (a highlight edge) can occur
+    // twice, once from each of its triangles; drop the repeats.
+    let mut pairs: Vec<(Key, Key)> = Vec::with_capacity(segments.len());
+    let mut vertex_pairs: Vec<(Key, Key)> = Vec::new();
+    for s in segments {
+        if s.a.elem >> 32 == 0 && s.b.elem >> 32 == 0 {
+            vertex_pairs.push((s.a, s.b));
+        } else {
+            pairs.push((s.a, s.b));
+        }
     }
-    keys.par_sort_unstable();
-    keys.dedup();
+    vertex_pairs.sort_unstable();
+    vertex_pairs.dedup();
+    pairs.extend(vertex_pairs);
+    // segment ends (key, 2·segment + side), sorted by key
+    let mut ends: Vec<(Key, u32)> = Vec::with_capacity(2 * pairs.len());
+    for (i, &(a, b)) in pairs.iter().enumerate() {
+        ends.push((a, 2 * i as u32));
+        ends.push((b, 2 * i as u32 + 1));
+    }
+    ends.par_sort_unstable();
+    // node numbering: runs of equal keys; offs[v]..offs[v+1] are its ends
+    let mut keys: Vec<Key> = Vec::new();
+    let mut offs: Vec<usize> = Vec::new();
+    let mut node_of_end = vec![0u32; ends.len()];
+    for (k, &(key, e)) in ends.iter().enumerate() {
+        if keys.last() != Some(&key) {
+            keys.push(key);
+            offs.push(k);
+        }
+        node_of_end[e as usize] = (keys.len() - 1) as u32;
+    }
+    offs.push(ends.len());
     let n = keys.len();
-    let idx = |k: &Key| keys.binary_search(k).unwrap_or(0);
-    let ends: Vec<(usize, usize)> = pairs.iter().map(|(a, b)| (idx(a), idx(b))).collect();
-    let mut offs = vec![0usize; n + 1];
-    for &(a, b) in &ends {
-        offs[a + 1] += 1;
-        offs[b + 1] += 1;
-    }
-    for i in 0..n {
-        offs[i + 1] += offs[i];
-    }
-    let mut fill = offs.clone();
-    let mut adj = vec![(0usize, 0usize); offs[n]];
-    for (s, &(a, b)) in ends.iter().enumerate() {
-        adj[fill[a]] = (b, s);
-        fill[a] += 1;
-        adj[fill[b]] = (a, s);
-        fill[b] += 1;
-    }
+    // the neighbour across the segment of end k, and that segment
+    let adj = |k: usize| -> (usize, usize) {
+        let e = ends[k].1 as usize;
+        (node_of_end[e ^ 1] as usize, e >> 1)
+    };
     let deg = |v: usize| offs[v + 1] - offs[v];
-    let mut used = vec![false; ends.len()];
+    let mut used = vec![false; pairs.len()];
     let mut walks: Vec<(bool, Vec<usize>)> = Vec::new();
     let walk = |start: usize, first: (usize, usize), used: &mut Vec<bool>| -> (bool, Vec<usize>) {
         let mut path = vec![start];
@@ -343,11 +357,8 @@ pub(crate) fn chain(
             if deg(cur) != 2 {
                 return (false, path);
             }
-            match adj[offs[cur]..offs[cur + 1]]
-                .iter()
-                .find(|(_, t)| !used[*t])
-            {
-                Some(&(nxt, t)) => {
+            match (offs[cur]..offs[cur + 1]).map(adj).find(|(_, t)| !used[*t]) {
+                Some((nxt, t)) => {
                     cur = nxt;
                     s = t;
                 }
@@ -360,7 +371,7 @@ pub(crate) fn chain(
             continue;
         }
         for k in offs[v]..offs[v + 1] {
-            let (w, s) = adj[k];
+            let (w, s) = adj(k);
             if !used[s] {
                 walks.push(walk(v, (w, s), &mut used));
             }
@@ -368,7 +379,7 @@ pub(crate) fn chain(
     }
     for v in 0..n {
         for k in offs[v]..offs[v + 1] {
-            let (w, s) = adj[k];
+            let (w, s) = adj(k);
             if !used[s] {
                 walks.push(walk(v, (w, s), &mut used));
             }

@@ -10,10 +10,10 @@
 //!    with u the unit chord directions (|κ_j| ≈ turning angle / local
 //!    length), lightly smoothed over three samples;
 //! 3. its slow part κ̄_j is the mean over a window of length w·s (default
-//!    w = 1); the *wiggle* W_j = |κ_j − κ̄_j|·s is the curvature variation
+//!    w = 2); the *wiggle* W_j = |κ_j − κ̄_j|·s is the curvature variation
 //!    normalised by the spacing (dimensionless; 0 for circles and straight
 //!    lines, and slowly varying for smooth surfaces);
-//! 4. a sample is flagged when W_j exceeds `wiggle_threshold` (default 1.0),
+//! 4. a sample is flagged when W_j exceeds `wiggle_threshold` (default 0.3),
 //!    when its turning angle exceeds `kink_angle` (default 0.35 rad, 20°),
 //!    or when it lies between two inflections (the curvature vector reverses
 //!    with |κ|·s > `inflection_curvature`, default 0.5) closer than the
@@ -24,8 +24,9 @@
 //! nothing to do with fairness).
 //!
 //! Flagged samples closer than the window form stretches; a stretch's score
-//! is Σ W_j·h/s (its integrated wiggle measured in spacings). The faces whose
-//! centroid lies within `region_radius` (default 0.5 s) of a flagged sample,
+//! is Σ W_j·h/s (its integrated wiggle measured in spacings; a kink counts
+//! as W = `wiggle_threshold` × turning angle / `kink_angle`). The faces whose
+//! centroid lies within `region_radius` (default 0.75 s) of a flagged sample,
 //! grown from the faces at the flagged nodes through face adjacency (hence
 //! connected), are united over all lines; each connected component is a
 //! suggested region whose score is the sum of its stretches' scores.
@@ -42,9 +43,9 @@ pub struct DetectOptions {
     /// Resampling step h in mesh units; `None` = max(1.5 × mean edge
     /// length, s/25).
     pub sample_step: Option<f64>,
-    /// Window length for the slow curvature part, in spacings (default 1).
+    /// Window length for the slow curvature part, in spacings (default 2).
     pub window: f64,
-    /// Flag where |κ − κ̄|·s exceeds this (default 1.0).
+    /// Flag where |κ − κ̄|·s exceeds this (default 0.3).
     pub wiggle_threshold: f64,
     /// Flag where one sample turns by more than this many radians (0.35).
     pub kink_angle: f64,
@@ -52,7 +53,7 @@ pub struct DetectOptions {
     /// inflection (default 0.5).
     pub inflection_curvature: f64,
     /// Radius around flagged samples that goes into a region, in spacings
-    /// (default 0.5).
+    /// (default 0.75).
     pub region_radius: f64,
     /// Stretches scoring below this are ignored (default 0.05).
     pub min_score: f64,
@@ -69,11 +70,11 @@ impl Default for DetectOptions {
     fn default() -> Self {
         DetectOptions {
             sample_step: None,
-            window: 1.0,
-            wiggle_threshold: 1.0,
+            window: 2.0,
+            wiggle_threshold: 0.3,
             kink_angle: 0.35,
             inflection_curvature: 0.5,
-            region_radius: 0.5,
+            region_radius: 0.75,
             min_score: 0.05,
             plane_normal: None,
             min_normal_cos: 0.3,
@@ -335,13 +336,7 @@ fn analyse(
     let mut segs = Vec::new();
     for (a, b) in stretches {
         let score: f64 = (a..=b)
-            .map(|j| {
-                wig[j].max(if turn[j] > o.kink_angle {
-                    turn[j] / o.kink_angle
-                } else {
-                    0.0
-                })
-            })
+            .map(|j| wig[j].max(o.wiggle_threshold * turn[j] / o.kink_angle))
             .sum::<f64>()
             * step
             / s;

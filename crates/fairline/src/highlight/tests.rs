@@ -466,6 +466,15 @@ fn circular_signed_distance_matches_brute_force() {
         checked += 1;
     }
     assert!(checked > 280);
+    // normals nearly parallel to the axis (tiny leading coefficient c4)
+    let light = CircularLight::new(Vec3::new(0.1, -0.2, 2.0), Vec3::Z, 0.8).unwrap();
+    for eps in [1e-3, 1e-5, 1e-7] {
+        let q = Vec3::new(0.5, 0.3, 0.0);
+        let n = Vec3::new(eps, 0.5 * eps, 1.0);
+        let a = light.signed_distance(q, n).unwrap();
+        let want = brute_distance(&light, q, n);
+        assert!((a.abs() - want).abs() < 1e-6, "eps {eps}: {a} vs {want}");
+    }
     // special cases: a normal line through the circle gives 0; N ∥ axis
     let light = CircularLight::new(Vec3::new(0.0, 0.0, 2.0), Vec3::Z, 1.0).unwrap();
     let q = Vec3::new(0.5, 0.0, 0.0);
