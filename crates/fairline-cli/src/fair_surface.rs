@@ -3,7 +3,7 @@
 
 use crate::common::{Report, bad_input, check_output, read_json};
 use crate::surface_highlight::{
-    check_ext, palette_srgb, plot_lines, polylines, surface_picture, uv_plot,
+    PALETTE, check_ext, palette_srgb, plot_lines, polylines, surface_picture, uv_picture, uv_plot,
 };
 use anyhow::Result;
 use fairline::bspline::{BSplineSurface, write_surfaces_json};
@@ -256,7 +256,7 @@ pub fn demo_section(demo: &crate::demo::Demo) -> Result<crate::demo::Section> {
     let greville = |k: &[f64], i: usize| (k[i + 1] + k[i + 2] + k[i + 3]) / 3.0;
     let centre = [greville(clean.knots_u(), bi), greville(clean.knots_v(), bj)];
     // Lights: concentric circles above the panel whose lines pass the dent.
-    let a = Vec3::new(0.3, 0.2, 2.5);
+    let a = Vec3::new(2.0, 1.5, 2.5);
     let q = clean.eval(centre[0], centre[1]);
     let n = clean
         .normal(centre[0], centre[1])
@@ -264,7 +264,7 @@ pub fn demo_section(demo: &crate::demo::Demo) -> Result<crate::demo::Section> {
     let x = q + (a.z - q.z) / n.z * n;
     let r0 = (x.x - a.x).hypot(x.y - a.y);
     let lights: Vec<CircularLight> = (0..11)
-        .map(|k| CircularLight::new(a, Vec3::Z, r0 * (1.0 + 0.6 * (k as f64 / 10.0 - 0.5))))
+        .map(|k| CircularLight::new(a, Vec3::Z, r0 * (1.0 + 0.3 * (k as f64 / 10.0 - 0.5))))
         .collect::<Result<_, _>>()?;
     let opts = SurfaceFairOptions::default();
     let endpoints = endpoints_around(&dented, &lights, centre, 0.2, opts.grid);
@@ -305,12 +305,37 @@ pub fn demo_section(demo: &crate::demo::Demo) -> Result<crate::demo::Section> {
         plot.marker(t.end, palette_srgb(t.light), "");
     }
     plot.write(demo.out.join("bspline-fairing-uv.svg"))?;
+    // The same pre-images as a picture: before (grey), after (colour),
+    // targets (black).
+    let mut uv_lines: Vec<(Vec<[f64; 2]>, [f32; 3], f32)> = Vec::new();
+    for l in &before.lines {
+        uv_lines.push((l.uv.clone(), [0.95, 0.75, 0.2], 5.0));
+    }
+    for l in &after.lines {
+        uv_lines.push((l.uv.clone(), PALETTE[l.light % PALETTE.len()], 1.6));
+    }
+    for t in &rep.targets {
+        uv_lines.push((t.samples.clone(), [0.0, 0.0, 0.0], 1.0));
+    }
+    let uv_file = demo.save(
+        "bspline-fairing-uv.png",
+        &uv_picture(
+            &dented,
+            &uv_lines,
+            "(u, v) pre-images: before amber, after colour, targets black",
+            (900, 900),
+        )?,
+    )?;
     write_surfaces_json(demo.out.join("bspline-panel-dented.json"), &[dented])?;
     write_surfaces_json(demo.out.join("bspline-panel-faired.json"), &[faired])?;
     Ok(crate::demo::Section {
         title: "B-spline fairing".into(),
-        text: "A bicubic roof-panel-like B-spline surface (21 x 22 control points) with one control point pushed down: 11 concentric circular lights above it show the dent as kinks in their highlight lines. The stretches around the dent are replaced by cubic Hermite targets in (u, v) and the control points over the knot box of the endpoints are moved by Gauss-Newton with a truncated SVD (Nishiyama et al.); everything else is unchanged. The (u, v) pre-images are in bspline-fairing-uv.svg.".into(),
-        images: vec![(file, "circular highlight lines before | after".into())],
+        text: "A bicubic roof-panel-like B-spline surface (21 x 22 control points) with one control point pushed down: 11 concentric circular lights above it show the dent as kinks in their highlight lines. The stretches around the dent are replaced by cubic Hermite targets in (u, v) and the control points over the knot box of the endpoints are moved by Gauss-Newton with a truncated SVD (Nishiyama et al.); everything else is unchanged. ".into(),
+        images: vec![
+            (file, "circular highlight lines before | after".into()),
+            (uv_file, "(u, v) pre-images".into()),
+            ("bspline-fairing-uv.svg".into(), "(u, v) pre-images, SVG".into()),
+        ],
         values: json!({
             "stretches": rep.targets.len(),
             "modified_control_points": rep.modified_control_points.len(),

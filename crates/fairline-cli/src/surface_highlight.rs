@@ -102,6 +102,38 @@ pub fn surface_picture(
     Ok(mesh_picture(&mesh, &picture, opts)?)
 }
 
+/// A PNG picture of the parameter domain of `surface` seen from above with
+/// polylines in (u, v): each entry is (points, colour, width); the domain is
+/// drawn as a flat light-grey rectangle.
+pub fn uv_picture(
+    surface: &BSplineSurface,
+    lines: &[(Vec<[f64; 2]>, [f32; 3], f32)],
+    title: &str,
+    size: (u32, u32),
+) -> Result<fairline::render::Image> {
+    let (du, dv) = (surface.domain_u(), surface.domain_v());
+    let mesh = fairline::shapes::quad_grid(2, 2, (du[0], du[1]), (dv[0], dv[1]), |_, _| 0.0);
+    let polylines = lines
+        .iter()
+        .map(|(pts, color, w)| PolylineLayer {
+            points: pts.iter().map(|p| Vec3::new(p[0], p[1], 0.0)).collect(),
+            closed: false,
+            color: *color,
+            width_px: *w,
+        })
+        .collect();
+    let picture = Picture {
+        polylines,
+        title: Some(title.to_string()),
+        ..Default::default()
+    };
+    let mut opts = RenderOptions::with_size(size.0, size.1);
+    opts.view_dir = Vec3::new(0.0, 0.0, -1.0);
+    opts.up = Vec3::Y;
+    opts.orthographic = true;
+    Ok(mesh_picture(&mesh, &picture, &opts)?)
+}
+
 /// An SVG plot of pre-images in the domain of `surface`.
 pub fn uv_plot(surface: &BSplineSurface, title: &str) -> SvgPlot {
     let (du, dv) = (surface.domain_u(), surface.domain_v());

@@ -47,9 +47,9 @@ fn json(p: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
 }
 
-/// Dome-like bicubic 15 × 15 surface (Nishiyama et al. Fig. 5) with control
-/// point (11, 7) raised, and nine concentric lights whose lines cross it.
-fn dome() -> (BSplineSurface, Vec<f64>) {
+/// Dome-like bicubic 15 × 15 surface (Nishiyama et al. Fig. 5), with
+/// control point (11, 7) raised when `bump`.
+fn dome_surface(bump: bool) -> BSplineSurface {
     let n = 15;
     let net = (0..n)
         .map(|i| {
@@ -57,16 +57,30 @@ fn dome() -> (BSplineSurface, Vec<f64>) {
                 .map(|j| {
                     let x = -1.0 + 2.0 * i as f64 / (n - 1) as f64;
                     let y = -1.0 + 2.0 * j as f64 / (n - 1) as f64;
-                    let bump = if (i, j) == (11, 7) { 0.03 } else { 0.0 };
-                    Vec3::new(x, y, 0.8 - 0.4 * (x * x + y * y) + bump)
+                    let dz = if bump && (i, j) == (11, 7) { 0.03 } else { 0.0 };
+                    Vec3::new(x, y, 0.8 - 0.4 * (x * x + y * y) + dz)
                 })
                 .collect()
         })
         .collect();
     let k = clamped_uniform_knots(n, 3);
-    let s = BSplineSurface::new(3, 3, k.clone(), k, net, None).unwrap();
-    let radii = (0..9).map(|k| 1.9 * (0.8 + 0.05 * k as f64)).collect();
-    (s, radii)
+    BSplineSurface::new(3, 3, k.clone(), k, net, None).unwrap()
+}
+
+/// Centre (Greville abscissae) of control point (11, 7).
+const CENTRE: [f64; 2] = [(9.0 + 10.0 + 11.0) / 36.0, (5.0 + 6.0 + 7.0) / 36.0];
+
+/// The bumped dome and the radii of nine concentric lights (centre
+/// (0, 0, 3), axis z) whose lines cross the bump: ±20 % around the radius
+/// the clean surface's normal line at the bump reaches.
+fn dome() -> (BSplineSurface, Vec<f64>) {
+    let clean = dome_surface(false);
+    let q = clean.eval(CENTRE[0], CENTRE[1]);
+    let n = clean.normal(CENTRE[0], CENTRE[1]).unwrap();
+    let x = q + (3.0 - q.z) / n.z * n;
+    let r0 = x.x.hypot(x.y);
+    let radii = (0..9).map(|k| r0 * (0.8 + 0.05 * k as f64)).collect();
+    (dome_surface(true), radii)
 }
 
 fn lights(radii: &[f64]) -> Vec<CircularLight> {
@@ -154,8 +168,7 @@ fn fair_surface_end_to_end_leaves_the_outside_bit_identical() {
     let f = d.join("dome.json");
     write_surfaces_json(&f, std::slice::from_ref(&surf)).unwrap();
     let ls = lights(&radii);
-    let centre = [(9.0 + 10.0 + 11.0) / 36.0, (5.0 + 6.0 + 7.0) / 36.0];
-    let ends = endpoints_around(&surf, &ls, centre, 0.2, 200);
+    let ends = endpoints_around(&surf, &ls, CENTRE, 0.2, 200);
     assert!(ends.len() >= 3);
     let (lf, ef) = (d.join("lights.json"), d.join("ends.json"));
     std::fs::write(
