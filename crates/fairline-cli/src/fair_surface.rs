@@ -307,7 +307,7 @@ pub fn demo_section(demo: &crate::demo::Demo) -> Result<crate::demo::Section> {
     plot.write(demo.out.join("bspline-fairing-uv.svg"))?;
     // The same pre-images as a picture: before (grey), after (colour),
     // targets (black).
-    let mut uv_lines: Vec<(Vec<[f64; 2]>, [f32; 3], f32)> = Vec::new();
+    let mut uv_lines: Vec<crate::surface_highlight::UvLine> = Vec::new();
     for l in &before.lines {
         uv_lines.push((l.uv.clone(), [0.95, 0.75, 0.2], 5.0));
     }

@@ -102,12 +102,15 @@ pub fn surface_picture(
     Ok(mesh_picture(&mesh, &picture, opts)?)
 }
 
+/// A polyline in (u, v) with its colour (linear light) and width (pixels).
+pub type UvLine = (Vec<[f64; 2]>, [f32; 3], f32);
+
 /// A PNG picture of the parameter domain of `surface` seen from above with
 /// polylines in (u, v): each entry is (points, colour, width); the domain is
 /// drawn as a flat light-grey rectangle.
 pub fn uv_picture(
     surface: &BSplineSurface,
-    lines: &[(Vec<[f64; 2]>, [f32; 3], f32)],
+    lines: &[UvLine],
     title: &str,
     size: (u32, u32),
 ) -> Result<fairline::render::Image> {
@@ -241,7 +244,7 @@ pub fn run(args: Args) -> Result<()> {
                 let lights: Vec<SurfaceLight> = match (&circular, array) {
                     (Some(c), _) => c.iter().map(|l| SurfaceLight::Circular(*l)).collect(),
                     (None, Some(a)) => {
-                        linear_lights(s, a, args.light.min_normal_cos, args.grid.min(400), 200)
+                        linear_lights(s, a, args.light.min_normal_cos, args.grid.min(400), 100)
                     }
                     (None, None) => Vec::new(),
                 };

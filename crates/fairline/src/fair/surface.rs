@@ -325,9 +325,8 @@ pub fn target_curves(
     let mut used: Vec<usize> = Vec::new();
     let mut light_index = Vec::with_capacity(endpoints.len());
     for (k, e) in endpoints.iter().enumerate() {
-        if !(e.radius > 0.0 && e.radius.is_finite())
-            || !e.start.iter().chain(&e.end).all(|x| x.is_finite())
-        {
+        let finite = e.start.iter().chain(&e.end).all(|x| x.is_finite());
+        if !(e.radius > 0.0 && e.radius.is_finite() && finite) {
             return Err(SurfaceFairError::Invalid(format!(
                 "endpoint {k}: radius must be positive and coordinates finite"
             )));

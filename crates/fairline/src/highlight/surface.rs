@@ -278,22 +278,54 @@ pub struct SurfaceHighlights {
 /// Circular (or linear) highlight lines of a B-spline surface (Nishiyama et
 /// al. §2): for each light, d_s of Eq. (2.18) on the grid of `opts`, its
 /// zero level by [`contour_field`], and with `opts.band = Some(ρ)` the band
-/// boundaries d_s = ±ρ.
+/// boundaries d_s = ±ρ. Consecutive lights of one linear array share one
+/// sampled field d_P (light m is its level m·s).
 pub fn surface_highlight_lines(
     surface: &BSplineSurface,
     lights: &[SurfaceLight],
     opts: &SurfaceHighlightOptions,
 ) -> SurfaceHighlights {
     let mut out = SurfaceHighlights::default();
+    // Lights of one linear array share d_P: its field is sampled once and
+    // light m is the level m·s of it.
+    let mut cache: Option<(SurfaceLight, DistanceField)> = None;
     for (k, light) in lights.iter().enumerate() {
-        let field = distance_field(surface, light, opts.grid_u, opts.grid_v);
-        out.lines
-            .extend(contour_field(surface, light, k, &field, 0.0, opts));
+        let (base, shift) = match *light {
+            SurfaceLight::Linear {
+                array,
+                index,
+                min_cos,
+            } => (
+                SurfaceLight::Linear {
+                    array,
+                    index: 0,
+                    min_cos,
+                },
+                index as f64 * array.spacing(),
+            ),
+            SurfaceLight::Circular(_) => (*light, 0.0),
+        };
+        if !matches!(&cache, Some((l, _)) if *l == base) {
+            cache = Some((
+                base,
+                distance_field(surface, &base, opts.grid_u, opts.grid_v),
+            ));
+        }
+        let Some((_, field)) = &cache else {
+            continue;
+        };
+        let level_set = |level: f64| {
+            let mut ls = contour_field(surface, &base, k, field, shift + level, opts);
+            for l in &mut ls {
+                l.level = level;
+                l.radius = light.radius();
+            }
+            ls
+        };
+        out.lines.extend(level_set(0.0));
         if let Some(rho) = opts.band.filter(|r| *r > 0.0 && r.is_finite()) {
-            out.band_lower
-                .extend(contour_field(surface, light, k, &field, -rho, opts));
-            out.band_upper
-                .extend(contour_field(surface, light, k, &field, rho, opts));
+            out.band_lower.extend(level_set(-rho));
+            out.band_upper.extend(level_set(rho));
         }
     }
     out
