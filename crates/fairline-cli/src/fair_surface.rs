@@ -123,6 +123,7 @@ pub fn run(args: Args) -> Result<()> {
     bar.finish_and_clear();
     report.set("iterations", rep.iterations.len());
     report.set("converged", rep.converged);
+    report.set("stop", rep.stop);
     report.set("modified_control_points", rep.modified_control_points.len());
     report.set(
         "modified_indices",
@@ -173,8 +174,8 @@ pub fn run(args: Args) -> Result<()> {
             };
             let img = side_by_side(
                 &[
-                    pic(&input, &before, "before")?,
-                    pic(&faired, &after, "after fairing")?,
+                    pic(&input, &before, "input")?,
+                    pic(&faired, &after, "faired")?,
                 ],
                 &["before", "after"],
             );
@@ -341,6 +342,7 @@ pub fn demo_section(demo: &crate::demo::Demo) -> Result<crate::demo::Section> {
             "modified_control_points": rep.modified_control_points.len(),
             "iterations": rep.iterations.len(),
             "converged": rep.converged,
+            "stop": rep.stop,
             "residual_before_mean": rep.residual_before.1,
             "residual_after_mean": rep.residual_after.1,
             "residual_before_max": rep.residual_before.0,

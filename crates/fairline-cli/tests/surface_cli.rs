@@ -226,6 +226,10 @@ fn fair_surface_end_to_end_leaves_the_outside_bit_identical() {
     );
     assert!(a < b / 30.0, "mean |d_s| {b} -> {a}");
     assert!(r["iterations"].as_u64().unwrap() <= 8);
+    assert!(
+        ["epsilon", "stalled", "max_iterations", "zero_residual"]
+            .contains(&r["stop"].as_str().unwrap())
+    );
     let modified: Vec<(usize, usize)> = r["modified_indices"]
         .as_array()
         .unwrap()

@@ -4,6 +4,6 @@
 pub mod surface;
 
 pub use surface::{
-    EndpointPair, Endpoints, FairIteration, SurfaceFairError, SurfaceFairOptions,
+    EndpointPair, Endpoints, FairIteration, FairStop, SurfaceFairError, SurfaceFairOptions,
     SurfaceFairReport, TargetCurve, endpoints_around, fair_surface, target_curves,
 };

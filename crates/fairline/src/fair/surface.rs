@@ -165,6 +165,23 @@ pub struct FairIteration {
     pub time_s: f64,
 }
 
+/// Why [`fair_surface`] stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FairStop {
+    /// The relative change of mean |d_s| fell below ε (Eq. (3.14)).
+    Epsilon,
+    /// mean |d_s| vanished (below 1e-14 of the control net size).
+    ZeroResidual,
+    /// Neither the full nor the damped step lowered mean |d_s|: the targets
+    /// are followed as well as the selected control points allow.
+    Stalled,
+    /// `max_iterations` reached.
+    MaxIterations,
+    /// The step was not finite (the previous surface is kept).
+    NonFiniteStep,
+}
+
 /// What [`fair_surface`] did.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SurfaceFairReport {
@@ -184,6 +201,8 @@ pub struct SurfaceFairReport {
     pub iterations: Vec<FairIteration>,
     /// Whether Eq. (3.14) was met (or the residual vanished).
     pub converged: bool,
+    /// Why the iteration stopped.
+    pub stop: FairStop,
     /// Largest control point displacement (surface units).
     pub max_displacement: f64,
 }
@@ -709,8 +728,8 @@ fn apply(
 /// max and mean |d_s| decrease (Eq. (3.12)), otherwise R + μΔr (Eq. (3.13)).
 /// Stops when |mean⁽ᵖ⁺¹⁾ − mean⁽ᵖ⁾| / mean⁽ᵖ⁾ < ε (Eq. (3.14), read with
 /// the absolute value), when the residual vanishes, when even the damped
-/// step does not lower the mean (the previous surface is kept), or after
-/// `opts.max_iterations`.
+/// step does not lower the mean (the previous surface is kept; reported as
+/// [`FairStop::Stalled`], not converged), or after `opts.max_iterations`.
 ///
 /// Returns the faired surface (control points outside the selection
 /// bit-identical) and the report.
@@ -768,6 +787,11 @@ pub fn fair_surface(
     let mut now = before;
     let mut iterations = Vec::new();
     let mut converged = now.1 <= tiny;
+    let mut stop = if converged {
+        FairStop::ZeroResidual
+    } else {
+        FairStop::MaxIterations
+    };
     while !converged && iterations.len() < opts.max_iterations && cols > 0 {
         let t0 = Instant::now();
         let base: Vec<Vec3> = selected
@@ -778,6 +802,7 @@ pub fn fair_surface(
         let fv: Vec<f64> = f.iter().map(|x| x.unwrap_or(0.0)).collect();
         let (dr, rank) = truncated_svd_solve(&j, &fv, opts.truncation)?;
         if !dr.iter().all(|x| x.is_finite()) {
+            stop = FairStop::NonFiniteStep;
             break;
         }
         let mut trial = current.clone();
@@ -793,7 +818,7 @@ pub fn fair_surface(
         }
         if !(st.1 < now.1) {
             // Not even the damped step helps: keep the current surface.
-            converged = now.1 <= tiny;
+            stop = FairStop::Stalled;
             break;
         }
         let rel = (now.1 - st.1).abs() / now.1;
@@ -809,8 +834,12 @@ pub fn fair_surface(
             rank,
             time_s: t0.elapsed().as_secs_f64(),
         });
-        if rel < opts.epsilon || now.1 <= tiny {
+        if now.1 <= tiny {
             converged = true;
+            stop = FairStop::ZeroResidual;
+        } else if rel < opts.epsilon {
+            converged = true;
+            stop = FairStop::Epsilon;
         }
     }
     let max_displacement = selected
@@ -828,6 +857,7 @@ pub fn fair_surface(
             residual_after: now,
             iterations,
             converged,
+            stop,
             max_displacement,
         },
     ))
