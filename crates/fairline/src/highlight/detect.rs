@@ -36,6 +36,7 @@ use crate::Vec3;
 use crate::geom;
 use crate::mesh::{FaceId, SurfaceMesh};
 use rayon::prelude::*;
+use std::collections::HashMap;
 
 /// Options of [`detect_irregularities`]; lengths relative to the spacing s.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -468,7 +469,31 @@ pub fn detect_irregularities(
                     }
                 }
             }
-            let near = |x: Vec3| st.points.iter().any(|q| (x - *q).length() <= radius);
+            // flagged samples bucketed in cubes of side `radius`: a face is
+            // near when a sample in one of the 27 cubes around it is close
+            let cell = |x: Vec3| {
+                let c = (x / radius).floor();
+                (c.x as i64, c.y as i64, c.z as i64)
+            };
+            let mut grid: HashMap<(i64, i64, i64), Vec<Vec3>> = HashMap::new();
+            for &q in &st.points {
+                grid.entry(cell(q)).or_default().push(q);
+            }
+            let near = |x: Vec3| {
+                let (i, j, k) = cell(x);
+                (-1..=1).any(|di| {
+                    (-1..=1).any(|dj| {
+                        (-1..=1).any(|dk| {
+                            grid.get(&(
+                                i.saturating_add(di),
+                                j.saturating_add(dj),
+                                k.saturating_add(dk),
+                            ))
+                            .is_some_and(|pts| pts.iter().any(|q| (x - *q).length() <= radius))
+                        })
+                    })
+                })
+            };
             let mut faces = Vec::new();
             while let Some(f) = queue.pop() {
                 faces.push(f);

@@ -20,6 +20,9 @@ pub use contour::{HighlightLine, HighlightLines, NodeId};
 pub use detect::{DetectOptions, Detection, IrregularRegion, LineFairness, detect_irregularities};
 pub use light::{CircleApproach, CircularLight, CircularLights, LightArray};
 pub use linear::{HighlightModel, HighlightOptions, highlight_lines};
+/// The one quartic solver (Nishiyama et al. Eq. (2.15)–(2.16)), shared by
+/// circular lights on meshes and on B-spline surfaces.
+pub use quartic::{quartic_roots, real_roots};
 
 use crate::mesh::MeshError;
 
