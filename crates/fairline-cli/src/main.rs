@@ -8,6 +8,7 @@ mod convert;
 mod curvature;
 mod demo;
 mod detect;
+mod enhance;
 mod highlight;
 mod highlight_png;
 mod info;
@@ -38,6 +39,7 @@ enum Command {
     Curvature(curvature::Args),
     Highlight(highlight::Args),
     Detect(detect::Args),
+    Enhance(enhance::Args),
     Render(render::Args),
     Demo(demo::Args),
 }
@@ -49,6 +51,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Curvature(a) => curvature::run(a),
         Command::Highlight(a) => highlight::run(a),
         Command::Detect(a) => detect::run(a),
+        Command::Enhance(a) => enhance::run(a),
         Command::Render(a) => render::run(a),
         Command::Demo(a) => demo::run(a),
     }
