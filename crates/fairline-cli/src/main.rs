@@ -8,6 +8,7 @@ mod convert;
 mod curvature;
 mod demo;
 mod detect;
+mod enhance;
 mod fair_surface;
 mod highlight;
 mod highlight_png;
@@ -41,6 +42,7 @@ enum Command {
     Highlight(highlight::Args),
     Detect(detect::Args),
     FairSurface(fair_surface::Args),
+    Enhance(enhance::Args),
     Render(render::Args),
     Demo(demo::Args),
 }
@@ -53,9 +55,28 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Highlight(a) => highlight::run(a),
         Command::Detect(a) => detect::run(a),
         Command::FairSurface(a) => fair_surface::run(a),
+        Command::Enhance(a) => enhance::run(a),
         Command::Render(a) => render::run(a),
         Command::Demo(a) => demo::run(a),
     }
+}
+
+/// The error and its causes joined by ": ", leaving out a cause whose text
+/// the message already ends with (library errors often include their
+/// source in their own text).
+fn error_message(e: &anyhow::Error) -> String {
+    let mut msg = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if msg.ends_with(&text) {
+            continue;
+        }
+        if !msg.is_empty() {
+            msg.push_str(": ");
+        }
+        msg.push_str(&text);
+    }
+    msg
 }
 
 fn main() {
@@ -72,7 +93,7 @@ fn main() {
         }
     };
     if let Err(e) = run(cli) {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", error_message(&e));
         std::process::exit(common::exit_code(&e));
     }
 }

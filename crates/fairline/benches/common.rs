@@ -66,3 +66,16 @@ pub fn test_surface(n: usize) -> fairline::SurfaceMesh {
 pub fn row(cells: &[String]) {
     println!("| {} |", cells.join(" | "));
 }
+
+/// CPU time (ns) used so far by all threads of this process (Linux
+/// /proc/self/task/*/schedstat; 0 elsewhere). The machine is shared, so
+/// wall times depend on the load; CPU time much less.
+pub fn cpu_ns() -> u64 {
+    let Ok(dir) = std::fs::read_dir("/proc/self/task") else {
+        return 0;
+    };
+    dir.filter_map(|t| t.ok())
+        .filter_map(|t| std::fs::read_to_string(t.path().join("schedstat")).ok())
+        .filter_map(|s| s.split_whitespace().next()?.parse::<u64>().ok())
+        .sum()
+}

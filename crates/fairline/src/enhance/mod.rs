@@ -237,6 +237,14 @@ pub struct EnhanceReport {
     pub max_displacement: f64,
     /// Mean vertex displacement, in input units.
     pub mean_displacement: f64,
+    /// Largest distance of a free vertex to the input surface around it, in
+    /// input units: input faces are searched ring by ring from the vertex's
+    /// input position until a ring brings no nearer face. It bounds the
+    /// distance to the whole input surface from above (another part of the
+    /// surface, e.g. across a thin part, may be nearer).
+    pub max_distance_to_input: f64,
+    /// Mean of the same distance over the free vertices, in input units.
+    pub mean_distance_to_input: f64,
     /// The length unit ē (mean input edge length) of the normalisation.
     pub edge_length: f64,
     /// Timings.
@@ -284,6 +292,8 @@ pub fn enhance_features(
             quality_after: quality_before.clone(),
             max_displacement: 0.0,
             mean_displacement: 0.0,
+            max_distance_to_input: 0.0,
+            mean_distance_to_input: 0.0,
             edge_length: if edge_length.is_finite() {
                 edge_length
             } else {
@@ -400,6 +410,8 @@ pub fn enhance_features(
         max_d = max_d.max(d);
         sum_d += d;
     }
+    let (max_distance_to_input, mean_distance_to_input) =
+        distance_to_input(mesh, &positions, &layout.free);
     let mut out_mesh = mesh.clone();
     out_mesh.set_positions(positions.clone())?;
     timings.total_s = start.elapsed().as_secs_f64();
@@ -415,10 +427,71 @@ pub fn enhance_features(
             quality_after: QualityStats::of_mesh(&out_mesh, bins),
             max_displacement: max_d,
             mean_displacement: sum_d / n as f64,
+            max_distance_to_input,
+            mean_distance_to_input,
             edge_length,
             timings,
         },
     })
+}
+
+/// Rings of input faces searched at most by [`distance_to_input`].
+const DISTANCE_RINGS: usize = 16;
+
+/// Largest and mean distance of the `free` vertices at `positions` to the
+/// input surface near them: the input faces are searched ring by ring
+/// around the vertex's input position (its incident faces, then those of
+/// its one-ring, ...) until a ring brings no nearer face (at most
+/// [`DISTANCE_RINGS`] rings). An upper bound of the distance to the whole
+/// input surface, which another part of the surface may come nearer to.
+fn distance_to_input(mesh: &SurfaceMesh, positions: &[Vec3], free: &[u32]) -> (f64, f64) {
+    use rayon::prelude::*;
+    use std::collections::HashSet;
+    let input = mesh.positions();
+    let distances: Vec<f64> = free
+        .par_iter()
+        .map(|&v| {
+            let v = VertexId(v);
+            let x = positions[v.idx()];
+            let mut best = f64::INFINITY;
+            let mut seen_vertices: HashSet<u32> = HashSet::from([v.0]);
+            let mut seen_faces = HashSet::new();
+            let mut frontier = vec![v];
+            for _ in 0..DISTANCE_RINGS {
+                let mut ring_best = f64::INFINITY;
+                let mut next = Vec::new();
+                for &w in &frontier {
+                    for f in mesh.vertex_faces(w) {
+                        if !seen_faces.insert(f.0) {
+                            continue;
+                        }
+                        let t = mesh.triangle(f).map(|u| input[u.idx()]);
+                        let b = crate::geom::closest_point_on_triangle(x, t[0], t[1], t[2]);
+                        let d = x.distance(b[0] * t[0] + b[1] * t[1] + b[2] * t[2]);
+                        ring_best = ring_best.min(d);
+                    }
+                    next.extend(mesh.one_ring(w).filter(|u| seen_vertices.insert(u.0)));
+                }
+                if ring_best < best {
+                    best = ring_best;
+                } else if best.is_finite() {
+                    break;
+                }
+                if next.is_empty() {
+                    break;
+                }
+                frontier = next;
+            }
+            if best.is_finite() { best } else { 0.0 }
+        })
+        .collect();
+    let max = distances.iter().copied().fold(0.0, f64::max);
+    let mean = if distances.is_empty() {
+        0.0
+    } else {
+        distances.iter().sum::<f64>() / distances.len() as f64
+    };
+    (max, mean)
 }
 
 fn validate(mesh: &SurfaceMesh, o: &EnhanceOptions) -> Result<(), EnhanceError> {

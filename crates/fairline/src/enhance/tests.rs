@@ -14,59 +14,9 @@ fn torus_curvature(big_r: f64, r: f64, p: Vec3) -> f64 {
     1.0 / r + v.cos().abs() / (big_r + r * v.cos())
 }
 
-/// Cube [-1, 1]³ with edges and corners rounded to `radius`, from an n × n
-/// grid per side: the flat parts are exact, the rounded parts are the offset
-/// of the inner box [-a, a]³, a = 1 − radius.
-pub(super) fn rounded_cube(n: u32, radius: f64) -> SurfaceMesh {
-    use std::collections::HashMap;
-    let a = 1.0 - radius;
-    let mut index: HashMap<[u32; 3], u32> = HashMap::new();
-    let mut pos = Vec::new();
-    let mut faces = Vec::new();
-    let mut vertex = |l: [u32; 3], pos: &mut Vec<Vec3>| -> u32 {
-        *index.entry(l).or_insert_with(|| {
-            let p = Vec3::new(l[0] as f64, l[1] as f64, l[2] as f64) * (2.0 / n as f64) - Vec3::ONE;
-            let q = p.clamp(Vec3::splat(-a), Vec3::splat(a));
-            pos.push(q + radius * (p - q).normalize());
-            (pos.len() - 1) as u32
-        })
-    };
-    for axis in 0..3 {
-        for side in [0, n] {
-            let (mut b, mut c) = ((axis + 1) % 3, (axis + 2) % 3);
-            if side == 0 {
-                std::mem::swap(&mut b, &mut c);
-            }
-            let at = |u: u32, v: u32| {
-                let mut l = [0; 3];
-                l[axis] = side;
-                l[b] = u;
-                l[c] = v;
-                l
-            };
-            for u in 0..n {
-                for v in 0..n {
-                    let q = [
-                        vertex(at(u, v), &mut pos),
-                        vertex(at(u + 1, v), &mut pos),
-                        vertex(at(u + 1, v + 1), &mut pos),
-                        vertex(at(u, v + 1), &mut pos),
-                    ];
-                    if (u + v) % 2 == 0 {
-                        faces.push([q[0], q[1], q[2]]);
-                        faces.push([q[0], q[2], q[3]]);
-                    } else {
-                        faces.push([q[0], q[1], q[3]]);
-                        faces.push([q[1], q[2], q[3]]);
-                    }
-                }
-            }
-        }
-    }
-    SurfaceMesh::new(pos, &faces).expect("rounded cube is manifold")
-}
+use shapes::rounded_cube;
 
-/// Mean distance of points of [`rounded_cube`] to its rounded part (0 for
+/// Mean distance of points of [`shapes::rounded_cube`] to its rounded part (0 for
 /// points in it, else the distance within the flat face to its border).
 fn mean_feature_distance(pos: &[Vec3], radius: f64) -> f64 {
     let a = 1.0 - radius;
@@ -88,57 +38,36 @@ fn mean_feature_distance(pos: &[Vec3], radius: f64) -> f64 {
     d / pos.len() as f64
 }
 
-/// Closest-point distance from `p` to triangle (a, b, c) (Ericson,
-/// Real-Time Collision Detection §5.1.5).
-fn point_triangle_distance(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> f64 {
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return p.distance(a);
-    }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return p.distance(b);
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return p.distance(a + ab * (d1 / (d1 - d3)));
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return p.distance(c);
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return p.distance(a + ac * (d2 / (d2 - d6)));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        return p.distance(b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
-    }
-    let denom = va + vb + vc;
-    if !(denom.abs() > 0.0) {
-        return p.distance(a).min(p.distance(b)).min(p.distance(c));
-    }
-    p.distance(a + ab * (vb / denom) + ac * (vc / denom))
-}
-
-/// Largest distance from the points to the surface of `input` (brute force).
-fn max_distance_to_surface(input: &SurfaceMesh, points: &[Vec3]) -> f64 {
+/// For every point, its distance to the surface of `input` and the value of
+/// the per-vertex field `field` of `input` interpolated at the closest
+/// point (brute force over the faces).
+fn project_to_surface(input: &SurfaceMesh, points: &[Vec3], field: &[f64]) -> Vec<(f64, f64)> {
     let p = input.positions();
     points
         .iter()
         .map(|&x| {
-            input
-                .faces()
-                .map(|f| {
-                    let [a, b, c] = input.triangle(f).map(|v| p[v.idx()]);
-                    point_triangle_distance(x, a, b, c)
-                })
-                .fold(f64::INFINITY, f64::min)
+            let mut best = (f64::INFINITY, 0.0);
+            for f in input.faces() {
+                let t = input.triangle(f);
+                let [a, b, c] = t.map(|v| p[v.idx()]);
+                let w = crate::geom::closest_point_on_triangle(x, a, b, c);
+                let d = x.distance(w[0] * a + w[1] * b + w[2] * c);
+                if d < best.0 {
+                    let value = (0..3).map(|k| w[k] * field[t[k].idx()]).sum();
+                    best = (d, value);
+                }
+            }
+            best
         })
+        .collect()
+}
+
+/// Largest distance from the points to the surface of `input`.
+fn max_distance_to_surface(input: &SurfaceMesh, points: &[Vec3]) -> f64 {
+    let zero = vec![0.0; input.vertex_count()];
+    project_to_surface(input, points, &zero)
+        .iter()
+        .map(|d| d.0)
         .fold(0.0, f64::max)
 }
 
@@ -197,6 +126,8 @@ fn rounded_cube_vertices_flow_to_the_rounded_edges_and_stay_on_the_surface() {
         deviation / e
     );
     assert!(out.report.max_displacement > 0.3 * e);
+    assert!(out.report.max_distance_to_input >= deviation - 1e-12 * e);
+    assert!(out.report.max_distance_to_input < 0.2 * e);
     assert_eq!(count_flips(&m, &out.positions), 0);
     // the flat parts stay flat: every moved point is on the cube's surface
     // to within the deviation measured above
@@ -329,4 +260,113 @@ fn invalid_input_is_refused_and_trivial_input_is_returned_unchanged() {
     let out = enhance_features(&m, &EnhanceOptions::default().fixed(all)).unwrap();
     assert_eq!(out.positions, m.positions());
     assert_eq!(out.report.free_vertices, 0);
+}
+
+/// Loads a mesh of the shared data set, or says why not.
+fn shared_mesh(name: &str) -> Option<SurfaceMesh> {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/meshes/");
+    let path = std::path::Path::new(path).join(name);
+    if !path.exists() {
+        println!("skipped: ../shared/data not found");
+        return None;
+    }
+    Some(crate::io::read_mesh(&path).expect("shared mesh reads"))
+}
+
+#[test]
+fn real_meshes_gain_vertices_in_curved_regions_and_stay_close() {
+    for name in ["bob_small.ply", "spot.ply"] {
+        let Some(m) = shared_mesh(name) else { return };
+        let out = enhance_features(&m, &EnhanceOptions::default().lambda(0.5)).unwrap();
+        let c = principal_curvatures_rusinkiewicz(&m);
+        let total: Vec<f64> = (0..m.vertex_count())
+            .map(|i| c.k1[i].abs() + c.k2[i].abs())
+            .collect();
+        let free: Vec<usize> = m
+            .vertices()
+            .filter(|&v| !m.is_boundary_vertex(v))
+            .map(|v| v.idx())
+            .collect();
+        let moved: Vec<Vec3> = free.iter().map(|&i| out.positions[i]).collect();
+        let projected = project_to_surface(&m, &moved, &total);
+        let before = free.iter().map(|&i| total[i]).sum::<f64>() / free.len() as f64;
+        let after = projected.iter().map(|p| p.1).sum::<f64>() / free.len() as f64;
+        let e = out.report.edge_length;
+        let deviation = projected.iter().map(|p| p.0).fold(0.0, f64::max) / e;
+        let mean_dev = projected.iter().map(|p| p.0).sum::<f64>() / (e * free.len() as f64);
+        println!(
+            "{name}: {} vertices, mean |k1|+|k2| at the vertices {before:.4} -> {after:.4}, \
+             distance to input max {deviation:.3} ē mean {mean_dev:.4} ē, quality min {:.3} -> {:.3}, \
+             mean {:.3} -> {:.3}, flips repaired {}",
+            m.vertex_count(),
+            out.report.quality_before.min,
+            out.report.quality_after.min,
+            out.report.quality_before.mean,
+            out.report.quality_after.mean,
+            out.report.flipped_triangles
+        );
+        assert!(after > 1.01 * before, "{name}: {before} -> {after}");
+        // the reported distance (to the input surface around the vertex)
+        // bounds the distance to the whole input from above (another
+        // part of the surface, e.g. across an ear, may be nearer) and is
+        // small too
+        let true_max = projected.iter().map(|p| p.0).fold(0.0, f64::max);
+        let reported = out.report.max_distance_to_input;
+        assert!(
+            reported >= true_max - 1e-12 * e && reported < 0.5 * e,
+            "{name}: reported {reported}, brute force {true_max}, edge {e}"
+        );
+        // share of vertices in the top curvature decile of the input: 10 %
+        // before by construction, more after
+        let mut sorted: Vec<f64> = free.iter().map(|&i| total[i]).collect();
+        sorted.sort_by(f64::total_cmp);
+        let threshold = sorted[sorted.len() * 9 / 10];
+        let share = |k: &mut dyn Iterator<Item = f64>| {
+            k.filter(|&k| k >= threshold).count() as f64 / free.len() as f64
+        };
+        let share_before = share(&mut free.iter().map(|&i| total[i]));
+        let share_after = share(&mut projected.iter().map(|p| p.1));
+        println!("{name}: top-decile share {share_before:.3} -> {share_after:.3}");
+        assert!(
+            share_after > share_before + 0.02,
+            "{name}: {share_before} -> {share_after}"
+        );
+        assert!(
+            deviation < 0.5 && mean_dev < 0.1,
+            "{name}: {deviation} {mean_dev}"
+        );
+        assert_eq!(count_flips(&m, &out.positions), 0);
+    }
+}
+
+#[test]
+fn flat_real_outline_slides_within_its_plane() {
+    // lego_open.ply: a flat open outline in the plane y = 0. Without
+    // curvature F_em vanishes and F_sd only holds the normal direction, so
+    // F_smo evens out the vertices within the plane: they may move by
+    // edge lengths, yet stay on the input surface; the boundary stays.
+    let Some(m) = shared_mesh("lego_open.ply") else {
+        return;
+    };
+    assert!(m.positions().iter().all(|p| p.y == 0.0));
+    let out = enhance_features(&m, &EnhanceOptions::default()).unwrap();
+    let e = out.report.edge_length;
+    assert!(out.report.max_displacement > e, "vertices slide");
+    for (v, (a, b)) in m.positions().iter().zip(&out.positions).enumerate() {
+        assert!(b.y.abs() <= 1e-12 * e, "vertex {v} left the plane: {b}");
+        if m.is_boundary_vertex(VertexId(v as u32)) {
+            assert_eq!(
+                a.to_array().map(f64::to_bits),
+                b.to_array().map(f64::to_bits)
+            );
+        }
+    }
+    let r = &out.report;
+    assert!(
+        r.max_distance_to_input <= 1e-12 * e,
+        "{}",
+        r.max_distance_to_input
+    );
+    assert_eq!(count_flips(&m, &out.positions), 0);
+    assert!(r.quality_after.mean > r.quality_before.mean);
 }

@@ -60,6 +60,56 @@ pub(crate) fn angle_between(a: Vec3, b: Vec3) -> f64 {
     }
 }
 
+/// Barycentric coordinates (summing to 1, all ≥ 0) of the point of triangle
+/// (a, b, c) closest to `p` (Ericson, Real-Time Collision Detection,
+/// §5.1.5, Voronoi regions of the vertices and edges). A degenerate
+/// triangle gives the closest of its vertices or edge points; never NaN for
+/// finite input.
+pub fn closest_point_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> [f64; 3] {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return [1.0, 0.0, 0.0];
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return [0.0, 1.0, 0.0];
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 && d1 - d3 > 0.0 {
+        let t = d1 / (d1 - d3);
+        return [1.0 - t, t, 0.0];
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return [0.0, 0.0, 1.0];
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 && d2 - d6 > 0.0 {
+        let t = d2 / (d2 - d6);
+        return [1.0 - t, 0.0, t];
+    }
+    let va = d3 * d6 - d5 * d4;
+    let (e, f) = (d4 - d3, d5 - d6);
+    if va <= 0.0 && e >= 0.0 && f >= 0.0 && e + f > 0.0 {
+        let t = e / (e + f);
+        return [0.0, 1.0 - t, t];
+    }
+    let denom = va + vb + vc;
+    if !(denom.abs() > 0.0) || !denom.is_finite() {
+        // degenerate: the best of the three vertices
+        let d = [p.distance(a), p.distance(b), p.distance(c)];
+        let k = (0..3).min_by(|&i, &j| d[i].total_cmp(&d[j])).unwrap_or(0);
+        let mut w = [0.0; 3];
+        w[k] = 1.0;
+        return w;
+    }
+    let (v, w) = (vb / denom, vc / denom);
+    [1.0 - v - w, v, w]
+}
+
 /// Triangle quality 2r/R (inradius over circumradius, times 2): 1 for an
 /// equilateral triangle, 0 for a degenerate one. Computed as
 /// 16 A² / (a b c (a + b + c)).
@@ -141,4 +191,35 @@ pub fn willmore_energy(mesh: &SurfaceMesh) -> f64 {
         })
         .collect();
     parts.iter().sum()
+}
+
+#[cfg(test)]
+mod closest_point_tests {
+    use super::*;
+
+    #[test]
+    fn closest_point_on_triangle_in_every_region() {
+        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+        let at = |w: [f64; 3]| w[0] * a + w[1] * b + w[2] * c;
+        let cases = [
+            (Vec3::new(0.25, 0.25, 2.0), Vec3::new(0.25, 0.25, 0.0)),
+            (Vec3::new(-1.0, -1.0, 0.5), a),
+            (Vec3::new(3.0, -0.5, 0.0), b),
+            (Vec3::new(-0.2, 4.0, 1.0), c),
+            (Vec3::new(0.5, -2.0, 0.0), Vec3::new(0.5, 0.0, 0.0)),
+            (Vec3::new(-3.0, 0.5, 0.0), Vec3::new(0.0, 0.5, 0.0)),
+            (Vec3::new(1.0, 1.0, -1.0), Vec3::new(0.5, 0.5, 0.0)),
+        ];
+        for (p, q) in cases {
+            let w = closest_point_on_triangle(p, a, b, c);
+            assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+            assert!(w.iter().all(|x| *x >= 0.0));
+            assert!(at(w).distance(q) < 1e-15, "{p}: {} vs {q}", at(w));
+        }
+        // degenerate triangles give a finite answer on the triangle
+        for (a, b, c) in [(a, a, a), (a, b, 2.0 * b), (b, b, c)] {
+            let w = closest_point_on_triangle(Vec3::new(0.3, 0.7, 0.2), a, b, c);
+            assert!(w.iter().all(|x| x.is_finite()));
+        }
+    }
 }

@@ -24,8 +24,8 @@ pub use laplace::{
     laplacian, laplacian_from_weights, uniform_laplacian,
 };
 pub use measures::{
-    corner_angles, edge_lengths, mean_edge_length, surface_area, triangle_qualities,
-    triangle_quality, volume, willmore_energy,
+    closest_point_on_triangle, corner_angles, edge_lengths, mean_edge_length, surface_area,
+    triangle_qualities, triangle_quality, volume, willmore_energy,
 };
 pub use normals::{
     face_normals, triangle_normal_area, vertex_normal, vertex_normals, vertex_normals_max,

@@ -38,7 +38,7 @@ impl CholeskySolver {
             a,
             Side::Lower,
         )
-        .map_err(|_| SolveError::NotPositiveDefinite)?;
+        .map_err(llt_error)?;
         Ok(CholeskySolver {
             symbolic,
             pattern: a
@@ -64,7 +64,7 @@ impl CholeskySolver {
             a,
             Side::Lower,
         )
-        .map_err(|_| SolveError::NotPositiveDefinite)?;
+        .map_err(llt_error)?;
         Ok(())
     }
 
@@ -113,6 +113,15 @@ impl CholeskySolver {
         } else {
             Err(SolveError::NonFinite)
         }
+    }
+}
+
+/// A failed numeric factorisation: not positive definite, or out of memory
+/// (the factor of a large system may not fit) and other faer failures.
+fn llt_error(e: faer::sparse::linalg::LltError) -> SolveError {
+    match e {
+        faer::sparse::linalg::LltError::Numeric(_) => SolveError::NotPositiveDefinite,
+        faer::sparse::linalg::LltError::Generic(e) => SolveError::Backend(format!("{e:?}")),
     }
 }
 

@@ -1,0 +1,207 @@
+//! `fairline enhance`: feature enhancement by vertex flow (Ji et al. 2011).
+
+use crate::common::{Report, bad_input, check_output, read_json, spinner};
+use anyhow::{Context, Result};
+use fairline::VertexId;
+use fairline::enhance::{EnhanceError, EnhanceOptions, enhance_features};
+use fairline::geom::{CurvatureMethod, principal_curvatures, vertex_normals};
+use fairline::mesh::SurfaceMesh;
+use fairline::render::{
+    Colormap, Image, Legend, MeshLayer, RenderOptions, Scene, render, scalar_colors, side_by_side,
+};
+use std::path::{Path, PathBuf};
+
+/// Moves the vertices of a triangle mesh from flat regions toward ridges
+/// and valleys (vertex flow, Ji et al. 2011) without changing the
+/// connectivity: minimises F_em + λ F_sd + μ F_smo by sparse least squares.
+/// Boundary vertices and the vertices of --fixed stay bit-identical; flipped
+/// triangles are repaired. The result does not depend on the scale or
+/// position of the input (internally normalised by the mean edge length).
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Example:\n  fairline enhance bob.ply --lambda 0.5 --mu 0.5 -o bob-enhanced.ply --report r.json --png bob-enhanced.png\n\nReport keys: flipped_triangles backtracked_vertices quality_before quality_after histogram_before histogram_after max_displacement max_distance_to_input timings."
+)]
+pub struct Args {
+    /// Input triangle mesh (.obj .ply .off .stl).
+    pub mesh: PathBuf,
+    /// λ, weight of the squared-distance term (smaller: stronger features). > 0.
+    #[arg(long, default_value_t = 1.0)]
+    pub lambda: f64,
+    /// μ, weight of the fairness term (larger: better triangles). ≥ 0.
+    #[arg(long, default_value_t = 0.5)]
+    pub mu: f64,
+    /// Solves; curvature is recomputed on the current mesh before each one
+    /// after the first.
+    #[arg(long, default_value_t = 1)]
+    pub iterations: usize,
+    /// JSON file `{"vertices":[...]}` of vertices that must not move.
+    #[arg(long, value_name = "FILE.json")]
+    pub fixed: Option<PathBuf>,
+    /// Output mesh.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
+    /// Write a JSON report.
+    #[arg(long, value_name = "FILE.json")]
+    pub report: Option<PathBuf>,
+    /// Picture of input and output side by side, coloured by mean curvature,
+    /// with the mesh edges.
+    #[arg(long, value_name = "IMG.png")]
+    pub png: Option<PathBuf>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FixedFile {
+    vertices: Vec<u32>,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    // every check that can refuse the input runs before anything is written
+    check_output(&args.mesh, &args.output)?;
+    check_parent(&args.output)?;
+    if let Some(png) = &args.png {
+        if png
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            != Some("png".into())
+        {
+            return Err(bad_input(format!(
+                "{}: --png must name a .png file",
+                png.display()
+            )));
+        }
+        check_output(&args.mesh, png)?;
+        check_parent(png)?;
+    }
+    if let Some(report) = &args.report {
+        check_output(&args.mesh, report)?;
+        check_parent(report)?;
+    }
+    let mesh = fairline::io::read_mesh(&args.mesh)?;
+    if !mesh.is_triangle_mesh() {
+        return Err(bad_input(format!(
+            "{}: enhance needs a triangle mesh (triangulate it first, e.g. with `fairline convert`)",
+            args.mesh.display()
+        )));
+    }
+    let fixed = match &args.fixed {
+        Some(p) => read_json::<FixedFile>(p)?
+            .vertices
+            .into_iter()
+            .map(VertexId)
+            .collect(),
+        None => Vec::new(),
+    };
+    let options = EnhanceOptions::default()
+        .lambda(args.lambda)
+        .mu(args.mu)
+        .iterations(args.iterations)
+        .fixed(fixed);
+    let mut report = Report::new("enhance");
+    let bar = spinner("vertex flow");
+    let result = report.time(|| enhance_features(&mesh, &options));
+    bar.finish_and_clear();
+    let result = match result {
+        Ok(r) => r,
+        Err(EnhanceError::FixedVertexOutOfRange { vertex, vertices }) => {
+            let file = args.fixed.as_deref().unwrap_or(Path::new("--fixed"));
+            return Err(bad_input(format!(
+                "{}: fixed vertex {vertex} does not exist; {} has {vertices} vertices (0 to {})",
+                file.display(),
+                args.mesh.display(),
+                vertices.saturating_sub(1)
+            )));
+        }
+        Err(e @ EnhanceError::InvalidOption(_)) => return Err(bad_input(e.to_string())),
+        Err(e) => return Err(e).context("vertex flow"),
+    };
+    let mut out = mesh.clone();
+    out.set_positions(result.positions)?;
+    // the picture is made before anything is written
+    let image = match &args.png {
+        Some(_) => Some(picture(&mesh, &out, (900, 800))?),
+        None => None,
+    };
+    fairline::io::write_mesh(&args.output, &out)?;
+    if let (Some(png), Some(image)) = (&args.png, image) {
+        image
+            .write_png(png)
+            .with_context(|| format!("writing {}", png.display()))?;
+    }
+    let r = &result.report;
+    report.set("vertices", r.vertices);
+    report.set("free_vertices", r.free_vertices);
+    report.set("iterations", r.iterations);
+    report.set("lambda", args.lambda);
+    report.set("mu", args.mu);
+    report.set("flipped_triangles", r.flipped_triangles);
+    report.set("backtracked_vertices", r.backtracked_vertices);
+    report.set("quality_before", &r.quality_before);
+    report.set("quality_after", &r.quality_after);
+    report.set("histogram_before", &r.quality_before.histogram);
+    report.set("histogram_after", &r.quality_after.histogram);
+    report.set("max_displacement", r.max_displacement);
+    report.set("mean_displacement", r.mean_displacement);
+    report.set("max_distance_to_input", r.max_distance_to_input);
+    report.set("mean_distance_to_input", r.mean_distance_to_input);
+    report.set("edge_length", r.edge_length);
+    report.set("timings", &r.timings);
+    report.write(args.report.as_deref())?;
+    Ok(())
+}
+
+/// Refuses an output path whose folder does not exist (before any work, so
+/// that a failed run writes nothing).
+fn check_parent(path: &Path) -> Result<()> {
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => return Ok(()),
+    };
+    if parent.is_dir() {
+        Ok(())
+    } else {
+        Err(bad_input(format!(
+            "{}: folder {} does not exist",
+            path.display(),
+            parent.display()
+        )))
+    }
+}
+
+/// Input and output side by side, `size` pixels each, smooth shaded,
+/// coloured by mean curvature on a common scale (the input's range), with
+/// wireframe, so that the migration of vertices toward features shows.
+pub fn picture(input: &SurfaceMesh, output: &SurfaceMesh, size: (u32, u32)) -> Result<Image> {
+    let h_in = principal_curvatures(input, CurvatureMethod::Rusinkiewicz).mean();
+    let h_out = principal_curvatures(output, CurvatureMethod::Rusinkiewicz).mean();
+    let (c_in, range) = scalar_colors(&h_in, Colormap::Coolwarm, None);
+    let (c_out, _) = scalar_colors(&h_out, Colormap::Coolwarm, Some(range));
+    let opts = RenderOptions::with_size(size.0, size.1);
+    let panel = |mesh: &SurfaceMesh, colors: &[[f32; 3]]| -> Result<Image> {
+        let triangles: Vec<[u32; 3]> = mesh
+            .faces()
+            .map(|f| mesh.triangle(f).map(|v| v.0))
+            .collect();
+        let normals = vertex_normals(mesh);
+        let layer = MeshLayer::new(mesh.positions(), &triangles)
+            .with_normals(&normals)
+            .with_colors(colors)
+            .with_wireframe([0.08, 0.08, 0.1])
+            .with_two_sided(false);
+        let scene = Scene {
+            meshes: vec![layer],
+            legend: Some(Legend {
+                title: "mean curvature".into(),
+                colormap: Colormap::Coolwarm,
+                min: range.0,
+                max: range.1,
+            }),
+            ..Default::default()
+        };
+        Ok(render(&scene, &opts)?)
+    };
+    let a = panel(input, &c_in)?;
+    let b = panel(output, &c_out)?;
+    Ok(side_by_side(&[a, b], &["input", "vertex flow"]))
+}
