@@ -16,7 +16,9 @@ use std::path::{Path, PathBuf};
 /// quad grid, ...) through every pipeline and writes pictures, meshes,
 /// `report.json` and `index.html` (open it in a browser) to the output folder.
 #[derive(clap::Args, Debug)]
-#[command(after_help = "Example:\n  fairline demo --out fairline-demo\n  (then open fairline-demo/index.html)")]
+#[command(
+    after_help = "Example:\n  fairline demo --out fairline-demo\n  (then open fairline-demo/index.html)"
+)]
 pub struct Args {
     /// Output folder (created if missing).
     #[arg(long, default_value = "fairline-demo")]
@@ -74,7 +76,9 @@ pub fn run(args: Args) -> Result<()> {
     let mut sections = Vec::new();
     for (name, step) in steps {
         bar.set_message(name.to_string());
-        let section = report.time(|| step(&demo)).with_context(|| format!("demo step `{name}`"))?;
+        let section = report
+            .time(|| step(&demo))
+            .with_context(|| format!("demo step `{name}`"))?;
         sections.push(section);
         bar.inc(1);
     }
@@ -96,7 +100,9 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 fn escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
 }
 
 fn write_index(out: &Path, sections: &[Section]) -> Result<()> {
@@ -104,7 +110,11 @@ fn write_index(out: &Path, sections: &[Section]) -> Result<()> {
         "<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>fairline demo</title>\n<style>body{font-family:sans-serif;max-width:1400px;margin:2em auto;color:#222}img{max-width:660px;margin:4px;border:1px solid #ccc}figure{display:inline-block;margin:0 8px}pre{background:#f4f4f4;padding:8px;overflow:auto}</style></head><body>\n<h1>fairline demo</h1>\n<p>Built-in surfaces through fairline's pipelines. Numbers are in <a href=\"report.json\">report.json</a>.</p>\n",
     );
     for s in sections {
-        html.push_str(&format!("<h2>{}</h2>\n<p>{}</p>\n", escape(&s.title), escape(&s.text)));
+        html.push_str(&format!(
+            "<h2>{}</h2>\n<p>{}</p>\n",
+            escape(&s.title),
+            escape(&s.text)
+        ));
         for (img, caption) in &s.images {
             html.push_str(&format!(
                 "<figure><img src=\"{img}\" alt=\"{c}\"><figcaption>{c}</figcaption></figure>\n",
@@ -117,7 +127,7 @@ fn write_index(out: &Path, sections: &[Section]) -> Result<()> {
         ));
     }
     html.push_str("</body></html>\n");
-    fairline::io::atomic_write(&out.join("index.html"), |w| {
+    fairline::io::atomic_write(out.join("index.html"), |w| {
         use std::io::Write;
         w.write_all(html.as_bytes())
     })?;
@@ -162,7 +172,7 @@ fn sphere_section(demo: &Demo) -> Result<Section> {
         "sphere-mean-curvature.png",
         false,
     )?;
-    fairline::io::write_mesh(&demo.out.join("sphere.ply"), &mesh)?;
+    fairline::io::write_mesh(demo.out.join("sphere.ply"), &mesh)?;
     Ok(Section {
         title: "Sphere".into(),
         text: "Icosphere of radius 1 (2562 vertices). Both estimators should give k1 = k2 = 1; the legend shows how close the mean curvature is.".into(),
@@ -227,7 +237,7 @@ fn wavy_section(demo: &Demo) -> Result<Section> {
         "wavy-mean-curvature.png",
         true,
     )?;
-    fairline::io::write_mesh(&demo.out.join("wavy.obj"), &mesh)?;
+    fairline::io::write_mesh(demo.out.join("wavy.obj"), &mesh)?;
     Ok(Section {
         title: "Wavy panel".into(),
         text: "A height field z = 0.2 sin 3x cos 2y, triangulated with alternating diagonals, coloured by mean curvature.".into(),
@@ -240,15 +250,25 @@ fn wavy_section(demo: &Demo) -> Result<Section> {
 }
 
 fn quad_section(demo: &Demo) -> Result<Section> {
-    let mesh = shapes::quad_grid(16, 16, (-1.0, 1.0), (-1.0, 1.0), |x, y| 0.3 * (x * x - y * y));
+    let mesh = shapes::quad_grid(16, 16, (-1.0, 1.0), (-1.0, 1.0), |x, y| {
+        0.3 * (x * x - y * y)
+    });
     let lines = structure_lines(&mesh);
     let polylines: Vec<PolylineLayer> = lines
         .iter()
         .enumerate()
         .map(|(i, l)| PolylineLayer {
-            points: l.vertices.iter().map(|&v| mesh.position(v)).collect::<Vec<Vec3>>(),
+            points: l
+                .vertices
+                .iter()
+                .map(|&v| mesh.position(v))
+                .collect::<Vec<Vec3>>(),
             closed: l.closed,
-            color: if i % 2 == 0 { [0.05, 0.2, 0.7] } else { [0.7, 0.1, 0.1] },
+            color: if i % 2 == 0 {
+                [0.05, 0.2, 0.7]
+            } else {
+                [0.7, 0.1, 0.1]
+            },
             width_px: 2.0,
         })
         .collect();
@@ -257,8 +277,11 @@ fn quad_section(demo: &Demo) -> Result<Section> {
         title: Some("quad saddle: structure lines".into()),
         ..Default::default()
     };
-    let img = demo.save("quad-structure-lines.png", &mesh_picture(&mesh, &picture, &demo.opts)?)?;
-    fairline::io::write_mesh(&demo.out.join("quad-saddle.obj"), &mesh)?;
+    let img = demo.save(
+        "quad-structure-lines.png",
+        &mesh_picture(&mesh, &picture, &demo.opts)?,
+    )?;
+    fairline::io::write_mesh(demo.out.join("quad-saddle.obj"), &mesh)?;
     Ok(Section {
         title: "Quad grid".into(),
         text: "A 16 × 16 quad saddle z = 0.3 (x² − y²); its structure lines are traced straight through the regular vertices.".into(),

@@ -6,7 +6,12 @@
 mod common;
 mod convert;
 mod curvature;
+mod demo;
+mod detect;
+mod highlight;
 mod info;
+mod render;
+mod surface;
 
 use clap::{Parser, Subcommand};
 
@@ -30,6 +35,10 @@ enum Command {
     Info(info::Args),
     Convert(convert::Args),
     Curvature(curvature::Args),
+    Highlight(highlight::Args),
+    Detect(detect::Args),
+    Render(render::Args),
+    Demo(demo::Args),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -37,6 +46,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Info(a) => info::run(a),
         Command::Convert(a) => convert::run(a),
         Command::Curvature(a) => curvature::run(a),
+        Command::Highlight(a) => highlight::run(a),
+        Command::Detect(a) => detect::run(a),
+        Command::Render(a) => render::run(a),
+        Command::Demo(a) => demo::run(a),
     }
 }
 

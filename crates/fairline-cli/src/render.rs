@@ -25,7 +25,9 @@ pub enum Scalar {
 /// software rasteriser: smooth shading, optional curvature colouring with a
 /// legend, optional wireframe. Deterministic output.
 #[derive(clap::Args, Debug)]
-#[command(after_help = "Examples:\n  fairline render spot.ply --png spot.png\n  fairline render spot.ply --png spot-mean.png --scalar mean --view 1,0.3,-0.5 --size 1600x1200")]
+#[command(
+    after_help = "Examples:\n  fairline render spot.ply --png spot.png\n  fairline render spot.ply --png spot-mean.png --scalar mean --view 1,0.3,-0.5 --size 1600x1200"
+)]
 pub struct Args {
     /// Mesh (.obj .ply .off .stl) or surface (.json .igs).
     pub input: PathBuf,
@@ -65,10 +67,18 @@ pub fn options(view: Option<Vec3>, size: (u32, u32)) -> Result<RenderOptions> {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if args.png.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref()
+    if args
+        .png
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .as_deref()
         != Some("png")
     {
-        return Err(bad_input(format!("{}: --png must name a .png file", args.png.display())));
+        return Err(bad_input(format!(
+            "{}: --png must name a .png file",
+            args.png.display()
+        )));
     }
     crate::common::check_output(&args.input, &args.png)?;
     let mesh = if crate::surface::is_surface_path(&args.input) {

@@ -28,10 +28,17 @@ pub fn load_surfaces(path: &Path) -> Result<Vec<BSplineSurface>> {
     let surfaces = if ext == "json" {
         read_surfaces_json(path)?
     } else {
-        read_iges(path)?.surfaces.into_iter().map(|s| s.surface).collect()
+        read_iges(path)?
+            .surfaces
+            .into_iter()
+            .map(|s| s.surface)
+            .collect()
     };
     if surfaces.is_empty() {
-        return Err(bad_input(format!("{}: the file holds no B-spline surface", path.display())));
+        return Err(bad_input(format!(
+            "{}: the file holds no B-spline surface",
+            path.display()
+        )));
     }
     Ok(surfaces)
 }

@@ -184,11 +184,22 @@ fn curvature_of_a_sphere_file_is_one_over_r() {
     assert_eq!(
         names,
         [
-            "x", "y", "z", "nx", "ny", "nz", "k1", "k2", "mean", "gauss", "d1x", "d1y", "d1z",
-            "d2x", "d2y", "d2z"
+            "nx", "ny", "nz", "k1", "k2", "mean", "gauss", "d1x", "d1y", "d1z", "d2x", "d2y", "d2z"
         ]
     );
-    let k1 = &props[6].1;
+    let bytes = std::fs::read(&out).unwrap();
+    let header = String::from_utf8_lossy(&bytes[..bytes.len().min(2000)]);
+    let order: Vec<&str> = header
+        .lines()
+        .take_while(|l| !l.starts_with("end_header"))
+        .filter_map(|l| l.strip_prefix("property double "))
+        .collect();
+    assert_eq!(
+        &order[..4],
+        ["x", "y", "z", "nx"],
+        "x y z come first, as doubles"
+    );
+    let k1 = &props[3].1;
     assert!(k1.iter().all(|k| (k - 0.5).abs() < 1e-6));
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(rep).unwrap()).unwrap();

@@ -26,11 +26,8 @@ fn main() {
         let mesh = shapes::height_field(n, n, (-2.0, 2.0), (-2.0, 2.0), |x, y| {
             0.3 * (1.3 * x).sin() * (0.9 * y).cos() + 0.1 * (x * y).cos()
         });
-        let light = LightArray::default_for(
-            Vec3::new(-2.0, -2.0, -0.4),
-            Vec3::new(2.0, 2.0, 0.4),
-            None,
-        );
+        let light =
+            LightArray::default_for(Vec3::new(-2.0, -2.0, -0.4), Vec3::new(2.0, 2.0, 0.4), None);
         let opts = HighlightOptions::default();
         let mut t_norm = Vec::new();
         let mut t_model = Vec::new();

@@ -28,10 +28,15 @@ impl MeshView {
     /// Prepares `mesh` for drawing.
     pub fn new(mesh: &SurfaceMesh) -> MeshView {
         let triangles = if mesh.is_triangle_mesh() {
-            mesh.faces().map(|f| mesh.triangle(f).map(|v| v.0)).collect()
+            mesh.faces()
+                .map(|f| mesh.triangle(f).map(|v| v.0))
+                .collect()
         } else {
             let t = triangulate(mesh);
-            t.mesh.faces().map(|f| t.mesh.triangle(f).map(|v| v.0)).collect()
+            t.mesh
+                .faces()
+                .map(|f| t.mesh.triangle(f).map(|v| v.0))
+                .collect()
         };
         let edges = mesh
             .edges()

@@ -158,6 +158,70 @@ pub fn ders_basis_funs(
     }
 }
 
+/// Derivative of the degree-`d` basis functions on knot span `span`, in
+/// place: on entry `x[r'] = X_{span-d+1+r', d-1}` (values or derivatives of
+/// the degree `d - 1` functions, `d` entries), on exit `x[r]` is the
+/// derivative of `N_{span-d+r, d}` (`d + 1` entries), by Piegl & Tiller
+/// Eq. (2.9):
+/// `N'_{i,d} = d (N_{i,d-1} / (u_{i+d} - u_i) - N_{i+1,d-1} / (u_{i+d+1} - u_{i+1}))`.
+/// Every denominator used spans the non-empty knot span, so none is zero.
+#[inline(always)]
+fn differentiate(span: usize, d: usize, knots: &[f64], x: &mut [f64; MAX_ORDER]) {
+    let df = d as f64;
+    // prev = x[r-1] / (u_{span+r} - u_{span-d+r}), the first term of N'_{span-d+r}.
+    let mut prev = 0.0;
+    for r in 0..d {
+        let t = x[r] / (knots[span + r + 1] - knots[span + r + 1 - d]);
+        x[r] = df * (prev - t);
+        prev = t;
+    }
+    x[d] = df * prev;
+}
+
+/// The non-zero basis functions and their first and second derivatives,
+/// like [`ders_basis_funs`] with `n = 2` (same output layout, rows beyond the
+/// degree zero), but cheaper and with no scratch buffers: the triangular
+/// table of A2.2 is run once, keeping its degree `p-1` and `p-2` rows in
+/// `ders[1]` and `ders[2]`, and the derivatives follow from the derivative
+/// formula Eq. (2.9) applied in place once and twice — the same quantities
+/// A2.3 computes through its `a[k][j]` coefficients. This is the evaluation
+/// hot path; it is cross-checked against A2.3 in the tests.
+pub fn basis_funs_ders2(span: usize, u: f64, degree: usize, knots: &[f64], ders: &mut BasisDerivs) {
+    let p = degree;
+    let [n, d1, d2] = ders;
+    n[0] = 1.0;
+    if p == 1 {
+        d1[0] = 1.0;
+    } else if p == 2 {
+        d2[0] = 1.0;
+    }
+    for j in 1..=p {
+        // left[k] = u - knots[span + 1 - k], right[k] = knots[span + k] - u.
+        let mut saved = 0.0;
+        for r in 0..j {
+            let right = knots[span + r + 1] - u;
+            let left = u - knots[span + 1 + r - j];
+            let temp = n[r] / (right + left);
+            n[r] = saved + right * temp;
+            saved = left * temp;
+        }
+        n[j] = saved;
+        if j + 2 == p {
+            d2[..=j].copy_from_slice(&n[..=j]);
+        } else if j + 1 == p {
+            d1[..=j].copy_from_slice(&n[..=j]);
+        }
+    }
+    if p >= 2 {
+        // Derivatives of the degree p-1 functions, then of degree p.
+        differentiate(span, p - 1, knots, d2);
+        differentiate(span, p, knots, d2);
+    } else {
+        d2[..=p].fill(0.0);
+    }
+    differentiate(span, p, knots, d1);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -212,6 +276,14 @@ mod tests {
             basis_funs(span, u, p, &knots, &mut out);
             let mut ders = [[0.0; MAX_ORDER]; 3];
             ders_basis_funs(span, u, p, 2, &knots, &mut ders);
+            let mut fast = [[0.0; MAX_ORDER]; 3];
+            basis_funs_ders2(span, u, p, &knots, &mut fast);
+            for k in 0..3 {
+                for r in 0..=p {
+                    let scale = 1.0 + ders[k][r].abs();
+                    assert!((fast[k][r] - ders[k][r]).abs() < 1e-12 * scale, "{k} {r}");
+                }
+            }
             let sum: f64 = out[..=p].iter().sum();
             assert!((sum - 1.0).abs() < 1e-14);
             let dsum: f64 = ders[1][..=p].iter().sum();
@@ -234,6 +306,48 @@ mod tests {
     }
 
     #[test]
+    fn bspline_fast_derivatives_match_a2_3_for_all_degrees() {
+        let mut x = 0.123_f64;
+        let mut next = || {
+            x = (x * 7919.0 + 0.31).fract();
+            x
+        };
+        for p in 1..=MAX_DEGREE {
+            let count = p + 4;
+            let mut knots = vec![0.0; p + 1];
+            let mut t = 0.0;
+            for k in 0..count - p - 1 {
+                // A double knot in the middle, random spacing elsewhere.
+                if k != 1 {
+                    t += 0.2 + next();
+                }
+                knots.push(t);
+            }
+            let end = t + 0.5;
+            knots.extend(std::iter::repeat_n(end, p + 1));
+            for step in 0..=50 {
+                let u = end * step as f64 / 50.0;
+                let span = find_span(&knots, p, count, u);
+                let mut a = [[0.0; MAX_ORDER]; 3];
+                let mut b = [[0.0; MAX_ORDER]; 3];
+                ders_basis_funs(span, u, p, 2, &knots, &mut a);
+                basis_funs_ders2(span, u, p, &knots, &mut b);
+                for k in 0..3 {
+                    let scale = a[k][..=p].iter().fold(1.0f64, |m, v| m.max(v.abs()));
+                    for r in 0..=p {
+                        assert!(
+                            (a[k][r] - b[k][r]).abs() <= 1e-11 * scale,
+                            "p {p} k {k} r {r}: {} vs {}",
+                            a[k][r],
+                            b[k][r]
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn bspline_linear_basis_has_zero_second_derivative() {
         let knots = [0.0, 0.0, 0.5, 1.0, 1.0];
         let span = find_span(&knots, 1, 3, 0.25);
@@ -242,5 +356,10 @@ mod tests {
         assert_eq!(&ders[0][..2], &[0.5, 0.5]);
         assert_eq!(&ders[1][..2], &[-2.0, 2.0]);
         assert_eq!(&ders[2][..2], &[0.0, 0.0]);
+        let mut fast = [[7.0; MAX_ORDER]; 3];
+        basis_funs_ders2(span, 0.25, 1, &knots, &mut fast);
+        assert_eq!(&fast[0][..2], &[0.5, 0.5]);
+        assert_eq!(&fast[1][..2], &[-2.0, 2.0]);
+        assert_eq!(&fast[2][..2], &[0.0, 0.0]);
     }
 }

@@ -30,7 +30,7 @@ use crate::Vec3;
 #[derive(Debug, Error)]
 pub enum IgesError {
     /// The file could not be read.
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {}: {source}", path.display())]
     Read {
         /// The file.
         path: PathBuf,
@@ -333,8 +333,40 @@ impl<'a> Iges<'a> {
     fn parameters(&self, k: usize) -> Result<Vec<(Param, usize)>, IgesError> {
         let e = &self.dir[k];
         let first = e.param_start - 1;
-        let count = e.param_lines.max(1);
-        if first < 0 || (first + count) as usize > self.params.len() {
+        if first < 0 || first as usize >= self.params.len() {
+            return Err(self.entity_error(
+                k,
+                e.line,
+                format!(
+                    "parameter data pointer {} lies outside the P section ({} records)",
+                    e.param_start,
+                    self.params.len()
+                ),
+            ));
+        }
+        // The records of this entity: those whose back-pointer (columns
+        // 66–72) names it; if the writer left no usable back-pointers, the
+        // directory's line count (field 14).
+        let de = (2 * k + 1) as i64;
+        let back = |r: &Record<'_>| -> Option<i64> {
+            std::str::from_utf8(&r.bytes[64..72])
+                .ok()?
+                .trim()
+                .parse()
+                .ok()
+        };
+        let first = first as usize;
+        let by_pointer = self.params[first..]
+            .iter()
+            .take_while(|r| back(r) == Some(de))
+            .count();
+        let count = if by_pointer > 0 {
+            by_pointer as i64
+        } else {
+            e.param_lines.max(1)
+        };
+        let first = first as i64;
+        if (first + count) as usize > self.params.len() {
             return Err(self.entity_error(
                 k,
                 e.line,
@@ -419,7 +451,7 @@ impl<'a> Iges<'a> {
     }
 }
 
-fn text_of<'p>(p: &'p [(Param, usize)], n: usize) -> Option<&'p str> {
+fn text_of(p: &[(Param, usize)], n: usize) -> Option<&str> {
     match p.get(n) {
         Some((Param::Text(s), _)) => Some(s),
         _ => None,
@@ -578,11 +610,11 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
         units,
         ..IgesImport::default()
     };
-    for k in 0..g.dir.len() {
+    for (k, &is_trimmed) in trimmed.iter().enumerate() {
         if g.dir[k].entity_type != 128 {
             continue;
         }
-        let s = read_entity_128(&g, k, trimmed[k])?;
+        let s = read_entity_128(&g, k, is_trimmed)?;
         out.trimmed += usize::from(s.trimmed);
         out.surfaces.push(s);
     }
@@ -611,7 +643,7 @@ fn read_entity_128(g: &Iges<'_>, k: usize, trimmed: bool) -> Result<IgesSurface,
     }
     let (count_u, count_v) = (k1 + 1, k2 + 1);
     let (nk_u, nk_v) = (count_u + m1 + 1, count_v + m2 + 1);
-    let c = count_u.checked_mul(count_v).unwrap_or(usize::MAX);
+    let c = count_u.saturating_mul(count_v);
     let needed = 10usize
         .saturating_add(nk_u)
         .saturating_add(nk_v)
@@ -695,4 +727,374 @@ fn read_entity_128(g: &Iges<'_>, k: usize, trimmed: bool) -> Result<IgesSurface,
         transformed: transform.is_some(),
         trimmed,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Builds a fixed-format IGES file from a Global string and entities
+    /// `(type, transform pointer, form, parameter data)`; parameter data are
+    /// cut into records of exactly 64 columns (so parameters and Hollerith
+    /// strings continue over records).
+    fn iges_file(global: &str, entities: &[(i64, i64, i64, &str)]) -> String {
+        let mut s = String::new();
+        s.push_str(&format!("{:<72}S{:>7}\n", "hand-made test file", 1));
+        let g: Vec<char> = global.chars().collect();
+        for (k, chunk) in g.chunks(72).enumerate() {
+            let c: String = chunk.iter().collect();
+            s.push_str(&format!("{c:<72}G{:>7}\n", k + 1));
+        }
+        let mut d = String::new();
+        let mut p = String::new();
+        let mut pseq = 1;
+        for (k, &(ty, tr, form, data)) in entities.iter().enumerate() {
+            let de = 2 * k + 1;
+            let chars: Vec<char> = data.chars().collect();
+            let chunks: Vec<String> = chars.chunks(64).map(|c| c.iter().collect()).collect();
+            d.push_str(&format!(
+                "{ty:>8}{pseq:>8}{:>8}{:>8}{:>8}{:>8}{tr:>8}{:>8}{:>8}D{de:>7}\n",
+                0, 0, 0, 0, 0, "00000000"
+            ));
+            d.push_str(&format!(
+                "{ty:>8}{:>8}{:>8}{:>8}{form:>8}{:>8}{:>8}{:>8}{:>8}D{:>7}\n",
+                0,
+                0,
+                chunks.len(),
+                "",
+                "",
+                "",
+                0,
+                de + 1
+            ));
+            for c in chunks {
+                p.push_str(&format!("{c:<64} {de:>7}P{pseq:>7}\n"));
+                pseq += 1;
+            }
+        }
+        s.push_str(&d);
+        s.push_str(&p);
+        s.push_str(&format!(
+            "{:<72}T{:>7}\n",
+            "S      1G      1D      6P      9", 1
+        ));
+        s
+    }
+
+    const GLOBAL: &str = "1H,,1H;,4Htest,8Hfile.igs,3Hgen,3Hver,32,308,15,308,15,4Htest,\
+                          1.,2,2HMM,1,0.1,15H20240101.000000,1E-8,100.,1Ha,1Hb,11,0,\
+                          15H20240101.000000;";
+
+    fn texts(tokens: &[Token]) -> Vec<Param> {
+        tokens.iter().map(|t| t.param.clone()).collect()
+    }
+
+    #[test]
+    fn bspline_iges_tokenizer_handles_hollerith_blanks_and_defaults() {
+        let (t, end) = tokenize(b"3Ha,b,1.5D2,,7;rest", b',', b';').unwrap();
+        assert!(end);
+        assert_eq!(
+            texts(&t),
+            vec![
+                Param::Hollerith(b"a,b".to_vec()),
+                Param::Text("1.5D2".into()),
+                Param::Empty,
+                Param::Text("7".into()),
+            ]
+        );
+        let (t, end) = tokenize(b"  12  , 4HAB;C ; 5,", b',', b';').unwrap();
+        assert!(end);
+        assert_eq!(
+            texts(&t),
+            vec![Param::Text("12".into()), Param::Hollerith(b"AB;C".to_vec())]
+        );
+        // Custom delimiters; a number split by record padding is rejoined.
+        let (t, end) = tokenize(b"1.2  5/2H/#/-3#", b'/', b'#').unwrap();
+        assert!(end);
+        assert_eq!(
+            texts(&t),
+            vec![
+                Param::Text("1.25".into()),
+                Param::Hollerith(b"/#".to_vec()),
+                Param::Text("-3".into()),
+            ]
+        );
+        let (_, end) = tokenize(b"1,2,", b',', b';').unwrap();
+        assert!(!end);
+        assert!(tokenize(b"5Hab;", b',', b';').is_err());
+        assert!(tokenize(b"2Habc,1;", b',', b';').is_err());
+    }
+
+    #[test]
+    fn bspline_iges_numbers_and_global_delimiters() {
+        assert_eq!(parse_real("1.0D+01"), Some(10.0));
+        assert_eq!(parse_real("1.0d-2"), Some(0.01));
+        assert_eq!(parse_real("1.E-3"), Some(0.001));
+        assert_eq!(parse_real("1."), Some(1.0));
+        assert_eq!(parse_real(".5"), Some(0.5));
+        assert_eq!(parse_real("-2"), Some(-2.0));
+        assert_eq!(parse_real("+7.5E+2"), Some(750.0));
+        assert_eq!(
+            parse_real("1.22464679914735E-016"),
+            Some(1.22464679914735e-16)
+        );
+        assert_eq!(parse_real("nan"), None);
+        assert_eq!(parse_real("1e999"), None);
+        assert_eq!(parse_real("1.2.3"), None);
+        assert_eq!(parse_int("3"), Some(3));
+        assert_eq!(parse_int("3."), Some(3));
+        assert_eq!(parse_int("3.5"), None);
+        assert_eq!(global_delimiters(b"1H,,1H;,4Htest,"), Ok((b',', b';')));
+        assert_eq!(global_delimiters(b",,4Htest;"), Ok((b',', b';')));
+        assert_eq!(global_delimiters(b";"), Ok((b',', b';')));
+        assert_eq!(global_delimiters(b"1H//1H#/4Htest#"), Ok((b'/', b'#')));
+        assert_eq!(
+            global_delimiters(b"1H|,"),
+            Err("Global section: expected a delimiter after field 1, found `,`".into())
+        );
+    }
+
+    /// A bilinear patch (polynomial, with a chained transform) and a rational
+    /// biquadratic patch, one of them trimmed.
+    fn sample_entities() -> Vec<(i64, i64, i64, String)> {
+        let bilinear = "128,1,1,1,1,0,0,1,0,0,0.,0.,1.,1.,0.0D+00,0.,1.0D+00,1.,\
+                        1.,1.,1.,1.,0.,0.,0.,1.E+0,0.,0.,0.,1.,0.,1.,1.,1.0D0,0.,1.,0.,1.;";
+        let mut rational =
+            String::from("128,2,2,2,2,0,0,0,0,0,0.,0.,0.,1.,1.,1.,0.,0.,0.,1.,1.,1.,");
+        let w = [1.0, 0.5, 1.0, 2.0, 1.0, 2.0, 1.0, 0.5, 1.0];
+        for x in w {
+            rational.push_str(&format!("{x:?},"));
+        }
+        for j in 0..3 {
+            for i in 0..3 {
+                rational.push_str(&format!("{}.,{}.,{}.,", i, j, (i * j) % 2));
+            }
+        }
+        rational.push_str("0.,1.,0.,1.;");
+        vec![
+            // DE 1: rotation by 90° about z, then translation (10, 0, 5).
+            (
+                124,
+                3,
+                0,
+                "124,0.,-1.,0.,10.,1.,0.,0.,0.,0.,0.,1.,5.;".into(),
+            ),
+            // DE 3: translation by (0, 0, 100), applied after DE 1.
+            (
+                124,
+                0,
+                0,
+                "124,1.,0.,0.,0.,0.,1.,0.,0.,0.,0.,1.,100.;".into(),
+            ),
+            (128, 1, 0, bilinear.into()),
+            (128, 0, 0, rational),
+            // DE 9: trimmed surface on DE 5.
+            (144, 0, 0, "144,5,1,0,11;".into()),
+            (142, 0, 0, "142,1,5,0,0,2;".into()),
+        ]
+    }
+
+    fn sample_file(global: &str) -> String {
+        let e = sample_entities();
+        let refs: Vec<(i64, i64, i64, &str)> = e
+            .iter()
+            .map(|(a, b, c, d)| (*a, *b, *c, d.as_str()))
+            .collect();
+        iges_file(global, &refs)
+    }
+
+    #[test]
+    fn bspline_iges_reads_hand_made_entities() {
+        let text = sample_file(GLOBAL);
+        let imp = parse_iges(&text).unwrap();
+        assert_eq!(imp.units.as_deref(), Some("MM"));
+        assert_eq!(imp.surfaces.len(), 2);
+        assert_eq!(imp.trimmed, 1);
+        let a = &imp.surfaces[0];
+        assert_eq!(a.directory_entry, 5);
+        assert!(a.trimmed && a.transformed && !a.rational);
+        assert!(!a.surface.is_rational());
+        assert_eq!(a.parameter_range, [0.0, 1.0, 0.0, 1.0]);
+        // P10 = (1, 0, 0): rotated to (0, 1, 0), + (10, 0, 5), + (0, 0, 100).
+        assert_eq!(a.surface.control_point(1, 0), Vec3::new(10.0, 1.0, 105.0));
+        // P11 = (1, 1, 1) -> (-1, 1, 1) + (10, 0, 105).
+        assert_eq!(a.surface.control_point(1, 1), Vec3::new(9.0, 1.0, 106.0));
+        assert_eq!(a.surface.control_point(0, 1), Vec3::new(9.0, 0.0, 105.0));
+        let b = &imp.surfaces[1];
+        assert!(b.rational && !b.trimmed && !b.transformed);
+        assert_eq!((b.surface.degree_u(), b.surface.degree_v()), (2, 2));
+        // Weights are listed with the u index fastest: w(i=1, j=0) = 0.5.
+        assert_eq!(b.surface.weight(1, 0), 0.5);
+        assert_eq!(b.surface.weight(0, 1), 2.0);
+        assert_eq!(b.surface.control_point(2, 1), Vec3::new(2.0, 1.0, 0.0));
+        assert_eq!(b.surface.control_point(1, 1), Vec3::new(1.0, 1.0, 1.0));
+        // A Hollerith string continued on the next G record ("2HM" + "M,").
+        let shifted = GLOBAL.replacen("4Htest", "6Htest12", 1);
+        assert_eq!(&shifted[70..72], "HM");
+        let other = parse_iges(&sample_file(&shifted)).unwrap();
+        assert_eq!(other.units.as_deref(), Some("MM"));
+        assert_eq!(other.surfaces, imp.surfaces);
+        // A wrong parameter line count (field 14) is overridden by the
+        // records' back-pointers.
+        let wrong = text.replacen(
+            "     128       0       0       3       0",
+            "     128       0       0       1       0",
+            1,
+        );
+        assert_ne!(wrong, text);
+        assert_eq!(parse_iges(&wrong).unwrap(), imp);
+        // CRLF line ends and custom delimiters give the same result.
+        assert_eq!(parse_iges(&text.replace('\n', "\r\n")).unwrap(), imp);
+        let custom = sample_file(
+            &GLOBAL
+                .replace("1H,,1H;,", "1H/,1H#,")
+                .replace(',', "/")
+                .replace(';', "#"),
+        );
+        let custom = custom
+            .lines()
+            .map(|l| {
+                if l.as_bytes()[72] == b'P' {
+                    let (data, rest) = l.split_at(64);
+                    format!("{}{rest}\n", data.replace(',', "/").replace(';', "#"))
+                } else {
+                    format!("{l}\n")
+                }
+            })
+            .collect::<String>();
+        assert_eq!(parse_iges(&custom).unwrap(), imp);
+    }
+
+    #[test]
+    fn bspline_iges_errors_name_line_and_entity() {
+        let text = sample_file(GLOBAL);
+        // Break a knot of the rational surface (DE 7).
+        let bad = text.replacen(
+            "128,2,2,2,2,0,0,0,0,0,0.,0.,",
+            "128,2,2,2,2,0,0,0,0,0,0.,x.,",
+            1,
+        );
+        let err = parse_iges(&bad).unwrap_err().to_string();
+        let line = text.lines().position(|l| l.starts_with("128,2,2")).unwrap() + 1;
+        assert_eq!(
+            err,
+            format!(
+                "line {line}: entity 128 (directory entry 7): parameter 11: expected a real number, found `x.`"
+            )
+        );
+        // A decreasing knot vector is a surface error naming the entity.
+        let bad = text.replacen(
+            "128,2,2,2,2,0,0,0,0,0,0.,0.,0.,1.,",
+            "128,2,2,2,2,0,0,0,0,0,0.,0.,2.,1.,",
+            1,
+        );
+        let err = parse_iges(&bad).unwrap_err().to_string();
+        assert!(
+            err.contains("entity 128 (directory entry 7): knot vector in u decreases"),
+            "{err}"
+        );
+        // Too few parameters.
+        let bad = text.replacen("0.,1.,0.,1.;", "0.,1.;      ", 1);
+        assert_ne!(bad, text);
+        let err = parse_iges(&bad).unwrap_err().to_string();
+        assert!(
+            err.contains("directory entry 5") && err.contains("need 38"),
+            "{err}"
+        );
+        // A short record.
+        let mut lines: Vec<&str> = text.lines().collect();
+        lines[3] = "short";
+        let err = parse_iges(&lines.join("\n")).unwrap_err().to_string();
+        assert!(err.starts_with("line 4: record has 5 columns"), "{err}");
+        // A transformation pointer to something that is not a 124.
+        let bad = text.replacen(
+            "     128       3       0       0       0       0       1",
+            "     128       3       0       0       0       0       9",
+            1,
+        );
+        assert_ne!(bad, text);
+        let err = parse_iges(&bad).unwrap_err().to_string();
+        assert!(err.contains("not entity 124"), "{err}");
+        assert!(read_iges("/nonexistent.igs").is_err());
+    }
+
+    #[test]
+    fn bspline_iges_never_panics_on_corrupted_input() {
+        let text = sample_file(GLOBAL).into_bytes();
+        let mut rng = crate::bspline::tests::Rng::new(99);
+        let alphabet = b"0123456789,;.-+EDH /#\n";
+        for _ in 0..3000 {
+            let mut t = text.clone();
+            for _ in 0..1 + (rng.unit() * 4.0) as usize {
+                let at = (rng.unit() * t.len() as f64) as usize % t.len();
+                let c = alphabet[(rng.unit() * alphabet.len() as f64) as usize % alphabet.len()];
+                t[at] = c;
+            }
+            if let Ok(imp) = parse_iges_bytes(&t) {
+                for s in &imp.surfaces {
+                    let (u, v) = s.surface.domain_center();
+                    let _ = s.surface.eval(u, v);
+                    let _ = s.surface.normal(u, v);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bspline_iges_impeller() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../../shared/data/surfaces/impeller.igs"
+        );
+        if !Path::new(path).exists() {
+            eprintln!("skipped: ../shared/data not found");
+            return;
+        }
+        let imp = read_iges(path).unwrap();
+        assert_eq!(imp.surfaces.len(), 247);
+        assert_eq!(imp.surfaces.iter().filter(|s| s.rational).count(), 212);
+        assert_eq!(
+            imp.surfaces
+                .iter()
+                .filter(|s| s.surface.is_rational())
+                .count(),
+            212
+        );
+        let max_degree = imp
+            .surfaces
+            .iter()
+            .map(|s| s.surface.degree_u().max(s.surface.degree_v()))
+            .max();
+        assert_eq!(max_degree, Some(5));
+        assert_eq!(imp.units.as_deref(), Some("MM"));
+        // Every surface of this SolidWorks file is the base of a 144.
+        assert_eq!(imp.trimmed, 247);
+        assert!(imp.surfaces.iter().all(|s| s.trimmed && !s.transformed));
+        let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+        for s in &imp.surfaces {
+            let (a, b) = s.surface.control_bounding_box();
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
+        let tol = 1e-9 * (hi - lo).length();
+        for s in &imp.surfaces {
+            let (u, v) = s.surface.domain_center();
+            let p = s.surface.eval(u, v);
+            assert!(p.is_finite());
+            assert!(p.cmpge(lo - tol).all() && p.cmple(hi + tol).all(), "{p:?}");
+            let (a, b) = s.surface.control_bounding_box();
+            assert!(p.cmpge(a - tol).all() && p.cmple(b + tol).all());
+            assert!(s.surface.derivatives(u, v).point.distance(p) <= tol);
+            // Tessellation and curvature never produce NaN.
+            let t = crate::bspline::tessellate(&s.surface, 6, 6);
+            assert!(t.positions.iter().all(|p| p.is_finite()));
+            assert!(t.normals.iter().all(|n| n.is_finite()));
+            assert!(t.normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-9));
+            for &[u, v] in &t.uv {
+                if let Some(c) = s.surface.principal_curvatures(u, v) {
+                    assert!(c.k1.is_finite() && c.k2.is_finite() && c.k1 >= c.k2);
+                }
+            }
+        }
+    }
 }

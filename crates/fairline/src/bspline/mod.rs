@@ -9,13 +9,20 @@
 //! - knot span search A2.1, basis functions A2.2, basis derivatives A2.3
 //!   ([`basis`]);
 //! - surface point A3.5 / A4.3, surface derivatives A3.6, rational surface
-//!   derivatives A4.4 ([`BSplineSurface`]);
-//! - normals and curvature from the first and second fundamental forms.
+//!   derivatives A4.4 ([`BSplineSurface`]), also on whole parameter grids
+//!   ([`BSplineSurface::derivatives_grid`], [`tessellate`]);
+//! - normals and curvature from the first and second fundamental forms;
+//! - local support (Piegl & Tiller Eq. 2.4, property P2.1):
+//!   [`BSplineSurface::basis_support`], [`BSplineSurface::control_points_in_box`];
+//! - readers and writers: JSON (DESIGN.md §5) and IGES entity 128.
+//!
+//! Evaluation never allocates: the basis functions live in stack buffers
+//! sized for [`MAX_DEGREE`].
 //!
 //! Knot vectors may be clamped or unclamped; the parameter domain is
 //! `[knots[p], knots[n]]` for `n` control points of degree `p`, and
-//! parameters outside it are clamped to it. Degrees up to [`MAX_DEGREE`] are
-//! supported so that every evaluation runs on stack buffers.
+//! parameters outside it are clamped to it (NaN to the domain start). Degrees
+//! up to [`MAX_DEGREE`] (15) are supported.
 //!
 //! Sign convention for curvature (as everywhere in fairline): the normal is
 //! `N = Su × Sv / |Su × Sv|`, and a normal section curving *away* from `N`
@@ -28,7 +35,7 @@ mod json;
 mod surface;
 mod tessellate;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 pub use basis::{MAX_DEGREE, MAX_ORDER, find_span};
 pub use iges::{IgesError, IgesImport, IgesSurface, parse_iges, read_iges};
@@ -139,6 +146,13 @@ pub enum BSplineError {
         direction: Direction,
         /// Knot index.
         index: usize,
+    },
+    /// The knots span a range too large to subtract in f64 (`last - first`
+    /// overflows), which would make the basis functions NaN.
+    #[error("knot vector in {direction} spans a range too large for f64 arithmetic")]
+    KnotRangeOverflow {
+        /// Direction.
+        direction: Direction,
     },
     /// The knot vector decreases.
     #[error("knot vector in {direction} decreases at index {index} ({previous} > {value})")]

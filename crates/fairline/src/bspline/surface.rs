@@ -7,7 +7,7 @@ use std::ops::Range;
 use glam::DVec4;
 use rayon::prelude::*;
 
-use super::basis::{BasisDerivs, MAX_DEGREE, MAX_ORDER, basis_funs, ders_basis_funs, find_span};
+use super::basis::{BasisDerivs, MAX_DEGREE, MAX_ORDER, basis_funs, basis_funs_ders2, find_span};
 use super::{BSplineError, Direction};
 use crate::Vec3;
 
@@ -158,6 +158,9 @@ fn check_knots(
     if let Some(index) = knots.iter().position(|k| !k.is_finite()) {
         return Err(BSplineError::NonFiniteKnot { direction, index });
     }
+    if !(knots[knots.len() - 1] - knots[0]).is_finite() {
+        return Err(BSplineError::KnotRangeOverflow { direction });
+    }
     for index in 1..knots.len() {
         if knots[index] < knots[index - 1] {
             return Err(BSplineError::KnotDecreasing {
@@ -295,11 +298,11 @@ impl BSplineSurface {
         if count_u == 0 || count_v == 0 {
             return Err(BSplineError::EmptyControlNet);
         }
-        if points.len() != count_u * count_v {
+        if count_u.checked_mul(count_v) != Some(points.len()) {
             return Err(BSplineError::ControlPointCount {
                 count_u,
                 count_v,
-                expected: count_u * count_v,
+                expected: count_u.saturating_mul(count_v),
                 found: points.len(),
             });
         }
@@ -555,19 +558,32 @@ impl BSplineSurface {
     /// The non-zero basis functions and their derivatives up to second order
     /// at `(u, v)` (clamped), Piegl & Tiller A2.1 + A2.3.
     pub fn basis(&self, u: f64, v: f64) -> SurfaceBasis {
-        let (u, v) = self.clamp_parameters(u, v);
-        let span_u = find_span(&self.knots_u, self.degree_u, self.count_u, u);
-        let span_v = find_span(&self.knots_v, self.degree_v, self.count_v, v);
-        let mut du = [[0.0; MAX_ORDER]; 3];
-        let mut dv = [[0.0; MAX_ORDER]; 3];
-        ders_basis_funs(span_u, u, self.degree_u, 2, &self.knots_u, &mut du);
-        ders_basis_funs(span_v, v, self.degree_v, 2, &self.knots_v, &mut dv);
+        let (span_u, du) = self.basis_u(u);
+        let (span_v, dv) = self.basis_v(v);
         SurfaceBasis {
             span_u,
             span_v,
             du,
             dv,
         }
+    }
+
+    /// Knot span and basis derivatives (orders 0–2) in u at `u` (clamped).
+    fn basis_u(&self, u: f64) -> (usize, BasisDerivs) {
+        let u = clamp_param(u, self.domain_u());
+        let span = find_span(&self.knots_u, self.degree_u, self.count_u, u);
+        let mut d = [[0.0; MAX_ORDER]; 3];
+        basis_funs_ders2(span, u, self.degree_u, &self.knots_u, &mut d);
+        (span, d)
+    }
+
+    /// Knot span and basis derivatives (orders 0–2) in v at `v` (clamped).
+    fn basis_v(&self, v: f64) -> (usize, BasisDerivs) {
+        let v = clamp_param(v, self.domain_v());
+        let span = find_span(&self.knots_v, self.degree_v, self.count_v, v);
+        let mut d = [[0.0; MAX_ORDER]; 3];
+        basis_funs_ders2(span, v, self.degree_v, &self.knots_v, &mut d);
+        (span, d)
     }
 
     /// The surface point `S(u, v)` (parameters clamped to the domain):
@@ -614,16 +630,30 @@ impl BSplineSurface {
 
     /// Position and first and second partial derivatives at `(u, v)`
     /// (parameters clamped), analytic: Piegl & Tiller A3.6
-    /// (`SurfaceDerivsAlgorithm1`) on the basis derivatives of A2.3; for a
+    /// (`SurfaceDerivsAlgorithm1`) on the basis derivatives of A2.3 (computed
+    /// by [`basis_funs_ders2`](super::basis::basis_funs_ders2)); for a
     /// rational surface the homogeneous derivatives `A^{(k,l)}, w^{(k,l)}` are
     /// combined by the quotient rule of A4.4 (`RatSurfaceDerivs`, Eq. 4.20).
     /// At a knot the derivatives are those of the span to the right (the
     /// last span at the domain end). No allocation.
     pub fn derivatives(&self, u: f64, v: f64) -> SurfaceDerivatives {
-        let b = self.basis(u, v);
+        let (span_u, du) = self.basis_u(u);
+        let (span_v, dv) = self.basis_v(v);
+        self.contract(span_u, &du, span_v, &dv)
+    }
+
+    /// The tensor-product sums of A3.6 (and the quotient rule of A4.4) for
+    /// given basis derivatives in u and v.
+    #[inline]
+    fn contract(
+        &self,
+        span_u: usize,
+        du: &BasisDerivs,
+        span_v: usize,
+        dv: &BasisDerivs,
+    ) -> SurfaceDerivatives {
         let (p, q) = (self.degree_u, self.degree_v);
-        let (i0, j0) = (b.span_u - p, b.span_v - q);
-        let (du, dv) = (&b.du, &b.dv);
+        let (i0, j0) = (span_u - p, span_v - q);
         match &self.weights {
             None => {
                 // a[k][l] = Σ_r du[k][r] Σ_s dv[l][s] P_rs.
@@ -680,20 +710,23 @@ impl BSplineSurface {
     }
 
     /// Derivatives at every grid point `(us[a], vs[b])`, row-major
-    /// (`a * vs.len() + b`), computed in parallel; deterministic.
+    /// (`a * vs.len() + b`), equal to [`BSplineSurface::derivatives`] at each
+    /// point. The basis derivatives (A2.1 + A2.3) are computed once per grid
+    /// row and column, so each point costs only the sums of A3.6/A4.4.
+    /// Parallel over points with rayon; deterministic.
     pub fn derivatives_grid(&self, us: &[f64], vs: &[f64]) -> Vec<SurfaceDerivatives> {
-        let mut out = vec![SurfaceDerivatives::default(); us.len() * vs.len()];
-        if vs.is_empty() {
-            return out;
-        }
-        out.par_chunks_mut(vs.len())
-            .zip(us.par_iter())
-            .for_each(|(row, &u)| {
-                for (d, &v) in row.iter_mut().zip(vs) {
-                    *d = self.derivatives(u, v);
-                }
-            });
-        out
+        let nv = vs.len();
+        let bu: Vec<(usize, BasisDerivs)> = us.par_iter().map(|&u| self.basis_u(u)).collect();
+        let bv: Vec<(usize, BasisDerivs)> = vs.par_iter().map(|&v| self.basis_v(v)).collect();
+        (0..us.len() * nv)
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|k| {
+                let (su, du) = &bu[k / nv];
+                let (sv, dv) = &bv[k % nv];
+                self.contract(*su, du, *sv, dv)
+            })
+            .collect()
     }
 
     /// Derivatives at `(u, v)`, or at the first of a few parameters nudged

@@ -23,7 +23,8 @@ pub struct Tessellation {
 }
 
 /// Samples `surface` on a uniform grid of `nu × nv` vertices spanning its
-/// whole domain (values below 2 are raised to 2) and splits every grid cell
+/// whole domain (values below 2 are raised to 2, values above 65535 lowered
+/// to 65535 so that vertex indices fit in `u32`) and splits every grid cell
 /// into two triangles oriented consistently with `Su × Sv`: cell corners
 /// `a=(i,j), b=(i+1,j), c=(i+1,j+1), d=(i,j+1)` give `[a,b,c]` and `[a,c,d]`.
 ///
@@ -31,8 +32,8 @@ pub struct Tessellation {
 /// Tiller A3.6/A4.4); rows are evaluated in parallel with rayon and the
 /// output is deterministic.
 pub fn tessellate(surface: &BSplineSurface, nu: usize, nv: usize) -> Tessellation {
-    let nu = nu.max(2);
-    let nv = nv.max(2);
+    let nu = nu.clamp(2, 65535);
+    let nv = nv.clamp(2, 65535);
     let [u0, u1] = surface.domain_u();
     let [v0, v1] = surface.domain_v();
     let param = |t0: f64, t1: f64, k: usize, n: usize| {
@@ -43,27 +44,20 @@ pub fn tessellate(surface: &BSplineSurface, nu: usize, nv: usize) -> Tessellatio
         }
     };
     let count = nu * nv;
-    let mut positions = vec![Vec3::ZERO; count];
-    let mut normals = vec![Vec3::ZERO; count];
-    let mut uv = vec![[0.0; 2]; count];
-    positions
-        .par_chunks_mut(nv)
-        .zip(normals.par_chunks_mut(nv))
-        .zip(uv.par_chunks_mut(nv))
-        .enumerate()
-        .for_each(|(a, ((pos, nor), uvs))| {
-            let u = param(u0, u1, a, nu);
-            for b in 0..nv {
-                let v = param(v0, v1, b, nv);
-                let d = surface.derivatives(u, v);
-                pos[b] = d.point;
-                nor[b] = d
-                    .normal()
-                    .or_else(|| surface.normal(u, v))
-                    .unwrap_or(Vec3::ZERO);
-                uvs[b] = [u, v];
-            }
-        });
+    let us: Vec<f64> = (0..nu).map(|a| param(u0, u1, a, nu)).collect();
+    let vs: Vec<f64> = (0..nv).map(|b| param(v0, v1, b, nv)).collect();
+    let derivs = surface.derivatives_grid(&us, &vs);
+    let uv: Vec<[f64; 2]> = (0..count).map(|k| [us[k / nv], vs[k % nv]]).collect();
+    let positions: Vec<Vec3> = derivs.iter().map(|d| d.point).collect();
+    let mut normals: Vec<Vec3> = derivs
+        .par_iter()
+        .zip(uv.par_iter())
+        .map(|(d, &[u, v])| {
+            d.normal()
+                .or_else(|| surface.normal(u, v))
+                .unwrap_or(Vec3::ZERO)
+        })
+        .collect();
     let idx = |a: usize, b: usize| (a * nv + b) as u32;
     let mut triangles = Vec::with_capacity(2 * (nu - 1) * (nv - 1));
     for a in 0..nu - 1 {
@@ -74,7 +68,7 @@ pub fn tessellate(surface: &BSplineSurface, nu: usize, nv: usize) -> Tessellatio
         }
     }
     // Last resort for normals: area-weighted average of adjacent triangles.
-    if normals.iter().any(|n| *n == Vec3::ZERO) {
+    if normals.contains(&Vec3::ZERO) {
         let mut acc = vec![Vec3::ZERO; count];
         for t in &triangles {
             let [p, q, r] = t.map(|k| positions[k as usize]);

@@ -583,6 +583,17 @@ fn bspline_validation_errors_name_the_problem() {
             ..
         })
     ));
+    assert_eq!(
+        mk(
+            1,
+            2,
+            vec![-1e308, -1e308, 1e308, 1e308],
+            k3.clone(),
+            net(2, 3),
+            None
+        ),
+        Err(E::KnotRangeOverflow { direction: U })
+    );
     // Interior multiplicity 3 > p = 2.
     assert!(matches!(
         mk(
@@ -663,6 +674,20 @@ fn bspline_validation_errors_name_the_problem() {
     short[1].pop();
     let err = mk(2, 2, k3.clone(), k3.clone(), net(3, 3), Some(short)).unwrap_err();
     assert!(err.to_string().contains("row 1"), "{err}");
+    let two_rows = Some(vec![vec![1.0; 3]; 2]);
+    let err = mk(2, 2, k3.clone(), k3.clone(), net(3, 3), two_rows).unwrap_err();
+    assert_eq!(err.to_string(), "weights: 2 rows, the control net has 3");
+    let err = BSplineSurface::from_flat(
+        2,
+        2,
+        k3.clone(),
+        k3.clone(),
+        [3, 3],
+        vec![Vec3::ZERO; 9],
+        Some(vec![1.0; 8]),
+    )
+    .unwrap_err();
+    assert!(matches!(err, E::WeightShape { .. }), "{err}");
     assert!(matches!(
         BSplineSurface::from_flat(
             2,

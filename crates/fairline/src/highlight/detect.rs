@@ -19,6 +19,10 @@
 //!    with |κ|·s > `inflection_curvature`, default 0.5) closer than the
 //!    window: an inflection cluster.
 //!
+//! When the light plane normal Z is given, samples where |Z·N| < 0.3 are
+//! not judged (near silhouettes lines crowd and bend for reasons that have
+//! nothing to do with fairness).
+//!
 //! Flagged samples closer than the window form stretches; a stretch's score
 //! is Σ W_j·h/s (its integrated wiggle measured in spacings). The faces whose
 //! centroid lies within `region_radius` (default 0.5 s) of a flagged sample,
@@ -26,7 +30,7 @@
 //! connected), are united over all lines; each connected component is a
 //! suggested region whose score is the sum of its stretches' scores.
 
-use super::{HighlightError, HighlightLines, NodeId};
+use super::{HighlightError, HighlightLine, HighlightLines, NodeId};
 use crate::Vec3;
 use crate::geom;
 use crate::mesh::{FaceId, SurfaceMesh};
@@ -52,6 +56,13 @@ pub struct DetectOptions {
     pub region_radius: f64,
     /// Stretches scoring below this are ignored (default 0.05).
     pub min_score: f64,
+    /// The light plane normal Z; when given, line samples where the surface
+    /// normal N has |Z·N| < `min_normal_cos` are not judged (near
+    /// silhouettes highlight lines crowd and bend for reasons unrelated to
+    /// fairness). Default `None`.
+    pub plane_normal: Option<Vec3>,
+    /// See `plane_normal` (default 0.3).
+    pub min_normal_cos: f64,
 }
 
 impl Default for DetectOptions {
@@ -64,6 +75,8 @@ impl Default for DetectOptions {
             inflection_curvature: 0.5,
             region_radius: 0.5,
             min_score: 0.05,
+            plane_normal: None,
+            min_normal_cos: 0.3,
         }
     }
 }
@@ -185,14 +198,14 @@ fn resample(points: &[Vec3], closed: bool, h: f64) -> (Vec<Sample>, f64, f64) {
 /// segment (node index) of each flagged sample.
 fn analyse(
     line_no: usize,
-    index: i64,
-    points: &[Vec3],
-    closed: bool,
+    line: &HighlightLine,
+    judged: &[bool],
     s: f64,
     h: f64,
     o: &DetectOptions,
 ) -> (LineFairness, Vec<Vec<usize>>) {
-    let (smp, step, length) = resample(points, closed, h);
+    let (index, closed) = (line.index, line.closed);
+    let (smp, step, length) = resample(&line.points, closed, h);
     let n = smp.len();
     let mut fair = LineFairness {
         line: line_no,
@@ -224,6 +237,12 @@ fn analyse(
         let (Some(a), Some(c)) = (at(j as isize - 1), at(j as isize + 1)) else {
             continue;
         };
+        let seg = smp[j].seg;
+        if !judged.get(seg).copied().unwrap_or(true)
+            || !judged.get(seg + 1).copied().unwrap_or(true)
+        {
+            continue;
+        }
         let u0 = (smp[j].p - smp[a].p).normalize_or_zero();
         let u1 = (smp[c].p - smp[j].p).normalize_or_zero();
         if u0 == Vec3::ZERO || u1 == Vec3::ZERO {
@@ -387,11 +406,33 @@ pub fn detect_irregularities(
             }
         }
     };
+    // which nodes are judged: |Z·N| >= min_normal_cos at the node
+    let normals = o.plane_normal.map(|_| geom::vertex_normals(mesh));
+    let z = o.plane_normal.and_then(|z| z.try_normalize());
+    let judged_node = |nd: NodeId| -> bool {
+        let (Some(z), Some(nrm)) = (z, normals.as_ref()) else {
+            return true;
+        };
+        let n = match nd {
+            NodeId::Vertex(v, _) => nrm[v.idx()],
+            NodeId::Edge(e, _) => {
+                let (a, b) = mesh.edge_vertices(e);
+                nrm[a.idx()] + nrm[b.idx()]
+            }
+        };
+        n.normalize_or_zero().dot(z).abs() >= o.min_normal_cos
+    };
     let analysed: Vec<(LineFairness, Vec<Vec<usize>>)> = lines
         .lines
         .par_iter()
         .enumerate()
-        .map(|(i, l)| analyse(i, l.index, &l.points, l.closed, spacing, h, o))
+        .map(|(i, l)| {
+            let mut judged: Vec<bool> = l.nodes.iter().map(|&nd| judged_node(nd)).collect();
+            if l.closed && !judged.is_empty() {
+                judged.push(judged[0]);
+            }
+            analyse(i, l, &judged, spacing, h, o)
+        })
         .collect();
     let radius = o.region_radius * spacing;
     let p = mesh.positions();
@@ -487,12 +528,18 @@ pub fn detect_irregularities(
     }
     let mut weight = vec![0.0; regions.len()];
     for (li, score, c, faces) in &stretch_faces {
-        let Some(f) = faces.first() else { continue };
-        let r = comp[f.idx()] as usize;
-        regions[r].score += score;
-        regions[r].center += *score * *c;
-        weight[r] += score;
-        regions[r].lines.push(*li);
+        // a stretch may touch several components: share its score by faces
+        let mut ids: Vec<usize> = faces.iter().map(|f| comp[f.idx()] as usize).collect();
+        ids.sort_unstable();
+        let total = ids.len() as f64;
+        for chunk in ids.chunk_by(|a, b| a == b) {
+            let r = chunk[0];
+            let share = score * chunk.len() as f64 / total;
+            regions[r].score += share;
+            regions[r].center += share * *c;
+            weight[r] += share;
+            regions[r].lines.push(*li);
+        }
     }
     for (r, w) in regions.iter_mut().zip(&weight) {
         if *w > 0.0 {
@@ -501,6 +548,7 @@ pub fn detect_irregularities(
         r.lines.sort_unstable();
         r.lines.dedup();
     }
+    regions.retain(|r| r.score > 0.0);
     regions.sort_by(|a, b| b.score.total_cmp(&a.score).then(a.faces.cmp(&b.faces)));
     Ok(Detection {
         lines: analysed.into_iter().map(|(f, _)| f).collect(),

@@ -14,12 +14,12 @@ use rayon::prelude::*;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HighlightOptions {
     /// Smallest |Z·N| for which a vertex gets a highlight distance (default
-    /// 0.05, normals within about 87° of the light plane). Below it the
+    /// 0.1, normals within about 84° of the light plane). Below it the
     /// normal line meets the light plane too far away and d_P runs off to
     /// infinity; edges at such vertices, and edges where Z·N changes sign,
     /// carry no nodes (DESIGN.md §3).
     pub min_normal_cos: f64,
-    /// Most levels (lights) one triangle may be crossed by (default 16);
+    /// Most levels (lights) one triangle may be crossed by (default 4);
     /// a triangle crossed by more is skipped: those lines are below the
     /// mesh resolution (this happens only near silhouettes).
     pub max_lines_per_face: u32,
@@ -28,8 +28,8 @@ pub struct HighlightOptions {
 impl Default for HighlightOptions {
     fn default() -> Self {
         HighlightOptions {
-            min_normal_cos: 0.05,
-            max_lines_per_face: 16,
+            min_normal_cos: 0.1,
+            max_lines_per_face: 4,
         }
     }
 }

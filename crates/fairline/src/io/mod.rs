@@ -298,11 +298,14 @@ pub fn write_ply_with_vertex_properties(
 /// Such values may be NaN or infinite; coordinates may not.
 pub fn read_ply_vertex_properties(
     path: impl AsRef<Path>,
-) -> Result<(Soup, Vec<(String, Vec<f64>)>), IoError> {
+) -> Result<(Soup, VertexProperties), IoError> {
     let path = path.as_ref();
     let bytes = read_bytes(path)?;
     ply::read(&bytes, path, true)
 }
+
+/// Named per-vertex scalar values, in file order: `(name, one value per vertex)`.
+pub type VertexProperties = Vec<(String, Vec<f64>)>;
 
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 
