@@ -1,8 +1,20 @@
 //! Fairing: highlight-line fairing of triangle meshes (Yong et al. §3,
-//! Algorithm 2) with its regions and movable vertices (§3.1).
+//! Algorithm 2) with its regions and movable vertices (§3.1), desired
+//! highlight lines (§3.2, §3.5) and the surface-diffusion-flow baseline.
 
+mod desired;
 mod error;
 pub mod highlight;
 pub mod region;
+mod system;
 
+pub use desired::{DesiredLine, DesiredLines, HighlightDeviation, desired_lines};
 pub use error::FairError;
+pub use highlight::{
+    FairMethod, FairOptions, FairResult, IterationReport, fair_highlight_lines,
+    fair_highlight_lines_with,
+};
+pub use region::{MovableSet, RegionSpec, movable_vertices};
+
+#[cfg(test)]
+mod tests;

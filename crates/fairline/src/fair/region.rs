@@ -190,8 +190,12 @@ impl MovableSet {
         let p = mesh.positions();
         mesh.edges()
             .filter(|&e| {
-                let a = mesh.face(mesh.edge_halfedge(e, 0)).is_some_and(|f| self.in_region[f.idx()]);
-                let b = mesh.face(mesh.edge_halfedge(e, 1)).is_some_and(|f| self.in_region[f.idx()]);
+                let a = mesh
+                    .face(mesh.edge_halfedge(e, 0))
+                    .is_some_and(|f| self.in_region[f.idx()]);
+                let b = mesh
+                    .face(mesh.edge_halfedge(e, 1))
+                    .is_some_and(|f| self.in_region[f.idx()]);
                 a != b
             })
             .map(|e| {
@@ -234,7 +238,7 @@ pub fn movable_vertices(
         .collect();
     // Supports of outside vertices: the vertex and its one-ring (Eq. (3)).
     let mut blocked = vec![false; nv];
-    let mut block_support = |v: VertexId, blocked: &mut Vec<bool>| {
+    let block_support = |v: VertexId, blocked: &mut Vec<bool>| {
         blocked[v.idx()] = true;
         for w in mesh.one_ring(v) {
             blocked[w.idx()] = true;
