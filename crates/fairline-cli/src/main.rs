@@ -8,6 +8,7 @@ mod convert;
 mod curvature;
 mod demo;
 mod detect;
+mod fair;
 mod highlight;
 mod info;
 mod render;
@@ -37,6 +38,7 @@ enum Command {
     Curvature(curvature::Args),
     Highlight(highlight::Args),
     Detect(detect::Args),
+    Fair(fair::Args),
     Render(render::Args),
     Demo(demo::Args),
 }
@@ -48,6 +50,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Curvature(a) => curvature::run(a),
         Command::Highlight(a) => highlight::run(a),
         Command::Detect(a) => detect::run(a),
+        Command::Fair(a) => fair::run(a),
         Command::Render(a) => render::run(a),
         Command::Demo(a) => demo::run(a),
     }

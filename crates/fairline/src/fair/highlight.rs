@@ -511,3 +511,96 @@ pub fn moved_vertices(mesh: &SurfaceMesh, reference: &[Vec3]) -> Vec<VertexId> {
         .map(|(i, _)| VertexId(i as u32))
         .collect()
 }
+
+/// Grows a face region by `rings` rings of faces (faces sharing a vertex
+/// with the region), e.g. to give a suggested region of
+/// [`crate::highlight::detect_irregularities`] the two rings of margin
+/// that movable vertices need (§3.1). Sorted, without duplicates.
+pub fn grow_region(mesh: &SurfaceMesh, faces: &[FaceId], rings: usize) -> Vec<FaceId> {
+    let mut inr = vec![false; mesh.face_count()];
+    for f in faces {
+        if f.idx() < inr.len() {
+            inr[f.idx()] = true;
+        }
+    }
+    for _ in 0..rings {
+        let mut touch = vec![false; mesh.vertex_count()];
+        for f in mesh.faces() {
+            if inr[f.idx()] {
+                for v in mesh.face_vertices(f) {
+                    touch[v.idx()] = true;
+                }
+            }
+        }
+        for f in mesh.faces() {
+            if mesh.face_vertices(f).any(|v| touch[v.idx()]) {
+                inr[f.idx()] = true;
+            }
+        }
+    }
+    mesh.faces().filter(|f| inr[f.idx()]).collect()
+}
+
+/// Before/after picture of a fairing run (Yong et al. Fig. 7): on the
+/// left the input with its highlight lines (dark), the region outline (red)
+/// and the desired OGH curves (blue); on the right the faired mesh with
+/// its highlight lines and the outline.
+pub fn fairing_picture(
+    before: &SurfaceMesh,
+    result: &FairResult,
+    opts: &crate::render::RenderOptions,
+) -> Result<crate::render::Image, crate::render::RenderError> {
+    use crate::picture::{Picture, mesh_picture};
+    use crate::render::{PolylineLayer, side_by_side};
+    let lines = |ls: &HighlightLines| -> Vec<PolylineLayer> {
+        ls.lines
+            .iter()
+            .map(|l| PolylineLayer {
+                points: l.points.clone(),
+                closed: l.closed,
+                color: [0.02, 0.02, 0.02],
+                width_px: 1.6,
+            })
+            .collect()
+    };
+    let outline: Vec<PolylineLayer> = result
+        .region
+        .outline(before)
+        .into_iter()
+        .map(|(a, b)| PolylineLayer {
+            points: vec![a, b],
+            closed: false,
+            color: [0.85, 0.05, 0.05],
+            width_px: 2.2,
+        })
+        .collect();
+    let mut left = lines(&result.lines_before);
+    left.extend(result.desired_before.lines.iter().map(|d| PolylineLayer {
+        points: d.samples.clone(),
+        closed: false,
+        color: [0.05, 0.25, 0.95],
+        width_px: 2.4,
+    }));
+    left.extend(outline.iter().cloned());
+    let mut right = lines(&result.lines_after);
+    right.extend(outline);
+    let a = mesh_picture(
+        before,
+        &Picture {
+            polylines: left,
+            title: Some("before: highlight lines, region, desired lines".into()),
+            ..Default::default()
+        },
+        opts,
+    )?;
+    let b = mesh_picture(
+        &result.mesh,
+        &Picture {
+            polylines: right,
+            title: Some("after highlight-line fairing".into()),
+            ..Default::default()
+        },
+        opts,
+    )?;
+    Ok(side_by_side(&[a, b], &["before", "after"]))
+}

@@ -12,7 +12,7 @@ pub use desired::{DesiredLine, DesiredLines, HighlightDeviation, desired_lines};
 pub use error::FairError;
 pub use highlight::{
     FairMethod, FairOptions, FairResult, IterationReport, fair_highlight_lines,
-    fair_highlight_lines_with,
+    fair_highlight_lines_with, fairing_picture, grow_region,
 };
 pub use region::{MovableSet, RegionSpec, movable_vertices};
 
