@@ -33,7 +33,7 @@ pub enum Method {
 /// node outside stays bit-identical. The region is region JSON
 /// ({"faces":[..]}, {"vertices":[..]} or {"sphere":{"center":[x,y,z],"radius":r}}),
 /// e.g. the output of `fairline detect`; with --auto the irregular regions
-/// are detected (and grown by two rings of faces) and faired in turn. Use
+/// are detected (and grown by four rings of faces) and faired in turn. Use
 /// the same light options as for `highlight`/`detect`.
 #[derive(clap::Args, Debug)]
 #[command(
@@ -176,7 +176,7 @@ pub fn run(args: Args) -> Result<()> {
         report.set("detected_regions", det.regions.len());
         det.regions
             .iter()
-            .map(|r| grow_region(&mesh, &r.faces, 2))
+            .map(|r| grow_region(&mesh, &r.faces, 4))
             .collect()
     };
     let mut current: SurfaceMesh = mesh.clone();
