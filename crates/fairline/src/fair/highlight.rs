@@ -13,6 +13,17 @@
 //! ([`HighlightModel::update`]); stop when max|x_i| / ē < ε (Eq. (17), ē
 //! the mean length of the edges inside R) or after N_max iterations.
 //!
+//! Step acceptance (beyond the paper, which has none): highlight lines react
+//! to normals with a lever of the light plane's distance, so a full
+//! Gauss–Newton step can overshoot. Each step is kept only when the energy
+//! reached — Willmore energy with fresh areas and cotangents plus f_diff of
+//! the same nodes and targets, the highlight distances re-evaluated without
+//! linearisation (module `system`) — is below the energy at x = 0;
+//! otherwise the vertices are put back and the step is recomputed with a
+//! Levenberg–Marquardt damping term μ‖x‖² (μ grows ×10 on a rejection and
+//! shrinks ×10 after a step that reached more than ¾ of the predicted
+//! decrease). Rejected steps count as iterations and are reported.
+//!
 //! The quadratic Q = JᵀJ gets a ridge of 1e-12 × its largest diagonal entry
 //! so that it is positive definite even where the frozen cotangent weights
 //! leave a null direction (e.g. negative cotangents); this changes the
