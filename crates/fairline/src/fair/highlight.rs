@@ -180,6 +180,8 @@ pub struct IterationReport {
 /// Result of [`fair_highlight_lines`].
 #[derive(Clone, Debug)]
 pub struct FairResult {
+    /// The method that produced it.
+    pub method: FairMethod,
     /// The faired mesh (same connectivity; only movable vertices moved).
     pub mesh: SurfaceMesh,
     /// Region, inside and movable vertices (§3.1).
@@ -494,6 +496,7 @@ pub fn fair_highlight_lines_with(
         .map(|(a, b)| (*a - *b).length())
         .fold(0.0, f64::max);
     Ok(FairResult {
+        method: options.method,
         iterations: history.len(),
         converged,
         willmore_before,
@@ -608,7 +611,13 @@ pub fn fairing_picture(
         &result.mesh,
         &Picture {
             polylines: right,
-            title: Some("after highlight-line fairing".into()),
+            title: Some(
+                match result.method {
+                    FairMethod::Highlight => "after highlight-line fairing",
+                    FairMethod::DiffusionFlow => "after surface diffusion flow (baseline)",
+                }
+                .into(),
+            ),
             ..Default::default()
         },
         opts,
