@@ -204,6 +204,9 @@ pub fn run(args: Args) -> Result<()> {
     }
     bar.finish_and_clear();
     fairline::io::write_mesh(&args.output, &current)?;
+    if args.png.is_some() && first.is_none() {
+        eprintln!("note: no region was faired (nothing detected), so no picture was written");
+    }
     if let (Some(png), Some(r)) = (&args.png, &first) {
         let mut opts = RenderOptions::with_size(900, 700);
         opts.view_dir = -light.plane_normal() + 0.35 * light.across();
