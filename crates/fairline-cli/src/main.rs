@@ -9,6 +9,7 @@ mod curvature;
 mod demo;
 mod detect;
 mod enhance;
+mod fair;
 mod fair_surface;
 mod highlight;
 mod highlight_png;
@@ -43,6 +44,7 @@ enum Command {
     Detect(detect::Args),
     FairSurface(fair_surface::Args),
     Enhance(enhance::Args),
+    Fair(fair::Args),
     Render(render::Args),
     Demo(demo::Args),
 }
@@ -56,6 +58,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Detect(a) => detect::run(a),
         Command::FairSurface(a) => fair_surface::run(a),
         Command::Enhance(a) => enhance::run(a),
+        Command::Fair(a) => fair::run(a),
         Command::Render(a) => render::run(a),
         Command::Demo(a) => demo::run(a),
     }
