@@ -1,3 +1,73 @@
+//! `fairline`: highlight lines, fairing and smoothing of surfaces from the
+//! shell. Each subcommand lives in its own module; this file only dispatches.
+//!
+//! Exit status: 0 success, 1 failure of the computation, 2 bad input or usage.
+
+mod common;
+mod convert;
+mod curvature;
+mod demo;
+mod detect;
+mod highlight;
+mod info;
+mod render;
+mod surface;
+
+use clap::{Parser, Subcommand};
+
+/// Shows and repairs the shape quality of surfaces: highlight lines,
+/// highlight-line fairing, smoothing, structure-line fairing of quad meshes
+/// and feature enhancement by vertex flow.
+#[derive(Parser, Debug)]
+#[command(
+    name = "fairline",
+    version,
+    about,
+    after_help = "Examples:\n  fairline demo --out fairline-demo\n  fairline info bunny.ply --json\n  fairline curvature bunny.ply -o bunny-curvature.ply\n\nExit status: 0 success, 1 computation failed, 2 bad input or usage."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    Info(info::Args),
+    Convert(convert::Args),
+    Curvature(curvature::Args),
+    Highlight(highlight::Args),
+    Detect(detect::Args),
+    Render(render::Args),
+    Demo(demo::Args),
+}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Info(a) => info::run(a),
+        Command::Convert(a) => convert::run(a),
+        Command::Curvature(a) => curvature::run(a),
+        Command::Highlight(a) => highlight::run(a),
+        Command::Detect(a) => detect::run(a),
+        Command::Render(a) => render::run(a),
+        Command::Demo(a) => demo::run(a),
+    }
+}
+
 fn main() {
-    println!("Hello, world!");
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() {
+                common::EXIT_BAD_INPUT
+            } else {
+                0
+            };
+            let _ = e.print();
+            std::process::exit(code);
+        }
+    };
+    if let Err(e) = run(cli) {
+        eprintln!("error: {e:#}");
+        std::process::exit(common::exit_code(&e));
+    }
 }

@@ -27,6 +27,7 @@ pub mod geom;
 pub mod highlight;
 pub mod io;
 pub mod mesh;
+pub mod picture;
 pub mod render;
 pub mod shapes;
 pub mod smooth;

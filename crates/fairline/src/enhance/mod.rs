@@ -1,1 +1,455 @@
-//! Placeholder: filled in by its issue.
+//! Feature enhancement by vertex flow (Ji, Liu, Wang & Wang 2011, "Feature
+//! enhancement by vertex flow for 3D shapes", Computer-Aided Design &
+//! Applications 8(5)): vertices of a triangle mesh slide over the surface
+//! from flat regions toward ridges and valleys, so that a coarse mesh spends
+//! its vertices where the curvature is.
+//!
+//! The new positions minimise, in the least-squares sense, Eq. (1)
+//! F = F_em + λ F_sd + μ F_smo, a quadratic in the 3n coordinates:
+//!
+//! - **F_em** (§3.2, §4.1). With the edge metric M_i = |k_i1| T_i1 T_i1ᵀ +
+//!   |k_i2| T_i2 T_i2ᵀ (Eq. (2)–(3), principal curvatures and directions by
+//!   Rusinkiewicz 2004) the edge energy is f_em(e) = ½ e_ijᵀ (M_i + M_j) e_ij
+//!   (Eq. (4)), whose gradient at v_i is Σ_j (M_i + M_j)(v_i − v_j). Only its
+//!   tangential components are driven to zero (Eq. (13)–(19)): two rows per
+//!   vertex, T_ikᵀ Σ_j (M_i + M_j)(v_i − v_j) = 0, k = 1, 2.
+//! - **F_sd** (§3.3). The Pottmann–Hofer quadratic model of the squared
+//!   distance to the input surface (Eq. (6)):
+//!   h(v) = Σ_k d/(d + ρ_ik) [(v − p_i)·T_ik]² + [(v − p_i)·N_i]², with p_i
+//!   the input position, ρ_ik = 1/|k_ik| and d the smallest principal radius
+//!   over the free vertices, so the coefficient is d|k_ik| / (1 + d|k_ik|)
+//!   (0 where k_ik = 0): three rows per vertex.
+//! - **F_smo** (§3.4). The uniform Laplacian L(v_i) = v_i − (1/d_i) Σ_j v_j
+//!   (Eq. (8)) weighted by μ_i = exp(−(|k_i1| + |k_i2|)) (Eq. (10)): three
+//!   rows per vertex.
+//!
+//! The 8n × 3n system (Eq. (20)) is assembled once per iteration in parallel
+//! and solved through a sparse Cholesky factorisation of its normal
+//! equations ([`crate::solve::normal_matrix`], [`crate::solve::CholeskySolver`],
+//! fill-reducing ordering by faer).
+//!
+//! **Normalisations.** Eq. (5) and Eq. (7) average F_em over the edges and
+//! F_sd over the vertices; fairline makes all three terms means over the
+//! vertices, so that their balance (and the meaning of λ, μ) does not depend
+//! on the mesh size: every row is a per-vertex residual and all rows carry
+//! the same factor 1/√|V|, which cancels. (Taken literally, the gradient of
+//! (1/|E|) Σ f_em shrinks like 1/|E| and the unnormalised Eq. (9) grows like
+//! |V|, so F_smo alone would decide the result on large meshes.)
+//!
+//! **Units (scale and motion invariance).** The paper does not fix the units
+//! of curvature, yet μ_i and the balance of the terms depend on them. All
+//! computations run in normalised coordinates x' = (x − c) / ē, where c is
+//! the centroid of the input vertices and ē the mean edge length of the
+//! input; curvatures are then k' = k ē (the turning angle per edge), F_em
+//! measures the sag of an edge in edge lengths (Appendix: f_em ≈ 8δ) and
+//! F_sd squared distances in edge lengths. Every quantity is invariant
+//! under translation, rotation and uniform scaling, so the result of a
+//! transformed input is the transformed result (up to rounding).
+//!
+//! **Constraints and repair.** Boundary vertices, isolated vertices,
+//! vertices without a normal and the vertices listed in
+//! [`EnhanceOptions::fixed`] are not unknowns; their output positions are the
+//! input values, bit for bit. A tiny Tikhonov term ε‖v − p‖² (ε = 1e-10 in
+//! normalised units) keeps the normal matrix positive definite when F_sd
+//! leaves a tangential direction free. After each solve, triangles whose
+//! normal turned against the input's (or collapsed) are repaired by halving
+//! the steps of their vertices, and after [`REPAIR_HALVINGS`] rounds by
+//! resetting them, until no triangle is flipped (§5: "we rectify the
+//! topological errors in the post-processing").
+//!
+//! **Iterations.** With `iterations > 1` curvature is recomputed on the
+//! current mesh for F_em and F_smo, while F_sd keeps the input positions and
+//! input frames as its distance reference.
+
+mod repair;
+mod system;
+#[cfg(test)]
+mod tests;
+
+use crate::Vec3;
+use crate::geom::{mean_edge_length, principal_curvatures_rusinkiewicz, triangle_qualities};
+use crate::mesh::{MeshError, SurfaceMesh, VertexId};
+use crate::solve::{CholeskySolver, SolveError};
+use serde::Serialize;
+use std::time::Instant;
+use thiserror::Error;
+
+/// Rounds of step halving for the vertices of flipped triangles before
+/// their steps are reset to zero.
+pub const REPAIR_HALVINGS: usize = 8;
+
+/// Weight ε of the regularisation ε‖v − p‖² (normalised units).
+const REGULARISATION: f64 = 1e-10;
+
+/// Options of [`enhance_features`]; `Default` gives the paper's λ = 1,
+/// μ = 0.5 and one iteration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnhanceOptions {
+    /// λ, weight of the squared-distance term F_sd (Eq. (1)). Smaller values
+    /// allow more deviation from the input and give stronger features. > 0.
+    pub lambda: f64,
+    /// μ, weight of the fairness term F_smo (Eq. (1)). Larger values give
+    /// better-shaped triangles. ≥ 0.
+    pub mu: f64,
+    /// Number of solves; curvature is recomputed on the current mesh before
+    /// each one after the first (F_sd keeps the input as reference). ≥ 1.
+    pub iterations: usize,
+    /// Vertices that must not move (in addition to the boundary).
+    pub fixed: Vec<VertexId>,
+    /// Number of bins of the triangle-quality histograms over [0, 1]. ≥ 1.
+    pub histogram_bins: usize,
+}
+
+impl Default for EnhanceOptions {
+    fn default() -> Self {
+        EnhanceOptions {
+            lambda: 1.0,
+            mu: 0.5,
+            iterations: 1,
+            fixed: Vec::new(),
+            histogram_bins: 10,
+        }
+    }
+}
+
+impl EnhanceOptions {
+    /// Sets λ.
+    pub fn lambda(mut self, lambda: f64) -> Self {
+        self.lambda = lambda;
+        self
+    }
+    /// Sets μ.
+    pub fn mu(mut self, mu: f64) -> Self {
+        self.mu = mu;
+        self
+    }
+    /// Sets the number of iterations.
+    pub fn iterations(mut self, iterations: usize) -> Self {
+        self.iterations = iterations;
+        self
+    }
+    /// Sets the fixed vertices.
+    pub fn fixed(mut self, fixed: Vec<VertexId>) -> Self {
+        self.fixed = fixed;
+        self
+    }
+    /// Sets the number of histogram bins.
+    pub fn histogram_bins(mut self, bins: usize) -> Self {
+        self.histogram_bins = bins;
+        self
+    }
+}
+
+/// Why [`enhance_features`] failed.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum EnhanceError {
+    /// The mesh is not a triangle mesh.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// An option is out of range.
+    #[error("invalid option: {0}")]
+    InvalidOption(String),
+    /// A fixed vertex does not exist.
+    #[error("fixed vertex {vertex} does not exist; the mesh has {vertices} vertices")]
+    FixedVertexOutOfRange {
+        /// The offending index.
+        vertex: usize,
+        /// Number of vertices.
+        vertices: usize,
+    },
+    /// The linear solve failed.
+    #[error("vertex-flow solve failed: {0}")]
+    Solve(#[from] SolveError),
+}
+
+/// Statistics of the triangle quality 2r/R (1 equilateral, 0 degenerate;
+/// Ji et al. §5, Pébay & Baker).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct QualityStats {
+    /// Smallest quality.
+    pub min: f64,
+    /// Mean quality.
+    pub mean: f64,
+    /// Face counts in equal bins over [0, 1] (the last bin includes 1).
+    pub histogram: Vec<usize>,
+}
+
+impl QualityStats {
+    /// Statistics of the qualities of all faces of `mesh` with `bins` bins.
+    pub fn of_mesh(mesh: &SurfaceMesh, bins: usize) -> QualityStats {
+        let q = triangle_qualities(mesh);
+        let bins = bins.max(1);
+        let mut histogram = vec![0usize; bins];
+        for &x in &q {
+            let b = ((x * bins as f64) as usize).min(bins - 1);
+            histogram[b] += 1;
+        }
+        let min = q.iter().copied().fold(f64::INFINITY, f64::min);
+        QualityStats {
+            min: if min.is_finite() { min } else { 0.0 },
+            mean: if q.is_empty() {
+                0.0
+            } else {
+                q.iter().sum::<f64>() / q.len() as f64
+            },
+            histogram,
+        }
+    }
+}
+
+/// Wall-clock seconds spent in the phases of [`enhance_features`], summed
+/// over the iterations.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct EnhanceTimings {
+    /// Principal curvatures (Rusinkiewicz).
+    pub curvature_s: f64,
+    /// Rows of Eq. (20) and the normal matrix.
+    pub assembly_s: f64,
+    /// Sparse Cholesky factorisation (symbolic analysis included).
+    pub factorisation_s: f64,
+    /// Triangular solves.
+    pub solve_s: f64,
+    /// Flip detection and repair.
+    pub repair_s: f64,
+    /// Everything.
+    pub total_s: f64,
+}
+
+/// What [`enhance_features`] did.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct EnhanceReport {
+    /// Number of vertices.
+    pub vertices: usize,
+    /// Vertices that were free to move (3 unknowns each).
+    pub free_vertices: usize,
+    /// Solves performed.
+    pub iterations: usize,
+    /// Triangles found flipped (normal against the input's, or collapsed)
+    /// after a solve and repaired; summed over the iterations.
+    pub flipped_triangles: usize,
+    /// Vertices whose step was shortened or undone by the repair.
+    pub backtracked_vertices: usize,
+    /// Triangle quality of the input.
+    pub quality_before: QualityStats,
+    /// Triangle quality of the output.
+    pub quality_after: QualityStats,
+    /// Largest vertex displacement, in input units.
+    pub max_displacement: f64,
+    /// Mean vertex displacement, in input units.
+    pub mean_displacement: f64,
+    /// The length unit ē (mean input edge length) of the normalisation.
+    pub edge_length: f64,
+    /// Timings.
+    pub timings: EnhanceTimings,
+}
+
+/// Output of [`enhance_features`].
+#[derive(Clone, Debug)]
+pub struct Enhanced {
+    /// New vertex positions (fixed vertices bit-identical to the input).
+    pub positions: Vec<Vec3>,
+    /// Report.
+    pub report: EnhanceReport,
+}
+
+/// Feature enhancement by vertex flow, Ji et al. 2011 Eq. (1)–(20): moves
+/// the free vertices of a triangle mesh toward high-curvature regions by
+/// minimising F_em + λ F_sd + μ F_smo in normalised coordinates (see the
+/// module documentation for the normalisation, constraints and repair).
+/// Returns the new positions (the connectivity is unchanged) and a report.
+///
+/// Errors: non-triangle faces, λ ≤ 0, μ < 0, non-finite options, zero
+/// iterations or bins, fixed vertices out of range, a failed factorisation.
+pub fn enhance_features(
+    mesh: &SurfaceMesh,
+    options: &EnhanceOptions,
+) -> Result<Enhanced, EnhanceError> {
+    let start = Instant::now();
+    validate(mesh, options)?;
+    let n = mesh.vertex_count();
+    let input = mesh.positions();
+    let bins = options.histogram_bins;
+    let quality_before = QualityStats::of_mesh(mesh, bins);
+    let edge_length = mean_edge_length(mesh);
+    let mut timings = EnhanceTimings::default();
+    let unchanged = |timings: EnhanceTimings, free: usize| Enhanced {
+        positions: input.to_vec(),
+        report: EnhanceReport {
+            vertices: n,
+            free_vertices: free,
+            iterations: 0,
+            flipped_triangles: 0,
+            backtracked_vertices: 0,
+            quality_before: quality_before.clone(),
+            quality_after: quality_before.clone(),
+            max_displacement: 0.0,
+            mean_displacement: 0.0,
+            edge_length: if edge_length.is_finite() {
+                edge_length
+            } else {
+                0.0
+            },
+            timings,
+        },
+    };
+    if mesh.face_count() == 0 || !(edge_length > 0.0) || !edge_length.is_finite() {
+        return Ok(unchanged(timings, 0));
+    }
+
+    // Normalised copy of the mesh: x' = (x − c) / ē.
+    let centroid = input.iter().copied().sum::<Vec3>() / n as f64;
+    let reference: Vec<Vec3> = input
+        .iter()
+        .map(|&x| (x - centroid) / edge_length)
+        .collect();
+    let mut work = mesh.clone();
+    work.set_positions(reference.clone())?;
+
+    let t = Instant::now();
+    let input_curvature = principal_curvatures_rusinkiewicz(&work);
+    timings.curvature_s += t.elapsed().as_secs_f64();
+
+    let mut is_fixed = vec![false; n];
+    for v in mesh.vertices() {
+        let i = v.idx();
+        is_fixed[i] = mesh.is_boundary_vertex(v)
+            || mesh.is_isolated(v)
+            || input_curvature.normals[i] == Vec3::ZERO
+            || input_curvature.d1[i] == Vec3::ZERO;
+    }
+    for v in &options.fixed {
+        is_fixed[v.idx()] = true;
+    }
+    let layout = system::Layout::new(mesh, &is_fixed);
+    if layout.free.is_empty() {
+        timings.total_s = start.elapsed().as_secs_f64();
+        return Ok(unchanged(timings, 0));
+    }
+    let distance = system::DistanceModel::new(&input_curvature, &layout, options.lambda);
+    let input_normals = repair::face_normals_of(&work);
+
+    let mut current = reference.clone();
+    let mut solver: Option<CholeskySolver> = None;
+    let mut flipped_triangles = 0;
+    let mut backtracked = vec![false; n];
+    for iteration in 0..options.iterations {
+        let curvature = if iteration == 0 {
+            input_curvature.clone()
+        } else {
+            let t = Instant::now();
+            work.set_positions(current.clone())?;
+            let c = principal_curvatures_rusinkiewicz(&work);
+            timings.curvature_s += t.elapsed().as_secs_f64();
+            c
+        };
+        let t = Instant::now();
+        let normal = system::assemble(
+            &layout,
+            &curvature,
+            &distance,
+            &current,
+            &reference,
+            options.mu,
+            REGULARISATION,
+        )?;
+        timings.assembly_s += t.elapsed().as_secs_f64();
+
+        let t = Instant::now();
+        let refactored = match solver.as_mut() {
+            Some(s) => s.refactor(normal.matrix.as_ref()).is_ok(),
+            None => false,
+        };
+        if !refactored {
+            solver = Some(CholeskySolver::new(normal.matrix.as_ref())?);
+        }
+        timings.factorisation_s += t.elapsed().as_secs_f64();
+
+        let t = Instant::now();
+        let mut x = normal.rhs;
+        if let Some(s) = solver.as_ref() {
+            s.solve_in_place(&mut x)?;
+        }
+        timings.solve_s += t.elapsed().as_secs_f64();
+
+        let t = Instant::now();
+        let mut target = current.clone();
+        for (f, &v) in layout.free.iter().enumerate() {
+            target[v as usize] = Vec3::new(x[3 * f], x[3 * f + 1], x[3 * f + 2]);
+        }
+        let outcome = repair::repair_flips(mesh, &input_normals, &current, &mut target);
+        flipped_triangles += outcome.flipped;
+        for v in outcome.backtracked {
+            backtracked[v] = true;
+        }
+        current = target;
+        timings.repair_s += t.elapsed().as_secs_f64();
+    }
+
+    // Back to input units; fixed vertices keep their input bits.
+    let mut positions = input.to_vec();
+    for &v in &layout.free {
+        let v = v as usize;
+        let x = centroid + current[v] * edge_length;
+        if x.is_finite() {
+            positions[v] = x;
+        }
+    }
+    let (mut max_d, mut sum_d) = (0.0f64, 0.0);
+    for (a, b) in positions.iter().zip(input) {
+        let d = a.distance(*b);
+        max_d = max_d.max(d);
+        sum_d += d;
+    }
+    let mut out_mesh = mesh.clone();
+    out_mesh.set_positions(positions.clone())?;
+    timings.total_s = start.elapsed().as_secs_f64();
+    Ok(Enhanced {
+        positions,
+        report: EnhanceReport {
+            vertices: n,
+            free_vertices: layout.free.len(),
+            iterations: options.iterations,
+            flipped_triangles,
+            backtracked_vertices: backtracked.iter().filter(|b| **b).count(),
+            quality_before,
+            quality_after: QualityStats::of_mesh(&out_mesh, bins),
+            max_displacement: max_d,
+            mean_displacement: sum_d / n as f64,
+            edge_length,
+            timings,
+        },
+    })
+}
+
+fn validate(mesh: &SurfaceMesh, o: &EnhanceOptions) -> Result<(), EnhanceError> {
+    mesh.require_triangles()?;
+    if !(o.lambda > 0.0) || !o.lambda.is_finite() {
+        return Err(EnhanceError::InvalidOption(format!(
+            "lambda must be positive and finite, got {}",
+            o.lambda
+        )));
+    }
+    if !(o.mu >= 0.0) || !o.mu.is_finite() {
+        return Err(EnhanceError::InvalidOption(format!(
+            "mu must be non-negative and finite, got {}",
+            o.mu
+        )));
+    }
+    if o.iterations == 0 {
+        return Err(EnhanceError::InvalidOption(
+            "iterations must be at least 1".into(),
+        ));
+    }
+    if o.histogram_bins == 0 {
+        return Err(EnhanceError::InvalidOption(
+            "histogram_bins must be at least 1".into(),
+        ));
+    }
+    if let Some(v) = o.fixed.iter().find(|v| v.idx() >= mesh.vertex_count()) {
+        return Err(EnhanceError::FixedVertexOutOfRange {
+            vertex: v.idx(),
+            vertices: mesh.vertex_count(),
+        });
+    }
+    Ok(())
+}

@@ -77,6 +77,24 @@ pub(crate) fn corner_area(p: Vec3, q: Vec3, r: Vec3) -> f64 {
     }
 }
 
+/// Mixed corner areas of every face: entry `f` holds the areas of the
+/// corners at `triangle(f)[0..3]` (for polygons, 1/n of the area at each of
+/// the first three corners — use [`mixed_corner_areas`] for polygons).
+pub(crate) fn triangle_corner_areas(mesh: &SurfaceMesh) -> Vec<[f64; 3]> {
+    let p = mesh.positions();
+    (0..mesh.face_count() as u32)
+        .into_par_iter()
+        .map(|f| {
+            let [a, b, c] = mesh.triangle(FaceId(f)).map(|v| p[v.idx()]);
+            [
+                corner_area(a, b, c),
+                corner_area(b, c, a),
+                corner_area(c, a, b),
+            ]
+        })
+        .collect()
+}
+
 /// Mixed corner areas per halfedge: entry `h` is the share of the face of
 /// `h` that belongs to the vertex `from_vertex(h)` (0 on boundary halfedges).
 /// The corner areas of a face sum to its area.
@@ -89,14 +107,26 @@ pub fn mixed_corner_areas(mesh: &SurfaceMesh) -> Vec<f64> {
 
 /// Mixed Voronoi vertex areas of Meyer et al. (2003): the sum of the mixed
 /// corner areas around each vertex. They sum to the surface area and are
-/// never negative.
+/// never negative. Triangle corners are computed per face in parallel and
+/// summed per vertex in face order (deterministic).
 pub fn mixed_vertex_areas(mesh: &SurfaceMesh) -> Vec<f64> {
-    (0..mesh.vertex_count() as u32)
-        .into_par_iter()
-        .map(|v| {
-            mesh.outgoing(VertexId(v))
-                .map(|h| mixed_corner_area(mesh, h))
-                .sum()
-        })
-        .collect()
+    if !mesh.is_triangle_mesh() {
+        return (0..mesh.vertex_count() as u32)
+            .into_par_iter()
+            .map(|v| {
+                mesh.outgoing(VertexId(v))
+                    .map(|h| mixed_corner_area(mesh, h))
+                    .sum()
+            })
+            .collect();
+    }
+    let corners = triangle_corner_areas(mesh);
+    let mut out = vec![0.0; mesh.vertex_count()];
+    for (f, ca) in corners.iter().enumerate() {
+        let t = mesh.triangle(FaceId(f as u32));
+        for k in 0..3 {
+            out[t[k].idx()] += ca[k];
+        }
+    }
+    out
 }

@@ -4,7 +4,7 @@
 //! Sign convention: with outward normals a sphere of radius r has
 //! k1 = k2 = H = +1/r. Principal curvatures are ordered signed, k1 ≥ k2.
 
-use super::areas::mixed_corner_areas;
+use super::areas::{mixed_corner_areas, triangle_corner_areas};
 use super::laplace::{LaplaceWeights, halfedge_weights};
 use super::measures::angle_between;
 use super::normals::{vertex_normals, vertex_normals_max};
@@ -196,7 +196,7 @@ fn rotate_frame(u: Vec3, v: Vec3, n: Vec3) -> (Vec3, Vec3) {
 /// Triangle meshes; non-triangle faces are ignored.
 pub fn principal_curvatures_rusinkiewicz(mesh: &SurfaceMesh) -> PrincipalCurvatures {
     let normals = vertex_normals_max(mesh);
-    let corner = mixed_corner_areas(mesh);
+    let corner = triangle_corner_areas(mesh);
     let p = mesh.positions();
     // Per-face tensor (ku, kuv, kv) in frame (t, b); None when degenerate.
     let face_tensors: Vec<Option<(Vec3, Vec3, [f64; 3])>> = (0..mesh.face_count() as u32)
@@ -259,7 +259,15 @@ pub fn principal_curvatures_rusinkiewicz(mesh: &SurfaceMesh) -> PrincipalCurvatu
                 let Some((t, b, k)) = face_tensors[f.idx()] else {
                     continue;
                 };
-                let wt = corner[h.idx()];
+                let tri = mesh.triangle(f);
+                let k_at = if tri[0] == v {
+                    0
+                } else if tri[1] == v {
+                    1
+                } else {
+                    2
+                };
+                let wt = corner[f.idx()][k_at];
                 if !(wt > 0.0) {
                     continue;
                 }

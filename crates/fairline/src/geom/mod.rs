@@ -27,7 +27,9 @@ pub use measures::{
     corner_angles, edge_lengths, mean_edge_length, surface_area, triangle_qualities,
     triangle_quality, volume, willmore_energy,
 };
-pub use normals::{face_normals, triangle_normal_area, vertex_normals, vertex_normals_max};
+pub use normals::{
+    face_normals, triangle_normal_area, vertex_normal, vertex_normals, vertex_normals_max,
+};
 
 /// Relative threshold below which a triangle counts as degenerate: its double
 /// area is at most `DEGENERATE_RELATIVE_AREA` times the sum of its squared

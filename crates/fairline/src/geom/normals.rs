@@ -68,22 +68,38 @@ pub fn vertex_normals(mesh: &SurfaceMesh) -> Vec<Vec3> {
         .collect();
     (0..mesh.vertex_count() as u32)
         .into_par_iter()
-        .map(|v| {
-            let mut s = Vec3::ZERO;
-            for f in mesh.vertex_faces(VertexId(v)) {
-                s += area_vectors[f.idx()];
-            }
-            let n = s.normalize_or_zero();
-            if n != Vec3::ZERO {
-                return n;
-            }
-            let mut s = Vec3::ZERO;
-            for f in mesh.vertex_faces(VertexId(v)) {
-                s += area_vectors[f.idx()].normalize_or_zero();
-            }
-            s.normalize_or_zero()
-        })
+        .map(|v| normal_from_area_vectors(mesh, VertexId(v), |f| area_vectors[f.idx()]))
         .collect()
+}
+
+/// The area-weighted normal of the single vertex `v`, Yong et al. Eq. (3);
+/// bit-identical to entry `v` of [`vertex_normals`]. For incremental updates
+/// after a few vertices moved (only the one-ring of a moved vertex changes).
+pub fn vertex_normal(mesh: &SurfaceMesh, v: VertexId) -> Vec3 {
+    normal_from_area_vectors(mesh, v, |f| face_area_vector(mesh, f))
+}
+
+/// Eq. (3) with the fallbacks of [`vertex_normals`], summing the face area
+/// vectors given by `area` in circulation order.
+#[inline]
+fn normal_from_area_vectors(
+    mesh: &SurfaceMesh,
+    v: VertexId,
+    area: impl Fn(FaceId) -> Vec3,
+) -> Vec3 {
+    let mut s = Vec3::ZERO;
+    for f in mesh.vertex_faces(v) {
+        s += area(f);
+    }
+    let n = s.normalize_or_zero();
+    if n != Vec3::ZERO {
+        return n;
+    }
+    let mut s = Vec3::ZERO;
+    for f in mesh.vertex_faces(v) {
+        s += area(f).normalize_or_zero();
+    }
+    s.normalize_or_zero()
 }
 
 /// Vertex normals with the weights of Max (1999), "Weights for computing

@@ -1,1 +1,58 @@
-//! Placeholder: filled in by its issue.
+//! Highlight lines: linear light arrays on triangle meshes (Yong et al. §2,
+//! Algorithm 1, with the corrections of DESIGN.md §3), circular lights
+//! (Nishiyama et al. §2, Eq. (2.1)–(2.18)) evaluated on meshes, highlight
+//! bands, and detection of irregular stretches of highlight lines.
+//!
+//! Assumes triangle meshes with consistently oriented faces; normals are the
+//! area-weighted vertex normals of Yong et al. Eq. (3) from [`crate::geom`].
+//! Node positions come from linear interpolation of the per-vertex field
+//! along edges (Yong et al. Eq. (4), corrected).
+
+mod circular;
+mod contour;
+pub mod detect;
+mod light;
+mod linear;
+pub mod quartic;
+
+pub use circular::{circular_highlight_bands, circular_highlight_lines};
+pub use contour::{HighlightLine, HighlightLines, NodeId};
+pub use detect::{DetectOptions, Detection, IrregularRegion, LineFairness, detect_irregularities};
+pub use light::{CircleApproach, CircularLight, CircularLights, LightArray};
+pub use linear::{HighlightModel, HighlightOptions, highlight_lines};
+
+use crate::mesh::MeshError;
+
+use thiserror::Error;
+
+/// Why a highlight computation could not run.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum HighlightError {
+    /// The mesh is unsuitable (e.g. not all triangles).
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// A light description is invalid (zero vector, parallel directions,
+    /// non-positive spacing or radius).
+    #[error("invalid light: {0}")]
+    InvalidLight(String),
+    /// An option is out of range.
+    #[error("invalid option: {0}")]
+    InvalidOption(String),
+}
+
+/// Highlight bands of lights with a tube radius ρ (Nishiyama et al. §2, last
+/// paragraph; for linear lights the strip |d_P − m·s| ≤ ρ of Yong et al.
+/// Eq. (1)–(2)): for each light, the boundary level sets as two families of
+/// polylines with the light's index.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HighlightBands {
+    /// The band radius ρ (mesh units).
+    pub radius: f64,
+    /// Level set at −ρ from each light.
+    pub lower: HighlightLines,
+    /// Level set at +ρ from each light.
+    pub upper: HighlightLines,
+}
+
+#[cfg(test)]
+mod tests;

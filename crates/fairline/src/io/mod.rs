@@ -1,1 +1,741 @@
-//! placeholder
+//! Mesh files: OBJ, PLY (ascii and binary), OFF and STL.
+//!
+//! Every reader produces a [`Soup`] (positions plus polygons, no
+//! connectivity); [`read_mesh`] then builds a [`SurfaceMesh`]. Readers never
+//! panic and never trust a count from a header: binary counts are checked
+//! against the bytes that remain, text readers grow their vectors as they
+//! parse. Malformed input gives an [`IoError`] that names the file, the line
+//! (text) or byte offset (binary), and the element (`vertex 3`, `face 7`,
+//! 0-based like every index in fairline).
+//!
+//! Writers keep f64 exact (DESIGN §2): text formats print Rust's shortest
+//! round-trip representation (`{}`), binary PLY stores doubles, so a vertex
+//! that was not moved is written bit-identical. STL stores f32 by definition.
+//! Every file is written atomically ([`atomic_write`]).
+//!
+//! The format is chosen by the file extension ([`MeshFormat::from_path`]).
+
+mod obj;
+mod off;
+mod ply;
+mod stl;
+
+use std::fmt;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use thiserror::Error;
+
+use crate::mesh::{MeshError, Soup, SurfaceMesh};
+
+/// Where in a file an error was found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Location {
+    /// The file as a whole (for example: it is empty).
+    File,
+    /// A 1-based line number of a text file (or of a PLY header).
+    Line(usize),
+    /// A 0-based byte offset into a binary file.
+    Byte(usize),
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Location::File => Ok(()),
+            Location::Line(l) => write!(f, ":{l}"),
+            Location::Byte(b) => write!(f, ": byte {b}"),
+        }
+    }
+}
+
+/// Why a mesh file could not be read or written.
+///
+/// Displayed as `path:line: element: message`, for example
+/// `bunny.ply:12: vertex 3: expected 3 coordinates, found 2`.
+#[derive(Debug, Error)]
+pub enum IoError {
+    /// The operating system refused to read or write the file.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file's content does not follow its format.
+    #[error("{}{location}: {message}", path.display())]
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// Line or byte offset of the problem.
+        location: Location,
+        /// What is wrong, starting with the element (`vertex 3: ...`).
+        message: String,
+    },
+    /// The file was read, but its faces do not form a [`SurfaceMesh`].
+    #[error("{}: {source}", path.display())]
+    Mesh {
+        /// The file.
+        path: PathBuf,
+        /// Why the mesh could not be built.
+        #[source]
+        source: MeshError,
+    },
+    /// The file name has no extension fairline knows.
+    #[error(
+        "{}: unknown mesh format (expected extension .obj, .ply, .off or .stl)",
+        path.display()
+    )]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The data handed to a writer cannot be written (non-finite
+    /// coordinates, indices out of range, mismatched property lengths, ...).
+    #[error("{}: {message}", path.display())]
+    InvalidData {
+        /// The file that was to be written.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// The output path names the input file.
+    #[error(
+        "refusing to write {}: it is the input file {}",
+        output.display(),
+        input.display()
+    )]
+    SameFile {
+        /// The input file.
+        input: PathBuf,
+        /// The output file.
+        output: PathBuf,
+    },
+}
+
+impl IoError {
+    /// The file the error is about (the output file for
+    /// [`IoError::SameFile`]).
+    pub fn path(&self) -> &Path {
+        match self {
+            IoError::Io { path, .. }
+            | IoError::Format { path, .. }
+            | IoError::Mesh { path, .. }
+            | IoError::UnknownFormat { path }
+            | IoError::InvalidData { path, .. } => path,
+            IoError::SameFile { output, .. } => output,
+        }
+    }
+
+    /// The 1-based line number, for format errors in text files.
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            IoError::Format {
+                location: Location::Line(l),
+                ..
+            } => Some(*l),
+            _ => None,
+        }
+    }
+}
+
+/// A mesh file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MeshFormat {
+    /// Wavefront OBJ (text; polygons kept).
+    Obj,
+    /// Stanford PLY (ascii or binary; polygons kept; written as binary
+    /// little-endian with double coordinates).
+    Ply,
+    /// Geomview OFF (text; polygons kept).
+    Off,
+    /// STL (ascii or binary; triangles only, f32 coordinates; written as
+    /// binary).
+    Stl,
+}
+
+impl MeshFormat {
+    /// The format named by the file extension (case-insensitive: `.obj`,
+    /// `.ply`, `.off`, `.stl`); [`IoError::UnknownFormat`] otherwise.
+    pub fn from_path(path: impl AsRef<Path>) -> Result<MeshFormat, IoError> {
+        let path = path.as_ref();
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("obj") => Ok(MeshFormat::Obj),
+            Some("ply") => Ok(MeshFormat::Ply),
+            Some("off") => Ok(MeshFormat::Off),
+            Some("stl") => Ok(MeshFormat::Stl),
+            _ => Err(IoError::UnknownFormat {
+                path: path.to_path_buf(),
+            }),
+        }
+    }
+
+    /// The usual lower-case file extension, without the dot.
+    pub fn extension(self) -> &'static str {
+        match self {
+            MeshFormat::Obj => "obj",
+            MeshFormat::Ply => "ply",
+            MeshFormat::Off => "off",
+            MeshFormat::Stl => "stl",
+        }
+    }
+}
+
+/// Reads a mesh file as a [`Soup`], choosing the format by extension.
+///
+/// STL vertices are welded by exact position. No connectivity checks are
+/// made beyond index range and face size (at least 3); coordinates must be
+/// finite.
+pub fn read_soup(path: impl AsRef<Path>) -> Result<Soup, IoError> {
+    let path = path.as_ref();
+    let format = MeshFormat::from_path(path)?;
+    let bytes = read_bytes(path)?;
+    read_with(&bytes, format, path)
+}
+
+/// Parses the bytes of a mesh file in the given format; `name_for_errors`
+/// is the file name used in error messages.
+pub fn read_soup_bytes(
+    bytes: &[u8],
+    format: MeshFormat,
+    name_for_errors: &str,
+) -> Result<Soup, IoError> {
+    read_with(bytes, format, Path::new(name_for_errors))
+}
+
+/// Reads a mesh file and builds a [`SurfaceMesh`] from it; a face list that
+/// is not an orientable manifold gives [`IoError::Mesh`].
+pub fn read_mesh(path: impl AsRef<Path>) -> Result<SurfaceMesh, IoError> {
+    let path = path.as_ref();
+    let soup = read_soup(path)?;
+    SurfaceMesh::from_soup(&soup).map_err(|source| IoError::Mesh {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Writes a [`Soup`] atomically in the format named by the extension.
+///
+/// OBJ and OFF print coordinates with `{}` (bit-exact round trip), PLY is
+/// binary little-endian with double coordinates, STL is binary (f32; polygons
+/// are split into triangle fans and facet normals computed). Refuses
+/// non-finite coordinates, out-of-range indices and faces with fewer than
+/// three vertices.
+pub fn write_soup(path: impl AsRef<Path>, soup: &Soup) -> Result<(), IoError> {
+    let path = path.as_ref();
+    let format = MeshFormat::from_path(path)?;
+    validate_for_write(soup, path)?;
+    match format {
+        MeshFormat::Obj => atomic_write(path, |w| obj::write(w, soup)),
+        MeshFormat::Off => atomic_write(path, |w| off::write(w, soup)),
+        MeshFormat::Ply => atomic_write(path, |w| ply::write(w, soup, &[])),
+        MeshFormat::Stl => {
+            if stl::triangle_count(soup) > u32::MAX as usize {
+                return Err(invalid(path, "too many triangles for STL"));
+            }
+            atomic_write(path, |w| stl::write(w, soup))
+        }
+    }
+}
+
+/// Writes a [`SurfaceMesh`] atomically in the format named by the extension
+/// (see [`write_soup`]).
+pub fn write_mesh(path: impl AsRef<Path>, mesh: &SurfaceMesh) -> Result<(), IoError> {
+    write_soup(path, &mesh.to_soup())
+}
+
+/// Writes a binary little-endian PLY with `double x y z`, then one `double`
+/// vertex property per entry of `props` (in order), then the faces as
+/// `property list uchar int vertex_indices` (`uint` count when a face has
+/// more than 255 vertices). Written atomically.
+///
+/// Each property must have one value per vertex and a name that is a single
+/// word different from `x`, `y`, `z` and from the other names.
+pub fn write_ply_with_vertex_properties(
+    path: impl AsRef<Path>,
+    soup: &Soup,
+    props: &[(&str, &[f64])],
+) -> Result<(), IoError> {
+    let path = path.as_ref();
+    validate_for_write(soup, path)?;
+    for (i, (name, values)) in props.iter().enumerate() {
+        if name.is_empty() || !name.bytes().all(|b| b.is_ascii_graphic()) {
+            return Err(invalid(
+                path,
+                format!("vertex property name {name:?} is not a single word"),
+            ));
+        }
+        if ["x", "y", "z"].contains(name) || props[..i].iter().any(|(n, _)| n == name) {
+            return Err(invalid(
+                path,
+                format!("vertex property name {name:?} is used twice"),
+            ));
+        }
+        if values.len() != soup.vertex_count() {
+            return Err(invalid(
+                path,
+                format!(
+                    "vertex property {name:?} has {} values for {} vertices",
+                    values.len(),
+                    soup.vertex_count()
+                ),
+            ));
+        }
+    }
+    atomic_write(path, |w| ply::write(w, soup, props))
+}
+
+/// Named per-vertex scalar properties, in file order.
+pub type VertexProperties = Vec<(String, Vec<f64>)>;
+
+/// Reads a PLY file and every scalar vertex property other than `x`, `y`,
+/// `z` (which are in the soup), by name and in file order, converted to f64.
+/// Such values may be NaN or infinite; coordinates may not.
+pub fn read_ply_vertex_properties(
+    path: impl AsRef<Path>,
+) -> Result<(Soup, VertexProperties), IoError> {
+    let path = path.as_ref();
+    let bytes = read_bytes(path)?;
+    ply::read(&bytes, path, true)
+}
+
+static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// Writes a file atomically: `write` fills a temporary file in the same
+/// directory, which is flushed, synced and then renamed over `path`. If
+/// anything fails, the temporary file is removed and `path` is untouched
+/// (no file is left behind when it did not exist).
+pub fn atomic_write<F>(path: impl AsRef<Path>, write: F) -> Result<(), IoError>
+where
+    F: FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+{
+    let path = path.as_ref();
+    let io_err = |source| IoError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let file_name = path.file_name().ok_or_else(|| {
+        io_err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "the output path has no file name",
+        ))
+    })?;
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let (tmp, file) = {
+        let mut attempt = 0;
+        loop {
+            let n = TEMP_COUNTER.fetch_add(1, Ordering::Relaxed);
+            let mut name = std::ffi::OsString::from(".");
+            name.push(file_name);
+            name.push(format!(".{}.{n}.tmp", std::process::id()));
+            let tmp = dir.join(name);
+            match File::options().write(true).create_new(true).open(&tmp) {
+                Ok(f) => break (tmp, f),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && attempt < 100 => {
+                    attempt += 1;
+                }
+                Err(e) => return Err(io_err(e)),
+            }
+        }
+    };
+    let result = (|| {
+        let mut w = BufWriter::new(file);
+        write(&mut w)?;
+        w.flush()?;
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()?;
+        drop(file);
+        std::fs::rename(&tmp, path)
+    })();
+    result.map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io_err(e)
+    })
+}
+
+/// Refuses an `output` path that names the same file as `input` (compared
+/// by canonical path, and on Unix also by device and inode so hard links are
+/// caught). When `output` does not exist yet, its canonical parent directory
+/// plus file name is compared instead.
+pub fn ensure_distinct(input: impl AsRef<Path>, output: impl AsRef<Path>) -> Result<(), IoError> {
+    let (input, output) = (input.as_ref(), output.as_ref());
+    let same = || IoError::SameFile {
+        input: input.to_path_buf(),
+        output: output.to_path_buf(),
+    };
+    let canon_in = std::fs::canonicalize(input).map_err(|source| IoError::Io {
+        path: input.to_path_buf(),
+        source,
+    })?;
+    if let Ok(canon_out) = std::fs::canonicalize(output) {
+        if canon_out == canon_in {
+            return Err(same());
+        }
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::MetadataExt;
+            if let (Ok(a), Ok(b)) = (std::fs::metadata(&canon_in), std::fs::metadata(&canon_out))
+                && a.dev() == b.dev()
+                && a.ino() == b.ino()
+            {
+                return Err(same());
+            }
+        }
+        return Ok(());
+    }
+    let Some(name) = output.file_name() else {
+        return Ok(());
+    };
+    let parent = match output.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if let Ok(canon_parent) = std::fs::canonicalize(parent)
+        && canon_parent.join(name) == canon_in
+    {
+        return Err(same());
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------
+// shared helpers of the format modules
+
+fn read_bytes(path: &Path) -> Result<Vec<u8>, IoError> {
+    std::fs::read(path).map_err(|source| IoError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+fn read_with(bytes: &[u8], format: MeshFormat, path: &Path) -> Result<Soup, IoError> {
+    if bytes.iter().all(|b| b.is_ascii_whitespace()) {
+        return Err(format_err(path, Location::File, "empty file"));
+    }
+    match format {
+        MeshFormat::Obj => obj::read(bytes, path),
+        MeshFormat::Off => off::read(bytes, path),
+        MeshFormat::Ply => ply::read(bytes, path, false).map(|(soup, _)| soup),
+        MeshFormat::Stl => stl::read(bytes, path),
+    }
+}
+
+fn format_err(path: &Path, location: Location, message: impl Into<String>) -> IoError {
+    IoError::Format {
+        path: path.to_path_buf(),
+        location,
+        message: message.into(),
+    }
+}
+
+fn invalid(path: &Path, message: impl Into<String>) -> IoError {
+    IoError::InvalidData {
+        path: path.to_path_buf(),
+        message: message.into(),
+    }
+}
+
+/// Checks what every writer needs: finite coordinates, faces of at least
+/// three in-range indices, a well-formed offset array.
+fn validate_for_write(soup: &Soup, path: &Path) -> Result<(), IoError> {
+    for (v, p) in soup.positions.iter().enumerate() {
+        if !p.is_finite() {
+            return Err(invalid(
+                path,
+                format!("vertex {v}: coordinate is NaN or infinite ({p})"),
+            ));
+        }
+    }
+    if soup.offsets.first().is_some_and(|&o| o != 0)
+        || soup.offsets.windows(2).any(|w| w[1] < w[0])
+        || soup
+            .offsets
+            .last()
+            .is_some_and(|&o| o as usize != soup.indices.len())
+    {
+        return Err(invalid(path, "malformed face offsets"));
+    }
+    let nv = soup.vertex_count();
+    for (f, face) in soup.faces().enumerate() {
+        if face.len() < 3 {
+            return Err(invalid(
+                path,
+                format!(
+                    "face {f}: has {} vertices; a face needs at least 3",
+                    face.len()
+                ),
+            ));
+        }
+        if let Some(&i) = face.iter().find(|&&i| i as usize >= nv) {
+            return Err(invalid(
+                path,
+                format!("face {f}: vertex index {i} out of range ({nv} vertices)"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Lines of a text file: yields `(1-based line number, line)` without the
+/// line ending (`\n` or `\r\n`).
+struct Lines<'a> {
+    data: &'a [u8],
+    pos: usize,
+    line: usize,
+}
+
+impl<'a> Lines<'a> {
+    fn new(data: &'a [u8], first_line: usize) -> Self {
+        Lines {
+            data,
+            pos: 0,
+            line: first_line,
+        }
+    }
+
+    /// Bytes not yet returned.
+    fn remaining(&self) -> usize {
+        self.data.len() - self.pos
+    }
+}
+
+impl<'a> Iterator for Lines<'a> {
+    type Item = (usize, &'a [u8]);
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.pos >= self.data.len() {
+            return None;
+        }
+        let rest = &self.data[self.pos..];
+        let (mut line, advance) = match rest.iter().position(|&b| b == b'\n') {
+            Some(i) => (&rest[..i], i + 1),
+            None => (rest, rest.len()),
+        };
+        if let [head @ .., b'\r'] = line {
+            line = head;
+        }
+        self.pos += advance;
+        let n = self.line;
+        self.line += 1;
+        Some((n, line))
+    }
+}
+
+/// Splits a line into whitespace-separated tokens.
+fn tokens(line: &[u8]) -> impl Iterator<Item = &[u8]> {
+    line.split(|b| b.is_ascii_whitespace())
+        .filter(|t| !t.is_empty())
+}
+
+/// Parses a decimal floating-point token (Rust's `f64` grammar, which
+/// also accepts `inf` and `nan`; callers check finiteness).
+fn parse_f64(tok: &[u8]) -> Option<f64> {
+    std::str::from_utf8(tok).ok()?.parse().ok()
+}
+
+/// Parses a decimal integer token.
+fn parse_i64(tok: &[u8]) -> Option<i64> {
+    std::str::from_utf8(tok).ok()?.parse().ok()
+}
+
+/// A token for an error message: lossy UTF-8, at most 40 characters.
+fn show(tok: &[u8]) -> String {
+    let s = String::from_utf8_lossy(tok);
+    if s.chars().count() > 40 {
+        let cut: String = s.chars().take(40).collect();
+        format!("{cut}...")
+    } else {
+        s.into_owned()
+    }
+}
+
+/// A capacity to reserve for `count` items announced by a header when
+/// `bytes` bytes remain and every item takes at least `min_item_bytes` of
+/// them: never more than the file can hold.
+fn capped_capacity(count: usize, bytes: usize, min_item_bytes: usize) -> usize {
+    count.min(bytes / min_item_bytes.max(1))
+}
+
+/// Appends a face to a soup, failing when the index array would outgrow
+/// 32-bit offsets.
+fn push_face(soup: &mut Soup, face: &[u32]) -> Result<(), &'static str> {
+    if soup.indices.len() + face.len() > u32::MAX as usize {
+        return Err("too many face indices for 32-bit offsets");
+    }
+    soup.push_face(face);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Vec3;
+
+    fn temp_dir(tag: &str) -> PathBuf {
+        let n = TEMP_COUNTER.fetch_add(1, Ordering::Relaxed);
+        let dir =
+            std::env::temp_dir().join(format!("fairline-io-{tag}-{}-{n}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn quad_soup() -> Soup {
+        Soup::from_polygons(
+            vec![
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.1),
+                Vec3::new(0.0, 1.0, 0.0),
+            ],
+            &[[0u32, 1, 2, 3]],
+        )
+    }
+
+    #[test]
+    fn format_from_extension_is_case_insensitive() {
+        assert_eq!(MeshFormat::from_path("a/B.OBJ").unwrap(), MeshFormat::Obj);
+        assert_eq!(MeshFormat::from_path("x.Ply").unwrap(), MeshFormat::Ply);
+        assert_eq!(MeshFormat::from_path("x.off").unwrap(), MeshFormat::Off);
+        assert_eq!(MeshFormat::from_path("x.sTl").unwrap(), MeshFormat::Stl);
+        let e = MeshFormat::from_path("dir/mesh.xyz").unwrap_err();
+        assert!(e.to_string().contains("mesh.xyz"), "{e}");
+        assert!(MeshFormat::from_path("noext").is_err());
+    }
+
+    #[test]
+    fn error_display_names_file_line_and_element() {
+        let e = format_err(
+            Path::new("bunny.ply"),
+            Location::Line(12),
+            "vertex 3: expected 3 coordinates, found 2",
+        );
+        assert_eq!(
+            e.to_string(),
+            "bunny.ply:12: vertex 3: expected 3 coordinates, found 2"
+        );
+        assert_eq!(e.line(), Some(12));
+        let e = format_err(Path::new("b.stl"), Location::Byte(84), "triangle 0: x");
+        assert_eq!(e.to_string(), "b.stl: byte 84: triangle 0: x");
+    }
+
+    #[test]
+    fn empty_file_is_an_error_in_every_format() {
+        for f in [
+            MeshFormat::Obj,
+            MeshFormat::Ply,
+            MeshFormat::Off,
+            MeshFormat::Stl,
+        ] {
+            let e = read_soup_bytes(b"", f, "empty").unwrap_err();
+            assert!(e.to_string().contains("empty file"), "{e}");
+            assert!(read_soup_bytes(b" \n\r\n", f, "empty").is_err());
+        }
+    }
+
+    #[test]
+    fn atomic_write_failure_leaves_nothing() {
+        let dir = temp_dir("atomic");
+        let path = dir.join("out.obj");
+        let r = atomic_write(&path, |w| {
+            w.write_all(b"partial")?;
+            Err(std::io::Error::other("boom"))
+        });
+        assert!(r.is_err());
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+        // success replaces the file, failure keeps the old content
+        atomic_write(&path, |w| w.write_all(b"one")).unwrap();
+        assert!(atomic_write(&path, |_| Err(std::io::Error::other("no"))).is_err());
+        assert_eq!(std::fs::read(&path).unwrap(), b"one");
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        // an unwritable directory is an error naming the path
+        let e = atomic_write(dir.join("missing/x.obj"), |w| w.write_all(b"x")).unwrap_err();
+        assert!(e.to_string().contains("missing"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn ensure_distinct_catches_same_file() {
+        let dir = temp_dir("distinct");
+        let input = dir.join("in.obj");
+        write_soup(&input, &quad_soup()).unwrap();
+        assert!(matches!(
+            ensure_distinct(&input, &input),
+            Err(IoError::SameFile { .. })
+        ));
+        let dotted = dir.join(".").join("in.obj");
+        assert!(ensure_distinct(&input, &dotted).is_err());
+        assert!(ensure_distinct(&input, dir.join("out.obj")).is_ok());
+        std::fs::create_dir(dir.join("sub")).unwrap();
+        assert!(ensure_distinct(&input, dir.join("sub/../in.obj")).is_err());
+        #[cfg(unix)]
+        {
+            let link = dir.join("link.obj");
+            std::fs::hard_link(&input, &link).unwrap();
+            assert!(ensure_distinct(&input, &link).is_err());
+        }
+        // a missing input is an I/O error
+        assert!(matches!(
+            ensure_distinct(dir.join("nope.obj"), &input),
+            Err(IoError::Io { .. })
+        ));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn writers_refuse_invalid_soups() {
+        let dir = temp_dir("invalid");
+        let mut soup = quad_soup();
+        soup.positions[2].y = f64::NAN;
+        let e = write_soup(dir.join("a.obj"), &soup).unwrap_err();
+        assert!(e.to_string().contains("vertex 2"), "{e}");
+        let soup = Soup::from_polygons(quad_soup().positions, &[[0u32, 1, 7]]);
+        let e = write_soup(dir.join("a.off"), &soup).unwrap_err();
+        assert!(e.to_string().contains("face 0"), "{e}");
+        let soup = Soup::from_polygons(quad_soup().positions, &[[0u32, 1]]);
+        assert!(write_soup(dir.join("a.ply"), &soup).is_err());
+        let e = write_ply_with_vertex_properties(
+            dir.join("b.ply"),
+            &quad_soup(),
+            &[("k", &[1.0, 2.0][..])],
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("2 values for 4 vertices"), "{e}");
+        let v = [0.0; 4];
+        assert!(
+            write_ply_with_vertex_properties(dir.join("b.ply"), &quad_soup(), &[("x", &v[..])])
+                .is_err()
+        );
+        assert!(
+            write_ply_with_vertex_properties(dir.join("b.ply"), &quad_soup(), &[("a b", &v[..])])
+                .is_err()
+        );
+        assert!(write_soup(dir.join("a.xyz"), &quad_soup()).is_err());
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn lines_handle_crlf_and_missing_final_newline() {
+        let v: Vec<_> = Lines::new(b"a\r\nb\n\nc", 1).collect();
+        assert_eq!(
+            v,
+            vec![
+                (1, &b"a"[..]),
+                (2, &b"b"[..]),
+                (3, &b""[..]),
+                (4, &b"c"[..])
+            ]
+        );
+    }
+}

@@ -64,15 +64,21 @@ pub struct MeshInfo {
     /// Closed chains of boundary edges (connected components of the
     /// boundary-edge graph).
     pub boundary_loops: usize,
-    /// Edges shared by more than two faces.
+    /// Distinct edges shared by more than two faces.
     pub non_manifold_edges: usize,
+    /// Face–edge incidences on those edges (what trimesh counts as
+    /// non-manifold face edges).
+    pub non_manifold_edge_incidences: usize,
+    /// Faces with the same vertex set as an earlier face.
+    pub duplicate_faces: usize,
     /// Vertices whose faces form more than one fan (counted on the manifold
     /// edges only).
     pub non_manifold_vertices: usize,
     /// Edges used twice in the same direction by two faces (orientation
     /// conflicts before any repair).
     pub inconsistently_oriented_edges: usize,
-    /// Connected components (of faces joined by vertices).
+    /// Connected components of faces joined across shared edges (faces that
+    /// touch only at a vertex are separate components).
     pub components: usize,
     /// Vertices used by no face.
     pub isolated_vertices: usize,
@@ -127,9 +133,10 @@ pub fn inspect(soup: &Soup) -> MeshInfo {
     let mut area = 0.0;
     let mut used = vec![false; nv];
     // directed edges (a, b, face)
-    let mut directed: Vec<(u32, u32)> = Vec::new();
-    let mut parent: Vec<u32> = (0..nv as u32).collect();
-    for face in soup.faces() {
+    let mut directed: Vec<(u32, u32, u32)> = Vec::new();
+    let mut duplicate_faces = 0;
+    let mut seen_faces = std::collections::HashSet::new();
+    for (fi, face) in soup.faces().enumerate() {
         *face_sizes.entry(face.len()).or_insert(0) += 1;
         let valid = face.len() >= 3
             && face.iter().all(|&i| (i as usize) < nv)
@@ -141,8 +148,12 @@ pub fn inspect(soup: &Soup) -> MeshInfo {
         for k in 0..face.len() {
             let (a, b) = (face[k], face[(k + 1) % face.len()]);
             used[a as usize] = true;
-            directed.push((a, b));
-            union(&mut parent, a, b);
+            directed.push((a, b, fi as u32));
+        }
+        let mut key = face.to_vec();
+        key.sort_unstable();
+        if !seen_faces.insert(key) {
+            duplicate_faces += 1;
         }
         // Newell area
         let c = face.iter().map(|&i| p[i as usize]).sum::<Vec3>() / face.len() as f64;
@@ -163,10 +174,12 @@ pub fn inspect(soup: &Soup) -> MeshInfo {
         }
     }
     // undirected edge analysis
-    let mut undirected: Vec<(u32, u32, bool)> = directed
+    let mut undirected: Vec<(u32, u32, bool, u32)> = directed
         .iter()
-        .map(|&(a, b)| (a.min(b), a.max(b), a < b))
+        .map(|&(a, b, f)| (a.min(b), a.max(b), a < b, f))
         .collect();
+    let mut face_parent: Vec<u32> = (0..soup.face_count() as u32).collect();
+    let mut nm_incidences = 0;
     undirected.sort_unstable();
     let (mut edges, mut boundary_edges, mut non_manifold_edges, mut inconsistent) = (0, 0, 0, 0);
     let mut boundary_parent: Vec<u32> = (0..nv as u32).collect();
@@ -175,12 +188,15 @@ pub fn inspect(soup: &Soup) -> MeshInfo {
     let mut manifold_edge_faces: Vec<(u32, u32)> = Vec::new();
     let mut i = 0;
     while i < undirected.len() {
-        let (a, b, _) = undirected[i];
+        let (a, b, _, _) = undirected[i];
         let mut j = i;
         while j < undirected.len() && undirected[j].0 == a && undirected[j].1 == b {
             j += 1;
         }
         edges += 1;
+        for k in i + 1..j {
+            union(&mut face_parent, undirected[i].3, undirected[k].3);
+        }
         lengths.push(p[a as usize].distance(p[b as usize]));
         match j - i {
             1 => {
@@ -195,7 +211,10 @@ pub fn inspect(soup: &Soup) -> MeshInfo {
                 }
                 manifold_edge_faces.push((a, b));
             }
-            _ => non_manifold_edges += 1,
+            n => {
+                non_manifold_edges += 1;
+                nm_incidences += n;
+            }
         }
         i = j;
     }
@@ -206,10 +225,8 @@ pub fn inspect(soup: &Soup) -> MeshInfo {
         }
     }
     let mut comp_roots = std::collections::BTreeSet::new();
-    for v in 0..nv {
-        if used[v] {
-            comp_roots.insert(find(&mut parent, v as u32));
-        }
+    for &(_, _, f) in &directed {
+        comp_roots.insert(find(&mut face_parent, f));
     }
     // non-manifold vertices: count fans through the faces around each vertex
     let non_manifold_vertices = count_non_manifold_vertices(soup, nv);
@@ -234,6 +251,8 @@ pub fn inspect(soup: &Soup) -> MeshInfo {
         boundary_edges,
         boundary_loops: loop_roots.len(),
         non_manifold_edges,
+        non_manifold_edge_incidences: nm_incidences,
+        duplicate_faces,
         non_manifold_vertices,
         inconsistently_oriented_edges: inconsistent,
         components: comp_roots.len(),

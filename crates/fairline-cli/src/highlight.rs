@@ -1,0 +1,311 @@
+//! `fairline highlight`: highlight lines of a linear light array (Yong et
+//! al. §2) or of concentric circular lights (Nishiyama et al. §2) on a
+//! triangle mesh, written as JSON or OBJ polylines.
+
+use crate::common::{Report, bad_input, check_output, parse_list, parse_vec3, read_json, spinner};
+use anyhow::Result;
+use fairline::highlight::{
+    CircularLight, CircularLights, HighlightBands, HighlightError, HighlightLine, HighlightLines,
+    HighlightModel, HighlightOptions, LightArray, circular_highlight_bands,
+    circular_highlight_lines,
+};
+use fairline::mesh::FaceId;
+use fairline::{SurfaceMesh, Vec3};
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+
+/// Options describing the linear light array (shared with `detect`).
+#[derive(clap::Args, Debug, Clone)]
+pub struct LightArgs {
+    /// Light direction H (made orthogonal to the plane normal).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    pub direction: Option<Vec3>,
+    /// Normal Z of the light plane (default: the view direction, +z).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    pub plane_normal: Option<Vec3>,
+    /// Point A0 on light 0 (default: one bounding-box diagonal above the
+    /// centre along the plane normal).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    pub plane_point: Option<Vec3>,
+    /// Spacing s between lights (default: about 20 lights across the mesh).
+    #[arg(long)]
+    pub spacing: Option<f64>,
+    /// Light array JSON {"plane_point","plane_normal","direction","spacing"}.
+    #[arg(long, value_name = "FILE.json", conflicts_with_all = ["direction", "plane_normal", "plane_point", "spacing"])]
+    pub lights: Option<PathBuf>,
+    /// Smallest |Z·N| at which a vertex gets a highlight distance.
+    #[arg(long, default_value_t = HighlightOptions::default().min_normal_cos)]
+    pub min_normal_cos: f64,
+}
+
+impl LightArgs {
+    /// The light array: from the file, or the bounding-box defaults with
+    /// the given fields overridden.
+    pub fn light_array(&self, mesh: &SurfaceMesh) -> Result<LightArray> {
+        if let Some(path) = &self.lights {
+            return read_json::<LightArray>(path);
+        }
+        let (lo, hi) = fairline::mesh::bounding_box(mesh.positions())
+            .ok_or_else(|| bad_input("the mesh has no vertices"))?;
+        let base = LightArray::default_for(lo, hi, self.plane_normal);
+        LightArray::new(
+            self.plane_point.unwrap_or(base.plane_point()),
+            self.plane_normal.unwrap_or(base.plane_normal()),
+            self.direction.unwrap_or(base.direction()),
+            self.spacing.unwrap_or(base.spacing()),
+        )
+        .map_err(to_input_error)
+    }
+
+    /// Model options.
+    pub fn options(&self) -> HighlightOptions {
+        HighlightOptions::default().min_normal_cos(self.min_normal_cos)
+    }
+}
+
+/// Maps library errors about the input (bad light, bad option, bad mesh)
+/// to exit status 2.
+pub fn to_input_error(e: HighlightError) -> anyhow::Error {
+    bad_input(e.to_string())
+}
+
+/// Reads a mesh and triangulates polygons; also returns, for each
+/// triangle, the input face it came from (None when nothing changed).
+pub fn read_triangles(path: &Path) -> Result<(SurfaceMesh, Option<Vec<FaceId>>)> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    if ext == "json" || ext == "igs" || ext == "iges" {
+        return Err(bad_input(format!(
+            "{}: B-spline surfaces are not handled by this command yet; give a mesh (.obj .ply .off .stl)",
+            path.display()
+        )));
+    }
+    let mesh = fairline::io::read_mesh(path)?;
+    if mesh.is_triangle_mesh() {
+        Ok((mesh, None))
+    } else {
+        let t = fairline::mesh::triangulate(&mesh);
+        Ok((t.mesh, Some(t.source_face)))
+    }
+}
+
+/// Highlight lines of a triangle mesh (polygons are triangulated first)
+/// under a linear light array (Yong et al. Algorithm 1, Eq. (1) and (4) as
+/// corrected in DESIGN.md §3), or, with --circle-center/--circle-axis/--radii,
+/// under concentric circular lights (Nishiyama et al. Eq. (2.18), zero level
+/// per radius). Lights default to a plane one bounding-box diagonal above the
+/// mesh along +z with about 20 lights across. --band ρ adds the band
+/// boundaries at ±ρ. Output JSON {"lines":[{"index":m,"closed":b,"points":[[x,y,z],..]}]}
+/// (circular lines also carry "radius"; bands under "bands"), or OBJ `l`
+/// polylines (groups lines, band_lower, band_upper).
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Examples:\n  fairline highlight spot.ply -o spot-lines.json\n  fairline highlight panel.obj --direction 0,1,0 --plane-normal 0,0,1 --plane-point 0,0,5 --spacing 0.1 -o lines.obj\n  fairline highlight panel.obj --circle-center 0,0,5 --circle-axis 0,0,1 --radii 1,2,3 --band 0.05 -o circles.json"
+)]
+pub struct Args {
+    /// Input triangle (or polygon) mesh.
+    pub mesh: PathBuf,
+    #[command(flatten)]
+    pub light: LightArgs,
+    /// Centre of the circular lights.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z", requires_all = ["circle_axis", "radii"])]
+    pub circle_center: Option<Vec3>,
+    /// Axis of the circular lights.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z", requires_all = ["circle_center", "radii"])]
+    pub circle_axis: Option<Vec3>,
+    /// Radii of the circular lights, comma separated.
+    #[arg(long, value_parser = parse_radii, allow_hyphen_values = true, value_name = "R1,R2,..", requires_all = ["circle_center", "circle_axis"])]
+    pub radii: Option<Radii>,
+    /// Also compute highlight bands of this radius (mesh units).
+    #[arg(long, value_name = "RHO")]
+    pub band: Option<f64>,
+    /// Output polylines (.json or .obj).
+    #[arg(short, long, value_name = "LINES.json|.obj")]
+    pub output: PathBuf,
+    /// Write a JSON report.
+    #[arg(long, value_name = "FILE.json")]
+    pub report: Option<PathBuf>,
+}
+
+/// A comma-separated list of radii.
+#[derive(Clone, Debug)]
+pub struct Radii(pub Vec<f64>);
+
+fn parse_radii(s: &str) -> Result<Radii, String> {
+    parse_list(s).map(Radii)
+}
+
+/// Output format of polylines.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum LinesFormat {
+    /// JSON of DESIGN.md §4.
+    Json,
+    /// Wavefront OBJ `l` elements.
+    Obj,
+}
+
+/// The format of `path` from its extension.
+pub fn lines_format(path: &Path) -> Result<LinesFormat> {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
+        .as_str()
+    {
+        "json" => Ok(LinesFormat::Json),
+        "obj" => Ok(LinesFormat::Obj),
+        _ => Err(bad_input(format!(
+            "{}: highlight lines are written as .json or .obj",
+            path.display()
+        ))),
+    }
+}
+
+fn line_json(l: &HighlightLine, radii: Option<&[f64]>) -> Value {
+    let pts: Vec<[f64; 3]> = l.points.iter().map(|p| p.to_array()).collect();
+    let mut v = json!({"index": l.index, "closed": l.closed, "points": pts});
+    if let Some(r) = radii.and_then(|r| r.get(l.index as usize)) {
+        v["radius"] = json!(r);
+    }
+    v
+}
+
+fn lines_json(lines: &HighlightLines, radii: Option<&[f64]>) -> Vec<Value> {
+    lines.lines.iter().map(|l| line_json(l, radii)).collect()
+}
+
+/// Writes lines (and bands) as JSON or OBJ, atomically.
+pub fn write_lines(
+    path: &Path,
+    lines: &HighlightLines,
+    bands: Option<&HighlightBands>,
+    radii: Option<&[f64]>,
+) -> Result<()> {
+    match lines_format(path)? {
+        LinesFormat::Json => {
+            let mut v = json!({"lines": lines_json(lines, radii)});
+            if let Some(b) = bands {
+                v["bands"] = json!({
+                    "radius": b.radius,
+                    "lower": lines_json(&b.lower, radii),
+                    "upper": lines_json(&b.upper, radii),
+                });
+            }
+            crate::common::write_json(path, &v)
+        }
+        LinesFormat::Obj => {
+            let mut groups: Vec<(&str, &HighlightLines)> = vec![("lines", lines)];
+            if let Some(b) = bands {
+                groups.push(("band_lower", &b.lower));
+                groups.push(("band_upper", &b.upper));
+            }
+            let mut text = String::from("# fairline highlight lines\n");
+            let mut next = 1usize;
+            for (name, ls) in groups {
+                text.push_str(&format!("g {name}\n"));
+                for l in &ls.lines {
+                    let first = next;
+                    for p in &l.points {
+                        text.push_str(&format!("v {} {} {}\n", p.x, p.y, p.z));
+                    }
+                    text.push('l');
+                    for k in 0..l.points.len() {
+                        text.push_str(&format!(" {}", first + k));
+                    }
+                    if l.closed {
+                        text.push_str(&format!(" {first}"));
+                    }
+                    text.push('\n');
+                    next += l.points.len();
+                }
+            }
+            fairline::io::atomic_write(path, |w| {
+                use std::io::Write;
+                w.write_all(text.as_bytes())
+            })?;
+            Ok(())
+        }
+    }
+}
+
+/// Summary statistics of a line set for reports.
+pub fn line_summary(lines: &HighlightLines) -> Value {
+    json!({
+        "lines": lines.lines.len(),
+        "closed_lines": lines.lines.iter().filter(|l| l.closed).count(),
+        "nodes": lines.node_count(),
+    })
+}
+
+pub fn run(args: Args) -> Result<()> {
+    lines_format(&args.output)?;
+    check_output(&args.mesh, &args.output)?;
+    if let Some(b) = args.band
+        && !(b > 0.0 && b.is_finite())
+    {
+        return Err(bad_input(format!(
+            "--band must be a positive number, got {b}"
+        )));
+    }
+    let (mesh, _) = read_triangles(&args.mesh)?;
+    let mut report = Report::new("highlight");
+    report.set("vertices", mesh.vertex_count());
+    report.set("faces", mesh.face_count());
+    let bar = spinner("highlight lines");
+    let (lines, bands, radii) = if let (Some(c), Some(t), Some(Radii(radii))) =
+        (args.circle_center, args.circle_axis, args.radii.clone())
+    {
+        let spec = CircularLights {
+            center: c.to_array(),
+            axis: t.to_array(),
+            radii: radii.clone(),
+        };
+        let lights: Vec<CircularLight> = spec.lights().map_err(to_input_error)?;
+        let (lines, bands) = report
+            .time(|| -> Result<_, HighlightError> {
+                let lines = circular_highlight_lines(&mesh, &lights)?;
+                let bands = match args.band {
+                    Some(rho) => Some(circular_highlight_bands(&mesh, &lights, rho)?),
+                    None => None,
+                };
+                Ok((lines, bands))
+            })
+            .map_err(to_input_error)?;
+        report.set("light", json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii}));
+        (lines, bands, Some(radii))
+    } else {
+        let light = args.light.light_array(&mesh)?;
+        let opts = args.light.options();
+        let (lines, bands) = report
+            .time(|| -> Result<_, HighlightError> {
+                let model = HighlightModel::new(&mesh, light, opts)?;
+                let lines = model.lines(&mesh);
+                let bands = match args.band {
+                    Some(rho) => Some(model.bands(&mesh, rho)?),
+                    None => None,
+                };
+                Ok((lines, bands))
+            })
+            .map_err(to_input_error)?;
+        report.set("light", json!({"kind": "linear", "array": light}));
+        (lines, bands, None)
+    };
+    bar.finish_and_clear();
+    write_lines(&args.output, &lines, bands.as_ref(), radii.as_deref())?;
+    report.set("summary", line_summary(&lines));
+    report.set("lines", lines.lines.len());
+    report.set(
+        "closed_lines",
+        lines.lines.iter().filter(|l| l.closed).count(),
+    );
+    report.set("nodes", lines.node_count());
+    if let Some(b) = &bands {
+        report.set("band", json!({"radius": b.radius, "lower_lines": b.lower.lines.len(), "upper_lines": b.upper.lines.len()}));
+    }
+    report.write(args.report.as_deref())?;
+    Ok(())
+}

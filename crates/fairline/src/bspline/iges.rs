@@ -1,0 +1,1100 @@
+//! IGES import of rational B-spline surfaces (entity 128).
+//!
+//! Reads the fixed-format ASCII IGES file (IGES 5.3 §2): 80-column records
+//! with the section letter (`S`, `G`, `D`, `P`, `T`) in column 73. The Global
+//! section's first two fields set the parameter and record delimiters
+//! (default `,` and `;`); Hollerith strings `nH…` may contain delimiters and
+//! span records; parameter data occupy columns 1–64 of the `P` records and may
+//! continue over several of them; directory entries come in pairs of `D`
+//! records of ten 8-column fields. Reals may use `D` exponents (`1.0D+01`) or
+//! omit digits (`1.`, `1.E-3`).
+//!
+//! Every entity 128 becomes a [`BSplineSurface`] (Piegl & Tiller's NURBS
+//! form; IGES 5.3 §4.24): `K1, K2, M1, M2, PROP1..5`, knots S and T, weights,
+//! control points and the parameter range `U0 U1 V0 V1`. A polynomial surface
+//! (`PROP3 = 1`) is built without weights (they are still read and checked to
+//! be numbers). A transformation matrix (entity 124, chained through its own
+//! directory entry) referenced by directory field 7 is applied to the control
+//! points. Trimming (entities 143 and 144) is ignored, but the surfaces it
+//! refers to are counted and flagged.
+
+use std::path::{Path, PathBuf};
+
+use glam::{DAffine3, DMat3};
+use thiserror::Error;
+
+use super::{BSplineError, BSplineSurface};
+use crate::Vec3;
+
+/// Why an IGES file could not be imported; names the file line and entity.
+#[derive(Debug, Error)]
+pub enum IgesError {
+    /// The file could not be read.
+    #[error("cannot read {}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The record structure is broken.
+    #[error("line {line}: {message}")]
+    Format {
+        /// 1-based line number in the file.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// An entity's directory entry or parameter data is malformed.
+    #[error("line {line}: entity {entity_type} (directory entry {entity}): {message}")]
+    Entity {
+        /// Directory entry sequence number (odd, 1-based).
+        entity: usize,
+        /// Entity type number.
+        entity_type: i64,
+        /// 1-based line number in the file.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// An entity 128 does not make a valid B-spline surface.
+    #[error("line {line}: entity 128 (directory entry {entity}): {source}")]
+    Surface {
+        /// Directory entry sequence number.
+        entity: usize,
+        /// 1-based line number of its parameter data.
+        line: usize,
+        /// The validation error.
+        source: BSplineError,
+    },
+}
+
+/// One imported entity 128.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IgesSurface {
+    /// The surface (transformation already applied).
+    pub surface: BSplineSurface,
+    /// Directory entry sequence number of the entity (odd, 1-based).
+    pub directory_entry: usize,
+    /// Form number (0 = free form, 1 plane, 2 cylinder, …).
+    pub form: i64,
+    /// `PROP3 == 0`: declared rational (weights kept).
+    pub rational: bool,
+    /// `PROP1, PROP2`: closed in u, closed in v.
+    pub closed: [bool; 2],
+    /// `PROP4, PROP5`: periodic in u, periodic in v.
+    pub periodic: [bool; 2],
+    /// `U0, U1, V0, V1`: the parameter range the file declares.
+    pub parameter_range: [f64; 4],
+    /// A transformation matrix (entity 124) was applied.
+    pub transformed: bool,
+    /// Referenced by a trimmed (144) or bounded (143) surface entity.
+    pub trimmed: bool,
+}
+
+/// The result of [`read_iges`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct IgesImport {
+    /// Every entity 128, in directory order.
+    pub surfaces: Vec<IgesSurface>,
+    /// How many of them are trimmed (their trimming was ignored).
+    pub trimmed: usize,
+    /// Unit name from the Global section (field 15), if given.
+    pub units: Option<String>,
+}
+
+/// Reads every rational B-spline surface (entity 128) of an ASCII IGES file.
+pub fn read_iges(path: impl AsRef<Path>) -> Result<IgesImport, IgesError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|source| IgesError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_iges_bytes(&bytes)
+}
+
+/// Parses IGES text; see [`read_iges`].
+pub fn parse_iges(text: &str) -> Result<IgesImport, IgesError> {
+    parse_iges_bytes(text.as_bytes())
+}
+
+/// One parameter of a free-format IGES record.
+#[derive(Clone, Debug, PartialEq)]
+enum Param {
+    /// Defaulted (nothing between two delimiters).
+    Empty,
+    /// A number or other unquoted text, blanks removed.
+    Text(String),
+    /// A Hollerith string `nH…`.
+    Hollerith(Vec<u8>),
+}
+
+/// A parameter and the byte offset where it starts.
+#[derive(Clone, Debug, PartialEq)]
+struct Token {
+    start: usize,
+    param: Param,
+}
+
+/// Splits free-format parameter data into parameters (IGES 5.3 §2.2.3).
+/// Stops at the record delimiter; returns whether one was found. Errors carry
+/// the byte offset of the problem.
+fn tokenize(data: &[u8], pd: u8, rd: u8) -> Result<(Vec<Token>, bool), (usize, String)> {
+    let len = data.len();
+    let mut tokens = Vec::new();
+    let mut pos = 0;
+    loop {
+        let mut q = pos;
+        while q < len && data[q] == b' ' {
+            q += 1;
+        }
+        let mut d = q;
+        while d < len && data[d].is_ascii_digit() {
+            d += 1;
+        }
+        if d > q && d < len && (data[d] == b'H' || data[d] == b'h') {
+            let n: usize = std::str::from_utf8(&data[q..d])
+                .ok()
+                .and_then(|s| s.parse().ok())
+                .ok_or((q, "bad Hollerith length".to_string()))?;
+            let start = d + 1;
+            let end = start.checked_add(n).filter(|&e| e <= len).ok_or((
+                q,
+                format!("Hollerith string of {n} characters runs past the end"),
+            ))?;
+            tokens.push(Token {
+                start: q,
+                param: Param::Hollerith(data[start..end].to_vec()),
+            });
+            pos = end;
+            while pos < len && data[pos] == b' ' {
+                pos += 1;
+            }
+            if pos >= len {
+                return Ok((tokens, false));
+            }
+            if data[pos] == rd {
+                return Ok((tokens, true));
+            }
+            if data[pos] != pd {
+                return Err((pos, "expected a delimiter after a Hollerith string".into()));
+            }
+            pos += 1;
+        } else {
+            let mut e = q;
+            while e < len && data[e] != pd && data[e] != rd {
+                e += 1;
+            }
+            let text: String = data[q..e]
+                .iter()
+                .filter(|&&c| c != b' ')
+                .map(|&c| c as char)
+                .collect();
+            let at_end = e >= len;
+            if !at_end || !text.is_empty() {
+                tokens.push(Token {
+                    start: q,
+                    param: if text.is_empty() {
+                        Param::Empty
+                    } else {
+                        Param::Text(text)
+                    },
+                });
+            }
+            if at_end {
+                return Ok((tokens, false));
+            }
+            if data[e] == rd {
+                return Ok((tokens, true));
+            }
+            pos = e + 1;
+        }
+    }
+}
+
+/// Parses an IGES real: `1.`, `.5`, `1.E-3`, `1.0D+01`, `-2`. Finite only.
+fn parse_real(s: &str) -> Option<f64> {
+    let t: String = s
+        .chars()
+        .map(|c| if c == 'D' || c == 'd' { 'E' } else { c })
+        .collect();
+    t.parse::<f64>().ok().filter(|x| x.is_finite())
+}
+
+/// Parses an IGES integer; accepts an integral real such as `3.`.
+fn parse_int(s: &str) -> Option<i64> {
+    s.parse::<i64>().ok().or_else(|| {
+        parse_real(s)
+            .filter(|x| x.fract() == 0.0 && x.abs() < 9.0e15)
+            .map(|x| x as i64)
+    })
+}
+
+/// Reads the parameter and record delimiters from the start of the Global
+/// section (fields 1 and 2: `1Hx` or defaulted to `,` and `;`).
+fn global_delimiters(g: &[u8]) -> Result<(u8, u8), String> {
+    let mut pos = 0;
+    let skip = |pos: &mut usize| {
+        while *pos < g.len() && g[*pos] == b' ' {
+            *pos += 1;
+        }
+    };
+    let hollerith_char = |pos: usize| -> Option<u8> {
+        (g.len() > pos + 2 && g[pos] == b'1' && (g[pos + 1] == b'H' || g[pos + 1] == b'h'))
+            .then(|| g[pos + 2])
+    };
+    skip(&mut pos);
+    let mut pd = b',';
+    let mut rd = b';';
+    if pos >= g.len() {
+        return Ok((pd, rd));
+    }
+    if let Some(c) = hollerith_char(pos) {
+        pd = c;
+        pos += 3;
+        skip(&mut pos);
+    }
+    match g.get(pos) {
+        None => return Ok((pd, rd)),
+        Some(&c) if c == pd => pos += 1,
+        Some(&c) if c == rd => return Ok((pd, rd)),
+        Some(&c) => {
+            return Err(format!(
+                "Global section: expected a delimiter after field 1, found `{}`",
+                c as char
+            ));
+        }
+    }
+    skip(&mut pos);
+    if let Some(c) = hollerith_char(pos) {
+        rd = c;
+    }
+    Ok((pd, rd))
+}
+
+/// One record: 1-based file line and its bytes.
+struct Record<'a> {
+    line: usize,
+    bytes: &'a [u8],
+}
+
+/// A directory entry (two D records).
+struct DirEntry {
+    entity_type: i64,
+    param_start: i64,
+    transform: i64,
+    param_lines: i64,
+    form: i64,
+    line: usize,
+}
+
+struct Iges<'a> {
+    dir: Vec<DirEntry>,
+    params: Vec<Record<'a>>,
+    pd: u8,
+    rd: u8,
+}
+
+/// Field `k` (1-based, 8 columns each) of a D record; blank is 0.
+fn d_field(rec: &Record<'_>, k: usize) -> Result<i64, IgesError> {
+    let raw = &rec.bytes[(k - 1) * 8..k * 8];
+    let s: String = raw
+        .iter()
+        .filter(|&&c| c != b' ')
+        .map(|&c| c as char)
+        .collect();
+    if s.is_empty() {
+        return Ok(0);
+    }
+    s.parse::<i64>().map_err(|_| IgesError::Format {
+        line: rec.line,
+        message: format!("directory field {k} is not an integer: `{s}`"),
+    })
+}
+
+impl<'a> Iges<'a> {
+    /// Directory entry index for a DE pointer (odd sequence number).
+    fn entry(&self, de: i64) -> Option<usize> {
+        (de > 0 && de % 2 == 1)
+            .then(|| ((de - 1) / 2) as usize)
+            .filter(|&k| k < self.dir.len())
+    }
+
+    fn entity_error(&self, k: usize, line: usize, message: String) -> IgesError {
+        IgesError::Entity {
+            entity: 2 * k + 1,
+            entity_type: self.dir[k].entity_type,
+            line,
+            message,
+        }
+    }
+
+    /// The parameters of directory entry `k` and the file line of each.
+    fn parameters(&self, k: usize) -> Result<Vec<(Param, usize)>, IgesError> {
+        let e = &self.dir[k];
+        let first = e.param_start - 1;
+        if first < 0 || first as usize >= self.params.len() {
+            return Err(self.entity_error(
+                k,
+                e.line,
+                format!(
+                    "parameter data pointer {} lies outside the P section ({} records)",
+                    e.param_start,
+                    self.params.len()
+                ),
+            ));
+        }
+        // The records of this entity: those whose back-pointer (columns
+        // 66–72) names it; if the writer left no usable back-pointers, the
+        // directory's line count (field 14).
+        let de = (2 * k + 1) as i64;
+        let back = |r: &Record<'_>| -> Option<i64> {
+            std::str::from_utf8(&r.bytes[64..72])
+                .ok()?
+                .trim()
+                .parse()
+                .ok()
+        };
+        let first = first as usize;
+        let by_pointer = self.params[first..]
+            .iter()
+            .take_while(|r| back(r) == Some(de))
+            .count();
+        let count = if by_pointer > 0 {
+            by_pointer as i64
+        } else {
+            e.param_lines.max(1)
+        };
+        let first = first as i64;
+        if (first + count) as usize > self.params.len() {
+            return Err(self.entity_error(
+                k,
+                e.line,
+                format!(
+                    "parameter data at P {}..{} lies outside the P section ({} records)",
+                    e.param_start,
+                    e.param_start + count - 1,
+                    self.params.len()
+                ),
+            ));
+        }
+        let recs = &self.params[first as usize..(first + count) as usize];
+        let mut data = Vec::with_capacity(64 * recs.len());
+        for r in recs {
+            data.extend_from_slice(&r.bytes[..64]);
+        }
+        let (tokens, terminated) = tokenize(&data, self.pd, self.rd).map_err(|(at, msg)| {
+            self.entity_error(k, recs[(at / 64).min(recs.len() - 1)].line, msg)
+        })?;
+        if !terminated {
+            return Err(self.entity_error(
+                k,
+                recs[recs.len() - 1].line,
+                format!(
+                    "parameter data do not end with the record delimiter `{}`",
+                    self.rd as char
+                ),
+            ));
+        }
+        Ok(tokens
+            .into_iter()
+            .map(|t| (t.param, recs[(t.start / 64).min(recs.len() - 1)].line))
+            .collect())
+    }
+
+    /// The affine map of transformation entity (124) `k`, composed with the
+    /// matrices it references in turn (IGES 5.3 §4.21).
+    fn transform(&self, k: usize, depth: usize) -> Result<DAffine3, IgesError> {
+        let e = &self.dir[k];
+        if e.entity_type != 124 {
+            return Err(self.entity_error(
+                k,
+                e.line,
+                "referenced as a transformation matrix but is not entity 124".into(),
+            ));
+        }
+        if depth > 64 {
+            return Err(self.entity_error(
+                k,
+                e.line,
+                "transformation matrices form a cycle".into(),
+            ));
+        }
+        let p = self.parameters(k)?;
+        let mut r = [0.0; 12];
+        for (n, v) in r.iter_mut().enumerate() {
+            *v = real(self, k, &p, n + 1, e.line)?;
+        }
+        let m = DAffine3::from_mat3_translation(
+            DMat3::from_cols(
+                Vec3::new(r[0], r[4], r[8]),
+                Vec3::new(r[1], r[5], r[9]),
+                Vec3::new(r[2], r[6], r[10]),
+            ),
+            Vec3::new(r[3], r[7], r[11]),
+        );
+        if e.transform != 0 {
+            let outer = self.entry(e.transform).ok_or_else(|| {
+                self.entity_error(
+                    k,
+                    e.line,
+                    format!(
+                        "transformation pointer {} is not a directory entry",
+                        e.transform
+                    ),
+                )
+            })?;
+            Ok(self.transform(outer, depth + 1)? * m)
+        } else {
+            Ok(m)
+        }
+    }
+}
+
+fn text_of(p: &[(Param, usize)], n: usize) -> Option<&str> {
+    match p.get(n) {
+        Some((Param::Text(s), _)) => Some(s),
+        _ => None,
+    }
+}
+
+fn line_of(p: &[(Param, usize)], n: usize, fallback: usize) -> usize {
+    p.get(n).or(p.last()).map_or(fallback, |t| t.1)
+}
+
+fn real(
+    g: &Iges<'_>,
+    k: usize,
+    p: &[(Param, usize)],
+    n: usize,
+    line: usize,
+) -> Result<f64, IgesError> {
+    match p.get(n) {
+        Some((Param::Empty, _)) => Ok(0.0),
+        _ => text_of(p, n).and_then(parse_real).ok_or_else(|| {
+            g.entity_error(
+                k,
+                line_of(p, n, line),
+                format!(
+                    "parameter {n}: expected a real number, found {}",
+                    describe(p.get(n))
+                ),
+            )
+        }),
+    }
+}
+
+fn int(
+    g: &Iges<'_>,
+    k: usize,
+    p: &[(Param, usize)],
+    n: usize,
+    line: usize,
+) -> Result<i64, IgesError> {
+    match p.get(n) {
+        Some((Param::Empty, _)) => Ok(0),
+        _ => text_of(p, n).and_then(parse_int).ok_or_else(|| {
+            g.entity_error(
+                k,
+                line_of(p, n, line),
+                format!(
+                    "parameter {n}: expected an integer, found {}",
+                    describe(p.get(n))
+                ),
+            )
+        }),
+    }
+}
+
+fn describe(p: Option<&(Param, usize)>) -> String {
+    match p {
+        None => "the end of the parameters".into(),
+        Some((Param::Empty, _)) => "nothing".into(),
+        Some((Param::Text(s), _)) => format!("`{s}`"),
+        Some((Param::Hollerith(h), _)) => format!("the string `{}`", String::from_utf8_lossy(h)),
+    }
+}
+
+fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
+    let mut global = Vec::new();
+    let mut dir_recs = Vec::new();
+    let mut params = Vec::new();
+    for (n, raw) in bytes.split(|&c| c == b'\n').enumerate() {
+        let line = n + 1;
+        let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
+        if raw.iter().all(|&c| c == b' ' || c == b'\x1a') {
+            continue;
+        }
+        if raw.len() < 73 {
+            return Err(IgesError::Format {
+                line,
+                message: format!(
+                    "record has {} columns; fixed-format IGES needs the section letter in column 73",
+                    raw.len()
+                ),
+            });
+        }
+        let rec = Record { line, bytes: raw };
+        match raw[72] {
+            b'S' | b'T' => {}
+            b'G' => global.extend_from_slice(&raw[..72]),
+            b'D' => dir_recs.push(rec),
+            b'P' => params.push(rec),
+            b'C' => {
+                return Err(IgesError::Format {
+                    line,
+                    message: "compressed ASCII IGES is not supported".into(),
+                });
+            }
+            c => {
+                return Err(IgesError::Format {
+                    line,
+                    message: format!(
+                        "unknown section letter `{}` in column 73 (binary IGES is not supported)",
+                        c as char
+                    ),
+                });
+            }
+        }
+    }
+    let (pd, rd) =
+        global_delimiters(&global).map_err(|message| IgesError::Format { line: 1, message })?;
+    let units =
+        tokenize(&global, pd, rd)
+            .ok()
+            .and_then(|(t, _)| match t.get(14).map(|t| &t.param) {
+                Some(Param::Hollerith(h)) => Some(String::from_utf8_lossy(h).into_owned()),
+                _ => None,
+            });
+    if dir_recs.len() % 2 != 0 {
+        return Err(IgesError::Format {
+            line: dir_recs.last().map_or(0, |r| r.line),
+            message: "the directory section has an odd number of records".into(),
+        });
+    }
+    let mut dir = Vec::with_capacity(dir_recs.len() / 2);
+    for pair in dir_recs.chunks(2) {
+        let (a, b) = (&pair[0], &pair[1]);
+        dir.push(DirEntry {
+            entity_type: d_field(a, 1)?,
+            param_start: d_field(a, 2)?,
+            transform: d_field(a, 7)?,
+            param_lines: d_field(b, 4)?,
+            form: d_field(b, 5)?,
+            line: a.line,
+        });
+    }
+    let g = Iges {
+        dir,
+        params,
+        pd,
+        rd,
+    };
+    // Surfaces referenced by trimmed (144) and bounded (143) surfaces.
+    let mut trimmed = vec![false; g.dir.len()];
+    for k in 0..g.dir.len() {
+        let slot = match g.dir[k].entity_type {
+            144 => 1,
+            143 => 2,
+            _ => continue,
+        };
+        let Ok(p) = g.parameters(k) else { continue };
+        if let Some(t) = text_of(&p, slot)
+            .and_then(parse_int)
+            .and_then(|de| g.entry(de))
+        {
+            trimmed[t] = true;
+        }
+    }
+    let mut out = IgesImport {
+        units,
+        ..IgesImport::default()
+    };
+    for (k, &is_trimmed) in trimmed.iter().enumerate() {
+        if g.dir[k].entity_type != 128 {
+            continue;
+        }
+        let s = read_entity_128(&g, k, is_trimmed)?;
+        out.trimmed += usize::from(s.trimmed);
+        out.surfaces.push(s);
+    }
+    Ok(out)
+}
+
+/// Entity 128, rational B-spline surface (IGES 5.3 §4.24).
+fn read_entity_128(g: &Iges<'_>, k: usize, trimmed: bool) -> Result<IgesSurface, IgesError> {
+    let e = &g.dir[k];
+    let p = g.parameters(k)?;
+    let line = p.first().map_or(e.line, |t| t.1);
+    let nonneg = |n: usize| -> Result<usize, IgesError> {
+        let v = int(g, k, &p, n, line)?;
+        usize::try_from(v).map_err(|_| {
+            g.entity_error(
+                k,
+                line_of(&p, n, line),
+                format!("parameter {n} is negative ({v})"),
+            )
+        })
+    };
+    let (k1, k2, m1, m2) = (nonneg(1)?, nonneg(2)?, nonneg(3)?, nonneg(4)?);
+    let mut prop = [0i64; 5];
+    for (n, v) in prop.iter_mut().enumerate() {
+        *v = int(g, k, &p, 5 + n, line)?;
+    }
+    let (count_u, count_v) = (k1 + 1, k2 + 1);
+    let (nk_u, nk_v) = (count_u + m1 + 1, count_v + m2 + 1);
+    let c = count_u.saturating_mul(count_v);
+    let needed = 10usize
+        .saturating_add(nk_u)
+        .saturating_add(nk_v)
+        .saturating_add(c.saturating_mul(4))
+        .saturating_add(4);
+    if p.len() < needed {
+        return Err(g.entity_error(
+            k,
+            line_of(&p, p.len(), line),
+            format!(
+                "{} parameters, but K1={k1}, K2={k2}, M1={m1}, M2={m2} need {needed}",
+                p.len()
+            ),
+        ));
+    }
+    let reals = |from: usize, n: usize| -> Result<Vec<f64>, IgesError> {
+        (from..from + n).map(|i| real(g, k, &p, i, line)).collect()
+    };
+    let mut at = 10;
+    let knots_u = reals(at, nk_u)?;
+    at += nk_u;
+    let knots_v = reals(at, nk_v)?;
+    at += nk_v;
+    let w_file = reals(at, c)?;
+    at += c;
+    let xyz = reals(at, 3 * c)?;
+    at += 3 * c;
+    let range = reals(at, 4)?;
+    let transform = if e.transform != 0 {
+        let t = g.entry(e.transform).ok_or_else(|| {
+            g.entity_error(
+                k,
+                e.line,
+                format!(
+                    "transformation pointer {} is not a directory entry",
+                    e.transform
+                ),
+            )
+        })?;
+        Some(g.transform(t, 0)?)
+    } else {
+        None
+    };
+    // IGES orders control points and weights with the u index fastest.
+    let mut points = vec![Vec3::ZERO; c];
+    let mut weights = vec![0.0; c];
+    for j in 0..count_v {
+        for i in 0..count_u {
+            let f = j * count_u + i;
+            let mut q = Vec3::new(xyz[3 * f], xyz[3 * f + 1], xyz[3 * f + 2]);
+            if let Some(t) = &transform {
+                q = t.transform_point3(q);
+            }
+            points[i * count_v + j] = q;
+            weights[i * count_v + j] = w_file[f];
+        }
+    }
+    let rational = prop[2] == 0;
+    let surface = BSplineSurface::from_flat(
+        m1,
+        m2,
+        knots_u,
+        knots_v,
+        [count_u, count_v],
+        points,
+        rational.then_some(weights),
+    )
+    .map_err(|source| IgesError::Surface {
+        entity: 2 * k + 1,
+        line,
+        source,
+    })?;
+    Ok(IgesSurface {
+        surface,
+        directory_entry: 2 * k + 1,
+        form: e.form,
+        rational,
+        closed: [prop[0] == 1, prop[1] == 1],
+        periodic: [prop[3] == 1, prop[4] == 1],
+        parameter_range: [range[0], range[1], range[2], range[3]],
+        transformed: transform.is_some(),
+        trimmed,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Builds a fixed-format IGES file from a Global string and entities
+    /// `(type, transform pointer, form, parameter data)`; parameter data are
+    /// cut into records of exactly 64 columns (so parameters and Hollerith
+    /// strings continue over records).
+    fn iges_file(global: &str, entities: &[(i64, i64, i64, &str)]) -> String {
+        let mut s = String::new();
+        s.push_str(&format!("{:<72}S{:>7}\n", "hand-made test file", 1));
+        let g: Vec<char> = global.chars().collect();
+        for (k, chunk) in g.chunks(72).enumerate() {
+            let c: String = chunk.iter().collect();
+            s.push_str(&format!("{c:<72}G{:>7}\n", k + 1));
+        }
+        let mut d = String::new();
+        let mut p = String::new();
+        let mut pseq = 1;
+        for (k, &(ty, tr, form, data)) in entities.iter().enumerate() {
+            let de = 2 * k + 1;
+            let chars: Vec<char> = data.chars().collect();
+            let chunks: Vec<String> = chars.chunks(64).map(|c| c.iter().collect()).collect();
+            d.push_str(&format!(
+                "{ty:>8}{pseq:>8}{:>8}{:>8}{:>8}{:>8}{tr:>8}{:>8}{:>8}D{de:>7}\n",
+                0, 0, 0, 0, 0, "00000000"
+            ));
+            d.push_str(&format!(
+                "{ty:>8}{:>8}{:>8}{:>8}{form:>8}{:>8}{:>8}{:>8}{:>8}D{:>7}\n",
+                0,
+                0,
+                chunks.len(),
+                "",
+                "",
+                "",
+                0,
+                de + 1
+            ));
+            for c in chunks {
+                p.push_str(&format!("{c:<64} {de:>7}P{pseq:>7}\n"));
+                pseq += 1;
+            }
+        }
+        s.push_str(&d);
+        s.push_str(&p);
+        s.push_str(&format!(
+            "{:<72}T{:>7}\n",
+            "S      1G      1D      6P      9", 1
+        ));
+        s
+    }
+
+    const GLOBAL: &str = "1H,,1H;,4Htest,8Hfile.igs,3Hgen,3Hver,32,308,15,308,15,4Htest,\
+                          1.,2,2HMM,1,0.1,15H20240101.000000,1E-8,100.,1Ha,1Hb,11,0,\
+                          15H20240101.000000;";
+
+    fn texts(tokens: &[Token]) -> Vec<Param> {
+        tokens.iter().map(|t| t.param.clone()).collect()
+    }
+
+    #[test]
+    fn bspline_iges_tokenizer_handles_hollerith_blanks_and_defaults() {
+        let (t, end) = tokenize(b"3Ha,b,1.5D2,,7;rest", b',', b';').unwrap();
+        assert!(end);
+        assert_eq!(
+            texts(&t),
+            vec![
+                Param::Hollerith(b"a,b".to_vec()),
+                Param::Text("1.5D2".into()),
+                Param::Empty,
+                Param::Text("7".into()),
+            ]
+        );
+        let (t, end) = tokenize(b"  12  , 4HAB;C ; 5,", b',', b';').unwrap();
+        assert!(end);
+        assert_eq!(
+            texts(&t),
+            vec![Param::Text("12".into()), Param::Hollerith(b"AB;C".to_vec())]
+        );
+        // Custom delimiters; a number split by record padding is rejoined.
+        let (t, end) = tokenize(b"1.2  5/2H/#/-3#", b'/', b'#').unwrap();
+        assert!(end);
+        assert_eq!(
+            texts(&t),
+            vec![
+                Param::Text("1.25".into()),
+                Param::Hollerith(b"/#".to_vec()),
+                Param::Text("-3".into()),
+            ]
+        );
+        let (_, end) = tokenize(b"1,2,", b',', b';').unwrap();
+        assert!(!end);
+        assert!(tokenize(b"5Hab;", b',', b';').is_err());
+        assert!(tokenize(b"2Habc,1;", b',', b';').is_err());
+    }
+
+    #[test]
+    fn bspline_iges_numbers_and_global_delimiters() {
+        assert_eq!(parse_real("1.0D+01"), Some(10.0));
+        assert_eq!(parse_real("1.0d-2"), Some(0.01));
+        assert_eq!(parse_real("1.E-3"), Some(0.001));
+        assert_eq!(parse_real("1."), Some(1.0));
+        assert_eq!(parse_real(".5"), Some(0.5));
+        assert_eq!(parse_real("-2"), Some(-2.0));
+        assert_eq!(parse_real("+7.5E+2"), Some(750.0));
+        assert_eq!(
+            parse_real("1.22464679914735E-016"),
+            Some(1.22464679914735e-16)
+        );
+        assert_eq!(parse_real("nan"), None);
+        assert_eq!(parse_real("1e999"), None);
+        assert_eq!(parse_real("1.2.3"), None);
+        assert_eq!(parse_int("3"), Some(3));
+        assert_eq!(parse_int("3."), Some(3));
+        assert_eq!(parse_int("3.5"), None);
+        assert_eq!(global_delimiters(b"1H,,1H;,4Htest,"), Ok((b',', b';')));
+        assert_eq!(global_delimiters(b",,4Htest;"), Ok((b',', b';')));
+        assert_eq!(global_delimiters(b";"), Ok((b',', b';')));
+        assert_eq!(global_delimiters(b"1H//1H#/4Htest#"), Ok((b'/', b'#')));
+        assert_eq!(
+            global_delimiters(b"1H|,"),
+            Err("Global section: expected a delimiter after field 1, found `,`".into())
+        );
+    }
+
+    /// A bilinear patch (polynomial, with a chained transform) and a rational
+    /// biquadratic patch, one of them trimmed.
+    fn sample_entities() -> Vec<(i64, i64, i64, String)> {
+        let bilinear = "128,1,1,1,1,0,0,1,0,0,0.,0.,1.,1.,0.0D+00,0.,1.0D+00,1.,\
+                        1.,1.,1.,1.,0.,0.,0.,1.E+0,0.,0.,0.,1.,0.,1.,1.,1.0D0,0.,1.,0.,1.;";
+        let mut rational =
+            String::from("128,2,2,2,2,0,0,0,0,0,0.,0.,0.,1.,1.,1.,0.,0.,0.,1.,1.,1.,");
+        let w = [1.0, 0.5, 1.0, 2.0, 1.0, 2.0, 1.0, 0.5, 1.0];
+        for x in w {
+            rational.push_str(&format!("{x:?},"));
+        }
+        for j in 0..3 {
+            for i in 0..3 {
+                rational.push_str(&format!("{}.,{}.,{}.,", i, j, (i * j) % 2));
+            }
+        }
+        rational.push_str("0.,1.,0.,1.;");
+        vec![
+            // DE 1: rotation by 90° about z, then translation (10, 0, 5).
+            (
+                124,
+                3,
+                0,
+                "124,0.,-1.,0.,10.,1.,0.,0.,0.,0.,0.,1.,5.;".into(),
+            ),
+            // DE 3: translation by (0, 0, 100), applied after DE 1.
+            (
+                124,
+                0,
+                0,
+                "124,1.,0.,0.,0.,0.,1.,0.,0.,0.,0.,1.,100.;".into(),
+            ),
+            (128, 1, 0, bilinear.into()),
+            (128, 0, 0, rational),
+            // DE 9: trimmed surface on DE 5.
+            (144, 0, 0, "144,5,1,0,11;".into()),
+            (142, 0, 0, "142,1,5,0,0,2;".into()),
+        ]
+    }
+
+    fn sample_file(global: &str) -> String {
+        let e = sample_entities();
+        let refs: Vec<(i64, i64, i64, &str)> = e
+            .iter()
+            .map(|(a, b, c, d)| (*a, *b, *c, d.as_str()))
+            .collect();
+        iges_file(global, &refs)
+    }
+
+    #[test]
+    fn bspline_iges_reads_hand_made_entities() {
+        let text = sample_file(GLOBAL);
+        let imp = parse_iges(&text).unwrap();
+        assert_eq!(imp.units.as_deref(), Some("MM"));
+        assert_eq!(imp.surfaces.len(), 2);
+        assert_eq!(imp.trimmed, 1);
+        let a = &imp.surfaces[0];
+        assert_eq!(a.directory_entry, 5);
+        assert!(a.trimmed && a.transformed && !a.rational);
+        assert!(!a.surface.is_rational());
+        assert_eq!(a.parameter_range, [0.0, 1.0, 0.0, 1.0]);
+        // P10 = (1, 0, 0): rotated to (0, 1, 0), + (10, 0, 5), + (0, 0, 100).
+        assert_eq!(a.surface.control_point(1, 0), Vec3::new(10.0, 1.0, 105.0));
+        // P11 = (1, 1, 1) -> (-1, 1, 1) + (10, 0, 105).
+        assert_eq!(a.surface.control_point(1, 1), Vec3::new(9.0, 1.0, 106.0));
+        assert_eq!(a.surface.control_point(0, 1), Vec3::new(9.0, 0.0, 105.0));
+        let b = &imp.surfaces[1];
+        assert!(b.rational && !b.trimmed && !b.transformed);
+        assert_eq!((b.surface.degree_u(), b.surface.degree_v()), (2, 2));
+        // Weights are listed with the u index fastest: w(i=1, j=0) = 0.5.
+        assert_eq!(b.surface.weight(1, 0), 0.5);
+        assert_eq!(b.surface.weight(0, 1), 2.0);
+        assert_eq!(b.surface.control_point(2, 1), Vec3::new(2.0, 1.0, 0.0));
+        assert_eq!(b.surface.control_point(1, 1), Vec3::new(1.0, 1.0, 1.0));
+        // A Hollerith string continued on the next G record ("2HM" + "M,").
+        let shifted = GLOBAL.replacen("4Htest", "6Htest12", 1);
+        assert_eq!(&shifted[70..72], "HM");
+        let other = parse_iges(&sample_file(&shifted)).unwrap();
+        assert_eq!(other.units.as_deref(), Some("MM"));
+        assert_eq!(other.surfaces, imp.surfaces);
+        // A wrong parameter line count (field 14) is overridden by the
+        // records' back-pointers.
+        let wrong = text.replacen(
+            "     128       0       0       3       0",
+            "     128       0       0       1       0",
+            1,
+        );
+        assert_ne!(wrong, text);
+        assert_eq!(parse_iges(&wrong).unwrap(), imp);
+        // CRLF line ends and custom delimiters give the same result.
+        assert_eq!(parse_iges(&text.replace('\n', "\r\n")).unwrap(), imp);
+        let custom = sample_file(
+            &GLOBAL
+                .replace("1H,,1H;,", "1H/,1H#,")
+                .replace(',', "/")
+                .replace(';', "#"),
+        );
+        let custom = custom
+            .lines()
+            .map(|l| {
+                if l.as_bytes()[72] == b'P' {
+                    let (data, rest) = l.split_at(64);
+                    format!("{}{rest}\n", data.replace(',', "/").replace(';', "#"))
+                } else {
+                    format!("{l}\n")
+                }
+            })
+            .collect::<String>();
+        assert_eq!(parse_iges(&custom).unwrap(), imp);
+    }
+
+    #[test]
+    fn bspline_iges_errors_name_line_and_entity() {
+        let text = sample_file(GLOBAL);
+        // Break a knot of the rational surface (DE 7).
+        let bad = text.replacen(
+            "128,2,2,2,2,0,0,0,0,0,0.,0.,",
+            "128,2,2,2,2,0,0,0,0,0,0.,x.,",
+            1,
+        );
+        let err = parse_iges(&bad).unwrap_err().to_string();
+        let line = text.lines().position(|l| l.starts_with("128,2,2")).unwrap() + 1;
+        assert_eq!(
+            err,
+            format!(
+                "line {line}: entity 128 (directory entry 7): parameter 11: expected a real number, found `x.`"
+            )
+        );
+        // A decreasing knot vector is a surface error naming the entity.
+        let bad = text.replacen(
+            "128,2,2,2,2,0,0,0,0,0,0.,0.,0.,1.,",
+            "128,2,2,2,2,0,0,0,0,0,0.,0.,2.,1.,",
+            1,
+        );
+        let err = parse_iges(&bad).unwrap_err().to_string();
+        assert!(
+            err.contains("entity 128 (directory entry 7): knot vector in u decreases"),
+            "{err}"
+        );
+        // Too few parameters.
+        let bad = text.replacen("0.,1.,0.,1.;", "0.,1.;      ", 1);
+        assert_ne!(bad, text);
+        let err = parse_iges(&bad).unwrap_err().to_string();
+        assert!(
+            err.contains("directory entry 5") && err.contains("need 38"),
+            "{err}"
+        );
+        // A short record.
+        let mut lines: Vec<&str> = text.lines().collect();
+        lines[3] = "short";
+        let err = parse_iges(&lines.join("\n")).unwrap_err().to_string();
+        assert!(err.starts_with("line 4: record has 5 columns"), "{err}");
+        // A transformation pointer to something that is not a 124.
+        let bad = text.replacen(
+            "     128       3       0       0       0       0       1",
+            "     128       3       0       0       0       0       9",
+            1,
+        );
+        assert_ne!(bad, text);
+        let err = parse_iges(&bad).unwrap_err().to_string();
+        assert!(err.contains("not entity 124"), "{err}");
+        assert!(read_iges("/nonexistent.igs").is_err());
+    }
+
+    #[test]
+    fn bspline_iges_never_panics_on_corrupted_input() {
+        let text = sample_file(GLOBAL).into_bytes();
+        let mut rng = crate::bspline::tests::Rng::new(99);
+        let alphabet = b"0123456789,;.-+EDH /#\n";
+        for _ in 0..3000 {
+            let mut t = text.clone();
+            for _ in 0..1 + (rng.unit() * 4.0) as usize {
+                let at = (rng.unit() * t.len() as f64) as usize % t.len();
+                let c = alphabet[(rng.unit() * alphabet.len() as f64) as usize % alphabet.len()];
+                t[at] = c;
+            }
+            if let Ok(imp) = parse_iges_bytes(&t) {
+                for s in &imp.surfaces {
+                    let (u, v) = s.surface.domain_center();
+                    let _ = s.surface.eval(u, v);
+                    let _ = s.surface.normal(u, v);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bspline_iges_impeller() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../../shared/data/surfaces/impeller.igs"
+        );
+        if !Path::new(path).exists() {
+            eprintln!("skipped: ../shared/data not found");
+            return;
+        }
+        let imp = read_iges(path).unwrap();
+        assert_eq!(imp.surfaces.len(), 247);
+        assert_eq!(imp.surfaces.iter().filter(|s| s.rational).count(), 212);
+        assert_eq!(
+            imp.surfaces
+                .iter()
+                .filter(|s| s.surface.is_rational())
+                .count(),
+            212
+        );
+        let max_degree = imp
+            .surfaces
+            .iter()
+            .map(|s| s.surface.degree_u().max(s.surface.degree_v()))
+            .max();
+        assert_eq!(max_degree, Some(5));
+        assert_eq!(imp.units.as_deref(), Some("MM"));
+        // Every surface of this SolidWorks file is the base of a 144.
+        assert_eq!(imp.trimmed, 247);
+        assert!(imp.surfaces.iter().all(|s| s.trimmed && !s.transformed));
+        let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+        for s in &imp.surfaces {
+            let (a, b) = s.surface.control_bounding_box();
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
+        let tol = 1e-9 * (hi - lo).length();
+        for s in &imp.surfaces {
+            let (u, v) = s.surface.domain_center();
+            let p = s.surface.eval(u, v);
+            assert!(p.is_finite());
+            assert!(p.cmpge(lo - tol).all() && p.cmple(hi + tol).all(), "{p:?}");
+            let (a, b) = s.surface.control_bounding_box();
+            assert!(p.cmpge(a - tol).all() && p.cmple(b + tol).all());
+            assert!(s.surface.derivatives(u, v).point.distance(p) <= tol);
+            // Tessellation and curvature never produce NaN.
+            let t = crate::bspline::tessellate(&s.surface, 6, 6);
+            assert!(t.positions.iter().all(|p| p.is_finite()));
+            assert!(t.normals.iter().all(|n| n.is_finite()));
+            assert!(t.normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-9));
+            for &[u, v] in &t.uv {
+                if let Some(c) = s.surface.principal_curvatures(u, v) {
+                    assert!(c.k1.is_finite() && c.k2.is_finite() && c.k1 >= c.k2);
+                }
+            }
+        }
+    }
+}

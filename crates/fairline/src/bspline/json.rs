@@ -1,0 +1,413 @@
+//! The B-spline surface JSON format of DESIGN.md §5:
+//! `{"degree_u":3,"degree_v":3,"knots_u":[...],"knots_v":[...],
+//! "control_points":[[[x,y,z],...],...]}` with optional `"weights"` of the
+//! control net's shape; a file holds one surface or `{"surfaces":[...]}`.
+//!
+//! Numbers are written as the shortest decimal that reads back to the same
+//! f64 and read exactly (serde_json `float_roundtrip`), so a round trip is
+//! bit-exact. Files are written atomically (temporary file + rename).
+
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use serde_json::{Map, Value};
+use thiserror::Error;
+
+use super::{BSplineError, BSplineSurface};
+use crate::Vec3;
+
+/// Why a surface JSON file could not be read or written.
+#[derive(Debug, Error)]
+pub enum SurfaceJsonError {
+    /// The file could not be read.
+    #[error("cannot read {}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The file could not be written.
+    #[error("cannot write {}: {source}", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The error of [`crate::io::atomic_write`].
+        source: crate::io::IoError,
+    },
+    /// The text is not JSON (the message carries line and column).
+    #[error("invalid JSON: {0}")]
+    Syntax(String),
+    /// The top level is neither a surface object nor `{"surfaces": [...]}`.
+    #[error("expected a surface object or {{\"surfaces\": [...]}}: {0}")]
+    Layout(String),
+    /// A field of a surface is missing or has the wrong type or shape.
+    #[error("surface {surface}: field `{field}`: {message}")]
+    Field {
+        /// Index of the surface in the file (0 for a single surface).
+        surface: usize,
+        /// The field, with indices (e.g. `control_points[2][1]`).
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The fields are well formed but do not make a valid surface.
+    #[error("surface {surface}: {source}")]
+    Surface {
+        /// Index of the surface in the file.
+        surface: usize,
+        /// The validation error.
+        source: BSplineError,
+    },
+}
+
+/// Reads every surface of a JSON file (DESIGN.md §5): a single surface gives
+/// a list of one. Errors name the surface index and field.
+pub fn read_surfaces_json(path: impl AsRef<Path>) -> Result<Vec<BSplineSurface>, SurfaceJsonError> {
+    let path = path.as_ref();
+    let text = fs::read_to_string(path).map_err(|source| SurfaceJsonError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_surfaces_json(&text)
+}
+
+/// Parses surfaces from JSON text; see [`read_surfaces_json`].
+pub fn parse_surfaces_json(text: &str) -> Result<Vec<BSplineSurface>, SurfaceJsonError> {
+    let value: Value =
+        serde_json::from_str(text).map_err(|e| SurfaceJsonError::Syntax(e.to_string()))?;
+    let Value::Object(obj) = value else {
+        return Err(SurfaceJsonError::Layout(
+            "the top level is not an object".into(),
+        ));
+    };
+    if let Some(list) = obj.get("surfaces") {
+        let Value::Array(list) = list else {
+            return Err(SurfaceJsonError::Layout(
+                "`surfaces` is not an array".into(),
+            ));
+        };
+        list.iter()
+            .enumerate()
+            .map(|(k, s)| match s {
+                Value::Object(o) => surface_from_object(k, o),
+                _ => Err(field_error(k, "", "the surface is not an object")),
+            })
+            .collect()
+    } else if obj.contains_key("degree_u") || obj.contains_key("control_points") {
+        Ok(vec![surface_from_object(0, &obj)?])
+    } else {
+        Err(SurfaceJsonError::Layout(
+            "neither `surfaces` nor `control_points` found".into(),
+        ))
+    }
+}
+
+fn field_error(surface: usize, field: &str, message: &str) -> SurfaceJsonError {
+    SurfaceJsonError::Field {
+        surface,
+        field: field.to_string(),
+        message: message.to_string(),
+    }
+}
+
+fn surface_from_object(
+    k: usize,
+    o: &Map<String, Value>,
+) -> Result<BSplineSurface, SurfaceJsonError> {
+    let get = |name: &str| o.get(name).ok_or_else(|| field_error(k, name, "missing"));
+    let degree = |name: &str| -> Result<usize, SurfaceJsonError> {
+        get(name)?
+            .as_u64()
+            .and_then(|d| usize::try_from(d).ok())
+            .ok_or_else(|| field_error(k, name, "expected a non-negative integer"))
+    };
+    let numbers = |name: &str, v: &Value| -> Result<Vec<f64>, SurfaceJsonError> {
+        let Value::Array(a) = v else {
+            return Err(field_error(k, name, "expected an array of numbers"));
+        };
+        a.iter()
+            .enumerate()
+            .map(|(i, x)| {
+                x.as_f64()
+                    .ok_or_else(|| field_error(k, &format!("{name}[{i}]"), "expected a number"))
+            })
+            .collect()
+    };
+    fn rows<'a>(k: usize, name: &str, v: &'a Value) -> Result<&'a [Value], SurfaceJsonError> {
+        match v {
+            Value::Array(a) => Ok(a),
+            _ => Err(field_error(k, name, "expected an array of rows")),
+        }
+    }
+    let degree_u = degree("degree_u")?;
+    let degree_v = degree("degree_v")?;
+    let knots_u = numbers("knots_u", get("knots_u")?)?;
+    let knots_v = numbers("knots_v", get("knots_v")?)?;
+    let mut net = Vec::new();
+    for (i, row) in rows(k, "control_points", get("control_points")?)?
+        .iter()
+        .enumerate()
+    {
+        let name = format!("control_points[{i}]");
+        let mut r = Vec::new();
+        for (j, p) in rows(k, &name, row)?.iter().enumerate() {
+            let name = format!("control_points[{i}][{j}]");
+            let xyz = numbers(&name, p)?;
+            if xyz.len() != 3 {
+                return Err(field_error(
+                    k,
+                    &name,
+                    &format!("expected 3 coordinates, found {}", xyz.len()),
+                ));
+            }
+            r.push(Vec3::new(xyz[0], xyz[1], xyz[2]));
+        }
+        net.push(r);
+    }
+    let weights = match o.get("weights") {
+        None | Some(Value::Null) => None,
+        Some(w) => {
+            let mut out = Vec::new();
+            for (i, row) in rows(k, "weights", w)?.iter().enumerate() {
+                out.push(numbers(&format!("weights[{i}]"), row)?);
+            }
+            Some(out)
+        }
+    };
+    BSplineSurface::new(degree_u, degree_v, knots_u, knots_v, net, weights)
+        .map_err(|source| SurfaceJsonError::Surface { surface: k, source })
+}
+
+fn surface_value(s: &BSplineSurface) -> Value {
+    let nv = s.count_v();
+    let pts = s.control_points();
+    let net: Vec<Value> = pts
+        .chunks(nv)
+        .map(|row| {
+            Value::from(
+                row.iter()
+                    .map(|p| Value::from(p.to_array().to_vec()))
+                    .collect::<Vec<_>>(),
+            )
+        })
+        .collect();
+    let mut o = Map::new();
+    o.insert("degree_u".into(), Value::from(s.degree_u()));
+    o.insert("degree_v".into(), Value::from(s.degree_v()));
+    o.insert("knots_u".into(), Value::from(s.knots_u().to_vec()));
+    o.insert("knots_v".into(), Value::from(s.knots_v().to_vec()));
+    o.insert("control_points".into(), Value::from(net));
+    if let Some(w) = s.weights() {
+        let rows: Vec<Value> = w.chunks(nv).map(|r| Value::from(r.to_vec())).collect();
+        o.insert("weights".into(), Value::from(rows));
+    }
+    Value::Object(o)
+}
+
+/// One surface as JSON text (DESIGN.md §5), numbers printed exactly.
+pub fn surface_to_json(surface: &BSplineSurface) -> String {
+    let mut s = surface_value(surface).to_string();
+    s.push('\n');
+    s
+}
+
+/// A list of surfaces as `{"surfaces":[...]}`, numbers printed exactly.
+pub fn surfaces_to_json(surfaces: &[BSplineSurface]) -> String {
+    let list: Vec<Value> = surfaces.iter().map(surface_value).collect();
+    let mut o = Map::new();
+    o.insert("surfaces".into(), Value::from(list));
+    let mut s = Value::Object(o).to_string();
+    s.push('\n');
+    s
+}
+
+/// Writes one surface to `path` atomically (temporary file in the same
+/// directory, then rename).
+pub fn write_surface_json(
+    path: impl AsRef<Path>,
+    surface: &BSplineSurface,
+) -> Result<(), SurfaceJsonError> {
+    write_atomic(path.as_ref(), surface_to_json(surface).as_bytes())
+}
+
+/// Writes `{"surfaces":[...]}` to `path` atomically.
+pub fn write_surfaces_json(
+    path: impl AsRef<Path>,
+    surfaces: &[BSplineSurface],
+) -> Result<(), SurfaceJsonError> {
+    write_atomic(path.as_ref(), surfaces_to_json(surfaces).as_bytes())
+}
+
+/// Writes `bytes` through [`crate::io::atomic_write`] (temporary file in the
+/// same directory, synced, then renamed; nothing is left behind on failure).
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SurfaceJsonError> {
+    crate::io::atomic_write(path, |w| w.write_all(bytes)).map_err(|e| SurfaceJsonError::Write {
+        path: path.to_path_buf(),
+        source: e,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bspline::tests::Rng;
+
+    fn random_surface(rng: &mut Rng, rational: bool) -> BSplineSurface {
+        let (nu, nv) = (5, 4);
+        let net: Vec<Vec<Vec3>> = (0..nu)
+            .map(|_| (0..nv).map(|_| 1e3 * rng.vec3()).collect())
+            .collect();
+        let weights = rational.then(|| {
+            (0..nu)
+                .map(|_| (0..nv).map(|_| 0.1 + rng.unit()).collect())
+                .collect()
+        });
+        let k = rng.unit();
+        BSplineSurface::new(
+            3,
+            2,
+            vec![0.0, 0.0, 0.0, 0.0, 0.1 + 0.8 * k, 1.0, 1.0, 1.0, 1.0],
+            vec![-1.0, -0.5, 0.1 * k, 1.0 / 3.0, 2.0, 2.5, 3.0],
+            net,
+            weights,
+        )
+        .unwrap()
+    }
+
+    fn temp_dir(name: &str) -> PathBuf {
+        let d =
+            std::env::temp_dir().join(format!("fairline-bspline-{name}-{}", std::process::id()));
+        fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn bspline_json_round_trip_is_bit_exact() {
+        let mut rng = Rng::new(42);
+        let surfaces = vec![
+            random_surface(&mut rng, false),
+            random_surface(&mut rng, true),
+        ];
+        let text = surfaces_to_json(&surfaces);
+        let back = parse_surfaces_json(&text).unwrap();
+        assert_eq!(back, surfaces);
+        for (a, b) in back.iter().zip(&surfaces) {
+            for (p, q) in a.control_points().iter().zip(b.control_points()) {
+                assert_eq!(
+                    p.to_array().map(f64::to_bits),
+                    q.to_array().map(f64::to_bits)
+                );
+            }
+        }
+        assert_eq!(surfaces_to_json(&back), text);
+        // A single surface object reads as a list of one.
+        let one = surface_to_json(&surfaces[1]);
+        assert!(one.starts_with("{\"control_points\""));
+        assert_eq!(
+            parse_surfaces_json(&one).unwrap(),
+            vec![surfaces[1].clone()]
+        );
+        // Through files, atomically, leaving no temporary file behind.
+        let dir = temp_dir("roundtrip");
+        let path = dir.join("surfaces.json");
+        write_surfaces_json(&path, &surfaces).unwrap();
+        write_surface_json(dir.join("one.json"), &surfaces[0]).unwrap();
+        assert_eq!(read_surfaces_json(&path).unwrap(), surfaces);
+        assert_eq!(
+            read_surfaces_json(dir.join("one.json")).unwrap(),
+            vec![surfaces[0].clone()]
+        );
+        let names: Vec<_> = fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        assert_eq!(names.len(), 2, "{names:?}");
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn bspline_json_errors_name_surface_and_field() {
+        let good = r#"{"degree_u":1,"degree_v":1,"knots_u":[0,0,1,1],"knots_v":[0,0,1,1],
+            "control_points":[[[0,0,0],[0,1,0]],[[1,0,0],[1,1,0.5]]]}"#;
+        assert_eq!(parse_surfaces_json(good).unwrap().len(), 1);
+        let list = |second: &str| format!("{{\"surfaces\":[{good},{second}]}}");
+        let err = |text: &str| parse_surfaces_json(text).unwrap_err().to_string();
+        assert_eq!(
+            err(&list(&good.replace("\"degree_u\":1,", ""))),
+            "surface 1: field `degree_u`: missing"
+        );
+        assert_eq!(
+            err(&list(&good.replace("\"degree_u\":1", "\"degree_u\":-1"))),
+            "surface 1: field `degree_u`: expected a non-negative integer"
+        );
+        assert_eq!(
+            err(&list(&good.replace("[1,1,0.5]", "[1,1]"))),
+            "surface 1: field `control_points[1][1]`: expected 3 coordinates, found 2"
+        );
+        assert_eq!(
+            err(&list(&good.replace("[1,1,0.5]", "[1,\"a\",0.5]"))),
+            "surface 1: field `control_points[1][1][1]`: expected a number"
+        );
+        assert_eq!(
+            err(&list(
+                &good.replace("\"knots_v\":[0,0,1,1]", "\"knots_v\":[0,1,0,1]")
+            )),
+            "surface 1: knot vector in v decreases at index 2 (1 > 0)"
+        );
+        assert_eq!(
+            err(&list(&good.replace("}", ",\"weights\":[[1,1],[1]]}"))),
+            "surface 1: weights: row 1 has 1 weights, the control net has 2"
+        );
+        assert_eq!(
+            err(&list(&good.replace("}", ",\"weights\":[[1,1],[1,0]]}"))),
+            "surface 1: weight (1, 1) is 0; weights must be positive"
+        );
+        assert!(err("{\"surfaces\": 3}").contains("not an array"));
+        assert!(err("[1,2]").contains("not an object"));
+        assert!(err("{\"degree_u\": 1,").starts_with("invalid JSON"));
+        assert!(
+            read_surfaces_json("/nonexistent/x.json")
+                .unwrap_err()
+                .to_string()
+                .starts_with("cannot read /nonexistent/x.json")
+        );
+        // A failed write leaves nothing behind.
+        let dir = temp_dir("failed-write");
+        let target = dir.join("sub-directory-as-target");
+        fs::create_dir_all(&target).unwrap();
+        assert!(write_surfaces_json(&target, &[]).is_err());
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 1);
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn bspline_teapot_json_loads() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../../shared/data/surfaces/teapot.json"
+        );
+        if !Path::new(path).exists() {
+            eprintln!("skipped: ../shared/data not found");
+            return;
+        }
+        let surfaces = read_surfaces_json(path).unwrap();
+        assert_eq!(surfaces.len(), 32);
+        for s in &surfaces {
+            assert_eq!((s.degree_u(), s.degree_v()), (3, 3));
+            assert_eq!((s.count_u(), s.count_v()), (4, 4));
+            assert!(!s.is_rational());
+            let t = crate::bspline::tessellate(s, 9, 9);
+            assert!(t.positions.iter().all(|p| p.is_finite()));
+            // Degenerate patch corners (spout tip, lid pole) still get normals.
+            for n in &t.normals {
+                assert!(n.is_finite());
+                assert!((n.length() - 1.0).abs() < 1e-9, "{n:?}");
+            }
+        }
+        // Round trip of a real file is bit-exact.
+        let again = parse_surfaces_json(&surfaces_to_json(&surfaces)).unwrap();
+        assert_eq!(again, surfaces);
+    }
+}

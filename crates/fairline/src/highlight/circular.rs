@@ -1,0 +1,217 @@
+//! Circular highlight lines (Nishiyama et al. §2): the signed distance
+//! between a surface normal line and a circular light, Eq. (2.5)–(2.18), and
+//! its zero level sets on triangle meshes.
+
+use super::contour::{self, Levels};
+use super::light::{CircleApproach, CircularLight};
+use super::quartic::quartic_roots;
+use super::{HighlightBands, HighlightError, HighlightLines};
+use crate::Vec3;
+use crate::geom;
+use crate::mesh::SurfaceMesh;
+use rayon::prelude::*;
+
+/// |α|² + |β|² below which the normal is taken as parallel to the circle
+/// axis (the normal line keeps a constant distance from the circle).
+const AXIS_PARALLEL: f64 = 1e-12;
+
+impl CircularLight {
+    /// Closest approach between the normal line E(τ) = Q + τN (Eq. (2.3)) of
+    /// a point Q with normal N and this circle (Nishiyama et al. §2):
+    ///
+    /// 1. the stationary points of the squared distance, Eq. (2.7), reduce to
+    ///    the quartic Eq. (2.15) with coefficients Eq. (2.16) in the notation
+    ///    of Eq. (2.12); all its real roots τ are found by
+    ///    [`super::quartic::quartic_roots`];
+    /// 2. for each root, θ follows from Eq. (2.10): (cos θ, sin θ) is
+    ///    proportional to ((τN − A + Q)·n, (τN − A + Q)·b) with the factor
+    ///    (τ − ε)/Det; the sign of that factor only picks the nearer or the
+    ///    farther of two antipodal circle points, so the nearer is taken
+    ///    directly, which needs no division by Det and covers Det = 0. When
+    ///    the line point lies on the axis (every θ equidistant), θ is solved
+    ///    from the first line of Eq. (2.8) (corrected as in DESIGN.md §3:
+    ///    ε + R(cos θ α + sin θ β) = τ);
+    /// 3. the root with the smallest distance |d| of Eq. (2.5) wins, and the
+    ///    signed distance is d_s = d·(N × L̇)/|N × L̇| of Eq. (2.18), with
+    ///    L̇ of Eq. (2.17).
+    ///
+    /// A normal parallel to the axis (α = β = 0) makes the distance
+    /// independent of τ; the point of the line in the circle's plane is used.
+    /// Returns `None` where d_s is undefined: zero normal, N parallel to L̇,
+    /// the line on the axis, or a non-finite result.
+    pub fn approach(&self, q: Vec3, normal: Vec3) -> Option<CircleApproach> {
+        let nn = normal.try_normalize()?;
+        if !q.is_finite() {
+            return None;
+        }
+        let (n, b) = self.frame();
+        let a = self.center();
+        let r = self.radius();
+        let bb = a - q;
+        let alpha = n.dot(nn);
+        let beta = b.dot(nn);
+        let gamma = bb.dot(n);
+        let delta = bb.dot(b);
+        let eps = bb.dot(nn);
+        let c = alpha * alpha + beta * beta;
+        let mut best: Option<(f64, f64, f64)> = None; // (|d|², τ, θ)
+        let mut consider = |tau: f64, theta: f64| {
+            let x = q + tau * nn;
+            let d2 = (self.point(theta) - x).length_squared();
+            if d2.is_finite() && best.is_none_or(|(b2, _, _)| d2 < b2) {
+                best = Some((d2, tau, theta));
+            }
+        };
+        let nearest_theta = |tau: f64| -> Option<f64> {
+            let w = q + tau * nn - a;
+            let (wn, wb) = (w.dot(n), w.dot(b));
+            (wn.hypot(wb) > 1e-12 * r).then(|| wb.atan2(wn))
+        };
+        if c < AXIS_PARALLEL {
+            // N ∥ t: take the line point in the circle's plane
+            let nt = nn.dot(self.axis());
+            let tau = if nt.abs() > 0.0 {
+                bb.dot(self.axis()) / nt
+            } else {
+                0.0
+            };
+            if let Some(th) = nearest_theta(tau) {
+                consider(tau, th);
+            }
+        } else {
+            let p = alpha * gamma + beta * delta;
+            let qq = gamma * gamma + delta * delta;
+            let r2 = r * r;
+            // Eq. (2.16)
+            let c4 = c;
+            let c3 = -2.0 * (p + c * eps);
+            let c2 = c * eps * eps + 4.0 * eps * p + qq - r2 * c * c;
+            let c1 = -2.0 * (p * eps * eps + qq * eps - r2 * c * p);
+            let c0 = qq * eps * eps - r2 * p * p;
+            for tau in quartic_roots(c4, c3, c2, c1, c0) {
+                match nearest_theta(tau) {
+                    Some(th) => consider(tau, th),
+                    None => {
+                        // line point on the axis: θ from Eq. (2.8), first line
+                        let rho = c.sqrt();
+                        let phi = beta.atan2(alpha);
+                        let cosv = ((tau - eps) / (r * rho)).clamp(-1.0, 1.0);
+                        let dv = cosv.acos();
+                        consider(tau, phi + dv);
+                        consider(tau, phi - dv);
+                    }
+                }
+            }
+        }
+        let (_, tau, theta) = best?;
+        let x = q + tau * nn;
+        let d = self.point(theta) - x;
+        // Eq. (2.17)
+        let ldot = r * (-theta.sin() * n + theta.cos() * b);
+        let m = nn.cross(ldot);
+        let ml = m.length();
+        if !(ml > 1e-12 * r) {
+            return None;
+        }
+        let ds = d.dot(m) / ml;
+        let theta = f64::atan2(theta.sin(), theta.cos());
+        (ds.is_finite() && tau.is_finite()).then_some(CircleApproach {
+            signed_distance: ds,
+            tau,
+            theta,
+        })
+    }
+
+    /// Signed distance d_s between the normal line of (Q, N) and the circle,
+    /// Nishiyama et al. Eq. (2.18) (surface units); `None` where undefined.
+    /// See [`CircularLight::approach`].
+    pub fn signed_distance(&self, q: Vec3, normal: Vec3) -> Option<f64> {
+        self.approach(q, normal).map(|a| a.signed_distance)
+    }
+}
+
+/// Per-vertex closest approaches of the mesh's normal lines (Eq. (3)
+/// normals of Yong et al.) to one circular light.
+fn vertex_approaches(
+    mesh: &SurfaceMesh,
+    normals: &[Vec3],
+    light: &CircularLight,
+) -> (Vec<f64>, Vec<i8>, Vec<f64>) {
+    let res: Vec<Option<CircleApproach>> = mesh
+        .positions()
+        .par_iter()
+        .zip(normals.par_iter())
+        .map(|(&q, &n)| light.approach(q, n))
+        .collect();
+    let values = res
+        .iter()
+        .map(|a| a.map_or(0.0, |a| a.signed_distance))
+        .collect();
+    let branch = res.iter().map(|a| i8::from(a.is_some())).collect();
+    let theta = res.iter().map(|a| a.map_or(0.0, |a| a.theta)).collect();
+    (values, branch, theta)
+}
+
+/// Contours of d_s = `level` for each light; line index k = light number.
+fn circular_levels(
+    mesh: &SurfaceMesh,
+    lights: &[CircularLight],
+    level: f64,
+) -> Result<HighlightLines, HighlightError> {
+    mesh.require_triangles()?;
+    let normals = geom::vertex_normals(mesh);
+    let mut all = HighlightLines::default();
+    for (k, light) in lights.iter().enumerate() {
+        let (values, branch, theta) = vertex_approaches(mesh, &normals, light);
+        // d_s is discontinuous where the nearest circle point jumps (its sign
+        // flips with the direction N × L̇): an edge whose two nearest circle
+        // points are more than 90° apart carries no nodes.
+        let edge_ok = |a: usize, b: usize| (theta[a] - theta[b]).cos() > 0.0;
+        let lines = contour::contour(
+            mesh,
+            &values,
+            &branch,
+            Levels::Single {
+                value: level,
+                index: k as i64,
+            },
+            1,
+            &edge_ok,
+        );
+        all.lines.extend(lines.lines);
+    }
+    Ok(all)
+}
+
+/// Circular highlight lines on a triangle mesh: for each light (typically
+/// concentric circles of several radii), the zero level set of the
+/// per-vertex signed distance d_s of Nishiyama et al. Eq. (2.18), contoured
+/// like the linear model (Yong et al. §2.3–2.4). Line index k is the
+/// position of the light in `lights`. Edges across which the nearest circle
+/// point jumps by more than 90° carry no nodes (d_s is discontinuous there).
+pub fn circular_highlight_lines(
+    mesh: &SurfaceMesh,
+    lights: &[CircularLight],
+) -> Result<HighlightLines, HighlightError> {
+    circular_levels(mesh, lights, 0.0)
+}
+
+/// Circular highlight bands (Nishiyama et al. §2, last paragraph): the
+/// level sets d_s = −ρ (`lower`) and d_s = +ρ (`upper`) of each light, a
+/// torus-shaped light of tube radius ρ > 0. Line index k = light number.
+pub fn circular_highlight_bands(
+    mesh: &SurfaceMesh,
+    lights: &[CircularLight],
+    rho: f64,
+) -> Result<HighlightBands, HighlightError> {
+    if !(rho > 0.0) || !rho.is_finite() {
+        return Err(HighlightError::InvalidOption(format!(
+            "band radius must be a positive finite number, got {rho}"
+        )));
+    }
+    Ok(HighlightBands {
+        radius: rho,
+        lower: circular_levels(mesh, lights, -rho)?,
+        upper: circular_levels(mesh, lights, rho)?,
+    })
+}

@@ -1,0 +1,407 @@
+//! Level-set contouring of a per-vertex scalar field on a triangle mesh:
+//! nodes on edges by linear interpolation (Yong et al. Eq. (4), with the
+//! spacing of Eq. (13)), segments per triangle by the connection rules of
+//! §2.4, and chaining into polylines.
+//!
+//! The field is a value per vertex plus a *branch* per vertex (0 = undefined,
+//! ±1 = the side of a discontinuity, e.g. the sign of Z·N for linear lights).
+//! An edge is valid when both ends carry the same non-zero branch; a triangle
+//! contributes segments only when its three edges are valid, so nothing is
+//! drawn across a jump of the field through infinity.
+
+use crate::Vec3;
+use crate::mesh::{EdgeId, FaceId, SurfaceMesh, VertexId};
+use rayon::prelude::*;
+
+/// A highlight node (Yong et al. §2.3): the point of level m on a mesh edge,
+/// or a vertex lying exactly on level m. Identifies the node across mesh
+/// updates as long as it stays on the same element.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum NodeId {
+    /// The node of index m on edge e.
+    Edge(EdgeId, i64),
+    /// Vertex v whose value equals level m exactly.
+    Vertex(VertexId, i64),
+}
+
+impl NodeId {
+    /// The level (light) index m of the node.
+    pub fn index(self) -> i64 {
+        match self {
+            NodeId::Edge(_, m) | NodeId::Vertex(_, m) => m,
+        }
+    }
+}
+
+/// One highlight line: a polyline through highlight nodes of one index m
+/// (Yong et al. §2.4). A closed line does not repeat its first point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HighlightLine {
+    /// Light index m (for circular lights: the index of the radius).
+    pub index: i64,
+    /// True when the polyline is a loop.
+    pub closed: bool,
+    /// Node positions in order (mesh units).
+    pub points: Vec<Vec3>,
+    /// The node behind each point.
+    pub nodes: Vec<NodeId>,
+}
+
+/// A highlight line model: all lines, sorted by index and then by their
+/// first node (deterministic).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct HighlightLines {
+    /// The polylines.
+    pub lines: Vec<HighlightLine>,
+}
+
+impl HighlightLines {
+    /// Total number of nodes over all lines.
+    pub fn node_count(&self) -> usize {
+        self.lines.iter().map(|l| l.nodes.len()).sum()
+    }
+}
+
+/// Which levels of the field are contoured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Levels {
+    /// Levels offset + m·spacing for every integer m (index m).
+    Periodic { spacing: f64, offset: f64 },
+    /// The single level `value`, reported with index `index`.
+    Single { value: f64, index: i64 },
+}
+
+impl Levels {
+    #[inline]
+    pub(crate) fn value(&self, m: i64) -> f64 {
+        match *self {
+            Levels::Periodic { spacing, offset } => offset + m as f64 * spacing,
+            Levels::Single { value, .. } => value,
+        }
+    }
+}
+
+/// Compact node key ordered by (m, kind, element).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub(crate) struct Key {
+    m: i64,
+    /// bit 32: 1 = edge, 0 = vertex; low 32 bits: element id.
+    elem: u64,
+}
+
+impl Key {
+    #[inline]
+    fn vertex(v: u32, m: i64) -> Key {
+        Key { m, elem: v as u64 }
+    }
+    #[inline]
+    fn edge(e: u32, m: i64) -> Key {
+        Key {
+            m,
+            elem: (1u64 << 32) | e as u64,
+        }
+    }
+    #[inline]
+    pub(crate) fn node(self) -> NodeId {
+        let id = self.elem as u32;
+        if self.elem >> 32 == 1 {
+            NodeId::Edge(EdgeId(id), self.m)
+        } else {
+            NodeId::Vertex(VertexId(id), self.m)
+        }
+    }
+}
+
+/// One segment inside a triangle, between two nodes of the same index.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Segment {
+    pub(crate) face: u32,
+    pub(crate) a: Key,
+    pub(crate) b: Key,
+}
+
+/// Segments of one triangle for all levels crossing it (Yong et al. §2.4).
+/// `max_levels` caps how many levels a single triangle may carry; a triangle
+/// crossed by more is skipped (the lines there are below mesh resolution).
+// one kernel over the field's parallel arrays; bundling them buys nothing
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub(crate) fn face_segments(
+    mesh: &SurfaceMesh,
+    f: FaceId,
+    values: &[f64],
+    branch: &[i8],
+    levels: Levels,
+    max_levels: i64,
+    edge_ok: &impl Fn(usize, usize) -> bool,
+    out: &mut Vec<Segment>,
+) {
+    let h0 = mesh.face_halfedge(f);
+    let h1 = mesh.next(h0);
+    let h2 = mesh.next(h1);
+    // vertices a -> b -> c; edge k joins vertex k and vertex k+1
+    let vs = [
+        mesh.from_vertex(h0).0,
+        mesh.to_vertex(h0).0,
+        mesh.to_vertex(h1).0,
+    ];
+    let br = branch[vs[0] as usize];
+    if br == 0 || branch[vs[1] as usize] != br || branch[vs[2] as usize] != br {
+        return;
+    }
+    let (a, b, c) = (vs[0] as usize, vs[1] as usize, vs[2] as usize);
+    if !(edge_ok(a, b) && edge_ok(b, c) && edge_ok(c, a)) {
+        return;
+    }
+    let es = [mesh.edge(h0).0, mesh.edge(h1).0, mesh.edge(h2).0];
+    let d = [
+        values[vs[0] as usize],
+        values[vs[1] as usize],
+        values[vs[2] as usize],
+    ];
+    let lo = d[0].min(d[1]).min(d[2]);
+    let hi = d[0].max(d[1]).max(d[2]);
+    let (m0, m1) = match levels {
+        Levels::Single { value, index } => {
+            if value < lo || value > hi {
+                return;
+            }
+            (index, index)
+        }
+        Levels::Periodic { spacing, offset } => {
+            let a = ((lo - offset) / spacing).floor();
+            let b = ((hi - offset) / spacing).ceil();
+            if !(b - a <= max_levels as f64 + 2.0) {
+                return;
+            }
+            (a as i64, b as i64)
+        }
+    };
+    for m in m0..=m1 {
+        let l = levels.value(m);
+        let s = [sign(d[0] - l), sign(d[1] - l), sign(d[2] - l)];
+        let zeros = s.iter().filter(|&&x| x == 0).count();
+        match zeros {
+            0 => {
+                let mut nodes = [Key::vertex(0, 0); 2];
+                let mut n = 0;
+                for k in 0..3 {
+                    if s[k] != s[(k + 1) % 3] {
+                        nodes[n] = Key::edge(es[k], m);
+                        n += 1;
+                    }
+                }
+                if n == 2 {
+                    out.push(seg(f, nodes[0], nodes[1]));
+                }
+            }
+            1 => {
+                let k = s.iter().position(|&x| x == 0).unwrap_or(0);
+                let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+                if s[k1] != s[k2] {
+                    // the edge opposite vertex k joins k1 and k2: edge index k1
+                    out.push(seg(f, Key::vertex(vs[k], m), Key::edge(es[k1], m)));
+                }
+            }
+            2 => {
+                // a highlight edge: both of its vertices lie on the level
+                let k = s.iter().position(|&x| x != 0).unwrap_or(0);
+                let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+                out.push(seg(f, Key::vertex(vs[k1], m), Key::vertex(vs[k2], m)));
+            }
+            _ => {}
+        }
+    }
+}
+
+#[inline]
+fn sign(x: f64) -> i8 {
+    if x > 0.0 {
+        1
+    } else if x < 0.0 {
+        -1
+    } else {
+        0
+    }
+}
+
+#[inline]
+fn seg(f: FaceId, a: Key, b: Key) -> Segment {
+    let (a, b) = if a <= b { (a, b) } else { (b, a) };
+    Segment { face: f.0, a, b }
+}
+
+/// Segments of all triangles, in face order (parallel, deterministic).
+pub(crate) fn all_segments(
+    mesh: &SurfaceMesh,
+    values: &[f64],
+    branch: &[i8],
+    levels: Levels,
+    max_levels: i64,
+    edge_ok: &(impl Fn(usize, usize) -> bool + Sync),
+) -> Vec<Segment> {
+    const CHUNK: usize = 4096;
+    let nf = mesh.face_count();
+    let chunks: Vec<Vec<Segment>> = (0..nf.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut out = Vec::new();
+            for f in c * CHUNK..((c + 1) * CHUNK).min(nf) {
+                face_segments(
+                    mesh,
+                    FaceId(f as u32),
+                    values,
+                    branch,
+                    levels,
+                    max_levels,
+                    edge_ok,
+                    &mut out,
+                );
+            }
+            out
+        })
+        .collect();
+    chunks.concat()
+}
+
+/// Position of a node: the vertex, or the point of level m on the edge by
+/// Yong et al. Eq. (4) as corrected in DESIGN.md §3:
+/// Q = ((ℓ − d2)·V1 + (d1 − ℓ)·V2) / (d1 − d2) with ℓ the level value.
+#[inline]
+pub(crate) fn node_position(
+    mesh: &SurfaceMesh,
+    values: &[f64],
+    levels: Levels,
+    node: NodeId,
+) -> Vec3 {
+    let p = mesh.positions();
+    match node {
+        NodeId::Vertex(v, _) => p[v.idx()],
+        NodeId::Edge(e, m) => {
+            let (v1, v2) = mesh.edge_vertices(e);
+            let (d1, d2) = (values[v1.idx()], values[v2.idx()]);
+            let l = levels.value(m);
+            let den = d1 - d2;
+            if den == 0.0 || !den.is_finite() {
+                return 0.5 * (p[v1.idx()] + p[v2.idx()]);
+            }
+            // convex weights, clamped against rounding
+            let t = ((d1 - l) / den).clamp(0.0, 1.0);
+            (1.0 - t) * p[v1.idx()] + t * p[v2.idx()]
+        }
+    }
+}
+
+/// Chains segments into polylines (open lines first from their end nodes,
+/// then loops), deterministically: nodes are visited in key order.
+/// Duplicate segments (a highlight edge seen from both triangles) count once.
+pub(crate) fn chain(
+    segments: &[Segment],
+    position: impl Fn(NodeId) -> Vec3 + Sync,
+) -> HighlightLines {
+    let mut pairs: Vec<(Key, Key)> = segments.iter().map(|s| (s.a, s.b)).collect();
+    pairs.par_sort_unstable();
+    pairs.dedup();
+    let mut keys: Vec<Key> = Vec::with_capacity(2 * pairs.len());
+    for &(a, b) in &pairs {
+        keys.push(a);
+        keys.push(b);
+    }
+    keys.par_sort_unstable();
+    keys.dedup();
+    let n = keys.len();
+    let idx = |k: &Key| keys.binary_search(k).unwrap_or(0);
+    let ends: Vec<(usize, usize)> = pairs.iter().map(|(a, b)| (idx(a), idx(b))).collect();
+    let mut offs = vec![0usize; n + 1];
+    for &(a, b) in &ends {
+        offs[a + 1] += 1;
+        offs[b + 1] += 1;
+    }
+    for i in 0..n {
+        offs[i + 1] += offs[i];
+    }
+    let mut fill = offs.clone();
+    let mut adj = vec![(0usize, 0usize); offs[n]];
+    for (s, &(a, b)) in ends.iter().enumerate() {
+        adj[fill[a]] = (b, s);
+        fill[a] += 1;
+        adj[fill[b]] = (a, s);
+        fill[b] += 1;
+    }
+    let deg = |v: usize| offs[v + 1] - offs[v];
+    let mut used = vec![false; ends.len()];
+    let mut walks: Vec<(bool, Vec<usize>)> = Vec::new();
+    let walk = |start: usize, first: (usize, usize), used: &mut Vec<bool>| -> (bool, Vec<usize>) {
+        let mut path = vec![start];
+        let (mut cur, mut s) = first;
+        loop {
+            used[s] = true;
+            if cur == start {
+                return (true, path);
+            }
+            path.push(cur);
+            if deg(cur) != 2 {
+                return (false, path);
+            }
+            match adj[offs[cur]..offs[cur + 1]]
+                .iter()
+                .find(|(_, t)| !used[*t])
+            {
+                Some(&(nxt, t)) => {
+                    cur = nxt;
+                    s = t;
+                }
+                None => return (false, path),
+            }
+        }
+    };
+    for v in 0..n {
+        if deg(v) == 2 {
+            continue;
+        }
+        for k in offs[v]..offs[v + 1] {
+            let (w, s) = adj[k];
+            if !used[s] {
+                walks.push(walk(v, (w, s), &mut used));
+            }
+        }
+    }
+    for v in 0..n {
+        for k in offs[v]..offs[v + 1] {
+            let (w, s) = adj[k];
+            if !used[s] {
+                walks.push(walk(v, (w, s), &mut used));
+            }
+        }
+    }
+    let mut lines: Vec<HighlightLine> = walks
+        .into_par_iter()
+        .map(|(closed, path)| {
+            let nodes: Vec<NodeId> = path.iter().map(|&i| keys[i].node()).collect();
+            HighlightLine {
+                index: nodes.first().map_or(0, |n| n.index()),
+                closed,
+                points: nodes.iter().map(|&nd| position(nd)).collect(),
+                nodes,
+            }
+        })
+        .collect();
+    lines.sort_by(|a, b| {
+        (a.index, a.nodes.first().copied()).cmp(&(b.index, b.nodes.first().copied()))
+    });
+    HighlightLines { lines }
+}
+
+/// Contours `levels` of the per-vertex field (`values`, `branch`) into
+/// polylines; see the module documentation.
+pub(crate) fn contour(
+    mesh: &SurfaceMesh,
+    values: &[f64],
+    branch: &[i8],
+    levels: Levels,
+    max_levels: i64,
+    edge_ok: &(impl Fn(usize, usize) -> bool + Sync),
+) -> HighlightLines {
+    let segs = all_segments(mesh, values, branch, levels, max_levels, edge_ok);
+    chain(&segs, |n| node_position(mesh, values, levels, n))
+}

@@ -1,0 +1,308 @@
+//! The highlight line model of a triangle mesh under an array of linear
+//! lights: Yong et al. §2, Algorithm 1, with the corrections of DESIGN.md §3.
+
+use super::HighlightError;
+use super::contour::{self, Levels, NodeId, Segment};
+use super::light::LightArray;
+use super::{HighlightBands, HighlightLines};
+use crate::Vec3;
+use crate::geom;
+use crate::mesh::{FaceId, SurfaceMesh, VertexId};
+use rayon::prelude::*;
+
+/// Options of the highlight line model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HighlightOptions {
+    /// Smallest |Z·N| for which a vertex gets a highlight distance (default
+    /// 0.1, normals within about 84° of the light plane). Below it the
+    /// normal line meets the light plane too far away and d_P runs off to
+    /// infinity; edges at such vertices, and edges where Z·N changes sign,
+    /// carry no nodes (DESIGN.md §3).
+    pub min_normal_cos: f64,
+    /// Most levels (lights) one triangle may be crossed by (default 4);
+    /// a triangle crossed by more is skipped: those lines are below the
+    /// mesh resolution (this happens only near silhouettes).
+    pub max_lines_per_face: u32,
+}
+
+impl Default for HighlightOptions {
+    fn default() -> Self {
+        HighlightOptions {
+            min_normal_cos: 0.1,
+            max_lines_per_face: 4,
+        }
+    }
+}
+
+impl HighlightOptions {
+    /// Sets [`HighlightOptions::min_normal_cos`].
+    pub fn min_normal_cos(mut self, c: f64) -> Self {
+        self.min_normal_cos = c;
+        self
+    }
+    /// Sets [`HighlightOptions::max_lines_per_face`].
+    pub fn max_lines_per_face(mut self, n: u32) -> Self {
+        self.max_lines_per_face = n;
+        self
+    }
+    fn check(&self) -> Result<(), HighlightError> {
+        if !(self.min_normal_cos >= 0.0 && self.min_normal_cos < 1.0) {
+            return Err(HighlightError::InvalidOption(format!(
+                "min_normal_cos must lie in [0, 1), got {}",
+                self.min_normal_cos
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The highlight line model of a triangle mesh (Yong et al. Algorithm 1):
+/// per-vertex normals (Eq. (3)) and highlight distances (Eq. (1), corrected),
+/// the segments of every triangle (§2.4), and the polylines built from them.
+///
+/// Keeps its per-vertex and per-face state so that
+/// [`HighlightModel::update`] can re-derive only what a moved vertex set
+/// touches (the fairing loop of Yong et al. Algorithm 2, step 9).
+#[derive(Clone, Debug)]
+pub struct HighlightModel {
+    light: LightArray,
+    options: HighlightOptions,
+    normals: Vec<Vec3>,
+    distances: Vec<f64>,
+    /// sign of Z·N, 0 where the distance is undefined
+    branch: Vec<i8>,
+    /// segments sorted by face
+    segments: Vec<Segment>,
+}
+
+/// Distance value and branch of one vertex.
+#[inline]
+fn vertex_distance(light: &LightArray, p: Vec3, n: Vec3, min_cos: f64) -> (f64, i8) {
+    match light.highlight_distance(p, n, min_cos) {
+        Some(d) => (
+            d,
+            if light.plane_normal().dot(n) > 0.0 {
+                1
+            } else {
+                -1
+            },
+        ),
+        None => (0.0, 0),
+    }
+}
+
+impl HighlightModel {
+    /// Builds the model (Yong et al. Algorithm 1). Errors when the mesh has
+    /// a face that is not a triangle or an option is out of range.
+    /// Degenerate triangles are harmless: they contribute no normal weight
+    /// and their segments have zero length.
+    pub fn new(
+        mesh: &SurfaceMesh,
+        light: LightArray,
+        options: HighlightOptions,
+    ) -> Result<Self, HighlightError> {
+        options.check()?;
+        mesh.require_triangles()?;
+        let normals = geom::vertex_normals(mesh);
+        let p = mesh.positions();
+        let (distances, branch): (Vec<f64>, Vec<i8>) = p
+            .par_iter()
+            .zip(normals.par_iter())
+            .map(|(&x, &n)| vertex_distance(&light, x, n, options.min_normal_cos))
+            .unzip();
+        let segments = contour::all_segments(
+            mesh,
+            &distances,
+            &branch,
+            Self::levels_of(&light),
+            options.max_lines_per_face as i64,
+            &|_, _| true,
+        );
+        Ok(HighlightModel {
+            light,
+            options,
+            normals,
+            distances,
+            branch,
+            segments,
+        })
+    }
+
+    fn levels_of(light: &LightArray) -> Levels {
+        Levels::Periodic {
+            spacing: light.spacing(),
+            offset: 0.0,
+        }
+    }
+
+    /// The light array.
+    pub fn light(&self) -> &LightArray {
+        &self.light
+    }
+    /// The options.
+    pub fn options(&self) -> &HighlightOptions {
+        &self.options
+    }
+    /// Unit vertex normals, Yong et al. Eq. (3).
+    pub fn normals(&self) -> &[Vec3] {
+        &self.normals
+    }
+    /// Highlight distance d_P per vertex, Eq. (1) corrected (mesh units);
+    /// `None` where |Z·N| is below `min_normal_cos`.
+    pub fn distance(&self, v: VertexId) -> Option<f64> {
+        (self.branch[v.idx()] != 0).then(|| self.distances[v.idx()])
+    }
+    /// All highlight distances (0 where undefined; see [`Self::distance`]).
+    pub fn distances(&self) -> &[f64] {
+        &self.distances
+    }
+    /// Number of segments (highlight edges seen from both sides count twice).
+    pub fn segment_count(&self) -> usize {
+        self.segments.len()
+    }
+
+    /// Position of a node on the current mesh: the vertex, or the point of
+    /// Yong et al. Eq. (4) as corrected in DESIGN.md §3,
+    /// ((m·s − d2)·V1 + (d1 − m·s)·V2) / (d1 − d2).
+    pub fn node_position(&self, mesh: &SurfaceMesh, node: NodeId) -> Vec3 {
+        contour::node_position(mesh, &self.distances, Self::levels_of(&self.light), node)
+    }
+
+    /// The highlight lines: segments chained into open or closed polylines,
+    /// each with its light index m (Yong et al. §2.4). `mesh` must be the
+    /// mesh the model was built or last updated with.
+    pub fn lines(&self, mesh: &SurfaceMesh) -> HighlightLines {
+        let levels = Self::levels_of(&self.light);
+        contour::chain(&self.segments, |n| {
+            contour::node_position(mesh, &self.distances, levels, n)
+        })
+    }
+
+    /// Incremental update after the vertices in `moved` changed position
+    /// (connectivity unchanged). Recomputes normals and distances of the
+    /// moved vertices and their one-ring neighbours (whose Eq. (3) normals
+    /// depend on the moved positions) and the segments of every triangle
+    /// touching those vertices. The result equals a full rebuild exactly.
+    /// Returns the number of vertices recomputed.
+    pub fn update(
+        &mut self,
+        mesh: &SurfaceMesh,
+        moved: &[VertexId],
+    ) -> Result<usize, HighlightError> {
+        if mesh.vertex_count() != self.distances.len() {
+            return Err(HighlightError::InvalidOption(format!(
+                "the mesh has {} vertices, the model {}",
+                mesh.vertex_count(),
+                self.distances.len()
+            )));
+        }
+        let nv = mesh.vertex_count() as u32;
+        let mut affected: Vec<u32> = Vec::new();
+        for &v in moved {
+            if v.0 >= nv {
+                return Err(HighlightError::InvalidOption(format!(
+                    "moved vertex {} out of range ({} vertices)",
+                    v.0, nv
+                )));
+            }
+            affected.push(v.0);
+            affected.extend(mesh.one_ring(v).map(|w| w.0));
+        }
+        affected.sort_unstable();
+        affected.dedup();
+        let p = mesh.positions();
+        let min_cos = self.options.min_normal_cos;
+        let fresh: Vec<(Vec3, f64, i8)> = affected
+            .par_iter()
+            .map(|&v| {
+                let n = geom::vertex_normal(mesh, VertexId(v));
+                let (d, b) = vertex_distance(&self.light, p[v as usize], n, min_cos);
+                (n, d, b)
+            })
+            .collect();
+        for (&v, &(n, d, b)) in affected.iter().zip(&fresh) {
+            self.normals[v as usize] = n;
+            self.distances[v as usize] = d;
+            self.branch[v as usize] = b;
+        }
+        let mut faces: Vec<u32> = affected
+            .iter()
+            .flat_map(|&v| mesh.vertex_faces(VertexId(v)).map(|f| f.0))
+            .collect();
+        faces.sort_unstable();
+        faces.dedup();
+        let levels = Self::levels_of(&self.light);
+        let mut new_segments = Vec::new();
+        for &f in &faces {
+            contour::face_segments(
+                mesh,
+                FaceId(f),
+                &self.distances,
+                &self.branch,
+                levels,
+                self.options.max_lines_per_face as i64,
+                &|_, _| true,
+                &mut new_segments,
+            );
+        }
+        let old = std::mem::take(&mut self.segments);
+        let mut merged = Vec::with_capacity(old.len() + new_segments.len());
+        let mut fresh_iter = new_segments.into_iter().peekable();
+        for s in old {
+            if faces.binary_search(&s.face).is_ok() {
+                continue;
+            }
+            while let Some(n) = fresh_iter.peek() {
+                if n.face < s.face {
+                    merged.push(*n);
+                    fresh_iter.next();
+                } else {
+                    break;
+                }
+            }
+            merged.push(s);
+        }
+        merged.extend(fresh_iter);
+        self.segments = merged;
+        Ok(affected.len())
+    }
+
+    /// Band boundaries of lights of radius `rho` (> 0): the level sets
+    /// d_P = m·s − ρ (`lower`) and d_P = m·s + ρ (`upper`), each reported
+    /// with the index m of its light; a band is the strip between them.
+    pub fn bands(&self, mesh: &SurfaceMesh, rho: f64) -> Result<HighlightBands, HighlightError> {
+        if !(rho > 0.0) || !rho.is_finite() {
+            return Err(HighlightError::InvalidOption(format!(
+                "band radius must be a positive finite number, got {rho}"
+            )));
+        }
+        let s = self.light.spacing();
+        let max = self.options.max_lines_per_face as i64;
+        let band = |offset: f64| {
+            contour::contour(
+                mesh,
+                &self.distances,
+                &self.branch,
+                Levels::Periodic { spacing: s, offset },
+                max,
+                &|_, _| true,
+            )
+        };
+        Ok(HighlightBands {
+            radius: rho,
+            lower: band(-rho),
+            upper: band(rho),
+        })
+    }
+}
+
+/// The highlight lines of a triangle mesh under a linear light array
+/// (Yong et al. Algorithm 1 with Eq. (1), (3), (4) as corrected in
+/// DESIGN.md §3). Errors on non-triangle meshes.
+pub fn highlight_lines(
+    mesh: &SurfaceMesh,
+    light: &LightArray,
+    options: &HighlightOptions,
+) -> Result<HighlightLines, HighlightError> {
+    Ok(HighlightModel::new(mesh, *light, *options)?.lines(mesh))
+}

@@ -1,0 +1,738 @@
+//! Closed-form tests of the highlight line model (Yong et al. §2) and the
+//! circular lights (Nishiyama et al. §2).
+
+use super::*;
+use crate::Vec3;
+use crate::geom;
+use crate::mesh::{SurfaceMesh, VertexId};
+use crate::shapes;
+use std::f64::consts::PI;
+
+/// Deterministic pseudo-random numbers in [-1, 1).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+    fn vec(&mut self) -> Vec3 {
+        Vec3::new(self.next(), self.next(), self.next())
+    }
+}
+
+#[test]
+fn distance_equals_explicit_line_plane_intersection() {
+    let mut rng = Rng(12345);
+    let mut checked = 0;
+    for _ in 0..200 {
+        let light = LightArray::new(
+            rng.vec() * 3.0,
+            rng.vec(),
+            rng.vec(),
+            0.1 + rng.next().abs(),
+        )
+        .unwrap();
+        let p = rng.vec() * 2.0;
+        let n = rng.vec().normalize();
+        let z = light.plane_normal();
+        let Some(d) = light.highlight_distance(p, n, 1e-3) else {
+            assert!(z.dot(n).abs() < 1e-3);
+            continue;
+        };
+        // explicit intersection X = P + tN with the plane (X - A0)·Z = 0
+        let t = (light.plane_point() - p).dot(z) / n.dot(z);
+        let x = p + t * n;
+        assert!((x - light.plane_point()).dot(z).abs() < 1e-9);
+        let want = (x - light.plane_point()).dot(z.cross(light.direction()));
+        assert!(
+            (d - want).abs() < 1e-9 * (1.0 + want.abs()),
+            "{d} vs {want}"
+        );
+        checked += 1;
+    }
+    assert!(checked > 150);
+    // index convention: a normal line through light m gives d = m·s
+    let light = LightArray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::Z, Vec3::X, 0.25).unwrap();
+    assert_eq!(light.across(), Vec3::Y);
+    for m in -4..=4 {
+        let target = light.light_point(m) + 0.7 * light.direction();
+        let p = Vec3::new(0.3, -0.2, 0.1);
+        let n = (target - p).normalize();
+        let d = light.highlight_distance(p, n, 0.0).unwrap();
+        assert!((d - m as f64 * 0.25).abs() < 1e-12, "m {m}: {d}");
+        // the opposite normal (same line) gives the same value
+        let d2 = light.highlight_distance(p, -n, 0.0).unwrap();
+        assert!((d2 - d).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn light_array_validation_and_json() {
+    let l = LightArray::new(
+        Vec3::ZERO,
+        Vec3::new(0.0, 0.0, 2.0),
+        Vec3::new(1.0, 0.0, 1.0),
+        0.5,
+    )
+    .unwrap();
+    assert!(
+        (l.direction() - Vec3::X).length() < 1e-15,
+        "H made orthogonal to Z"
+    );
+    assert!((l.plane_normal() - Vec3::Z).length() < 1e-15);
+    assert!(LightArray::new(Vec3::ZERO, Vec3::Z, Vec3::new(0.0, 0.0, -3.0), 1.0).is_err());
+    assert!(LightArray::new(Vec3::ZERO, Vec3::ZERO, Vec3::X, 1.0).is_err());
+    assert!(LightArray::new(Vec3::ZERO, Vec3::Z, Vec3::X, 0.0).is_err());
+    assert!(LightArray::new(Vec3::ZERO, Vec3::Z, Vec3::X, f64::NAN).is_err());
+    assert!(LightArray::new(Vec3::splat(f64::INFINITY), Vec3::Z, Vec3::X, 1.0).is_err());
+    let json = serde_json::to_string(&l).unwrap();
+    assert!(json.contains("\"plane_point\":[0.0,0.0,0.0]") && json.contains("\"spacing\":0.5"));
+    let back: LightArray = serde_json::from_str(&json).unwrap();
+    assert_eq!(back, l);
+    let parsed: LightArray = serde_json::from_str(
+        r#"{"plane_point":[1,2,3],"plane_normal":[0,0,1],"direction":[0,1,0],"spacing":0.2}"#,
+    )
+    .unwrap();
+    assert_eq!(parsed.plane_point(), Vec3::new(1.0, 2.0, 3.0));
+    assert!(
+        serde_json::from_str::<LightArray>(
+            r#"{"plane_point":[0,0,0],"plane_normal":[0,0,1],"direction":[0,0,1],"spacing":1}"#
+        )
+        .is_err()
+    );
+    assert!(
+        serde_json::from_str::<LightArray>(
+            r#"{"plane_point":[0,0,0],"plane_normal":[0,0,1],"direction":[1,0,0],"spacing":-1}"#
+        )
+        .is_err()
+    );
+    // defaults: plane above the box along +z, ~20 lights across
+    let d = LightArray::default_for(Vec3::new(-1.0, -2.0, 0.0), Vec3::new(1.0, 2.0, 0.5), None);
+    assert_eq!(d.plane_normal(), Vec3::Z);
+    assert!(d.plane_point().z > 0.5);
+    let width = 4.0 * d.across().y.abs() + 2.0 * d.across().x.abs();
+    assert!((width / d.spacing() - 20.0).abs() < 1e-9);
+    let v = LightArray::default_for(Vec3::ZERO, Vec3::ONE, Some(Vec3::new(1.0, 0.0, 0.0)));
+    assert_eq!(v.plane_normal(), Vec3::X);
+    assert!(v.plane_point().x > 1.0);
+    let degenerate = LightArray::default_for(Vec3::ONE, Vec3::ONE, Some(Vec3::ZERO));
+    assert!(degenerate.spacing() > 0.0);
+}
+
+/// Cylinder of radius r about z, lights parallel to the axis in the plane
+/// x = D: d = −D tan φ, so line m is the straight line at tan φ = −m s / D.
+#[test]
+fn cylinder_gives_straight_lines_at_computable_angles() {
+    let (r, h, dd, s) = (1.0, 3.0, 4.0, 0.5);
+    let mesh = shapes::cylinder(r, h, 256, 40);
+    let light = LightArray::new(Vec3::new(dd, 0.0, 0.0), Vec3::X, Vec3::Z, s).unwrap();
+    let lines = highlight_lines(&mesh, &light, &HighlightOptions::default()).unwrap();
+    let mut seen = std::collections::BTreeSet::new();
+    for line in &lines.lines {
+        let m = line.index;
+        seen.insert(m);
+        let phi_m = (-(m as f64) * s / dd).atan();
+        for p in &line.points {
+            let phi = p.y.atan2(p.x);
+            // front side (cos φ > 0) only: the normal line meets the plane
+            // behind the back side at the antipodal angle
+            let dphi = if p.x > 0.0 {
+                phi - phi_m
+            } else {
+                (phi - phi_m - PI)
+                    .rem_euclid(2.0 * PI)
+                    .min((phi_m + PI - phi).rem_euclid(2.0 * PI))
+            };
+            assert!(dphi.abs() < 2e-3, "line {m}: angle {phi} vs {phi_m}");
+        }
+        // straight: spans the full height
+        let zmin = line
+            .points
+            .iter()
+            .map(|p| p.z)
+            .fold(f64::INFINITY, f64::min);
+        let zmax = line
+            .points
+            .iter()
+            .map(|p| p.z)
+            .fold(f64::NEG_INFINITY, f64::max);
+        assert!(
+            zmin < 1e-9 && zmax > h - 1e-9,
+            "line {m} spans [{zmin}, {zmax}]"
+        );
+        assert!(!line.closed);
+    }
+    // |m| s / D up to tan(acos 0.05) ~ 20: lines -20..=20 over the front
+    for m in -12..=12 {
+        assert!(seen.contains(&m), "missing line {m}");
+    }
+    // node positions obey Eq. (4): the interpolated distance equals m·s
+    let model = HighlightModel::new(&mesh, light, HighlightOptions::default()).unwrap();
+    for line in &lines.lines {
+        for (node, p) in line.nodes.iter().zip(&line.points) {
+            assert_eq!(model.node_position(&mesh, *node), *p);
+            if let NodeId::Edge(e, m) = *node {
+                let (a, b) = mesh.edge_vertices(e);
+                let (pa, pb) = (mesh.position(a), mesh.position(b));
+                let t = (*p - pa).length() / (pb - pa).length();
+                let da = model.distance(a).unwrap();
+                let db = model.distance(b).unwrap();
+                let d = (1.0 - t) * da + t * db;
+                assert!((d - m as f64 * s).abs() < 1e-9 * (1.0 + d.abs()));
+            }
+        }
+    }
+}
+
+/// Sphere of radius R at the origin, lights along x in the plane z = D:
+/// d = D N_y / N_z, so line m lies in the plane D y = m s z through the x axis
+/// (an arc of a great circle).
+#[test]
+fn sphere_gives_great_circle_arcs() {
+    let (r, dd, s) = (1.0, 3.0, 0.4);
+    let mesh = shapes::icosphere(r, 5);
+    let light = LightArray::new(Vec3::new(0.0, 0.0, dd), Vec3::Z, Vec3::X, s).unwrap();
+    let lines = highlight_lines(&mesh, &light, &HighlightOptions::default()).unwrap();
+    assert!(lines.lines.len() > 20);
+    let (mut worst, mut worst_front): (f64, f64) = (0.0, 0.0);
+    for line in &lines.lines {
+        let plane_n = Vec3::new(0.0, dd, -(line.index as f64) * s).normalize();
+        for p in &line.points {
+            worst = worst.max(p.dot(plane_n).abs());
+            if p.z.abs() > 0.5 {
+                worst_front = worst_front.max(p.dot(plane_n).abs());
+            }
+        }
+    }
+    // discretisation error: larger near the silhouette |N_z| -> 0.05
+    assert!(
+        worst < 1e-2,
+        "distance from the great-circle planes {worst}"
+    );
+    assert!(worst_front < 4e-3, "away from the silhouette {worst_front}");
+    // line 0 is the great circle y = 0 (upper and lower half)
+    let zero: Vec<_> = lines.lines.iter().filter(|l| l.index == 0).collect();
+    let len: f64 = zero
+        .iter()
+        .map(|l| {
+            l.points
+                .windows(2)
+                .map(|w| (w[1] - w[0]).length())
+                .sum::<f64>()
+        })
+        .sum();
+    // |N_z| >= 0.1 cuts out asin(0.1) on both sides of x = ±R
+    let want = 2.0 * PI * r - 4.0 * 0.1f64.asin() * r;
+    assert!(
+        (len - want).abs() < 0.05,
+        "length of line 0: {len} vs {want}"
+    );
+}
+
+#[test]
+fn planes_parallel_and_perpendicular_to_the_lights() {
+    let s = 0.2;
+    let light = LightArray::new(Vec3::new(0.0, 0.0, 2.0), Vec3::Z, Vec3::X, s).unwrap();
+    // a horizontal plane: normal lines vertical, straight lines under each light
+    let mesh = shapes::plane(21);
+    let lines = highlight_lines(&mesh, &light, &HighlightOptions::default()).unwrap();
+    for line in &lines.lines {
+        for p in &line.points {
+            assert!((p.y - line.index as f64 * s).abs() < 1e-12);
+        }
+    }
+    assert_eq!(
+        lines.lines.iter().map(|l| l.index).collect::<Vec<_>>(),
+        (-5..=5).collect::<Vec<_>>()
+    );
+    // a vertical plane (Z·N = 0 everywhere): no nodes at all
+    let p = mesh
+        .positions()
+        .iter()
+        .map(|q| Vec3::new(q.x, 0.0, q.y))
+        .collect();
+    let mut vertical = mesh.clone();
+    vertical.set_positions(p).unwrap();
+    let model = HighlightModel::new(&vertical, light, HighlightOptions::default()).unwrap();
+    assert_eq!(model.segment_count(), 0);
+    assert!(model.lines(&vertical).lines.is_empty());
+    assert!(vertical.vertices().all(|v| model.distance(v).is_none()));
+    // a horizontal plane lying between two lights: no nodes
+    let small = shapes::height_field(8, 8, (-0.05, 0.05), (0.03, 0.09), |_, _| 0.0);
+    let m = HighlightModel::new(&small, light, HighlightOptions::default()).unwrap();
+    assert_eq!(m.segment_count(), 0);
+}
+
+#[test]
+fn vertex_nodes_and_highlight_edges() {
+    // plane grid with spacing equal to the grid step: every vertex row lies
+    // exactly on a light, so nodes are vertices and lines run along edges
+    let mesh = shapes::height_field(5, 5, (0.0, 1.0), (0.0, 1.0), |_, _| 0.0);
+    let light = LightArray::new(Vec3::new(0.0, 0.0, 1.0), Vec3::Z, Vec3::X, 0.25).unwrap();
+    let lines = highlight_lines(&mesh, &light, &HighlightOptions::default()).unwrap();
+    assert_eq!(lines.lines.len(), 5);
+    for (k, line) in lines.lines.iter().enumerate() {
+        assert_eq!(line.index, k as i64);
+        assert_eq!(line.nodes.len(), 5, "{line:?}");
+        assert!(line.nodes.iter().all(|n| matches!(n, NodeId::Vertex(_, _))));
+        assert!(!line.closed);
+    }
+}
+
+#[test]
+fn incremental_update_equals_full_recompute() {
+    let mut mesh = shapes::icosphere(1.0, 4);
+    let light = LightArray::new(
+        Vec3::new(0.2, 0.1, 3.0),
+        Vec3::new(0.1, 0.0, 1.0),
+        Vec3::X,
+        0.15,
+    )
+    .unwrap();
+    let opts = HighlightOptions::default();
+    let mut model = HighlightModel::new(&mesh, light, opts).unwrap();
+    let mut rng = Rng(777);
+    for round in 0..4 {
+        let moved: Vec<VertexId> = (0..20)
+            .map(|_| VertexId(((rng.next() + 1.0) * 0.5 * mesh.vertex_count() as f64) as u32))
+            .collect();
+        let normals = geom::vertex_normals(&mesh);
+        for &v in &moved {
+            mesh.positions_mut()[v.idx()] += 0.02 * normals[v.idx()] * (1.0 + rng.next());
+        }
+        let before = model.lines(&mesh);
+        let n = model.update(&mesh, &moved).unwrap();
+        assert!(
+            (20..400).contains(&n),
+            "round {round}: {n} vertices recomputed"
+        );
+        let full = HighlightModel::new(&mesh, light, opts).unwrap();
+        assert_eq!(model.lines(&mesh), full.lines(&mesh), "round {round}");
+        assert_eq!(model.distances(), full.distances());
+        assert_eq!(model.normals(), full.normals());
+        assert_ne!(before, full.lines(&mesh), "the moves must change something");
+    }
+    assert!(model.update(&mesh, &[VertexId(u32::MAX)]).is_err());
+}
+
+#[test]
+fn output_is_deterministic_and_finite() {
+    let mesh = shapes::torus(2.0, 0.7, 120, 60);
+    let light = LightArray::default_for(
+        Vec3::splat(-3.0),
+        Vec3::splat(3.0),
+        Some(Vec3::new(0.3, 0.2, 1.0)),
+    );
+    let a = highlight_lines(&mesh, &light, &HighlightOptions::default()).unwrap();
+    let b = highlight_lines(&mesh, &light, &HighlightOptions::default()).unwrap();
+    assert_eq!(a, b);
+    assert!(
+        a.lines
+            .iter()
+            .all(|l| l.points.iter().all(|p| p.is_finite()))
+    );
+    // every line has at least two nodes and consecutive nodes share a face
+    for l in &a.lines {
+        assert!(l.nodes.len() >= 2);
+        assert!(l.nodes.iter().all(|n| n.index() == l.index));
+    }
+}
+
+#[test]
+fn bad_input_is_reported_not_panicked() {
+    let quads = shapes::quad_grid(4, 4, (0.0, 1.0), (0.0, 1.0), |_, _| 0.0);
+    let light = LightArray::new(Vec3::new(0.0, 0.0, 1.0), Vec3::Z, Vec3::X, 0.1).unwrap();
+    assert!(matches!(
+        highlight_lines(&quads, &light, &HighlightOptions::default()),
+        Err(HighlightError::Mesh(_))
+    ));
+    assert!(circular_highlight_lines(&quads, &[]).is_err());
+    assert!(
+        HighlightModel::new(
+            &shapes::plane(3),
+            light,
+            HighlightOptions::default().min_normal_cos(1.5)
+        )
+        .is_err()
+    );
+    // degenerate triangles (zero area, coincident vertices): finite output
+    let pos = vec![
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(2.0, 0.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.3),
+        Vec3::new(1.0, 1.0, 0.3),
+    ];
+    let mesh = SurfaceMesh::new(pos, &[[0u32, 1, 3], [1, 2, 3], [0, 2, 1], [0, 3, 4]]);
+    if let Ok(mesh) = mesh {
+        let lines = highlight_lines(&mesh, &light, &HighlightOptions::default()).unwrap();
+        assert!(
+            lines
+                .lines
+                .iter()
+                .all(|l| l.points.iter().all(|p| p.is_finite()))
+        );
+    }
+    let flat = vec![Vec3::ZERO, Vec3::X, 2.0 * Vec3::X];
+    let mesh = SurfaceMesh::new(flat, &[[0u32, 1, 2]]).unwrap();
+    let lines = highlight_lines(&mesh, &light, &HighlightOptions::default()).unwrap();
+    assert!(lines.lines.is_empty());
+    let d = detect_irregularities(&mesh, &lines, 0.1, &DetectOptions::default()).unwrap();
+    assert!(d.regions.is_empty());
+    assert!(detect_irregularities(&mesh, &lines, 0.0, &DetectOptions::default()).is_err());
+}
+
+#[test]
+fn linear_bands_bracket_the_lines() {
+    let mesh = shapes::plane(41);
+    let s = 0.2;
+    let light = LightArray::new(Vec3::new(0.0, 0.0, 2.0), Vec3::Z, Vec3::X, s).unwrap();
+    let model = HighlightModel::new(&mesh, light, HighlightOptions::default()).unwrap();
+    let bands = model.bands(&mesh, 0.03).unwrap();
+    assert_eq!(bands.lower.lines.len(), bands.upper.lines.len());
+    assert!(!bands.lower.lines.is_empty());
+    for l in &bands.lower.lines {
+        assert!(
+            l.points
+                .iter()
+                .all(|p| (p.y - (l.index as f64 * s - 0.03)).abs() < 1e-12)
+        );
+    }
+    for l in &bands.upper.lines {
+        assert!(
+            l.points
+                .iter()
+                .all(|p| (p.y - (l.index as f64 * s + 0.03)).abs() < 1e-12)
+        );
+    }
+    assert!(model.bands(&mesh, 0.0).is_err());
+}
+
+/// Brute-force distance between the line Q + τN and the circle.
+fn brute_distance(light: &CircularLight, q: Vec3, n: Vec3) -> f64 {
+    let n = n.normalize();
+    let dist = |th: f64| {
+        let w = light.point(th) - q;
+        (w - w.dot(n) * n).length()
+    };
+    let k = 4000;
+    let mut best = (f64::INFINITY, 0.0);
+    for i in 0..k {
+        let th = 2.0 * PI * i as f64 / k as f64;
+        let d = dist(th);
+        if d < best.0 {
+            best = (d, th);
+        }
+    }
+    // golden-section refinement
+    let (mut a, mut b) = (best.1 - 2.0 * PI / k as f64, best.1 + 2.0 * PI / k as f64);
+    for _ in 0..100 {
+        let c = b - (b - a) * 0.618_033_988_75;
+        let d = a + (b - a) * 0.618_033_988_75;
+        if dist(c) < dist(d) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    dist(0.5 * (a + b))
+}
+
+#[test]
+fn circular_signed_distance_matches_brute_force() {
+    let mut rng = Rng(4242);
+    let mut checked = 0;
+    for _ in 0..300 {
+        let light =
+            CircularLight::new(rng.vec() * 2.0, rng.vec(), 0.2 + 2.0 * rng.next().abs()).unwrap();
+        let q = rng.vec() * 2.0;
+        let n = rng.vec();
+        let Some(a) = light.approach(q, n) else {
+            continue;
+        };
+        let want = brute_distance(&light, q, n);
+        assert!(
+            (a.signed_distance.abs() - want).abs() < 1e-7 * (1.0 + want),
+            "{} vs {want}",
+            a.signed_distance
+        );
+        // the nearest points: on the line at τ, on the circle at θ
+        let nn = n.normalize();
+        let d = light.point(a.theta) - (q + a.tau * nn);
+        assert!((d.length() - want).abs() < 1e-7 * (1.0 + want));
+        assert!(d.dot(nn).abs() < 1e-6 * (1.0 + want), "d ⟂ N");
+        checked += 1;
+    }
+    assert!(checked > 280);
+    // special cases: a normal line through the circle gives 0; N ∥ axis
+    let light = CircularLight::new(Vec3::new(0.0, 0.0, 2.0), Vec3::Z, 1.0).unwrap();
+    let q = Vec3::new(0.5, 0.0, 0.0);
+    let n = (Vec3::new(1.0, 0.0, 2.0) - q).normalize();
+    assert!(light.signed_distance(q, n).unwrap().abs() < 1e-10);
+    let d = light
+        .signed_distance(Vec3::new(0.25, 0.0, 0.0), Vec3::Z)
+        .unwrap();
+    assert!((d.abs() - 0.75).abs() < 1e-12);
+    // on the axis with N ∥ axis: every circle point is equally near
+    assert!(light.signed_distance(Vec3::ZERO, Vec3::Z).is_none());
+    assert!(light.signed_distance(Vec3::ZERO, Vec3::ZERO).is_none());
+    assert!(CircularLight::new(Vec3::ZERO, Vec3::Z, 0.0).is_err());
+    assert!(CircularLight::new(Vec3::ZERO, Vec3::ZERO, 1.0).is_err());
+    // the sign changes across the circle: a point moving across the zero
+    let ds: Vec<f64> = [-0.1, 0.1]
+        .iter()
+        .map(|dx| {
+            let q = Vec3::new(0.5 + dx, 0.0, 0.0);
+            light
+                .signed_distance(
+                    q,
+                    (Vec3::new(1.0, 0.0, 2.0) - Vec3::new(0.5, 0.0, 0.0)).normalize(),
+                )
+                .unwrap()
+        })
+        .collect();
+    assert!(ds[0] * ds[1] < 0.0, "{ds:?}");
+}
+
+/// A plane z = 0 under a circle of radius R at height H about the z axis: a
+/// point at radius ρ has vertical normal, so its normal line meets the circle
+/// iff ρ = R; the circular highlight lines are circles of radius R.
+#[test]
+fn circular_lines_on_a_plane_are_circles() {
+    let mesh = shapes::plane(81);
+    let radii = [0.3, 0.55, 0.8];
+    let lights = CircularLights {
+        center: [0.0, 0.0, 1.5],
+        axis: [0.0, 0.0, 1.0],
+        radii: radii.to_vec(),
+    }
+    .lights()
+    .unwrap();
+    let lines = circular_highlight_lines(&mesh, &lights).unwrap();
+    for (k, &r) in radii.iter().enumerate() {
+        let ls: Vec<_> = lines.lines.iter().filter(|l| l.index == k as i64).collect();
+        assert_eq!(ls.len(), 1, "radius {r}");
+        assert!(ls[0].closed);
+        for p in &ls[0].points {
+            assert!((p.truncate().length() - r).abs() < 2e-3, "radius {r}: {p}");
+        }
+    }
+    let bands = circular_highlight_bands(&mesh, &lights, 0.05).unwrap();
+    for l in bands.lower.lines.iter().chain(&bands.upper.lines) {
+        let r = radii[l.index as usize];
+        let rr = l.points[0].truncate().length();
+        assert!(((rr - r).abs() - 0.05).abs() < 2e-3, "band of {r} at {rr}");
+    }
+    assert!(circular_highlight_bands(&mesh, &lights, -1.0).is_err());
+}
+
+/// A sphere under a concentric circle on the z axis: by symmetry the lines
+/// are circles of latitude.
+#[test]
+fn circular_lines_on_a_sphere_are_latitude_circles() {
+    let mesh = shapes::icosphere(1.0, 5);
+    let lights = CircularLights {
+        center: [0.0, 0.0, 3.0],
+        axis: [0.0, 0.0, 1.0],
+        radii: vec![1.0, 2.0],
+    }
+    .lights()
+    .unwrap();
+    let lines = circular_highlight_lines(&mesh, &lights).unwrap();
+    for (k, r) in [1.0f64, 2.0].iter().enumerate() {
+        // normal line from (sin a, 0, cos a) hits (r, 0, 3) when
+        // r = sin a + t sin a, 3 = cos a + t cos a  =>  tan a = r / 3
+        let a = (r / 3.0).atan();
+        let ls: Vec<_> = lines
+            .lines
+            .iter()
+            .filter(|l| l.index == k as i64 && l.points[0].z > 0.0)
+            .collect();
+        assert!(!ls.is_empty());
+        for l in ls {
+            for p in &l.points {
+                assert!(
+                    (p.z - a.cos()).abs() < 5e-3,
+                    "radius {r}: z {} vs {}",
+                    p.z,
+                    a.cos()
+                );
+            }
+        }
+    }
+}
+
+fn bump_field(x: f64, y: f64) -> f64 {
+    0.15 * (1.3 * x).sin() * (0.9 * y).cos()
+}
+
+#[test]
+fn detection_finds_a_planted_bump_and_nothing_on_clean_shapes() {
+    let (c, sigma) = (Vec3::new(0.4, -0.3, 0.0), 0.12);
+    let bump = move |x: f64, y: f64| {
+        bump_field(x, y) + 0.01 * (-((x - c.x).powi(2) + (y - c.y).powi(2)) / (sigma * sigma)).exp()
+    };
+    let n = 161;
+    let mesh = shapes::height_field(n, n, (-2.0, 2.0), (-2.0, 2.0), bump);
+    let clean = shapes::height_field(n, n, (-2.0, 2.0), (-2.0, 2.0), bump_field);
+    let light =
+        LightArray::default_for(Vec3::new(-2.0, -2.0, -0.2), Vec3::new(2.0, 2.0, 0.2), None)
+            .with_spacing(0.1)
+            .unwrap();
+    let opts = DetectOptions::default();
+    let run = |m: &SurfaceMesh| {
+        let lines = highlight_lines(m, &light, &HighlightOptions::default()).unwrap();
+        detect_irregularities(m, &lines, light.spacing(), &opts).unwrap()
+    };
+    let det = run(&mesh);
+    assert!(!det.regions.is_empty(), "the bump must be found");
+    let top = &det.regions[0];
+    let p = mesh.positions();
+    let centroid = |f: crate::mesh::FaceId| {
+        let [a, b, cc] = mesh.triangle(f);
+        (p[a.idx()] + p[b.idx()] + p[cc.idx()]) / 3.0
+    };
+    let near_bump = top
+        .faces
+        .iter()
+        .any(|&f| (centroid(f) - c).truncate().length() < 0.5 * sigma);
+    assert!(
+        near_bump,
+        "top region must contain the bump centre: {:?}",
+        top.center
+    );
+    let far = det
+        .all_faces()
+        .iter()
+        .filter(|&&f| (centroid(f) - c).truncate().length() > 4.0 * sigma)
+        .count();
+    assert!(
+        far * 20 < det.all_faces().len().max(1),
+        "{far} of {} faces far from the bump",
+        det.all_faces().len()
+    );
+    assert!(top.score > 0.0);
+    // the same surface without the bump: nothing
+    let det = run(&clean);
+    assert!(
+        det.regions.is_empty(),
+        "clean field flagged: {:?}",
+        det.regions
+            .iter()
+            .map(|r| (r.center, r.score))
+            .collect::<Vec<_>>()
+    );
+    // clean sphere and cylinder: nothing
+    let sphere = shapes::icosphere(1.0, 5);
+    let l = LightArray::default_for(Vec3::splat(-1.0), Vec3::splat(1.0), None);
+    let lines = highlight_lines(&sphere, &l, &HighlightOptions::default()).unwrap();
+    let det = detect_irregularities(&sphere, &lines, l.spacing(), &opts).unwrap();
+    assert!(
+        det.regions.is_empty(),
+        "sphere flagged: {:?}",
+        det.regions
+            .iter()
+            .map(|r| (r.center, r.score))
+            .collect::<Vec<_>>()
+    );
+    let cyl = shapes::cylinder(1.0, 3.0, 200, 60);
+    let l = LightArray::new(
+        Vec3::new(4.0, 0.0, 1.5),
+        Vec3::X,
+        Vec3::new(0.0, 0.3, 1.0),
+        0.4,
+    )
+    .unwrap();
+    let lines = highlight_lines(&cyl, &l, &HighlightOptions::default()).unwrap();
+    let det = detect_irregularities(&cyl, &lines, l.spacing(), &opts).unwrap();
+    assert!(
+        det.regions.is_empty(),
+        "cylinder flagged: {:?}",
+        det.regions
+            .iter()
+            .map(|r| (r.center, r.score))
+            .collect::<Vec<_>>()
+    );
+}
+
+#[test]
+fn real_meshes_run_through_highlight_and_detect() {
+    for name in ["bunny_npm.obj", "spot.ply"] {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/meshes/");
+        let path = format!("{path}{name}");
+        if !std::path::Path::new(&path).exists() {
+            println!("skipped: ../shared/data not found");
+            return;
+        }
+        let mut mesh = crate::io::read_mesh(&path).unwrap();
+        if !mesh.is_triangle_mesh() {
+            mesh = crate::mesh::triangulate(&mesh).mesh;
+        }
+        let (lo, hi) = crate::mesh::bounding_box(mesh.positions()).unwrap();
+        for view in [Vec3::Z, Vec3::new(1.0, 0.5, 0.2)] {
+            let light = LightArray::default_for(lo, hi, Some(view));
+            let mut model = HighlightModel::new(&mesh, light, HighlightOptions::default()).unwrap();
+            let lines = model.lines(&mesh);
+            assert!(
+                lines.lines.len() > 10,
+                "{name}: {} lines",
+                lines.lines.len()
+            );
+            assert!(
+                lines
+                    .lines
+                    .iter()
+                    .all(|l| l.points.iter().all(|p| p.is_finite()) && l.points.len() >= 2)
+            );
+            let det = detect_irregularities(
+                &mesh,
+                &lines,
+                light.spacing(),
+                &DetectOptions {
+                    plane_normal: Some(light.plane_normal()),
+                    ..DetectOptions::default()
+                },
+            )
+            .unwrap();
+            assert_eq!(det.lines.len(), lines.lines.len());
+            assert!(
+                det.regions
+                    .iter()
+                    .all(|r| r.score > 0.0 && !r.faces.is_empty())
+            );
+            assert!(det.regions.windows(2).all(|w| w[0].score >= w[1].score));
+            // incremental update on a real mesh equals the full rebuild
+            let moved: Vec<VertexId> = (0..mesh.vertex_count() as u32)
+                .step_by(97)
+                .map(VertexId)
+                .collect();
+            let normals = geom::vertex_normals(&mesh);
+            let e = geom::mean_edge_length(&mesh);
+            for &v in &moved {
+                mesh.positions_mut()[v.idx()] += 0.2 * e * normals[v.idx()];
+            }
+            model.update(&mesh, &moved).unwrap();
+            let full = HighlightModel::new(&mesh, light, HighlightOptions::default()).unwrap();
+            assert_eq!(model.lines(&mesh), full.lines(&mesh), "{name}");
+        }
+        // circular lights on the real mesh: finite, deterministic
+        let c = 0.5 * (lo + hi) + (hi - lo).length() * Vec3::Z;
+        let lights = CircularLights {
+            center: c.to_array(),
+            axis: [0.0, 0.0, 1.0],
+            radii: vec![0.2 * (hi - lo).length(), 0.4 * (hi - lo).length()],
+        }
+        .lights()
+        .unwrap();
+        let a = circular_highlight_lines(&mesh, &lights).unwrap();
+        assert!(!a.lines.is_empty(), "{name}");
+        assert_eq!(a, circular_highlight_lines(&mesh, &lights).unwrap());
+        assert!(
+            a.lines
+                .iter()
+                .all(|l| l.points.iter().all(|p| p.is_finite()))
+        );
+    }
+}

@@ -1,0 +1,136 @@
+//! Pictures of meshes: the glue between [`crate::mesh`], [`crate::geom`] and
+//! the software renderer of [`crate::render`]. Polygon meshes are
+//! triangulated for drawing; vertices are smooth-shaded with area-weighted
+//! normals; scalar fields are colour-mapped with a legend.
+
+use crate::Vec3;
+use crate::geom::vertex_normals;
+use crate::mesh::{SurfaceMesh, triangulate};
+use crate::render::{
+    Colormap, Image, Legend, MeshLayer, PolylineLayer, RenderError, RenderOptions, Scene, render,
+    scalar_colors,
+};
+
+/// A mesh prepared for drawing: triangles and smooth vertex normals.
+#[derive(Clone, Debug)]
+pub struct MeshView {
+    /// Vertex positions (those of the mesh).
+    pub positions: Vec<Vec3>,
+    /// Triangles (polygons triangulated).
+    pub triangles: Vec<[u32; 3]>,
+    /// Unit vertex normals.
+    pub normals: Vec<Vec3>,
+    /// Polygon edges (for wireframes of quad meshes), as vertex pairs.
+    pub edges: Vec<[u32; 2]>,
+}
+
+impl MeshView {
+    /// Prepares `mesh` for drawing.
+    pub fn new(mesh: &SurfaceMesh) -> MeshView {
+        let triangles = if mesh.is_triangle_mesh() {
+            mesh.faces()
+                .map(|f| mesh.triangle(f).map(|v| v.0))
+                .collect()
+        } else {
+            let t = triangulate(mesh);
+            t.mesh
+                .faces()
+                .map(|f| t.mesh.triangle(f).map(|v| v.0))
+                .collect()
+        };
+        let edges = mesh
+            .edges()
+            .map(|e| {
+                let (a, b) = mesh.edge_vertices(e);
+                [a.0, b.0]
+            })
+            .collect();
+        MeshView {
+            positions: mesh.positions().to_vec(),
+            triangles,
+            normals: vertex_normals(mesh),
+            edges,
+        }
+    }
+
+    /// A smooth-shaded layer of this mesh.
+    pub fn layer(&self) -> MeshLayer<'_> {
+        MeshLayer::new(&self.positions, &self.triangles).with_normals(&self.normals)
+    }
+
+    /// The polygon edges as thin polylines (a wireframe that shows quads as
+    /// quads), in `color`.
+    pub fn edge_polylines(&self, color: [f32; 3], width_px: f32) -> Vec<PolylineLayer> {
+        self.edges
+            .iter()
+            .map(|&[a, b]| PolylineLayer {
+                points: vec![self.positions[a as usize], self.positions[b as usize]],
+                closed: false,
+                color,
+                width_px,
+            })
+            .collect()
+    }
+}
+
+/// A per-vertex scalar field to colour a mesh with.
+#[derive(Clone, Debug)]
+pub struct ScalarField<'a> {
+    /// Legend title, e.g. "mean curvature".
+    pub name: String,
+    /// One value per vertex.
+    pub values: &'a [f64],
+    /// Colour map (diverging maps are centred on 0).
+    pub colormap: Colormap,
+    /// Fixed range, or `None` for the robust automatic range.
+    pub range: Option<(f64, f64)>,
+}
+
+/// What to draw over one mesh.
+#[derive(Clone, Debug, Default)]
+pub struct Picture<'a> {
+    /// Optional colour-mapped scalar field.
+    pub scalar: Option<ScalarField<'a>>,
+    /// Polylines drawn over the surface (highlight lines, outlines).
+    pub polylines: Vec<PolylineLayer>,
+    /// Draw the polygon edges.
+    pub wireframe: bool,
+    /// Title at the top.
+    pub title: Option<String>,
+}
+
+/// Renders one mesh with an optional scalar field, polylines and wireframe.
+pub fn mesh_picture(
+    mesh: &SurfaceMesh,
+    picture: &Picture<'_>,
+    opts: &RenderOptions,
+) -> Result<Image, RenderError> {
+    let view = MeshView::new(mesh);
+    let mut legend = None;
+    let colors;
+    let mut layer = view.layer();
+    if let Some(field) = &picture.scalar {
+        let (c, (lo, hi)) = scalar_colors(field.values, field.colormap, field.range);
+        colors = c;
+        layer = layer.with_colors(&colors);
+        legend = Some(Legend {
+            title: field.name.clone(),
+            colormap: field.colormap,
+            min: lo,
+            max: hi,
+        });
+    }
+    let mut polylines = Vec::new();
+    if picture.wireframe {
+        polylines.extend(view.edge_polylines([0.08, 0.08, 0.1], 0.8));
+    }
+    polylines.extend(picture.polylines.iter().cloned());
+    let scene = Scene {
+        meshes: vec![layer],
+        polylines,
+        points: Vec::new(),
+        legend,
+        title: picture.title.clone(),
+    };
+    render(&scene, opts)
+}
