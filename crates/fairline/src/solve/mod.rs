@@ -5,8 +5,10 @@
 //! All matrices are faer `SparseColMat<usize, f64>`.
 
 mod cholesky;
+mod qp;
 
 pub use cholesky::{CholeskySolver, least_squares, normal_matrix, sparse_from_triplets};
+pub use qp::{BoxQpOptions, BoxQpSolution, solve_box_qp};
 
 use thiserror::Error;
 
