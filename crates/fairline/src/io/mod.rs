@@ -293,9 +293,6 @@ pub fn write_ply_with_vertex_properties(
     atomic_write(path, |w| ply::write(w, soup, props))
 }
 
-/// Named per-vertex scalar properties, in file order.
-pub type VertexProperties = Vec<(String, Vec<f64>)>;
-
 /// Reads a PLY file and every scalar vertex property other than `x`, `y`,
 /// `z` (which are in the soup), by name and in file order, converted to f64.
 /// Such values may be NaN or infinite; coordinates may not.
@@ -306,6 +303,9 @@ pub fn read_ply_vertex_properties(
     let bytes = read_bytes(path)?;
     ply::read(&bytes, path, true)
 }
+
+/// Named per-vertex scalar values, in file order: `(name, one value per vertex)`.
+pub type VertexProperties = Vec<(String, Vec<f64>)>;
 
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 

@@ -15,8 +15,8 @@ use std::io::{self, Write};
 use std::path::Path;
 
 use super::{
-    IoError, Lines, Location, capped_capacity, format_err, parse_f64, parse_i64, push_face, show,
-    tokens,
+    IoError, Lines, Location, VertexProperties as Extra, capped_capacity, format_err, parse_f64,
+    parse_i64, push_face, show, tokens,
 };
 use crate::Vec3;
 use crate::mesh::Soup;
@@ -301,11 +301,7 @@ struct Plan {
 
 /// Parses a PLY file; with `collect`, also returns the scalar vertex
 /// properties other than x, y, z.
-pub(super) fn read(
-    bytes: &[u8],
-    path: &Path,
-    collect: bool,
-) -> Result<(Soup, super::VertexProperties), IoError> {
+pub(super) fn read(bytes: &[u8], path: &Path, collect: bool) -> Result<(Soup, Extra), IoError> {
     if bytes.iter().all(|b| b.is_ascii_whitespace()) {
         return Err(format_err(path, Location::File, "empty file"));
     }
@@ -374,8 +370,6 @@ pub(super) fn read(
         Encoding::Big => read_binary(bytes, path, &header, &plan, true),
     }
 }
-
-type Extra = Vec<(String, Vec<f64>)>;
 
 /// The extra vertex properties to collect: (property index, name).
 fn extra_props(el: &Element, plan: &Plan) -> Vec<usize> {
