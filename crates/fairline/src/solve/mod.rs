@@ -1,12 +1,14 @@
 //! Sparse linear solvers shared by every algorithm: sparse Cholesky with a
 //! reusable symbolic factorisation, normal equations of sparse least-squares
-//! problems, and triplet assembly.
+//! problems, triplet assembly, and an exact bound-constrained QP solver.
 //!
 //! All matrices are faer `SparseColMat<usize, f64>`.
 
+mod box_qp;
 mod cholesky;
 mod qp;
 
+pub use box_qp::{BoxQpOptions, BoxQpSolution, box_qp};
 pub use cholesky::{CholeskySolver, least_squares, normal_matrix, sparse_from_triplets};
 pub use qp::{BoxQpOptions, BoxQpSolution, solve_box_qp};
 
