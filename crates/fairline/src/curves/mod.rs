@@ -39,7 +39,9 @@ impl CubicHermite {
     pub fn strain_energy(&self) -> f64 {
         // H'' = (12t−6)(P0−P1) + (6t−4)V0 + (6t−2)V1; integrals of products.
         let d = self.p0 - self.p1;
-        12.0 * d.length_squared() + 4.0 * self.v0.length_squared() + 4.0 * self.v1.length_squared()
+        12.0 * d.length_squared()
+            + 4.0 * self.v0.length_squared()
+            + 4.0 * self.v1.length_squared()
             + 2.0 * 2.0 * self.v0.dot(self.v1)
             + 2.0 * 6.0 * d.dot(self.v0)
             + 2.0 * 6.0 * d.dot(self.v1)
@@ -278,7 +280,8 @@ mod tests {
             .map(|i| {
                 let t = (i as f64 + 0.5) / n as f64;
                 let e = 1e-4;
-                let dd = (c.hermite.point(t + e) - 2.0 * c.hermite.point(t) + c.hermite.point(t - e))
+                let dd = (c.hermite.point(t + e) - 2.0 * c.hermite.point(t)
+                    + c.hermite.point(t - e))
                     / (e * e);
                 dd.length_squared() / n as f64
             })

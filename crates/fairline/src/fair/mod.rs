@@ -1,9 +1,8 @@
-//! Fairing: structure-line fairing of quad meshes (Grüner thesis ch. 4) and
-//! fair polyline networks with tolerance cylinders (§3.1.1).
+//! Placeholder: filled in by its issue.
 
-mod quad;
+pub mod quad;
 
 pub use quad::{
-    PolylineNetworkOptions, PolylineNetworkReport, QuadFairError, QuadFairOptions,
-    QuadFairReport, fair_polyline_network, fair_structure_lines, structure_energy,
+    PolylineNetworkOptions, PolylineNetworkReport, QuadFairError, QuadFairOptions, QuadFairReport,
+    fair_polyline_network, fair_structure_lines, structure_energy,
 };

@@ -402,9 +402,9 @@ impl Stage {
                 if c == usize::MAX {
                     b += t * w * cur[j];
                 } else if c < r {
+                    // lower triangle only; the pair (c, r) is met again
+                    // from row c, where it is skipped
                     trip.push((r, c, -t * w));
-                } else if c > r {
-                    trip.push((c, r, -t * w));
                 }
             }
             trip.push((r, r, diag));
@@ -443,7 +443,9 @@ pub fn implicit_smooth(
 ) -> Result<SmoothReport, SmoothError> {
     mesh.require_triangles()?;
     if !(opts.time_step > 0.0) || !opts.time_step.is_finite() {
-        return Err(SmoothError::InvalidOption("time step must be positive".into()));
+        return Err(SmoothError::InvalidOption(
+            "time step must be positive".into(),
+        ));
     }
     let c = &opts.constraints;
     let roles = roles(mesh, c)?;

@@ -48,7 +48,11 @@ fn moreton_sequin(x: Vec3, n: Vec3, q: &[Vec3]) -> (f64, Vec<f64>, Vec<f64>) {
         let t = d - d.dot(n) * n;
         let (tx, ty) = (t.dot(bx), t.dot(by));
         let tl = (tx * tx + ty * ty).sqrt();
-        let (tx, ty) = if tl > 0.0 { (tx / tl, ty / tl) } else { (0.0, 0.0) };
+        let (tx, ty) = if tl > 0.0 {
+            (tx / tl, ty / tl)
+        } else {
+            (0.0, 0.0)
+        };
         rows.push([tx * tx, tx * ty, ty * ty]);
         kappa.push(if l2 > 0.0 { 2.0 * d.dot(n) / l2 } else { 0.0 });
         d2.push(l2);
@@ -81,7 +85,8 @@ fn moreton_sequin(x: Vec3, n: Vec3, q: &[Vec3]) -> (f64, Vec<f64>, Vec<f64>) {
 /// (Eq. (26)–(27), boundary values H from the input mesh, sparse Cholesky,
 /// symbolic factorisation reused), (2) move each inner vertex along its
 /// normal by the t that makes its linearised Moreton–Séquin mean curvature
-/// equal H̃ (Eq. (29)); |t| is limited to half the mean length of its edges.
+/// equal H̃ (Eq. (29)), a Jacobi step damped by ½; |t| is limited to half
+/// the mean length of its edges.
 /// Iterates until max |t| / ē < ε.
 pub fn schneider_kobbelt(
     mesh: &mut SurfaceMesh,
@@ -100,10 +105,21 @@ pub fn schneider_kobbelt(
         .vertices()
         .map(|v| mesh.one_ring(v).map(|u| u.idx()).collect())
         .collect();
-    let normals0 = geom::vertex_normals(mesh);
-    // fixed mean curvature values at the constrained vertices
+    let mut normals0 = geom::vertex_normals_max(mesh);
+    // Fixed mean curvature values at the constrained vertices. A boundary
+    // vertex sees only half a fan, which tilts fan normals by O(h) and spoils
+    // the Moreton–Séquin fit, so its G¹ data (normal and H) come from a
+    // quadric fit over the two-ring ([`geom::quadric_fit`]; sign flipped to
+    // the Moreton–Séquin convention κ̃ = 2⟨d, n⟩/|d|²).
     let h_fixed: Vec<f64> = (0..n)
         .map(|i| {
+            let v = VertexId(i as u32);
+            if roles[i] != Role::Free && mesh.is_boundary_vertex(v) {
+                if let Some(f) = geom::quadric_fit(mesh, v) {
+                    normals0[i] = f.normal;
+                    return -f.mean;
+                }
+            }
             let q: Vec<Vec3> = nbrs[i].iter().map(|&j| input[j]).collect();
             moreton_sequin(input[i], normals0[i], &q).0
         })
@@ -123,7 +139,7 @@ pub fn schneider_kobbelt(
     while !converged && iterations < opts.max_iterations {
         iterations += 1;
         let p = work.positions().to_vec();
-        let mut normals = geom::vertex_normals(&work);
+        let mut normals = geom::vertex_normals_max(&work);
         for i in 0..n {
             if roles[i] != Role::Free {
                 normals[i] = normals0[i];
@@ -150,12 +166,15 @@ pub fn schneider_kobbelt(
             trip.push((r, r, diag.max(1e-300)));
         }
         let a = sparse_from_triplets(m, m, &trip)?;
-        let ok = solver.as_mut().is_some_and(|s| s.refactor(a.as_ref()).is_ok());
+        let ok = solver
+            .as_mut()
+            .is_some_and(|s| s.refactor(a.as_ref()).is_ok());
         if !ok {
             solver = Some(CholeskySolver::new(a.as_ref())?);
         }
         solver.as_ref().expect("set").solve_in_place(&mut rhs)?;
-        // (2) move along the normal so that H(q + t n) = H̃
+        // (2) move along the normal so that H(q + t n) = H̃ (Jacobi step,
+        // damped by ½: a full step overshoots the checkerboard mode)
         let mut worst: f64 = 0.0;
         let mut next = p.clone();
         for (r, &i) in unknown.iter().enumerate() {
@@ -175,7 +194,7 @@ pub fn schneider_kobbelt(
                 continue;
             }
             let lmean = q.iter().map(|x| x.distance(p[i])).sum::<f64>() / q.len() as f64;
-            let t = ((h - rhs[r]) / slope).clamp(-0.5 * lmean, 0.5 * lmean);
+            let t = (0.5 * (h - rhs[r]) / slope).clamp(-0.5 * lmean, 0.5 * lmean);
             if t.is_finite() {
                 next[i] = p[i] + t * ni;
                 worst = worst.max(t.abs() / ebar);

@@ -3,7 +3,7 @@
 use super::{Constraints, Role, SmoothError, SmoothReport, max_distance, roles};
 use crate::Vec3;
 use crate::geom;
-use crate::mesh::SurfaceMesh;
+use crate::mesh::{SurfaceMesh, VertexId};
 
 /// Options of [`spring_smooth`].
 #[derive(Clone, Debug, PartialEq)]
@@ -16,6 +16,10 @@ pub struct SpringOptions {
     /// Positional constraints. Boundary vertices are always fixed, as
     /// Yamada et al. require positional constraints on the boundary nodes.
     pub constraints: Constraints,
+    /// Normal constraints (Grüner §3.3): these vertices use the given
+    /// normal (normalised) instead of the estimated one. Boundary vertices
+    /// not listed get a normal from a quadric fit over the input two-ring.
+    pub normals: Vec<(VertexId, Vec3)>,
 }
 
 impl Default for SpringOptions {
@@ -24,6 +28,7 @@ impl Default for SpringOptions {
             epsilon: 1e-4,
             max_iterations: 200,
             constraints: Constraints::default(),
+            normals: Vec::new(),
         }
     }
 }
@@ -52,9 +57,44 @@ pub fn spring_smooth(
         .vertices()
         .map(|v| mesh.one_ring(v).map(|u| u.idx()).collect())
         .collect();
+    // Normal constraint at the boundary (Grüner §3.3): a boundary node sees
+    // half a fan, whose averaged normal is tilted by O(h) and would bend the
+    // whole patch; its normal is taken once from a quadric fit over the
+    // two-ring of the input ([`geom::quadric_fit`]).
+    let n = mesh.vertex_count();
+    let mut given = vec![None; n];
+    for &(v, nrm) in &opts.normals {
+        if v.idx() >= n {
+            return Err(SmoothError::FixedVertexOutOfRange {
+                vertex: v.idx(),
+                count: n,
+            });
+        }
+        let u = nrm.normalize_or_zero();
+        if u == Vec3::ZERO || !u.is_finite() {
+            return Err(SmoothError::InvalidOption(format!(
+                "normal constraint of vertex {} is not a direction",
+                v.idx()
+            )));
+        }
+        given[v.idx()] = Some(u);
+    }
+    let boundary_normals: Vec<(usize, Vec3)> = mesh
+        .vertices()
+        .filter_map(|v| match given[v.idx()] {
+            Some(u) => Some((v.idx(), u)),
+            None if roles[v.idx()] == Role::Fixed && mesh.is_boundary_vertex(v) => {
+                geom::quadric_fit(mesh, v).map(|f| (v.idx(), f.normal))
+            }
+            None => None,
+        })
+        .collect();
     while iterations < opts.max_iterations {
         iterations += 1;
-        let normals = geom::vertex_normals(&work);
+        let mut normals = geom::vertex_normals_max(&work);
+        for &(i, nrm) in &boundary_normals {
+            normals[i] = nrm;
+        }
         let p = work.positions_mut();
         let mut worst: f64 = 0.0;
         for i in 0..p.len() {

@@ -199,7 +199,11 @@ pub fn box_qp(
         for _ in 0..60 {
             let mut y: Vec<f64> = x.iter().zip(&d).map(|(a, b)| a + t * b).collect();
             project(&mut y);
-            let decrease: f64 = g.iter().zip(y.iter().zip(&x)).map(|(gi, (a, b))| gi * (a - b)).sum();
+            let decrease: f64 = g
+                .iter()
+                .zip(y.iter().zip(&x))
+                .map(|(gi, (a, b))| gi * (a - b))
+                .sum();
             let f = objective(&qm, c, &y);
             if f <= f0 + 1e-4 * decrease {
                 accepted = Some(y);
@@ -293,7 +297,9 @@ mod tests {
     fn dense_solve(a: &mut [Vec<f64>], b: &mut [f64]) -> bool {
         let n = b.len();
         for k in 0..n {
-            let p = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs())).unwrap();
+            let p = (k..n)
+                .max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))
+                .unwrap();
             if a[p][k].abs() < 1e-14 {
                 return false;
             }
@@ -335,10 +341,19 @@ mod tests {
                 };
             }
             let free: Vec<usize> = (0..n).filter(|&i| s[i] == 2).collect();
-            let mut a: Vec<Vec<f64>> = free.iter().map(|&i| free.iter().map(|&j| q[i][j]).collect()).collect();
+            let mut a: Vec<Vec<f64>> = free
+                .iter()
+                .map(|&i| free.iter().map(|&j| q[i][j]).collect())
+                .collect();
             let mut b: Vec<f64> = free
                 .iter()
-                .map(|&i| -c[i] - (0..n).filter(|&j| s[j] != 2).map(|j| q[i][j] * x[j]).sum::<f64>())
+                .map(|&i| {
+                    -c[i]
+                        - (0..n)
+                            .filter(|&j| s[j] != 2)
+                            .map(|j| q[i][j] * x[j])
+                            .sum::<f64>()
+                })
                 .collect();
             if !dense_solve(&mut a, &mut b) {
                 continue;
@@ -366,7 +381,11 @@ mod tests {
             let n = 1 + trial % 7;
             // Q = BᵀB + δI with a sparse-ish B.
             let b: Vec<Vec<f64>> = (0..n + 1)
-                .map(|_| (0..n).map(|_| if rng.next() > -0.3 { rng.next() } else { 0.0 }).collect())
+                .map(|_| {
+                    (0..n)
+                        .map(|_| if rng.next() > -0.3 { rng.next() } else { 0.0 })
+                        .collect()
+                })
                 .collect();
             let mut q = vec![vec![0.0; n]; n];
             for i in 0..n {
@@ -392,7 +411,12 @@ mod tests {
             assert!(sol.converged, "trial {trial}");
             for i in 0..n {
                 assert!(sol.x[i] >= l[i] && sol.x[i] <= u[i]);
-                assert!((sol.x[i] - xb[i]).abs() < 1e-8, "trial {trial}: {:?} vs {:?}", sol.x, xb);
+                assert!(
+                    (sol.x[i] - xb[i]).abs() < 1e-8,
+                    "trial {trial}: {:?} vs {:?}",
+                    sol.x,
+                    xb
+                );
             }
             assert!((sol.objective - fb).abs() < 1e-9 * (1.0 + fb.abs()));
         }
@@ -402,15 +426,39 @@ mod tests {
     fn box_qp_unconstrained_interior_solution_and_errors() {
         // Q = diag(2, 4), c = (-2, -4): minimiser (1, 1) inside the box.
         let q = sparse_from_triplets(2, 2, &[(0, 0, 2.0), (1, 1, 4.0)]).unwrap();
-        let s = box_qp(q.as_ref(), &[-2.0, -4.0], &[-5.0, -5.0], &[5.0, 5.0], &BoxQpOptions::default())
-            .unwrap();
+        let s = box_qp(
+            q.as_ref(),
+            &[-2.0, -4.0],
+            &[-5.0, -5.0],
+            &[5.0, 5.0],
+            &BoxQpOptions::default(),
+        )
+        .unwrap();
         assert_eq!(s.x, vec![1.0, 1.0]);
         assert_eq!(s.active, 0);
         // Crossed bounds and size mismatch are errors.
-        assert!(box_qp(q.as_ref(), &[0.0, 0.0], &[1.0, 0.0], &[0.0, 1.0], &BoxQpOptions::default()).is_err());
+        assert!(
+            box_qp(
+                q.as_ref(),
+                &[0.0, 0.0],
+                &[1.0, 0.0],
+                &[0.0, 1.0],
+                &BoxQpOptions::default()
+            )
+            .is_err()
+        );
         assert!(box_qp(q.as_ref(), &[0.0], &[0.0], &[0.0], &BoxQpOptions::default()).is_err());
         // Indefinite Q is reported.
         let bad = sparse_from_triplets(2, 2, &[(0, 0, -1.0), (1, 1, 1.0)]).unwrap();
-        assert!(box_qp(bad.as_ref(), &[1.0, 1.0], &[-1.0, -1.0], &[1.0, 1.0], &BoxQpOptions::default()).is_err());
+        assert!(
+            box_qp(
+                bad.as_ref(),
+                &[1.0, 1.0],
+                &[-1.0, -1.0],
+                &[1.0, 1.0],
+                &BoxQpOptions::default()
+            )
+            .is_err()
+        );
     }
 }

@@ -6,11 +6,9 @@
 
 mod box_qp;
 mod cholesky;
-mod qp;
 
 pub use box_qp::{BoxQpOptions, BoxQpSolution, box_qp};
 pub use cholesky::{CholeskySolver, least_squares, normal_matrix, sparse_from_triplets};
-pub use qp::{BoxQpOptions, BoxQpSolution, solve_box_qp};
 
 use thiserror::Error;
 
