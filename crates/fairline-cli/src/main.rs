@@ -11,6 +11,7 @@ mod detect;
 mod highlight;
 mod info;
 mod render;
+mod smooth;
 mod surface;
 
 use clap::{Parser, Subcommand};
@@ -38,6 +39,8 @@ enum Command {
     Highlight(highlight::Args),
     Detect(detect::Args),
     Render(render::Args),
+    Smooth(smooth::Args),
+    FairQuad(smooth::QuadArgs),
     Demo(demo::Args),
 }
 
@@ -49,6 +52,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Highlight(a) => highlight::run(a),
         Command::Detect(a) => detect::run(a),
         Command::Render(a) => render::run(a),
+        Command::Smooth(a) => smooth::run(a),
+        Command::FairQuad(a) => smooth::run_quad(a),
         Command::Demo(a) => demo::run(a),
     }
 }
