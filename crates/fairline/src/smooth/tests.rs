@@ -409,3 +409,155 @@ fn weights_options_and_hierarchical_boundary() {
         Err(SmoothError::FixedVertexOutOfRange { .. })
     ));
 }
+
+#[test]
+fn closed_forms_sphere_shrinkage_plane_invariance_and_large_implicit_steps() {
+    // implicit step on a sphere of radius R: L x = −(2/R) n A, so
+    // (M − tL) x' = M x gives R' = R / (1 + 2t/R²)
+    let r0 = 2.0;
+    let base = shapes::icosphere(r0, 4);
+    let mean_r = |m: &SurfaceMesh| {
+        m.positions().iter().map(|p| p.length()).sum::<f64>() / m.vertex_count() as f64
+    };
+    let e = geom::mean_edge_length(&base);
+    for ts in [1.0, 10.0] {
+        let mut m = base.clone();
+        implicit_smooth(
+            &mut m,
+            &ImplicitOptions {
+                time_step: ts,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let t = ts * e * e;
+        let want = r0 / (1.0 + 2.0 * t / (r0 * r0));
+        assert!(
+            (mean_r(&m) - want).abs() < 0.01 * (r0 - want),
+            "t {ts}: {} vs {want}",
+            mean_r(&m)
+        );
+        assert!(radial_spread(&m) < 1e-3);
+    }
+    // unconditionally stable: a step 10⁵ ē² shrinks toward the centre
+    // without blowing up or tangling
+    let mut m = noisy_sphere(1.0, 3, 0.05);
+    implicit_smooth(
+        &mut m,
+        &ImplicitOptions {
+            time_step: 1e5,
+            iterations: 3,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(
+        m.positions()
+            .iter()
+            .all(|p| p.is_finite() && p.length() < 1.0)
+    );
+    // the same step explicitly would diverge; Laplace with λ = 0.5 shrinks
+    // the sphere by a steady factor per step, Taubin keeps its size
+    let mut lap = base.clone();
+    laplace_smooth(
+        &mut lap,
+        &LaplaceOptions {
+            iterations: 20,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let mut tau = base.clone();
+    taubin_smooth(
+        &mut tau,
+        &TaubinOptions {
+            iterations: 20,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let s_lap = mean_r(&lap) / r0;
+    let s_tau = mean_r(&tau) / r0;
+    // uniform umbrella on a sphere: Δx ≈ −(ē²/(2R)) n·c with c ≈ 1, so each
+    // step shrinks R by about λ ē²/(2R)
+    let per_step = 0.5 * e * e / (2.0 * r0 * r0);
+    assert!(
+        ((1.0 - s_lap) / (20.0 * per_step) - 1.0).abs() < 0.2,
+        "laplace {s_lap} per step {per_step}"
+    );
+    assert!(
+        (1.0 - s_tau).abs() < 0.1 * (1.0 - s_lap),
+        "taubin {s_tau} vs laplace {s_lap}"
+    );
+    // a plane stays a plane: every method moves vertices only inside it
+    let n = Vec3::new(0.3, -0.2, 1.0).normalize();
+    let mut pl = shapes::height_field(12, 12, (0.0, 1.0), (0.0, 1.0), |x, y| {
+        -(n.x * x + n.y * y) / n.z
+    });
+    for (i, p) in pl.positions_mut().iter_mut().enumerate() {
+        let u = n.any_orthonormal_vector();
+        *p += 0.02 * noise(i, 21) * u + 0.02 * noise(i, 22) * n.cross(u);
+    }
+    let fix = Constraints {
+        fix_boundary: true,
+        ..Default::default()
+    };
+    let runs: Vec<(&str, SurfaceMesh)> = vec![
+        ("laplace", {
+            let mut m = pl.clone();
+            laplace_smooth(
+                &mut m,
+                &LaplaceOptions {
+                    weights: LaplaceWeights::Cotangent,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            m
+        }),
+        ("taubin", {
+            let mut m = pl.clone();
+            taubin_smooth(&mut m, &TaubinOptions::default()).unwrap();
+            m
+        }),
+        ("implicit", {
+            let mut m = pl.clone();
+            implicit_smooth(
+                &mut m,
+                &ImplicitOptions {
+                    time_step: 5.0,
+                    constraints: fix.clone(),
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            m
+        }),
+        ("spring", {
+            let mut m = pl.clone();
+            spring_smooth(&mut m, &SpringOptions::default()).unwrap();
+            m
+        }),
+        ("schneider-kobbelt", {
+            let mut m = pl.clone();
+            schneider_kobbelt(&mut m, &SchneiderKobbeltOptions::default()).unwrap();
+            m
+        }),
+    ];
+    for (name, m) in runs {
+        let off = m
+            .positions()
+            .iter()
+            .map(|p| p.dot(n).abs())
+            .fold(0.0, f64::max);
+        assert!(off < 1e-12, "{name}: {off}");
+        let moved = max_distance(m.positions(), pl.positions());
+        match name {
+            // linear functions are cotangent-harmonic on a planar mesh:
+            // with the boundary fixed nothing moves
+            "implicit" => assert!(moved < 1e-12, "implicit moved {moved}"),
+            "schneider-kobbelt" => {}
+            _ => assert!(moved > 1e-4, "{name} moved nothing"),
+        }
+    }
+}
