@@ -270,22 +270,26 @@ fn run_explicit(
     let normals = c.tangential_only.then(|| geom::vertex_normals(mesh));
     let input = mesh.positions().to_vec();
     let v0 = geom::volume(mesh);
-    let mut work = mesh.clone();
+    let needs_sync = weights != LaplaceWeights::Uniform || c.preserve_volume;
+    // a copy of the mesh is only needed to recompute weights or volumes
+    let mut work = needs_sync.then(|| mesh.clone());
     let mut cur = input.clone();
     let mut next = input.clone();
-    let needs_sync = weights != LaplaceWeights::Uniform || c.preserve_volume;
     for _ in 0..iterations {
         for &s in scales {
-            if needs_sync {
-                work.positions_mut().copy_from_slice(&cur);
-            }
-            let w = normalised_weights(&work, &nb, weights);
+            let w = match work.as_mut() {
+                Some(wm) => {
+                    wm.positions_mut().copy_from_slice(&cur);
+                    normalised_weights(wm, &nb, weights)
+                }
+                None => None,
+            };
             explicit_step(&cur, &mut next, &nb, w.as_deref(), s, normals.as_deref());
             std::mem::swap(&mut cur, &mut next);
-            if c.preserve_volume {
-                work.positions_mut().copy_from_slice(&cur);
-                restore_volume(&mut work, &roles, v0)?;
-                cur.copy_from_slice(work.positions());
+            if let (true, Some(wm)) = (c.preserve_volume, work.as_mut()) {
+                wm.positions_mut().copy_from_slice(&cur);
+                restore_volume(wm, &roles, v0)?;
+                cur.copy_from_slice(wm.positions());
             }
         }
     }
