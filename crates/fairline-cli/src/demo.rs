@@ -70,6 +70,7 @@ pub fn run(args: Args) -> Result<()> {
         ("torus curvature", torus_section),
         ("wavy panel", wavy_section),
         ("quad grid", quad_section),
+        ("smoothing", crate::smooth::demo_section),
     ];
     let bar = progress(steps.len() as u64, "demo");
     let mut report = Report::new("demo");
