@@ -330,13 +330,13 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
     if let Some(p) = &args.png {
         check_output(&args.mesh, p)?;
     }
-    if !(args.weight > 0.0) || !args.weight.is_finite() {
+    if !args.weight.is_finite() || args.weight <= 0.0 {
         return Err(bad_input("--weight must be a positive number"));
     }
-    if !(args.deviation >= 0.0) || !args.deviation.is_finite() {
+    if !args.deviation.is_finite() || args.deviation < 0.0 {
         return Err(bad_input("--deviation must be ≥ 0"));
     }
-    if !(args.deviation_factor > 0.0) || !args.deviation_factor.is_finite() {
+    if !args.deviation_factor.is_finite() || args.deviation_factor <= 0.0 {
         return Err(bad_input("--deviation-factor must be positive"));
     }
     let mut mesh = fairline::io::read_mesh(&args.mesh)?;

@@ -523,7 +523,8 @@ mod tests {
 
     #[test]
     fn zigzag_structure_lines_are_straightened_closer_to_the_truth_than_laplace_and_taubin() {
-        let cases: Vec<(u32, u32, Box<dyn Fn(f64, f64) -> f64>)> = vec![
+        type Surface = Box<dyn Fn(f64, f64) -> f64>;
+        let cases: Vec<(u32, u32, Surface)> = vec![
             (10, 10, Box::new(|x, y| 0.4 * (x * x - y * y))),
             (
                 13,
@@ -538,7 +539,6 @@ mod tests {
         ];
         for (nx, ny, f) in cases {
             let (truth, zz) = zigzag_grid(nx, ny, 0.2, &f);
-            let e_truth = structure_energy(&truth);
             let mut ours = zz.clone();
             let r = fair_structure_lines(&mut ours, &QuadFairOptions::default()).unwrap();
             let mut lap = zz.clone();

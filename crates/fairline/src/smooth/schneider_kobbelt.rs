@@ -114,11 +114,12 @@ pub fn schneider_kobbelt(
     let h_fixed: Vec<f64> = (0..n)
         .map(|i| {
             let v = VertexId(i as u32);
-            if roles[i] != Role::Free && mesh.is_boundary_vertex(v) {
-                if let Some(f) = geom::quadric_fit(mesh, v) {
-                    normals0[i] = f.normal;
-                    return -f.mean;
-                }
+            if roles[i] != Role::Free
+                && mesh.is_boundary_vertex(v)
+                && let Some(f) = geom::quadric_fit(mesh, v)
+            {
+                normals0[i] = f.normal;
+                return -f.mean;
             }
             let q: Vec<Vec3> = nbrs[i].iter().map(|&j| input[j]).collect();
             moreton_sequin(input[i], normals0[i], &q).0
