@@ -74,6 +74,7 @@ pub fn run(args: Args) -> Result<()> {
         ("highlight lines", highlight_section),
         ("highlight-line fairing", fair_section),
         ("B-spline fairing", crate::fair_surface::demo_section),
+        ("smoothing", crate::smooth::demo_section),
     ];
     let bar = progress(steps.len() as u64, "demo");
     let mut report = Report::new("demo");

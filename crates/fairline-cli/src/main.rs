@@ -15,6 +15,7 @@ mod highlight;
 mod highlight_png;
 mod info;
 mod render;
+mod smooth;
 mod surface;
 mod surface_highlight;
 
@@ -46,6 +47,8 @@ enum Command {
     Enhance(enhance::Args),
     Fair(fair::Args),
     Render(render::Args),
+    Smooth(smooth::Args),
+    FairQuad(smooth::QuadArgs),
     Demo(demo::Args),
 }
 
@@ -60,6 +63,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Enhance(a) => enhance::run(a),
         Command::Fair(a) => fair::run(a),
         Command::Render(a) => render::run(a),
+        Command::Smooth(a) => smooth::run(a),
+        Command::FairQuad(a) => smooth::run_quad(a),
         Command::Demo(a) => demo::run(a),
     }
 }
