@@ -7,8 +7,12 @@ use std::path::PathBuf;
 /// Converts between mesh formats by extension (.obj .ply .off .stl). Polygons
 /// are kept where the format allows (STL is triangulated). Coordinates are
 /// written exactly (shortest round-trip decimal, or binary doubles in PLY).
+/// B-spline surfaces (.igs/.iges, .json) convert to surface JSON (all
+/// entity-128 surfaces, exact), or to a mesh (tessellated, 64 × 64 per surface).
 #[derive(clap::Args, Debug)]
-#[command(after_help = "Example:\n  fairline convert bunny.obj bunny.ply")]
+#[command(
+    after_help = "Examples:\n  fairline convert bunny.obj bunny.ply\n  fairline convert impeller.igs impeller.json"
+)]
 pub struct Args {
     /// Input mesh.
     pub input: PathBuf,
@@ -21,6 +25,32 @@ pub struct Args {
 
 pub fn run(args: Args) -> Result<()> {
     check_output(&args.input, &args.output)?;
+    if crate::surface::is_surface_path(&args.input) {
+        let surfaces = crate::surface::load_surfaces(&args.input)?;
+        let mut report = Report::new("convert");
+        report.set("surfaces", surfaces.len());
+        if crate::surface::is_surface_path(&args.output) {
+            let ext = args
+                .output
+                .extension()
+                .and_then(|e| e.to_str())
+                .unwrap_or("");
+            if !ext.eq_ignore_ascii_case("json") {
+                return Err(crate::common::bad_input(format!(
+                    "{}: surfaces are written as .json (IGES output is not supported)",
+                    args.output.display()
+                )));
+            }
+            fairline::bspline::write_surfaces_json(&args.output, &surfaces)?;
+        } else {
+            let mesh = crate::surface::tessellated_mesh(&surfaces, 64)?;
+            report.set("vertices", mesh.vertex_count());
+            report.set("faces", mesh.face_count());
+            fairline::io::write_mesh(&args.output, &mesh)?;
+        }
+        report.write(args.report.as_deref())?;
+        return Ok(());
+    }
     let soup = fairline::io::read_soup(&args.input)?;
     let mut report = Report::new("convert");
     report.set("vertices", soup.vertex_count());

@@ -55,6 +55,15 @@ impl LightArgs {
         }
         let (lo, hi) = fairline::mesh::bounding_box(mesh.positions())
             .ok_or_else(|| bad_input("the mesh has no vertices"))?;
+        self.light_array_in_box(lo, hi)
+    }
+
+    /// The light array: from the file, or the defaults for the bounding box
+    /// `lo`–`hi` with the given fields overridden.
+    pub fn light_array_in_box(&self, lo: Vec3, hi: Vec3) -> Result<LightArray> {
+        if let Some(path) = &self.lights {
+            return read_json::<LightArray>(path);
+        }
         let base = LightArray::default_for(lo, hi, self.plane_normal);
         LightArray::new(
             self.plane_point.unwrap_or(base.plane_point()),
@@ -123,9 +132,13 @@ pub fn read_triangles(path: &Path) -> Result<(SurfaceMesh, Option<Vec<FaceId>>)>
 /// boundaries at ±ρ. Output JSON {"lines":[{"index":m,"closed":b,"points":[[x,y,z],..]}]}
 /// (circular lines also carry "radius"; bands under "bands"), or OBJ `l`
 /// polylines (groups lines, band_lower, band_upper).
+///
+/// B-spline surfaces (.json, .igs/.iges) are handled as in Nishiyama et al.
+/// §2: d_s sampled on a --grid × --grid (u, v) grid, contoured by marching
+/// squares, refined onto the true zero; JSON lines carry "uv" and "points".
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  fairline highlight spot.ply -o spot-lines.json --png spot-lines.png\n  fairline highlight panel.obj --direction 0,1,0 --plane-normal 0,0,1 --plane-point 0,0,5 --spacing 0.1 -o lines.obj\n  fairline highlight panel.obj --circle-center 0,0,5 --circle-axis 0,0,1 --radii 1,2,3 --band 0.05 -o circles.json"
+    after_help = "Examples:\n  fairline highlight spot.ply -o spot-lines.json --png spot-lines.png\n  fairline highlight panel.obj --direction 0,1,0 --plane-normal 0,0,1 --plane-point 0,0,5 --spacing 0.1 -o lines.obj\n  fairline highlight panel.obj --circle-center 0,0,5 --circle-axis 0,0,1 --radii 1,2,3 --band 0.05 -o circles.json\n  fairline highlight roof.json --circle-center 0,0,3 --circle-axis 0,0,1 --radii 0.8,1,1.2 --grid 300 -o lines.json --png lines.png --svg uv.svg"
 )]
 pub struct Args {
     /// Input triangle (or polygon) mesh.
@@ -147,13 +160,24 @@ pub struct Args {
     /// Output polylines (.json or .obj).
     #[arg(short, long, value_name = "LINES.json|.obj")]
     pub output: PathBuf,
-    /// Picture of the lines on the shaded mesh.
+    /// Picture of the lines on the shaded mesh (or surface).
     #[arg(long, value_name = "IMG.png")]
     pub png: Option<PathBuf>,
     /// Viewing direction of the picture X,Y,Z (from the eye towards the
     /// object; default: down the light-plane normal, slightly tilted).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
     pub view: Option<Vec3>,
+    /// B-spline surfaces: grid points per parameter direction on which d_s
+    /// is sampled before contouring.
+    #[arg(long, default_value_t = 200, value_name = "N")]
+    pub grid: usize,
+    /// B-spline surfaces: SVG of the (u, v) pre-images (of surface
+    /// --surface, default 0).
+    #[arg(long, value_name = "UV.svg")]
+    pub svg: Option<PathBuf>,
+    /// B-spline surfaces: use only this surface of the file (default: all).
+    #[arg(long, value_name = "K")]
+    pub surface: Option<usize>,
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
@@ -271,6 +295,9 @@ pub fn line_summary(lines: &HighlightLines) -> Value {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    if crate::surface::is_surface_path(&args.mesh) {
+        return crate::surface_highlight::run(args);
+    }
     lines_format(&args.output)?;
     check_output(&args.mesh, &args.output)?;
     if let Some(p) = &args.png {

@@ -9,11 +9,15 @@ mod curvature;
 mod demo;
 mod detect;
 mod enhance;
+mod fair;
+mod fair_surface;
 mod highlight;
 mod highlight_png;
 mod info;
 mod render;
+mod smooth;
 mod surface;
+mod surface_highlight;
 
 use clap::{Parser, Subcommand};
 
@@ -39,8 +43,12 @@ enum Command {
     Curvature(curvature::Args),
     Highlight(highlight::Args),
     Detect(detect::Args),
+    FairSurface(fair_surface::Args),
     Enhance(enhance::Args),
+    Fair(fair::Args),
     Render(render::Args),
+    Smooth(smooth::Args),
+    FairQuad(smooth::QuadArgs),
     Demo(demo::Args),
 }
 
@@ -51,10 +59,32 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Curvature(a) => curvature::run(a),
         Command::Highlight(a) => highlight::run(a),
         Command::Detect(a) => detect::run(a),
+        Command::FairSurface(a) => fair_surface::run(a),
         Command::Enhance(a) => enhance::run(a),
+        Command::Fair(a) => fair::run(a),
         Command::Render(a) => render::run(a),
+        Command::Smooth(a) => smooth::run(a),
+        Command::FairQuad(a) => smooth::run_quad(a),
         Command::Demo(a) => demo::run(a),
     }
+}
+
+/// The error and its causes joined by ": ", leaving out a cause whose text
+/// the message already ends with (library errors often include their
+/// source in their own text).
+fn error_message(e: &anyhow::Error) -> String {
+    let mut msg = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if msg.ends_with(&text) {
+            continue;
+        }
+        if !msg.is_empty() {
+            msg.push_str(": ");
+        }
+        msg.push_str(&text);
+    }
+    msg
 }
 
 fn main() {
@@ -71,7 +101,7 @@ fn main() {
         }
     };
     if let Err(e) = run(cli) {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", error_message(&e));
         std::process::exit(common::exit_code(&e));
     }
 }

@@ -63,9 +63,14 @@ pub fn load_tessellated(path: &Path, index: Option<usize>, n: usize) -> Result<S
         Some(k) => vec![load_surface(path, k)?],
         None => load_surfaces(path)?,
     };
+    tessellated_mesh(&surfaces, n)
+}
+
+/// Tessellates surfaces into one triangle mesh, `n` × `n` samples each.
+pub fn tessellated_mesh(surfaces: &[BSplineSurface], n: usize) -> Result<SurfaceMesh> {
     let mut positions = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
-    for s in &surfaces {
+    for s in surfaces {
         let t = tessellate(s, n, n);
         let base = positions.len() as u32;
         positions.extend(t.positions);

@@ -579,3 +579,36 @@ fn non_manifold_real_meshes_are_refused_with_the_edge_named() {
         }
     }
 }
+
+/// The demo's highlight section: the planted dent is found (top region
+/// centred on it within the dent's width) and the clean panel gets nothing.
+#[test]
+fn demo_finds_the_planted_dent() {
+    let d = tmp("demo");
+    let out = d.join("demo");
+    ok(&run(&[
+        "demo",
+        "--out",
+        out.to_str().unwrap(),
+        "--size",
+        "320x240",
+    ]));
+    let r = json(&out.join("report.json"));
+    let s = &r["sections"]["Highlight lines and a planted dent"];
+    assert!(s["regions"].as_u64().unwrap() >= 1, "{s}");
+    assert!(
+        s["top_region_centre_distance_from_dent"].as_f64().unwrap() < 0.16,
+        "{s}"
+    );
+    assert_eq!(s["clean_panel_regions"], 0);
+    for png in [
+        "highlight-dent-lines.png",
+        "highlight-dent-region.png",
+        "highlight-clean-lines.png",
+    ] {
+        let (dark, _) = dark_and_red(&out.join(png));
+        assert!(dark > 200, "{png}: {dark} dark pixels");
+    }
+    let (_, red) = dark_and_red(&out.join("highlight-dent-lines.png"));
+    assert!(red > 20, "red stretches at the dent: {red}");
+}

@@ -10,7 +10,7 @@
 
 mod common;
 
-use common::{median_secs, row, runs, sizes, test_surface};
+use common::{cpu_ns, median_secs, row, runs, sizes, test_surface};
 use fairline::Vec3;
 use fairline::geom;
 use fairline::highlight::{
@@ -28,19 +28,6 @@ fn light_for(mesh: &SurfaceMesh) -> LightArray {
 
 fn ms(s: f64) -> String {
     format!("{:.1}", s * 1e3)
-}
-
-/// CPU time (ns) used so far by all threads of this process (Linux
-/// /proc/self/task/*/schedstat; 0 elsewhere). The machine is shared, so
-/// wall times depend on the load; CPU time does much less.
-fn cpu_ns() -> u64 {
-    let Ok(dir) = std::fs::read_dir("/proc/self/task") else {
-        return 0;
-    };
-    dir.filter_map(|t| t.ok())
-        .filter_map(|t| std::fs::read_to_string(t.path().join("schedstat")).ok())
-        .filter_map(|s| s.split_whitespace().next()?.parse::<u64>().ok())
-        .sum()
 }
 
 /// "wall median (CPU per run)" in ms over `runs` calls of `f` after a warm-up.

@@ -19,6 +19,28 @@ pub const MAX_ORDER: usize = MAX_DEGREE + 1;
 /// `ders[k][r]` is the k-th derivative of `N_{span - degree + r, degree}`.
 pub type BasisDerivs = [[f64; MAX_ORDER]; 3];
 
+/// The clamped uniform knot vector of `count` control points of degree
+/// `degree` on `[0, 1]`: `degree + 1` zeros, `count - degree - 1` equally
+/// spaced interior knots, `degree + 1` ones (Piegl & Tiller Eq. 2.13 with
+/// uniform interior knots). Empty when `count <= degree`.
+pub fn clamped_uniform_knots(count: usize, degree: usize) -> Vec<f64> {
+    if count <= degree {
+        return Vec::new();
+    }
+    let spans = count - degree;
+    (0..count + degree + 1)
+        .map(|k| {
+            if k <= degree {
+                0.0
+            } else if k >= count {
+                1.0
+            } else {
+                (k - degree) as f64 / spans as f64
+            }
+        })
+        .collect()
+}
+
 /// The knot span index `k` with `knots[k] <= u < knots[k + 1]` and
 /// `degree <= k < count` (Piegl & Tiller A2.1, `FindSpan`, binary search).
 ///

@@ -37,7 +37,7 @@ mod tessellate;
 #[cfg(test)]
 pub(crate) mod tests;
 
-pub use basis::{MAX_DEGREE, MAX_ORDER, find_span};
+pub use basis::{MAX_DEGREE, MAX_ORDER, clamped_uniform_knots, find_span};
 pub use iges::{IgesError, IgesImport, IgesSurface, parse_iges, read_iges};
 pub use json::{
     SurfaceJsonError, parse_surfaces_json, read_surfaces_json, surface_to_json, surfaces_to_json,

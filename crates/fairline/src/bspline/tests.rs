@@ -266,7 +266,7 @@ fn full_circle() -> (Vec<[f64; 2]>, Vec<f64>, Vec<f64>) {
 
 /// Sphere octant of radius `r`: u along the equator (x towards y), v from
 /// the equator up to the north pole, so `Su × Sv` points outward.
-fn sphere_octant(r: f64) -> BSplineSurface {
+pub(crate) fn sphere_octant(r: f64) -> BSplineSurface {
     let (c, w) = quarter_circle();
     let mut net = Vec::new();
     let mut weights = Vec::new();

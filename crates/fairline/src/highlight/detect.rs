@@ -36,6 +36,49 @@ use crate::Vec3;
 use crate::geom;
 use crate::mesh::{FaceId, SurfaceMesh};
 use rayon::prelude::*;
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A small multiplicative hasher for integer cell keys (the default SipHash
+/// dominated region growing); not for untrusted keys, which these are not.
+#[derive(Default)]
+struct CellHasher(u64);
+
+impl Hasher for CellHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    fn write_i64(&mut self, i: i64) {
+        self.write_u64(i as u64);
+    }
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+}
+
+/// Flagged sample points per grid cell.
+type CellMap = HashMap<(i64, i64, i64), Vec<Vec3>, BuildHasherDefault<CellHasher>>;
+
+/// The 26 cells around a cell.
+const NEIGHBOUR_CELLS: [(i64, i64, i64); 26] = {
+    let mut out = [(0, 0, 0); 26];
+    let mut n = 0;
+    let mut d = 0;
+    while d < 27 {
+        let c = (d / 9 - 1, (d / 3) % 3 - 1, d % 3 - 1);
+        if !(c.0 == 0 && c.1 == 0 && c.2 == 0) {
+            out[n] = c;
+            n += 1;
+        }
+        d += 1;
+    }
+    out
+};
 
 /// Options of [`detect_irregularities`]; lengths relative to the spacing s.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -468,7 +511,32 @@ pub fn detect_irregularities(
                     }
                 }
             }
-            let near = |x: Vec3| st.points.iter().any(|q| (x - *q).length() <= radius);
+            // flagged samples bucketed in cubes of side `radius`: a face is
+            // near when a sample in its own cube or one of the 26 around it
+            // is close (own cube first: the usual hit inside a region)
+            let cell = |x: Vec3| {
+                let c = (x / radius).floor();
+                (c.x as i64, c.y as i64, c.z as i64)
+            };
+            let mut grid: CellMap = HashMap::default();
+            for &q in &st.points {
+                grid.entry(cell(q)).or_default().push(q);
+            }
+            let near = |x: Vec3| {
+                let (i, j, k) = cell(x);
+                let hit = |c: (i64, i64, i64)| {
+                    grid.get(&c)
+                        .is_some_and(|pts| pts.iter().any(|q| (x - *q).length() <= radius))
+                };
+                hit((i, j, k))
+                    || NEIGHBOUR_CELLS.iter().any(|&(di, dj, dk)| {
+                        hit((
+                            i.saturating_add(di),
+                            j.saturating_add(dj),
+                            k.saturating_add(dk),
+                        ))
+                    })
+            };
             let mut faces = Vec::new();
             while let Some(f) = queue.pop() {
                 faces.push(f);

@@ -171,6 +171,9 @@ impl HighlightModel {
     /// The highlight lines: segments chained into open or closed polylines,
     /// each with its light index m (Yong et al. §2.4). `mesh` must be the
     /// mesh the model was built or last updated with.
+    /// Chaining is one pass over all segments (a sort of their ends); after
+    /// an [`Self::update`], positions of known nodes are cheaper to follow
+    /// with [`Self::node_position`].
     pub fn lines(&self, mesh: &SurfaceMesh) -> HighlightLines {
         let levels = Self::levels_of(&self.light);
         contour::chain(&self.segments, |n| {
@@ -183,7 +186,8 @@ impl HighlightModel {
     /// moved vertices and their one-ring neighbours (whose Eq. (3) normals
     /// depend on the moved positions) and the segments of every triangle
     /// touching those vertices. The result equals a full rebuild exactly.
-    /// Returns the number of vertices recomputed.
+    /// Cost: the local work plus one copy of the segment list (no search
+    /// over the whole mesh). Returns the number of vertices recomputed.
     pub fn update(
         &mut self,
         mesh: &SurfaceMesh,
@@ -245,24 +249,22 @@ impl HighlightModel {
                 &mut new_segments,
             );
         }
+        // Segments are sorted by face: copy the untouched runs between the
+        // affected faces wholesale and put the fresh segments in their place.
         let old = std::mem::take(&mut self.segments);
         let mut merged = Vec::with_capacity(old.len() + new_segments.len());
-        let mut fresh_iter = new_segments.into_iter().peekable();
-        for s in old {
-            if faces.binary_search(&s.face).is_ok() {
-                continue;
-            }
-            while let Some(n) = fresh_iter.peek() {
-                if n.face < s.face {
-                    merged.push(*n);
-                    fresh_iter.next();
-                } else {
-                    break;
-                }
-            }
-            merged.push(s);
+        let mut fresh = new_segments.as_slice();
+        let mut at = 0usize;
+        for &f in &faces {
+            let start = at + old[at..].partition_point(|s| s.face < f);
+            let end = start + old[start..].partition_point(|s| s.face == f);
+            merged.extend_from_slice(&old[at..start]);
+            let k = fresh.partition_point(|s| s.face == f);
+            merged.extend_from_slice(&fresh[..k]);
+            fresh = &fresh[k..];
+            at = end;
         }
-        merged.extend(fresh_iter);
+        merged.extend_from_slice(&old[at..]);
         self.segments = merged;
         Ok(affected.len())
     }

@@ -14,12 +14,20 @@ pub mod detect;
 mod light;
 mod linear;
 pub mod quartic;
+pub mod surface;
 
 pub use circular::{circular_highlight_bands, circular_highlight_lines};
 pub use contour::{HighlightLine, HighlightLines, NodeId};
 pub use detect::{DetectOptions, Detection, IrregularRegion, LineFairness, detect_irregularities};
 pub use light::{CircleApproach, CircularLight, CircularLights, LightArray};
 pub use linear::{HighlightModel, HighlightOptions, highlight_lines};
+/// The one quartic solver (Nishiyama et al. Eq. (2.15)–(2.16)), shared by
+/// circular lights on meshes and on B-spline surfaces.
+pub use quartic::{quartic_roots, real_roots};
+pub use surface::{
+    SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight, linear_lights,
+    surface_highlight_lines, surface_signed_distance,
+};
 
 use crate::mesh::MeshError;
 

@@ -1,0 +1,331 @@
+//! `fairline highlight SURFACE.json|.igs`: highlight lines of B-spline
+//! surfaces (Nishiyama et al. §2) traced in the parameter domain, written
+//! with their (u, v) pre-images and 3D points; PNG of the shaded surface
+//! with the lines, SVG of the pre-images.
+
+use crate::common::{Report, bad_input, check_output, write_json};
+use crate::highlight::{Args, Radii, to_input_error};
+use anyhow::Result;
+use fairline::Vec3;
+use fairline::bspline::BSplineSurface;
+use fairline::highlight::{
+    CircularLights, SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight,
+    linear_lights, surface_highlight_lines,
+};
+use fairline::picture::{Picture, mesh_picture};
+use fairline::render::{PolylineLayer, RenderOptions, SvgPlot};
+use serde_json::{Value, json};
+use std::path::Path;
+
+/// Colours of successive lights (linear light, sRGB-ish) for pictures.
+pub const PALETTE: [[f32; 3]; 6] = [
+    [0.75, 0.05, 0.05],
+    [0.05, 0.15, 0.70],
+    [0.05, 0.45, 0.10],
+    [0.60, 0.25, 0.00],
+    [0.45, 0.05, 0.55],
+    [0.00, 0.40, 0.45],
+];
+
+/// sRGB bytes of a palette colour (for SVG).
+pub fn palette_srgb(k: usize) -> [u8; 3] {
+    let c = PALETTE[k % PALETTE.len()];
+    let px = fairline::render::linear_to_srgb8(c);
+    [px[0], px[1], px[2]]
+}
+
+/// One line as JSON (DESIGN.md §4): radius (circular) or index (linear),
+/// closed, uv, points; `surface` when the file holds several.
+pub fn line_json(
+    l: &SurfaceHighlightLine,
+    lights: &[SurfaceLight],
+    surface: Option<usize>,
+) -> Value {
+    let uv: Vec<[f64; 2]> = l.uv.clone();
+    let pts: Vec<[f64; 3]> = l.points.iter().map(|p| p.to_array()).collect();
+    let mut v =
+        json!({"light": l.light, "level": l.level, "closed": l.closed, "uv": uv, "points": pts});
+    if let Some(r) = l.radius {
+        v["radius"] = json!(r);
+    }
+    if let Some(SurfaceLight::Linear { index, .. }) = lights.get(l.light) {
+        v["index"] = json!(index);
+    }
+    if let Some(s) = surface {
+        v["surface"] = json!(s);
+    }
+    v
+}
+
+/// Validates an output picture path.
+pub fn check_ext(path: &Path, ext: &str, option: &str) -> Result<()> {
+    let ok = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case(ext));
+    if ok {
+        Ok(())
+    } else {
+        Err(bad_input(format!(
+            "{}: {option} must name a .{ext} file",
+            path.display()
+        )))
+    }
+}
+
+/// Polylines of surface highlight lines for a picture, coloured by light.
+pub fn polylines(lines: &[&SurfaceHighlightLine], width: f32) -> Vec<PolylineLayer> {
+    lines
+        .iter()
+        .map(|l| PolylineLayer {
+            points: l.points.clone(),
+            closed: l.closed,
+            color: PALETTE[l.light % PALETTE.len()],
+            width_px: width,
+        })
+        .collect()
+}
+
+/// A picture of tessellated surfaces with polylines over them.
+pub fn surface_picture(
+    surfaces: &[BSplineSurface],
+    polylines: Vec<PolylineLayer>,
+    title: &str,
+    opts: &RenderOptions,
+) -> Result<fairline::render::Image> {
+    let mesh = crate::surface::tessellated_mesh(surfaces, 96)?;
+    let picture = Picture {
+        polylines,
+        title: Some(title.to_string()),
+        ..Default::default()
+    };
+    Ok(mesh_picture(&mesh, &picture, opts)?)
+}
+
+/// A polyline in (u, v) with its colour (linear light) and width (pixels).
+pub type UvLine = (Vec<[f64; 2]>, [f32; 3], f32);
+
+/// A PNG picture of the parameter domain of `surface` seen from above with
+/// polylines in (u, v): each entry is (points, colour, width); the domain is
+/// drawn as a flat light-grey rectangle.
+pub fn uv_picture(
+    surface: &BSplineSurface,
+    lines: &[UvLine],
+    title: &str,
+    size: (u32, u32),
+) -> Result<fairline::render::Image> {
+    let (du, dv) = (surface.domain_u(), surface.domain_v());
+    let mesh = fairline::shapes::quad_grid(2, 2, (du[0], du[1]), (dv[0], dv[1]), |_, _| 0.0);
+    let polylines = lines
+        .iter()
+        .map(|(pts, color, w)| PolylineLayer {
+            points: pts.iter().map(|p| Vec3::new(p[0], p[1], 0.0)).collect(),
+            closed: false,
+            color: *color,
+            width_px: *w,
+        })
+        .collect();
+    let picture = Picture {
+        polylines,
+        title: Some(title.to_string()),
+        ..Default::default()
+    };
+    let mut opts = RenderOptions::with_size(size.0, size.1);
+    opts.view_dir = Vec3::new(0.0, 0.0, -1.0);
+    opts.up = Vec3::Y;
+    opts.orthographic = true;
+    Ok(mesh_picture(&mesh, &picture, &opts)?)
+}
+
+/// An SVG plot of pre-images in the domain of `surface`.
+pub fn uv_plot(surface: &BSplineSurface, title: &str) -> SvgPlot {
+    let (du, dv) = (surface.domain_u(), surface.domain_v());
+    let mut plot = SvgPlot::new(800, 800, (du[0], du[1]), (dv[0], dv[1]));
+    plot.title(title);
+    plot.axes("u", "v");
+    plot
+}
+
+/// Adds pre-image polylines to a plot (closed lines repeat their start).
+pub fn plot_lines(plot: &mut SvgPlot, lines: &[&SurfaceHighlightLine], width: f64) {
+    for l in lines {
+        let mut uv = l.uv.clone();
+        if l.closed && !uv.is_empty() {
+            uv.push(uv[0]);
+        }
+        plot.polyline(&uv, palette_srgb(l.light), width);
+    }
+}
+
+pub fn run(args: Args) -> Result<()> {
+    if !args
+        .output
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+    {
+        return Err(bad_input(format!(
+            "{}: highlight lines of B-spline surfaces are written as .json",
+            args.output.display()
+        )));
+    }
+    check_output(&args.mesh, &args.output)?;
+    if let Some(p) = &args.png {
+        check_ext(p, "png", "--png")?;
+        check_output(&args.mesh, p)?;
+    }
+    if let Some(p) = &args.svg {
+        check_ext(p, "svg", "--svg")?;
+        check_output(&args.mesh, p)?;
+    }
+    if args.view.is_some_and(|v| v.length() == 0.0) {
+        return Err(bad_input("--view must not be the zero vector"));
+    }
+    if !(2..=4000).contains(&args.grid) {
+        return Err(bad_input(format!(
+            "--grid must be between 2 and 4000, got {}",
+            args.grid
+        )));
+    }
+    if let Some(b) = args.band
+        && !(b > 0.0 && b.is_finite())
+    {
+        return Err(bad_input(format!(
+            "--band must be a positive number, got {b}"
+        )));
+    }
+    let all = crate::surface::load_surfaces(&args.mesh)?;
+    let chosen: Vec<(usize, BSplineSurface)> = match args.surface {
+        Some(k) => vec![(k, crate::surface::load_surface(&args.mesh, k)?)],
+        None => all.into_iter().enumerate().collect(),
+    };
+    let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+    for (_, s) in &chosen {
+        let (a, b) = s.control_bounding_box();
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    let mut report = Report::new("highlight");
+    report.set("surfaces", chosen.len());
+    report.set("grid", args.grid);
+    let opts = SurfaceHighlightOptions::default()
+        .grid(args.grid)
+        .band(args.band);
+    let circular = if let (Some(c), Some(t), Some(Radii(radii))) =
+        (args.circle_center, args.circle_axis, args.radii.clone())
+    {
+        let spec = CircularLights {
+            center: c.to_array(),
+            axis: t.to_array(),
+            radii,
+        };
+        let lights = spec.lights().map_err(to_input_error)?;
+        report.set(
+            "light",
+            json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii}),
+        );
+        Some(lights)
+    } else {
+        None
+    };
+    let array = match circular {
+        Some(_) => None,
+        None => {
+            let a = args.light.light_array_in_box(lo, hi)?;
+            report.set("light", json!({"kind": "linear", "array": a}));
+            Some(a)
+        }
+    };
+    let bar = crate::common::progress(chosen.len() as u64, "highlight lines");
+    let results: Vec<(usize, Vec<SurfaceLight>, SurfaceHighlights)> = report.time(|| {
+        chosen
+            .iter()
+            .map(|(k, s)| {
+                let lights: Vec<SurfaceLight> = match (&circular, array) {
+                    (Some(c), _) => c.iter().map(|l| SurfaceLight::Circular(*l)).collect(),
+                    (None, Some(a)) => {
+                        linear_lights(s, a, args.light.min_normal_cos, args.grid.min(400), 100)
+                    }
+                    (None, None) => Vec::new(),
+                };
+                let h = surface_highlight_lines(s, &lights, &opts);
+                bar.inc(1);
+                (*k, lights, h)
+            })
+            .collect()
+    });
+    bar.finish_and_clear();
+    let multi = chosen.len() > 1;
+    let tag = |k: usize| multi.then_some(k);
+    let mut lines = Vec::new();
+    let (mut lower, mut upper) = (Vec::new(), Vec::new());
+    for (k, lights, h) in &results {
+        lines.extend(h.lines.iter().map(|l| line_json(l, lights, tag(*k))));
+        lower.extend(h.band_lower.iter().map(|l| line_json(l, lights, tag(*k))));
+        upper.extend(h.band_upper.iter().map(|l| line_json(l, lights, tag(*k))));
+    }
+    let line_count = lines.len();
+    let mut out = json!({"lines": lines});
+    if let Some(rho) = args.band {
+        out["bands"] = json!({"radius": rho, "lower": lower, "upper": upper});
+    }
+    // Pictures first (they can fail on bad options); the lines file last.
+    if let Some(p) = &args.png {
+        let surfaces: Vec<BSplineSurface> = chosen.iter().map(|(_, s)| s.clone()).collect();
+        let all_lines: Vec<&SurfaceHighlightLine> = results
+            .iter()
+            .flat_map(|(_, _, h)| h.lines.iter().chain(&h.band_lower).chain(&h.band_upper))
+            .collect();
+        let title = format!(
+            "{}: highlight lines",
+            args.mesh
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        );
+        let mut ropts = RenderOptions::with_size(1200, 900);
+        if let Some(v) = args.view {
+            ropts.view_dir = v;
+        }
+        let img = surface_picture(&surfaces, polylines(&all_lines, 2.0), &title, &ropts)?;
+        img.write_png(p)?;
+    }
+    if let Some(p) = &args.svg {
+        let want = args.surface.unwrap_or(0);
+        let (_, s) = chosen
+            .iter()
+            .find(|(k, _)| *k == want)
+            .unwrap_or(&chosen[0]);
+        let h = &results
+            .iter()
+            .find(|(k, _, _)| *k == want)
+            .unwrap_or(&results[0])
+            .2;
+        let mut plot = uv_plot(s, "highlight line pre-images (u, v)");
+        plot_lines(&mut plot, &h.lines.iter().collect::<Vec<_>>(), 1.5);
+        plot_lines(
+            &mut plot,
+            &h.band_lower.iter().chain(&h.band_upper).collect::<Vec<_>>(),
+            0.6,
+        );
+        plot.write(p)?;
+    }
+    write_json(&args.output, &out)?;
+    report.set("lines", line_count);
+    report.set(
+        "closed_lines",
+        results
+            .iter()
+            .map(|(_, _, h)| h.lines.iter().filter(|l| l.closed).count())
+            .sum::<usize>(),
+    );
+    report.set(
+        "points",
+        results
+            .iter()
+            .map(|(_, _, h)| h.lines.iter().map(|l| l.uv.len()).sum::<usize>())
+            .sum::<usize>(),
+    );
+    report.write(args.report.as_deref())?;
+    Ok(())
+}

@@ -1,0 +1,413 @@
+//! Command-line tests of B-spline surface highlight lines and
+//! circular-highlight fairing (Nishiyama et al.): `highlight SURFACE.json`,
+//! `fair-surface`, `convert` of IGES, on a dome-like bicubic surface with a
+//! planted bump and on the real teapot and impeller.
+
+use fairline::Vec3;
+use fairline::bspline::{
+    BSplineSurface, clamped_uniform_knots, read_surfaces_json, write_surfaces_json,
+};
+use fairline::fair::endpoints_around;
+use fairline::highlight::{CircularLight, SurfaceLight, surface_signed_distance};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_fairline"))
+        .args(args)
+        .output()
+        .expect("run fairline")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("fairline-surface-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn data(rel: &str) -> Option<PathBuf> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data")
+        .join(rel);
+    if p.exists() {
+        Some(p)
+    } else {
+        println!("skipped: ../shared/data not found");
+        None
+    }
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn json(p: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+/// Dome-like bicubic 15 × 15 surface (Nishiyama et al. Fig. 5), with
+/// control point (11, 7) raised when `bump`.
+fn dome_surface(bump: bool) -> BSplineSurface {
+    let n = 15;
+    let net = (0..n)
+        .map(|i| {
+            (0..n)
+                .map(|j| {
+                    let x = -1.0 + 2.0 * i as f64 / (n - 1) as f64;
+                    let y = -1.0 + 2.0 * j as f64 / (n - 1) as f64;
+                    let dz = if bump && (i, j) == (11, 7) { 0.03 } else { 0.0 };
+                    Vec3::new(x, y, 0.8 - 0.4 * (x * x + y * y) + dz)
+                })
+                .collect()
+        })
+        .collect();
+    let k = clamped_uniform_knots(n, 3);
+    BSplineSurface::new(3, 3, k.clone(), k, net, None).unwrap()
+}
+
+/// Centre (Greville abscissae) of control point (11, 7).
+const CENTRE: [f64; 2] = [(9.0 + 10.0 + 11.0) / 36.0, (5.0 + 6.0 + 7.0) / 36.0];
+
+/// The bumped dome and the radii of nine concentric lights (centre
+/// (0, 0, 3), axis z) whose lines cross the bump: ±20 % around the radius
+/// the clean surface's normal line at the bump reaches.
+fn dome() -> (BSplineSurface, Vec<f64>) {
+    let clean = dome_surface(false);
+    let q = clean.eval(CENTRE[0], CENTRE[1]);
+    let n = clean.normal(CENTRE[0], CENTRE[1]).unwrap();
+    let x = q + (3.0 - q.z) / n.z * n;
+    let r0 = x.x.hypot(x.y);
+    let radii = (0..9).map(|k| r0 * (0.8 + 0.05 * k as f64)).collect();
+    (dome_surface(true), radii)
+}
+
+fn lights(radii: &[f64]) -> Vec<CircularLight> {
+    radii
+        .iter()
+        .map(|&r| CircularLight::new(Vec3::new(0.0, 0.0, 3.0), Vec3::Z, r).unwrap())
+        .collect()
+}
+
+fn list(v: &[f64]) -> String {
+    v.iter()
+        .map(|x| x.to_string())
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+#[test]
+fn surface_highlight_writes_uv_and_points_on_the_zero_level() {
+    let d = tmp("hl");
+    let (surf, radii) = dome();
+    let f = d.join("dome.json");
+    write_surfaces_json(&f, std::slice::from_ref(&surf)).unwrap();
+    let (out, png, svg, rep) = (
+        d.join("lines.json"),
+        d.join("lines.png"),
+        d.join("uv.svg"),
+        d.join("r.json"),
+    );
+    let o = run(&[
+        "highlight",
+        s(&f),
+        "--circle-center",
+        "0,0,3",
+        "--circle-axis",
+        "0,0,1",
+        "--radii",
+        &list(&radii),
+        "--grid",
+        "150",
+        "--band",
+        "0.01",
+        "-o",
+        s(&out),
+        "--png",
+        s(&png),
+        "--svg",
+        s(&svg),
+        "--report",
+        s(&rep),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v = json(&out);
+    let lines = v["lines"].as_array().unwrap();
+    assert!(lines.len() >= radii.len());
+    let ls = lights(&radii);
+    for l in lines {
+        let r = l["radius"].as_f64().unwrap();
+        let k = radii
+            .iter()
+            .position(|&x| x == r)
+            .expect("radius of a given light");
+        let light = SurfaceLight::Circular(ls[k]);
+        let uv = l["uv"].as_array().unwrap();
+        let pts = l["points"].as_array().unwrap();
+        assert_eq!(uv.len(), pts.len());
+        for (a, p) in uv.iter().zip(pts) {
+            let (u, w) = (a[0].as_f64().unwrap(), a[1].as_f64().unwrap());
+            let q = surf.eval(u, w);
+            assert_eq!(q.x, p[0].as_f64().unwrap());
+            assert!(surface_signed_distance(&surf, &light, u, w).unwrap().abs() <= 1e-9);
+        }
+    }
+    assert!(!v["bands"]["lower"].as_array().unwrap().is_empty());
+    let r = json(&rep);
+    assert_eq!(r["command"], "highlight");
+    assert!(r["time_s"].as_f64().unwrap() >= 0.0);
+    assert!(std::fs::metadata(&png).unwrap().len() > 10_000);
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("<polyline"));
+}
+
+#[test]
+fn fair_surface_end_to_end_leaves_the_outside_bit_identical() {
+    let d = tmp("fair");
+    let (surf, radii) = dome();
+    let f = d.join("dome.json");
+    write_surfaces_json(&f, std::slice::from_ref(&surf)).unwrap();
+    let ls = lights(&radii);
+    let ends = endpoints_around(&surf, &ls, CENTRE, 0.2, 200);
+    assert!(ends.len() >= 3);
+    let (lf, ef) = (d.join("lights.json"), d.join("ends.json"));
+    std::fs::write(
+        &lf,
+        format!(
+            r#"{{"center":[0,0,3],"axis":[0,0,1],"radii":[{}]}}"#,
+            list(&radii)
+        ),
+    )
+    .unwrap();
+    std::fs::write(
+        &ef,
+        serde_json::to_string(&serde_json::json!({"endpoints": ends})).unwrap(),
+    )
+    .unwrap();
+    let (out, rep, png, svg) = (
+        d.join("out.json"),
+        d.join("rep.json"),
+        d.join("fair.png"),
+        d.join("uv.svg"),
+    );
+    let o = run(&[
+        "fair-surface",
+        s(&f),
+        "--lights",
+        s(&lf),
+        "--endpoints",
+        s(&ef),
+        "-o",
+        s(&out),
+        "--report",
+        s(&rep),
+        "--png",
+        s(&png),
+        "--svg",
+        s(&svg),
+        "--max-iterations",
+        "8",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = json(&rep);
+    for key in [
+        "iterations",
+        "converged",
+        "modified_control_points",
+        "residual_before",
+        "residual_after",
+        "time_s",
+    ] {
+        assert!(!r[key].is_null(), "report key {key}");
+    }
+    let (b, a) = (
+        r["residual_before"]["mean"].as_f64().unwrap(),
+        r["residual_after"]["mean"].as_f64().unwrap(),
+    );
+    assert!(a < b / 30.0, "mean |d_s| {b} -> {a}");
+    assert!(r["iterations"].as_u64().unwrap() <= 8);
+    assert!(
+        ["epsilon", "stalled", "max_iterations", "zero_residual"]
+            .contains(&r["stop"].as_str().unwrap())
+    );
+    let modified: Vec<(usize, usize)> = r["modified_indices"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| {
+            (
+                p[0].as_u64().unwrap() as usize,
+                p[1].as_u64().unwrap() as usize,
+            )
+        })
+        .collect();
+    assert_eq!(
+        modified.len(),
+        r["modified_control_points"].as_u64().unwrap() as usize
+    );
+    let faired = read_surfaces_json(&out).unwrap().remove(0);
+    let mut moved = 0;
+    for i in 0..15 {
+        for j in 0..15 {
+            let (p, q) = (surf.control_point(i, j), faired.control_point(i, j));
+            if modified.contains(&(i, j)) {
+                moved += usize::from(p != q);
+            } else {
+                assert_eq!(
+                    p.to_array().map(f64::to_bits),
+                    q.to_array().map(f64::to_bits),
+                    "({i},{j})"
+                );
+            }
+        }
+    }
+    assert!(moved > 0);
+    assert!(std::fs::metadata(&png).unwrap().len() > 10_000);
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("<circle"));
+}
+
+#[test]
+fn fair_surface_bad_input_exits_2_without_output() {
+    let d = tmp("bad");
+    let (surf, radii) = dome();
+    let f = d.join("dome.json");
+    write_surfaces_json(&f, std::slice::from_ref(&surf)).unwrap();
+    let lf = d.join("lights.json");
+    std::fs::write(
+        &lf,
+        format!(
+            r#"{{"center":[0,0,3],"axis":[0,0,1],"radii":[{}]}}"#,
+            list(&radii)
+        ),
+    )
+    .unwrap();
+    let ef = d.join("ends.json");
+    std::fs::write(
+        &ef,
+        r#"{"endpoints":[{"radius":7.5,"start":[0.6,0.3],"end":[0.8,0.4]}]}"#,
+    )
+    .unwrap();
+    let out = d.join("out.json");
+    let o = run(&[
+        "fair-surface",
+        s(&f),
+        "--lights",
+        s(&lf),
+        "--endpoints",
+        s(&ef),
+        "-o",
+        s(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("radius 7.5"));
+    assert!(!out.exists());
+    // Malformed endpoints file: the error names the file.
+    std::fs::write(&ef, r#"{"endpoints":[{"radius":1,"start":[0.6]}]}"#).unwrap();
+    let o = run(&[
+        "fair-surface",
+        s(&f),
+        "--lights",
+        s(&lf),
+        "--endpoints",
+        s(&ef),
+        "-o",
+        s(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("ends.json"));
+    // Output over the input, wrong extensions, bad grid.
+    let o = run(&[
+        "fair-surface",
+        s(&f),
+        "--lights",
+        s(&lf),
+        "--endpoints",
+        s(&ef),
+        "-o",
+        s(&f),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let o = run(&[
+        "highlight",
+        s(&f),
+        "--circle-center",
+        "0,0,3",
+        "--circle-axis",
+        "0,0,1",
+        "--radii",
+        "1",
+        "-o",
+        s(&d.join("l.obj")),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let o = run(&[
+        "highlight",
+        s(&f),
+        "--radii",
+        "1",
+        "--circle-center",
+        "0,0,3",
+        "--circle-axis",
+        "0,0,1",
+        "--grid",
+        "1",
+        "-o",
+        s(&d.join("l.json")),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!d.join("l.json").exists());
+    let o = run(&["fair-surface", "--help"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("Example"));
+}
+
+#[test]
+fn real_surfaces_teapot_and_impeller() {
+    let Some(tp) = data("surfaces/teapot.json") else {
+        return;
+    };
+    let d = tmp("real");
+    let out = d.join("teapot-lines.json");
+    let o = run(&[
+        "highlight",
+        s(&tp),
+        "--circle-center",
+        "0,-8,6",
+        "--circle-axis",
+        "0,1,-0.5",
+        "--radii",
+        "1,2,3",
+        "--grid",
+        "60",
+        "-o",
+        s(&out),
+        "--png",
+        s(&d.join("teapot.png")),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v = json(&out);
+    let lines = v["lines"].as_array().unwrap();
+    assert!(lines.len() > 10);
+    assert!(lines.iter().all(|l| l["surface"].as_u64().unwrap() < 32));
+    let Some(ip) = data("surfaces/impeller.igs") else {
+        return;
+    };
+    let js = d.join("impeller.json");
+    let o = run(&["convert", s(&ip), s(&js)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let surfaces = read_surfaces_json(&js).unwrap();
+    assert_eq!(surfaces.len(), 247);
+    // Linear light array (defaults from the bounding box) on the impeller.
+    let out = d.join("impeller-lines.json");
+    let o = run(&[
+        "highlight",
+        s(&ip),
+        "--grid",
+        "40",
+        "-o",
+        s(&out),
+        "--png",
+        s(&d.join("impeller.png")),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!json(&out)["lines"].as_array().unwrap().is_empty());
+}

@@ -1,0 +1,934 @@
+//! Circular-highlight fairing of B-spline surfaces (Nishiyama et al. §3).
+//!
+//! The user marks, on the pre-image of each circular highlight line, the two
+//! endpoints of an irregular stretch. Between them a smooth *target curve*
+//! is built in the parameter domain (cubic Hermite, Eq. (3.1)–(3.3)), sampled
+//! at n(i) points (Eq. (3.4)–(3.5)), and the control points whose support
+//! meets the knot-span bounding box of all endpoints are moved by
+//! Gauss–Newton on d_s(u_ij, v_ij) = 0 (Eq. (3.6)–(3.9)) with a truncated
+//! SVD, a damped step when the residual grows (Eq. (3.12)–(3.13)) and the
+//! stopping rule of Eq. (3.14).
+//!
+//! Everything outside the selected control points is left bit-identical: the
+//! other control points are never written, so the surface is unchanged
+//! wherever no selected basis function is non-zero.
+//!
+//! Assumes a regular parametrisation (Nishiyama et al. §3.1) and a
+//! non-degenerate normal along the target curves; samples where d_s is
+//! undefined are left out and counted.
+
+use crate::Vec3;
+use crate::bspline::{BSplineError, BSplineSurface};
+use crate::curves::CubicHermite;
+use crate::highlight::CircularLight;
+use crate::highlight::surface::{
+    SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceLight, contour_field, distance_field,
+};
+use faer::Mat;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+use thiserror::Error;
+
+/// One irregular stretch to fair: the radius of its light and the two
+/// endpoints in the parameter domain, DESIGN.md §5
+/// `{"radius":r,"start":[u,v],"end":[u,v]}`. Each endpoint is snapped to the
+/// nearest point of that radius' pre-image.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EndpointPair {
+    /// Radius R of the circular light whose highlight line this is.
+    pub radius: f64,
+    /// First endpoint e¹ (u, v).
+    pub start: [f64; 2],
+    /// Second endpoint e² (u, v).
+    pub end: [f64; 2],
+}
+
+/// The endpoints file of DESIGN.md §5: `{"endpoints":[...]}`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Endpoints {
+    /// The stretches to fair.
+    pub endpoints: Vec<EndpointPair>,
+}
+
+/// Options of [`fair_surface`]. Lengths of the paper that assume its units
+/// (s = 50, Δw = 1e-4) are expressed relative to the surface (DESIGN.md §3).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceFairOptions {
+    /// Grid points per direction for the pre-images the endpoints snap to.
+    pub grid: usize,
+    /// Sample spacing s of Eq. (3.5) as a fraction of the parameter domain's
+    /// diagonal.
+    pub sample_spacing: f64,
+    /// Finite-difference step Δw of Eq. (3.10) as a fraction of the control
+    /// net's bounding-box diagonal.
+    pub fd_step: f64,
+    /// Singular values below this fraction of the largest are dropped
+    /// (Nishiyama et al. §3.3: 5 %).
+    pub truncation: f64,
+    /// Step factor μ of Eq. (3.13) used when Eq. (3.12) fails (0.1).
+    pub damped_step: f64,
+    /// ε of the stopping rule Eq. (3.14) (1e-4).
+    pub epsilon: f64,
+    /// Most Gauss–Newton iterations.
+    pub max_iterations: usize,
+}
+
+impl Default for SurfaceFairOptions {
+    fn default() -> Self {
+        SurfaceFairOptions {
+            grid: 200,
+            sample_spacing: 0.005,
+            fd_step: 1e-7,
+            truncation: 0.05,
+            damped_step: 0.1,
+            epsilon: 1e-4,
+            max_iterations: 20,
+        }
+    }
+}
+
+/// Why fairing could not run.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum SurfaceFairError {
+    /// An option or an endpoint is out of range.
+    #[error("invalid input: {0}")]
+    Invalid(String),
+    /// No light of the endpoint's radius was given.
+    #[error("endpoint {index}: no circular light of radius {radius}")]
+    NoLight {
+        /// Position in the endpoints list.
+        index: usize,
+        /// The radius asked for.
+        radius: f64,
+    },
+    /// The light of that radius draws no highlight line on the surface.
+    #[error("endpoint {index}: the light of radius {radius} has no highlight line on the surface")]
+    NoPreImage {
+        /// Position in the endpoints list.
+        index: usize,
+        /// The radius.
+        radius: f64,
+    },
+    /// No sample of any target curve has a defined d_s.
+    #[error("no target sample has a defined signed distance")]
+    NoSamples,
+    /// The SVD did not converge.
+    #[error("singular value decomposition failed")]
+    Svd,
+    /// Writing a control point failed (non-finite update).
+    #[error(transparent)]
+    Surface(#[from] BSplineError),
+}
+
+/// The smooth target of one stretch (Nishiyama et al. §3.2–3.3).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TargetCurve {
+    /// Position of the stretch in the endpoints list.
+    pub index: usize,
+    /// Position of its light in the lights slice.
+    pub light: usize,
+    /// Radius of that light.
+    pub radius: f64,
+    /// Endpoint e¹ snapped onto the pre-image.
+    pub start: [f64; 2],
+    /// Endpoint e² snapped onto the pre-image.
+    pub end: [f64; 2],
+    /// Tangent t¹ of Eq. (3.1) (direction from the Bézier fit, length Eq. (3.3)).
+    pub tangent_start: [f64; 2],
+    /// Tangent t² of Eq. (3.1).
+    pub tangent_end: [f64; 2],
+    /// The sample parameters h_i(t_j) of Eq. (3.4), n(i) of Eq. (3.5).
+    pub samples: Vec<[f64; 2]>,
+    /// The pre-image polyline the endpoints were snapped to (u, v).
+    pub pre_image: Vec<[f64; 2]>,
+}
+
+/// One Gauss–Newton iteration of [`fair_surface`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FairIteration {
+    /// max |d_s| over the samples after the step.
+    pub max_abs: f64,
+    /// mean |d_s| over the samples after the step.
+    pub mean_abs: f64,
+    /// Step factor μ used (1, or the damped step of Eq. (3.13)).
+    pub step: f64,
+    /// Jacobian rows (samples).
+    pub rows: usize,
+    /// Jacobian columns (control point components).
+    pub cols: usize,
+    /// Singular values kept by the truncation.
+    pub rank: usize,
+    /// Wall time of the iteration (s).
+    pub time_s: f64,
+}
+
+/// Why [`fair_surface`] stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FairStop {
+    /// The relative change of mean |d_s| fell below ε (Eq. (3.14)).
+    Epsilon,
+    /// mean |d_s| vanished (below 1e-14 of the control net size).
+    ZeroResidual,
+    /// Neither the full nor the damped step lowered mean |d_s|: the targets
+    /// are followed as well as the selected control points allow.
+    Stalled,
+    /// `max_iterations` reached.
+    MaxIterations,
+    /// The step was not finite (the previous surface is kept).
+    NonFiniteStep,
+}
+
+/// What [`fair_surface`] did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SurfaceFairReport {
+    /// The targets.
+    pub targets: Vec<TargetCurve>,
+    /// Control points moved, `(i, j)`, row-major.
+    pub modified_control_points: Vec<(usize, usize)>,
+    /// Knot-span bounding box `[u0, u1, v0, v1]` of the endpoints.
+    pub knot_box: [f64; 4],
+    /// Samples left out because d_s is undefined there.
+    pub undefined_samples: usize,
+    /// (max, mean) |d_s| at the samples before fairing.
+    pub residual_before: (f64, f64),
+    /// (max, mean) |d_s| at the samples after fairing.
+    pub residual_after: (f64, f64),
+    /// Per-iteration record.
+    pub iterations: Vec<FairIteration>,
+    /// Whether Eq. (3.14) was met (or the residual vanished).
+    pub converged: bool,
+    /// Why the iteration stopped.
+    pub stop: FairStop,
+    /// Largest control point displacement (surface units).
+    pub max_displacement: f64,
+}
+
+/// The light of each endpoint pair: the one whose radius matches within
+/// 1e-9 (relative).
+fn light_of(lights: &[CircularLight], radius: f64) -> Option<usize> {
+    lights
+        .iter()
+        .position(|l| (l.radius() - radius).abs() <= 1e-9 * l.radius().max(1.0))
+}
+
+/// A pre-image polyline with cumulative arc length (in `(u, v)`).
+struct Arc<'a> {
+    pts: &'a [[f64; 2]],
+    closed: bool,
+    /// `cum[k]` arc length at point k; for closed lines one extra entry
+    /// (back to point 0).
+    cum: Vec<f64>,
+}
+
+fn dist2(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)
+}
+
+impl<'a> Arc<'a> {
+    fn new(line: &'a SurfaceHighlightLine) -> Self {
+        let pts = &line.uv[..];
+        let mut cum = vec![0.0];
+        let n = pts.len();
+        let segs = if line.closed { n } else { n.saturating_sub(1) };
+        for k in 0..segs {
+            let d = dist2(pts[k], pts[(k + 1) % n]).sqrt();
+            cum.push(cum[k] + d);
+        }
+        Arc {
+            pts,
+            closed: line.closed,
+            cum,
+        }
+    }
+    fn length(&self) -> f64 {
+        *self.cum.last().unwrap_or(&0.0)
+    }
+    /// Nearest point: (squared distance, arc position, point).
+    fn nearest(&self, p: [f64; 2]) -> (f64, f64, [f64; 2]) {
+        let n = self.pts.len();
+        let mut best = (f64::INFINITY, 0.0, self.pts[0]);
+        if n == 1 {
+            return (dist2(self.pts[0], p), 0.0, self.pts[0]);
+        }
+        for k in 0..self.cum.len() - 1 {
+            let (a, b) = (self.pts[k], self.pts[(k + 1) % n]);
+            let ab = [b[0] - a[0], b[1] - a[1]];
+            let l2 = ab[0] * ab[0] + ab[1] * ab[1];
+            let t = if l2 > 0.0 {
+                (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1]) / l2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let q = [a[0] + t * ab[0], a[1] + t * ab[1]];
+            let d = dist2(p, q);
+            if d < best.0 {
+                best = (d, self.cum[k] + t * (self.cum[k + 1] - self.cum[k]), q);
+            }
+        }
+        best
+    }
+    /// The point at arc position `s` (wrapped on closed lines, clamped on
+    /// open ones).
+    fn at(&self, s: f64) -> [f64; 2] {
+        let len = self.length();
+        let n = self.pts.len();
+        if len <= 0.0 || n < 2 {
+            return self.pts[0];
+        }
+        let s = if self.closed {
+            s.rem_euclid(len)
+        } else {
+            s.clamp(0.0, len)
+        };
+        let k = match self.cum.binary_search_by(|c| c.total_cmp(&s)) {
+            Ok(k) => k.min(self.cum.len() - 2),
+            Err(k) => k.saturating_sub(1).min(self.cum.len() - 2),
+        };
+        let (a, b) = (self.pts[k], self.pts[(k + 1) % n]);
+        let d = self.cum[k + 1] - self.cum[k];
+        let t = if d > 0.0 {
+            ((s - self.cum[k]) / d).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
+    }
+}
+
+/// Direction of travel at an endpoint from the cubic through four points of
+/// the regular part (Nishiyama et al. §3.2, Fig. 4(b)): `q[0]` is the
+/// endpoint and `q[1..4]` go away from the stretch at equal arc steps. The
+/// interpolating cubic at t = 0, 1/3, 2/3, 1 has derivative
+/// (−11 q0 + 18 q1 − 9 q2 + 2 q3) / 2 at q0 (pointing away from the stretch).
+fn outward_direction(q: [[f64; 2]; 4]) -> Option<[f64; 2]> {
+    let d = [
+        0.5 * (-11.0 * q[0][0] + 18.0 * q[1][0] - 9.0 * q[2][0] + 2.0 * q[3][0]),
+        0.5 * (-11.0 * q[0][1] + 18.0 * q[1][1] - 9.0 * q[2][1] + 2.0 * q[3][1]),
+    ];
+    let l = d[0].hypot(d[1]);
+    (l > 0.0 && l.is_finite()).then(|| [d[0] / l, d[1] / l])
+}
+
+/// Target curves of Nishiyama et al. §3.2–3.3 for each endpoint pair:
+///
+/// 1. the pre-images of every light used are contoured on an
+///    `opts.grid`² grid ([`crate::highlight::surface`]);
+/// 2. the start is snapped to the nearest point of its radius' pre-image,
+///    and the end to the nearest point of the same polyline;
+/// 3. the stretch runs from e¹ to e² along the polyline (on closed lines the
+///    shorter way); four points of the regular part on each side, spaced by
+///    |e¹ − e²|/3 of arc length (less where an open line ends), give the
+///    tangent directions through a cubic fit; their lengths are |e¹ − e²|
+///    (Eq. (3.3));
+/// 4. the cubic Hermite curve of Eq. (3.1)–(3.2) is sampled at
+///    n(i) = 2 + ⌊|e¹ − e²| / s⌋ equally spaced parameters (Eq. (3.4)–(3.5)),
+///    s = `opts.sample_spacing` × domain diagonal, clamped to the domain.
+///
+/// (Eq. (3.2) of the paper lists the Hermite basis with H₁ and H₂ swapped
+/// relative to Eq. (3.1); [`CubicHermite`] uses the standard assignment.)
+pub fn target_curves(
+    surface: &BSplineSurface,
+    lights: &[CircularLight],
+    endpoints: &[EndpointPair],
+    opts: &SurfaceFairOptions,
+) -> Result<Vec<TargetCurve>, SurfaceFairError> {
+    check_options(opts)?;
+    let (du, dv) = (surface.domain_u(), surface.domain_v());
+    let diag = (du[1] - du[0]).hypot(dv[1] - dv[0]);
+    let s = opts.sample_spacing * diag;
+    // Pre-images of the lights used (once per light).
+    let mut used: Vec<usize> = Vec::new();
+    let mut light_index = Vec::with_capacity(endpoints.len());
+    for (k, e) in endpoints.iter().enumerate() {
+        let finite = e.start.iter().chain(&e.end).all(|x| x.is_finite());
+        if !(e.radius > 0.0 && e.radius.is_finite() && finite) {
+            return Err(SurfaceFairError::Invalid(format!(
+                "endpoint {k}: radius must be positive and coordinates finite"
+            )));
+        }
+        let l = light_of(lights, e.radius).ok_or(SurfaceFairError::NoLight {
+            index: k,
+            radius: e.radius,
+        })?;
+        light_index.push(l);
+        if !used.contains(&l) {
+            used.push(l);
+        }
+    }
+    let hopts = SurfaceHighlightOptions::default().grid(opts.grid);
+    let pre_images: Vec<(usize, Vec<SurfaceHighlightLine>)> = used
+        .par_iter()
+        .map(|&l| {
+            let light = SurfaceLight::Circular(lights[l]);
+            let field = distance_field(surface, &light, opts.grid, opts.grid);
+            (l, contour_field(surface, &light, l, &field, 0.0, &hopts))
+        })
+        .collect();
+    let mut out = Vec::with_capacity(endpoints.len());
+    for (k, e) in endpoints.iter().enumerate() {
+        let l = light_index[k];
+        let lines = &pre_images
+            .iter()
+            .find(|(x, _)| *x == l)
+            .map(|(_, v)| v)
+            .ok_or(SurfaceFairError::NoPreImage {
+                index: k,
+                radius: e.radius,
+            })?;
+        let arcs: Vec<Arc> = lines
+            .iter()
+            .filter(|x| x.uv.len() >= 2)
+            .map(Arc::new)
+            .collect();
+        let start = surface_clamp(surface, e.start);
+        let end = surface_clamp(surface, e.end);
+        let (arc, (_, s1, e1)) = arcs
+            .iter()
+            .map(|a| (a, a.nearest(start)))
+            .min_by(|x, y| x.1.0.total_cmp(&y.1.0))
+            .ok_or(SurfaceFairError::NoPreImage {
+                index: k,
+                radius: e.radius,
+            })?;
+        let (_, s2, e2) = arc.nearest(end);
+        let chord = dist2(e1, e2).sqrt();
+        if !(chord > 1e-9 * diag) {
+            return Err(SurfaceFairError::Invalid(format!(
+                "endpoint {k}: start and end snap to the same point of the highlight line"
+            )));
+        }
+        let len = arc.length();
+        // Direction of travel along the arc from e1 to e2.
+        let dir = if arc.closed {
+            if (s2 - s1).rem_euclid(len) <= 0.5 * len {
+                1.0
+            } else {
+                -1.0
+            }
+        } else if s2 >= s1 {
+            1.0
+        } else {
+            -1.0
+        };
+        let h = chord / 3.0;
+        let side = |s0: f64, away: f64| -> Option<[f64; 2]> {
+            // Arc available beyond s0 in direction `away`.
+            let avail = if arc.closed {
+                f64::INFINITY
+            } else if away > 0.0 {
+                len - s0
+            } else {
+                s0
+            };
+            let step = h.min(avail / 3.0);
+            if !(step > 1e-12 * diag) {
+                return None;
+            }
+            let q = [0.0, 1.0, 2.0, 3.0].map(|m| arc.at(s0 + away * m * step));
+            outward_direction(q)
+        };
+        let chord_dir = [(e2[0] - e1[0]) / chord, (e2[1] - e1[1]) / chord];
+        let t1 = side(s1, -dir).map_or(chord_dir, |d| [-d[0], -d[1]]);
+        let t2 = side(s2, dir).unwrap_or(chord_dir);
+        let hermite = CubicHermite {
+            p0: Vec3::new(e1[0], e1[1], 0.0),
+            p1: Vec3::new(e2[0], e2[1], 0.0),
+            v0: Vec3::new(t1[0], t1[1], 0.0) * chord,
+            v1: Vec3::new(t2[0], t2[1], 0.0) * chord,
+        };
+        let n = 2 + if s > 0.0 {
+            ((chord / s).floor() as usize).min(100_000)
+        } else {
+            0
+        };
+        let samples = (0..n)
+            .map(|j| {
+                let p = hermite.point(j as f64 / (n - 1) as f64);
+                surface_clamp(surface, [p.x, p.y])
+            })
+            .collect();
+        out.push(TargetCurve {
+            index: k,
+            light: l,
+            radius: lights[l].radius(),
+            start: e1,
+            end: e2,
+            tangent_start: [t1[0] * chord, t1[1] * chord],
+            tangent_end: [t2[0] * chord, t2[1] * chord],
+            samples,
+            pre_image: arc.pts.to_vec(),
+        });
+    }
+    Ok(out)
+}
+
+fn surface_clamp(surface: &BSplineSurface, p: [f64; 2]) -> [f64; 2] {
+    let (u, v) = surface.clamp_parameters(p[0], p[1]);
+    [u, v]
+}
+
+fn check_options(o: &SurfaceFairOptions) -> Result<(), SurfaceFairError> {
+    let bad = |m: &str| Err(SurfaceFairError::Invalid(m.to_string()));
+    if o.grid < 3 || o.grid > 10_000 {
+        return bad("grid must be between 3 and 10000");
+    }
+    if !(o.sample_spacing > 0.0 && o.sample_spacing.is_finite()) {
+        return bad("sample spacing must be positive");
+    }
+    if !(o.fd_step > 0.0 && o.fd_step < 1.0) {
+        return bad("finite-difference step must be in (0, 1)");
+    }
+    if !(o.truncation >= 0.0 && o.truncation < 1.0) {
+        return bad("truncation must be in [0, 1)");
+    }
+    if !(o.damped_step > 0.0 && o.damped_step <= 1.0) {
+        return bad("damped step must be in (0, 1]");
+    }
+    if !(o.epsilon > 0.0 && o.epsilon.is_finite()) {
+        return bad("epsilon must be positive");
+    }
+    Ok(())
+}
+
+/// The knot-span bounding box of points (Nishiyama et al. §3.2, Fig. 4(c)):
+/// the smallest box with knot-valued sides that encloses them.
+pub fn knot_box(surface: &BSplineSurface, points: &[[f64; 2]]) -> [f64; 4] {
+    let (du, dv) = (surface.domain_u(), surface.domain_v());
+    let (mut u0, mut u1, mut v0, mut v1) = (du[1], du[0], dv[1], dv[0]);
+    for p in points {
+        u0 = u0.min(p[0]);
+        u1 = u1.max(p[0]);
+        v0 = v0.min(p[1]);
+        v1 = v1.max(p[1]);
+    }
+    let down = |knots: &[f64], x: f64, lo: f64| {
+        knots
+            .iter()
+            .copied()
+            .filter(|&k| k <= x && k >= lo)
+            .fold(lo, f64::max)
+    };
+    let up = |knots: &[f64], x: f64, hi: f64| {
+        knots
+            .iter()
+            .copied()
+            .filter(|&k| k >= x && k <= hi)
+            .fold(hi, f64::min)
+    };
+    [
+        down(surface.knots_u(), u0, du[0]),
+        up(surface.knots_u(), u1, du[1]),
+        down(surface.knots_v(), v0, dv[0]),
+        up(surface.knots_v(), v1, dv[1]),
+    ]
+}
+
+/// A sample of a target curve with its light and the derivatives of the
+/// surface (and its first partials) with respect to the selected control
+/// points: S, S_u, S_v are linear in the control points with coefficients
+/// R, ∂R/∂u, ∂R/∂v of the (rational) basis.
+struct Sample {
+    uv: [f64; 2],
+    light: usize,
+    /// (column base = 3 × selected index, R, R_u, R_v).
+    coeffs: Vec<(usize, f64, f64, f64)>,
+}
+
+/// Rational basis R_ij and its first partials at `(u, v)` for the control
+/// points in `column` (flat index → selected index), Piegl & Tiller Eq. (4.2)
+/// differentiated: R = N w / W, R_u = (N_u w W − N w W_u) / W².
+fn sample_coeffs(
+    surface: &BSplineSurface,
+    column: &[Option<usize>],
+    u: f64,
+    v: f64,
+) -> Vec<(usize, f64, f64, f64)> {
+    let b = surface.basis(u, v);
+    let (p, q) = (surface.degree_u(), surface.degree_v());
+    let (i0, j0) = (b.span_u - p, b.span_v - q);
+    let w = |r: usize, s: usize| surface.weight(i0 + r, j0 + s);
+    let (mut ww, mut wu, mut wv) = (0.0, 0.0, 0.0);
+    if surface.is_rational() {
+        for r in 0..=p {
+            for s in 0..=q {
+                let wt = w(r, s);
+                ww += b.du[0][r] * b.dv[0][s] * wt;
+                wu += b.du[1][r] * b.dv[0][s] * wt;
+                wv += b.du[0][r] * b.dv[1][s] * wt;
+            }
+        }
+    } else {
+        ww = 1.0;
+    }
+    let mut out = Vec::new();
+    if !(ww > 0.0 && ww.is_finite()) {
+        return out;
+    }
+    for r in 0..=p {
+        for s in 0..=q {
+            let Some(col) = column[surface.index(i0 + r, j0 + s)] else {
+                continue;
+            };
+            let wt = if surface.is_rational() { w(r, s) } else { 1.0 };
+            let n = b.du[0][r] * b.dv[0][s] * wt;
+            let nu = b.du[1][r] * b.dv[0][s] * wt;
+            let nv = b.du[0][r] * b.dv[1][s] * wt;
+            let rr = n / ww;
+            let ru = (nu * ww - n * wu) / (ww * ww);
+            let rv = (nv * ww - n * wv) / (ww * ww);
+            if rr != 0.0 || ru != 0.0 || rv != 0.0 {
+                out.push((3 * col, rr, ru, rv));
+            }
+        }
+    }
+    out
+}
+
+/// d_s of Eq. (2.18) at every sample; `None` where undefined.
+fn residuals(
+    surface: &BSplineSurface,
+    lights: &[CircularLight],
+    samples: &[Sample],
+) -> Vec<Option<f64>> {
+    samples
+        .par_iter()
+        .with_min_len(16)
+        .map(|s| {
+            let d = surface.derivatives(s.uv[0], s.uv[1]);
+            lights[s.light].signed_distance(d.point, d.normal()?)
+        })
+        .collect()
+}
+
+/// (max, mean) |d_s|; infinite if any sample is undefined.
+fn stats(r: &[Option<f64>]) -> (f64, f64) {
+    if r.is_empty() {
+        return (0.0, 0.0);
+    }
+    let mut max = 0.0f64;
+    let mut sum = 0.0;
+    for x in r {
+        match x {
+            Some(x) => {
+                max = max.max(x.abs());
+                sum += x.abs();
+            }
+            None => return (f64::INFINITY, f64::INFINITY),
+        }
+    }
+    (max, sum / r.len() as f64)
+}
+
+/// The Jacobian ∂d_s/∂r of Eq. (3.9) by the forward differences of
+/// Eq. (3.10), re-evaluating only the samples each column affects: moving
+/// component a of control point P by Δw moves S, S_u, S_v of a sample by
+/// (R, R_u, R_v)·Δw along axis a, exactly, so only the normal and the
+/// quartic of Eq. (2.15) are recomputed. Parallel over samples.
+fn jacobian(
+    surface: &BSplineSurface,
+    lights: &[CircularLight],
+    samples: &[Sample],
+    f: &[Option<f64>],
+    cols: usize,
+    dw: f64,
+) -> Mat<f64> {
+    let entries: Vec<Vec<(usize, f64)>> = samples
+        .par_iter()
+        .zip(f.par_iter())
+        .map(|(s, &f0)| {
+            let mut e = Vec::with_capacity(3 * s.coeffs.len());
+            let Some(f0) = f0 else { return e };
+            let d = surface.derivatives(s.uv[0], s.uv[1]);
+            let light = &lights[s.light];
+            for &(c, r, ru, rv) in &s.coeffs {
+                for a in 0..3 {
+                    let mut ax = Vec3::ZERO;
+                    ax[a] = dw;
+                    let q = d.point + r * ax;
+                    let n = (d.su + ru * ax).cross(d.sv + rv * ax);
+                    let g = light.signed_distance(q, n).map_or(0.0, |fd| (fd - f0) / dw);
+                    if g.is_finite() {
+                        e.push((c + a, g));
+                    }
+                }
+            }
+            e
+        })
+        .collect();
+    let mut j = Mat::<f64>::zeros(samples.len(), cols);
+    for (row, e) in entries.iter().enumerate() {
+        for &(c, g) in e {
+            j[(row, c)] = g;
+        }
+    }
+    j
+}
+
+/// Least-squares solution of J Δr = −F by the truncated SVD (Nishiyama et
+/// al. §3.3): singular values below `truncation` × the largest are set to
+/// zero. Returns (Δr, rank).
+fn truncated_svd_solve(
+    j: &Mat<f64>,
+    f: &[f64],
+    truncation: f64,
+) -> Result<(Vec<f64>, usize), SurfaceFairError> {
+    let svd = j.thin_svd().map_err(|_| SurfaceFairError::Svd)?;
+    let (u, s, v) = (svd.U(), svd.S().column_vector(), svd.V());
+    let k = s.nrows();
+    let smax = (0..k).map(|i| s[i]).fold(0.0f64, f64::max);
+    let mut dr = vec![0.0; j.ncols()];
+    if !(smax > 0.0 && smax.is_finite()) {
+        return Ok((dr, 0));
+    }
+    let mut rank = 0;
+    for i in 0..k {
+        let si = s[i];
+        if !(si >= truncation * smax && si > 0.0) {
+            continue;
+        }
+        rank += 1;
+        let mut utf = 0.0;
+        for r in 0..u.nrows() {
+            utf += u[(r, i)] * f[r];
+        }
+        let c = -utf / si;
+        for (col, x) in dr.iter_mut().enumerate() {
+            *x += c * v[(col, i)];
+        }
+    }
+    Ok((dr, rank))
+}
+
+/// Moves the selected control points by `mu · dr`.
+fn apply(
+    surface: &mut BSplineSurface,
+    base: &[Vec3],
+    selected: &[(usize, usize)],
+    dr: &[f64],
+    mu: f64,
+) -> Result<(), SurfaceFairError> {
+    for (k, &(i, j)) in selected.iter().enumerate() {
+        let d = Vec3::new(dr[3 * k], dr[3 * k + 1], dr[3 * k + 2]);
+        surface.set_control_point(i, j, base[k] + mu * d)?;
+    }
+    Ok(())
+}
+
+/// Circular-highlight fairing of a B-spline surface, Nishiyama et al. §3:
+/// targets by [`target_curves`]; the control points whose support meets
+/// the knot-span bounding box of all endpoints ([`knot_box`],
+/// [`BSplineSurface::control_points_in_box`]) are the unknowns r (three
+/// components each); Gauss–Newton on d_s(u_ij, v_ij) = 0 (Eq. (3.6)–(3.9))
+/// with the Jacobian of Eq. (3.10) ([`jacobian`], Δw relative to the control
+/// net size) and the truncated SVD; full step R + Δr (Eq. (3.11)) when both
+/// max and mean |d_s| decrease (Eq. (3.12)), otherwise R + μΔr (Eq. (3.13)).
+/// Stops when |mean⁽ᵖ⁺¹⁾ − mean⁽ᵖ⁾| / mean⁽ᵖ⁾ < ε (Eq. (3.14), read with
+/// the absolute value), when the residual vanishes, when even the damped
+/// step does not lower the mean (the previous surface is kept; reported as
+/// [`FairStop::Stalled`], not converged), or after `opts.max_iterations`.
+///
+/// Returns the faired surface (control points outside the selection
+/// bit-identical) and the report.
+pub fn fair_surface(
+    surface: &BSplineSurface,
+    lights: &[CircularLight],
+    endpoints: &[EndpointPair],
+    opts: &SurfaceFairOptions,
+) -> Result<(BSplineSurface, SurfaceFairReport), SurfaceFairError> {
+    if endpoints.is_empty() {
+        return Err(SurfaceFairError::Invalid("no endpoints given".into()));
+    }
+    let targets = target_curves(surface, lights, endpoints, opts)?;
+    let ends: Vec<[f64; 2]> = targets.iter().flat_map(|t| [t.start, t.end]).collect();
+    let kb = knot_box(surface, &ends);
+    let selected = surface.control_points_in_box(kb[0], kb[1], kb[2], kb[3]);
+    let mut column = vec![None; surface.count_u() * surface.count_v()];
+    for (k, &(i, j)) in selected.iter().enumerate() {
+        column[surface.index(i, j)] = Some(k);
+    }
+    let cols = 3 * selected.len();
+    // Samples with a defined d_s on the input surface.
+    let all: Vec<Sample> = targets
+        .iter()
+        .flat_map(|t| {
+            t.samples.iter().map(|&uv| Sample {
+                uv,
+                light: t.light,
+                coeffs: Vec::new(),
+            })
+        })
+        .collect();
+    let f_all = residuals(surface, lights, &all);
+    let mut samples: Vec<Sample> = all
+        .into_iter()
+        .zip(&f_all)
+        .filter(|(_, f)| f.is_some())
+        .map(|(s, _)| s)
+        .collect();
+    let undefined_samples = f_all.len() - samples.len();
+    if samples.is_empty() {
+        return Err(SurfaceFairError::NoSamples);
+    }
+    samples
+        .par_iter_mut()
+        .for_each(|s| s.coeffs = sample_coeffs(surface, &column, s.uv[0], s.uv[1]));
+    let (lo, hi) = surface.control_bounding_box();
+    let size = (hi - lo).length().max(f64::MIN_POSITIVE);
+    let dw = opts.fd_step * size;
+    let tiny = 1e-14 * size;
+
+    let mut current = surface.clone();
+    let mut f = residuals(&current, lights, &samples);
+    let before = stats(&f);
+    let mut now = before;
+    let mut iterations = Vec::new();
+    let mut converged = now.1 <= tiny;
+    let mut stop = if converged {
+        FairStop::ZeroResidual
+    } else {
+        FairStop::MaxIterations
+    };
+    while !converged && iterations.len() < opts.max_iterations && cols > 0 {
+        let t0 = Instant::now();
+        let base: Vec<Vec3> = selected
+            .iter()
+            .map(|&(i, j)| current.control_point(i, j))
+            .collect();
+        let j = jacobian(&current, lights, &samples, &f, cols, dw);
+        let fv: Vec<f64> = f.iter().map(|x| x.unwrap_or(0.0)).collect();
+        let (dr, rank) = truncated_svd_solve(&j, &fv, opts.truncation)?;
+        if !dr.iter().all(|x| x.is_finite()) {
+            stop = FairStop::NonFiniteStep;
+            break;
+        }
+        let mut trial = current.clone();
+        let mut step = 1.0;
+        apply(&mut trial, &base, &selected, &dr, step)?;
+        let mut ft = residuals(&trial, lights, &samples);
+        let mut st = stats(&ft);
+        if !(st.0 < now.0 && st.1 < now.1) {
+            step = opts.damped_step;
+            apply(&mut trial, &base, &selected, &dr, step)?;
+            ft = residuals(&trial, lights, &samples);
+            st = stats(&ft);
+        }
+        if !(st.1 < now.1) {
+            // Not even the damped step helps: keep the current surface.
+            stop = FairStop::Stalled;
+            break;
+        }
+        let rel = (now.1 - st.1).abs() / now.1;
+        current = trial;
+        f = ft;
+        now = st;
+        iterations.push(FairIteration {
+            max_abs: st.0,
+            mean_abs: st.1,
+            step,
+            rows: samples.len(),
+            cols,
+            rank,
+            time_s: t0.elapsed().as_secs_f64(),
+        });
+        if now.1 <= tiny {
+            converged = true;
+            stop = FairStop::ZeroResidual;
+        } else if rel < opts.epsilon {
+            converged = true;
+            stop = FairStop::Epsilon;
+        }
+    }
+    let max_displacement = selected
+        .iter()
+        .map(|&(i, j)| (current.control_point(i, j) - surface.control_point(i, j)).length())
+        .fold(0.0, f64::max);
+    Ok((
+        current,
+        SurfaceFairReport {
+            targets,
+            modified_control_points: selected,
+            knot_box: kb,
+            undefined_samples,
+            residual_before: before,
+            residual_after: now,
+            iterations,
+            converged,
+            stop,
+            max_displacement,
+        },
+    ))
+}
+
+/// Endpoint pairs around a disc of the parameter domain: for every pre-image
+/// of every light (zero level on a `grid`² grid) and every maximal run of its
+/// points inside the disc of centre `center` and radius `radius` (in
+/// `(u, v)`), the pair (last point before, first point after) the run — the
+/// "two endpoints bounding the local irregularity" a user would click
+/// (Nishiyama et al. Fig. 3). Runs that reach an open end of a line are
+/// skipped (no regular part on that side).
+pub fn endpoints_around(
+    surface: &BSplineSurface,
+    lights: &[CircularLight],
+    center: [f64; 2],
+    radius: f64,
+    grid: usize,
+) -> Vec<EndpointPair> {
+    let hopts = SurfaceHighlightOptions::default().grid(grid);
+    let mut out = Vec::new();
+    if !(radius > 0.0) {
+        return out;
+    }
+    for (k, light) in lights.iter().enumerate() {
+        let sl = SurfaceLight::Circular(*light);
+        let field = distance_field(surface, &sl, grid, grid);
+        for line in contour_field(surface, &sl, k, &field, 0.0, &hopts) {
+            let n = line.uv.len();
+            if n < 3 {
+                continue;
+            }
+            let inside: Vec<bool> = line
+                .uv
+                .iter()
+                .map(|&p| dist2(p, center) <= radius * radius)
+                .collect();
+            if inside.iter().all(|&b| b) || !inside.iter().any(|&b| b) {
+                continue;
+            }
+            // Start scanning at an outside point so runs do not wrap.
+            let first_out = if line.closed {
+                inside.iter().position(|&b| !b).unwrap_or(0)
+            } else {
+                0
+            };
+            let m = if line.closed { n } else { n - first_out };
+            let idx = |t: usize| (first_out + t) % n;
+            let mut t = 0;
+            while t < m {
+                if inside[idx(t)] {
+                    let s = t;
+                    while t < m && inside[idx(t)] {
+                        t += 1;
+                    }
+                    if !line.closed && (s == 0 || t >= m) {
+                        continue; // reaches an open end
+                    }
+                    out.push(EndpointPair {
+                        radius: light.radius(),
+                        start: line.uv[idx(s - 1)],
+                        end: line.uv[idx(t)],
+                    });
+                } else {
+                    t += 1;
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,622 @@
+//! Highlight lines of B-spline surfaces in the parameter domain (Nishiyama
+//! et al. §2, last two paragraphs): the signed distance d_s of Eq. (2.18)
+//! sampled on a `(u, v)` grid, its zero level (and the band levels ±ρ)
+//! contoured by marching squares into pre-image polylines, every contour
+//! point refined onto the true level along its grid edge, and the lines
+//! mapped to 3D by evaluating the surface.
+//!
+//! Assumes a regular parametrisation (Nishiyama et al. §2: "well
+//! conditioned"); where the normal is undefined, d_s is undefined and no
+//! line is drawn through that grid cell. d_s changes sign where the nearest
+//! point of the circle jumps (Eq. (2.18) measures along N × L̇), and a
+//! linear light's distance jumps through infinity where Z·N = 0; grid edges
+//! across such a jump carry no contour point (as on meshes, DESIGN.md §3).
+
+use super::light::{CircularLight, LightArray};
+use crate::Vec3;
+use crate::bspline::{BSplineSurface, SurfaceDerivatives};
+use rayon::prelude::*;
+
+/// A light whose highlight lines are drawn on a B-spline surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SurfaceLight {
+    /// A circular light (Nishiyama et al. Eq. (2.1)); field d_s of Eq. (2.18).
+    Circular(CircularLight),
+    /// Light `index` m of a linear light array (Yong et al. Eq. (1)–(2),
+    /// sign of DESIGN.md §3); field d_P − m·s.
+    Linear {
+        /// The array.
+        array: LightArray,
+        /// The light index m.
+        index: i64,
+        /// Smallest |Z·N| at which the distance is defined.
+        min_cos: f64,
+    },
+}
+
+/// A light's field value at one surface point: the distance and a *branch
+/// angle*. Two samples belong to the same continuous piece of the field when
+/// their branch angles differ by less than 90° (the angle θ of the nearest
+/// circle point for circular lights; 0 or π by the sign of Z·N for linear
+/// lights).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FieldSample {
+    /// Signed distance (surface units).
+    pub value: f64,
+    /// Branch angle (radians).
+    pub branch: f64,
+}
+
+impl SurfaceLight {
+    /// The field at a surface point `q` with unit normal `normal`: d_s of
+    /// Nishiyama et al. Eq. (2.18) via [`CircularLight::approach`], or the
+    /// highlight distance of [`LightArray::highlight_distance`] minus m·s.
+    /// `None` where undefined.
+    #[inline]
+    pub fn sample(&self, q: Vec3, normal: Vec3) -> Option<FieldSample> {
+        match self {
+            SurfaceLight::Circular(c) => c.approach(q, normal).map(|a| FieldSample {
+                value: a.signed_distance,
+                branch: a.theta,
+            }),
+            SurfaceLight::Linear {
+                array,
+                index,
+                min_cos,
+            } => {
+                let d = array.highlight_distance(q, normal, *min_cos)?;
+                let zn = array.plane_normal().dot(normal);
+                Some(FieldSample {
+                    value: d - *index as f64 * array.spacing(),
+                    branch: if zn >= 0.0 { 0.0 } else { std::f64::consts::PI },
+                })
+            }
+        }
+    }
+
+    /// The field at surface derivatives `d` (normal of Eq. (2.4)).
+    #[inline]
+    pub fn sample_derivatives(&self, d: &SurfaceDerivatives) -> Option<FieldSample> {
+        self.sample(d.point, d.normal()?)
+    }
+
+    /// The radius R of a circular light, `None` for a linear one.
+    pub fn radius(&self) -> Option<f64> {
+        match self {
+            SurfaceLight::Circular(c) => Some(c.radius()),
+            SurfaceLight::Linear { .. } => None,
+        }
+    }
+}
+
+/// The signed distance d_s(u, v) of Nishiyama et al. Eq. (2.18) (or the
+/// linear-light distance) at one parameter; `None` where undefined.
+pub fn surface_signed_distance(
+    surface: &BSplineSurface,
+    light: &SurfaceLight,
+    u: f64,
+    v: f64,
+) -> Option<f64> {
+    light
+        .sample_derivatives(&surface.derivatives(u, v))
+        .map(|s| s.value)
+}
+
+/// A light's field sampled on a tensor grid of parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DistanceField {
+    /// Grid parameters in u (increasing).
+    pub us: Vec<f64>,
+    /// Grid parameters in v (increasing).
+    pub vs: Vec<f64>,
+    /// Samples, row-major: `samples[a * vs.len() + b]` at `(us[a], vs[b])`;
+    /// `None` where the field is undefined.
+    pub samples: Vec<Option<FieldSample>>,
+}
+
+impl DistanceField {
+    /// The field value at grid point `(a, b)`.
+    pub fn value(&self, a: usize, b: usize) -> Option<f64> {
+        self.samples[a * self.vs.len() + b].map(|s| s.value)
+    }
+}
+
+/// `n` parameters spread uniformly over `[t0, t1]`, ending exactly at `t1`.
+pub(crate) fn uniform_params([t0, t1]: [f64; 2], n: usize) -> Vec<f64> {
+    let n = n.max(2);
+    (0..n)
+        .map(|k| {
+            if k + 1 == n {
+                t1
+            } else {
+                t0 + (t1 - t0) * (k as f64 / (n - 1) as f64)
+            }
+        })
+        .collect()
+}
+
+/// The field of `light` on the `nu × nv` uniform grid over the whole
+/// parameter domain (each count at least 2). Derivatives come from
+/// [`BSplineSurface::derivatives_grid`]; the quartic of Eq. (2.15)–(2.16) is
+/// solved per grid point in parallel. Deterministic.
+pub fn distance_field(
+    surface: &BSplineSurface,
+    light: &SurfaceLight,
+    nu: usize,
+    nv: usize,
+) -> DistanceField {
+    let us = uniform_params(surface.domain_u(), nu);
+    let vs = uniform_params(surface.domain_v(), nv);
+    let ders = surface.derivatives_grid(&us, &vs);
+    let samples = ders
+        .par_iter()
+        .with_min_len(256)
+        .map(|d| light.sample_derivatives(d))
+        .collect();
+    DistanceField { us, vs, samples }
+}
+
+/// The lights m of a linear light array whose highlight lines can appear
+/// on the surface: every m between the smallest and largest highlight
+/// distance d_P / s sampled on an `n × n` grid (Yong et al. Eq. (1)–(2)),
+/// at most `max_lights` of them (the middle ones). Empty when no grid point
+/// sees the lights (|Z·N| < `min_cos` everywhere).
+pub fn linear_lights(
+    surface: &BSplineSurface,
+    array: LightArray,
+    min_cos: f64,
+    n: usize,
+    max_lights: usize,
+) -> Vec<SurfaceLight> {
+    let probe = SurfaceLight::Linear {
+        array,
+        index: 0,
+        min_cos,
+    };
+    let field = distance_field(surface, &probe, n, n);
+    let (lo, hi) = field
+        .samples
+        .iter()
+        .flatten()
+        .map(|s| s.value / array.spacing())
+        .filter(|x| x.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
+    if !(lo <= hi) || max_lights == 0 {
+        return Vec::new();
+    }
+    let (mut m0, mut m1) = (lo.ceil() as i64, hi.floor() as i64);
+    let count = (m1 - m0 + 1).max(0) as usize;
+    if count > max_lights {
+        let mid = (m0 + m1) / 2;
+        m0 = mid - (max_lights as i64) / 2;
+        m1 = m0 + max_lights as i64 - 1;
+    }
+    (m0..=m1)
+        .map(|index| SurfaceLight::Linear {
+            array,
+            index,
+            min_cos,
+        })
+        .collect()
+}
+
+/// Options of [`surface_highlight_lines`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceHighlightOptions {
+    /// Grid points in u (≥ 2).
+    pub grid_u: usize,
+    /// Grid points in v (≥ 2).
+    pub grid_v: usize,
+    /// Band radius ρ: when set, the levels ±ρ are contoured too
+    /// (Nishiyama et al. §2, "circular highlight band").
+    pub band: Option<f64>,
+    /// Absolute tolerance on |d_s − level| for refined contour points.
+    pub tolerance: f64,
+    /// Most refinement steps per contour point.
+    pub max_refine_steps: usize,
+}
+
+impl Default for SurfaceHighlightOptions {
+    fn default() -> Self {
+        SurfaceHighlightOptions {
+            grid_u: 200,
+            grid_v: 200,
+            band: None,
+            tolerance: 1e-11,
+            max_refine_steps: 80,
+        }
+    }
+}
+
+impl SurfaceHighlightOptions {
+    /// Sets both grid sizes.
+    pub fn grid(mut self, n: usize) -> Self {
+        self.grid_u = n;
+        self.grid_v = n;
+        self
+    }
+    /// Sets the band radius ρ.
+    pub fn band(mut self, rho: Option<f64>) -> Self {
+        self.band = rho;
+        self
+    }
+}
+
+/// One pre-image polyline of a highlight line (or band boundary) and its
+/// image on the surface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SurfaceHighlightLine {
+    /// Position of the light in the input slice.
+    pub light: usize,
+    /// Radius R of the circular light (`None` for linear lights).
+    pub radius: Option<f64>,
+    /// Contoured level: 0 for the highlight line, ±ρ for band boundaries.
+    pub level: f64,
+    /// True when the polyline is a loop (the first point is not repeated).
+    pub closed: bool,
+    /// Parameters `[u, v]` of the points, each on a grid edge, refined so
+    /// that |d_s − level| ≤ the tolerance where the field allows.
+    pub uv: Vec<[f64; 2]>,
+    /// Surface points `S(u, v)`.
+    pub points: Vec<Vec3>,
+}
+
+/// All highlight lines of a surface: the zero levels and, with a band, the
+/// ±ρ levels. Sorted by light, then by first grid edge (deterministic).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SurfaceHighlights {
+    /// Zero-level pre-images (the highlight lines).
+    pub lines: Vec<SurfaceHighlightLine>,
+    /// Level −ρ (empty without a band).
+    pub band_lower: Vec<SurfaceHighlightLine>,
+    /// Level +ρ (empty without a band).
+    pub band_upper: Vec<SurfaceHighlightLine>,
+}
+
+/// Circular (or linear) highlight lines of a B-spline surface (Nishiyama et
+/// al. §2): for each light, d_s of Eq. (2.18) on the grid of `opts`, its
+/// zero level by [`contour_field`], and with `opts.band = Some(ρ)` the band
+/// boundaries d_s = ±ρ. Consecutive lights of one linear array share one
+/// sampled field d_P (light m is its level m·s).
+pub fn surface_highlight_lines(
+    surface: &BSplineSurface,
+    lights: &[SurfaceLight],
+    opts: &SurfaceHighlightOptions,
+) -> SurfaceHighlights {
+    let mut out = SurfaceHighlights::default();
+    // Lights of one linear array share d_P: its field is sampled once and
+    // light m is the level m·s of it.
+    let mut cache: Option<(SurfaceLight, DistanceField)> = None;
+    for (k, light) in lights.iter().enumerate() {
+        let (base, shift) = match *light {
+            SurfaceLight::Linear {
+                array,
+                index,
+                min_cos,
+            } => (
+                SurfaceLight::Linear {
+                    array,
+                    index: 0,
+                    min_cos,
+                },
+                index as f64 * array.spacing(),
+            ),
+            SurfaceLight::Circular(_) => (*light, 0.0),
+        };
+        if !matches!(&cache, Some((l, _)) if *l == base) {
+            cache = Some((
+                base,
+                distance_field(surface, &base, opts.grid_u, opts.grid_v),
+            ));
+        }
+        let Some((_, field)) = &cache else {
+            continue;
+        };
+        let level_set = |level: f64| {
+            let mut ls = contour_field(surface, &base, k, field, shift + level, opts);
+            for l in &mut ls {
+                l.level = level;
+                l.radius = light.radius();
+            }
+            ls
+        };
+        out.lines.extend(level_set(0.0));
+        if let Some(rho) = opts.band.filter(|r| *r > 0.0 && r.is_finite()) {
+            out.band_lower.extend(level_set(-rho));
+            out.band_upper.extend(level_set(rho));
+        }
+    }
+    out
+}
+
+/// A grid edge: horizontal (along u) from `(a, b)` to `(a + 1, b)`, or
+/// vertical (along v) from `(a, b)` to `(a, b + 1)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum GridEdge {
+    U(usize, usize),
+    V(usize, usize),
+}
+
+/// The level `level` of a sampled field as polylines in `(u, v)` (marching
+/// squares) mapped to 3D:
+///
+/// - a grid edge carries a contour point when both ends are defined, lie on
+///   the same branch (branch angles less than 90° apart) and on different
+///   sides of the level (a value equal to the level counts as above);
+/// - a cell whose four corners and edges are all valid contributes one
+///   segment per pair of crossed edges; with four crossed edges (a saddle)
+///   the value at the cell centre (mean of the corners) decides: the
+///   segments cut off the corners on the other side of the level than the
+///   centre, the same rule in every cell (consistent, no crossings);
+/// - segments are chained through shared edges into open or closed lines;
+/// - each point is refined along its grid edge by the Illinois variant of
+///   regula falsi on the exact field until |d_s − level| ≤ `opts.tolerance`
+///   (or `opts.max_refine_steps`); if the field becomes undefined inside
+///   the edge, or the refinement finds no zero (the sign change is a jump
+///   of d_s, e.g. where the nearest root of the quartic switches), the
+///   point is dropped and its line split there.
+pub fn contour_field(
+    surface: &BSplineSurface,
+    light: &SurfaceLight,
+    light_index: usize,
+    field: &DistanceField,
+    level: f64,
+    opts: &SurfaceHighlightOptions,
+) -> Vec<SurfaceHighlightLine> {
+    let (nu, nv) = (field.us.len(), field.vs.len());
+    if nu < 2 || nv < 2 || field.samples.len() != nu * nv {
+        return Vec::new();
+    }
+    let at = |a: usize, b: usize| field.samples[a * nv + b];
+    let above = |s: FieldSample| s.value >= level;
+    let same_branch = |x: FieldSample, y: FieldSample| (x.branch - y.branch).cos() > 0.0;
+    // Edge ids: U(a, b) -> a * nv + b; V(a, b) -> n_u_edges + a * (nv - 1) + b.
+    let n_u_edges = (nu - 1) * nv;
+    let edge_id = |e: GridEdge| match e {
+        GridEdge::U(a, b) => a * nv + b,
+        GridEdge::V(a, b) => n_u_edges + a * (nv - 1) + b,
+    };
+    let edge_of = |id: usize| {
+        if id < n_u_edges {
+            GridEdge::U(id / nv, id % nv)
+        } else {
+            let k = id - n_u_edges;
+            GridEdge::V(k / (nv - 1), k % (nv - 1))
+        }
+    };
+    let ends = |e: GridEdge| match e {
+        GridEdge::U(a, b) => ((a, b), (a + 1, b)),
+        GridEdge::V(a, b) => ((a, b), (a, b + 1)),
+    };
+    // Segments per cell (parallel over cell rows, deterministic order).
+    let segments: Vec<[usize; 2]> = (0..nu - 1)
+        .into_par_iter()
+        .flat_map_iter(|a| {
+            let mut segs = Vec::new();
+            for b in 0..nv - 1 {
+                let c = [at(a, b), at(a + 1, b), at(a + 1, b + 1), at(a, b + 1)];
+                if c.iter().any(Option::is_none) {
+                    continue;
+                }
+                let c = c.map(Option::unwrap);
+                if !(same_branch(c[0], c[1])
+                    && same_branch(c[1], c[2])
+                    && same_branch(c[2], c[3])
+                    && same_branch(c[3], c[0]))
+                {
+                    continue;
+                }
+                // Cell edges in order: bottom (c0-c1), right (c1-c2), top (c3-c2), left (c0-c3).
+                let edges = [
+                    GridEdge::U(a, b),
+                    GridEdge::V(a + 1, b),
+                    GridEdge::U(a, b + 1),
+                    GridEdge::V(a, b),
+                ];
+                let side = c.map(above);
+                let cut: Vec<usize> = (0..4).filter(|&k| side[k] != side[(k + 1) % 4]).collect();
+                match cut.len() {
+                    2 => segs.push([edge_id(edges[cut[0]]), edge_id(edges[cut[1]])]),
+                    4 => {
+                        let centre = 0.25 * (c[0].value + c[1].value + c[2].value + c[3].value);
+                        let centre_above = centre >= level;
+                        // Corner k touches edges k-1 (previous) and k.
+                        for k in 0..4 {
+                            if side[k] != centre_above {
+                                segs.push([edge_id(edges[(k + 3) % 4]), edge_id(edges[k])]);
+                            }
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            segs
+        })
+        .collect();
+    if segments.is_empty() {
+        return Vec::new();
+    }
+    // Adjacency: every edge has at most two segments.
+    let mut nodes: Vec<usize> = segments.iter().flatten().copied().collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    let index_of = |id: usize| nodes.binary_search(&id).unwrap_or(0);
+    let mut adj: Vec<[usize; 2]> = vec![[usize::MAX; 2]; nodes.len()];
+    for s in &segments {
+        let (x, y) = (index_of(s[0]), index_of(s[1]));
+        for (p, q) in [(x, y), (y, x)] {
+            if adj[p][0] == usize::MAX {
+                adj[p][0] = q;
+            } else if adj[p][1] == usize::MAX {
+                adj[p][1] = q;
+            }
+        }
+    }
+    let degree = |p: usize| adj[p].iter().filter(|&&q| q != usize::MAX).count();
+    let mut used = vec![false; nodes.len()];
+    let mut chains: Vec<(bool, Vec<usize>)> = Vec::new();
+    let walk = |start: usize, used: &mut Vec<bool>| -> (bool, Vec<usize>) {
+        let mut chain = vec![start];
+        used[start] = true;
+        let mut prev = usize::MAX;
+        let mut cur = start;
+        loop {
+            let next = adj[cur]
+                .iter()
+                .copied()
+                .find(|&q| q != usize::MAX && q != prev && !used[q]);
+            match next {
+                Some(q) => {
+                    used[q] = true;
+                    chain.push(q);
+                    prev = cur;
+                    cur = q;
+                }
+                None => {
+                    let closed = chain.len() > 2 && adj[cur].contains(&start);
+                    return (closed, chain);
+                }
+            }
+        }
+    };
+    for p in 0..nodes.len() {
+        if !used[p] && degree(p) <= 1 {
+            let c = walk(p, &mut used);
+            chains.push((false, c.1));
+        }
+    }
+    for p in 0..nodes.len() {
+        if !used[p] {
+            chains.push(walk(p, &mut used));
+        }
+    }
+    // Refine every node onto the level along its grid edge; a crossing that
+    // is a jump of the field (no zero inside the edge) is dropped.
+    let refined: Vec<Option<[f64; 2]>> = nodes
+        .par_iter()
+        .map(|&id| {
+            let e = edge_of(id);
+            let ((a0, b0), (a1, b1)) = ends(e);
+            let p0 = [field.us[a0], field.vs[b0]];
+            let p1 = [field.us[a1], field.vs[b1]];
+            let f0 = at(a0, b0).map_or(0.0, |s| s.value) - level;
+            let f1 = at(a1, b1).map_or(0.0, |s| s.value) - level;
+            refine_on_edge(surface, light, level, p0, p1, f0, f1, opts)
+        })
+        .collect();
+    let mut pieces: Vec<(bool, Vec<[f64; 2]>)> = Vec::new();
+    for (closed, chain) in chains {
+        if chain.iter().all(|&p| refined[p].is_some()) {
+            pieces.push((closed, chain.iter().filter_map(|&p| refined[p]).collect()));
+            continue;
+        }
+        // Split at dropped nodes; a loop is opened at its first dropped node.
+        let n = chain.len();
+        let shift = if closed {
+            chain
+                .iter()
+                .position(|&p| refined[p].is_none())
+                .unwrap_or(0)
+        } else {
+            0
+        };
+        let mut run: Vec<[f64; 2]> = Vec::new();
+        for k in 0..n {
+            match refined[chain[(shift + k) % n]] {
+                Some(p) => run.push(p),
+                None => pieces.push((false, std::mem::take(&mut run))),
+            }
+        }
+        pieces.push((false, run));
+    }
+    pieces
+        .into_iter()
+        .filter(|(_, uv)| uv.len() >= 2)
+        .map(|(closed, uv)| {
+            let points = uv.iter().map(|&[u, v]| surface.eval(u, v)).collect();
+            SurfaceHighlightLine {
+                light: light_index,
+                radius: light.radius(),
+                level,
+                closed,
+                uv,
+                points,
+            }
+        })
+        .collect()
+}
+
+/// The point of the segment `p0 → p1` where the field equals `level`, with
+/// `f0 = field(p0) − level` and `f1 = field(p1) − level` of opposite signs:
+/// Illinois regula falsi on the exact field (safeguarded by the bracket).
+/// `None` when the sign change is a jump of the field rather than a zero
+/// (the best |f| found stays above 1e-6 of the end values and above the
+/// tolerance).
+#[allow(clippy::too_many_arguments)]
+fn refine_on_edge(
+    surface: &BSplineSurface,
+    light: &SurfaceLight,
+    level: f64,
+    p0: [f64; 2],
+    p1: [f64; 2],
+    f0: f64,
+    f1: f64,
+    opts: &SurfaceHighlightOptions,
+) -> Option<[f64; 2]> {
+    let lerp = |t: f64| [p0[0] + t * (p1[0] - p0[0]), p0[1] + t * (p1[1] - p0[1])];
+    let linear_t = |fa: f64, fb: f64, ta: f64, tb: f64| {
+        let den = fa - fb;
+        if den != 0.0 && den.is_finite() {
+            (ta + fa * (tb - ta) / den).clamp(ta.min(tb), ta.max(tb))
+        } else {
+            0.5 * (ta + tb)
+        }
+    };
+    if f0 == 0.0 {
+        return Some(p0);
+    }
+    if f1 == 0.0 {
+        return Some(p1);
+    }
+    let (mut ta, mut fa, mut tb, mut fb) = (0.0, f0, 1.0, f1);
+    let mut best = (linear_t(fa, fb, ta, tb), f64::INFINITY);
+    let mut side = 0i8;
+    for _ in 0..opts.max_refine_steps {
+        let t = linear_t(fa, fb, ta, tb);
+        let [u, v] = lerp(t);
+        let Some(ft) = surface_signed_distance(surface, light, u, v).map(|d| d - level) else {
+            // Undefined inside the edge: no reliable zero there.
+            return None;
+        };
+        if ft.abs() < best.1 {
+            best = (t, ft.abs());
+        }
+        if ft.abs() <= opts.tolerance || (tb - ta).abs() < 1e-15 {
+            break;
+        }
+        if (ft < 0.0) == (fa < 0.0) {
+            ta = t;
+            fa = ft;
+            if side == -1 {
+                fb *= 0.5;
+            }
+            side = -1;
+        } else {
+            tb = t;
+            fb = ft;
+            if side == 1 {
+                fa *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    // A true zero brings |f| down to the tolerance (or to rounding level on
+    // a collapsed bracket); a jump leaves it near the jump's size.
+    let accept = best.1 <= opts.tolerance.max(1e-6 * f0.abs().max(f1.abs()));
+    accept.then(|| lerp(best.0))
+}
+
+#[cfg(test)]
+mod tests;
