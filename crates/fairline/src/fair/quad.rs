@@ -848,12 +848,15 @@ pub(crate) fn fair_structure_lines_with(
     for _ in 0..opts.iterations {
         report.iterations += 1;
         // classification
+        let flagged: Vec<bool> = runs
+            .par_iter()
+            .with_min_len(4096)
+            .map(|r| run_deviation(&cur, r).length() > deviation)
+            .collect();
         let mut free = vec![false; n];
-        for r in &runs {
-            if run_deviation(&cur, r).length() > deviation {
-                free[r[1] as usize] = true;
-                free[r[2] as usize] = true;
-            }
+        for (r, _) in runs.iter().zip(&flagged).filter(|(_, f)| **f) {
+            free[r[1] as usize] = true;
+            free[r[2] as usize] = true;
         }
         let mut index = vec![u32::MAX; n];
         let mut unknowns = Vec::new();
