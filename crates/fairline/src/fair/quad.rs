@@ -363,7 +363,6 @@ impl System<'_> {
         ) else {
             return Ok(None);
         };
-        // out = ωv + Aᵀ(Av) on interleaved x, y, z
         // per run the unknowns of its points (u32::MAX: fixed), and per
         // incidence of a vertex its coefficient, so that the product below
         // streams over arrays instead of looking them up
@@ -379,6 +378,7 @@ impl System<'_> {
             .map(|&(ri, s)| coef[ri as usize][s as usize])
             .collect();
         let mut av = vec![Vec3::ZERO; runs.len()];
+        // out = ωv + Aᵀ(Av) on interleaved x, y, z
         let apply = |v: &[f64], out: &mut [f64]| {
             av.par_iter_mut()
                 .zip(local.par_iter().zip(coef.par_iter()))
