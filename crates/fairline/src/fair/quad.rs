@@ -348,7 +348,7 @@ impl System<'_> {
                 b.copy_from_slice(&(omega * (self.p0[j] - cur[j]) - g).to_array());
             });
         drop(residual);
-        // c̃ = √(ωλ/2), λ ≈ half the mean Gershgorin bound of K₁ + K₂ over
+        // √(ωλ), λ ≈ half the mean Gershgorin bound of K₁ + K₂ over
         // the unknowns: Σ_j Σ_{runs ∋ j} |a_j| Σ_{free t} |a_t| = Σ_runs S²
         // with S = Σ_{free t} |a_t|
         let gersh: f64 = runs
@@ -469,7 +469,7 @@ struct Lines<'a> {
     family: &'a [u8],
 }
 
-/// c̃I + K_f of one family f, factored line by line: every unknown belongs
+/// c_f I + K_f of one family f, factored line by line: every unknown belongs
 /// to the block of the first line of family f through it (or to a block of
 /// its own), and the block of a line holds the Eq. (32) terms of the runs
 /// of that line among the unknowns it owns, in line order. A run spans four
@@ -525,7 +525,7 @@ impl LineBlocks {
                 block_line.push(u32::MAX);
             }
         }
-        // band of c̃I + K_f, then its factor, block by block in parallel
+        // band of c_f I + K_f, then its factor, block by block in parallel
         let mut factor = vec![[shift, 0.0, 0.0, 0.0]; m];
         let mut slices: Vec<&mut [[f64; 4]]> = Vec::with_capacity(block_line.len());
         let mut rest: &mut [[f64; 4]] = &mut factor;
@@ -600,8 +600,8 @@ impl LineBlocks {
         })
     }
 
-    /// z = scale · (c̃I + K_f)⁻¹ r on interleaved x, y, z, or
-    /// z += scale · (c̃I + K_f)⁻¹ r when `add`.
+    /// z = scale · (c_f I + K_f)⁻¹ r on interleaved x, y, z, or
+    /// z += scale · (c_f I + K_f)⁻¹ r when `add`.
     /// `y` is scratch space.
     fn solve(&self, r: &[f64], z: &mut [f64], scale: f64, add: bool, y: &mut Vec<f64>) {
         // gather into block order, solve the blocks, scatter back
