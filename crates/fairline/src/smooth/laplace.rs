@@ -317,6 +317,7 @@ fn finish(
         volume_after: geom::volume(mesh),
         max_displacement,
         converged: true,
+        residual: None,
     })
 }
 
