@@ -426,6 +426,23 @@ impl Stage {
         })
     }
 
+    /// Symbolic analysis of the pattern: nested-dissection ordering from the
+    /// positions `cur` of the unknowns, then faer's symbolic Cholesky. Needs
+    /// no matrix values, so it can run while they are computed.
+    fn analyse(&mut self, cur: &[Vec3]) -> Result<(), SmoothError> {
+        if self.unknowns.is_empty() {
+            return Ok(());
+        }
+        let points: Vec<Vec3> = self.unknowns.iter().map(|&i| cur[i]).collect();
+        let order = nested_dissection(self.pattern.as_ref(), &points)?;
+        let opts = CholeskyOptions {
+            ordering: CholeskyOrdering::Custom(order),
+            ..CholeskyOptions::default()
+        };
+        self.solver = Some(CholeskySolver::analyse(self.pattern.as_ref(), &opts)?);
+        Ok(())
+    }
+
     /// `weight(i, k)` is w_ij for unknown vertex i and its neighbourhood
     /// entry k (j = `nb.nbr[k]`); `mass[i]` the diagonal.
     fn solve(
@@ -439,6 +456,9 @@ impl Stage {
         let m = self.unknowns.len();
         if m == 0 {
             return Ok(());
+        }
+        if self.solver.is_none() {
+            self.analyse(cur)?;
         }
         let col_ptr = self.pattern.col_ptr();
         let row_idx = self.pattern.row_idx();
@@ -489,20 +509,22 @@ impl Stage {
             .collect();
         let mut rhs = rhs_blocks.concat();
         let a = SparseColMatRef::new(self.pattern.as_ref(), &values);
-        let refactored = match self.solver.as_mut() {
-            Some(s) => s.refactor(a).is_ok(),
-            None => false,
-        };
-        if !refactored {
-            let points: Vec<Vec3> = unknowns.iter().map(|&i| cur[i]).collect();
+        let solver = self.solver.as_mut().expect("analysed above");
+        if let Err(e) = solver.refactor(a) {
+            // With large steps and obtuse triangles M − tL can be near
+            // indefinite and the pivots depend on the order: retry once with
+            // an ordering from the current positions (as a fresh solver would)
+            let points: Vec<Vec3> = self.unknowns.iter().map(|&i| src[i]).collect();
             let order = nested_dissection(self.pattern.as_ref(), &points)?;
             let opts = CholeskyOptions {
                 ordering: CholeskyOrdering::Custom(order),
                 ..CholeskyOptions::default()
             };
-            self.solver = Some(CholeskySolver::with_options(a, &opts)?);
+            match CholeskySolver::with_options(a, &opts) {
+                Ok(fresh) => *solver = fresh,
+                Err(_) => return Err(e.into()),
+            }
         }
-        let solver = self.solver.as_ref().expect("set above");
         solver.solve_points(&mut rhs)?;
         for (r, &i) in self.unknowns.iter().enumerate() {
             cur[i] = rhs[r];
@@ -545,6 +567,23 @@ pub fn implicit_smooth(
     let mut inner = Stage::new(|i| roles[i] == Role::Free, n, &nb)?;
     // the mesh itself carries the positions of each step (weights, areas,
     // volume); on failure its input positions are restored
+    // the symbolic analysis of the free vertices' system needs only its
+    // pattern and the input positions: run it alongside the first step's
+    // cotangent weights and mixed areas (the mesh still holds the input)
+    let (analysed, wm) = {
+        let m: &SurfaceMesh = mesh;
+        rayon::join(
+            || inner.analyse(&input),
+            || {
+                rayon::join(
+                    || geom::halfedge_weights(m, LaplaceWeights::Cotangent),
+                    || geom::mixed_vertex_areas(m),
+                )
+            },
+        )
+    };
+    analysed?;
+    let mut first = Some(wm);
     let mut run = |mesh: &mut SurfaceMesh| -> Result<Vec<Vec3>, SmoothError> {
         let mut cur = input.clone();
         for step in 0..opts.iterations {
@@ -570,10 +609,13 @@ pub fn implicit_smooth(
                     .collect();
                 curve.solve(&mut cur, &mass, t, &nb, &weight)?;
             }
-            let (hw, mass) = rayon::join(
-                || geom::halfedge_weights(mesh, LaplaceWeights::Cotangent),
-                || geom::mixed_vertex_areas(mesh),
-            );
+            let (hw, mass) = match first.take() {
+                Some(wm) => wm,
+                None => rayon::join(
+                    || geom::halfedge_weights(mesh, LaplaceWeights::Cotangent),
+                    || geom::mixed_vertex_areas(mesh),
+                ),
+            };
             let weight = |_: usize, k: usize| hw[nb.he[k] as usize];
             inner.solve(&mut cur, &mass, t, &nb, &weight)?;
             if let Some(nrm) = &normals {

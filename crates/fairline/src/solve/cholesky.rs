@@ -20,7 +20,9 @@ use faer::sparse::linalg::cholesky::{
     LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::sparse::linalg::matmul::sparse_sparse_matmul;
-use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, Triplet};
+use faer::sparse::{
+    SparseColMat, SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef, Triplet,
+};
 use faer::{Conj, Mat, MatMut, Par, Side};
 use std::sync::Arc;
 
@@ -65,6 +67,8 @@ pub struct CholeskySolver {
     symbolic: Arc<SymbolicCholesky<usize>>,
     pattern: SymbolicSparseColMat<usize>,
     values: Vec<f64>,
+    /// Whether `values` holds a factorisation of the current values.
+    factored: bool,
     par: Par,
 }
 
@@ -80,18 +84,32 @@ impl CholeskySolver {
         a: SparseColMatRef<'_, usize, f64>,
         opts: &CholeskyOptions,
     ) -> Result<Self, SolveError> {
-        let n = a.nrows();
-        if n != a.ncols() {
+        let mut s = Self::analyse(a.symbolic(), opts)?;
+        s.factor(a)?;
+        Ok(s)
+    }
+
+    /// Symbolic analysis only (fill-reducing ordering, elimination tree,
+    /// supernodes) of a symmetric pattern (only its lower triangle is read);
+    /// the values come with [`CholeskySolver::refactor`], which must be
+    /// called before solving. Lets a caller analyse while it is still
+    /// computing the matrix values.
+    pub fn analyse(
+        pattern: SymbolicSparseColMatRef<'_, usize>,
+        opts: &CholeskyOptions,
+    ) -> Result<Self, SolveError> {
+        let n = pattern.nrows();
+        if n != pattern.ncols() {
             return Err(SolveError::Dimension(format!(
                 "Cholesky needs a square matrix, got {}×{}",
-                a.nrows(),
-                a.ncols()
+                pattern.nrows(),
+                pattern.ncols()
             )));
         }
         let backend = |e: faer::sparse::FaerError| SolveError::Backend(format!("{e:?}"));
         let symbolic = match &opts.ordering {
             CholeskyOrdering::Amd => factorize_symbolic_cholesky(
-                a.symbolic(),
+                pattern,
                 Side::Lower,
                 SymmetricOrdering::Amd,
                 Default::default(),
@@ -101,7 +119,7 @@ impl CholeskySolver {
                 let inv = inverse_permutation(fwd, n)?;
                 let perm = PermRef::new_checked(fwd, &inv, n);
                 factorize_symbolic_cholesky(
-                    a.symbolic(),
+                    pattern,
                     Side::Lower,
                     SymmetricOrdering::Custom(perm),
                     Default::default(),
@@ -109,22 +127,22 @@ impl CholeskySolver {
                 .map_err(backend)?
             }
         };
-        let mut s = CholeskySolver {
+        Ok(CholeskySolver {
             symbolic: Arc::new(symbolic),
-            pattern: a.symbolic().to_owned().map_err(backend)?,
+            pattern: pattern.to_owned().map_err(backend)?,
             values: Vec::new(),
+            factored: false,
             par: if opts.parallel {
                 Par::rayon(0)
             } else {
                 Par::Seq
             },
-        };
-        s.factor(a)?;
-        Ok(s)
+        })
     }
 
     /// Numeric factorisation with the stored symbolic analysis.
     fn factor(&mut self, a: SparseColMatRef<'_, usize, f64>) -> Result<(), SolveError> {
+        self.factored = false;
         let len = self.symbolic.len_val();
         let mut values = Vec::new();
         values
@@ -149,6 +167,7 @@ impl CholeskySolver {
             // faer's numeric LLᵀ fails only on a non-positive pivot
             .map_err(|_| SolveError::NotPositiveDefinite)?;
         self.values = values;
+        self.factored = true;
         Ok(())
     }
 
@@ -177,6 +196,11 @@ impl CholeskySolver {
 
     /// Solves in place for the columns of `m` (sequential triangular solves).
     fn solve_mat(&self, m: MatMut<'_, f64>) -> Result<(), SolveError> {
+        if !self.factored {
+            return Err(SolveError::Backend(
+                "the Cholesky solver has been analysed but not factored (call refactor)".into(),
+            ));
+        }
         let req = self
             .symbolic
             .solve_in_place_scratch::<f64>(m.ncols(), Par::Seq);
@@ -379,9 +403,26 @@ mod tests {
             assert!((x[i] - x_true[i]).abs() < 1e-12);
         }
         s.refactor(build(2.0).as_ref()).unwrap();
-        let mut y = b;
+        let mut y = b.clone();
         s.solve_in_place(&mut y).unwrap();
         assert!((y[0] - x[0]).abs() > 1e-3, "refactored values are used");
+        // refactoring with new values equals a fresh factorisation of them,
+        // and so does analysing the pattern first and factoring later
+        let fresh = CholeskySolver::new(build(2.0).as_ref()).unwrap();
+        let mut late = CholeskySolver::analyse(a.symbolic(), &CholeskyOptions::default()).unwrap();
+        let mut z = b.clone();
+        assert!(late.solve_in_place(&mut z).is_err(), "no values yet");
+        late.refactor(build(2.0).as_ref()).unwrap();
+        for solver in [&fresh, &late] {
+            let mut z = b.clone();
+            solver.solve_in_place(&mut z).unwrap();
+            let d = z
+                .iter()
+                .zip(&y)
+                .map(|(p, q)| (p - q).abs())
+                .fold(0.0, f64::max);
+            assert!(d < 1e-12, "{d}");
+        }
         // a matrix that is not positive definite is refused
         let bad = sparse_from_triplets(2, 2, &[(0, 0, 1.0), (1, 1, -1.0)]).unwrap();
         assert_eq!(
