@@ -102,13 +102,7 @@ impl HighlightModel {
         options: HighlightOptions,
     ) -> Result<Self, HighlightError> {
         options.check()?;
-        let not_triangle = (0..mesh.face_count() as u32).into_par_iter().any(|f| {
-            let h = mesh.face_halfedge(FaceId(f));
-            mesh.next(mesh.next(mesh.next(h))) != h
-        });
-        if not_triangle {
-            mesh.require_triangles()?; // names the first such face
-        }
+        mesh.require_triangles()?;
         // one pass per vertex: the Eq. (3) normal (bit-identical to
         // geom::vertex_normals) and the Eq. (1) distance
         let area_vectors = geom::face_area_vectors(mesh);
