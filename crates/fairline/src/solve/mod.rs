@@ -1,19 +1,24 @@
 //! Sparse linear solvers shared by every algorithm: sparse Cholesky with a
-//! reusable symbolic factorisation, normal equations of sparse least-squares
-//! problems (by Cholesky or by matrix-free preconditioned conjugate
-//! gradients), preconditioned conjugate gradients for any symmetric positive
-//! definite operator, triplet assembly, and an exact bound-constrained QP
-//! solver.
+//! reusable symbolic factorisation (AMD or nested-dissection ordering),
+//! normal equations of sparse least-squares problems (by Cholesky or by
+//! matrix-free preconditioned conjugate gradients), preconditioned conjugate
+//! gradients for any symmetric positive definite operator, triplet assembly,
+//! and an exact bound-constrained QP solver.
 //!
 //! All matrices are faer `SparseColMat<usize, f64>`.
 
 mod box_qp;
 mod cg;
 mod cholesky;
+mod ordering;
 
 pub use box_qp::{BoxQpOptions, BoxQpSolution, box_qp};
 pub use cg::{CgOptions, CgReport, normal_equations_cg, pcg};
-pub use cholesky::{CholeskySolver, least_squares, normal_matrix, sparse_from_triplets};
+pub use cholesky::{
+    CholeskyOptions, CholeskyOrdering, CholeskySolver, least_squares, normal_matrix,
+    sparse_from_triplets,
+};
+pub use ordering::nested_dissection;
 
 use thiserror::Error;
 
