@@ -47,12 +47,19 @@ impl CircularLight {
         let (n, b) = self.frame();
         let a = self.center();
         let r = self.radius();
+        // Parametrise the line from its point nearest to the centre A,
+        // Q₀ = Q + ((A − Q)·N)N, so that ε = (A − Q₀)·N = 0 in Eq. (2.12):
+        // the same line, but the coefficients of Eq. (2.16) lose the terms
+        // in ε², ε³ whose cancellation (|ε| ≫ R for a distant light) used to
+        // destroy nearly merged roots, and c0 = −R²p² ≤ 0 < c4 guarantees a
+        // real root of each sign. τ is shifted back at the end.
+        let eps0 = (a - q).dot(nn);
+        let q = q + eps0 * nn;
         let bb = a - q;
         let alpha = n.dot(nn);
         let beta = b.dot(nn);
         let gamma = bb.dot(n);
         let delta = bb.dot(b);
-        let eps = bb.dot(nn);
         let c = alpha * alpha + beta * beta;
         let mut best: Option<(f64, f64, f64)> = None; // (|d|², τ, θ)
         let mut consider = |tau: f64, theta: f64| {
@@ -82,12 +89,12 @@ impl CircularLight {
             let p = alpha * gamma + beta * delta;
             let qq = gamma * gamma + delta * delta;
             let r2 = r * r;
-            // Eq. (2.16)
+            // Eq. (2.16) with ε = 0
             let c4 = c;
-            let c3 = -2.0 * (p + c * eps);
-            let c2 = c * eps * eps + 4.0 * eps * p + qq - r2 * c * c;
-            let c1 = -2.0 * (p * eps * eps + qq * eps - r2 * c * p);
-            let c0 = qq * eps * eps - r2 * p * p;
+            let c3 = -2.0 * p;
+            let c2 = qq - r2 * c * c;
+            let c1 = 2.0 * r2 * c * p;
+            let c0 = -r2 * p * p;
             for tau in quartic_roots(c4, c3, c2, c1, c0) {
                 match nearest_theta(tau) {
                     Some(th) => consider(tau, th),
@@ -95,7 +102,7 @@ impl CircularLight {
                         // line point on the axis: θ from Eq. (2.8), first line
                         let rho = c.sqrt();
                         let phi = beta.atan2(alpha);
-                        let cosv = ((tau - eps) / (r * rho)).clamp(-1.0, 1.0);
+                        let cosv = (tau / (r * rho)).clamp(-1.0, 1.0);
                         let dv = cosv.acos();
                         consider(tau, phi + dv);
                         consider(tau, phi - dv);
@@ -115,6 +122,7 @@ impl CircularLight {
         }
         let ds = d.dot(m) / ml;
         let theta = f64::atan2(theta.sin(), theta.cos());
+        let tau = tau + eps0;
         (ds.is_finite() && tau.is_finite()).then_some(CircleApproach {
             signed_distance: ds,
             tau,

@@ -363,3 +363,34 @@ mod tests {
         }
     }
 }
+#[cfg(test)]
+mod scratch {
+    use super::*;
+    fn from_roots(lead: f64, roots: &[f64]) -> Vec<f64> {
+        let mut c = vec![lead];
+        for &r in roots {
+            let mut n = vec![0.0; c.len() + 1];
+            for (i, &ci) in c.iter().enumerate() {
+                n[i + 1] += ci;
+                n[i] -= r * ci;
+            }
+            c = n;
+        }
+        c
+    }
+    #[test]
+    fn scratch_near_double() {
+        let mut fails = 0;
+        for &s in &[1e-3, 1.0, 25.0, 1e3, 1e5] {
+            for &gap in &[1e-2, 1e-4, 1e-6, 1e-7, 1e-8] {
+                for &(o1, o2) in &[(3.0, -2.0), (1.2, -0.3), (50.0, 0.5)] {
+                    let r = [s, s * (1.0 + gap), s * o1, s * o2];
+                    let c = from_roots(0.7, &r);
+                    let got = real_roots(&c);
+                    if got.len() < 3 { fails += 1; println!("s={s} gap={gap} o=({o1},{o2}) got {got:?}"); }
+                }
+            }
+        }
+        println!("fails {fails}");
+    }
+}

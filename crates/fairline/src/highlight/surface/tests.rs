@@ -208,3 +208,116 @@ fn surface_lines_on_the_teapot_and_the_impeller() {
     }
     assert!(lines > 0, "impeller: no highlight lines");
 }
+
+#[test]
+fn scratch_teapot_far() {
+    let Some(tp) = data("teapot.json") else { return; };
+    let teapot = read_surfaces_json(&tp).unwrap();
+    for (cz, rad) in [(40.0, 20.0), (60.0, 30.0), (100.0, 25.0), (30.0, 25.0)] {
+        let light = CircularLight::new(Vec3::new(0.5, 0.3, cz), Vec3::new(0.1, 0.2, 1.0), rad).unwrap();
+        let (mut flips, mut nones, mut tot) = (0, 0, 0);
+        for patch in &teapot {
+            let f = distance_field(patch, &SurfaceLight::Circular(light), 200, 200);
+            let _ = &f;
+            let [u0, u1] = patch.domain_u();
+            let [v0, v1] = patch.domain_v();
+            for i in 0..40 {
+                let u = u0 + (u1 - u0) * (i as f64 + 0.5) / 40.0;
+                let mut prev: Option<(f64, f64)> = None;
+                for j in 0..=400 {
+                    let v = v0 + (v1 - v0) * j as f64 / 400.0;
+                    let d = patch.derivatives(u, v);
+                    tot += 1;
+                    let a = light.approach(d.point, d.normal().unwrap_or(Vec3::ZERO));
+                    match a {
+                        None => { nones += 1; if nones < 5 { println!("none at {u} {v}"); } prev = None; }
+                        Some(a) => {
+                            if let Some((pd, pt)) = prev {
+                                if (a.theta - pt).cos() > 0.99 && pd * a.signed_distance < 0.0 && pd.abs() > 0.5 {
+                                    flips += 1;
+                                    if flips < 5 { println!("flip {pd} -> {} th {pt} {}", a.signed_distance, a.theta); }
+                                }
+                            }
+                            prev = Some((a.signed_distance, a.theta));
+                        }
+                    }
+                }
+            }
+        }
+        println!("light cz={cz} r={rad}: flips {flips} nones {nones} of {tot}");
+    }
+}
+
+/// min over θ of the distance between the circle point L(θ) and the line
+/// Q + τN, by dense sampling of θ refined by golden-section search: the
+/// ground truth for the nearest stationary point of Eq. (2.15).
+fn brute_min_distance(light: &CircularLight, q: Vec3, n: Vec3) -> f64 {
+    let n = n.normalize();
+    let dist = |t: f64| (light.point(t) - q).cross(n).length();
+    let m = 3600;
+    let step = std::f64::consts::TAU / m as f64;
+    let k = (0..m)
+        .min_by(|&i, &j| dist(i as f64 * step).total_cmp(&dist(j as f64 * step)))
+        .unwrap();
+    let (mut a, mut b) = ((k as f64 - 1.0) * step, (k as f64 + 1.0) * step);
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..80 {
+        let (x1, x2) = (b - g * (b - a), a + g * (b - a));
+        if dist(x1) < dist(x2) {
+            b = x2;
+        } else {
+            a = x1;
+        }
+    }
+    dist(0.5 * (a + b))
+}
+
+/// Distant lights on the teapot (|ε| ≫ R, nearly merged quartic roots):
+/// every sample's |d_s| is the global minimum distance between the normal
+/// line and the circle, and d_s along parameter lines has no sign flip while
+/// the nearest circle point θ moves continuously (both were broken when the
+/// quartic coefficients of Eq. (2.16) were formed about Q instead of the
+/// line point nearest the centre).
+#[test]
+fn teapot_distant_light_distance_is_global_minimum_and_continuous() {
+    let Some(tp) = data("teapot.json") else {
+        return;
+    };
+    let teapot = read_surfaces_json(&tp).unwrap();
+    for (cz, rad) in [(40.0, 20.0), (60.0, 30.0), (100.0, 25.0)] {
+        let light =
+            CircularLight::new(Vec3::new(0.5, 0.3, cz), Vec3::new(0.1, 0.2, 1.0), rad).unwrap();
+        let (mut flips, mut worst) = (0, 0.0f64);
+        for patch in &teapot {
+            let [u0, u1] = patch.domain_u();
+            let [v0, v1] = patch.domain_v();
+            for i in 0..12 {
+                let u = u0 + (u1 - u0) * (i as f64 + 0.5) / 12.0;
+                let mut prev: Option<(f64, f64)> = None;
+                for j in 0..=200 {
+                    let v = v0 + (v1 - v0) * (j as f64 + 0.5) / 201.0;
+                    let d = patch.derivatives(u, v);
+                    let Some(nrm) = d.normal() else {
+                        prev = None;
+                        continue;
+                    };
+                    let a = light.approach(d.point, nrm).expect("defined off the axis");
+                    if j % 10 == 0 {
+                        let truth = brute_min_distance(&light, d.point, nrm);
+                        worst = worst.max((a.signed_distance.abs() - truth).abs());
+                    }
+                    if let Some((pd, pt)) = prev
+                        && (a.theta - pt).cos() > 0.99
+                        && pd * a.signed_distance < 0.0
+                        && (pd - a.signed_distance).abs() > 0.5
+                    {
+                        flips += 1;
+                    }
+                    prev = Some((a.signed_distance, a.theta));
+                }
+            }
+        }
+        assert!(worst < 1e-7, "light z={cz}: |d_s| off the true minimum by {worst:e}");
+        assert_eq!(flips, 0, "light z={cz}: spurious sign flips of d_s");
+    }
+}
