@@ -9,11 +9,13 @@ mod curvature;
 mod demo;
 mod detect;
 mod enhance;
+mod fair;
 mod fair_surface;
 mod highlight;
 mod highlight_png;
 mod info;
 mod render;
+mod smooth;
 mod surface;
 mod surface_highlight;
 
@@ -43,7 +45,10 @@ enum Command {
     Detect(detect::Args),
     FairSurface(fair_surface::Args),
     Enhance(enhance::Args),
+    Fair(fair::Args),
     Render(render::Args),
+    Smooth(smooth::Args),
+    FairQuad(smooth::QuadArgs),
     Demo(demo::Args),
 }
 
@@ -56,7 +61,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Detect(a) => detect::run(a),
         Command::FairSurface(a) => fair_surface::run(a),
         Command::Enhance(a) => enhance::run(a),
+        Command::Fair(a) => fair::run(a),
         Command::Render(a) => render::run(a),
+        Command::Smooth(a) => smooth::run(a),
+        Command::FairQuad(a) => smooth::run_quad(a),
         Command::Demo(a) => demo::run(a),
     }
 }

@@ -141,6 +141,7 @@ fn enhance_refuses_bad_input_with_status_2_and_writes_nothing() {
     refused(&d, &[i, "--mu=-1"], "mu");
     refused(&d, &[i, "--iterations", "0"], "iterations");
     refused(&d, &[i, "--lambda", "abc"], "lambda");
+    refused(&d, &[i, "--solver", "lu"], "solver");
     // fixed-vertex files: index out of range, wrong key, broken JSON
     let fixed = d.join("fixed.json");
     std::fs::write(&fixed, r#"{"vertices":[100000]}"#).unwrap();
@@ -250,4 +251,65 @@ fn demo_has_a_vertex_flow_section() {
     assert!(html.contains("vertex-flow.png"));
     let png = std::fs::read(out.join("vertex-flow.png")).unwrap();
     assert!(png.starts_with(b"\x89PNG"));
+}
+
+/// `--solver direct` and `--solver cg` write the same mesh to 1e-8 of the
+/// bounding-box diagonal (the same least-squares solution), and the report
+/// says which solver ran and how many CG iterations it took.
+#[test]
+fn enhance_solvers_agree_from_the_command_line() {
+    let d = tmp("solvers");
+    let input = d.join("cube.obj");
+    fairline::io::write_mesh(&input, &fairline::shapes::rounded_cube(10, 0.3)).unwrap();
+    let mut outputs = Vec::new();
+    for solver in ["direct", "cg", "auto"] {
+        let (out, rep) = (
+            d.join(format!("{solver}.ply")),
+            d.join(format!("{solver}.json")),
+        );
+        let o = run(&[
+            "enhance",
+            s(&input),
+            "--solver",
+            solver,
+            "-o",
+            s(&out),
+            "--report",
+            s(&rep),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&rep).unwrap()).unwrap();
+        assert_eq!(r["solver"], solver);
+        let iterations = r["cg_iterations"].as_u64().unwrap();
+        assert_eq!(
+            iterations == 0,
+            solver == "direct",
+            "{solver}: {iterations}"
+        );
+        outputs.push(fairline::io::read_mesh(&out).unwrap());
+    }
+    let p = outputs[0].positions();
+    let (lo, hi) = p.iter().fold(
+        (
+            fairline::Vec3::splat(f64::INFINITY),
+            fairline::Vec3::splat(f64::NEG_INFINITY),
+        ),
+        |(lo, hi), q| (lo.min(*q), hi.max(*q)),
+    );
+    for other in &outputs[1..] {
+        let diff = p
+            .iter()
+            .zip(other.positions())
+            .map(|(a, b)| a.distance(*b))
+            .fold(0.0, f64::max);
+        assert!(diff <= 1e-8 * lo.distance(hi), "difference {diff}");
+    }
+    let input_mesh = fairline::io::read_mesh(&input).unwrap();
+    let moved = input_mesh
+        .positions()
+        .iter()
+        .zip(p)
+        .filter(|(a, b)| a.distance(**b) > 1e-3)
+        .count();
+    assert!(moved > 100, "{moved} vertices moved");
 }

@@ -79,3 +79,22 @@ pub fn cpu_ns() -> u64 {
         .filter_map(|s| s.split_whitespace().next()?.parse::<u64>().ok())
         .sum()
 }
+
+/// Medians over `runs` calls of `f` (after one warm-up) of the wall time and
+/// of the CPU time of all threads, both in seconds. On a loaded machine the
+/// CPU time divided by the thread count estimates the idle-machine wall time.
+pub fn median_wall_cpu<T>(runs: usize, mut f: impl FnMut() -> T) -> (f64, f64) {
+    std::hint::black_box(f());
+    let mut wall = Vec::new();
+    let mut cpu = Vec::new();
+    for _ in 0..runs.max(1) {
+        let c0 = cpu_ns();
+        let s = Instant::now();
+        std::hint::black_box(f());
+        wall.push(s.elapsed().as_secs_f64());
+        cpu.push((cpu_ns().saturating_sub(c0)) as f64 * 1e-9);
+    }
+    wall.sort_by(|a, b| a.total_cmp(b));
+    cpu.sort_by(|a, b| a.total_cmp(b));
+    (wall[wall.len() / 2], cpu[cpu.len() / 2])
+}

@@ -4,38 +4,47 @@
 //! flip repair: the whole computation of `fairline enhance` without file
 //! input/output), the CPU time per run (all threads; the machine is shared,
 //! so wall times depend on the load) and the phases of the median run with
-//! the share of the sparse Cholesky factorisation. Prints a Markdown table.
+//! the share of the linear solve (factorisation and triangular solves, or
+//! conjugate gradients). Prints a Markdown table.
 //!
 //! Run: `cargo bench -p fairline --bench enhance`
-//! (`FAIRLINE_BENCH_RUNS`, default 3, and `FAIRLINE_BENCH_SIZES`, default
-//! `10000,100000`, override runs and sizes). One million vertices does not
-//! fit a 24 GiB machine: the Cholesky factor of its 3M × 3M normal matrix
-//! (3 × 3 blocks over the 2-ring of each vertex) has 3.2 · 10⁹ nonzeros
-//! (26 GB) after the AMD ordering; see BENCHMARKS.md.
+//! (`FAIRLINE_BENCH_RUNS`, default 3, `FAIRLINE_BENCH_SIZES`, default
+//! `10000,100000`, and `FAIRLINE_BENCH_SOLVER`, `auto` (default), `cg` or
+//! `direct`, override runs, sizes and solver). One million vertices takes
+//! about 3.3 GB with conjugate gradients; the direct solver does not fit a
+//! 24 GiB machine there (the Cholesky factor of its 3M × 3M normal matrix
+//! has 3.2 · 10⁹ nonzeros, 26 GB); see BENCHMARKS.md.
 
 mod common;
 
 use common::{cpu_ns, row, runs, sizes};
-use fairline::enhance::{EnhanceOptions, enhance_features};
+use fairline::enhance::{EnhanceOptions, EnhanceSolver, enhance_features};
 use fairline::shapes::torus;
 use std::time::Instant;
 
 fn main() {
     let runs = runs(3).max(1);
-    let options = EnhanceOptions::default();
+    let solver = match std::env::var("FAIRLINE_BENCH_SOLVER").as_deref() {
+        Ok("direct") => EnhanceSolver::Direct,
+        Ok("cg") => EnhanceSolver::Cg,
+        _ => EnhanceSolver::Auto,
+    };
+    let options = EnhanceOptions::default().solver(solver);
     row(&[
         "vertices",
+        "solver",
         "median wall s",
         "CPU s per run",
         "curvature s",
         "assembly s",
         "factorisation s",
-        "solve s",
+        "solve s (CG iterations)",
         "repair s",
-        "factorisation share",
+        "other s",
+        "solve share",
     ]
     .map(String::from));
-    row(&["---"; 9].map(String::from));
+    row(&["---"; 11].map(String::from));
     for n in sizes(&[10_000, 100_000]) {
         let n_minor = ((n as f64 / 4.0).sqrt().round() as u32).max(3);
         let n_major = ((n as f64 / n_minor as f64).round() as u32).max(3);
@@ -45,22 +54,40 @@ fn main() {
         for _ in 0..runs {
             let t = Instant::now();
             let r = enhance_features(&mesh, &options).expect("enhance");
-            results.push((t.elapsed().as_secs_f64(), r.report.timings));
+            results.push((
+                t.elapsed().as_secs_f64(),
+                r.report.timings,
+                r.report.cg_iterations,
+            ));
         }
         let cpu = (cpu_ns() - c0) as f64 * 1e-9 / runs as f64;
         results.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let (median, t) = &results[results.len() / 2];
+        let (median, t, iterations) = &results[results.len() / 2];
         let f = |x: f64| format!("{x:.3}");
         row(&[
             mesh.vertex_count().to_string(),
+            format!("{solver:?}").to_lowercase(),
             f(*median),
             f(cpu),
             f(t.curvature_s),
             f(t.assembly_s),
             f(t.factorisation_s),
-            f(t.solve_s),
+            if *iterations > 0 {
+                format!("{} ({iterations})", f(t.solve_s))
+            } else {
+                f(t.solve_s)
+            },
             f(t.repair_s),
-            format!("{:.0} %", 100.0 * t.factorisation_s / t.total_s.max(1e-12)),
+            f(t.total_s
+                - t.curvature_s
+                - t.assembly_s
+                - t.factorisation_s
+                - t.solve_s
+                - t.repair_s),
+            format!(
+                "{:.0} %",
+                100.0 * (t.factorisation_s + t.solve_s) / t.total_s.max(1e-12)
+            ),
         ]);
     }
 }

@@ -7,13 +7,18 @@
 
 mod common;
 
-use common::{median_secs, row, runs, sizes, test_surface};
+use common::{median_wall_cpu, row, runs, sizes, test_surface};
 use fairline::geom;
+
+/// "wall (cpu)" of a median pair.
+fn cell((wall, cpu): (f64, f64)) -> String {
+    format!("{wall:.4} ({cpu:.4})")
+}
 
 fn main() {
     let runs = runs(7);
     println!(
-        "threads: {}, runs per cell: {runs} (median, seconds)\n",
+        "threads: {}, runs per cell: {runs}; each cell: median wall seconds (median CPU seconds of all threads)\n",
         rayon::current_num_threads()
     );
     row(&[
@@ -36,24 +41,24 @@ fn main() {
         let path = dir.join(format!("surface-{n}.ply"));
         fairline::io::write_ply_with_vertex_properties(&path, &soup, &[]).expect("write ply");
         let mb = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0) as f64 / 1e6;
-        let t_read = median_secs(runs, || fairline::io::read_soup(&path).expect("read"));
-        let t_build = median_secs(runs, || {
+        let t_read = median_wall_cpu(runs, || fairline::io::read_soup(&path).expect("read"));
+        let t_build = median_wall_cpu(runs, || {
             fairline::SurfaceMesh::from_soup(&soup).expect("mesh")
         });
-        let t_normals = median_secs(runs, || geom::vertex_normals(&mesh));
-        let t_cot = median_secs(runs, || geom::cotangent_laplacian(&mesh));
-        let t_areas = median_secs(runs, || geom::mixed_vertex_areas(&mesh));
-        let t_curv = median_secs(runs, || geom::principal_curvatures_rusinkiewicz(&mesh));
+        let t_normals = median_wall_cpu(runs, || geom::vertex_normals(&mesh));
+        let t_cot = median_wall_cpu(runs, || geom::cotangent_laplacian(&mesh));
+        let t_areas = median_wall_cpu(runs, || geom::mixed_vertex_areas(&mesh));
+        let t_curv = median_wall_cpu(runs, || geom::principal_curvatures_rusinkiewicz(&mesh));
         row(&[
             mesh.vertex_count().to_string(),
             mesh.face_count().to_string(),
-            format!("{t_read:.4}"),
+            cell(t_read),
             format!("{mb:.1}"),
-            format!("{t_build:.4}"),
-            format!("{t_normals:.4}"),
-            format!("{t_cot:.4}"),
-            format!("{t_areas:.4}"),
-            format!("{t_curv:.4}"),
+            cell(t_build),
+            cell(t_normals),
+            cell(t_cot),
+            cell(t_areas),
+            cell(t_curv),
         ]);
         let _ = std::fs::remove_file(&path);
     }

@@ -23,10 +23,45 @@
 //!   (Eq. (8)) weighted by μ_i = exp(−(|k_i1| + |k_i2|)) (Eq. (10)): three
 //!   rows per vertex.
 //!
-//! The 8n × 3n system (Eq. (20)) is assembled once per iteration in parallel
-//! and solved through a sparse Cholesky factorisation of its normal
-//! equations ([`crate::solve::normal_matrix`], [`crate::solve::CholeskySolver`],
-//! fill-reducing ordering by faer).
+//! The 8n × 3n system LX = b (Eq. (20), §4.3) is assembled once per
+//! iteration in parallel and solved in the least-squares sense, i.e. its
+//! normal equations (LᵀL + εI) X = Lᵀb + εp are solved (ε below), by one of
+//! two solvers ([`EnhanceSolver`]) that give the same solution:
+//!
+//! - **Direct** — what §4.3 does ("we compute the Cholesky factorization
+//!   for a 3n × 3n sparse matrix", TAUCS): [`crate::solve::normal_matrix`]
+//!   and [`crate::solve::CholeskySolver`] (faer, AMD ordering, supernodal).
+//!   LᵀL couples the three coordinates of each vertex with those of its
+//!   whole 2-ring (the F_em rows mix x, y, z over the 1-ring; only the
+//!   F_smo rows are per coordinate), so its factor fills in heavily:
+//!   1.3 · 10⁷ nonzeros at 10k vertices, 2.2 · 10⁸ at 100k, 3.2 · 10⁹ (26 GB)
+//!   at 1M; the factorisation was 84–91 % of the time and 1M did not fit.
+//! - **Conjugate gradients** — [`crate::solve::normal_equations_cg`]:
+//!   block-Jacobi (3 × 3 per vertex) preconditioned CG on the same normal
+//!   equations, matrix-free (LᵀL v = Lᵀ(L v), never formed), parallel and
+//!   deterministic, warm-started at the current positions (the solution is
+//!   within an edge length of them), stopped at a relative residual of
+//!   [`CG_TOLERANCE`] = 10⁻¹², at which the result equals the Cholesky one to
+//!   about 10⁻¹² of the bounding-box diagonal (tested to 10⁻⁸). The memory is
+//!   that of L (about 3 GB at 1M vertices). Where the curvature pins the
+//!   tangential motion (F_sd with d|k| > 0, F_em) CG converges in about 25
+//!   iterations at any size (tori of 10k–1M vertices); where it does not —
+//!   flat parts, where only the F_smo bi-Laplacian holds the tangential
+//!   motion — the count grows with the size of the flat part (rounded cube:
+//!   190 at 10k, about 1500 at 100k; the real scan `spot`, 2.9k vertices:
+//!   730), and the direct solve may be faster.
+//!
+//! The default, [`EnhanceSolver::Auto`], runs CG within a budget of
+//! [`AUTO_BUDGET`] √n iterations — about the cost of the factorisation,
+//! which grows like n^1.5 — and falls back to the direct solve when CG has
+//! not converged, up to [`AUTO_DIRECT_LIMIT`] free vertices (beyond, the
+//! factor does not fit in memory and CG continues). So smooth curved meshes
+//! meet the speed targets (BENCHMARKS.md, "Vertex flow") and meshes with
+//! large flat parts cost at most about twice the direct solve. (A two-level
+//! preconditioner with a piecewise-constant coarse space on vertex
+//! aggregates was tried and did not reduce the CG iterations on the
+//! rounded cube: such a coarse space does not approximate the bi-Laplacian's
+//! smooth modes.)
 //!
 //! **Normalisations.** Eq. (5) and Eq. (7) average F_em over the edges and
 //! F_sd over the vertices; fairline makes all three terms means over the
@@ -69,7 +104,7 @@ mod tests;
 use crate::Vec3;
 use crate::geom::{mean_edge_length, principal_curvatures_rusinkiewicz, triangle_qualities};
 use crate::mesh::{MeshError, SurfaceMesh, VertexId};
-use crate::solve::{CholeskySolver, SolveError};
+use crate::solve::{CgOptions, CholeskySolver, SolveError, normal_equations_cg};
 use serde::Serialize;
 use std::time::Instant;
 use thiserror::Error;
@@ -77,6 +112,24 @@ use thiserror::Error;
 /// Rounds of step halving for the vertices of flipped triangles before
 /// their steps are reset to zero.
 pub const REPAIR_HALVINGS: usize = 8;
+
+/// Default relative residual at which conjugate gradients stop.
+pub const CG_TOLERANCE: f64 = 1e-12;
+
+/// Iteration budget of conjugate gradients under [`EnhanceSolver::Auto`],
+/// in units of √(free vertices): about the cost of the direct solve, whose
+/// factorisation grows like n^1.5 while an iteration costs O(n) (measured
+/// on this project's machine: the budget is 200 iterations at 10k free
+/// vertices, 630 at 100k; see BENCHMARKS.md).
+pub const AUTO_BUDGET: f64 = 2.0;
+
+/// Largest number of free vertices for which [`EnhanceSolver::Auto`] falls
+/// back to the direct solver: the Cholesky factor of 300k vertices takes
+/// about 6 GB; beyond, it does not fit a typical machine.
+pub const AUTO_DIRECT_LIMIT: usize = 300_000;
+
+/// Default iteration limit of conjugate gradients.
+pub const CG_MAX_ITERATIONS: usize = 5000;
 
 /// Weight ε of the regularisation ε‖v − p‖² (normalised units).
 const REGULARISATION: f64 = 1e-10;
@@ -98,6 +151,30 @@ pub struct EnhanceOptions {
     pub fixed: Vec<VertexId>,
     /// Number of bins of the triangle-quality histograms over [0, 1]. ≥ 1.
     pub histogram_bins: usize,
+    /// How the least-squares system of Eq. (20) is solved.
+    pub solver: EnhanceSolver,
+    /// Conjugate gradients stop when the residual of the normal equations
+    /// is at most this fraction of their right-hand side. In (0, 1).
+    pub cg_tolerance: f64,
+    /// Conjugate gradients fail after this many iterations. ≥ 1.
+    pub cg_max_iterations: usize,
+}
+
+/// Solver of the least-squares system of Eq. (20); both compute the same
+/// least-squares solution (to the tolerance of conjugate gradients).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum EnhanceSolver {
+    /// Conjugate gradients within a budget of [`AUTO_BUDGET`] √n iterations
+    /// (n free vertices), then the direct solver if they have not converged
+    /// and n ≤ [`AUTO_DIRECT_LIMIT`]; above that limit conjugate gradients
+    /// only, up to [`EnhanceOptions::cg_max_iterations`].
+    Auto,
+    /// Sparse Cholesky factorisation of the normal matrix AᵀA + εI.
+    Direct,
+    /// Block-Jacobi preconditioned conjugate gradients on the normal
+    /// equations, matrix-free, warm-started at the current positions.
+    Cg,
 }
 
 impl Default for EnhanceOptions {
@@ -108,6 +185,9 @@ impl Default for EnhanceOptions {
             iterations: 1,
             fixed: Vec::new(),
             histogram_bins: 10,
+            solver: EnhanceSolver::Auto,
+            cg_tolerance: CG_TOLERANCE,
+            cg_max_iterations: CG_MAX_ITERATIONS,
         }
     }
 }
@@ -131,6 +211,11 @@ impl EnhanceOptions {
     /// Sets the fixed vertices.
     pub fn fixed(mut self, fixed: Vec<VertexId>) -> Self {
         self.fixed = fixed;
+        self
+    }
+    /// Sets the solver.
+    pub fn solver(mut self, solver: EnhanceSolver) -> Self {
+        self.solver = solver;
         self
     }
     /// Sets the number of histogram bins.
@@ -203,11 +288,12 @@ impl QualityStats {
 pub struct EnhanceTimings {
     /// Principal curvatures (Rusinkiewicz).
     pub curvature_s: f64,
-    /// Rows of Eq. (20) and the normal matrix.
+    /// Rows of Eq. (20) (and the normal matrix, for the direct solver).
     pub assembly_s: f64,
-    /// Sparse Cholesky factorisation (symbolic analysis included).
+    /// Sparse Cholesky factorisation (symbolic analysis included; 0 when
+    /// conjugate gradients solved the system).
     pub factorisation_s: f64,
-    /// Triangular solves.
+    /// Conjugate gradients and the triangular solves of the direct solver.
     pub solve_s: f64,
     /// Flip detection and repair.
     pub repair_s: f64,
@@ -247,6 +333,17 @@ pub struct EnhanceReport {
     pub mean_distance_to_input: f64,
     /// The length unit ē (mean input edge length) of the normalisation.
     pub edge_length: f64,
+    /// The solver used.
+    pub solver: EnhanceSolver,
+    /// Conjugate-gradient iterations, summed over the solves (0 for the
+    /// direct solver).
+    pub cg_iterations: usize,
+    /// Largest final relative residual of the normal equations over the
+    /// conjugate-gradient solves that converged (0 for the direct solver).
+    pub cg_relative_residual: f64,
+    /// Solves of [`EnhanceSolver::Auto`] that fell back to the direct
+    /// solver because conjugate gradients had not converged in their budget.
+    pub direct_fallbacks: usize,
     /// Timings.
     pub timings: EnhanceTimings,
 }
@@ -267,7 +364,9 @@ pub struct Enhanced {
 /// Returns the new positions (the connectivity is unchanged) and a report.
 ///
 /// Errors: non-triangle faces, λ ≤ 0, μ < 0, non-finite options, zero
-/// iterations or bins, fixed vertices out of range, a failed factorisation.
+/// iterations or bins, fixed vertices out of range, a failed factorisation,
+/// conjugate gradients that did not converge ([`EnhanceSolver::Cg`], or
+/// [`EnhanceSolver::Auto`] above [`AUTO_DIRECT_LIMIT`] free vertices).
 pub fn enhance_features(
     mesh: &SurfaceMesh,
     options: &EnhanceOptions,
@@ -299,6 +398,10 @@ pub fn enhance_features(
             } else {
                 0.0
             },
+            solver: options.solver,
+            cg_iterations: 0,
+            cg_relative_residual: 0.0,
+            direct_fallbacks: 0,
             timings,
         },
     };
@@ -341,6 +444,8 @@ pub fn enhance_features(
     let mut current = reference.clone();
     let mut solver: Option<CholeskySolver> = None;
     let mut flipped_triangles = 0;
+    let (mut cg_iterations, mut cg_residual) = (0usize, 0.0f64);
+    let mut direct_fallbacks = 0;
     let mut backtracked = vec![false; n];
     for iteration in 0..options.iterations {
         let curvature = if iteration == 0 {
@@ -353,7 +458,7 @@ pub fn enhance_features(
             c
         };
         let t = Instant::now();
-        let normal = system::assemble(
+        let system = system::assemble(
             &layout,
             &curvature,
             &distance,
@@ -364,22 +469,74 @@ pub fn enhance_features(
         )?;
         timings.assembly_s += t.elapsed().as_secs_f64();
 
-        let t = Instant::now();
-        let refactored = match solver.as_mut() {
-            Some(s) => s.refactor(normal.matrix.as_ref()).is_ok(),
-            None => false,
+        let nf = layout.free.len();
+        let budget = match options.solver {
+            EnhanceSolver::Direct => 0,
+            EnhanceSolver::Cg => options.cg_max_iterations,
+            EnhanceSolver::Auto if nf > AUTO_DIRECT_LIMIT => options.cg_max_iterations,
+            EnhanceSolver::Auto => ((AUTO_BUDGET * (nf as f64).sqrt()) as usize)
+                .clamp(1, options.cg_max_iterations.max(1)),
         };
-        if !refactored {
-            solver = Some(CholeskySolver::new(normal.matrix.as_ref())?);
+        let mut x = None;
+        if budget > 0 {
+            let t = Instant::now();
+            let mut guess: Vec<f64> = layout
+                .free
+                .iter()
+                .flat_map(|&v| current[v as usize].to_array())
+                .collect();
+            let r = normal_equations_cg(
+                system.a.as_ref(),
+                system.at.as_ref(),
+                system.epsilon,
+                &system.rhs,
+                &mut guess,
+                &CgOptions {
+                    tolerance: options.cg_tolerance,
+                    max_iterations: budget,
+                    block: 3,
+                },
+            )?;
+            cg_iterations += r.iterations;
+            timings.solve_s += t.elapsed().as_secs_f64();
+            if r.converged {
+                cg_residual = cg_residual.max(r.relative_residual);
+                x = Some(guess);
+            } else if options.solver == EnhanceSolver::Cg || nf > AUTO_DIRECT_LIMIT {
+                return Err(EnhanceError::Solve(SolveError::Backend(format!(
+                    "conjugate gradients did not reach the relative residual {:e} in {} iterations ({:e}); \
+                     try the direct solver",
+                    options.cg_tolerance, r.iterations, r.relative_residual
+                ))));
+            }
         }
-        timings.factorisation_s += t.elapsed().as_secs_f64();
-
-        let t = Instant::now();
-        let mut x = normal.rhs;
-        if let Some(s) = solver.as_ref() {
-            s.solve_in_place(&mut x)?;
-        }
-        timings.solve_s += t.elapsed().as_secs_f64();
+        let x = match x {
+            Some(x) => x,
+            None => {
+                if budget > 0 {
+                    direct_fallbacks += 1;
+                }
+                let t = Instant::now();
+                let matrix = system.normal_matrix()?;
+                timings.assembly_s += t.elapsed().as_secs_f64();
+                let t = Instant::now();
+                let refactored = match solver.as_mut() {
+                    Some(s) => s.refactor(matrix.as_ref()).is_ok(),
+                    None => false,
+                };
+                if !refactored {
+                    solver = Some(CholeskySolver::new(matrix.as_ref())?);
+                }
+                timings.factorisation_s += t.elapsed().as_secs_f64();
+                let t = Instant::now();
+                let mut x = system.rhs;
+                if let Some(s) = solver.as_ref() {
+                    s.solve_in_place(&mut x)?;
+                }
+                timings.solve_s += t.elapsed().as_secs_f64();
+                x
+            }
+        };
 
         let t = Instant::now();
         let mut target = current.clone();
@@ -430,6 +587,10 @@ pub fn enhance_features(
             max_distance_to_input,
             mean_distance_to_input,
             edge_length,
+            solver: options.solver,
+            cg_iterations,
+            cg_relative_residual: cg_residual,
+            direct_fallbacks,
             timings,
         },
     })
@@ -446,7 +607,6 @@ const DISTANCE_RINGS: usize = 16;
 /// input surface, which another part of the surface may come nearer to.
 fn distance_to_input(mesh: &SurfaceMesh, positions: &[Vec3], free: &[u32]) -> (f64, f64) {
     use rayon::prelude::*;
-    use std::collections::HashSet;
     let input = mesh.positions();
     let distances: Vec<f64> = free
         .par_iter()
@@ -454,23 +614,30 @@ fn distance_to_input(mesh: &SurfaceMesh, positions: &[Vec3], free: &[u32]) -> (f
             let v = VertexId(v);
             let x = positions[v.idx()];
             let mut best = f64::INFINITY;
-            let mut seen_vertices: HashSet<u32> = HashSet::from([v.0]);
-            let mut seen_faces = HashSet::new();
+            // small sets: a ring or two is searched in almost every case
+            let mut seen_vertices: Vec<u32> = vec![v.0];
+            let mut seen_faces: Vec<u32> = Vec::new();
             let mut frontier = vec![v];
             for _ in 0..DISTANCE_RINGS {
                 let mut ring_best = f64::INFINITY;
                 let mut next = Vec::new();
                 for &w in &frontier {
                     for f in mesh.vertex_faces(w) {
-                        if !seen_faces.insert(f.0) {
+                        if seen_faces.contains(&f.0) {
                             continue;
                         }
+                        seen_faces.push(f.0);
                         let t = mesh.triangle(f).map(|u| input[u.idx()]);
                         let b = crate::geom::closest_point_on_triangle(x, t[0], t[1], t[2]);
                         let d = x.distance(b[0] * t[0] + b[1] * t[1] + b[2] * t[2]);
                         ring_best = ring_best.min(d);
                     }
-                    next.extend(mesh.one_ring(w).filter(|u| seen_vertices.insert(u.0)));
+                    for u in mesh.one_ring(w) {
+                        if !seen_vertices.contains(&u.0) {
+                            seen_vertices.push(u.0);
+                            next.push(u);
+                        }
+                    }
                 }
                 if ring_best < best {
                     best = ring_best;

@@ -109,10 +109,39 @@ impl DistanceModel {
     }
 }
 
-/// Normal equations (AᵀA + εI) x = Aᵀb + ε p of one iteration.
-pub(super) struct NormalEquations {
-    pub matrix: SparseColMat<usize, f64>,
+/// The least-squares system of one iteration: A (8n × 3n) by columns and
+/// by rows, and the right-hand side Aᵀb + ε p of the regularised normal
+/// equations (AᵀA + εI) x = Aᵀb + ε p.
+pub(super) struct LeastSquares {
+    /// A, compressed by column.
+    pub a: SparseColMat<usize, f64>,
+    /// Aᵀ, compressed by column (the rows of A).
+    pub at: SparseColMat<usize, f64>,
+    /// Aᵀb + ε p.
     pub rhs: Vec<f64>,
+    /// ε.
+    pub epsilon: f64,
+}
+
+impl LeastSquares {
+    /// The regularised normal matrix AᵀA + εI (both triangles).
+    pub fn normal_matrix(&self) -> Result<SparseColMat<usize, f64>, EnhanceError> {
+        let mut matrix = normal_matrix(self.a.as_ref())?;
+        let (symbolic, values) = matrix.parts_mut();
+        for u in 0..symbolic.ncols() {
+            let range = symbolic.col_range(u);
+            let rows = &symbolic.row_idx()[range.clone()];
+            match rows.binary_search(&u) {
+                Ok(k) => values[range.start + k] += self.epsilon,
+                Err(_) => {
+                    return Err(
+                        SolveError::Backend("normal matrix lacks a diagonal entry".into()).into(),
+                    );
+                }
+            }
+        }
+        Ok(matrix)
+    }
 }
 
 /// Rows of one chunk of free vertices: columns of Aᵀ.
@@ -139,7 +168,7 @@ fn edge_metrics(curvature: &PrincipalCurvatures) -> Vec<DMat3> {
 
 /// Assembles the 8n × 3n matrix A and right-hand side b of Eq. (20) for the
 /// current curvature (F_em, F_smo) and the fixed distance model (F_sd), and
-/// returns the regularised normal equations. `current` and `reference` are
+/// returns it with the right-hand side of the regularised normal equations. `current` and `reference` are
 /// normalised positions of all vertices; fixed vertices are read from
 /// `current`, F_sd pulls toward `reference`.
 pub(super) fn assemble(
@@ -150,7 +179,7 @@ pub(super) fn assemble(
     reference: &[Vec3],
     mu: f64,
     epsilon: f64,
-) -> Result<NormalEquations, EnhanceError> {
+) -> Result<LeastSquares, EnhanceError> {
     const CHUNK: usize = 2048;
     let nf = layout.free.len();
     let metrics = edge_metrics(curvature);
@@ -206,34 +235,22 @@ pub(super) fn assemble(
         .transpose()
         .to_col_major()
         .map_err(|e| SolveError::Backend(format!("{e:?}")))?;
-    let mut matrix = normal_matrix(a.as_ref())?;
-
-    // Aᵀb, gathered per unknown
-    let mut rhs: Vec<f64> = (0..3 * nf)
+    // Aᵀb, gathered per unknown, plus ε p
+    let rhs: Vec<f64> = (0..3 * nf)
         .into_par_iter()
         .map(|u| {
             let rows = a.row_idx_of_col_raw(u);
             let v = a.val_of_col(u);
-            rows.iter().zip(v).map(|(&r, x)| x * b[r]).sum()
+            let p = reference[layout.free[u / 3] as usize];
+            rows.iter().zip(v).map(|(&r, x)| x * b[r]).sum::<f64>() + epsilon * p[u % 3]
         })
         .collect();
-    // ε‖v − p‖²: ε on the diagonal, ε p on the right
-    let (symbolic, values) = matrix.parts_mut();
-    for u in 0..3 * nf {
-        let range = symbolic.col_range(u);
-        let rows = &symbolic.row_idx()[range.clone()];
-        match rows.binary_search(&u) {
-            Ok(k) => values[range.start + k] += epsilon,
-            Err(_) => {
-                return Err(
-                    SolveError::Backend("normal matrix lacks a diagonal entry".into()).into(),
-                );
-            }
-        }
-        let p = reference[layout.free[u / 3] as usize];
-        rhs[u] += epsilon * p[u % 3];
-    }
-    Ok(NormalEquations { matrix, rhs })
+    Ok(LeastSquares {
+        a,
+        at,
+        rhs,
+        epsilon,
+    })
 }
 
 /// Emits the eight rows (columns of Aᵀ) of free vertex `f`.

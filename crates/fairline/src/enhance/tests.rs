@@ -370,3 +370,71 @@ fn flat_real_outline_slides_within_its_plane() {
     assert_eq!(count_flips(&m, &out.positions), 0);
     assert!(r.quality_after.mean > r.quality_before.mean);
 }
+
+/// Conjugate gradients (the default) and the sparse Cholesky factorisation
+/// solve the same least-squares problem (Eq. (20)): on meshes with flat
+/// parts (the hardest case for conjugate gradients: only F_smo holds the
+/// tangential motion there), with boundary and fixed vertices and with
+/// recomputed curvature, the outputs agree to 1e-8 of the bounding-box
+/// diagonal while the vertices move by a sizeable fraction of an edge.
+#[test]
+fn conjugate_gradients_match_the_direct_solve() {
+    let ridge = shapes::height_field(25, 17, (-1.0, 1.0), (-0.7, 0.7), |x, _| {
+        0.4 * (-(x / 0.2) * (x / 0.2)).exp()
+    });
+    let mut cases = vec![
+        (rounded_cube(12, 0.3), EnhanceOptions::default()),
+        (
+            shapes::torus(1.0, 0.4, 40, 12),
+            EnhanceOptions::default().lambda(0.3).iterations(2),
+        ),
+        (
+            ridge,
+            EnhanceOptions::default().fixed(vec![VertexId(40), VertexId(77)]),
+        ),
+    ];
+    // a real scan: flips are repaired, and its flat-ish parts need the most
+    // iterations
+    if let Some(m) = shared_mesh("spot.ply") {
+        cases.push((m, EnhanceOptions::default()));
+    }
+    for (m, o) in cases {
+        let direct = enhance_features(&m, &o.clone().solver(EnhanceSolver::Direct)).unwrap();
+        let cg = enhance_features(&m, &o.clone().solver(EnhanceSolver::Cg)).unwrap();
+        let auto = enhance_features(&m, &o).unwrap();
+        let (lo, hi) = m.positions().iter().fold(
+            (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let diagonal = lo.distance(hi);
+        let diff = direct
+            .positions
+            .iter()
+            .zip(&cg.positions)
+            .map(|(a, b)| a.distance(*b))
+            .fold(0.0, f64::max);
+        println!(
+            "{} vertices: {} fallbacks of auto, {} CG iterations, max difference {:.2e} of the diagonal, max displacement {:.3} ē",
+            m.vertex_count(),
+            auto.report.direct_fallbacks,
+            cg.report.cg_iterations,
+            diff / diagonal,
+            direct.report.max_displacement / direct.report.edge_length
+        );
+        assert!(
+            diff <= 1e-8 * diagonal,
+            "difference {diff}, diagonal {diagonal}"
+        );
+        assert!(direct.report.max_displacement > 0.05 * direct.report.edge_length);
+        assert!(cg.report.cg_iterations > 0 && cg.report.cg_relative_residual <= CG_TOLERANCE);
+        assert_eq!(direct.report.cg_iterations, 0);
+        assert_eq!(cg.report.flipped_triangles, direct.report.flipped_triangles);
+        // the default is the CG result when CG converged within its budget,
+        // else the direct one, bit for bit
+        if auto.report.direct_fallbacks == 0 {
+            assert_eq!(auto.positions, cg.positions);
+        } else {
+            assert_eq!(auto.positions, direct.positions);
+        }
+    }
+}

@@ -1,9 +1,33 @@
-//! Fairing: circular-highlight fairing of B-spline surfaces (Nishiyama et
-//! al. §3) in [`surface`].
+//! Fairing: highlight-line fairing of triangle meshes (Yong et al. §3,
+//! Algorithm 2) with its regions and movable vertices (§3.1), desired
+//! highlight lines (§3.2, §3.5) and the surface-diffusion-flow baseline;
+//! structure-line fairing of quad meshes (Grüner) in [`quad`];
+//! circular-highlight fairing of B-spline surfaces (Nishiyama et al. §3) in
+//! [`surface`].
 
+mod desired;
+mod error;
+pub mod highlight;
+pub mod quad;
+pub mod region;
 pub mod surface;
+mod system;
 
+pub use desired::{DesiredLine, DesiredLines, HighlightDeviation, desired_lines};
+pub use error::FairError;
+pub use highlight::{
+    FairMethod, FairOptions, FairResult, IterationReport, fair_highlight_lines,
+    fair_highlight_lines_with, fairing_picture, grow_region,
+};
+pub use quad::{
+    PolylineNetworkOptions, PolylineNetworkReport, QuadFairError, QuadFairOptions, QuadFairReport,
+    fair_polyline_network, fair_structure_lines, structure_energy,
+};
+pub use region::{MovableSet, RegionSpec, movable_vertices};
 pub use surface::{
     EndpointPair, Endpoints, FairIteration, FairStop, SurfaceFairError, SurfaceFairOptions,
     SurfaceFairReport, TargetCurve, endpoints_around, fair_surface, target_curves,
 };
+
+#[cfg(test)]
+mod tests;

@@ -12,6 +12,7 @@ mod curvature;
 mod laplace;
 mod measures;
 mod normals;
+mod quadric;
 
 pub use areas::{barycentric_vertex_areas, face_areas, mixed_corner_areas, mixed_vertex_areas};
 pub use curvature::{
@@ -30,6 +31,7 @@ pub use measures::{
 pub use normals::{
     face_normals, triangle_normal_area, vertex_normal, vertex_normals, vertex_normals_max,
 };
+pub use quadric::{QuadricFit, quadric_fit};
 
 /// Relative threshold below which a triangle counts as degenerate: its double
 /// area is at most `DEGENERATE_RELATIVE_AREA` times the sum of its squared

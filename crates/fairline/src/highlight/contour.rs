@@ -12,6 +12,7 @@
 use crate::Vec3;
 use crate::mesh::{EdgeId, FaceId, SurfaceMesh, VertexId};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 /// A highlight node (Yong et al. §2.3): the point of level m on a mesh edge,
 /// or a vertex lying exactly on level m. Identifies the node across mesh
@@ -343,13 +344,25 @@ pub(crate) fn chain(
         (node_of_end[e ^ 1] as usize, e >> 1)
     };
     let deg = |v: usize| offs[v + 1] - offs[v];
-    let mut used = vec![false; pairs.len()];
-    let mut walks: Vec<(bool, Vec<usize>)> = Vec::new();
-    let walk = |start: usize, first: (usize, usize), used: &mut Vec<bool>| -> (bool, Vec<usize>) {
+    // Lines of different light indices m never share a node, and nodes are
+    // ordered by m first: each run of nodes with one m is walked on its
+    // own, in parallel. Within a run the order of visits is the global one
+    // restricted to it, so the lines are the same as a serial walk's. Each
+    // segment belongs to exactly one run, so the flags are never contended.
+    let used: Vec<AtomicBool> = (0..pairs.len()).map(|_| AtomicBool::new(false)).collect();
+    let mut groups: Vec<(usize, usize)> = Vec::new();
+    let mut g0 = 0;
+    for v in 1..=n {
+        if v == n || keys[v].m != keys[g0].m {
+            groups.push((g0, v));
+            g0 = v;
+        }
+    }
+    let walk = |start: usize, first: (usize, usize)| -> (bool, Vec<usize>) {
         let mut path = vec![start];
         let (mut cur, mut s) = first;
         loop {
-            used[s] = true;
+            used[s].store(true, Relaxed);
             if cur == start {
                 return (true, path);
             }
@@ -357,7 +370,10 @@ pub(crate) fn chain(
             if deg(cur) != 2 {
                 return (false, path);
             }
-            match (offs[cur]..offs[cur + 1]).map(adj).find(|(_, t)| !used[*t]) {
+            match (offs[cur]..offs[cur + 1])
+                .map(adj)
+                .find(|(_, t)| !used[*t].load(Relaxed))
+            {
                 Some((nxt, t)) => {
                     cur = nxt;
                     s = t;
@@ -366,25 +382,32 @@ pub(crate) fn chain(
             }
         }
     };
-    for v in 0..n {
-        if deg(v) == 2 {
-            continue;
-        }
-        for k in offs[v]..offs[v + 1] {
-            let (w, s) = adj(k);
-            if !used[s] {
-                walks.push(walk(v, (w, s), &mut used));
+    let walks: Vec<(bool, Vec<usize>)> = groups
+        .par_iter()
+        .flat_map_iter(|&(lo, hi)| {
+            let mut walks = Vec::new();
+            for v in lo..hi {
+                if deg(v) == 2 {
+                    continue;
+                }
+                for k in offs[v]..offs[v + 1] {
+                    let (w, s) = adj(k);
+                    if !used[s].load(Relaxed) {
+                        walks.push(walk(v, (w, s)));
+                    }
+                }
             }
-        }
-    }
-    for v in 0..n {
-        for k in offs[v]..offs[v + 1] {
-            let (w, s) = adj(k);
-            if !used[s] {
-                walks.push(walk(v, (w, s), &mut used));
+            for v in lo..hi {
+                for k in offs[v]..offs[v + 1] {
+                    let (w, s) = adj(k);
+                    if !used[s].load(Relaxed) {
+                        walks.push(walk(v, (w, s)));
+                    }
+                }
             }
-        }
-    }
+            walks
+        })
+        .collect();
     let mut lines: Vec<HighlightLine> = walks
         .into_par_iter()
         .map(|(closed, path)| {

@@ -1,1 +1,241 @@
-//! Placeholder: filled in by its issue.
+//! The classic smoothing family of the Grüner thesis, chapter 3: Laplace
+//! smoothing (§3.2.2), Taubin λ|μ smoothing (§3.2.3), implicit (backward
+//! Euler) smoothing of Desbrun et al., the constraints of §3.2.4 (fixed
+//! vertices by empty neighbourhoods, fixed boundary, hierarchical labels,
+//! volume preservation by rescaling, tangent-plane motion), the spring model
+//! of Yamada et al. (§3.3) and the Δ_B H = 0 construction of Schneider and
+//! Kobbelt (§3.4).
+//!
+//! Every function works on a copy of the positions and writes them back into
+//! the mesh only when it succeeds; vertices that are constrained keep their
+//! exact (bit-identical) coordinates.
+
+mod laplace;
+mod schneider_kobbelt;
+mod spring;
+
+pub use laplace::{
+    ImplicitOptions, LaplaceOptions, TaubinOptions, TaubinParameters, implicit_smooth,
+    laplace_smooth, taubin_lambda_for_pass_band, taubin_smooth,
+};
+pub use schneider_kobbelt::{SchneiderKobbeltOptions, schneider_kobbelt};
+pub use spring::{SpringOptions, spring_smooth};
+
+use crate::Vec3;
+use crate::mesh::{MeshError, SurfaceMesh, VertexId};
+use crate::solve::SolveError;
+use thiserror::Error;
+
+/// Why a smoothing run failed.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum SmoothError {
+    /// The mesh does not suit the method (e.g. cotangent weights on quads).
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// A linear solve failed.
+    #[error("linear solve failed: {0}")]
+    Solve(#[from] SolveError),
+    /// An option is out of range.
+    #[error("invalid option: {0}")]
+    InvalidOption(String),
+    /// A fixed-vertex index is out of range.
+    #[error("fixed vertex {vertex} does not exist (the mesh has {count} vertices)")]
+    FixedVertexOutOfRange {
+        /// The offending index.
+        vertex: usize,
+        /// Number of vertices.
+        count: usize,
+    },
+    /// Volume preservation was asked for an open mesh.
+    #[error("volume preservation needs a closed mesh")]
+    NotClosed,
+}
+
+/// Constraints of Grüner thesis §3.2.4, shared by every smoothing method.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Constraints {
+    /// Vertices that never move (empty neighbourhoods, Taubin's interpolatory
+    /// constraint). Their coordinates stay bit-identical.
+    pub fixed: Vec<VertexId>,
+    /// Keep every boundary vertex fixed.
+    pub fix_boundary: bool,
+    /// Hierarchical labels: boundary vertices get the higher label, so the
+    /// boundary is smoothed as a set of curves (each boundary vertex sees only
+    /// its two neighbours along the boundary polyline) and the interior follows.
+    /// Ignored when `fix_boundary` is set.
+    pub hierarchical_boundary: bool,
+    /// Rescale about the centroid after every step so the enclosed volume
+    /// equals the input volume (Desbrun et al., β = (V0/Vn)^(1/3)); closed
+    /// meshes only. With fixed vertices only the free vertices are scaled
+    /// (the scale is then found by a secant iteration). Relative error ≤ 1e-9.
+    pub preserve_volume: bool,
+    /// Move vertices only within the tangent plane of their input normal
+    /// (the normal component of every displacement is removed).
+    pub tangential_only: bool,
+}
+
+/// What a smoothing run did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SmoothReport {
+    /// Iterations performed (a Taubin iteration is a λ step and a μ step).
+    pub iterations: usize,
+    /// Enclosed volume before (meaningful for closed meshes only).
+    pub volume_before: f64,
+    /// Enclosed volume after.
+    pub volume_after: f64,
+    /// Largest distance a vertex moved from its input position.
+    pub max_displacement: f64,
+    /// Whether an iterative method met its stopping criterion.
+    pub converged: bool,
+}
+
+/// Per-vertex role derived from [`Constraints`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Role {
+    Fixed,
+    /// Boundary vertex smoothed along the boundary polyline only.
+    BoundaryCurve,
+    Free,
+}
+
+pub(crate) fn roles(mesh: &SurfaceMesh, c: &Constraints) -> Result<Vec<Role>, SmoothError> {
+    let n = mesh.vertex_count();
+    let mut r = vec![Role::Free; n];
+    for v in mesh.vertices() {
+        if mesh.is_isolated(v) {
+            r[v.idx()] = Role::Fixed;
+        } else if mesh.is_boundary_vertex(v) {
+            if c.fix_boundary {
+                r[v.idx()] = Role::Fixed;
+            } else if c.hierarchical_boundary {
+                r[v.idx()] = Role::BoundaryCurve;
+            }
+        }
+    }
+    for v in &c.fixed {
+        if v.idx() >= n {
+            return Err(SmoothError::FixedVertexOutOfRange {
+                vertex: v.idx(),
+                count: n,
+            });
+        }
+        r[v.idx()] = Role::Fixed;
+    }
+    if c.preserve_volume && !mesh.is_closed() {
+        return Err(SmoothError::NotClosed);
+    }
+    Ok(r)
+}
+
+/// Neighbourhood structure in CSR form: for vertex i, neighbours
+/// `nbr[off[i]..off[i+1]]` with halfedge ids `he[..]` (for weights).
+/// Fixed vertices have empty neighbourhoods; boundary-curve vertices see only
+/// their boundary neighbours (Grüner thesis §3.2.4, hierarchical labels).
+pub(crate) struct Neighbourhoods {
+    pub off: Vec<u32>,
+    pub nbr: Vec<u32>,
+    pub he: Vec<u32>,
+}
+
+impl Neighbourhoods {
+    pub(crate) fn new(mesh: &SurfaceMesh, roles: &[Role]) -> Self {
+        let n = mesh.vertex_count();
+        let mut off = Vec::with_capacity(n + 1);
+        let mut nbr = Vec::with_capacity(mesh.halfedge_count());
+        let mut he = Vec::with_capacity(mesh.halfedge_count());
+        off.push(0u32);
+        for v in mesh.vertices() {
+            match roles[v.idx()] {
+                Role::Fixed => {}
+                Role::Free => {
+                    for h in mesh.outgoing(v) {
+                        nbr.push(mesh.to_vertex(h).0);
+                        he.push(h.0);
+                    }
+                }
+                Role::BoundaryCurve => {
+                    for h in mesh.outgoing(v) {
+                        if mesh.is_boundary_edge(mesh.edge(h)) {
+                            nbr.push(mesh.to_vertex(h).0);
+                            he.push(h.0);
+                        }
+                    }
+                }
+            }
+            off.push(nbr.len() as u32);
+        }
+        Neighbourhoods { off, nbr, he }
+    }
+}
+
+/// Largest distance between corresponding points.
+pub(crate) fn max_distance(a: &[Vec3], b: &[Vec3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x.distance(*y))
+        .fold(0.0, f64::max)
+}
+
+/// Restores the volume `v0` by scaling the non-fixed vertices about the
+/// centroid of all vertices (Desbrun et al. 1999; Grüner §3.2.3). `work`
+/// holds the current positions. Exact cube root when nothing is fixed; a
+/// safeguarded secant iteration on the scale otherwise.
+pub(crate) fn restore_volume(
+    work: &mut SurfaceMesh,
+    roles: &[Role],
+    v0: f64,
+) -> Result<(), SmoothError> {
+    let vol = crate::geom::volume(work);
+    if !(vol.abs() > 0.0) || !(v0.abs() > 0.0) || !vol.is_finite() {
+        return Ok(());
+    }
+    let base: Vec<Vec3> = work.positions().to_vec();
+    let c = base.iter().copied().sum::<Vec3>() / base.len().max(1) as f64;
+    let apply = |work: &mut SurfaceMesh, s: f64| {
+        for (i, p) in work.positions_mut().iter_mut().enumerate() {
+            if roles[i] != Role::Fixed {
+                *p = c + s * (base[i] - c);
+            }
+        }
+    };
+    let ratio = v0 / vol;
+    if !(ratio > 0.0) {
+        return Ok(());
+    }
+    let mut s1 = ratio.cbrt();
+    apply(work, s1);
+    if roles.iter().all(|r| *r != Role::Fixed) {
+        return Ok(());
+    }
+    // secant on g(s) = V(s) - v0, starting from s = 1 and the cube-root guess
+    let mut s0 = 1.0;
+    let mut g0 = vol - v0;
+    let mut g1 = crate::geom::volume(work) - v0;
+    for _ in 0..60 {
+        if (g1 / v0).abs() <= 1e-12 {
+            return Ok(());
+        }
+        let d = g1 - g0;
+        if !(d.abs() > 0.0) {
+            break;
+        }
+        let s2 = s1 - g1 * (s1 - s0) / d;
+        if !s2.is_finite() || !(s2 > 0.0) {
+            break;
+        }
+        s0 = s1;
+        g0 = g1;
+        s1 = s2;
+        apply(work, s1);
+        g1 = crate::geom::volume(work) - v0;
+    }
+    if (g1 / v0).abs() > 1e-9 {
+        return Err(SmoothError::InvalidOption(
+            "volume cannot be restored by scaling the free vertices".into(),
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,13 +1,16 @@
 //! Sparse linear solvers shared by every algorithm: sparse Cholesky with a
 //! reusable symbolic factorisation, normal equations of sparse least-squares
-//! problems, triplet assembly, and an exact bound-constrained QP solver.
+//! problems (by Cholesky or by matrix-free preconditioned conjugate
+//! gradients), triplet assembly, and an exact bound-constrained QP solver.
 //!
 //! All matrices are faer `SparseColMat<usize, f64>`.
 
 mod box_qp;
+mod cg;
 mod cholesky;
 
 pub use box_qp::{BoxQpOptions, BoxQpSolution, box_qp};
+pub use cg::{CgOptions, CgReport, normal_equations_cg};
 pub use cholesky::{CholeskySolver, least_squares, normal_matrix, sparse_from_triplets};
 
 use thiserror::Error;

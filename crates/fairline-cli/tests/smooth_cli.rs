@@ -1,0 +1,367 @@
+//! Command-line tests of `fairline smooth` and `fairline fair-quad`.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_fairline"))
+        .args(args)
+        .output()
+        .expect("run fairline")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("fairline-sm-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn data(rel: &str) -> Option<PathBuf> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data")
+        .join(rel);
+    if p.exists() {
+        Some(p)
+    } else {
+        println!("skipped: ../shared/data not found");
+        None
+    }
+}
+
+fn report(p: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn read_obj_vertices(p: &Path) -> Vec<[f64; 3]> {
+    std::fs::read_to_string(p)
+        .unwrap()
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| {
+            let v: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect()
+}
+
+/// n×n quad grid of a saddle with a planted zigzag across the lines.
+fn zigzag_quads(n: usize) -> String {
+    let mut out = String::new();
+    let h = 2.0 / (n - 1) as f64;
+    for j in 0..n {
+        for i in 0..n {
+            let mut x = -1.0 + h * i as f64;
+            let y = -1.0 + h * j as f64;
+            if i > 0 && j > 0 && i < n - 1 && j < n - 1 {
+                x += if j % 2 == 0 { 0.2 * h } else { -0.2 * h };
+            }
+            writeln!(out, "v {x} {y} {}", 0.4 * (x * x - y * y)).unwrap();
+        }
+    }
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let a = j * n + i + 1;
+            writeln!(out, "f {} {} {} {}", a, a + 1, a + 1 + n, a + n).unwrap();
+        }
+    }
+    out
+}
+
+#[test]
+fn fair_quad_straightens_a_zigzag_grid_keeps_fixed_vertices_and_writes_a_picture() {
+    let d = tmp("fq");
+    let input = d.join("zz.obj");
+    std::fs::write(&input, zigzag_quads(10)).unwrap();
+    std::fs::write(d.join("fixed.json"), r#"{"vertices":[33,56]}"#).unwrap();
+    let out = d.join("out.obj");
+    let rep = d.join("r.json");
+    let png = d.join("cmp.png");
+    let o = run(&[
+        "fair-quad",
+        s(&input),
+        "-o",
+        s(&out),
+        "--fixed",
+        s(&d.join("fixed.json")),
+        "--report",
+        s(&rep),
+        "--png",
+        s(&png),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = report(&rep);
+    for k in [
+        "command",
+        "time_s",
+        "structure_lines",
+        "free_vertices",
+        "structure_energy_before",
+        "structure_energy_after",
+        "max_displacement",
+    ] {
+        assert!(r.get(k).is_some(), "missing {k}");
+    }
+    assert_eq!(r["structure_lines"], 20);
+    let (e0, e1) = (
+        r["structure_energy_before"].as_f64().unwrap(),
+        r["structure_energy_after"].as_f64().unwrap(),
+    );
+    assert!(e1 < 0.01 * e0, "{e0} → {e1}");
+    let a = read_obj_vertices(&input);
+    let b = read_obj_vertices(&out);
+    for v in [33, 56, 0, 9, 90, 99] {
+        assert_eq!(a[v], b[v], "vertex {v}");
+    }
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
+}
+
+#[test]
+fn smooth_methods_run_from_the_command_line_with_their_report_keys() {
+    let d = tmp("methods");
+    let input = d.join("zz.obj");
+    std::fs::write(&input, zigzag_quads(8)).unwrap();
+    // triangle-only methods get the triangulated grid
+    let tri = d.join("tri.obj");
+    assert!(run(&["convert", s(&input), s(&tri)]).status.success());
+    let mut t = String::new();
+    for l in std::fs::read_to_string(&input).unwrap().lines() {
+        if let Some(f) = l.strip_prefix("f ") {
+            let v: Vec<&str> = f.split_whitespace().collect();
+            writeln!(
+                t,
+                "f {} {} {}\nf {} {} {}",
+                v[0], v[1], v[2], v[0], v[2], v[3]
+            )
+            .unwrap();
+        } else {
+            writeln!(t, "{l}").unwrap();
+        }
+    }
+    std::fs::write(&tri, t).unwrap();
+    for (method, mesh, extra) in [
+        ("laplace", &input, vec!["--weights", "edge"]),
+        ("taubin", &input, vec!["--pass-band", "0.1"]),
+        ("implicit", &tri, vec!["--time-step", "2", "--fix-boundary"]),
+        ("spring", &input, vec![]),
+        ("schneider-kobbelt", &tri, vec!["--iterations", "5"]),
+    ] {
+        let out = d.join(format!("{method}.obj"));
+        let rep = d.join(format!("{method}.json"));
+        let mut args = vec![
+            "smooth",
+            s(mesh),
+            "--method",
+            method,
+            "-o",
+            s(&out),
+            "--report",
+            s(&rep),
+        ];
+        args.extend(extra);
+        let o = run(&args);
+        assert!(
+            o.status.success(),
+            "{method}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let r = report(&rep);
+        for k in [
+            "command",
+            "time_s",
+            "iterations",
+            "volume_before",
+            "volume_after",
+            "max_displacement",
+        ] {
+            assert!(r.get(k).is_some(), "{method}: missing {k}");
+        }
+        assert!(
+            r["max_displacement"].as_f64().unwrap() > 0.0,
+            "{method} moved nothing"
+        );
+        if method == "taubin" {
+            let (l, m) = (r["lambda"].as_f64().unwrap(), r["mu"].as_f64().unwrap());
+            assert!((1.0 / l + 1.0 / m - 0.1).abs() < 1e-12);
+            assert_eq!(r["transfer"].as_array().unwrap().len(), 21);
+        }
+    }
+}
+
+#[test]
+fn smooth_preserves_volume_of_a_real_closed_mesh() {
+    let Some(spot) = data("meshes/spot.ply") else {
+        return;
+    };
+    let d = tmp("vol");
+    let out = d.join("spot.ply");
+    let rep = d.join("r.json");
+    let o = run(&[
+        "smooth",
+        s(&spot),
+        "--method",
+        "laplace",
+        "--iterations",
+        "20",
+        "--preserve-volume",
+        "-o",
+        s(&out),
+        "--report",
+        s(&rep),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = report(&rep);
+    let (v0, v1) = (
+        r["volume_before"].as_f64().unwrap(),
+        r["volume_after"].as_f64().unwrap(),
+    );
+    assert!(((v1 - v0) / v0).abs() < 1e-9, "{v0} {v1}");
+    // without it Laplace shrinks the real mesh
+    let o = run(&[
+        "smooth",
+        s(&spot),
+        "--method",
+        "laplace",
+        "--iterations",
+        "20",
+        "-o",
+        s(&out),
+        "--report",
+        s(&rep),
+    ]);
+    assert!(o.status.success());
+    let r = report(&rep);
+    assert!(r["volume_after"].as_f64().unwrap() < 0.99 * r["volume_before"].as_f64().unwrap());
+}
+
+#[test]
+fn fair_quad_on_the_real_quad_meshes() {
+    for f in ["quads/quadmesh.obj", "quads/hypar.obj"] {
+        let Some(p) = data(f) else { return };
+        let d = tmp("real");
+        let out = d.join("out.obj");
+        let rep = d.join("r.json");
+        let o = run(&[
+            "fair-quad",
+            s(&p),
+            "--deviation",
+            "0.005",
+            "--fix-boundary",
+            "-o",
+            s(&out),
+            "--report",
+            s(&rep),
+        ]);
+        assert!(
+            o.status.success(),
+            "{f}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let r = report(&rep);
+        let (e0, e1) = (
+            r["structure_energy_before"].as_f64().unwrap(),
+            r["structure_energy_after"].as_f64().unwrap(),
+        );
+        assert!(e1 <= e0, "{f}: {e0} → {e1}");
+        assert!(r["structure_lines"].as_u64().unwrap() >= 18, "{f}");
+        // same vertex count, finite coordinates
+        let a = read_obj_vertices(&p);
+        let b = read_obj_vertices(&out);
+        assert_eq!(a.len(), b.len());
+        assert!(b.iter().flatten().all(|x| x.is_finite()));
+    }
+}
+
+#[test]
+fn bad_input_exits_2_and_writes_nothing() {
+    let d = tmp("bad");
+    let input = d.join("zz.obj");
+    std::fs::write(&input, zigzag_quads(6)).unwrap();
+    let out = d.join("out.obj");
+    let bad_fixed = d.join("fixed.json");
+    std::fs::write(&bad_fixed, r#"{"vertices":[1, 500]}"#).unwrap();
+    let garbage = d.join("garbage.json");
+    std::fs::write(&garbage, "{not json").unwrap();
+    let broken = d.join("broken.obj");
+    std::fs::write(&broken, "v 0 0 0\nv 1 0 0\nf 1 2 7\n").unwrap();
+    let missing = d.join("missing.obj");
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["smooth", s(&input), "-o", s(&out), "--fixed", s(&bad_fixed)],
+        vec!["smooth", s(&input), "-o", s(&out), "--fixed", s(&garbage)],
+        vec!["smooth", s(&input), "-o", s(&out), "--method", "implicit"],
+        vec![
+            "smooth",
+            s(&input),
+            "-o",
+            s(&out),
+            "--method",
+            "laplace",
+            "--weights",
+            "cotan",
+        ],
+        vec!["smooth", s(&input), "-o", s(&out), "--preserve-volume"],
+        vec![
+            "smooth",
+            s(&input),
+            "-o",
+            s(&out),
+            "--method",
+            "taubin",
+            "--pass-band",
+            "1.5",
+        ],
+        vec!["smooth", s(&input), "-o", s(&out), "--lambda", "inf"],
+        vec!["smooth", s(&input), "-o", s(&out), "--iterations", "0"],
+        vec!["smooth", s(&input), "-o", s(&input)],
+        vec!["smooth", s(&broken), "-o", s(&out)],
+        vec!["smooth", s(&missing), "-o", s(&out)],
+        vec!["smooth", s(&input), "-o", s(&out), "--method", "nope"],
+        vec!["fair-quad", s(&input), "-o", s(&out), "--weight", "-1"],
+        vec![
+            "fair-quad",
+            s(&input),
+            "-o",
+            s(&out),
+            "--deviation-factor",
+            "0",
+        ],
+        vec![
+            "fair-quad",
+            s(&input),
+            "-o",
+            s(&out),
+            "--fixed",
+            s(&bad_fixed),
+        ],
+        vec!["fair-quad", s(&broken), "-o", s(&out)],
+    ];
+    for args in cases {
+        let o = run(&args);
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(
+            !String::from_utf8_lossy(&o.stderr).trim().is_empty(),
+            "{args:?}: no message"
+        );
+        assert!(!out.exists(), "{args:?} wrote output");
+    }
+    // a triangle mesh has no quads for fair-quad
+    let tri = d.join("tri.obj");
+    std::fs::write(&tri, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let o = run(&["fair-quad", s(&tri), "-o", s(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("quad"));
+    for cmd in ["smooth", "fair-quad"] {
+        let o = run(&[cmd, "--help"]);
+        assert!(o.status.success() && String::from_utf8_lossy(&o.stdout).contains("Example"));
+    }
+}

@@ -1,0 +1,63 @@
+//! Smoothing and structure-line fairing timings (issue 5 targets on this
+//! 2-core machine): Taubin, uniform weights, 10 iterations (20 steps) on a
+//! 450k-vertex triangle mesh (target ≤ 0.15 s); one implicit step on the same
+//! mesh (≤ 1.5 s); structure-line fairing of a 1M-vertex zigzag quad grid
+//! (≤ 10 s). `cargo bench -p fairline --bench smooth`; sizes via
+//! `FAIRLINE_BENCH_SIZES=450000`, runs via `FAIRLINE_BENCH_RUNS`.
+
+mod common;
+
+use fairline::Vec3;
+use fairline::fair::{QuadFairOptions, fair_structure_lines};
+use fairline::smooth::{ImplicitOptions, TaubinOptions, implicit_smooth, taubin_smooth};
+
+fn main() {
+    let runs = common::runs(3);
+    println!("{:>10} {:>28} {:>10}", "vertices", "task", "median_s");
+    for n in common::sizes(&[450_000]) {
+        let mesh = common::test_surface(n);
+        let t = common::median_secs(runs, || {
+            let mut m = mesh.clone();
+            taubin_smooth(&mut m, &TaubinOptions::default()).expect("taubin")
+        });
+        println!(
+            "{:>10} {:>28} {:>10.3}",
+            mesh.vertex_count(),
+            "taubin 10 it (20 steps)",
+            t
+        );
+        let t = common::median_secs(runs, || {
+            let mut m = mesh.clone();
+            implicit_smooth(&mut m, &ImplicitOptions::default()).expect("implicit")
+        });
+        println!(
+            "{:>10} {:>28} {:>10.3}",
+            mesh.vertex_count(),
+            "implicit 1 step",
+            t
+        );
+    }
+    // 1M-vertex quad grid with a planted zigzag
+    let side = 1000u32;
+    let mut quads = fairline::shapes::quad_grid(side, side, (-1.0, 1.0), (-1.0, 1.0), |x, y| {
+        0.3 * (x * x - y * y)
+    });
+    let h = 2.0 / (side - 1) as f64;
+    for (k, p) in quads.positions_mut().iter_mut().enumerate() {
+        let (i, j) = (k as u32 % side, k as u32 / side);
+        if i > 0 && j > 0 && i < side - 1 && j < side - 1 {
+            let x = p.x + if j % 2 == 0 { 0.2 * h } else { -0.2 * h };
+            *p = Vec3::new(x, p.y, 0.3 * (x * x - p.y * p.y));
+        }
+    }
+    let t = common::median_secs(runs.min(2), || {
+        let mut m = quads.clone();
+        fair_structure_lines(&mut m, &QuadFairOptions::default()).expect("fair")
+    });
+    println!(
+        "{:>10} {:>28} {:>10.3}",
+        quads.vertex_count(),
+        "structure-line fairing",
+        t
+    );
+}

@@ -1,0 +1,626 @@
+//! Highlight-line fairing of a triangle mesh, Yong et al. §3.3–3.7,
+//! Algorithm 2, and the surface-diffusion-flow baseline the paper compares
+//! against (Xu et al., ∂V/∂t = N Δ_B H).
+//!
+//! Each iteration: (1) freeze cotangents, areas and normals; (2) build the
+//! desired lines of the current highlight lines ([`desired_lines`]);
+//! (3) linearise F = ω1 f_fair + ω2 f_diff in the normal displacements x of
+//! the movable vertices (module `system`: Willmore quadratic form,
+//! Gauss–Newton of f_diff with the analytic sparse Jacobian of Eq. (13));
+//! (4) minimise the quadratic under |x_i| ≤ ½ min adjacent edge length
+//! (Eq. (16)) exactly with [`crate::solve::box_qp`]; (5) move V_i ← V_i +
+//! x_i N_i and update the highlight model incrementally
+//! ([`HighlightModel::update`]); stop when max|x_i| / ē < ε (Eq. (17), ē
+//! the mean length of the edges inside R) or after N_max iterations.
+//!
+//! Step acceptance (beyond the paper, which has none): highlight lines react
+//! to normals with a lever of the light plane's distance, so a full
+//! Gauss–Newton step can overshoot. Each step is kept only when the energy
+//! reached — Willmore energy with fresh areas and cotangents plus f_diff of
+//! the same nodes and targets, the highlight distances re-evaluated without
+//! linearisation (module `system`) — is below the energy at x = 0;
+//! otherwise the vertices are put back and the step is recomputed with a
+//! Levenberg–Marquardt damping term μ‖x‖² (μ grows ×10 on a rejection and
+//! shrinks ×10 after a step that reached more than ¾ of the predicted
+//! decrease). Rejected steps count as iterations and are reported.
+//!
+//! The quadratic Q = JᵀJ gets a ridge of 1e-12 × its largest diagonal entry
+//! so that it is positive definite even where the frozen cotangent weights
+//! leave a null direction (e.g. negative cotangents); this changes the
+//! solution by a relative 1e-12 at most where Q was already definite.
+//!
+//! The baseline (`FairMethod::DiffusionFlow`) replaces F by ‖Δ_B H‖² over
+//! the movable vertices (area-weighted), linearised the same way: each step
+//! is the implicit step of the flow with an infinite time step, i.e. a
+//! Gauss–Newton step toward its stationary state Δ_B H = 0, inside the same
+//! Eq. (16) box. Both methods move the same vertices along the same normals.
+
+use super::FairError;
+use super::desired::{DesiredLines, HighlightDeviation, desired_lines};
+use super::region::{MovableSet, movable_vertices};
+use super::system::{
+    DiffNode, Frozen, NOT_MOVABLE, Residual, difference_energy_after, difference_residual,
+    diffusion_residual, region_willmore, willmore_residual,
+};
+use crate::Vec3;
+use crate::highlight::{HighlightLines, HighlightModel, HighlightOptions, LightArray, NodeId};
+use crate::mesh::{FaceId, SurfaceMesh, VertexId};
+use crate::solve::{BoxQpOptions, box_qp, normal_matrix, sparse_from_triplets};
+
+/// Which energy the fairing minimises.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum FairMethod {
+    /// Yong et al.: ω1 f_fair + ω2 f_diff (Eq. (15)).
+    #[default]
+    Highlight,
+    /// Baseline: surface diffusion flow ∂V/∂t = N Δ_B H (Xu et al.) on the
+    /// same movable vertices.
+    DiffusionFlow,
+}
+
+/// Options of [`fair_highlight_lines`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FairOptions {
+    /// The energy to minimise (default [`FairMethod::Highlight`]).
+    pub method: FairMethod,
+    /// ω1, weight of f_fair (default 1, as in Yong et al. §4).
+    pub fair_weight: f64,
+    /// ω2, weight of f_diff (default 1, as in Yong et al. §4); f_diff is
+    /// measured in light spacings per region diameter (module `system`).
+    pub diff_weight: f64,
+    /// N_max, most iterations (default 50).
+    pub max_iterations: usize,
+    /// ε of Eq. (17) (default 1e-3).
+    pub epsilon: f64,
+    /// Options of the highlight line model.
+    pub highlight: HighlightOptions,
+}
+
+impl Default for FairOptions {
+    fn default() -> Self {
+        FairOptions {
+            method: FairMethod::Highlight,
+            fair_weight: 1.0,
+            diff_weight: 1.0,
+            max_iterations: 50,
+            epsilon: 1e-3,
+            highlight: HighlightOptions::default(),
+        }
+    }
+}
+
+impl FairOptions {
+    /// Sets [`FairOptions::method`].
+    pub fn method(mut self, m: FairMethod) -> Self {
+        self.method = m;
+        self
+    }
+    /// Sets ω1 and ω2.
+    pub fn weights(mut self, fair: f64, diff: f64) -> Self {
+        self.fair_weight = fair;
+        self.diff_weight = diff;
+        self
+    }
+    /// Sets [`FairOptions::max_iterations`].
+    pub fn max_iterations(mut self, n: usize) -> Self {
+        self.max_iterations = n;
+        self
+    }
+    /// Sets [`FairOptions::epsilon`].
+    pub fn epsilon(mut self, e: f64) -> Self {
+        self.epsilon = e;
+        self
+    }
+    /// Sets [`FairOptions::highlight`].
+    pub fn highlight(mut self, h: HighlightOptions) -> Self {
+        self.highlight = h;
+        self
+    }
+    fn check(&self) -> Result<(), FairError> {
+        for (name, v) in [
+            ("fair weight ω1", self.fair_weight),
+            ("difference weight ω2", self.diff_weight),
+        ] {
+            if !(v >= 0.0) || !v.is_finite() {
+                return Err(FairError::InvalidOption(format!(
+                    "{name} must be a finite number ≥ 0, got {v}"
+                )));
+            }
+        }
+        if self.method == FairMethod::Highlight && self.fair_weight + self.diff_weight == 0.0 {
+            return Err(FairError::InvalidOption(
+                "at least one of the weights ω1, ω2 must be positive".into(),
+            ));
+        }
+        if !(self.epsilon > 0.0) || !self.epsilon.is_finite() {
+            return Err(FairError::InvalidOption(format!(
+                "epsilon must be a positive number, got {}",
+                self.epsilon
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// What one iteration of Algorithm 2 did; energies at the start of the
+/// iteration (x = 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IterationReport {
+    /// Iteration number, from 1.
+    pub iteration: usize,
+    /// f_fair: Willmore energy Σ_{I_R} A_i H_i² of the region.
+    pub f_fair: f64,
+    /// f_diff: Σ (l_i/D) (ν_i·(Q_i − Q̃_i)/s)² (see module `system`).
+    pub f_diff: f64,
+    /// The minimised energy at x = 0: ω1 f_fair + ω2 f_diff, or ‖Δ_B H‖²
+    /// for the baseline.
+    pub objective: f64,
+    /// The quadratic model's value at the QP solution.
+    pub predicted: f64,
+    /// The energy actually reached by the step.
+    pub achieved: f64,
+    /// Whether the step lowered the energy and was kept.
+    pub accepted: bool,
+    /// Levenberg–Marquardt damping used (relative to max diag JᵀJ).
+    pub damping: f64,
+    /// max |x_i| (mesh units).
+    pub max_step: f64,
+    /// max |x_i| / ē, the quantity of Eq. (17).
+    pub step_ratio: f64,
+    /// Displacements at their Eq. (16) bound.
+    pub active_bounds: usize,
+    /// Projected-Newton iterations of the QP.
+    pub qp_iterations: usize,
+    /// Inside highlight nodes with a target.
+    pub target_nodes: usize,
+    /// Runs of inside nodes without a desired line (§3.2).
+    pub skipped_runs: usize,
+}
+
+/// Result of [`fair_highlight_lines`].
+#[derive(Clone, Debug)]
+pub struct FairResult {
+    /// The method that produced it.
+    pub method: FairMethod,
+    /// The faired mesh (same connectivity; only movable vertices moved).
+    pub mesh: SurfaceMesh,
+    /// Region, inside and movable vertices (§3.1).
+    pub region: MovableSet,
+    /// Iterations run.
+    pub iterations: usize,
+    /// True when Eq. (17) stopped the iteration.
+    pub converged: bool,
+    /// Willmore energy of the region before and after.
+    pub willmore_before: f64,
+    /// See `willmore_before`.
+    pub willmore_after: f64,
+    /// Distance of the inside highlight nodes from the desired curves,
+    /// before.
+    pub deviation_before: HighlightDeviation,
+    /// The same after fairing.
+    pub deviation_after: HighlightDeviation,
+    /// Largest total displacement of a vertex (mesh units).
+    pub max_displacement: f64,
+    /// Mean edge length ē inside R.
+    pub mean_edge_length: f64,
+    /// Desired lines of the input (for pictures).
+    pub desired_before: DesiredLines,
+    /// Highlight lines before and after.
+    pub lines_before: HighlightLines,
+    /// See `lines_before`.
+    pub lines_after: HighlightLines,
+    /// Per-iteration energies.
+    pub history: Vec<IterationReport>,
+}
+
+/// The linearised energy of one mesh state.
+struct Linearised {
+    residual: Residual,
+    objective: f64,
+    desired: DesiredLines,
+    f_fair: f64,
+    f_diff: f64,
+    diff_nodes: Vec<DiffNode>,
+}
+
+/// Smallest non-zero Levenberg–Marquardt damping, relative to the largest
+/// diagonal entry of JᵀJ.
+const MIN_DAMPING: f64 = 1e-6;
+
+/// Mean length of the edges inside R (both faces in R); edges touching R
+/// when there is none.
+fn region_edge_length(mesh: &SurfaceMesh, set: &MovableSet) -> f64 {
+    let p = mesh.positions();
+    let (mut inside, mut ni, mut touch, mut nt) = (0.0, 0usize, 0.0, 0usize);
+    for e in mesh.edges() {
+        let ins: Vec<bool> = (0..2)
+            .map(|i| {
+                mesh.face(mesh.edge_halfedge(e, i))
+                    .is_some_and(|f| set.in_region[f.idx()])
+            })
+            .collect();
+        if !(ins[0] || ins[1]) {
+            continue;
+        }
+        let (a, b) = mesh.edge_vertices(e);
+        let l = (p[a.idx()] - p[b.idx()]).length();
+        touch += l;
+        nt += 1;
+        if ins[0] && ins[1] {
+            inside += l;
+            ni += 1;
+        }
+    }
+    if ni > 0 {
+        inside / ni as f64
+    } else if nt > 0 {
+        touch / nt as f64
+    } else {
+        0.0
+    }
+}
+
+/// Eq. (16) bound ½ min adjacent edge length per movable vertex.
+fn step_bounds(mesh: &SurfaceMesh, movable: &[VertexId]) -> Vec<f64> {
+    let p = mesh.positions();
+    movable
+        .iter()
+        .map(|&v| {
+            let m = mesh
+                .one_ring(v)
+                .map(|w| (p[w.idx()] - p[v.idx()]).length())
+                .fold(f64::INFINITY, f64::min);
+            if m.is_finite() { 0.5 * m } else { 0.0 }
+        })
+        .collect()
+}
+
+/// Minimises ‖r0 + J x‖² under |x_i| ≤ bound_i (Eq. (16)); returns x,
+/// the model value at x and the QP statistics.
+fn solve_box(
+    res: &Residual,
+    bounds: &[f64],
+    damping: f64,
+) -> Result<(Vec<f64>, f64, usize, usize), FairError> {
+    let n = bounds.len();
+    let mut triplets: Vec<(usize, usize, f64)> = Vec::new();
+    let mut diag = vec![0.0; n];
+    let mut c = vec![0.0; n];
+    for (r, (row, &r0)) in res.rows.iter().zip(&res.r0).enumerate() {
+        for &(col, v) in row {
+            triplets.push((r, col as usize, v));
+            diag[col as usize] += v * v;
+            c[col as usize] += v * r0;
+        }
+    }
+    let dmax = diag.iter().copied().fold(0.0, f64::max);
+    let ridge = if dmax > 0.0 && dmax.is_finite() {
+        1e-12 * dmax
+    } else {
+        1.0
+    };
+    let rows = res.rows.len();
+    let lm = damping * dmax;
+    for i in 0..n {
+        triplets.push((rows + i, i, (ridge + lm).sqrt()));
+    }
+    let j = sparse_from_triplets(rows + n, n, &triplets)?;
+    let q = normal_matrix(j.as_ref())?;
+    let lower: Vec<f64> = bounds.iter().map(|b| -b).collect();
+    let sol = box_qp(q.as_ref(), &c, &lower, bounds, &BoxQpOptions::default())?;
+    // ‖r0 + Jx‖² = ‖r0‖² + 2(½ xᵀJᵀJx + cᵀx) − (ridge + damping)‖x‖²
+    let xx: f64 = sol.x.iter().map(|v| v * v).sum();
+    let predicted = res.energy() + 2.0 * sol.objective - (ridge + lm) * xx;
+    Ok((sol.x, predicted, sol.active, sol.iterations))
+}
+
+/// Fairs the face region `faces` of a triangle mesh with the highlight
+/// lines of `light` (Yong et al. Algorithm 2; see the module
+/// documentation). Only the movable vertices of §3.1 move, along their
+/// normals; every other vertex, every normal outside R and every highlight
+/// node outside R stay bit-identical. Errors on non-triangle meshes,
+/// invalid options or regions, and with [`FairError::NoMovableVertex`]
+/// (advice included) when the region is too small.
+pub fn fair_highlight_lines(
+    mesh: &SurfaceMesh,
+    light: &LightArray,
+    faces: &[FaceId],
+    options: &FairOptions,
+) -> Result<FairResult, FairError> {
+    fair_highlight_lines_with(mesh, light, faces, options, &mut |_| {})
+}
+
+/// [`fair_highlight_lines`] calling `on_iteration` after every iteration
+/// (for progress display).
+pub fn fair_highlight_lines_with(
+    mesh: &SurfaceMesh,
+    light: &LightArray,
+    faces: &[FaceId],
+    options: &FairOptions,
+    on_iteration: &mut dyn FnMut(&IterationReport),
+) -> Result<FairResult, FairError> {
+    options.check()?;
+    mesh.require_triangles()?;
+    let mut mesh = mesh.clone();
+    let mut model = HighlightModel::new(&mesh, *light, options.highlight)?;
+    let lines_before = model.lines(&mesh);
+    let nodes: Vec<NodeId> = lines_before
+        .lines
+        .iter()
+        .flat_map(|l| l.nodes.iter().copied())
+        .collect();
+    let set = movable_vertices(&mesh, faces, &nodes)?;
+    let mut col = vec![NOT_MOVABLE; mesh.vertex_count()];
+    for (k, v) in set.movable.iter().enumerate() {
+        col[v.idx()] = k as u32;
+    }
+    let ebar = region_edge_length(&mesh, &set);
+    if !(ebar > 0.0) || !ebar.is_finite() {
+        return Err(FairError::Region(
+            "the region's edges have zero length".into(),
+        ));
+    }
+    let start = mesh.positions().to_vec();
+    // f_diff unit D s² (module `system`): D the region's bounding-box diagonal
+    let region_points: Vec<Vec3> = set
+        .inside_vertices
+        .iter()
+        .chain(set.movable.iter())
+        .map(|v| start[v.idx()])
+        .collect();
+    let diameter = crate::mesh::bounding_box(&region_points)
+        .map_or(0.0, |(lo, hi)| (hi - lo).length())
+        .max(ebar);
+    let diff_unit = diameter * light.spacing() * light.spacing();
+    let inside_node = |m: &SurfaceMesh, n: NodeId| set.node_inside(m, n);
+    let desired_before = desired_lines(&lines_before, |n| inside_node(&mesh, n));
+    let deviation_before = desired_before.deviation();
+    let willmore_before = region_willmore(&mesh, &Frozen::new(&mesh), &set.inside_vertices);
+    let (w1, w2) = (options.fair_weight, options.diff_weight);
+    // the linearised energy of the current mesh (steps 4 of Algorithm 2)
+    let linearise = |mesh: &SurfaceMesh, model: &HighlightModel, lines: &HighlightLines| {
+        let frozen = Frozen::new(mesh);
+        let normals = model.normals();
+        let desired = desired_lines(lines, |n| set.node_inside(mesh, n));
+        let fair = willmore_residual(mesh, &frozen, normals, &col, &set.inside_vertices);
+        let (diff, diff_nodes) =
+            difference_residual(mesh, model, normals, &col, &desired, diff_unit);
+        let (f_fair, f_diff) = (fair.energy(), diff.energy());
+        let residual = match options.method {
+            FairMethod::Highlight => {
+                let mut r = Residual::default();
+                r.extend_scaled(fair, w1.sqrt());
+                r.extend_scaled(diff, w2.sqrt());
+                r
+            }
+            FairMethod::DiffusionFlow => {
+                diffusion_residual(mesh, &frozen, normals, &col, &set.movable)
+            }
+        };
+        Linearised {
+            objective: residual.energy(),
+            residual,
+            desired,
+            f_fair,
+            f_diff,
+            diff_nodes,
+        }
+    };
+    let mut history = Vec::new();
+    let mut converged = false;
+    let mut lines = lines_before.clone();
+    let mut current = linearise(&mesh, &model, &lines);
+    let mut damping = 0.0;
+    for it in 1..=options.max_iterations {
+        let normals = model.normals().to_vec();
+        let bounds = step_bounds(&mesh, &set.movable);
+        let (x, predicted, active, qp_iterations) = solve_box(&current.residual, &bounds, damping)?;
+        let max_step = x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let old: Vec<Vec3> = set.movable.iter().map(|v| mesh.position(*v)).collect();
+        let positions = mesh.positions_mut();
+        for (k, v) in set.movable.iter().enumerate() {
+            let np = old[k] + x[k] * normals[v.idx()];
+            if np.is_finite() {
+                positions[v.idx()] = np;
+            }
+        }
+        model.update(&mesh, &set.movable)?;
+        // the energy reached, with the targets of this iteration
+        let achieved = match options.method {
+            FairMethod::Highlight => {
+                let frozen = Frozen::new(&mesh);
+                w1 * region_willmore(&mesh, &frozen, &set.inside_vertices)
+                    + w2 * difference_energy_after(&mesh, &model, &current.diff_nodes)
+            }
+            FairMethod::DiffusionFlow => {
+                let frozen = Frozen::new(&mesh);
+                diffusion_residual(&mesh, &frozen, model.normals(), &col, &set.movable).energy()
+            }
+        };
+        // Levenberg–Marquardt acceptance of the Gauss–Newton step
+        let gain = current.objective - predicted;
+        let rho = if gain > 0.0 {
+            (current.objective - achieved) / gain
+        } else {
+            0.0
+        };
+        let accepted = achieved < current.objective && achieved.is_finite();
+        let report = IterationReport {
+            iteration: it,
+            f_fair: current.f_fair,
+            f_diff: current.f_diff,
+            objective: current.objective,
+            predicted,
+            achieved,
+            accepted,
+            damping,
+            max_step,
+            step_ratio: max_step / ebar,
+            active_bounds: active,
+            qp_iterations,
+            target_nodes: current.desired.lines.iter().map(|l| l.nodes.len()).sum(),
+            skipped_runs: current.desired.skipped,
+        };
+        on_iteration(&report);
+        history.push(report);
+        if accepted {
+            lines = model.lines(&mesh);
+            current = linearise(&mesh, &model, &lines);
+            if rho > 0.75 {
+                damping *= 0.1;
+                if damping < MIN_DAMPING {
+                    damping = 0.0;
+                }
+            } else if rho < 0.25 {
+                damping = (damping * 4.0).max(MIN_DAMPING);
+            }
+        } else {
+            let positions = mesh.positions_mut();
+            for (k, v) in set.movable.iter().enumerate() {
+                positions[v.idx()] = old[k];
+            }
+            model.update(&mesh, &set.movable)?;
+            damping = (damping * 10.0).max(MIN_DAMPING);
+        }
+        if max_step / ebar < options.epsilon {
+            converged = true;
+            break;
+        }
+    }
+    let desired_after = desired_lines(&lines, |n| inside_node(&mesh, n));
+    let willmore_after = region_willmore(&mesh, &Frozen::new(&mesh), &set.inside_vertices);
+    let max_displacement = mesh
+        .positions()
+        .iter()
+        .zip(&start)
+        .map(|(a, b)| (*a - *b).length())
+        .fold(0.0, f64::max);
+    Ok(FairResult {
+        method: options.method,
+        iterations: history.len(),
+        converged,
+        willmore_before,
+        willmore_after,
+        deviation_before,
+        deviation_after: desired_after.deviation(),
+        max_displacement,
+        mean_edge_length: ebar,
+        desired_before,
+        lines_before,
+        lines_after: lines,
+        history,
+        region: set,
+        mesh,
+    })
+}
+
+/// The positions of `mesh` that differ from `reference` (same vertex
+/// count), for checks and reports.
+pub fn moved_vertices(mesh: &SurfaceMesh, reference: &[Vec3]) -> Vec<VertexId> {
+    mesh.positions()
+        .iter()
+        .zip(reference)
+        .enumerate()
+        .filter(|(_, (a, b))| a.to_array().map(f64::to_bits) != b.to_array().map(f64::to_bits))
+        .map(|(i, _)| VertexId(i as u32))
+        .collect()
+}
+
+/// Grows a face region by `rings` rings of faces (faces sharing a vertex
+/// with the region), e.g. to give a suggested region of
+/// [`crate::highlight::detect_irregularities`] the two rings of margin
+/// that movable vertices need (§3.1). Sorted, without duplicates.
+pub fn grow_region(mesh: &SurfaceMesh, faces: &[FaceId], rings: usize) -> Vec<FaceId> {
+    let mut inr = vec![false; mesh.face_count()];
+    for f in faces {
+        if f.idx() < inr.len() {
+            inr[f.idx()] = true;
+        }
+    }
+    for _ in 0..rings {
+        let mut touch = vec![false; mesh.vertex_count()];
+        for f in mesh.faces() {
+            if inr[f.idx()] {
+                for v in mesh.face_vertices(f) {
+                    touch[v.idx()] = true;
+                }
+            }
+        }
+        for f in mesh.faces() {
+            if mesh.face_vertices(f).any(|v| touch[v.idx()]) {
+                inr[f.idx()] = true;
+            }
+        }
+    }
+    mesh.faces().filter(|f| inr[f.idx()]).collect()
+}
+
+/// Before/after picture of a fairing run (Yong et al. Fig. 7): on the
+/// left the input with its highlight lines (dark), the region outline (red)
+/// and the desired OGH curves (blue); on the right the faired mesh with
+/// its highlight lines and the outline.
+pub fn fairing_picture(
+    before: &SurfaceMesh,
+    result: &FairResult,
+    opts: &crate::render::RenderOptions,
+) -> Result<crate::render::Image, crate::render::RenderError> {
+    use crate::picture::{Picture, mesh_picture};
+    use crate::render::{PolylineLayer, side_by_side};
+    let lines = |ls: &HighlightLines| -> Vec<PolylineLayer> {
+        ls.lines
+            .iter()
+            .map(|l| PolylineLayer {
+                points: l.points.clone(),
+                closed: l.closed,
+                color: [0.02, 0.02, 0.02],
+                width_px: 1.6,
+            })
+            .collect()
+    };
+    let outline: Vec<PolylineLayer> = result
+        .region
+        .outline(before)
+        .into_iter()
+        .map(|(a, b)| PolylineLayer {
+            points: vec![a, b],
+            closed: false,
+            color: [0.85, 0.05, 0.05],
+            width_px: 2.2,
+        })
+        .collect();
+    let mut left = lines(&result.lines_before);
+    left.extend(result.desired_before.lines.iter().map(|d| PolylineLayer {
+        points: d.samples.clone(),
+        closed: false,
+        color: [0.05, 0.25, 0.95],
+        width_px: 2.4,
+    }));
+    left.extend(outline.iter().cloned());
+    let mut right = lines(&result.lines_after);
+    right.extend(outline);
+    let a = mesh_picture(
+        before,
+        &Picture {
+            polylines: left,
+            title: Some("before: highlight lines, region, desired lines".into()),
+            ..Default::default()
+        },
+        opts,
+    )?;
+    let b = mesh_picture(
+        &result.mesh,
+        &Picture {
+            polylines: right,
+            title: Some(
+                match result.method {
+                    FairMethod::Highlight => "after highlight-line fairing",
+                    FairMethod::DiffusionFlow => "after surface diffusion flow (baseline)",
+                }
+                .into(),
+            ),
+            ..Default::default()
+        },
+        opts,
+    )?;
+    Ok(side_by_side(&[a, b], &["before", "after"]))
+}

@@ -1,0 +1,158 @@
+//! Spring model of Yamada et al. (Grüner thesis §3.3, Eq. (20)–(24)).
+
+use super::{Constraints, Role, SmoothError, SmoothReport, max_distance, roles};
+use crate::Vec3;
+use crate::geom;
+use crate::mesh::{SurfaceMesh, VertexId};
+
+/// Options of [`spring_smooth`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpringOptions {
+    /// Stop when the largest displacement of a sweep divided by the mean
+    /// length of that vertex's edges is below ε.
+    pub epsilon: f64,
+    /// Upper bound on the number of Gauss–Seidel sweeps.
+    pub max_iterations: usize,
+    /// Positional constraints. Boundary vertices are always fixed, as
+    /// Yamada et al. require positional constraints on the boundary nodes.
+    pub constraints: Constraints,
+    /// Normal constraints (Grüner §3.3): these vertices use the given
+    /// normal (normalised) instead of the estimated one. Boundary vertices
+    /// not listed get a normal from a quadric fit over the input two-ring.
+    pub normals: Vec<(VertexId, Vec3)>,
+}
+
+impl Default for SpringOptions {
+    fn default() -> Self {
+        SpringOptions {
+            epsilon: 1e-4,
+            max_iterations: 200,
+            constraints: Constraints::default(),
+            normals: Vec::new(),
+        }
+    }
+}
+
+/// Spring-model fairing: each free node moves by the inverse-length
+/// weighted average (Eq. (24)) of the spring displacements
+/// dp_ij = ⟨p_j − p_i, n_i + n_j⟩ / (1 + ⟨n_i, n_j⟩) n_i (Eq. (23), n_j
+/// reversed when ⟨n_i, n_j⟩ < 0) plus the tangential part of the uniform
+/// Laplacian dp_u,i. Gauss–Seidel: each sweep updates nodes in index order
+/// using the latest positions (normals are recomputed per sweep, by
+/// [`geom::vertex_normals`]). Any polygon mesh.
+pub fn spring_smooth(
+    mesh: &mut SurfaceMesh,
+    opts: &SpringOptions,
+) -> Result<SmoothReport, SmoothError> {
+    let mut c = opts.constraints.clone();
+    c.fix_boundary = true;
+    c.preserve_volume = false;
+    let roles = roles(mesh, &c)?;
+    let input = mesh.positions().to_vec();
+    let v0 = geom::volume(mesh);
+    let mut work = mesh.clone();
+    let mut iterations = 0;
+    let mut converged = false;
+    let nbrs: Vec<Vec<usize>> = mesh
+        .vertices()
+        .map(|v| mesh.one_ring(v).map(|u| u.idx()).collect())
+        .collect();
+    // Normal constraint at the boundary (Grüner §3.3): a boundary node sees
+    // half a fan, whose averaged normal is tilted by O(h) and would bend the
+    // whole patch; its normal is taken once from a quadric fit over the
+    // two-ring of the input ([`geom::quadric_fit`]).
+    let n = mesh.vertex_count();
+    let mut given = vec![None; n];
+    for &(v, nrm) in &opts.normals {
+        if v.idx() >= n {
+            return Err(SmoothError::FixedVertexOutOfRange {
+                vertex: v.idx(),
+                count: n,
+            });
+        }
+        let u = nrm.normalize_or_zero();
+        if u == Vec3::ZERO || !u.is_finite() {
+            return Err(SmoothError::InvalidOption(format!(
+                "normal constraint of vertex {} is not a direction",
+                v.idx()
+            )));
+        }
+        given[v.idx()] = Some(u);
+    }
+    let boundary_normals: Vec<(usize, Vec3)> = mesh
+        .vertices()
+        .filter_map(|v| match given[v.idx()] {
+            Some(u) => Some((v.idx(), u)),
+            None if roles[v.idx()] == Role::Fixed && mesh.is_boundary_vertex(v) => {
+                geom::quadric_fit(mesh, v).map(|f| (v.idx(), f.normal))
+            }
+            None => None,
+        })
+        .collect();
+    while iterations < opts.max_iterations {
+        iterations += 1;
+        let mut normals = geom::vertex_normals_max(&work);
+        for &(i, nrm) in &boundary_normals {
+            normals[i] = nrm;
+        }
+        let p = work.positions_mut();
+        let mut worst: f64 = 0.0;
+        for i in 0..p.len() {
+            if roles[i] != Role::Free || nbrs[i].is_empty() {
+                continue;
+            }
+            let ni = normals[i];
+            if ni == Vec3::ZERO {
+                continue;
+            }
+            let x = p[i];
+            let (mut sw, mut sd, mut lap, mut lsum) = (0.0, 0.0, Vec3::ZERO, 0.0);
+            for &j in &nbrs[i] {
+                let d = p[j] - x;
+                let l = d.length();
+                lap += p[j];
+                lsum += l;
+                if !(l > 0.0) {
+                    continue;
+                }
+                let mut nj = normals[j];
+                if nj.dot(ni) < 0.0 {
+                    nj = -nj;
+                }
+                let den = 1.0 + ni.dot(nj);
+                if !(den > 1e-12) {
+                    continue;
+                }
+                let w = 1.0 / l;
+                sw += w;
+                sd += w * d.dot(ni + nj) / den;
+            }
+            let m = nbrs[i].len() as f64;
+            let u0 = lap / m - x;
+            let du = u0 - u0.dot(ni) * ni;
+            let dn = if sw > 0.0 { sd / sw } else { 0.0 };
+            let disp = dn * ni + du;
+            let mean_l = lsum / m;
+            if disp.is_finite() {
+                p[i] = x + disp;
+                if mean_l > 0.0 {
+                    worst = worst.max(disp.length() / mean_l);
+                }
+            }
+        }
+        if worst < opts.epsilon {
+            converged = true;
+            break;
+        }
+    }
+    let cur = work.positions().to_vec();
+    let max_displacement = max_distance(&cur, &input);
+    mesh.set_positions(cur)?;
+    Ok(SmoothReport {
+        iterations,
+        volume_before: v0,
+        volume_after: geom::volume(mesh),
+        max_displacement,
+        converged,
+    })
+}
