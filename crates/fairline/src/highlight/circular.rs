@@ -66,23 +66,30 @@ impl CircularLight {
         let gamma = bb.dot(n);
         let delta = bb.dot(b);
         let c = alpha * alpha + beta * beta;
+        // The circle point is carried as the unit vector (cos θ, sin θ) (no
+        // trigonometry in the loop); L(θ) = A + R(cos θ n + sin θ b).
+        let circle = |cs: f64, sn: f64| a + r * (cs * n + sn * b);
         // squared distance between L(θ) and the line, with P = L(θ) − Q₀
-        let g = |theta: f64| {
-            let p = self.point(theta) - q;
+        let g = |cs: f64, sn: f64| {
+            let p = circle(cs, sn) - q;
             let s = p.dot(nn);
             (p - s * nn).length_squared()
         };
-        let mut best: Option<(f64, f64)> = None; // (g, θ)
-        let mut consider = |theta: f64| {
-            let d2 = g(theta);
-            if d2.is_finite() && best.is_none_or(|(b2, _)| d2 < b2) {
-                best = Some((d2, theta));
+        let mut best: Option<(f64, f64, f64)> = None; // (g, cos θ, sin θ)
+        let mut consider = |cs: f64, sn: f64| {
+            let d2 = g(cs, sn);
+            if d2.is_finite() && best.is_none_or(|(b2, _, _)| d2 < b2) {
+                best = Some((d2, cs, sn));
             }
         };
-        let nearest_theta = |tau: f64| -> Option<f64> {
+        let nearest_dir = |tau: f64| -> Option<(f64, f64)> {
             let w = q + tau * nn - a;
             let (wn, wb) = (w.dot(n), w.dot(b));
-            (wn.hypot(wb) > 1e-12 * r).then(|| wb.atan2(wn))
+            let mut len = (wn * wn + wb * wb).sqrt();
+            if !len.is_finite() {
+                len = wn.hypot(wb);
+            }
+            (len > 1e-12 * r).then(|| (wn / len, wb / len))
         };
         if c < AXIS_PARALLEL {
             // N ∥ t: take the line point in the circle's plane
@@ -92,8 +99,8 @@ impl CircularLight {
             } else {
                 0.0
             };
-            if let Some(th) = nearest_theta(tau) {
-                consider(th);
+            if let Some((cs, sn)) = nearest_dir(tau) {
+                consider(cs, sn);
             }
         } else {
             let p = alpha * gamma + beta * delta;
@@ -106,26 +113,29 @@ impl CircularLight {
             let c1 = 2.0 * r2 * c * p;
             let c0 = -r2 * p * p;
             for tau in quartic_roots(c4, c3, c2, c1, c0) {
-                match nearest_theta(tau) {
-                    Some(th) => consider(th),
+                match nearest_dir(tau) {
+                    Some((cs, sn)) => consider(cs, sn),
                     None => {
                         // line point on the axis: θ from Eq. (2.8), first line
                         let rho = c.sqrt();
                         let phi = beta.atan2(alpha);
                         let cosv = (tau / (r * rho)).clamp(-1.0, 1.0);
                         let dv = cosv.acos();
-                        consider(phi + dv);
-                        consider(phi - dv);
+                        for th in [phi + dv, phi - dv] {
+                            let (sn, cs) = th.sin_cos();
+                            consider(cs, sn);
+                        }
                     }
                 }
             }
         }
-        let (mut g_best, mut theta) = best?;
+        let (mut g_best, mut cs, mut sn) = best?;
         // Newton polish of the stationary point: h = g/2,
         // h' = P·L' − (P·N)(L'·N), h'' = |L'|² + P·L'' − (L'·N)² − (P·N)(L''·N),
-        // L' = R(−sin θ n + cos θ b), L'' = −(L − A).
+        // L' = R(−sin θ n + cos θ b), L'' = −(L − A). The step δ is applied
+        // as the rotation by atan δ (same to third order, so still Newton's
+        // quadratic convergence) to keep (cos θ, sin θ) without trigonometry.
         for _ in 0..3 {
-            let (sn, cs) = theta.sin_cos();
             let rad = r * (cs * n + sn * b);
             let l1 = r * (-sn * n + cs * b);
             let p = a + rad - q;
@@ -135,31 +145,31 @@ impl CircularLight {
             if !(h2 > 0.0) || h1 == 0.0 {
                 break;
             }
-            let next = theta - h1 / h2;
-            let g_next = g(next);
+            let step = -h1 / h2;
+            let k = 1.0 / (1.0 + step * step).sqrt();
+            let (cn, sn_next) = ((cs - step * sn) * k, (sn + step * cs) * k);
+            let g_next = g(cn, sn_next);
             if g_next.is_finite() && g_next <= g_best {
-                let done = (next - theta).abs() <= 4.0 * f64::EPSILON * (1.0 + theta.abs());
-                theta = next;
-                g_best = g_next;
-                if done {
+                (cs, sn, g_best) = (cn, sn_next, g_next);
+                if step.abs() <= 4.0 * f64::EPSILON {
                     break;
                 }
             } else {
                 break;
             }
         }
-        let lp = self.point(theta);
+        let lp = circle(cs, sn);
         let tau = (lp - q).dot(nn);
         let d = lp - (q + tau * nn);
         // Eq. (2.17)
-        let ldot = r * (-theta.sin() * n + theta.cos() * b);
+        let ldot = r * (-sn * n + cs * b);
         let m = nn.cross(ldot);
         let ml = m.length();
         if !(ml > 1e-12 * r) {
             return None;
         }
         let ds = d.dot(m) / ml;
-        let theta = f64::atan2(theta.sin(), theta.cos());
+        let theta = f64::atan2(sn, cs);
         let tau = tau + eps0;
         (ds.is_finite() && tau.is_finite()).then_some(CircleApproach {
             signed_distance: ds,

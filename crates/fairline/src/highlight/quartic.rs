@@ -5,9 +5,17 @@
 //! Method: root isolation by critical points. The real roots of p' (found
 //! recursively down to the closed-form quadratic) split the real line into
 //! intervals on which p is monotone; each interval whose end values differ
-//! in sign holds exactly one root, found by Newton steps safeguarded by
-//! bisection inside the shrinking bracket, to full precision. The outer
-//! intervals end at Fujiwara's bound on the root moduli.
+//! in sign holds exactly one root, found by Halley steps (Newton's where
+//! Halley's denominator is not safely positive) safeguarded by bisection
+//! inside the shrinking bracket, to full precision: until |p| is at the
+//! Horner rounding level, then one last Newton step. Each search starts
+//! where the quadratic Taylor model of p about a critical end of the
+//! interval vanishes, x_c ± sqrt(2|p(x_c)|/|p''(x_c)|) — exact in the limit
+//! of a near-double root — so about three evaluations find a root. The
+//! critical points themselves are only needed to ~1e-7 before a last
+//! cubically convergent step (p there is then off by a term far below
+//! rounding). The outer intervals end at Fujiwara's bound on the root
+//! moduli.
 //!
 //! Near-double roots: at a critical point x_c, p(x_c) is computed with an
 //! error below 2n·eps·Σ|c_i||x_c|^i (Horner). Where |p(x_c)| is below 16
@@ -78,16 +86,22 @@ fn eval_bound(c: &[f64; 5], n: usize, x: f64) -> (f64, f64) {
     (p, m)
 }
 
-/// p(x) and p'(x) by Horner (degree `n`).
+/// p(x), p'(x), p''(x) and the rounding bound Σ |c[i]| |x|^i by Horner
+/// (degree `n`).
 #[inline]
-fn eval_d(c: &[f64; 5], n: usize, x: f64) -> (f64, f64) {
+fn eval_d2_bound(c: &[f64; 5], n: usize, x: f64) -> (f64, f64, f64, f64) {
     let mut p = c[n];
     let mut d = 0.0;
+    let mut d2 = 0.0;
+    let mut m = c[n].abs();
+    let ax = x.abs();
     for i in (0..n).rev() {
+        d2 = d2 * x + d;
         d = d * x + p;
         p = p * x + c[i];
+        m = m * ax + c[i].abs();
     }
-    (p, d)
+    (p, d, 2.0 * d2, m)
 }
 
 /// All distinct real roots of the quartic c4 x⁴ + c3 x³ + c2 x² + c1 x + c0,
@@ -125,7 +139,7 @@ pub fn quartic_roots(c4: f64, c3: f64, c2: f64, c1: f64, c0: f64) -> Roots {
         }
         break;
     }
-    let roots = roots_of_degree(&c, deg);
+    let roots = roots_of_degree(&c, deg, false);
     // ascending by construction; merge roots equal to rounding
     let mut out = Roots::default();
     for &x in roots.iter() {
@@ -139,8 +153,12 @@ pub fn quartic_roots(c4: f64, c3: f64, c2: f64, c1: f64, c0: f64) -> Roots {
     out
 }
 
-/// Roots of Σ c[i] xⁱ of degree `n` (c[n] ≠ 0), ascending.
-fn roots_of_degree(c: &[f64; 5], n: usize) -> Roots {
+/// Roots of Σ c[i] xⁱ of degree `n` (c[n] ≠ 0), ascending. `coarse`: the
+/// roots are only wanted as critical points of the antiderivative, to a
+/// relative accuracy of about 1e-7 of the root bound before a last cubically
+/// convergent Halley step (its value there is
+/// then off by a second-order term far below rounding).
+fn roots_of_degree(c: &[f64; 5], n: usize, coarse: bool) -> Roots {
     let mut out = Roots::default();
     match n {
         0 => {}
@@ -152,7 +170,7 @@ fn roots_of_degree(c: &[f64; 5], n: usize) -> Roots {
             for i in 0..n {
                 dc[i] = (i + 1) as f64 * c[i + 1];
             }
-            let crit = roots_of_degree(&dc, n - 1);
+            let crit = roots_of_degree(&dc, n - 1, true);
             let bound = 1.01 * fujiwara(c, n);
             if !(bound > 0.0) || !bound.is_finite() {
                 // all lower coefficients zero: p = c_n xⁿ
@@ -182,7 +200,32 @@ fn roots_of_degree(c: &[f64; 5], n: usize) -> Roots {
                     out.push(pts[i]);
                 }
                 if i + 1 < k && vals[i] * vals[i + 1] < 0.0 {
-                    out.push(bracketed(c, n, pts[i], pts[i + 1], vals[i]));
+                    let (a, b) = (pts[i], pts[i + 1]);
+                    // start from the quadratic Taylor model of p at a
+                    // critical end (p' = 0 there): x_c ± sqrt(2|p|/|p''|);
+                    // of two such ends, the one whose estimate is closer
+                    let mut start = if k == 2 && n == 3 {
+                        // monotone cubic: Newton from the inflection point
+                        // converges monotonically
+                        (-c[2] / (3.0 * c[3])).clamp(a, b)
+                    } else {
+                        0.5 * (a + b)
+                    };
+                    let mut reach = f64::INFINITY;
+                    if i > 0 {
+                        let t = taylor_reach(c, n, a, vals[i]);
+                        if t < reach && a + t < b {
+                            (start, reach) = (a + t, t);
+                        }
+                    }
+                    if i + 2 < k {
+                        let t = taylor_reach(c, n, b, vals[i + 1]);
+                        if t < reach && b - t > a {
+                            start = b - t;
+                        }
+                    }
+                    let step = if coarse { 1e-7 * bound } else { 0.0 };
+                    out.push(bracketed(c, n, a, b, vals[i], start, step));
                 }
             }
         }
@@ -190,9 +233,22 @@ fn roots_of_degree(c: &[f64; 5], n: usize) -> Roots {
     out
 }
 
+/// sqrt(2|v|/|p''(x)|): where the quadratic Taylor model of p about a
+/// critical point x with value v reaches zero (infinite if p''(x) = 0).
+#[inline]
+fn taylor_reach(c: &[f64; 5], n: usize, x: f64, v: f64) -> f64 {
+    let mut p2 = 0.0;
+    for i in (2..=n).rev() {
+        p2 = p2 * x + (i * (i - 1)) as f64 * c[i];
+    }
+    let t = (2.0 * v.abs() / p2.abs()).sqrt();
+    if t.is_finite() { t } else { f64::INFINITY }
+}
+
 /// Fujiwara's bound on the moduli of the roots of Σ c[i] xⁱ of degree `n`
 /// (c[n] ≠ 0): 2·max_k |c[n−k]/c[n]|^(1/k), the constant term's share
-/// halved.
+/// halved. The cube root is replaced by a power of two at most twice as
+/// large (a valid, slightly looser bound; `cbrt` is slow).
 fn fujiwara(c: &[f64; 5], n: usize) -> f64 {
     let lead = c[n];
     let mut b = 0.0f64;
@@ -204,12 +260,24 @@ fn fujiwara(c: &[f64; 5], n: usize) -> f64 {
         let root = match k {
             1 => r,
             2 => r.sqrt(),
-            3 => r.cbrt(),
+            3 => cbrt_upper(r),
             _ => r.sqrt().sqrt(),
         };
         b = b.max(root);
     }
     2.0 * b
+}
+
+/// A power of two ≥ r^(1/3) and < 2·r^(1/3), for r ≥ 0 (exponent arithmetic
+/// only); `cbrt` for zero, subnormal or non-finite r.
+#[inline]
+fn cbrt_upper(r: f64) -> f64 {
+    if !r.is_normal() {
+        return r.cbrt();
+    }
+    // r ∈ [2^e, 2^(e+1)), so r^(1/3) < 2^⌈(e+1)/3⌉
+    let e = ((r.to_bits() >> 52) & 0x7ff) as i32 - 1023;
+    2f64.powi((e + 1).div_euclid(3) + i32::from((e + 1).rem_euclid(3) != 0))
 }
 
 /// Numerically stable quadratic formula; a discriminant within rounding of
@@ -234,14 +302,24 @@ fn quadratic(a: f64, b: f64, c: f64, out: &mut Roots) {
     }
 }
 
-/// The single root of a monotone p on [a, b] with p(a)·p(b) < 0: Newton
-/// steps kept inside the shrinking bracket, bisection otherwise, until the
-/// bracket or the step reaches rounding level.
-fn bracketed(c: &[f64; 5], n: usize, mut a: f64, mut b: f64, pa: f64) -> f64 {
+/// The single root of a monotone p on [a, b] with p(a)·p(b) < 0, from
+/// `start` in (a, b): Newton steps kept inside the shrinking bracket,
+/// bisection otherwise, until |p| is at rounding level (then one last Newton
+/// step) or the bracket or the step reaches rounding level.
+fn bracketed(
+    c: &[f64; 5],
+    n: usize,
+    mut a: f64,
+    mut b: f64,
+    pa: f64,
+    start: f64,
+    step: f64,
+) -> f64 {
     let sa = pa.signum();
-    let mut x = 0.5 * (a + b);
+    let tol = 2.0 * n as f64 * f64::EPSILON;
+    let mut x = start;
     for _ in 0..200 {
-        let (p, d) = eval_d(c, n, x);
+        let (p, d, d2, m) = eval_d2_bound(c, n, x);
         if p == 0.0 {
             return x;
         }
@@ -250,13 +328,24 @@ fn bracketed(c: &[f64; 5], n: usize, mut a: f64, mut b: f64, pa: f64) -> f64 {
         } else {
             b = x;
         }
-        let newton = x - p / d;
-        let next = if newton > a && newton < b {
-            newton
+        if p.abs() <= tol * m {
+            let newton = x - p / d;
+            return if newton > a && newton < b { newton } else { x };
+        }
+        // Halley's step (cubic convergence), Newton's where its
+        // denominator is not safely positive
+        let den = 2.0 * d * d - p * d2;
+        let halley = if den > d * d {
+            x - 2.0 * p * d / den
+        } else {
+            x - p / d
+        };
+        let next = if halley > a && halley < b {
+            halley
         } else {
             0.5 * (a + b)
         };
-        if (next - x).abs() <= 2.0 * f64::EPSILON * x.abs()
+        if (next - x).abs() <= step.max(2.0 * f64::EPSILON * x.abs())
             || b - a <= 4.0 * f64::EPSILON * a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
         {
             return next;
