@@ -54,6 +54,11 @@ pub struct Args {
     /// Singular values below this fraction of the largest are dropped.
     #[arg(long, default_value_t = SurfaceFairOptions::default().truncation)]
     pub truncation: f64,
+    /// Floor the truncation is lowered to (tenfold) when a step is rejected or
+    /// mean |d_s| falls by less than half; equal to --truncation for the
+    /// paper's fixed rule (a larger value is taken as --truncation).
+    #[arg(long, default_value_t = SurfaceFairOptions::default().min_truncation)]
+    pub min_truncation: f64,
     /// Target sample spacing s as a fraction of the domain diagonal, Eq. (3.5).
     #[arg(long, default_value_t = SurfaceFairOptions::default().sample_spacing)]
     pub sample_spacing: f64,
@@ -110,6 +115,7 @@ pub fn run(args: Args) -> Result<()> {
         grid: args.grid,
         sample_spacing: args.sample_spacing,
         truncation: args.truncation,
+        min_truncation: args.min_truncation.min(args.truncation),
         epsilon: args.epsilon,
         max_iterations: args.max_iterations,
         ..Default::default()

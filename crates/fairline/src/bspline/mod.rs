@@ -43,7 +43,9 @@ pub use json::{
     SurfaceJsonError, parse_surfaces_json, read_surfaces_json, surface_to_json, surfaces_to_json,
     write_surface_json, write_surfaces_json,
 };
-pub use surface::{BSplineSurface, BasisSupport, Curvature, SurfaceBasis, SurfaceDerivatives};
+pub use surface::{
+    BSplineSurface, BasisSupport, Curvature, SurfaceBasis, SurfaceDerivatives, unit_normal,
+};
 pub use tessellate::{Tessellation, tessellate};
 
 use std::fmt;

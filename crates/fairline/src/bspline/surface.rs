@@ -729,6 +729,78 @@ impl BSplineSurface {
             .collect()
     }
 
+    /// `f(S, S_u, S_v)` at every grid point `(us[a], vs[b])`, row-major
+    /// (`a * vs.len() + b`): position and first partial derivatives only,
+    /// for fields that need the normal but no curvature (highlight lines).
+    /// The basis functions (Piegl & Tiller A2.1 + A2.3) are computed once
+    /// per grid row and column; each row then contracts the control net in
+    /// u once — `T_j = Σ_r N_r(u) P_{i0+r, j}` and `T'_j = Σ_r N'_r(u) P_{i0+r, j}`
+    /// for every column j (homogeneous `P^w` for a rational surface) — so a
+    /// grid point costs only the (q+1)-term sums in v of A3.6 (and the
+    /// quotient rule of A4.4). The values equal those of
+    /// [`BSplineSurface::derivatives`] up to rounding. Parallel over rows
+    /// with rayon; deterministic.
+    pub fn map_grid_first<T: Send>(
+        &self,
+        us: &[f64],
+        vs: &[f64],
+        f: impl Fn(Vec3, Vec3, Vec3) -> T + Sync,
+    ) -> Vec<T> {
+        let (p, q) = (self.degree_u, self.degree_v);
+        let nc = self.count_v;
+        let bv: Vec<(usize, BasisDerivs)> = vs.iter().map(|&v| self.basis_v(v)).collect();
+        us.par_iter()
+            .flat_map_iter(|&u| {
+                let (span_u, du) = self.basis_u(u);
+                let i0 = span_u - p;
+                // the net contracted in u: value and u-derivative per column
+                let mut t0 = vec![DVec4::ZERO; nc];
+                let mut t1 = vec![DVec4::ZERO; nc];
+                for r in 0..=p {
+                    let k = self.index(i0 + r, 0);
+                    let row = &self.points[k..][..nc];
+                    let (n0, n1) = (du[0][r], du[1][r]);
+                    match &self.weights {
+                        None => {
+                            for (j, pt) in row.iter().enumerate() {
+                                let pw = pt.extend(0.0);
+                                t0[j] += n0 * pw;
+                                t1[j] += n1 * pw;
+                            }
+                        }
+                        Some(w) => {
+                            for (j, (pt, &wj)) in row.iter().zip(&w[k..][..nc]).enumerate() {
+                                let pw = wj * pt.extend(1.0);
+                                t0[j] += n0 * pw;
+                                t1[j] += n1 * pw;
+                            }
+                        }
+                    }
+                }
+                let rational = self.weights.is_some();
+                let f = &f;
+                bv.iter().map(move |(span_v, dv)| {
+                    let j0 = span_v - q;
+                    let (mut a, mut au, mut av) = (DVec4::ZERO, DVec4::ZERO, DVec4::ZERO);
+                    for s in 0..=q {
+                        a += dv[0][s] * t0[j0 + s];
+                        au += dv[0][s] * t1[j0 + s];
+                        av += dv[1][s] * t0[j0 + s];
+                    }
+                    if rational {
+                        let inv = 1.0 / a.w;
+                        let s00 = a.truncate() * inv;
+                        let su = (au.truncate() - au.w * s00) * inv;
+                        let sv = (av.truncate() - av.w * s00) * inv;
+                        f(s00, su, sv)
+                    } else {
+                        f(a.truncate(), au.truncate(), av.truncate())
+                    }
+                })
+            })
+            .collect()
+    }
+
     /// Derivatives at `(u, v)`, or at the first of a few parameters nudged
     /// towards the domain centre (by the fractions `nudges` of the domain
     /// width) if the point is degenerate, i.e. `|Su × Sv| <= tol · max(|Su|, |Sv|)²`
@@ -845,18 +917,26 @@ fn support_range(
     }
 }
 
+/// Unit normal `Su × Sv / |Su × Sv|` (Nishiyama et al. Eq. (2.4)), or `None`
+/// where `|Su × Sv|` is below 1e-10 · max(|Su|, |Sv|)² (degenerate
+/// parametrisation) or not finite. See [`SurfaceDerivatives::normal`].
+#[inline]
+pub fn unit_normal(su: Vec3, sv: Vec3) -> Option<Vec3> {
+    let n = su.cross(sv);
+    let len = n.length();
+    let m = su.length_squared().max(sv.length_squared());
+    if len > DEGENERATE * m && len.is_finite() {
+        Some(n / len)
+    } else {
+        None
+    }
+}
+
 impl SurfaceDerivatives {
     /// Unit normal `Su × Sv / |Su × Sv|`, or `None` where `|Su × Sv|` is below
     /// 1e-10 · max(|Su|, |Sv|)² (degenerate parametrisation) or not finite.
     pub fn normal(&self) -> Option<Vec3> {
-        let n = self.su.cross(self.sv);
-        let len = n.length();
-        let m = self.su.length_squared().max(self.sv.length_squared());
-        if len > DEGENERATE * m && len.is_finite() {
-            Some(n / len)
-        } else {
-            None
-        }
+        unit_normal(self.su, self.sv)
     }
 
     /// Curvature from the fundamental forms (do Carmo §3.3):

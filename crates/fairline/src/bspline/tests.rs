@@ -756,6 +756,43 @@ fn bspline_derivatives_grid_matches_pointwise() {
     }
 }
 
+/// The row-contracted first-derivative grid equals pointwise evaluation on
+/// a rational torus (exact surface of revolution, weights ≠ 1, knots with
+/// interior multiplicity) and a non-rational random net, including the
+/// domain ends and knot values.
+#[test]
+fn bspline_map_grid_first_matches_pointwise() {
+    let mut rng = Rng::new(5);
+    let net = random_net(&mut rng, 7, 6);
+    let plain = BSplineSurface::new(
+        3,
+        2,
+        clamped_uniform_knots(7, 3),
+        clamped_uniform_knots(6, 2),
+        net,
+        None,
+    )
+    .unwrap();
+    for s in [torus(2.0, 0.5), plain] {
+        let [a, b] = s.domain_u();
+        let [c, d] = s.domain_v();
+        let us: Vec<f64> = (0..=16).map(|k| a + (b - a) * k as f64 / 16.0).collect();
+        let vs: Vec<f64> = (0..=12).map(|k| c + (d - c) * k as f64 / 12.0).collect();
+        let g = s.map_grid_first(&us, &vs, |p, su, sv| (p, su, sv));
+        assert_eq!(g.len(), us.len() * vs.len());
+        for (ia, &u) in us.iter().enumerate() {
+            for (ib, &v) in vs.iter().enumerate() {
+                let want = s.derivatives(u, v);
+                let (p, su, sv) = g[ia * vs.len() + ib];
+                let scale = 1.0 + want.su.length() + want.sv.length();
+                assert!((p - want.point).length() < 1e-13 * scale, "S at ({u}, {v})");
+                assert!((su - want.su).length() < 1e-12 * scale, "Su at ({u}, {v})");
+                assert!((sv - want.sv).length() < 1e-12 * scale, "Sv at ({u}, {v})");
+            }
+        }
+    }
+}
+
 #[test]
 #[ignore = "timing; run with cargo test --release -- --ignored"]
 fn bspline_grid_evaluation_speed() {

@@ -66,8 +66,17 @@ pub struct SurfaceFairOptions {
     /// net's bounding-box diagonal.
     pub fd_step: f64,
     /// Singular values below this fraction of the largest are dropped
-    /// (Nishiyama et al. §3.3: 5 %).
+    /// (Nishiyama et al. §3.3: 5 %) — at first; see `min_truncation`.
     pub truncation: f64,
+    /// Floor of the truncation. The 5 % truncation keeps the first steps
+    /// stable but leaves the residual in the dropped singular directions
+    /// untouched, so with it alone the residual stalls after ~1.5 orders of
+    /// magnitude. Whenever a step fails Eq. (3.12)–(3.13) or mean |d_s|
+    /// falls by less than half, the truncation is divided by 10 (the same
+    /// SVD is reused) down to this floor, and Eq. (3.14) only stops the
+    /// iteration at the floor. Equal to `truncation` for the paper's fixed
+    /// rule.
+    pub min_truncation: f64,
     /// Step factor μ of Eq. (3.13) used when Eq. (3.12) fails (0.1).
     pub damped_step: f64,
     /// ε of the stopping rule Eq. (3.14) (1e-4).
@@ -83,6 +92,7 @@ impl Default for SurfaceFairOptions {
             sample_spacing: 0.005,
             fd_step: 1e-7,
             truncation: 0.05,
+            min_truncation: 1e-3,
             damped_step: 0.1,
             epsilon: 1e-4,
             max_iterations: 20,
@@ -161,6 +171,8 @@ pub struct FairIteration {
     pub cols: usize,
     /// Singular values kept by the truncation.
     pub rank: usize,
+    /// The truncation used (fraction of the largest singular value).
+    pub truncation: f64,
     /// Wall time of the iteration (s).
     pub time_s: f64,
 }
@@ -485,6 +497,9 @@ fn check_options(o: &SurfaceFairOptions) -> Result<(), SurfaceFairError> {
     if !(o.truncation >= 0.0 && o.truncation < 1.0) {
         return bad("truncation must be in [0, 1)");
     }
+    if !(o.min_truncation >= 0.0 && o.min_truncation <= o.truncation) {
+        return bad("minimum truncation must be in [0, truncation]");
+    }
     if !(o.damped_step > 0.0 && o.damped_step <= 1.0) {
         return bad("damped step must be in (0, 1]");
     }
@@ -668,25 +683,36 @@ fn jacobian(
     j
 }
 
+/// The thin SVD J = U S Vᵀ of the Jacobian, computed once per iteration
+/// and reused for every truncation level tried.
+struct JacobianSvd {
+    u: Mat<f64>,
+    s: Vec<f64>,
+    v: Mat<f64>,
+}
+
+fn jacobian_svd(j: &Mat<f64>) -> Result<JacobianSvd, SurfaceFairError> {
+    let svd = j.thin_svd().map_err(|_| SurfaceFairError::Svd)?;
+    let sv = svd.S().column_vector();
+    Ok(JacobianSvd {
+        u: svd.U().to_owned(),
+        s: (0..sv.nrows()).map(|i| sv[i]).collect(),
+        v: svd.V().to_owned(),
+    })
+}
+
 /// Least-squares solution of J Δr = −F by the truncated SVD (Nishiyama et
 /// al. §3.3): singular values below `truncation` × the largest are set to
 /// zero. Returns (Δr, rank).
-fn truncated_svd_solve(
-    j: &Mat<f64>,
-    f: &[f64],
-    truncation: f64,
-) -> Result<(Vec<f64>, usize), SurfaceFairError> {
-    let svd = j.thin_svd().map_err(|_| SurfaceFairError::Svd)?;
-    let (u, s, v) = (svd.U(), svd.S().column_vector(), svd.V());
-    let k = s.nrows();
-    let smax = (0..k).map(|i| s[i]).fold(0.0f64, f64::max);
-    let mut dr = vec![0.0; j.ncols()];
+fn truncated_svd_solve(svd: &JacobianSvd, f: &[f64], truncation: f64) -> (Vec<f64>, usize) {
+    let (u, v) = (&svd.u, &svd.v);
+    let smax = svd.s.iter().copied().fold(0.0f64, f64::max);
+    let mut dr = vec![0.0; v.nrows()];
     if !(smax > 0.0 && smax.is_finite()) {
-        return Ok((dr, 0));
+        return (dr, 0);
     }
     let mut rank = 0;
-    for i in 0..k {
-        let si = s[i];
+    for (i, &si) in svd.s.iter().enumerate() {
         if !(si >= truncation * smax && si > 0.0) {
             continue;
         }
@@ -700,7 +726,7 @@ fn truncated_svd_solve(
             *x += c * v[(col, i)];
         }
     }
-    Ok((dr, rank))
+    (dr, rank)
 }
 
 /// Moves the selected control points by `mu · dr`.
@@ -724,11 +750,14 @@ fn apply(
 /// [`BSplineSurface::control_points_in_box`]) are the unknowns r (three
 /// components each); Gauss–Newton on d_s(u_ij, v_ij) = 0 (Eq. (3.6)–(3.9))
 /// with the Jacobian of Eq. (3.10) ([`jacobian`], Δw relative to the control
-/// net size) and the truncated SVD; full step R + Δr (Eq. (3.11)) when both
+/// net size) and the truncated SVD (the paper's 5 %, lowered tenfold down to
+/// `opts.min_truncation` whenever a step is rejected or gains less than a
+/// halving of mean |d_s|: see [`SurfaceFairOptions::min_truncation`]); full step R + Δr (Eq. (3.11)) when both
 /// max and mean |d_s| decrease (Eq. (3.12)), otherwise R + μΔr (Eq. (3.13)).
 /// Stops when |mean⁽ᵖ⁺¹⁾ − mean⁽ᵖ⁾| / mean⁽ᵖ⁾ < ε (Eq. (3.14), read with
-/// the absolute value), when the residual vanishes, when even the damped
-/// step does not lower the mean (the previous surface is kept; reported as
+/// the absolute value; only once the truncation is at its floor), when the
+/// residual vanishes, when even the damped step at the floor does not lower
+/// the mean (the previous surface is kept; reported as
 /// [`FairStop::Stalled`], not converged), or after `opts.max_iterations`.
 ///
 /// Returns the faired surface (control points outside the selection
@@ -792,6 +821,7 @@ pub fn fair_surface(
     } else {
         FairStop::MaxIterations
     };
+    let mut trunc = opts.truncation;
     while !converged && iterations.len() < opts.max_iterations && cols > 0 {
         let t0 = Instant::now();
         let base: Vec<Vec3> = selected
@@ -800,27 +830,42 @@ pub fn fair_surface(
             .collect();
         let j = jacobian(&current, lights, &samples, &f, cols, dw);
         let fv: Vec<f64> = f.iter().map(|x| x.unwrap_or(0.0)).collect();
-        let (dr, rank) = truncated_svd_solve(&j, &fv, opts.truncation)?;
-        if !dr.iter().all(|x| x.is_finite()) {
-            stop = FairStop::NonFiniteStep;
-            break;
-        }
-        let mut trial = current.clone();
-        let mut step = 1.0;
-        apply(&mut trial, &base, &selected, &dr, step)?;
-        let mut ft = residuals(&trial, lights, &samples);
-        let mut st = stats(&ft);
-        if !(st.0 < now.0 && st.1 < now.1) {
-            step = opts.damped_step;
+        let svd = jacobian_svd(&j)?;
+        // Try the current truncation; if neither the full nor the damped
+        // step lowers mean |d_s|, lower the truncation (same SVD).
+        let mut accepted = None;
+        loop {
+            let (dr, rank) = truncated_svd_solve(&svd, &fv, trunc);
+            if !dr.iter().all(|x| x.is_finite()) {
+                stop = FairStop::NonFiniteStep;
+                break;
+            }
+            let mut trial = current.clone();
+            let mut step = 1.0;
             apply(&mut trial, &base, &selected, &dr, step)?;
-            ft = residuals(&trial, lights, &samples);
-            st = stats(&ft);
+            let mut ft = residuals(&trial, lights, &samples);
+            let mut st = stats(&ft);
+            if !(st.0 < now.0 && st.1 < now.1) {
+                step = opts.damped_step;
+                apply(&mut trial, &base, &selected, &dr, step)?;
+                ft = residuals(&trial, lights, &samples);
+                st = stats(&ft);
+            }
+            if st.1 < now.1 {
+                accepted = Some((trial, ft, st, step, rank));
+                break;
+            }
+            if trunc <= opts.min_truncation {
+                // Not even the damped step at the finest truncation helps:
+                // keep the current surface.
+                stop = FairStop::Stalled;
+                break;
+            }
+            trunc = (0.1 * trunc).max(opts.min_truncation);
         }
-        if !(st.1 < now.1) {
-            // Not even the damped step helps: keep the current surface.
-            stop = FairStop::Stalled;
+        let Some((trial, ft, st, step, rank)) = accepted else {
             break;
-        }
+        };
         let rel = (now.1 - st.1).abs() / now.1;
         current = trial;
         f = ft;
@@ -832,11 +877,16 @@ pub fn fair_surface(
             rows: samples.len(),
             cols,
             rank,
+            truncation: trunc,
             time_s: t0.elapsed().as_secs_f64(),
         });
         if now.1 <= tiny {
             converged = true;
             stop = FairStop::ZeroResidual;
+        } else if trunc > opts.min_truncation && rel < 0.5 {
+            // slow progress: the residual left is mostly in the dropped
+            // singular directions
+            trunc = (0.1 * trunc).max(opts.min_truncation);
         } else if rel < opts.epsilon {
             converged = true;
             stop = FairStop::Epsilon;

@@ -22,7 +22,12 @@ impl CircularLight {
     /// 1. the stationary points of the squared distance, Eq. (2.7), reduce to
     ///    the quartic Eq. (2.15) with coefficients Eq. (2.16) in the notation
     ///    of Eq. (2.12); all its real roots τ are found by
-    ///    [`super::quartic::quartic_roots`];
+    ///    [`super::quartic::quartic_roots`] (no allocation, near-double roots
+    ///    never lost). The line is parametrised from its point nearest to the
+    ///    centre A, Q₀ = Q + ((A − Q)·N)N, so that ε = (A − Q₀)·N = 0: the same
+    ///    line, but Eq. (2.16) loses the terms in ε², ε³ whose cancellation
+    ///    for a distant light (|ε| ≫ R) destroyed nearly merged roots, and
+    ///    c₀ = −R²p² ≤ 0 < c₄ guarantees a real root of each sign;
     /// 2. for each root, θ follows from Eq. (2.10): (cos θ, sin θ) is
     ///    proportional to ((τN − A + Q)·n, (τN − A + Q)·b) with the factor
     ///    (τ − ε)/Det; the sign of that factor only picks the nearer or the
@@ -31,14 +36,20 @@ impl CircularLight {
     ///    the line point lies on the axis (every θ equidistant), θ is solved
     ///    from the first line of Eq. (2.8) (corrected as in DESIGN.md §3:
     ///    ε + R(cos θ α + sin θ β) = τ);
-    /// 3. the root with the smallest distance |d| of Eq. (2.5) wins, and the
-    ///    signed distance is d_s = d·(N × L̇)/|N × L̇| of Eq. (2.18), with
-    ///    L̇ of Eq. (2.17).
+    /// 3. each candidate is scored by the distance of its circle point L(θ)
+    ///    from the line, |P − (P·N)N| with P = L(θ) − Q₀ (τ eliminated as in
+    ///    Eq. (2.8), first line), the nearest wins, and its θ is polished by
+    ///    Newton steps on the derivative of that squared distance g(θ)
+    ///    (kept only while g decreases) — so the distance is accurate to
+    ///    rounding even where the quartic has a near-double root whose τ is
+    ///    only known to ~sqrt(eps);
+    /// 4. the signed distance is d_s = d·(N × L̇)/|N × L̇| of Eq. (2.18),
+    ///    with L̇ of Eq. (2.17) and d from the line point to L(θ).
     ///
     /// A normal parallel to the axis (α = β = 0) makes the distance
     /// independent of τ; the point of the line in the circle's plane is used.
     /// Returns `None` where d_s is undefined: zero normal, N parallel to L̇,
-    /// the line on the axis, or a non-finite result.
+    /// the line on the axis, or a non-finite result. No allocation.
     pub fn approach(&self, q: Vec3, normal: Vec3) -> Option<CircleApproach> {
         let nn = normal.try_normalize()?;
         if !q.is_finite() {
@@ -47,25 +58,38 @@ impl CircularLight {
         let (n, b) = self.frame();
         let a = self.center();
         let r = self.radius();
+        let eps0 = (a - q).dot(nn);
+        let q = q + eps0 * nn;
         let bb = a - q;
         let alpha = n.dot(nn);
         let beta = b.dot(nn);
         let gamma = bb.dot(n);
         let delta = bb.dot(b);
-        let eps = bb.dot(nn);
         let c = alpha * alpha + beta * beta;
-        let mut best: Option<(f64, f64, f64)> = None; // (|d|², τ, θ)
-        let mut consider = |tau: f64, theta: f64| {
-            let x = q + tau * nn;
-            let d2 = (self.point(theta) - x).length_squared();
+        // The circle point is carried as the unit vector (cos θ, sin θ) (no
+        // trigonometry in the loop); L(θ) = A + R(cos θ n + sin θ b).
+        let circle = |cs: f64, sn: f64| a + r * (cs * n + sn * b);
+        // squared distance between L(θ) and the line, with P = L(θ) − Q₀
+        let g = |cs: f64, sn: f64| {
+            let p = circle(cs, sn) - q;
+            let s = p.dot(nn);
+            (p - s * nn).length_squared()
+        };
+        let mut best: Option<(f64, f64, f64)> = None; // (g, cos θ, sin θ)
+        let mut consider = |cs: f64, sn: f64| {
+            let d2 = g(cs, sn);
             if d2.is_finite() && best.is_none_or(|(b2, _, _)| d2 < b2) {
-                best = Some((d2, tau, theta));
+                best = Some((d2, cs, sn));
             }
         };
-        let nearest_theta = |tau: f64| -> Option<f64> {
+        let nearest_dir = |tau: f64| -> Option<(f64, f64)> {
             let w = q + tau * nn - a;
             let (wn, wb) = (w.dot(n), w.dot(b));
-            (wn.hypot(wb) > 1e-12 * r).then(|| wb.atan2(wn))
+            let mut len = (wn * wn + wb * wb).sqrt();
+            if !len.is_finite() {
+                len = wn.hypot(wb);
+            }
+            (len > 1e-12 * r).then(|| (wn / len, wb / len))
         };
         if c < AXIS_PARALLEL {
             // N ∥ t: take the line point in the circle's plane
@@ -75,46 +99,78 @@ impl CircularLight {
             } else {
                 0.0
             };
-            if let Some(th) = nearest_theta(tau) {
-                consider(tau, th);
+            if let Some((cs, sn)) = nearest_dir(tau) {
+                consider(cs, sn);
             }
         } else {
             let p = alpha * gamma + beta * delta;
             let qq = gamma * gamma + delta * delta;
             let r2 = r * r;
-            // Eq. (2.16)
+            // Eq. (2.16) with ε = 0
             let c4 = c;
-            let c3 = -2.0 * (p + c * eps);
-            let c2 = c * eps * eps + 4.0 * eps * p + qq - r2 * c * c;
-            let c1 = -2.0 * (p * eps * eps + qq * eps - r2 * c * p);
-            let c0 = qq * eps * eps - r2 * p * p;
+            let c3 = -2.0 * p;
+            let c2 = qq - r2 * c * c;
+            let c1 = 2.0 * r2 * c * p;
+            let c0 = -r2 * p * p;
             for tau in quartic_roots(c4, c3, c2, c1, c0) {
-                match nearest_theta(tau) {
-                    Some(th) => consider(tau, th),
+                match nearest_dir(tau) {
+                    Some((cs, sn)) => consider(cs, sn),
                     None => {
                         // line point on the axis: θ from Eq. (2.8), first line
                         let rho = c.sqrt();
                         let phi = beta.atan2(alpha);
-                        let cosv = ((tau - eps) / (r * rho)).clamp(-1.0, 1.0);
+                        let cosv = (tau / (r * rho)).clamp(-1.0, 1.0);
                         let dv = cosv.acos();
-                        consider(tau, phi + dv);
-                        consider(tau, phi - dv);
+                        for th in [phi + dv, phi - dv] {
+                            let (sn, cs) = th.sin_cos();
+                            consider(cs, sn);
+                        }
                     }
                 }
             }
         }
-        let (_, tau, theta) = best?;
-        let x = q + tau * nn;
-        let d = self.point(theta) - x;
+        let (mut g_best, mut cs, mut sn) = best?;
+        // Newton polish of the stationary point: h = g/2,
+        // h' = P·L' − (P·N)(L'·N), h'' = |L'|² + P·L'' − (L'·N)² − (P·N)(L''·N),
+        // L' = R(−sin θ n + cos θ b), L'' = −(L − A). The step δ is applied
+        // as the rotation by atan δ (same to third order, so still Newton's
+        // quadratic convergence) to keep (cos θ, sin θ) without trigonometry.
+        for _ in 0..3 {
+            let rad = r * (cs * n + sn * b);
+            let l1 = r * (-sn * n + cs * b);
+            let p = a + rad - q;
+            let (pn, l1n) = (p.dot(nn), l1.dot(nn));
+            let h1 = p.dot(l1) - pn * l1n;
+            let h2 = l1.length_squared() - p.dot(rad) - l1n * l1n + pn * rad.dot(nn);
+            if !(h2 > 0.0) || h1 == 0.0 {
+                break;
+            }
+            let step = -h1 / h2;
+            let k = 1.0 / (1.0 + step * step).sqrt();
+            let (cn, sn_next) = ((cs - step * sn) * k, (sn + step * cs) * k);
+            let g_next = g(cn, sn_next);
+            if g_next.is_finite() && g_next <= g_best {
+                (cs, sn, g_best) = (cn, sn_next, g_next);
+                if step.abs() <= 4.0 * f64::EPSILON {
+                    break;
+                }
+            } else {
+                break;
+            }
+        }
+        let lp = circle(cs, sn);
+        let tau = (lp - q).dot(nn);
+        let d = lp - (q + tau * nn);
         // Eq. (2.17)
-        let ldot = r * (-theta.sin() * n + theta.cos() * b);
+        let ldot = r * (-sn * n + cs * b);
         let m = nn.cross(ldot);
         let ml = m.length();
         if !(ml > 1e-12 * r) {
             return None;
         }
         let ds = d.dot(m) / ml;
-        let theta = f64::atan2(theta.sin(), theta.cos());
+        let theta = f64::atan2(sn, cs);
+        let tau = tau + eps0;
         (ds.is_finite() && tau.is_finite()).then_some(CircleApproach {
             signed_distance: ds,
             tau,

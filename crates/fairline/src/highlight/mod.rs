@@ -23,7 +23,7 @@ pub use light::{CircleApproach, CircularLight, CircularLights, LightArray};
 pub use linear::{HighlightModel, HighlightOptions, highlight_lines};
 /// The one quartic solver (Nishiyama et al. Eq. (2.15)–(2.16)), shared by
 /// circular lights on meshes and on B-spline surfaces.
-pub use quartic::{quartic_roots, real_roots};
+pub use quartic::{Roots, quartic_roots};
 pub use surface::{
     SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight, linear_lights,
     surface_highlight_lines, surface_signed_distance,

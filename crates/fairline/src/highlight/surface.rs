@@ -14,7 +14,7 @@
 
 use super::light::{CircularLight, LightArray};
 use crate::Vec3;
-use crate::bspline::{BSplineSurface, SurfaceDerivatives};
+use crate::bspline::{BSplineSurface, SurfaceDerivatives, unit_normal};
 use rayon::prelude::*;
 
 /// A light whose highlight lines are drawn on a B-spline surface.
@@ -136,9 +136,11 @@ pub(crate) fn uniform_params([t0, t1]: [f64; 2], n: usize) -> Vec<f64> {
 }
 
 /// The field of `light` on the `nu × nv` uniform grid over the whole
-/// parameter domain (each count at least 2). Derivatives come from
-/// [`BSplineSurface::derivatives_grid`]; the quartic of Eq. (2.15)–(2.16) is
-/// solved per grid point in parallel. Deterministic.
+/// parameter domain (each count at least 2). Points and first derivatives
+/// come from [`BSplineSurface::map_grid_first`] (basis functions once per
+/// grid row and column, the net contracted in u once per row), the normal
+/// from Eq. (2.4), and the quartic of Eq. (2.15)–(2.16) is solved per grid
+/// point without allocation; parallel over rows. Deterministic.
 pub fn distance_field(
     surface: &BSplineSurface,
     light: &SurfaceLight,
@@ -147,12 +149,8 @@ pub fn distance_field(
 ) -> DistanceField {
     let us = uniform_params(surface.domain_u(), nu);
     let vs = uniform_params(surface.domain_v(), nv);
-    let ders = surface.derivatives_grid(&us, &vs);
-    let samples = ders
-        .par_iter()
-        .with_min_len(256)
-        .map(|d| light.sample_derivatives(d))
-        .collect();
+    let samples =
+        surface.map_grid_first(&us, &vs, |p, su, sv| light.sample(p, unit_normal(su, sv)?));
     DistanceField { us, vs, samples }
 }
 

@@ -145,7 +145,7 @@ fn pre_images(
 }
 
 /// Runs the whole check on one case and returns the report.
-fn check_case(c: &Case, max_iterations: usize, name: &str) -> SurfaceFairReport {
+fn check_case(c: &Case, max_iterations: usize, drop: f64, name: &str) -> SurfaceFairReport {
     let opts = SurfaceFairOptions {
         max_iterations,
         ..Default::default()
@@ -169,11 +169,31 @@ fn check_case(c: &Case, max_iterations: usize, name: &str) -> SurfaceFairReport 
         b.0,
         a.0
     );
-    // Within the paper's iteration counts (at most 8) the residual at the
-    // targets drops by well over an order of magnitude (the paper's 5 %
-    // truncation; the rest of the residual is the part of the Hermite
-    // targets the selected control points cannot follow).
-    assert!(a.1 <= b.1 / 30.0, "{name}: mean {} -> {}", b.1, a.1);
+    // Within the paper's iteration counts (at most 8) the mean residual at
+    // the targets drops by `drop` (two to three orders of magnitude). With
+    // the paper's fixed 5 % truncation it stalls after ~1.5 orders (the
+    // residual left lies in the dropped singular directions); the
+    // truncation is lowered to 1e-3 as progress slows. What remains is the
+    // least-squares floor: the Hermite targets are not exactly highlight
+    // lines of any surface the selected control points can reach (more
+    // samples than effective unknowns — the rank at 1e-3 is ~50–100 of
+    // 3 × the selected points, as tangential moves hardly change d_s).
+    assert!(a.1 <= b.1 / drop, "{name}: mean {} -> {}", b.1, a.1);
+    // the fixed 5 % rule of the paper, for comparison: stalls higher
+    let fixed = SurfaceFairOptions {
+        min_truncation: opts.truncation,
+        ..opts
+    };
+    let (_, rep5) = fair_surface(&c.bumped, &c.lights, &endpoints, &fixed).unwrap();
+    eprintln!(
+        "{name}: fixed 5 % truncation: mean |d_s| {:.3e} after {} iterations",
+        rep5.residual_after.1,
+        rep5.iterations.len()
+    );
+    assert!(
+        a.1 < 0.5 * rep5.residual_after.1,
+        "{name}: no gain over 5 %"
+    );
     assert!(a.0 <= b.0 / 20.0, "{name}: max {} -> {}", b.0, a.0);
     assert!(rep.iterations.len() <= max_iterations);
     for w in rep.iterations.windows(2) {
@@ -268,7 +288,7 @@ fn check_case(c: &Case, max_iterations: usize, name: &str) -> SurfaceFairReport 
 fn fair_dome_15x15_removes_a_planted_bump() {
     let clean = height_surface(15, 15, 1.0, 1.0, |x, y| 0.8 - 0.4 * (x * x + y * y));
     let c = case(clean, (11, 7, 0.03), Vec3::new(0.0, 0.0, 3.0), 0.4, 9, 0.2);
-    let rep = check_case(&c, 8, "dome");
+    let rep = check_case(&c, 8, 100.0, "dome");
     // The selected control points are exactly those whose support meets
     // the knot box of the endpoints.
     let kb = rep.knot_box;
@@ -285,7 +305,7 @@ fn fair_dome_15x15_removes_a_planted_bump() {
 fn fair_saddle_21x20_removes_a_planted_bump() {
     let clean = height_surface(21, 20, 1.0, 1.0, |x, y| 0.35 * (x * x - y * y));
     let c = case(clean, (6, 13, 0.02), Vec3::new(0.0, 0.0, 2.0), 0.3, 9, 0.16);
-    check_case(&c, 8, "saddle");
+    check_case(&c, 8, 500.0, "saddle");
 }
 
 #[test]
@@ -301,7 +321,7 @@ fn fair_roof_panel_21x22_removes_a_planted_dent() {
         11,
         0.2,
     );
-    check_case(&c, 8, "roof");
+    check_case(&c, 8, 300.0, "roof");
 }
 
 #[test]
