@@ -104,10 +104,69 @@ mod tests;
 use crate::Vec3;
 use crate::geom::{mean_edge_length, principal_curvatures_rusinkiewicz, triangle_qualities};
 use crate::mesh::{MeshError, SurfaceMesh, VertexId};
-use crate::solve::{CgOptions, CholeskySolver, SolveError, normal_equations_cg};
+use crate::solve::{
+    Amg, AmgOptions, CgOptions, CholeskySolver, CsrMatrix, SolveError, normal_equations_cg,
+    normal_equations_pcg,
+};
 use serde::Serialize;
 use std::time::Instant;
 use thiserror::Error;
+
+/// The multigrid preconditioner of the normal matrix of `system`, with the
+/// translations and the linear fields (in normalised coordinates) of the
+/// free vertices as near-null space.
+fn multigrid(
+    system: &system::LeastSquares,
+    layout: &system::Layout,
+    current: &[Vec3],
+) -> Result<Amg, EnhanceError> {
+    let t = Instant::now();
+    let k = CsrMatrix::normal(system.a.as_ref(), system.at.as_ref(), system.epsilon)?;
+    let t_normal = t.elapsed().as_secs_f64();
+    let nf = layout.free.len();
+    let linear = std::env::var("FAIRLINE_AMG_NULL").map(|v| v == "12").unwrap_or(true);
+    let mut nullspace = Vec::new();
+    for c in 0..3 {
+        nullspace.push((0..3 * nf).map(|u| if u % 3 == c { 1.0 } else { 0.0 }).collect());
+    }
+    if linear {
+        for d in 0..3 {
+            for c in 0..3 {
+                nullspace.push(
+                    (0..3 * nf)
+                        .map(|u| {
+                            if u % 3 == c {
+                                current[layout.free[u / 3] as usize][d]
+                            } else {
+                                0.0
+                            }
+                        })
+                        .collect(),
+                );
+            }
+        }
+    }
+    let steps = std::env::var("FAIRLINE_AMG_STEPS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1);
+    let amg = Amg::new(
+        k,
+        &nullspace,
+        &AmgOptions {
+            smoothing_steps: steps,
+            ..AmgOptions::default()
+        },
+    )?;
+    if std::env::var("FAIRLINE_AMG_DEBUG").is_ok() {
+        eprintln!(
+            "normal {t_normal:.3} s, setup {:.3} s, {:?}",
+            t.elapsed().as_secs_f64(),
+            amg.stats()
+        );
+    }
+    Ok(amg)
+}
 
 /// Rounds of step halving for the vertices of flipped triangles before
 /// their steps are reset to zero.
@@ -175,6 +234,9 @@ pub enum EnhanceSolver {
     /// Block-Jacobi preconditioned conjugate gradients on the normal
     /// equations, matrix-free, warm-started at the current positions.
     Cg,
+    /// Conjugate gradients preconditioned by a smoothed-aggregation
+    /// multigrid V-cycle ([`crate::solve::Amg`]) of the normal matrix.
+    Amg,
 }
 
 impl Default for EnhanceOptions {
@@ -471,14 +533,48 @@ pub fn enhance_features(
 
         let nf = layout.free.len();
         let budget = match options.solver {
-            EnhanceSolver::Direct => 0,
+            EnhanceSolver::Direct | EnhanceSolver::Amg => 0,
             EnhanceSolver::Cg => options.cg_max_iterations,
             EnhanceSolver::Auto if nf > AUTO_DIRECT_LIMIT => options.cg_max_iterations,
             EnhanceSolver::Auto => ((AUTO_BUDGET * (nf as f64).sqrt()) as usize)
                 .clamp(1, options.cg_max_iterations.max(1)),
         };
         let mut x = None;
-        if budget > 0 {
+        if options.solver == EnhanceSolver::Amg {
+            let t = Instant::now();
+            let mut guess: Vec<f64> = layout
+                .free
+                .iter()
+                .flat_map(|&v| current[v as usize].to_array())
+                .collect();
+            let amg = multigrid(&system, &layout, &current)?;
+            timings.factorisation_s += t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            let r = normal_equations_pcg(
+                system.a.as_ref(),
+                system.at.as_ref(),
+                system.epsilon,
+                &system.rhs,
+                &mut guess,
+                &CgOptions {
+                    tolerance: options.cg_tolerance,
+                    max_iterations: options.cg_max_iterations,
+                    block: 3,
+                },
+                &amg,
+            )?;
+            cg_iterations += r.iterations;
+            timings.solve_s += t.elapsed().as_secs_f64();
+            if !r.converged {
+                return Err(EnhanceError::Solve(SolveError::Backend(format!(
+                    "conjugate gradients did not reach the relative residual {:e} in {} iterations ({:e}); \
+                     try the direct solver",
+                    options.cg_tolerance, r.iterations, r.relative_residual
+                ))));
+            }
+            cg_residual = cg_residual.max(r.relative_residual);
+            x = Some(guess);
+        } else if budget > 0 {
             let t = Instant::now();
             let mut guess: Vec<f64> = layout
                 .free

@@ -5,12 +5,14 @@
 //!
 //! All matrices are faer `SparseColMat<usize, f64>`.
 
+mod amg;
 mod box_qp;
 mod cg;
 mod cholesky;
 
+pub use amg::{Amg, AmgOptions, AmgStats, CsrMatrix};
 pub use box_qp::{BoxQpOptions, BoxQpSolution, box_qp};
-pub use cg::{CgOptions, CgReport, normal_equations_cg};
+pub use cg::{CgOptions, CgReport, Preconditioner, normal_equations_cg, normal_equations_pcg};
 pub use cholesky::{CholeskySolver, least_squares, normal_matrix, sparse_from_triplets};
 
 use thiserror::Error;
