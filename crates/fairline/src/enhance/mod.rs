@@ -112,60 +112,21 @@ use serde::Serialize;
 use std::time::Instant;
 use thiserror::Error;
 
-/// The multigrid preconditioner of the normal matrix of `system`, with the
-/// translations and the linear fields (in normalised coordinates) of the
-/// free vertices as near-null space.
-fn multigrid(
-    system: &system::LeastSquares,
-    layout: &system::Layout,
-    current: &[Vec3],
-) -> Result<Amg, EnhanceError> {
-    let t = Instant::now();
+/// The smoothed-aggregation multigrid preconditioner
+/// ([`crate::solve::Amg`]) of the normal matrix LᵀL + εI of `system`, with
+/// the three translations of the free vertices as near-null space (a
+/// rigid shift of a flat region costs only its F_sd normal rows; the
+/// F_smo bi-Laplacian does not see it).
+fn multigrid(system: &system::LeastSquares, nf: usize) -> Result<Amg, EnhanceError> {
     let k = CsrMatrix::normal(system.a.as_ref(), system.at.as_ref(), system.epsilon)?;
-    let t_normal = t.elapsed().as_secs_f64();
-    let nf = layout.free.len();
-    let linear = std::env::var("FAIRLINE_AMG_NULL").map(|v| v == "12").unwrap_or(true);
-    let mut nullspace = Vec::new();
-    for c in 0..3 {
-        nullspace.push((0..3 * nf).map(|u| if u % 3 == c { 1.0 } else { 0.0 }).collect());
-    }
-    if linear {
-        for d in 0..3 {
-            for c in 0..3 {
-                nullspace.push(
-                    (0..3 * nf)
-                        .map(|u| {
-                            if u % 3 == c {
-                                current[layout.free[u / 3] as usize][d]
-                            } else {
-                                0.0
-                            }
-                        })
-                        .collect(),
-                );
-            }
-        }
-    }
-    let steps = std::env::var("FAIRLINE_AMG_STEPS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(1);
-    let amg = Amg::new(
-        k,
-        &nullspace,
-        &AmgOptions {
-            smoothing_steps: steps,
-            ..AmgOptions::default()
-        },
-    )?;
-    if std::env::var("FAIRLINE_AMG_DEBUG").is_ok() {
-        eprintln!(
-            "normal {t_normal:.3} s, setup {:.3} s, {:?}",
-            t.elapsed().as_secs_f64(),
-            amg.stats()
-        );
-    }
-    Ok(amg)
+    let nullspace: Vec<Vec<f64>> = (0..3)
+        .map(|c| {
+            (0..3 * nf)
+                .map(|u| if u % 3 == c { 1.0 } else { 0.0 })
+                .collect()
+        })
+        .collect();
+    Ok(Amg::new(k, &nullspace, &AmgOptions::default())?)
 }
 
 /// Rounds of step halving for the vertices of flipped triangles before
@@ -547,7 +508,7 @@ pub fn enhance_features(
                 .iter()
                 .flat_map(|&v| current[v as usize].to_array())
                 .collect();
-            let amg = multigrid(&system, &layout, &current)?;
+            let amg = multigrid(&system, nf)?;
             timings.factorisation_s += t.elapsed().as_secs_f64();
             let t = Instant::now();
             let r = normal_equations_pcg(

@@ -250,7 +250,6 @@ impl BlockJacobi {
             });
         BlockJacobi { block, inverses }
     }
-
 }
 
 impl Preconditioner for BlockJacobi {
