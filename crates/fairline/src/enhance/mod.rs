@@ -25,8 +25,8 @@
 //!
 //! The 8n × 3n system LX = b (Eq. (20), §4.3) is assembled once per
 //! iteration in parallel and solved in the least-squares sense, i.e. its
-//! normal equations (LᵀL + εI) X = Lᵀb + εp are solved (ε below), by one of
-//! two solvers ([`EnhanceSolver`]) that give the same solution:
+//! normal equations (LᵀL + εI) X = Lᵀb + εp are solved (ε below), by one of the
+//! solvers ([`EnhanceSolver`]) that give the same solution:
 //!
 //! - **Direct** — what §4.3 does ("we compute the Cholesky factorization
 //!   for a 3n × 3n sparse matrix", TAUCS): [`crate::solve::normal_matrix`]
@@ -57,11 +57,22 @@
 //! not converged, up to [`AUTO_DIRECT_LIMIT`] free vertices (beyond, the
 //! factor does not fit in memory and CG continues). So smooth curved meshes
 //! meet the speed targets (BENCHMARKS.md, "Vertex flow") and meshes with
-//! large flat parts cost at most about twice the direct solve. (A two-level
-//! preconditioner with a piecewise-constant coarse space on vertex
-//! aggregates was tried and did not reduce the CG iterations on the
-//! rounded cube: such a coarse space does not approximate the bi-Laplacian's
-//! smooth modes.)
+//! large flat parts cost at most about twice the direct solve.
+//!
+//! - **Multigrid-preconditioned CG** ([`EnhanceSolver::Amg`], not the
+//!   default): the same CG preconditioned by a smoothed-aggregation
+//!   multigrid V-cycle of LᵀL + εI ([`crate::solve::Amg`], Vaněk, Mandel &
+//!   Brezina 1996) with the three translations as near-null space. It cuts
+//!   the iterations on the rounded cube by 8 (75 instead of 597 at 10k
+//!   vertices) but not to a size-independent count — on flat parts the
+//!   tangential motion is governed by the F_smo bi-Laplacian, a
+//!   fourth-order operator whose near-null space also holds the linear
+//!   fields, and adding them (9 more vectors) makes the coarse levels too
+//!   dense to set up cheaply — and its setup (forming LᵀL and the Galerkin
+//!   products) costs about as much as the iterations it saves: at 10k
+//!   vertices it is no faster than the direct solve and at 100k its coarse
+//!   levels fill in (BENCHMARKS.md). It reaches the Cholesky result to
+//!   10⁻⁹ of the bounding-box diagonal (tested).
 //!
 //! **Normalisations.** Eq. (5) and Eq. (7) average F_em over the edges and
 //! F_sd over the vertices; fairline makes all three terms means over the
@@ -196,7 +207,11 @@ pub enum EnhanceSolver {
     /// equations, matrix-free, warm-started at the current positions.
     Cg,
     /// Conjugate gradients preconditioned by a smoothed-aggregation
-    /// multigrid V-cycle ([`crate::solve::Amg`]) of the normal matrix.
+    /// multigrid V-cycle ([`crate::solve::Amg`]) of the normal matrix,
+    /// warm-started at the current positions, up to
+    /// [`EnhanceOptions::cg_max_iterations`]; an error if they do not
+    /// converge. Fewer iterations than [`EnhanceSolver::Cg`] on large flat
+    /// parts, but a costly setup (module documentation).
     Amg,
 }
 
@@ -388,7 +403,8 @@ pub struct Enhanced {
 ///
 /// Errors: non-triangle faces, λ ≤ 0, μ < 0, non-finite options, zero
 /// iterations or bins, fixed vertices out of range, a failed factorisation,
-/// conjugate gradients that did not converge ([`EnhanceSolver::Cg`], or
+/// conjugate gradients that did not converge ([`EnhanceSolver::Cg`],
+/// [`EnhanceSolver::Amg`], or
 /// [`EnhanceSolver::Auto`] above [`AUTO_DIRECT_LIMIT`] free vertices).
 pub fn enhance_features(
     mesh: &SurfaceMesh,
