@@ -254,6 +254,7 @@ pub fn run(args: Args) -> Result<()> {
                     epsilon: args.epsilon.unwrap_or(d.epsilon),
                     max_iterations: args.iterations.unwrap_or(d.max_iterations),
                     constraints,
+                    ..d
                 };
                 schneider_kobbelt(&mut mesh, &o).map(|r| (r, None))
             }
@@ -268,6 +269,9 @@ pub fn run(args: Args) -> Result<()> {
     report.set("volume_before", r.volume_before);
     report.set("volume_after", r.volume_after);
     report.set("max_displacement", r.max_displacement);
+    if let Some(res) = r.residual {
+        report.set("residual", res);
+    }
     if let Some(p) = params {
         report.set("lambda", p.lambda);
         report.set("mu", p.mu);

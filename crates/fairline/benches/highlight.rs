@@ -6,7 +6,8 @@
 //! irregularity detection. Prints Markdown tables of median wall times.
 //!
 //! Run: `cargo bench -p fairline --bench highlight`
-//! (`FAIRLINE_BENCH_RUNS`, `FAIRLINE_BENCH_SIZES` override runs and sizes).
+//! (`FAIRLINE_BENCH_RUNS`, `FAIRLINE_BENCH_SIZES` override runs and sizes;
+//! `FAIRLINE_BENCH_ONLY=model` runs only the whole-model table).
 
 mod common;
 
@@ -86,6 +87,10 @@ fn main() {
             lines.lines.len().to_string(),
             lines.node_count().to_string(),
         ]);
+    }
+
+    if std::env::var("FAIRLINE_BENCH_ONLY").is_ok_and(|s| s == "model") {
+        return;
     }
 
     println!(

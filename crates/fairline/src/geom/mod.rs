@@ -12,6 +12,7 @@ mod curvature;
 mod laplace;
 mod measures;
 mod normals;
+pub(crate) use normals::{face_area_vectors, vertex_normal_from_area_vectors};
 mod quadric;
 
 pub use areas::{barycentric_vertex_areas, face_areas, mixed_corner_areas, mixed_vertex_areas};

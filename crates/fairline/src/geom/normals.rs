@@ -62,14 +62,32 @@ pub fn face_normals(mesh: &SurfaceMesh) -> Vec<Vec3> {
 /// faces) the unweighted sum of unit face normals is tried; if that vanishes
 /// too, the normal is the zero vector. Isolated vertices get zero.
 pub fn vertex_normals(mesh: &SurfaceMesh) -> Vec<Vec3> {
-    let area_vectors: Vec<Vec3> = (0..mesh.face_count() as u32)
-        .into_par_iter()
-        .map(|f| face_area_vector(mesh, FaceId(f)))
-        .collect();
+    let area_vectors = face_area_vectors(mesh);
     (0..mesh.vertex_count() as u32)
         .into_par_iter()
-        .map(|v| normal_from_area_vectors(mesh, VertexId(v), |f| area_vectors[f.idx()]))
+        .map(|v| vertex_normal_from_area_vectors(mesh, VertexId(v), &area_vectors))
         .collect()
+}
+
+/// Area vectors of all faces (parallel): the weights A_T N_T of Yong et al.
+/// Eq. (3).
+pub(crate) fn face_area_vectors(mesh: &SurfaceMesh) -> Vec<Vec3> {
+    (0..mesh.face_count() as u32)
+        .into_par_iter()
+        .map(|f| face_area_vector(mesh, FaceId(f)))
+        .collect()
+}
+
+/// Entry `v` of [`vertex_normals`] from the face area vectors of
+/// [`face_area_vectors`], for callers that fuse other per-vertex work into
+/// the same pass (bit-identical).
+#[inline]
+pub(crate) fn vertex_normal_from_area_vectors(
+    mesh: &SurfaceMesh,
+    v: VertexId,
+    area_vectors: &[Vec3],
+) -> Vec3 {
+    normal_from_area_vectors(mesh, v, |f| area_vectors[f.idx()])
 }
 
 /// The area-weighted normal of the single vertex `v`, Yong et al. Eq. (3);

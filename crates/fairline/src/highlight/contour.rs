@@ -154,7 +154,6 @@ pub(crate) fn face_segments(
     if !(edge_ok(a, b) && edge_ok(b, c) && edge_ok(c, a)) {
         return;
     }
-    let es = [mesh.edge(h0).0, mesh.edge(h1).0, mesh.edge(h2).0];
     let d = [
         values[vs[0] as usize],
         values[vs[1] as usize],
@@ -170,16 +169,28 @@ pub(crate) fn face_segments(
             (index, index)
         }
         Levels::Periodic { spacing, offset } => {
-            let a = ((lo - offset) / spacing).floor();
-            let b = ((hi - offset) / spacing).ceil();
+            let a = floor((lo - offset) / spacing);
+            let b = ceil((hi - offset) / spacing);
             if !(b - a <= max_levels as f64 + 2.0) {
                 return;
             }
             (a as i64, b as i64)
         }
     };
+    let mut es = [0u32; 3];
+    let mut have_edges = false;
     for m in m0..=m1 {
         let l = levels.value(m);
+        // Rounding is monotone, so all three differences share the sign of
+        // these two: all above or all below the level, no segment (the
+        // common case, decided without the edges).
+        if lo - l > 0.0 || hi - l < 0.0 {
+            continue;
+        }
+        if !have_edges {
+            es = [mesh.edge(h0).0, mesh.edge(h1).0, mesh.edge(h2).0];
+            have_edges = true;
+        }
         let s = [sign(d[0] - l), sign(d[1] - l), sign(d[2] - l)];
         let zeros = s.iter().filter(|&&x| x == 0).count();
         match zeros {
@@ -212,6 +223,31 @@ pub(crate) fn face_segments(
             }
             _ => {}
         }
+    }
+}
+
+/// `x.floor()` without a call into libm (the x86-64 baseline has no
+/// rounding instruction and this runs for every triangle): equal to
+/// `f64::floor` except that −0.0 may come out as 0.0.
+#[inline]
+pub(crate) fn floor(x: f64) -> f64 {
+    // beyond 2^52 every f64 is an integer (and ±inf, NaN pass through)
+    if x.abs() < 4_503_599_627_370_496.0 {
+        let t = x as i64 as f64;
+        if t > x { t - 1.0 } else { t }
+    } else {
+        x
+    }
+}
+
+/// `x.ceil()` without libm, as [`floor`].
+#[inline]
+pub(crate) fn ceil(x: f64) -> f64 {
+    if x.abs() < 4_503_599_627_370_496.0 {
+        let t = x as i64 as f64;
+        if t < x { t + 1.0 } else { t }
+    } else {
+        x
     }
 }
 
@@ -293,14 +329,287 @@ pub(crate) fn node_position(
     }
 }
 
-/// Chains segments into polylines (open lines first from their end nodes,
-/// then loops), deterministically: nodes are visited in key order.
+/// No segment / no neighbour.
+const NONE: u32 = u32::MAX;
+
+/// Chains segments into polylines (Yong et al. §2.4), deterministically.
+/// Segments must be sorted by face (as [`all_segments`] returns them).
+/// Duplicate segments (a highlight edge seen from both triangles) count once.
+///
+/// The result is defined by the node order (m, vertex before edge, element
+/// id) and, at each node, the order of its segments (by position in the
+/// segment list, highlight edges after all others, by their node pair):
+/// first, from every node whose degree is not 2, in that order, each of its
+/// unused segments is followed through degree-2 nodes to the next node of
+/// another degree (an open line, or a closed one if it returns); then each
+/// remaining loop starts at its smallest node along that node's first
+/// segment. Lines are sorted by index and first node.
+///
+/// No global numbering of nodes is needed: a node on edge e lies on at most
+/// the two triangles of e, so its other segment is found in the segment run
+/// of the face across e (one pass over the faces gives those runs); only
+/// nodes at vertices, rare on real data, are grouped by a sort. The lines
+/// of each index m share no node and are walked in parallel.
+pub(crate) fn chain(
+    mesh: &SurfaceMesh,
+    segments: &[Segment],
+    position: impl Fn(NodeId) -> Vec3 + Sync,
+) -> HighlightLines {
+    let ns = segments.len();
+    if ns == 0 {
+        return HighlightLines::default();
+    }
+    debug_assert!(segments.windows(2).all(|w| w[0].face <= w[1].face));
+    let is_vertex = |k: Key| k.elem >> 32 == 0;
+    // face_first[f]..face_first[f + 1]: the segments of face f
+    let nf = mesh.face_count();
+    let mut face_first = vec![0u32; nf + 1];
+    const FCHUNK: usize = 1 << 14;
+    face_first
+        .par_chunks_mut(FCHUNK)
+        .enumerate()
+        .for_each(|(c, out)| {
+            let f0 = (c * FCHUNK) as u32;
+            let mut i = segments.partition_point(|s| s.face < f0);
+            for (k, slot) in out.iter_mut().enumerate() {
+                let f = f0 + k as u32;
+                while i < ns && segments[i].face < f {
+                    i += 1;
+                }
+                *slot = i as u32;
+            }
+        });
+    // Highlight edges (segments joining two vertex nodes) come once from
+    // each of their triangles: keep the first of equal ones. Their rank
+    // (order among a node's segments) is after all other segments, by node
+    // pair; the rank of any other segment is its position.
+    let mut vv: Vec<(Key, Key, u32)> = segments
+        .par_iter()
+        .enumerate()
+        .filter(|(_, s)| is_vertex(s.a) && is_vertex(s.b))
+        .map(|(i, s)| (s.a, s.b, i as u32))
+        .collect();
+    vv.sort_unstable();
+    let used: Vec<AtomicBool> = (0..ns).map(|_| AtomicBool::new(false)).collect();
+    let mut vv_rank: Vec<(u32, u64)> = Vec::with_capacity(vv.len());
+    let mut pairs = 0u64;
+    for (k, &(a, b, i)) in vv.iter().enumerate() {
+        if k > 0 && vv[k - 1].0 == a && vv[k - 1].1 == b {
+            used[i as usize].store(true, Relaxed); // a repeat: never walked
+        } else {
+            vv_rank.push((i, (1u64 << 32) | pairs));
+            pairs += 1;
+        }
+    }
+    vv_rank.sort_unstable();
+    let rank = |s: u32| -> u64 {
+        match vv_rank.binary_search_by_key(&s, |&(i, _)| i) {
+            Ok(k) => vv_rank[k].1,
+            Err(_) => s as u64,
+        }
+    };
+    // links[s][side]: the other segment at end `side` (0 = a, 1 = b) of s
+    // when that node has degree 2, else NONE. Nodes on edges first.
+    let mut links: Vec<[u32; 2]> = segments
+        .par_iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let mut l = [NONE; 2];
+            for (side, key) in [s.a, s.b].into_iter().enumerate() {
+                if is_vertex(key) {
+                    continue;
+                }
+                let e = key.elem as u32;
+                let f0 = mesh.face(mesh.edge_halfedge(EdgeId(e), 0));
+                let f1 = mesh.face(mesh.edge_halfedge(EdgeId(e), 1));
+                let g = if f0 == Some(FaceId(s.face)) { f1 } else { f0 };
+                if let Some(g) = g {
+                    let (lo, hi) = (face_first[g.idx()], face_first[g.idx() + 1]);
+                    l[side] = (lo..hi)
+                        .find(|&t| {
+                            t as usize != i
+                                && (segments[t as usize].a == key || segments[t as usize].b == key)
+                        })
+                        .unwrap_or(NONE);
+                }
+            }
+            l
+        })
+        .collect();
+    // Nodes at vertices: their ends grouped by a sort, in rank order.
+    let mut vends: Vec<(Key, u64, u32, u8)> = segments
+        .par_iter()
+        .enumerate()
+        .filter(|(_, s)| is_vertex(s.a) || is_vertex(s.b))
+        .flat_map_iter(|(i, s)| {
+            let i = i as u32;
+            [(s.a, 0u8), (s.b, 1u8)]
+                .into_iter()
+                .filter(move |&(k, _)| is_vertex(k))
+                .map(move |(k, side)| (k, i, side))
+        })
+        .filter(|&(_, i, _)| !used[i as usize].load(Relaxed)) // repeats
+        .map(|(k, i, side)| (k, rank(i), i, side))
+        .collect();
+    vends.sort_unstable();
+    // start ports (node, rank, segment) of nodes whose degree is not 2
+    let mut starts: Vec<(Key, u64, u32)> = links
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(i, l)| {
+            let s = &segments[i];
+            [(s.a, l[0]), (s.b, l[1])]
+                .into_iter()
+                .filter(|&(k, t)| !is_vertex(k) && t == NONE)
+                .map(move |(k, _)| (k, i as u64, i as u32))
+        })
+        .collect();
+    let mut r0 = 0;
+    while r0 < vends.len() {
+        let mut r1 = r0 + 1;
+        while r1 < vends.len() && vends[r1].0 == vends[r0].0 {
+            r1 += 1;
+        }
+        if r1 - r0 == 2 {
+            let (x, y) = (vends[r0], vends[r0 + 1]);
+            links[x.2 as usize][x.3 as usize] = y.2;
+            links[y.2 as usize][y.3 as usize] = x.2;
+        } else {
+            starts.extend(vends[r0..r1].iter().map(|&(k, r, i, _)| (k, r, i)));
+        }
+        r0 = r1;
+    }
+    starts.par_sort_unstable();
+    // segments grouped by index m (stable: by position within a group)
+    let order = group_by_index(segments);
+    let mut groups: Vec<(usize, usize)> = Vec::new();
+    let mut g0 = 0;
+    for k in 1..=order.len() {
+        if k == order.len() || segments[order[k] as usize].a.m != segments[order[g0] as usize].a.m {
+            groups.push((g0, k));
+            g0 = k;
+        }
+    }
+    // Follows segment s0 from node `start`. Returns whether the line closed,
+    // its nodes, and the segment after each node.
+    let walk = |start: Key, s0: u32| -> (bool, Vec<Key>, Vec<u32>) {
+        let mut path = vec![start];
+        let mut via = Vec::new();
+        let (mut from, mut s) = (start, s0);
+        loop {
+            used[s as usize].store(true, Relaxed);
+            via.push(s);
+            let seg = &segments[s as usize];
+            let (to, side) = if seg.a == from {
+                (seg.b, 1)
+            } else {
+                (seg.a, 0)
+            };
+            if to == start {
+                return (true, path, via);
+            }
+            path.push(to);
+            let t = links[s as usize][side];
+            if t == NONE || used[t as usize].load(Relaxed) {
+                return (false, path, via);
+            }
+            from = to;
+            s = t;
+        }
+    };
+    let walks: Vec<(bool, Vec<Key>)> = groups
+        .par_iter()
+        .flat_map_iter(|&(lo, hi)| {
+            let m = segments[order[lo] as usize].a.m;
+            let mut out = Vec::new();
+            let p0 = starts.partition_point(|p| p.0.m < m);
+            for &(k, _, s) in starts[p0..].iter().take_while(|p| p.0.m == m) {
+                if !used[s as usize].load(Relaxed) {
+                    let (closed, path, _) = walk(k, s);
+                    out.push((closed, path));
+                }
+            }
+            // loops: start at the smallest node, along its first segment
+            for &s in &order[lo..hi] {
+                if used[s as usize].load(Relaxed) {
+                    continue;
+                }
+                let (closed, mut path, via) = walk(segments[s as usize].a, s);
+                if closed {
+                    let n = path.len();
+                    let j = (0..n).min_by_key(|&j| path[j]).unwrap_or(0);
+                    // via[j] leaves node j forwards, via[j - 1] backwards
+                    if rank(via[j]) <= rank(via[(j + n - 1) % n]) {
+                        path.rotate_left(j);
+                    } else {
+                        path.reverse();
+                        path.rotate_left(n - 1 - j);
+                    }
+                }
+                out.push((closed, path));
+            }
+            out
+        })
+        .collect();
+    let mut lines: Vec<HighlightLine> = walks
+        .into_par_iter()
+        .map(|(closed, path)| {
+            let nodes: Vec<NodeId> = path.iter().map(|&k| k.node()).collect();
+            HighlightLine {
+                index: nodes.first().map_or(0, |n| n.index()),
+                closed,
+                points: nodes.iter().map(|&nd| position(nd)).collect(),
+                nodes,
+            }
+        })
+        .collect();
+    lines.sort_by(|a, b| {
+        (a.index, a.nodes.first().copied()).cmp(&(b.index, b.nodes.first().copied()))
+    });
+    HighlightLines { lines }
+}
+
+/// Positions of the segments sorted by (index m, position): a counting sort
+/// when the indices span a range comparable to the number of segments, a
+/// comparison sort otherwise (same order).
+fn group_by_index(segments: &[Segment]) -> Vec<u32> {
+    let (lo, hi) = segments
+        .par_iter()
+        .map(|s| (s.a.m, s.a.m))
+        .reduce(|| (i64::MAX, i64::MIN), |x, y| (x.0.min(y.0), x.1.max(y.1)));
+    let span = (hi as i128 - lo as i128 + 1).max(0) as u128;
+    if span <= 2 * segments.len() as u128 + 1024 {
+        let mut count = vec![0u32; span as usize + 1];
+        for s in segments {
+            count[(s.a.m - lo) as usize + 1] += 1;
+        }
+        for k in 1..count.len() {
+            count[k] += count[k - 1];
+        }
+        let mut order = vec![0u32; segments.len()];
+        for (i, s) in segments.iter().enumerate() {
+            let c = &mut count[(s.a.m - lo) as usize];
+            order[*c as usize] = i as u32;
+            *c += 1;
+        }
+        order
+    } else {
+        let mut order: Vec<u32> = (0..segments.len() as u32).collect();
+        order.par_sort_unstable_by_key(|&i| (segments[i as usize].a.m, i));
+        order
+    }
+}
+
+#[cfg(test)]
+/// The previous chaining by one sort of all segment ends, kept as the
+/// reference [`chain`] must reproduce exactly: open lines first from their
+/// end nodes, then loops, visiting nodes in key order.
 /// Duplicate segments (a highlight edge seen from both triangles) count once.
 ///
 /// One sort of the 2·#segments segment ends by node key gives both the node
 /// numbering and each node's incident segments (the run of equal keys), so
 /// no search structure is built.
-pub(crate) fn chain(
+pub(crate) fn chain_reference(
     segments: &[Segment],
     position: impl Fn(NodeId) -> Vec3 + Sync,
 ) -> HighlightLines {
@@ -437,5 +746,5 @@ pub(crate) fn contour(
     edge_ok: &(impl Fn(usize, usize) -> bool + Sync),
 ) -> HighlightLines {
     let segs = all_segments(mesh, values, branch, levels, max_levels, edge_ok);
-    chain(&segs, |n| node_position(mesh, values, levels, n))
+    chain(mesh, &segs, |n| node_position(mesh, values, levels, n))
 }

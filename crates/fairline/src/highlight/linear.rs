@@ -103,13 +103,33 @@ impl HighlightModel {
     ) -> Result<Self, HighlightError> {
         options.check()?;
         mesh.require_triangles()?;
-        let normals = geom::vertex_normals(mesh);
+        // one pass per vertex: the Eq. (3) normal (bit-identical to
+        // geom::vertex_normals) and the Eq. (1) distance
+        let area_vectors = geom::face_area_vectors(mesh);
         let p = mesh.positions();
-        let (distances, branch): (Vec<f64>, Vec<i8>) = p
-            .par_iter()
-            .zip(normals.par_iter())
-            .map(|(&x, &n)| vertex_distance(&light, x, n, options.min_normal_cos))
-            .unzip();
+        let nv = mesh.vertex_count();
+        let mut normals = vec![Vec3::ZERO; nv];
+        let mut distances = vec![0.0; nv];
+        let mut branch = vec![0i8; nv];
+        const CHUNK: usize = 4096;
+        normals
+            .par_chunks_mut(CHUNK)
+            .zip(distances.par_chunks_mut(CHUNK))
+            .zip(branch.par_chunks_mut(CHUNK))
+            .enumerate()
+            .for_each(|(c, ((ns, ds), bs))| {
+                let cells = ns.iter_mut().zip(ds.iter_mut()).zip(bs.iter_mut());
+                for (k, ((n, d), b)) in cells.enumerate() {
+                    let v = c * CHUNK + k;
+                    *n = geom::vertex_normal_from_area_vectors(
+                        mesh,
+                        VertexId(v as u32),
+                        &area_vectors,
+                    );
+                    (*d, *b) = vertex_distance(&light, p[v], *n, options.min_normal_cos);
+                }
+            });
+        drop(area_vectors);
         let segments = contour::all_segments(
             mesh,
             &distances,
@@ -176,7 +196,16 @@ impl HighlightModel {
     /// with [`Self::node_position`].
     pub fn lines(&self, mesh: &SurfaceMesh) -> HighlightLines {
         let levels = Self::levels_of(&self.light);
-        contour::chain(&self.segments, |n| {
+        contour::chain(mesh, &self.segments, |n| {
+            contour::node_position(mesh, &self.distances, levels, n)
+        })
+    }
+
+    /// [`Self::lines`] by the previous sort-based chaining, for tests.
+    #[cfg(test)]
+    pub(crate) fn lines_reference(&self, mesh: &SurfaceMesh) -> HighlightLines {
+        let levels = Self::levels_of(&self.light);
+        contour::chain_reference(&self.segments, |n| {
             contour::node_position(mesh, &self.distances, levels, n)
         })
     }

@@ -310,6 +310,7 @@ fn incremental_update_equals_full_recompute() {
         );
         let full = HighlightModel::new(&mesh, light, opts).unwrap();
         assert_eq!(model.lines(&mesh), full.lines(&mesh), "round {round}");
+        assert_eq!(model.lines(&mesh), model.lines_reference(&mesh));
         assert_eq!(model.distances(), full.distances());
         assert_eq!(model.normals(), full.normals());
         assert_ne!(before, full.lines(&mesh), "the moves must change something");
@@ -743,5 +744,183 @@ fn real_meshes_run_through_highlight_and_detect() {
                 .iter()
                 .all(|l| l.points.iter().all(|p| p.is_finite()))
         );
+    }
+}
+
+/// Segments of (`values`, `branch`) chained by [`contour::chain`] and by the
+/// sort-based reference; both must give identical lines.
+fn chain_both(
+    mesh: &SurfaceMesh,
+    values: &[f64],
+    branch: &[i8],
+    levels: contour::Levels,
+    max_levels: i64,
+) -> HighlightLines {
+    let segs = contour::all_segments(mesh, values, branch, levels, max_levels, &|_, _| true);
+    let pos = |n| contour::node_position(mesh, values, levels, n);
+    let a = contour::chain(mesh, &segs, pos);
+    assert_eq!(a, contour::chain_reference(&segs, pos));
+    a
+}
+
+#[test]
+fn fast_floor_and_ceil_equal_the_library_ones() {
+    let mut rng = Rng(99);
+    let mut xs = vec![
+        0.0,
+        -0.0,
+        1.0,
+        -1.0,
+        0.5,
+        -0.5,
+        2.0f64.powi(52),
+        -(2.0f64.powi(52)) - 0.5,
+    ];
+    xs.extend([
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        1e300,
+        -1e300,
+        4503599627370495.5,
+    ]);
+    xs.extend((0..1000).map(|k| rng.next() * 10f64.powi(k % 20 - 5)));
+    for x in xs {
+        assert_eq!(contour::floor(x), x.floor(), "{x}");
+        assert_eq!(contour::ceil(x), x.ceil(), "{x}");
+    }
+    assert!(contour::floor(f64::NAN).is_nan() && contour::ceil(f64::NAN).is_nan());
+}
+
+#[test]
+fn chaining_without_node_numbering_matches_the_sort_based_reference() {
+    let opts = HighlightOptions::default();
+    // closed loops (torus, sphere), open lines (height field with boundary),
+    // silhouette cut-offs (tilted views)
+    let shapes_and_views = [
+        (shapes::torus(2.0, 0.7, 120, 60), Vec3::new(0.3, 0.2, 1.0)),
+        (shapes::icosphere(1.0, 4), Vec3::new(0.1, 0.0, 1.0)),
+        (
+            shapes::height_field(90, 70, (-1.0, 1.0), (-1.0, 1.0), |x, y| {
+                0.25 * (3.0 * x).sin() * (2.0 * y).cos() + 0.1 * x * y
+            }),
+            Vec3::new(0.2, -0.4, 1.0),
+        ),
+    ];
+    let mut loops = 0;
+    let mut open = 0;
+    for (mesh, view) in &shapes_and_views {
+        let (lo, hi) = crate::mesh::bounding_box(mesh.positions()).unwrap();
+        let light = LightArray::default_for(lo, hi, Some(*view));
+        let model = HighlightModel::new(mesh, light, opts).unwrap();
+        let lines = model.lines(mesh);
+        assert_eq!(lines, model.lines_reference(mesh));
+        loops += lines.lines.iter().filter(|l| l.closed).count();
+        open += lines.lines.iter().filter(|l| !l.closed).count();
+    }
+    assert!(loops > 10 && open > 10, "{loops} loops, {open} open lines");
+
+    // A field with values on the levels: nodes at vertices of any degree,
+    // highlight edges seen from both triangles, undefined vertices (open
+    // ends inside the mesh), and faces skipped for too many levels.
+    let mesh = shapes::height_field(40, 30, (0.0, 1.0), (0.0, 1.0), |_, _| 0.0);
+    let mut rng = Rng(4242);
+    let values: Vec<f64> = (0..mesh.vertex_count())
+        .map(|_| (2.5 * (rng.next() + 1.0)).round())
+        .collect();
+    let branch: Vec<i8> = (0..mesh.vertex_count())
+        .map(|_| if rng.next() < -0.8 { 0 } else { 1 })
+        .collect();
+    let levels = contour::Levels::Periodic {
+        spacing: 1.0,
+        offset: 0.0,
+    };
+    let lines = chain_both(&mesh, &values, &branch, levels, 3);
+    let vertex_nodes = lines
+        .lines
+        .iter()
+        .flat_map(|l| &l.nodes)
+        .filter(|n| matches!(n, NodeId::Vertex(..)))
+        .count();
+    assert!(vertex_nodes > 100, "{vertex_nodes} vertex nodes");
+    // a vertex node of degree > 2 starts or ends several lines
+    let mut ends: Vec<NodeId> = lines
+        .lines
+        .iter()
+        .filter(|l| !l.closed)
+        .flat_map(|l| [l.nodes[0], l.nodes[l.nodes.len() - 1]])
+        .filter(|n| matches!(n, NodeId::Vertex(..)))
+        .collect();
+    ends.sort();
+    assert!(
+        ends.windows(3).any(|w| w[0] == w[2]),
+        "no vertex of degree > 2"
+    );
+    // the same field with offsets between levels: nodes on edges only
+    for offset in [0.5, 0.25] {
+        let lv = contour::Levels::Periodic {
+            spacing: 1.0,
+            offset,
+        };
+        chain_both(&mesh, &values, &branch, lv, 4);
+    }
+
+    // Pieces far apart in value: indices spread far wider than the number of
+    // segments (grouping by index falls back from counting to sorting).
+    let piece = shapes::icosphere(1.0, 2);
+    let mut positions = Vec::new();
+    let mut faces: Vec<[u32; 3]> = Vec::new();
+    for k in 0..5u32 {
+        let off = positions.len() as u32;
+        positions.extend(
+            piece
+                .positions()
+                .iter()
+                .map(|&p| p + Vec3::X * (3.0 * k as f64)),
+        );
+        faces.extend(piece.faces().map(|f| piece.triangle(f).map(|v| v.0 + off)));
+    }
+    let mesh = SurfaceMesh::new(positions, &faces).unwrap();
+    let values: Vec<f64> = mesh
+        .positions()
+        .iter()
+        .map(|p| (p.x / 3.0).round() * 1e7 + p.z)
+        .collect();
+    let branch = vec![1i8; mesh.vertex_count()];
+    let levels = contour::Levels::Periodic {
+        spacing: 0.1,
+        offset: 0.0,
+    };
+    let lines = chain_both(&mesh, &values, &branch, levels, 4);
+    assert!(lines.lines.len() >= 5 * 15 && lines.lines.iter().all(|l| l.closed));
+
+    // real meshes, two views each
+    for name in [
+        "bunny_npm.obj",
+        "spot.ply",
+        "lego_open.ply",
+        "bob_small.ply",
+    ] {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/meshes/");
+        let path = format!("{path}{name}");
+        if !std::path::Path::new(&path).exists() {
+            println!("skipped: ../shared/data not found");
+            return;
+        }
+        let mut mesh = crate::io::read_mesh(&path).unwrap();
+        if !mesh.is_triangle_mesh() {
+            mesh = crate::mesh::triangulate(&mesh).mesh;
+        }
+        let (lo, hi) = crate::mesh::bounding_box(mesh.positions()).unwrap();
+        let mut count = 0;
+        for view in [Vec3::Z, Vec3::new(1.0, 0.5, 0.2)] {
+            let light = LightArray::default_for(lo, hi, Some(view));
+            let light = light.with_spacing(light.spacing() / 3.0).unwrap();
+            let model = HighlightModel::new(&mesh, light, opts).unwrap();
+            let lines = model.lines(&mesh);
+            count += lines.lines.len();
+            assert_eq!(lines, model.lines_reference(&mesh), "{name}");
+        }
+        // (the Lego brick has lines only on its studs, in the tilted view)
+        assert!(count > 0, "{name}");
     }
 }

@@ -31,6 +31,9 @@ pub struct SurfaceMesh {
     f_he: Vec<u32>,
     /// Number of faces whose orientation was reversed to make it consistent.
     flipped_faces: usize,
+    /// The first face that is not a triangle (topology never changes after
+    /// construction, so the triangle checks of every algorithm are O(1)).
+    first_non_triangle: Option<u32>,
 }
 
 /// What the mesh builder did to the input besides building it.
@@ -292,7 +295,12 @@ impl SurfaceMesh {
             v_out,
             f_he,
             flipped_faces,
+            first_non_triangle: None,
         };
+        mesh.first_non_triangle = (0..mesh.f_he.len() as u32).find(|&f| {
+            let h = mesh.f_he[f as usize] as usize;
+            mesh.he_next[mesh.he_next[mesh.he_next[h] as usize] as usize] as usize != h
+        });
 
         // Every vertex must be a single fan: circulating from its stored
         // halfedge must reach all of its outgoing halfedges.
@@ -563,10 +571,7 @@ impl SurfaceMesh {
     }
     /// True when every face is a triangle.
     pub fn is_triangle_mesh(&self) -> bool {
-        self.faces().all(|f| {
-            let h = self.face_halfedge(f);
-            self.next(self.next(self.next(h))) == h
-        })
+        self.first_non_triangle.is_none()
     }
     /// True when every face is a quad.
     pub fn is_quad_mesh(&self) -> bool {
@@ -575,11 +580,11 @@ impl SurfaceMesh {
     /// Returns an error naming the first non-triangle face, for
     /// triangle-only algorithms.
     pub fn require_triangles(&self) -> Result<(), MeshError> {
-        match self.faces().find(|&f| self.face_size(f) != 3) {
+        match self.first_non_triangle {
             None => Ok(()),
             Some(f) => Err(MeshError::NotTriangle {
-                face: f.idx(),
-                size: self.face_size(f),
+                face: f as usize,
+                size: self.face_size(FaceId(f)),
             }),
         }
     }

@@ -13,7 +13,8 @@ use super::{
 use crate::Vec3;
 use crate::geom::{self, LaplaceWeights};
 use crate::mesh::SurfaceMesh;
-use crate::solve::{CholeskySolver, sparse_from_triplets};
+use crate::solve::{CholeskyOptions, CholeskyOrdering, CholeskySolver, nested_dissection};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use rayon::prelude::*;
 
 /// Options of [`laplace_smooth`].
@@ -316,6 +317,7 @@ fn finish(
         volume_after: geom::volume(mesh),
         max_displacement,
         converged: true,
+        residual: None,
     })
 }
 
@@ -360,14 +362,28 @@ pub fn taubin_smooth(
 
 /// One backward-Euler system over the `unknown` vertices: rows
 /// (m_i + t Σ_j w_ij) x'_i − t Σ_{j unknown} w_ij x'_j = m_i x_i + t Σ_{j known} w_ij x_j.
+///
+/// The lower-triangular pattern is built once from the one-ring adjacency
+/// (column c holds row c, then the unknown neighbours r > c in ascending
+/// order); each step only refills the values, in parallel per column block,
+/// and refactors with the symbolic analysis (nested-dissection ordering,
+/// computed from the positions at the first step) kept.
 struct Stage {
     index: Vec<usize>,
     unknowns: Vec<usize>,
+    pattern: SymbolicSparseColMat<usize>,
     solver: Option<CholeskySolver>,
 }
 
+/// Columns per parallel task when filling matrix values.
+const COLUMN_BLOCK: usize = 4096;
+
 impl Stage {
-    fn new(is_unknown: impl Fn(usize) -> bool, n: usize) -> Self {
+    fn new(
+        is_unknown: impl Fn(usize) -> bool,
+        n: usize,
+        nb: &Neighbourhoods,
+    ) -> Result<Self, SmoothError> {
         let mut index = vec![usize::MAX; n];
         let mut unknowns = Vec::new();
         for i in 0..n {
@@ -376,58 +392,142 @@ impl Stage {
                 unknowns.push(i);
             }
         }
-        Stage {
+        let m = unknowns.len();
+        let mut col_ptr = Vec::with_capacity(m + 1);
+        let mut row_idx = Vec::with_capacity(m + nb.nbr.len() / 2);
+        col_ptr.push(0usize);
+        for (c, &i) in unknowns.iter().enumerate() {
+            row_idx.push(c);
+            let start = row_idx.len();
+            for &j in &nb.nbr[nb.off[i] as usize..nb.off[i + 1] as usize] {
+                let r = index[j as usize];
+                if r != usize::MAX && r > c {
+                    row_idx.push(r);
+                }
+            }
+            row_idx[start..].sort_unstable();
+            // a neighbour listed twice gets one entry (values are summed)
+            let mut w = start;
+            for k in start..row_idx.len() {
+                if w == start || row_idx[w - 1] != row_idx[k] {
+                    row_idx[w] = row_idx[k];
+                    w += 1;
+                }
+            }
+            row_idx.truncate(w);
+            col_ptr.push(row_idx.len());
+        }
+        let pattern = SymbolicSparseColMat::new_checked(m, m, col_ptr, None, row_idx);
+        Ok(Stage {
             index,
             unknowns,
+            pattern,
             solver: None,
-        }
+        })
     }
 
-    /// `nbrs(i)` lists (j, w_ij) for unknown i; `mass[i]` the diagonal.
+    /// Symbolic analysis of the pattern: nested-dissection ordering from the
+    /// positions `cur` of the unknowns, then faer's symbolic Cholesky. Needs
+    /// no matrix values, so it can run while they are computed.
+    fn analyse(&mut self, cur: &[Vec3]) -> Result<(), SmoothError> {
+        if self.unknowns.is_empty() {
+            return Ok(());
+        }
+        let points: Vec<Vec3> = self.unknowns.iter().map(|&i| cur[i]).collect();
+        let order = nested_dissection(self.pattern.as_ref(), &points)?;
+        let opts = CholeskyOptions {
+            ordering: CholeskyOrdering::Custom(order),
+            ..CholeskyOptions::default()
+        };
+        self.solver = Some(CholeskySolver::analyse(self.pattern.as_ref(), &opts)?);
+        Ok(())
+    }
+
+    /// `weight(i, k)` is w_ij for unknown vertex i and its neighbourhood
+    /// entry k (j = `nb.nbr[k]`); `mass[i]` the diagonal.
     fn solve(
         &mut self,
         cur: &mut [Vec3],
         mass: &[f64],
         t: f64,
-        nbrs: &dyn Fn(usize) -> Vec<(usize, f64)>,
+        nb: &Neighbourhoods,
+        weight: &(dyn Fn(usize, usize) -> f64 + Sync),
     ) -> Result<(), SmoothError> {
         let m = self.unknowns.len();
         if m == 0 {
             return Ok(());
         }
-        let mut trip = Vec::with_capacity(8 * m);
-        let mut rhs = vec![vec![0.0; m]; 3];
-        for (r, &i) in self.unknowns.iter().enumerate() {
-            let mut diag = mass[i];
-            let mut b = mass[i] * cur[i];
-            for (j, w) in nbrs(i) {
-                diag += t * w;
-                let c = self.index[j];
-                if c == usize::MAX {
-                    b += t * w * cur[j];
-                } else if c < r {
-                    // lower triangle only; the pair (c, r) is met again
-                    // from row c, where it is skipped
-                    trip.push((r, c, -t * w));
+        if self.solver.is_none() {
+            self.analyse(cur)?;
+        }
+        let col_ptr = self.pattern.col_ptr();
+        let row_idx = self.pattern.row_idx();
+        let mut values = vec![0.0; row_idx.len()];
+        // split the values into blocks of whole columns
+        let mut blocks: Vec<(usize, &mut [f64])> = Vec::with_capacity(m / COLUMN_BLOCK + 1);
+        let mut rest = values.as_mut_slice();
+        for c0 in (0..m).step_by(COLUMN_BLOCK) {
+            let c1 = (c0 + COLUMN_BLOCK).min(m);
+            let (head, tail) = rest.split_at_mut(col_ptr[c1] - col_ptr[c0]);
+            blocks.push((c0, head));
+            rest = tail;
+        }
+        let (index, unknowns) = (&self.index, &self.unknowns);
+        let src: &[Vec3] = cur;
+        let rhs_blocks: Vec<Vec<Vec3>> = blocks
+            .into_par_iter()
+            .map(|(c0, vals)| {
+                let c1 = (c0 + COLUMN_BLOCK).min(m);
+                let base = col_ptr[c0];
+                let mut rhs = Vec::with_capacity(c1 - c0);
+                for c in c0..c1 {
+                    let i = unknowns[c];
+                    let (a, b) = (col_ptr[c] - base, col_ptr[c + 1] - base);
+                    let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+                    let mut diag = mass[i];
+                    let mut bi = mass[i] * src[i];
+                    for k in nb.off[i] as usize..nb.off[i + 1] as usize {
+                        let j = nb.nbr[k] as usize;
+                        let w = weight(i, k);
+                        diag += t * w;
+                        let r = index[j];
+                        if r == usize::MAX {
+                            bi += t * w * src[j];
+                        } else if r > c {
+                            // rows[0] is the diagonal; the rest is sorted
+                            if let Ok(p) = rows[1..].binary_search(&r) {
+                                vals[a + 1 + p] -= t * w;
+                            }
+                        }
+                    }
+                    vals[a] = diag;
+                    debug_assert!(b > a);
+                    rhs.push(bi);
                 }
+                rhs
+            })
+            .collect();
+        let mut rhs = rhs_blocks.concat();
+        let a = SparseColMatRef::new(self.pattern.as_ref(), &values);
+        let solver = self.solver.as_mut().expect("analysed above");
+        if let Err(e) = solver.refactor(a) {
+            // With large steps and obtuse triangles M − tL can be near
+            // indefinite and the pivots depend on the order: retry once with
+            // an ordering from the current positions (as a fresh solver would)
+            let points: Vec<Vec3> = self.unknowns.iter().map(|&i| src[i]).collect();
+            let order = nested_dissection(self.pattern.as_ref(), &points)?;
+            let opts = CholeskyOptions {
+                ordering: CholeskyOrdering::Custom(order),
+                ..CholeskyOptions::default()
+            };
+            match CholeskySolver::with_options(a, &opts) {
+                Ok(fresh) => *solver = fresh,
+                Err(_) => return Err(e.into()),
             }
-            trip.push((r, r, diag));
-            rhs[0][r] = b.x;
-            rhs[1][r] = b.y;
-            rhs[2][r] = b.z;
         }
-        let a = sparse_from_triplets(m, m, &trip)?;
-        let refactored = match self.solver.as_mut() {
-            Some(s) => s.refactor(a.as_ref()).is_ok(),
-            None => false,
-        };
-        if !refactored {
-            self.solver = Some(CholeskySolver::new(a.as_ref())?);
-        }
-        let solver = self.solver.as_ref().expect("set above");
-        solver.solve_columns(&mut rhs)?;
+        solver.solve_points(&mut rhs)?;
         for (r, &i) in self.unknowns.iter().enumerate() {
-            cur[i] = Vec3::new(rhs[0][r], rhs[1][r], rhs[2][r]);
+            cur[i] = rhs[r];
         }
         Ok(())
     }
@@ -436,8 +536,8 @@ impl Stage {
 /// Implicit smoothing (Desbrun et al. 1999): per step solve
 /// (M − tL) x' = M x with the cotangent Laplacian L (weights
 /// ½(cot α + cot β), recomputed per step) and the mixed Voronoi mass M, by a
-/// sparse Cholesky factorisation whose symbolic analysis is reused across
-/// steps. t = `time_step` · ē² (ē the input mean edge length). Fixed vertices
+/// sparse Cholesky factorisation (nested-dissection ordering) whose symbolic
+/// analysis is reused across steps. t = `time_step` · ē² (ē the input mean edge length). Fixed vertices
 /// are Dirichlet values; with hierarchical labels the boundary is first
 /// smoothed as curves by the 1D analogue (weights ē/l, mass ē(l₋ + l₊)/2).
 /// Triangle meshes.
@@ -463,55 +563,83 @@ pub fn implicit_smooth(
     }
     let t = opts.time_step * ebar * ebar;
     let n = mesh.vertex_count();
-    let mut work = mesh.clone();
-    let mut cur = input.clone();
-    let mut curve = Stage::new(|i| roles[i] == Role::BoundaryCurve, n);
-    let mut inner = Stage::new(|i| roles[i] == Role::Free, n);
-    for _ in 0..opts.iterations {
-        let before = cur.clone();
-        if !curve.unknowns.is_empty() {
-            let p = cur.clone();
-            let nbrs = |i: usize| -> Vec<(usize, f64)> {
-                (nb.off[i] as usize..nb.off[i + 1] as usize)
-                    .map(|k| {
-                        let j = nb.nbr[k] as usize;
-                        let l = p[i].distance(p[j]);
-                        (j, if l > 0.0 { ebar / l } else { 0.0 })
+    let mut curve = Stage::new(|i| roles[i] == Role::BoundaryCurve, n, &nb)?;
+    let mut inner = Stage::new(|i| roles[i] == Role::Free, n, &nb)?;
+    // the mesh itself carries the positions of each step (weights, areas,
+    // volume); on failure its input positions are restored
+    // the symbolic analysis of the free vertices' system needs only its
+    // pattern and the input positions: run it alongside the first step's
+    // cotangent weights and mixed areas (the mesh still holds the input)
+    let (analysed, wm) = {
+        let m: &SurfaceMesh = mesh;
+        rayon::join(
+            || inner.analyse(&input),
+            || {
+                rayon::join(
+                    || geom::halfedge_weights(m, LaplaceWeights::Cotangent),
+                    || geom::mixed_vertex_areas(m),
+                )
+            },
+        )
+    };
+    analysed?;
+    let mut first = Some(wm);
+    let mut run = |mesh: &mut SurfaceMesh| -> Result<Vec<Vec3>, SmoothError> {
+        let mut cur = input.clone();
+        for step in 0..opts.iterations {
+            let before = cur.clone();
+            if step > 0 {
+                mesh.positions_mut().copy_from_slice(&before);
+            }
+            if !curve.unknowns.is_empty() {
+                let p = &before;
+                let length = |i: usize, k: usize| p[i].distance(p[nb.nbr[k] as usize]);
+                let weight = |i: usize, k: usize| {
+                    let l = length(i, k);
+                    if l > 0.0 { ebar / l } else { 0.0 }
+                };
+                let mass: Vec<f64> = (0..n)
+                    .into_par_iter()
+                    .map(|i| {
+                        let s: f64 = (nb.off[i] as usize..nb.off[i + 1] as usize)
+                            .map(|k| length(i, k))
+                            .sum();
+                        0.5 * ebar * s
                     })
-                    .collect()
+                    .collect();
+                curve.solve(&mut cur, &mass, t, &nb, &weight)?;
+            }
+            let (hw, mass) = match first.take() {
+                Some(wm) => wm,
+                None => rayon::join(
+                    || geom::halfedge_weights(mesh, LaplaceWeights::Cotangent),
+                    || geom::mixed_vertex_areas(mesh),
+                ),
             };
-            let mass: Vec<f64> = (0..n)
-                .map(|i| {
-                    let s: f64 = (nb.off[i] as usize..nb.off[i + 1] as usize)
-                        .map(|k| p[i].distance(p[nb.nbr[k] as usize]))
-                        .sum();
-                    0.5 * ebar * s
-                })
-                .collect();
-            curve.solve(&mut cur, &mass, t, &nbrs)?;
-        }
-        work.positions_mut().copy_from_slice(&before);
-        let hw = geom::halfedge_weights(&work, LaplaceWeights::Cotangent);
-        let mass = geom::mixed_vertex_areas(&work);
-        let nbrs = |i: usize| -> Vec<(usize, f64)> {
-            (nb.off[i] as usize..nb.off[i + 1] as usize)
-                .map(|k| (nb.nbr[k] as usize, hw[nb.he[k] as usize]))
-                .collect()
-        };
-        inner.solve(&mut cur, &mass, t, &nbrs)?;
-        if let Some(nrm) = &normals {
-            for i in 0..n {
-                let d = cur[i] - before[i];
-                if d != Vec3::ZERO {
-                    cur[i] = before[i] + (d - d.dot(nrm[i]) * nrm[i]);
+            let weight = |_: usize, k: usize| hw[nb.he[k] as usize];
+            inner.solve(&mut cur, &mass, t, &nb, &weight)?;
+            if let Some(nrm) = &normals {
+                for i in 0..n {
+                    let d = cur[i] - before[i];
+                    if d != Vec3::ZERO {
+                        cur[i] = before[i] + (d - d.dot(nrm[i]) * nrm[i]);
+                    }
                 }
             }
+            if c.preserve_volume {
+                mesh.positions_mut().copy_from_slice(&cur);
+                restore_volume(mesh, &roles, v0)?;
+                cur.copy_from_slice(mesh.positions());
+            }
         }
-        if c.preserve_volume {
-            work.positions_mut().copy_from_slice(&cur);
-            restore_volume(&mut work, &roles, v0)?;
-            cur.copy_from_slice(work.positions());
+        Ok(cur)
+    };
+    let cur = match run(mesh) {
+        Ok(cur) => cur,
+        Err(e) => {
+            mesh.positions_mut().copy_from_slice(&input);
+            return Err(e);
         }
-    }
+    };
     finish(mesh, cur, &input, v0, opts.iterations)
 }

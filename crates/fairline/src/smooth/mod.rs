@@ -87,6 +87,10 @@ pub struct SmoothReport {
     pub max_displacement: f64,
     /// Whether an iterative method met its stopping criterion.
     pub converged: bool,
+    /// Final residual of an iterative method that has one (Schneider–Kobbelt:
+    /// max |H_i − H̃_i| · ē over the free vertices, dimensionless); `None`
+    /// for the others.
+    pub residual: Option<f64>,
 }
 
 /// Per-vertex role derived from [`Constraints`].

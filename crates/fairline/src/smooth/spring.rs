@@ -154,5 +154,6 @@ pub fn spring_smooth(
         volume_after: geom::volume(mesh),
         max_displacement,
         converged,
+        residual: None,
     })
 }

@@ -1,52 +1,174 @@
 //! Sparse Cholesky (LLᵀ) with the symbolic analysis kept for refactoring
 //! matrices of the same pattern, as PMP's and libigl's `min_quad_with_fixed`
 //! do: assemble once, analyse once, refactor and solve many times.
+//!
+//! Built on faer's supernodal/simplicial Cholesky (faer picks supernodal when
+//! the factor is dense enough). The fill-reducing ordering is AMD by default
+//! or a caller-supplied permutation (e.g. [`super::nested_dissection`] for
+//! meshes, which gives a factor that is cheaper to compute and to factor).
+//! The numeric factorisation may use rayon inside large supernodes
+//! ([`CholeskyOptions::parallel`]); triangular solves always run
+//! sequentially: faer's parallel supernodal solve spends far more time
+//! scheduling than computing on mesh-sized factors (measured: 3.9 s CPU
+//! against 0.18 s sequential for three right-hand sides at 450k unknowns).
 
 use super::SolveError;
-use faer::linalg::solvers::Solve;
+use crate::Vec3;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{
+    LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+};
 use faer::sparse::linalg::matmul::sparse_sparse_matmul;
-use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, Triplet};
-use faer::{Mat, Par, Side};
+use faer::sparse::{
+    SparseColMat, SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef, Triplet,
+};
+use faer::{Conj, Mat, MatMut, Par, Side};
+use std::sync::Arc;
+
+/// Fill-reducing ordering of a [`CholeskySolver`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum CholeskyOrdering {
+    /// Approximate minimum degree (faer's AMD), computed from the pattern.
+    #[default]
+    Amd,
+    /// A caller-supplied permutation: entry k is the original index of the
+    /// k-th eliminated unknown (e.g. from [`super::nested_dissection`]).
+    Custom(Vec<usize>),
+}
+
+/// Options of [`CholeskySolver::with_options`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct CholeskyOptions {
+    /// Fill-reducing ordering (default AMD).
+    pub ordering: CholeskyOrdering,
+    /// Let the numeric factorisation use rayon inside the dense kernels of
+    /// large supernodes (default true); small supernodes run sequentially
+    /// either way.
+    pub parallel: bool,
+}
+
+impl Default for CholeskyOptions {
+    fn default() -> Self {
+        CholeskyOptions {
+            ordering: CholeskyOrdering::Amd,
+            parallel: true,
+        }
+    }
+}
 
 /// Sparse Cholesky factorisation of a symmetric positive-definite matrix.
-/// The symbolic factorisation (fill-reducing ordering, elimination tree) is
-/// computed once in [`CholeskySolver::new`] and reused by
+/// The symbolic factorisation (fill-reducing ordering, elimination tree,
+/// supernodes) is computed once in [`CholeskySolver::new`] /
+/// [`CholeskySolver::with_options`] and reused by
 /// [`CholeskySolver::refactor`] when only the values change.
 #[derive(Clone, Debug)]
 pub struct CholeskySolver {
-    symbolic: faer::sparse::linalg::solvers::SymbolicLlt<usize>,
+    symbolic: Arc<SymbolicCholesky<usize>>,
     pattern: SymbolicSparseColMat<usize>,
-    llt: faer::sparse::linalg::solvers::Llt<usize, f64>,
+    values: Vec<f64>,
+    /// Whether `values` holds a factorisation of the current values.
+    factored: bool,
+    par: Par,
 }
 
 impl CholeskySolver {
-    /// Analyses and factors `a` (the full symmetric matrix or its lower
-    /// triangle; only the lower triangle is read).
+    /// Analyses (AMD ordering) and factors `a` (the full symmetric matrix or
+    /// its lower triangle; only the lower triangle is read).
     pub fn new(a: SparseColMatRef<'_, usize, f64>) -> Result<Self, SolveError> {
-        if a.nrows() != a.ncols() {
+        Self::with_options(a, &CholeskyOptions::default())
+    }
+
+    /// As [`CholeskySolver::new`] with a chosen ordering and parallelism.
+    pub fn with_options(
+        a: SparseColMatRef<'_, usize, f64>,
+        opts: &CholeskyOptions,
+    ) -> Result<Self, SolveError> {
+        let mut s = Self::analyse(a.symbolic(), opts)?;
+        s.factor(a)?;
+        Ok(s)
+    }
+
+    /// Symbolic analysis only (fill-reducing ordering, elimination tree,
+    /// supernodes) of a symmetric pattern (only its lower triangle is read);
+    /// the values come with [`CholeskySolver::refactor`], which must be
+    /// called before solving. Lets a caller analyse while it is still
+    /// computing the matrix values.
+    pub fn analyse(
+        pattern: SymbolicSparseColMatRef<'_, usize>,
+        opts: &CholeskyOptions,
+    ) -> Result<Self, SolveError> {
+        let n = pattern.nrows();
+        if n != pattern.ncols() {
             return Err(SolveError::Dimension(format!(
                 "Cholesky needs a square matrix, got {}×{}",
-                a.nrows(),
-                a.ncols()
+                pattern.nrows(),
+                pattern.ncols()
             )));
         }
-        let symbolic =
-            faer::sparse::linalg::solvers::SymbolicLlt::try_new(a.symbolic(), Side::Lower)
-                .map_err(|e| SolveError::Backend(format!("{e:?}")))?;
-        let llt = faer::sparse::linalg::solvers::Llt::try_new_with_symbolic(
-            symbolic.clone(),
-            a,
-            Side::Lower,
-        )
-        .map_err(llt_error)?;
+        let backend = |e: faer::sparse::FaerError| SolveError::Backend(format!("{e:?}"));
+        let symbolic = match &opts.ordering {
+            CholeskyOrdering::Amd => factorize_symbolic_cholesky(
+                pattern,
+                Side::Lower,
+                SymmetricOrdering::Amd,
+                Default::default(),
+            )
+            .map_err(backend)?,
+            CholeskyOrdering::Custom(fwd) => {
+                let inv = inverse_permutation(fwd, n)?;
+                let perm = PermRef::new_checked(fwd, &inv, n);
+                factorize_symbolic_cholesky(
+                    pattern,
+                    Side::Lower,
+                    SymmetricOrdering::Custom(perm),
+                    Default::default(),
+                )
+                .map_err(backend)?
+            }
+        };
         Ok(CholeskySolver {
-            symbolic,
-            pattern: a
-                .symbolic()
-                .to_owned()
-                .map_err(|e| SolveError::Backend(format!("{e:?}")))?,
-            llt,
+            symbolic: Arc::new(symbolic),
+            pattern: pattern.to_owned().map_err(backend)?,
+            values: Vec::new(),
+            factored: false,
+            par: if opts.parallel {
+                Par::rayon(0)
+            } else {
+                Par::Seq
+            },
         })
+    }
+
+    /// Numeric factorisation with the stored symbolic analysis.
+    fn factor(&mut self, a: SparseColMatRef<'_, usize, f64>) -> Result<(), SolveError> {
+        self.factored = false;
+        let len = self.symbolic.len_val();
+        let mut values = Vec::new();
+        values
+            .try_reserve_exact(len)
+            .map_err(|_| SolveError::Backend("out of memory for the Cholesky factor".into()))?;
+        values.resize(len, 0.0);
+        let req = self
+            .symbolic
+            .factorize_numeric_llt_scratch::<f64>(self.par, Default::default());
+        let mut buf = MemBuffer::try_new(req)
+            .map_err(|_| SolveError::Backend("out of memory for the Cholesky workspace".into()))?;
+        self.symbolic
+            .factorize_numeric_llt(
+                &mut values,
+                a,
+                Side::Lower,
+                Default::default(),
+                self.par,
+                MemStack::new(&mut buf),
+                Default::default(),
+            )
+            // faer's numeric LLᵀ fails only on a non-positive pivot
+            .map_err(|_| SolveError::NotPositiveDefinite)?;
+        self.values = values;
+        self.factored = true;
+        Ok(())
     }
 
     /// Refactors a matrix with the same sparsity pattern as the one given to
@@ -59,18 +181,38 @@ impl CholeskySolver {
                 "refactor needs the same sparsity pattern".into(),
             ));
         }
-        self.llt = faer::sparse::linalg::solvers::Llt::try_new_with_symbolic(
-            self.symbolic.clone(),
-            a,
-            Side::Lower,
-        )
-        .map_err(llt_error)?;
-        Ok(())
+        self.factor(a)
     }
 
     /// Order of the matrix.
     pub fn dim(&self) -> usize {
         self.pattern.nrows()
+    }
+
+    /// Number of stored entries of the factor L (a measure of fill-in).
+    pub fn factor_len(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Solves in place for the columns of `m` (sequential triangular solves).
+    fn solve_mat(&self, m: MatMut<'_, f64>) -> Result<(), SolveError> {
+        if !self.factored {
+            return Err(SolveError::Backend(
+                "the Cholesky solver has been analysed but not factored (call refactor)".into(),
+            ));
+        }
+        let req = self
+            .symbolic
+            .solve_in_place_scratch::<f64>(m.ncols(), Par::Seq);
+        let mut buf = MemBuffer::try_new(req)
+            .map_err(|_| SolveError::Backend("out of memory for the solve workspace".into()))?;
+        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            m,
+            Par::Seq,
+            MemStack::new(&mut buf),
+        );
+        Ok(())
     }
 
     /// Solves A x = b for one right-hand side, in place.
@@ -83,7 +225,7 @@ impl CholeskySolver {
             )));
         }
         let mut m = Mat::<f64>::from_fn(n, 1, |i, _| b[i]);
-        self.llt.solve_in_place(m.as_mut());
+        self.solve_mat(m.as_mut())?;
         for (i, x) in b.iter_mut().enumerate() {
             *x = m[(i, 0)];
         }
@@ -102,7 +244,7 @@ impl CholeskySolver {
             return Err(SolveError::Dimension("right-hand side length".into()));
         }
         let mut m = Mat::<f64>::from_fn(n, columns.len(), |i, j| columns[j][i]);
-        self.llt.solve_in_place(m.as_mut());
+        self.solve_mat(m.as_mut())?;
         for (j, c) in columns.iter_mut().enumerate() {
             for (i, x) in c.iter_mut().enumerate() {
                 *x = m[(i, j)];
@@ -114,15 +256,49 @@ impl CholeskySolver {
             Err(SolveError::NonFinite)
         }
     }
+
+    /// Solves A X = B for a right-hand side of points (the x, y and z
+    /// coordinates are three columns), in place.
+    pub fn solve_points(&self, b: &mut [Vec3]) -> Result<(), SolveError> {
+        let n = self.dim();
+        if b.len() != n {
+            return Err(SolveError::Dimension(format!(
+                "right-hand side has {} points, matrix has order {n}",
+                b.len()
+            )));
+        }
+        let mut m = Mat::<f64>::from_fn(n, 3, |i, j| b[i][j]);
+        self.solve_mat(m.as_mut())?;
+        for (i, p) in b.iter_mut().enumerate() {
+            *p = Vec3::new(m[(i, 0)], m[(i, 1)], m[(i, 2)]);
+        }
+        if b.iter().all(|p| p.is_finite()) {
+            Ok(())
+        } else {
+            Err(SolveError::NonFinite)
+        }
+    }
 }
 
-/// A failed numeric factorisation: not positive definite, or out of memory
-/// (the factor of a large system may not fit) and other faer failures.
-fn llt_error(e: faer::sparse::linalg::LltError) -> SolveError {
-    match e {
-        faer::sparse::linalg::LltError::Numeric(_) => SolveError::NotPositiveDefinite,
-        faer::sparse::linalg::LltError::Generic(e) => SolveError::Backend(format!("{e:?}")),
+/// The inverse of a permutation given as new → old indices; an error when
+/// `fwd` is not a permutation of 0..n.
+fn inverse_permutation(fwd: &[usize], n: usize) -> Result<Vec<usize>, SolveError> {
+    if fwd.len() != n {
+        return Err(SolveError::Dimension(format!(
+            "ordering has {} entries, matrix has order {n}",
+            fwd.len()
+        )));
     }
+    let mut inv = vec![usize::MAX; n];
+    for (k, &i) in fwd.iter().enumerate() {
+        if i >= n || inv[i] != usize::MAX {
+            return Err(SolveError::Dimension(
+                "the ordering is not a permutation".into(),
+            ));
+        }
+        inv[i] = k;
+    }
+    Ok(inv)
 }
 
 /// Assembles a sparse matrix from (row, column, value) triplets; duplicate
@@ -227,9 +403,26 @@ mod tests {
             assert!((x[i] - x_true[i]).abs() < 1e-12);
         }
         s.refactor(build(2.0).as_ref()).unwrap();
-        let mut y = b;
+        let mut y = b.clone();
         s.solve_in_place(&mut y).unwrap();
         assert!((y[0] - x[0]).abs() > 1e-3, "refactored values are used");
+        // refactoring with new values equals a fresh factorisation of them,
+        // and so does analysing the pattern first and factoring later
+        let fresh = CholeskySolver::new(build(2.0).as_ref()).unwrap();
+        let mut late = CholeskySolver::analyse(a.symbolic(), &CholeskyOptions::default()).unwrap();
+        let mut z = b.clone();
+        assert!(late.solve_in_place(&mut z).is_err(), "no values yet");
+        late.refactor(build(2.0).as_ref()).unwrap();
+        for solver in [&fresh, &late] {
+            let mut z = b.clone();
+            solver.solve_in_place(&mut z).unwrap();
+            let d = z
+                .iter()
+                .zip(&y)
+                .map(|(p, q)| (p - q).abs())
+                .fold(0.0, f64::max);
+            assert!(d < 1e-12, "{d}");
+        }
         // a matrix that is not positive definite is refused
         let bad = sparse_from_triplets(2, 2, &[(0, 0, 1.0), (1, 1, -1.0)]).unwrap();
         assert_eq!(

@@ -1,5 +1,5 @@
 //! Sparse linear solvers shared by every algorithm: sparse Cholesky with a
-//! reusable symbolic factorisation, normal equations of sparse least-squares
+//! reusable symbolic factorisation (AMD or nested-dissection ordering), normal equations of sparse least-squares
 //! problems (by Cholesky or by matrix-free preconditioned conjugate
 //! gradients), triplet assembly, and an exact bound-constrained QP solver.
 //!
@@ -9,11 +9,16 @@ mod amg;
 mod box_qp;
 mod cg;
 mod cholesky;
+mod ordering;
 
 pub use amg::{Amg, AmgOptions, AmgStats, CsrMatrix};
 pub use box_qp::{BoxQpOptions, BoxQpSolution, box_qp};
 pub use cg::{CgOptions, CgReport, Preconditioner, normal_equations_cg, normal_equations_pcg};
-pub use cholesky::{CholeskySolver, least_squares, normal_matrix, sparse_from_triplets};
+pub use cholesky::{
+    CholeskyOptions, CholeskyOrdering, CholeskySolver, least_squares, normal_matrix,
+    sparse_from_triplets,
+};
+pub use ordering::nested_dissection;
 
 use thiserror::Error;
 
