@@ -35,8 +35,10 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     pub iterations: usize,
     /// Solver of the least-squares system: `cg` (preconditioned conjugate
-    /// gradients, fast on large meshes), `direct` (sparse Cholesky), or
-    /// `auto` (conjugate gradients within a budget of about the cost of the
+    /// gradients, fast on large curved meshes), `amg` (conjugate gradients
+    /// with a multigrid preconditioner: fewer iterations on large flat
+    /// parts, but a costly setup), `direct` (sparse Cholesky), or `auto`
+    /// (conjugate gradients within a budget of about the cost of the
     /// direct solve, then the direct solve up to 300k free vertices). All
     /// give the same result to 1e-8 of the size of the mesh.
     #[arg(long, value_enum, default_value_t = Solver::Auto)]
@@ -65,6 +67,8 @@ pub enum Solver {
     Direct,
     /// Preconditioned conjugate gradients on the normal equations.
     Cg,
+    /// Conjugate gradients preconditioned by smoothed-aggregation multigrid.
+    Amg,
 }
 
 #[derive(serde::Deserialize)]
@@ -119,6 +123,7 @@ pub fn run(args: Args) -> Result<()> {
             Solver::Auto => EnhanceSolver::Auto,
             Solver::Direct => EnhanceSolver::Direct,
             Solver::Cg => EnhanceSolver::Cg,
+            Solver::Amg => EnhanceSolver::Amg,
         })
         .fixed(fixed);
     let mut report = Report::new("enhance");

@@ -253,7 +253,7 @@ fn demo_has_a_vertex_flow_section() {
     assert!(png.starts_with(b"\x89PNG"));
 }
 
-/// `--solver direct` and `--solver cg` write the same mesh to 1e-8 of the
+/// `--solver direct`, `cg` and `amg` write the same mesh to 1e-8 of the
 /// bounding-box diagonal (the same least-squares solution), and the report
 /// says which solver ran and how many CG iterations it took.
 #[test]
@@ -262,7 +262,7 @@ fn enhance_solvers_agree_from_the_command_line() {
     let input = d.join("cube.obj");
     fairline::io::write_mesh(&input, &fairline::shapes::rounded_cube(10, 0.3)).unwrap();
     let mut outputs = Vec::new();
-    for solver in ["direct", "cg", "auto"] {
+    for solver in ["direct", "cg", "amg", "auto"] {
         let (out, rep) = (
             d.join(format!("{solver}.ply")),
             d.join(format!("{solver}.json")),

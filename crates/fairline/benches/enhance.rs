@@ -1,5 +1,7 @@
 //! Vertex-flow feature enhancement (Ji et al. 2011) on tori (R = 1,
-//! r = 0.4, n_major = 4 n_minor) of about 10k and 100k vertices: median wall
+//! r = 0.4, n_major = 4 n_minor) and rounded cubes (radius 0.3, large flat
+//! faces: the hard case of the iterative solvers) of about 10k and 100k
+//! vertices: median wall
 //! time of `enhance_features` (curvature, assembly, factorisation, solve and
 //! flip repair: the whole computation of `fairline enhance` without file
 //! input/output), the CPU time per run (all threads; the machine is shared,
@@ -9,8 +11,9 @@
 //!
 //! Run: `cargo bench -p fairline --bench enhance`
 //! (`FAIRLINE_BENCH_RUNS`, default 3, `FAIRLINE_BENCH_SIZES`, default
-//! `10000,100000`, and `FAIRLINE_BENCH_SOLVER`, `auto` (default), `cg` or
-//! `direct`, override runs, sizes and solver). One million vertices takes
+//! `10000,100000`, `FAIRLINE_BENCH_SOLVER`, `auto` (default), `cg`, `amg`
+//! or `direct`, and `FAIRLINE_BENCH_SHAPES`, default `torus,cube`, override
+//! runs, sizes, solver and shapes). One million vertices takes
 //! about 3.3 GB with conjugate gradients; the direct solver does not fit a
 //! 24 GiB machine there (the Cholesky factor of its 3M × 3M normal matrix
 //! has 3.2 · 10⁹ nonzeros, 26 GB); see BENCHMARKS.md.
@@ -19,7 +22,7 @@ mod common;
 
 use common::{cpu_ns, row, runs, sizes};
 use fairline::enhance::{EnhanceOptions, EnhanceSolver, enhance_features};
-use fairline::shapes::torus;
+use fairline::shapes::{rounded_cube, torus};
 use std::time::Instant;
 
 fn main() {
@@ -27,10 +30,13 @@ fn main() {
     let solver = match std::env::var("FAIRLINE_BENCH_SOLVER").as_deref() {
         Ok("direct") => EnhanceSolver::Direct,
         Ok("cg") => EnhanceSolver::Cg,
+        Ok("amg") => EnhanceSolver::Amg,
         _ => EnhanceSolver::Auto,
     };
+    let shapes = std::env::var("FAIRLINE_BENCH_SHAPES").unwrap_or_else(|_| "torus,cube".into());
     let options = EnhanceOptions::default().solver(solver);
     row(&[
+        "shape",
         "vertices",
         "solver",
         "median wall s",
@@ -44,11 +50,18 @@ fn main() {
         "solve share",
     ]
     .map(String::from));
-    row(&["---"; 11].map(String::from));
-    for n in sizes(&[10_000, 100_000]) {
-        let n_minor = ((n as f64 / 4.0).sqrt().round() as u32).max(3);
-        let n_major = ((n as f64 / n_minor as f64).round() as u32).max(3);
-        let mesh = torus(1.0, 0.4, n_major, n_minor);
+    row(&["---"; 12].map(String::from));
+    for (shape, n) in shapes
+        .split(',')
+        .flat_map(|s| sizes(&[10_000, 100_000]).into_iter().map(move |n| (s, n)))
+    {
+        let mesh = if shape == "cube" {
+            rounded_cube(((n as f64 / 6.0).sqrt().round() as u32).max(2), 0.3)
+        } else {
+            let n_minor = ((n as f64 / 4.0).sqrt().round() as u32).max(3);
+            let n_major = ((n as f64 / n_minor as f64).round() as u32).max(3);
+            torus(1.0, 0.4, n_major, n_minor)
+        };
         let c0 = cpu_ns();
         let mut results = Vec::new();
         for _ in 0..runs {
@@ -65,6 +78,7 @@ fn main() {
         let (median, t, iterations) = &results[results.len() / 2];
         let f = |x: f64| format!("{x:.3}");
         row(&[
+            shape.to_string(),
             mesh.vertex_count().to_string(),
             format!("{solver:?}").to_lowercase(),
             f(*median),

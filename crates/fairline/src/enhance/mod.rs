@@ -25,8 +25,8 @@
 //!
 //! The 8n × 3n system LX = b (Eq. (20), §4.3) is assembled once per
 //! iteration in parallel and solved in the least-squares sense, i.e. its
-//! normal equations (LᵀL + εI) X = Lᵀb + εp are solved (ε below), by one of
-//! two solvers ([`EnhanceSolver`]) that give the same solution:
+//! normal equations (LᵀL + εI) X = Lᵀb + εp are solved (ε below), by one of the
+//! solvers ([`EnhanceSolver`]) that give the same solution:
 //!
 //! - **Direct** — what §4.3 does ("we compute the Cholesky factorization
 //!   for a 3n × 3n sparse matrix", TAUCS): [`crate::solve::normal_matrix`]
@@ -57,11 +57,22 @@
 //! not converged, up to [`AUTO_DIRECT_LIMIT`] free vertices (beyond, the
 //! factor does not fit in memory and CG continues). So smooth curved meshes
 //! meet the speed targets (BENCHMARKS.md, "Vertex flow") and meshes with
-//! large flat parts cost at most about twice the direct solve. (A two-level
-//! preconditioner with a piecewise-constant coarse space on vertex
-//! aggregates was tried and did not reduce the CG iterations on the
-//! rounded cube: such a coarse space does not approximate the bi-Laplacian's
-//! smooth modes.)
+//! large flat parts cost at most about twice the direct solve.
+//!
+//! - **Multigrid-preconditioned CG** ([`EnhanceSolver::Amg`], not the
+//!   default): the same CG preconditioned by a smoothed-aggregation
+//!   multigrid V-cycle of LᵀL + εI ([`crate::solve::Amg`], Vaněk, Mandel &
+//!   Brezina 1996) with the three translations as near-null space. It cuts
+//!   the iterations on the rounded cube by 8 (75 instead of 597 at 10k
+//!   vertices) but not to a size-independent count — on flat parts the
+//!   tangential motion is governed by the F_smo bi-Laplacian, a
+//!   fourth-order operator whose near-null space also holds the linear
+//!   fields, and adding them (9 more vectors) makes the coarse levels too
+//!   dense to set up cheaply — and its setup (forming LᵀL and the Galerkin
+//!   products) costs about as much as the iterations it saves: at 10k
+//!   vertices it is no faster than the direct solve and at 100k its coarse
+//!   levels fill in (BENCHMARKS.md). It reaches the Cholesky result to
+//!   10⁻⁹ of the bounding-box diagonal (tested).
 //!
 //! **Normalisations.** Eq. (5) and Eq. (7) average F_em over the edges and
 //! F_sd over the vertices; fairline makes all three terms means over the
@@ -104,10 +115,30 @@ mod tests;
 use crate::Vec3;
 use crate::geom::{mean_edge_length, principal_curvatures_rusinkiewicz, triangle_qualities};
 use crate::mesh::{MeshError, SurfaceMesh, VertexId};
-use crate::solve::{CgOptions, CholeskySolver, SolveError, normal_equations_cg};
+use crate::solve::{
+    Amg, AmgOptions, CgOptions, CholeskySolver, CsrMatrix, SolveError, normal_equations_cg,
+    normal_equations_pcg,
+};
 use serde::Serialize;
 use std::time::Instant;
 use thiserror::Error;
+
+/// The smoothed-aggregation multigrid preconditioner
+/// ([`crate::solve::Amg`]) of the normal matrix LᵀL + εI of `system`, with
+/// the three translations of the free vertices as near-null space (a
+/// rigid shift of a flat region costs only its F_sd normal rows; the
+/// F_smo bi-Laplacian does not see it).
+fn multigrid(system: &system::LeastSquares, nf: usize) -> Result<Amg, EnhanceError> {
+    let k = CsrMatrix::normal(system.a.as_ref(), system.at.as_ref(), system.epsilon)?;
+    let nullspace: Vec<Vec<f64>> = (0..3)
+        .map(|c| {
+            (0..3 * nf)
+                .map(|u| if u % 3 == c { 1.0 } else { 0.0 })
+                .collect()
+        })
+        .collect();
+    Ok(Amg::new(k, &nullspace, &AmgOptions::default())?)
+}
 
 /// Rounds of step halving for the vertices of flipped triangles before
 /// their steps are reset to zero.
@@ -175,6 +206,13 @@ pub enum EnhanceSolver {
     /// Block-Jacobi preconditioned conjugate gradients on the normal
     /// equations, matrix-free, warm-started at the current positions.
     Cg,
+    /// Conjugate gradients preconditioned by a smoothed-aggregation
+    /// multigrid V-cycle ([`crate::solve::Amg`]) of the normal matrix,
+    /// warm-started at the current positions, up to
+    /// [`EnhanceOptions::cg_max_iterations`]; an error if they do not
+    /// converge. Fewer iterations than [`EnhanceSolver::Cg`] on large flat
+    /// parts, but a costly setup (module documentation).
+    Amg,
 }
 
 impl Default for EnhanceOptions {
@@ -365,7 +403,8 @@ pub struct Enhanced {
 ///
 /// Errors: non-triangle faces, λ ≤ 0, μ < 0, non-finite options, zero
 /// iterations or bins, fixed vertices out of range, a failed factorisation,
-/// conjugate gradients that did not converge ([`EnhanceSolver::Cg`], or
+/// conjugate gradients that did not converge ([`EnhanceSolver::Cg`],
+/// [`EnhanceSolver::Amg`], or
 /// [`EnhanceSolver::Auto`] above [`AUTO_DIRECT_LIMIT`] free vertices).
 pub fn enhance_features(
     mesh: &SurfaceMesh,
@@ -471,14 +510,48 @@ pub fn enhance_features(
 
         let nf = layout.free.len();
         let budget = match options.solver {
-            EnhanceSolver::Direct => 0,
+            EnhanceSolver::Direct | EnhanceSolver::Amg => 0,
             EnhanceSolver::Cg => options.cg_max_iterations,
             EnhanceSolver::Auto if nf > AUTO_DIRECT_LIMIT => options.cg_max_iterations,
             EnhanceSolver::Auto => ((AUTO_BUDGET * (nf as f64).sqrt()) as usize)
                 .clamp(1, options.cg_max_iterations.max(1)),
         };
         let mut x = None;
-        if budget > 0 {
+        if options.solver == EnhanceSolver::Amg {
+            let t = Instant::now();
+            let mut guess: Vec<f64> = layout
+                .free
+                .iter()
+                .flat_map(|&v| current[v as usize].to_array())
+                .collect();
+            let amg = multigrid(&system, nf)?;
+            timings.factorisation_s += t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            let r = normal_equations_pcg(
+                system.a.as_ref(),
+                system.at.as_ref(),
+                system.epsilon,
+                &system.rhs,
+                &mut guess,
+                &CgOptions {
+                    tolerance: options.cg_tolerance,
+                    max_iterations: options.cg_max_iterations,
+                    block: 3,
+                },
+                &amg,
+            )?;
+            cg_iterations += r.iterations;
+            timings.solve_s += t.elapsed().as_secs_f64();
+            if !r.converged {
+                return Err(EnhanceError::Solve(SolveError::Backend(format!(
+                    "conjugate gradients did not reach the relative residual {:e} in {} iterations ({:e}); \
+                     try the direct solver",
+                    options.cg_tolerance, r.iterations, r.relative_residual
+                ))));
+            }
+            cg_residual = cg_residual.max(r.relative_residual);
+            x = Some(guess);
+        } else if budget > 0 {
             let t = Instant::now();
             let mut guess: Vec<f64> = layout
                 .free

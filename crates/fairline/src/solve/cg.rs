@@ -47,6 +47,13 @@ pub struct CgOptions {
     pub block: usize,
 }
 
+/// A symmetric positive-definite approximation z = M⁻¹ r of the inverse of
+/// the system matrix, applied once per conjugate-gradient iteration.
+pub trait Preconditioner: Sync {
+    /// z = M⁻¹ r (`z` is overwritten).
+    fn apply(&self, r: &[f64], z: &mut [f64]);
+}
+
 /// Solves (AᵀA + εI) x = `rhs` by block-Jacobi preconditioned conjugate
 /// gradients, starting from the values in `x` (a warm start; its length is
 /// the number of columns of A). `a` is A (m × n) and `at` is Aᵀ (n × m),
@@ -75,6 +82,31 @@ pub fn normal_equations_cg(
         )));
     }
     let preconditioner = BlockJacobi::new(a, epsilon, block);
+    normal_equations_pcg(a, at, epsilon, rhs, x, options, &preconditioner)
+}
+
+/// Solves (AᵀA + εI) x = `rhs` by conjugate gradients preconditioned by
+/// `preconditioner` (e.g. [`super::Amg`]), otherwise as
+/// [`normal_equations_cg`] (`options.block` is not used).
+pub fn normal_equations_pcg(
+    a: SparseColMatRef<'_, usize, f64>,
+    at: SparseColMatRef<'_, usize, f64>,
+    epsilon: f64,
+    rhs: &[f64],
+    x: &mut [f64],
+    options: &CgOptions,
+    preconditioner: &dyn Preconditioner,
+) -> Result<CgReport, SolveError> {
+    let (m, n) = (a.nrows(), a.ncols());
+    if at.nrows() != n || at.ncols() != m || rhs.len() != n || x.len() != n {
+        return Err(SolveError::Dimension(format!(
+            "CG on the normal equations: A {m}×{n}, Aᵀ {}×{}, right-hand side {}, start {}",
+            at.nrows(),
+            at.ncols(),
+            rhs.len(),
+            x.len()
+        )));
+    }
     let mut scratch = vec![0.0; m];
     pcg(
         |v: &[f64], out: &mut [f64]| normal_product(a, at, epsilon, v, out, &mut scratch),
@@ -225,7 +257,7 @@ fn dot(x: &[f64], y: &[f64]) -> f64 {
 }
 
 /// Inverses of the diagonal blocks of AᵀA + εI, row-major per block.
-struct BlockJacobi {
+pub(super) struct BlockJacobi {
     block: usize,
     inverses: Vec<f64>,
 }
@@ -252,7 +284,9 @@ impl BlockJacobi {
             });
         BlockJacobi { block, inverses }
     }
+}
 
+impl Preconditioner for BlockJacobi {
     fn apply(&self, r: &[f64], z: &mut [f64]) {
         let b = self.block;
         z.par_chunks_mut(b * CHUNK)
@@ -290,7 +324,7 @@ fn sparse_dot(a: SparseColMatRef<'_, usize, f64>, i: usize, j: usize) -> f64 {
 /// Inverse of the symmetric `b × b` matrix `m` by its Cholesky factor,
 /// written to `inv`; a block that is not positive definite falls back to
 /// the inverse of its diagonal (zero where the diagonal is not positive).
-fn invert_spd(m: &mut [f64], b: usize, inv: &mut [f64]) {
+pub(super) fn invert_spd(m: &mut [f64], b: usize, inv: &mut [f64]) {
     let original: Vec<f64> = m.to_vec();
     // in-place Cholesky, lower triangle
     let mut ok = true;

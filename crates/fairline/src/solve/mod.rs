@@ -7,13 +7,15 @@
 //!
 //! All matrices are faer `SparseColMat<usize, f64>`.
 
+mod amg;
 mod box_qp;
 mod cg;
 mod cholesky;
 mod ordering;
 
+pub use amg::{Amg, AmgOptions, AmgStats, CsrMatrix};
 pub use box_qp::{BoxQpOptions, BoxQpSolution, box_qp};
-pub use cg::{CgOptions, CgReport, normal_equations_cg, pcg};
+pub use cg::{CgOptions, CgReport, Preconditioner, normal_equations_cg, normal_equations_pcg, pcg};
 pub use cholesky::{
     CholeskyOptions, CholeskyOrdering, CholeskySolver, least_squares, normal_matrix,
     sparse_from_triplets,
