@@ -437,6 +437,9 @@ impl Stage {
         let order = nested_dissection(self.pattern.as_ref(), &points)?;
         let opts = CholeskyOptions {
             ordering: CholeskyOrdering::Custom(order),
+            // faer's rayon-parallel supernodal kernels made the 450k step
+            // slower on 2 cores (1.6 s vs 1.2 s wall, BENCHMARKS.md)
+            parallel: false,
             ..CholeskyOptions::default()
         };
         self.solver = Some(CholeskySolver::analyse(self.pattern.as_ref(), &opts)?);
@@ -518,6 +521,7 @@ impl Stage {
             let order = nested_dissection(self.pattern.as_ref(), &points)?;
             let opts = CholeskyOptions {
                 ordering: CholeskyOrdering::Custom(order),
+                parallel: false,
                 ..CholeskyOptions::default()
             };
             match CholeskySolver::with_options(a, &opts) {
