@@ -440,7 +440,6 @@ impl Stage {
             // faer's rayon-parallel supernodal kernels made the 450k step
             // slower on 2 cores (1.6 s vs 1.2 s wall, BENCHMARKS.md)
             parallel: false,
-            ..CholeskyOptions::default()
         };
         self.solver = Some(CholeskySolver::analyse(self.pattern.as_ref(), &opts)?);
         Ok(())
@@ -522,7 +521,6 @@ impl Stage {
             let opts = CholeskyOptions {
                 ordering: CholeskyOrdering::Custom(order),
                 parallel: false,
-                ..CholeskyOptions::default()
             };
             match CholeskySolver::with_options(a, &opts) {
                 Ok(fresh) => *solver = fresh,
