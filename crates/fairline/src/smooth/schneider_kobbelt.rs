@@ -124,7 +124,11 @@ struct MsFit {
 ///    |t_i| is limited to half the mean length of its edges.
 ///
 /// Iterates until max |t| / ē < ε (ē the input mean edge length); the report
-/// gives the iterations and the final residual max |H − H̃| · ē.
+/// gives the accepted iterations and the final residual max |H − H̃| · ē.
+/// A step is accepted only if it lowers the merit Σ_i (Σ_j w_ij (H_i − H_j))²;
+/// when no step length down to 1/64 does (the linearisation freezes the
+/// normals and cotangent weights, which is poor on larger patches such as a
+/// 61×61 dented roof), the iteration stops unconverged instead of drifting.
 pub fn schneider_kobbelt(
     mesh: &mut SurfaceMesh,
     opts: &SchneiderKobbeltOptions,
@@ -268,7 +272,6 @@ pub fn schneider_kobbelt(
         if iterations >= opts.max_iterations {
             break;
         }
-        iterations += 1;
         // (2) linearised Eq. (29) for all free vertices at once. With
         // κ̃_j = 2a/L, a = ⟨d_j, n_i⟩, L = |d_j|², d_j = q_j − q_i:
         // ∂κ̃_j/∂t_i = (−2 + 2κ̃_j a)/L, ∂κ̃_j/∂t_j = (2⟨n_j, n_i⟩ − 2κ̃_j⟨d_j, n_j⟩)/L.
@@ -345,6 +348,8 @@ pub fn schneider_kobbelt(
         // backtracking on the merit ‖Σ_j w_ij (H_i − H_j)‖²: far from the
         // solution the linearisation (normals and fit weights frozen) can
         // overshoot; halve the step until the merit drops
+        // (a step that lowers it for no α ≥ 1/64 is not taken: the iteration
+        // has stalled and ends unconverged rather than drift uphill)
         let mut alpha = 1.0;
         let mut trial = work.clone();
         let next_ev = loop {
@@ -352,11 +357,18 @@ pub fn schneider_kobbelt(
                 trial.positions_mut()[i] = p[i] + alpha * t[r] * normals[i];
             }
             let e = evaluate(&trial);
-            if e.merit < ev.merit || alpha < 1.0 / 64.0 {
-                break e;
+            if e.merit < ev.merit {
+                break Some(e);
+            }
+            if alpha < 1.0 / 64.0 {
+                break None;
             }
             alpha *= 0.5;
         };
+        let Some(next_ev) = next_ev else {
+            break;
+        };
+        iterations += 1;
         let worst = alpha * tmax / ebar;
         work = trial;
         ev = next_ev;
