@@ -36,17 +36,15 @@ impl Default for SchneiderKobbeltOptions {
 }
 
 /// Moreton–Séquin mean curvature at `x` with normal `n` and neighbours `q`
-/// (Eq. (28) and the least-squares fit of Euler's formula), returned as
-/// (H, g, d2, κ̃) with H = g·κ̃ linear in the normal curvatures κ̃_j, d2 the
-/// squared distances |q_j − x|². Falls back to the mean of κ̃ (g_j = 1/m)
-/// when the 3×3 normal matrix is singular.
-fn moreton_sequin(x: Vec3, n: Vec3, q: &[Vec3]) -> MsFit {
+/// (Eq. (28) and the least-squares fit of Euler's formula): H = Σ g_j κ̃_j,
+/// linear in the normal curvatures κ̃_j = 2⟨q_j − x, n⟩ / |q_j − x|². Falls
+/// back to the mean of κ̃ (g_j = 1/m) when the 3×3 normal matrix is singular.
+fn moreton_sequin(x: Vec3, n: Vec3, q: &[Vec3]) -> f64 {
     let m = q.len();
     let bx = n.any_orthonormal_vector();
     let by = n.cross(bx);
     let mut rows = Vec::with_capacity(m);
     let mut kappa = Vec::with_capacity(m);
-    let mut d2 = Vec::with_capacity(m);
     for &qj in q {
         let d = qj - x;
         let l2 = d.length_squared();
@@ -60,7 +58,6 @@ fn moreton_sequin(x: Vec3, n: Vec3, q: &[Vec3]) -> MsFit {
         };
         rows.push([tx * tx, tx * ty, ty * ty]);
         kappa.push(if l2 > 0.0 { 2.0 * d.dot(n) / l2 } else { 0.0 });
-        d2.push(l2);
     }
     let mut ata = glam::DMat3::ZERO;
     for r in &rows {
@@ -80,8 +77,7 @@ fn moreton_sequin(x: Vec3, n: Vec3, q: &[Vec3]) -> MsFit {
     } else {
         Vec::new()
     };
-    let h = g.iter().zip(&kappa).map(|(a, b)| a * b).sum();
-    MsFit { h, g, d2, kappa }
+    g.iter().zip(&kappa).map(|(a, b)| a * b).sum()
 }
 
 /// State of one outer iteration: normals (fixed G¹ normals at constrained
@@ -89,17 +85,11 @@ fn moreton_sequin(x: Vec3, n: Vec3, q: &[Vec3]) -> MsFit {
 /// Σ_i (Σ_j w_ij (H_i − H_j))² over the free vertices.
 struct Eval {
     normals: Vec<Vec3>,
-    fits: Vec<Option<MsFit>>,
+    fits: Vec<Option<f64>>,
     hw: Vec<f64>,
+    /// Σ_j w_ij (H_i − H_j) per free vertex (the residual of Δ_B H = 0).
+    f: Vec<f64>,
     merit: f64,
-}
-
-/// Moreton–Séquin estimate at one vertex: H = Σ g_j κ̃_j.
-struct MsFit {
-    h: f64,
-    g: Vec<f64>,
-    d2: Vec<f64>,
-    kappa: Vec<f64>,
 }
 
 /// Schneider–Kobbelt fairing of a triangle mesh with G¹ boundary (fixed
@@ -114,21 +104,23 @@ struct MsFit {
 ///    constrained vertex with its *fixed* G¹ normal and its current
 ///    neighbours — this is where the normal condition enters;
 /// 2. every free vertex moves along its normal, q_i + t_i n_i, so that its
-///    Moreton–Séquin mean curvature equals H̃_i (Eq. (29)). The linearisation
-///    of Eq. (28) in t couples each vertex with its neighbours (moving q_j
-///    changes κ̃_j at q_i by the same order as moving q_i), so the t_i are
-///    solved together from the sparse linearised system J t = H̃ − H (least
-///    squares, `solve::least_squares`) — a Newton step; the vertex-by-vertex
-///    (Jacobi) update of the linearisation converges like Jacobi on a
-///    Laplacian, i.e. in O(n) iterations, and was too slow on small patches.
-///    |t_i| is limited to half the mean length of its edges.
+///    Moreton–Séquin mean curvature equals H̃_i (Eq. (29)). Moving q_j
+///    changes κ̃_j at q_i by the same order as moving q_i, and the normals,
+///    fit weights and cotangent weights move too, so the t_i are solved
+///    together: one Newton step on the residuals Σ_j w_ij (H_i − H_j) of the
+///    free vertices, with the Jacobian by finite differences of the whole
+///    evaluation, coloured so that vertices more than four rings apart are
+///    probed together (a residual depends on its two-ring only), and solved
+///    by sparse least squares (`solve::least_squares`). |t_i| is limited to
+///    half the mean length of its edges. (A vertex-by-vertex update converges
+///    like Jacobi on a Laplacian; a hand linearisation that freezes normals
+///    and weights gave no descent direction on a 61×61 dented roof.)
 ///
 /// Iterates until max |t| / ē < ε (ē the input mean edge length); the report
 /// gives the accepted iterations and the final residual max |H − H̃| · ē.
 /// A step is accepted only if it lowers the merit Σ_i (Σ_j w_ij (H_i − H_j))²;
-/// when no step length down to 1/64 does (the linearisation freezes the
-/// normals and cotangent weights, which is poor on larger patches such as a
-/// 61×61 dented roof), the iteration stops unconverged instead of drifting.
+/// when no step length down to 1/64 does, the iteration stops unconverged
+/// instead of drifting.
 pub fn schneider_kobbelt(
     mesh: &mut SurfaceMesh,
     opts: &SchneiderKobbeltOptions,
@@ -197,7 +189,7 @@ pub fn schneider_kobbelt(
                 normals[i] = normals0[i];
             }
         }
-        let fits: Vec<Option<MsFit>> = (0..n)
+        let fits: Vec<Option<f64>> = (0..n)
             .map(|i| {
                 if nbrs[i].is_empty() || normals[i] == Vec3::ZERO {
                     return None;
@@ -208,31 +200,79 @@ pub fn schneider_kobbelt(
             .collect();
         let hw = geom::halfedge_weights(work, LaplaceWeights::Cotangent);
         // merit: Σ_i (Σ_j w_ij (H_i − H_j))² over the free vertices
-        let h_of = |i: usize| fits[i].as_ref().map_or(0.0, |f| f.h);
-        let merit = unknown
+        let h_of = |i: usize| fits[i].unwrap_or(0.0);
+        let f: Vec<f64> = unknown
             .iter()
             .map(|&i| {
-                let f: f64 = work
-                    .outgoing(VertexId(i as u32))
+                work.outgoing(VertexId(i as u32))
                     .map(|h| 2.0 * hw[h.idx()] * (h_of(i) - h_of(work.to_vertex(h).idx())))
-                    .sum();
-                f * f
+                    .sum()
             })
-            .sum();
+            .collect();
+        let merit = f.iter().map(|x| x * x).sum();
         Eval {
             normals,
             fits,
             hw,
+            f,
             merit,
         }
     };
+    // The residual f_i of a free vertex depends on the positions within two
+    // rings of it (H_i and its normal on the one-ring, H_j of the neighbours
+    // on theirs, the cotangent weights on the one-ring), so moving vertex k
+    // changes only the rows of its two-ring: columns whose two-rings are
+    // disjoint (distance > 4) are probed by one finite difference together.
+    let rings = |start: usize, depth: usize| -> Vec<usize> {
+        let mut seen = vec![start];
+        let mut frontier = vec![start];
+        for _ in 0..depth {
+            let mut next = Vec::new();
+            for &a in &frontier {
+                for &b in &nbrs[a] {
+                    if !seen.contains(&b) {
+                        seen.push(b);
+                        next.push(b);
+                    }
+                }
+            }
+            frontier = next;
+        }
+        seen
+    };
+    let support: Vec<Vec<usize>> = unknown
+        .iter()
+        .map(|&k| {
+            let mut rows: Vec<usize> = rings(k, 2)
+                .into_iter()
+                .filter_map(|i| (index[i] != usize::MAX).then_some(index[i]))
+                .collect();
+            rows.sort_unstable();
+            rows
+        })
+        .collect();
+    let mut colour = vec![usize::MAX; m];
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (c, &k) in unknown.iter().enumerate() {
+        let taken: Vec<usize> = rings(k, 4)
+            .into_iter()
+            .filter_map(|i| (index[i] != usize::MAX).then(|| colour[index[i]]))
+            .filter(|&g| g != usize::MAX)
+            .collect();
+        let g = (0..).find(|g| !taken.contains(g)).unwrap_or(0);
+        colour[c] = g;
+        if g == groups.len() {
+            groups.push(Vec::new());
+        }
+        groups[g].push(c);
+    }
     let mut ev = evaluate(&work);
     while !converged {
         let p = work.positions().to_vec();
         let Eval {
             normals, fits, hw, ..
         } = &ev;
-        let h_of = |i: usize| fits[i].as_ref().map_or(0.0, |f| f.h);
+        let h_of = |i: usize| fits[i].unwrap_or(0.0);
         // (1) harmonic H̃ with Dirichlet values at the constrained vertices
         let mut trip = Vec::new();
         let mut htilde = vec![0.0; m];
@@ -272,59 +312,34 @@ pub fn schneider_kobbelt(
         if iterations >= opts.max_iterations {
             break;
         }
-        // (2) linearised Eq. (29) for all free vertices at once. With
-        // κ̃_j = 2a/L, a = ⟨d_j, n_i⟩, L = |d_j|², d_j = q_j − q_i:
-        // ∂κ̃_j/∂t_i = (−2 + 2κ̃_j a)/L, ∂κ̃_j/∂t_j = (2⟨n_j, n_i⟩ − 2κ̃_j⟨d_j, n_j⟩)/L.
-        // Rows of ∂H/∂t for every vertex (constrained ones too: their H, the
-        // Dirichlet data of H̃, moves with their free neighbours).
-        let dh: Vec<Vec<(usize, f64)>> = (0..n)
-            .map(|i| {
-                let mut row = Vec::new();
-                let Some(f) = &fits[i] else {
-                    return row;
-                };
-                let ni = normals[i];
-                let mut diag = 0.0;
-                for (k, &j) in nbrs[i].iter().enumerate() {
-                    let l = f.d2[k];
-                    if !(l > 0.0) {
-                        continue;
-                    }
-                    let d = p[j] - p[i];
-                    diag += f.g[k] * (-2.0 + 2.0 * f.kappa[k] * d.dot(ni)) / l;
-                    let cj = index[j];
-                    if cj != usize::MAX {
-                        let nj = normals[j];
-                        let v = f.g[k] * (2.0 * nj.dot(ni) - 2.0 * f.kappa[k] * d.dot(nj)) / l;
-                        if v.is_finite() {
-                            row.push((cj, v));
-                        }
-                    }
-                }
-                if index[i] != usize::MAX && diag.is_finite() {
-                    row.push((index[i], diag));
-                }
-                row
-            })
-            .collect();
-        // Newton step for Σ_j w_ij (H_i − H_j) = 0 at the free vertices
-        // (equivalently H = H̃ with H̃'s boundary data moving along):
-        // Σ_j w_ij (∂H_i − ∂H_j) t = −Σ_j w_ij (H_i − H_j)
+        // (2) Newton step for Σ_j w_ij (H_i − H_j) = 0 at the free vertices,
+        // all offsets t along the current normals at once. The Jacobian is
+        // taken by coloured finite differences of the whole evaluation, so
+        // it includes what a hand linearisation of Eq. (29) freezes (the
+        // normals, the Moreton–Séquin fit weights, the cotangent weights);
+        // with frozen terms the step was no descent direction on larger
+        // patches.
+        let step = 1e-6 * ebar;
         let mut jac = Vec::new();
-        let mut rhs = vec![0.0; m];
-        for (r, &i) in unknown.iter().enumerate() {
-            for h in work.outgoing(VertexId(i as u32)) {
-                let j = work.to_vertex(h).idx();
-                let w = 2.0 * hw[h.idx()];
-                rhs[r] -= w * (h_of(i) - h_of(j));
-                for &(c, v) in &dh[i] {
-                    jac.push((r, c, w * v));
+        let mut probe = work.clone();
+        for group in &groups {
+            for &c in group {
+                let i = unknown[c];
+                probe.positions_mut()[i] = p[i] + step * normals[i];
+            }
+            let e = evaluate(&probe);
+            for &c in group {
+                for &r in &support[c] {
+                    let v = (e.f[r] - ev.f[r]) / step;
+                    if v != 0.0 && v.is_finite() {
+                        jac.push((r, c, v));
+                    }
                 }
-                for &(c, v) in &dh[j] {
-                    jac.push((r, c, -w * v));
-                }
+                let i = unknown[c];
+                probe.positions_mut()[i] = p[i];
             }
         }
+        let rhs: Vec<f64> = ev.f.iter().map(|x| -x).collect();
         let jm = sparse_from_triplets(m, m, &jac)?;
         let t = least_squares(jm.as_ref(), std::slice::from_ref(&rhs))?
             .pop()
