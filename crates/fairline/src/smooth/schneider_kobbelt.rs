@@ -256,7 +256,8 @@ pub fn schneider_kobbelt(
     for (c, &k) in unknown.iter().enumerate() {
         let taken: Vec<usize> = rings(k, 4)
             .into_iter()
-            .filter_map(|i| (index[i] != usize::MAX).then(|| colour[index[i]]))
+            .filter(|&i| index[i] != usize::MAX)
+            .map(|i| colour[index[i]])
             .filter(|&g| g != usize::MAX)
             .collect();
         let g = (0..).find(|g| !taken.contains(g)).unwrap_or(0);
