@@ -124,34 +124,16 @@ impl CsrMatrix {
             .into_par_iter()
             .map(|c| {
                 let rows = c * ROWS..((c + 1) * ROWS).min(n);
-                let mut acc = vec![0.0; n];
-                let mut mark = vec![false; n];
-                let mut touched: Vec<u32> = Vec::new();
+                let mut row = RowAccumulator::new(n);
                 let (mut len, mut idx, mut val) = (Vec::new(), Vec::new(), Vec::new());
                 for u in rows {
                     for (&r, &w) in a.row_idx_of_col_raw(u).iter().zip(a.val_of_col(u)) {
                         for (&v, &x) in at.row_idx_of_col_raw(r).iter().zip(at.val_of_col(r)) {
-                            if !mark[v] {
-                                mark[v] = true;
-                                touched.push(v as u32);
-                            }
-                            acc[v] += w * x;
+                            row.add(v as u32, w * x);
                         }
                     }
-                    if !mark[u] {
-                        mark[u] = true;
-                        touched.push(u as u32);
-                    }
-                    acc[u] += epsilon;
-                    touched.sort_unstable();
-                    for &v in &touched {
-                        idx.push(v);
-                        val.push(acc[v as usize]);
-                        acc[v as usize] = 0.0;
-                        mark[v as usize] = false;
-                    }
-                    len.push(touched.len());
-                    touched.clear();
+                    row.add(u as u32, epsilon);
+                    len.push(row.flush(&mut idx, &mut val));
                 }
                 (len, idx, val)
             })
@@ -245,31 +227,17 @@ impl CsrMatrix {
             .into_par_iter()
             .map(|c| {
                 let rows = c * ROWS..((c + 1) * ROWS).min(self.nrows);
-                let mut acc = vec![0.0; n];
-                let mut mark = vec![false; n];
-                let mut touched: Vec<u32> = Vec::new();
+                let mut row = RowAccumulator::new(n);
                 let (mut len, mut idx, mut val) = (Vec::new(), Vec::new(), Vec::new());
                 for i in rows {
                     let (ri, rv) = self.row(i);
                     for (&k, &w) in ri.iter().zip(rv) {
                         let (bi, bv) = b.row(k as usize);
                         for (&j, &x) in bi.iter().zip(bv) {
-                            if !mark[j as usize] {
-                                mark[j as usize] = true;
-                                touched.push(j);
-                            }
-                            acc[j as usize] += w * x;
+                            row.add(j, w * x);
                         }
                     }
-                    touched.sort_unstable();
-                    for &j in &touched {
-                        idx.push(j);
-                        val.push(acc[j as usize]);
-                        acc[j as usize] = 0.0;
-                        mark[j as usize] = false;
-                    }
-                    len.push(touched.len());
-                    touched.clear();
+                    len.push(row.flush(&mut idx, &mut val));
                 }
                 (len, idx, val)
             })
@@ -807,41 +775,23 @@ fn smooth_prolongator(
         .into_par_iter()
         .map(|c| {
             let nodes = c * ROWS..((c + 1) * ROWS).min(nb);
-            let mut acc = vec![0.0; ncols];
-            let mut mark = vec![false; ncols];
-            let mut touched: Vec<u32> = Vec::new();
+            let mut row = RowAccumulator::new(ncols);
             let (mut len, mut idx, mut val) = (Vec::new(), Vec::new(), Vec::new());
             for g in nodes {
                 let inv = &inverses[g * block * block..(g + 1) * block * block];
                 for i in 0..block {
                     let (ti, tv) = t.row(g * block + i);
                     for (&j, &v) in ti.iter().zip(tv) {
-                        if !mark[j as usize] {
-                            mark[j as usize] = true;
-                            touched.push(j);
-                        }
-                        acc[j as usize] += v;
+                        row.add(j, v);
                     }
                     for l in 0..block {
                         let w = -omega * inv[i * block + l];
                         let (ki, kv) = kt.row(g * block + l);
                         for (&j, &v) in ki.iter().zip(kv) {
-                            if !mark[j as usize] {
-                                mark[j as usize] = true;
-                                touched.push(j);
-                            }
-                            acc[j as usize] += w * v;
+                            row.add(j, w * v);
                         }
                     }
-                    touched.sort_unstable();
-                    for &j in &touched {
-                        idx.push(j);
-                        val.push(acc[j as usize]);
-                        acc[j as usize] = 0.0;
-                        mark[j as usize] = false;
-                    }
-                    len.push(touched.len());
-                    touched.clear();
+                    len.push(row.flush(&mut idx, &mut val));
                 }
             }
             (len, idx, val)
@@ -907,6 +857,49 @@ fn symmetrise_with_unit_idle(k: CsrMatrix) -> CsrMatrix {
         ptr,
         idx,
         val,
+    }
+}
+
+/// A dense scatter accumulator for one sparse row at a time (Gustavson's
+/// sparse product): `add` sums into column j, `flush` appends the touched
+/// columns in increasing order with their sums and resets, returning how
+/// many there were.
+struct RowAccumulator {
+    acc: Vec<f64>,
+    mark: Vec<bool>,
+    touched: Vec<u32>,
+}
+
+impl RowAccumulator {
+    fn new(ncols: usize) -> Self {
+        RowAccumulator {
+            acc: vec![0.0; ncols],
+            mark: vec![false; ncols],
+            touched: Vec::new(),
+        }
+    }
+
+    #[inline]
+    fn add(&mut self, j: u32, v: f64) {
+        let k = j as usize;
+        if !self.mark[k] {
+            self.mark[k] = true;
+            self.touched.push(j);
+        }
+        self.acc[k] += v;
+    }
+
+    fn flush(&mut self, idx: &mut Vec<u32>, val: &mut Vec<f64>) -> usize {
+        self.touched.sort_unstable();
+        for &j in &self.touched {
+            idx.push(j);
+            val.push(self.acc[j as usize]);
+            self.acc[j as usize] = 0.0;
+            self.mark[j as usize] = false;
+        }
+        let n = self.touched.len();
+        self.touched.clear();
+        n
     }
 }
 
