@@ -115,7 +115,13 @@ pub fn run(args: Args) -> Result<()> {
         grid: args.grid,
         sample_spacing: args.sample_spacing,
         truncation: args.truncation,
-        min_truncation: args.min_truncation.min(args.truncation),
+        // a larger floor is taken as --truncation; NaN is left for the
+        // library's option check to refuse (f64::min would hide it)
+        min_truncation: if args.min_truncation > args.truncation {
+            args.truncation
+        } else {
+            args.min_truncation
+        },
         epsilon: args.epsilon,
         max_iterations: args.max_iterations,
         ..Default::default()

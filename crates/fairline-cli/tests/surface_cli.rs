@@ -209,6 +209,28 @@ fn fair_surface_end_to_end_leaves_the_outside_bit_identical() {
         "8",
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // a truncation floor that is not a number is refused, nothing written
+    let nan_out = d.join("nan.json");
+    let bad = run(&[
+        "fair-surface",
+        s(&f),
+        "--lights",
+        s(&lf),
+        "--endpoints",
+        s(&ef),
+        "-o",
+        s(&nan_out),
+        "--min-truncation",
+        "NaN",
+    ]);
+    assert_eq!(
+        bad.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&bad.stderr)
+    );
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("truncation"));
+    assert!(!nan_out.exists());
     let r = json(&rep);
     for key in [
         "iterations",
