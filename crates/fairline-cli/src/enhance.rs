@@ -34,13 +34,14 @@ pub struct Args {
     /// after the first.
     #[arg(long, default_value_t = 1)]
     pub iterations: usize,
-    /// Solver of the least-squares system: `cg` (preconditioned conjugate
-    /// gradients, fast on large curved meshes), `amg` (conjugate gradients
-    /// with a multigrid preconditioner: fewer iterations on large flat
-    /// parts, but a costly setup), `direct` (sparse Cholesky), or `auto`
-    /// (conjugate gradients within a budget of about the cost of the
-    /// direct solve, then the direct solve up to 300k free vertices). All
-    /// give the same result to 1e-8 of the size of the mesh.
+    /// Solver of the least-squares system: `cg` (block-Jacobi conjugate
+    /// gradients, fast on curved meshes), `amg` (conjugate gradients
+    /// preconditioned by a multigrid bi-Laplacian model: few iterations
+    /// also on large flat or cylindrical parts, at a higher cost per
+    /// iteration), `direct` (sparse Cholesky, memory-hungry), or `auto`
+    /// (`cg` for up to 40 iterations, then `amg` from there; `direct` only
+    /// should that fail). All give the same result to 1e-8 of the size of
+    /// the mesh.
     #[arg(long, value_enum, default_value_t = Solver::Auto)]
     pub solver: Solver,
     /// JSON file `{"vertices":[...]}` of vertices that must not move.
@@ -61,13 +62,14 @@ pub struct Args {
 /// `--solver` values.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Solver {
-    /// Conjugate gradients, then the direct solve if they are slow.
+    /// Block-Jacobi conjugate gradients, then the multigrid preconditioner
+    /// if they are slow.
     Auto,
     /// Sparse Cholesky factorisation of the normal equations.
     Direct,
     /// Preconditioned conjugate gradients on the normal equations.
     Cg,
-    /// Conjugate gradients preconditioned by smoothed-aggregation multigrid.
+    /// Conjugate gradients preconditioned by a multigrid bi-Laplacian model.
     Amg,
 }
 

@@ -28,7 +28,7 @@
 //! normal equations (LᵀL + εI) X = Lᵀb + εp are solved (ε below), by one of the
 //! solvers ([`EnhanceSolver`]) that give the same solution:
 //!
-//! - **Direct** — what §4.3 does ("we compute the Cholesky factorization
+//! - **Direct** ([`EnhanceSolver::Direct`]) — what §4.3 does ("we compute the Cholesky factorization
 //!   for a 3n × 3n sparse matrix", TAUCS): [`crate::solve::normal_matrix`]
 //!   and [`crate::solve::CholeskySolver`] (faer, AMD ordering, supernodal).
 //!   LᵀL couples the three coordinates of each vertex with those of its
@@ -46,33 +46,30 @@
 //!   that of L (about 3 GB at 1M vertices). Where the curvature pins the
 //!   tangential motion (F_sd with d|k| > 0, F_em) CG converges in about 25
 //!   iterations at any size (tori of 10k–1M vertices); where it does not —
-//!   flat parts, where only the F_smo bi-Laplacian holds the tangential
-//!   motion — the count grows with the size of the flat part (rounded cube:
-//!   190 at 10k, about 1500 at 100k; the real scan `spot`, 2.9k vertices:
-//!   730), and the direct solve may be faster.
+//!   flat parts and the axial direction of cylindrical parts, where only
+//!   the F_smo bi-Laplacian holds the tangential motion — the count grows
+//!   with the size of those parts (rounded cube: 597 at 10k, about 1500 at
+//!   100k; the real scan `spot`, 2.9k vertices: 730).
+//! - **CG with the factored bi-Laplacian preconditioner**
+//!   ([`EnhanceSolver::Amg`]): block Jacobi plus H⁻¹ Q̂⁻¹ H⁻¹, where
+//!   H Q̂ H models the F_smo and F_em rows as a weighted bi-Laplacian with
+//!   per-vertex 3 × 3 weights and the F_sd rows as a reaction term, and H,
+//!   a 1-ring vector Laplacian, is inverted approximately by one
+//!   smoothed-aggregation multigrid V-cycle ([`crate::solve::Amg`], Vaněk,
+//!   Mandel & Brezina 1996); see `precondition.rs` for the derivation and
+//!   the measured condition numbers. Its iteration count hardly grows with
+//!   the mesh (rounded cube: about 40 at 10k vertices, 55 at 100k; open
+//!   cylinders of two lengths: 26 and 28, block Jacobi 631 on the shorter),
+//!   but an iteration costs several of block Jacobi's and the setup about
+//!   ten. (An earlier multigrid on LᵀL itself cut the iterations only 8×
+//!   and filled in on coarse levels: LᵀL is a fourth-order operator.)
 //!
-//! The default, [`EnhanceSolver::Auto`], runs CG within a budget of
-//! [`AUTO_BUDGET`] √n iterations — about the cost of the factorisation,
-//! which grows like n^1.5 — and falls back to the direct solve when CG has
-//! not converged, up to [`AUTO_DIRECT_LIMIT`] free vertices (beyond, the
-//! factor does not fit in memory and CG continues). So smooth curved meshes
-//! meet the speed targets (BENCHMARKS.md, "Vertex flow") and meshes with
-//! large flat parts cost at most about twice the direct solve.
-//!
-//! - **Multigrid-preconditioned CG** ([`EnhanceSolver::Amg`], not the
-//!   default): the same CG preconditioned by a smoothed-aggregation
-//!   multigrid V-cycle of LᵀL + εI ([`crate::solve::Amg`], Vaněk, Mandel &
-//!   Brezina 1996) with the three translations as near-null space. It cuts
-//!   the iterations on the rounded cube by 8 (75 instead of 597 at 10k
-//!   vertices) but not to a size-independent count — on flat parts the
-//!   tangential motion is governed by the F_smo bi-Laplacian, a
-//!   fourth-order operator whose near-null space also holds the linear
-//!   fields, and adding them (9 more vectors) makes the coarse levels too
-//!   dense to set up cheaply — and its setup (forming LᵀL and the Galerkin
-//!   products) costs about as much as the iterations it saves: at 10k
-//!   vertices it is no faster than the direct solve and at 100k its coarse
-//!   levels fill in (BENCHMARKS.md). It reaches the Cholesky result to
-//!   10⁻⁹ of the bounding-box diagonal (tested).
+//! The default, [`EnhanceSolver::Auto`], runs block-Jacobi CG for at most
+//! [`AUTO_JACOBI_BUDGET`] iterations — enough where the curvature holds the
+//! motion — and continues from there with the factored preconditioner; the
+//! direct solve is a last resort should that fail (up to
+//! [`AUTO_DIRECT_LIMIT`] free vertices). Every CG result reaches the
+//! Cholesky one to 10⁻⁸ of the bounding-box diagonal (tested).
 //!
 //! **Normalisations.** Eq. (5) and Eq. (7) average F_em over the edges and
 //! F_sd over the vertices; fairline makes all three terms means over the
@@ -107,6 +104,7 @@
 //! current mesh for F_em and F_smo, while F_sd keeps the input positions and
 //! input frames as its distance reference.
 
+mod precondition;
 mod repair;
 mod system;
 #[cfg(test)]
@@ -116,29 +114,11 @@ use crate::Vec3;
 use crate::geom::{mean_edge_length, principal_curvatures_rusinkiewicz, triangle_qualities};
 use crate::mesh::{MeshError, SurfaceMesh, VertexId};
 use crate::solve::{
-    Amg, AmgOptions, CgOptions, CholeskySolver, CsrMatrix, SolveError, normal_equations_cg,
-    normal_equations_pcg,
+    CgOptions, CgReport, CholeskySolver, SolveError, normal_equations_cg, normal_equations_pcg,
 };
 use serde::Serialize;
 use std::time::Instant;
 use thiserror::Error;
-
-/// The smoothed-aggregation multigrid preconditioner
-/// ([`crate::solve::Amg`]) of the normal matrix LᵀL + εI of `system`, with
-/// the three translations of the free vertices as near-null space (a
-/// rigid shift of a flat region costs only its F_sd normal rows; the
-/// F_smo bi-Laplacian does not see it).
-fn multigrid(system: &system::LeastSquares, nf: usize) -> Result<Amg, EnhanceError> {
-    let k = CsrMatrix::normal(system.a.as_ref(), system.at.as_ref(), system.epsilon)?;
-    let nullspace: Vec<Vec<f64>> = (0..3)
-        .map(|c| {
-            (0..3 * nf)
-                .map(|u| if u % 3 == c { 1.0 } else { 0.0 })
-                .collect()
-        })
-        .collect();
-    Ok(Amg::new(k, &nullspace, &AmgOptions::default())?)
-}
 
 /// Rounds of step halving for the vertices of flipped triangles before
 /// their steps are reset to zero.
@@ -147,16 +127,18 @@ pub const REPAIR_HALVINGS: usize = 8;
 /// Default relative residual at which conjugate gradients stop.
 pub const CG_TOLERANCE: f64 = 1e-12;
 
-/// Iteration budget of conjugate gradients under [`EnhanceSolver::Auto`],
-/// in units of √(free vertices): about the cost of the direct solve, whose
-/// factorisation grows like n^1.5 while an iteration costs O(n) (measured
-/// on this project's machine: the budget is 200 iterations at 10k free
-/// vertices, 630 at 100k; see BENCHMARKS.md).
-pub const AUTO_BUDGET: f64 = 2.0;
+/// Iterations of block-Jacobi conjugate gradients under
+/// [`EnhanceSolver::Auto`] before they switch to the multigrid-preconditioned
+/// ones: where the curvature holds every tangential direction (tori of 10k
+/// to 1M vertices) block Jacobi converges in about 25 iterations, each
+/// cheaper than a preconditioned one and without a setup; where it does not
+/// (flat or cylindrical parts) it would need hundreds to thousands.
+pub const AUTO_JACOBI_BUDGET: usize = 40;
 
 /// Largest number of free vertices for which [`EnhanceSolver::Auto`] falls
-/// back to the direct solver: the Cholesky factor of 300k vertices takes
-/// about 6 GB; beyond, it does not fit a typical machine.
+/// back to the direct solver when conjugate gradients fail: the Cholesky
+/// factor of 300k vertices takes about 6 GB; beyond, it does not fit a
+/// typical machine.
 pub const AUTO_DIRECT_LIMIT: usize = 300_000;
 
 /// Default iteration limit of conjugate gradients.
@@ -196,22 +178,25 @@ pub struct EnhanceOptions {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum EnhanceSolver {
-    /// Conjugate gradients within a budget of [`AUTO_BUDGET`] √n iterations
-    /// (n free vertices), then the direct solver if they have not converged
-    /// and n ≤ [`AUTO_DIRECT_LIMIT`]; above that limit conjugate gradients
-    /// only, up to [`EnhanceOptions::cg_max_iterations`].
+    /// Block-Jacobi conjugate gradients for at most [`AUTO_JACOBI_BUDGET`]
+    /// iterations, then, from where they stopped, conjugate gradients
+    /// preconditioned as [`EnhanceSolver::Amg`] up to
+    /// [`EnhanceOptions::cg_max_iterations`], then (should they fail, and
+    /// for n ≤ [`AUTO_DIRECT_LIMIT`] free vertices) the direct solver.
     Auto,
     /// Sparse Cholesky factorisation of the normal matrix AᵀA + εI.
     Direct,
     /// Block-Jacobi preconditioned conjugate gradients on the normal
     /// equations, matrix-free, warm-started at the current positions.
     Cg,
-    /// Conjugate gradients preconditioned by a smoothed-aggregation
-    /// multigrid V-cycle ([`crate::solve::Amg`]) of the normal matrix,
-    /// warm-started at the current positions, up to
+    /// Conjugate gradients preconditioned by block Jacobi plus the factored
+    /// bi-Laplacian model H Q̂ H of the smoothness and edge-metric rows,
+    /// with a smoothed-aggregation multigrid V-cycle for H (module
+    /// documentation), warm-started at the current positions, up to
     /// [`EnhanceOptions::cg_max_iterations`]; an error if they do not
-    /// converge. Fewer iterations than [`EnhanceSolver::Cg`] on large flat
-    /// parts, but a costly setup (module documentation).
+    /// converge. The iteration count hardly grows with the mesh, also on
+    /// flat and cylindrical parts. Needs μ > 0 (with μ = 0 it is block
+    /// Jacobi).
     Amg,
 }
 
@@ -509,22 +494,60 @@ pub fn enhance_features(
         timings.assembly_s += t.elapsed().as_secs_f64();
 
         let nf = layout.free.len();
-        let budget = match options.solver {
-            EnhanceSolver::Direct | EnhanceSolver::Amg => 0,
-            EnhanceSolver::Cg => options.cg_max_iterations,
-            EnhanceSolver::Auto if nf > AUTO_DIRECT_LIMIT => options.cg_max_iterations,
-            EnhanceSolver::Auto => ((AUTO_BUDGET * (nf as f64).sqrt()) as usize)
-                .clamp(1, options.cg_max_iterations.max(1)),
+        let mut guess: Vec<f64> = layout
+            .free
+            .iter()
+            .flat_map(|&v| current[v as usize].to_array())
+            .collect();
+        let cg = |max_iterations: usize| CgOptions {
+            tolerance: options.cg_tolerance,
+            max_iterations,
+            block: 3,
+        };
+        let not_converged = |r: &CgReport| {
+            EnhanceError::Solve(SolveError::Backend(format!(
+                "conjugate gradients did not reach the relative residual {:e} in {} iterations ({:e}); \
+                 try the direct solver",
+                options.cg_tolerance, r.iterations, r.relative_residual
+            )))
         };
         let mut x = None;
-        if options.solver == EnhanceSolver::Amg {
+        // block-Jacobi CG: alone (Cg) or as the cheap first attempt (Auto)
+        // (μ = 0 leaves no smoothness model for the multigrid preconditioner)
+        let jacobi_only = options.solver == EnhanceSolver::Cg
+            || (options.solver == EnhanceSolver::Amg && options.mu == 0.0);
+        let jacobi_budget = match options.solver {
+            _ if jacobi_only => options.cg_max_iterations,
+            EnhanceSolver::Auto => AUTO_JACOBI_BUDGET.min(options.cg_max_iterations),
+            _ => 0,
+        };
+        if jacobi_budget > 0 {
             let t = Instant::now();
-            let mut guess: Vec<f64> = layout
-                .free
-                .iter()
-                .flat_map(|&v| current[v as usize].to_array())
-                .collect();
-            let amg = multigrid(&system, nf)?;
+            let r = normal_equations_cg(
+                system.a.as_ref(),
+                system.at.as_ref(),
+                system.epsilon,
+                &system.rhs,
+                &mut guess,
+                &cg(jacobi_budget),
+            )?;
+            cg_iterations += r.iterations;
+            timings.solve_s += t.elapsed().as_secs_f64();
+            if r.converged {
+                cg_residual = cg_residual.max(r.relative_residual);
+                x = Some(guess.clone());
+            } else if jacobi_only {
+                return Err(not_converged(&r));
+            }
+        }
+        // CG preconditioned by the factored bi-Laplacian model, warm-started
+        // where block Jacobi stopped
+        let multigrid = matches!(options.solver, EnhanceSolver::Amg | EnhanceSolver::Auto);
+        if x.is_none() && multigrid && options.mu > 0.0 {
+            let t = Instant::now();
+            let preconditioner = precondition::FactoredPreconditioner::new(
+                &layout, &curvature, &distance, &system, options.mu,
+            )?;
             timings.factorisation_s += t.elapsed().as_secs_f64();
             let t = Instant::now();
             let r = normal_equations_pcg(
@@ -533,60 +556,43 @@ pub fn enhance_features(
                 system.epsilon,
                 &system.rhs,
                 &mut guess,
-                &CgOptions {
-                    tolerance: options.cg_tolerance,
-                    max_iterations: options.cg_max_iterations,
-                    block: 3,
-                },
-                &amg,
+                &cg(options.cg_max_iterations),
+                &preconditioner,
             )?;
             cg_iterations += r.iterations;
             timings.solve_s += t.elapsed().as_secs_f64();
-            if !r.converged {
-                return Err(EnhanceError::Solve(SolveError::Backend(format!(
-                    "conjugate gradients did not reach the relative residual {:e} in {} iterations ({:e}); \
-                     try the direct solver",
-                    options.cg_tolerance, r.iterations, r.relative_residual
-                ))));
+            if r.converged {
+                cg_residual = cg_residual.max(r.relative_residual);
+                x = Some(guess.clone());
+            } else if options.solver == EnhanceSolver::Amg || nf > AUTO_DIRECT_LIMIT {
+                return Err(not_converged(&r));
             }
-            cg_residual = cg_residual.max(r.relative_residual);
-            x = Some(guess);
-        } else if budget > 0 {
+        }
+        if x.is_none() && options.solver == EnhanceSolver::Auto && nf > AUTO_DIRECT_LIMIT {
+            // μ = 0: no smoothness model to precondition with; block-Jacobi
+            // CG continues (the direct factor does not fit)
             let t = Instant::now();
-            let mut guess: Vec<f64> = layout
-                .free
-                .iter()
-                .flat_map(|&v| current[v as usize].to_array())
-                .collect();
             let r = normal_equations_cg(
                 system.a.as_ref(),
                 system.at.as_ref(),
                 system.epsilon,
                 &system.rhs,
                 &mut guess,
-                &CgOptions {
-                    tolerance: options.cg_tolerance,
-                    max_iterations: budget,
-                    block: 3,
-                },
+                &cg(options.cg_max_iterations),
             )?;
             cg_iterations += r.iterations;
             timings.solve_s += t.elapsed().as_secs_f64();
-            if r.converged {
-                cg_residual = cg_residual.max(r.relative_residual);
-                x = Some(guess);
-            } else if options.solver == EnhanceSolver::Cg || nf > AUTO_DIRECT_LIMIT {
-                return Err(EnhanceError::Solve(SolveError::Backend(format!(
-                    "conjugate gradients did not reach the relative residual {:e} in {} iterations ({:e}); \
-                     try the direct solver",
-                    options.cg_tolerance, r.iterations, r.relative_residual
-                ))));
+            if !r.converged {
+                return Err(not_converged(&r));
             }
+            cg_residual = cg_residual.max(r.relative_residual);
+            x = Some(guess.clone());
         }
+        let attempted_cg = jacobi_budget > 0 || multigrid;
         let x = match x {
             Some(x) => x,
             None => {
-                if budget > 0 {
+                if attempted_cg {
                     direct_fallbacks += 1;
                 }
                 let t = Instant::now();

@@ -58,7 +58,7 @@ impl Layout {
         }
     }
 
-    fn ring(&self, f: usize) -> &[u32] {
+    pub fn ring(&self, f: usize) -> &[u32] {
         &self.ring[self.ring_ptr[f]..self.ring_ptr[f + 1]]
     }
 }
@@ -67,7 +67,8 @@ impl Layout {
 /// the input at p, each scaled by √(λ c) with c = d|k| / (1 + d|k|) for the
 /// tangents (d = 1 / max |k| over the free vertices) and c = 1 for N.
 pub(super) struct DistanceModel {
-    rows: Vec<[Vec3; 3]>,
+    /// The three scaled frame vectors of each free vertex.
+    pub rows: Vec<[Vec3; 3]>,
 }
 
 impl DistanceModel {
@@ -253,6 +254,20 @@ pub(super) fn assemble(
     })
 }
 
+/// |k_1|, |k_2| of vertex `i`, 0 where not finite.
+fn absolute_curvatures(curvature: &PrincipalCurvatures, i: usize) -> (f64, f64) {
+    let finite = |k: f64| if k.is_finite() { k.abs() } else { 0.0 };
+    (finite(curvature.k1[i]), finite(curvature.k2[i]))
+}
+
+/// The weight μ μ_i of the F_smo rows of vertex `i` (their squared row
+/// scale), μ_i = exp(−(|k_i1| + |k_i2|)) (Ji et al. Eq. (10)), curvature in
+/// normalised units.
+pub(super) fn smoothness_weight(curvature: &PrincipalCurvatures, i: usize, mu: f64) -> f64 {
+    let (a1, a2) = absolute_curvatures(curvature, i);
+    mu * (-(a1 + a2)).exp()
+}
+
 /// Emits the eight rows (columns of Aᵀ) of free vertex `f`.
 #[allow(clippy::too_many_arguments)]
 fn vertex_rows(
@@ -271,13 +286,8 @@ fn vertex_rows(
     let ring = layout.ring(f);
     let deg = ring.len().max(1) as f64;
     let (t1, t2) = (curvature.d1[i], curvature.d2[i]);
-    let (a1, a2) = (curvature.k1[i].abs(), curvature.k2[i].abs());
-    let (a1, a2) = (
-        if a1.is_finite() { a1 } else { 0.0 },
-        if a2.is_finite() { a2 } else { 0.0 },
-    );
-    // μ_i = exp(−(|k1| + |k2|)), Eq. (10), curvature in normalised units
-    let w_smo = (mu * (-(a1 + a2)).exp()).sqrt();
+    let (a1, a2) = absolute_curvatures(curvature, i);
+    let w_smo = smoothness_weight(curvature, i, mu).sqrt();
     let s_ring = -w_smo / deg;
     // F_em: T_ikᵀ Σ_j (M_i + M_j)(v_i − v_j), with M_i T_ik = |k_ik| T_ik
     let mut ci = [Vec3::ZERO; 2];

@@ -256,32 +256,56 @@ fn dot(x: &[f64], y: &[f64]) -> f64 {
         .sum()
 }
 
-/// Inverses of the diagonal blocks of AᵀA + εI, row-major per block.
-pub(super) struct BlockJacobi {
+/// The diagonal blocks of AᵀA + εI (`block` × `block`, row-major, one per
+/// group of `block` consecutive unknowns), computed from the columns of A
+/// (sorted row indices) in parallel.
+pub fn normal_diagonal_blocks(
+    a: SparseColMatRef<'_, usize, f64>,
+    epsilon: f64,
+    block: usize,
+) -> Vec<f64> {
+    let block = block.max(1);
+    let nb = a.ncols() / block;
+    let bb = block * block;
+    let mut blocks = vec![0.0; nb * bb];
+    blocks.par_chunks_mut(bb).enumerate().for_each(|(g, m)| {
+        for i in 0..block {
+            for j in 0..=i {
+                let s = sparse_dot(a, g * block + i, g * block + j);
+                m[i * block + j] = s;
+                m[j * block + i] = s;
+            }
+            m[i * block + i] += epsilon;
+        }
+    });
+    blocks
+}
+
+/// Block-Jacobi preconditioner: the inverses of symmetric diagonal blocks
+/// (e.g. those of AᵀA + εI from [`normal_diagonal_blocks`]), row-major per
+/// block.
+pub struct BlockJacobi {
     block: usize,
     inverses: Vec<f64>,
 }
 
 impl BlockJacobi {
-    fn new(a: SparseColMatRef<'_, usize, f64>, epsilon: f64, block: usize) -> BlockJacobi {
-        let nb = a.ncols() / block;
+    /// Block Jacobi of AᵀA + εI.
+    pub fn new(a: SparseColMatRef<'_, usize, f64>, epsilon: f64, block: usize) -> BlockJacobi {
+        BlockJacobi::from_blocks(normal_diagonal_blocks(a, epsilon, block), block)
+    }
+
+    /// Block Jacobi of the given `block` × `block` symmetric diagonal blocks
+    /// (row-major, concatenated); a block that is not positive definite is
+    /// replaced by the inverse of its positive diagonal entries.
+    pub fn from_blocks(mut blocks: Vec<f64>, block: usize) -> BlockJacobi {
+        let block = block.max(1);
         let bb = block * block;
-        let mut inverses = vec![0.0; nb * bb];
+        let mut inverses = vec![0.0; blocks.len()];
         inverses
             .par_chunks_mut(bb)
-            .enumerate()
-            .for_each(|(g, inv)| {
-                let mut m = vec![0.0; bb];
-                for i in 0..block {
-                    for j in 0..=i {
-                        let s = sparse_dot(a, g * block + i, g * block + j);
-                        m[i * block + j] = s;
-                        m[j * block + i] = s;
-                    }
-                    m[i * block + i] += epsilon;
-                }
-                invert_spd(&mut m, block, inv);
-            });
+            .zip(blocks.par_chunks_mut(bb))
+            .for_each(|(inv, m)| invert_spd(m, block, inv));
         BlockJacobi { block, inverses }
     }
 }

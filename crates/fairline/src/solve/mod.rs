@@ -12,15 +12,20 @@ mod box_qp;
 mod cg;
 mod cholesky;
 mod ordering;
+mod small;
 
 pub use amg::{Amg, AmgOptions, AmgStats, CsrMatrix};
 pub use box_qp::{BoxQpOptions, BoxQpSolution, box_qp};
-pub use cg::{CgOptions, CgReport, Preconditioner, normal_equations_cg, normal_equations_pcg, pcg};
+pub use cg::{
+    BlockJacobi, CgOptions, CgReport, Preconditioner, normal_diagonal_blocks, normal_equations_cg,
+    normal_equations_pcg, pcg,
+};
 pub use cholesky::{
     CholeskyOptions, CholeskyOrdering, CholeskySolver, least_squares, normal_matrix,
     sparse_from_triplets,
 };
 pub use ordering::nested_dissection;
+pub use small::{symmetric_eigen3, symmetric_function3};
 
 use thiserror::Error;
 
