@@ -1,35 +1,10 @@
 //! Command-line tests of the foundation commands: info, convert, curvature,
 //! render, demo; exit codes and atomic, non-overwriting outputs.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+use common::*;
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_fairline"))
-}
-
-fn run(args: &[&str]) -> Output {
-    bin().args(args).output().expect("run fairline")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("fairline-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn data(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        println!("skipped: ../shared/data not found");
-        None
-    }
-}
+use std::path::Path;
 
 fn write(path: &Path, text: &str) {
     std::fs::write(path, text).unwrap();

@@ -1,26 +1,10 @@
 //! Command-line tests of `fairline enhance`: report contract, fixed and
 //! boundary vertices bit-identical in the written mesh, PNG, exit codes.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+use common::*;
 
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_fairline"))
-        .args(args)
-        .output()
-        .expect("run fairline")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("fairline-enhance-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+use std::path::Path;
 
 fn ridge() -> fairline::SurfaceMesh {
     fairline::shapes::height_field(15, 15, (-1.0, 1.0), (-1.0, 1.0), |x, _| {

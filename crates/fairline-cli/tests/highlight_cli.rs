@@ -1,34 +1,10 @@
 //! Command-line tests of `fairline highlight` and `fairline detect`.
 
+mod common;
+use common::*;
+
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_fairline"))
-        .args(args)
-        .output()
-        .expect("run fairline")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("fairline-hl-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn data(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        println!("skipped: ../shared/data not found");
-        None
-    }
-}
+use std::path::Path;
 
 /// An n×n triangulated height field over [-2,2]² as OBJ text.
 fn height_field_obj(n: usize, z: impl Fn(f64, f64) -> f64) -> String {
@@ -48,19 +24,6 @@ fn height_field_obj(n: usize, z: impl Fn(f64, f64) -> f64) -> String {
         }
     }
     s
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
-
-fn ok(o: &Output) {
-    assert!(
-        o.status.success(),
-        "status {:?}: {}",
-        o.status,
-        String::from_utf8_lossy(&o.stderr)
-    );
 }
 
 #[test]

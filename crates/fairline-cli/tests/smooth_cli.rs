@@ -1,42 +1,10 @@
 //! Command-line tests of `fairline smooth` and `fairline fair-quad`.
 
+mod common;
+use common::*;
+
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_fairline"))
-        .args(args)
-        .output()
-        .expect("run fairline")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("fairline-sm-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn data(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        println!("skipped: ../shared/data not found");
-        None
-    }
-}
-
-fn report(p: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+use std::path::Path;
 
 fn read_obj_vertices(p: &Path) -> Vec<[f64; 3]> {
     std::fs::read_to_string(p)
@@ -95,7 +63,7 @@ fn fair_quad_straightens_a_zigzag_grid_keeps_fixed_vertices_and_writes_a_picture
         s(&png),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let r = report(&rep);
+    let r = json(&rep);
     for k in [
         "command",
         "time_s",
@@ -170,7 +138,7 @@ fn smooth_methods_run_from_the_command_line_with_their_report_keys() {
             "{method}: {}",
             String::from_utf8_lossy(&o.stderr)
         );
-        let r = report(&rep);
+        let r = json(&rep);
         for k in [
             "command",
             "time_s",
@@ -215,7 +183,7 @@ fn smooth_preserves_volume_of_a_real_closed_mesh() {
         s(&rep),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let r = report(&rep);
+    let r = json(&rep);
     let (v0, v1) = (
         r["volume_before"].as_f64().unwrap(),
         r["volume_after"].as_f64().unwrap(),
@@ -235,7 +203,7 @@ fn smooth_preserves_volume_of_a_real_closed_mesh() {
         s(&rep),
     ]);
     assert!(o.status.success());
-    let r = report(&rep);
+    let r = json(&rep);
     assert!(r["volume_after"].as_f64().unwrap() < 0.99 * r["volume_before"].as_f64().unwrap());
 }
 
@@ -264,7 +232,7 @@ fn fair_quad_on_a_large_grid_takes_the_iterative_path() {
         s(&rep),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let r = report(&rep);
+    let r = json(&rep);
     assert!(r["free_vertices"].as_u64().unwrap() > 20_000, "{r}");
     let (e0, e1) = (
         r["structure_energy_before"].as_f64().unwrap(),
@@ -303,7 +271,7 @@ fn fair_quad_on_the_real_quad_meshes() {
             "{f}: {}",
             String::from_utf8_lossy(&o.stderr)
         );
-        let r = report(&rep);
+        let r = json(&rep);
         let (e0, e1) = (
             r["structure_energy_before"].as_f64().unwrap(),
             r["structure_energy_after"].as_f64().unwrap(),

@@ -3,49 +3,15 @@
 //! `fair-surface`, `convert` of IGES, on a dome-like bicubic surface with a
 //! planted bump and on the real teapot and impeller.
 
+mod common;
+use common::*;
+
 use fairline::Vec3;
 use fairline::bspline::{
     BSplineSurface, clamped_uniform_knots, read_surfaces_json, write_surfaces_json,
 };
 use fairline::fair::endpoints_around;
 use fairline::highlight::{CircularLight, SurfaceLight, surface_signed_distance};
-use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_fairline"))
-        .args(args)
-        .output()
-        .expect("run fairline")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("fairline-surface-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn data(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        println!("skipped: ../shared/data not found");
-        None
-    }
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn json(p: &Path) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
-}
 
 /// Dome-like bicubic 15 × 15 surface (Nishiyama et al. Fig. 5), with
 /// control point (11, 7) raised when `bump`.
