@@ -114,7 +114,8 @@ use crate::Vec3;
 use crate::geom::{mean_edge_length, principal_curvatures_rusinkiewicz, triangle_qualities};
 use crate::mesh::{MeshError, SurfaceMesh, VertexId};
 use crate::solve::{
-    CgOptions, CgReport, CholeskySolver, SolveError, normal_equations_cg, normal_equations_pcg,
+    CgOptions, CgReport, CholeskySolver, Preconditioner, SolveError, normal_equations_cg,
+    normal_equations_pcg,
 };
 use serde::Serialize;
 use std::time::Instant;
@@ -521,20 +522,29 @@ pub fn enhance_features(
             EnhanceSolver::Auto => AUTO_JACOBI_BUDGET.min(options.cg_max_iterations),
             _ => 0,
         };
-        if jacobi_budget > 0 {
+        // one CG run from `guess`: block Jacobi (`None`) or the given
+        // preconditioner; counts its iterations, time and residual
+        let mut cg_seconds = 0.0;
+        let mut run_cg = |guess: &mut [f64],
+                          budget: usize,
+                          preconditioner: Option<&dyn Preconditioner>|
+         -> Result<CgReport, EnhanceError> {
             let t = Instant::now();
-            let r = normal_equations_cg(
-                system.a.as_ref(),
-                system.at.as_ref(),
-                system.epsilon,
-                &system.rhs,
-                &mut guess,
-                &cg(jacobi_budget),
-            )?;
+            let (a, at, eps) = (system.a.as_ref(), system.at.as_ref(), system.epsilon);
+            let r = match preconditioner {
+                Some(p) => normal_equations_pcg(a, at, eps, &system.rhs, guess, &cg(budget), p)?,
+                None => normal_equations_cg(a, at, eps, &system.rhs, guess, &cg(budget))?,
+            };
             cg_iterations += r.iterations;
-            timings.solve_s += t.elapsed().as_secs_f64();
+            cg_seconds += t.elapsed().as_secs_f64();
             if r.converged {
                 cg_residual = cg_residual.max(r.relative_residual);
+            }
+            Ok(r)
+        };
+        if jacobi_budget > 0 {
+            let r = run_cg(&mut guess, jacobi_budget, None)?;
+            if r.converged {
                 x = Some(guess.clone());
             } else if jacobi_only {
                 return Err(not_converged(&r));
@@ -549,20 +559,8 @@ pub fn enhance_features(
                 &layout, &curvature, &distance, &system, options.mu,
             )?;
             timings.factorisation_s += t.elapsed().as_secs_f64();
-            let t = Instant::now();
-            let r = normal_equations_pcg(
-                system.a.as_ref(),
-                system.at.as_ref(),
-                system.epsilon,
-                &system.rhs,
-                &mut guess,
-                &cg(options.cg_max_iterations),
-                &preconditioner,
-            )?;
-            cg_iterations += r.iterations;
-            timings.solve_s += t.elapsed().as_secs_f64();
+            let r = run_cg(&mut guess, options.cg_max_iterations, Some(&preconditioner))?;
             if r.converged {
-                cg_residual = cg_residual.max(r.relative_residual);
                 x = Some(guess.clone());
             } else if options.solver == EnhanceSolver::Amg || nf > AUTO_DIRECT_LIMIT {
                 return Err(not_converged(&r));
@@ -571,23 +569,13 @@ pub fn enhance_features(
         if x.is_none() && options.solver == EnhanceSolver::Auto && nf > AUTO_DIRECT_LIMIT {
             // μ = 0: no smoothness model to precondition with; block-Jacobi
             // CG continues (the direct factor does not fit)
-            let t = Instant::now();
-            let r = normal_equations_cg(
-                system.a.as_ref(),
-                system.at.as_ref(),
-                system.epsilon,
-                &system.rhs,
-                &mut guess,
-                &cg(options.cg_max_iterations),
-            )?;
-            cg_iterations += r.iterations;
-            timings.solve_s += t.elapsed().as_secs_f64();
+            let r = run_cg(&mut guess, options.cg_max_iterations, None)?;
             if !r.converged {
                 return Err(not_converged(&r));
             }
-            cg_residual = cg_residual.max(r.relative_residual);
             x = Some(guess.clone());
         }
+        timings.solve_s += cg_seconds;
         let attempted_cg = jacobi_budget > 0 || multigrid;
         let x = match x {
             Some(x) => x,

@@ -62,6 +62,19 @@ fn project_to_surface(input: &SurfaceMesh, points: &[Vec3], field: &[f64]) -> Ve
         .collect()
 }
 
+/// Length of the diagonal of the bounding box of `m`'s vertices.
+fn bounding_diagonal(m: &SurfaceMesh) -> f64 {
+    crate::mesh::bounding_box(m.positions()).map_or(0.0, |(lo, hi)| lo.distance(hi))
+}
+
+/// Largest distance between corresponding points.
+fn max_difference(a: &[Vec3], b: &[Vec3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| a.distance(*b))
+        .fold(0.0, f64::max)
+}
+
 /// Largest distance from the points to the surface of `input`.
 fn max_distance_to_surface(input: &SurfaceMesh, points: &[Vec3]) -> f64 {
     let zero = vec![0.0; input.vertex_count()];
@@ -402,17 +415,8 @@ fn conjugate_gradients_match_the_direct_solve() {
         let direct = enhance_features(&m, &o.clone().solver(EnhanceSolver::Direct)).unwrap();
         let cg = enhance_features(&m, &o.clone().solver(EnhanceSolver::Cg)).unwrap();
         let auto = enhance_features(&m, &o).unwrap();
-        let (lo, hi) = m.positions().iter().fold(
-            (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-        );
-        let diagonal = lo.distance(hi);
-        let diff = direct
-            .positions
-            .iter()
-            .zip(&cg.positions)
-            .map(|(a, b)| a.distance(*b))
-            .fold(0.0, f64::max);
+        let diagonal = bounding_diagonal(&m);
+        let diff = max_difference(&direct.positions, &cg.positions);
         println!(
             "{} vertices: {} fallbacks of auto, {} CG iterations, max difference {:.2e} of the diagonal, max displacement {:.3} ē",
             m.vertex_count(),
@@ -437,12 +441,7 @@ fn conjugate_gradients_match_the_direct_solve() {
             assert_eq!(auto.positions, cg.positions);
         } else {
             assert!(auto.report.cg_iterations > AUTO_JACOBI_BUDGET);
-            let diff = direct
-                .positions
-                .iter()
-                .zip(&auto.positions)
-                .map(|(a, b)| a.distance(*b))
-                .fold(0.0, f64::max);
+            let diff = max_difference(&direct.positions, &auto.positions);
             assert!(diff <= 1e-8 * diagonal, "auto: difference {diff}");
         }
     }
@@ -468,17 +467,8 @@ fn multigrid_matches_the_direct_solve() {
         let direct = enhance_features(&m, &o.clone().solver(EnhanceSolver::Direct)).unwrap();
         let amg = enhance_features(&m, &o.clone().solver(EnhanceSolver::Amg)).unwrap();
         let cg = enhance_features(&m, &o.clone().solver(EnhanceSolver::Cg)).unwrap();
-        let (lo, hi) = m.positions().iter().fold(
-            (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-        );
-        let diagonal = lo.distance(hi);
-        let diff = direct
-            .positions
-            .iter()
-            .zip(&amg.positions)
-            .map(|(a, b)| a.distance(*b))
-            .fold(0.0, f64::max);
+        let diagonal = bounding_diagonal(&m);
+        let diff = max_difference(&direct.positions, &amg.positions);
         println!(
             "{} vertices: AMG {} iterations, block Jacobi {}, max difference {:.2e} of the diagonal",
             m.vertex_count(),
