@@ -555,15 +555,25 @@ pub fn enhance_features(
         let multigrid = matches!(options.solver, EnhanceSolver::Amg | EnhanceSolver::Auto);
         if x.is_none() && multigrid && options.mu > 0.0 {
             let t = Instant::now();
-            let preconditioner = precondition::FactoredPreconditioner::new(
+            let built = precondition::FactoredPreconditioner::new(
                 &layout, &curvature, &distance, &system, options.mu,
-            )?;
+            );
             timings.factorisation_s += t.elapsed().as_secs_f64();
-            let r = run_cg(&mut guess, options.cg_max_iterations, Some(&preconditioner))?;
-            if r.converged {
-                x = Some(guess.clone());
-            } else if options.solver == EnhanceSolver::Amg || nf > AUTO_DIRECT_LIMIT {
-                return Err(not_converged(&r));
+            match built {
+                Ok(preconditioner) => {
+                    let r = run_cg(&mut guess, options.cg_max_iterations, Some(&preconditioner))?;
+                    if r.converged {
+                        x = Some(guess.clone());
+                    } else if options.solver == EnhanceSolver::Amg || nf > AUTO_DIRECT_LIMIT {
+                        return Err(not_converged(&r));
+                    }
+                }
+                // auto: a degenerate model (e.g. a multigrid level that is
+                // not positive definite) leaves the direct solve
+                Err(e) if options.solver == EnhanceSolver::Amg || nf > AUTO_DIRECT_LIMIT => {
+                    return Err(e.into());
+                }
+                Err(_) => {}
             }
         }
         if x.is_none() && options.solver == EnhanceSolver::Auto && nf > AUTO_DIRECT_LIMIT {
