@@ -42,16 +42,16 @@ use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
 use rayon::prelude::*;
 
 /// Rows per parallel task.
-const ROWS: usize = 1024;
+pub(super) const ROWS: usize = 1024;
 
 /// A sparse matrix compressed by row with 32-bit column indices.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CsrMatrix {
-    nrows: usize,
-    ncols: usize,
-    ptr: Vec<usize>,
-    idx: Vec<u32>,
-    val: Vec<f64>,
+    pub(super) nrows: usize,
+    pub(super) ncols: usize,
+    pub(super) ptr: Vec<usize>,
+    pub(super) idx: Vec<u32>,
+    pub(super) val: Vec<f64>,
 }
 
 impl CsrMatrix {
@@ -70,7 +70,7 @@ impl CsrMatrix {
         self.idx.len()
     }
 
-    fn row(&self, i: usize) -> (&[u32], &[f64]) {
+    pub(super) fn row(&self, i: usize) -> (&[u32], &[f64]) {
         let r = self.ptr[i]..self.ptr[i + 1];
         (&self.idx[r.clone()], &self.val[r])
     }
@@ -124,7 +124,7 @@ impl CsrMatrix {
             .into_par_iter()
             .map(|c| {
                 let rows = c * ROWS..((c + 1) * ROWS).min(n);
-                let mut row = RowAccumulator::new(n);
+                let mut row = RowAccumulator::<1>::new(n);
                 let (mut len, mut idx, mut val) = (Vec::new(), Vec::new(), Vec::new());
                 for u in rows {
                     for (&r, &w) in a.row_idx_of_col_raw(u).iter().zip(a.val_of_col(u)) {
@@ -174,7 +174,7 @@ impl CsrMatrix {
     }
 
     /// y = b − M x, in parallel.
-    fn residual(&self, b: &[f64], x: &[f64], y: &mut [f64]) {
+    pub(super) fn residual(&self, b: &[f64], x: &[f64], y: &mut [f64]) {
         y.par_chunks_mut(ROWS).enumerate().for_each(|(c, y)| {
             for (k, y) in y.iter_mut().enumerate() {
                 let i = c * ROWS + k;
@@ -227,7 +227,7 @@ impl CsrMatrix {
             .into_par_iter()
             .map(|c| {
                 let rows = c * ROWS..((c + 1) * ROWS).min(self.nrows);
-                let mut row = RowAccumulator::new(n);
+                let mut row = RowAccumulator::<1>::new(n);
                 let (mut len, mut idx, mut val) = (Vec::new(), Vec::new(), Vec::new());
                 for i in rows {
                     let (ri, rv) = self.row(i);
@@ -446,7 +446,7 @@ impl Preconditioner for Amg {
 
 /// Inverses of the diagonal blocks of K (row-major per block) and the
 /// smoother's damping 4 / (3 ρ̄), ρ̄ the largest absolute row sum of D⁻¹K.
-fn block_jacobi(k: &CsrMatrix, block: usize) -> (Vec<f64>, f64) {
+pub(super) fn block_jacobi(k: &CsrMatrix, block: usize) -> (Vec<f64>, f64) {
     let nb = k.nrows() / block;
     let bb = block * block;
     let mut inverses = vec![0.0; nb * bb];
@@ -536,10 +536,17 @@ fn power_estimate(k: &CsrMatrix, inverses: &[f64], block: usize) -> f64 {
 }
 
 /// Power iterations of the spectral radius estimate.
-const POWER_ITERATIONS: usize = 15;
+pub(super) const POWER_ITERATIONS: usize = 15;
 
 /// x = ω D⁻¹ r (or x += ω D⁻¹ r when `add`), in parallel.
-fn block_apply(inverses: &[f64], block: usize, omega: f64, r: &[f64], x: &mut [f64], add: bool) {
+pub(super) fn block_apply(
+    inverses: &[f64],
+    block: usize,
+    omega: f64,
+    r: &[f64],
+    x: &mut [f64],
+    add: bool,
+) {
     let b = block;
     x.par_chunks_mut(b * 256)
         .zip(r.par_chunks(b * 256))
@@ -560,7 +567,6 @@ fn block_apply(inverses: &[f64], block: usize, omega: f64, r: &[f64], x: &mut [f
 
 /// Aggregate index of every node (module documentation, step 1).
 fn aggregate(k: &CsrMatrix, block: usize, theta: f64) -> Vec<u32> {
-    const FREE: u32 = u32::MAX;
     let nb = k.nrows() / block;
     // node graph: neighbours of node g are the nodes of the columns of its rows
     // squared Frobenius norms of the blocks K_gh of each block row
@@ -584,6 +590,15 @@ fn aggregate(k: &CsrMatrix, block: usize, theta: f64) -> Vec<u32> {
             out
         })
         .collect();
+    aggregate_nodes(&norms, theta)
+}
+
+/// Aggregates of the nodes of a graph given, per node, its stored blocks
+/// as (node, squared Frobenius norm), sorted by node (module
+/// documentation, step 1): couplings weaker than `theta` are dropped.
+pub(super) fn aggregate_nodes(norms: &[Vec<(u32, f64)>], theta: f64) -> Vec<u32> {
+    const FREE: u32 = u32::MAX;
+    let nb = norms.len();
     let diagonal: Vec<f64> = norms
         .iter()
         .enumerate()
@@ -645,7 +660,7 @@ fn aggregate(k: &CsrMatrix, block: usize, theta: f64) -> Vec<u32> {
 
 /// Tentative prolongator (n × count·nk) and coarse near-null space (by
 /// rows), by a QR factorisation of the near-null space on each aggregate.
-fn tentative(
+pub(super) fn tentative(
     aggregates: &[u32],
     count: usize,
     block: usize,
@@ -762,7 +777,7 @@ fn tentative(
 }
 
 /// P = T − ω D⁻¹ (K T), row block by row block.
-fn smooth_prolongator(
+pub(super) fn smooth_prolongator(
     t: &CsrMatrix,
     kt: &CsrMatrix,
     inverses: &[f64],
@@ -775,7 +790,7 @@ fn smooth_prolongator(
         .into_par_iter()
         .map(|c| {
             let nodes = c * ROWS..((c + 1) * ROWS).min(nb);
-            let mut row = RowAccumulator::new(ncols);
+            let mut row = RowAccumulator::<1>::new(ncols);
             let (mut len, mut idx, mut val) = (Vec::new(), Vec::new(), Vec::new());
             for g in nodes {
                 let inv = &inverses[g * block * block..(g + 1) * block * block];
@@ -861,45 +876,60 @@ fn symmetrise_with_unit_idle(k: CsrMatrix) -> CsrMatrix {
 }
 
 /// A dense scatter accumulator for one sparse row at a time (Gustavson's
-/// sparse product): `add` sums into column j, `flush` appends the touched
-/// columns in increasing order with their sums and resets, returning how
-/// many there were.
-struct RowAccumulator {
-    acc: Vec<f64>,
+/// sparse product) with values in ℝ^W: `add_vector` sums into column j,
+/// `flush_with` hands the touched columns in increasing order with their
+/// sums to a closure and resets, returning how many there were.
+pub(super) struct RowAccumulator<const W: usize = 1> {
+    acc: Vec<[f64; W]>,
     mark: Vec<bool>,
     touched: Vec<u32>,
 }
 
-impl RowAccumulator {
-    fn new(ncols: usize) -> Self {
+impl<const W: usize> RowAccumulator<W> {
+    pub(super) fn new(ncols: usize) -> Self {
         RowAccumulator {
-            acc: vec![0.0; ncols],
+            acc: vec![[0.0; W]; ncols],
             mark: vec![false; ncols],
             touched: Vec::new(),
         }
     }
 
     #[inline]
-    fn add(&mut self, j: u32, v: f64) {
+    pub(super) fn add_vector(&mut self, j: u32, v: [f64; W]) {
         let k = j as usize;
         if !self.mark[k] {
             self.mark[k] = true;
             self.touched.push(j);
         }
-        self.acc[k] += v;
+        for (a, v) in self.acc[k].iter_mut().zip(v) {
+            *a += v;
+        }
     }
 
-    fn flush(&mut self, idx: &mut Vec<u32>, val: &mut Vec<f64>) -> usize {
+    pub(super) fn flush_with(&mut self, mut f: impl FnMut(u32, [f64; W])) -> usize {
         self.touched.sort_unstable();
         for &j in &self.touched {
-            idx.push(j);
-            val.push(self.acc[j as usize]);
-            self.acc[j as usize] = 0.0;
+            f(j, self.acc[j as usize]);
+            self.acc[j as usize] = [0.0; W];
             self.mark[j as usize] = false;
         }
         let n = self.touched.len();
         self.touched.clear();
         n
+    }
+}
+
+impl RowAccumulator<1> {
+    #[inline]
+    fn add(&mut self, j: u32, v: f64) {
+        self.add_vector(j, [v]);
+    }
+
+    fn flush(&mut self, idx: &mut Vec<u32>, val: &mut Vec<f64>) -> usize {
+        self.flush_with(|j, v| {
+            idx.push(j);
+            val.push(v[0]);
+        })
     }
 }
 

@@ -13,6 +13,7 @@ mod cg;
 mod cholesky;
 mod ordering;
 mod small;
+mod vector_amg;
 
 pub use amg::{Amg, AmgOptions, AmgStats, CsrMatrix};
 pub use box_qp::{BoxQpOptions, BoxQpSolution, box_qp};
@@ -26,6 +27,7 @@ pub use cholesky::{
 };
 pub use ordering::nested_dissection;
 pub use small::{symmetric_eigen3, symmetric_function3};
+pub use vector_amg::{SymmetricBlock, VectorAmg, VectorAmgOptions, VectorOperator};
 
 use thiserror::Error;
 
