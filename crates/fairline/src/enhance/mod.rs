@@ -114,8 +114,7 @@ use crate::Vec3;
 use crate::geom::{mean_edge_length, principal_curvatures_rusinkiewicz, triangle_qualities};
 use crate::mesh::{MeshError, SurfaceMesh, VertexId};
 use crate::solve::{
-    CgOptions, CgReport, CholeskySolver, Preconditioner, SolveError, normal_equations_cg,
-    normal_equations_pcg,
+    BlockJacobi, CgOptions, CgReport, CholeskySolver, Preconditioner, SolveError, pcg_with,
 };
 use serde::Serialize;
 use std::time::Instant;
@@ -135,6 +134,12 @@ pub const CG_TOLERANCE: f64 = 1e-12;
 /// cheaper than a preconditioned one and without a setup; where it does not
 /// (flat or cylindrical parts) it would need hundreds to thousands.
 pub const AUTO_JACOBI_BUDGET: usize = 40;
+
+/// Under [`EnhanceSolver::Auto`], block-Jacobi conjugate gradients give up
+/// early when, every this many iterations, their mean rate over the last
+/// ones predicts more than [`AUTO_JACOBI_BUDGET`] iterations
+/// ([`CgOptions::hopeless_after`]).
+pub const AUTO_JACOBI_CHECK: usize = 8;
 
 /// Largest number of free vertices for which [`EnhanceSolver::Auto`] falls
 /// back to the direct solver when conjugate gradients fail: the Cholesky
@@ -500,10 +505,11 @@ pub fn enhance_features(
             .iter()
             .flat_map(|&v| current[v as usize].to_array())
             .collect();
-        let cg = |max_iterations: usize| CgOptions {
+        let cg = |max_iterations: usize, hopeless_after: usize| CgOptions {
             tolerance: options.cg_tolerance,
             max_iterations,
             block: 3,
+            hopeless_after,
         };
         let not_converged = |r: &CgReport| {
             EnhanceError::Solve(SolveError::Backend(format!(
@@ -525,16 +531,21 @@ pub fn enhance_features(
         // one CG run from `guess`: block Jacobi (`None`) or the given
         // preconditioner; counts its iterations, time and residual
         let mut cg_seconds = 0.0;
+        let jacobi = BlockJacobi::from_blocks(system.diagonal_blocks(), 3);
+        let mut scratch = vec![0.0; 8 * nf];
         let mut run_cg = |guess: &mut [f64],
                           budget: usize,
-                          preconditioner: Option<&dyn Preconditioner>|
+                          hopeless_after: usize,
+                          preconditioner: &dyn Preconditioner|
          -> Result<CgReport, EnhanceError> {
             let t = Instant::now();
-            let (a, at, eps) = (system.a.as_ref(), system.at.as_ref(), system.epsilon);
-            let r = match preconditioner {
-                Some(p) => normal_equations_pcg(a, at, eps, &system.rhs, guess, &cg(budget), p)?,
-                None => normal_equations_cg(a, at, eps, &system.rhs, guess, &cg(budget))?,
-            };
+            let r = pcg_with(
+                |v: &[f64], out: &mut [f64]| system.normal_product(v, out, &mut scratch),
+                |r: &[f64], z: &mut [f64]| preconditioner.apply(r, z),
+                &system.rhs,
+                guess,
+                &cg(budget, hopeless_after),
+            )?;
             cg_iterations += r.iterations;
             cg_seconds += t.elapsed().as_secs_f64();
             if r.converged {
@@ -543,7 +554,8 @@ pub fn enhance_features(
             Ok(r)
         };
         if jacobi_budget > 0 {
-            let r = run_cg(&mut guess, jacobi_budget, None)?;
+            let hopeless_after = if jacobi_only { 0 } else { AUTO_JACOBI_CHECK };
+            let r = run_cg(&mut guess, jacobi_budget, hopeless_after, &jacobi)?;
             if r.converged {
                 x = Some(guess.clone());
             } else if jacobi_only {
@@ -556,12 +568,17 @@ pub fn enhance_features(
         if x.is_none() && multigrid && options.mu > 0.0 {
             let t = Instant::now();
             let built = precondition::FactoredPreconditioner::new(
-                &layout, &curvature, &distance, &system, options.mu,
+                &layout,
+                &curvature,
+                &distance,
+                jacobi.clone(),
+                options.mu,
+                system.epsilon,
             );
             timings.factorisation_s += t.elapsed().as_secs_f64();
             match built {
                 Ok(preconditioner) => {
-                    let r = run_cg(&mut guess, options.cg_max_iterations, Some(&preconditioner))?;
+                    let r = run_cg(&mut guess, options.cg_max_iterations, 0, &preconditioner)?;
                     if r.converged {
                         x = Some(guess.clone());
                     } else if options.solver == EnhanceSolver::Amg || nf > AUTO_DIRECT_LIMIT {
@@ -579,7 +596,7 @@ pub fn enhance_features(
         if x.is_none() && options.solver == EnhanceSolver::Auto && nf > AUTO_DIRECT_LIMIT {
             // μ = 0: no smoothness model to precondition with; block-Jacobi
             // CG continues (the direct factor does not fit)
-            let r = run_cg(&mut guess, options.cg_max_iterations, None)?;
+            let r = run_cg(&mut guess, options.cg_max_iterations, 0, &jacobi)?;
             if !r.converged {
                 return Err(not_converged(&r));
             }

@@ -110,14 +110,30 @@ impl DistanceModel {
     }
 }
 
-/// The least-squares system of one iteration: A (8n × 3n) by columns and
-/// by rows, and the right-hand side Aᵀb + ε p of the regularised normal
-/// equations (AᵀA + εI) x = Aᵀb + ε p.
+/// The least-squares system of one iteration, stored by vertex (module
+/// documentation): for free vertex f its entries `ptr[f]..ptr[f + 1]`, one
+/// per free vertex of its closed one-ring (f included) in increasing free
+/// index, each with the coefficients of the two F_em rows and of the F_smo
+/// rows; its three F_sd rows; the right-hand side b of Eq. (20); and the
+/// right-hand side Aᵀb + ε p of the regularised normal equations
+/// (AᵀA + εI) x = Aᵀb + ε p. A is applied matrix-free (A x by rows, Aᵀ y
+/// gathered through the mirror entries), which moves a fifth of the memory
+/// of the assembled A and Aᵀ; the sparse A is built only for the direct
+/// solver.
 pub(super) struct LeastSquares {
-    /// A, compressed by column.
-    pub a: SparseColMat<usize, f64>,
-    /// Aᵀ, compressed by column (the rows of A).
-    pub at: SparseColMat<usize, f64>,
+    ptr: Vec<usize>,
+    /// Free index of each entry.
+    col: Vec<u32>,
+    /// F_em coefficient vectors (rows 1 and 2) of each entry.
+    em: Vec<[Vec3; 2]>,
+    /// F_smo coefficient of each entry.
+    smo: Vec<f64>,
+    /// For entry e of f with column g: the entry of g whose column is f.
+    mirror: Vec<u32>,
+    /// F_sd rows of each free vertex.
+    sd: Vec<[Vec3; 3]>,
+    /// b of Eq. (20), eight rows per free vertex.
+    b: Vec<f64>,
     /// Aᵀb + ε p.
     pub rhs: Vec<f64>,
     /// ε.
@@ -125,9 +141,135 @@ pub(super) struct LeastSquares {
 }
 
 impl LeastSquares {
+    /// y = A x (8 rows per free vertex), in parallel.
+    pub fn mul(&self, x: &[f64], y: &mut [f64]) {
+        y.par_chunks_mut(8 * VERTICES)
+            .enumerate()
+            .for_each(|(c, y)| {
+                for (k, y) in y.chunks_mut(8).enumerate() {
+                    let f = c * VERTICES + k;
+                    let (mut em, mut smo) = ([0.0; 2], Vec3::ZERO);
+                    for e in self.ptr[f]..self.ptr[f + 1] {
+                        let g = 3 * self.col[e] as usize;
+                        let xg = Vec3::new(x[g], x[g + 1], x[g + 2]);
+                        em[0] += self.em[e][0].dot(xg);
+                        em[1] += self.em[e][1].dot(xg);
+                        smo += self.smo[e] * xg;
+                    }
+                    let xf = Vec3::new(x[3 * f], x[3 * f + 1], x[3 * f + 2]);
+                    let sd = self.sd[f];
+                    y.copy_from_slice(&[
+                        em[0],
+                        em[1],
+                        sd[0].dot(xf),
+                        sd[1].dot(xf),
+                        sd[2].dot(xf),
+                        smo.x,
+                        smo.y,
+                        smo.z,
+                    ]);
+                }
+            });
+    }
+
+    /// x = Aᵀ y, gathered per free vertex in parallel.
+    pub fn mul_transpose(&self, y: &[f64], x: &mut [f64]) {
+        x.par_chunks_mut(3 * VERTICES)
+            .enumerate()
+            .for_each(|(c, x)| {
+                for (k, x) in x.chunks_mut(3).enumerate() {
+                    let g = c * VERTICES + k;
+                    let mut s = Vec3::ZERO;
+                    for e in self.ptr[g]..self.ptr[g + 1] {
+                        let f = self.col[e] as usize;
+                        let m = self.mirror[e] as usize;
+                        let yf = &y[8 * f..8 * f + 8];
+                        s += self.em[m][0] * yf[0]
+                            + self.em[m][1] * yf[1]
+                            + self.smo[m] * Vec3::new(yf[5], yf[6], yf[7]);
+                    }
+                    let sd = self.sd[g];
+                    let yg = &y[8 * g..8 * g + 8];
+                    s += sd[0] * yg[2] + sd[1] * yg[3] + sd[2] * yg[4];
+                    x.copy_from_slice(&s.to_array());
+                }
+            });
+    }
+
+    /// out = (AᵀA + εI) v, with `scratch` of length 8n for A v.
+    pub fn normal_product(&self, v: &[f64], out: &mut [f64], scratch: &mut [f64]) {
+        self.mul(v, scratch);
+        self.mul_transpose(scratch, out);
+        out.par_iter_mut()
+            .zip(v.par_iter())
+            .for_each(|(o, v)| *o += self.epsilon * v);
+    }
+
+    /// The 3 × 3 diagonal blocks of AᵀA + εI, row-major per free vertex.
+    pub fn diagonal_blocks(&self) -> Vec<f64> {
+        let outer = |d: Vec3| DMat3::from_cols(d * d.x, d * d.y, d * d.z);
+        (0..self.sd.len())
+            .into_par_iter()
+            .flat_map_iter(|g| {
+                let mut m = DMat3::from_diagonal(Vec3::splat(self.epsilon));
+                for e in self.ptr[g]..self.ptr[g + 1] {
+                    let mi = self.mirror[e] as usize;
+                    m += outer(self.em[mi][0]) + outer(self.em[mi][1]);
+                    m += DMat3::from_diagonal(Vec3::splat(self.smo[mi] * self.smo[mi]));
+                }
+                for t in self.sd[g] {
+                    m += outer(t);
+                }
+                // row-major (the block is symmetric)
+                m.transpose().to_cols_array()
+            })
+            .collect()
+    }
+
+    /// The sparse A (8n × 3n) compressed by column; every structural entry
+    /// is stored even when zero, so the pattern depends only on the
+    /// connectivity.
+    fn sparse(&self) -> Result<SparseColMat<usize, f64>, EnhanceError> {
+        let nf = self.sd.len();
+        let mut col_ptr = Vec::with_capacity(8 * nf + 1);
+        col_ptr.push(0usize);
+        let mut rows = Vec::with_capacity(2 * 3 * self.col.len() + 9 * nf + 3 * self.col.len());
+        let mut vals = Vec::with_capacity(rows.capacity());
+        // Aᵀ by columns = A by rows
+        for f in 0..nf {
+            let range = self.ptr[f]..self.ptr[f + 1];
+            for k in 0..2 {
+                for e in range.clone() {
+                    let base = 3 * self.col[e] as usize;
+                    rows.extend_from_slice(&[base, base + 1, base + 2]);
+                    vals.extend_from_slice(&self.em[e][k].to_array());
+                }
+                col_ptr.push(rows.len());
+            }
+            for t in self.sd[f] {
+                rows.extend_from_slice(&[3 * f, 3 * f + 1, 3 * f + 2]);
+                vals.extend_from_slice(&t.to_array());
+                col_ptr.push(rows.len());
+            }
+            for c in 0..3 {
+                for e in range.clone() {
+                    rows.push(3 * self.col[e] as usize + c);
+                    vals.push(self.smo[e]);
+                }
+                col_ptr.push(rows.len());
+            }
+        }
+        let symbolic = SymbolicSparseColMat::new_checked(3 * nf, 8 * nf, col_ptr, None, rows);
+        SparseColMat::new(symbolic, vals)
+            .as_ref()
+            .transpose()
+            .to_col_major()
+            .map_err(|e| SolveError::Backend(format!("{e:?}")).into())
+    }
+
     /// The regularised normal matrix AᵀA + εI (both triangles).
     pub fn normal_matrix(&self) -> Result<SparseColMat<usize, f64>, EnhanceError> {
-        let mut matrix = normal_matrix(self.a.as_ref())?;
+        let mut matrix = normal_matrix(self.sparse()?.as_ref())?;
         let (symbolic, values) = matrix.parts_mut();
         for u in 0..symbolic.ncols() {
             let range = symbolic.col_range(u);
@@ -145,13 +287,8 @@ impl LeastSquares {
     }
 }
 
-/// Rows of one chunk of free vertices: columns of Aᵀ.
-struct Chunk {
-    col_len: Vec<usize>,
-    rows: Vec<usize>,
-    vals: Vec<f64>,
-    b: Vec<f64>,
-}
+/// Free vertices per parallel task of the matrix-free products.
+const VERTICES: usize = 512;
 
 /// The edge metric M_i = |k_i1| T_i1 T_i1ᵀ + |k_i2| T_i2 T_i2ᵀ of every
 /// vertex (Ji et al. Eq. (2)).
@@ -167,9 +304,13 @@ fn edge_metrics(curvature: &PrincipalCurvatures) -> Vec<DMat3> {
         .collect()
 }
 
-/// Assembles the 8n × 3n matrix A and right-hand side b of Eq. (20) for the
-/// current curvature (F_em, F_smo) and the fixed distance model (F_sd), and
-/// returns it with the right-hand side of the regularised normal equations. `current` and `reference` are
+/// Rows of Eq. (20) of one free vertex: its entries (column, F_em
+/// coefficients, F_smo coefficient) and its eight right-hand sides.
+type VertexRows = (Vec<(u32, [Vec3; 2], f64)>, [f64; 8]);
+
+/// Assembles the system of Eq. (20) for the current curvature (F_em,
+/// F_smo) and the fixed distance model (F_sd), with the right-hand side of
+/// the regularised normal equations. `current` and `reference` are
 /// normalised positions of all vertices; fixed vertices are read from
 /// `current`, F_sd pulls toward `reference`.
 pub(super) fn assemble(
@@ -181,77 +322,75 @@ pub(super) fn assemble(
     mu: f64,
     epsilon: f64,
 ) -> Result<LeastSquares, EnhanceError> {
-    const CHUNK: usize = 2048;
     let nf = layout.free.len();
     let metrics = edge_metrics(curvature);
-    let chunks: Vec<Chunk> = (0..nf.div_ceil(CHUNK))
+    let rows: Vec<VertexRows> = (0..nf)
         .into_par_iter()
-        .map(|c| {
-            let range = c * CHUNK..((c + 1) * CHUNK).min(nf);
-            let mut chunk = Chunk {
-                col_len: Vec::with_capacity(8 * range.len()),
-                rows: Vec::new(),
-                vals: Vec::new(),
-                b: Vec::with_capacity(8 * range.len()),
-            };
-            // (free index, F_em coefficients for T1 and T2, F_smo coefficient)
-            let mut entries: Vec<(u32, Vec3, Vec3, f64)> = Vec::new();
-            for f in range {
-                vertex_rows(
-                    layout,
-                    curvature,
-                    &metrics,
-                    distance,
-                    current,
-                    reference,
-                    mu,
-                    f,
-                    &mut entries,
-                    &mut chunk,
-                );
-            }
-            chunk
+        .map(|f| {
+            vertex_rows(
+                layout, curvature, &metrics, distance, current, reference, mu, f,
+            )
         })
         .collect();
-
-    let total: usize = chunks.iter().map(|c| c.rows.len()).sum();
-    let mut col_ptr = Vec::with_capacity(8 * nf + 1);
-    col_ptr.push(0usize);
-    let mut row_idx = Vec::with_capacity(total);
-    let mut vals = Vec::with_capacity(total);
+    let mut ptr = Vec::with_capacity(nf + 1);
+    ptr.push(0usize);
+    let total: usize = rows.iter().map(|r| r.0.len()).sum();
+    let (mut col, mut em, mut smo) = (
+        Vec::with_capacity(total),
+        Vec::with_capacity(total),
+        Vec::with_capacity(total),
+    );
     let mut b = Vec::with_capacity(8 * nf);
-    for c in chunks {
-        for len in c.col_len {
-            let last = *col_ptr.last().unwrap_or(&0);
-            col_ptr.push(last + len);
+    for (entries, rhs) in &rows {
+        for &(g, c, s) in entries {
+            col.push(g);
+            em.push(c);
+            smo.push(s);
         }
-        row_idx.extend_from_slice(&c.rows);
-        vals.extend_from_slice(&c.vals);
-        b.extend_from_slice(&c.b);
+        ptr.push(col.len());
+        b.extend_from_slice(rhs);
     }
-    let symbolic = SymbolicSparseColMat::new_checked(3 * nf, 8 * nf, col_ptr, None, row_idx);
-    let at = SparseColMat::new(symbolic, vals);
-    let a = at
-        .as_ref()
-        .transpose()
-        .to_col_major()
-        .map_err(|e| SolveError::Backend(format!("{e:?}")))?;
-    // Aᵀb, gathered per unknown, plus ε p
-    let rhs: Vec<f64> = (0..3 * nf)
+    drop(rows);
+    // the free-neighbour relation is symmetric: entry (f, g) has a mirror (g, f)
+    let mirror: Vec<u32> = (0..nf)
         .into_par_iter()
-        .map(|u| {
-            let rows = a.row_idx_of_col_raw(u);
-            let v = a.val_of_col(u);
-            let p = reference[layout.free[u / 3] as usize];
-            rows.iter().zip(v).map(|(&r, x)| x * b[r]).sum::<f64>() + epsilon * p[u % 3]
+        .flat_map_iter(|f| {
+            let (ptr, col) = (&ptr, &col);
+            (ptr[f]..ptr[f + 1]).map(move |e| {
+                let g = col[e] as usize;
+                let others = &col[ptr[g]..ptr[g + 1]];
+                match others.binary_search(&(f as u32)) {
+                    Ok(k) => (ptr[g] + k) as u32,
+                    Err(_) => NONE,
+                }
+            })
         })
         .collect();
-    Ok(LeastSquares {
-        a,
-        at,
-        rhs,
+    if mirror.contains(&NONE) {
+        return Err(SolveError::Backend("one-rings are not symmetric".into()).into());
+    }
+    let mut system = LeastSquares {
+        ptr,
+        col,
+        em,
+        smo,
+        mirror,
+        sd: distance.rows.clone(),
+        b,
+        rhs: Vec::new(),
         epsilon,
-    })
+    };
+    // Aᵀb + ε p
+    let mut rhs = vec![0.0; 3 * nf];
+    system.mul_transpose(&system.b, &mut rhs);
+    rhs.par_chunks_mut(3).enumerate().for_each(|(f, r)| {
+        let p = reference[layout.free[f] as usize];
+        for c in 0..3 {
+            r[c] += epsilon * p[c];
+        }
+    });
+    system.rhs = rhs;
+    Ok(system)
 }
 
 /// |k_1|, |k_2| of vertex `i`, 0 where not finite.
@@ -268,7 +407,9 @@ pub(super) fn smoothness_weight(curvature: &PrincipalCurvatures, i: usize, mu: f
     mu * (-(a1 + a2)).exp()
 }
 
-/// Emits the eight rows (columns of Aᵀ) of free vertex `f`.
+/// The eight rows of free vertex `f` (two F_em, three F_sd, three F_smo):
+/// its entries in increasing free index (a neighbour listed twice sums)
+/// and the right-hand sides.
 #[allow(clippy::too_many_arguments)]
 fn vertex_rows(
     layout: &Layout,
@@ -279,9 +420,7 @@ fn vertex_rows(
     reference: &[Vec3],
     mu: f64,
     f: usize,
-    entries: &mut Vec<(u32, Vec3, Vec3, f64)>,
-    out: &mut Chunk,
-) {
+) -> VertexRows {
     let i = layout.free[f] as usize;
     let ring = layout.ring(f);
     let deg = ring.len().max(1) as f64;
@@ -291,9 +430,9 @@ fn vertex_rows(
     let s_ring = -w_smo / deg;
     // F_em: T_ikᵀ Σ_j (M_i + M_j)(v_i − v_j), with M_i T_ik = |k_ik| T_ik
     let mut ci = [Vec3::ZERO; 2];
-    let mut b_em = [0.0; 2];
+    let mut b = [0.0; 8];
     let mut b_smo = Vec3::ZERO;
-    entries.clear();
+    let mut entries: Vec<(u32, [Vec3; 2], f64)> = Vec::with_capacity(ring.len() + 1);
     for &j in ring {
         let mj = metrics[j as usize];
         let cj1 = -(a1 * t1 + mj * t1);
@@ -303,44 +442,29 @@ fn vertex_rows(
         let fj = layout.free_index[j as usize];
         if fj == NONE {
             let xj = current[j as usize];
-            b_em[0] -= cj1.dot(xj);
-            b_em[1] -= cj2.dot(xj);
+            b[0] -= cj1.dot(xj);
+            b[1] -= cj2.dot(xj);
             b_smo -= s_ring * xj;
         } else {
-            entries.push((fj, cj1, cj2, s_ring));
+            entries.push((fj, [cj1, cj2], s_ring));
         }
     }
-    entries.push((f as u32, ci[0], ci[1], w_smo));
+    entries.push((f as u32, ci, w_smo));
     entries.sort_unstable_by_key(|e| e.0);
-
-    // two F_em rows
-    for k in 0..2 {
-        let mut len = 0;
-        for e in entries.iter() {
-            let c = if k == 0 { e.1 } else { e.2 };
-            let base = 3 * e.0 as usize;
-            out.rows.extend_from_slice(&[base, base + 1, base + 2]);
-            out.vals.extend_from_slice(&[c.x, c.y, c.z]);
-            len += 3;
+    entries.dedup_by(|later, kept| {
+        let same = later.0 == kept.0;
+        if same {
+            kept.1[0] += later.1[0];
+            kept.1[1] += later.1[1];
+            kept.2 += later.2;
         }
-        out.col_len.push(len);
-        out.b.push(b_em[k]);
-    }
-    // three F_sd rows: √(λc) Tᵀ v = √(λc) Tᵀ p
+        same
+    });
+    // F_sd rows: √(λc) Tᵀ v = √(λc) Tᵀ p
     let p = reference[i];
-    for t in distance.rows[f] {
-        out.rows.extend_from_slice(&[3 * f, 3 * f + 1, 3 * f + 2]);
-        out.vals.extend_from_slice(&[t.x, t.y, t.z]);
-        out.col_len.push(3);
-        out.b.push(t.dot(p));
+    for (k, t) in distance.rows[f].iter().enumerate() {
+        b[2 + k] = t.dot(p);
     }
-    // three F_smo rows, one per coordinate
-    for c in 0..3 {
-        for e in entries.iter() {
-            out.rows.push(3 * e.0 as usize + c);
-            out.vals.push(e.3);
-        }
-        out.col_len.push(entries.len());
-        out.b.push(b_smo[c]);
-    }
+    b[5..8].copy_from_slice(&b_smo.to_array());
+    (entries, b)
 }

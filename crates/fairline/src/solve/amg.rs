@@ -1011,6 +1011,7 @@ mod tests {
             tolerance: 1e-12,
             max_iterations: 100_000,
             block: 1,
+            hopeless_after: 0,
         };
         let mut x = vec![0.0; n];
         let jacobi =

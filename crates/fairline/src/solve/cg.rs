@@ -31,6 +31,8 @@ pub struct CgReport {
     pub iterations: usize,
     /// Final relative residual ‖c − (AᵀA + εI) x‖ / ‖c‖.
     pub relative_residual: f64,
+    /// Relative residual of the starting point.
+    pub initial_relative_residual: f64,
     /// Whether the tolerance was reached.
     pub converged: bool,
 }
@@ -45,6 +47,11 @@ pub struct CgOptions {
     /// Size of the diagonal blocks of the block-Jacobi preconditioner
     /// (1 = Jacobi); the number of unknowns must be a multiple of it.
     pub block: usize,
+    /// When not 0: every this many iterations, give up (not converged)
+    /// when the mean reduction of the residual per iteration over the last
+    /// this many predicts the tolerance only after `max_iterations` — for a
+    /// cheap first attempt that a stronger preconditioner takes over.
+    pub hopeless_after: usize,
 }
 
 /// A symmetric positive-definite approximation z = M⁻¹ r of the inverse of
@@ -108,13 +115,14 @@ pub fn normal_equations_pcg(
         )));
     }
     let mut scratch = vec![0.0; m];
-    pcg(
+    conjugate_gradients(
         |v: &[f64], out: &mut [f64]| normal_product(a, at, epsilon, v, out, &mut scratch),
         |r: &[f64], z: &mut [f64]| preconditioner.apply(r, z),
         rhs,
         x,
         options.tolerance,
         options.max_iterations,
+        options.hopeless_after,
     )
 }
 
@@ -133,12 +141,44 @@ pub fn normal_equations_pcg(
 /// result does not depend on the number of threads when `apply` and
 /// `precondition` do not.
 pub fn pcg(
+    apply: impl FnMut(&[f64], &mut [f64]),
+    precondition: impl FnMut(&[f64], &mut [f64]),
+    rhs: &[f64],
+    x: &mut [f64],
+    tolerance: f64,
+    max_iterations: usize,
+) -> Result<CgReport, SolveError> {
+    conjugate_gradients(apply, precondition, rhs, x, tolerance, max_iterations, 0)
+}
+
+/// [`pcg`] with the tolerance, iteration limit and early give-up rule of
+/// `options` (`options.block` is not used).
+pub fn pcg_with(
+    apply: impl FnMut(&[f64], &mut [f64]),
+    precondition: impl FnMut(&[f64], &mut [f64]),
+    rhs: &[f64],
+    x: &mut [f64],
+    options: &CgOptions,
+) -> Result<CgReport, SolveError> {
+    conjugate_gradients(
+        apply,
+        precondition,
+        rhs,
+        x,
+        options.tolerance,
+        options.max_iterations,
+        options.hopeless_after,
+    )
+}
+
+fn conjugate_gradients(
     mut apply: impl FnMut(&[f64], &mut [f64]),
     mut precondition: impl FnMut(&[f64], &mut [f64]),
     rhs: &[f64],
     x: &mut [f64],
     tolerance: f64,
     max_iterations: usize,
+    hopeless_after: usize,
 ) -> Result<CgReport, SolveError> {
     let n = rhs.len();
     if x.len() != n {
@@ -154,6 +194,7 @@ pub fn pcg(
         return Ok(CgReport {
             iterations: 0,
             relative_residual: 0.0,
+            initial_relative_residual: 0.0,
             converged: true,
         });
     }
@@ -161,6 +202,8 @@ pub fn pcg(
     let (mut r, mut z, mut p, mut q) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut iterations = 0;
     let mut restarts = 0;
+    let mut initial_residual = None;
+    let mut hopeless = false;
     let true_residual = loop {
         // true residual r = c − S x; the recurrence below drifts from it, so
         // convergence is confirmed on it and CG restarted from the current
@@ -170,10 +213,15 @@ pub fn pcg(
             .zip(rhs.par_iter().zip(q.par_iter()))
             .for_each(|(r, (c, q))| *r = c - q);
         let true_residual = dot(&r, &r).sqrt();
+        initial_residual.get_or_insert(true_residual);
         if !true_residual.is_finite() || !x.iter().all(|v| v.is_finite()) {
             return Err(SolveError::NonFinite);
         }
-        if true_residual <= target || iterations >= max_iterations || restarts >= MAX_RESTARTS {
+        if true_residual <= target
+            || iterations >= max_iterations
+            || restarts >= MAX_RESTARTS
+            || hopeless
+        {
             break true_residual;
         }
         restarts += 1;
@@ -181,6 +229,7 @@ pub fn pcg(
         p.copy_from_slice(&z);
         let mut rz = dot(&r, &z);
         let mut norm_r = true_residual;
+        let mut checkpoint = (iterations, true_residual);
         while norm_r > target && iterations < max_iterations {
             apply(&p, &mut q);
             let pq = dot(&p, &q);
@@ -203,11 +252,22 @@ pub fn pcg(
                 .for_each(|(p, z)| *p = z + beta * *p);
             norm_r = dot(&r, &r).sqrt();
             iterations += 1;
+            if hopeless_after > 0 && iterations - checkpoint.0 == hopeless_after {
+                // mean rate over the last stretch, extrapolated
+                let rate = (norm_r / checkpoint.1).powf(1.0 / hopeless_after as f64);
+                let needed = (target / norm_r).ln() / rate.ln();
+                if !(rate < 1.0) || !(iterations as f64 + needed <= max_iterations as f64) {
+                    hopeless = true;
+                    break;
+                }
+                checkpoint = (iterations, norm_r);
+            }
         }
     };
     Ok(CgReport {
         iterations,
         relative_residual: true_residual / norm_c,
+        initial_relative_residual: initial_residual.unwrap_or(true_residual) / norm_c,
         converged: true_residual <= target,
     })
 }
@@ -284,6 +344,7 @@ pub fn normal_diagonal_blocks(
 /// Block-Jacobi preconditioner: the inverses of symmetric diagonal blocks
 /// (e.g. those of AᵀA + εI from [`normal_diagonal_blocks`]), row-major per
 /// block.
+#[derive(Clone, Debug)]
 pub struct BlockJacobi {
     block: usize,
     inverses: Vec<f64>,
@@ -449,6 +510,7 @@ mod tests {
             tolerance: 1e-12,
             max_iterations: 2000,
             block: 3,
+            hopeless_after: 0,
         };
         let mut x = vec![0.0; n];
         let r = normal_equations_cg(a.as_ref(), at.as_ref(), 0.0, &rhs, &mut x, &options).unwrap();

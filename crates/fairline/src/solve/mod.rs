@@ -19,7 +19,7 @@ pub use amg::{Amg, AmgOptions, AmgStats, CsrMatrix};
 pub use box_qp::{BoxQpOptions, BoxQpSolution, box_qp};
 pub use cg::{
     BlockJacobi, CgOptions, CgReport, Preconditioner, normal_diagonal_blocks, normal_equations_cg,
-    normal_equations_pcg, pcg,
+    normal_equations_pcg, pcg, pcg_with,
 };
 pub use cholesky::{
     CholeskyOptions, CholeskyOrdering, CholeskySolver, least_squares, normal_matrix,
