@@ -36,14 +36,15 @@
 //!   F_smo rows are per coordinate), so its factor fills in heavily:
 //!   1.3 · 10⁷ nonzeros at 10k vertices, 2.2 · 10⁸ at 100k, 3.2 · 10⁹ (26 GB)
 //!   at 1M; the factorisation was 84–91 % of the time and 1M did not fit.
-//! - **Conjugate gradients** — [`crate::solve::normal_equations_cg`]:
+//! - **Conjugate gradients** — [`crate::solve::pcg_with`]:
 //!   block-Jacobi (3 × 3 per vertex) preconditioned CG on the same normal
-//!   equations, matrix-free (LᵀL v = Lᵀ(L v), never formed), parallel and
-//!   deterministic, warm-started at the current positions (the solution is
-//!   within an edge length of them), stopped at a relative residual of
-//!   [`CG_TOLERANCE`] = 10⁻¹², at which the result equals the Cholesky one to
-//!   about 10⁻¹² of the bounding-box diagonal (tested to 10⁻⁸). The memory is
-//!   that of L (about 3 GB at 1M vertices). Where the curvature pins the
+//!   equations, matrix-free: L is stored per vertex (the coefficients of
+//!   its rows over its closed one-ring) and LᵀL v = Lᵀ(L v) is never
+//!   formed; parallel and deterministic, warm-started at the current
+//!   positions (the solution is within an edge length of them), stopped at
+//!   a relative residual of [`CG_TOLERANCE`] = 10⁻¹², at which the result
+//!   equals the Cholesky one to about 10⁻¹² of the bounding-box diagonal
+//!   (tested to 10⁻⁸). Where the curvature pins the
 //!   tangential motion (F_sd with d|k| > 0, F_em) CG converges in about 25
 //!   iterations at any size (tori of 10k–1M vertices); where it does not —
 //!   flat parts and the axial direction of cylindrical parts, where only
@@ -55,21 +56,23 @@
 //!   H Q̂ H models the F_smo and F_em rows as a weighted bi-Laplacian with
 //!   per-vertex 3 × 3 weights and the F_sd rows as a reaction term, and H,
 //!   a 1-ring vector Laplacian, is inverted approximately by one
-//!   smoothed-aggregation multigrid V-cycle ([`crate::solve::Amg`], Vaněk,
-//!   Mandel & Brezina 1996); see `precondition.rs` for the derivation and
-//!   the measured condition numbers. Its iteration count hardly grows with
-//!   the mesh (rounded cube: about 40 at 10k vertices, 55 at 100k; open
-//!   cylinders of two lengths: 26 and 28, block Jacobi 631 on the shorter),
-//!   but an iteration costs several of block Jacobi's and the setup about
-//!   ten. (An earlier multigrid on LᵀL itself cut the iterations only 8×
-//!   and filled in on coarse levels: LᵀL is a fourth-order operator.)
+//!   smoothed-aggregation multigrid V-cycle ([`crate::solve::VectorAmg`],
+//!   Vaněk, Mandel & Brezina 1996); see `precondition.rs` for the
+//!   derivation and the measured condition numbers. Its iteration count
+//!   hardly grows with the mesh (rounded cube: 34 at 10k vertices, 32 at
+//!   100k, 45 at 1M; open cylinders of two lengths: 27 and 28, block Jacobi
+//!   631 on the shorter); an iteration costs two V-cycles more than one of
+//!   block Jacobi, and the setup about ten iterations. (An earlier multigrid on LᵀL itself cut
+//!   the iterations only 8× and filled in on coarse levels: LᵀL is a
+//!   fourth-order operator.)
 //!
 //! The default, [`EnhanceSolver::Auto`], runs block-Jacobi CG for at most
 //! [`AUTO_JACOBI_BUDGET`] iterations — enough where the curvature holds the
-//! motion — and continues from there with the factored preconditioner; the
-//! direct solve is a last resort should that fail (up to
-//! [`AUTO_DIRECT_LIMIT`] free vertices). Every CG result reaches the
-//! Cholesky one to 10⁻⁸ of the bounding-box diagonal (tested).
+//! motion — giving up earlier when, checked every [`AUTO_JACOBI_CHECK`]
+//! iterations, its rate predicts more, and continues from there with the
+//! factored preconditioner; the direct solve is a last resort should that
+//! fail (up to [`AUTO_DIRECT_LIMIT`] free vertices). Every CG result
+//! reaches the Cholesky one to 10⁻⁸ of the bounding-box diagonal (tested).
 //!
 //! **Normalisations.** Eq. (5) and Eq. (7) average F_em over the edges and
 //! F_sd over the vertices; fairline makes all three terms means over the

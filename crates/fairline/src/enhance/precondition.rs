@@ -40,15 +40,17 @@
 //! **The preconditioner** is z = B⁻¹ r + V Q̂⁻¹ V r with B block Jacobi of
 //! LᵀL + εI (3 × 3 per vertex), which takes care of what the model leaves
 //! out (the variation of the curvature between neighbours in F_em), and V
-//! one smoothed-aggregation multigrid V-cycle for H ([`crate::solve::Amg`],
-//! the three translations as near-null space), a symmetric
-//! positive-definite approximation of H⁻¹. Measured condition numbers of
-//! the preconditioned matrix with exact H⁻¹ (dense eigenvalues): rounded
-//! cube 22–28 for 386–1538 free vertices, not growing (block Jacobi alone:
-//! 155–518, growing), open cylinder 6 (block Jacobi 1.8 · 10⁵). With the
-//! V-cycle, conjugate gradients to 10⁻¹² take about 40 iterations on the
-//! 10k-vertex rounded cube and 55 on the 100k one (block Jacobi: 597 and
-//! about 1500). Both parts are symmetric positive definite, so conjugate
+//! one smoothed-aggregation multigrid V-cycle for H
+//! ([`crate::solve::VectorAmg`], which keeps the form G ⊗ I₃ + Σ on every
+//! level: a scalar prolongator and one scalar and one symmetric 3 × 3 block
+//! per coarse entry; the three translations as near-null space), a
+//! symmetric positive-definite approximation of H⁻¹. Measured condition
+//! numbers of the preconditioned matrix with exact H⁻¹ (dense eigenvalues):
+//! rounded cube 22–28 for 386–1538 free vertices, not growing (block Jacobi
+//! alone: 155–518, growing), open cylinder 6 (block Jacobi 1.8 · 10⁵). With
+//! the V-cycle, conjugate gradients to 10⁻¹² take 34 iterations on the
+//! 10k-vertex rounded cube, 32 on the 100k one and 45 on the 1M one (block
+//! Jacobi: 597, about 1500, not feasible). Both parts are symmetric positive definite, so conjugate
 //! gradients converge to the same solution, only in fewer iterations.
 
 use super::system::{DistanceModel, Layout, smoothness_weight};
@@ -60,14 +62,15 @@ use crate::solve::{
 };
 use glam::DMat3;
 use rayon::prelude::*;
+use std::sync::Mutex;
 
 const NONE: u32 = u32::MAX;
 
 /// Block-Jacobi smoothing steps before and after each coarse correction of
 /// the V-cycle for H: two instead of one cost about 40 % more per cycle and
-/// save 40 % of the iterations (rounded cube, 100k vertices: 55 instead of
-/// 93).
-const SMOOTHING_STEPS: usize = 1;
+/// save a third of the iterations, more on larger meshes (rounded cube:
+/// 32 instead of 47 at 100k vertices, 45 instead of about 115 at 1M).
+const SMOOTHING_STEPS: usize = 2;
 
 /// M⁻¹ + B⁻¹ (module documentation).
 pub(super) struct FactoredPreconditioner {
@@ -76,6 +79,8 @@ pub(super) struct FactoredPreconditioner {
     inverse_q: Vec<DMat3>,
     /// Smoothed-aggregation multigrid V-cycle of H = G ⊗ I₃ + Σ.
     h: VectorAmg,
+    /// Two scratch vectors of the apply.
+    scratch: Mutex<(Vec<f64>, Vec<f64>)>,
 }
 
 impl FactoredPreconditioner {
@@ -107,6 +112,7 @@ impl FactoredPreconditioner {
             jacobi,
             inverse_q: blocks.into_iter().map(|(q, _)| q).collect(),
             h,
+            scratch: Mutex::new((vec![0.0; 3 * nf], vec![0.0; 3 * nf])),
         })
     }
 }
@@ -163,28 +169,20 @@ fn vertex_blocks(
 /// neighbours.
 fn assemble_h(layout: &Layout, blocks: &[(DMat3, DMat3)]) -> Result<VectorOperator, SolveError> {
     let nf = layout.free.len();
-    let rows: Vec<Vec<(u32, f64, SymmetricBlock)>> = (0..nf)
+    // columns of each row: free neighbours and the vertex itself, sorted (a
+    // neighbour listed twice, never on a manifold mesh, sums)
+    let rows: Vec<Vec<(u32, f64)>> = (0..nf)
         .into_par_iter()
         .map(|f| {
             let ring = layout.ring(f);
-            let s = blocks[f].1;
-            let sigma = [
-                s.x_axis.x,
-                s.y_axis.y,
-                s.z_axis.z,
-                0.5 * (s.y_axis.x + s.x_axis.y),
-                0.5 * (s.z_axis.x + s.x_axis.z),
-                0.5 * (s.z_axis.y + s.y_axis.z),
-            ];
-            let mut row: Vec<(u32, f64, SymmetricBlock)> = ring
+            let mut row: Vec<(u32, f64)> = ring
                 .iter()
                 .map(|&j| layout.free_index[j as usize])
                 .filter(|&g| g != NONE)
-                .map(|g| (g, -1.0, [0.0; 6]))
+                .map(|g| (g, -1.0))
                 .collect();
-            row.push((f as u32, ring.len() as f64, sigma));
+            row.push((f as u32, ring.len() as f64));
             row.sort_unstable_by_key(|e| e.0);
-            // a neighbour listed twice (never on a manifold mesh) sums
             row.dedup_by(|later, kept| {
                 let same = later.0 == kept.0;
                 if same {
@@ -195,7 +193,26 @@ fn assemble_h(layout: &Layout, blocks: &[(DMat3, DMat3)]) -> Result<VectorOperat
             row
         })
         .collect();
-    VectorOperator::from_rows(rows)
+    let mut ptr = Vec::with_capacity(nf + 1);
+    ptr.push(0);
+    for r in &rows {
+        ptr.push(ptr[ptr.len() - 1] + r.len());
+    }
+    let (idx, a): (Vec<u32>, Vec<f64>) = rows.into_iter().flatten().unzip();
+    let sigma: Vec<SymmetricBlock> = blocks
+        .par_iter()
+        .map(|(_, s)| {
+            [
+                s.x_axis.x,
+                s.y_axis.y,
+                s.z_axis.z,
+                0.5 * (s.y_axis.x + s.x_axis.y),
+                0.5 * (s.z_axis.x + s.x_axis.z),
+                0.5 * (s.z_axis.y + s.y_axis.z),
+            ]
+        })
+        .collect();
+    VectorOperator::with_diagonal_blocks(ptr, idx, a, sigma)
 }
 
 impl Preconditioner for FactoredPreconditioner {
@@ -203,18 +220,26 @@ impl Preconditioner for FactoredPreconditioner {
     /// symmetric positive-definite function of r).
     fn apply(&self, r: &[f64], z: &mut [f64]) {
         self.jacobi.apply(r, z);
-        let mut t = vec![0.0; r.len()];
-        self.h.apply(r, &mut t);
-        let mut u: Vec<f64> = t
-            .par_chunks(3)
+        let mut fresh = None;
+        let mut guard = self.scratch.try_lock();
+        let (t, u) = match guard.as_deref_mut() {
+            Ok((t, u)) if t.len() == r.len() => (t, u),
+            _ => {
+                let (t, u) = fresh.insert((vec![0.0; r.len()], vec![0.0; r.len()]));
+                (t, u)
+            }
+        };
+        self.h.apply(r, t);
+        u.par_chunks_mut(3)
+            .zip(t.par_chunks(3))
             .zip(self.inverse_q.par_iter())
-            .flat_map_iter(|(t, q)| (*q * Vec3::new(t[0], t[1], t[2])).to_array())
-            .collect();
-        self.h.apply(&u, &mut t);
-        std::mem::swap(&mut u, &mut t);
-        z.par_iter_mut().zip(u.par_iter()).for_each(|(z, u)| {
-            if u.is_finite() {
-                *z += u;
+            .for_each(|((u, t), q)| {
+                u.copy_from_slice(&(*q * Vec3::new(t[0], t[1], t[2])).to_array());
+            });
+        self.h.apply(u, t);
+        z.par_iter_mut().zip(t.par_iter()).for_each(|(z, t)| {
+            if t.is_finite() {
+                *z += t;
             }
         });
     }
@@ -389,50 +414,6 @@ mod tests {
             let mut pv = vec![0.0; n];
             p.apply(&v, &mut pv);
             assert!(dot(&v, &pv) > 0.0);
-        }
-    }
-
-    #[test]
-    #[ignore]
-    fn scratch_timing() {
-        for file in ["/tmp/cube10k.obj", "/tmp/cube100k.obj"] {
-            let mesh = crate::io::read_mesh(file).unwrap();
-            let (layout, curvature, distance, system) = setup(&mesh);
-            let t = std::time::Instant::now();
-            let p = FactoredPreconditioner::new(
-                &layout,
-                &curvature,
-                &distance,
-                jacobi_of(&system),
-                0.5,
-                1e-10,
-            )
-            .unwrap();
-            println!(
-                "{file}: setup {:.3}s sizes {:?}",
-                t.elapsed().as_secs_f64(),
-                p.h.sizes()
-            );
-            let n = system.rhs.len();
-            let r: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
-            let mut z = vec![0.0; n];
-            let reps = 20;
-            let t = std::time::Instant::now();
-            for _ in 0..reps {
-                p.h.apply(&r, &mut z);
-            }
-            println!(
-                "  V-cycle {:.3} ms",
-                t.elapsed().as_secs_f64() * 1e3 / reps as f64
-            );
-            let t = std::time::Instant::now();
-            for _ in 0..reps {
-                p.jacobi.apply(&r, &mut z);
-            }
-            println!(
-                "  block Jacobi {:.3} ms",
-                t.elapsed().as_secs_f64() * 1e3 / reps as f64
-            );
         }
     }
 }

@@ -496,28 +496,3 @@ fn multigrid_matches_the_direct_solve() {
         assert_eq!(again.positions, amg.positions, "deterministic");
     }
 }
-
-#[test]
-#[ignore]
-fn scratch_tolerance() {
-    let m = crate::io::read_mesh(std::path::Path::new("/tmp/cube10k.obj")).unwrap();
-    let d = enhance_features(&m, &EnhanceOptions::default().solver(EnhanceSolver::Direct)).unwrap();
-    let el = d.report.edge_length;
-    for tol in [1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-12] {
-        let mut o = EnhanceOptions::default();
-        o.cg_tolerance = tol;
-        let a = enhance_features(&m, &o).unwrap();
-        let diff = a
-            .positions
-            .iter()
-            .zip(&d.positions)
-            .map(|(p, q)| p.distance(*q))
-            .fold(0.0, f64::max);
-        println!(
-            "tol {tol:e}: its {} diff/edge {:e} solve {:.3}",
-            a.report.cg_iterations,
-            diff / el,
-            a.report.timings.solve_s
-        );
-    }
-}

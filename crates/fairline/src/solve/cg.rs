@@ -93,7 +93,7 @@ pub fn normal_equations_cg(
 }
 
 /// Solves (AᵀA + εI) x = `rhs` by conjugate gradients preconditioned by
-/// `preconditioner` (e.g. [`super::Amg`]), otherwise as
+/// `preconditioner` (e.g. [`super::VectorAmg`]), otherwise as
 /// [`normal_equations_cg`] (`options.block` is not used).
 pub fn normal_equations_pcg(
     a: SparseColMatRef<'_, usize, f64>,

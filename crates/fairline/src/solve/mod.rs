@@ -15,7 +15,7 @@ mod ordering;
 mod small;
 mod vector_amg;
 
-pub use amg::{Amg, AmgOptions, AmgStats, CsrMatrix};
+pub use amg::CsrMatrix;
 pub use box_qp::{BoxQpOptions, BoxQpSolution, box_qp};
 pub use cg::{
     BlockJacobi, CgOptions, CgReport, Preconditioner, normal_diagonal_blocks, normal_equations_cg,

@@ -19,14 +19,26 @@
 //!
 //! has the same form (its blocks are again symmetric, its pattern that of
 //! P_sᵀ A P_s). Against the same method on the assembled 3n × 3n matrix
-//! ([`super::Amg`]) a stored coarse entry is one index, one scalar and six
-//! block values instead of nine indices and nine values, the prolongator
-//! has a ninth of the entries, the finest level stores S on its diagonal
-//! only, and the setup multiplies scalar matrices. Aggregation, the
-//! tentative prolongator and its smoothing are those of [`super::Amg`]
-//! (shared functions); the smoother is damped block Jacobi with the 3 × 3
-//! diagonal blocks of K, ω = 4 / (3 ρ̄), so the V-cycle is symmetric
-//! positive definite (see [`super::Amg`]).
+//! (3 × 3 blocks everywhere, as fairline had before) a stored coarse entry
+//! is one index, one scalar and six block values instead of nine indices
+//! and nine values, the prolongator has a ninth of the entries, the finest
+//! level stores S on its diagonal only, and the setup multiplies scalar
+//! matrices: on the 100k-vertex rounded cube of vertex flow a V-cycle took
+//! 11.5 ms instead of about 40 and the setup 0.4 s instead of 1.3 s, in
+//! fewer conjugate-gradient iterations. Aggregation, the tentative
+//! prolongator and its smoothing are the shared steps of `amg.rs`.
+//!
+//! Apply: one symmetric V-cycle — ν damped block-Jacobi steps
+//! x ← x + ω D⁻¹(b − K x), D the 3 × 3 diagonal blocks of K,
+//! ω = 4 / (3 ρ̄) (ρ̄ as for the prolongator smoothing), before and ν
+//! after the coarse correction, with restriction Pᵀ and prolongation P;
+//! the coarsest level (at most [`VectorAmgOptions::max_coarse_nodes`]
+//! nodes) is factored by [`super::CholeskySolver`]. The smoother is
+//! convergent in the K norm (ω ρ(D⁻¹K) ≤ 4/3 < 2), pre- and post-smoothing
+//! are adjoint and the coarsest solve is exact, so the V-cycle is a
+//! symmetric positive-definite operator and a valid preconditioner for
+//! conjugate gradients. Every parallel loop writes disjoint rows and sums
+//! in a fixed order: the result does not depend on the number of threads.
 
 use super::amg::{
     POWER_ITERATIONS, ROWS, RowAccumulator, aggregate_nodes, block_jacobi, smooth_prolongator,
@@ -36,6 +48,7 @@ use super::cg::{Preconditioner, invert_spd};
 use super::{CholeskySolver, CsrMatrix, SolveError};
 use faer::sparse::{SparseColMat, Triplet};
 use rayon::prelude::*;
+use std::sync::Mutex;
 
 /// A symmetric 3 × 3 block as [xx, yy, zz, xy, xz, yz].
 pub type SymmetricBlock = [f64; 6];
@@ -120,6 +133,53 @@ impl VectorOperator {
             } else {
                 Blocks::Full(s)
             },
+        })
+    }
+
+    /// The operator A ⊗ I₃ + S with S block-diagonal: A by rows (`ptr`,
+    /// columns `idx` strictly increasing per row and including the
+    /// diagonal, values `a`) and the diagonal block of S of every node.
+    /// A must be symmetric.
+    ///
+    /// Errors: inconsistent lengths, a column out of range, columns not
+    /// increasing, a missing diagonal entry.
+    pub fn with_diagonal_blocks(
+        ptr: Vec<usize>,
+        idx: Vec<u32>,
+        a: Vec<f64>,
+        s: Vec<SymmetricBlock>,
+    ) -> Result<Self, SolveError> {
+        let n = s.len();
+        let consistent = ptr.len() == n + 1
+            && ptr.first() == Some(&0)
+            && ptr.windows(2).all(|w| w[0] <= w[1])
+            && ptr[n] == idx.len()
+            && idx.len() == a.len()
+            && n < u32::MAX as usize;
+        if !consistent {
+            return Err(SolveError::Dimension(format!(
+                "vector operator: {} row pointers, {} columns, {} values, {n} blocks",
+                ptr.len(),
+                idx.len(),
+                a.len()
+            )));
+        }
+        let bad = (0..n).into_par_iter().find_first(|&i| {
+            let row = &idx[ptr[i]..ptr[i + 1]];
+            !row.windows(2).all(|w| w[0] < w[1])
+                || row.last().is_some_and(|&j| j as usize >= n)
+                || row.binary_search(&(i as u32)).is_err()
+        });
+        if let Some(i) = bad {
+            return Err(SolveError::Dimension(format!(
+                "vector operator row {i}: columns must increase, lie below {n} and include the diagonal"
+            )));
+        }
+        Ok(VectorOperator {
+            ptr,
+            idx,
+            a,
+            s: Blocks::Diagonal(s),
         })
     }
 
@@ -394,6 +454,7 @@ pub struct VectorAmg {
     levels: Vec<Level>,
     coarse: CholeskySolver,
     smoothing_steps: usize,
+    workspace: Mutex<Vec<[Vec<f64>; 3]>>,
 }
 
 impl VectorAmg {
@@ -450,11 +511,14 @@ impl VectorAmg {
             b = coarse_b;
         }
         let coarse = CholeskySolver::new(k.to_faer()?.as_ref())?;
-        Ok(VectorAmg {
+        let mut amg = VectorAmg {
             levels,
             coarse,
             smoothing_steps: options.smoothing_steps.max(1),
-        })
+            workspace: Mutex::new(Vec::new()),
+        };
+        amg.workspace = Mutex::new(amg.new_workspace());
+        Ok(amg)
     }
 
     /// Nodes and stored entries per level, finest first (the last level is
@@ -469,7 +533,19 @@ impl VectorAmg {
         s
     }
 
-    fn cycle(&self, level: usize, b: &[f64], x: &mut [f64]) {
+    /// Scratch vectors of every level: residual, coarse residual, coarse
+    /// correction.
+    fn new_workspace(&self) -> Vec<[Vec<f64>; 3]> {
+        self.levels
+            .iter()
+            .map(|l| {
+                let nc = 3 * l.p.ncols;
+                [vec![0.0; 3 * l.k.nodes()], vec![0.0; nc], vec![0.0; nc]]
+            })
+            .collect()
+    }
+
+    fn cycle(&self, level: usize, b: &[f64], x: &mut [f64], workspace: &mut [[Vec<f64>; 3]]) {
         if level == self.levels.len() {
             x.copy_from_slice(b);
             if self.coarse.solve_in_place(x).is_err() {
@@ -478,32 +554,37 @@ impl VectorAmg {
             return;
         }
         let l = &self.levels[level];
-        let mut r = vec![0.0; b.len()];
+        let Some(([r, rc, xc], deeper)) = workspace.split_first_mut() else {
+            return;
+        };
         // pre-smoothing from x = 0
         jacobi_step(&l.inverses, l.omega, b, x, false);
         for _ in 1..self.smoothing_steps {
-            l.k.residual(b, x, &mut r);
-            jacobi_step(&l.inverses, l.omega, &r, x, true);
+            l.k.residual(b, x, r);
+            jacobi_step(&l.inverses, l.omega, r, x, true);
         }
-        l.k.residual(b, x, &mut r);
-        let mut rc = vec![0.0; 3 * l.pt.nrows];
-        mul_coordinates(&l.pt, &r, &mut rc);
-        let mut xc = vec![0.0; rc.len()];
-        self.cycle(level + 1, &rc, &mut xc);
-        mul_coordinates(&l.p, &xc, &mut r);
+        l.k.residual(b, x, r);
+        mul_coordinates(&l.pt, r, rc);
+        self.cycle(level + 1, rc, xc, deeper);
+        mul_coordinates(&l.p, xc, r);
         x.par_iter_mut()
             .zip(r.par_iter())
             .for_each(|(x, c)| *x += c);
         for _ in 0..self.smoothing_steps {
-            l.k.residual(b, x, &mut r);
-            jacobi_step(&l.inverses, l.omega, &r, x, true);
+            l.k.residual(b, x, r);
+            jacobi_step(&l.inverses, l.omega, r, x, true);
         }
     }
 }
 
 impl Preconditioner for VectorAmg {
     fn apply(&self, r: &[f64], z: &mut [f64]) {
-        self.cycle(0, r, z);
+        // the scratch vectors are reused (no page faults on fresh memory
+        // each cycle); a concurrent call gets its own
+        match self.workspace.try_lock() {
+            Ok(mut workspace) => self.cycle(0, r, z, &mut workspace),
+            Err(_) => self.cycle(0, r, z, &mut self.new_workspace()),
+        }
     }
 }
 
@@ -604,4 +685,260 @@ fn vector_jacobi(k: &VectorOperator) -> (Vec<[f64; 9]>, f64) {
         1.0
     };
     (inverses, omega)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solve::pcg;
+
+    /// K = A ⊗ I₃ + S on a side × side grid: A the 4-neighbour graph
+    /// Laplacian with a Dirichlet term on the left column (a_ii + 1), S a
+    /// reaction `strength` · n nᵀ per node with n turning with the column
+    /// (as the normal of a cylinder turns around it), so the motion along
+    /// n is held by S and the two other directions by A alone.
+    fn grid(side: usize, strength: f64) -> VectorOperator {
+        let node = |x: usize, y: usize| (y * side + x) as u32;
+        let rows = (0..side * side)
+            .map(|i| {
+                let (x, y) = (i % side, i / side);
+                let mut row = Vec::new();
+                let mut degree = 0.0;
+                for (dx, dy) in [(0i64, -1i64), (-1, 0), (1, 0), (0, 1)] {
+                    let (u, v) = (x as i64 + dx, y as i64 + dy);
+                    if u >= 0 && v >= 0 && (u as usize) < side && (v as usize) < side {
+                        row.push((node(u as usize, v as usize), -1.0, [0.0; 6]));
+                        degree += 1.0;
+                    }
+                }
+                if x == 0 {
+                    degree += 1.0;
+                }
+                let angle = std::f64::consts::TAU * x as f64 / side as f64;
+                let n = [angle.cos(), angle.sin(), 0.0];
+                let s = [
+                    strength * n[0] * n[0],
+                    strength * n[1] * n[1],
+                    0.0,
+                    strength * n[0] * n[1],
+                    0.0,
+                    0.0,
+                ];
+                row.push((i as u32, degree, s));
+                row.sort_by_key(|e| e.0);
+                row
+            })
+            .collect();
+        VectorOperator::from_rows(rows).unwrap()
+    }
+
+    fn dense(k: &VectorOperator) -> Vec<Vec<f64>> {
+        let n = 3 * k.nodes();
+        let m = k.to_faer().unwrap();
+        let mut d = vec![vec![0.0; n]; n];
+        for j in 0..n {
+            for (&i, &v) in m.row_idx_of_col_raw(j).iter().zip(m.val_of_col(j)) {
+                d[i][j] = v;
+            }
+        }
+        d
+    }
+
+    fn vector(n: usize, seed: f64) -> Vec<f64> {
+        (0..n).map(|i| (seed * (i as f64 + 1.0)).sin()).collect()
+    }
+
+    /// The structured product equals the assembled matrix; the Galerkin
+    /// operator of the structure equals (P ⊗ I₃)ᵀ K (P ⊗ I₃) formed densely,
+    /// including its off-diagonal blocks, and its product is again that
+    /// matrix.
+    #[test]
+    fn structure_matches_the_assembled_matrices() {
+        let k = grid(6, 2.0);
+        let n = 3 * k.nodes();
+        let d = dense(&k);
+        let x = vector(n, 0.37);
+        let mut y = vec![0.0; n];
+        k.mul_vec(&x, &mut y);
+        for i in 0..n {
+            let e: f64 = (0..n).map(|j| d[i][j] * x[j]).sum();
+            assert!(
+                (y[i] - e).abs() <= 1e-12 * (1.0 + e.abs()),
+                "{i}: {} vs {e}",
+                y[i]
+            );
+        }
+        // a smoothed prolongator of the scalar part from aggregates
+        let aggregates = aggregate_nodes(&k.strength_norms(), 0.08);
+        let count = aggregates.iter().map(|&a| a as usize + 1).max().unwrap();
+        assert!(count < k.nodes() / 2, "{count} aggregates");
+        let (t, _) = tentative(&aggregates, count, 1, &vec![1.0; k.nodes()], 1);
+        let a = k.scalar();
+        let (inverse, omega) = block_jacobi(&a, 1);
+        let p = smooth_prolongator(&t, &a.matmul(&t), &inverse, 1, omega);
+        let kc = k.galerkin(&p, &p.transpose());
+        assert!(matches!(kc.s, Blocks::Full(_)));
+        let dc = dense(&kc);
+        let nc = 3 * count;
+        // P ⊗ I₃ densely
+        let mut pp = vec![vec![0.0; nc]; n];
+        for i in 0..k.nodes() {
+            let (idx, val) = p.row(i);
+            for (&j, &v) in idx.iter().zip(val) {
+                for c in 0..3 {
+                    pp[3 * i + c][3 * j as usize + c] = v;
+                }
+            }
+        }
+        let scale = d.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        for r in 0..nc {
+            for c in 0..nc {
+                let mut e = 0.0;
+                for i in 0..n {
+                    if pp[i][r] == 0.0 {
+                        continue;
+                    }
+                    for j in 0..n {
+                        e += pp[i][r] * d[i][j] * pp[j][c];
+                    }
+                }
+                assert!(
+                    (dc[r][c] - e).abs() <= 1e-12 * scale,
+                    "({r}, {c}): {} vs {e}",
+                    dc[r][c]
+                );
+            }
+        }
+        let xc = vector(nc, 0.91);
+        let mut yc = vec![0.0; nc];
+        kc.mul_vec(&xc, &mut yc);
+        for r in 0..nc {
+            let e: f64 = (0..nc).map(|c| dc[r][c] * xc[c]).sum();
+            assert!((yc[r] - e).abs() <= 1e-11 * scale * (1.0 + e.abs()));
+        }
+    }
+
+    fn solve(k: &VectorOperator, preconditioner: Option<&VectorAmg>) -> (usize, Vec<f64>) {
+        let n = 3 * k.nodes();
+        let rhs = vector(n, 0.61);
+        let mut x = vec![0.0; n];
+        let inverses = vector_jacobi(k).0;
+        let report = pcg(
+            |v: &[f64], out: &mut [f64]| k.mul_vec(v, out),
+            |r: &[f64], z: &mut [f64]| match preconditioner {
+                Some(p) => p.apply(r, z),
+                None => jacobi_step(&inverses, 1.0, r, z, false),
+            },
+            &rhs,
+            &mut x,
+            1e-10,
+            20_000,
+        )
+        .unwrap();
+        assert!(report.converged, "{report:?}");
+        (report.iterations, x)
+    }
+
+    /// Preconditioned by the V-cycle, conjugate gradients need about as
+    /// many iterations on a 96 × 96 grid as on a 24 × 24 one and far fewer
+    /// than with block Jacobi, and reach the direct solution.
+    #[test]
+    fn multigrid_iterations_do_not_grow_with_the_grid() {
+        let mut counts = Vec::new();
+        for side in [24, 48, 96] {
+            let k = grid(side, 4.0);
+            let amg = VectorAmg::new(
+                k.clone(),
+                &vec![1.0; k.nodes()],
+                &VectorAmgOptions {
+                    smoothing_steps: 2,
+                    max_coarse_nodes: 50,
+                    ..VectorAmgOptions::default()
+                },
+            )
+            .unwrap();
+            assert!(amg.sizes().len() >= 3, "{:?}", amg.sizes());
+            let (iterations, x) = solve(&k, Some(&amg));
+            counts.push(iterations);
+            if side == 24 {
+                let (jacobi, _) = solve(&k, None);
+                assert!(
+                    5 * iterations <= jacobi,
+                    "multigrid {iterations}, Jacobi {jacobi}"
+                );
+                let mut exact = vector(3 * k.nodes(), 0.61);
+                CholeskySolver::new(k.to_faer().unwrap().as_ref())
+                    .unwrap()
+                    .solve_in_place(&mut exact)
+                    .unwrap();
+                let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let diff = x
+                    .iter()
+                    .zip(&exact)
+                    .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+                assert!(diff <= 1e-7 * scale, "difference {diff}, scale {scale}");
+            }
+        }
+        println!("vector multigrid iterations on 24², 48², 96² grids: {counts:?}");
+        assert!(counts[2] <= counts[0] + counts[0] / 2 + 2, "{counts:?}");
+    }
+
+    /// The V-cycle is a symmetric positive-definite operator (conjugate
+    /// gradients need both).
+    #[test]
+    fn v_cycle_is_symmetric_positive_definite() {
+        let k = grid(20, 3.0);
+        let amg = VectorAmg::new(
+            k.clone(),
+            &vec![1.0; k.nodes()],
+            &VectorAmgOptions {
+                max_coarse_nodes: 30,
+                ..VectorAmgOptions::default()
+            },
+        )
+        .unwrap();
+        let n = 3 * k.nodes();
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        let (x, y) = (vector(n, 0.61), vector(n, 1.37));
+        let (mut px, mut py) = (vec![0.0; n], vec![0.0; n]);
+        amg.apply(&x, &mut px);
+        amg.apply(&y, &mut py);
+        let (a, b) = (dot(&y, &px), dot(&x, &py));
+        assert!((a - b).abs() <= 1e-10 * a.abs().max(b.abs()), "{a} vs {b}");
+        for seed in [0.61, 1.37, 2.9, 0.05] {
+            let v = vector(n, seed);
+            let mut pv = vec![0.0; n];
+            amg.apply(&v, &mut pv);
+            assert!(dot(&v, &pv) > 0.0);
+        }
+    }
+
+    /// Malformed operators are refused with an error, not a panic.
+    #[test]
+    fn malformed_operators_are_refused() {
+        let block = [0.0; 6];
+        // missing diagonal
+        assert!(
+            VectorOperator::from_rows(vec![vec![(1, -1.0, block)], vec![(1, 1.0, block)]]).is_err()
+        );
+        // column out of range, unsorted
+        assert!(VectorOperator::from_rows(vec![vec![(0, 1.0, block), (5, -1.0, block)]]).is_err());
+        assert!(
+            VectorOperator::from_rows(vec![
+                vec![(1, -1.0, block), (0, 2.0, block)],
+                vec![(0, -1.0, block), (1, 2.0, block)]
+            ])
+            .is_err()
+        );
+        assert!(
+            VectorOperator::with_diagonal_blocks(vec![0, 1], vec![0], vec![1.0, 2.0], vec![block])
+                .is_err()
+        );
+        assert!(
+            VectorOperator::with_diagonal_blocks(vec![0, 1], vec![1], vec![1.0], vec![block])
+                .is_err()
+        );
+        let k = grid(4, 1.0);
+        assert!(VectorAmg::new(k, &[1.0; 3], &VectorAmgOptions::default()).is_err());
+    }
 }
