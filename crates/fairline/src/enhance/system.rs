@@ -117,9 +117,9 @@ impl DistanceModel {
 /// rows; its three F_sd rows; the right-hand side b of Eq. (20); and the
 /// right-hand side Aᵀb + ε p of the regularised normal equations
 /// (AᵀA + εI) x = Aᵀb + ε p. A is applied matrix-free (A x by rows, Aᵀ y
-/// gathered through the mirror entries), which moves a fifth of the memory
-/// of the assembled A and Aᵀ; the sparse A is built only for the direct
-/// solver.
+/// gathered with a copy of the coefficients in transposed order), which
+/// moves less than half the memory of the assembled A and Aᵀ; the sparse A
+/// is built only for the direct solver.
 pub(super) struct LeastSquares {
     ptr: Vec<usize>,
     /// Free index of each entry.
@@ -128,8 +128,10 @@ pub(super) struct LeastSquares {
     em: Vec<[Vec3; 2]>,
     /// F_smo coefficient of each entry.
     smo: Vec<f64>,
-    /// For entry e of f with column g: the entry of g whose column is f.
-    mirror: Vec<u32>,
+    /// For entry e of g with column f: the coefficients of entry (f, g)
+    /// (the column of A for g, read in g's order by Aᵀ y).
+    em_mirror: Vec<[Vec3; 2]>,
+    smo_mirror: Vec<f64>,
     /// F_sd rows of each free vertex.
     sd: Vec<[Vec3; 3]>,
     /// b of Eq. (20), eight rows per free vertex.
@@ -182,11 +184,11 @@ impl LeastSquares {
                     let mut s = Vec3::ZERO;
                     for e in self.ptr[g]..self.ptr[g + 1] {
                         let f = self.col[e] as usize;
-                        let m = self.mirror[e] as usize;
                         let yf = &y[8 * f..8 * f + 8];
-                        s += self.em[m][0] * yf[0]
-                            + self.em[m][1] * yf[1]
-                            + self.smo[m] * Vec3::new(yf[5], yf[6], yf[7]);
+                        let em = self.em_mirror[e];
+                        s += em[0] * yf[0]
+                            + em[1] * yf[1]
+                            + self.smo_mirror[e] * Vec3::new(yf[5], yf[6], yf[7]);
                     }
                     let sd = self.sd[g];
                     let yg = &y[8 * g..8 * g + 8];
@@ -213,9 +215,10 @@ impl LeastSquares {
             .flat_map_iter(|g| {
                 let mut m = DMat3::from_diagonal(Vec3::splat(self.epsilon));
                 for e in self.ptr[g]..self.ptr[g + 1] {
-                    let mi = self.mirror[e] as usize;
-                    m += outer(self.em[mi][0]) + outer(self.em[mi][1]);
-                    m += DMat3::from_diagonal(Vec3::splat(self.smo[mi] * self.smo[mi]));
+                    let em = self.em_mirror[e];
+                    let smo = self.smo_mirror[e];
+                    m += outer(em[0]) + outer(em[1]);
+                    m += DMat3::from_diagonal(Vec3::splat(smo * smo));
                 }
                 for t in self.sd[g] {
                     m += outer(t);
@@ -369,12 +372,15 @@ pub(super) fn assemble(
     if mirror.contains(&NONE) {
         return Err(SolveError::Backend("one-rings are not symmetric".into()).into());
     }
+    let em_mirror = mirror.par_iter().map(|&m| em[m as usize]).collect();
+    let smo_mirror = mirror.par_iter().map(|&m| smo[m as usize]).collect();
     let mut system = LeastSquares {
         ptr,
         col,
         em,
         smo,
-        mirror,
+        em_mirror,
+        smo_mirror,
         sd: distance.rows.clone(),
         b,
         rhs: Vec::new(),

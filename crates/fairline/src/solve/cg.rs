@@ -49,7 +49,8 @@ pub struct CgOptions {
     pub block: usize,
     /// When not 0: every this many iterations, give up (not converged)
     /// when the mean reduction of the residual per iteration over the last
-    /// this many predicts the tolerance only after `max_iterations` — for a
+    /// this many predicts the tolerance only after twice `max_iterations`
+    /// (the rate of a few early iterations is often pessimistic) — for a
     /// cheap first attempt that a stronger preconditioner takes over.
     pub hopeless_after: usize,
 }
@@ -256,7 +257,7 @@ fn conjugate_gradients(
                 // mean rate over the last stretch, extrapolated
                 let rate = (norm_r / checkpoint.1).powf(1.0 / hopeless_after as f64);
                 let needed = (target / norm_r).ln() / rate.ln();
-                if !(rate < 1.0) || !(iterations as f64 + needed <= max_iterations as f64) {
+                if !(rate < 1.0) || !(iterations as f64 + needed <= 2.0 * max_iterations as f64) {
                     hopeless = true;
                     break;
                 }
