@@ -142,7 +142,7 @@ pub const AUTO_JACOBI_BUDGET: usize = 40;
 /// early when, every this many iterations, their mean rate over the last
 /// ones predicts more than [`AUTO_JACOBI_BUDGET`] iterations
 /// ([`CgOptions::hopeless_after`]).
-pub const AUTO_JACOBI_CHECK: usize = 8;
+pub const AUTO_JACOBI_CHECK: usize = 4;
 
 /// Largest number of free vertices for which [`EnhanceSolver::Auto`] falls
 /// back to the direct solver when conjugate gradients fail: the Cholesky

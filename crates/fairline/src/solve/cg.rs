@@ -47,11 +47,11 @@ pub struct CgOptions {
     /// Size of the diagonal blocks of the block-Jacobi preconditioner
     /// (1 = Jacobi); the number of unknowns must be a multiple of it.
     pub block: usize,
-    /// When not 0: every this many iterations, give up (not converged)
-    /// when the mean reduction of the residual per iteration over the last
-    /// this many predicts the tolerance only after twice `max_iterations`
-    /// (the rate of a few early iterations is often pessimistic) — for a
-    /// cheap first attempt that a stronger preconditioner takes over.
+    /// When not 0: every this many iterations from twice this many on,
+    /// give up (not converged) when the mean reduction of the residual per
+    /// iteration over the last this many predicts the tolerance only after
+    /// twice `max_iterations` (the rate of a few iterations fluctuates) —
+    /// for a cheap first attempt that a stronger preconditioner takes over.
     pub hopeless_after: usize,
 }
 
@@ -257,7 +257,13 @@ fn conjugate_gradients(
                 // mean rate over the last stretch, extrapolated
                 let rate = (norm_r / checkpoint.1).powf(1.0 / hopeless_after as f64);
                 let needed = (target / norm_r).ln() / rate.ln();
-                if !(rate < 1.0) || !(iterations as f64 + needed <= 2.0 * max_iterations as f64) {
+                // the first stretch is not judged: it holds the quick
+                // decay of the stiffest components on any mesh
+                let judged = iterations >= 2 * hopeless_after;
+                if judged
+                    && (!(rate < 1.0)
+                        || !(iterations as f64 + needed <= 2.0 * max_iterations as f64))
+                {
                     hopeless = true;
                     break;
                 }
