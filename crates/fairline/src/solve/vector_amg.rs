@@ -50,6 +50,10 @@ use faer::sparse::{SparseColMat, Triplet};
 use rayon::prelude::*;
 use std::sync::Mutex;
 
+/// Chunks of [`ROWS`] nodes per parallel task at least: the coarse levels
+/// are small, and waking a second thread for them costs more than it saves.
+const MIN_TASK_CHUNKS: usize = 4;
+
 /// A symmetric 3 × 3 block as [xx, yy, zz, xy, xz, yz].
 pub type SymmetricBlock = [f64; 6];
 
@@ -238,24 +242,30 @@ impl VectorOperator {
 
     /// y = K x, in parallel.
     pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
-        y.par_chunks_mut(3 * ROWS).enumerate().for_each(|(c, y)| {
-            for (k, y) in y.chunks_mut(3).enumerate() {
-                y.copy_from_slice(&self.row_times(c * ROWS + k, x));
-            }
-        });
+        y.par_chunks_mut(3 * ROWS)
+            .enumerate()
+            .with_min_len(MIN_TASK_CHUNKS)
+            .for_each(|(c, y)| {
+                for (k, y) in y.chunks_mut(3).enumerate() {
+                    y.copy_from_slice(&self.row_times(c * ROWS + k, x));
+                }
+            });
     }
 
     /// y = b − K x, in parallel.
     fn residual(&self, b: &[f64], x: &[f64], y: &mut [f64]) {
-        y.par_chunks_mut(3 * ROWS).enumerate().for_each(|(c, y)| {
-            for (k, y) in y.chunks_mut(3).enumerate() {
-                let i = c * ROWS + k;
-                let t = self.row_times(i, x);
-                for r in 0..3 {
-                    y[r] = b[3 * i + r] - t[r];
+        y.par_chunks_mut(3 * ROWS)
+            .enumerate()
+            .with_min_len(MIN_TASK_CHUNKS)
+            .for_each(|(c, y)| {
+                for (k, y) in y.chunks_mut(3).enumerate() {
+                    let i = c * ROWS + k;
+                    let t = self.row_times(i, x);
+                    for r in 0..3 {
+                        y[r] = b[3 * i + r] - t[r];
+                    }
                 }
-            }
-        });
+            });
     }
 
     /// The diagonal block A_II I₃ + S_II of node i (row-major 3 × 3).
@@ -567,9 +577,10 @@ impl VectorAmg {
         mul_coordinates(&l.pt, r, rc);
         self.cycle(level + 1, rc, xc, deeper);
         mul_coordinates(&l.p, xc, r);
-        x.par_iter_mut()
-            .zip(r.par_iter())
-            .for_each(|(x, c)| *x += c);
+        x.par_chunks_mut(3 * ROWS)
+            .zip(r.par_chunks(3 * ROWS))
+            .with_min_len(MIN_TASK_CHUNKS)
+            .for_each(|(x, c)| x.iter_mut().zip(c).for_each(|(x, c)| *x += c));
         for _ in 0..self.smoothing_steps {
             l.k.residual(b, x, r);
             jacobi_step(&l.inverses, l.omega, r, x, true);
@@ -590,19 +601,22 @@ impl Preconditioner for VectorAmg {
 
 /// y = (M ⊗ I₃) x for a scalar matrix M on interleaved coordinates.
 fn mul_coordinates(m: &CsrMatrix, x: &[f64], y: &mut [f64]) {
-    y.par_chunks_mut(3 * ROWS).enumerate().for_each(|(c, y)| {
-        for (k, y) in y.chunks_mut(3).enumerate() {
-            let (idx, val) = m.row(c * ROWS + k);
-            let mut s = [0.0; 3];
-            for (&j, &v) in idx.iter().zip(val) {
-                let j = 3 * j as usize;
-                for r in 0..3 {
-                    s[r] += v * x[j + r];
+    y.par_chunks_mut(3 * ROWS)
+        .enumerate()
+        .with_min_len(MIN_TASK_CHUNKS)
+        .for_each(|(c, y)| {
+            for (k, y) in y.chunks_mut(3).enumerate() {
+                let (idx, val) = m.row(c * ROWS + k);
+                let mut s = [0.0; 3];
+                for (&j, &v) in idx.iter().zip(val) {
+                    let j = 3 * j as usize;
+                    for r in 0..3 {
+                        s[r] += v * x[j + r];
+                    }
                 }
+                y.copy_from_slice(&s);
             }
-            y.copy_from_slice(&s);
-        }
-    });
+        });
 }
 
 /// x = ω D⁻¹ r (or x += ω D⁻¹ r when `add`), D the 3 × 3 diagonal blocks.
@@ -610,6 +624,7 @@ fn jacobi_step(inverses: &[[f64; 9]], omega: f64, r: &[f64], x: &mut [f64], add:
     x.par_chunks_mut(3 * ROWS)
         .zip(r.par_chunks(3 * ROWS))
         .zip(inverses.par_chunks(ROWS))
+        .with_min_len(MIN_TASK_CHUNKS)
         .for_each(|((x, r), inv)| {
             for ((x, r), m) in x.chunks_mut(3).zip(r.chunks(3)).zip(inv) {
                 for i in 0..3 {
