@@ -47,7 +47,7 @@ pub struct CgOptions {
     /// Size of the diagonal blocks of the block-Jacobi preconditioner
     /// (1 = Jacobi); the number of unknowns must be a multiple of it.
     pub block: usize,
-    /// When not 0: every this many iterations from twice this many on,
+    /// When not 0: every this many iterations from three times this many on,
     /// give up (not converged) when the mean reduction of the residual per
     /// iteration over the last this many predicts the tolerance only after
     /// twice `max_iterations` (the rate of a few iterations fluctuates) —
@@ -257,9 +257,10 @@ fn conjugate_gradients(
                 // mean rate over the last stretch, extrapolated
                 let rate = (norm_r / checkpoint.1).powf(1.0 / hopeless_after as f64);
                 let needed = (target / norm_r).ln() / rate.ln();
-                // the first stretch is not judged: it holds the quick
-                // decay of the stiffest components on any mesh
-                let judged = iterations >= 2 * hopeless_after;
+                // the first two stretches are not judged: they hold the
+                // quick decay of the stiffest components, or a stagnation,
+                // on any mesh
+                let judged = iterations >= 3 * hopeless_after;
                 if judged
                     && (!(rate < 1.0)
                         || !(iterations as f64 + needed <= 2.0 * max_iterations as f64))
