@@ -589,4 +589,42 @@ mod tests {
         }
         assert!(pcg(apply, identity, &rhs, &mut vec![0.0; n - 1], 1e-12, 10).is_err());
     }
+
+    /// The give-up rule stops a hopeless run early and leaves a run alone
+    /// that converges in time: on a 1D Laplacian of 2000 unknowns
+    /// (condition number ~10⁶) plain CG cannot reach 10⁻¹⁰ in 40
+    /// iterations and gives up at the 12th, 16th or 20th; on the same
+    /// operator with a strong diagonal (condition number ~3) it converges,
+    /// with the same iterations and result as without the rule.
+    #[test]
+    fn hopeless_runs_give_up_early() {
+        let n = 2000;
+        let run = |sigma: f64, hopeless_after: usize| {
+            let apply = |v: &[f64], out: &mut [f64]| {
+                for i in 0..n {
+                    let l = if i > 0 { v[i - 1] } else { 0.0 };
+                    let r = if i + 1 < n { v[i + 1] } else { 0.0 };
+                    out[i] = (2.0 + sigma) * v[i] - l - r;
+                }
+            };
+            let rhs: Vec<f64> = (0..n).map(|i| (0.37 * i as f64).sin() + 1.0).collect();
+            let mut x = vec![0.0; n];
+            let options = CgOptions {
+                tolerance: 1e-10,
+                max_iterations: 40,
+                block: 1,
+                hopeless_after,
+            };
+            let report = pcg_with(apply, |r, z| z.copy_from_slice(r), &rhs, &mut x, &options);
+            (report.unwrap(), x)
+        };
+        let (hard, _) = run(1e-6, 4);
+        assert!(!hard.converged);
+        assert!((12..=20).contains(&hard.iterations), "{hard:?}");
+        let (easy, x) = run(2.0, 4);
+        let (plain, y) = run(2.0, 0);
+        assert!(easy.converged, "{easy:?}");
+        assert_eq!(easy.iterations, plain.iterations);
+        assert_eq!(x, y);
+    }
 }
