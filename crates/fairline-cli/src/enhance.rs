@@ -39,7 +39,8 @@ pub struct Args {
     /// preconditioned by a multigrid bi-Laplacian model: few iterations
     /// also on large flat or cylindrical parts, at a higher cost per
     /// iteration), `direct` (sparse Cholesky, memory-hungry), or `auto`
-    /// (`cg` for up to 40 iterations, fewer when its progress shows it
+    /// (`amg` on meshes with large flat or cylindrical parts; elsewhere
+    /// `cg` for up to 40 iterations, fewer when its progress shows it
     /// would need more, then `amg` from there; `direct` only should that
     /// fail). All give the same result to 1e-8 of the size of the mesh.
     #[arg(long, value_enum, default_value_t = Solver::Auto)]

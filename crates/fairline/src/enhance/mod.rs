@@ -66,13 +66,17 @@
 //!   the iterations only 8× and filled in on coarse levels: LᵀL is a
 //!   fourth-order operator.)
 //!
-//! The default, [`EnhanceSolver::Auto`], runs block-Jacobi CG for at most
-//! [`AUTO_JACOBI_BUDGET`] iterations — enough where the curvature holds the
-//! motion — giving up earlier when, checked every [`AUTO_JACOBI_CHECK`]
-//! iterations, its rate predicts more, and continues from there with the
-//! factored preconditioner; the direct solve is a last resort should that
-//! fail (up to [`AUTO_DIRECT_LIMIT`] free vertices). Every CG result
-//! reaches the Cholesky one to 10⁻⁸ of the bounding-box diagonal (tested).
+//! The default, [`EnhanceSolver::Auto`], chooses by the geometry: where
+//! more than [`AUTO_SOFT_SHARE`] of the free vertices have a tangential
+//! direction that F_sd leaves (nearly) free — flat and cylindrical parts —
+//! it runs the factored preconditioner from the start; elsewhere it runs
+//! block-Jacobi CG for at most [`AUTO_JACOBI_BUDGET`] iterations — enough
+//! where the curvature holds the motion — giving up earlier when, checked
+//! every [`AUTO_JACOBI_CHECK`] iterations, its rate predicts far more, and
+//! continues from there with the factored preconditioner. The direct solve
+//! is a last resort should that fail (up to [`AUTO_DIRECT_LIMIT`] free
+//! vertices). Every CG result reaches the Cholesky one to 10⁻⁸ of the
+//! bounding-box diagonal (tested).
 //!
 //! **Normalisations.** Eq. (5) and Eq. (7) average F_em over the edges and
 //! F_sd over the vertices; fairline makes all three terms means over the
@@ -138,6 +142,17 @@ pub const CG_TOLERANCE: f64 = 1e-12;
 /// (flat or cylindrical parts) it would need hundreds to thousands.
 pub const AUTO_JACOBI_BUDGET: usize = 40;
 
+/// Under [`EnhanceSolver::Auto`], block Jacobi is skipped when more than
+/// this share of the free vertices have a tangential direction that the
+/// distance term F_sd holds by less than [`SOFT_COEFFICIENT`] of its normal
+/// weight (a principal curvature below 1 % of the largest: flat and
+/// cylindrical parts), which only the F_smo bi-Laplacian holds.
+pub const AUTO_SOFT_SHARE: f64 = 0.1;
+
+/// The coefficient c = d|k| / (1 + d|k|) of Ji et al. Eq. (6) below which
+/// a tangential direction counts as free for [`AUTO_SOFT_SHARE`].
+pub const SOFT_COEFFICIENT: f64 = 0.01;
+
 /// Under [`EnhanceSolver::Auto`], block-Jacobi conjugate gradients give up
 /// early when, every this many iterations, their mean rate over the last
 /// ones predicts more than [`AUTO_JACOBI_BUDGET`] iterations
@@ -187,9 +202,11 @@ pub struct EnhanceOptions {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum EnhanceSolver {
-    /// Block-Jacobi conjugate gradients for at most [`AUTO_JACOBI_BUDGET`]
-    /// iterations, then, from where they stopped, conjugate gradients
-    /// preconditioned as [`EnhanceSolver::Amg`] up to
+    /// [`EnhanceSolver::Amg`] on meshes with large flat or cylindrical
+    /// parts ([`AUTO_SOFT_SHARE`]); elsewhere block-Jacobi conjugate
+    /// gradients for at most [`AUTO_JACOBI_BUDGET`] iterations (fewer when
+    /// their progress predicts far more), then, from where they stopped,
+    /// conjugate gradients preconditioned as [`EnhanceSolver::Amg`] up to
     /// [`EnhanceOptions::cg_max_iterations`], then (should they fail, and
     /// for n ≤ [`AUTO_DIRECT_LIMIT`] free vertices) the direct solver.
     Auto,
@@ -472,6 +489,7 @@ pub fn enhance_features(
         return Ok(unchanged(timings, 0));
     }
     let distance = system::DistanceModel::new(&input_curvature, &layout, options.lambda);
+    let soft_share = distance.soft_share(options.lambda);
     let input_normals = repair::face_normals_of(&work);
 
     let mut current = reference.clone();
@@ -528,6 +546,9 @@ pub fn enhance_features(
             || (options.solver == EnhanceSolver::Amg && options.mu == 0.0);
         let jacobi_budget = match options.solver {
             _ if jacobi_only => options.cg_max_iterations,
+            // many vertices with a free tangential direction: block Jacobi
+            // would only lose time before the multigrid takes over
+            EnhanceSolver::Auto if options.mu > 0.0 && soft_share > AUTO_SOFT_SHARE => 0,
             EnhanceSolver::Auto => AUTO_JACOBI_BUDGET.min(options.cg_max_iterations),
             _ => 0,
         };

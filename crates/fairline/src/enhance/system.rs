@@ -108,6 +108,21 @@ impl DistanceModel {
             .collect();
         DistanceModel { rows }
     }
+
+    /// Share of the free vertices with a tangential row whose weight λc is
+    /// below [`super::SOFT_COEFFICIENT`] λ (rows built with this `lambda`).
+    pub fn soft_share(&self, lambda: f64) -> f64 {
+        if self.rows.is_empty() {
+            return 0.0;
+        }
+        let limit = super::SOFT_COEFFICIENT * lambda;
+        let soft = self
+            .rows
+            .iter()
+            .filter(|r| r[0].length_squared().min(r[1].length_squared()) < limit)
+            .count();
+        soft as f64 / self.rows.len() as f64
+    }
 }
 
 /// The least-squares system of one iteration, stored by vertex (module

@@ -496,3 +496,27 @@ fn multigrid_matches_the_direct_solve() {
         assert_eq!(again.positions, amg.positions, "deterministic");
     }
 }
+
+/// `auto` chooses by the geometry: on a rounded cube (flat faces, more than
+/// a tenth of the vertices with a tangential direction F_sd leaves free) it
+/// runs the multigrid-preconditioned CG from the start, bit for bit; on a
+/// torus (curvature everywhere) block-Jacobi CG, bit for bit.
+#[test]
+fn auto_chooses_the_solver_by_the_geometry() {
+    let cube = rounded_cube(12, 0.3);
+    // 15 vertices around the tube: none exactly where a principal
+    // curvature vanishes (the top and bottom circles)
+    let torus = shapes::torus(1.0, 0.4, 60, 15);
+    let o = EnhanceOptions::default();
+    let auto = enhance_features(&cube, &o).unwrap();
+    let amg = enhance_features(&cube, &o.clone().solver(EnhanceSolver::Amg)).unwrap();
+    assert!(
+        auto.positions == amg.positions,
+        "auto is not the multigrid solve"
+    );
+    assert_eq!(auto.report.cg_iterations, amg.report.cg_iterations);
+    let auto = enhance_features(&torus, &o).unwrap();
+    let cg = enhance_features(&torus, &o.clone().solver(EnhanceSolver::Cg)).unwrap();
+    assert!(auto.positions == cg.positions, "auto is not block Jacobi");
+    assert_eq!(auto.report.cg_iterations, cg.report.cg_iterations);
+}
