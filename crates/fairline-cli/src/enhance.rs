@@ -63,8 +63,9 @@ pub struct Args {
 /// `--solver` values.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Solver {
-    /// Block-Jacobi conjugate gradients, then the multigrid preconditioner
-    /// if they are slow.
+    /// The multigrid preconditioner on meshes with large flat or
+    /// cylindrical parts, else block-Jacobi conjugate gradients, then the
+    /// multigrid preconditioner if they are slow.
     Auto,
     /// Sparse Cholesky factorisation of the normal equations.
     Direct,
