@@ -286,6 +286,17 @@ mod tests {
         BlockJacobi::from_blocks(system.diagonal_blocks(), 3)
     }
 
+    /// The factored preconditioner of a [`setup`] with μ = 0.5.
+    fn factored(
+        layout: &Layout,
+        curvature: &PrincipalCurvatures,
+        distance: &DistanceModel,
+        system: &LeastSquares,
+    ) -> FactoredPreconditioner {
+        FactoredPreconditioner::new(layout, curvature, distance, jacobi_of(system), 0.5, 1e-10)
+            .unwrap()
+    }
+
     fn iterations(
         system: &LeastSquares,
         preconditioner: Option<&FactoredPreconditioner>,
@@ -327,15 +338,7 @@ mod tests {
         for (height, along) in [(4.0, 60), (8.0, 120)] {
             let mesh = crate::shapes::cylinder(1.0, height, 30, along);
             let (layout, curvature, distance, system) = setup(&mesh);
-            let p = FactoredPreconditioner::new(
-                &layout,
-                &curvature,
-                &distance,
-                jacobi_of(&system),
-                0.5,
-                1e-10,
-            )
-            .unwrap();
+            let p = factored(&layout, &curvature, &distance, &system);
             let (n, x) = iterations(&system, Some(&p));
             counts.push(n);
             if along == 60 {
@@ -364,15 +367,7 @@ mod tests {
         let fine = setup(&crate::shapes::rounded_cube(32, 0.3));
         let mut counts = Vec::new();
         for (layout, curvature, distance, system) in [&coarse, &fine] {
-            let p = FactoredPreconditioner::new(
-                layout,
-                curvature,
-                distance,
-                jacobi_of(system),
-                0.5,
-                1e-10,
-            )
-            .unwrap();
+            let p = factored(layout, curvature, distance, system);
             let (n, _) = iterations(system, Some(&p));
             let (nj, _) = iterations(system, None);
             counts.push((n, nj));
@@ -390,15 +385,7 @@ mod tests {
     fn preconditioner_is_symmetric_positive_definite() {
         let mesh = crate::shapes::rounded_cube(6, 0.3);
         let (layout, curvature, distance, system) = setup(&mesh);
-        let p = FactoredPreconditioner::new(
-            &layout,
-            &curvature,
-            &distance,
-            jacobi_of(&system),
-            0.5,
-            1e-10,
-        )
-        .unwrap();
+        let p = factored(&layout, &curvature, &distance, &system);
         let n = system.rhs.len();
         let vector =
             |seed: f64| -> Vec<f64> { (0..n).map(|i| (seed * (i as f64 + 1.0)).sin()).collect() };

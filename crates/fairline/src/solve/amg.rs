@@ -210,22 +210,25 @@ pub(super) fn block_jacobi(k: &CsrMatrix, block: usize) -> (Vec<f64>, f64) {
         .collect();
     let gershgorin = bounds.iter().copied().fold(0.0f64, f64::max);
     let power = power_estimate(k, &inverses, block);
-    let rho = gershgorin.min(1.1 * power);
-    let omega = if rho > 0.0 && rho.is_finite() {
-        4.0 / (3.0 * rho)
-    } else {
-        1.0
-    };
-    (inverses, omega)
+    (inverses, jacobi_damping(gershgorin, power))
 }
 
 /// Estimate of ρ(D⁻¹K) by power iterations from a fixed start vector.
 fn power_estimate(k: &CsrMatrix, inverses: &[f64], block: usize) -> f64 {
-    let n = k.nrows();
+    let mut y = vec![0.0; k.nrows()];
+    power_iterations(k.nrows(), |x, z| {
+        k.mul_vec(x, &mut y);
+        block_apply(inverses, block, 1.0, &y, z, false);
+    })
+}
+
+/// Estimate of the spectral radius of the operator `apply(x, z)`: z = M x
+/// on vectors of length `n`, by [`POWER_ITERATIONS`] power iterations from
+/// a fixed start vector; infinite when an iterate vanishes or overflows.
+pub(super) fn power_iterations(n: usize, mut apply: impl FnMut(&[f64], &mut [f64])) -> f64 {
     let mut x: Vec<f64> = (0..n)
         .map(|i| 1.0 + 0.5 * ((i as f64 * 0.618_033_988_75).fract() - 0.5))
         .collect();
-    let mut y = vec![0.0; n];
     let mut z = vec![0.0; n];
     let mut rho = 0.0;
     for _ in 0..POWER_ITERATIONS {
@@ -234,16 +237,27 @@ fn power_estimate(k: &CsrMatrix, inverses: &[f64], block: usize) -> f64 {
             return f64::INFINITY;
         }
         x.iter_mut().for_each(|v| *v /= norm);
-        k.mul_vec(&x, &mut y);
-        block_apply(inverses, block, 1.0, &y, &mut z, false);
+        apply(&x, &mut z);
         rho = z.iter().map(|v| v * v).sum::<f64>().sqrt();
         std::mem::swap(&mut x, &mut z);
     }
     rho
 }
 
+/// The damping 4 / (3 ρ̄) of a Jacobi smoother, ρ̄ the smaller of the
+/// Gershgorin bound and 1.1 times the power estimate of ρ(D⁻¹K) (1 when
+/// neither is usable).
+pub(super) fn jacobi_damping(gershgorin: f64, power: f64) -> f64 {
+    let rho = gershgorin.min(1.1 * power);
+    if rho > 0.0 && rho.is_finite() {
+        4.0 / (3.0 * rho)
+    } else {
+        1.0
+    }
+}
+
 /// Power iterations of the spectral radius estimate.
-pub(super) const POWER_ITERATIONS: usize = 15;
+const POWER_ITERATIONS: usize = 15;
 
 /// x = ω D⁻¹ r (or x += ω D⁻¹ r when `add`), in parallel.
 pub(super) fn block_apply(

@@ -41,8 +41,8 @@
 //! in a fixed order: the result does not depend on the number of threads.
 
 use super::amg::{
-    POWER_ITERATIONS, ROWS, RowAccumulator, aggregate_nodes, block_jacobi, smooth_prolongator,
-    tentative,
+    ROWS, RowAccumulator, aggregate_nodes, block_jacobi, jacobi_damping, power_iterations,
+    smooth_prolongator, tentative,
 };
 use super::cg::{Preconditioner, invert_spd};
 use super::{CholeskySolver, CsrMatrix, SolveError};
@@ -56,6 +56,16 @@ const MIN_TASK_CHUNKS: usize = 4;
 
 /// A symmetric 3 × 3 block as [xx, yy, zz, xy, xz, yz].
 pub type SymmetricBlock = [f64; 6];
+
+/// The 3 × 3 block a I₃ + S of an entry, by rows.
+#[inline]
+fn entry_block(a: f64, s: &SymmetricBlock) -> [[f64; 3]; 3] {
+    [
+        [a + s[0], s[3], s[4]],
+        [s[3], a + s[1], s[5]],
+        [s[4], s[5], a + s[2]],
+    ]
+}
 
 #[inline]
 fn symmetric_mul(s: &SymmetricBlock, x: &[f64]) -> [f64; 3] {
@@ -274,17 +284,9 @@ impl VectorOperator {
         for e in self.ptr[i]..self.ptr[i + 1] {
             if self.idx[e] as usize == i {
                 let (a, s) = self.entry(i, e);
-                m = [
-                    a + s[0],
-                    s[3],
-                    s[4],
-                    s[3],
-                    a + s[1],
-                    s[5],
-                    s[4],
-                    s[5],
-                    a + s[2],
-                ];
+                for (r, row) in entry_block(a, &s).iter().enumerate() {
+                    m[3 * r..3 * r + 3].copy_from_slice(row);
+                }
             }
         }
         m
@@ -322,7 +324,7 @@ impl VectorOperator {
     /// The Galerkin operator (P ⊗ I₃)ᵀ K (P ⊗ I₃) for the scalar
     /// prolongator `p` (with its transpose `pt`), symmetrised; a node whose
     /// row vanishes (a zero column of `p`) gets a unit diagonal.
-    fn galerkin(&self, p: &CsrMatrix, pt: &CsrMatrix) -> VectorOperator {
+    fn galerkin(&self, p: &CsrMatrix, pt: &CsrMatrix) -> Result<VectorOperator, SolveError> {
         let nc = p.ncols;
         type Row = Vec<(u32, f64, SymmetricBlock)>;
         let rows: Vec<Row> = (0..nc.div_ceil(ROWS))
@@ -394,7 +396,7 @@ impl VectorOperator {
                 out
             })
             .collect();
-        VectorOperator::from_rows(rows).expect("Galerkin rows are sorted and hold the diagonal")
+        VectorOperator::from_rows(rows)
     }
 
     /// The assembled 3n × 3n matrix (both triangles).
@@ -404,11 +406,7 @@ impl VectorOperator {
             for e in self.ptr[i]..self.ptr[i + 1] {
                 let j = self.idx[e] as usize;
                 let (a, s) = self.entry(i, e);
-                let m = [
-                    [a + s[0], s[3], s[4]],
-                    [s[3], a + s[1], s[5]],
-                    [s[4], s[5], a + s[2]],
-                ];
+                let m = entry_block(a, &s);
                 for (r, row) in m.iter().enumerate() {
                     for (c, &v) in row.iter().enumerate() {
                         if v != 0.0 {
@@ -508,7 +506,7 @@ impl VectorAmg {
             let (a_inverse, a_omega) = block_jacobi(&a, 1);
             let p = smooth_prolongator(&t, &a.matmul(&t), &a_inverse, 1, a_omega);
             let pt = p.transpose();
-            let kc = k.galerkin(&p, &pt);
+            let kc = k.galerkin(&p, &pt)?;
             let (inverses, omega) = vector_jacobi(&k);
             levels.push(Level {
                 k,
@@ -660,11 +658,7 @@ fn vector_jacobi(k: &VectorOperator) -> (Vec<[f64; 9]>, f64) {
             let mut sums = [0.0f64; 3];
             for e in k.ptr[i]..k.ptr[i + 1] {
                 let (a, s) = k.entry(i, e);
-                let m = [
-                    [a + s[0], s[3], s[4]],
-                    [s[3], a + s[1], s[5]],
-                    [s[4], s[5], a + s[2]],
-                ];
+                let m = entry_block(a, &s);
                 for (r, sum) in sums.iter_mut().enumerate() {
                     for c in 0..3 {
                         let v: f64 = (0..3).map(|l| inv[3 * r + l] * m[l][c]).sum();
@@ -675,31 +669,12 @@ fn vector_jacobi(k: &VectorOperator) -> (Vec<[f64; 9]>, f64) {
             sums.into_iter().fold(0.0f64, f64::max)
         })
         .reduce(|| 0.0, f64::max);
-    // power iterations on D⁻¹K from a fixed start vector
-    let mut x: Vec<f64> = (0..3 * n)
-        .map(|i| 1.0 + 0.5 * ((i as f64 * 0.618_033_988_75).fract() - 0.5))
-        .collect();
-    let (mut y, mut z) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
-    let mut power = 0.0;
-    for _ in 0..POWER_ITERATIONS {
-        let norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
-        if !(norm > 0.0) || !norm.is_finite() {
-            power = f64::INFINITY;
-            break;
-        }
-        x.iter_mut().for_each(|v| *v /= norm);
-        k.mul_vec(&x, &mut y);
-        jacobi_step(&inverses, 1.0, &y, &mut z, false);
-        power = z.iter().map(|v| v * v).sum::<f64>().sqrt();
-        std::mem::swap(&mut x, &mut z);
-    }
-    let rho = gershgorin.min(1.1 * power);
-    let omega = if rho > 0.0 && rho.is_finite() {
-        4.0 / (3.0 * rho)
-    } else {
-        1.0
-    };
-    (inverses, omega)
+    let mut y = vec![0.0; 3 * n];
+    let power = power_iterations(3 * n, |x, z| {
+        k.mul_vec(x, &mut y);
+        jacobi_step(&inverses, 1.0, &y, z, false);
+    });
+    (inverses, jacobi_damping(gershgorin, power))
 }
 
 #[cfg(test)]
@@ -791,7 +766,7 @@ mod tests {
         let a = k.scalar();
         let (inverse, omega) = block_jacobi(&a, 1);
         let p = smooth_prolongator(&t, &a.matmul(&t), &inverse, 1, omega);
-        let kc = k.galerkin(&p, &p.transpose());
+        let kc = k.galerkin(&p, &p.transpose()).unwrap();
         assert!(matches!(kc.s, Blocks::Full(_)));
         let dc = dense(&kc);
         let nc = 3 * count;
