@@ -58,7 +58,7 @@ use crate::Vec3;
 use crate::geom::PrincipalCurvatures;
 use crate::solve::{
     BlockJacobi, Preconditioner, SolveError, SymmetricBlock, VectorAmg, VectorAmgOptions,
-    VectorOperator, symmetric_function3,
+    VectorOperator, function_of_eigen3, symmetric_eigen3, symmetric_function3,
 };
 use glam::DMat3;
 use rayon::prelude::*;
@@ -155,11 +155,17 @@ fn vertex_blocks(
     for row in distance.rows[f] {
         r += outer(row);
     }
-    let q_half = symmetric_function3(q, |x| x.max(0.0).sqrt());
-    let q_inverse_half = symmetric_function3(q, |x| if x > 0.0 { 1.0 / x.sqrt() } else { 0.0 });
+    let (values, vectors) = symmetric_eigen3(q);
+    let q_half = function_of_eigen3(values, vectors, |x| x.max(0.0).sqrt());
+    let q_inverse_half =
+        function_of_eigen3(
+            values,
+            vectors,
+            |x| if x > 0.0 { 1.0 / x.sqrt() } else { 0.0 },
+        );
     let x = q_half * r * q_half;
     let sigma = q_inverse_half * symmetric_function3(x, |x| x.max(0.0).sqrt()) * q_inverse_half;
-    let q_inverse = symmetric_function3(q, |x| if x > 0.0 { 1.0 / x } else { 0.0 });
+    let q_inverse = function_of_eigen3(values, vectors, |x| if x > 0.0 { 1.0 / x } else { 0.0 });
     let finite_or_zero = |m: DMat3| if m.is_finite() { m } else { DMat3::ZERO };
     (finite_or_zero(q_inverse), finite_or_zero(sigma))
 }

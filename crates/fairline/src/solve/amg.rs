@@ -25,7 +25,7 @@
 //! Every parallel loop writes disjoint rows, sums in a fixed order, so the
 //! result does not depend on the number of threads.
 
-use super::cg::invert_spd;
+use super::cg::{dot, invert_spd};
 use rayon::prelude::*;
 
 /// Rows per parallel task.
@@ -154,6 +154,9 @@ impl CsrMatrix {
 /// Inverses of the diagonal blocks of K (row-major per block) and the
 /// smoother's damping 4 / (3 ρ̄), ρ̄ the largest absolute row sum of D⁻¹K.
 pub(super) fn block_jacobi(k: &CsrMatrix, block: usize) -> (Vec<f64>, f64) {
+    if block == 1 {
+        return point_jacobi(k);
+    }
     let nb = k.nrows() / block;
     let bb = block * block;
     let mut inverses = vec![0.0; nb * bb];
@@ -213,6 +216,33 @@ pub(super) fn block_jacobi(k: &CsrMatrix, block: usize) -> (Vec<f64>, f64) {
     (inverses, jacobi_damping(gershgorin, power))
 }
 
+/// [`block_jacobi`] with 1 × 1 blocks: 1 / K_ii (0 where not positive)
+/// and the damping from the row sums Σ_j |K_ij| / K_ii.
+fn point_jacobi(k: &CsrMatrix) -> (Vec<f64>, f64) {
+    let (inverses, bounds): (Vec<f64>, Vec<f64>) = (0..k.nrows())
+        .into_par_iter()
+        .map(|i| {
+            let (ri, rv) = k.row(i);
+            let d: f64 = ri
+                .iter()
+                .zip(rv)
+                .filter(|(j, _)| **j as usize == i)
+                .map(|(_, v)| v)
+                .sum();
+            let inverse = if d > 0.0 && d.is_finite() {
+                1.0 / d
+            } else {
+                0.0
+            };
+            let sum: f64 = rv.iter().map(|v| v.abs()).sum();
+            (inverse, inverse * sum)
+        })
+        .unzip();
+    let gershgorin = bounds.iter().copied().fold(0.0f64, f64::max);
+    let power = power_estimate(k, &inverses, 1);
+    (inverses, jacobi_damping(gershgorin, power))
+}
+
 /// Estimate of ρ(D⁻¹K) by power iterations from a fixed start vector.
 fn power_estimate(k: &CsrMatrix, inverses: &[f64], block: usize) -> f64 {
     let mut y = vec![0.0; k.nrows()];
@@ -231,14 +261,16 @@ pub(super) fn power_iterations(n: usize, mut apply: impl FnMut(&[f64], &mut [f64
         .collect();
     let mut z = vec![0.0; n];
     let mut rho = 0.0;
+    let mut norm = dot(&x, &x).sqrt();
     for _ in 0..POWER_ITERATIONS {
-        let norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
         if !(norm > 0.0) || !norm.is_finite() {
             return f64::INFINITY;
         }
-        x.iter_mut().for_each(|v| *v /= norm);
+        x.par_iter_mut().for_each(|v| *v /= norm);
         apply(&x, &mut z);
-        rho = z.iter().map(|v| v * v).sum::<f64>().sqrt();
+        // ‖z‖ is the estimate and the next normalisation
+        norm = dot(&z, &z).sqrt();
+        rho = norm;
         std::mem::swap(&mut x, &mut z);
     }
     rho

@@ -315,7 +315,7 @@ fn normal_product(
 }
 
 /// Deterministic parallel dot product.
-fn dot(x: &[f64], y: &[f64]) -> f64 {
+pub(super) fn dot(x: &[f64], y: &[f64]) -> f64 {
     x.par_chunks(CHUNK)
         .zip(y.par_chunks(CHUNK))
         .map(|(x, y)| x.iter().zip(y).map(|(x, y)| x * y).sum::<f64>())
@@ -418,7 +418,21 @@ fn sparse_dot(a: SparseColMatRef<'_, usize, f64>, i: usize, j: usize) -> f64 {
 /// written to `inv`; a block that is not positive definite falls back to
 /// the inverse of its diagonal (zero where the diagonal is not positive).
 pub(super) fn invert_spd(m: &mut [f64], b: usize, inv: &mut [f64]) {
-    let original: Vec<f64> = m.to_vec();
+    // the diagonal of the input (for the fallback); blocks of up to 3 × 3
+    // (the common case, once per vertex) stay on the stack
+    let mut small = [0.0; 3];
+    let mut large = Vec::new();
+    let diagonal: &mut [f64] = if b <= 3 {
+        &mut small[..b]
+    } else {
+        large.resize(b, 0.0);
+        &mut large
+    };
+    for (i, d) in diagonal.iter_mut().enumerate() {
+        *d = m[i * b + i];
+    }
+    let mut y_small = [0.0; 3];
+    let mut y_large = Vec::new();
     // in-place Cholesky, lower triangle
     let mut ok = true;
     for j in 0..b {
@@ -437,7 +451,13 @@ pub(super) fn invert_spd(m: &mut [f64], b: usize, inv: &mut [f64]) {
     if ok {
         // columns of the inverse: solve L Lᵀ x = e_c
         for c in 0..b {
-            let mut y = vec![0.0; b];
+            let y: &mut [f64] = if b <= 3 {
+                &mut y_small[..b]
+            } else {
+                y_large.clear();
+                y_large.resize(b, 0.0);
+                &mut y_large
+            };
             for i in 0..b {
                 let e = if i == c { 1.0 } else { 0.0 };
                 y[i] = (e - (0..i).map(|k| m[i * b + k] * y[k]).sum::<f64>()) / m[i * b + i];
@@ -455,7 +475,7 @@ pub(super) fn invert_spd(m: &mut [f64], b: usize, inv: &mut [f64]) {
     }
     inv.iter_mut().for_each(|v| *v = 0.0);
     for i in 0..b {
-        let d = original[i * b + i];
+        let d = diagonal[i];
         inv[i * b + i] = if d > 0.0 && d.is_finite() {
             1.0 / d
         } else {

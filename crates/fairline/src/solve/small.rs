@@ -60,6 +60,13 @@ pub fn symmetric_eigen3(m: DMat3) -> (DVec3, DMat3) {
 /// f(S) = V diag(f(λ)) Vᵀ for the symmetric part S of `m`.
 pub fn symmetric_function3(m: DMat3, f: impl Fn(f64) -> f64) -> DMat3 {
     let (values, vectors) = symmetric_eigen3(m);
+    function_of_eigen3(values, vectors, f)
+}
+
+/// f(M) = V f(Λ) Vᵀ from the eigenvalues Λ and orthonormal eigenvectors V
+/// (columns) of a symmetric M, as returned by [`symmetric_eigen3`]: several
+/// functions of one matrix for one decomposition.
+pub fn function_of_eigen3(values: DVec3, vectors: DMat3, f: impl Fn(f64) -> f64) -> DMat3 {
     let scaled = DMat3::from_cols(
         vectors.x_axis * f(values.x),
         vectors.y_axis * f(values.y),
