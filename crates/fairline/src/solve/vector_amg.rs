@@ -69,6 +69,19 @@ const NODES: usize = 256;
 /// are small, and waking a second thread for them costs more than it saves.
 const MIN_TASK_CHUNKS: usize = 4;
 
+/// Calls `f(i, out_i)` for every node i with its three entries of `out`,
+/// in parallel over chunks of [`NODES`] nodes (each node written once).
+fn for_each_node(out: &mut [f64], f: impl Fn(usize, &mut [f64]) + Sync) {
+    out.par_chunks_mut(3 * NODES)
+        .enumerate()
+        .with_min_len(MIN_TASK_CHUNKS)
+        .for_each(|(c, out)| {
+            for (k, out) in out.chunks_mut(3).enumerate() {
+                f(c * NODES + k, out);
+            }
+        });
+}
+
 /// A symmetric 3 × 3 block as [xx, yy, zz, xy, xz, yz].
 pub type SymmetricBlock = [f64; 6];
 
@@ -341,14 +354,9 @@ impl VectorOperator {
 
     /// y = K x, in parallel.
     pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
-        y.par_chunks_mut(3 * NODES)
-            .enumerate()
-            .with_min_len(MIN_TASK_CHUNKS)
-            .for_each(|(c, y)| {
-                for (k, y) in y.chunks_mut(3).enumerate() {
-                    y.copy_from_slice(&self.row_times(c * NODES + k, x));
-                }
-            });
+        for_each_node(y, |i, y| {
+            y.copy_from_slice(&self.row_times(i, x));
+        });
     }
 
     /// One damped block-Jacobi step from `x` into `out`:
@@ -362,36 +370,24 @@ impl VectorOperator {
         x: &[f64],
         out: &mut [f64],
     ) {
-        out.par_chunks_mut(3 * NODES)
-            .enumerate()
-            .with_min_len(MIN_TASK_CHUNKS)
-            .for_each(|(c, out)| {
-                for (k, out) in out.chunks_mut(3).enumerate() {
-                    let i = c * NODES + k;
-                    let t = self.row_times(i, x);
-                    let r = [b[3 * i] - t[0], b[3 * i + 1] - t[1], b[3 * i + 2] - t[2]];
-                    let z = symmetric_mul(&inverses[i], &r);
-                    for c in 0..3 {
-                        out[c] = x[3 * i + c] + omega * z[c];
-                    }
-                }
-            });
+        for_each_node(out, |i, out| {
+            let t = self.row_times(i, x);
+            let r = [b[3 * i] - t[0], b[3 * i + 1] - t[1], b[3 * i + 2] - t[2]];
+            let z = symmetric_mul(&inverses[i], &r);
+            for c in 0..3 {
+                out[c] = x[3 * i + c] + omega * z[c];
+            }
+        });
     }
 
     /// y = b − K x, in parallel.
     fn residual(&self, b: &[f64], x: &[f64], y: &mut [f64]) {
-        y.par_chunks_mut(3 * NODES)
-            .enumerate()
-            .with_min_len(MIN_TASK_CHUNKS)
-            .for_each(|(c, y)| {
-                for (k, y) in y.chunks_mut(3).enumerate() {
-                    let i = c * NODES + k;
-                    let t = self.row_times(i, x);
-                    for r in 0..3 {
-                        y[r] = b[3 * i + r] - t[r];
-                    }
-                }
-            });
+        for_each_node(y, |i, y| {
+            let t = self.row_times(i, x);
+            for r in 0..3 {
+                y[r] = b[3 * i + r] - t[r];
+            }
+        });
     }
 
     /// The diagonal block A_II I₃ + S_II of node i (row-major 3 × 3).
@@ -724,44 +720,33 @@ impl Preconditioner for VectorAmg {
 
 /// y = (M ⊗ I₃) x for a scalar matrix M on interleaved coordinates.
 fn mul_coordinates(m: &CsrMatrix, x: &[f64], y: &mut [f64]) {
-    y.par_chunks_mut(3 * NODES)
-        .enumerate()
-        .with_min_len(MIN_TASK_CHUNKS)
-        .for_each(|(c, y)| {
-            for (k, y) in y.chunks_mut(3).enumerate() {
-                let (idx, val) = m.row(c * NODES + k);
-                let mut s = [0.0; 3];
-                for (&j, &v) in idx.iter().zip(val) {
-                    let j = 3 * j as usize;
-                    for r in 0..3 {
-                        s[r] += v * x[j + r];
-                    }
-                }
-                y.copy_from_slice(&s);
+    for_each_node(y, |i, y| {
+        let (idx, val) = m.row(i);
+        let mut s = [0.0; 3];
+        for (&j, &v) in idx.iter().zip(val) {
+            let j = 3 * j as usize;
+            for r in 0..3 {
+                s[r] += v * x[j + r];
             }
-        });
+        }
+        y.copy_from_slice(&s);
+    });
 }
 
 /// out = base + (M ⊗ I₃) x for a scalar matrix M on interleaved
 /// coordinates (the prolongation of a coarse correction, added).
 fn prolong_add(m: &CsrMatrix, x: &[f64], base: &[f64], out: &mut [f64]) {
-    out.par_chunks_mut(3 * NODES)
-        .enumerate()
-        .with_min_len(MIN_TASK_CHUNKS)
-        .for_each(|(c, out)| {
-            for (k, out) in out.chunks_mut(3).enumerate() {
-                let i = c * NODES + k;
-                let (idx, val) = m.row(i);
-                let mut s = [base[3 * i], base[3 * i + 1], base[3 * i + 2]];
-                for (&j, &v) in idx.iter().zip(val) {
-                    let j = 3 * j as usize;
-                    for r in 0..3 {
-                        s[r] += v * x[j + r];
-                    }
-                }
-                out.copy_from_slice(&s);
+    for_each_node(out, |i, out| {
+        let (idx, val) = m.row(i);
+        let mut s = [base[3 * i], base[3 * i + 1], base[3 * i + 2]];
+        for (&j, &v) in idx.iter().zip(val) {
+            let j = 3 * j as usize;
+            for r in 0..3 {
+                s[r] += v * x[j + r];
             }
-        });
+        }
+        out.copy_from_slice(&s);
+    });
 }
 
 /// x = ω D⁻¹ r, D⁻¹ the symmetric inverses of the 3 × 3 diagonal blocks.
