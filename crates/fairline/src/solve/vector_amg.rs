@@ -863,6 +863,21 @@ mod tests {
         d
     }
 
+    /// K x equals the dense matrix `d` times x, entry by entry.
+    fn assert_product_is_dense(k: &VectorOperator, d: &[Vec<f64>], x: &[f64]) {
+        let n = x.len();
+        let mut y = vec![0.0; n];
+        k.mul_vec(x, &mut y);
+        for i in 0..n {
+            let e: f64 = (0..n).map(|j| d[i][j] * x[j]).sum();
+            assert!(
+                (y[i] - e).abs() <= 1e-12 * (1.0 + e.abs()),
+                "{i}: {} vs {e}",
+                y[i]
+            );
+        }
+    }
+
     fn vector(n: usize, seed: f64) -> Vec<f64> {
         (0..n).map(|i| (seed * (i as f64 + 1.0)).sin()).collect()
     }
@@ -877,16 +892,7 @@ mod tests {
         let n = 3 * k.nodes();
         let d = dense(&k);
         let x = vector(n, 0.37);
-        let mut y = vec![0.0; n];
-        k.mul_vec(&x, &mut y);
-        for i in 0..n {
-            let e: f64 = (0..n).map(|j| d[i][j] * x[j]).sum();
-            assert!(
-                (y[i] - e).abs() <= 1e-12 * (1.0 + e.abs()),
-                "{i}: {} vs {e}",
-                y[i]
-            );
-        }
+        assert_product_is_dense(&k, &d, &x);
         // a smoothed prolongator of the scalar part from aggregates
         let aggregates = aggregate_nodes(&k.strength_norms(), 0.08);
         let count = aggregates.iter().map(|&a| a as usize + 1).max().unwrap();
@@ -963,19 +969,10 @@ mod tests {
             let n = 3 * k.nodes();
             let d = dense(k);
             let (x, b) = (vector(n, 0.43), vector(n, 1.1));
-            let mut y = vec![0.0; n];
-            k.mul_vec(&x, &mut y);
+            assert_product_is_dense(k, &d, &x);
             let (inverses, omega) = vector_jacobi(k);
             let mut smoothed = vec![0.0; n];
             k.smooth(&inverses, omega, &b, &x, &mut smoothed);
-            for i in 0..n {
-                let e: f64 = (0..n).map(|j| d[i][j] * x[j]).sum();
-                assert!(
-                    (y[i] - e).abs() <= 1e-12 * (1.0 + e.abs()),
-                    "{i}: {} vs {e}",
-                    y[i]
-                );
-            }
             for node in 0..k.nodes() {
                 let r: Vec<f64> = (0..3)
                     .map(|c| {
