@@ -9,6 +9,8 @@
 //! the share of the linear solve (factorisation and triangular solves, or
 //! conjugate gradients). Prints a Markdown table.
 //!
+//! Runs on a worker thread of rayon's pool, as the command does.
+//!
 //! Run: `cargo bench -p fairline --bench enhance`
 //! (`FAIRLINE_BENCH_RUNS`, default 3, `FAIRLINE_BENCH_SIZES`, default
 //! `10000,100000`, `FAIRLINE_BENCH_SOLVER`, `auto` (default), `cg`, `amg`
@@ -26,6 +28,11 @@ use fairline::shapes::{rounded_cube, torus};
 use std::time::Instant;
 
 fn main() {
+    // on a worker of rayon's pool, as `fairline` runs its commands
+    rayon::scope(|_| bench());
+}
+
+fn bench() {
     let runs = runs(3).max(1);
     let solver = match std::env::var("FAIRLINE_BENCH_SOLVER").as_deref() {
         Ok("direct") => EnhanceSolver::Direct,
