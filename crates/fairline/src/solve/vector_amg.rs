@@ -91,7 +91,7 @@ fn full_block(s: &SymmetricBlock) -> [[f64; 3]; 3] {
     [[s[0], s[3], s[4]], [s[3], s[1], s[5]], [s[4], s[5], s[2]]]
 }
 
-#[inline]
+#[inline(always)]
 fn symmetric_mul(s: &SymmetricBlock, x: &[f64]) -> [f64; 3] {
     [
         s[0] * x[0] + s[3] * x[1] + s[4] * x[2],
@@ -307,7 +307,7 @@ impl VectorOperator {
     }
 
     /// Row i of K applied to x: Σ_J (A_IJ x_J + S_IJ x_J).
-    #[inline]
+    #[inline(always)]
     fn row_times(&self, i: usize, x: &[f64]) -> [f64; 3] {
         let mut y = [0.0; 3];
         let range = self.ptr[i]..self.ptr[i + 1];
