@@ -726,48 +726,59 @@ const DISTANCE_RINGS: usize = 16;
 fn distance_to_input(mesh: &SurfaceMesh, positions: &[Vec3], free: &[u32]) -> (f64, f64) {
     use rayon::prelude::*;
     let input = mesh.positions();
+    // a few chunks per thread; each marks the faces and vertices it has
+    // seen with the index of the vertex being searched (no clearing, no
+    // search through the seen ones)
+    let chunk = free
+        .len()
+        .div_ceil(4 * rayon::current_num_threads())
+        .max(256);
     let distances: Vec<f64> = free
-        .par_iter()
-        .map(|&v| {
-            let v = VertexId(v);
-            let x = positions[v.idx()];
-            let mut best = f64::INFINITY;
-            // small sets: a ring or two is searched in almost every case
-            let mut seen_vertices: Vec<u32> = vec![v.0];
-            let mut seen_faces: Vec<u32> = Vec::new();
-            let mut frontier = vec![v];
-            for _ in 0..DISTANCE_RINGS {
-                let mut ring_best = f64::INFINITY;
-                let mut next = Vec::new();
-                for &w in &frontier {
-                    for f in mesh.vertex_faces(w) {
-                        if seen_faces.contains(&f.0) {
-                            continue;
+        .par_chunks(chunk)
+        .flat_map_iter(|vertices| {
+            let mut face_mark = vec![u32::MAX; mesh.face_count()];
+            let mut vertex_mark = vec![u32::MAX; mesh.vertex_count()];
+            let (mut frontier, mut next) = (Vec::new(), Vec::new());
+            let mut out = Vec::with_capacity(vertices.len());
+            for (k, &v) in vertices.iter().enumerate() {
+                let k = k as u32;
+                let x = positions[v as usize];
+                let mut best = f64::INFINITY;
+                vertex_mark[v as usize] = k;
+                frontier.clear();
+                frontier.push(VertexId(v));
+                for _ in 0..DISTANCE_RINGS {
+                    let mut ring_best = f64::INFINITY;
+                    next.clear();
+                    for &w in &frontier {
+                        for f in mesh.vertex_faces(w) {
+                            if std::mem::replace(&mut face_mark[f.idx()], k) == k {
+                                continue;
+                            }
+                            let t = mesh.triangle(f).map(|u| input[u.idx()]);
+                            let b = crate::geom::closest_point_on_triangle(x, t[0], t[1], t[2]);
+                            let d = x.distance(b[0] * t[0] + b[1] * t[1] + b[2] * t[2]);
+                            ring_best = ring_best.min(d);
                         }
-                        seen_faces.push(f.0);
-                        let t = mesh.triangle(f).map(|u| input[u.idx()]);
-                        let b = crate::geom::closest_point_on_triangle(x, t[0], t[1], t[2]);
-                        let d = x.distance(b[0] * t[0] + b[1] * t[1] + b[2] * t[2]);
-                        ring_best = ring_best.min(d);
-                    }
-                    for u in mesh.one_ring(w) {
-                        if !seen_vertices.contains(&u.0) {
-                            seen_vertices.push(u.0);
-                            next.push(u);
+                        for u in mesh.one_ring(w) {
+                            if std::mem::replace(&mut vertex_mark[u.idx()], k) != k {
+                                next.push(u);
+                            }
                         }
                     }
+                    if ring_best < best {
+                        best = ring_best;
+                    } else if best.is_finite() {
+                        break;
+                    }
+                    if next.is_empty() {
+                        break;
+                    }
+                    std::mem::swap(&mut frontier, &mut next);
                 }
-                if ring_best < best {
-                    best = ring_best;
-                } else if best.is_finite() {
-                    break;
-                }
-                if next.is_empty() {
-                    break;
-                }
-                frontier = next;
+                out.push(if best.is_finite() { best } else { 0.0 });
             }
-            if best.is_finite() { best } else { 0.0 }
+            out
         })
         .collect();
     let max = distances.iter().copied().fold(0.0, f64::max);
