@@ -236,11 +236,13 @@ impl Preconditioner for FactoredPreconditioner {
             }
         };
         self.h.apply(r, t);
-        u.par_chunks_mut(3)
-            .zip(t.par_chunks(3))
+        u.as_chunks_mut::<3>()
+            .0
+            .par_iter_mut()
+            .zip(t.as_chunks::<3>().0.par_iter())
             .zip(self.inverse_q.par_iter())
             .for_each(|((u, t), q)| {
-                u.copy_from_slice(&(*q * Vec3::new(t[0], t[1], t[2])).to_array());
+                *u = (*q * Vec3::from_array(*t)).to_array();
             });
         self.h.apply(u, t);
         z.par_iter_mut().zip(t.par_iter()).for_each(|(z, t)| {

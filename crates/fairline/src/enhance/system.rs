@@ -163,7 +163,7 @@ impl LeastSquares {
         y.par_chunks_mut(8 * VERTICES)
             .enumerate()
             .for_each(|(c, y)| {
-                for (k, y) in y.chunks_mut(8).enumerate() {
+                for (k, y) in y.as_chunks_mut::<8>().0.iter_mut().enumerate() {
                     let f = c * VERTICES + k;
                     let (mut em, mut smo) = ([0.0; 2], Vec3::ZERO);
                     for e in self.ptr[f]..self.ptr[f + 1] {
@@ -175,7 +175,7 @@ impl LeastSquares {
                     }
                     let xf = Vec3::new(x[3 * f], x[3 * f + 1], x[3 * f + 2]);
                     let sd = self.sd[f];
-                    y.copy_from_slice(&[
+                    *y = [
                         em[0],
                         em[1],
                         sd[0].dot(xf),
@@ -184,7 +184,7 @@ impl LeastSquares {
                         smo.x,
                         smo.y,
                         smo.z,
-                    ]);
+                    ];
                 }
             });
     }
@@ -194,7 +194,7 @@ impl LeastSquares {
         x.par_chunks_mut(3 * VERTICES)
             .enumerate()
             .for_each(|(c, x)| {
-                for (k, x) in x.chunks_mut(3).enumerate() {
+                for (k, x) in x.as_chunks_mut::<3>().0.iter_mut().enumerate() {
                     let g = c * VERTICES + k;
                     let mut s = Vec3::ZERO;
                     for e in self.ptr[g]..self.ptr[g + 1] {
@@ -208,7 +208,7 @@ impl LeastSquares {
                     let sd = self.sd[g];
                     let yg = &y[8 * g..8 * g + 8];
                     s += sd[0] * yg[2] + sd[1] * yg[3] + sd[2] * yg[4];
-                    x.copy_from_slice(&s.to_array());
+                    *x = s.to_array();
                 }
             });
     }

@@ -71,12 +71,14 @@ const MIN_TASK_CHUNKS: usize = 4;
 
 /// Calls `f(i, out_i)` for every node i with its three entries of `out`,
 /// in parallel over chunks of [`NODES`] nodes (each node written once).
-fn for_each_node(out: &mut [f64], f: impl Fn(usize, &mut [f64]) + Sync) {
+fn for_each_node(out: &mut [f64], f: impl Fn(usize, &mut [f64; 3]) + Sync) {
     out.par_chunks_mut(3 * NODES)
         .enumerate()
         .with_min_len(MIN_TASK_CHUNKS)
         .for_each(|(c, out)| {
-            for (k, out) in out.chunks_mut(3).enumerate() {
+            // fixed-size entries: whole-array stores instead of a
+            // slice copy (a call) per node
+            for (k, out) in out.as_chunks_mut::<3>().0.iter_mut().enumerate() {
                 f(c * NODES + k, out);
             }
         });
@@ -355,7 +357,7 @@ impl VectorOperator {
     /// y = K x, in parallel.
     pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
         for_each_node(y, |i, y| {
-            y.copy_from_slice(&self.row_times(i, x));
+            *y = self.row_times(i, x);
         });
     }
 
@@ -729,7 +731,7 @@ fn mul_coordinates(m: &CsrMatrix, x: &[f64], y: &mut [f64]) {
                 s[r] += v * x[j + r];
             }
         }
-        y.copy_from_slice(&s);
+        *y = s;
     });
 }
 
@@ -745,7 +747,7 @@ fn prolong_add(m: &CsrMatrix, x: &[f64], base: &[f64], out: &mut [f64]) {
                 s[r] += v * x[j + r];
             }
         }
-        out.copy_from_slice(&s);
+        *out = s;
     });
 }
 
