@@ -151,9 +151,10 @@ impl CsrMatrix {
     }
 }
 
-/// Inverses of the diagonal blocks of K (row-major per block) and the
-/// smoother's damping 4 / (3 ρ̄), ρ̄ the largest absolute row sum of D⁻¹K.
-pub(super) fn block_jacobi(k: &CsrMatrix, block: usize) -> (Vec<f64>, f64) {
+/// Inverses of the diagonal blocks of K (row-major per block), the
+/// smoother's damping 4 / (3 ρ̄) ([`jacobi_damping`]) and the power
+/// estimate of ρ(D⁻¹K) it used.
+pub(super) fn block_jacobi(k: &CsrMatrix, block: usize) -> (Vec<f64>, f64, f64) {
     if block == 1 {
         return point_jacobi(k);
     }
@@ -213,12 +214,12 @@ pub(super) fn block_jacobi(k: &CsrMatrix, block: usize) -> (Vec<f64>, f64) {
         .collect();
     let gershgorin = bounds.iter().copied().fold(0.0f64, f64::max);
     let power = power_estimate(k, &inverses, block);
-    (inverses, jacobi_damping(gershgorin, power))
+    (inverses, jacobi_damping(gershgorin, power), power)
 }
 
 /// [`block_jacobi`] with 1 × 1 blocks: 1 / K_ii (0 where not positive)
 /// and the damping from the row sums Σ_j |K_ij| / K_ii.
-fn point_jacobi(k: &CsrMatrix) -> (Vec<f64>, f64) {
+fn point_jacobi(k: &CsrMatrix) -> (Vec<f64>, f64, f64) {
     let (inverses, bounds): (Vec<f64>, Vec<f64>) = (0..k.nrows())
         .into_par_iter()
         .map(|i| {
@@ -240,7 +241,7 @@ fn point_jacobi(k: &CsrMatrix) -> (Vec<f64>, f64) {
         .unzip();
     let gershgorin = bounds.iter().copied().fold(0.0f64, f64::max);
     let power = power_estimate(k, &inverses, 1);
-    (inverses, jacobi_damping(gershgorin, power))
+    (inverses, jacobi_damping(gershgorin, power), power)
 }
 
 /// Estimate of ρ(D⁻¹K) by power iterations from a fixed start vector.

@@ -624,11 +624,11 @@ impl VectorAmg {
             }
             let (t, coarse_b) = tentative(&aggregates, count, 1, &b, 1);
             let a = k.scalar();
-            let (a_inverse, a_omega) = block_jacobi(&a, 1);
+            let (a_inverse, a_omega, a_power) = block_jacobi(&a, 1);
             let p = smooth_prolongator(&t, &a.matmul(&t), &a_inverse, 1, a_omega);
             let pt = p.transpose();
             let kc = k.galerkin(&p, &pt)?;
-            let (inverses, omega) = vector_jacobi(&k);
+            let (inverses, omega) = vector_jacobi(&k, a_power);
             levels.push(Level {
                 k,
                 inverses,
@@ -769,8 +769,15 @@ fn scale_by_inverses(inverses: &[SymmetricBlock], omega: f64, r: &[f64], x: &mut
 
 /// Inverses of the diagonal blocks of K and the smoother's damping
 /// 4 / (3 ρ̄), ρ̄ the smaller of the largest absolute row sum of D⁻¹K and
-/// 1.1 times a power-iteration estimate of ρ(D⁻¹K).
-fn vector_jacobi(k: &VectorOperator) -> (Vec<SymmetricBlock>, f64) {
+/// 1.1 times a power-iteration estimate of ρ(D⁻¹K), given `scalar_power`,
+/// that estimate of ρ(D_A⁻¹A).
+///
+/// When S is block-diagonal (the finest level of vertex flow) that of A
+/// serves: D = D_A ⊗ I₃ + S, and for every x
+/// xᵀKx / xᵀDx = (xᵀ(A ⊗ I₃)x + xᵀSx) / (xᵀ(D_A ⊗ I₃)x + xᵀSx)
+/// ≤ max(ρ(D_A⁻¹A), 1) = ρ(D_A⁻¹A) (S ⪰ 0; the mean eigenvalue of D_A⁻¹A
+/// is 1), so ρ(D⁻¹K) ≤ ρ(D_A⁻¹A) — fifteen products with K saved.
+fn vector_jacobi(k: &VectorOperator, scalar_power: f64) -> (Vec<SymmetricBlock>, f64) {
     let n = k.nodes();
     let inverses: Vec<SymmetricBlock> = (0..n)
         .into_par_iter()
@@ -800,11 +807,15 @@ fn vector_jacobi(k: &VectorOperator) -> (Vec<SymmetricBlock>, f64) {
             sums.into_iter().fold(0.0f64, f64::max)
         })
         .reduce(|| 0.0, f64::max);
-    let mut y = vec![0.0; 3 * n];
-    let power = power_iterations(3 * n, |x, z| {
-        k.mul_vec(x, &mut y);
-        scale_by_inverses(&inverses, 1.0, &y, z);
-    });
+    let power = if matches!(k.s, Blocks::Diagonal(_)) {
+        scalar_power.max(1.0)
+    } else {
+        let mut y = vec![0.0; 3 * n];
+        power_iterations(3 * n, |x, z| {
+            k.mul_vec(x, &mut y);
+            scale_by_inverses(&inverses, 1.0, &y, z);
+        })
+    };
     (inverses, jacobi_damping(gershgorin, power))
 }
 
@@ -901,7 +912,7 @@ mod tests {
         assert!(count < k.nodes() / 2, "{count} aggregates");
         let (t, _) = tentative(&aggregates, count, 1, &vec![1.0; k.nodes()], 1);
         let a = k.scalar();
-        let (inverse, omega) = block_jacobi(&a, 1);
+        let (inverse, omega, _) = block_jacobi(&a, 1);
         let p = smooth_prolongator(&t, &a.matmul(&t), &inverse, 1, omega);
         let kc = k.galerkin(&p, &p.transpose()).unwrap();
         assert!(matches!(kc.s, Blocks::Full(_)));
@@ -972,7 +983,7 @@ mod tests {
             let d = dense(k);
             let (x, b) = (vector(n, 0.43), vector(n, 1.1));
             assert_product_is_dense(k, &d, &x);
-            let (inverses, omega) = vector_jacobi(k);
+            let (inverses, omega) = vector_jacobi(k, block_jacobi(&k.scalar(), 1).2);
             let mut smoothed = vec![0.0; n];
             k.smooth(&inverses, omega, &b, &x, &mut smoothed);
             for node in 0..k.nodes() {
@@ -992,11 +1003,89 @@ mod tests {
         }
     }
 
+    /// Largest eigenvalue of the symmetric dense matrix `m`.
+    fn largest_eigenvalue(m: &[Vec<f64>]) -> f64 {
+        let n = m.len();
+        let dense = faer::Mat::from_fn(n, n, |i, j| m[i][j]);
+        let values = dense.self_adjoint_eigenvalues(faer::Side::Lower).unwrap();
+        values[n - 1]
+    }
+
+    /// What lets the finest level skip its own power iterations: with S
+    /// block-diagonal, ρ(D⁻¹K) ≤ ρ(D_A⁻¹A) (dense eigenvalues of the
+    /// symmetric forms D^{-1/2} K D^{-1/2}), equal when S vanishes (and
+    /// here also with S of rank one per node: the two directions it leaves
+    /// free carry the top eigenvector).
+    #[test]
+    fn diagonal_reaction_does_not_raise_the_jacobi_spectral_radius() {
+        for strength in [0.0, 0.3, 5.0] {
+            let k = grid(6, strength);
+            assert!(matches!(k.s, Blocks::Diagonal(_)));
+            let (a, d) = (k.scalar(), dense(&k));
+            let n = k.nodes();
+            // D_A^{-1/2} A D_A^{-1/2}
+            let a_diagonal: Vec<f64> = (0..n)
+                .map(|i| {
+                    let (idx, val) = a.row(i);
+                    idx.iter()
+                        .zip(val)
+                        .find(|e| *e.0 as usize == i)
+                        .unwrap()
+                        .1
+                        .sqrt()
+                })
+                .collect();
+            let scaled_a: Vec<Vec<f64>> = (0..n)
+                .map(|i| {
+                    let mut row = vec![0.0; n];
+                    let (idx, val) = a.row(i);
+                    for (&j, &v) in idx.iter().zip(val) {
+                        row[j as usize] = v / (a_diagonal[i] * a_diagonal[j as usize]);
+                    }
+                    row
+                })
+                .collect();
+            // D^{-1/2} K D^{-1/2} with the 3 × 3 diagonal blocks of K
+            let roots: Vec<glam::DMat3> = (0..n)
+                .map(|i| {
+                    let b = k.diagonal_block(i);
+                    let m = glam::DMat3::from_cols_array(&b).transpose();
+                    crate::solve::symmetric_function3(m, |x| 1.0 / x.sqrt())
+                })
+                .collect();
+            let scaled_k: Vec<Vec<f64>> = (0..3 * n)
+                .map(|r| {
+                    (0..3 * n)
+                        .map(|c| {
+                            let (ri, ci) = (r / 3, c / 3);
+                            let mut v = 0.0;
+                            for p in 0..3 {
+                                for q in 0..3 {
+                                    v += roots[ri].col(p)[r % 3]
+                                        * d[3 * ri + p][3 * ci + q]
+                                        * roots[ci].col(c % 3)[q];
+                                }
+                            }
+                            v
+                        })
+                        .collect()
+                })
+                .collect();
+            let (rho_a, rho_k) = (largest_eigenvalue(&scaled_a), largest_eigenvalue(&scaled_k));
+            assert!(rho_a > 1.0, "{rho_a}");
+            if strength == 0.0 {
+                assert!((rho_k - rho_a).abs() <= 1e-12, "{rho_k} vs {rho_a}");
+            } else {
+                assert!(rho_k <= rho_a + 1e-12, "S = {strength}: {rho_k} > {rho_a}");
+            }
+        }
+    }
+
     fn solve(k: &VectorOperator, preconditioner: Option<&VectorAmg>) -> (usize, Vec<f64>) {
         let n = 3 * k.nodes();
         let rhs = vector(n, 0.61);
         let mut x = vec![0.0; n];
-        let inverses = vector_jacobi(k).0;
+        let inverses = vector_jacobi(k, block_jacobi(&k.scalar(), 1).2).0;
         let report = pcg(
             |v: &[f64], out: &mut [f64]| k.mul_vec(v, out),
             |r: &[f64], z: &mut [f64]| match preconditioner {
