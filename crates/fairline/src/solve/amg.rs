@@ -572,6 +572,17 @@ impl<const W: usize> RowAccumulator<W> {
         }
     }
 
+    /// Adds `v` to the first component of column j only.
+    #[inline]
+    pub(super) fn add_first(&mut self, j: u32, v: f64) {
+        let k = j as usize;
+        if !self.mark[k] {
+            self.mark[k] = true;
+            self.touched.push(j);
+        }
+        self.acc[k][0] += v;
+    }
+
     pub(super) fn flush_with(&mut self, mut f: impl FnMut(u32, [f64; W])) -> usize {
         self.touched.sort_unstable();
         for &j in &self.touched {

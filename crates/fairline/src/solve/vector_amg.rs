@@ -291,15 +291,21 @@ impl VectorOperator {
         self.idx.len()
     }
 
+    /// A_IJ of entry `e` of row `i`.
+    #[inline]
+    fn scalar_entry(&self, i: usize, e: usize) -> f64 {
+        match &self.a {
+            Scalars::Entries(a) => a[e],
+            Scalars::UnitOffDiagonal { diagonal } if self.idx[e] as usize == i => diagonal[i],
+            Scalars::UnitOffDiagonal { .. } => -1.0,
+        }
+    }
+
     /// Entry `e` of row `i` as (A_IJ, K_IJ = A_IJ I₃ + S_IJ).
     #[inline]
     fn entry(&self, i: usize, e: usize) -> (f64, SymmetricBlock) {
         let diagonal = self.idx[e] as usize == i;
-        let a = match &self.a {
-            Scalars::Entries(a) => a[e],
-            Scalars::UnitOffDiagonal { diagonal: d } if diagonal => d[i],
-            Scalars::UnitOffDiagonal { .. } => -1.0,
-        };
+        let a = self.scalar_entry(i, e);
         let k = match &self.s {
             Blocks::Full(k) => k[e],
             Blocks::Diagonal(s) if diagonal => shifted(a, &s[i]),
@@ -444,12 +450,17 @@ impl VectorOperator {
     /// The Galerkin operator (P ⊗ I₃)ᵀ K (P ⊗ I₃) for the scalar
     /// prolongator `p` (with its transpose `pt`), symmetrised; a node whose
     /// row vanishes (a zero column of `p`) gets a unit diagonal.
+    ///
+    /// With S on the diagonal only, Pᵀ A P and Pᵀ S P are summed apart:
+    /// an off-diagonal entry of K adds one scalar per coarse pair instead
+    /// of seven values.
     fn galerkin(&self, p: &CsrMatrix, pt: &CsrMatrix) -> Result<VectorOperator, SolveError> {
         let nc = p.ncols;
         type Row = Vec<(u32, f64, SymmetricBlock)>;
         let rows: Vec<Row> = (0..nc.div_ceil(ROWS))
             .into_par_iter()
             .flat_map_iter(|c| {
+                // column sums of (A, K) for Full, (A, S) for Diagonal
                 let mut acc = RowAccumulator::<7>::new(nc);
                 let mut out: Vec<Row> = Vec::new();
                 for ci in c * ROWS..((c + 1) * ROWS).min(nc) {
@@ -457,8 +468,21 @@ impl VectorOperator {
                     for (&k, &pk) in ki.iter().zip(kv) {
                         let k = k as usize;
                         for e in self.ptr[k]..self.ptr[k + 1] {
-                            let (a, s) = self.entry(k, e); // s = K_kl
-                            let (li, lv) = p.row(self.idx[e] as usize);
+                            let l = self.idx[e] as usize;
+                            let (li, lv) = p.row(l);
+                            let (a, s) = match &self.s {
+                                Blocks::Full(blocks) => (self.scalar_entry(k, e), blocks[e]),
+                                Blocks::Diagonal(blocks) if l == k => {
+                                    (self.scalar_entry(k, e), blocks[k])
+                                }
+                                Blocks::Diagonal(_) => {
+                                    let a = self.scalar_entry(k, e);
+                                    for (&j, &pl) in li.iter().zip(lv) {
+                                        acc.add_first(j, pk * pl * a);
+                                    }
+                                    continue;
+                                }
+                            };
                             for (&j, &pl) in li.iter().zip(lv) {
                                 let w = pk * pl;
                                 acc.add_vector(
@@ -477,8 +501,10 @@ impl VectorOperator {
                         }
                     }
                     let mut row = Vec::new();
+                    let reaction_only = matches!(self.s, Blocks::Diagonal(_));
                     acc.flush_with(|j, v| {
-                        row.push((j, v[0], [v[1], v[2], v[3], v[4], v[5], v[6]]));
+                        let s = [v[1], v[2], v[3], v[4], v[5], v[6]];
+                        row.push((j, v[0], if reaction_only { shifted(v[0], &s) } else { s }));
                     });
                     out.push(row);
                 }
