@@ -457,13 +457,18 @@ impl VectorOperator {
     fn galerkin(&self, p: &CsrMatrix, pt: &CsrMatrix) -> Result<VectorOperator, SolveError> {
         let nc = p.ncols;
         type Row = Vec<(u32, f64, SymmetricBlock)>;
-        let rows: Vec<Row> = (0..nc.div_ceil(ROWS))
+        // a few tasks per thread also on small coarse levels (each with an
+        // accumulator as long as a coarse row)
+        let per_task = nc
+            .div_ceil(4 * rayon::current_num_threads())
+            .clamp(16, ROWS);
+        let rows: Vec<Row> = (0..nc.div_ceil(per_task))
             .into_par_iter()
             .flat_map_iter(|c| {
                 // column sums of (A, K) for Full, (A, S) for Diagonal
                 let mut acc = RowAccumulator::<7>::new(nc);
                 let mut out: Vec<Row> = Vec::new();
-                for ci in c * ROWS..((c + 1) * ROWS).min(nc) {
+                for ci in c * per_task..((c + 1) * per_task).min(nc) {
                     let (ki, kv) = pt.row(ci);
                     for (&k, &pk) in ki.iter().zip(kv) {
                         let k = k as usize;
