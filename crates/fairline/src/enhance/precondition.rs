@@ -37,21 +37,27 @@
 //! one is held by F_sd and F_em, and a scalar H (one σ_i per vertex) fails
 //! there (measured: no gain over block Jacobi on an open cylinder).
 //!
-//! **The preconditioner** is z = B⁻¹ r + V Q̂⁻¹ V r with B block Jacobi of
-//! LᵀL + εI (3 × 3 per vertex), which takes care of what the model leaves
-//! out (the variation of the curvature between neighbours in F_em), and V
-//! one smoothed-aggregation multigrid V-cycle for H
+//! **The preconditioner** is z = B⁻¹ r + Vᵀ Q̂⁻¹ V r with B block Jacobi
+//! of LᵀL + εI (3 × 3 per vertex), which takes care of what the model
+//! leaves out (the variation of the curvature between neighbours in F_em),
+//! and V ≈ H⁻¹ one smoothed-aggregation multigrid cycle for H
 //! ([`crate::solve::VectorAmg`], which keeps the form G ⊗ I₃ + Σ on every
 //! level: a scalar prolongator and one scalar and one symmetric 3 × 3 block
-//! per coarse entry; the three translations as near-null space), a
-//! symmetric positive-definite approximation of H⁻¹. Measured condition
-//! numbers of the preconditioned matrix with exact H⁻¹ (dense eigenvalues):
-//! rounded cube 22–28 for 386–1538 free vertices, not growing (block Jacobi
-//! alone: 155–518, growing), open cylinder 6 (block Jacobi 1.8 · 10⁵). With
-//! the V-cycle, conjugate gradients to 10⁻¹² take 34 iterations on the
-//! 10k-vertex rounded cube, 32 on the 100k one and 45 on the 1M one (block
-//! Jacobi: 597, about 1500, not feasible). Both parts are symmetric positive definite, so conjugate
-//! gradients converge to the same solution, only in fewer iterations.
+//! per coarse entry; the three translations as near-null space) with
+//! [`SMOOTHING_STEPS`] smoothing steps before each coarse correction and
+//! none after ([`VectorAmg::apply_pre`]); Vᵀ is the same cycle with the
+//! steps after the correction only ([`VectorAmg::apply_post`]), so
+//! Vᵀ Q̂⁻¹ V is symmetric positive semi-definite whatever the quality of V,
+//! and the pair costs one symmetric V-cycle. Measured condition numbers of
+//! the preconditioned matrix with exact H⁻¹ (dense eigenvalues): rounded
+//! cube 22–28 for 386–1538 free vertices, not growing (block Jacobi alone:
+//! 155–518, growing), open cylinder 6 (block Jacobi 1.8 · 10⁵). With the
+//! multigrid cycles, conjugate gradients to 10⁻¹² take 35 iterations on
+//! the 10k-vertex rounded cube and 33 on the 100k one (block Jacobi: 597,
+//! about 1500); exact H⁻¹ takes 37 on the 10k one, so the cycles are not
+//! what limits the count, the model is. Both parts are symmetric positive
+//! definite, so conjugate gradients converge to the same solution, only in
+//! fewer iterations.
 
 use super::system::{DistanceModel, Layout, smoothness_weight};
 use crate::Vec3;
@@ -66,18 +72,22 @@ use std::sync::Mutex;
 
 const NONE: u32 = u32::MAX;
 
-/// Block-Jacobi smoothing steps before and after each coarse correction of
-/// the V-cycle for H: two instead of one cost about 40 % more per cycle and
-/// save a third of the iterations, more on larger meshes (rounded cube:
-/// 32 instead of 47 at 100k vertices, 45 instead of about 115 at 1M).
-const SMOOTHING_STEPS: usize = 2;
+/// Block-Jacobi smoothing steps of each one-sided cycle for H (before each
+/// coarse correction in V, after it in Vᵀ). Measured on the rounded cube
+/// (conjugate-gradient iterations at 10k / 100k vertices, solve time at
+/// 10k): one-sided with 2 steps 40 / 40, 0.055 s; with 3 steps 35 / 33,
+/// 0.059 s; with 4 steps 33 / 31, 0.067 s; the symmetric cycle with 2 steps
+/// before and 2 after each correction, used twice (eight passes over each
+/// level instead of six), 34 / 32, 0.087 s; one step each side 47 at 100k.
+const SMOOTHING_STEPS: usize = 3;
 
 /// M⁻¹ + B⁻¹ (module documentation).
 pub(super) struct FactoredPreconditioner {
     jacobi: BlockJacobi,
     /// Q̂_i⁻¹ of each free vertex.
     inverse_q: Vec<DMat3>,
-    /// Smoothed-aggregation multigrid V-cycle of H = G ⊗ I₃ + Σ.
+    /// Smoothed-aggregation multigrid of H = G ⊗ I₃ + Σ (its one-sided
+    /// cycles V and Vᵀ).
     h: VectorAmg,
     /// Two scratch vectors of the apply.
     scratch: Mutex<(Vec<f64>, Vec<f64>)>,
@@ -222,8 +232,9 @@ fn assemble_h(layout: &Layout, blocks: &[(DMat3, DMat3)]) -> Result<VectorOperat
 }
 
 impl Preconditioner for FactoredPreconditioner {
-    /// z = B⁻¹ r + V Q̂⁻¹ V r, V one V-cycle for H (symmetric, so z is a
-    /// symmetric positive-definite function of r).
+    /// z = B⁻¹ r + Vᵀ Q̂⁻¹ V r, V the cycle for H with smoothing before
+    /// each coarse correction, Vᵀ its transpose (so z is a symmetric
+    /// positive-definite function of r).
     fn apply(&self, r: &[f64], z: &mut [f64]) {
         self.jacobi.apply(r, z);
         let mut fresh = None;
@@ -235,7 +246,7 @@ impl Preconditioner for FactoredPreconditioner {
                 (t, u)
             }
         };
-        self.h.apply(r, t);
+        self.h.apply_pre(r, t);
         u.as_chunks_mut::<3>()
             .0
             .par_iter_mut()
@@ -244,7 +255,7 @@ impl Preconditioner for FactoredPreconditioner {
             .for_each(|((u, t), q)| {
                 *u = (*q * Vec3::from_array(*t)).to_array();
             });
-        self.h.apply(u, t);
+        self.h.apply_post(u, t);
         z.par_iter_mut().zip(t.par_iter()).for_each(|(z, t)| {
             if t.is_finite() {
                 *z += t;

@@ -37,13 +37,19 @@
 //! convergent in the K norm (ω ρ(D⁻¹K) ≤ 4/3 < 2), pre- and post-smoothing
 //! are adjoint and the coarsest solve is exact, so the V-cycle is a
 //! symmetric positive-definite operator and a valid preconditioner for
-//! conjugate gradients. Every parallel loop writes disjoint rows and sums
-//! in a fixed order: the result does not depend on the number of threads.
+//! conjugate gradients. The one-sided cycles [`VectorAmg::apply_pre`] (ν
+//! steps before each coarse correction, none after) and
+//! [`VectorAmg::apply_post`] (after only) are each other's transposes, so
+//! a product Vᵀ W V with them is symmetric at the cost of one symmetric
+//! cycle (vertex flow's factored preconditioner). Every parallel loop
+//! writes disjoint rows and sums in a fixed order: the result does not
+//! depend on the number of threads.
 //!
 //! Cost. Each smoothing step forms the residual row by row and updates
 //! into a second vector (no stored residual, one pass instead of two), the
 //! prolongation adds into that vector in the same pass, and the steps
-//! alternate between the two vectors (2ν per level, so no copy); the
+//! alternate between the two vectors (starting in the one that makes the
+//! result end in x, so no copy); the
 //! finest H of vertex flow, a graph Laplacian, stores no off-diagonal
 //! values (all −1); coarse levels store the whole block A_IJ I₃ + S_IJ
 //! (one 3 × 3 product per entry), A beside it for the setup only. On the
@@ -705,11 +711,19 @@ impl VectorAmg {
             .collect()
     }
 
-    /// x = V-cycle applied to b from `level` down. The smoothing steps
-    /// alternate between x and a scratch vector; their number, ν − 1
-    /// before the residual, one for the prolongation and ν after, is even,
-    /// so the result ends in x without a copy.
-    fn cycle(&self, level: usize, b: &[f64], x: &mut [f64], workspace: &mut [[Vec<f64>; 4]]) {
+    /// x = V-cycle applied to b from `level` down, with `pre` smoothing
+    /// steps before the coarse correction and `post` after, on every
+    /// level. The steps alternate between x and a scratch vector, which
+    /// one holds the iterate first is chosen so that the result ends in x
+    /// without a copy.
+    fn cycle(
+        &self,
+        level: usize,
+        b: &[f64],
+        x: &mut [f64],
+        workspace: &mut [[Vec<f64>; 4]],
+        (pre, post): (usize, usize),
+    ) {
         if level == self.levels.len() {
             x.copy_from_slice(b);
             if self.coarse.solve_in_place(x).is_err() {
@@ -721,33 +735,71 @@ impl VectorAmg {
         let Some(([other, r, rc, xc], deeper)) = workspace.split_first_mut() else {
             return;
         };
-        let (mut current, mut next): (&mut [f64], &mut [f64]) = (x, other);
-        // pre-smoothing from x = 0: the first step is x = ω D⁻¹ b
-        scale_by_inverses(&l.inverses, l.omega, b, current);
-        for _ in 1..self.smoothing_steps {
-            l.k.smooth(&l.inverses, l.omega, b, current, next);
-            std::mem::swap(&mut current, &mut next);
+        // steps that move the iterate to the other vector: pre − 1
+        // smoothing steps, the prolongation, post smoothing steps
+        let moves = pre.saturating_sub(1) + 1 + post;
+        let (mut current, mut next): (&mut [f64], &mut [f64]) = if moves % 2 == 0 {
+            (x, other)
+        } else {
+            (other, x)
+        };
+        if pre > 0 {
+            // pre-smoothing from x = 0: the first step is x = ω D⁻¹ b
+            scale_by_inverses(&l.inverses, l.omega, b, current);
+            for _ in 1..pre {
+                l.k.smooth(&l.inverses, l.omega, b, current, next);
+                std::mem::swap(&mut current, &mut next);
+            }
+            l.k.residual(b, current, r);
+            mul_coordinates(&l.pt, r, rc);
+        } else {
+            // x = 0: the residual is b
+            current.iter_mut().for_each(|v| *v = 0.0);
+            mul_coordinates(&l.pt, b, rc);
         }
-        l.k.residual(b, current, r);
-        mul_coordinates(&l.pt, r, rc);
-        self.cycle(level + 1, rc, xc, deeper);
+        self.cycle(level + 1, rc, xc, deeper, (pre, post));
         prolong_add(&l.p, xc, current, next);
         std::mem::swap(&mut current, &mut next);
-        for _ in 0..self.smoothing_steps {
+        for _ in 0..post {
             l.k.smooth(&l.inverses, l.omega, b, current, next);
             std::mem::swap(&mut current, &mut next);
         }
     }
+
+    /// Runs `cycle` from the finest level with the shared scratch vectors
+    /// (no page faults on fresh memory each cycle); a concurrent call gets
+    /// its own.
+    fn run(&self, r: &[f64], z: &mut [f64], steps: (usize, usize)) {
+        match self.workspace.try_lock() {
+            Ok(mut workspace) => self.cycle(0, r, z, &mut workspace, steps),
+            Err(_) => self.cycle(0, r, z, &mut self.new_workspace(), steps),
+        }
+    }
+
+    /// The V-cycle with ν smoothing steps before each coarse correction
+    /// and none after, V_pre; [`VectorAmg::apply_post`] is its transpose,
+    /// so V_preᵀ W V_pre is symmetric positive semi-definite for every
+    /// symmetric positive semi-definite W, at the cost of one symmetric
+    /// V-cycle. (With T = I − ω D⁻¹K and Z = Σ_{i<ν} Tⁱ ω D⁻¹, Z is
+    /// symmetric and I − Z K = T^ν, so V_pre = Z + P V_pre,c Pᵀ (I − K Z)
+    /// has the transpose Z + T^ν P V_pre,cᵀ Pᵀ, the cycle with ν steps after
+    /// each coarse correction only, by induction over the levels.)
+    pub fn apply_pre(&self, r: &[f64], z: &mut [f64]) {
+        self.run(r, z, (self.smoothing_steps, 0));
+    }
+
+    /// The transpose of [`VectorAmg::apply_pre`]: ν smoothing steps after
+    /// each coarse correction and none before.
+    pub fn apply_post(&self, r: &[f64], z: &mut [f64]) {
+        self.run(r, z, (0, self.smoothing_steps));
+    }
 }
 
 impl Preconditioner for VectorAmg {
+    /// The symmetric V-cycle: ν steps before and ν after each coarse
+    /// correction.
     fn apply(&self, r: &[f64], z: &mut [f64]) {
-        // the scratch vectors are reused (no page faults on fresh memory
-        // each cycle); a concurrent call gets its own
-        match self.workspace.try_lock() {
-            Ok(mut workspace) => self.cycle(0, r, z, &mut workspace),
-            Err(_) => self.cycle(0, r, z, &mut self.new_workspace()),
-        }
+        self.run(r, z, (self.smoothing_steps, self.smoothing_steps));
     }
 }
 
@@ -1204,6 +1256,52 @@ mod tests {
             let mut pv = vec![0.0; n];
             amg.apply(&v, &mut pv);
             assert!(dot(&v, &pv) > 0.0);
+        }
+    }
+
+    /// The cycle with smoothing before each coarse correction only and
+    /// the one with smoothing after it only are each other's transposes
+    /// (for 1 to 4 steps, an odd and an even count, over three levels),
+    /// neither is symmetric by itself, and their product Vᵀ V is positive
+    /// definite.
+    #[test]
+    fn one_sided_cycles_are_transposes() {
+        let k = grid(20, 3.0);
+        let n = 3 * k.nodes();
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        let (x, y) = (vector(n, 0.61), vector(n, 1.37));
+        for steps in 1..=4 {
+            let amg = VectorAmg::new(
+                k.clone(),
+                &vec![1.0; k.nodes()],
+                &VectorAmgOptions {
+                    smoothing_steps: steps,
+                    max_coarse_nodes: 30,
+                    ..VectorAmgOptions::default()
+                },
+            )
+            .unwrap();
+            assert!(amg.sizes().len() >= 3, "{:?}", amg.sizes());
+            let mut v = vec![0.0; n];
+            let mut w = vec![0.0; n];
+            // ⟨y, V x⟩ = ⟨Vᵀ y, x⟩
+            amg.apply_pre(&x, &mut v);
+            amg.apply_post(&y, &mut w);
+            let (a, b) = (dot(&y, &v), dot(&w, &x));
+            assert!(
+                (a - b).abs() <= 1e-10 * a.abs().max(b.abs()),
+                "{steps}: {a} vs {b}"
+            );
+            // V alone is not symmetric: ⟨y, V x⟩ ≠ ⟨V y, x⟩
+            let mut vy = vec![0.0; n];
+            amg.apply_pre(&y, &mut vy);
+            let c = dot(&vy, &x);
+            assert!((a - c).abs() > 1e-6 * a.abs(), "{steps}: {a} vs {c}");
+            // Vᵀ V x then ⟨x, Vᵀ V x⟩ = ‖V x‖² > 0
+            let mut vtv = vec![0.0; n];
+            amg.apply_post(&v, &mut vtv);
+            let q = dot(&x, &vtv);
+            assert!((q - dot(&v, &v)).abs() <= 1e-10 * q, "{steps}: {q}");
         }
     }
 
