@@ -52,18 +52,19 @@
 //!   with the size of those parts (rounded cube: 597 at 10k, about 1500 at
 //!   100k; the real scan `spot`, 2.9k vertices: 730).
 //! - **CG with the factored bi-Laplacian preconditioner**
-//!   ([`EnhanceSolver::Amg`]): block Jacobi plus H⁻¹ Q̂⁻¹ H⁻¹, where
-//!   H Q̂ H models the F_smo and F_em rows as a weighted bi-Laplacian with
-//!   per-vertex 3 × 3 weights and the F_sd rows as a reaction term, and H,
-//!   a 1-ring vector Laplacian, is inverted approximately by one
-//!   smoothed-aggregation multigrid V-cycle ([`crate::solve::VectorAmg`],
-//!   Vaněk, Mandel & Brezina 1996); see `precondition.rs` for the
-//!   derivation and the measured condition numbers. Its iteration count
-//!   hardly grows with the mesh (rounded cube: 34 at 10k vertices, 32 at
-//!   100k, 45 at 1M; open cylinders of two lengths: 27 and 28, block Jacobi
-//!   631 on the shorter); an iteration costs two V-cycles more than one of
-//!   block Jacobi, and the setup about ten iterations. (An earlier multigrid on LᵀL itself cut
-//!   the iterations only 8× and filled in on coarse levels: LᵀL is a
+//!   ([`EnhanceSolver::Amg`]): block Jacobi plus Vᵀ Q̂⁻¹ V ≈ H⁻¹ Q̂⁻¹ H⁻¹,
+//!   where H Q̂ H models the F_smo and F_em rows as a weighted bi-Laplacian
+//!   with per-vertex 3 × 3 weights and the F_sd rows as a reaction term,
+//!   and H, a 1-ring vector Laplacian, is inverted approximately by a
+//!   smoothed-aggregation multigrid cycle V and its transpose
+//!   ([`crate::solve::VectorAmg`], Vaněk, Mandel & Brezina 1996); see
+//!   `precondition.rs` for the derivation and the measured condition
+//!   numbers. Its iteration count hardly grows with the mesh (rounded
+//!   cube: 35 at 10k vertices, 33 at 100k, 41 at 1M; open cylinders of two
+//!   lengths: 28 and 28, block Jacobi 631 on the shorter); an iteration
+//!   costs about one symmetric V-cycle more than one of block Jacobi, and
+//!   the setup about ten iterations. (An earlier multigrid on LᵀL itself
+//!   cut the iterations only 8× and filled in on coarse levels: LᵀL is a
 //!   fourth-order operator.)
 //!
 //! The default, [`EnhanceSolver::Auto`], chooses by the geometry: where
@@ -217,7 +218,7 @@ pub enum EnhanceSolver {
     Cg,
     /// Conjugate gradients preconditioned by block Jacobi plus the factored
     /// bi-Laplacian model H Q̂ H of the smoothness and edge-metric rows,
-    /// with a smoothed-aggregation multigrid V-cycle for H (module
+    /// with smoothed-aggregation multigrid cycles for H (module
     /// documentation), warm-started at the current positions, up to
     /// [`EnhanceOptions::cg_max_iterations`]; an error if they do not
     /// converge. The iteration count hardly grows with the mesh, also on
