@@ -309,6 +309,42 @@ pub type VertexProperties = Vec<(String, Vec<f64>)>;
 
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 
+/// Items formatted per parallel chunk before a group of chunks is written.
+const FORMAT_CHUNK: usize = 4096;
+
+/// Chunks formatted at a time (bounds the text held in memory).
+const FORMAT_GROUP: usize = 64;
+
+/// Writes items 0..count, each formatted into a byte buffer by
+/// `format(i, buffer)`, in order: the same bytes as formatting them one
+/// after another, formatted in parallel chunks (text output of large
+/// meshes is bound by number formatting).
+pub(crate) fn write_formatted(
+    w: &mut impl Write,
+    count: usize,
+    format: impl Fn(usize, &mut Vec<u8>) -> std::io::Result<()> + Sync,
+) -> std::io::Result<()> {
+    use rayon::prelude::*;
+    for group in (0..count).step_by(FORMAT_CHUNK * FORMAT_GROUP) {
+        let end = (group + FORMAT_CHUNK * FORMAT_GROUP).min(count);
+        let starts: Vec<usize> = (group..end).step_by(FORMAT_CHUNK).collect();
+        let parts = starts
+            .into_par_iter()
+            .map(|start| {
+                let mut buffer = Vec::new();
+                for i in start..(start + FORMAT_CHUNK).min(end) {
+                    format(i, &mut buffer)?;
+                }
+                Ok(buffer)
+            })
+            .collect::<std::io::Result<Vec<Vec<u8>>>>()?;
+        for part in parts {
+            w.write_all(&part)?;
+        }
+    }
+    Ok(())
+}
+
 /// Writes a file atomically: `write` fills a temporary file in the same
 /// directory, which is flushed, synced and then renamed over `path`. If
 /// anything fails, the temporary file is removed and `path` is untouched
@@ -641,6 +677,30 @@ mod tests {
             assert!(e.to_string().contains("empty file"), "{e}");
             assert!(read_soup_bytes(b" \n\r\n", f, "empty").is_err());
         }
+    }
+
+    /// Parallel formatting writes the same bytes as formatting one item
+    /// after another, across chunk and group boundaries, and passes on a
+    /// formatting error.
+    #[test]
+    fn formatted_writing_keeps_the_order() {
+        let count = FORMAT_CHUNK * FORMAT_GROUP + FORMAT_CHUNK + 7;
+        let line = |i: usize| format!("{i} {}\n", (i as f64).sqrt());
+        let mut written = Vec::new();
+        write_formatted(&mut written, count, |i, out| {
+            out.write_all(line(i).as_bytes())
+        })
+        .unwrap();
+        let expected: String = (0..count).map(line).collect();
+        assert!(written == expected.as_bytes());
+        let failing = write_formatted(&mut Vec::new(), count, |i, out| {
+            if i == count - 3 {
+                Err(std::io::Error::other("bad item"))
+            } else {
+                out.write_all(b"x")
+            }
+        });
+        assert_eq!(failing.unwrap_err().to_string(), "bad item");
     }
 
     #[test]

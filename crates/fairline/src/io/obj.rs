@@ -10,7 +10,10 @@
 use std::io::{self, Write};
 use std::path::Path;
 
-use super::{IoError, Lines, Location, format_err, parse_f64, parse_i64, push_face, show, tokens};
+use super::{
+    IoError, Lines, Location, format_err, parse_f64, parse_i64, push_face, show, tokens,
+    write_formatted,
+};
 use crate::Vec3;
 use crate::mesh::Soup;
 
@@ -199,17 +202,18 @@ impl Reader<'_> {
 /// Writes `v` lines (shortest round-trip formatting) and 1-based `f` lines.
 pub(super) fn write(w: &mut impl Write, soup: &Soup) -> io::Result<()> {
     writeln!(w, "# written by fairline")?;
-    for p in &soup.positions {
-        writeln!(w, "v {} {} {}", p.x, p.y, p.z)?;
-    }
-    for face in soup.faces() {
-        w.write_all(b"f")?;
-        for &i in face {
-            write!(w, " {}", u64::from(i) + 1)?;
+    write_formatted(w, soup.vertex_count(), |v, out| {
+        let p = soup.positions[v];
+        writeln!(out, "v {} {} {}", p.x, p.y, p.z)
+    })?;
+    write_formatted(w, soup.face_count(), |f, out| {
+        out.push(b'f');
+        for &i in soup.face(f) {
+            write!(out, " {}", u64::from(i) + 1)?;
         }
-        w.write_all(b"\n")?;
-    }
-    Ok(())
+        out.push(b'\n');
+        Ok(())
+    })
 }
 
 #[cfg(test)]

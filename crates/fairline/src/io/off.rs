@@ -11,7 +11,7 @@ use std::path::Path;
 
 use super::{
     IoError, Lines, Location, capped_capacity, format_err, parse_f64, parse_i64, push_face, show,
-    tokens,
+    tokens, write_formatted,
 };
 use crate::Vec3;
 use crate::mesh::Soup;
@@ -176,17 +176,19 @@ pub(super) fn read(bytes: &[u8], path: &Path) -> Result<Soup, IoError> {
 pub(super) fn write(w: &mut impl Write, soup: &Soup) -> io::Result<()> {
     writeln!(w, "OFF")?;
     writeln!(w, "{} {} 0", soup.vertex_count(), soup.face_count())?;
-    for p in &soup.positions {
-        writeln!(w, "{} {} {}", p.x, p.y, p.z)?;
-    }
-    for face in soup.faces() {
-        write!(w, "{}", face.len())?;
+    write_formatted(w, soup.vertex_count(), |v, out| {
+        let p = soup.positions[v];
+        writeln!(out, "{} {} {}", p.x, p.y, p.z)
+    })?;
+    write_formatted(w, soup.face_count(), |f, out| {
+        let face = soup.face(f);
+        write!(out, "{}", face.len())?;
         for &i in face {
-            write!(w, " {i}")?;
+            write!(out, " {i}")?;
         }
-        w.write_all(b"\n")?;
-    }
-    Ok(())
+        out.push(b'\n');
+        Ok(())
+    })
 }
 
 #[cfg(test)]
