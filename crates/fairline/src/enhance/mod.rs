@@ -758,7 +758,8 @@ fn distance_to_input(mesh: &SurfaceMesh, positions: &[Vec3], free: &[u32]) -> (f
                             }
                             let t = mesh.triangle(f).map(|u| input[u.idx()]);
                             let b = crate::geom::closest_point_on_triangle(x, t[0], t[1], t[2]);
-                            let d = x.distance(b[0] * t[0] + b[1] * t[1] + b[2] * t[2]);
+                            // squared: one square root per vertex
+                            let d = x.distance_squared(b[0] * t[0] + b[1] * t[1] + b[2] * t[2]);
                             ring_best = ring_best.min(d);
                         }
                         for u in mesh.one_ring(w) {
@@ -777,7 +778,7 @@ fn distance_to_input(mesh: &SurfaceMesh, positions: &[Vec3], free: &[u32]) -> (f
                     }
                     std::mem::swap(&mut frontier, &mut next);
                 }
-                out.push(if best.is_finite() { best } else { 0.0 });
+                out.push(if best.is_finite() { best.sqrt() } else { 0.0 });
             }
             out
         })
