@@ -191,6 +191,12 @@ impl LeastSquares {
 
     /// x = Aᵀ y, gathered per free vertex in parallel.
     pub fn mul_transpose(&self, y: &[f64], x: &mut [f64]) {
+        self.mul_transpose_shifted(y, None, x);
+    }
+
+    /// x = Aᵀ y + ε v for `shift` = Some((ε, v)) (x = Aᵀ y for None), in
+    /// one pass.
+    fn mul_transpose_shifted(&self, y: &[f64], shift: Option<(f64, &[f64])>, x: &mut [f64]) {
         x.par_chunks_mut(3 * VERTICES)
             .enumerate()
             .for_each(|(c, x)| {
@@ -208,6 +214,9 @@ impl LeastSquares {
                     let sd = self.sd[g];
                     let yg = &y[8 * g..8 * g + 8];
                     s += sd[0] * yg[2] + sd[1] * yg[3] + sd[2] * yg[4];
+                    if let Some((epsilon, v)) = shift {
+                        s += epsilon * Vec3::new(v[3 * g], v[3 * g + 1], v[3 * g + 2]);
+                    }
                     *x = s.to_array();
                 }
             });
@@ -216,10 +225,7 @@ impl LeastSquares {
     /// out = (AᵀA + εI) v, with `scratch` of length 8n for A v.
     pub fn normal_product(&self, v: &[f64], out: &mut [f64], scratch: &mut [f64]) {
         self.mul(v, scratch);
-        self.mul_transpose(scratch, out);
-        out.par_iter_mut()
-            .zip(v.par_iter())
-            .for_each(|(o, v)| *o += self.epsilon * v);
+        self.mul_transpose_shifted(scratch, Some((self.epsilon, v)), out);
     }
 
     /// The 3 × 3 diagonal blocks of AᵀA + εI, row-major per free vertex.

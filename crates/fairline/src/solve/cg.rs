@@ -238,12 +238,7 @@ fn conjugate_gradients(
                 break;
             }
             let alpha = rz / pq;
-            x.par_iter_mut()
-                .zip(p.par_iter())
-                .for_each(|(x, p)| *x += alpha * p);
-            r.par_iter_mut()
-                .zip(q.par_iter())
-                .for_each(|(r, q)| *r -= alpha * q);
+            let norm_r_squared = step_and_norm(x, &mut r, &p, &q, alpha);
             precondition(&r, &mut z);
             let rz_next = dot(&r, &z);
             let beta = rz_next / rz;
@@ -251,7 +246,7 @@ fn conjugate_gradients(
             p.par_iter_mut()
                 .zip(z.par_iter())
                 .for_each(|(p, z)| *p = z + beta * *p);
-            norm_r = dot(&r, &r).sqrt();
+            norm_r = norm_r_squared.sqrt();
             iterations += 1;
             if hopeless_after > 0 && iterations - checkpoint.0 == hopeless_after {
                 // mean rate over the last stretch, extrapolated
@@ -315,6 +310,26 @@ fn normal_product(
 }
 
 /// Deterministic parallel dot product.
+/// x += α p and r −= α q in one pass, returning ‖r‖² of the new r (summed
+/// like [`dot`]: the same bits as `dot(r, r)` afterwards).
+fn step_and_norm(x: &mut [f64], r: &mut [f64], p: &[f64], q: &[f64], alpha: f64) -> f64 {
+    x.par_chunks_mut(CHUNK)
+        .zip(r.par_chunks_mut(CHUNK))
+        .zip(p.par_chunks(CHUNK).zip(q.par_chunks(CHUNK)))
+        .map(|((x, r), (p, q))| {
+            let mut sum = 0.0;
+            for (((x, r), p), q) in x.iter_mut().zip(r.iter_mut()).zip(p).zip(q) {
+                *x += alpha * p;
+                *r -= alpha * q;
+                sum += *r * *r;
+            }
+            sum
+        })
+        .collect::<Vec<f64>>()
+        .iter()
+        .sum()
+}
+
 pub(super) fn dot(x: &[f64], y: &[f64]) -> f64 {
     x.par_chunks(CHUNK)
         .zip(y.par_chunks(CHUNK))
