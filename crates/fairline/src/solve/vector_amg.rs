@@ -468,6 +468,7 @@ impl VectorOperator {
         let per_task = nc
             .div_ceil(4 * rayon::current_num_threads())
             .clamp(16, ROWS);
+        let reaction_only = matches!(self.s, Blocks::Diagonal(_));
         let rows: Vec<Row> = (0..nc.div_ceil(per_task))
             .into_par_iter()
             .flat_map_iter(|c| {
@@ -512,7 +513,6 @@ impl VectorOperator {
                         }
                     }
                     let mut row = Vec::new();
-                    let reaction_only = matches!(self.s, Blocks::Diagonal(_));
                     acc.flush_with(|j, v| {
                         let s = [v[1], v[2], v[3], v[4], v[5], v[6]];
                         row.push((j, v[0], if reaction_only { shifted(v[0], &s) } else { s }));
@@ -754,11 +754,10 @@ impl VectorAmg {
             mul_coordinates(&l.pt, r, rc);
         } else {
             // x = 0: the residual is b
-            current.iter_mut().for_each(|v| *v = 0.0);
             mul_coordinates(&l.pt, b, rc);
         }
         self.cycle(level + 1, rc, xc, deeper, (pre, post));
-        prolong_add(&l.p, xc, current, next);
+        prolong_add(&l.p, xc, (pre > 0).then_some(&*current), next);
         std::mem::swap(&mut current, &mut next);
         for _ in 0..post {
             l.k.smooth(&l.inverses, l.omega, b, current, next);
@@ -819,11 +818,12 @@ fn mul_coordinates(m: &CsrMatrix, x: &[f64], y: &mut [f64]) {
 }
 
 /// out = base + (M ⊗ I₃) x for a scalar matrix M on interleaved
-/// coordinates (the prolongation of a coarse correction, added).
-fn prolong_add(m: &CsrMatrix, x: &[f64], base: &[f64], out: &mut [f64]) {
+/// coordinates (the prolongation of a coarse correction, added; base 0
+/// when None).
+fn prolong_add(m: &CsrMatrix, x: &[f64], base: Option<&[f64]>, out: &mut [f64]) {
     for_each_node(out, |i, out| {
         let (idx, val) = m.row(i);
-        let mut s = [base[3 * i], base[3 * i + 1], base[3 * i + 2]];
+        let mut s = base.map_or([0.0; 3], |b| [b[3 * i], b[3 * i + 1], b[3 * i + 2]]);
         for (&j, &v) in idx.iter().zip(val) {
             let j = 3 * j as usize;
             for r in 0..3 {
