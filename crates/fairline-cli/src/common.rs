@@ -4,7 +4,6 @@
 use anyhow::{Context, Result};
 use fairline::Vec3;
 use serde_json::{Map, Value, json};
-use std::io::IsTerminal;
 use std::path::Path;
 use std::time::Instant;
 
@@ -112,11 +111,18 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-/// A JSON report: `"command"`, `"time_s"` (computation only) and the keys
-/// each command adds.
+/// A JSON report: `"command"`, `"time_s"` (computation only), the keys
+/// each command adds, and `"warnings"` when a command warned.
+///
+/// A report never contains `null`: a value that does not serialise to a
+/// finite number (serde_json turns NaN and ±inf into `null`) is left out of
+/// its object, or written as the string `"not finite"` inside an array,
+/// with a `warning:` line naming the key. A command that has a value that
+/// may legitimately be absent leaves the key out itself.
 pub struct Report {
     map: Map<String, Value>,
     compute: std::time::Duration,
+    warnings: Vec<String>,
 }
 
 impl Report {
@@ -127,14 +133,36 @@ impl Report {
         Report {
             map,
             compute: std::time::Duration::ZERO,
+            warnings: Vec::new(),
         }
     }
-    /// Sets a key.
+    /// Sets a key (see the type's documentation for non-finite values).
     pub fn set(&mut self, key: &str, value: impl serde::Serialize) {
-        self.map.insert(
-            key.into(),
-            serde_json::to_value(value).unwrap_or(Value::Null),
-        );
+        let value = match serde_json::to_value(value) {
+            Ok(v) => v,
+            Err(e) => {
+                self.warn(format!(
+                    "report value `{key}` could not be written ({e}); left out"
+                ));
+                return;
+            }
+        };
+        let mut dropped = Vec::new();
+        if let Some(v) = finite_only(key, value, &mut dropped) {
+            self.map.insert(key.into(), v);
+        }
+        for path in dropped {
+            self.warn(format!(
+                "report value `{path}` is not a finite number; left out of the report"
+            ));
+        }
+    }
+    /// Prints `warning: MSG` on standard error and records it under
+    /// `"warnings"` in the report.
+    pub fn warn(&mut self, msg: impl Into<String>) {
+        let msg = msg.into();
+        crate::output::warn(&msg);
+        self.warnings.push(msg);
     }
     /// Runs `f`, adding its wall time to the computation time.
     pub fn time<T>(&mut self, f: impl FnOnce() -> T) -> T {
@@ -147,6 +175,9 @@ impl Report {
     pub fn to_json(&self) -> Value {
         let mut m = self.map.clone();
         m.insert("time_s".into(), json!(self.compute.as_secs_f64()));
+        if !self.warnings.is_empty() {
+            m.insert("warnings".into(), json!(self.warnings));
+        }
         Value::Object(m)
     }
     /// Writes the report atomically when a path was given.
@@ -155,6 +186,36 @@ impl Report {
             write_json(p, &self.to_json())?;
         }
         Ok(())
+    }
+}
+
+/// `value` without its `null`s: dropped from objects, replaced by the
+/// string `"not finite"` in arrays; the path of each (`key.sub[3]`) is
+/// pushed to `dropped`. `None` when `value` itself is `null`.
+pub fn finite_only(path: &str, value: Value, dropped: &mut Vec<String>) -> Option<Value> {
+    match value {
+        Value::Null => {
+            dropped.push(path.to_string());
+            None
+        }
+        Value::Object(m) => Some(Value::Object(
+            m.into_iter()
+                .filter_map(|(k, v)| {
+                    let sub = format!("{path}.{k}");
+                    finite_only(&sub, v, dropped).map(|v| (k, v))
+                })
+                .collect(),
+        )),
+        Value::Array(a) => Some(Value::Array(
+            a.into_iter()
+                .enumerate()
+                .map(|(i, v)| {
+                    let sub = format!("{path}[{i}]");
+                    finite_only(&sub, v, dropped).unwrap_or_else(|| json!("not finite"))
+                })
+                .collect(),
+        )),
+        other => Some(other),
     }
 }
 
@@ -177,36 +238,17 @@ pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
     serde_json::from_str(&text).map_err(|e| bad_input(format!("{}: {e}", path.display())))
 }
 
-/// Refuses to write `output` over `input`.
+/// Refuses to write `output` over `input`: the policy of
+/// [`crate::output::Job`] for a command with one input and one output
+/// (prefer declaring every input and output on a `Job`). Kept for commands
+/// written against the older helper.
+#[allow(dead_code)]
 pub fn check_output(input: &Path, output: &Path) -> Result<()> {
-    fairline::io::ensure_distinct(input, output)?;
+    crate::output::Job::new("fairline")
+        .input(input)
+        .output("output", output)
+        .check()?;
     Ok(())
 }
 
-/// A progress bar on stderr when stderr is a terminal; hidden otherwise.
-pub fn progress(len: u64, message: &str) -> indicatif::ProgressBar {
-    if !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(len);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{spinner} {msg:<24} [{bar:32}] {pos}/{len} ({elapsed})",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-        .progress_chars("=> "),
-    );
-    bar.set_message(message.to_string());
-    bar
-}
-
-/// A spinner for work of unknown length; hidden when not on a terminal.
-pub fn spinner(message: &str) -> indicatif::ProgressBar {
-    if !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new_spinner();
-    bar.set_message(message.to_string());
-    bar.enable_steady_tick(std::time::Duration::from_millis(120));
-    bar
-}
+pub use crate::output::{progress, spinner};

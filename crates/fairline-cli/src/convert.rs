@@ -1,6 +1,7 @@
 //! `fairline convert`: mesh format conversion.
 
-use crate::common::{Report, check_output};
+use crate::common::Report;
+use crate::output::Job;
 use anyhow::Result;
 use std::path::PathBuf;
 
@@ -24,7 +25,11 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    check_output(&args.input, &args.output)?;
+    let job = Job::new("convert")
+        .input(&args.input)
+        .output("OUT", &args.output)
+        .output_opt("--report", args.report.as_deref())
+        .check()?;
     if crate::surface::is_surface_path(&args.input) {
         let surfaces = crate::surface::load_surfaces(&args.input)?;
         let mut report = Report::new("convert");
@@ -42,13 +47,22 @@ pub fn run(args: Args) -> Result<()> {
                 )));
             }
             fairline::bspline::write_surfaces_json(&args.output, &surfaces)?;
+            report.write(args.report.as_deref())?;
+            job.finish(format_args!("{} surface(s) converted", surfaces.len()));
+            return Ok(());
         } else {
             let mesh = crate::surface::tessellated_mesh(&surfaces, 64)?;
             report.set("vertices", mesh.vertex_count());
             report.set("faces", mesh.face_count());
             fairline::io::write_mesh(&args.output, &mesh)?;
+            report.write(args.report.as_deref())?;
+            job.finish(format_args!(
+                "{} surface(s) tessellated to {} vertices, {} faces",
+                surfaces.len(),
+                mesh.vertex_count(),
+                mesh.face_count()
+            ));
         }
-        report.write(args.report.as_deref())?;
         return Ok(());
     }
     let soup = fairline::io::read_soup(&args.input)?;
@@ -57,5 +71,10 @@ pub fn run(args: Args) -> Result<()> {
     report.set("faces", soup.face_count());
     fairline::io::write_soup(&args.output, &soup)?;
     report.write(args.report.as_deref())?;
+    job.finish(format_args!(
+        "{} vertices, {} faces converted",
+        soup.vertex_count(),
+        soup.face_count()
+    ));
     Ok(())
 }

@@ -1,6 +1,6 @@
 //! `fairline curvature`: per-vertex principal curvatures written as PLY.
 
-use crate::common::{Report, bad_input, check_output};
+use crate::common::{Report, bad_input, spinner};
 use anyhow::Result;
 use fairline::geom::{CurvatureMethod, principal_curvatures};
 use fairline::mesh::Stats;
@@ -49,13 +49,18 @@ pub fn run(args: Args) -> Result<()> {
             args.output.display()
         )));
     }
-    check_output(&args.mesh, &args.output)?;
+    let job = crate::output::Job::new("curvature")
+        .input(&args.mesh)
+        .output("-o", &args.output)
+        .output_opt("--report", args.report.as_deref())
+        .check()?;
     let mesh = fairline::io::read_mesh(&args.mesh)?;
     let mut report = Report::new("curvature");
     let method = match args.method {
         Method::Rusinkiewicz => CurvatureMethod::Rusinkiewicz,
         Method::Meyer => CurvatureMethod::Meyer,
     };
+    let bar = spinner("curvature");
     let (c, triangulated) = report.time(|| {
         if mesh.is_triangle_mesh() {
             (principal_curvatures(&mesh, method), false)
@@ -64,6 +69,7 @@ pub fn run(args: Args) -> Result<()> {
             (principal_curvatures(&t.mesh, method), true)
         }
     });
+    bar.finish_and_clear();
     let mean = c.mean();
     let gauss = c.gauss();
     let comp =
@@ -93,5 +99,15 @@ pub fn run(args: Args) -> Result<()> {
     report.set("mean", Stats::of(mean.iter().copied()));
     report.set("gauss", Stats::of(gauss.iter().copied()));
     report.write(args.report.as_deref())?;
+    job.finish(format_args!(
+        "{} curvature of {} vertices{}",
+        format!("{:?}", args.method).to_lowercase(),
+        mesh.vertex_count(),
+        if triangulated {
+            " (polygons triangulated)"
+        } else {
+            ""
+        }
+    ));
     Ok(())
 }

@@ -59,8 +59,8 @@ impl Demo {
 type Step = fn(&Demo) -> Result<Section>;
 
 pub fn run(args: Args) -> Result<()> {
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
+    let job = crate::output::Job::new("demo");
+    crate::output::owned_folder("--out", &args.out)?;
     let demo = Demo {
         out: args.out.clone(),
         opts: RenderOptions::with_size(args.size.0, args.size.1),
@@ -96,11 +96,12 @@ pub fn run(args: Args) -> Result<()> {
     report.set("out", args.out.display().to_string());
     write_json(&args.out.join("report.json"), &report.to_json())?;
     write_index(&args.out, &sections)?;
-    println!(
-        "demo written to {} (open {})",
+    job.finish(format_args!(
+        "{} sections written to {} (open {})",
+        sections.len(),
         args.out.display(),
         args.out.join("index.html").display()
-    );
+    ));
     Ok(())
 }
 

@@ -1,7 +1,7 @@
 //! `fairline detect`: irregular stretches of highlight lines turned into
 //! suggested fairing regions.
 
-use crate::common::{Report, bad_input, check_output, spinner, write_json};
+use crate::common::{Report, bad_input, spinner, write_json};
 use crate::highlight::{LightArgs, read_triangles, to_input_error};
 use anyhow::Result;
 use fairline::highlight::{DetectOptions, HighlightModel, detect_irregularities};
@@ -61,11 +61,16 @@ pub fn run(args: Args) -> Result<()> {
             args.output.display()
         )));
     }
-    check_output(&args.mesh, &args.output)?;
     if let Some(p) = &args.png {
         crate::highlight_png::check_png(p)?;
-        check_output(&args.mesh, p)?;
     }
+    let job = crate::output::Job::new("detect")
+        .input(&args.mesh)
+        .input_opt(args.light.lights.as_deref())
+        .output("-o", &args.output)
+        .output_opt("--png", args.png.as_deref())
+        .output_opt("--report", args.report.as_deref())
+        .check()?;
     if args.view.is_some_and(|v| v.length() == 0.0) {
         return Err(bad_input("--view must not be the zero vector"));
     }
@@ -169,6 +174,16 @@ pub fn run(args: Args) -> Result<()> {
             },
         )?;
     }
+    if lines.lines.is_empty() {
+        report.warn("no highlight line crosses the mesh, so nothing could be detected; try other light options (--plane-normal, --direction, --spacing)");
+    }
     report.write(args.report.as_deref())?;
+    job.finish(format_args!(
+        "{} region(s) flagged ({} faces) from {} highlight line(s) on {} vertices",
+        det.regions.len(),
+        all.len(),
+        lines.lines.len(),
+        mesh.vertex_count()
+    ));
     Ok(())
 }

@@ -1,6 +1,6 @@
 //! `fairline enhance`: feature enhancement by vertex flow (Ji et al. 2011).
 
-use crate::common::{Report, bad_input, check_output, read_json, spinner};
+use crate::common::{Report, bad_input, read_json, spinner};
 use anyhow::{Context, Result};
 use fairline::VertexId;
 use fairline::enhance::{EnhanceError, EnhanceOptions, EnhanceSolver, enhance_features};
@@ -83,8 +83,13 @@ struct FixedFile {
 
 pub fn run(args: Args) -> Result<()> {
     // every check that can refuse the input runs before anything is written
-    check_output(&args.mesh, &args.output)?;
-    check_parent(&args.output)?;
+    let job = crate::output::Job::new("enhance")
+        .input(&args.mesh)
+        .input_opt(args.fixed.as_deref())
+        .output("-o", &args.output)
+        .output_opt("--png", args.png.as_deref())
+        .output_opt("--report", args.report.as_deref())
+        .check()?;
     if let Some(png) = &args.png {
         if png
             .extension()
@@ -97,12 +102,6 @@ pub fn run(args: Args) -> Result<()> {
                 png.display()
             )));
         }
-        check_output(&args.mesh, png)?;
-        check_parent(png)?;
-    }
-    if let Some(report) = &args.report {
-        check_output(&args.mesh, report)?;
-        check_parent(report)?;
     }
     let mesh = fairline::io::read_mesh(&args.mesh)?;
     if !mesh.is_triangle_mesh() {
@@ -183,26 +182,18 @@ pub fn run(args: Args) -> Result<()> {
     report.set("cg_relative_residual", r.cg_relative_residual);
     report.set("direct_fallbacks", r.direct_fallbacks);
     report.set("timings", &r.timings);
-    report.write(args.report.as_deref())?;
-    Ok(())
-}
-
-/// Refuses an output path whose folder does not exist (before any work, so
-/// that a failed run writes nothing).
-fn check_parent(path: &Path) -> Result<()> {
-    let parent = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => return Ok(()),
-    };
-    if parent.is_dir() {
-        Ok(())
-    } else {
-        Err(bad_input(format!(
-            "{}: folder {} does not exist",
-            path.display(),
-            parent.display()
-        )))
+    if r.flipped_triangles > 0 {
+        report.warn(format!(
+            "{} triangle(s) flipped their orientation; try a smaller --lambda or fewer --iterations",
+            r.flipped_triangles
+        ));
     }
+    report.write(args.report.as_deref())?;
+    job.finish(format_args!(
+        "vertex flow, {} iteration(s) on {} vertices ({} free), minimum triangle quality {:.3} → {:.3}",
+        r.iterations, r.vertices, r.free_vertices, r.quality_before.min, r.quality_after.min
+    ));
+    Ok(())
 }
 
 /// Input and output side by side, `size` pixels each, smooth shaded,

@@ -2,7 +2,7 @@
 //! §3, Algorithm 2) inside a region, with the surface-diffusion-flow
 //! baseline for comparison.
 
-use crate::common::{Report, bad_input, check_output, progress};
+use crate::common::{Report, bad_input, progress};
 use crate::highlight::{LightArgs, to_input_error};
 use anyhow::Result;
 use fairline::SurfaceMesh;
@@ -127,10 +127,14 @@ fn result_json(r: &FairResult) -> Value {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    check_output(&args.mesh, &args.output)?;
-    if let Some(p) = &args.png {
-        check_output(&args.mesh, p)?;
-    }
+    let mut job = crate::output::Job::new("fair")
+        .input(&args.mesh)
+        .input_opt(args.region.as_deref())
+        .input_opt(args.light.lights.as_deref())
+        .output("-o", &args.output)
+        .output_opt("--png", args.png.as_deref())
+        .output_opt("--report", args.report.as_deref())
+        .check()?;
     let mesh = fairline::io::read_mesh(&args.mesh)?;
     if !mesh.is_triangle_mesh() {
         return Err(bad_input(format!(
@@ -204,8 +208,12 @@ pub fn run(args: Args) -> Result<()> {
     }
     bar.finish_and_clear();
     fairline::io::write_mesh(&args.output, &current)?;
-    if args.png.is_some() && first.is_none() {
-        eprintln!("note: no region was faired (nothing detected), so no picture was written");
+    if first.is_none() {
+        report.warn("no region was faired (nothing detected): the output is the input unchanged");
+        if let Some(png) = &args.png {
+            crate::output::say("note: no region was faired, so no picture was written");
+            job.skip(png);
+        }
     }
     if let (Some(png), Some(r)) = (&args.png, &first) {
         let mut opts = RenderOptions::with_size(900, 700);
@@ -214,7 +222,7 @@ pub fn run(args: Args) -> Result<()> {
         let img = fairing_picture(&mesh, r, &opts)?;
         img.write_png(png)?;
     }
-    report.set("method", format!("{:?}", args.method).to_lowercase());
+    report.set("method", crate::output::option_value(&args.method));
     report.set("light", light);
     report.set("regions", results.len());
     if args.auto {
@@ -262,6 +270,33 @@ pub fn run(args: Args) -> Result<()> {
             report.set("per_region", results.clone());
         }
     }
+    let converged = results.iter().all(|r| r["converged"] == json!(true));
+    let deviation = |key: &str| {
+        results
+            .iter()
+            .filter_map(|r| r[key].as_f64())
+            .fold(0.0, f64::max)
+    };
+    let (before, after) = (
+        deviation("highlight_deviation_before"),
+        deviation("highlight_deviation_after"),
+    );
+    if !converged {
+        report.warn(format!(
+            "fairing did not converge within --max-iterations {}; try more iterations or a larger region (--grow, --auto)",
+            args.max_iterations
+        ));
+    }
+    if after > before {
+        report.warn(format!(
+            "the highlight-line deviation got worse: {before:.4e} before, {after:.4e} after"
+        ));
+    }
     report.write(args.report.as_deref())?;
+    job.finish(format_args!(
+        "{} region(s) faired, {}, highlight deviation {before:.3e} → {after:.3e}, largest move {total_moved:.3e}",
+        results.len(),
+        if converged { "converged" } else { "not converged" }
+    ));
     Ok(())
 }

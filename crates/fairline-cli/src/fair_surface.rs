@@ -1,7 +1,7 @@
 //! `fairline fair-surface`: circular-highlight fairing of a B-spline surface
 //! (Nishiyama et al. §3).
 
-use crate::common::{Report, bad_input, check_output, read_json};
+use crate::common::{Report, bad_input, read_json};
 use crate::surface_highlight::{
     PALETTE, check_ext, palette_srgb, plot_lines, polylines, surface_picture, uv_picture, uv_plot,
 };
@@ -85,18 +85,21 @@ fn to_cli(e: SurfaceFairError) -> anyhow::Error {
 
 pub fn run(args: Args) -> Result<()> {
     check_ext(&args.output, "json", "-o")?;
-    check_output(&args.surface_file, &args.output)?;
-    for p in [&args.lights, &args.endpoints] {
-        check_output(p, &args.output)?;
-    }
     if let Some(p) = &args.png {
         check_ext(p, "png", "--png")?;
-        check_output(&args.surface_file, p)?;
     }
     if let Some(p) = &args.svg {
         check_ext(p, "svg", "--svg")?;
-        check_output(&args.surface_file, p)?;
     }
+    let job = crate::output::Job::new("fair-surface")
+        .input(&args.surface_file)
+        .input(&args.lights)
+        .input(&args.endpoints)
+        .output("-o", &args.output)
+        .output_opt("--png", args.png.as_deref())
+        .output_opt("--svg", args.svg.as_deref())
+        .output_opt("--report", args.report.as_deref())
+        .check()?;
     let mut surfaces = crate::surface::load_surfaces(&args.surface_file)?;
     if args.surface >= surfaces.len() {
         return Err(bad_input(format!(
@@ -228,7 +231,32 @@ pub fn run(args: Args) -> Result<()> {
     }
     surfaces[args.surface] = faired;
     write_surfaces_json(&args.output, &surfaces)?;
+    if !rep.converged {
+        report.warn(format!(
+            "fairing did not converge ({:?} after {} iteration(s)); try --max-iterations or other endpoints",
+            rep.stop,
+            rep.iterations.len()
+        ));
+    }
+    if rep.residual_after.0 > rep.residual_before.0 {
+        report.warn(format!(
+            "the largest highlight residual got worse: {:.4e} before, {:.4e} after",
+            rep.residual_before.0, rep.residual_after.0
+        ));
+    }
     report.write(args.report.as_deref())?;
+    job.finish(format_args!(
+        "{} iteration(s), {}, {} control point(s) moved, largest residual {:.3e} → {:.3e}",
+        rep.iterations.len(),
+        if rep.converged {
+            "converged"
+        } else {
+            "not converged"
+        },
+        rep.modified_control_points.len(),
+        rep.residual_before.0,
+        rep.residual_after.0
+    ));
     Ok(())
 }
 

@@ -2,7 +2,7 @@
 //! al. §2) or of concentric circular lights (Nishiyama et al. §2) on a
 //! triangle mesh, written as JSON or OBJ polylines.
 
-use crate::common::{Report, bad_input, check_output, parse_list, parse_vec3, read_json, spinner};
+use crate::common::{Report, bad_input, parse_list, parse_vec3, read_json, spinner};
 use anyhow::Result;
 use fairline::highlight::{
     CircularLight, CircularLights, HighlightBands, HighlightError, HighlightLine, HighlightLines,
@@ -299,11 +299,16 @@ pub fn run(args: Args) -> Result<()> {
         return crate::surface_highlight::run(args);
     }
     lines_format(&args.output)?;
-    check_output(&args.mesh, &args.output)?;
     if let Some(p) = &args.png {
         crate::highlight_png::check_png(p)?;
-        check_output(&args.mesh, p)?;
     }
+    let job = crate::output::Job::new("highlight")
+        .input(&args.mesh)
+        .input_opt(args.light.lights.as_deref())
+        .output("-o", &args.output)
+        .output_opt("--png", args.png.as_deref())
+        .output_opt("--report", args.report.as_deref())
+        .check()?;
     if args.view.is_some_and(|v| v.length() == 0.0) {
         return Err(bad_input("--view must not be the zero vector"));
     }
@@ -415,6 +420,16 @@ pub fn run(args: Args) -> Result<()> {
             },
         )?;
     }
+    if lines.lines.is_empty() {
+        report.warn("no highlight line crosses the mesh; try other light options (--plane-normal, --direction, --spacing)");
+    }
     report.write(args.report.as_deref())?;
+    job.finish(format_args!(
+        "{} highlight line(s) ({} closed, {} nodes) on {} vertices",
+        lines.lines.len(),
+        lines.lines.iter().filter(|l| l.closed).count(),
+        lines.node_count(),
+        mesh.vertex_count()
+    ));
     Ok(())
 }

@@ -1,7 +1,9 @@
 //! `fairline info`: counts and defects of a mesh file.
 
 use crate::common::Report;
+use crate::output::{Job, print_stdout};
 use anyhow::Result;
+use std::fmt::Write as _;
 use std::path::PathBuf;
 
 /// Counts and defects of a mesh: vertices, faces, edges, boundary loops,
@@ -22,40 +24,69 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let job = Job::new("info")
+        .input(&args.mesh)
+        .output_opt("--report", args.report.as_deref())
+        .check()?;
     let soup = fairline::io::read_soup(&args.mesh)?;
     let mut report = Report::new("info");
     let info = report.time(|| fairline::mesh::inspect(&soup));
-    let value = serde_json::to_value(&info)?;
-    if let serde_json::Value::Object(m) = &value {
-        for (k, v) in m {
+    let mut value = serde_json::to_value(&info)?;
+    // Absent values (no genus for a non-manifold mesh, no manifold error for
+    // a manifold one) are left out rather than written as null.
+    if let serde_json::Value::Object(m) = &mut value {
+        m.retain(|_, v| !v.is_null());
+        for (k, v) in m.iter() {
             report.set(k, v);
         }
     }
+    // the same values without non-finite numbers (report.set warned)
+    let value = crate::common::finite_only("", value, &mut Vec::new()).unwrap_or_default();
     report.write(args.report.as_deref())?;
+    let summary = format!(
+        "{}: {} vertices, {} faces, {}",
+        args.mesh.display(),
+        info.vertices,
+        info.faces,
+        if info.manifold_error.is_none() {
+            "manifold"
+        } else {
+            "not a manifold"
+        }
+    );
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&value)?);
+        print_stdout(&format!("{}\n", serde_json::to_string_pretty(&value)?))?;
+        job.finish(summary);
         return Ok(());
     }
+    let mut out = String::new();
     let sizes: Vec<String> = info
         .face_sizes
         .iter()
         .map(|(k, v)| format!("{v} with {k} vertices"))
         .collect();
-    println!("file                {}", args.mesh.display());
-    println!("vertices            {}", info.vertices);
-    println!("faces               {} ({})", info.faces, sizes.join(", "));
-    println!("edges               {}", info.edges);
-    println!(
+    let _ = writeln!(out, "file                {}", args.mesh.display());
+    let _ = writeln!(out, "vertices            {}", info.vertices);
+    let _ = writeln!(
+        out,
+        "faces               {} ({})",
+        info.faces,
+        sizes.join(", ")
+    );
+    let _ = writeln!(out, "edges               {}", info.edges);
+    let _ = writeln!(
+        out,
         "boundary edges      {} in {} loops",
         info.boundary_edges, info.boundary_loops
     );
-    println!("components          {}", info.components);
-    match info.genus {
-        Some(g) => println!("genus               {g}"),
-        None => println!("genus               undefined (not a manifold)"),
-    }
-    println!("euler               {}", info.euler_characteristic);
-    println!(
+    let _ = writeln!(out, "components          {}", info.components);
+    let _ = match info.genus {
+        Some(g) => writeln!(out, "genus               {g}"),
+        None => writeln!(out, "genus               undefined (not a manifold)"),
+    };
+    let _ = writeln!(out, "euler               {}", info.euler_characteristic);
+    let _ = writeln!(
+        out,
         "bbox                [{:.6}, {:.6}, {:.6}] – [{:.6}, {:.6}, {:.6}]",
         info.bbox.min[0],
         info.bbox.min[1],
@@ -64,11 +95,12 @@ pub fn run(args: Args) -> Result<()> {
         info.bbox.max[1],
         info.bbox.max[2]
     );
-    println!(
+    let _ = writeln!(
+        out,
         "edge length         min {:.6}  mean {:.6}  max {:.6}",
         info.edge_length.min, info.edge_length.mean, info.edge_length.max
     );
-    println!("area                {:.6}", info.area);
+    let _ = writeln!(out, "area                {:.6}", info.area);
     let defects = [
         ("non-manifold edges", info.non_manifold_edges),
         (
@@ -88,12 +120,14 @@ pub fn run(args: Args) -> Result<()> {
     ];
     for (name, n) in defects {
         if n > 0 {
-            println!("DEFECT              {n} {name}");
+            let _ = writeln!(out, "DEFECT              {n} {name}");
         }
     }
-    match &info.manifold_error {
-        None => println!("manifold            yes"),
-        Some(e) => println!("manifold            no: {e}"),
-    }
+    let _ = match &info.manifold_error {
+        None => writeln!(out, "manifold            yes"),
+        Some(e) => writeln!(out, "manifold            no: {e}"),
+    };
+    print_stdout(&out)?;
+    job.finish(summary);
     Ok(())
 }

@@ -14,6 +14,7 @@ mod fair_surface;
 mod highlight;
 mod highlight_png;
 mod info;
+mod output;
 mod render;
 mod smooth;
 mod surface;
@@ -100,13 +101,14 @@ fn main() {
             std::process::exit(code);
         }
     };
+    output::install_signal_handler();
     // The command runs on a worker of rayon's pool: its parallel loops then
     // start from a worker and split work with the other threads directly,
     // instead of handing every loop to the pool and sleeping until it is
     // done (two thread wake-ups per loop, thousands per second in the
     // conjugate-gradient solves; 10k-vertex `enhance`: 0.20 → 0.17 s).
     if let Err(e) = rayon::scope(|_| run(cli)) {
-        eprintln!("error: {}", error_message(&e));
+        output::say(&format!("error: {}", error_message(&e)));
         std::process::exit(common::exit_code(&e));
     }
 }

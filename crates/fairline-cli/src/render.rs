@@ -94,7 +94,12 @@ pub fn run(args: Args) -> Result<()> {
             args.png.display()
         )));
     }
-    crate::common::check_output(&args.input, &args.png)?;
+    let job = crate::output::Job::new("render")
+        .input(&args.input)
+        .input_opt(args.light.lights.as_deref())
+        .output("--png", &args.png)
+        .output_opt("--report", args.report.as_deref())
+        .check()?;
     let l = &args.light;
     if !args.highlight
         && (l.direction.is_some()
@@ -134,6 +139,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let mut report = Report::new("render");
     let mut summary = None;
+    let bar = crate::common::spinner("rendering");
     let image = report.time(|| -> Result<_> {
         let values;
         let mut picture = Picture {
@@ -194,14 +200,29 @@ pub fn run(args: Args) -> Result<()> {
         }
         Ok(mesh_picture(&mesh, &picture, &opts)?)
     })?;
+    bar.finish_and_clear();
     image.write_png(&args.png)?;
     report.set("vertices", mesh.vertex_count());
     report.set("faces", mesh.face_count());
     report.set("width", args.size.0);
     report.set("height", args.size.1);
+    let mut what = format!(
+        "{}x{} picture of {} vertices",
+        args.size.0,
+        args.size.1,
+        mesh.vertex_count()
+    );
     if let Some(h) = summary {
+        if h["lines"] == 0 {
+            report.warn("no highlight line crosses the mesh; try other light options (--plane-normal, --direction, --spacing)");
+        }
+        what.push_str(&format!(
+            " with {} highlight line(s), {} flagged region(s)",
+            h["lines"], h["regions"]
+        ));
         report.set("highlight", h);
     }
     report.write(args.report.as_deref())?;
+    job.finish(what);
     Ok(())
 }

@@ -1,7 +1,7 @@
 //! `fairline smooth` (the classic smoothing family, Grüner thesis ch. 3) and
 //! `fairline fair-quad` (structure-line fairing of quad meshes, ch. 4).
 
-use crate::common::{Report, bad_input, check_output, read_json, spinner};
+use crate::common::{Report, bad_input, read_json, spinner};
 use anyhow::Result;
 use fairline::fair::{QuadFairOptions, fair_structure_lines};
 use fairline::geom::LaplaceWeights;
@@ -168,10 +168,13 @@ pub fn before_after(
 }
 
 pub fn run(args: Args) -> Result<()> {
-    check_output(&args.mesh, &args.output)?;
-    if let Some(p) = &args.png {
-        check_output(&args.mesh, p)?;
-    }
+    let job = crate::output::Job::new("smooth")
+        .input(&args.mesh)
+        .input_opt(args.fixed.as_deref())
+        .output("-o", &args.output)
+        .output_opt("--png", args.png.as_deref())
+        .output_opt("--report", args.report.as_deref())
+        .check()?;
     for (n, v) in [
         ("lambda", args.lambda),
         ("mu", args.mu),
@@ -261,7 +264,7 @@ pub fn run(args: Args) -> Result<()> {
         });
     bar.finish_and_clear();
     let (r, params) = result.map_err(smooth_error)?;
-    let name = format!("{:?}", args.method).to_lowercase();
+    let name = crate::output::option_value(&args.method);
     report.set("method", &name);
     report.set("vertices", mesh.vertex_count());
     report.set("iterations", r.iterations);
@@ -282,7 +285,20 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(png) = &args.png {
         before_after(&input, &mesh, ["input", name.as_str()], false, png)?;
     }
+    if !r.converged {
+        report.warn(format!(
+            "{name} did not converge in {} iteration(s); try more --iterations or a larger --epsilon",
+            r.iterations
+        ));
+    }
     report.write(args.report.as_deref())?;
+    job.finish(format_args!(
+        "{name}, {} iteration(s){} on {} vertices, largest move {:.3e}",
+        r.iterations,
+        if r.converged { "" } else { ", not converged" },
+        mesh.vertex_count(),
+        r.max_displacement
+    ));
     Ok(())
 }
 
@@ -330,10 +346,13 @@ pub struct QuadArgs {
 }
 
 pub fn run_quad(args: QuadArgs) -> Result<()> {
-    check_output(&args.mesh, &args.output)?;
-    if let Some(p) = &args.png {
-        check_output(&args.mesh, p)?;
-    }
+    let job = crate::output::Job::new("fair-quad")
+        .input(&args.mesh)
+        .input_opt(args.fixed.as_deref())
+        .output("-o", &args.output)
+        .output_opt("--png", args.png.as_deref())
+        .output_opt("--report", args.report.as_deref())
+        .check()?;
     if !args.weight.is_finite() || args.weight <= 0.0 {
         return Err(bad_input("--weight must be a positive number"));
     }
@@ -388,7 +407,21 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
             png,
         )?;
     }
+    if r.structure_energy_after > r.structure_energy_before {
+        report.warn(format!(
+            "the structure-line energy got worse: {:.4e} before, {:.4e} after; try a larger --weight",
+            r.structure_energy_before, r.structure_energy_after
+        ));
+    }
     report.write(args.report.as_deref())?;
+    job.finish(format_args!(
+        "{} iteration(s) on {} structure line(s), {} free vertices, structure energy {:.3e} → {:.3e}",
+        r.iterations,
+        r.structure_lines,
+        r.free_vertices,
+        r.structure_energy_before,
+        r.structure_energy_after
+    ));
     Ok(())
 }
 

@@ -26,9 +26,10 @@ pub fn load_surfaces(path: &Path) -> Result<Vec<BSplineSurface>> {
         .map(|e| e.to_ascii_lowercase())
         .unwrap_or_default();
     let surfaces = if ext == "json" {
-        read_surfaces_json(path)?
+        read_surfaces_json(path).map_err(|e| crate::output::name_file(path, e))?
     } else {
-        read_iges(path)?
+        read_iges(path)
+            .map_err(|e| crate::output::name_file(path, e))?
             .surfaces
             .into_iter()
             .map(|s| s.surface)

@@ -3,7 +3,7 @@
 //! with their (u, v) pre-images and 3D points; PNG of the shaded surface
 //! with the lines, SVG of the pre-images.
 
-use crate::common::{Report, bad_input, check_output, write_json};
+use crate::common::{Report, bad_input, write_json};
 use crate::highlight::{Args, Radii, to_input_error};
 use anyhow::Result;
 use fairline::Vec3;
@@ -169,15 +169,20 @@ pub fn run(args: Args) -> Result<()> {
             args.output.display()
         )));
     }
-    check_output(&args.mesh, &args.output)?;
     if let Some(p) = &args.png {
         check_ext(p, "png", "--png")?;
-        check_output(&args.mesh, p)?;
     }
     if let Some(p) = &args.svg {
         check_ext(p, "svg", "--svg")?;
-        check_output(&args.mesh, p)?;
     }
+    let job = crate::output::Job::new("highlight")
+        .input(&args.mesh)
+        .input_opt(args.light.lights.as_deref())
+        .output("-o", &args.output)
+        .output_opt("--png", args.png.as_deref())
+        .output_opt("--svg", args.svg.as_deref())
+        .output_opt("--report", args.report.as_deref())
+        .check()?;
     if args.view.is_some_and(|v| v.length() == 0.0) {
         return Err(bad_input("--view must not be the zero vector"));
     }
@@ -326,6 +331,13 @@ pub fn run(args: Args) -> Result<()> {
             .map(|(_, _, h)| h.lines.iter().map(|l| l.uv.len()).sum::<usize>())
             .sum::<usize>(),
     );
+    if line_count == 0 {
+        report.warn("no highlight line pre-image was found on the surface; try other radii, --circle-center or --circle-axis");
+    }
     report.write(args.report.as_deref())?;
+    job.finish(format_args!(
+        "{line_count} highlight line pre-image(s) on {} surface(s)",
+        results.len()
+    ));
     Ok(())
 }

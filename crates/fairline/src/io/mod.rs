@@ -345,10 +345,89 @@ pub(crate) fn write_formatted(
     Ok(())
 }
 
-/// Writes a file atomically: `write` fills a temporary file in the same
-/// directory, which is flushed, synced and then renamed over `path`. If
-/// anything fails, the temporary file is removed and `path` is untouched
-/// (no file is left behind when it did not exist).
+/// The temporary files [`atomic_write`] has created and not yet renamed or
+/// removed, and whether the process is shutting down (then no new temporary
+/// file may be created).
+struct LiveTemps {
+    paths: Vec<PathBuf>,
+    closing: bool,
+}
+
+static LIVE_TEMPS: std::sync::Mutex<LiveTemps> = std::sync::Mutex::new(LiveTemps {
+    paths: Vec::new(),
+    closing: false,
+});
+
+fn live_temps() -> std::sync::MutexGuard<'static, LiveTemps> {
+    // A panic while the lock was held cannot leave the list inconsistent
+    // (every change is one push or one removal), so a poisoned lock is used.
+    LIVE_TEMPS.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Removes every temporary file that an [`atomic_write`] in progress has
+/// created, and makes every later [`atomic_write`] fail before it creates
+/// one. Meant for a process that is about to exit on a signal (SIGINT,
+/// SIGTERM): the outputs it already renamed into place are complete, the
+/// ones in progress leave nothing behind. Returns how many files were
+/// removed. The library never calls it itself.
+pub fn remove_temporary_files() -> usize {
+    let mut live = live_temps();
+    live.closing = true;
+    let mut removed = 0;
+    for p in live.paths.drain(..) {
+        if std::fs::remove_file(&p).is_ok() {
+            removed += 1;
+        }
+    }
+    removed
+}
+
+/// Where [`atomic_write`] puts a file given as `path`: a symbolic link is
+/// followed to its target (so the link stays a link and its target gets the
+/// new content); an existing path must be a regular file. Device nodes,
+/// FIFOs, sockets and directories are refused, since a rename would replace
+/// them with a regular file.
+fn write_target(path: &Path) -> std::io::Result<PathBuf> {
+    use std::io::{Error, ErrorKind};
+    match std::fs::symlink_metadata(path) {
+        Err(e) if e.kind() == ErrorKind::NotFound => Ok(path.to_path_buf()),
+        Err(e) => Err(e),
+        Ok(m) => {
+            let (target, meta) = if m.file_type().is_symlink() {
+                let target = std::fs::canonicalize(path).map_err(|_| {
+                    Error::new(
+                        ErrorKind::InvalidInput,
+                        "it is a symbolic link to nothing; refusing to replace it",
+                    )
+                })?;
+                let meta = std::fs::metadata(&target)?;
+                (target, meta)
+            } else {
+                (path.to_path_buf(), m)
+            };
+            if meta.is_file() {
+                Ok(target)
+            } else if meta.is_dir() {
+                Err(Error::new(ErrorKind::InvalidInput, "it is a directory"))
+            } else {
+                Err(Error::new(
+                    ErrorKind::InvalidInput,
+                    "it is not a regular file (a device, FIFO or socket); refusing to replace it",
+                ))
+            }
+        }
+    }
+}
+
+/// Writes a file atomically: `write` fills a temporary file
+/// `.NAME.PID.N.tmp` in the same directory, which is flushed, synced and
+/// then renamed over `path`. If anything fails, the temporary file is
+/// removed and `path` is untouched (no file is left behind when it did not
+/// exist). A symbolic link is followed and its target replaced; an existing
+/// `path` that is not a regular file (device, FIFO, socket, directory) is
+/// refused. The temporary file is listed while it exists, so that
+/// [`remove_temporary_files`] can remove it when the process is stopped by
+/// a signal.
 pub fn atomic_write<F>(path: impl AsRef<Path>, write: F) -> Result<(), IoError>
 where
     F: FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
@@ -358,17 +437,25 @@ where
         path: path.to_path_buf(),
         source,
     };
-    let file_name = path.file_name().ok_or_else(|| {
+    let target = write_target(path).map_err(io_err)?;
+    let file_name = target.file_name().ok_or_else(|| {
         io_err(std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
             "the output path has no file name",
         ))
     })?;
-    let dir = match path.parent() {
+    let dir = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
     };
     let (tmp, file) = {
+        let mut live = live_temps();
+        if live.closing {
+            return Err(io_err(std::io::Error::new(
+                std::io::ErrorKind::Interrupted,
+                "the process is stopping; nothing written",
+            )));
+        }
         let mut attempt = 0;
         loop {
             let n = TEMP_COUNTER.fetch_add(1, Ordering::Relaxed);
@@ -377,7 +464,10 @@ where
             name.push(format!(".{}.{n}.tmp", std::process::id()));
             let tmp = dir.join(name);
             match File::options().write(true).create_new(true).open(&tmp) {
-                Ok(f) => break (tmp, f),
+                Ok(f) => {
+                    live.paths.push(tmp.clone());
+                    break (tmp, f);
+                }
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && attempt < 100 => {
                     attempt += 1;
                 }
@@ -392,55 +482,70 @@ where
         let file = w.into_inner().map_err(|e| e.into_error())?;
         file.sync_all()?;
         drop(file);
-        std::fs::rename(&tmp, path)
+        std::fs::rename(&tmp, &target)
     })();
-    result.map_err(|e| {
+    if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
-        io_err(e)
-    })
+    }
+    live_temps().paths.retain(|p| p != &tmp);
+    result.map_err(io_err)
 }
 
-/// Refuses an `output` path that names the same file as `input` (compared
-/// by canonical path, and on Unix also by device and inode so hard links are
-/// caught). When `output` does not exist yet, its canonical parent directory
-/// plus file name is compared instead.
-pub fn ensure_distinct(input: impl AsRef<Path>, output: impl AsRef<Path>) -> Result<(), IoError> {
-    let (input, output) = (input.as_ref(), output.as_ref());
-    let same = || IoError::SameFile {
-        input: input.to_path_buf(),
-        output: output.to_path_buf(),
-    };
-    let canon_in = std::fs::canonicalize(input).map_err(|source| IoError::Io {
-        path: input.to_path_buf(),
-        source,
-    })?;
-    if let Ok(canon_out) = std::fs::canonicalize(output) {
-        if canon_out == canon_in {
-            return Err(same());
-        }
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::MetadataExt;
-            if let (Ok(a), Ok(b)) = (std::fs::metadata(&canon_in), std::fs::metadata(&canon_out))
-                && a.dev() == b.dev()
-                && a.ino() == b.ino()
-            {
-                return Err(same());
-            }
-        }
-        return Ok(());
+/// Whether `a` and `b` name the same file: the same canonical path (a path
+/// that does not exist yet is its canonical parent folder plus its name),
+/// or, on Unix, the same device and inode (hard links). Paths that cannot
+/// be resolved at all are compared as given.
+pub fn same_file(a: impl AsRef<Path>, b: impl AsRef<Path>) -> bool {
+    let (a, b) = (a.as_ref(), b.as_ref());
+    if a == b {
+        return true;
     }
-    let Some(name) = output.file_name() else {
-        return Ok(());
-    };
-    let parent = match output.parent() {
+    let (ca, cb) = (canonical_or_planned(a), canonical_or_planned(b));
+    if let (Some(x), Some(y)) = (&ca, &cb)
+        && x == y
+    {
+        return true;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b))
+            && x.dev() == y.dev()
+            && x.ino() == y.ino()
+        {
+            return true;
+        }
+    }
+    false
+}
+
+/// The canonical path of `path`, or for a path that does not exist the
+/// canonical path of its folder joined with its file name.
+fn canonical_or_planned(path: &Path) -> Option<PathBuf> {
+    if let Ok(c) = std::fs::canonicalize(path) {
+        return Some(c);
+    }
+    let name = path.file_name()?;
+    let parent = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    if let Ok(canon_parent) = std::fs::canonicalize(parent)
-        && canon_parent.join(name) == canon_in
-    {
-        return Err(same());
+    std::fs::canonicalize(parent).ok().map(|p| p.join(name))
+}
+
+/// Refuses an `output` path that names the same file as `input` (see
+/// [`same_file`]: canonical path, device and inode). The input must exist.
+pub fn ensure_distinct(input: impl AsRef<Path>, output: impl AsRef<Path>) -> Result<(), IoError> {
+    let (input, output) = (input.as_ref(), output.as_ref());
+    std::fs::canonicalize(input).map_err(|source| IoError::Io {
+        path: input.to_path_buf(),
+        source,
+    })?;
+    if same_file(input, output) {
+        return Err(IoError::SameFile {
+            input: input.to_path_buf(),
+            output: output.to_path_buf(),
+        });
     }
     Ok(())
 }
@@ -749,6 +854,76 @@ mod tests {
             ensure_distinct(dir.join("nope.obj"), &input),
             Err(IoError::Io { .. })
         ));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn same_file_sees_symlinks_and_planned_paths() {
+        let dir = temp_dir("samefile");
+        let input = dir.join("in.obj");
+        write_soup(&input, &quad_soup()).unwrap();
+        #[cfg(unix)]
+        {
+            let sym = dir.join("sym.obj");
+            std::os::unix::fs::symlink(&input, &sym).unwrap();
+            assert!(same_file(&input, &sym));
+        }
+        // two spellings of a file that does not exist yet
+        assert!(same_file(dir.join("new.obj"), dir.join("./new.obj")));
+        assert!(!same_file(dir.join("new.obj"), dir.join("other.obj")));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn atomic_write_refuses_special_files_and_follows_symlinks() {
+        let dir = temp_dir("special");
+        // a directory is refused, not replaced
+        let sub = dir.join("sub");
+        std::fs::create_dir(&sub).unwrap();
+        let e = atomic_write(&sub, |w| w.write_all(b"x")).unwrap_err();
+        assert!(e.to_string().contains("directory"), "{e}");
+        assert!(sub.is_dir());
+        // a FIFO is refused and stays a FIFO
+        let fifo = dir.join("fifo");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if made.map(|s| s.success()).unwrap_or(false) {
+            let e = atomic_write(&fifo, |w| w.write_all(b"x")).unwrap_err();
+            assert!(e.to_string().contains("not a regular file"), "{e}");
+            use std::os::unix::fs::FileTypeExt;
+            assert!(
+                std::fs::symlink_metadata(&fifo)
+                    .unwrap()
+                    .file_type()
+                    .is_fifo()
+            );
+        }
+        // /dev/null is a character device: refused, never replaced
+        assert!(atomic_write("/dev/null", |w| w.write_all(b"x")).is_err());
+        // a symbolic link keeps being a link; its target gets the content
+        let target = dir.join("target.txt");
+        std::fs::write(&target, b"old").unwrap();
+        let link = dir.join("link.txt");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        atomic_write(&link, |w| w.write_all(b"new")).unwrap();
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
+        // a dangling link is refused
+        let dangling = dir.join("dangling.txt");
+        std::os::unix::fs::symlink(dir.join("nothing"), &dangling).unwrap();
+        assert!(atomic_write(&dangling, |w| w.write_all(b"x")).is_err());
+        // no temporary file is left anywhere
+        let left: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+            .collect();
+        assert!(left.is_empty(), "{left:?}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

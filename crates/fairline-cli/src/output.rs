@@ -1,0 +1,508 @@
+//! The one output policy of every `fairline` command, and what a command
+//! says on the terminal.
+//!
+//! # Declaring inputs and outputs
+//!
+//! A command declares every file it reads and every file it writes before
+//! it does any work, and checks them in one call:
+//!
+//! ```ignore
+//! let job = Job::new("smooth")
+//!     .input(&args.mesh)
+//!     .input_opt(args.fixed.as_deref())
+//!     .output("-o", &args.output)
+//!     .output_opt("--png", args.png.as_deref())
+//!     .output_opt("--report", args.report.as_deref())
+//!     .check()?;
+//! // ... read, compute, write ...
+//! job.finish(format_args!("taubin, 10 iterations on {n} vertices"));
+//! ```
+//!
+//! [`Job::check`] refuses (exit status 2, the path and its option named,
+//! nothing written) an output that
+//! - is one of the command's inputs: the same canonical path, or on Unix
+//!   the same device and inode (hard links, symbolic links, `./x.obj`
+//!   against `x.obj` are all caught — [`fairline::io::same_file`]);
+//! - is the same file as another output of the command;
+//! - exists and is not a regular file: a directory, a device node such as
+//!   `/dev/null`, a FIFO or a socket (writing goes through a temporary file
+//!   and a rename, which would replace it with a regular file); `-` and
+//!   anything under `/dev` or `/proc` (`/dev/stdout`) are refused too — the
+//!   commands write files, never standard output;
+//! - lies in a folder that does not exist or cannot be written to.
+//!
+//! A symbolic link to a regular file is allowed: its target gets the new
+//! content and the link stays. Every write is atomic
+//! ([`fairline::io::atomic_write`]: temporary file `.NAME.PID.N.tmp` in the
+//! same folder, then a rename). The temporary files in progress are removed
+//! when a write fails and when the process gets SIGINT or SIGTERM
+//! ([`install_signal_handler`]; exit status 130 or 143).
+//!
+//! # Terminal
+//!
+//! Every command ends with one summary line on standard error
+//! ([`Job::finish`]: `fairline smooth: … in 0.42 s; wrote out.obj, r.json`),
+//! prints `warning: …` lines ([`warn`]) when something did not converge or
+//! a measure got worse, and shows a progress bar or spinner ([`progress`],
+//! [`spinner`]) only when standard error is a terminal. Standard output
+//! carries data only (`info`); when the reader of a pipe goes away
+//! (`fairline info x.obj | head -1`) the command stops quietly with exit
+//! status 0 ([`print_stdout`]), as ripgrep does.
+
+use crate::common::bad_input;
+use anyhow::Result;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// One command's declared inputs and outputs, and its start time.
+#[derive(Debug)]
+pub struct Job {
+    command: &'static str,
+    inputs: Vec<PathBuf>,
+    outputs: Vec<(String, PathBuf)>,
+    not_written: Vec<PathBuf>,
+    started: Instant,
+}
+
+impl Job {
+    /// A job of the command `command` (its name on the command line),
+    /// started now.
+    pub fn new(command: &'static str) -> Self {
+        Job {
+            command,
+            inputs: Vec::new(),
+            outputs: Vec::new(),
+            not_written: Vec::new(),
+            started: Instant::now(),
+        }
+    }
+
+    /// Declares a file the command reads.
+    pub fn input(mut self, path: impl AsRef<Path>) -> Self {
+        self.inputs.push(path.as_ref().to_path_buf());
+        self
+    }
+
+    /// Declares a file the command reads, when given.
+    pub fn input_opt(self, path: Option<&Path>) -> Self {
+        match path {
+            Some(p) => self.input(p),
+            None => self,
+        }
+    }
+
+    /// Declares a file the command writes; `option` is how the user gave it
+    /// (`-o`, `--report`, `OUT`), used in messages.
+    pub fn output(mut self, option: &str, path: impl AsRef<Path>) -> Self {
+        self.outputs
+            .push((option.to_string(), path.as_ref().to_path_buf()));
+        self
+    }
+
+    /// Declares a file the command writes, when given.
+    pub fn output_opt(self, option: &str, path: Option<&Path>) -> Self {
+        match path {
+            Some(p) => self.output(option, p),
+            None => self,
+        }
+    }
+
+    /// Checks every declared output against the policy of this module
+    /// (exit status 2 and nothing written on a violation) and returns the
+    /// checked job.
+    pub fn check(self) -> Result<Self> {
+        for (k, (option, out)) in self.outputs.iter().enumerate() {
+            check_output_path(option, out)?;
+            for input in &self.inputs {
+                if fairline::io::same_file(input, out) {
+                    return Err(bad_input(format!(
+                        "refusing to write {} ({option}): it is the input file {}; nothing written",
+                        out.display(),
+                        input.display()
+                    )));
+                }
+            }
+            for (other_option, other) in &self.outputs[..k] {
+                if fairline::io::same_file(other, out) {
+                    return Err(bad_input(format!(
+                        "{} ({option}) and {} ({other_option}) are the same file; give each output its own path; nothing written",
+                        out.display(),
+                        other.display()
+                    )));
+                }
+            }
+        }
+        Ok(self)
+    }
+
+    /// Notes that a declared output was deliberately not written (it is
+    /// then left out of the summary).
+    pub fn skip(&mut self, path: &Path) {
+        self.not_written.push(path.to_path_buf());
+    }
+
+    /// Seconds since the job started.
+    pub fn elapsed_s(&self) -> f64 {
+        self.started.elapsed().as_secs_f64()
+    }
+
+    /// The summary line: `fairline COMMAND: WHAT in T s; wrote A, B`.
+    pub fn summary(&self, what: impl std::fmt::Display) -> String {
+        let written: Vec<String> = self
+            .outputs
+            .iter()
+            .filter(|(_, p)| !self.not_written.contains(p))
+            .map(|(_, p)| p.display().to_string())
+            .collect();
+        let mut line = format!(
+            "fairline {}: {what} in {}",
+            self.command,
+            seconds(self.elapsed_s())
+        );
+        if !written.is_empty() {
+            line.push_str("; wrote ");
+            line.push_str(&written.join(", "));
+        }
+        line
+    }
+
+    /// Prints the summary line on standard error.
+    pub fn finish(&self, what: impl std::fmt::Display) {
+        say(&self.summary(what));
+    }
+}
+
+/// The name of the marker file [`owned_folder`] leaves in a folder it made.
+pub const OWNED_FOLDER_MARKER: &str = ".fairline-owned";
+
+/// Prepares `dir` for a command that fills a whole folder with files of
+/// fixed names (`demo --out DIR`). The folder is created when missing; an
+/// existing folder is used only when it is empty or was made by fairline
+/// before (it holds the marker file [`OWNED_FOLDER_MARKER`]), so that
+/// files fairline did not create are never overwritten. Anything else is
+/// refused with exit status 2 before any work.
+pub fn owned_folder(option: &str, dir: &Path) -> Result<()> {
+    let shown = dir.display();
+    let marker = dir.join(OWNED_FOLDER_MARKER);
+    match std::fs::metadata(dir) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            std::fs::create_dir_all(dir).map_err(|e| {
+                bad_input(format!("{shown} ({option}): cannot create the folder: {e}"))
+            })?;
+        }
+        Err(e) => return Err(bad_input(format!("{shown} ({option}): {e}"))),
+        Ok(m) if !m.is_dir() => {
+            return Err(bad_input(format!(
+                "{shown} ({option}): exists and is not a folder; nothing written"
+            )));
+        }
+        Ok(_) => {
+            if marker.is_file() {
+                return Ok(());
+            }
+            let mut entries = std::fs::read_dir(dir)
+                .map_err(|e| bad_input(format!("{shown} ({option}): {e}")))?;
+            if entries.next().is_some() {
+                return Err(bad_input(format!(
+                    "{shown} ({option}): the folder is not empty and was not made by fairline; give a new or empty folder so that no file of yours is overwritten (nothing written)"
+                )));
+            }
+        }
+    }
+    std::fs::write(
+        &marker,
+        "made by fairline; files here may be overwritten by the next run\n",
+    )
+    .map_err(|e| bad_input(format!("{} ({option}): {e}", marker.display())))?;
+    Ok(())
+}
+
+/// `0.42 s`, `12.3 s`, `3 min 05 s`.
+pub fn seconds(s: f64) -> String {
+    if !s.is_finite() || s < 0.0 {
+        return "? s".into();
+    }
+    if s < 10.0 {
+        format!("{s:.2} s")
+    } else if s < 120.0 {
+        format!("{s:.1} s")
+    } else {
+        let m = (s / 60.0).floor();
+        format!("{m:.0} min {:02.0} s", s - 60.0 * m)
+    }
+}
+
+/// Checks one output path on its own: a file name, not `-` or a special
+/// file, a regular file or absent, its folder present and writable.
+fn check_output_path(option: &str, out: &Path) -> Result<()> {
+    let shown = out.display();
+    if out.as_os_str() == "-" {
+        return Err(bad_input(format!(
+            "{option} -: writing to standard output is not supported; give a file name"
+        )));
+    }
+    if out.file_name().is_none() {
+        return Err(bad_input(format!("{shown} ({option}): not a file name")));
+    }
+    let canonical = std::fs::canonicalize(out).ok();
+    if let Some(c) = &canonical
+        && (c.starts_with("/dev") || c.starts_with("/proc"))
+    {
+        return Err(bad_input(format!(
+            "{shown} ({option}): is a special file; outputs must be regular files"
+        )));
+    }
+    match std::fs::symlink_metadata(out) {
+        Ok(link_meta) => {
+            let meta = match std::fs::metadata(out) {
+                Ok(m) => m,
+                Err(_) if link_meta.file_type().is_symlink() => {
+                    return Err(bad_input(format!(
+                        "{shown} ({option}): is a symbolic link to nothing; refusing to replace it"
+                    )));
+                }
+                Err(e) => return Err(bad_input(format!("{shown} ({option}): {e}"))),
+            };
+            if meta.is_dir() {
+                return Err(bad_input(format!(
+                    "{shown} ({option}): is a directory; give a file name"
+                )));
+            }
+            if !meta.is_file() {
+                return Err(bad_input(format!(
+                    "{shown} ({option}): is not a regular file (a device, FIFO or socket); refusing to replace it"
+                )));
+            }
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => return Err(bad_input(format!("{shown} ({option}): {e}"))),
+    }
+    // The folder the file is written in (the link's target's folder for a
+    // symbolic link): it must exist and accept a new file.
+    let target = canonical.unwrap_or_else(|| out.to_path_buf());
+    let dir = match target.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    if !dir.is_dir() {
+        return Err(bad_input(format!(
+            "{shown} ({option}): the folder {} does not exist; nothing written",
+            dir.display()
+        )));
+    }
+    let probe = dir.join(format!(".fairline-probe.{}.tmp", std::process::id()));
+    match std::fs::File::options()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(f) => {
+            drop(f);
+            let _ = std::fs::remove_file(&probe);
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+        Err(e) => {
+            return Err(bad_input(format!(
+                "{shown} ({option}): cannot write in the folder {}: {e}; nothing written",
+                dir.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The spelling of an option value on the command line
+/// (`schneider-kobbelt`), used for report values so that they match.
+pub fn option_value<T: clap::ValueEnum>(value: &T) -> String {
+    value
+        .to_possible_value()
+        .map(|p| p.get_name().to_string())
+        .unwrap_or_default()
+}
+
+/// `err` with the file named: unchanged when its message (with its
+/// causes) already names `path`, else with `path` as context, so that the
+/// error line reads `PATH: message` (defect 10 of issue #16). The causes
+/// are kept, so the exit status does not change.
+pub fn name_file(path: &Path, err: impl Into<anyhow::Error>) -> anyhow::Error {
+    let err = err.into();
+    let shown = path.display().to_string();
+    if format!("{err:#}").contains(&shown) {
+        err
+    } else {
+        err.context(shown)
+    }
+}
+
+/// Writes a line on standard error, ignoring a closed standard error.
+pub fn say(line: &str) {
+    let mut e = std::io::stderr().lock();
+    let _ = writeln!(e, "{line}");
+}
+
+/// Prints `warning: MSG` on standard error.
+pub fn warn(msg: impl std::fmt::Display) {
+    say(&format!("warning: {msg}"));
+}
+
+/// Writes `text` on standard output. When the reader has gone away (a
+/// closed pipe: `fairline info x.obj | head -1`), the process ends quietly
+/// with exit status 0: what the reader wanted, it got. Other write errors
+/// are returned.
+pub fn print_stdout(text: &str) -> Result<()> {
+    let mut out = std::io::stdout().lock();
+    let r = out.write_all(text.as_bytes()).and_then(|_| out.flush());
+    match r {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
+        Err(e) => Err(anyhow::Error::new(e).context("writing to standard output")),
+    }
+}
+
+/// Removes the temporary files of the writes in progress and exits with
+/// 128 + the signal number (130 for SIGINT, 143 for SIGTERM) when the
+/// process gets SIGINT or SIGTERM. Written with `signal-hook`: the signal
+/// only wakes a thread, which does the work outside the signal handler.
+pub fn install_signal_handler() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        return;
+    };
+    let spawned = std::thread::Builder::new()
+        .name("signals".into())
+        .spawn(move || {
+            if let Some(signal) = signals.forever().next() {
+                let removed = fairline::io::remove_temporary_files();
+                let name = if signal == SIGINT {
+                    "interrupted"
+                } else {
+                    "terminated"
+                };
+                let files = if removed == 1 { "file" } else { "files" };
+                say(&format!(
+                    "\nfairline: {name}; {removed} temporary {files} removed, unfinished outputs not written"
+                ));
+                std::process::exit(128 + signal);
+            }
+        });
+    drop(spawned);
+}
+
+/// How long work runs before its progress bar or spinner appears.
+const PROGRESS_DELAY: std::time::Duration = std::time::Duration::from_millis(800);
+
+/// Shows `bar` on standard error once the work has taken
+/// [`PROGRESS_DELAY`] and is not finished, so that quick work draws
+/// nothing; `bar` must have been made hidden.
+fn show_later(bar: &indicatif::ProgressBar, tick: bool) {
+    let later = bar.clone();
+    let spawned = std::thread::Builder::new()
+        .name("progress".into())
+        .spawn(move || {
+            std::thread::sleep(PROGRESS_DELAY);
+            if !later.is_finished() {
+                later.set_draw_target(indicatif::ProgressDrawTarget::stderr_with_hz(8));
+                if tick {
+                    later.enable_steady_tick(std::time::Duration::from_millis(120));
+                }
+            }
+        });
+    drop(spawned);
+}
+
+/// A progress bar of `len` steps on standard error when it is a terminal
+/// (hidden otherwise), drawn once the work has taken about a second.
+pub fn progress(len: u64, message: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::hidden();
+    if !std::io::stderr().is_terminal() {
+        return bar;
+    }
+    bar.set_length(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} {msg:<24} [{bar:32}] {pos}/{len} ({elapsed})",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    bar.set_message(message.to_string());
+    show_later(&bar, false);
+    bar
+}
+
+/// A spinner for work of unknown length on standard error when it is a
+/// terminal (hidden otherwise), drawn once the work has taken about a
+/// second.
+pub fn spinner(message: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::hidden();
+    if !std::io::stderr().is_terminal() {
+        return bar;
+    }
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    bar.set_message(message.to_string());
+    show_later(&bar, true);
+    bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir(tag: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("fairline-output-{}-{tag}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn outputs_clashing_with_inputs_or_each_other_are_refused() {
+        let d = dir("clash");
+        let input = d.join("in.obj");
+        std::fs::write(&input, "v 0 0 0\n").unwrap();
+        let job = |out: &Path, report: &Path| {
+            Job::new("t")
+                .input(&input)
+                .output("-o", out)
+                .output("--report", report)
+                .check()
+        };
+        assert!(job(&d.join("a.obj"), &d.join("r.json")).is_ok());
+        let e = job(&d.join("a.obj"), &input).unwrap_err().to_string();
+        assert!(e.contains("in.obj") && e.contains("--report"), "{e}");
+        assert!(job(&d.join("./in.obj"), &d.join("r.json")).is_err());
+        let e = job(&d.join("a.obj"), &d.join("./a.obj"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("same file"), "{e}");
+        // missing folder, directory, /dev/null, "-"
+        assert!(job(&d.join("a.obj"), &d.join("missing/r.json")).is_err());
+        assert!(job(&d, &d.join("r.json")).is_err());
+        assert!(job(Path::new("/dev/null"), &d.join("r.json")).is_err());
+        assert!(job(Path::new("-"), &d.join("r.json")).is_err());
+        // the check writes nothing
+        let names: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("in.obj")]);
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn summary_names_what_was_written() {
+        let mut job = Job::new("smooth")
+            .output("-o", "a.obj")
+            .output("--png", "b.png");
+        job.skip(Path::new("b.png"));
+        let s = job.summary("did it");
+        assert!(s.starts_with("fairline smooth: did it in "), "{s}");
+        assert!(s.ends_with("; wrote a.obj"), "{s}");
+        assert_eq!(seconds(0.123), "0.12 s");
+        assert_eq!(seconds(185.0), "3 min 05 s");
+    }
+}
