@@ -288,7 +288,7 @@ async function start() {
   // a z-up part is seen from the front, a y-up one (most scanned meshes) from +z
   const ext = docs[0].bbox;
   const span = [0, 1, 2].map((i) => ext[1][i] - ext[0][i]);
-  if (span[1] > span[2] * 1.5 && span[1] >= span[0] * 0.8) { viewer.camera.up = 'y'; $('up').value = 'y'; }
+  if (span[1] > 1.05 * Math.max(span[0], span[2])) { viewer.camera.up = 'y'; $('up').value = 'y'; }
   await Promise.all(docs.map((_, k) => loadGeometry(k)));
   viewer.camera.fit(Math.max(...docs.map((d) => d.radius)));
   await refreshSession();
