@@ -94,7 +94,7 @@ fn to_error(e: FairError) -> anyhow::Error {
     }
 }
 
-fn result_json(r: &FairResult) -> Value {
+pub(crate) fn result_json(r: &FairResult) -> Value {
     json!({
         "iterations": r.iterations,
         "converged": r.converged,

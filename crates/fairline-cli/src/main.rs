@@ -19,6 +19,7 @@ mod render;
 mod smooth;
 mod surface;
 mod surface_highlight;
+mod view;
 
 use clap::{Parser, Subcommand};
 
@@ -51,6 +52,7 @@ enum Command {
     Smooth(smooth::Args),
     FairQuad(smooth::QuadArgs),
     Demo(demo::Args),
+    View(view::Args),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -67,6 +69,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Smooth(a) => smooth::run(a),
         Command::FairQuad(a) => smooth::run_quad(a),
         Command::Demo(a) => demo::run(a),
+        Command::View(a) => view::run(a),
     }
 }
 

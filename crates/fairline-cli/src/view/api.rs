@@ -1,0 +1,1175 @@
+//! Routing and the handlers of the JSON API (documented in `view`).
+
+use super::auth::{Guard, query_param};
+use super::doc::{Doc, Step, shell_word};
+use super::frame::{frame, vec3_bytes};
+use fairline::fair::{FairMethod, FairOptions, RegionSpec, fair_highlight_lines_with, grow_region};
+use fairline::geom::{CurvatureMethod, LaplaceWeights, principal_curvatures, vertex_normals};
+use fairline::highlight::{
+    CircularLight, CircularLights, DetectOptions, HighlightLines, HighlightModel,
+    HighlightOptions, LightArray, circular_highlight_bands, circular_highlight_lines,
+    detect_irregularities,
+};
+use fairline::mesh::{FaceId, VertexId};
+use fairline::{SurfaceMesh, Vec3};
+use serde::Deserialize;
+use serde_json::{Value, json};
+use std::io::Read;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+/// Largest request body read (bytes).
+const MAX_BODY: u64 = 64 << 20;
+
+/// State shared by the worker threads.
+pub struct Shared {
+    pub state: Mutex<State>,
+    pub guard: Guard,
+}
+
+/// Documents, the save folder and the current job.
+pub struct State {
+    docs: Vec<Doc>,
+    save_dir: PathBuf,
+    job: Option<Job>,
+    next_job: u64,
+}
+
+/// A long computation running on its own thread.
+struct Job {
+    id: u64,
+    doc: usize,
+    label: String,
+    state: &'static str,
+    progress: f64,
+    message: String,
+    report: Value,
+    command: String,
+    cancel: Arc<AtomicBool>,
+    started: Instant,
+}
+
+impl State {
+    pub fn new(docs: Vec<Doc>, save_dir: PathBuf) -> Self {
+        State {
+            docs,
+            save_dir,
+            job: None,
+            next_job: 1,
+        }
+    }
+}
+
+/// An answer: status, content type, body, extra headers.
+struct Answer {
+    status: u16,
+    content_type: &'static str,
+    body: Vec<u8>,
+    headers: Vec<(String, String)>,
+}
+
+fn json_answer(v: &Value) -> Answer {
+    Answer {
+        status: 200,
+        content_type: "application/json",
+        body: v.to_string().into_bytes(),
+        headers: Vec::new(),
+    }
+}
+
+fn binary(body: Vec<u8>) -> Answer {
+    Answer {
+        status: 200,
+        content_type: "application/octet-stream",
+        body,
+        headers: Vec::new(),
+    }
+}
+
+fn error(status: u16, msg: impl Into<String>) -> Answer {
+    Answer {
+        status,
+        content_type: "application/json",
+        body: json!({"error": msg.into()}).to_string().into_bytes(),
+        headers: Vec::new(),
+    }
+}
+
+/// A bad request (400) from any error.
+fn bad(e: impl std::fmt::Display) -> Answer {
+    error(400, e.to_string())
+}
+
+/// Answers one request.
+pub fn handle(shared: &Arc<Shared>, mut req: tiny_http::Request) {
+    let answer = match shared.guard.check(&req) {
+        Err(why) => error(403, why),
+        Ok(()) => {
+            let mut body = Vec::new();
+            let too_big = req.body_length().is_some_and(|n| n as u64 > MAX_BODY);
+            if too_big
+                || req
+                    .as_reader()
+                    .take(MAX_BODY)
+                    .read_to_end(&mut body)
+                    .is_err()
+            {
+                error(413, "request body too large or unreadable")
+            } else {
+                route(shared, &req, &body)
+            }
+        }
+    };
+    let mut resp = tiny_http::Response::from_data(answer.body).with_status_code(answer.status);
+    let mut headers = vec![
+        ("Content-Type".to_string(), answer.content_type.to_string()),
+        ("Cache-Control".to_string(), "no-store".to_string()),
+        ("X-Content-Type-Options".to_string(), "nosniff".to_string()),
+        (
+            "Content-Security-Policy".to_string(),
+            "default-src 'self'; img-src 'self' data: blob:; style-src 'self'; connect-src 'self'; frame-ancestors 'none'".to_string(),
+        ),
+    ];
+    headers.extend(answer.headers);
+    for (k, v) in headers {
+        if let Ok(h) = tiny_http::Header::from_bytes(k.as_bytes(), v.as_bytes()) {
+            resp.add_header(h);
+        }
+    }
+    let _ = req.respond(resp);
+}
+
+fn route(shared: &Arc<Shared>, req: &tiny_http::Request, body: &[u8]) -> Answer {
+    let url = req.url();
+    let path = url.split('?').next().unwrap_or("");
+    let get = *req.method() == tiny_http::Method::Get;
+    let post = *req.method() == tiny_http::Method::Post;
+    if get && !path.starts_with("/api/") {
+        return match super::assets::asset(path) {
+            Some((ctype, bytes)) => {
+                let mut a = Answer {
+                    status: 200,
+                    content_type: ctype,
+                    body: bytes.to_vec(),
+                    headers: Vec::new(),
+                };
+                if path == "/" || path == "/index.html" {
+                    a.headers
+                        .push(("Set-Cookie".into(), shared.guard.set_cookie()));
+                }
+                a
+            }
+            None => error(404, format!("no such page: {path}")),
+        };
+    }
+    let parts: Vec<&str> = path.trim_start_matches("/api/").split('/').collect();
+    match (get, post, parts.as_slice()) {
+        (true, _, ["session"]) => json_answer(&session(&lock(shared))),
+        (true, _, ["job"]) => json_answer(&job_json(&lock(shared))),
+        (_, true, ["job", "cancel"]) => {
+            let mut st = lock(shared);
+            if let Some(j) = st.job.as_mut()
+                && j.state == "running"
+            {
+                j.cancel.store(true, Ordering::SeqCst);
+                j.state = "cancelled";
+                j.message = "cancelled; the result will be discarded".into();
+            }
+            json_answer(&job_json(&st))
+        }
+        (_, _, ["doc", k, rest @ ..]) => {
+            let Ok(k) = k.parse::<usize>() else {
+                return error(404, "bad document index");
+            };
+            if k >= lock(shared).docs.len() {
+                return error(404, format!("no document {k}"));
+            }
+            let step = query_param(url, "step").and_then(|s| s.parse::<usize>().ok());
+            match (get, post, rest) {
+                (true, _, ["positions"]) => {
+                    let st = lock(shared);
+                    let d = &st.docs[k];
+                    binary(vec3_bytes(&d.step(step).positions, d.center))
+                }
+                (true, _, ["normals"]) => {
+                    let mesh = lock(shared).docs[k].tri_at(step);
+                    binary(vec3_bytes(&vertex_normals(&mesh), Vec3::ZERO))
+                }
+                (true, _, ["indices"]) => {
+                    let st = lock(shared);
+                    let tri = &st.docs[k].tri;
+                    let mut out = Vec::with_capacity(tri.face_count() * 12);
+                    for f in tri.faces() {
+                        for v in tri.triangle(f) {
+                            out.extend_from_slice(&v.0.to_le_bytes());
+                        }
+                    }
+                    binary(out)
+                }
+                (true, _, ["patches"]) => {
+                    let st = lock(shared);
+                    binary(
+                        st.docs[k]
+                            .patch_of_triangle
+                            .iter()
+                            .flat_map(|p| p.to_le_bytes())
+                            .collect(),
+                    )
+                }
+                (true, _, ["scalar", name]) => scalar(shared, k, name, step),
+                (true, _, ["download"]) => download(shared, k, url),
+                (_, true, ["lines"]) => lines(shared, k, body),
+                (_, true, ["detect"]) => detect(shared, k, body),
+                (_, true, ["region"]) => region(shared, k, body),
+                (_, true, ["region-file"]) => region_file(shared, k, body),
+                (_, true, ["run"]) => start_job(shared, k, body),
+                (_, true, ["undo"]) => move_cursor(shared, k, -1),
+                (_, true, ["redo"]) => move_cursor(shared, k, 1),
+                (_, true, ["save"]) => save(shared, k, body),
+                _ => error(404, format!("no such API call: {path}")),
+            }
+        }
+        _ => error(404, format!("no such API call: {path}")),
+    }
+}
+
+fn lock(shared: &Shared) -> std::sync::MutexGuard<'_, State> {
+    shared
+        .state
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+fn parse<T: for<'de> Deserialize<'de>>(body: &[u8]) -> Result<T, Answer> {
+    serde_json::from_slice(body).map_err(|e| bad(format!("request: {e}")))
+}
+
+fn vec_arg(v: Vec3) -> String {
+    format!("{},{},{}", v.x, v.y, v.z)
+}
+
+/// The light options of a command for a linear light array.
+fn light_args(l: &LightArray) -> String {
+    format!(
+        "--plane-point {} --plane-normal {} --direction {} --spacing {}",
+        vec_arg(l.plane_point()),
+        vec_arg(l.plane_normal()),
+        vec_arg(l.direction()),
+        l.spacing()
+    )
+}
+
+/// Summary statistics of a scalar for the legend.
+fn scalar_range(v: &[f64]) -> Value {
+    let mut f: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if f.is_empty() {
+        return json!({"min": 0.0, "max": 0.0, "lo": 0.0, "hi": 0.0});
+    }
+    f.sort_by(f64::total_cmp);
+    let q = |p: f64| f[((f.len() - 1) as f64 * p).round() as usize];
+    json!({"min": f[0], "max": f[f.len() - 1], "lo": q(0.02), "hi": q(0.98)})
+}
+
+fn session(st: &State) -> Value {
+    let docs: Vec<Value> = st
+        .docs
+        .iter()
+        .enumerate()
+        .map(|(k, d)| {
+            let light = LightArray::default_for(d.bbox.0, d.bbox.1, None);
+            let mut scalars = vec![
+                json!({"name": "k1"}),
+                json!({"name": "k2"}),
+                json!({"name": "mean"}),
+                json!({"name": "gauss"}),
+            ];
+            for (n, v) in &d.ply_scalars {
+                let mut s = scalar_range(v);
+                s["name"] = json!(n);
+                scalars.push(s);
+            }
+            json!({
+                "id": k,
+                "name": d.name,
+                "kind": if d.is_surface() { "surface" } else { "mesh" },
+                "vertices": d.tri.vertex_count(),
+                "triangles": d.tri.face_count(),
+                "faces": d.mesh.face_count(),
+                "quads": d.mesh.faces().filter(|&f| d.mesh.face_size(f) == 4).count(),
+                "center": d.center.to_array(),
+                "radius": d.radius,
+                "bbox": [d.bbox.0.to_array(), d.bbox.1.to_array()],
+                "scalars": scalars,
+                "grid": d.grid,
+                "patches": d.history[0].surfaces.as_ref().map(|s| s.len()).unwrap_or(0),
+                "light": light,
+                "min_normal_cos": HighlightOptions::default().min_normal_cos,
+                "history": {
+                    "cursor": d.cursor,
+                    "steps": d.history.iter().map(|s| json!({"label": s.label, "command": s.command, "report": s.report})).collect::<Vec<_>>(),
+                },
+            })
+        })
+        .collect();
+    json!({"docs": docs, "save_dir": st.save_dir.display().to_string(), "job": job_json(st)})
+}
+
+fn job_json(st: &State) -> Value {
+    match &st.job {
+        None => Value::Null,
+        Some(j) => json!({
+            "id": j.id,
+            "doc": j.doc,
+            "label": j.label,
+            "state": j.state,
+            "progress": j.progress,
+            "message": j.message,
+            "report": j.report,
+            "command": j.command,
+            "elapsed_s": j.started.elapsed().as_secs_f64(),
+        }),
+    }
+}
+
+fn scalar(shared: &Shared, k: usize, name: &str, step: Option<usize>) -> Answer {
+    let (mesh, ply) = {
+        let st = lock(shared);
+        let d = &st.docs[k];
+        let ply = d
+            .ply_scalars
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.clone());
+        (d.tri_at(step), ply)
+    };
+    let values = match (name, ply) {
+        (_, Some(v)) => v,
+        ("k1" | "k2" | "mean" | "gauss", None) => {
+            let c = principal_curvatures(&mesh, CurvatureMethod::Rusinkiewicz);
+            match name {
+                "k1" => c.k1,
+                "k2" => c.k2,
+                "mean" => c.mean(),
+                _ => c.gauss(),
+            }
+        }
+        _ => return error(404, format!("no scalar `{name}`")),
+    };
+    let range = scalar_range(&values);
+    let floats: Vec<f32> = values
+        .iter()
+        .map(|&x| if x.is_finite() { x as f32 } else { 0.0 })
+        .collect();
+    binary(frame(&range, &floats))
+}
+
+#[derive(Deserialize)]
+struct LinesRequest {
+    light: Option<LightArray>,
+    circular: Option<CircularLights>,
+    band: Option<f64>,
+    #[serde(default)]
+    step: Option<usize>,
+}
+
+/// Lines into the header list and the float buffer.
+fn push_lines(
+    lines: &HighlightLines,
+    center: Vec3,
+    radii: Option<&[f64]>,
+    meta: &mut Vec<Value>,
+    floats: &mut Vec<f32>,
+) {
+    for l in &lines.lines {
+        let start = floats.len() / 3;
+        for p in &l.points {
+            let q = *p - center;
+            floats.extend([q.x as f32, q.y as f32, q.z as f32]);
+        }
+        let mut m = json!({"index": l.index, "closed": l.closed, "start": start, "count": l.points.len()});
+        if let Some(r) = radii.and_then(|r| r.get(l.index as usize)) {
+            m["radius"] = json!(r);
+        }
+        meta.push(m);
+    }
+}
+
+fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
+    let req: LinesRequest = match parse(body) {
+        Ok(r) => r,
+        Err(a) => return a,
+    };
+    let (mesh, center, file) = {
+        let st = lock(shared);
+        let d = &st.docs[k];
+        (d.tri_at(req.step), d.center, d.current_file())
+    };
+    if let Some(b) = req.band
+        && !(b > 0.0 && b.is_finite())
+    {
+        return bad("band must be a positive number");
+    }
+    let t = Instant::now();
+    let mut meta = Vec::new();
+    let mut band_meta = Vec::new();
+    let mut floats = Vec::new();
+    let command;
+    if let Some(c) = req.circular {
+        let lights: Vec<CircularLight> = match c.lights() {
+            Ok(l) if !l.is_empty() => l,
+            Ok(_) => return bad("circular lights need at least one radius"),
+            Err(e) => return bad(e),
+        };
+        let lines = match circular_highlight_lines(&mesh, &lights) {
+            Ok(l) => l,
+            Err(e) => return bad(e),
+        };
+        push_lines(&lines, center, Some(&c.radii), &mut meta, &mut floats);
+        if let Some(rho) = req.band {
+            match circular_highlight_bands(&mesh, &lights, rho) {
+                Ok(b) => {
+                    push_lines(&b.lower, center, Some(&c.radii), &mut band_meta, &mut floats);
+                    push_lines(&b.upper, center, Some(&c.radii), &mut band_meta, &mut floats);
+                }
+                Err(e) => return bad(e),
+            }
+        }
+        let radii: Vec<String> = c.radii.iter().map(|r| r.to_string()).collect();
+        command = format!(
+            "fairline highlight {file} --circle-center {} --circle-axis {} --radii {}{} -o lines.json",
+            vec_arg(Vec3::from(c.center)),
+            vec_arg(Vec3::from(c.axis)),
+            radii.join(","),
+            req.band.map(|b| format!(" --band {b}")).unwrap_or_default()
+        );
+    } else {
+        let Some(light) = req.light else {
+            return bad("give \"light\" or \"circular\"");
+        };
+        let model = match HighlightModel::new(&mesh, light, HighlightOptions::default()) {
+            Ok(m) => m,
+            Err(e) => return bad(e),
+        };
+        let lines = model.lines(&mesh);
+        push_lines(&lines, center, None, &mut meta, &mut floats);
+        if let Some(rho) = req.band {
+            match model.bands(&mesh, rho) {
+                Ok(b) => {
+                    push_lines(&b.lower, center, None, &mut band_meta, &mut floats);
+                    push_lines(&b.upper, center, None, &mut band_meta, &mut floats);
+                }
+                Err(e) => return bad(e),
+            }
+        }
+        command = format!(
+            "fairline highlight {file} {}{} -o lines.json",
+            light_args(&light),
+            req.band.map(|b| format!(" --band {b}")).unwrap_or_default()
+        );
+    }
+    let header = json!({
+        "lines": meta,
+        "bands": band_meta,
+        "time_s": t.elapsed().as_secs_f64(),
+        "command": command,
+    });
+    binary(frame(&header, &floats))
+}
+
+#[derive(Deserialize)]
+struct DetectRequest {
+    light: LightArray,
+    threshold: Option<f64>,
+    region_radius: Option<f64>,
+}
+
+fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
+    let req: DetectRequest = match parse(body) {
+        Ok(r) => r,
+        Err(a) => return a,
+    };
+    let (mesh, center, file) = {
+        let st = lock(shared);
+        let d = &st.docs[k];
+        (d.tri_at(None), d.center, d.current_file())
+    };
+    let defaults = DetectOptions::default();
+    let opts = DetectOptions {
+        wiggle_threshold: req.threshold.unwrap_or(defaults.wiggle_threshold),
+        region_radius: req.region_radius.unwrap_or(defaults.region_radius),
+        plane_normal: Some(req.light.plane_normal()),
+        ..defaults
+    };
+    let t = Instant::now();
+    let model = match HighlightModel::new(&mesh, req.light, HighlightOptions::default()) {
+        Ok(m) => m,
+        Err(e) => return bad(e),
+    };
+    let lines = model.lines(&mesh);
+    let det = match detect_irregularities(&mesh, &lines, req.light.spacing(), &opts) {
+        Ok(d) => d,
+        Err(e) => return bad(e),
+    };
+    let elapsed = t.elapsed().as_secs_f64();
+    let mut meta = Vec::new();
+    let mut floats = Vec::new();
+    push_lines(&lines, center, None, &mut meta, &mut floats);
+    let mut stretches = Vec::new();
+    for l in &det.lines {
+        for s in &l.stretches {
+            let start = floats.len() / 3;
+            for p in &s.points {
+                let q = *p - center;
+                floats.extend([q.x as f32, q.y as f32, q.z as f32]);
+            }
+            stretches.push(json!({"line": l.line, "index": l.index, "score": s.score, "start": start, "count": s.points.len()}));
+        }
+    }
+    let regions: Vec<Value> = det
+        .regions
+        .iter()
+        .map(|r| {
+            json!({
+                "score": r.score,
+                "center": (r.center - center).to_array(),
+                "faces": r.faces.iter().map(|f| f.0).collect::<Vec<_>>(),
+                "lines": r.lines,
+            })
+        })
+        .collect();
+    let mut command = format!("fairline detect {file} {} -o region.json", light_args(&req.light));
+    if let Some(t) = req.threshold {
+        command.push_str(&format!(" --threshold {t}"));
+    }
+    if let Some(r) = req.region_radius {
+        command.push_str(&format!(" --region-radius {r}"));
+    }
+    let header = json!({
+        "lines": meta,
+        "bands": [],
+        "stretches": stretches,
+        "regions": regions,
+        "time_s": elapsed,
+        "command": command,
+    });
+    binary(frame(&header, &floats))
+}
+
+#[derive(Deserialize)]
+struct RegionRequest {
+    op: String,
+    #[serde(default)]
+    faces: Vec<u32>,
+    #[serde(default)]
+    rings: Option<usize>,
+    center: Option<[f64; 3]>,
+    radius: Option<f64>,
+}
+
+fn to_faces(mesh: &SurfaceMesh, faces: &[u32]) -> Vec<FaceId> {
+    let mut f: Vec<FaceId> = faces
+        .iter()
+        .filter(|&&t| (t as usize) < mesh.face_count())
+        .map(|&t| FaceId(t))
+        .collect();
+    f.sort_unstable();
+    f.dedup();
+    f
+}
+
+fn region(shared: &Shared, k: usize, body: &[u8]) -> Answer {
+    let req: RegionRequest = match parse(body) {
+        Ok(r) => r,
+        Err(a) => return a,
+    };
+    let (mesh, center) = {
+        let st = lock(shared);
+        (st.docs[k].tri_at(None), st.docs[k].center)
+    };
+    let faces = to_faces(&mesh, &req.faces);
+    let rings = req.rings.unwrap_or(1).min(1000);
+    let out: Vec<FaceId> = match req.op.as_str() {
+        "grow" => grow_region(&mesh, &faces, rings),
+        "shrink" => {
+            // the complement grown by `rings` rings, complemented again
+            let mut inside = vec![false; mesh.face_count()];
+            for f in &faces {
+                inside[f.idx()] = true;
+            }
+            let outside: Vec<FaceId> = mesh.faces().filter(|f| !inside[f.idx()]).collect();
+            if outside.is_empty() {
+                // a closed region with nothing outside: shrink from the
+                // mesh boundary is impossible; leave it
+                faces.clone()
+            } else {
+                let grown = grow_region(&mesh, &outside, rings);
+                let mut out_grown = vec![false; mesh.face_count()];
+                for f in &grown {
+                    out_grown[f.idx()] = true;
+                }
+                faces.iter().copied().filter(|f| !out_grown[f.idx()]).collect()
+            }
+        }
+        "sphere" => {
+            let (Some(c), Some(r)) = (req.center, req.radius) else {
+                return bad("sphere needs center and radius");
+            };
+            if !(r > 0.0 && r.is_finite()) || !c.iter().all(|x| x.is_finite()) {
+                return bad("sphere needs a finite center and a positive radius");
+            }
+            let c = Vec3::from(c) + center;
+            let spec = json!({"sphere": {"center": c.to_array(), "radius": r}}).to_string();
+            match RegionSpec::from_json(&spec).and_then(|s| s.faces(&mesh)) {
+                Ok(f) => f,
+                Err(e) => return bad(e),
+            }
+        }
+        other => return bad(format!("unknown region op `{other}` (grow, shrink, sphere)")),
+    };
+    json_answer(&json!({"faces": out.iter().map(|f| f.0).collect::<Vec<_>>()}))
+}
+
+/// Vertices all of whose faces are in the region.
+fn inside_vertices(mesh: &SurfaceMesh, faces: &[FaceId]) -> Vec<bool> {
+    let mut inr = vec![false; mesh.face_count()];
+    for f in faces {
+        inr[f.idx()] = true;
+    }
+    (0..mesh.vertex_count())
+        .map(|v| {
+            let mut any = false;
+            for f in mesh.vertex_faces(VertexId(v as u32)) {
+                if !inr[f.idx()] {
+                    return false;
+                }
+                any = true;
+            }
+            any
+        })
+        .collect()
+}
+
+fn region_file(shared: &Shared, k: usize, body: &[u8]) -> Answer {
+    #[derive(Deserialize)]
+    struct Req {
+        faces: Vec<u32>,
+    }
+    let req: Req = match parse(body) {
+        Ok(r) => r,
+        Err(a) => return a,
+    };
+    let st = lock(shared);
+    let d = &st.docs[k];
+    let faces = to_faces(&d.tri, &req.faces);
+    let inside = inside_vertices(&d.tri, &faces);
+    let fixed: Vec<u32> = (0..inside.len() as u32)
+        .filter(|&v| !inside[v as usize])
+        .collect();
+    json_answer(&json!({
+        "region": {"faces": d.input_faces(&req.faces)},
+        "fixed": {"vertices": fixed},
+    }))
+}
+
+#[derive(Deserialize, Default)]
+#[serde(default)]
+struct RunOptions {
+    method: Option<String>,
+    max_iterations: Option<usize>,
+    epsilon: Option<f64>,
+    iterations: Option<usize>,
+    lambda: Option<f64>,
+    mu: Option<f64>,
+    weights: Option<String>,
+    weight: Option<f64>,
+}
+
+#[derive(Deserialize)]
+struct RunRequest {
+    method: String,
+    #[serde(default)]
+    faces: Option<Vec<u32>>,
+    light: Option<LightArray>,
+    #[serde(default)]
+    options: RunOptions,
+}
+
+/// What a finished job gives: new positions, report, command, label.
+struct Outcome {
+    positions: Vec<Vec3>,
+    report: Value,
+    command: String,
+    label: String,
+}
+
+/// Fraction of a job done, written by the job, read by its watcher.
+type Progress = Arc<Mutex<f64>>;
+
+fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
+    let req: RunRequest = match parse(body) {
+        Ok(r) => r,
+        Err(a) => return a,
+    };
+    let mut st = lock(shared);
+    if st.job.as_ref().is_some_and(|j| j.state == "running") {
+        return error(409, "a job is already running; wait for it or cancel it");
+    }
+    let d = &st.docs[k];
+    if d.is_surface() {
+        return bad("mesh methods need a mesh document; this one is a B-spline surface");
+    }
+    let tri = d.tri_at(None);
+    let mesh = d.mesh_now();
+    let file = d.current_file();
+    let out = d.next_file();
+    let id = st.next_job;
+    st.next_job += 1;
+    let cancel = Arc::new(AtomicBool::new(false));
+    st.job = Some(Job {
+        id,
+        doc: k,
+        label: req.method.clone(),
+        state: "running",
+        progress: 0.0,
+        message: format!("{} running", req.method),
+        report: Value::Null,
+        command: String::new(),
+        cancel: Arc::clone(&cancel),
+        started: Instant::now(),
+    });
+    drop(st);
+    let ctx = JobContext {
+        id,
+        doc: k,
+        cancel,
+        progress: Arc::new(Mutex::new(0.0)),
+    };
+    let shared = Arc::clone(shared);
+    std::thread::spawn(move || {
+        let progress = Arc::clone(&ctx.progress);
+        let (tx, rx) = std::sync::mpsc::channel();
+        let worker = std::thread::spawn(move || {
+            let r = run_method(&req, &tri, &mesh, &file, &out, &progress);
+            let _ = tx.send(());
+            r
+        });
+        // copy the progress into the job while it runs
+        while rx
+            .recv_timeout(std::time::Duration::from_millis(100))
+            .is_err()
+            && !worker.is_finished()
+        {
+            let p = *ctx.progress.lock().unwrap_or_else(|e| e.into_inner());
+            let mut st = lock(&shared);
+            if let Some(j) = st.job.as_mut()
+                && j.id == ctx.id
+                && j.state == "running"
+            {
+                j.progress = p;
+            }
+        }
+        let result = worker
+            .join()
+            .unwrap_or_else(|_| Err("the computation panicked".to_string()));
+        finish_job(&shared, &ctx, result);
+    });
+    json_answer(&json!({"job": id}))
+}
+
+struct JobContext {
+    id: u64,
+    doc: usize,
+    cancel: Arc<AtomicBool>,
+    progress: Progress,
+}
+
+fn finish_job(shared: &Shared, ctx: &JobContext, result: Result<Outcome, String>) {
+    let mut st = lock(shared);
+    let cancelled = ctx.cancel.load(Ordering::SeqCst);
+    match result {
+        Ok(o) if !cancelled => {
+            let d = &mut st.docs[ctx.doc];
+            let surfaces = d.current().surfaces.clone();
+            d.push(Step {
+                label: o.label.clone(),
+                command: o.command.clone(),
+                report: o.report.clone(),
+                positions: Arc::new(o.positions),
+                surfaces,
+            });
+            if let Some(j) = st.job.as_mut()
+                && j.id == ctx.id
+            {
+                j.state = "done";
+                j.progress = 1.0;
+                j.message = format!("{} done", o.label);
+                j.report = o.report;
+                j.command = o.command;
+            }
+        }
+        Ok(_) => {}
+        Err(e) => {
+            if let Some(j) = st.job.as_mut()
+                && j.id == ctx.id
+                && !cancelled
+            {
+                j.state = "failed";
+                j.message = e;
+            }
+        }
+    }
+}
+
+fn run_method(
+    req: &RunRequest,
+    tri: &SurfaceMesh,
+    mesh: &SurfaceMesh,
+    file: &str,
+    out: &str,
+    progress: &Progress,
+) -> Result<Outcome, String> {
+    let o = &req.options;
+    let faces = req.faces.as_ref().map(|f| to_faces(tri, f));
+    let fixed_outside = |m: &SurfaceMesh| -> Vec<VertexId> {
+        match &faces {
+            None => Vec::new(),
+            Some(f) => {
+                let inside = inside_vertices(tri, f);
+                let _ = m;
+                (0..inside.len() as u32)
+                    .filter(|&v| !inside[v as usize])
+                    .map(VertexId)
+                    .collect()
+            }
+        }
+    };
+    let fixed_arg = if faces.is_some() { " --fixed fixed.json" } else { "" };
+    let t = Instant::now();
+    match req.method.as_str() {
+        "fair" => {
+            let faces = faces.as_ref().ok_or("fairing needs a region (faces)")?;
+            let light = req.light.ok_or("fairing needs the light array")?;
+            let method = match o.method.as_deref().unwrap_or("highlight") {
+                "highlight" => FairMethod::Highlight,
+                "diffusion-flow" => FairMethod::DiffusionFlow,
+                m => return Err(format!("unknown fairing method `{m}`")),
+            };
+            let defaults = FairOptions::default();
+            let options = FairOptions {
+                method,
+                max_iterations: o.max_iterations.unwrap_or(defaults.max_iterations),
+                epsilon: o.epsilon.unwrap_or(defaults.epsilon),
+                ..defaults
+            };
+            let total = options.max_iterations.max(1) as f64;
+            let mut done = 0.0;
+            let r = fair_highlight_lines_with(tri, &light, faces, &options, &mut |_| {
+                done += 1.0;
+                *progress.lock().unwrap_or_else(|e| e.into_inner()) = (done / total).min(1.0);
+            })
+            .map_err(|e| e.to_string())?;
+            let mut report = crate::fair::result_json(&r);
+            report["command"] = json!("fair");
+            report["time_s"] = json!(t.elapsed().as_secs_f64());
+            let m = o.method.as_deref().unwrap_or("highlight");
+            Ok(Outcome {
+                positions: r.mesh.positions().to_vec(),
+                report,
+                command: format!(
+                    "fairline fair {file} --region region.json {} --method {m} --max-iterations {} --epsilon {} -o {out}",
+                    light_args(&light),
+                    options.max_iterations,
+                    options.epsilon
+                ),
+                label: format!("fair ({m})"),
+            })
+        }
+        "smooth" => {
+            use fairline::smooth::{
+                Constraints, ImplicitOptions, LaplaceOptions, SchneiderKobbeltOptions,
+                SpringOptions, TaubinOptions, implicit_smooth, laplace_smooth, schneider_kobbelt,
+                spring_smooth, taubin_smooth,
+            };
+            let mut m = mesh.clone();
+            let constraints = Constraints {
+                fixed: fixed_outside(mesh),
+                ..Constraints::default()
+            };
+            let (weights, wname) = match o.weights.as_deref().unwrap_or("cotan") {
+                "uniform" => (LaplaceWeights::Uniform, "uniform"),
+                "cotan" => (LaplaceWeights::Cotangent, "cotan"),
+                w => return Err(format!("unknown weights `{w}` (uniform, cotan)")),
+            };
+            let method = o.method.as_deref().unwrap_or("taubin").to_string();
+            let iterations = o.iterations;
+            let r = match method.as_str() {
+                "laplace" => laplace_smooth(
+                    &mut m,
+                    &LaplaceOptions {
+                        weights,
+                        lambda: o.lambda.unwrap_or(0.5),
+                        iterations: iterations.unwrap_or(10),
+                        constraints,
+                    },
+                ),
+                "taubin" => taubin_smooth(
+                    &mut m,
+                    &TaubinOptions {
+                        weights,
+                        iterations: iterations.unwrap_or(10),
+                        constraints,
+                        ..TaubinOptions::default()
+                    },
+                )
+                .map(|(r, _)| r),
+                "implicit" => implicit_smooth(
+                    &mut m,
+                    &ImplicitOptions {
+                        iterations: iterations.unwrap_or(1),
+                        constraints,
+                        ..ImplicitOptions::default()
+                    },
+                ),
+                "spring" => {
+                    let d = SpringOptions::default();
+                    spring_smooth(
+                        &mut m,
+                        &SpringOptions {
+                            max_iterations: iterations.unwrap_or(d.max_iterations),
+                            constraints,
+                            ..d
+                        },
+                    )
+                }
+                "schneider-kobbelt" => {
+                    let d = SchneiderKobbeltOptions::default();
+                    schneider_kobbelt(
+                        &mut m,
+                        &SchneiderKobbeltOptions {
+                            max_iterations: iterations.unwrap_or(d.max_iterations),
+                            constraints,
+                            ..d
+                        },
+                    )
+                }
+                other => return Err(format!("unknown smoothing method `{other}`")),
+            }
+            .map_err(|e| e.to_string())?;
+            let mut cmd = format!("fairline smooth {file} --method {method}");
+            if matches!(method.as_str(), "laplace" | "taubin") {
+                cmd.push_str(&format!(" --weights {wname}"));
+            }
+            if let Some(i) = iterations {
+                cmd.push_str(&format!(" --iterations {i}"));
+            }
+            if method == "laplace"
+                && let Some(l) = o.lambda
+            {
+                cmd.push_str(&format!(" --lambda {l}"));
+            }
+            cmd.push_str(&format!("{fixed_arg} -o {out}"));
+            Ok(Outcome {
+                positions: m.positions().to_vec(),
+                report: json!({
+                    "command": "smooth",
+                    "method": method,
+                    "iterations": r.iterations,
+                    "converged": r.converged,
+                    "volume_before": r.volume_before,
+                    "volume_after": r.volume_after,
+                    "max_displacement": r.max_displacement,
+                    "time_s": t.elapsed().as_secs_f64(),
+                }),
+                command: cmd,
+                label: format!("smooth ({method})"),
+            })
+        }
+        "fair-quad" => {
+            use fairline::fair::{QuadFairOptions, fair_structure_lines};
+            if !mesh.faces().any(|f| mesh.face_size(f) == 4) {
+                return Err("fair-quad needs a quad mesh (no quadrilateral found)".into());
+            }
+            let mut m = mesh.clone();
+            let d = QuadFairOptions::default();
+            let opts = QuadFairOptions {
+                weight: o.weight.unwrap_or(d.weight),
+                iterations: o.iterations.unwrap_or(d.iterations),
+                fixed: fixed_outside(mesh),
+                ..d
+            };
+            let r = fair_structure_lines(&mut m, &opts).map_err(|e| e.to_string())?;
+            Ok(Outcome {
+                positions: m.positions().to_vec(),
+                report: json!({
+                    "command": "fair-quad",
+                    "structure_lines": r.structure_lines,
+                    "free_vertices": r.free_vertices,
+                    "structure_energy_before": r.structure_energy_before,
+                    "structure_energy_after": r.structure_energy_after,
+                    "max_displacement": r.max_displacement,
+                    "iterations": r.iterations,
+                    "time_s": t.elapsed().as_secs_f64(),
+                }),
+                command: format!(
+                    "fairline fair-quad {file} --weight {} --iterations {}{fixed_arg} -o {out}",
+                    opts.weight, opts.iterations
+                ),
+                label: "fair-quad".into(),
+            })
+        }
+        "enhance" => {
+            use fairline::enhance::{EnhanceOptions, enhance_features};
+            let d = EnhanceOptions::default();
+            let lambda = o.lambda.unwrap_or(1.0);
+            let mu = o.mu.unwrap_or(0.5);
+            let iterations = o.iterations.unwrap_or(d.iterations);
+            let opts = EnhanceOptions::default()
+                .lambda(lambda)
+                .mu(mu)
+                .iterations(iterations)
+                .fixed(fixed_outside(tri));
+            let r = enhance_features(tri, &opts).map_err(|e| e.to_string())?;
+            Ok(Outcome {
+                report: json!({
+                    "command": "enhance",
+                    "flipped_triangles": r.report.flipped_triangles,
+                    "quality_before": r.report.quality_before,
+                    "quality_after": r.report.quality_after,
+                    "max_displacement": r.report.max_displacement,
+                    "time_s": t.elapsed().as_secs_f64(),
+                }),
+                positions: r.positions,
+                command: format!(
+                    "fairline enhance {file} --lambda {lambda} --mu {mu} --iterations {iterations}{fixed_arg} -o {out}"
+                ),
+                label: "enhance".into(),
+            })
+        }
+        other => Err(format!(
+            "unknown method `{other}` (fair, smooth, fair-quad, enhance)"
+        )),
+    }
+}
+
+fn move_cursor(shared: &Shared, k: usize, by: i64) -> Answer {
+    let mut st = lock(shared);
+    let d = &mut st.docs[k];
+    let next = d.cursor as i64 + by;
+    if next < 0 || next >= d.history.len() as i64 {
+        return error(409, if by < 0 { "nothing to undo" } else { "nothing to redo" });
+    }
+    d.cursor = next as usize;
+    json_answer(&json!({"cursor": d.cursor, "label": d.history[d.cursor].label}))
+}
+
+/// The current mesh (or surfaces) in a format, as bytes.
+fn current_bytes(d: &Doc, ext: &str) -> Result<Vec<u8>, String> {
+    if ext == "json" {
+        let Some(s) = &d.current().surfaces else {
+            return Err("JSON is for surfaces; meshes download as obj, ply, off or stl".into());
+        };
+        return Ok(fairline::bspline::surfaces_to_json(s).into_bytes());
+    }
+    if !matches!(ext, "obj" | "ply" | "off" | "stl") {
+        return Err(format!("unknown format `{ext}` (obj, ply, off, stl, json)"));
+    }
+    let mesh = d.mesh_now();
+    let dir = std::env::temp_dir();
+    let name = format!(
+        "fairline-view-{}-{}.{ext}",
+        std::process::id(),
+        super::auth::new_token().map_err(|e| e.to_string())?
+    );
+    let path = dir.join(name);
+    let r = fairline::io::write_mesh(&path, &mesh)
+        .map_err(|e| e.to_string())
+        .and_then(|_| std::fs::read(&path).map_err(|e| e.to_string()));
+    let _ = std::fs::remove_file(&path);
+    r
+}
+
+fn download(shared: &Shared, k: usize, url: &str) -> Answer {
+    let st = lock(shared);
+    let d = &st.docs[k];
+    let ext = query_param(url, "format").unwrap_or_else(|| {
+        if d.is_surface() { "json".into() } else { "ply".into() }
+    });
+    match current_bytes(d, &ext) {
+        Ok(bytes) => {
+            let mut a = binary(bytes);
+            let stem = d
+                .path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "mesh".into());
+            a.headers.push((
+                "Content-Disposition".into(),
+                format!(
+                    "attachment; filename=\"{}-step{}.{ext}\"",
+                    stem.replace(['"', '\\'], "_"),
+                    d.cursor
+                ),
+            ));
+            a
+        }
+        Err(e) => bad(e),
+    }
+}
+
+/// A plain file name: no separator, not `.`/`..`, no leading dot, no
+/// control characters, at most 200 bytes.
+pub fn safe_file_name(name: &str) -> Result<&str, String> {
+    let ok = !name.is_empty()
+        && name.len() <= 200
+        && !name.starts_with('.')
+        && !name.contains(['/', '\\', ':', '\0'])
+        && !name.chars().any(char::is_control);
+    if ok {
+        Ok(name)
+    } else {
+        Err(format!(
+            "`{name}` is not a plain file name (no folders, no leading dot)"
+        ))
+    }
+}
+
+fn save(shared: &Shared, k: usize, body: &[u8]) -> Answer {
+    #[derive(Deserialize)]
+    struct Req {
+        name: String,
+    }
+    let req: Req = match parse(body) {
+        Ok(r) => r,
+        Err(a) => return a,
+    };
+    let name = match safe_file_name(&req.name) {
+        Ok(n) => n,
+        Err(e) => return bad(e),
+    };
+    let st = lock(shared);
+    let d = &st.docs[k];
+    let path = st.save_dir.join(name);
+    for input in st.docs.iter().map(|d| &d.path) {
+        if let Err(e) = fairline::io::ensure_distinct(input, &path) {
+            return bad(e);
+        }
+    }
+    let ext = std::path::Path::new(name)
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let bytes = match current_bytes(d, &ext) {
+        Ok(b) => b,
+        Err(e) => return bad(e),
+    };
+    match fairline::io::atomic_write(&path, |w| std::io::Write::write_all(w, &bytes)) {
+        Ok(()) => json_answer(&json!({
+            "path": path.display().to_string(),
+            "bytes": bytes.len(),
+            "command": format!("# saved step {} of {} as {}", d.cursor, d.name, shell_word(&path.display().to_string())),
+        })),
+        Err(e) => error(500, e.to_string()),
+    }
+}

@@ -1,0 +1,248 @@
+//! An open document of the workbench: a mesh or a set of B-spline surfaces,
+//! the triangle mesh drawn for it, and its history of steps (undo/redo).
+
+use crate::common::bad_input;
+use anyhow::Result;
+use fairline::bspline::{BSplineSurface, tessellate};
+use fairline::mesh::FaceId;
+use fairline::{SurfaceMesh, Vec3};
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// One state of a document: its positions (and surfaces) after an action.
+pub struct Step {
+    /// What was done ("open", "fair (highlight)", ...).
+    pub label: String,
+    /// The equivalent `fairline` command.
+    pub command: String,
+    /// The report of the action.
+    pub report: Value,
+    /// Vertex positions of the drawn triangle mesh.
+    pub positions: Arc<Vec<Vec3>>,
+    /// The surfaces (surface documents only).
+    pub surfaces: Option<Arc<Vec<BSplineSurface>>>,
+}
+
+/// A mesh or surface file opened in the workbench.
+pub struct Doc {
+    /// File name shown on the page.
+    pub name: String,
+    /// The path given on the command line.
+    pub path: PathBuf,
+    /// The mesh as read (polygons kept); for surfaces, the tessellation.
+    pub mesh: SurfaceMesh,
+    /// The triangle mesh drawn and given to triangle algorithms; the same
+    /// vertices as `mesh`.
+    pub tri: SurfaceMesh,
+    /// Input face of each triangle when `mesh` has polygons.
+    pub tri_source: Option<Vec<FaceId>>,
+    /// Patch index of each triangle (surfaces), else empty.
+    pub patch_of_triangle: Vec<u32>,
+    /// Tessellation grid per patch direction (surfaces).
+    pub grid: usize,
+    /// Scalar vertex properties read from a PLY file.
+    pub ply_scalars: Vec<(String, Vec<f64>)>,
+    /// Bounding-box centre of the input (binary positions are relative to it).
+    pub center: Vec3,
+    /// Half the bounding-box diagonal.
+    pub radius: f64,
+    /// Bounding box of the input.
+    pub bbox: (Vec3, Vec3),
+    /// Steps; `history[cursor]` is the current state.
+    pub history: Vec<Step>,
+    /// Index of the current step.
+    pub cursor: usize,
+}
+
+/// The triangle mesh of surfaces tessellated `n` × `n` per patch, and the
+/// patch index of each triangle.
+pub fn tessellate_all(surfaces: &[BSplineSurface], n: usize) -> Result<(SurfaceMesh, Vec<u32>)> {
+    let mut positions = Vec::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    let mut patch = Vec::new();
+    for (k, s) in surfaces.iter().enumerate() {
+        let t = tessellate(s, n, n);
+        let base = positions.len() as u32;
+        positions.extend(t.positions);
+        for tri in &t.triangles {
+            // degenerate corners (poles) would make the mesh non-manifold
+            if tri[0] != tri[1] && tri[1] != tri[2] && tri[0] != tri[2] {
+                triangles.push(tri.map(|i| i + base));
+                patch.push(k as u32);
+            }
+        }
+    }
+    let mesh = SurfaceMesh::new(positions, &triangles)?;
+    Ok((mesh, patch))
+}
+
+impl Doc {
+    /// Reads a mesh or surface file.
+    pub fn open(path: &Path, grid: usize) -> Result<Doc> {
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| path.display().to_string());
+        let (mesh, surfaces, patch_of_triangle, ply_scalars) =
+            if crate::surface::is_surface_path(path) {
+                let surfaces = crate::surface::load_surfaces(path)?;
+                let (mesh, patch) = tessellate_all(&surfaces, grid)?;
+                (mesh, Some(Arc::new(surfaces)), patch, Vec::new())
+            } else {
+                let mesh = fairline::io::read_mesh(path)?;
+                let is_ply = path
+                    .extension()
+                    .and_then(|e| e.to_str())
+                    .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+                let scalars = if is_ply {
+                    fairline::io::read_ply_vertex_properties(path)
+                        .map(|(_, props)| props)
+                        .unwrap_or_default()
+                        .into_iter()
+                        .filter(|(n, v)| {
+                            v.len() == mesh.vertex_count()
+                                && !matches!(n.as_str(), "nx" | "ny" | "nz" | "red" | "green" | "blue" | "alpha")
+                        })
+                        .collect()
+                } else {
+                    Vec::new()
+                };
+                (mesh, None, Vec::new(), scalars)
+            };
+        let (lo, hi) = fairline::mesh::bounding_box(mesh.positions())
+            .ok_or_else(|| bad_input(format!("{}: no vertices", path.display())))?;
+        if mesh.face_count() == 0 {
+            return Err(bad_input(format!("{}: no faces", path.display())));
+        }
+        let (tri, tri_source) = if mesh.is_triangle_mesh() {
+            (mesh.clone(), None)
+        } else {
+            let t = fairline::mesh::triangulate(&mesh);
+            (t.mesh, Some(t.source_face))
+        };
+        let positions = Arc::new(mesh.positions().to_vec());
+        let center = 0.5 * (lo + hi);
+        let radius = (0.5 * (hi - lo).length()).max(f64::MIN_POSITIVE);
+        let kind = if surfaces.is_some() { "surface" } else { "mesh" };
+        Ok(Doc {
+            name: name.clone(),
+            path: path.to_path_buf(),
+            mesh,
+            tri,
+            tri_source,
+            patch_of_triangle,
+            grid,
+            ply_scalars,
+            center,
+            radius,
+            bbox: (lo, hi),
+            history: vec![Step {
+                label: "open".into(),
+                command: format!("fairline view {}", shell_word(&path.display().to_string())),
+                report: json!({"command": "open", "kind": kind}),
+                positions,
+                surfaces,
+            }],
+            cursor: 0,
+        })
+    }
+
+    /// True for B-spline surface documents.
+    pub fn is_surface(&self) -> bool {
+        self.history[0].surfaces.is_some()
+    }
+
+    /// The current step.
+    pub fn current(&self) -> &Step {
+        &self.history[self.cursor]
+    }
+
+    /// The step `n` (clamped to the history).
+    pub fn step(&self, n: Option<usize>) -> &Step {
+        &self.history[n.unwrap_or(self.cursor).min(self.history.len() - 1)]
+    }
+
+    /// The drawn triangle mesh at step `n`.
+    pub fn tri_at(&self, n: Option<usize>) -> SurfaceMesh {
+        let mut m = self.tri.clone();
+        // same vertex count by construction
+        let _ = m.set_positions(self.step(n).positions.to_vec());
+        m
+    }
+
+    /// The input mesh (polygons kept) at the current step.
+    pub fn mesh_now(&self) -> SurfaceMesh {
+        let mut m = self.mesh.clone();
+        let _ = m.set_positions(self.current().positions.to_vec());
+        m
+    }
+
+    /// Appends a step after the current one (dropping the redo tail).
+    pub fn push(&mut self, step: Step) {
+        self.history.truncate(self.cursor + 1);
+        self.history.push(step);
+        self.cursor = self.history.len() - 1;
+    }
+
+    /// The file name the current state would have as a command's output.
+    pub fn current_file(&self) -> String {
+        if self.cursor == 0 {
+            return shell_word(&self.path.display().to_string());
+        }
+        let stem = self
+            .path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "out".into());
+        shell_word(&format!("{stem}-step{}.{}", self.cursor, self.out_ext()))
+    }
+
+    /// The file name of the next step's output.
+    pub fn next_file(&self) -> String {
+        let stem = self
+            .path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "out".into());
+        shell_word(&format!("{stem}-step{}.{}", self.cursor + 1, self.out_ext()))
+    }
+
+    fn out_ext(&self) -> String {
+        if self.is_surface() {
+            return "json".into();
+        }
+        self.path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_else(|| "ply".into())
+    }
+
+    /// The region JSON of DESIGN.md §5 for a set of drawn triangles, in the
+    /// input's face indices.
+    pub fn input_faces(&self, triangles: &[u32]) -> Vec<u32> {
+        let mut out: Vec<u32> = triangles
+            .iter()
+            .filter(|&&t| (t as usize) < self.tri.face_count())
+            .map(|&t| match &self.tri_source {
+                Some(src) => src[t as usize].0,
+                None => t,
+            })
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+}
+
+/// `s` quoted for a POSIX shell when it holds anything but plain characters.
+pub fn shell_word(s: &str) -> String {
+    if !s.is_empty()
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || "-_./,=:+".contains(c))
+    {
+        s.to_string()
+    } else {
+        format!("'{}'", s.replace('\'', "'\\''"))
+    }
+}

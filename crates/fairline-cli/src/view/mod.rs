@@ -1,0 +1,197 @@
+//! `fairline view`: the workbench, a local browser app over the library.
+//!
+//! The command reads the files named on the command line, starts an HTTP
+//! server bound to 127.0.0.1 only, prints the page URL with a random access
+//! token as the first line of standard output, opens the browser (unless
+//! `--no-open`) and serves until interrupted. The page (crates/fairline-cli/web,
+//! embedded in the binary) is a client of the JSON API below; the only
+//! computation in JavaScript is shading.
+//!
+//! # Security
+//! - The listener is bound to 127.0.0.1.
+//! - Every request must carry the token: as the `token` query parameter
+//!   (the page URL), the `X-Fairline-Token` header (API calls of the page),
+//!   or, for GET requests only, the `fairline_PORT` cookie the page response
+//!   sets (`HttpOnly; SameSite=Strict`, so that the page's ES module imports
+//!   load). Anything else gets 403, the page included.
+//! - The `Host` header must be `127.0.0.1:PORT` or `localhost:PORT` (DNS
+//!   rebinding), an `Origin` header, when present, `http://127.0.0.1:PORT`
+//!   or `http://localhost:PORT`, and `Sec-Fetch-Site: cross-site` is refused
+//!   (cross-site requests). POST requests need the header token: a form of
+//!   another site cannot set it, and no CORS header is ever sent.
+//! - Only the files named on the command line are read; saves go to
+//!   `--save-dir` (default: the current folder) under a plain file name (no
+//!   separator, no `..`), atomically, never over an input file.
+//!
+//! # API (all paths under `/api`, all JSON unless said otherwise)
+//! - `GET /api/session`: the open documents `docs[k]` with `name`, `kind`
+//!   (`mesh` | `surface`), `vertices`, `triangles`, `center` (positions in
+//!   binary buffers are relative to it), `radius`, `bbox`, `scalars`
+//!   (names with `min`, `max`, `lo`, `hi` = 2nd/98th percentiles),
+//!   `patches`, `light` (the default linear light array of DESIGN.md §5),
+//!   `min_normal_cos`, `history` (`cursor`, `steps` with `label`, `command`);
+//!   plus `save_dir` and `job`.
+//! - `GET /api/doc/K/positions[?step=N]`, `.../normals[?step=N]`:
+//!   little-endian f32 triples per vertex (positions minus `center`;
+//!   normals = the library's area-weighted vertex normals, Yong et al.
+//!   Eq. (3)); `step` selects a history step (default the current one).
+//! - `GET /api/doc/K/indices`: u32 triples per triangle.
+//! - `GET /api/doc/K/patches`: u32 patch index per triangle (surfaces).
+//! - `GET /api/doc/K/scalar/NAME`: f32 per vertex (`k1 k2 mean gauss` by
+//!   Rusinkiewicz's method, or a PLY vertex property of the input).
+//! - `POST /api/doc/K/lines` `{"light":LIGHT}` or
+//!   `{"circular":{"center","axis","radii"}}`, optional `"band":rho`: the
+//!   library's exact highlight polylines. Binary frame: u32 length of a JSON
+//!   header, the header, padding to 4 bytes, then f32 points (minus
+//!   `center`); the header lists `lines` (`index`, `closed`, `start`,
+//!   `count` into the points), `bands`, `time_s` and `command`.
+//! - `POST /api/doc/K/detect` `{"light":LIGHT, "threshold"?, "region_radius"?}`:
+//!   the same frame; the header adds `stretches` (irregular stretches,
+//!   `start`, `count`, `score`) and the ranked `regions` (`score`, `center`,
+//!   `faces` as triangle indices).
+//! - `POST /api/doc/K/region` `{"faces":[..], "op":"grow"|"shrink", "rings":n}`
+//!   or `{"op":"sphere","center":[x,y,z],"radius":r}`: a triangle set.
+//! - `POST /api/doc/K/region-file` `{"faces":[..]}`: the region JSON of
+//!   DESIGN.md §5 in the input file's face indices, and `fixed`: the fixed
+//!   vertices file (every vertex not inside the region).
+//! - `POST /api/doc/K/run` `{"method":M, "faces"?, "light"?, "options"?}`
+//!   with M one of `fair` (options `method` highlight|diffusion-flow,
+//!   `max_iterations`, `epsilon`), `smooth` (options `method`, `iterations`,
+//!   `lambda`, `weights`), `fair-quad` (`weight`, `iterations`), `enhance`
+//!   (`lambda`, `mu`, `iterations`): starts a job on a thread; answers
+//!   `{"job":id}`. With `faces`, only the vertices inside the region move.
+//! - `GET /api/job`: `{"id","state":"running"|"done"|"failed"|"cancelled",
+//!   "progress":0..1,"message","report","command"}`. `POST /api/job/cancel`.
+//!   The library has no cancel hook: a cancelled job runs to its end on its
+//!   thread and its result is thrown away; progress is per iteration where
+//!   the library reports iterations (highlight fairing), else coarse.
+//! - `POST /api/doc/K/undo`, `POST /api/doc/K/redo`: move in the history.
+//! - `GET /api/doc/K/download?format=obj|ply|off|stl|json`: the current mesh
+//!   (or surfaces as JSON) as a file.
+//! - `POST /api/doc/K/save` `{"name":"file.obj"}`: writes the current mesh
+//!   (or surfaces .json) into the save folder, atomically.
+
+mod api;
+mod assets;
+mod auth;
+mod doc;
+mod frame;
+
+use crate::common::bad_input;
+use anyhow::{Context, Result};
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+/// Opens meshes (.obj .ply .off .stl) or B-spline surfaces (.json .igs
+/// .iges) in the browser: exact highlight shading on the GPU, the
+/// library's highlight lines and detected irregularities, marking a region
+/// and fairing or smoothing it, with undo/redo and the equivalent command
+/// for each step. Prints the page URL (with its access token) as the first
+/// line of standard output and serves until interrupted (Ctrl-C).
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Examples:\n  fairline view bunny.ply\n  fairline view panel.obj panel-faired.obj --no-open\n  fairline view roof.json --port 8765 --save-dir out"
+)]
+pub struct Args {
+    /// Mesh or surface to open.
+    pub file: PathBuf,
+    /// A second mesh or surface shown beside the first.
+    pub file2: Option<PathBuf>,
+    /// Port on 127.0.0.1 (default: a free one).
+    #[arg(long)]
+    pub port: Option<u16>,
+    /// Do not open the browser; only print the URL.
+    #[arg(long)]
+    pub no_open: bool,
+    /// Folder where the page may save files (default: the current folder).
+    #[arg(long, value_name = "DIR")]
+    pub save_dir: Option<PathBuf>,
+    /// Grid points per direction and patch when tessellating surfaces.
+    #[arg(long, default_value_t = 64, value_name = "N")]
+    pub grid: usize,
+}
+
+/// Worker threads answering requests (a job runs on its own thread).
+const WORKERS: usize = 4;
+
+pub fn run(args: Args) -> Result<()> {
+    let save_dir = match &args.save_dir {
+        Some(d) => d.clone(),
+        None => std::env::current_dir().context("the current folder")?,
+    };
+    if !save_dir.is_dir() {
+        return Err(bad_input(format!(
+            "--save-dir {}: not a folder",
+            save_dir.display()
+        )));
+    }
+    if !(2..=1024).contains(&args.grid) {
+        return Err(bad_input("--grid must be between 2 and 1024"));
+    }
+    let mut docs = vec![doc::Doc::open(&args.file, args.grid)?];
+    if let Some(f2) = &args.file2 {
+        docs.push(doc::Doc::open(f2, args.grid)?);
+    }
+    let token = auth::new_token()?;
+    let server = tiny_http::Server::http(("127.0.0.1", args.port.unwrap_or(0)))
+        .map_err(|e| anyhow::anyhow!("cannot listen on 127.0.0.1:{}: {e}", args.port.unwrap_or(0)))?;
+    let port = server
+        .server_addr()
+        .to_ip()
+        .map(|a| a.port())
+        .ok_or_else(|| anyhow::anyhow!("the server has no TCP address"))?;
+    let url = format!("http://127.0.0.1:{port}/?token={token}");
+    {
+        let mut out = std::io::stdout().lock();
+        writeln!(out, "{url}")?;
+        out.flush()?;
+    }
+    let names: Vec<String> = docs.iter().map(|d| d.name.clone()).collect();
+    eprintln!(
+        "fairline view: serving {} on 127.0.0.1:{port} (saves go to {}); Ctrl-C to stop",
+        names.join(" and "),
+        save_dir.display()
+    );
+    if !args.no_open {
+        open_browser(&url);
+    }
+    let state = Arc::new(api::Shared {
+        state: Mutex::new(api::State::new(docs, save_dir)),
+        guard: auth::Guard::new(token, port),
+    });
+    let server = Arc::new(server);
+    let mut workers = Vec::new();
+    for _ in 0..WORKERS {
+        let server = Arc::clone(&server);
+        let state = Arc::clone(&state);
+        workers.push(std::thread::spawn(move || {
+            while let Ok(req) = server.recv() {
+                api::handle(&state, req);
+            }
+        }));
+    }
+    for w in workers {
+        let _ = w.join();
+    }
+    Ok(())
+}
+
+/// Opens `url` with xdg-open (open on macOS); failure is a warning.
+fn open_browser(url: &str) {
+    let opener = if cfg!(target_os = "macos") {
+        "open"
+    } else {
+        "xdg-open"
+    };
+    match std::process::Command::new(opener)
+        .arg(url)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+    {
+        Ok(_) => {}
+        Err(e) => eprintln!("warning: could not open a browser ({opener}: {e}); open the URL above by hand"),
+    }
+}

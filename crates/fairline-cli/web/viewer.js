@@ -1,0 +1,357 @@
+// WebGL2 viewer: one or two documents side by side under one camera, the
+// exact highlight shading of shaders/surface.frag, overlays (exact lines,
+// irregular stretches, region, wireframe, patch boundaries).
+import { Camera } from './camera.js';
+import { colormapTexture } from './colormap.js';
+
+async function shaderText(name) {
+  const r = await fetch(`shaders/${name}`);
+  if (!r.ok) throw new Error(`shader ${name}: ${r.status}`);
+  return r.text();
+}
+
+function compile(gl, type, src, name) {
+  const s = gl.createShader(type);
+  gl.shaderSource(s, src);
+  gl.compileShader(s);
+  if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) throw new Error(`${name}: ${gl.getShaderInfoLog(s)}`);
+  return s;
+}
+
+async function program(gl, vert, frag) {
+  const p = gl.createProgram();
+  gl.attachShader(p, compile(gl, gl.VERTEX_SHADER, await shaderText(vert), vert));
+  gl.attachShader(p, compile(gl, gl.FRAGMENT_SHADER, await shaderText(frag), frag));
+  gl.bindAttribLocation(p, 0, 'aPosition');
+  gl.bindAttribLocation(p, 1, 'aNormal');
+  gl.bindAttribLocation(p, 2, 'aScalar');
+  gl.linkProgram(p);
+  if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(`${vert}+${frag}: ${gl.getProgramInfoLog(p)}`);
+  const uniforms = {};
+  const n = gl.getProgramParameter(p, gl.ACTIVE_UNIFORMS);
+  for (let i = 0; i < n; i++) {
+    const info = gl.getActiveUniform(p, i);
+    const name = info.name.replace(/\[0\]$/, '');
+    uniforms[name] = { loc: gl.getUniformLocation(p, info.name), type: info.type, size: info.size };
+  }
+  return { p, uniforms };
+}
+
+function setUniforms(gl, prog, values) {
+  for (const [name, v] of Object.entries(values)) {
+    const u = prog.uniforms[name];
+    if (!u) continue;
+    switch (u.type) {
+      case gl.FLOAT: if (u.size > 1) { const a = new Float32Array(u.size); a.set(v.slice(0, u.size)); gl.uniform1fv(u.loc, a); } else gl.uniform1f(u.loc, v); break;
+      case gl.INT: case gl.SAMPLER_2D: case gl.BOOL: gl.uniform1i(u.loc, v); break;
+      case gl.FLOAT_VEC3: gl.uniform3fv(u.loc, v); break;
+      case gl.FLOAT_VEC4: gl.uniform4fv(u.loc, v); break;
+      case gl.FLOAT_MAT4: gl.uniformMatrix4fv(u.loc, false, v); break;
+      default: break;
+    }
+  }
+}
+
+// Segments (pairs of points) of polylines from a frame header + data.
+export function segments(lines, data) {
+  let n = 0;
+  for (const l of lines) n += 2 * (l.count - 1 + (l.closed ? 1 : 0));
+  const out = new Float32Array(3 * Math.max(n, 0));
+  let o = 0;
+  for (const l of lines) {
+    const last = l.count - 1 + (l.closed ? 1 : 0);
+    for (let i = 0; i < last; i++) {
+      const a = l.start + i, b = l.start + ((i + 1) % l.count);
+      out.set(data.subarray(3 * a, 3 * a + 3), o); o += 3;
+      out.set(data.subarray(3 * b, 3 * b + 3), o); o += 3;
+    }
+  }
+  return out;
+}
+
+export class Viewer {
+  constructor(canvas) {
+    this.canvas = canvas;
+    const gl = canvas.getContext('webgl2', { antialias: true, preserveDrawingBuffer: true });
+    if (!gl) throw new Error('this browser has no WebGL2');
+    this.gl = gl;
+    this.camera = new Camera();
+    this.docs = [];
+    this.wireframe = false;
+    this.dirty = true;
+    this.onFrame = null;
+    this.frames = 0;
+  }
+
+  async init() {
+    const gl = this.gl;
+    this.surface = await program(gl, 'surface.vert', 'surface.frag');
+    this.line = await program(gl, 'line.vert', 'line.frag');
+    this.pick = await program(gl, 'pick.vert', 'pick.frag');
+    this.colormap = colormapTexture(gl);
+    const loop = () => {
+      if (this.dirty) { this.dirty = false; this.draw(); }
+      requestAnimationFrame(loop);
+    };
+    requestAnimationFrame(loop);
+  }
+
+  // Geometry of document k: positions/normals (f32, relative to its centre),
+  // indices (u32 triangles).
+  setGeometry(k, meta, positions, normals, indices) {
+    const gl = this.gl;
+    let d = this.docs[k];
+    if (!d) {
+      d = this.docs[k] = { meta, vao: gl.createVertexArray(), pos: gl.createBuffer(), nrm: gl.createBuffer(), scl: gl.createBuffer(), idx: gl.createBuffer(), overlays: {}, region: null, scalarOn: false };
+      gl.bindVertexArray(d.vao);
+      gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, d.idx);
+      gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, indices, gl.STATIC_DRAW);
+      d.indices = indices;
+      d.count = indices.length;
+      gl.bindBuffer(gl.ARRAY_BUFFER, d.scl);
+      gl.bufferData(gl.ARRAY_BUFFER, new Float32Array(positions.length / 3), gl.STATIC_DRAW);
+      gl.enableVertexAttribArray(2);
+      gl.vertexAttribPointer(2, 1, gl.FLOAT, false, 0, 0);
+    }
+    gl.bindVertexArray(d.vao);
+    gl.bindBuffer(gl.ARRAY_BUFFER, d.pos);
+    gl.bufferData(gl.ARRAY_BUFFER, positions, gl.DYNAMIC_DRAW);
+    gl.enableVertexAttribArray(0);
+    gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 0, 0);
+    gl.bindBuffer(gl.ARRAY_BUFFER, d.nrm);
+    gl.bufferData(gl.ARRAY_BUFFER, normals, gl.DYNAMIC_DRAW);
+    gl.enableVertexAttribArray(1);
+    gl.vertexAttribPointer(1, 3, gl.FLOAT, false, 0, 0);
+    gl.bindVertexArray(null);
+    d.positions = positions;
+    d.pickMesh = null;
+    d.wire = null;
+    this.dirty = true;
+  }
+
+  setScalar(k, values, range) {
+    const gl = this.gl;
+    const d = this.docs[k];
+    if (!values) { d.scalarOn = false; this.dirty = true; return; }
+    gl.bindBuffer(gl.ARRAY_BUFFER, d.scl);
+    gl.bufferData(gl.ARRAY_BUFFER, values, gl.STATIC_DRAW);
+    d.scalarOn = true;
+    d.scalarRange = range;
+    this.dirty = true;
+  }
+
+  // A line overlay: segment endpoints (f32 pairs) and an RGBA colour.
+  setOverlay(k, name, segs, color) {
+    const gl = this.gl;
+    const d = this.docs[k];
+    if (!segs || segs.length === 0) { delete d.overlays[name]; this.dirty = true; return; }
+    const o = d.overlays[name] || { buf: gl.createBuffer(), vao: gl.createVertexArray() };
+    gl.bindVertexArray(o.vao);
+    gl.bindBuffer(gl.ARRAY_BUFFER, o.buf);
+    gl.bufferData(gl.ARRAY_BUFFER, segs, gl.STATIC_DRAW);
+    gl.enableVertexAttribArray(0);
+    gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 0, 0);
+    gl.bindVertexArray(null);
+    o.count = segs.length / 3;
+    o.color = color;
+    d.overlays[name] = o;
+    this.dirty = true;
+  }
+
+  // The marked region: a list of triangle indices.
+  setRegion(k, faces) {
+    const gl = this.gl;
+    const d = this.docs[k];
+    if (!faces || faces.length === 0) { d.region = null; this.dirty = true; return; }
+    const idx = new Uint32Array(faces.length * 3);
+    faces.forEach((f, i) => idx.set(d.indices.subarray(3 * f, 3 * f + 3), 3 * i));
+    const r = d.region || { vao: gl.createVertexArray(), idx: gl.createBuffer() };
+    gl.bindVertexArray(r.vao);
+    gl.bindBuffer(gl.ARRAY_BUFFER, d.pos);
+    gl.enableVertexAttribArray(0);
+    gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 0, 0);
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, r.idx);
+    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, idx, gl.DYNAMIC_DRAW);
+    gl.bindVertexArray(null);
+    r.count = idx.length;
+    d.region = r;
+    this.dirty = true;
+  }
+
+  wireOf(d) {
+    if (d.wire) return d.wire;
+    const gl = this.gl;
+    const t = d.indices;
+    const e = new Uint32Array(t.length * 2);
+    for (let i = 0; i < t.length; i += 3) {
+      e.set([t[i], t[i + 1], t[i + 1], t[i + 2], t[i + 2], t[i]], 2 * i);
+    }
+    const w = { vao: gl.createVertexArray(), idx: gl.createBuffer(), count: e.length };
+    gl.bindVertexArray(w.vao);
+    gl.bindBuffer(gl.ARRAY_BUFFER, d.pos);
+    gl.enableVertexAttribArray(0);
+    gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 0, 0);
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, w.idx);
+    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, e, gl.STATIC_DRAW);
+    gl.bindVertexArray(null);
+    d.wire = w;
+    return w;
+  }
+
+  // Viewport of document k: [x, y, w, h] in device pixels.
+  viewport(k) {
+    const w = this.canvas.width, h = this.canvas.height;
+    const n = Math.max(this.docs.length, 1);
+    const cw = Math.floor(w / n);
+    return [k * cw, 0, cw, h];
+  }
+
+  resize() {
+    const dpr = window.devicePixelRatio || 1;
+    const w = Math.max(1, Math.round(this.canvas.clientWidth * dpr));
+    const h = Math.max(1, Math.round(this.canvas.clientHeight * dpr));
+    if (this.canvas.width !== w || this.canvas.height !== h) {
+      this.canvas.width = w;
+      this.canvas.height = h;
+      this.dirty = true;
+    }
+  }
+
+  draw() {
+    const gl = this.gl;
+    this.resize();
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    gl.viewport(0, 0, this.canvas.width, this.canvas.height);
+    gl.clearColor(0.16, 0.18, 0.21, 1);
+    gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+    gl.enable(gl.DEPTH_TEST);
+    gl.enable(gl.SCISSOR_TEST);
+    this.docs.forEach((d, k) => {
+      const vp = this.viewport(k);
+      gl.viewport(...vp);
+      gl.scissor(...vp);
+      const vpm = this.camera.viewProj(vp[2] / vp[3]);
+      gl.useProgram(this.surface.p);
+      gl.activeTexture(gl.TEXTURE0);
+      gl.bindTexture(gl.TEXTURE_2D, this.colormap);
+      setUniforms(gl, this.surface, Object.assign({}, this.lightUniforms ? this.lightUniforms(k) : { uMode: 0 }, {
+        uViewProj: vpm,
+        uEye: this.camera.eye(),
+        uMinCos: d.meta.min_normal_cos,
+        uRadiusCount: this.lightUniforms ? Math.min(16, (this.lightUniforms(k).uRadii || []).length) : 0,
+        uScalarOn: d.scalarOn ? 1 : 0,
+        uScalarLo: d.scalarRange ? d.scalarRange.lo : 0,
+        uScalarHi: d.scalarRange ? d.scalarRange.hi : 1,
+        uColormap: 0,
+        uBaseColor: [0.78, 0.8, 0.84],
+      }));
+      gl.enable(gl.POLYGON_OFFSET_FILL);
+      gl.polygonOffset(1, 1);
+      gl.bindVertexArray(d.vao);
+      gl.drawElements(gl.TRIANGLES, d.count, gl.UNSIGNED_INT, 0);
+      gl.disable(gl.POLYGON_OFFSET_FILL);
+      gl.useProgram(this.line.p);
+      setUniforms(gl, this.line, { uViewProj: vpm });
+      if (d.region) {
+        gl.enable(gl.BLEND);
+        gl.blendFunc(gl.SRC_ALPHA, gl.ONE_MINUS_SRC_ALPHA);
+        gl.depthFunc(gl.LEQUAL);
+        setUniforms(gl, this.line, { uColor: [1.0, 0.55, 0.1, 0.35] });
+        gl.bindVertexArray(d.region.vao);
+        gl.drawElements(gl.TRIANGLES, d.region.count, gl.UNSIGNED_INT, 0);
+        gl.depthFunc(gl.LESS);
+        gl.disable(gl.BLEND);
+      }
+      if (this.wireframe) {
+        const w = this.wireOf(d);
+        setUniforms(gl, this.line, { uColor: [0.1, 0.1, 0.15, 1] });
+        gl.bindVertexArray(w.vao);
+        gl.drawElements(gl.LINES, w.count, gl.UNSIGNED_INT, 0);
+      }
+      for (const o of Object.values(d.overlays)) {
+        setUniforms(gl, this.line, { uColor: o.color });
+        gl.bindVertexArray(o.vao);
+        gl.drawArrays(gl.LINES, 0, o.count);
+      }
+      gl.bindVertexArray(null);
+    });
+    gl.disable(gl.SCISSOR_TEST);
+    this.frames++;
+    if (this.onFrame) this.onFrame();
+  }
+
+  // Renders `n` frames synchronously, each waited for (readPixels), while
+  // `change(i)` alters the lights; returns the frame times in ms.
+  timeFrames(n, change) {
+    const times = [];
+    const px = new Uint8Array(4);
+    for (let i = 0; i < n; i++) {
+      const t = performance.now();
+      change(i);
+      this.draw();
+      this.gl.readPixels(0, 0, 1, 1, this.gl.RGBA, this.gl.UNSIGNED_BYTE, px);
+      times.push(performance.now() - t);
+    }
+    return times;
+  }
+
+  // Triangle index under canvas pixel (x, y) (CSS pixels) and the document
+  // it belongs to, or null.
+  pickAt(x, y) {
+    const gl = this.gl;
+    const dpr = window.devicePixelRatio || 1;
+    const px = Math.round(x * dpr), py = this.canvas.height - 1 - Math.round(y * dpr);
+    const k = this.docs.findIndex((_, i) => { const v = this.viewport(i); return px >= v[0] && px < v[0] + v[2]; });
+    if (k < 0) return null;
+    const d = this.docs[k];
+    if (!d.pickMesh) {
+      const t = d.indices, p = d.positions;
+      const e = new Float32Array(t.length * 3);
+      for (let i = 0; i < t.length; i++) e.set(p.subarray(3 * t[i], 3 * t[i] + 3), 3 * i);
+      const m = { vao: gl.createVertexArray(), buf: gl.createBuffer(), count: t.length };
+      gl.bindVertexArray(m.vao);
+      gl.bindBuffer(gl.ARRAY_BUFFER, m.buf);
+      gl.bufferData(gl.ARRAY_BUFFER, e, gl.STATIC_DRAW);
+      gl.enableVertexAttribArray(0);
+      gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 0, 0);
+      gl.bindVertexArray(null);
+      d.pickMesh = m;
+    }
+    const w = this.canvas.width, h = this.canvas.height;
+    if (!this.pickFbo || this.pickFbo.w !== w || this.pickFbo.h !== h) {
+      const fb = gl.createFramebuffer();
+      const tex = gl.createTexture();
+      gl.bindTexture(gl.TEXTURE_2D, tex);
+      gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA8, w, h, 0, gl.RGBA, gl.UNSIGNED_BYTE, null);
+      const depth = gl.createRenderbuffer();
+      gl.bindRenderbuffer(gl.RENDERBUFFER, depth);
+      gl.renderbufferStorage(gl.RENDERBUFFER, gl.DEPTH_COMPONENT24, w, h);
+      gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+      gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, tex, 0);
+      gl.framebufferRenderbuffer(gl.FRAMEBUFFER, gl.DEPTH_ATTACHMENT, gl.RENDERBUFFER, depth);
+      this.pickFbo = { fb, w, h };
+    }
+    gl.bindFramebuffer(gl.FRAMEBUFFER, this.pickFbo.fb);
+    const vp = this.viewport(k);
+    gl.viewport(...vp);
+    gl.disable(gl.SCISSOR_TEST);
+    gl.clearColor(0, 0, 0, 0);
+    gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+    gl.enable(gl.DEPTH_TEST);
+    gl.useProgram(this.pick.p);
+    setUniforms(gl, this.pick, { uViewProj: this.camera.viewProj(vp[2] / vp[3]) });
+    gl.bindVertexArray(d.pickMesh.vao);
+    gl.drawArrays(gl.TRIANGLES, 0, d.pickMesh.count);
+    gl.bindVertexArray(null);
+    const out = new Uint8Array(4);
+    gl.readPixels(px, py, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, out);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    const id = out[0] + out[1] * 256 + out[2] * 65536 + out[3] * 16777216;
+    if (id === 0) return null;
+    const f = id - 1;
+    const t = d.indices, p = d.positions;
+    const c = [0, 0, 0];
+    for (let j = 0; j < 3; j++) for (let i = 0; i < 3; i++) c[i] += p[3 * t[3 * f + j] + i] / 3;
+    return { doc: k, face: f, point: c };
+  }
+}
