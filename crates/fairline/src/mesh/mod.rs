@@ -2,6 +2,7 @@
 //! topology queries, triangulation of polygons and structure lines of quad
 //! meshes.
 
+mod build;
 mod inspect;
 mod soup;
 mod surface_mesh;

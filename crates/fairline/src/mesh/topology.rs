@@ -143,7 +143,9 @@ pub struct Triangulation {
 /// shorter diagonal; larger polygons are ear-clipped in the plane of their
 /// Newell normal (a fan from the first vertex if ear clipping gets stuck on a
 /// self-intersecting polygon). Vertex indices are unchanged.
+/// Split non-manifold vertices stay split and pinned in the triangulation.
 pub fn triangulate(mesh: &SurfaceMesh) -> Triangulation {
+    let source_mesh = mesh;
     let p = mesh.positions();
     let mut tris: Vec<[u32; 3]> = Vec::with_capacity(mesh.face_count() * 2);
     let mut source = Vec::with_capacity(mesh.face_count() * 2);
@@ -170,8 +172,9 @@ pub fn triangulate(mesh: &SurfaceMesh) -> Triangulation {
             source.push(f);
         }
     }
-    let mesh = SurfaceMesh::new(p.to_vec(), &tris)
+    let mut mesh = SurfaceMesh::new(p.to_vec(), &tris)
         .expect("triangulating a manifold polygon mesh keeps it manifold");
+    mesh.inherit_split_vertices(source_mesh);
     Triangulation {
         mesh,
         source_face: source,
