@@ -51,6 +51,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     check_output(&args.mesh, &args.output)?;
     let mesh = fairline::io::read_mesh(&args.mesh)?;
+    crate::repair::note_split_vertices(&args.mesh, &mesh);
     let mut report = Report::new("curvature");
     let method = match args.method {
         Method::Rusinkiewicz => CurvatureMethod::Rusinkiewicz,

@@ -92,8 +92,15 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     match &info.manifold_error {
+        None if info.non_manifold_vertices > 0 => println!(
+            "manifold            yes, once its {} non-manifold vertices are split per fan (every command does this)",
+            info.non_manifold_vertices
+        ),
         None => println!("manifold            yes"),
-        Some(e) => println!("manifold            no: {e}"),
+        Some(e) => println!(
+            "manifold            no: {e}\nhint                run `fairline repair {} OUT` to repair it",
+            args.mesh.display()
+        ),
     }
     Ok(())
 }

@@ -15,6 +15,7 @@ mod highlight;
 mod highlight_png;
 mod info;
 mod render;
+mod repair;
 mod smooth;
 mod surface;
 mod surface_highlight;
@@ -50,6 +51,7 @@ enum Command {
     Smooth(smooth::Args),
     FairQuad(smooth::QuadArgs),
     Demo(demo::Args),
+    Repair(repair::Args),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -66,6 +68,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Smooth(a) => smooth::run(a),
         Command::FairQuad(a) => smooth::run_quad(a),
         Command::Demo(a) => demo::run(a),
+        Command::Repair(a) => repair::run(a),
     }
 }
 
@@ -107,6 +110,9 @@ fn main() {
     // conjugate-gradient solves; 10k-vertex `enhance`: 0.20 → 0.17 s).
     if let Err(e) = rayon::scope(|_| run(cli)) {
         eprintln!("error: {}", error_message(&e));
+        if let Some(hint) = repair::hint(&e) {
+            eprintln!("hint: {hint}");
+        }
         std::process::exit(common::exit_code(&e));
     }
 }

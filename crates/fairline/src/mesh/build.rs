@@ -14,9 +14,10 @@
 //!    appended after the input vertices and remembered, so that output merges
 //!    them back bit-identical (as PMP and OpenMesh do when reading such files).
 
+use super::MeshError;
+use super::inspect::{find, union};
 use super::soup::Soup;
 use super::surface_mesh::{NONE, SplitVertices, SurfaceMesh};
-use super::MeshError;
 use rayon::prelude::*;
 
 /// Below this many faces the parallel steps run sequentially.
@@ -126,40 +127,108 @@ pub(super) fn match_edges(soup: &Soup) -> Result<EdgeTable, MeshError> {
         }
     }
     drop(fill);
-    let mut corner_edge = vec![0u32; corners];
-    let mut lo_hi: Vec<(u32, u32)> = Vec::with_capacity(corners / 2 + 1);
-    let mut incidences: Vec<[(u32, u32); 2]> = Vec::with_capacity(corners / 2 + 1);
-    for lo in 0..nv {
-        let group = &mut entries[start[lo] as usize..start[lo + 1] as usize];
-        if group.len() > 1 {
-            // stable on the corner, which is already ascending
-            group.sort_unstable();
+    // Each group (corners of one smaller vertex) is sorted on the larger
+    // vertex and counted, in parallel over chunks of whole groups; then the
+    // edges of each chunk are written into its own range of the edge arrays.
+    let chunks = group_chunks(&start, nf >= PARALLEL_FACES);
+    let mut slices: Vec<&mut [(u32, u32)]> = Vec::with_capacity(chunks.len());
+    let mut rest: &mut [(u32, u32)] = &mut entries;
+    for w in chunks.windows(2) {
+        let len = (start[w[1]] - start[w[0]]) as usize;
+        let (head, tail) = rest.split_at_mut(len);
+        slices.push(head);
+        rest = tail;
+    }
+    let count_chunk = |(k, slice): (usize, &mut [(u32, u32)])| -> Result<usize, MeshError> {
+        let base = start[chunks[k]];
+        let mut edges = 0;
+        for lo in chunks[k]..chunks[k + 1] {
+            let group = &mut slice[(start[lo] - base) as usize..(start[lo + 1] - base) as usize];
+            if group.len() > 1 {
+                // corners ascend within a group, so this is stable on them
+                group.sort_unstable();
+            }
+            let mut i = 0;
+            while i < group.len() {
+                let hi = group[i].0;
+                let mut j = i + 1;
+                while j < group.len() && group[j].0 == hi {
+                    j += 1;
+                }
+                let face_of = |k: usize| corner_face[group[k].1 as usize];
+                if j - i > 2 || (j - i == 2 && face_of(i) == face_of(i + 1)) {
+                    return Err(MeshError::NonManifoldEdge {
+                        v0: lo,
+                        v1: hi as usize,
+                        faces: (i..j).map(|k| face_of(k) as usize).collect(),
+                    });
+                }
+                edges += 1;
+                i = j;
+            }
         }
-        let mut i = 0;
-        while i < group.len() {
-            let hi = group[i].0;
-            let mut j = i + 1;
-            while j < group.len() && group[j].0 == hi {
-                j += 1;
+        Ok(edges)
+    };
+    let counts: Vec<Result<usize, MeshError>> = if chunks.len() > 2 {
+        slices
+            .into_par_iter()
+            .enumerate()
+            .map(count_chunk)
+            .collect()
+    } else {
+        slices.into_iter().enumerate().map(count_chunk).collect()
+    };
+    let mut edge_start = Vec::with_capacity(counts.len() + 1);
+    edge_start.push(0usize);
+    for c in counts {
+        let n = c?;
+        edge_start.push(edge_start[edge_start.len() - 1] + n);
+    }
+    let ne = edge_start[edge_start.len() - 1];
+    let mut lo_hi: Vec<(u32, u32)> = vec![(0, 0); ne];
+    let mut incidences: Vec<[(u32, u32); 2]> = vec![[(NONE, NONE); 2]; ne];
+    let mut parts: Vec<(usize, &mut [(u32, u32)], &mut [[(u32, u32); 2]])> = Vec::new();
+    let (mut lh, mut inc): (&mut [(u32, u32)], &mut [[(u32, u32); 2]]) =
+        (&mut lo_hi, &mut incidences);
+    for k in 0..edge_start.len() - 1 {
+        let len = edge_start[k + 1] - edge_start[k];
+        let (a, b) = lh.split_at_mut(len);
+        let (c, d) = inc.split_at_mut(len);
+        parts.push((k, a, c));
+        lh = b;
+        inc = d;
+    }
+    let fill_chunk =
+        |(k, lo_hi, incidences): (usize, &mut [(u32, u32)], &mut [[(u32, u32); 2]])| {
+            let mut e = 0;
+            for lo in chunks[k]..chunks[k + 1] {
+                let group = &entries[start[lo] as usize..start[lo + 1] as usize];
+                let mut i = 0;
+                while i < group.len() {
+                    let hi = group[i].0;
+                    lo_hi[e] = (lo as u32, hi);
+                    incidences[e][0] = (corner_face[group[i].1 as usize], group[i].1);
+                    if i + 1 < group.len() && group[i + 1].0 == hi {
+                        incidences[e][1] = (corner_face[group[i + 1].1 as usize], group[i + 1].1);
+                        i += 2;
+                    } else {
+                        i += 1;
+                    }
+                    e += 1;
+                }
             }
-            let face_of = |k: usize| corner_face[group[k].1 as usize];
-            if j - i > 2 || (j - i == 2 && face_of(i) == face_of(i + 1)) {
-                return Err(MeshError::NonManifoldEdge {
-                    v0: lo,
-                    v1: hi as usize,
-                    faces: (i..j).map(|k| face_of(k) as usize).collect(),
-                });
-            }
-            let e = lo_hi.len() as u32;
-            lo_hi.push((lo as u32, hi));
-            let mut inc = [(NONE, NONE); 2];
-            for (k, slot) in (i..j).zip(inc.iter_mut()) {
-                let c = group[k].1;
-                corner_edge[c as usize] = e;
-                *slot = (face_of(k), c);
-            }
-            incidences.push(inc);
-            i = j;
+        };
+    if chunks.len() > 2 {
+        parts.into_par_iter().for_each(fill_chunk);
+    } else {
+        parts.into_iter().for_each(fill_chunk);
+    }
+    drop(entries);
+    let mut corner_edge = vec![0u32; corners];
+    for (e, inc) in incidences.iter().enumerate() {
+        corner_edge[inc[0].1 as usize] = e as u32;
+        if inc[1].1 != NONE {
+            corner_edge[inc[1].1 as usize] = e as u32;
         }
     }
     Ok(EdgeTable {
@@ -167,6 +236,27 @@ pub(super) fn match_edges(soup: &Soup) -> Result<EdgeTable, MeshError> {
         lo_hi,
         incidences,
     })
+}
+
+/// Boundaries of chunks of whole vertex groups (vertex indices, first 0,
+/// last `nv`) with about equal numbers of corners: one chunk when
+/// sequential.
+fn group_chunks(start: &[u32], parallel: bool) -> Vec<usize> {
+    let nv = start.len() - 1;
+    let total = start[nv] as usize;
+    let pieces = if parallel { 64 } else { 1 };
+    let mut bounds = vec![0usize];
+    for k in 1..pieces {
+        let target = (total * k / pieces) as u32;
+        let v = start.partition_point(|&s| s < target).min(nv);
+        if v > bounds[bounds.len() - 1] {
+            bounds.push(v);
+        }
+    }
+    if bounds[bounds.len() - 1] < nv || bounds.len() == 1 {
+        bounds.push(nv);
+    }
+    bounds
 }
 
 /// Step 3: which faces to reverse so that every interior edge is traversed
@@ -376,23 +466,14 @@ pub(super) fn split_fans(soup: &Soup, edges: &EdgeTable) -> Option<(Soup, Vec<u3
     let corners = soup.indices.len();
     let nv = soup.positions.len();
     let mut parent: Vec<u32> = (0..corners as u32).collect();
-    fn find(parent: &mut [u32], mut x: u32) -> u32 {
-        while parent[x as usize] != x {
-            parent[x as usize] = parent[parent[x as usize] as usize];
-            x = parent[x as usize];
-        }
-        x
-    }
-    fn union(parent: &mut [u32], a: u32, b: u32) {
-        let (ra, rb) = (find(parent, a), find(parent, b));
-        if ra != rb {
-            parent[ra.max(rb) as usize] = ra.min(rb);
-        }
-    }
     // the corner after `c` in its face
     let next_corner = |c: u32, f: u32| -> u32 {
         let t = soup.offsets[f as usize + 1];
-        if c + 1 == t { soup.offsets[f as usize] } else { c + 1 }
+        if c + 1 == t {
+            soup.offsets[f as usize]
+        } else {
+            c + 1
+        }
     };
     for inc in &edges.incidences {
         let [(f, c), (g, d)] = *inc;
@@ -460,6 +541,12 @@ pub(super) fn split_fans(soup: &Soup, edges: &EdgeTable) -> Option<(Soup, Vec<u3
 /// Builds the halfedge mesh of a soup whose vertices may be non-manifold;
 /// see the module documentation.
 pub(super) fn build(soup: &Soup) -> Result<SurfaceMesh, MeshError> {
+    build_with_flips(soup).map(|(mesh, _)| mesh)
+}
+
+/// [`build`], also returning which faces were reversed (1) for a consistent
+/// orientation.
+pub(super) fn build_with_flips(soup: &Soup) -> Result<(SurfaceMesh, Vec<u8>), MeshError> {
     validate(soup)?;
     let edges = match_edges(soup)?;
     let (flip, flipped) = orient(soup, &edges)?;
@@ -468,7 +555,8 @@ pub(super) fn build(soup: &Soup) -> Result<SurfaceMesh, MeshError> {
         Ok(v_out) => match first_multi_fan_vertex(&he, &v_out) {
             None => {
                 let positions = soup.positions.clone();
-                return Ok(SurfaceMesh::from_parts(positions, he, v_out, flipped, None));
+                let mesh = SurfaceMesh::from_parts(positions, he, v_out, flipped, None);
+                return Ok((mesh, flip));
             }
             Some(v) => v,
         },
@@ -490,7 +578,7 @@ pub(super) fn build(soup: &Soup) -> Result<SurfaceMesh, MeshError> {
         marked[v as usize] = true;
         marked[nv + j] = true;
     }
-    Ok(SurfaceMesh::from_parts(
+    let mesh = SurfaceMesh::from_parts(
         split.positions,
         he,
         v_out,
@@ -500,5 +588,6 @@ pub(super) fn build(soup: &Soup) -> Result<SurfaceMesh, MeshError> {
             source,
             marked,
         }),
-    ))
+    );
+    Ok((mesh, flip))
 }

@@ -110,7 +110,9 @@ impl SurfaceMesh {
             he_next[he_next[he_next[h] as usize] as usize] as usize == h
         };
         let first_non_triangle = if f_he.len() >= 20_000 {
-            (0..f_he.len()).into_par_iter().find_first(|&f| !is_triangle(f))
+            (0..f_he.len())
+                .into_par_iter()
+                .find_first(|&f| !is_triangle(f))
         } else {
             (0..f_he.len()).find(|&f| !is_triangle(f))
         }
@@ -488,7 +490,8 @@ impl SurfaceMesh {
         for f in self.faces() {
             // start at the source of the stored halfedge for stable output
             let h = self.face_halfedge(f);
-            soup.indices.push(self.original_vertex(self.from_vertex(h)).0);
+            soup.indices
+                .push(self.original_vertex(self.from_vertex(h)).0);
             let mut c = h;
             loop {
                 let n = self.next(c);

@@ -104,7 +104,10 @@ fn non_manifold_vertices_are_split_per_fan_and_merged_back() {
     assert_eq!(topology_summary(&m).components, 2);
     let soup = m.to_soup();
     assert_eq!(soup.positions.len(), 7);
-    assert_eq!(soup.positions[0].to_array().map(f64::to_bits), p[0].to_array().map(f64::to_bits));
+    assert_eq!(
+        soup.positions[0].to_array().map(f64::to_bits),
+        p[0].to_array().map(f64::to_bits)
+    );
     let want: Vec<Vec<u32>> = faces.iter().map(|f| f.to_vec()).collect();
     let mut got = m.polygons();
     let mut want_sorted = want.clone();
