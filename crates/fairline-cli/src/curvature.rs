@@ -55,6 +55,7 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--report", args.report.as_deref())
         .check()?;
     let mesh = fairline::io::read_mesh(&args.mesh)?;
+    crate::repair::note_split_vertices(&args.mesh, &mesh);
     let mut report = Report::new("curvature");
     let method = match args.method {
         Method::Rusinkiewicz => CurvatureMethod::Rusinkiewicz,
@@ -89,10 +90,15 @@ pub fn run(args: Args) -> Result<()> {
         ("d2y", comp(|v| v.y, &c.d2)),
         ("d2z", comp(|v| v.z, &c.d2)),
     ];
-    let props: Vec<(&str, &[f64])> = cols.iter().map(|(n, v)| (*n, v.as_slice())).collect();
+    // one row per input vertex: a split non-manifold vertex takes the values
+    // of the fan that kept its index
+    let props: Vec<(&str, &[f64])> = cols
+        .iter()
+        .map(|(n, v)| (*n, mesh.original_values(v)))
+        .collect();
     fairline::io::write_ply_with_vertex_properties(&args.output, &mesh.to_soup(), &props)?;
     report.set("method", format!("{:?}", args.method).to_lowercase());
-    report.set("vertices", mesh.vertex_count());
+    report.set("vertices", mesh.original_vertex_count());
     report.set("triangulated", triangulated);
     report.set("k1", Stats::of(c.k1.iter().copied()));
     report.set("k2", Stats::of(c.k2.iter().copied()));

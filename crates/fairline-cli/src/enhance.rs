@@ -104,6 +104,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     let mesh = fairline::io::read_mesh(&args.mesh)?;
+    crate::repair::note_split_vertices(&args.mesh, &mesh);
     if !mesh.is_triangle_mesh() {
         return Err(bad_input(format!(
             "{}: enhance needs a triangle mesh (triangulate it first, e.g. with `fairline convert`)",

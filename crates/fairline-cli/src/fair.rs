@@ -136,6 +136,7 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--report", args.report.as_deref())
         .check()?;
     let mesh = fairline::io::read_mesh(&args.mesh)?;
+    crate::repair::note_split_vertices(&args.mesh, &mesh);
     if !mesh.is_triangle_mesh() {
         return Err(bad_input(format!(
             "{}: highlight-line fairing needs a triangle mesh (this one has polygons; triangulate it first, e.g. with `fairline convert`)",

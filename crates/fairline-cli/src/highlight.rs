@@ -115,6 +115,7 @@ pub fn read_triangles(path: &Path) -> Result<(SurfaceMesh, Option<Vec<FaceId>>)>
         )));
     }
     let mesh = fairline::io::read_mesh(path)?;
+    crate::repair::note_split_vertices(path, &mesh);
     if mesh.is_triangle_mesh() {
         Ok((mesh, None))
     } else {

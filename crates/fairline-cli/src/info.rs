@@ -124,8 +124,18 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     let _ = match &info.manifold_error {
+        None if info.non_manifold_vertices > 0 => writeln!(
+            out,
+            "manifold            yes, once its {} non-manifold vertices are split per fan (every command does this)",
+            info.non_manifold_vertices
+        ),
         None => writeln!(out, "manifold            yes"),
-        Some(e) => writeln!(out, "manifold            no: {e}"),
+        Some(e) => writeln!(
+            out,
+            "manifold            no: {e}
+hint                run `fairline repair {} OUT` to repair it",
+            args.mesh.display()
+        ),
     };
     print_stdout(&out)?;
     job.finish(summary);

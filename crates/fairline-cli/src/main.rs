@@ -16,6 +16,7 @@ mod highlight_png;
 mod info;
 mod output;
 mod render;
+mod repair;
 mod smooth;
 mod surface;
 mod surface_highlight;
@@ -53,6 +54,7 @@ enum Command {
     FairQuad(smooth::QuadArgs),
     Demo(demo::Args),
     View(view::Args),
+    Repair(repair::Args),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -70,6 +72,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::FairQuad(a) => smooth::run_quad(a),
         Command::Demo(a) => demo::run(a),
         Command::View(a) => view::run(a),
+        Command::Repair(a) => repair::run(a),
     }
 }
 
@@ -112,6 +115,9 @@ fn main() {
     // conjugate-gradient solves; 10k-vertex `enhance`: 0.20 → 0.17 s).
     if let Err(e) = rayon::scope(|_| run(cli)) {
         output::say(&format!("error: {}", error_message(&e)));
+        if let Some(hint) = repair::hint(&e) {
+            output::say(&format!("hint: {hint}"));
+        }
         std::process::exit(common::exit_code(&e));
     }
 }

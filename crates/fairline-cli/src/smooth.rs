@@ -189,6 +189,7 @@ pub fn run(args: Args) -> Result<()> {
         return Err(bad_input("--iterations must be at least 1"));
     }
     let mut mesh = fairline::io::read_mesh(&args.mesh)?;
+    crate::repair::note_split_vertices(&args.mesh, &mesh);
     let fixed = match &args.fixed {
         Some(p) => read_fixed(p, mesh.vertex_count())?,
         None => Vec::new(),
@@ -207,7 +208,8 @@ pub fn run(args: Args) -> Result<()> {
         },
         Weights::Cotan => LaplaceWeights::Cotangent,
     };
-    let input = mesh.clone();
+    // the input is kept only for the before/after picture
+    let input = args.png.is_some().then(|| mesh.clone());
     let mut report = Report::new("smooth");
     let bar = spinner("smoothing");
     let method = args.method;
@@ -282,8 +284,8 @@ pub fn run(args: Args) -> Result<()> {
         report.set("transfer", p.transfer_samples());
     }
     fairline::io::write_mesh(&args.output, &mesh)?;
-    if let Some(png) = &args.png {
-        before_after(&input, &mesh, ["input", name.as_str()], false, png)?;
+    if let (Some(png), Some(input)) = (&args.png, &input) {
+        before_after(input, &mesh, ["input", name.as_str()], false, png)?;
     }
     if !r.converged {
         report.warn(format!(
@@ -363,6 +365,7 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
         return Err(bad_input("--deviation-factor must be positive"));
     }
     let mut mesh = fairline::io::read_mesh(&args.mesh)?;
+    crate::repair::note_split_vertices(&args.mesh, &mesh);
     if !mesh.faces().any(|f| mesh.face_size(f) == 4) {
         return Err(bad_input(format!(
             "{}: fair-quad needs a quad mesh (no quadrilateral found)",

@@ -477,7 +477,7 @@ pub fn enhance_features(
     for v in mesh.vertices() {
         let i = v.idx();
         is_fixed[i] = mesh.is_boundary_vertex(v)
-            || mesh.is_isolated(v)
+            || mesh.is_pinned(v)
             || input_curvature.normals[i] == Vec3::ZERO
             || input_curvature.d1[i] == Vec3::ZERO;
     }

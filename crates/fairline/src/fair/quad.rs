@@ -770,7 +770,7 @@ pub(crate) fn fair_structure_lines_with(
     let mut hard_fixed = vec![false; n];
     for v in mesh.vertices() {
         let b = mesh.is_boundary_vertex(v);
-        if mesh.is_isolated(v) || (b && (opts.fix_boundary || mesh.valence(v) <= 2)) {
+        if mesh.is_pinned(v) || (b && (opts.fix_boundary || mesh.valence(v) <= 2)) {
             hard_fixed[v.idx()] = true;
         }
     }

@@ -231,7 +231,7 @@ pub fn movable_vertices(
     let inside: Vec<bool> = mesh
         .vertices()
         .map(|v| {
-            !mesh.is_isolated(v)
+            !mesh.is_pinned(v)
                 && !mesh.is_boundary_vertex(v)
                 && mesh.vertex_faces(v).all(|f| in_region[f.idx()])
         })

@@ -1,8 +1,9 @@
 //! Inspection of a [`Soup`] that may be broken: counts and defects, without
 //! refusing non-manifold or otherwise invalid input (`fairline info`).
 
-use super::{Soup, SurfaceMesh, topology_summary};
+use super::{EdgeId, FaceId, HalfedgeId, MeshError, Soup, SurfaceMesh, VertexId, topology_summary};
 use crate::Vec3;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -107,7 +108,32 @@ pub struct MeshInfo {
     pub area: f64,
 }
 
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
+/// Area of a polygon (half the length of its Newell vector about the
+/// centroid) and whether it is degenerate: twice its area at most
+/// [`crate::geom::DEGENERATE_RELATIVE_AREA`] times the sum of its squared
+/// edge lengths (the test of `geom`'s triangle areas, for any polygon).
+pub(super) fn polygon_area(p: &[Vec3], face: &[u32]) -> (f64, bool) {
+    let n = face.len();
+    if n == 0 {
+        return (0.0, true);
+    }
+    let c = face.iter().map(|&i| p[i as usize]).sum::<Vec3>() / n as f64;
+    let mut s = Vec3::ZERO;
+    let mut scale = 0.0;
+    for k in 0..n {
+        let a = p[face[k] as usize] - c;
+        let b = p[face[if k + 1 == n { 0 } else { k + 1 }] as usize] - c;
+        s += a.cross(b);
+        scale += (b - a).length_squared();
+    }
+    let a2 = s.length();
+    (
+        0.5 * a2,
+        !(a2 > crate::geom::DEGENERATE_RELATIVE_AREA * scale),
+    )
+}
+
+pub(super) fn find(parent: &mut [u32], mut x: u32) -> u32 {
     while parent[x as usize] != x {
         parent[x as usize] = parent[parent[x as usize] as usize];
         x = parent[x as usize];
@@ -115,7 +141,7 @@ fn find(parent: &mut [u32], mut x: u32) -> u32 {
     x
 }
 
-fn union(parent: &mut [u32], a: u32, b: u32) {
+pub(super) fn union(parent: &mut [u32], a: u32, b: u32) {
     let (ra, rb) = (find(parent, a), find(parent, b));
     if ra != rb {
         parent[ra.max(rb) as usize] = ra.min(rb);
@@ -124,7 +150,163 @@ fn union(parent: &mut [u32], a: u32, b: u32) {
 
 /// Counts and defects of a soup. Never fails; invalid faces are counted and
 /// left out of the edge analysis.
+///
+/// When the soup makes a [`SurfaceMesh`] (the usual case, non-manifold
+/// vertices included), the counts come from the halfedge structure in a few
+/// linear, partly parallel passes; boundary loops are then the halfedge
+/// boundary loops (two loops touching at a non-manifold vertex count twice).
+/// Otherwise a slower analysis of the raw face list counts every defect.
 pub fn inspect(soup: &Soup) -> MeshInfo {
+    match super::build::build_with_flips(soup) {
+        Ok((mesh, flip)) => inspect_mesh(soup, &mesh, &flip),
+        Err(e) => inspect_broken(soup, e),
+    }
+}
+
+/// Below this many faces the per-face passes run sequentially.
+const PARALLEL_FACES: usize = 20_000;
+/// Faces per chunk of the parallel sums (fixed, so sums are deterministic).
+const CHUNK: usize = 8192;
+
+/// [`inspect`] of a soup that built `mesh`, with the builder's face flips.
+fn inspect_mesh(soup: &Soup, mesh: &SurfaceMesh, flip: &[u8]) -> MeshInfo {
+    let nv = soup.vertex_count();
+    let nf = soup.face_count();
+    let p = &soup.positions;
+    let mut face_sizes = BTreeMap::new();
+    for w in soup.offsets.windows(2) {
+        *face_sizes.entry((w[1] - w[0]) as usize).or_insert(0) += 1;
+    }
+    // degenerate faces and area, in fixed chunks
+    let chunk_stats = |range: std::ops::Range<usize>| {
+        let (mut degenerate, mut area) = (0usize, 0.0f64);
+        for f in range {
+            let (a, d) = polygon_area(p, soup.face(f));
+            degenerate += usize::from(d);
+            if a.is_finite() {
+                area += a;
+            }
+        }
+        (degenerate, area)
+    };
+    let chunks: Vec<(usize, f64)> = if nf >= PARALLEL_FACES {
+        (0..nf.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|k| chunk_stats(k * CHUNK..((k + 1) * CHUNK).min(nf)))
+            .collect()
+    } else {
+        vec![chunk_stats(0..nf)]
+    };
+    let degenerate_faces = chunks.iter().map(|c| c.0).sum();
+    let area = chunks.iter().map(|c| c.1).sum();
+    // per edge: boundary, orientation conflicts in the input, length
+    let edge_pass = |e: usize| {
+        let (f, g) = (
+            mesh.face(HalfedgeId(2 * e as u32)),
+            mesh.face(HalfedgeId(2 * e as u32 + 1)),
+        );
+        let boundary = f.is_none() || g.is_none();
+        let inconsistent = match (f, g) {
+            (Some(f), Some(g)) => flip[f.idx()] != flip[g.idx()],
+            _ => false,
+        };
+        let (a, b) = mesh.edge_vertices(EdgeId(e as u32));
+        (
+            boundary,
+            inconsistent,
+            mesh.position(a).distance(mesh.position(b)),
+        )
+    };
+    let ne = mesh.edge_count();
+    let lengths: Vec<f64>;
+    let (boundary_edges, inconsistent) = {
+        let passes: Vec<(bool, bool, f64)> = if ne >= PARALLEL_FACES {
+            (0..ne).into_par_iter().map(edge_pass).collect()
+        } else {
+            (0..ne).map(edge_pass).collect()
+        };
+        let counts = passes.iter().fold((0, 0), |(b, i), x| {
+            (b + usize::from(x.0), i + usize::from(x.1))
+        });
+        lengths = passes.into_iter().map(|x| x.2).collect();
+        counts
+    };
+    let summary = topology_summary(mesh);
+    let original = mesh.original_vertex_count();
+    let isolated = (0..original as u32)
+        .filter(|&v| mesh.is_isolated(VertexId(v)))
+        .count();
+    let euler = (nv - isolated) as i64 - ne as i64 + nf as i64;
+    MeshInfo {
+        vertices: nv,
+        faces: nf,
+        face_sizes,
+        edges: ne,
+        boundary_edges,
+        boundary_loops: summary.boundary_loops,
+        non_manifold_edges: 0,
+        non_manifold_edge_incidences: 0,
+        duplicate_faces: duplicate_faces_of_mesh(soup, mesh),
+        non_manifold_vertices: mesh.split_vertex_count(),
+        inconsistently_oriented_edges: inconsistent,
+        components: summary.components,
+        isolated_vertices: isolated,
+        invalid_faces: 0,
+        degenerate_faces,
+        non_finite_vertices: 0,
+        euler_characteristic: euler,
+        genus: Some(summary.genus),
+        manifold: true,
+        manifold_error: None,
+        triangle_mesh: mesh.is_triangle_mesh(),
+        bbox: bbox_of(p),
+        edge_length: Stats::of(lengths),
+        area,
+    }
+}
+
+/// Faces with the same vertex set as an earlier face, in a mesh that built.
+/// Two triangles with one vertex set share all three edges, so they are
+/// neighbours across their first halfedge (a closed two-face component);
+/// larger polygons are compared by sorted vertex lists.
+fn duplicate_faces_of_mesh(soup: &Soup, mesh: &SurfaceMesh) -> usize {
+    let nf = soup.face_count();
+    let same_set = |f: usize, g: usize| {
+        let (a, b) = (soup.face(f), soup.face(g));
+        a.len() == b.len() && a.iter().all(|v| b.contains(v))
+    };
+    let mut n = 0;
+    let mut polygons: Vec<(Vec<u32>, usize)> = Vec::new();
+    for f in 0..nf {
+        if soup.face(f).len() == 3 {
+            let h = mesh.face_halfedge(FaceId(f as u32));
+            if let Some(g) = mesh.face(mesh.opposite(h))
+                && g.idx() < f
+                && same_set(f, g.idx())
+            {
+                n += 1;
+            }
+        } else {
+            let mut key = soup.face(f).to_vec();
+            key.sort_unstable();
+            polygons.push((key, f));
+        }
+    }
+    polygons.sort_unstable();
+    n + polygons.windows(2).filter(|w| w[0].0 == w[1].0).count()
+}
+
+fn bbox_of(p: &[Vec3]) -> BoundingBox {
+    super::bounding_box(p)
+        .map(|(lo, hi)| BoundingBox {
+            min: lo.to_array(),
+            max: hi.to_array(),
+        })
+        .unwrap_or_default()
+}
+
+/// [`inspect`] of a soup the mesh builder refuses with `error`.
+fn inspect_broken(soup: &Soup, error: MeshError) -> MeshInfo {
     let nv = soup.vertex_count();
     let p = &soup.positions;
     let mut face_sizes = BTreeMap::new();
@@ -155,22 +337,10 @@ pub fn inspect(soup: &Soup) -> MeshInfo {
         if !seen_faces.insert(key) {
             duplicate_faces += 1;
         }
-        // Newell area
-        let c = face.iter().map(|&i| p[i as usize]).sum::<Vec3>() / face.len() as f64;
-        let mut s = Vec3::ZERO;
-        let mut scale = 0.0;
-        for k in 0..face.len() {
-            let a = p[face[k] as usize] - c;
-            let b = p[face[(k + 1) % face.len()] as usize] - c;
-            s += a.cross(b);
-            scale += (b - a).length_squared();
-        }
-        let a2 = s.length();
-        if !(a2 > crate::geom::DEGENERATE_RELATIVE_AREA * scale) {
-            degenerate_faces += 1;
-        }
-        if a2.is_finite() {
-            area += 0.5 * a2;
+        let (face_area, degenerate) = polygon_area(p, face);
+        degenerate_faces += usize::from(degenerate);
+        if face_area.is_finite() {
+            area += face_area;
         }
     }
     // undirected edge analysis
@@ -233,16 +403,8 @@ pub fn inspect(soup: &Soup) -> MeshInfo {
     let used_count = used.iter().filter(|&&u| u).count();
     let valid_faces = soup.face_count() - invalid_faces;
     let euler = used_count as i64 - edges as i64 + valid_faces as i64;
-    let (manifold, manifold_error, genus) = match SurfaceMesh::from_soup(soup) {
-        Ok(m) => (true, None, Some(topology_summary(&m).genus)),
-        Err(e) => (false, Some(e.to_string()), None),
-    };
-    let bbox = super::bounding_box(p)
-        .map(|(lo, hi)| BoundingBox {
-            min: lo.to_array(),
-            max: hi.to_array(),
-        })
-        .unwrap_or_default();
+    let (manifold, manifold_error, genus) = (false, Some(error.to_string()), None);
+    let bbox = bbox_of(p);
     MeshInfo {
         vertices: nv,
         faces: soup.face_count(),

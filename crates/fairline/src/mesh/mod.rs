@@ -1,13 +1,18 @@
 //! Meshes: the halfedge [`SurfaceMesh`], the connectivity-free [`Soup`],
-//! topology queries, triangulation of polygons and structure lines of quad
-//! meshes.
+//! topology queries, triangulation of polygons, structure lines of quad
+//! meshes, and the repair of dirty face lists.
 
+mod build;
 mod inspect;
+mod repair;
 mod soup;
 mod surface_mesh;
 mod topology;
 
 pub use inspect::{BoundingBox, MeshInfo, Stats, inspect};
+pub use repair::{
+    RemovalReason, RemovedFace, RepairReport, Repaired, SplitEdge, SplitVertex, repair,
+};
 pub use soup::{Soup, bounding_box};
 pub use surface_mesh::{BuildNotes, FaceHalfedges, Outgoing, SurfaceMesh};
 pub use topology::{

@@ -6,11 +6,25 @@
 //! are linked into boundary loops. The outgoing halfedge stored for a boundary
 //! vertex is its boundary halfedge, so circulating from it visits the whole fan.
 
+use super::build::Halfedges;
 use super::soup::Soup;
 use super::{EdgeId, FaceId, HalfedgeId, MeshError, VertexId};
 use crate::Vec3;
+use rayon::prelude::*;
 
-const NONE: u32 = u32::MAX;
+/// "No element" in the index arrays.
+pub(super) const NONE: u32 = u32::MAX;
+
+/// Non-manifold vertices split by the builder, one copy per extra fan.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(super) struct SplitVertices {
+    /// Vertices of the input; copies are numbered from here on.
+    pub original_vertices: usize,
+    /// The input vertex of copy `original_vertices + j`, ascending.
+    pub source: Vec<u32>,
+    /// True for a split input vertex and for every copy.
+    pub marked: Vec<bool>,
+}
 
 /// Polygon mesh with halfedge connectivity. Built from a face list by
 /// [`SurfaceMesh::new`] or [`SurfaceMesh::from_soup`], which reject
@@ -34,6 +48,8 @@ pub struct SurfaceMesh {
     /// The first face that is not a triangle (topology never changes after
     /// construction, so the triangle checks of every algorithm are O(1)).
     first_non_triangle: Option<u32>,
+    /// Non-manifold vertices split when building; `None` for a manifold input.
+    split: Option<SplitVertices>,
 }
 
 /// What the mesh builder did to the input besides building it.
@@ -41,6 +57,11 @@ pub struct SurfaceMesh {
 pub struct BuildNotes {
     /// Faces whose vertex order was reversed for a consistent orientation.
     pub flipped_faces: usize,
+    /// Non-manifold input vertices (several fans of faces meeting) that were
+    /// split, one copy per fan.
+    pub split_vertices: usize,
+    /// Copies added by that splitting (one per fan beyond the first).
+    pub vertex_copies: usize,
 }
 
 impl SurfaceMesh {
@@ -50,244 +71,54 @@ impl SurfaceMesh {
         Self::from_soup(&soup)
     }
 
-    /// Builds a mesh from a soup.
+    /// Builds a mesh from a soup (see [`super::build`] for the steps).
     ///
     /// Rejects: indices out of range, faces with fewer than three vertices or
     /// a repeated vertex, non-finite coordinates, edges shared by more than
-    /// two faces, vertices whose faces form more than one fan, and components
-    /// whose faces cannot be oriented consistently (Möbius strips). Faces
-    /// whose orientation disagrees with their component's first face are
-    /// reversed (see [`SurfaceMesh::flipped_faces`]).
+    /// two faces, and components whose faces cannot be oriented consistently
+    /// (Möbius strips). Faces whose orientation disagrees with their
+    /// component's first face are reversed (see [`SurfaceMesh::flipped_faces`]).
+    ///
+    /// A vertex where several fans of faces meet (a non-manifold vertex) is
+    /// split, one copy per fan: the fan with the vertex's first corner keeps
+    /// the index, the others get copies appended after the input vertices.
+    /// The original and its copies are pinned ([`SurfaceMesh::is_pinned`]):
+    /// no algorithm moves them, so [`SurfaceMesh::to_soup`] can merge the
+    /// copies back and write the input's vertex list bit-identical.
     pub fn from_soup(soup: &Soup) -> Result<Self, MeshError> {
-        let nv = soup.positions.len();
-        let nf = soup.face_count();
-        if nv >= NONE as usize / 2 || soup.indices.len() >= NONE as usize / 2 {
-            return Err(MeshError::TooLarge);
-        }
-        for (v, p) in soup.positions.iter().enumerate() {
-            if !p.is_finite() {
-                return Err(MeshError::NonFiniteCoordinate { vertex: v });
-            }
-        }
-        for f in 0..nf {
-            let face = soup.face(f);
-            if face.len() < 3 {
-                return Err(MeshError::FaceTooSmall {
-                    face: f,
-                    size: face.len(),
-                });
-            }
-            for (i, &a) in face.iter().enumerate() {
-                if a as usize >= nv {
-                    return Err(MeshError::IndexOutOfRange {
-                        face: f,
-                        index: a as usize,
-                        vertices: nv,
-                    });
-                }
-                if face[..i].contains(&a) {
-                    return Err(MeshError::RepeatedVertex {
-                        face: f,
-                        vertex: a as usize,
-                    });
-                }
-            }
-        }
+        super::build::build(soup)
+    }
 
-        // Undirected edges: group corners by their smaller vertex (CSR).
-        let corners = soup.indices.len();
-        let mut count = vec![0u32; nv + 1];
-        for f in 0..nf {
-            let face = soup.face(f);
-            for i in 0..face.len() {
-                let (a, b) = (face[i], face[(i + 1) % face.len()]);
-                count[a.min(b) as usize + 1] += 1;
-            }
+    /// Assembles a mesh from the builder's arrays.
+    pub(super) fn from_parts(
+        mut positions: Vec<Vec3>,
+        he: Halfedges,
+        v_out: Vec<u32>,
+        flipped_faces: usize,
+        split: Option<SplitVertices>,
+    ) -> Self {
+        positions.shrink_to_fit();
+        let Halfedges {
+            to: he_to,
+            next: he_next,
+            prev: he_prev,
+            face: he_face,
+            face_halfedge: f_he,
+        } = he;
+        let is_triangle = |f: usize| {
+            let h = f_he[f] as usize;
+            he_next[he_next[he_next[h] as usize] as usize] as usize == h
+        };
+        let first_non_triangle = if f_he.len() >= 20_000 {
+            (0..f_he.len())
+                .into_par_iter()
+                .find_first(|&f| !is_triangle(f))
+        } else {
+            (0..f_he.len()).find(|&f| !is_triangle(f))
         }
-        for i in 0..nv {
-            count[i + 1] += count[i];
-        }
-        // entry: (hi, face, corner index into soup.indices, forward = lo->hi)
-        let mut entries: Vec<(u32, u32, u32, bool)> = vec![(0, 0, 0, false); corners];
-        let mut fill = count.clone();
-        for f in 0..nf {
-            let start = soup.offsets[f];
-            let face = soup.face(f);
-            for i in 0..face.len() {
-                let (a, b) = (face[i], face[(i + 1) % face.len()]);
-                let lo = a.min(b) as usize;
-                entries[fill[lo] as usize] = (a.max(b), f as u32, start + i as u32, a < b);
-                fill[lo] += 1;
-            }
-        }
-        // Edge id of every corner (the edge from corner i to corner i+1).
-        let mut corner_edge = vec![0u32; corners];
-        let mut edge_lo_hi: Vec<(u32, u32)> = Vec::with_capacity(corners / 2 + 1);
-        // For each edge: up to two (face, forward) incidences.
-        let mut edge_faces: Vec<[(u32, bool); 2]> = Vec::with_capacity(corners / 2 + 1);
-        for lo in 0..nv {
-            let group = &mut entries[count[lo] as usize..count[lo + 1] as usize];
-            group.sort_unstable_by_key(|e| (e.0, e.1));
-            let mut i = 0;
-            while i < group.len() {
-                let hi = group[i].0;
-                let mut j = i;
-                while j < group.len() && group[j].0 == hi {
-                    j += 1;
-                }
-                if j - i > 2 {
-                    return Err(MeshError::NonManifoldEdge {
-                        v0: lo,
-                        v1: hi as usize,
-                        faces: group[i..j].iter().map(|e| e.1 as usize).collect(),
-                    });
-                }
-                if j - i == 2 && group[i].1 == group[i + 1].1 {
-                    // the same face uses the edge twice (a face that folds back)
-                    return Err(MeshError::NonManifoldEdge {
-                        v0: lo,
-                        v1: hi as usize,
-                        faces: vec![group[i].1 as usize, group[i + 1].1 as usize],
-                    });
-                }
-                let e = edge_lo_hi.len() as u32;
-                edge_lo_hi.push((lo as u32, hi));
-                let mut inc = [(NONE, false); 2];
-                for (k, g) in group[i..j].iter().enumerate() {
-                    corner_edge[g.2 as usize] = e;
-                    inc[k] = (g.1, g.3);
-                }
-                edge_faces.push(inc);
-                i = j;
-            }
-        }
-        let ne = edge_lo_hi.len();
-
-        // Consistent orientation by breadth-first search over faces.
-        let mut flip: Vec<u8> = vec![2; nf]; // 2 = unvisited
-        let mut queue = Vec::new();
-        let mut flipped_faces = 0usize;
-        for seed in 0..nf {
-            if flip[seed] != 2 {
-                continue;
-            }
-            flip[seed] = 0;
-            queue.clear();
-            queue.push(seed as u32);
-            while let Some(f) = queue.pop() {
-                let f = f as usize;
-                let (s, t) = (soup.offsets[f] as usize, soup.offsets[f + 1] as usize);
-                for c in s..t {
-                    let inc = edge_faces[corner_edge[c] as usize];
-                    if inc[1].0 == NONE {
-                        continue;
-                    }
-                    let (me, other) = if inc[0].0 as usize == f {
-                        (inc[0], inc[1])
-                    } else {
-                        (inc[1], inc[0])
-                    };
-                    let g = other.0 as usize;
-                    // Consistent when the two faces traverse the edge in
-                    // opposite directions after flipping.
-                    let want = if me.1 == other.1 {
-                        1 - flip[f]
-                    } else {
-                        flip[f]
-                    };
-                    if flip[g] == 2 {
-                        flip[g] = want;
-                        if want == 1 {
-                            flipped_faces += 1;
-                        }
-                        queue.push(g as u32);
-                    } else if flip[g] != want {
-                        return Err(MeshError::NonOrientable { face: g });
-                    }
-                }
-            }
-        }
-
-        // Halfedges: edge e owns 2e (lo -> hi) and 2e + 1 (hi -> lo).
-        let nh = 2 * ne;
-        let mut he_to = vec![0u32; nh];
-        for (e, &(lo, hi)) in edge_lo_hi.iter().enumerate() {
-            he_to[2 * e] = hi;
-            he_to[2 * e + 1] = lo;
-        }
-        let mut he_next = vec![NONE; nh];
-        let mut he_prev = vec![NONE; nh];
-        let mut he_face = vec![NONE; nh];
-        let mut f_he = vec![NONE; nf];
-        let mut face_hes: Vec<u32> = Vec::new();
-        for f in 0..nf {
-            let (s, t) = (soup.offsets[f] as usize, soup.offsets[f + 1] as usize);
-            let n = t - s;
-            face_hes.clear();
-            for k in 0..n {
-                // walk the face in its (possibly flipped) order
-                let (a, c) = if flip[f] == 1 {
-                    // reversed order: edge from corner s+k+1 to corner s+k
-                    let c = s + (n - 1 - k);
-                    let a = soup.indices[s + (c - s + 1) % n];
-                    (a, c)
-                } else {
-                    (soup.indices[s + k], s + k)
-                };
-                let e = corner_edge[c] as usize;
-                let h = if edge_lo_hi[e].0 == a {
-                    2 * e
-                } else {
-                    2 * e + 1
-                };
-                if he_face[h] != NONE {
-                    // cannot happen after orientation unless two faces share a
-                    // directed edge, which orientation would have reported
-                    return Err(MeshError::NonOrientable { face: f });
-                }
-                he_face[h] = f as u32;
-                face_hes.push(h as u32);
-            }
-            for k in 0..n {
-                let h = face_hes[k] as usize;
-                let hn = face_hes[(k + 1) % n];
-                he_next[h] = hn;
-                he_prev[hn as usize] = h as u32;
-            }
-            f_he[f] = face_hes[0];
-        }
-
-        // Boundary halfedges: at most one outgoing per vertex.
-        let mut v_out = vec![NONE; nv];
-        let mut boundary_out = vec![NONE; nv];
-        for h in 0..nh {
-            if he_face[h] == NONE {
-                let from = he_to[h ^ 1] as usize;
-                if boundary_out[from] != NONE {
-                    return Err(MeshError::NonManifoldVertex { vertex: from });
-                }
-                boundary_out[from] = h as u32;
-            }
-        }
-        for h in 0..nh {
-            if he_face[h] == NONE {
-                let to = he_to[h] as usize;
-                let n = boundary_out[to];
-                he_next[h] = n;
-                he_prev[n as usize] = h as u32;
-            }
-            let from = he_to[h ^ 1] as usize;
-            if v_out[from] == NONE {
-                v_out[from] = h as u32;
-            }
-        }
-        for v in 0..nv {
-            if boundary_out[v] != NONE {
-                v_out[v] = boundary_out[v];
-            }
-        }
-        let mut mesh = SurfaceMesh {
-            positions: soup.positions.clone(),
+        .map(|f| f as u32);
+        SurfaceMesh {
+            positions,
             he_to,
             he_next,
             he_prev,
@@ -295,46 +126,85 @@ impl SurfaceMesh {
             v_out,
             f_he,
             flipped_faces,
-            first_non_triangle: None,
-        };
-        mesh.first_non_triangle = (0..mesh.f_he.len() as u32).find(|&f| {
-            let h = mesh.f_he[f as usize] as usize;
-            mesh.he_next[mesh.he_next[mesh.he_next[h] as usize] as usize] as usize != h
-        });
+            first_non_triangle,
+            split,
+        }
+    }
 
-        // Every vertex must be a single fan: circulating from its stored
-        // halfedge must reach all of its outgoing halfedges.
-        let mut valence = vec![0u32; nv];
-        for h in 0..nh {
-            valence[mesh.he_to[h ^ 1] as usize] += 1;
-        }
-        for v in 0..nv {
-            if mesh.v_out[v] == NONE {
-                continue;
-            }
-            let mut n = 0u32;
-            let start = mesh.v_out[v];
-            let mut h = start;
-            loop {
-                n += 1;
-                h = mesh.he_next[(h ^ 1) as usize];
-                if h == start || n > valence[v] {
-                    break;
-                }
-            }
-            if n != valence[v] {
-                return Err(MeshError::NonManifoldVertex { vertex: v });
-            }
-        }
-        mesh.positions.shrink_to_fit();
-        Ok(mesh)
+    /// Gives this mesh (built from `source`'s positions with the same
+    /// vertex indices, e.g. a triangulation) `source`'s split vertices.
+    pub(super) fn inherit_split_vertices(&mut self, source: &SurfaceMesh) {
+        self.split = source.split.clone();
     }
 
     /// What the builder changed: the number of faces it reversed.
     pub fn build_notes(&self) -> BuildNotes {
         BuildNotes {
             flipped_faces: self.flipped_faces,
+            split_vertices: self.split_vertex_count(),
+            vertex_copies: self.vertex_count() - self.original_vertex_count(),
         }
+    }
+
+    // ---- split non-manifold vertices ----------------------------------
+
+    /// Number of vertices of the input the mesh was built from. Vertices
+    /// `0..original_vertex_count()` are the input's, in its order; any after
+    /// them are copies of split non-manifold vertices.
+    pub fn original_vertex_count(&self) -> usize {
+        self.split
+            .as_ref()
+            .map_or(self.positions.len(), |s| s.original_vertices)
+    }
+
+    /// Number of input vertices that were split because several fans of
+    /// faces meet there.
+    pub fn split_vertex_count(&self) -> usize {
+        self.split.as_ref().map_or(0, |s| {
+            let mut n = 0;
+            let mut last = u32::MAX;
+            for &v in &s.source {
+                n += usize::from(v != last);
+                last = v;
+            }
+            n
+        })
+    }
+
+    /// The input vertex that `v` stands for: itself, or the vertex it is a
+    /// split copy of.
+    #[inline]
+    pub fn original_vertex(&self, v: VertexId) -> VertexId {
+        match &self.split {
+            Some(s) if v.idx() >= s.original_vertices => {
+                VertexId(s.source[v.idx() - s.original_vertices])
+            }
+            _ => v,
+        }
+    }
+
+    /// True for a split non-manifold input vertex and for each of its copies.
+    #[inline]
+    pub fn is_split_vertex(&self, v: VertexId) -> bool {
+        self.split
+            .as_ref()
+            .is_some_and(|s| s.marked.get(v.idx()).copied().unwrap_or(false))
+    }
+
+    /// True for vertices that no algorithm may move: isolated vertices and
+    /// split non-manifold vertices with their copies (moving one fan's copy
+    /// would tear the input vertex apart). Every algorithm treats them like
+    /// fixed vertices, so their coordinates stay bit-identical.
+    #[inline]
+    pub fn is_pinned(&self, v: VertexId) -> bool {
+        self.is_isolated(v) || self.is_split_vertex(v)
+    }
+
+    /// The first `original_vertex_count()` entries of a per-vertex array:
+    /// the values of the input's vertices, in its order (a split vertex
+    /// takes the value of the fan that kept its index).
+    pub fn original_values<'a, T>(&self, values: &'a [T]) -> &'a [T] {
+        &values[..self.original_vertex_count().min(values.len())]
     }
 
     /// Number of faces whose orientation was reversed when building.
@@ -589,12 +459,16 @@ impl SurfaceMesh {
         }
     }
 
-    /// The polygons of the mesh as vertex-index lists (in the mesh's
-    /// consistent orientation).
+    /// The polygons of the mesh as lists of input vertex indices (in the
+    /// mesh's consistent orientation; split copies are replaced by the vertex
+    /// they copy).
     pub fn polygons(&self) -> Vec<Vec<u32>> {
         self.faces()
             .map(|f| {
-                let mut poly: Vec<u32> = self.face_vertices(f).map(|v| v.0).collect();
+                let mut poly: Vec<u32> = self
+                    .face_vertices(f)
+                    .map(|v| self.original_vertex(v).0)
+                    .collect();
                 // start at the source of the stored halfedge for stable output
                 poly.rotate_right(1);
                 poly
@@ -602,9 +476,34 @@ impl SurfaceMesh {
             .collect()
     }
 
-    /// The mesh as a soup (positions and polygons).
+    /// The mesh as a soup (positions and polygons) over the input's vertex
+    /// list: split copies are merged back into the vertex they copy (they
+    /// are pinned, so its position is bit-identical to the input's).
     pub fn to_soup(&self) -> Soup {
-        Soup::from_polygons(self.positions.clone(), &self.polygons())
+        let positions = self.original_values(&self.positions).to_vec();
+        let mut soup = Soup {
+            positions,
+            offsets: Vec::with_capacity(self.face_count() + 1),
+            indices: Vec::with_capacity(self.halfedge_count()),
+        };
+        soup.offsets.push(0);
+        for f in self.faces() {
+            // start at the source of the stored halfedge for stable output
+            let h = self.face_halfedge(f);
+            soup.indices
+                .push(self.original_vertex(self.from_vertex(h)).0);
+            let mut c = h;
+            loop {
+                let n = self.next(c);
+                if n == h {
+                    break;
+                }
+                soup.indices.push(self.original_vertex(self.to_vertex(c)).0);
+                c = n;
+            }
+            soup.offsets.push(soup.indices.len() as u32);
+        }
+        soup
     }
 
     /// Halfedge from `a` to `b`, if the edge exists.

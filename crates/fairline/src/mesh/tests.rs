@@ -36,22 +36,9 @@ fn rejects_bad_faces_naming_the_element() {
     assert_eq!(e, MeshError::NonFiniteCoordinate { vertex: 2 });
 }
 
-#[test]
-fn rejects_non_manifold_edges_and_vertices() {
-    // three triangles on edge (0, 1)
-    let e = SurfaceMesh::new(pts(5), &[[0u32, 1, 2], [1, 0, 3], [0, 1, 4]]).unwrap_err();
-    match e {
-        MeshError::NonManifoldEdge {
-            v0: 0,
-            v1: 1,
-            faces,
-        } => assert_eq!(faces.len(), 3),
-        other => panic!("{other:?}"),
-    }
-    // bow tie: two triangles sharing only vertex 0
-    let e = SurfaceMesh::new(pts(5), &[[0u32, 1, 2], [0, 3, 4]]).unwrap_err();
-    assert_eq!(e, MeshError::NonManifoldVertex { vertex: 0 });
-    // two closed cones touching at their apex (no boundary at the apex)
+/// Two closed tetrahedral cones touching at their apex, vertex 0 (no
+/// boundary at the apex): a non-manifold vertex of two closed fans.
+pub(crate) fn two_cones() -> (Vec<Vec3>, Vec<[u32; 3]>) {
     let mut p = vec![Vec3::ZERO];
     let mut faces = Vec::new();
     for side in [1.0, -1.0] {
@@ -70,8 +57,76 @@ fn rejects_non_manifold_edges_and_vertices() {
             [base, base + 1, base + 2]
         });
     }
-    let e = SurfaceMesh::new(p, &faces).unwrap_err();
-    assert_eq!(e, MeshError::NonManifoldVertex { vertex: 0 });
+    (p, faces)
+}
+
+#[test]
+fn rejects_non_manifold_edges() {
+    // three triangles on edge (0, 1)
+    let e = SurfaceMesh::new(pts(5), &[[0u32, 1, 2], [1, 0, 3], [0, 1, 4]]).unwrap_err();
+    match e {
+        MeshError::NonManifoldEdge {
+            v0: 0,
+            v1: 1,
+            faces,
+        } => assert_eq!(faces.len(), 3),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn non_manifold_vertices_are_split_per_fan_and_merged_back() {
+    // bow tie: two triangles sharing only vertex 0 (two boundary fans)
+    let faces = [[0u32, 1, 2], [0, 3, 4]];
+    let m = SurfaceMesh::new(pts(5), &faces).unwrap();
+    assert_eq!(m.vertex_count(), 6);
+    assert_eq!(m.original_vertex_count(), 5);
+    assert_eq!(m.split_vertex_count(), 1);
+    assert_eq!(m.build_notes().vertex_copies, 1);
+    assert_eq!(m.original_vertex(VertexId(5)), VertexId(0));
+    assert!(m.is_pinned(VertexId(0)) && m.is_pinned(VertexId(5)));
+    assert!(!m.is_pinned(VertexId(1)));
+    // the first fan keeps vertex 0, the second uses the copy
+    assert_eq!(m.triangle(FaceId(1)).iter().filter(|v| v.0 == 5).count(), 1);
+    assert_eq!(m.valence(VertexId(0)), 2);
+    assert_eq!(m.valence(VertexId(5)), 2);
+    let soup = m.to_soup();
+    assert_eq!(soup.positions, pts(5));
+    assert_eq!(m.polygons(), vec![vec![0, 1, 2], vec![0, 3, 4]]);
+
+    // two closed cones touching at the apex: the two copies are interior
+    let (p, faces) = two_cones();
+    let m = SurfaceMesh::new(p.clone(), &faces).unwrap();
+    assert_eq!((m.vertex_count(), m.split_vertex_count()), (8, 1));
+    assert!(m.is_closed());
+    assert!(!m.is_boundary_vertex(VertexId(0)) && !m.is_boundary_vertex(VertexId(7)));
+    assert!(m.is_pinned(VertexId(7)));
+    assert_eq!(topology_summary(&m).components, 2);
+    let soup = m.to_soup();
+    assert_eq!(soup.positions.len(), 7);
+    assert_eq!(
+        soup.positions[0].to_array().map(f64::to_bits),
+        p[0].to_array().map(f64::to_bits)
+    );
+    let want: Vec<Vec<u32>> = faces.iter().map(|f| f.to_vec()).collect();
+    let mut got = m.polygons();
+    let mut want_sorted = want.clone();
+    for f in got.iter_mut().chain(want_sorted.iter_mut()) {
+        let k = f.iter().enumerate().min_by_key(|x| x.1).map_or(0, |x| x.0);
+        f.rotate_left(k);
+    }
+    assert_eq!(got, want_sorted);
+    // a triangulation keeps the split and the pins
+    let t = triangulate(&m);
+    assert!(t.mesh.is_pinned(VertexId(7)));
+    assert_eq!(t.mesh.to_soup().positions.len(), 7);
+
+    // a vertex of three fans gets two copies, numbered in fan order
+    let m = SurfaceMesh::new(pts(7), &[[0u32, 1, 2], [0, 3, 4], [5, 6, 0]]).unwrap();
+    assert_eq!((m.vertex_count(), m.split_vertex_count()), (9, 1));
+    assert_eq!(m.original_vertex(VertexId(7)), VertexId(0));
+    assert_eq!(m.original_vertex(VertexId(8)), VertexId(0));
+    assert_eq!(m.triangle(FaceId(2)).iter().filter(|v| v.0 == 8).count(), 1);
 }
 
 #[test]

@@ -26,27 +26,27 @@ pub fn boundary_loops(mesh: &SurfaceMesh) -> Vec<Vec<HalfedgeId>> {
 }
 
 /// Connected components: a label per vertex (isolated vertices get their own
-/// component) and the number of components.
+/// component) and the number of components. Labels are numbered in order of
+/// each component's smallest vertex. Union–find over the edge array (one
+/// sequential pass, no circulation).
 pub fn components(mesh: &SurfaceMesh) -> (Vec<u32>, usize) {
     let n = mesh.vertex_count();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    for e in mesh.edges() {
+        let (a, b) = mesh.edge_vertices(e);
+        super::inspect::union(&mut parent, a.0, b.0);
+    }
+    // roots are the smallest vertex of their component (union keeps the
+    // smaller root), so labels follow the first vertex of each component
     let mut label = vec![u32::MAX; n];
     let mut count = 0u32;
-    let mut stack = Vec::new();
-    for s in mesh.vertices() {
-        if label[s.idx()] != u32::MAX {
-            continue;
+    for v in 0..n {
+        let r = super::inspect::find(&mut parent, v as u32) as usize;
+        if label[r] == u32::MAX {
+            label[r] = count;
+            count += 1;
         }
-        label[s.idx()] = count;
-        stack.push(s);
-        while let Some(v) = stack.pop() {
-            for w in mesh.one_ring(v) {
-                if label[w.idx()] == u32::MAX {
-                    label[w.idx()] = count;
-                    stack.push(w);
-                }
-            }
-        }
-        count += 1;
+        label[v] = label[r];
     }
     (label, count as usize)
 }
@@ -143,7 +143,9 @@ pub struct Triangulation {
 /// shorter diagonal; larger polygons are ear-clipped in the plane of their
 /// Newell normal (a fan from the first vertex if ear clipping gets stuck on a
 /// self-intersecting polygon). Vertex indices are unchanged.
+/// Split non-manifold vertices stay split and pinned in the triangulation.
 pub fn triangulate(mesh: &SurfaceMesh) -> Triangulation {
+    let source_mesh = mesh;
     let p = mesh.positions();
     let mut tris: Vec<[u32; 3]> = Vec::with_capacity(mesh.face_count() * 2);
     let mut source = Vec::with_capacity(mesh.face_count() * 2);
@@ -170,8 +172,9 @@ pub fn triangulate(mesh: &SurfaceMesh) -> Triangulation {
             source.push(f);
         }
     }
-    let mesh = SurfaceMesh::new(p.to_vec(), &tris)
+    let mut mesh = SurfaceMesh::new(p.to_vec(), &tris)
         .expect("triangulating a manifold polygon mesh keeps it manifold");
+    mesh.inherit_split_vertices(source_mesh);
     Triangulation {
         mesh,
         source_face: source,

@@ -106,7 +106,7 @@ pub(crate) fn roles(mesh: &SurfaceMesh, c: &Constraints) -> Result<Vec<Role>, Sm
     let n = mesh.vertex_count();
     let mut r = vec![Role::Free; n];
     for v in mesh.vertices() {
-        if mesh.is_isolated(v) {
+        if mesh.is_pinned(v) {
             r[v.idx()] = Role::Fixed;
         } else if mesh.is_boundary_vertex(v) {
             if c.fix_boundary {

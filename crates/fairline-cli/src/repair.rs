@@ -1,0 +1,160 @@
+//! `fairline repair`: turns a dirty mesh into one every command accepts, and
+//! the hint every refusal of dirty input ends with.
+
+use crate::common::{Report, check_output};
+use anyhow::{Context, Result};
+use std::path::{Path, PathBuf};
+
+/// Repairs a dirty mesh: splits non-manifold edges and vertices, removes
+/// unreferenced vertices and duplicate (same vertex set) and zero-area
+/// faces, and makes the orientation consistent where it can. Every kept
+/// vertex keeps its coordinates bit-identical and its order; split copies
+/// are appended at the end. The report lists every change (removed faces
+/// with the reason, removed vertices, split edges and vertices, reversed
+/// faces, and `vertex_source`, the input vertex of each output vertex, when
+/// the vertex list changed).
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Example:\n  fairline repair ../shared/data/meshes/bunny_res4.ply bunny-repaired.ply --report repair.json"
+)]
+pub struct Args {
+    /// Input mesh (.obj .ply .off .stl).
+    pub input: PathBuf,
+    /// Output mesh; never the input file.
+    pub output: PathBuf,
+    /// Write a JSON report of every change.
+    #[arg(long, value_name = "FILE.json")]
+    pub report: Option<PathBuf>,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    check_output(&args.input, &args.output)?;
+    if let Some(r) = &args.report {
+        check_output(&args.input, r)?;
+        if r == &args.output {
+            return Err(crate::common::bad_input(format!(
+                "{}: the report and the output mesh are the same file",
+                r.display()
+            )));
+        }
+    }
+    let soup = fairline::io::read_soup(&args.input)?;
+    let mut report = Report::new("repair");
+    let repaired = report
+        .time(|| fairline::mesh::repair(&soup))
+        .with_context(|| format!("{}: cannot repair", args.input.display()))?;
+    fairline::io::write_soup(&args.output, &repaired.soup)?;
+    let r = &repaired.report;
+    if let serde_json::Value::Object(m) = serde_json::to_value(r)? {
+        for (k, v) in m {
+            report.set(&k, v);
+        }
+    }
+    report.write(args.report.as_deref())?;
+    let count = |reason| {
+        r.removed_faces
+            .iter()
+            .filter(|f| f.reason == reason)
+            .count()
+    };
+    use fairline::mesh::RemovalReason as R;
+    let changes = [
+        (count(R::Duplicate), "duplicate faces removed"),
+        (count(R::ZeroArea), "zero-area faces removed"),
+        (
+            count(R::InvalidIndex) + count(R::TooFewVertices) + count(R::RepeatedVertex),
+            "invalid faces removed",
+        ),
+        (
+            count(R::NonManifoldEdge),
+            "faces removed from edges that could not be split",
+        ),
+        (
+            r.collapsed_faces.len(),
+            "faces with a repeated vertex collapsed",
+        ),
+        (r.split_edges.len(), "non-manifold edges split"),
+        (r.split_vertices.len(), "non-manifold vertices split"),
+        (
+            r.flipped_faces.len(),
+            "faces reversed for a consistent orientation",
+        ),
+        (r.removed_vertices.len(), "unreferenced vertices removed"),
+    ];
+    for (n, what) in changes {
+        if n > 0 {
+            eprintln!("  {n} {what}");
+        }
+    }
+    if !r.orientation_conflicts.is_empty() {
+        eprintln!(
+            "warning: {} faces could not be oriented consistently (non-orientable surface); left as they are",
+            r.orientation_conflicts.len()
+        );
+    }
+    if let Some(problem) = &r.remaining_problem {
+        eprintln!("warning: the output is still not a manifold: {problem}");
+    }
+    eprintln!(
+        "repair: {} → {}: {} vertices, {} faces → {} vertices, {} faces{}",
+        args.input.display(),
+        args.output.display(),
+        r.vertices_before,
+        r.faces_before,
+        r.vertices_after,
+        r.faces_after,
+        if r.unchanged() {
+            " (nothing to repair)"
+        } else if r.vertex_source.is_empty() {
+            ""
+        } else {
+            "; vertex indices changed (see vertex_source in the report)"
+        }
+    );
+    Ok(())
+}
+
+/// The hint appended to a refusal of dirty input: which file to repair and
+/// how, or `None` when the error is not about a repairable mesh.
+pub fn hint(err: &anyhow::Error) -> Option<String> {
+    use fairline::MeshError as M;
+    let io = err
+        .chain()
+        .find_map(|c| c.downcast_ref::<fairline::io::IoError>())?;
+    let fairline::io::IoError::Mesh { path, source } = io else {
+        return None;
+    };
+    match source {
+        M::NonManifoldEdge { .. }
+        | M::NonManifoldVertex { .. }
+        | M::NonOrientable { .. }
+        | M::RepeatedVertex { .. }
+        | M::FaceTooSmall { .. } => Some(format!(
+            "run `fairline repair {} {}` and use the repaired mesh",
+            path.display(),
+            repaired_name(path).display()
+        )),
+        _ => None,
+    }
+}
+
+/// `name-repaired.ext` in the current folder (the input's folder may be
+/// read-only).
+fn repaired_name(path: &Path) -> PathBuf {
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("mesh");
+    let ext = path.extension().and_then(|s| s.to_str()).unwrap_or("ply");
+    PathBuf::from(format!("{stem}-repaired.{ext}"))
+}
+
+/// Says on stderr how many non-manifold vertices of `path` were split into
+/// separate fans (kept fixed, merged back on output); nothing when none.
+pub fn note_split_vertices(path: &Path, mesh: &fairline::SurfaceMesh) {
+    let n = mesh.split_vertex_count();
+    if n > 0 {
+        eprintln!(
+            "note: {}: {n} non-manifold vertices split into {} fans; they stay fixed and are merged back on output",
+            path.display(),
+            n + mesh.vertex_count() - mesh.original_vertex_count()
+        );
+    }
+}
