@@ -580,6 +580,12 @@ fn errors_reading_inputs_name_the_file() {
     let bad_obj = d.join("bad-mesh.obj");
     std::fs::write(&bad_obj, "v 0 0 0\nv 1 0\nf 1 2 3\n").unwrap();
     let lights = d.join("lights.json");
+    let zero_axis = d.join("zero-axis.json");
+    std::fs::write(
+        &zero_axis,
+        r#"{"center":[0,0,1],"axis":[0,0,0],"radii":[1]}"#,
+    )
+    .unwrap();
     let bad_igs = d.join("bad-surface.igs");
     std::fs::write(&bad_igs, "not an iges file\n").unwrap();
     let cases: Vec<(Vec<&str>, &str)> = vec![
