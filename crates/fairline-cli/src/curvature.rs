@@ -97,7 +97,7 @@ pub fn run(args: Args) -> Result<()> {
         .map(|(n, v)| (*n, mesh.original_values(v)))
         .collect();
     fairline::io::write_ply_with_vertex_properties(&args.output, &mesh.to_soup(), &props)?;
-    report.set("method", format!("{:?}", args.method).to_lowercase());
+    report.set("method", crate::output::option_value(&args.method));
     report.set("vertices", mesh.original_vertex_count());
     report.set("triangulated", triangulated);
     report.set("k1", Stats::of(c.k1.iter().copied()));

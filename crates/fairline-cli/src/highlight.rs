@@ -339,7 +339,13 @@ pub fn run(args: Args) -> Result<()> {
     };
     let (lines, bands, radii) = if let Some(spec) = circular {
         let radii = spec.radii.clone();
-        let lights: Vec<CircularLight> = spec.lights().map_err(to_input_error)?;
+        let from_file = args.circle_center.is_none() || args.circle_axis.is_none();
+        let lights: Vec<CircularLight> =
+            spec.lights()
+                .map_err(|e| match (&args.light.lights, from_file) {
+                    (Some(path), true) => crate::output::name_file(path, to_input_error(e)),
+                    _ => to_input_error(e),
+                })?;
         if lights.is_empty() {
             return Err(bad_input("circular lights need at least one radius"));
         }

@@ -494,6 +494,27 @@ mod tests {
     }
 
     #[test]
+    fn owned_folders_are_made_reused_and_foreign_ones_refused() {
+        let d = dir("owned");
+        let fresh = d.join("fresh");
+        owned_folder("--out", &fresh).unwrap();
+        assert!(fresh.join(OWNED_FOLDER_MARKER).is_file());
+        std::fs::write(fresh.join("picture.png"), "old").unwrap();
+        owned_folder("--out", &fresh).unwrap(); // made by fairline: reused
+        let empty = d.join("empty");
+        std::fs::create_dir(&empty).unwrap();
+        owned_folder("--out", &empty).unwrap();
+        let foreign = d.join("foreign");
+        std::fs::create_dir(&foreign).unwrap();
+        std::fs::write(foreign.join("scan.ply"), "mine").unwrap();
+        let e = owned_folder("--out", &foreign).unwrap_err().to_string();
+        assert!(e.contains("not empty"), "{e}");
+        assert!(!foreign.join(OWNED_FOLDER_MARKER).exists());
+        assert!(owned_folder("--out", &foreign.join("scan.ply")).is_err());
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
     fn summary_names_what_was_written() {
         let mut job = Job::new("smooth")
             .output("-o", "a.obj")

@@ -111,7 +111,7 @@ fn fair_removes_a_bump_and_touches_nothing_outside() {
         s(&rep2),
     ]));
     let r2 = json(&rep2);
-    assert_eq!(r2["method"], "diffusionflow");
+    assert_eq!(r2["method"], "diffusion-flow");
     assert!(f("highlight_deviation_after") < r2["highlight_deviation_after"].as_f64().unwrap());
 }
 

@@ -86,7 +86,7 @@ fn an_output_naming_an_input_is_refused_by_every_command_and_nothing_is_written(
         vec!["convert", i, s(&o), "--report", i],
         vec!["highlight", i, "-o", "l.json", "--report", i],
         vec!["enhance", i, "-o", s(&o), "--report", i],
-        vec!["fair", i, "-o", s(&o), "--report", i],
+        vec!["fair", i, "--auto", "-o", s(&o), "--report", i],
         // files read besides the mesh are inputs too
         vec!["highlight", i, "--lights", s(&lights), "-o", s(&lights)],
         vec!["detect", i, "--lights", s(&lights), "-o", s(&lights)],
@@ -407,31 +407,39 @@ fn a_closed_standard_output_ends_quietly() {
 
 #[test]
 fn reports_never_contain_null_and_say_what_was_left_out() {
-    // defect 8: coordinates near the f64 limit make the area and edge
-    // lengths overflow; serde_json would write them as null
+    // defect 8: a tetrahedron of edge 1e150 has a volume of about 1e449,
+    // beyond f64; serde_json would write it as null
     let d = tmp("null");
     let m = d.join("huge.obj");
     std::fs::write(
         &m,
-        "v -1e308 -1e308 0\nv 1e308 -1e308 0\nv -1e308 1e308 0\nf 1 2 3\n",
+        "v 0 0 0\nv 1e150 0 0\nv 0 1e150 0\nv 0 0 1e150\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
     )
     .unwrap();
     let r = d.join("r.json");
-    let o = run(&["info", s(&m), "--json", "--report", s(&r)]);
+    let o = run(&[
+        "smooth",
+        s(&m),
+        "--method",
+        "laplace",
+        "-o",
+        s(&d.join("o.obj")),
+        "--report",
+        s(&r),
+    ]);
     ok(&o);
     let text = std::fs::read_to_string(&r).unwrap();
     assert!(!text.contains("null"), "{text}");
-    let stdout = String::from_utf8_lossy(&o.stdout);
-    assert!(!stdout.contains("null"), "{stdout}");
     let e = stderr(&o);
     assert!(
-        e.contains("warning: report value `area` is not a finite number"),
+        e.contains("warning: report value `volume_before` is not a finite number; left out"),
         "{e}"
     );
     let v = json(&r);
-    assert!(v.get("area").is_none());
-    assert!(v["warnings"].as_array().is_some_and(|w| !w.is_empty()));
-    assert_eq!(v["vertices"], 3);
+    assert!(v.get("volume_before").is_none());
+    assert!(v["max_displacement"].as_f64().unwrap() > 1e148);
+    assert_eq!(v["warnings"].as_array().unwrap().len(), 2);
+    assert_eq!(v["vertices"], 4);
     // a non-manifold mesh has no genus: the key is left out, not null
     let nm = d.join("nm.obj");
     std::fs::write(
@@ -439,9 +447,10 @@ fn reports_never_contain_null_and_say_what_was_left_out() {
         "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 1 1 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
     )
     .unwrap();
-    let o = run(&["info", s(&nm), "--report", s(&r)]);
+    let o = run(&["info", s(&nm), "--json", "--report", s(&r)]);
     ok(&o);
     assert!(!std::fs::read_to_string(&r).unwrap().contains("null"));
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("null"));
     assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
 }
 
@@ -521,8 +530,8 @@ fn non_convergence_and_worse_measures_are_warned_about() {
             .unwrap()
             .contains("did not converge")
     );
-    // converged spring smoothing: no warning
-    let o = run_in(&d, &["smooth", s(&i), "--method", "spring", "-o", "s.obj"]);
+    // a fixed number of Laplace steps: nothing to warn about
+    let o = run_in(&d, &["smooth", s(&i), "--method", "laplace", "-o", "s.obj"]);
     ok(&o);
     assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
     // report values are spelled like the option values
@@ -571,6 +580,12 @@ fn errors_reading_inputs_name_the_file() {
     let bad_obj = d.join("bad-mesh.obj");
     std::fs::write(&bad_obj, "v 0 0 0\nv 1 0\nf 1 2 3\n").unwrap();
     let lights = d.join("lights.json");
+    let zero_axis = d.join("zero-axis.json");
+    std::fs::write(
+        &zero_axis,
+        r#"{"center":[0,0,1],"axis":[0,0,0],"radii":[1]}"#,
+    )
+    .unwrap();
     let bad_igs = d.join("bad-surface.igs");
     std::fs::write(&bad_igs, "not an iges file\n").unwrap();
     let cases: Vec<(Vec<&str>, &str)> = vec![

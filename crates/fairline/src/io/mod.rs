@@ -475,6 +475,9 @@ where
             }
         }
     };
+    // Removes the temporary file however this function ends: an error, a
+    // panic in `write`, or success (then the name is already gone).
+    let guard = LiveTemp(tmp);
     let result = (|| {
         let mut w = BufWriter::new(file);
         write(&mut w)?;
@@ -482,13 +485,21 @@ where
         let file = w.into_inner().map_err(|e| e.into_error())?;
         file.sync_all()?;
         drop(file);
-        std::fs::rename(&tmp, &target)
+        std::fs::rename(&guard.0, &target)
     })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    live_temps().paths.retain(|p| p != &tmp);
+    drop(guard);
     result.map_err(io_err)
+}
+
+/// A temporary file of [`atomic_write`]: removed and unlisted when dropped.
+struct LiveTemp(PathBuf);
+
+impl Drop for LiveTemp {
+    fn drop(&mut self) {
+        // after the rename there is no file of this name left to remove
+        let _ = std::fs::remove_file(&self.0);
+        live_temps().paths.retain(|p| p != &self.0);
+    }
 }
 
 /// Whether `a` and `b` name the same file: the same canonical path (a path
@@ -924,6 +935,21 @@ mod tests {
             .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
             .collect();
         assert!(left.is_empty(), "{left:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_panic_while_writing_leaves_no_temporary_file() {
+        let dir = temp_dir("panic");
+        let path = dir.join("out.obj");
+        let r = std::panic::catch_unwind(|| {
+            let _ = atomic_write(&path, |w| {
+                w.write_all(b"partial")?;
+                panic!("writer failed");
+            });
+        });
+        assert!(r.is_err());
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
