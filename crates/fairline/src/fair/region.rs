@@ -105,7 +105,6 @@ impl RegionSpec {
     /// indices and on an empty result.
     pub fn faces(&self, mesh: &SurfaceMesh) -> Result<Vec<FaceId>, FairError> {
         let nf = mesh.face_count();
-        let nv = mesh.vertex_count();
         let mut faces: Vec<FaceId> = match self {
             RegionSpec::Faces(f) => {
                 if let Some(&bad) = f.iter().find(|&&i| i as usize >= nf) {
@@ -116,6 +115,8 @@ impl RegionSpec {
                 f.iter().map(|&i| FaceId(i)).collect()
             }
             RegionSpec::Vertices(v) => {
+                // listed by input index: a split copy counts as its vertex
+                let nv = mesh.original_vertex_count();
                 if let Some(&bad) = v.iter().find(|&&i| i as usize >= nv) {
                     return Err(FairError::Region(format!(
                         "vertex {bad} out of range (the mesh has {nv} vertices)"
@@ -126,7 +127,10 @@ impl RegionSpec {
                     listed[i as usize] = true;
                 }
                 mesh.faces()
-                    .filter(|&f| mesh.face_vertices(f).all(|w| listed[w.idx()]))
+                    .filter(|&f| {
+                        mesh.face_vertices(f)
+                            .all(|w| listed[mesh.original_vertex(w).idx()])
+                    })
                     .collect()
             }
             RegionSpec::Sphere { center, radius } => {

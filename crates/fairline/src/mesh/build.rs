@@ -85,9 +85,15 @@ pub(super) struct EdgeTable {
     pub corner_edge: Vec<u32>,
     /// The two vertices of every edge, smaller first.
     pub lo_hi: Vec<(u32, u32)>,
-    /// Up to two incidences of every edge: (face, corner); `NONE` when absent.
-    pub incidences: Vec<[(u32, u32); 2]>,
+    /// Up to two incidences of every edge; `NONE` when absent.
+    pub incidences: Vec<Incidence>,
 }
+
+/// The faces on one edge as (face, corner) pairs.
+pub(super) type Incidence = [(u32, u32); 2];
+
+/// A chunk of vertex groups and its ranges of the edge arrays.
+type EdgeChunk<'a> = (usize, &'a mut [(u32, u32)], &'a mut [Incidence]);
 
 /// Step 2: matches the corners of all faces into undirected edges. Edges are
 /// numbered by (smaller vertex, larger vertex), so the numbering depends only
@@ -186,10 +192,9 @@ pub(super) fn match_edges(soup: &Soup) -> Result<EdgeTable, MeshError> {
     }
     let ne = edge_start[edge_start.len() - 1];
     let mut lo_hi: Vec<(u32, u32)> = vec![(0, 0); ne];
-    let mut incidences: Vec<[(u32, u32); 2]> = vec![[(NONE, NONE); 2]; ne];
-    let mut parts: Vec<(usize, &mut [(u32, u32)], &mut [[(u32, u32); 2]])> = Vec::new();
-    let (mut lh, mut inc): (&mut [(u32, u32)], &mut [[(u32, u32); 2]]) =
-        (&mut lo_hi, &mut incidences);
+    let mut incidences: Vec<Incidence> = vec![[(NONE, NONE); 2]; ne];
+    let mut parts: Vec<EdgeChunk> = Vec::new();
+    let (mut lh, mut inc): (&mut [(u32, u32)], &mut [Incidence]) = (&mut lo_hi, &mut incidences);
     for k in 0..edge_start.len() - 1 {
         let len = edge_start[k + 1] - edge_start[k];
         let (a, b) = lh.split_at_mut(len);
@@ -198,26 +203,25 @@ pub(super) fn match_edges(soup: &Soup) -> Result<EdgeTable, MeshError> {
         lh = b;
         inc = d;
     }
-    let fill_chunk =
-        |(k, lo_hi, incidences): (usize, &mut [(u32, u32)], &mut [[(u32, u32); 2]])| {
-            let mut e = 0;
-            for lo in chunks[k]..chunks[k + 1] {
-                let group = &entries[start[lo] as usize..start[lo + 1] as usize];
-                let mut i = 0;
-                while i < group.len() {
-                    let hi = group[i].0;
-                    lo_hi[e] = (lo as u32, hi);
-                    incidences[e][0] = (corner_face[group[i].1 as usize], group[i].1);
-                    if i + 1 < group.len() && group[i + 1].0 == hi {
-                        incidences[e][1] = (corner_face[group[i + 1].1 as usize], group[i + 1].1);
-                        i += 2;
-                    } else {
-                        i += 1;
-                    }
-                    e += 1;
+    let fill_chunk = |(k, lo_hi, incidences): EdgeChunk| {
+        let mut e = 0;
+        for lo in chunks[k]..chunks[k + 1] {
+            let group = &entries[start[lo] as usize..start[lo + 1] as usize];
+            let mut i = 0;
+            while i < group.len() {
+                let hi = group[i].0;
+                lo_hi[e] = (lo as u32, hi);
+                incidences[e][0] = (corner_face[group[i].1 as usize], group[i].1);
+                if i + 1 < group.len() && group[i + 1].0 == hi {
+                    incidences[e][1] = (corner_face[group[i + 1].1 as usize], group[i + 1].1);
+                    i += 2;
+                } else {
+                    i += 1;
                 }
+                e += 1;
             }
-        };
+        }
+    };
     if chunks.len() > 2 {
         parts.into_par_iter().for_each(fill_chunk);
     } else {
