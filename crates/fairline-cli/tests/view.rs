@@ -407,7 +407,9 @@ mod cdp {
 
     impl Browser {
         pub fn launch(exe: &str, width: u32, height: u32) -> Browser {
-            let profile = std::env::temp_dir().join(format!("fairline-chromium-{}-{}", std::process::id(), width));
+            static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+            let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+            let profile = std::env::temp_dir().join(format!("fairline-chromium-{}-{n}", std::process::id()));
             let _ = std::fs::remove_dir_all(&profile);
             std::fs::create_dir_all(&profile).unwrap();
             let mut child = Command::new(exe)
@@ -512,7 +514,18 @@ mod cdp {
                     return;
                 }
                 let status = self.eval("document.getElementById('status') ? document.getElementById('status').textContent : ''");
-                assert!(t.elapsed() < Duration::from_secs(secs), "timed out waiting for {expr}; status: {status}");
+                if t.elapsed() >= Duration::from_secs(secs) {
+                    let log: Vec<String> = self
+                        .events
+                        .iter()
+                        .filter(|e| {
+                            let m = e["method"].as_str().unwrap_or("");
+                            m.starts_with("Runtime.console") || m.starts_with("Runtime.exception") || m.starts_with("Log.")
+                        })
+                        .map(|e| e["params"].to_string())
+                        .collect();
+                    panic!("timed out waiting for {expr}; status: {status}; log: {log:?}");
+                }
                 std::thread::sleep(Duration::from_millis(100));
             }
         }
@@ -537,6 +550,10 @@ mod cdp {
         }
     }
 }
+
+/// One browser at a time: the tests share a small machine, and software
+/// WebGL is CPU-bound.
+static BROWSER_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 /// Brightness (0–255) of pixel (x, y).
 fn lum(img: &(u32, u32, Vec<u8>, Vec<u8>), x: u32, y: u32) -> f64 {
@@ -572,6 +589,7 @@ fn page_in_headless_chromium_shades_stripes_and_runs_a_repair_session() {
         eprintln!("\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n");
         return;
     };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tmp("view-browser");
     let mesh = dir.join("panel.obj");
     dented_panel(&mesh, 101);
@@ -676,6 +694,79 @@ fn page_in_headless_chromium_shades_stripes_and_runs_a_repair_session() {
                 "request to another host: {url}"
             );
         }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Clicks the (u, v) panel at point `k` of pre-image `line`.
+fn click_uv(b: &mut cdp::Browser, line: usize, k: usize) {
+    let xy = b.eval(&format!(
+        "(() => {{ const p = window.fairline.uvPanel; const l = p.lines[{line}]; const [x, y] = p.toPx(l.uv[2 * {k}], l.uv[2 * {k} + 1]); const r = p.canvas.getBoundingClientRect(); return [r.left + x * r.width / p.canvas.width, r.top + y * r.height / p.canvas.height]; }})()"
+    ));
+    let (x, y) = (xy[0].as_f64().unwrap(), xy[1].as_f64().unwrap());
+    for t in ["mouseMoved", "mousePressed", "mouseReleased"] {
+        b.call("Input.dispatchMouseEvent", json!({"type": t, "x": x, "y": y, "button": "left", "clickCount": 1}));
+    }
+}
+
+#[test]
+fn page_shows_bspline_patches_and_fairs_a_surface_from_uv_endpoints() {
+    let Some(exe) = cdp::chromium() else {
+        assert!(std::env::var_os("CI").is_none(), "chromium is not installed and CI is set (apt-get install chromium)");
+        eprintln!("\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n");
+        return;
+    };
+    let Some(teapot) = shared("surfaces/teapot.json") else {
+        return;
+    };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmp("view-surface");
+    let srv = start(&[&teapot], &dir);
+    let mut b = cdp::Browser::launch(&exe, 1400, 900);
+    b.call("Page.navigate", json!({"url": srv.url}));
+    b.wait_for("document.body && document.body.dataset.ready === '1'", 120);
+    let patches = srv.json("/api/session", None)["docs"][0]["patches"].as_u64().unwrap();
+    // one label per visible patch
+    b.wait_for("document.querySelectorAll('#labels span').length > 0", 30);
+    let labels = b.eval("document.querySelectorAll('#labels span').length").as_u64().unwrap();
+    assert!(labels > 0 && labels <= patches);
+    // the highest patch (the lid's knob) faces the circular lights above
+    let (_, o) = srv.get("/api/doc/0/outlines");
+    let (outl, _) = parse_frame(&o);
+    let labels = outl["labels"].as_array().unwrap();
+    let patch = (0..labels.len())
+        .max_by(|&a, &b| labels[a][2].as_f64().unwrap().total_cmp(&labels[b][2].as_f64().unwrap()))
+        .unwrap();
+    b.eval(&format!("document.getElementById('patch').value = '{patch}'"));
+    b.eval("document.getElementById('uvlines').click()");
+    b.wait_for("window.fairline.uvPanel.lines.length > 0", 60);
+    // hovering a pre-image lights it up in the 3-D view
+    let n = b.eval("window.fairline.uvPanel.lines.map((l) => l.count)");
+    let counts: Vec<usize> = serde_json::from_value(n).unwrap();
+    let line = (0..counts.len()).max_by_key(|&i| counts[i]).unwrap();
+    click_uv(&mut b, line, counts[line] / 3);
+    b.wait_for("window.fairline.viewer.docs[0].overlays.hover", 10);
+    click_uv(&mut b, line, 2 * counts[line] / 3);
+    b.wait_for("window.fairline.uvPanel.endpoints.length === 1", 10);
+    std::thread::sleep(Duration::from_millis(300));
+    let shot = b.screenshot();
+    std::fs::write(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/images/workbench-surface.png"), &shot.3).unwrap();
+    b.eval("document.getElementById('fair-surface').click()");
+    b.wait_for("document.body.dataset.lastJob", 300);
+    let job = srv.json("/api/job", None);
+    assert_eq!(job["state"], "done", "{job}");
+    assert!(job["command"].as_str().unwrap().starts_with("fairline fair-surface "));
+    assert!(job["report"]["modified_control_points"].as_u64().unwrap() > 0);
+    let session = srv.json("/api/session", None);
+    assert_eq!(session["docs"][0]["history"]["cursor"], 1);
+    // the faired surfaces download as JSON; the other patches are unchanged
+    let (_, j) = srv.get("/api/doc/0/download?format=json");
+    let after: Value = serde_json::from_slice(&j).unwrap();
+    let before: Value = serde_json::from_str(&std::fs::read_to_string(&teapot).unwrap()).unwrap();
+    let cp = |v: &Value, k: usize| v["surfaces"][k]["control_points"].clone();
+    assert_ne!(cp(&after, patch), cp(&before, patch), "patch {patch} was faired");
+    for k in (0..patches as usize).filter(|&k| k != patch) {
+        assert_eq!(cp(&after, k), cp(&before, k), "patch {k} untouched");
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -221,6 +221,8 @@ fn route(shared: &Arc<Shared>, req: &tiny_http::Request, body: &[u8]) -> Answer 
                 (true, _, ["scalar", name]) => scalar(shared, k, name, step),
                 (true, _, ["download"]) => download(shared, k, url),
                 (_, true, ["lines"]) => lines(shared, k, body),
+                (true, _, ["outlines"]) => outlines(shared, k, step),
+                (_, true, ["surface-lines"]) => surface_lines(shared, k, body),
                 (_, true, ["detect"]) => detect(shared, k, body),
                 (_, true, ["region"]) => region(shared, k, body),
                 (_, true, ["region-file"]) => region_file(shared, k, body),
@@ -689,6 +691,12 @@ struct RunOptions {
 #[derive(Deserialize)]
 struct RunRequest {
     method: String,
+    /// fair-surface: the patch, the circular lights and the endpoints
+    /// `[{"radius","start":[u,v],"end":[u,v]}]` (DESIGN.md §5).
+    #[serde(default)]
+    patch: usize,
+    circular: Option<CircularLights>,
+    endpoints: Option<Value>,
     #[serde(default)]
     faces: Option<Vec<u32>>,
     light: Option<LightArray>,
@@ -699,6 +707,7 @@ struct RunRequest {
 /// What a finished job gives: new positions, report, command, label.
 struct Outcome {
     positions: Vec<Vec3>,
+    surfaces: Option<Arc<Vec<fairline::bspline::BSplineSurface>>>,
     report: Value,
     command: String,
     label: String,
@@ -717,9 +726,18 @@ fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
         return error(409, "a job is already running; wait for it or cancel it");
     }
     let d = &st.docs[k];
-    if d.is_surface() {
-        return bad("mesh methods need a mesh document; this one is a B-spline surface");
+    if d.is_surface() != (req.method == "fair-surface") {
+        return bad(if d.is_surface() {
+            "this document is a B-spline surface: its method is fair-surface"
+        } else {
+            "fair-surface needs a B-spline surface document"
+        });
     }
+    let surface_input = d
+        .current()
+        .surfaces
+        .clone()
+        .map(|s| (s, d.grid));
     let tri = d.tri_at(None);
     let mesh = d.mesh_now();
     let file = d.current_file();
@@ -751,7 +769,12 @@ fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
         let progress = Arc::clone(&ctx.progress);
         let (tx, rx) = std::sync::mpsc::channel();
         let worker = std::thread::spawn(move || {
-            let r = run_method(&req, &tri, &mesh, &file, &out, &progress);
+            let r = match surface_input {
+                Some((surfaces, grid)) => {
+                    run_fair_surface(&req, &surfaces, grid, &file, &out)
+                }
+                None => run_method(&req, &tri, &mesh, &file, &out, &progress),
+            };
             let _ = tx.send(());
             r
         });
@@ -791,7 +814,7 @@ fn finish_job(shared: &Shared, ctx: &JobContext, result: Result<Outcome, String>
     match result {
         Ok(o) if !cancelled => {
             let d = &mut st.docs[ctx.doc];
-            let surfaces = d.current().surfaces.clone();
+            let surfaces = o.surfaces.or_else(|| d.current().surfaces.clone());
             d.push(Step {
                 label: o.label.clone(),
                 command: o.command.clone(),
@@ -875,6 +898,7 @@ fn run_method(
             report["time_s"] = json!(t.elapsed().as_secs_f64());
             let m = o.method.as_deref().unwrap_or("highlight");
             Ok(Outcome {
+                surfaces: None,
                 positions: r.mesh.positions().to_vec(),
                 report,
                 command: format!(
@@ -971,6 +995,7 @@ fn run_method(
             }
             cmd.push_str(&format!("{fixed_arg} -o {out}"));
             Ok(Outcome {
+                surfaces: None,
                 positions: m.positions().to_vec(),
                 report: json!({
                     "command": "smooth",
@@ -1001,6 +1026,7 @@ fn run_method(
             };
             let r = fair_structure_lines(&mut m, &opts).map_err(|e| e.to_string())?;
             Ok(Outcome {
+                surfaces: None,
                 positions: m.positions().to_vec(),
                 report: json!({
                     "command": "fair-quad",
@@ -1032,6 +1058,7 @@ fn run_method(
                 .fixed(fixed_outside(tri));
             let r = enhance_features(tri, &opts).map_err(|e| e.to_string())?;
             Ok(Outcome {
+                surfaces: None,
                 report: json!({
                     "command": "enhance",
                     "flipped_triangles": r.report.flipped_triangles,
@@ -1172,4 +1199,176 @@ fn save(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         })),
         Err(e) => error(500, e.to_string()),
     }
+}
+
+/// Patch boundaries (one closed polyline per patch, from its tessellation
+/// grid) and a label point per patch (its middle grid point).
+fn outlines(shared: &Shared, k: usize, step: Option<usize>) -> Answer {
+    let st = lock(shared);
+    let d = &st.docs[k];
+    let Some(surfaces) = &d.step(step).surfaces else {
+        return bad("outlines are for B-spline surfaces");
+    };
+    let n = d.grid;
+    let p = &d.step(step).positions;
+    let mut floats = Vec::new();
+    let mut meta = Vec::new();
+    let mut labels = Vec::new();
+    for s in 0..surfaces.len() {
+        let base = s * n * n;
+        let at = |a: usize, b: usize| p.get(base + a * n + b).copied().unwrap_or(Vec3::ZERO) - d.center;
+        let mut ring: Vec<(usize, usize)> = Vec::new();
+        ring.extend((0..n).map(|b| (0, b)));
+        ring.extend((1..n).map(|a| (a, n - 1)));
+        ring.extend((0..n - 1).rev().map(|b| (n - 1, b)));
+        ring.extend((1..n - 1).rev().map(|a| (a, 0)));
+        let start = floats.len() / 3;
+        for (a, b) in &ring {
+            let q = at(*a, *b);
+            floats.extend([q.x as f32, q.y as f32, q.z as f32]);
+        }
+        meta.push(json!({"index": s, "closed": true, "start": start, "count": ring.len()}));
+        labels.push(at(n / 2, n / 2).to_array());
+    }
+    binary(frame(&json!({"lines": meta, "labels": labels}), &floats))
+}
+
+#[derive(Deserialize)]
+struct SurfaceLinesRequest {
+    circular: CircularLights,
+    #[serde(default)]
+    patch: usize,
+    grid: Option<usize>,
+    band: Option<f64>,
+}
+
+/// Circular highlight line pre-images of one patch (Nishiyama et al. §2):
+/// a frame with the 3-D points (minus the centre), then the (u, v) points;
+/// each line has `radius`, `closed`, `start`, `count` and `uv_start`.
+fn surface_lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
+    use fairline::highlight::{SurfaceHighlightOptions, SurfaceLight, surface_highlight_lines};
+    let req: SurfaceLinesRequest = match parse(body) {
+        Ok(r) => r,
+        Err(a) => return a,
+    };
+    let (surface, center, file) = {
+        let st = lock(shared);
+        let d = &st.docs[k];
+        let Some(s) = &d.current().surfaces else {
+            return bad("surface lines are for B-spline surfaces");
+        };
+        let Some(surface) = s.get(req.patch).cloned() else {
+            return bad(format!("no patch {} (the file holds {})", req.patch, s.len()));
+        };
+        (surface, d.center, d.current_file())
+    };
+    let lights: Vec<CircularLight> = match req.circular.lights() {
+        Ok(l) if !l.is_empty() => l,
+        Ok(_) => return bad("circular lights need at least one radius"),
+        Err(e) => return bad(e),
+    };
+    let grid = req.grid.unwrap_or(200).clamp(8, 2000);
+    if let Some(b) = req.band
+        && !(b > 0.0 && b.is_finite())
+    {
+        return bad("band must be a positive number");
+    }
+    let t = Instant::now();
+    let slights: Vec<SurfaceLight> = lights.iter().map(|l| SurfaceLight::Circular(*l)).collect();
+    let h = surface_highlight_lines(
+        &surface,
+        &slights,
+        &SurfaceHighlightOptions::default().grid(grid).band(req.band),
+    );
+    let elapsed = t.elapsed().as_secs_f64();
+    let all: Vec<(&str, &fairline::highlight::SurfaceHighlightLine)> = h
+        .lines
+        .iter()
+        .map(|l| ("line", l))
+        .chain(h.band_lower.iter().map(|l| ("band", l)))
+        .chain(h.band_upper.iter().map(|l| ("band", l)))
+        .collect();
+    let mut floats = Vec::new();
+    let mut meta = Vec::new();
+    for (kind, l) in &all {
+        let start = floats.len() / 3;
+        for p in &l.points {
+            let q = *p - center;
+            floats.extend([q.x as f32, q.y as f32, q.z as f32]);
+        }
+        meta.push(json!({"kind": kind, "light": l.light, "radius": l.radius, "level": l.level, "closed": l.closed, "start": start, "count": l.points.len()}));
+    }
+    let uv_base = floats.len();
+    for (m, (_, l)) in meta.iter_mut().zip(&all) {
+        m["uv_start"] = json!((floats.len() - uv_base) / 2);
+        for uv in &l.uv {
+            floats.extend([uv[0] as f32, uv[1] as f32]);
+        }
+    }
+    let [u0, u1] = surface.domain_u();
+    let [v0, v1] = surface.domain_v();
+    let radii: Vec<String> = req.circular.radii.iter().map(|r| r.to_string()).collect();
+    let header = json!({
+        "lines": meta,
+        "uv_offset": uv_base,
+        "domain": [[u0, u1], [v0, v1]],
+        "time_s": elapsed,
+        "command": format!(
+            "fairline highlight {file} --surface {} --circle-center {} --circle-axis {} --radii {} --grid {grid}{} -o lines.json --svg uv.svg",
+            req.patch,
+            vec_arg(Vec3::from(req.circular.center)),
+            vec_arg(Vec3::from(req.circular.axis)),
+            radii.join(","),
+            req.band.map(|b| format!(" --band {b}")).unwrap_or_default()
+        ),
+    });
+    binary(frame(&header, &floats))
+}
+
+/// Circular-highlight fairing of one patch (Nishiyama et al. §3) with the
+/// library's default options; the patch is replaced and re-tessellated.
+fn run_fair_surface(
+    req: &RunRequest,
+    surfaces: &Arc<Vec<fairline::bspline::BSplineSurface>>,
+    grid: usize,
+    file: &str,
+    out: &str,
+) -> Result<Outcome, String> {
+    use fairline::fair::{Endpoints, SurfaceFairOptions, fair_surface};
+    let circular = req.circular.as_ref().ok_or("fair-surface needs the circular lights")?;
+    let lights = circular.lights().map_err(|e| e.to_string())?;
+    let ends: Endpoints = serde_json::from_value(json!({"endpoints": req.endpoints.clone().unwrap_or(Value::Null)}))
+        .map_err(|e| format!("endpoints: {e}"))?;
+    let input = surfaces.get(req.patch).ok_or("no such patch")?;
+    let mut opts = SurfaceFairOptions::default();
+    if let Some(n) = req.options.max_iterations {
+        opts.max_iterations = n;
+    }
+    if let Some(e) = req.options.epsilon {
+        opts.epsilon = e;
+    }
+    let t = Instant::now();
+    let (faired, rep) = fair_surface(input, &lights, &ends.endpoints, &opts).map_err(|e| e.to_string())?;
+    let mut all = surfaces.as_ref().clone();
+    all[req.patch] = faired;
+    let (mesh, _) = super::doc::tessellate_all(&all, grid).map_err(|e| e.to_string())?;
+    Ok(Outcome {
+        positions: mesh.positions().to_vec(),
+        surfaces: Some(Arc::new(all)),
+        report: json!({
+            "command": "fair-surface",
+            "iterations": rep.iterations.len(),
+            "converged": rep.converged,
+            "modified_control_points": rep.modified_control_points.len(),
+            "residual_before": {"max": rep.residual_before.0, "mean": rep.residual_before.1},
+            "residual_after": {"max": rep.residual_after.0, "mean": rep.residual_after.1},
+            "max_displacement": rep.max_displacement,
+            "time_s": t.elapsed().as_secs_f64(),
+        }),
+        command: format!(
+            "fairline fair-surface {file} --surface {} --lights lights.json --endpoints endpoints.json -o {out}",
+            req.patch
+        ),
+        label: format!("fair-surface (patch {})", req.patch),
+    })
 }
