@@ -6,9 +6,8 @@ use super::frame::{frame, vec3_bytes};
 use fairline::fair::{FairMethod, FairOptions, RegionSpec, fair_highlight_lines_with, grow_region};
 use fairline::geom::{CurvatureMethod, LaplaceWeights, principal_curvatures, vertex_normals};
 use fairline::highlight::{
-    CircularLight, CircularLights, DetectOptions, HighlightLines, HighlightModel,
-    HighlightOptions, LightArray, circular_highlight_bands, circular_highlight_lines,
-    detect_irregularities,
+    CircularLight, CircularLights, DetectOptions, HighlightLines, HighlightModel, HighlightOptions,
+    LightArray, circular_highlight_bands, circular_highlight_lines, detect_irregularities,
 };
 use fairline::mesh::{FaceId, VertexId};
 use fairline::{SurfaceMesh, Vec3};
@@ -390,7 +389,8 @@ fn push_lines(
             let q = *p - center;
             floats.extend([q.x as f32, q.y as f32, q.z as f32]);
         }
-        let mut m = json!({"index": l.index, "closed": l.closed, "start": start, "count": l.points.len()});
+        let mut m =
+            json!({"index": l.index, "closed": l.closed, "start": start, "count": l.points.len()});
         if let Some(r) = radii.and_then(|r| r.get(l.index as usize)) {
             m["radius"] = json!(r);
         }
@@ -403,10 +403,16 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         Ok(r) => r,
         Err(a) => return a,
     };
-    let (mesh, center, file) = {
-        let st = lock(shared);
-        let d = &st.docs[k];
-        (d.tri_at(req.step), d.center, d.current_file())
+    let st = lock(shared);
+    let d = &st.docs[k];
+    let (center, file) = (d.center, d.current_file());
+    let stepped;
+    let mesh = match req.step {
+        None => &d.now,
+        Some(_) => {
+            stepped = d.tri_at(req.step);
+            &stepped
+        }
     };
     if let Some(b) = req.band
         && !(b > 0.0 && b.is_finite())
@@ -424,16 +430,28 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             Ok(_) => return bad("circular lights need at least one radius"),
             Err(e) => return bad(e),
         };
-        let lines = match circular_highlight_lines(&mesh, &lights) {
+        let lines = match circular_highlight_lines(mesh, &lights) {
             Ok(l) => l,
             Err(e) => return bad(e),
         };
         push_lines(&lines, center, Some(&c.radii), &mut meta, &mut floats);
         if let Some(rho) = req.band {
-            match circular_highlight_bands(&mesh, &lights, rho) {
+            match circular_highlight_bands(mesh, &lights, rho) {
                 Ok(b) => {
-                    push_lines(&b.lower, center, Some(&c.radii), &mut band_meta, &mut floats);
-                    push_lines(&b.upper, center, Some(&c.radii), &mut band_meta, &mut floats);
+                    push_lines(
+                        &b.lower,
+                        center,
+                        Some(&c.radii),
+                        &mut band_meta,
+                        &mut floats,
+                    );
+                    push_lines(
+                        &b.upper,
+                        center,
+                        Some(&c.radii),
+                        &mut band_meta,
+                        &mut floats,
+                    );
                 }
                 Err(e) => return bad(e),
             }
@@ -450,14 +468,14 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         let Some(light) = req.light else {
             return bad("give \"light\" or \"circular\"");
         };
-        let model = match HighlightModel::new(&mesh, light, HighlightOptions::default()) {
+        let model = match HighlightModel::new(mesh, light, HighlightOptions::default()) {
             Ok(m) => m,
             Err(e) => return bad(e),
         };
-        let lines = model.lines(&mesh);
+        let lines = model.lines(mesh);
         push_lines(&lines, center, None, &mut meta, &mut floats);
         if let Some(rho) = req.band {
-            match model.bands(&mesh, rho) {
+            match model.bands(mesh, rho) {
                 Ok(b) => {
                     push_lines(&b.lower, center, None, &mut band_meta, &mut floats);
                     push_lines(&b.upper, center, None, &mut band_meta, &mut floats);
@@ -492,11 +510,9 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         Ok(r) => r,
         Err(a) => return a,
     };
-    let (mesh, center, file) = {
-        let st = lock(shared);
-        let d = &st.docs[k];
-        (d.tri_at(None), d.center, d.current_file())
-    };
+    let st = lock(shared);
+    let d = &st.docs[k];
+    let (mesh, center, file) = (&d.now, d.center, d.current_file());
     let defaults = DetectOptions::default();
     let opts = DetectOptions {
         wiggle_threshold: req.threshold.unwrap_or(defaults.wiggle_threshold),
@@ -505,12 +521,12 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         ..defaults
     };
     let t = Instant::now();
-    let model = match HighlightModel::new(&mesh, req.light, HighlightOptions::default()) {
+    let model = match HighlightModel::new(mesh, req.light, HighlightOptions::default()) {
         Ok(m) => m,
         Err(e) => return bad(e),
     };
-    let lines = model.lines(&mesh);
-    let det = match detect_irregularities(&mesh, &lines, req.light.spacing(), &opts) {
+    let lines = model.lines(mesh);
+    let det = match detect_irregularities(mesh, &lines, req.light.spacing(), &opts) {
         Ok(d) => d,
         Err(e) => return bad(e),
     };
@@ -541,7 +557,10 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             })
         })
         .collect();
-    let mut command = format!("fairline detect {file} {} -o region.json", light_args(&req.light));
+    let mut command = format!(
+        "fairline detect {file} {} -o region.json",
+        light_args(&req.light)
+    );
     if let Some(t) = req.threshold {
         command.push_str(&format!(" --threshold {t}"));
     }
@@ -611,14 +630,18 @@ fn region(shared: &Shared, k: usize, body: &[u8]) -> Answer {
                 for f in &grown {
                     out_grown[f.idx()] = true;
                 }
-                faces.iter().copied().filter(|f| !out_grown[f.idx()]).collect()
+                faces
+                    .iter()
+                    .copied()
+                    .filter(|f| !out_grown[f.idx()])
+                    .collect()
             }
         }
         "sphere" => {
             let (Some(c), Some(r)) = (req.center, req.radius) else {
                 return bad("sphere needs center and radius");
             };
-            if !(r > 0.0 && r.is_finite()) || !c.iter().all(|x| x.is_finite()) {
+            if !(r > 0.0 && r.is_finite() && c.iter().all(|x| x.is_finite())) {
                 return bad("sphere needs a finite center and a positive radius");
             }
             let c = Vec3::from(c) + center;
@@ -628,7 +651,11 @@ fn region(shared: &Shared, k: usize, body: &[u8]) -> Answer {
                 Err(e) => return bad(e),
             }
         }
-        other => return bad(format!("unknown region op `{other}` (grow, shrink, sphere)")),
+        other => {
+            return bad(format!(
+                "unknown region op `{other}` (grow, shrink, sphere)"
+            ));
+        }
     };
     json_answer(&json!({"faces": out.iter().map(|f| f.0).collect::<Vec<_>>()}))
 }
@@ -733,11 +760,7 @@ fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
             "fair-surface needs a B-spline surface document"
         });
     }
-    let surface_input = d
-        .current()
-        .surfaces
-        .clone()
-        .map(|s| (s, d.grid));
+    let surface_input = d.current().surfaces.clone().map(|s| (s, d.grid));
     let tri = d.tri_at(None);
     let mesh = d.mesh_now();
     let file = d.current_file();
@@ -770,9 +793,7 @@ fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
         let (tx, rx) = std::sync::mpsc::channel();
         let worker = std::thread::spawn(move || {
             let r = match surface_input {
-                Some((surfaces, grid)) => {
-                    run_fair_surface(&req, &surfaces, grid, &file, &out)
-                }
+                Some((surfaces, grid)) => run_fair_surface(&req, &surfaces, grid, &file, &out),
                 None => run_method(&req, &tri, &mesh, &file, &out, &progress),
             };
             let _ = tx.send(());
@@ -868,7 +889,11 @@ fn run_method(
             }
         }
     };
-    let fixed_arg = if faces.is_some() { " --fixed fixed.json" } else { "" };
+    let fixed_arg = if faces.is_some() {
+        " --fixed fixed.json"
+    } else {
+        ""
+    };
     let t = Instant::now();
     match req.method.as_str() {
         "fair" => {
@@ -1085,9 +1110,16 @@ fn move_cursor(shared: &Shared, k: usize, by: i64) -> Answer {
     let d = &mut st.docs[k];
     let next = d.cursor as i64 + by;
     if next < 0 || next >= d.history.len() as i64 {
-        return error(409, if by < 0 { "nothing to undo" } else { "nothing to redo" });
+        return error(
+            409,
+            if by < 0 {
+                "nothing to undo"
+            } else {
+                "nothing to redo"
+            },
+        );
     }
-    d.cursor = next as usize;
+    d.set_cursor(next as usize);
     json_answer(&json!({"cursor": d.cursor, "label": d.history[d.cursor].label}))
 }
 
@@ -1121,7 +1153,11 @@ fn download(shared: &Shared, k: usize, url: &str) -> Answer {
     let st = lock(shared);
     let d = &st.docs[k];
     let ext = query_param(url, "format").unwrap_or_else(|| {
-        if d.is_surface() { "json".into() } else { "ply".into() }
+        if d.is_surface() {
+            "json".into()
+        } else {
+            "ply".into()
+        }
     });
     match current_bytes(d, &ext) {
         Ok(bytes) => {
@@ -1216,7 +1252,8 @@ fn outlines(shared: &Shared, k: usize, step: Option<usize>) -> Answer {
     let mut labels = Vec::new();
     for s in 0..surfaces.len() {
         let base = s * n * n;
-        let at = |a: usize, b: usize| p.get(base + a * n + b).copied().unwrap_or(Vec3::ZERO) - d.center;
+        let at =
+            |a: usize, b: usize| p.get(base + a * n + b).copied().unwrap_or(Vec3::ZERO) - d.center;
         let mut ring: Vec<(usize, usize)> = Vec::new();
         ring.extend((0..n).map(|b| (0, b)));
         ring.extend((1..n).map(|a| (a, n - 1)));
@@ -1258,7 +1295,11 @@ fn surface_lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             return bad("surface lines are for B-spline surfaces");
         };
         let Some(surface) = s.get(req.patch).cloned() else {
-            return bad(format!("no patch {} (the file holds {})", req.patch, s.len()));
+            return bad(format!(
+                "no patch {} (the file holds {})",
+                req.patch,
+                s.len()
+            ));
         };
         (surface, d.center, d.current_file())
     };
@@ -1335,10 +1376,14 @@ fn run_fair_surface(
     out: &str,
 ) -> Result<Outcome, String> {
     use fairline::fair::{Endpoints, SurfaceFairOptions, fair_surface};
-    let circular = req.circular.as_ref().ok_or("fair-surface needs the circular lights")?;
+    let circular = req
+        .circular
+        .as_ref()
+        .ok_or("fair-surface needs the circular lights")?;
     let lights = circular.lights().map_err(|e| e.to_string())?;
-    let ends: Endpoints = serde_json::from_value(json!({"endpoints": req.endpoints.clone().unwrap_or(Value::Null)}))
-        .map_err(|e| format!("endpoints: {e}"))?;
+    let ends: Endpoints =
+        serde_json::from_value(json!({"endpoints": req.endpoints.clone().unwrap_or(Value::Null)}))
+            .map_err(|e| format!("endpoints: {e}"))?;
     let input = surfaces.get(req.patch).ok_or("no such patch")?;
     let mut opts = SurfaceFairOptions::default();
     if let Some(n) = req.options.max_iterations {
@@ -1348,7 +1393,8 @@ fn run_fair_surface(
         opts.epsilon = e;
     }
     let t = Instant::now();
-    let (faired, rep) = fair_surface(input, &lights, &ends.endpoints, &opts).map_err(|e| e.to_string())?;
+    let (faired, rep) =
+        fair_surface(input, &lights, &ends.endpoints, &opts).map_err(|e| e.to_string())?;
     let mut all = surfaces.as_ref().clone();
     all[req.patch] = faired;
     let (mesh, _) = super::doc::tessellate_all(&all, grid).map_err(|e| e.to_string())?;

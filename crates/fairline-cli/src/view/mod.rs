@@ -134,8 +134,9 @@ pub fn run(args: Args) -> Result<()> {
         docs.push(doc::Doc::open(f2, args.grid)?);
     }
     let token = auth::new_token()?;
-    let server = tiny_http::Server::http(("127.0.0.1", args.port.unwrap_or(0)))
-        .map_err(|e| anyhow::anyhow!("cannot listen on 127.0.0.1:{}: {e}", args.port.unwrap_or(0)))?;
+    let server = tiny_http::Server::http(("127.0.0.1", args.port.unwrap_or(0))).map_err(|e| {
+        anyhow::anyhow!("cannot listen on 127.0.0.1:{}: {e}", args.port.unwrap_or(0))
+    })?;
     let port = server
         .server_addr()
         .to_ip()
@@ -192,6 +193,8 @@ fn open_browser(url: &str) {
         .spawn()
     {
         Ok(_) => {}
-        Err(e) => eprintln!("warning: could not open a browser ({opener}: {e}); open the URL above by hand"),
+        Err(e) => eprintln!(
+            "warning: could not open a browser ({opener}: {e}); open the URL above by hand"
+        ),
     }
 }
