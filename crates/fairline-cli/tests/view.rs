@@ -1142,6 +1142,8 @@ fn workbench_timings() {
         b.call("Page.navigate", json!({"url": srv.url}));
         b.wait_for("document.body && document.body.dataset.ready === '1'", 600);
         let ready_s = t0.elapsed().as_secs_f64();
+        let slow = b.eval("performance.getEntriesByType('resource').concat(performance.getEntriesByType('navigation')).map((e) => [e.name.replace(/token=[0-9a-f]+/, 'token=…'), Math.round(e.startTime), Math.round(e.duration)]).sort((a, b) => b[2] - a[2]).slice(0, 4)");
+        eprintln!("BENCH {label}: slowest requests [url, start ms, duration ms]: {slow}");
         let times: Vec<f64> =
             serde_json::from_value(b.eval("window.fairline.timeFrames(10)")).unwrap();
         let size =

@@ -3,6 +3,7 @@
 use super::auth::{Guard, query_param};
 use super::doc::{Doc, Step, shell_word};
 use super::frame::{frame, vec3_bytes};
+use super::http::{HttpRequest, HttpResponse};
 use fairline::fair::{FairMethod, FairOptions, RegionSpec, fair_highlight_lines_with, grow_region};
 use fairline::geom::{CurvatureMethod, LaplaceWeights, principal_curvatures, vertex_normals};
 use fairline::highlight::{
@@ -13,14 +14,10 @@ use fairline::mesh::{FaceId, VertexId};
 use fairline::{SurfaceMesh, Vec3};
 use serde::Deserialize;
 use serde_json::{Value, json};
-use std::io::Read;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
-
-/// Largest request body read (bytes).
-const MAX_BODY: u64 = 64 << 20;
 
 /// State shared by the worker threads.
 pub struct Shared {
@@ -102,26 +99,11 @@ fn bad(e: impl std::fmt::Display) -> Answer {
 }
 
 /// Answers one request.
-pub fn handle(shared: &Arc<Shared>, mut req: tiny_http::Request) {
-    let answer = match shared.guard.check(&req) {
+pub fn handle(shared: &Arc<Shared>, req: &HttpRequest) -> HttpResponse {
+    let answer = match shared.guard.check(req) {
         Err(why) => error(403, why),
-        Ok(()) => {
-            let mut body = Vec::new();
-            let too_big = req.body_length().is_some_and(|n| n as u64 > MAX_BODY);
-            if too_big
-                || req
-                    .as_reader()
-                    .take(MAX_BODY)
-                    .read_to_end(&mut body)
-                    .is_err()
-            {
-                error(413, "request body too large or unreadable")
-            } else {
-                route(shared, &req, &body)
-            }
-        }
+        Ok(()) => route(shared, req, &req.body),
     };
-    let mut resp = tiny_http::Response::from_data(answer.body).with_status_code(answer.status);
     let mut headers = vec![
         ("Content-Type".to_string(), answer.content_type.to_string()),
         ("Cache-Control".to_string(), "no-store".to_string()),
@@ -132,19 +114,18 @@ pub fn handle(shared: &Arc<Shared>, mut req: tiny_http::Request) {
         ),
     ];
     headers.extend(answer.headers);
-    for (k, v) in headers {
-        if let Ok(h) = tiny_http::Header::from_bytes(k.as_bytes(), v.as_bytes()) {
-            resp.add_header(h);
-        }
+    HttpResponse {
+        status: answer.status,
+        headers,
+        body: answer.body,
     }
-    let _ = req.respond(resp);
 }
 
-fn route(shared: &Arc<Shared>, req: &tiny_http::Request, body: &[u8]) -> Answer {
-    let url = req.url();
+fn route(shared: &Arc<Shared>, req: &HttpRequest, body: &[u8]) -> Answer {
+    let url = req.url.as_str();
     let path = url.split('?').next().unwrap_or("");
-    let get = *req.method() == tiny_http::Method::Get;
-    let post = *req.method() == tiny_http::Method::Post;
+    let get = req.method == "GET";
+    let post = req.method == "POST";
     if get && !path.starts_with("/api/") {
         return match super::assets::asset(path) {
             Some((ctype, bytes)) => {
