@@ -62,9 +62,18 @@ fn start(files: &[&Path], save_dir: &Path) -> Server {
 }
 
 /// One HTTP/1.1 request; returns (status, headers text, body).
-fn http(port: u16, method: &str, path: &str, headers: &[(&str, &str)], body: &[u8]) -> (u16, String, Vec<u8>) {
+fn http(
+    port: u16,
+    method: &str,
+    path: &str,
+    headers: &[(&str, &str)],
+    body: &[u8],
+) -> (u16, String, Vec<u8>) {
     let mut stream = TcpStream::connect(("127.0.0.1", port)).unwrap();
-    let mut req = format!("{method} {path} HTTP/1.1\r\nConnection: close\r\nContent-Length: {}\r\n", body.len());
+    let mut req = format!(
+        "{method} {path} HTTP/1.1\r\nConnection: close\r\nContent-Length: {}\r\n",
+        body.len()
+    );
     if !headers.iter().any(|(k, _)| k.eq_ignore_ascii_case("host")) {
         req.push_str(&format!("Host: 127.0.0.1:{port}\r\n"));
     }
@@ -80,7 +89,10 @@ fn http(port: u16, method: &str, path: &str, headers: &[(&str, &str)], body: &[u
     let head = String::from_utf8_lossy(&resp[..split]).to_string();
     let status: u16 = head.split(' ').nth(1).unwrap().parse().unwrap();
     let mut body = resp[split + 4..].to_vec();
-    if head.to_ascii_lowercase().contains("transfer-encoding: chunked") {
+    if head
+        .to_ascii_lowercase()
+        .contains("transfer-encoding: chunked")
+    {
         body = dechunk(&body);
     }
     (status, head, body)
@@ -101,7 +113,13 @@ fn dechunk(mut b: &[u8]) -> Vec<u8> {
 
 impl Server {
     fn get(&self, path: &str) -> (u16, Vec<u8>) {
-        let (st, _, b) = http(self.port, "GET", path, &[("X-Fairline-Token", &self.token)], b"");
+        let (st, _, b) = http(
+            self.port,
+            "GET",
+            path,
+            &[("X-Fairline-Token", &self.token)],
+            b"",
+        );
         (st, b)
     }
     fn post(&self, path: &str, body: &Value) -> (u16, Vec<u8>) {
@@ -109,7 +127,10 @@ impl Server {
             self.port,
             "POST",
             path,
-            &[("X-Fairline-Token", &self.token), ("Content-Type", "application/json")],
+            &[
+                ("X-Fairline-Token", &self.token),
+                ("Content-Type", "application/json"),
+            ],
             body.to_string().as_bytes(),
         );
         (st, b)
@@ -173,17 +194,27 @@ fn dented_panel(path: &Path, n: usize) {
     std::fs::write(path, text).unwrap();
 }
 
-const LIGHT: &str = r#"{"plane_point":[0,0,6],"plane_normal":[0,0,1],"direction":[1,0,0],"spacing":0.1}"#;
+const LIGHT: &str =
+    r#"{"plane_point":[0,0,6],"plane_normal":[0,0,1],"direction":[1,0,0],"spacing":0.1}"#;
 
 /// A file of the shared data; panics when it is missing and CI is set,
 /// says so loudly otherwise.
 fn shared(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data").join(rel);
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data")
+        .join(rel);
     if p.exists() {
         return Some(p);
     }
-    assert!(std::env::var_os("CI").is_none(), "{} is missing and CI is set", p.display());
-    eprintln!("\n*** SKIPPED: {} not found (set up ../shared/data to run this test) ***\n", p.display());
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "{} is missing and CI is set",
+        p.display()
+    );
+    eprintln!(
+        "\n*** SKIPPED: {} not found (set up ../shared/data to run this test) ***\n",
+        p.display()
+    );
     None
 }
 
@@ -201,9 +232,39 @@ fn requests_without_the_token_or_from_elsewhere_are_refused() {
     assert_eq!(http(p, "GET", "/?token=0123", &[], b"").0, 403);
     // the right token with a foreign Host (DNS rebinding) or Origin
     let t = srv.token.as_str();
-    assert_eq!(http(p, "GET", "/api/session", &[("X-Fairline-Token", t), ("Host", "evil.example:80")], b"").0, 403);
-    assert_eq!(http(p, "GET", "/api/session", &[("X-Fairline-Token", t), ("Origin", "http://evil.example")], b"").0, 403);
-    assert_eq!(http(p, "GET", "/api/session", &[("X-Fairline-Token", t), ("Sec-Fetch-Site", "cross-site")], b"").0, 403);
+    assert_eq!(
+        http(
+            p,
+            "GET",
+            "/api/session",
+            &[("X-Fairline-Token", t), ("Host", "evil.example:80")],
+            b""
+        )
+        .0,
+        403
+    );
+    assert_eq!(
+        http(
+            p,
+            "GET",
+            "/api/session",
+            &[("X-Fairline-Token", t), ("Origin", "http://evil.example")],
+            b""
+        )
+        .0,
+        403
+    );
+    assert_eq!(
+        http(
+            p,
+            "GET",
+            "/api/session",
+            &[("X-Fairline-Token", t), ("Sec-Fetch-Site", "cross-site")],
+            b""
+        )
+        .0,
+        403
+    );
     // the page with the token sets the cookie; GET with the cookie works,
     // POST with the cookie alone (what a cross-site form could send) does not
     let (st, head, body) = http(p, "GET", &format!("/?token={t}"), &[], b"");
@@ -212,9 +273,25 @@ fn requests_without_the_token_or_from_elsewhere_are_refused() {
     let cookie = format!("fairline_{p}={t}");
     assert!(head.contains(&cookie), "{head}");
     assert!(head.contains("SameSite=Strict"));
-    assert_eq!(http(p, "GET", "/main.js", &[("Cookie", &cookie)], b"").0, 200);
-    assert_eq!(http(p, "POST", "/api/doc/0/undo", &[("Cookie", &cookie)], b"{}").0, 403);
-    assert_eq!(http(p, "GET", "/api/session", &[("Host", &format!("localhost:{p}")), ("X-Fairline-Token", t)], b"").0, 200);
+    assert_eq!(
+        http(p, "GET", "/main.js", &[("Cookie", &cookie)], b"").0,
+        200
+    );
+    assert_eq!(
+        http(p, "POST", "/api/doc/0/undo", &[("Cookie", &cookie)], b"{}").0,
+        403
+    );
+    assert_eq!(
+        http(
+            p,
+            "GET",
+            "/api/session",
+            &[("Host", &format!("localhost:{p}")), ("X-Fairline-Token", t)],
+            b""
+        )
+        .0,
+        200
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -236,7 +313,10 @@ fn api_lines_detect_and_fairing_equal_the_cli() {
     assert_eq!(pos.len(), 81 * 81 * 12);
     let (_, idx) = srv.get("/api/doc/0/indices");
     assert_eq!(idx.len(), 2 * 80 * 80 * 12);
-    let first: Vec<f32> = pos[..12].chunks(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect();
+    let first: Vec<f32> = pos[..12]
+        .chunks(4)
+        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+        .collect();
     assert!((first[0] as f64 + center[0] - -2.0).abs() < 1e-6);
 
     // exact lines equal `fairline highlight` with the same lights
@@ -244,7 +324,14 @@ fn api_lines_detect_and_fairing_equal_the_cli() {
     let (st, b) = srv.post("/api/doc/0/lines", &json!({"light": light}));
     assert_eq!(st, 200);
     let (header, data) = parse_frame(&b);
-    ok(&run(&["highlight", s(&mesh), "--lights", s(&dir.join("light.json")), "-o", s(&dir.join("lines.json"))]));
+    ok(&run(&[
+        "highlight",
+        s(&mesh),
+        "--lights",
+        s(&dir.join("light.json")),
+        "-o",
+        s(&dir.join("lines.json")),
+    ]));
     let cli = common::json(&dir.join("lines.json"));
     let cli_lines = cli["lines"].as_array().unwrap();
     let lines = header["lines"].as_array().unwrap();
@@ -259,29 +346,61 @@ fn api_lines_detect_and_fairing_equal_the_cli() {
             for a in 0..3 {
                 let want = p[a].as_f64().unwrap() - center[a];
                 let got = data[3 * (start + k) + a] as f64;
-                assert!((want - got).abs() <= 1e-6 * (1.0 + want.abs()), "line {} point {k}", l["index"]);
+                assert!(
+                    (want - got).abs() <= 1e-6 * (1.0 + want.abs()),
+                    "line {} point {k}",
+                    l["index"]
+                );
             }
         }
     }
-    assert!(header["command"].as_str().unwrap().starts_with("fairline highlight"));
+    assert!(
+        header["command"]
+            .as_str()
+            .unwrap()
+            .starts_with("fairline highlight")
+    );
 
     // detection: the same regions as `fairline detect`
     let (st, b) = srv.post("/api/doc/0/detect", &json!({"light": light}));
     assert_eq!(st, 200);
     let (det, _) = parse_frame(&b);
-    ok(&run(&["detect", s(&mesh), "--lights", s(&dir.join("light.json")), "-o", s(&dir.join("region.json")), "--report", s(&dir.join("detect.json"))]));
+    ok(&run(&[
+        "detect",
+        s(&mesh),
+        "--lights",
+        s(&dir.join("light.json")),
+        "-o",
+        s(&dir.join("region.json")),
+        "--report",
+        s(&dir.join("detect.json")),
+    ]));
     let rep = common::json(&dir.join("detect.json"));
     let regions = det["regions"].as_array().unwrap();
     assert_eq!(regions.len(), rep["regions"].as_array().unwrap().len());
     assert!(!regions.is_empty(), "the planted dent is detected");
     // the dent at (0.5, −0.4) is the top region
     let c0 = &regions[0]["center"];
-    let (x, y) = (c0[0].as_f64().unwrap() + center[0], c0[1].as_f64().unwrap() + center[1]);
-    assert!((x - 0.5).abs() < 0.3 && (y + 0.4).abs() < 0.3, "top region at ({x}, {y})");
+    let (x, y) = (
+        c0[0].as_f64().unwrap() + center[0],
+        c0[1].as_f64().unwrap() + center[1],
+    );
+    assert!(
+        (x - 0.5).abs() < 0.3 && (y + 0.4).abs() < 0.3,
+        "top region at ({x}, {y})"
+    );
 
     // fairing the grown region: the server's result is the CLI's, byte for byte
-    let faces: Vec<u64> = regions[0]["faces"].as_array().unwrap().iter().map(|f| f.as_u64().unwrap()).collect();
-    let grown = srv.json("/api/doc/0/region", Some(&json!({"op": "grow", "faces": faces, "rings": 2})));
+    let faces: Vec<u64> = regions[0]["faces"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_u64().unwrap())
+        .collect();
+    let grown = srv.json(
+        "/api/doc/0/region",
+        Some(&json!({"op": "grow", "faces": faces, "rings": 2})),
+    );
     let faces = grown["faces"].clone();
     let files = srv.json("/api/doc/0/region-file", Some(&json!({"faces": faces})));
     std::fs::write(dir.join("grown.json"), files["region"].to_string()).unwrap();
@@ -290,15 +409,36 @@ fn api_lines_detect_and_fairing_equal_the_cli() {
     let job = srv.wait_job();
     assert_eq!(job["state"], "done", "{job}");
     let cmd = job["command"].as_str().unwrap();
-    assert!(cmd.starts_with("fairline fair ") && cmd.contains("--region region.json"), "{cmd}");
-    ok(&run(&["fair", s(&mesh), "--region", s(&dir.join("grown.json")), "--lights", s(&dir.join("light.json")), "-o", s(&dir.join("cli-faired.obj")), "--report", s(&dir.join("fair.json"))]));
+    assert!(
+        cmd.starts_with("fairline fair ") && cmd.contains("--region region.json"),
+        "{cmd}"
+    );
+    ok(&run(&[
+        "fair",
+        s(&mesh),
+        "--region",
+        s(&dir.join("grown.json")),
+        "--lights",
+        s(&dir.join("light.json")),
+        "-o",
+        s(&dir.join("cli-faired.obj")),
+        "--report",
+        s(&dir.join("fair.json")),
+    ]));
     let (st, served) = srv.get("/api/doc/0/download?format=obj");
     assert_eq!(st, 200);
     let cli_bytes = std::fs::read(dir.join("cli-faired.obj")).unwrap();
-    assert!(served == cli_bytes, "the served faired mesh differs from `fairline fair`'s");
+    assert!(
+        served == cli_bytes,
+        "the served faired mesh differs from `fairline fair`'s"
+    );
     let rep = common::json(&dir.join("fair.json"));
     assert_eq!(job["report"]["willmore_after"], rep["willmore_after"]);
-    assert_ne!(std::fs::read(&mesh).unwrap(), served, "fairing moved something");
+    assert_ne!(
+        std::fs::read(&mesh).unwrap(),
+        served,
+        "fairing moved something"
+    );
 
     // undo brings the input back; redo the faired mesh
     let input_obj = {
@@ -307,7 +447,10 @@ fn api_lines_detect_and_fairing_equal_the_cli() {
     };
     let reread = dir.join("input-again.obj");
     ok(&run(&["convert", s(&mesh), s(&reread)]));
-    assert!(input_obj == std::fs::read(&reread).unwrap(), "undo restores the input exactly");
+    assert!(
+        input_obj == std::fs::read(&reread).unwrap(),
+        "undo restores the input exactly"
+    );
     assert_eq!(srv.post("/api/doc/0/undo", &json!({})).0, 409);
     srv.json("/api/doc/0/redo", Some(&json!({})));
     assert!(srv.get("/api/doc/0/download?format=obj").1 == cli_bytes);
@@ -315,7 +458,13 @@ fn api_lines_detect_and_fairing_equal_the_cli() {
     assert_eq!(session["docs"][0]["history"]["cursor"], 1);
 
     // saving: plain names inside the save folder only, never over an input
-    for bad_name in ["../escape.obj", "/tmp/abs.obj", ".hidden.obj", "sub/x.obj", "panel.obj"] {
+    for bad_name in [
+        "../escape.obj",
+        "/tmp/abs.obj",
+        ".hidden.obj",
+        "sub/x.obj",
+        "panel.obj",
+    ] {
         let (st, _) = srv.post("/api/doc/0/save", &json!({"name": bad_name}));
         assert_eq!(st, 400, "{bad_name} was accepted");
     }
@@ -328,7 +477,8 @@ fn api_lines_detect_and_fairing_equal_the_cli() {
 
 #[test]
 fn real_mesh_and_surface_load_with_curvature_and_patches() {
-    let (Some(spot), Some(teapot)) = (shared("meshes/spot.ply"), shared("surfaces/teapot.json")) else {
+    let (Some(spot), Some(teapot)) = (shared("meshes/spot.ply"), shared("surfaces/teapot.json"))
+    else {
         return;
     };
     let dir = tmp("view-real");
@@ -341,7 +491,10 @@ fn real_mesh_and_surface_load_with_curvature_and_patches() {
     let patches = docs[1]["patches"].as_u64().unwrap() as usize;
     assert!(patches > 1);
     let (_, p) = srv.get("/api/doc/1/patches");
-    let ids: Vec<u32> = p.chunks(4).map(|c| u32::from_le_bytes(c.try_into().unwrap())).collect();
+    let ids: Vec<u32> = p
+        .chunks(4)
+        .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+        .collect();
     assert_eq!(ids.len(), docs[1]["triangles"].as_u64().unwrap() as usize);
     assert_eq!(*ids.iter().max().unwrap() as usize, patches - 1);
     // mean curvature equals `fairline curvature` (f32 of the same f64)
@@ -360,7 +513,10 @@ fn real_mesh_and_surface_load_with_curvature_and_patches() {
     let (_, b2) = srv2.get("/api/doc/0/scalar/mean");
     let (_, mean_file) = parse_frame(&b2);
     assert_eq!(mean.len(), mean_file.len());
-    assert!(mean.iter().zip(&mean_file).all(|(a, b)| a == b), "server curvature differs from the CLI's");
+    assert!(
+        mean.iter().zip(&mean_file).all(|(a, b)| a == b),
+        "server curvature differs from the CLI's"
+    );
     // surfaces download as JSON that reads back
     let (st, j) = srv.get("/api/doc/1/download?format=json");
     assert_eq!(st, 200);
@@ -399,15 +555,22 @@ mod cdp {
 
     /// The Chromium binary, or None.
     pub fn chromium() -> Option<String> {
-        ["/usr/bin/chromium", "/usr/bin/chromium-browser", "/usr/bin/google-chrome"]
-            .iter()
-            .find(|p| std::path::Path::new(p).exists())
-            .map(|p| p.to_string())
+        [
+            "/usr/bin/chromium",
+            "/usr/bin/chromium-browser",
+            "/usr/bin/google-chrome",
+        ]
+        .iter()
+        .find(|p| std::path::Path::new(p).exists())
+        .map(|p| p.to_string())
     }
 
     impl Browser {
         pub fn launch(exe: &str, width: u32, height: u32) -> Browser {
-            let profile = std::env::temp_dir().join(format!("fairline-chromium-{}-{}", std::process::id(), width));
+            static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+            let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+            let profile =
+                std::env::temp_dir().join(format!("fairline-chromium-{}-{n}", std::process::id()));
             let _ = std::fs::remove_dir_all(&profile);
             std::fs::create_dir_all(&profile).unwrap();
             let mut child = Command::new(exe)
@@ -453,15 +616,33 @@ mod cdp {
                 }
             });
             let (ws, _) = tungstenite::connect(ws_url.as_str()).expect("connect to DevTools");
-            let mut b = Browser { child, ws, next: 1, session: String::new(), events: Vec::new(), _profile: profile };
+            let mut b = Browser {
+                child,
+                ws,
+                next: 1,
+                session: String::new(),
+                events: Vec::new(),
+                _profile: profile,
+            };
             let target = b.call_browser("Target.createTarget", json!({"url": "about:blank"}));
             let id = target["targetId"].as_str().unwrap().to_string();
-            let att = b.call_browser("Target.attachToTarget", json!({"targetId": id, "flatten": true}));
+            let att = b.call_browser(
+                "Target.attachToTarget",
+                json!({"targetId": id, "flatten": true}),
+            );
             b.session = att["sessionId"].as_str().unwrap().to_string();
-            for m in ["Runtime.enable", "Log.enable", "Network.enable", "Page.enable"] {
+            for m in [
+                "Runtime.enable",
+                "Log.enable",
+                "Network.enable",
+                "Page.enable",
+            ] {
                 b.call(m, json!({}));
             }
-            b.call("Emulation.setDeviceMetricsOverride", json!({"width": width, "height": height, "deviceScaleFactor": 1, "mobile": false}));
+            b.call(
+                "Emulation.setDeviceMetricsOverride",
+                json!({"width": width, "height": height, "deviceScaleFactor": 1, "mobile": false}),
+            );
             b
         }
 
@@ -498,8 +679,15 @@ mod cdp {
 
         /// Evaluates a JavaScript expression (awaiting promises) and returns its value.
         pub fn eval(&mut self, expr: &str) -> Value {
-            let r = self.call("Runtime.evaluate", json!({"expression": expr, "awaitPromise": true, "returnByValue": true}));
-            assert!(r.get("exceptionDetails").is_none(), "{expr}: {}", r["exceptionDetails"]);
+            let r = self.call(
+                "Runtime.evaluate",
+                json!({"expression": expr, "awaitPromise": true, "returnByValue": true}),
+            );
+            assert!(
+                r.get("exceptionDetails").is_none(),
+                "{expr}: {}",
+                r["exceptionDetails"]
+            );
             r["result"]["value"].clone()
         }
 
@@ -512,7 +700,20 @@ mod cdp {
                     return;
                 }
                 let status = self.eval("document.getElementById('status') ? document.getElementById('status').textContent : ''");
-                assert!(t.elapsed() < Duration::from_secs(secs), "timed out waiting for {expr}; status: {status}");
+                if t.elapsed() >= Duration::from_secs(secs) {
+                    let log: Vec<String> = self
+                        .events
+                        .iter()
+                        .filter(|e| {
+                            let m = e["method"].as_str().unwrap_or("");
+                            m.starts_with("Runtime.console")
+                                || m.starts_with("Runtime.exception")
+                                || m.starts_with("Log.")
+                        })
+                        .map(|e| e["params"].to_string())
+                        .collect();
+                    panic!("timed out waiting for {expr}; status: {status}; log: {log:?}");
+                }
                 std::thread::sleep(Duration::from_millis(100));
             }
         }
@@ -537,6 +738,10 @@ mod cdp {
         }
     }
 }
+
+/// One browser at a time: the tests share a small machine, and software
+/// WebGL is CPU-bound.
+static BROWSER_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 /// Brightness (0–255) of pixel (x, y).
 fn lum(img: &(u32, u32, Vec<u8>, Vec<u8>), x: u32, y: u32) -> f64 {
@@ -568,10 +773,16 @@ fn canvas_rect(b: &mut cdp::Browser) -> (u32, u32, u32, u32) {
 #[test]
 fn page_in_headless_chromium_shades_stripes_and_runs_a_repair_session() {
     let Some(exe) = cdp::chromium() else {
-        assert!(std::env::var_os("CI").is_none(), "chromium is not installed and CI is set (apt-get install chromium)");
-        eprintln!("\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n");
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "chromium is not installed and CI is set (apt-get install chromium)"
+        );
+        eprintln!(
+            "\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n"
+        );
         return;
     };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tmp("view-browser");
     let mesh = dir.join("panel.obj");
     dented_panel(&mesh, 101);
@@ -597,16 +808,26 @@ fn page_in_headless_chromium_shades_stripes_and_runs_a_repair_session() {
     b.eval("(() => { const m = document.getElementById('mode'); m.value = '0'; m.dispatchEvent(new Event('input')); })()");
     std::thread::sleep(Duration::from_millis(400));
     let plain = b.screenshot();
-    assert_eq!(dark_runs(&plain, row, x0, x1, 40.0), 0, "plain shading has no stripes");
+    assert_eq!(
+        dark_runs(&plain, row, x0, x1, 40.0),
+        0,
+        "plain shading has no stripes"
+    );
     let bg = lum(&plain, cx + 3, cy + 3);
     let mid = lum(&plain, cx + cw / 2, row);
-    assert!(mid > bg + 60.0, "the surface ({mid}) is lit against the background ({bg})");
+    assert!(
+        mid > bg + 60.0,
+        "the surface ({mid}) is lit against the background ({bg})"
+    );
     // halving the spacing (slider −1) about doubles the stripes
     b.eval("(() => { const m = document.getElementById('mode'); m.value = '1'; m.dispatchEvent(new Event('input')); const s = document.getElementById('spacing'); s.value = '-1'; s.dispatchEvent(new Event('input')); })()");
     std::thread::sleep(Duration::from_millis(400));
     let dense = b.screenshot();
     let dense_stripes = dark_runs(&dense, row, x0, x1, 40.0);
-    assert!(dense_stripes as f64 >= 1.6 * stripes as f64, "{stripes} -> {dense_stripes} stripes after halving the spacing");
+    assert!(
+        dense_stripes as f64 >= 1.6 * stripes as f64,
+        "{stripes} -> {dense_stripes} stripes after halving the spacing"
+    );
     // zebra bands: about half the scanline is dark
     b.eval("(() => { const m = document.getElementById('mode'); m.value = '2'; m.dispatchEvent(new Event('input')); })()");
     std::thread::sleep(Duration::from_millis(400));
@@ -617,45 +838,94 @@ fn page_in_headless_chromium_shades_stripes_and_runs_a_repair_session() {
     let times: Vec<f64> = serde_json::from_value(b.eval("window.fairline.timeFrames(30)")).unwrap();
     let mut sorted = times.clone();
     sorted.sort_by(f64::total_cmp);
-    eprintln!("frame time with light changes (SwiftShader, 1400x900 window): median {:.1} ms", sorted[sorted.len() / 2]);
+    eprintln!(
+        "frame time with light changes (SwiftShader, 1400x900 window): median {:.1} ms",
+        sorted[sorted.len() / 2]
+    );
     b.eval("(() => { const m = document.getElementById('mode'); m.value = '1'; m.dispatchEvent(new Event('input')); const s = document.getElementById('sweep'); s.value = '0'; s.dispatchEvent(new Event('input')); })()");
 
     // scripted session: detect, take the top region, fair it, compare, undo, download
     b.eval("document.getElementById('detect').click()");
     b.wait_for("document.querySelectorAll('#regions li').length > 0", 60);
     b.eval("document.querySelector('#regions li').click()");
-    b.wait_for("document.getElementById('regioninfo').textContent.includes('marked')", 30);
+    b.wait_for(
+        "document.getElementById('regioninfo').textContent.includes('marked')",
+        30,
+    );
     std::thread::sleep(Duration::from_millis(500));
     let shot = b.screenshot();
     let images = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/images");
     std::fs::create_dir_all(&images).unwrap();
     std::fs::write(images.join("workbench.png"), &shot.3).unwrap();
-    b.eval("(() => { const m = document.getElementById('method'); m.value = 'fair:highlight'; })()");
+    b.eval(
+        "(() => { const m = document.getElementById('method'); m.value = 'fair:highlight'; })()",
+    );
     b.eval("document.getElementById('run').click()");
     b.wait_for("document.body.dataset.lastJob", 300);
-    assert_eq!(b.eval("document.body.dataset.lastJob"), json!("done"), "{}", b.eval("document.getElementById('status').textContent"));
+    assert_eq!(
+        b.eval("document.body.dataset.lastJob"),
+        json!("done"),
+        "{}",
+        b.eval("document.getElementById('status').textContent")
+    );
     let session = srv.json("/api/session", None);
     assert_eq!(session["docs"][0]["history"]["cursor"], 1);
-    assert!(b.eval("document.getElementById('command').textContent").as_str().unwrap().starts_with("fairline fair "));
-    assert!(b.eval("document.getElementById('report').textContent").as_str().unwrap().contains("willmore after"));
+    assert!(
+        b.eval("document.getElementById('command').textContent")
+            .as_str()
+            .unwrap()
+            .starts_with("fairline fair ")
+    );
+    assert!(
+        b.eval("document.getElementById('report').textContent")
+            .as_str()
+            .unwrap()
+            .contains("willmore after")
+    );
     let after = b.screenshot();
     b.eval("document.getElementById('before').click()");
-    b.wait_for("document.getElementById('status').textContent.includes('before the last step')", 30);
+    b.wait_for(
+        "document.getElementById('status').textContent.includes('before the last step')",
+        30,
+    );
     std::thread::sleep(Duration::from_millis(400));
     let before = b.screenshot();
-    let differing = before.2.chunks(4).zip(after.2.chunks(4)).filter(|(a, b)| a != b).count();
-    assert!(differing > 20, "before/after toggle changes the picture ({differing} pixels)");
+    let differing = before
+        .2
+        .chunks(4)
+        .zip(after.2.chunks(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        differing > 20,
+        "before/after toggle changes the picture ({differing} pixels)"
+    );
     b.eval("document.getElementById('undo').click()");
-    b.wait_for("document.getElementById('status').textContent === 'undone'", 30);
+    b.wait_for(
+        "document.getElementById('status').textContent === 'undone'",
+        30,
+    );
     let session = srv.json("/api/session", None);
     assert_eq!(session["docs"][0]["history"]["cursor"], 0);
     b.eval("document.getElementById('dl-region').click()");
     b.wait_for("window.fairline.state.lastDownload && window.fairline.state.lastDownload.name === 'region.json'", 30);
     let region = b.eval("window.fairline.state.lastDownload.value");
-    assert!(region["faces"].as_array().is_some_and(|f| !f.is_empty()), "{region}");
+    assert!(
+        region["faces"].as_array().is_some_and(|f| !f.is_empty()),
+        "{region}"
+    );
     // the downloaded region is valid input for the CLI
     std::fs::write(dir.join("region.json"), region.to_string()).unwrap();
-    ok(&run(&["fair", s(&mesh), "--region", s(&dir.join("region.json")), "--max-iterations", "1", "-o", s(&dir.join("o.obj"))]));
+    ok(&run(&[
+        "fair",
+        s(&mesh),
+        "--region",
+        s(&dir.join("region.json")),
+        "--max-iterations",
+        "1",
+        "-o",
+        s(&dir.join("o.obj")),
+    ]));
 
     // no console error, no exception, no request to any other host
     let port = srv.port;
@@ -672,10 +942,216 @@ fn page_in_headless_chromium_shades_stripes_and_runs_a_repair_session() {
         if m == "Network.requestWillBeSent" {
             let url = p["request"]["url"].as_str().unwrap_or("");
             assert!(
-                url.starts_with(&format!("http://127.0.0.1:{port}/")) || url.starts_with("blob:") || url.starts_with("data:") || url == "about:blank",
+                url.starts_with(&format!("http://127.0.0.1:{port}/"))
+                    || url.starts_with("blob:")
+                    || url.starts_with("data:")
+                    || url == "about:blank",
                 "request to another host: {url}"
             );
         }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Clicks the (u, v) panel at point `k` of pre-image `line`.
+fn click_uv(b: &mut cdp::Browser, line: usize, k: usize) {
+    let xy = b.eval(&format!(
+        "(() => {{ const p = window.fairline.uvPanel; const l = p.lines[{line}]; const [x, y] = p.toPx(l.uv[2 * {k}], l.uv[2 * {k} + 1]); const r = p.canvas.getBoundingClientRect(); return [r.left + x * r.width / p.canvas.width, r.top + y * r.height / p.canvas.height]; }})()"
+    ));
+    let (x, y) = (xy[0].as_f64().unwrap(), xy[1].as_f64().unwrap());
+    for t in ["mouseMoved", "mousePressed", "mouseReleased"] {
+        b.call(
+            "Input.dispatchMouseEvent",
+            json!({"type": t, "x": x, "y": y, "button": "left", "clickCount": 1}),
+        );
+    }
+}
+
+#[test]
+fn page_shows_bspline_patches_and_fairs_a_surface_from_uv_endpoints() {
+    let Some(exe) = cdp::chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "chromium is not installed and CI is set (apt-get install chromium)"
+        );
+        eprintln!(
+            "\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n"
+        );
+        return;
+    };
+    let Some(teapot) = shared("surfaces/teapot.json") else {
+        return;
+    };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmp("view-surface");
+    let srv = start(&[&teapot], &dir);
+    let mut b = cdp::Browser::launch(&exe, 1400, 900);
+    b.call("Page.navigate", json!({"url": srv.url}));
+    b.wait_for("document.body && document.body.dataset.ready === '1'", 120);
+    let patches = srv.json("/api/session", None)["docs"][0]["patches"]
+        .as_u64()
+        .unwrap();
+    // one label per visible patch
+    b.wait_for("document.querySelectorAll('#labels span').length > 0", 30);
+    let labels = b
+        .eval("document.querySelectorAll('#labels span').length")
+        .as_u64()
+        .unwrap();
+    assert!(labels > 0 && labels <= patches);
+    // the highest patch (the lid's knob) faces the circular lights above
+    let (_, o) = srv.get("/api/doc/0/outlines");
+    let (outl, _) = parse_frame(&o);
+    let labels = outl["labels"].as_array().unwrap();
+    let patch = (0..labels.len())
+        .max_by(|&a, &b| {
+            labels[a][2]
+                .as_f64()
+                .unwrap()
+                .total_cmp(&labels[b][2].as_f64().unwrap())
+        })
+        .unwrap();
+    b.eval(&format!(
+        "document.getElementById('patch').value = '{patch}'"
+    ));
+    b.eval("document.getElementById('uvlines').click()");
+    b.wait_for("window.fairline.uvPanel.lines.length > 0", 60);
+    // hovering a pre-image lights it up in the 3-D view
+    let n = b.eval("window.fairline.uvPanel.lines.map((l) => l.count)");
+    let counts: Vec<usize> = serde_json::from_value(n).unwrap();
+    let line = (0..counts.len()).max_by_key(|&i| counts[i]).unwrap();
+    click_uv(&mut b, line, counts[line] / 3);
+    b.wait_for("window.fairline.viewer.docs[0].overlays.hover", 10);
+    click_uv(&mut b, line, 2 * counts[line] / 3);
+    b.wait_for("window.fairline.uvPanel.endpoints.length === 1", 10);
+    std::thread::sleep(Duration::from_millis(300));
+    let shot = b.screenshot();
+    std::fs::write(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/images/workbench-surface.png"),
+        &shot.3,
+    )
+    .unwrap();
+    b.eval("document.getElementById('fair-surface').click()");
+    b.wait_for("document.body.dataset.lastJob", 300);
+    let job = srv.json("/api/job", None);
+    assert_eq!(job["state"], "done", "{job}");
+    assert!(
+        job["command"]
+            .as_str()
+            .unwrap()
+            .starts_with("fairline fair-surface ")
+    );
+    assert!(job["report"]["modified_control_points"].as_u64().unwrap() > 0);
+    let session = srv.json("/api/session", None);
+    assert_eq!(session["docs"][0]["history"]["cursor"], 1);
+    // the faired surfaces download as JSON; the other patches are unchanged
+    let (_, j) = srv.get("/api/doc/0/download?format=json");
+    let after: Value = serde_json::from_slice(&j).unwrap();
+    let before: Value = serde_json::from_str(&std::fs::read_to_string(&teapot).unwrap()).unwrap();
+    let cp = |v: &Value, k: usize| v["surfaces"][k]["control_points"].clone();
+    assert_ne!(
+        cp(&after, patch),
+        cp(&before, patch),
+        "patch {patch} was faired"
+    );
+    for k in (0..patches as usize).filter(|&k| k != patch) {
+        assert_eq!(cp(&after, k), cp(&before, k), "patch {k} untouched");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A height field z = 0.15 sin(1.3x) cos(0.9y) on n × n vertices over
+/// [−2, 2]², as binary little-endian PLY (fast to write and read).
+fn panel_ply(path: &Path, n: usize) {
+    let mut out = Vec::new();
+    let faces = 2 * (n - 1) * (n - 1);
+    out.extend_from_slice(
+        format!("ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty double x\nproperty double y\nproperty double z\nelement face {faces}\nproperty list uchar int vertex_indices\nend_header\n", n * n)
+            .as_bytes(),
+    );
+    for j in 0..n {
+        for i in 0..n {
+            let x = -2.0 + 4.0 * i as f64 / (n - 1) as f64;
+            let y = -2.0 + 4.0 * j as f64 / (n - 1) as f64;
+            for c in [x, y, 0.15 * (1.3 * x).sin() * (0.9 * y).cos()] {
+                out.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+    }
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let a = (j * n + i) as i32;
+            let (b, c, d) = (a + 1, a + n as i32 + 1, a + n as i32);
+            for t in [[a, b, c], [a, c, d]] {
+                out.push(3);
+                for v in t {
+                    out.extend_from_slice(&v.to_le_bytes());
+                }
+            }
+        }
+    }
+    std::fs::write(path, out).unwrap();
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Timed runs for BENCHMARKS.md (not a test of speed: it asserts nothing
+/// about time). `cargo test --release -p fairline-cli --test view -- --ignored --nocapture workbench_timings`
+#[test]
+#[ignore]
+fn workbench_timings() {
+    let dir = tmp("view-bench");
+    // exact polylines of a 450k-vertex mesh: server time and round trip
+    let m450 = dir.join("p450k.ply");
+    panel_ply(&m450, 671);
+    let srv = start(&[&m450], &dir);
+    let light: Value = serde_json::from_str(
+        r#"{"plane_point":[0,0,6],"plane_normal":[0,0,1],"direction":[1,0,0],"spacing":0.2}"#,
+    )
+    .unwrap();
+    let (mut server_s, mut trip_s) = (Vec::new(), Vec::new());
+    let mut nlines = 0;
+    for _ in 0..7 {
+        let t = Instant::now();
+        let (st, b) = srv.post("/api/doc/0/lines", &json!({"light": light}));
+        trip_s.push(t.elapsed().as_secs_f64());
+        assert_eq!(st, 200);
+        let (h, _) = parse_frame(&b);
+        server_s.push(h["time_s"].as_f64().unwrap());
+        nlines = h["lines"].as_array().unwrap().len();
+    }
+    eprintln!(
+        "BENCH exact lines, 450,241 vertices, {nlines} lines: server {:.1} ms, round trip {:.1} ms (medians of 7)",
+        1e3 * median(server_s),
+        1e3 * median(trip_s)
+    );
+    drop(srv);
+    let Some(exe) = cdp::chromium() else {
+        eprintln!("no chromium: no page timings");
+        return;
+    };
+    for (n, label) in [(101usize, "20k triangles"), (708, "1.0M triangles")] {
+        let mesh = dir.join(format!("p{n}.ply"));
+        panel_ply(&mesh, n);
+        let mut b = cdp::Browser::launch(&exe, 1280, 800);
+        let t0 = Instant::now();
+        let srv = start(&[&mesh], &dir);
+        let url_s = t0.elapsed().as_secs_f64();
+        b.call("Page.navigate", json!({"url": srv.url}));
+        b.wait_for("document.body && document.body.dataset.ready === '1'", 600);
+        let ready_s = t0.elapsed().as_secs_f64();
+        let slow = b.eval("performance.getEntriesByType('resource').concat(performance.getEntriesByType('navigation')).map((e) => [e.name.replace(/token=[0-9a-f]+/, 'token=…'), Math.round(e.startTime), Math.round(e.duration)]).sort((a, b) => b[2] - a[2]).slice(0, 4)");
+        eprintln!("BENCH {label}: slowest requests [url, start ms, duration ms]: {slow}");
+        let times: Vec<f64> =
+            serde_json::from_value(b.eval("window.fairline.timeFrames(10)")).unwrap();
+        let size =
+            b.eval("[window.fairline.viewer.canvas.width, window.fairline.viewer.canvas.height]");
+        eprintln!(
+            "BENCH {label}: URL printed after {url_s:.2} s, first shaded frame {ready_s:.2} s after the command; frame with a light change (SwiftShader, canvas {size}): median {:.0} ms of 10",
+            median(times)
+        );
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -62,17 +62,19 @@ export class Lights {
   radii() {
     const typed = this.radiiText.split(',').map(Number).filter((r) => Number.isFinite(r) && r > 0);
     if (typed.length) return typed.slice(0, 16);
-    const s = this.spacing();
-    return Array.from({ length: 12 }, (_, k) => (k + 1) * 1.5 * s + this.sweep * s);
+    // radii across the part, moved by the sweep
+    const step = 0.2 * this.radius * Math.pow(2, this.spacingExp);
+    return Array.from({ length: 10 }, (_, k) => (k + 1 + this.sweep) * step);
   }
 
-  // Circular lights {center, axis, radii} on the light plane, centred above
-  // the document centre.
+  // Circular lights {center, axis, radii}: axis the light-plane normal,
+  // centred 1.5 part radii above the document centre (the view centre when
+  // the lights follow the view).
   circular(camera) {
     const a = this.array(camera);
     const z = a.plane_normal;
-    const t = dot([0, 1, 2].map((i) => a.plane_point[i] - this.center[i]), z);
-    const c = [0, 1, 2].map((i) => this.center[i] + z[i] * t);
+    const o = this.follow === 'view' && camera ? camera.target : [0, 0, 0];
+    const c = [0, 1, 2].map((i) => this.center[i] + o[i] + z[i] * 1.5 * this.radius);
     return { center: c, axis: z, radii: this.radii() };
   }
 

@@ -5,9 +5,10 @@ import { Viewer, segments } from './viewer.js';
 import { Lights } from './lights.js';
 import { attachControls, local } from './picking.js';
 import { drawLegend } from './colormap.js';
+import { UvPanel, PALETTE, rgba } from './uvpanel.js';
 import { $, status, showCommand, showReport, showHistory, offer, offerJson } from './panels.js';
 
-const state = { session: null, active: 0, regions: [], detected: [], before: false, job: null, lastDownload: null };
+const state = { labels: [], surfaceDoc: -1, uvData: null, uvCircular: null, session: null, active: 0, regions: [], detected: [], before: false, job: null, lastDownload: null };
 window.fairline = { state };
 
 const viewer = new Viewer($('gl'));
@@ -37,6 +38,7 @@ async function reloadActive() {
   const d = activeDoc();
   const step = state.before && d.history.cursor > 0 ? d.history.cursor - 1 : undefined;
   await loadGeometry(state.active, step);
+  if (d.kind === 'surface') await loadOutlines(state.active, step);
   await applyScalar();
   viewer.setOverlay(state.active, 'lines', null);
   viewer.setOverlay(state.active, 'stretches', null);
@@ -166,6 +168,11 @@ async function run() {
   const it = Number($('iterations').value);
   if (it > 0) { body.options[method === 'fair' ? 'max_iterations' : 'iterations'] = it; }
   if (method === 'fair' && !faces.length) { status('highlight-line fairing needs a marked region', true); return; }
+  await runJob(k, body);
+}
+
+async function runJob(k, body) {
+  const method = body.method;
   const { job } = await api.json(`/api/doc/${k}/run`, body);
   state.job = job;
   $('cancel').disabled = false;
@@ -234,6 +241,75 @@ async function save() {
   showCommand(r.command);
 }
 
+// ---- B-spline surfaces: patch outlines and labels, the (u, v) panel ----
+
+async function loadOutlines(k, step) {
+  const { header, data } = await api.frame(`/api/doc/${k}/outlines${step === undefined ? '' : `?step=${step}`}`);
+  viewer.setOverlay(k, 'patches', segmentsOf(header.lines, data), [0.1, 0.15, 0.45, 1]);
+  state.labels[k] = header.labels;
+}
+
+function segmentsOf(lines, data) { return segments(lines, data); }
+
+function placeLabels() {
+  const box = $('labels');
+  const spans = [];
+  const cw = viewer.canvas.clientWidth, ch = viewer.canvas.clientHeight;
+  state.labels.forEach((pts, k) => {
+    if (!pts) return;
+    const vp = viewer.viewport(k);
+    const dpr = window.devicePixelRatio || 1;
+    const m = viewer.camera.viewProj(vp[2] / vp[3]);
+    pts.forEach((p, i) => {
+      const x = m[0] * p[0] + m[4] * p[1] + m[8] * p[2] + m[12];
+      const y = m[1] * p[0] + m[5] * p[1] + m[9] * p[2] + m[13];
+      const w = m[3] * p[0] + m[7] * p[1] + m[11] * p[2] + m[15];
+      if (w <= 0) return;
+      const sx = (vp[0] + (x / w * 0.5 + 0.5) * vp[2]) / dpr;
+      const sy = ch - (vp[1] + (y / w * 0.5 + 0.5) * vp[3]) / dpr;
+      if (sx < 0 || sy < 0 || sx > cw || sy > ch) return;
+      const s = document.createElement('span');
+      s.textContent = String(i);
+      s.style.left = `${sx}px`;
+      s.style.top = `${sy}px`;
+      spans.push(s);
+    });
+  });
+  box.replaceChildren(...spans);
+}
+
+let uvPanel = null;
+
+async function uvLines() {
+  const k = state.surfaceDoc;
+  const patch = Number($('patch').value) || 0;
+  const circular = lights[k].circular(viewer.camera);
+  status('computing circular pre-images…');
+  const { header, data } = await api.frame(`/api/doc/${k}/surface-lines`, { circular, patch });
+  uvPanel.set(header, data);
+  for (const name of Object.keys(viewer.docs[k].overlays)) if (name.startsWith('circ')) viewer.setOverlay(k, name, null);
+  const lines = header.lines.filter((l) => l.kind === 'line');
+  const byLight = new Map();
+  for (const l of lines) { if (!byLight.has(l.light)) byLight.set(l.light, []); byLight.get(l.light).push(l); }
+  for (const [light, ls] of byLight) viewer.setOverlay(k, `circ${light}`, segments(ls, data), rgba(PALETTE[light % PALETTE.length]));
+  state.uvData = data;
+  state.uvCircular = circular;
+  showCommand(header.command);
+  status(`${lines.length} circular highlight line(s) on patch ${patch} in ${(header.time_s * 1000).toFixed(0)} ms of server time`);
+}
+
+function showEndpoints(list) {
+  $('endpoints').textContent = list.length ? list.map((e) => `R=${Number(e.radius).toPrecision(3)}: (${e.start.map((x) => x.toFixed(3))}) → (${e.end.map((x) => x.toFixed(3))})`).join('; ') : 'click a line twice in the (u, v) panel to pick the endpoints of a stretch';
+}
+
+async function fairSurface() {
+  const k = state.surfaceDoc;
+  if (!uvPanel.endpoints.length) { status('pick endpoints in the (u, v) panel first', true); return; }
+  state.active = k;
+  await runJob(k, { method: 'fair-surface', patch: Number($('patch').value) || 0, circular: state.uvCircular, endpoints: uvPanel.endpoints, options: {} });
+  if (document.body.dataset.lastJob === 'done') await uvLines();
+}
+
 function guard(f) {
   return async (...a) => {
     try { await f(...a); } catch (err) { status(err.message, true); }
@@ -271,6 +347,22 @@ function wire() {
   $('dl-fixed').addEventListener('click', guard(() => downloadRegion('fixed')));
   $('dl-mesh').addEventListener('click', guard(downloadMesh));
   $('save').addEventListener('click', guard(save));
+  if (state.surfaceDoc >= 0) {
+    $('surface-panel').hidden = false;
+    uvPanel = window.fairline.uvPanel = new UvPanel($('uv'), (line) => {
+      const k = state.surfaceDoc;
+      viewer.setOverlay(k, 'hover', line ? segments([line], state.uvData) : null, [1, 1, 0.2, 1]);
+    }, showEndpoints);
+    showEndpoints([]);
+    $('uvlines').addEventListener('click', guard(uvLines));
+    $('clear-ends').addEventListener('click', () => uvPanel.clearEndpoints());
+    $('fair-surface').addEventListener('click', guard(fairSurface));
+    $('dl-endpoints').addEventListener('click', () => {
+      const value = { endpoints: uvPanel.endpoints };
+      state.lastDownload = { name: 'endpoints.json', value };
+      offerJson(value, 'endpoints.json');
+    });
+  }
   attachControls($('gl'), viewer, (e, phase) => { onPick(e, phase); return $('tool').value !== 'orbit'; });
   window.addEventListener('resize', () => { viewer.dirty = true; });
 }
@@ -290,11 +382,14 @@ async function start() {
   const span = [0, 1, 2].map((i) => ext[1][i] - ext[0][i]);
   if (span[1] > 1.05 * Math.max(span[0], span[2])) { viewer.camera.up = 'y'; $('up').value = 'y'; }
   await Promise.all(docs.map((_, k) => loadGeometry(k)));
+  state.surfaceDoc = docs.findIndex((d) => d.kind === 'surface');
+  await Promise.all(docs.map((d, k) => (d.kind === 'surface' ? loadOutlines(k) : null)));
   viewer.camera.fit(Math.max(...docs.map((d) => d.radius)));
   await refreshSession();
   readLightControls();
   wire();
   viewer.onFrame = () => {
+    placeLabels();
     if (!document.body.dataset.ready) document.body.dataset.ready = '1';
   };
   viewer.dirty = true;

@@ -3,25 +3,21 @@
 use super::auth::{Guard, query_param};
 use super::doc::{Doc, Step, shell_word};
 use super::frame::{frame, vec3_bytes};
+use super::http::{HttpRequest, HttpResponse};
 use fairline::fair::{FairMethod, FairOptions, RegionSpec, fair_highlight_lines_with, grow_region};
 use fairline::geom::{CurvatureMethod, LaplaceWeights, principal_curvatures, vertex_normals};
 use fairline::highlight::{
-    CircularLight, CircularLights, DetectOptions, HighlightLines, HighlightModel,
-    HighlightOptions, LightArray, circular_highlight_bands, circular_highlight_lines,
-    detect_irregularities,
+    CircularLight, CircularLights, DetectOptions, HighlightLines, HighlightModel, HighlightOptions,
+    LightArray, circular_highlight_bands, circular_highlight_lines, detect_irregularities,
 };
 use fairline::mesh::{FaceId, VertexId};
 use fairline::{SurfaceMesh, Vec3};
 use serde::Deserialize;
 use serde_json::{Value, json};
-use std::io::Read;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
-
-/// Largest request body read (bytes).
-const MAX_BODY: u64 = 64 << 20;
 
 /// State shared by the worker threads.
 pub struct Shared {
@@ -103,26 +99,11 @@ fn bad(e: impl std::fmt::Display) -> Answer {
 }
 
 /// Answers one request.
-pub fn handle(shared: &Arc<Shared>, mut req: tiny_http::Request) {
-    let answer = match shared.guard.check(&req) {
+pub fn handle(shared: &Arc<Shared>, req: &HttpRequest) -> HttpResponse {
+    let answer = match shared.guard.check(req) {
         Err(why) => error(403, why),
-        Ok(()) => {
-            let mut body = Vec::new();
-            let too_big = req.body_length().is_some_and(|n| n as u64 > MAX_BODY);
-            if too_big
-                || req
-                    .as_reader()
-                    .take(MAX_BODY)
-                    .read_to_end(&mut body)
-                    .is_err()
-            {
-                error(413, "request body too large or unreadable")
-            } else {
-                route(shared, &req, &body)
-            }
-        }
+        Ok(()) => route(shared, req, &req.body),
     };
-    let mut resp = tiny_http::Response::from_data(answer.body).with_status_code(answer.status);
     let mut headers = vec![
         ("Content-Type".to_string(), answer.content_type.to_string()),
         ("Cache-Control".to_string(), "no-store".to_string()),
@@ -133,19 +114,18 @@ pub fn handle(shared: &Arc<Shared>, mut req: tiny_http::Request) {
         ),
     ];
     headers.extend(answer.headers);
-    for (k, v) in headers {
-        if let Ok(h) = tiny_http::Header::from_bytes(k.as_bytes(), v.as_bytes()) {
-            resp.add_header(h);
-        }
+    HttpResponse {
+        status: answer.status,
+        headers,
+        body: answer.body,
     }
-    let _ = req.respond(resp);
 }
 
-fn route(shared: &Arc<Shared>, req: &tiny_http::Request, body: &[u8]) -> Answer {
-    let url = req.url();
+fn route(shared: &Arc<Shared>, req: &HttpRequest, body: &[u8]) -> Answer {
+    let url = req.url.as_str();
     let path = url.split('?').next().unwrap_or("");
-    let get = *req.method() == tiny_http::Method::Get;
-    let post = *req.method() == tiny_http::Method::Post;
+    let get = req.method == "GET";
+    let post = req.method == "POST";
     if get && !path.starts_with("/api/") {
         return match super::assets::asset(path) {
             Some((ctype, bytes)) => {
@@ -221,6 +201,8 @@ fn route(shared: &Arc<Shared>, req: &tiny_http::Request, body: &[u8]) -> Answer 
                 (true, _, ["scalar", name]) => scalar(shared, k, name, step),
                 (true, _, ["download"]) => download(shared, k, url),
                 (_, true, ["lines"]) => lines(shared, k, body),
+                (true, _, ["outlines"]) => outlines(shared, k, step),
+                (_, true, ["surface-lines"]) => surface_lines(shared, k, body),
                 (_, true, ["detect"]) => detect(shared, k, body),
                 (_, true, ["region"]) => region(shared, k, body),
                 (_, true, ["region-file"]) => region_file(shared, k, body),
@@ -388,7 +370,8 @@ fn push_lines(
             let q = *p - center;
             floats.extend([q.x as f32, q.y as f32, q.z as f32]);
         }
-        let mut m = json!({"index": l.index, "closed": l.closed, "start": start, "count": l.points.len()});
+        let mut m =
+            json!({"index": l.index, "closed": l.closed, "start": start, "count": l.points.len()});
         if let Some(r) = radii.and_then(|r| r.get(l.index as usize)) {
             m["radius"] = json!(r);
         }
@@ -401,10 +384,16 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         Ok(r) => r,
         Err(a) => return a,
     };
-    let (mesh, center, file) = {
-        let st = lock(shared);
-        let d = &st.docs[k];
-        (d.tri_at(req.step), d.center, d.current_file())
+    let st = lock(shared);
+    let d = &st.docs[k];
+    let (center, file) = (d.center, d.current_file());
+    let stepped;
+    let mesh = match req.step {
+        None => &d.now,
+        Some(_) => {
+            stepped = d.tri_at(req.step);
+            &stepped
+        }
     };
     if let Some(b) = req.band
         && !(b > 0.0 && b.is_finite())
@@ -422,16 +411,28 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             Ok(_) => return bad("circular lights need at least one radius"),
             Err(e) => return bad(e),
         };
-        let lines = match circular_highlight_lines(&mesh, &lights) {
+        let lines = match circular_highlight_lines(mesh, &lights) {
             Ok(l) => l,
             Err(e) => return bad(e),
         };
         push_lines(&lines, center, Some(&c.radii), &mut meta, &mut floats);
         if let Some(rho) = req.band {
-            match circular_highlight_bands(&mesh, &lights, rho) {
+            match circular_highlight_bands(mesh, &lights, rho) {
                 Ok(b) => {
-                    push_lines(&b.lower, center, Some(&c.radii), &mut band_meta, &mut floats);
-                    push_lines(&b.upper, center, Some(&c.radii), &mut band_meta, &mut floats);
+                    push_lines(
+                        &b.lower,
+                        center,
+                        Some(&c.radii),
+                        &mut band_meta,
+                        &mut floats,
+                    );
+                    push_lines(
+                        &b.upper,
+                        center,
+                        Some(&c.radii),
+                        &mut band_meta,
+                        &mut floats,
+                    );
                 }
                 Err(e) => return bad(e),
             }
@@ -448,14 +449,14 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         let Some(light) = req.light else {
             return bad("give \"light\" or \"circular\"");
         };
-        let model = match HighlightModel::new(&mesh, light, HighlightOptions::default()) {
+        let model = match HighlightModel::new(mesh, light, HighlightOptions::default()) {
             Ok(m) => m,
             Err(e) => return bad(e),
         };
-        let lines = model.lines(&mesh);
+        let lines = model.lines(mesh);
         push_lines(&lines, center, None, &mut meta, &mut floats);
         if let Some(rho) = req.band {
-            match model.bands(&mesh, rho) {
+            match model.bands(mesh, rho) {
                 Ok(b) => {
                     push_lines(&b.lower, center, None, &mut band_meta, &mut floats);
                     push_lines(&b.upper, center, None, &mut band_meta, &mut floats);
@@ -490,11 +491,9 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         Ok(r) => r,
         Err(a) => return a,
     };
-    let (mesh, center, file) = {
-        let st = lock(shared);
-        let d = &st.docs[k];
-        (d.tri_at(None), d.center, d.current_file())
-    };
+    let st = lock(shared);
+    let d = &st.docs[k];
+    let (mesh, center, file) = (&d.now, d.center, d.current_file());
     let defaults = DetectOptions::default();
     let opts = DetectOptions {
         wiggle_threshold: req.threshold.unwrap_or(defaults.wiggle_threshold),
@@ -503,12 +502,12 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         ..defaults
     };
     let t = Instant::now();
-    let model = match HighlightModel::new(&mesh, req.light, HighlightOptions::default()) {
+    let model = match HighlightModel::new(mesh, req.light, HighlightOptions::default()) {
         Ok(m) => m,
         Err(e) => return bad(e),
     };
-    let lines = model.lines(&mesh);
-    let det = match detect_irregularities(&mesh, &lines, req.light.spacing(), &opts) {
+    let lines = model.lines(mesh);
+    let det = match detect_irregularities(mesh, &lines, req.light.spacing(), &opts) {
         Ok(d) => d,
         Err(e) => return bad(e),
     };
@@ -539,7 +538,10 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             })
         })
         .collect();
-    let mut command = format!("fairline detect {file} {} -o region.json", light_args(&req.light));
+    let mut command = format!(
+        "fairline detect {file} {} -o region.json",
+        light_args(&req.light)
+    );
     if let Some(t) = req.threshold {
         command.push_str(&format!(" --threshold {t}"));
     }
@@ -609,14 +611,18 @@ fn region(shared: &Shared, k: usize, body: &[u8]) -> Answer {
                 for f in &grown {
                     out_grown[f.idx()] = true;
                 }
-                faces.iter().copied().filter(|f| !out_grown[f.idx()]).collect()
+                faces
+                    .iter()
+                    .copied()
+                    .filter(|f| !out_grown[f.idx()])
+                    .collect()
             }
         }
         "sphere" => {
             let (Some(c), Some(r)) = (req.center, req.radius) else {
                 return bad("sphere needs center and radius");
             };
-            if !(r > 0.0 && r.is_finite()) || !c.iter().all(|x| x.is_finite()) {
+            if !(r > 0.0 && r.is_finite() && c.iter().all(|x| x.is_finite())) {
                 return bad("sphere needs a finite center and a positive radius");
             }
             let c = Vec3::from(c) + center;
@@ -626,7 +632,11 @@ fn region(shared: &Shared, k: usize, body: &[u8]) -> Answer {
                 Err(e) => return bad(e),
             }
         }
-        other => return bad(format!("unknown region op `{other}` (grow, shrink, sphere)")),
+        other => {
+            return bad(format!(
+                "unknown region op `{other}` (grow, shrink, sphere)"
+            ));
+        }
     };
     json_answer(&json!({"faces": out.iter().map(|f| f.0).collect::<Vec<_>>()}))
 }
@@ -689,6 +699,12 @@ struct RunOptions {
 #[derive(Deserialize)]
 struct RunRequest {
     method: String,
+    /// fair-surface: the patch, the circular lights and the endpoints
+    /// `[{"radius","start":[u,v],"end":[u,v]}]` (DESIGN.md §5).
+    #[serde(default)]
+    patch: usize,
+    circular: Option<CircularLights>,
+    endpoints: Option<Value>,
     #[serde(default)]
     faces: Option<Vec<u32>>,
     light: Option<LightArray>,
@@ -699,6 +715,7 @@ struct RunRequest {
 /// What a finished job gives: new positions, report, command, label.
 struct Outcome {
     positions: Vec<Vec3>,
+    surfaces: Option<Arc<Vec<fairline::bspline::BSplineSurface>>>,
     report: Value,
     command: String,
     label: String,
@@ -717,9 +734,14 @@ fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
         return error(409, "a job is already running; wait for it or cancel it");
     }
     let d = &st.docs[k];
-    if d.is_surface() {
-        return bad("mesh methods need a mesh document; this one is a B-spline surface");
+    if d.is_surface() != (req.method == "fair-surface") {
+        return bad(if d.is_surface() {
+            "this document is a B-spline surface: its method is fair-surface"
+        } else {
+            "fair-surface needs a B-spline surface document"
+        });
     }
+    let surface_input = d.current().surfaces.clone().map(|s| (s, d.grid));
     let tri = d.tri_at(None);
     let mesh = d.mesh_now();
     let file = d.current_file();
@@ -751,7 +773,10 @@ fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
         let progress = Arc::clone(&ctx.progress);
         let (tx, rx) = std::sync::mpsc::channel();
         let worker = std::thread::spawn(move || {
-            let r = run_method(&req, &tri, &mesh, &file, &out, &progress);
+            let r = match surface_input {
+                Some((surfaces, grid)) => run_fair_surface(&req, &surfaces, grid, &file, &out),
+                None => run_method(&req, &tri, &mesh, &file, &out, &progress),
+            };
             let _ = tx.send(());
             r
         });
@@ -791,7 +816,7 @@ fn finish_job(shared: &Shared, ctx: &JobContext, result: Result<Outcome, String>
     match result {
         Ok(o) if !cancelled => {
             let d = &mut st.docs[ctx.doc];
-            let surfaces = d.current().surfaces.clone();
+            let surfaces = o.surfaces.or_else(|| d.current().surfaces.clone());
             d.push(Step {
                 label: o.label.clone(),
                 command: o.command.clone(),
@@ -845,7 +870,11 @@ fn run_method(
             }
         }
     };
-    let fixed_arg = if faces.is_some() { " --fixed fixed.json" } else { "" };
+    let fixed_arg = if faces.is_some() {
+        " --fixed fixed.json"
+    } else {
+        ""
+    };
     let t = Instant::now();
     match req.method.as_str() {
         "fair" => {
@@ -875,6 +904,7 @@ fn run_method(
             report["time_s"] = json!(t.elapsed().as_secs_f64());
             let m = o.method.as_deref().unwrap_or("highlight");
             Ok(Outcome {
+                surfaces: None,
                 positions: r.mesh.positions().to_vec(),
                 report,
                 command: format!(
@@ -971,6 +1001,7 @@ fn run_method(
             }
             cmd.push_str(&format!("{fixed_arg} -o {out}"));
             Ok(Outcome {
+                surfaces: None,
                 positions: m.positions().to_vec(),
                 report: json!({
                     "command": "smooth",
@@ -1001,6 +1032,7 @@ fn run_method(
             };
             let r = fair_structure_lines(&mut m, &opts).map_err(|e| e.to_string())?;
             Ok(Outcome {
+                surfaces: None,
                 positions: m.positions().to_vec(),
                 report: json!({
                     "command": "fair-quad",
@@ -1032,6 +1064,7 @@ fn run_method(
                 .fixed(fixed_outside(tri));
             let r = enhance_features(tri, &opts).map_err(|e| e.to_string())?;
             Ok(Outcome {
+                surfaces: None,
                 report: json!({
                     "command": "enhance",
                     "flipped_triangles": r.report.flipped_triangles,
@@ -1058,9 +1091,16 @@ fn move_cursor(shared: &Shared, k: usize, by: i64) -> Answer {
     let d = &mut st.docs[k];
     let next = d.cursor as i64 + by;
     if next < 0 || next >= d.history.len() as i64 {
-        return error(409, if by < 0 { "nothing to undo" } else { "nothing to redo" });
+        return error(
+            409,
+            if by < 0 {
+                "nothing to undo"
+            } else {
+                "nothing to redo"
+            },
+        );
     }
-    d.cursor = next as usize;
+    d.set_cursor(next as usize);
     json_answer(&json!({"cursor": d.cursor, "label": d.history[d.cursor].label}))
 }
 
@@ -1094,7 +1134,11 @@ fn download(shared: &Shared, k: usize, url: &str) -> Answer {
     let st = lock(shared);
     let d = &st.docs[k];
     let ext = query_param(url, "format").unwrap_or_else(|| {
-        if d.is_surface() { "json".into() } else { "ply".into() }
+        if d.is_surface() {
+            "json".into()
+        } else {
+            "ply".into()
+        }
     });
     match current_bytes(d, &ext) {
         Ok(bytes) => {
@@ -1172,4 +1216,186 @@ fn save(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         })),
         Err(e) => error(500, e.to_string()),
     }
+}
+
+/// Patch boundaries (one closed polyline per patch, from its tessellation
+/// grid) and a label point per patch (its middle grid point).
+fn outlines(shared: &Shared, k: usize, step: Option<usize>) -> Answer {
+    let st = lock(shared);
+    let d = &st.docs[k];
+    let Some(surfaces) = &d.step(step).surfaces else {
+        return bad("outlines are for B-spline surfaces");
+    };
+    let n = d.grid;
+    let p = &d.step(step).positions;
+    let mut floats = Vec::new();
+    let mut meta = Vec::new();
+    let mut labels = Vec::new();
+    for s in 0..surfaces.len() {
+        let base = s * n * n;
+        let at =
+            |a: usize, b: usize| p.get(base + a * n + b).copied().unwrap_or(Vec3::ZERO) - d.center;
+        let mut ring: Vec<(usize, usize)> = Vec::new();
+        ring.extend((0..n).map(|b| (0, b)));
+        ring.extend((1..n).map(|a| (a, n - 1)));
+        ring.extend((0..n - 1).rev().map(|b| (n - 1, b)));
+        ring.extend((1..n - 1).rev().map(|a| (a, 0)));
+        let start = floats.len() / 3;
+        for (a, b) in &ring {
+            let q = at(*a, *b);
+            floats.extend([q.x as f32, q.y as f32, q.z as f32]);
+        }
+        meta.push(json!({"index": s, "closed": true, "start": start, "count": ring.len()}));
+        labels.push(at(n / 2, n / 2).to_array());
+    }
+    binary(frame(&json!({"lines": meta, "labels": labels}), &floats))
+}
+
+#[derive(Deserialize)]
+struct SurfaceLinesRequest {
+    circular: CircularLights,
+    #[serde(default)]
+    patch: usize,
+    grid: Option<usize>,
+    band: Option<f64>,
+}
+
+/// Circular highlight line pre-images of one patch (Nishiyama et al. §2):
+/// a frame with the 3-D points (minus the centre), then the (u, v) points;
+/// each line has `radius`, `closed`, `start`, `count` and `uv_start`.
+fn surface_lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
+    use fairline::highlight::{SurfaceHighlightOptions, SurfaceLight, surface_highlight_lines};
+    let req: SurfaceLinesRequest = match parse(body) {
+        Ok(r) => r,
+        Err(a) => return a,
+    };
+    let (surface, center, file) = {
+        let st = lock(shared);
+        let d = &st.docs[k];
+        let Some(s) = &d.current().surfaces else {
+            return bad("surface lines are for B-spline surfaces");
+        };
+        let Some(surface) = s.get(req.patch).cloned() else {
+            return bad(format!(
+                "no patch {} (the file holds {})",
+                req.patch,
+                s.len()
+            ));
+        };
+        (surface, d.center, d.current_file())
+    };
+    let lights: Vec<CircularLight> = match req.circular.lights() {
+        Ok(l) if !l.is_empty() => l,
+        Ok(_) => return bad("circular lights need at least one radius"),
+        Err(e) => return bad(e),
+    };
+    let grid = req.grid.unwrap_or(200).clamp(8, 2000);
+    if let Some(b) = req.band
+        && !(b > 0.0 && b.is_finite())
+    {
+        return bad("band must be a positive number");
+    }
+    let t = Instant::now();
+    let slights: Vec<SurfaceLight> = lights.iter().map(|l| SurfaceLight::Circular(*l)).collect();
+    let h = surface_highlight_lines(
+        &surface,
+        &slights,
+        &SurfaceHighlightOptions::default().grid(grid).band(req.band),
+    );
+    let elapsed = t.elapsed().as_secs_f64();
+    let all: Vec<(&str, &fairline::highlight::SurfaceHighlightLine)> = h
+        .lines
+        .iter()
+        .map(|l| ("line", l))
+        .chain(h.band_lower.iter().map(|l| ("band", l)))
+        .chain(h.band_upper.iter().map(|l| ("band", l)))
+        .collect();
+    let mut floats = Vec::new();
+    let mut meta = Vec::new();
+    for (kind, l) in &all {
+        let start = floats.len() / 3;
+        for p in &l.points {
+            let q = *p - center;
+            floats.extend([q.x as f32, q.y as f32, q.z as f32]);
+        }
+        meta.push(json!({"kind": kind, "light": l.light, "radius": l.radius, "level": l.level, "closed": l.closed, "start": start, "count": l.points.len()}));
+    }
+    let uv_base = floats.len();
+    for (m, (_, l)) in meta.iter_mut().zip(&all) {
+        m["uv_start"] = json!((floats.len() - uv_base) / 2);
+        for uv in &l.uv {
+            floats.extend([uv[0] as f32, uv[1] as f32]);
+        }
+    }
+    let [u0, u1] = surface.domain_u();
+    let [v0, v1] = surface.domain_v();
+    let radii: Vec<String> = req.circular.radii.iter().map(|r| r.to_string()).collect();
+    let header = json!({
+        "lines": meta,
+        "uv_offset": uv_base,
+        "domain": [[u0, u1], [v0, v1]],
+        "time_s": elapsed,
+        "command": format!(
+            "fairline highlight {file} --surface {} --circle-center {} --circle-axis {} --radii {} --grid {grid}{} -o lines.json --svg uv.svg",
+            req.patch,
+            vec_arg(Vec3::from(req.circular.center)),
+            vec_arg(Vec3::from(req.circular.axis)),
+            radii.join(","),
+            req.band.map(|b| format!(" --band {b}")).unwrap_or_default()
+        ),
+    });
+    binary(frame(&header, &floats))
+}
+
+/// Circular-highlight fairing of one patch (Nishiyama et al. §3) with the
+/// library's default options; the patch is replaced and re-tessellated.
+fn run_fair_surface(
+    req: &RunRequest,
+    surfaces: &Arc<Vec<fairline::bspline::BSplineSurface>>,
+    grid: usize,
+    file: &str,
+    out: &str,
+) -> Result<Outcome, String> {
+    use fairline::fair::{Endpoints, SurfaceFairOptions, fair_surface};
+    let circular = req
+        .circular
+        .as_ref()
+        .ok_or("fair-surface needs the circular lights")?;
+    let lights = circular.lights().map_err(|e| e.to_string())?;
+    let ends: Endpoints =
+        serde_json::from_value(json!({"endpoints": req.endpoints.clone().unwrap_or(Value::Null)}))
+            .map_err(|e| format!("endpoints: {e}"))?;
+    let input = surfaces.get(req.patch).ok_or("no such patch")?;
+    let mut opts = SurfaceFairOptions::default();
+    if let Some(n) = req.options.max_iterations {
+        opts.max_iterations = n;
+    }
+    if let Some(e) = req.options.epsilon {
+        opts.epsilon = e;
+    }
+    let t = Instant::now();
+    let (faired, rep) =
+        fair_surface(input, &lights, &ends.endpoints, &opts).map_err(|e| e.to_string())?;
+    let mut all = surfaces.as_ref().clone();
+    all[req.patch] = faired;
+    let (mesh, _) = super::doc::tessellate_all(&all, grid).map_err(|e| e.to_string())?;
+    Ok(Outcome {
+        positions: mesh.positions().to_vec(),
+        surfaces: Some(Arc::new(all)),
+        report: json!({
+            "command": "fair-surface",
+            "iterations": rep.iterations.len(),
+            "converged": rep.converged,
+            "modified_control_points": rep.modified_control_points.len(),
+            "residual_before": {"max": rep.residual_before.0, "mean": rep.residual_before.1},
+            "residual_after": {"max": rep.residual_after.0, "mean": rep.residual_after.1},
+            "max_displacement": rep.max_displacement,
+            "time_s": t.elapsed().as_secs_f64(),
+        }),
+        command: format!(
+            "fairline fair-surface {file} --surface {} --lights lights.json --endpoints endpoints.json -o {out}",
+            req.patch
+        ),
+        label: format!("fair-surface (patch {})", req.patch),
+    })
 }

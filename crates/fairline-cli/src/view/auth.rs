@@ -49,13 +49,8 @@ impl Guard {
     }
 
     /// Checks host, origin, fetch site and token of a request.
-    pub fn check(&self, req: &tiny_http::Request) -> Result<(), Refusal> {
-        let header = |name: &str| -> Option<String> {
-            req.headers()
-                .iter()
-                .find(|h| h.field.as_str().as_str().eq_ignore_ascii_case(name))
-                .map(|h| h.value.as_str().to_string())
-        };
+    pub fn check(&self, req: &super::http::HttpRequest) -> Result<(), Refusal> {
+        let header = |name: &str| -> Option<String> { req.header(name).map(str::to_string) };
         let hosts = [
             format!("127.0.0.1:{}", self.port),
             format!("localhost:{}", self.port),
@@ -78,10 +73,10 @@ impl Guard {
         if header("X-Fairline-Token").is_some_and(|t| self.same(t.trim())) {
             return Ok(());
         }
-        if query_param(req.url(), "token").is_some_and(|t| self.same(&t)) {
+        if query_param(&req.url, "token").is_some_and(|t| self.same(&t)) {
             return Ok(());
         }
-        if *req.method() == tiny_http::Method::Get
+        if req.method == "GET"
             && let Some(c) = header("Cookie")
         {
             let name = self.cookie_name();

@@ -53,6 +53,9 @@ pub struct Doc {
     pub history: Vec<Step>,
     /// Index of the current step.
     pub cursor: usize,
+    /// `tri` with the current step's positions (kept in step with `cursor`,
+    /// so requests on the current state need no copy of the mesh).
+    pub now: SurfaceMesh,
 }
 
 /// The triangle mesh of surfaces tessellated `n` × `n` per patch, and the
@@ -102,7 +105,10 @@ impl Doc {
                         .into_iter()
                         .filter(|(n, v)| {
                             v.len() == mesh.vertex_count()
-                                && !matches!(n.as_str(), "nx" | "ny" | "nz" | "red" | "green" | "blue" | "alpha")
+                                && !matches!(
+                                    n.as_str(),
+                                    "nx" | "ny" | "nz" | "red" | "green" | "blue" | "alpha"
+                                )
                         })
                         .collect()
                 } else {
@@ -122,9 +128,14 @@ impl Doc {
             (t.mesh, Some(t.source_face))
         };
         let positions = Arc::new(mesh.positions().to_vec());
+        let tri_now = tri.clone();
         let center = 0.5 * (lo + hi);
         let radius = (0.5 * (hi - lo).length()).max(f64::MIN_POSITIVE);
-        let kind = if surfaces.is_some() { "surface" } else { "mesh" };
+        let kind = if surfaces.is_some() {
+            "surface"
+        } else {
+            "mesh"
+        };
         Ok(Doc {
             name: name.clone(),
             path: path.to_path_buf(),
@@ -145,6 +156,7 @@ impl Doc {
                 surfaces,
             }],
             cursor: 0,
+            now: tri_now,
         })
     }
 
@@ -182,7 +194,16 @@ impl Doc {
     pub fn push(&mut self, step: Step) {
         self.history.truncate(self.cursor + 1);
         self.history.push(step);
-        self.cursor = self.history.len() - 1;
+        self.set_cursor(self.history.len() - 1);
+    }
+
+    /// Makes step `n` the current one.
+    pub fn set_cursor(&mut self, n: usize) {
+        self.cursor = n.min(self.history.len() - 1);
+        // same vertex count by construction
+        let _ = self
+            .now
+            .set_positions(self.history[self.cursor].positions.to_vec());
     }
 
     /// The file name the current state would have as a command's output.
@@ -205,7 +226,11 @@ impl Doc {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "out".into());
-        shell_word(&format!("{stem}-step{}.{}", self.cursor + 1, self.out_ext()))
+        shell_word(&format!(
+            "{stem}-step{}.{}",
+            self.cursor + 1,
+            self.out_ext()
+        ))
     }
 
     fn out_ext(&self) -> String {

@@ -76,6 +76,7 @@ mod assets;
 mod auth;
 mod doc;
 mod frame;
+mod http;
 
 use crate::common::bad_input;
 use anyhow::{Context, Result};
@@ -112,9 +113,6 @@ pub struct Args {
     pub grid: usize,
 }
 
-/// Worker threads answering requests (a job runs on its own thread).
-const WORKERS: usize = 4;
-
 pub fn run(args: Args) -> Result<()> {
     let save_dir = match &args.save_dir {
         Some(d) => d.clone(),
@@ -134,13 +132,9 @@ pub fn run(args: Args) -> Result<()> {
         docs.push(doc::Doc::open(f2, args.grid)?);
     }
     let token = auth::new_token()?;
-    let server = tiny_http::Server::http(("127.0.0.1", args.port.unwrap_or(0)))
-        .map_err(|e| anyhow::anyhow!("cannot listen on 127.0.0.1:{}: {e}", args.port.unwrap_or(0)))?;
-    let port = server
-        .server_addr()
-        .to_ip()
-        .map(|a| a.port())
-        .ok_or_else(|| anyhow::anyhow!("the server has no TCP address"))?;
+    let listener = std::net::TcpListener::bind(("127.0.0.1", args.port.unwrap_or(0)))
+        .with_context(|| format!("cannot listen on 127.0.0.1:{}", args.port.unwrap_or(0)))?;
+    let port = listener.local_addr()?.port();
     let url = format!("http://127.0.0.1:{port}/?token={token}");
     {
         let mut out = std::io::stdout().lock();
@@ -160,20 +154,8 @@ pub fn run(args: Args) -> Result<()> {
         state: Mutex::new(api::State::new(docs, save_dir)),
         guard: auth::Guard::new(token, port),
     });
-    let server = Arc::new(server);
-    let mut workers = Vec::new();
-    for _ in 0..WORKERS {
-        let server = Arc::clone(&server);
-        let state = Arc::clone(&state);
-        workers.push(std::thread::spawn(move || {
-            while let Ok(req) = server.recv() {
-                api::handle(&state, req);
-            }
-        }));
-    }
-    for w in workers {
-        let _ = w.join();
-    }
+    let handler: http::Handler = Arc::new(move |req| api::handle(&state, req));
+    http::serve(listener, handler);
     Ok(())
 }
 
@@ -192,6 +174,8 @@ fn open_browser(url: &str) {
         .spawn()
     {
         Ok(_) => {}
-        Err(e) => eprintln!("warning: could not open a browser ({opener}: {e}); open the URL above by hand"),
+        Err(e) => eprintln!(
+            "warning: could not open a browser ({opener}: {e}); open the URL above by hand"
+        ),
     }
 }

@@ -104,10 +104,14 @@ void main() {
       if (uMode == 1) {
         float w = fwidth(d) * uLineWidth;
         float a = 1.0 - smoothstep(0.5 * w, w, off);
+        // lines closer than about three pixels cannot be told apart: fade
+        // them out instead of painting the area black
+        a *= 1.0 - smoothstep(0.15, 0.35, fwidth(d) / uSpacing);
         color = mix(color, vec3(0.02), a);
       } else {
         float aa = fwidth(d);
         float a = 1.0 - smoothstep(uBandHalf - aa, uBandHalf + aa, off);
+        a = mix(a, uBandHalf / uSpacing, smoothstep(0.15, 0.35, aa / uSpacing));
         color = mix(color, vec3(0.02), a);
       }
     }
@@ -128,7 +132,7 @@ void main() {
       if (!ok) continue;
       if (uMode == 4) {
         float w = fwidth(ds) * uLineWidth;
-        a = max(a, 1.0 - smoothstep(0.5 * w, w, abs(ds)));
+        a = max(a, 1.0 - smoothstep(0.5 * w, w, abs(ds)) * 1.0);
       } else {
         float aa = fwidth(ds);
         a = max(a, 1.0 - smoothstep(uBandHalf - aa, uBandHalf + aa, abs(ds)));
