@@ -1,7 +1,7 @@
 //! `fairline curvature`: per-vertex principal curvatures written as PLY.
 
 use crate::common::{Report, bad_input, check_output};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use fairline::geom::{CurvatureMethod, principal_curvatures};
 use fairline::mesh::Stats;
 use std::path::PathBuf;
@@ -56,14 +56,15 @@ pub fn run(args: Args) -> Result<()> {
         Method::Rusinkiewicz => CurvatureMethod::Rusinkiewicz,
         Method::Meyer => CurvatureMethod::Meyer,
     };
-    let (c, triangulated) = report.time(|| {
-        if mesh.is_triangle_mesh() {
+    let (c, triangulated) = report.time(|| -> Result<_> {
+        Ok(if mesh.is_triangle_mesh() {
             (principal_curvatures(&mesh, method), false)
         } else {
-            let t = fairline::mesh::triangulate(&mesh);
+            let t = fairline::mesh::triangulate(&mesh)
+                .with_context(|| format!("{}: triangulating its polygons", args.mesh.display()))?;
             (principal_curvatures(&t.mesh, method), true)
-        }
-    });
+        })
+    })?;
     let mean = c.mean();
     let gauss = c.gauss();
     let comp =

@@ -678,7 +678,7 @@ fn real_meshes_run_through_highlight_and_detect() {
         }
         let mut mesh = crate::io::read_mesh(&path).unwrap();
         if !mesh.is_triangle_mesh() {
-            mesh = crate::mesh::triangulate(&mesh).mesh;
+            mesh = crate::mesh::triangulate(&mesh).unwrap().mesh;
         }
         let (lo, hi) = crate::mesh::bounding_box(mesh.positions()).unwrap();
         for view in [Vec3::Z, Vec3::new(1.0, 0.5, 0.2)] {
@@ -908,7 +908,7 @@ fn chaining_without_node_numbering_matches_the_sort_based_reference() {
         }
         let mut mesh = crate::io::read_mesh(&path).unwrap();
         if !mesh.is_triangle_mesh() {
-            mesh = crate::mesh::triangulate(&mesh).mesh;
+            mesh = crate::mesh::triangulate(&mesh).unwrap().mesh;
         }
         let (lo, hi) = crate::mesh::bounding_box(mesh.positions()).unwrap();
         let mut count = 0;
