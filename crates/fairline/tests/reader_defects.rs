@@ -228,3 +228,97 @@ fn ply_vertex_properties_must_be_finite() {
     );
     assert!(!out.exists());
 }
+
+// ---------------------------------------------------------------------------
+// B-spline surfaces: weights (defect 11), file size (defect 9), the file named
+// in every content error (defect 10)
+
+fn surface_json(weight: &str) -> String {
+    format!(
+        r#"{{"degree_u":1,"degree_v":1,"knots_u":[0,0,1,1],"knots_v":[0,0,1,1],
+        "control_points":[[[0,0,0],[0,1,0]],[[1,0,0],[1,1,1]]],
+        "weights":[[1,1],[{weight},1]]}}"#
+    )
+}
+
+#[test]
+fn tiny_weights_are_refused_at_read_time_naming_the_weight_and_file() {
+    use fairline::bspline::{BSplineError, parse_surfaces_json, read_surfaces_json};
+    let dir = tmp("weights");
+    // sound weights (ratio 1e-6) are read and evaluate finitely
+    let ok = parse_surfaces_json(&surface_json("1e-6")).unwrap();
+    assert!(ok[0].eval(0.5, 0.5).is_finite());
+    for w in ["1e-320", "1e-9", "2.2e-308"] {
+        let path = dir.join("w.json");
+        std::fs::write(&path, surface_json(w)).unwrap();
+        let e = read_surfaces_json(&path).unwrap_err();
+        let text = e.to_string();
+        assert!(text.contains("w.json"), "{text}");
+        assert!(
+            text.contains("surface 0") && text.contains("weight (1, 0)"),
+            "{text}"
+        );
+        let inner = parse_surfaces_json(&surface_json(w)).unwrap_err();
+        assert!(
+            matches!(
+                inner,
+                fairline::bspline::SurfaceJsonError::Surface {
+                    source: BSplineError::WeightRange { i: 1, j: 0, .. },
+                    ..
+                }
+            ),
+            "{inner:?}"
+        );
+    }
+    // all weights equally tiny but subnormal: refused too
+    let all = surface_json("1e-320")
+        .replace("1,1],[", "1e-320,1e-320],[")
+        .replace(",1]]}", ",1e-320]]}");
+    assert!(parse_surfaces_json(&all).is_err());
+}
+
+#[test]
+fn surface_json_over_the_size_limit_is_refused_before_reading() {
+    use fairline::bspline::{MAX_SURFACE_JSON_BYTES, read_surfaces_json};
+    let dir = tmp("json-size");
+    let path = dir.join("huge.json");
+    let f = std::fs::File::create(&path).unwrap();
+    f.set_len(MAX_SURFACE_JSON_BYTES + 1).unwrap(); // sparse: costs no disk
+    let e = read_surfaces_json(&path).unwrap_err().to_string();
+    assert!(e.contains("huge.json") && e.contains("refused"), "{e}");
+    let _ = std::fs::remove_file(&path);
+}
+
+#[test]
+fn surface_json_and_iges_content_errors_name_the_file() {
+    use fairline::bspline::{read_iges, read_surfaces_json};
+    let dir = tmp("named");
+    let cases: [(&str, &str); 4] = [
+        ("syntax.json", "{\"degree_u\": 3,"),
+        ("layout.json", "[1, 2]"),
+        (
+            "field.json",
+            r#"{"degree_u":1,"degree_v":1,"knots_u":[0,0,1,1],"knots_v":[0,0,1,1],"control_points":[[[0,0],[0,1,0]],[[1,0,0],[1,1,1]]]}"#,
+        ),
+        (
+            "knots.json",
+            r#"{"degree_u":1,"degree_v":1,"knots_u":[0,1,0,1],"knots_v":[0,0,1,1],"control_points":[[[0,0,0],[0,1,0]],[[1,0,0],[1,1,1]]]}"#,
+        ),
+    ];
+    for (name, text) in cases {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        let e = read_surfaces_json(&p).unwrap_err().to_string();
+        assert!(e.starts_with(p.to_str().unwrap()), "{e}");
+    }
+    for (name, text) in [
+        ("short.igs", "garbage line\n"),
+        ("letter.igs", &format!("{:<72}Z      1\n", "x")),
+        ("entity.igs", &format!("{:<72}D      1\n", "     128")),
+    ] {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        let e = read_iges(&p).unwrap_err().to_string();
+        assert!(e.starts_with(p.to_str().unwrap()), "{e}");
+    }
+}

@@ -52,6 +52,27 @@ pub enum SurfaceJsonError {
         /// What is wrong.
         message: String,
     },
+    /// The file is larger than [`MAX_SURFACE_JSON_BYTES`].
+    #[error(
+        "{}: {size} bytes; surface JSON files over {max} bytes are refused (reading one holds it in memory several times over)",
+        path.display()
+    )]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its size in bytes.
+        size: u64,
+        /// The limit, [`MAX_SURFACE_JSON_BYTES`].
+        max: u64,
+    },
+    /// An error of the content of a file, with the file's name.
+    #[error("{}: {error}", path.display())]
+    InFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong in it (surface, field, JSON line and column).
+        error: Box<SurfaceJsonError>,
+    },
     /// The fields are well formed but do not make a valid surface.
     #[error("surface {surface}: {source}")]
     Surface {
@@ -62,15 +83,47 @@ pub enum SurfaceJsonError {
     },
 }
 
+/// The largest surface JSON file [`read_surfaces_json`] reads: 64 MiB.
+///
+/// The parser holds the text and a tree of its values (up to about 16 bytes
+/// of tree per byte of text for arrays of one-digit numbers, about 3 for
+/// typical full-precision control nets), so the limit bounds the memory of a
+/// read to about 1 GiB; a 64 MiB file holds a net of about a million control
+/// points at full precision.
+pub const MAX_SURFACE_JSON_BYTES: u64 = 64 << 20;
+
 /// Reads every surface of a JSON file (DESIGN.md §5): a single surface gives
-/// a list of one. Errors name the surface index and field.
+/// a list of one. Errors name the file, the surface index and the field.
+/// Files over [`MAX_SURFACE_JSON_BYTES`] are refused before being read.
 pub fn read_surfaces_json(path: impl AsRef<Path>) -> Result<Vec<BSplineSurface>, SurfaceJsonError> {
+    use std::io::Read;
     let path = path.as_ref();
-    let text = fs::read_to_string(path).map_err(|source| SurfaceJsonError::Read {
+    let read_err = |source| SurfaceJsonError::Read {
         path: path.to_path_buf(),
         source,
-    })?;
-    parse_surfaces_json(&text)
+    };
+    let too_large = |size| SurfaceJsonError::TooLarge {
+        path: path.to_path_buf(),
+        size,
+        max: MAX_SURFACE_JSON_BYTES,
+    };
+    let file = fs::File::open(path).map_err(read_err)?;
+    let size = file.metadata().map_err(read_err)?.len();
+    if size > MAX_SURFACE_JSON_BYTES {
+        return Err(too_large(size));
+    }
+    // read at most one byte past the limit, in case the file grows meanwhile
+    let mut text = String::new();
+    file.take(MAX_SURFACE_JSON_BYTES + 1)
+        .read_to_string(&mut text)
+        .map_err(read_err)?;
+    if text.len() as u64 > MAX_SURFACE_JSON_BYTES {
+        return Err(too_large(text.len() as u64));
+    }
+    parse_surfaces_json(&text).map_err(|error| SurfaceJsonError::InFile {
+        path: path.to_path_buf(),
+        error: Box::new(error),
+    })
 }
 
 /// Parses surfaces from JSON text; see [`read_surfaces_json`].
