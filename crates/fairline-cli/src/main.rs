@@ -3,6 +3,8 @@
 //!
 //! Exit status: 0 success, 1 failure of the computation, 2 bad input or usage.
 
+#![forbid(unsafe_code)]
+
 mod common;
 mod convert;
 mod curvature;

@@ -1054,14 +1054,9 @@ mod tests {
 
     #[test]
     fn bspline_iges_impeller() {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../../shared/data/surfaces/impeller.igs"
-        );
-        if !Path::new(path).exists() {
-            eprintln!("skipped: ../shared/data not found");
+        let Some(path) = crate::shared_data::shared_data("surfaces/impeller.igs") else {
             return;
-        }
+        };
         let imp = read_iges(path).unwrap();
         assert_eq!(imp.surfaces.len(), 247);
         assert_eq!(imp.surfaces.iter().filter(|s| s.rational).count(), 212);

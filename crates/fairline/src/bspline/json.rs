@@ -437,14 +437,9 @@ mod tests {
 
     #[test]
     fn bspline_teapot_json_loads() {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../../shared/data/surfaces/teapot.json"
-        );
-        if !Path::new(path).exists() {
-            eprintln!("skipped: ../shared/data not found");
+        let Some(path) = crate::shared_data::shared_data("surfaces/teapot.json") else {
             return;
-        }
+        };
         let surfaces = read_surfaces_json(path).unwrap();
         assert_eq!(surfaces.len(), 32);
         for s in &surfaces {
