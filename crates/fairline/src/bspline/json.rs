@@ -83,14 +83,14 @@ pub enum SurfaceJsonError {
     },
 }
 
-/// The largest surface JSON file [`read_surfaces_json`] reads: 64 MiB.
+/// The largest surface JSON file [`read_surfaces_json`] reads: 32 MiB.
 ///
-/// The parser holds the text and a tree of its values (up to about 16 bytes
-/// of tree per byte of text for arrays of one-digit numbers, about 3 for
-/// typical full-precision control nets), so the limit bounds the memory of a
-/// read to about 1 GiB; a 64 MiB file holds a net of about a million control
-/// points at full precision.
-pub const MAX_SURFACE_JSON_BYTES: u64 = 64 << 20;
+/// The parser holds the text and a tree of its values: measured, a file of
+/// one-digit control points peaks at about 23 bytes of memory per byte of
+/// text (a 32 MiB file at 0.76 GB; a 200 MB file peaked at 5.1 GB before
+/// this limit). 32 MiB holds a net of about half a million control points at
+/// full precision, far beyond real CAD surfaces.
+pub const MAX_SURFACE_JSON_BYTES: u64 = 32 << 20;
 
 /// Reads every surface of a JSON file (DESIGN.md §5): a single surface gives
 /// a list of one. Errors name the file, the surface index and the field.
