@@ -1,7 +1,7 @@
 //! `fairline curvature`: per-vertex principal curvatures written as PLY.
 
 use crate::common::{Report, bad_input, spinner};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use fairline::geom::{CurvatureMethod, principal_curvatures};
 use fairline::mesh::Stats;
 use std::path::PathBuf;
@@ -62,14 +62,15 @@ pub fn run(args: Args) -> Result<()> {
         Method::Meyer => CurvatureMethod::Meyer,
     };
     let bar = spinner("curvature");
-    let (c, triangulated) = report.time(|| {
-        if mesh.is_triangle_mesh() {
+    let (c, triangulated) = report.time(|| -> Result<_> {
+        Ok(if mesh.is_triangle_mesh() {
             (principal_curvatures(&mesh, method), false)
         } else {
-            let t = fairline::mesh::triangulate(&mesh);
+            let t = fairline::mesh::triangulate(&mesh)
+                .with_context(|| format!("{}: triangulating its polygons", args.mesh.display()))?;
             (principal_curvatures(&t.mesh, method), true)
-        }
-    });
+        })
+    })?;
     bar.finish_and_clear();
     let mean = c.mean();
     let gauss = c.gauss();

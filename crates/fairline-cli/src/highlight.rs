@@ -3,7 +3,7 @@
 //! triangle mesh, written as JSON or OBJ polylines.
 
 use crate::common::{Report, bad_input, parse_list, parse_vec3, read_json, spinner};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use fairline::highlight::{
     CircularLight, CircularLights, HighlightBands, HighlightError, HighlightLine, HighlightLines,
     HighlightModel, HighlightOptions, LightArray, circular_highlight_bands,
@@ -119,7 +119,8 @@ pub fn read_triangles(path: &Path) -> Result<(SurfaceMesh, Option<Vec<FaceId>>)>
     if mesh.is_triangle_mesh() {
         Ok((mesh, None))
     } else {
-        let t = fairline::mesh::triangulate(&mesh);
+        let t = fairline::mesh::triangulate(&mesh)
+            .with_context(|| format!("{}: triangulating its polygons", path.display()))?;
         Ok((t.mesh, Some(t.source_face)))
     }
 }

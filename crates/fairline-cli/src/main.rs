@@ -3,6 +3,8 @@
 //!
 //! Exit status: 0 success, 1 failure of the computation, 2 bad input or usage.
 
+#![forbid(unsafe_code)]
+
 mod common;
 mod convert;
 mod curvature;
@@ -32,7 +34,7 @@ use clap::{Parser, Subcommand};
     name = "fairline",
     version,
     about,
-    after_help = "Examples:\n  fairline demo --out fairline-demo\n  fairline info bunny.ply --json\n  fairline curvature bunny.ply -o bunny-curvature.ply\n\nExit status: 0 success, 1 computation failed, 2 bad input or usage."
+    after_help = "Examples:\n  fairline demo --out fairline-demo\n  fairline info fairline-demo/sphere.ply --json\n  fairline curvature fairline-demo/sphere.ply -o sphere-curvature.ply\n\nExit status: 0 success, 1 computation failed, 2 bad input or usage."
 )]
 struct Cli {
     #[command(subcommand)]

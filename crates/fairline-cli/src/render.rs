@@ -2,7 +2,7 @@
 
 use crate::common::{Report, bad_input, parse_size, parse_vec3};
 use crate::highlight::{LightArgs, to_input_error};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use fairline::Vec3;
 use fairline::geom::{CurvatureMethod, principal_curvatures};
 use fairline::highlight::{DetectOptions, HighlightModel, detect_irregularities};
@@ -123,7 +123,9 @@ pub fn run(args: Args) -> Result<()> {
     let tri_mesh = if mesh.is_triangle_mesh() {
         &mesh
     } else {
-        tri = fairline::mesh::triangulate(&mesh).mesh;
+        tri = fairline::mesh::triangulate(&mesh)
+            .with_context(|| format!("{}: triangulating its polygons", args.input.display()))?
+            .mesh;
         &tri
     };
     let light = if args.highlight {

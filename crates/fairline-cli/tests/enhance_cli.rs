@@ -164,12 +164,9 @@ fn enhance_refuses_bad_input_with_status_2_and_writes_nothing() {
 /// (μ = 0.5 evens out the sliver triangles of this scan-like mesh).
 #[test]
 fn enhance_runs_on_a_real_coarse_mesh() {
-    let input =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/meshes/bob_small.ply");
-    if !input.exists() {
-        println!("skipped: ../shared/data not found");
+    let Some(input) = data("meshes/bob_small.ply") else {
         return;
-    }
+    };
     let d = tmp("bob");
     let (out, rep) = (d.join("bob.ply"), d.join("r.json"));
     let o = run(&[

@@ -195,11 +195,9 @@ fn bad_regions_exit_with_2_and_write_nothing() {
 /// bit-identical and the region's energies drop.
 #[test]
 fn real_mesh_spot_back() {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/meshes/spot.ply");
-    if !p.exists() {
-        println!("skipped: ../shared/data not found");
+    let Some(p) = data("meshes/spot.ply") else {
         return;
-    }
+    };
     let d = tmp("spot");
     let mut mesh = fairline::io::read_mesh(&p).unwrap();
     // the highest vertex of the back (y up, body along z)

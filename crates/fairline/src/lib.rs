@@ -18,6 +18,8 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 // Numeric kernels index several parallel arrays with one loop variable.
 #![allow(clippy::needless_range_loop)]
+// Nothing needs unsafe code: slices, rayon and faer's safe API suffice.
+#![forbid(unsafe_code)]
 
 pub mod bspline;
 pub mod curves;
@@ -32,6 +34,11 @@ pub mod render;
 pub mod shapes;
 pub mod smooth;
 pub mod solve;
+
+/// The test helper for `../shared/data` (one file shared by every test crate).
+#[cfg(test)]
+#[path = "../tests/support/shared_data.rs"]
+mod shared_data;
 
 /// A 3-vector of f64 (position, normal, direction).
 pub type Vec3 = glam::DVec3;

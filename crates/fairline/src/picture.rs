@@ -5,7 +5,7 @@
 
 use crate::Vec3;
 use crate::geom::vertex_normals;
-use crate::mesh::{SurfaceMesh, triangulate};
+use crate::mesh::{SurfaceMesh, triangle_list};
 use crate::render::{
     Colormap, Image, Legend, MeshLayer, PolylineLayer, RenderError, RenderOptions, Scene, render,
     scalar_colors,
@@ -32,11 +32,7 @@ impl MeshView {
                 .map(|f| mesh.triangle(f).map(|v| v.0))
                 .collect()
         } else {
-            let t = triangulate(mesh);
-            t.mesh
-                .faces()
-                .map(|f| t.mesh.triangle(f).map(|v| v.0))
-                .collect()
+            triangle_list(mesh)
         };
         let edges = mesh
             .edges()

@@ -10,16 +10,11 @@ use fairline::io::{
 };
 use fairline::{Soup, Vec3};
 
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data");
+#[path = "support/shared_data.rs"]
+mod shared_data;
 
 fn data_dir() -> Option<PathBuf> {
-    let dir = PathBuf::from(DATA);
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        println!("skipped: ../shared/data not found");
-        None
-    }
+    shared_data::shared_data("")
 }
 
 fn temp_dir(tag: &str) -> PathBuf {

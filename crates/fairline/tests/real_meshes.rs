@@ -7,18 +7,11 @@ use fairline::mesh::topology_summary;
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
+#[path = "support/shared_data.rs"]
+mod shared_data;
+
 fn data(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/"
-    ))
-    .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        println!("skipped: ../shared/data not found");
-        None
-    }
+    shared_data::shared_data(rel)
 }
 
 #[test]

@@ -124,7 +124,8 @@ impl Doc {
         let (tri, tri_source) = if mesh.is_triangle_mesh() {
             (mesh.clone(), None)
         } else {
-            let t = fairline::mesh::triangulate(&mesh);
+            let t = fairline::mesh::triangulate(&mesh)
+                .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
             (t.mesh, Some(t.source_face))
         };
         let positions = Arc::new(mesh.positions().to_vec());

@@ -24,18 +24,14 @@ pub fn tmp(name: &str) -> PathBuf {
     d
 }
 
-/// A file of the shared real data (`../shared/data/` beside the checkout),
-/// or `None` (the test is skipped, with a message) when it is not there.
+#[path = "../../../fairline/tests/support/shared_data.rs"]
+mod shared_data;
+
+/// A file of the shared real data (`../shared/data/` beside the checkout);
+/// when it is missing the test fails under CI and says loudly that it
+/// checked nothing otherwise (see `shared_data.rs`).
 pub fn data(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        println!("skipped: ../shared/data not found");
-        None
-    }
+    shared_data::shared_data(rel)
 }
 
 /// The JSON document in `path`.

@@ -57,6 +57,14 @@ pub enum IgesError {
         /// What is wrong.
         message: String,
     },
+    /// An error of the content of a file, with the file's name.
+    #[error("{}: {error}", path.display())]
+    InFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong in it (line, entity).
+        error: Box<IgesError>,
+    },
     /// An entity 128 does not make a valid B-spline surface.
     #[error("line {line}: entity 128 (directory entry {entity}): {source}")]
     Surface {
@@ -104,13 +112,17 @@ pub struct IgesImport {
 }
 
 /// Reads every rational B-spline surface (entity 128) of an ASCII IGES file.
+/// Errors name the file, and the line and entity where known.
 pub fn read_iges(path: impl AsRef<Path>) -> Result<IgesImport, IgesError> {
     let path = path.as_ref();
     let bytes = std::fs::read(path).map_err(|source| IgesError::Read {
         path: path.to_path_buf(),
         source,
     })?;
-    parse_iges_bytes(&bytes)
+    parse_iges_bytes(&bytes).map_err(|error| IgesError::InFile {
+        path: path.to_path_buf(),
+        error: Box::new(error),
+    })
 }
 
 /// Parses IGES text; see [`read_iges`].
@@ -1042,14 +1054,9 @@ mod tests {
 
     #[test]
     fn bspline_iges_impeller() {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../../shared/data/surfaces/impeller.igs"
-        );
-        if !Path::new(path).exists() {
-            eprintln!("skipped: ../shared/data not found");
+        let Some(path) = crate::shared_data::shared_data("surfaces/impeller.igs") else {
             return;
-        }
+        };
         let imp = read_iges(path).unwrap();
         assert_eq!(imp.surfaces.len(), 247);
         assert_eq!(imp.surfaces.iter().filter(|s| s.rational).count(), 212);

@@ -40,11 +40,12 @@ pub(crate) mod tests;
 pub use basis::{MAX_DEGREE, MAX_ORDER, clamped_uniform_knots, find_span};
 pub use iges::{IgesError, IgesImport, IgesSurface, parse_iges, read_iges};
 pub use json::{
-    SurfaceJsonError, parse_surfaces_json, read_surfaces_json, surface_to_json, surfaces_to_json,
-    write_surface_json, write_surfaces_json,
+    MAX_SURFACE_JSON_BYTES, SurfaceJsonError, parse_surfaces_json, read_surfaces_json,
+    surface_to_json, surfaces_to_json, write_surface_json, write_surfaces_json,
 };
 pub use surface::{
-    BSplineSurface, BasisSupport, Curvature, SurfaceBasis, SurfaceDerivatives, unit_normal,
+    BSplineSurface, BasisSupport, Curvature, MIN_WEIGHT_RATIO, SurfaceBasis, SurfaceDerivatives,
+    unit_normal,
 };
 pub use tessellate::{Tessellation, tessellate};
 
@@ -226,6 +227,22 @@ pub enum BSplineError {
         j: usize,
         /// The weight.
         weight: f64,
+    },
+    /// A weight so much smaller than the largest weight (or so small in
+    /// itself: subnormal) that rational evaluation loses all precision or
+    /// overflows; see [`MIN_WEIGHT_RATIO`].
+    #[error(
+        "weight ({i}, {j}) is {weight:e}, below 1e-8 times the largest weight {largest:e} (or subnormal): the surface cannot be evaluated reliably"
+    )]
+    WeightRange {
+        /// Index along u.
+        i: usize,
+        /// Index along v.
+        j: usize,
+        /// The weight.
+        weight: f64,
+        /// The largest weight of the surface.
+        largest: f64,
     },
     /// A control point index is out of range.
     #[error("control point index ({i}, {j}) is outside the {count_u} x {count_v} net")]

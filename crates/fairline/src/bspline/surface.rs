@@ -116,6 +116,43 @@ const CURVATURE_REGULAR: f64 = 1e-5;
 /// Parameter nudges tried for curvature at a (nearly) degenerate point.
 const CURVATURE_NUDGES: [f64; 3] = [1e-4, 1e-3, 1e-2];
 
+/// The smallest weight allowed relative to the largest one of a surface.
+///
+/// The rational surface `S = Σ N w P / Σ N w` and its derivatives divide by
+/// `W = Σ N w ≥ min w` while the numerators scale with `max w`; rounding
+/// errors therefore grow like `(max w / min w) · ε`. At the bound 1e-8 that
+/// keeps about eight correct digits (2e-8 relative); a weight of 1e-320 next
+/// to weights of 1 makes evaluation overflow to infinity or NaN, which later
+/// steps would blame on a vertex instead of on the weight.
+pub const MIN_WEIGHT_RATIO: f64 = 1e-8;
+
+/// Checks weights (row-major, `count_v` per row): finite, positive, normal
+/// (not subnormal) and within [`MIN_WEIGHT_RATIO`] of the largest.
+fn check_weights(w: &[f64], count_v: usize) -> Result<(), BSplineError> {
+    let at = |k: usize| (k / count_v.max(1), k % count_v.max(1));
+    for (k, &weight) in w.iter().enumerate() {
+        let (i, j) = at(k);
+        if !weight.is_finite() {
+            return Err(BSplineError::NonFiniteWeight { i, j });
+        }
+        if weight <= 0.0 {
+            return Err(BSplineError::NonPositiveWeight { i, j, weight });
+        }
+    }
+    let largest = w.iter().copied().fold(0.0, f64::max);
+    let floor = (largest * MIN_WEIGHT_RATIO).max(f64::MIN_POSITIVE);
+    if let Some(k) = w.iter().position(|&weight| weight < floor) {
+        let (i, j) = at(k);
+        return Err(BSplineError::WeightRange {
+            i,
+            j,
+            weight: w[k],
+            largest,
+        });
+    }
+    Ok(())
+}
+
 fn check_degree(direction: Direction, degree: usize) -> Result<(), BSplineError> {
     if degree == 0 {
         return Err(BSplineError::DegreeZero { direction });
@@ -224,7 +261,8 @@ impl BSplineSurface {
     /// `p + 1` points per direction; `knots.len() == n + p + 1`; finite,
     /// non-decreasing knots; multiplicity ≤ `p + 1` (≤ `p` strictly inside
     /// the domain); a non-empty domain `[knots[p], knots[n]]`; finite
-    /// control points; finite, positive weights.
+    /// control points; finite, positive weights no smaller than
+    /// [`MIN_WEIGHT_RATIO`] times the largest (see [`BSplineError::WeightRange`]).
     pub fn new(
         degree_u: usize,
         degree_v: usize,
@@ -320,15 +358,7 @@ impl BSplineSurface {
                     message: format!("{} weights for {} control points", w.len(), points.len()),
                 });
             }
-            for (k, &weight) in w.iter().enumerate() {
-                let (i, j) = (k / count_v, k % count_v);
-                if !weight.is_finite() {
-                    return Err(BSplineError::NonFiniteWeight { i, j });
-                }
-                if weight <= 0.0 {
-                    return Err(BSplineError::NonPositiveWeight { i, j, weight });
-                }
-            }
+            check_weights(w, count_v)?;
         }
         Ok(BSplineSurface {
             degree_u,
@@ -452,17 +482,14 @@ impl BSplineSurface {
     }
 
     /// Sets weight `w_ij`, making the surface rational (all other weights 1)
-    /// if it was not; refuses non-finite or non-positive weights.
+    /// if it was not; refuses weights that [`BSplineSurface::new`] refuses.
     pub fn set_weight(&mut self, i: usize, j: usize, weight: f64) -> Result<(), BSplineError> {
         let k = self.check_index(i, j)?;
-        if !weight.is_finite() {
-            return Err(BSplineError::NonFiniteWeight { i, j });
-        }
-        if weight <= 0.0 {
-            return Err(BSplineError::NonPositiveWeight { i, j, weight });
-        }
         let n = self.points.len();
-        self.weights.get_or_insert_with(|| vec![1.0; n])[k] = weight;
+        let mut w = self.weights.clone().unwrap_or_else(|| vec![1.0; n]);
+        w[k] = weight;
+        check_weights(&w, self.count_v)?;
+        self.weights = Some(w);
         Ok(())
     }
 

@@ -277,12 +277,7 @@ fn invalid_input_is_refused_and_trivial_input_is_returned_unchanged() {
 
 /// Loads a mesh of the shared data set, or says why not.
 fn shared_mesh(name: &str) -> Option<SurfaceMesh> {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/meshes/");
-    let path = std::path::Path::new(path).join(name);
-    if !path.exists() {
-        println!("skipped: ../shared/data not found");
-        return None;
-    }
+    let path = crate::shared_data::shared_data(&format!("meshes/{name}"))?;
     Some(crate::io::read_mesh(&path).expect("shared mesh reads"))
 }
 

@@ -670,15 +670,12 @@ fn detection_finds_a_planted_bump_and_nothing_on_clean_shapes() {
 #[test]
 fn real_meshes_run_through_highlight_and_detect() {
     for name in ["bunny_npm.obj", "spot.ply"] {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/meshes/");
-        let path = format!("{path}{name}");
-        if !std::path::Path::new(&path).exists() {
-            println!("skipped: ../shared/data not found");
+        let Some(path) = crate::shared_data::shared_data(&format!("meshes/{name}")) else {
             return;
-        }
+        };
         let mut mesh = crate::io::read_mesh(&path).unwrap();
         if !mesh.is_triangle_mesh() {
-            mesh = crate::mesh::triangulate(&mesh).mesh;
+            mesh = crate::mesh::triangulate(&mesh).unwrap().mesh;
         }
         let (lo, hi) = crate::mesh::bounding_box(mesh.positions()).unwrap();
         for view in [Vec3::Z, Vec3::new(1.0, 0.5, 0.2)] {
@@ -900,15 +897,12 @@ fn chaining_without_node_numbering_matches_the_sort_based_reference() {
         "lego_open.ply",
         "bob_small.ply",
     ] {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/meshes/");
-        let path = format!("{path}{name}");
-        if !std::path::Path::new(&path).exists() {
-            println!("skipped: ../shared/data not found");
+        let Some(path) = crate::shared_data::shared_data(&format!("meshes/{name}")) else {
             return;
-        }
+        };
         let mut mesh = crate::io::read_mesh(&path).unwrap();
         if !mesh.is_triangle_mesh() {
-            mesh = crate::mesh::triangulate(&mesh).mesh;
+            mesh = crate::mesh::triangulate(&mesh).unwrap().mesh;
         }
         let (lo, hi) = crate::mesh::bounding_box(mesh.positions()).unwrap();
         let mut count = 0;

@@ -227,8 +227,9 @@ pub fn read_mesh(path: impl AsRef<Path>) -> Result<SurfaceMesh, IoError> {
 /// OBJ and OFF print coordinates with `{}` (bit-exact round trip), PLY is
 /// binary little-endian with double coordinates, STL is binary (f32; polygons
 /// are split into triangle fans and facet normals computed). Refuses
-/// non-finite coordinates, out-of-range indices and faces with fewer than
-/// three vertices.
+/// non-finite coordinates, out-of-range indices, faces with fewer than
+/// three vertices, and for STL coordinates that f32 cannot hold (they would
+/// be written as infinity); nothing is written then.
 pub fn write_soup(path: impl AsRef<Path>, soup: &Soup) -> Result<(), IoError> {
     let path = path.as_ref();
     let format = MeshFormat::from_path(path)?;
@@ -240,6 +241,22 @@ pub fn write_soup(path: impl AsRef<Path>, soup: &Soup) -> Result<(), IoError> {
         MeshFormat::Stl => {
             if stl::triangle_count(soup) > u32::MAX as usize {
                 return Err(invalid(path, "too many triangles for STL"));
+            }
+            // STL stores f32: a coordinate beyond ±f32::MAX would become inf
+            let beyond_f32 = |c: f64| !(c as f32).is_finite();
+            if let Some((v, p)) = soup
+                .positions
+                .iter()
+                .enumerate()
+                .find(|(_, p)| p.to_array().into_iter().any(beyond_f32))
+            {
+                return Err(invalid(
+                    path,
+                    format!(
+                        "vertex {v}: coordinate beyond the range of STL's 32-bit floats (±{:e}) ({p}); write .ply, .obj or .off instead",
+                        f32::MAX
+                    ),
+                ));
             }
             atomic_write(path, |w| stl::write(w, soup))
         }
@@ -258,7 +275,8 @@ pub fn write_mesh(path: impl AsRef<Path>, mesh: &SurfaceMesh) -> Result<(), IoEr
 /// more than 255 vertices). Written atomically.
 ///
 /// Each property must have one value per vertex and a name that is a single
-/// word different from `x`, `y`, `z` and from the other names.
+/// word different from `x`, `y`, `z` and from the other names; every value
+/// must be finite (nothing is written otherwise).
 pub fn write_ply_with_vertex_properties(
     path: impl AsRef<Path>,
     soup: &Soup,
@@ -277,6 +295,12 @@ pub fn write_ply_with_vertex_properties(
             return Err(invalid(
                 path,
                 format!("vertex property name {name:?} is used twice"),
+            ));
+        }
+        if let Some((v, x)) = values.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+            return Err(invalid(
+                path,
+                format!("vertex {v}: property {name:?} is {x} (NaN or infinite)"),
             ));
         }
         if values.len() != soup.vertex_count() {
@@ -640,19 +664,32 @@ fn validate_for_write(soup: &Soup, path: &Path) -> Result<(), IoError> {
 }
 
 /// Lines of a text file: yields `(1-based line number, line)` without the
-/// line ending (`\n` or `\r\n`).
+/// line ending: `\n`, `\r\n`, or (old Mac files) a lone `\r`.
 struct Lines<'a> {
     data: &'a [u8],
     pos: usize,
     line: usize,
+    /// Whether a `\r` not followed by `\n` ends a line.
+    lone_cr: bool,
 }
 
 impl<'a> Lines<'a> {
+    /// Lines ended by `\n`, `\r\n` or a lone `\r`.
     fn new(data: &'a [u8], first_line: usize) -> Self {
         Lines {
             data,
             pos: 0,
             line: first_line,
+            lone_cr: true,
+        }
+    }
+
+    /// Lines ended by `\n` or `\r\n` only: for a header followed by binary
+    /// data, where the byte after a `\r` may be data.
+    fn lf_only(data: &'a [u8], first_line: usize) -> Self {
+        Lines {
+            lone_cr: false,
+            ..Lines::new(data, first_line)
         }
     }
 
@@ -670,13 +707,17 @@ impl<'a> Iterator for Lines<'a> {
             return None;
         }
         let rest = &self.data[self.pos..];
-        let (mut line, advance) = match rest.iter().position(|&b| b == b'\n') {
+        let end = if self.lone_cr {
+            rest.iter().position(|&b| b == b'\n' || b == b'\r')
+        } else {
+            rest.iter().position(|&b| b == b'\n')
+        };
+        let (line, advance) = match end {
+            Some(i) if rest[i] == b'\r' && rest.get(i + 1) == Some(&b'\n') => (&rest[..i], i + 2),
+            Some(i) if rest[i] == b'\n' && i > 0 && rest[i - 1] == b'\r' => (&rest[..i - 1], i + 1),
             Some(i) => (&rest[..i], i + 1),
             None => (rest, rest.len()),
         };
-        if let [head @ .., b'\r'] = line {
-            line = head;
-        }
         self.pos += advance;
         let n = self.line;
         self.line += 1;
@@ -717,6 +758,25 @@ fn show(tok: &[u8]) -> String {
 /// them: never more than the file can hold.
 fn capped_capacity(count: usize, bytes: usize, min_item_bytes: usize) -> usize {
     count.min(bytes / min_item_bytes.max(1))
+}
+
+/// Refuses bytes after the end of binary data (`end`): they mean the header's
+/// counts do not describe the file, and whatever they hold would be lost
+/// silently. A final line ending (`\n` or `\r\n`, which some writers add) is
+/// tolerated. Shared by binary PLY and binary STL.
+fn trailing_bytes(bytes: &[u8], end: usize, path: &Path) -> Result<(), IoError> {
+    let tail = bytes.get(end..).unwrap_or_default();
+    if tail.is_empty() || tail == b"\n" || tail == b"\r\n" {
+        return Ok(());
+    }
+    Err(format_err(
+        path,
+        Location::Byte(end),
+        format!(
+            "{} bytes after the end of the data the header announces (wrong counts or a damaged file?)",
+            tail.len()
+        ),
+    ))
 }
 
 /// Appends a face to a soup, failing when the index array would outgrow

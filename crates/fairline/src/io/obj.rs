@@ -4,6 +4,9 @@
 //! `v/vt`, `v//vn` and `v/vt/vn` corners and negative (relative) indices,
 //! `#` comments and `\` line continuations. Texture coordinates, normals,
 //! lines, groups, objects, smoothing groups and materials are ignored.
+//! Lines may end in `\n`, `\r\n` or a lone `\r` (old Mac files). A file
+//! without any `v` statement is refused ("no vertices found") rather than
+//! read as an empty mesh.
 //! Write: `v` lines with Rust's shortest round-trip `{}` formatting, then
 //! 1-based `f` lines.
 
@@ -69,6 +72,15 @@ pub(super) fn read(bytes: &[u8], path: &Path) -> Result<Soup, IoError> {
         r.statement(joined_line, &stmt)?;
     }
     let nv = r.soup.vertex_count();
+    if nv == 0 {
+        // a file of only unknown (or only ignored) statements is not a mesh:
+        // reading it as an empty one would hide a wrong file or format
+        return Err(format_err(
+            path,
+            Location::File,
+            "no vertices found (no 'v' statement): not an OBJ mesh",
+        ));
+    }
     if let Some(f) = r.forward.iter().find(|f| f.index >= nv as u64) {
         return Err(format_err(
             path,

@@ -4,7 +4,8 @@
 //! `vertices faces [edges]`, one vertex per line (`x y z`, further values
 //! such as normals and colours ignored), one face per line
 //! (`n i1 .. in [colour]`), `#` comments and blank lines anywhere.
-//! Polygons are kept. Write: plain `OFF` with `{}`-formatted coordinates.
+//! Polygons are kept. Lines beyond the announced counts are refused (they
+//! mean the counts are wrong). Write: plain `OFF` with `{}`-formatted coordinates.
 
 use std::io::{self, Write};
 use std::path::Path;
@@ -168,6 +169,13 @@ pub(super) fn read(bytes: &[u8], path: &Path) -> Result<Soup, IoError> {
             corners.push(i as u32);
         }
         push_face(&mut soup, &corners).map_err(|m| err(ln, format!("face {f}: {m}")))?;
+    }
+    // lines beyond the header's counts would be lost silently
+    if let Some((ln, _)) = lines.next() {
+        return Err(err(
+            ln,
+            format!("data after the last face (the header announces {nv} vertices and {nf} faces)"),
+        ));
     }
     Ok(soup)
 }

@@ -4,9 +4,14 @@
 //! type (`char`/`int8` ... `double`/`float64`), list properties anywhere
 //! (skipped unless they are the face's `vertex_indices` / `vertex_index`),
 //! unknown elements (edges, materials, ...) skipped, `comment` and
-//! `obj_info` lines, CRLF line endings. Polygons are kept. Binary bodies are
+//! `obj_info` lines, CRLF line endings (the header: `\n` or `\r\n` only, as
+//! binary data follows it). Polygons are kept. Binary bodies are
 //! parsed by slicing the bytes in memory; every header count is checked
 //! against the bytes that remain before anything is allocated.
+//! Refused rather than converted or ignored: an ascii value that does not fit
+//! its declared type (a `uchar` of 300, an `int` of 1.5, a `float` beyond
+//! ±3.4e38), rows after the last announced element (ascii), and bytes after
+//! the end of the binary data (only a final line ending is tolerated).
 //! Write: binary little-endian, `double x y z` plus optional extra double
 //! vertex properties, faces as `list uchar int vertex_indices` (`uint` count
 //! when a face has more than 255 vertices).
@@ -16,7 +21,7 @@ use std::path::Path;
 
 use super::{
     IoError, Lines, Location, VertexProperties as Extra, capped_capacity, format_err, parse_f64,
-    parse_i64, push_face, show, tokens,
+    parse_i64, push_face, show, tokens, trailing_bytes,
 };
 use crate::Vec3;
 use crate::mesh::Soup;
@@ -60,6 +65,39 @@ impl Scalar {
 
     fn is_integer(self) -> bool {
         !matches!(self, Scalar::F32 | Scalar::F64)
+    }
+
+    /// Whether a value read from ascii text can be stored in this type: an
+    /// integer within the type's range for the integer types, a value within
+    /// ±`f32::MAX` for `float` (NaN and infinity are left to the callers,
+    /// which refuse them for coordinates). A `uchar` of 300 or an `int` of
+    /// 1.5 is a broken file, not a value to convert silently.
+    fn holds(self, v: f64) -> bool {
+        let int_in = |lo: f64, hi: f64| v.fract() == 0.0 && (lo..=hi).contains(&v);
+        match self {
+            Scalar::I8 => int_in(i8::MIN.into(), i8::MAX.into()),
+            Scalar::U8 => int_in(0.0, u8::MAX.into()),
+            Scalar::I16 => int_in(i16::MIN.into(), i16::MAX.into()),
+            Scalar::U16 => int_in(0.0, u16::MAX.into()),
+            Scalar::I32 => int_in(i32::MIN.into(), i32::MAX.into()),
+            Scalar::U32 => int_in(0.0, u32::MAX.into()),
+            Scalar::F32 => !v.is_finite() || v.abs() <= f64::from(f32::MAX),
+            Scalar::F64 => true,
+        }
+    }
+
+    /// The type's name as written in PLY headers.
+    fn name(self) -> &'static str {
+        match self {
+            Scalar::I8 => "char",
+            Scalar::U8 => "uchar",
+            Scalar::I16 => "short",
+            Scalar::U16 => "ushort",
+            Scalar::I32 => "int",
+            Scalar::U32 => "uint",
+            Scalar::F32 => "float",
+            Scalar::F64 => "double",
+        }
     }
 
     /// The value at the start of `b`, which holds at least `self.size()`
@@ -162,7 +200,7 @@ enum Role {
 
 fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, IoError> {
     let err = |line: usize, m: String| format_err(path, Location::Line(line), m);
-    let mut lines = Lines::new(bytes, 1);
+    let mut lines = Lines::lf_only(bytes, 1);
     match lines.next() {
         Some((_, l)) if l.trim_ascii() == b"ply" => {}
         _ => {
@@ -575,6 +613,7 @@ fn read_binary(
             }
         }
     }
+    trailing_bytes(bytes, pos, path)?;
     Ok((soup, extra))
 }
 
@@ -663,15 +702,24 @@ fn read_ascii(
                         };
                         let v = parse_f64(tok).ok_or_else(|| {
                             err(format!(
-                                "cannot read '{}' as property {} ({s:?})",
+                                "cannot read '{}' as property {} ({})",
                                 show(tok),
-                                prop.name
+                                prop.name,
+                                s.name()
                             ))
                         })?;
+                        if !s.holds(v) {
+                            return Err(err(format!(
+                                "value '{}' of property {} does not fit its type {}",
+                                show(tok),
+                                prop.name,
+                                s.name()
+                            )));
+                        }
                         vals[j] = v;
                         k += 1;
                     }
-                    Kind::List { .. } => {
+                    Kind::List { count, item } => {
                         let Some(tok) = toks.get(k) else {
                             return Err(err(format!(
                                 "expected {} values, found {}",
@@ -679,13 +727,16 @@ fn read_ascii(
                                 toks.len()
                             )));
                         };
-                        let n = parse_i64(tok).filter(|&n| n >= 0).ok_or_else(|| {
-                            err(format!(
-                                "cannot read list length '{}' of property {}",
-                                show(tok),
-                                prop.name
-                            ))
-                        })?;
+                        let n = parse_i64(tok)
+                            .filter(|&n| n >= 0 && count.holds(n as f64))
+                            .ok_or_else(|| {
+                                err(format!(
+                                    "cannot read list length '{}' of property {} ({})",
+                                    show(tok),
+                                    prop.name,
+                                    count.name()
+                                ))
+                            })?;
                         let need = (n as u64).saturating_add((k + 1 + rest) as u64);
                         if need > toks.len() as u64 {
                             return Err(err(format!(
@@ -703,9 +754,15 @@ fn read_ascii(
                             }
                             corners.clear();
                             for tok in items {
-                                let v = parse_i64(tok).ok_or_else(|| {
-                                    err(format!("cannot read vertex index '{}'", show(tok)))
-                                })?;
+                                let v = parse_i64(tok)
+                                    .filter(|&v| item.holds(v as f64))
+                                    .ok_or_else(|| {
+                                        err(format!(
+                                            "cannot read vertex index '{}' ({})",
+                                            show(tok),
+                                            item.name()
+                                        ))
+                                    })?;
                                 if v < 0 || v as u64 >= plan.nv as u64 {
                                     return Err(err(format!(
                                         "vertex index {v} out of range ({} vertices)",
@@ -715,11 +772,15 @@ fn read_ascii(
                                 corners.push(v as u32);
                             }
                             push_face(&mut soup, &corners).map_err(|m| err(m.into()))?;
-                        } else if let Some(tok) = items.iter().find(|t| parse_f64(t).is_none()) {
+                        } else if let Some(tok) = items
+                            .iter()
+                            .find(|t| parse_f64(t).is_none_or(|v| !item.holds(v)))
+                        {
                             return Err(err(format!(
-                                "cannot read '{}' in list {}",
+                                "cannot read '{}' in list {} as {}",
                                 show(tok),
-                                prop.name
+                                prop.name,
+                                item.name()
                             )));
                         }
                         k += 1 + n;
@@ -740,6 +801,14 @@ fn read_ascii(
                 }
             }
         }
+    }
+    // rows beyond the header's counts would be lost silently
+    if let Some((ln, _)) = lines.find(|(_, l)| !l.trim_ascii().is_empty()) {
+        return Err(format_err(
+            path,
+            Location::Line(ln),
+            "data after the last element (the header's counts announce fewer rows)",
+        ));
     }
     Ok((soup, extra))
 }

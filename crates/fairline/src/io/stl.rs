@@ -3,7 +3,10 @@
 //! Read: a file is binary when its size is exactly `84 + 50·n` for the
 //! triangle count `n` stored at byte 80 (a binary header may well begin with
 //! `solid`); otherwise it is ascii when it begins with `solid` and looks like
-//! text, else a (truncated or padded) binary file. STL stores every triangle
+//! text, else a binary file whose size does not match its count: a
+//! truncated one is refused naming the first missing triangle, and bytes
+//! after the announced triangles are refused too (only a final line ending
+//! is tolerated), since they mean the count is wrong and data would be lost. STL stores every triangle
 //! with its own corners, so vertices are welded by exact position (bit
 //! pattern, `-0.0` counted as `0.0`). Facet normals are ignored.
 //! Write: binary, polygons split into triangle fans, facet normals computed
@@ -14,7 +17,9 @@ use std::hash::{BuildHasherDefault, Hasher};
 use std::io::{self, Write};
 use std::path::Path;
 
-use super::{IoError, Lines, Location, format_err, parse_f64, push_face, show, tokens};
+use super::{
+    IoError, Lines, Location, format_err, parse_f64, push_face, show, tokens, trailing_bytes,
+};
 use crate::Vec3;
 use crate::mesh::Soup;
 
@@ -110,6 +115,7 @@ fn read_binary(bytes: &[u8], path: &Path) -> Result<Soup, IoError> {
             ),
         ));
     }
+    trailing_bytes(bytes, 84 + 50 * n, path)?;
     let mut welder = Welder::with_capacity(n / 2 + 3);
     let mut soup = Soup::new();
     soup.offsets.reserve_exact(n);

@@ -17,7 +17,7 @@ pub use soup::{Soup, bounding_box};
 pub use surface_mesh::{BuildNotes, FaceHalfedges, Outgoing, SurfaceMesh};
 pub use topology::{
     StructureLine, TopologySummary, Triangulation, boundary_loops, components, structure_lines,
-    topology_summary, triangulate,
+    topology_summary, triangle_list, triangulate,
 };
 
 use thiserror::Error;
@@ -142,6 +142,15 @@ pub enum MeshError {
         expected: usize,
         /// Given count.
         got: usize,
+    },
+    /// Every split of a polygon into triangles would repeat an edge that the
+    /// mesh (or the split of another polygon) already has.
+    #[error(
+        "face {face} cannot be split into triangles: every diagonal of it is already an edge of the mesh"
+    )]
+    NoTriangulation {
+        /// Face index.
+        face: usize,
     },
     /// The mesh does not fit 32-bit indices.
     #[error("mesh too large for 32-bit indices")]

@@ -117,7 +117,7 @@ fn non_manifold_vertices_are_split_per_fan_and_merged_back() {
     }
     assert_eq!(got, want_sorted);
     // a triangulation keeps the split and the pins
-    let t = triangulate(&m);
+    let t = triangulate(&m).unwrap();
     assert!(t.mesh.is_pinned(VertexId(7)));
     assert_eq!(t.mesh.to_soup().positions.len(), 7);
 
@@ -215,7 +215,7 @@ fn boundary_loops_components_and_genus() {
 #[test]
 fn triangulation_keeps_area_and_orientation() {
     let q = shapes::quad_grid(4, 3, (0.0, 3.0), (0.0, 2.0), |x, y| 0.1 * x * y);
-    let t = triangulate(&q);
+    let t = triangulate(&q).unwrap();
     assert_eq!(t.mesh.face_count(), 2 * q.face_count());
     assert!(t.mesh.is_triangle_mesh());
     let a0 = crate::geom::surface_area(&q);
@@ -231,7 +231,7 @@ fn triangulation_keeps_area_and_orientation() {
         Vec3::new(0.0, 2.0, 0.0),
     ];
     let m = SurfaceMesh::new(p, &[[0u32, 1, 2, 3, 4, 5]]).unwrap();
-    let t = triangulate(&m);
+    let t = triangulate(&m).unwrap();
     assert_eq!(t.mesh.face_count(), 4);
     let n = crate::geom::face_normals(&t.mesh);
     assert!(

@@ -2,8 +2,9 @@
 //! components, Euler characteristic and genus, triangulation of polygons and
 //! structure lines of quad meshes.
 
-use super::{FaceId, HalfedgeId, SurfaceMesh, VertexId};
+use super::{FaceId, HalfedgeId, MeshError, SurfaceMesh, VertexId};
 use crate::Vec3;
+use std::collections::HashSet;
 
 /// Boundary loops as sequences of boundary halfedges (each loop in order).
 pub fn boundary_loops(mesh: &SurfaceMesh) -> Vec<Vec<HalfedgeId>> {
@@ -144,41 +145,119 @@ pub struct Triangulation {
 /// Newell normal (a fan from the first vertex if ear clipping gets stuck on a
 /// self-intersecting polygon). Vertex indices are unchanged.
 /// Split non-manifold vertices stay split and pinned in the triangulation.
-pub fn triangulate(mesh: &SurfaceMesh) -> Triangulation {
-    let source_mesh = mesh;
+///
+/// A diagonal that is already an edge of the mesh, or that another polygon's
+/// split already added, would give an edge of three or four triangles (a
+/// valence-2 vertex between two quads, T-junction quads); such a split is
+/// replaced by the other diagonal of a quad, or by a fan from another corner
+/// of a larger polygon, whose diagonals are all new edges.
+///
+/// # Errors
+/// [`MeshError::NoTriangulation`] naming the polygon when every such split
+/// would duplicate an edge (every diagonal of it is already an edge).
+pub fn triangulate(mesh: &SurfaceMesh) -> Result<Triangulation, MeshError> {
+    let (tris, source) = split_polygons(mesh, true)?;
+    let mut triangles = SurfaceMesh::new(mesh.positions().to_vec(), &tris)?;
+    triangles.inherit_split_vertices(mesh);
+    Ok(Triangulation {
+        mesh: triangles,
+        source_face: source,
+    })
+}
+
+/// The triangles of every polygon for drawing only: the same splits as
+/// [`triangulate`] where those exist, otherwise the preferred split even if it
+/// duplicates an edge (a picture does not need a manifold triangle list).
+pub fn triangle_list(mesh: &SurfaceMesh) -> Vec<[u32; 3]> {
+    match split_polygons(mesh, true) {
+        Ok((tris, _)) => tris,
+        Err(_) => split_polygons(mesh, false)
+            .map(|(tris, _)| tris)
+            .unwrap_or_default(),
+    }
+}
+
+/// Splits every polygon into triangles; with `avoid_duplicates`, no diagonal
+/// is an existing edge or a diagonal already added (see [`triangulate`]).
+fn split_polygons(
+    mesh: &SurfaceMesh,
+    avoid_duplicates: bool,
+) -> Result<(Vec<[u32; 3]>, Vec<FaceId>), MeshError> {
     let p = mesh.positions();
     let mut tris: Vec<[u32; 3]> = Vec::with_capacity(mesh.face_count() * 2);
     let mut source = Vec::with_capacity(mesh.face_count() * 2);
     let mut poly = Vec::new();
+    // diagonals added so far, as (smaller, larger) vertex index
+    let mut added: HashSet<(u32, u32)> = HashSet::new();
+    let key = |a: u32, b: u32| if a < b { (a, b) } else { (b, a) };
     for f in mesh.faces() {
         poly.clear();
         poly.extend(mesh.face_vertices(f).map(|v| v.0));
+        let first = tris.len();
         match poly.len() {
             3 => tris.push([poly[0], poly[1], poly[2]]),
             4 => {
                 let d02 = p[poly[0] as usize].distance_squared(p[poly[2] as usize]);
                 let d13 = p[poly[1] as usize].distance_squared(p[poly[3] as usize]);
-                if d02 <= d13 {
-                    tris.push([poly[0], poly[1], poly[2]]);
-                    tris.push([poly[0], poly[2], poly[3]]);
-                } else {
-                    tris.push([poly[1], poly[2], poly[3]]);
-                    tris.push([poly[1], poly[3], poly[0]]);
-                }
+                let split_at = |k: usize, tris: &mut Vec<[u32; 3]>| {
+                    let [a, b, c, d] = [0, 1, 2, 3].map(|i| poly[(i + k) % 4]);
+                    tris.push([a, b, c]);
+                    tris.push([a, c, d]);
+                };
+                split_at(if d02 <= d13 { 0 } else { 1 }, &mut tris);
             }
             _ => ear_clip(p, &poly, &mut tris),
         }
-        while source.len() < tris.len() {
-            source.push(f);
+        if avoid_duplicates && poly.len() > 3 {
+            let is_free = |tris: &[[u32; 3]], added: &HashSet<(u32, u32)>| {
+                polygon_diagonals(&poly, tris).all(|(a, b)| {
+                    !added.contains(&key(a, b))
+                        && mesh.find_halfedge(VertexId(a), VertexId(b)).is_none()
+                })
+            };
+            if !is_free(&tris[first..], &added) {
+                // fans from each corner in turn (for a quad: the other diagonal)
+                let mut found = false;
+                for k in 0..poly.len() {
+                    tris.truncate(first);
+                    for i in 1..poly.len() - 1 {
+                        let at = |j: usize| poly[(j + k) % poly.len()];
+                        tris.push([at(0), at(i), at(i + 1)]);
+                    }
+                    if is_free(&tris[first..], &added) {
+                        found = true;
+                        break;
+                    }
+                }
+                if !found {
+                    return Err(MeshError::NoTriangulation { face: f.idx() });
+                }
+            }
+            for (a, b) in polygon_diagonals(&poly, &tris[first..]) {
+                added.insert(key(a, b));
+            }
         }
+        source.resize(tris.len(), f);
     }
-    let mut mesh = SurfaceMesh::new(p.to_vec(), &tris)
-        .expect("triangulating a manifold polygon mesh keeps it manifold");
-    mesh.inherit_split_vertices(source_mesh);
-    Triangulation {
-        mesh,
-        source_face: source,
-    }
+    Ok((tris, source))
+}
+
+/// The edges of `tris` (the triangles of one polygon) that are not sides of
+/// `poly`: the diagonals the split adds (each reported once per triangle side).
+fn polygon_diagonals<'a>(
+    poly: &'a [u32],
+    tris: &'a [[u32; 3]],
+) -> impl Iterator<Item = (u32, u32)> + 'a {
+    let n = poly.len();
+    let is_side = move |a: u32, b: u32| {
+        (0..n).any(|i| {
+            let (u, v) = (poly[i], poly[(i + 1) % n]);
+            (u == a && v == b) || (u == b && v == a)
+        })
+    };
+    tris.iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .filter(move |&(a, b)| !is_side(a, b))
 }
 
 fn ear_clip(p: &[Vec3], poly: &[u32], out: &mut Vec<[u32; 3]>) {

@@ -20,15 +20,7 @@ fn plane() -> BSplineSurface {
 }
 
 fn data(path: &str) -> Option<std::path::PathBuf> {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/surfaces")
-        .join(path);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipped: ../shared/data not found");
-        None
-    }
+    crate::shared_data::shared_data(&format!("surfaces/{path}"))
 }
 
 #[test]
