@@ -4,6 +4,7 @@
 //! Exit status: 0 success, 1 failure of the computation, 2 bad input or usage.
 
 mod common;
+mod continuity;
 mod convert;
 mod curvature;
 mod demo;
@@ -44,6 +45,7 @@ enum Command {
     Highlight(highlight::Args),
     Detect(detect::Args),
     FairSurface(fair_surface::Args),
+    Continuity(continuity::Args),
     Enhance(enhance::Args),
     Fair(fair::Args),
     Render(render::Args),
@@ -60,6 +62,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Highlight(a) => highlight::run(a),
         Command::Detect(a) => detect::run(a),
         Command::FairSurface(a) => fair_surface::run(a),
+        Command::Continuity(a) => continuity::run(a),
         Command::Enhance(a) => enhance::run(a),
         Command::Fair(a) => fair::run(a),
         Command::Render(a) => render::run(a),
