@@ -335,8 +335,8 @@ fn measure(
     let rest = (|| {
         let (ca, na) = cross_direction(a.side, &da)?;
         let (cb, nb) = cross_direction(b.side, &db)?;
-        let cos = (-cb).dot(ca).clamp(-1.0, 1.0);
-        let angle = cos.acos().to_degrees();
+        // atan2(|a × b|, a · b): accurate near 0° where acos is not
+        let angle = ca.cross(-cb).length().atan2(ca.dot(-cb)).to_degrees();
         let nb_aligned = if na.dot(nb) < 0.0 { -nb } else { nb };
         let ka = normal_curvature(&da, na, ca)?;
         let kb = normal_curvature(&db, nb_aligned, cb)?;

@@ -210,7 +210,10 @@ mod tests {
         let w = polyline_waviness(&circle(0.5, 20_000), true, 0.01, 0.1);
         assert!((w.length - PI).abs() < 1e-5, "{}", w.length);
         assert!((w.max_curvature - 2.0).abs() < 1e-3, "{}", w.max_curvature);
-        assert!(w.curvature_variation < 1e-2, "{}", w.curvature_variation);
+        // The resampled points lie on the 20 000-gon's chords (sagitta
+        // 6e-9): 2 sagitta / h² = 1.2e-4 of curvature noise per sample,
+        // summed over 314 samples.
+        assert!(w.curvature_variation < 0.05, "{}", w.curvature_variation);
         assert_eq!(w.inflections, 0);
         assert_eq!(w.self_crossings, 0);
     }
