@@ -7,7 +7,10 @@ use crate::surface_highlight::{
 };
 use anyhow::Result;
 use fairline::bspline::{BSplineSurface, write_surfaces_json};
-use fairline::fair::{Endpoints, SurfaceFairError, SurfaceFairOptions, fair_surface};
+use fairline::fair::{
+    BoundaryControl, Endpoints, SurfaceFairError, SurfaceFairMethod, SurfaceFairOptions,
+    fair_surface,
+};
 use fairline::highlight::{
     CircularLight, CircularLights, SurfaceHighlightOptions, SurfaceLight, surface_highlight_lines,
 };
@@ -20,8 +23,12 @@ use std::path::PathBuf;
 /// endpoint pair of ENDPOINTS.json is snapped onto the pre-image of its
 /// light, joined by a cubic Hermite target in (u, v), sampled, and the
 /// control points whose support meets the knot-span box of the endpoints are
-/// moved by Gauss–Newton on d_s = 0 with a truncated SVD. All other control
-/// points are written back bit-identical. Output: the surface file (all
+/// moved — by default (`--method regularised`) by Levenberg–Marquardt on the
+/// targets plus weak targets holding every other line crossing the moved
+/// region plus a thin-plate energy of the displacement, so no other line gets
+/// wavier; `--method paper` is the paper's Gauss–Newton with a truncated
+/// SVD. Control points on the patch boundary stay fixed unless `--boundary
+/// free`. All other control points are written back bit-identical. Output: the surface file (all
 /// surfaces of the input, surface --surface replaced), as JSON.
 ///
 /// LIGHTS.json: {"center":[x,y,z],"axis":[x,y,z],"radii":[r1,...]};
@@ -65,6 +72,22 @@ pub struct Args {
     /// Grid points per direction for the pre-images.
     #[arg(long, default_value_t = SurfaceFairOptions::default().grid, value_name = "N")]
     pub grid: usize,
+    /// Solver: `regularised` (Levenberg–Marquardt with weak targets on every
+    /// other line and a thin-plate energy on the displacement: keeps the
+    /// other lines fair) or `paper` (Nishiyama et al.'s truncated SVD).
+    #[arg(long, value_enum, default_value = "regularised")]
+    pub method: MethodArg,
+    /// Which boundary control points may move: `fixed` (the outermost row:
+    /// boundary curves and seams stay closed), `tangent` (two rows: seams
+    /// also keep G1) or `free`.
+    #[arg(long, value_enum, default_value = "fixed")]
+    pub boundary: BoundaryArg,
+    /// Weight of the weak targets holding the other lines (regularised).
+    #[arg(long, default_value_t = SurfaceFairOptions::default().keep_weight)]
+    pub keep_weight: f64,
+    /// Weight of the thin-plate energy of the displacement (regularised).
+    #[arg(long, default_value_t = SurfaceFairOptions::default().fairness_weight)]
+    pub fairness_weight: f64,
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
@@ -76,9 +99,25 @@ pub struct Args {
     pub svg: Option<PathBuf>,
 }
 
+/// `--method`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum MethodArg {
+    Regularised,
+    Paper,
+}
+
+/// `--boundary`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum BoundaryArg {
+    Fixed,
+    Tangent,
+    Free,
+}
+
 fn to_cli(e: SurfaceFairError) -> anyhow::Error {
     match e {
         SurfaceFairError::Svd | SurfaceFairError::Surface(_) => anyhow::Error::new(e),
+        SurfaceFairError::NothingToMove(_) => bad_input(format!("{e} (--boundary free)")),
         other => bad_input(other.to_string()),
     }
 }
@@ -127,6 +166,17 @@ pub fn run(args: Args) -> Result<()> {
         },
         epsilon: args.epsilon,
         max_iterations: args.max_iterations,
+        method: match args.method {
+            MethodArg::Regularised => SurfaceFairMethod::Regularised,
+            MethodArg::Paper => SurfaceFairMethod::Paper,
+        },
+        boundary: match args.boundary {
+            BoundaryArg::Fixed => BoundaryControl::Fixed,
+            BoundaryArg::Tangent => BoundaryControl::FixedWithTangents,
+            BoundaryArg::Free => BoundaryControl::Free,
+        },
+        keep_weight: args.keep_weight,
+        fairness_weight: args.fairness_weight,
         ..Default::default()
     };
     let input = surfaces[args.surface].clone();
@@ -136,6 +186,69 @@ pub fn run(args: Args) -> Result<()> {
         .time(|| fair_surface(&input, &lights, &ends.endpoints, &opts))
         .map_err(to_cli)?;
     bar.finish_and_clear();
+    // Endpoints that snapped far from where they were given (more than 2 %
+    // of the parameter domain's diagonal) were probably read off the wrong
+    // line.
+    let (du, dv) = (input.domain_u(), input.domain_v());
+    let diag = (du[1] - du[0]).hypot(dv[1] - dv[0]);
+    for t in &rep.targets {
+        for (k, d) in t.snap_distance.iter().enumerate() {
+            if *d > 0.02 * diag {
+                let given = ends.endpoints[t.index];
+                let p = if k == 0 { given.start } else { given.end };
+                let q = if k == 0 { t.start } else { t.end };
+                eprintln!(
+                    "warning: {}: endpoint {} {}: ({:.4}, {:.4}) is {:.4} away from the nearest line of radius {} and was moved to ({:.4}, {:.4})",
+                    args.endpoints.display(),
+                    t.index,
+                    if k == 0 { "start" } else { "end" },
+                    p[0],
+                    p[1],
+                    d,
+                    t.radius,
+                    q[0],
+                    q[1]
+                );
+            }
+        }
+    }
+    eprintln!(
+        "fair-surface: {} stretches, {} control points moved, {} held on the patch boundary ({}); {} iterations, {} ({:?}); mean |d_s| {:.3e} -> {:.3e}",
+        rep.targets.len(),
+        rep.modified_control_points.len(),
+        rep.held_boundary_points.len(),
+        match opts.boundary {
+            BoundaryControl::Free => "boundary free",
+            BoundaryControl::Fixed => "boundary rows fixed: seams stay closed",
+            BoundaryControl::FixedWithTangents => "two boundary rows fixed: seams keep G1",
+        },
+        rep.iterations.len(),
+        if rep.converged {
+            "converged"
+        } else {
+            "NOT converged"
+        },
+        rep.stop,
+        rep.residual_before.1,
+        rep.residual_after.1
+    );
+    report.set("method", rep.method);
+    report.set("boundary", opts.boundary);
+    report.set(
+        "held_boundary_points",
+        rep.held_boundary_points
+            .iter()
+            .map(|&(i, j)| [i, j])
+            .collect::<Vec<_>>(),
+    );
+    report.set("keep_samples", rep.keep_samples);
+    report.set(
+        "snap_distances",
+        rep.targets
+            .iter()
+            .map(|t| t.snap_distance)
+            .collect::<Vec<_>>(),
+    );
     report.set("iterations", rep.iterations.len());
     report.set("converged", rep.converged);
     report.set("stop", rep.stop);

@@ -6,6 +6,7 @@
 #![forbid(unsafe_code)]
 
 mod common;
+mod continuity;
 mod convert;
 mod curvature;
 mod demo;
@@ -49,6 +50,7 @@ enum Command {
     Highlight(highlight::Args),
     Detect(detect::Args),
     FairSurface(fair_surface::Args),
+    Continuity(continuity::Args),
     Enhance(enhance::Args),
     Fair(fair::Args),
     Render(render::Args),
@@ -67,6 +69,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Highlight(a) => highlight::run(a),
         Command::Detect(a) => detect::run(a),
         Command::FairSurface(a) => fair_surface::run(a),
+        Command::Continuity(a) => continuity::run(a),
         Command::Enhance(a) => enhance::run(a),
         Command::Fair(a) => fair::run(a),
         Command::Render(a) => render::run(a),

@@ -30,6 +30,7 @@
 //! points outward has `k1 = k2 = +1/r`, `H = +1/r`, `K = 1/r²`.
 
 pub mod basis;
+pub mod continuity;
 mod iges;
 mod json;
 mod surface;

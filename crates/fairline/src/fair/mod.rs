@@ -25,8 +25,9 @@ pub use quad::{
 };
 pub use region::{MovableSet, RegionSpec, movable_vertices};
 pub use surface::{
-    EndpointPair, Endpoints, FairIteration, FairStop, SurfaceFairError, SurfaceFairOptions,
-    SurfaceFairReport, TargetCurve, endpoints_around, fair_surface, target_curves,
+    BoundaryControl, EndpointPair, Endpoints, FairIteration, FairStop, SurfaceFairError,
+    SurfaceFairMethod, SurfaceFairOptions, SurfaceFairReport, TargetCurve, Waviness,
+    endpoints_around, fair_surface, polyline_waviness, target_curves,
 };
 
 #[cfg(test)]

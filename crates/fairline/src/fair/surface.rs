@@ -83,6 +83,54 @@ pub struct SurfaceFairOptions {
     pub epsilon: f64,
     /// Most Gauss–Newton iterations.
     pub max_iterations: usize,
+    /// The solver: the paper's truncated SVD, or the regularised
+    /// Levenberg–Marquardt that also keeps the other lines (default).
+    pub method: SurfaceFairMethod,
+    /// Which control points on the patch boundary may move.
+    pub boundary: BoundaryControl,
+    /// Weight κ of the weak targets that hold the other highlight lines
+    /// (all lights, outside the selected stretches) where they are, relative
+    /// to the selected targets (each group's sum of squares is divided by its
+    /// number of samples). [`SurfaceFairMethod::Regularised`] only.
+    pub keep_weight: f64,
+    /// Weight φ of the fairness energy on the control displacement
+    /// (second differences of the displacement of the control net, a
+    /// discrete thin-plate energy), relative to the mean diagonal of the
+    /// targets' Gauss–Newton matrix over the mean diagonal of the
+    /// second-difference matrix (so it does not depend on the surface's
+    /// scale). [`SurfaceFairMethod::Regularised`] only.
+    pub fairness_weight: f64,
+}
+
+/// The solver of [`fair_surface`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SurfaceFairMethod {
+    /// Nishiyama et al. §3.3 as published: Gauss–Newton with a truncated
+    /// SVD (lowered from 5 % as progress slows, see
+    /// [`SurfaceFairOptions::min_truncation`]) on the selected targets only.
+    Paper,
+    /// Beyond the paper (issue #20 item 6): Levenberg–Marquardt on the
+    /// selected targets plus weak targets at the current pre-images of all
+    /// other lines crossing the moved region plus a fairness energy on the
+    /// control displacement; well posed whatever the number of targets.
+    Regularised,
+}
+
+/// Which control points on the boundary of the patch may move.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BoundaryControl {
+    /// Boundary control points move like any other.
+    Free,
+    /// The outermost row of control points on all four sides stays fixed:
+    /// the boundary curves, hence the seams with any neighbour (G0), are
+    /// unchanged (default).
+    Fixed,
+    /// The two outermost rows stay fixed: boundary curves and the
+    /// cross-boundary tangents, hence G1 seams with an unchanged neighbour,
+    /// are kept.
+    FixedWithTangents,
 }
 
 impl Default for SurfaceFairOptions {
@@ -96,6 +144,10 @@ impl Default for SurfaceFairOptions {
             damped_step: 0.1,
             epsilon: 1e-4,
             max_iterations: 20,
+            method: SurfaceFairMethod::Regularised,
+            boundary: BoundaryControl::Fixed,
+            keep_weight: 0.01,
+            fairness_weight: 3e-3,
         }
     }
 }
@@ -128,6 +180,12 @@ pub enum SurfaceFairError {
     /// The SVD did not converge.
     #[error("singular value decomposition failed")]
     Svd,
+    /// Every control point over the stretches is on the patch boundary and
+    /// held by [`SurfaceFairOptions::boundary`].
+    #[error(
+        "all {0} control points over the stretches lie on the patch boundary, which is held fixed (free it to move them)"
+    )]
+    NothingToMove(usize),
     /// Writing a control point failed (non-finite update).
     #[error(transparent)]
     Surface(#[from] BSplineError),
@@ -154,6 +212,12 @@ pub struct TargetCurve {
     pub samples: Vec<[f64; 2]>,
     /// The pre-image polyline the endpoints were snapped to (u, v).
     pub pre_image: Vec<[f64; 2]>,
+    /// The stretch of that polyline between e¹ and e² (the part the target
+    /// replaces), from e¹ to e².
+    pub stretch: Vec<[f64; 2]>,
+    /// How far (in u, v) each given endpoint was from where it snapped:
+    /// a large value means the point was not on a line of that radius.
+    pub snap_distance: [f64; 2],
 }
 
 /// One Gauss–Newton iteration of [`fair_surface`].
@@ -171,8 +235,15 @@ pub struct FairIteration {
     pub cols: usize,
     /// Singular values kept by the truncation.
     pub rank: usize,
-    /// The truncation used (fraction of the largest singular value).
+    /// The truncation used (fraction of the largest singular value;
+    /// [`SurfaceFairMethod::Paper`] only, 0 otherwise).
     pub truncation: f64,
+    /// The objective after the step: mean d_s² at the targets (plus the weak
+    /// targets and the fairness energy with [`SurfaceFairMethod::Regularised`]).
+    pub objective: f64,
+    /// Levenberg–Marquardt damping of the accepted step (0 for the paper's
+    /// method).
+    pub damping: f64,
     /// Wall time of the iteration (s).
     pub time_s: f64,
 }
@@ -181,12 +252,15 @@ pub struct FairIteration {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FairStop {
-    /// The relative change of mean |d_s| fell below ε (Eq. (3.14)).
+    /// The relative change of mean |d_s| fell below ε (Eq. (3.14)); with
+    /// [`SurfaceFairMethod::Regularised`], the relative decrease of the
+    /// objective did.
     Epsilon,
     /// mean |d_s| vanished (below 1e-14 of the control net size).
     ZeroResidual,
-    /// Neither the full nor the damped step lowered mean |d_s|: the targets
-    /// are followed as well as the selected control points allow.
+    /// Neither the full nor the damped step lowered mean |d_s| (the
+    /// objective with [`SurfaceFairMethod::Regularised`], after raising the
+    /// damping 12 times): not converged.
     Stalled,
     /// `max_iterations` reached.
     MaxIterations,
@@ -199,8 +273,16 @@ pub enum FairStop {
 pub struct SurfaceFairReport {
     /// The targets.
     pub targets: Vec<TargetCurve>,
+    /// The solver used.
+    pub method: SurfaceFairMethod,
     /// Control points moved, `(i, j)`, row-major.
     pub modified_control_points: Vec<(usize, usize)>,
+    /// Control points over the knot box that stayed fixed because they lie
+    /// on the patch boundary ([`SurfaceFairOptions::boundary`]), row-major.
+    pub held_boundary_points: Vec<(usize, usize)>,
+    /// Weak-target samples on the other lines
+    /// ([`SurfaceFairMethod::Regularised`]; 0 otherwise).
+    pub keep_samples: usize,
     /// Knot-span bounding box `[u0, u1, v0, v1]` of the endpoints.
     pub knot_box: [f64; 4],
     /// Samples left out because d_s is undefined there.
@@ -211,7 +293,9 @@ pub struct SurfaceFairReport {
     pub residual_after: (f64, f64),
     /// Per-iteration record.
     pub iterations: Vec<FairIteration>,
-    /// Whether Eq. (3.14) was met (or the residual vanished).
+    /// Whether the stop test held: Eq. (3.14) (the objective's relative
+    /// decrease below ε with [`SurfaceFairMethod::Regularised`]) or a
+    /// vanishing residual. False when stalled or out of iterations.
     pub converged: bool,
     /// Why the iteration stopped.
     pub stop: FairStop,
@@ -282,6 +366,37 @@ impl<'a> Arc<'a> {
             }
         }
         best
+    }
+    /// The polyline from arc position `s1` to `s2` travelling in direction
+    /// `dir` (±1; wrapping on closed lines): the two end points and the
+    /// vertices between them.
+    fn between(&self, s1: f64, s2: f64, dir: f64) -> Vec<[f64; 2]> {
+        let len = self.length();
+        let n = self.pts.len();
+        let mut out = vec![self.at(s1)];
+        if !(len > 0.0) || n < 2 {
+            return out;
+        }
+        let span = if self.closed {
+            (dir * (s2 - s1)).rem_euclid(len)
+        } else {
+            (s2 - s1).abs()
+        };
+        // vertices k with arc position strictly inside the travelled span
+        let mut inner: Vec<(f64, [f64; 2])> = (0..self.cum.len() - 1)
+            .filter_map(|k| {
+                let d = if self.closed {
+                    (dir * (self.cum[k] - s1)).rem_euclid(len)
+                } else {
+                    dir * (self.cum[k] - s1)
+                };
+                (d > 0.0 && d < span).then_some((d, self.pts[k % n]))
+            })
+            .collect();
+        inner.sort_by(|a, b| a.0.total_cmp(&b.0));
+        out.extend(inner.into_iter().map(|(_, p)| p));
+        out.push(self.at(s2));
+        out
     }
     /// The point at arc position `s` (wrapped on closed lines, clamped on
     /// open ones).
@@ -443,6 +558,7 @@ pub fn target_curves(
             let q = [0.0, 1.0, 2.0, 3.0].map(|m| arc.at(s0 + away * m * step));
             outward_direction(q)
         };
+        let stretch = arc.between(s1, s2, dir);
         let chord_dir = [(e2[0] - e1[0]) / chord, (e2[1] - e1[1]) / chord];
         let t1 = side(s1, -dir).map_or(chord_dir, |d| [-d[0], -d[1]]);
         let t2 = side(s2, dir).unwrap_or(chord_dir);
@@ -473,6 +589,8 @@ pub fn target_curves(
             tangent_end: [t2[0] * chord, t2[1] * chord],
             samples,
             pre_image: arc.pts.to_vec(),
+            stretch,
+            snap_distance: [dist2(e.start, e1).sqrt(), dist2(e.end, e2).sqrt()],
         });
     }
     Ok(out)
@@ -642,18 +760,19 @@ fn stats(r: &[Option<f64>]) -> (f64, f64) {
 /// Eq. (3.10), re-evaluating only the samples each column affects: moving
 /// component a of control point P by Δw moves S, S_u, S_v of a sample by
 /// (R, R_u, R_v)·Δw along axis a, exactly, so only the normal and the
-/// quartic of Eq. (2.15) are recomputed. Parallel over samples.
-fn jacobian(
+/// quartic of Eq. (2.15) are recomputed. Parallel over samples; one sparse
+/// row (column, value) per sample, empty where d_s is undefined.
+fn jacobian_rows(
     surface: &BSplineSurface,
     lights: &[CircularLight],
     samples: &[Sample],
     f: &[Option<f64>],
-    cols: usize,
     dw: f64,
-) -> Mat<f64> {
-    let entries: Vec<Vec<(usize, f64)>> = samples
+) -> Vec<Vec<(usize, f64)>> {
+    samples
         .par_iter()
         .zip(f.par_iter())
+        .with_min_len(8)
         .map(|(s, &f0)| {
             let mut e = Vec::with_capacity(3 * s.coeffs.len());
             let Some(f0) = f0 else { return e };
@@ -673,7 +792,19 @@ fn jacobian(
             }
             e
         })
-        .collect();
+        .collect()
+}
+
+/// The dense Jacobian of [`jacobian_rows`] (samples × `cols`).
+fn jacobian(
+    surface: &BSplineSurface,
+    lights: &[CircularLight],
+    samples: &[Sample],
+    f: &[Option<f64>],
+    cols: usize,
+    dw: f64,
+) -> Mat<f64> {
+    let entries = jacobian_rows(surface, lights, samples, f, dw);
     let mut j = Mat::<f64>::zeros(samples.len(), cols);
     for (row, e) in entries.iter().enumerate() {
         for &(c, g) in e {
@@ -744,21 +875,50 @@ fn apply(
     Ok(())
 }
 
+/// Whether control point (i, j) is held by the boundary rule.
+fn on_held_boundary(surface: &BSplineSurface, rule: BoundaryControl, i: usize, j: usize) -> bool {
+    let rows = match rule {
+        BoundaryControl::Free => return false,
+        BoundaryControl::Fixed => 1,
+        BoundaryControl::FixedWithTangents => 2,
+    };
+    let (nu, nv) = (surface.count_u(), surface.count_v());
+    i < rows || j < rows || i + rows >= nu || j + rows >= nv
+}
+
+/// What a solver hands back to [`fair_surface`].
+struct Solved {
+    surface: BSplineSurface,
+    iterations: Vec<FairIteration>,
+    converged: bool,
+    stop: FairStop,
+    after: (f64, f64),
+    keep_samples: usize,
+}
+
 /// Circular-highlight fairing of a B-spline surface, Nishiyama et al. §3:
 /// targets by [`target_curves`]; the control points whose support meets
 /// the knot-span bounding box of all endpoints ([`knot_box`],
-/// [`BSplineSurface::control_points_in_box`]) are the unknowns r (three
-/// components each); Gauss–Newton on d_s(u_ij, v_ij) = 0 (Eq. (3.6)–(3.9))
-/// with the Jacobian of Eq. (3.10) ([`jacobian`], Δw relative to the control
-/// net size) and the truncated SVD (the paper's 5 %, lowered tenfold down to
-/// `opts.min_truncation` whenever a step is rejected or gains less than a
-/// halving of mean |d_s|: see [`SurfaceFairOptions::min_truncation`]); full step R + Δr (Eq. (3.11)) when both
-/// max and mean |d_s| decrease (Eq. (3.12)), otherwise R + μΔr (Eq. (3.13)).
-/// Stops when |mean⁽ᵖ⁺¹⁾ − mean⁽ᵖ⁾| / mean⁽ᵖ⁾ < ε (Eq. (3.14), read with
-/// the absolute value; only once the truncation is at its floor), when the
-/// residual vanishes, when even the damped step at the floor does not lower
-/// the mean (the previous surface is kept; reported as
-/// [`FairStop::Stalled`], not converged), or after `opts.max_iterations`.
+/// [`BSplineSurface::control_points_in_box`]), less those on the patch
+/// boundary held by `opts.boundary` (by default the outermost row on every
+/// side, so the boundary curves and the seams stay closed), are the
+/// unknowns r (three components each). Then, by `opts.method`:
+///
+/// - [`SurfaceFairMethod::Paper`]: Gauss–Newton on d_s(u_ij, v_ij) = 0
+///   (Eq. (3.6)–(3.9)) with the Jacobian of Eq. (3.10) ([`jacobian`], Δw
+///   relative to the control net size) and the truncated SVD (the paper's
+///   5 %, lowered tenfold down to `opts.min_truncation` whenever a step is
+///   rejected or gains less than a halving of mean |d_s|); full step
+///   R + Δr (Eq. (3.11)) when both max and mean |d_s| decrease
+///   (Eq. (3.12)), otherwise R + μΔr (Eq. (3.13)). Stops when
+///   |mean⁽ᵖ⁺¹⁾ − mean⁽ᵖ⁾| / mean⁽ᵖ⁾ < ε (Eq. (3.14), only once the
+///   truncation is at its floor), when the residual vanishes, when even the
+///   damped step at the floor does not lower the mean ([`FairStop::Stalled`],
+///   not converged), or after `opts.max_iterations`.
+/// - [`SurfaceFairMethod::Regularised`]: Levenberg–Marquardt on the
+///   objective of [`regularised`] (targets + weak targets on every other line
+///   crossing the moved region + thin-plate energy of the displacement),
+///   stopping when its relative decrease falls below ε.
 ///
 /// Returns the faired surface (control points outside the selection
 /// bit-identical) and the report.
@@ -774,12 +934,17 @@ pub fn fair_surface(
     let targets = target_curves(surface, lights, endpoints, opts)?;
     let ends: Vec<[f64; 2]> = targets.iter().flat_map(|t| [t.start, t.end]).collect();
     let kb = knot_box(surface, &ends);
-    let selected = surface.control_points_in_box(kb[0], kb[1], kb[2], kb[3]);
+    let (held, selected): (Vec<(usize, usize)>, Vec<(usize, usize)>) = surface
+        .control_points_in_box(kb[0], kb[1], kb[2], kb[3])
+        .into_iter()
+        .partition(|&(i, j)| on_held_boundary(surface, opts.boundary, i, j));
+    if selected.is_empty() {
+        return Err(SurfaceFairError::NothingToMove(held.len()));
+    }
     let mut column = vec![None; surface.count_u() * surface.count_v()];
     for (k, &(i, j)) in selected.iter().enumerate() {
         column[surface.index(i, j)] = Some(k);
     }
-    let cols = 3 * selected.len();
     // Samples with a defined d_s on the input surface.
     let all: Vec<Sample> = targets
         .iter()
@@ -809,11 +974,64 @@ pub fn fair_surface(
     let size = (hi - lo).length().max(f64::MIN_POSITIVE);
     let dw = opts.fd_step * size;
     let tiny = 1e-14 * size;
+    let before = stats(&residuals(surface, lights, &samples));
+    let solved = match opts.method {
+        SurfaceFairMethod::Paper => {
+            solve_paper(surface, lights, &samples, &selected, opts, dw, tiny)?
+        }
+        SurfaceFairMethod::Regularised => regularised::solve(
+            &regularised::Problem {
+                surface,
+                lights,
+                targets: &targets,
+                samples: &samples,
+                selected: &selected,
+                column: &column,
+                dw,
+                tiny,
+            },
+            opts,
+        )?,
+    };
+    let current = solved.surface;
+    let max_displacement = selected
+        .iter()
+        .map(|&(i, j)| (current.control_point(i, j) - surface.control_point(i, j)).length())
+        .fold(0.0, f64::max);
+    Ok((
+        current,
+        SurfaceFairReport {
+            targets,
+            method: opts.method,
+            modified_control_points: selected,
+            held_boundary_points: held,
+            keep_samples: solved.keep_samples,
+            knot_box: kb,
+            undefined_samples,
+            residual_before: before,
+            residual_after: solved.after,
+            iterations: solved.iterations,
+            converged: solved.converged,
+            stop: solved.stop,
+            max_displacement,
+        },
+    ))
+}
 
+/// The paper's solver (Nishiyama et al. §3.3), see [`fair_surface`].
+fn solve_paper(
+    surface: &BSplineSurface,
+    lights: &[CircularLight],
+    samples: &[Sample],
+    selected: &[(usize, usize)],
+    opts: &SurfaceFairOptions,
+    dw: f64,
+    tiny: f64,
+) -> Result<Solved, SurfaceFairError> {
+    let cols = 3 * selected.len();
     let mut current = surface.clone();
-    let mut f = residuals(&current, lights, &samples);
-    let before = stats(&f);
-    let mut now = before;
+    let mut f = residuals(&current, lights, samples);
+    let mut now = stats(&f);
     let mut iterations = Vec::new();
     let mut converged = now.1 <= tiny;
     let mut stop = if converged {
@@ -828,7 +1046,7 @@ pub fn fair_surface(
             .iter()
             .map(|&(i, j)| current.control_point(i, j))
             .collect();
-        let j = jacobian(&current, lights, &samples, &f, cols, dw);
+        let j = jacobian(&current, lights, samples, &f, cols, dw);
         let fv: Vec<f64> = f.iter().map(|x| x.unwrap_or(0.0)).collect();
         let svd = jacobian_svd(&j)?;
         // Try the current truncation; if neither the full nor the damped
@@ -842,13 +1060,13 @@ pub fn fair_surface(
             }
             let mut trial = current.clone();
             let mut step = 1.0;
-            apply(&mut trial, &base, &selected, &dr, step)?;
-            let mut ft = residuals(&trial, lights, &samples);
+            apply(&mut trial, &base, selected, &dr, step)?;
+            let mut ft = residuals(&trial, lights, samples);
             let mut st = stats(&ft);
             if !(st.0 < now.0 && st.1 < now.1) {
                 step = opts.damped_step;
-                apply(&mut trial, &base, &selected, &dr, step)?;
-                ft = residuals(&trial, lights, &samples);
+                apply(&mut trial, &base, selected, &dr, step)?;
+                ft = residuals(&trial, lights, samples);
                 st = stats(&ft);
             }
             if st.1 < now.1 {
@@ -870,6 +1088,7 @@ pub fn fair_surface(
         current = trial;
         f = ft;
         now = st;
+        let objective = mean_square(&f);
         iterations.push(FairIteration {
             max_abs: st.0,
             mean_abs: st.1,
@@ -878,6 +1097,8 @@ pub fn fair_surface(
             cols,
             rank,
             truncation: trunc,
+            objective,
+            damping: 0.0,
             time_s: t0.elapsed().as_secs_f64(),
         });
         if now.1 <= tiny {
@@ -892,25 +1113,29 @@ pub fn fair_surface(
             stop = FairStop::Epsilon;
         }
     }
-    let max_displacement = selected
-        .iter()
-        .map(|&(i, j)| (current.control_point(i, j) - surface.control_point(i, j)).length())
-        .fold(0.0, f64::max);
-    Ok((
-        current,
-        SurfaceFairReport {
-            targets,
-            modified_control_points: selected,
-            knot_box: kb,
-            undefined_samples,
-            residual_before: before,
-            residual_after: now,
-            iterations,
-            converged,
-            stop,
-            max_displacement,
-        },
-    ))
+    Ok(Solved {
+        surface: current,
+        iterations,
+        converged,
+        stop,
+        after: now,
+        keep_samples: 0,
+    })
+}
+
+/// Mean of d_s² (infinite if any is undefined; 0 for none).
+fn mean_square(r: &[Option<f64>]) -> f64 {
+    if r.is_empty() {
+        return 0.0;
+    }
+    let mut sum = 0.0;
+    for x in r {
+        match x {
+            Some(x) => sum += x * x,
+            None => return f64::INFINITY,
+        }
+    }
+    sum / r.len() as f64
 }
 
 /// Endpoint pairs around a disc of the parameter domain: for every pre-image
@@ -979,6 +1204,13 @@ pub fn endpoints_around(
     }
     out
 }
+
+mod regularised;
+mod waviness;
+
+pub use waviness::{
+    Waviness, discrete_curvature, polyline_waviness, resample_polyline, self_crossings,
+};
 
 #[cfg(test)]
 mod tests;

@@ -144,12 +144,101 @@ fn pre_images(
     .lines
 }
 
-/// Runs the whole check on one case and returns the report.
-fn check_case(c: &Case, max_iterations: usize, drop: f64, name: &str) -> SurfaceFairReport {
-    let opts = SurfaceFairOptions {
-        max_iterations,
-        ..Default::default()
-    };
+/// Per light: (Σ total variation of curvature, Σ inflections, Σ self
+/// crossings, closed polylines) of its pre-images, resampled every four
+/// grid cells; inflections count sign changes among |κ| ≥ 0.5 (a radius of
+/// two domains: contouring noise on straight stretches stays below it).
+fn light_waviness(
+    lines: &[SurfaceHighlightLine],
+    count: usize,
+    grid: usize,
+) -> Vec<(f64, usize, usize, usize)> {
+    let spacing = 4.0 / (grid - 1) as f64;
+    let mut out = vec![(0.0, 0, 0, 0); count];
+    for l in lines {
+        let w = polyline_waviness(&l.uv, l.closed, spacing, 0.5);
+        let o = &mut out[l.light];
+        o.0 += w.curvature_variation;
+        o.1 += w.inflections;
+        o.2 += w.self_crossings;
+        o.3 += usize::from(l.closed);
+    }
+    out
+}
+
+/// Every light's lines are at most as wavy after as before: total
+/// variation of curvature not higher, no new inflection, crossing or closed
+/// loop. Returns (Σ TV before, Σ TV after).
+fn assert_no_line_wavier(
+    before: &[SurfaceHighlightLine],
+    after: &[SurfaceHighlightLine],
+    count: usize,
+    grid: usize,
+    name: &str,
+) -> (f64, f64) {
+    let (wb, wa) = (
+        light_waviness(before, count, grid),
+        light_waviness(after, count, grid),
+    );
+    let mut sums = (0.0, 0.0);
+    for (l, (b, a)) in wb.iter().zip(&wa).enumerate() {
+        sums.0 += b.0;
+        sums.1 += a.0;
+        assert!(
+            a.0 <= b.0,
+            "{name}: light {l}: curvature variation {} -> {}",
+            b.0,
+            a.0
+        );
+        assert!(
+            a.1 <= b.1,
+            "{name}: light {l}: inflections {} -> {}",
+            b.1,
+            a.1
+        );
+        assert!(
+            a.2 <= b.2,
+            "{name}: light {l}: self crossings {} -> {}",
+            b.2,
+            a.2
+        );
+        assert!(
+            a.3 <= b.3,
+            "{name}: light {l}: closed loops {} -> {}",
+            b.3,
+            a.3
+        );
+    }
+    sums
+}
+
+/// The lights whose worst per-light TV rose with the paper's solver (for
+/// the record), as (count, largest relative rise).
+fn tv_rises(
+    before: &[SurfaceHighlightLine],
+    after: &[SurfaceHighlightLine],
+    count: usize,
+    grid: usize,
+) -> (usize, f64) {
+    let (wb, wa) = (
+        light_waviness(before, count, grid),
+        light_waviness(after, count, grid),
+    );
+    let mut worst = (0, 0.0f64);
+    for (b, a) in wb.iter().zip(&wa) {
+        if a.0 > b.0 {
+            worst.0 += 1;
+            worst.1 = worst.1.max(a.0 / b.0.max(f64::MIN_POSITIVE) - 1.0);
+        }
+    }
+    worst
+}
+
+/// Runs the whole check on one case and returns the report: the default
+/// (regularised) solver on all stretches around the defect and on the
+/// stretches of every other light only.
+fn check_case(c: &Case, drop: f64, name: &str) -> SurfaceFairReport {
+    let opts = SurfaceFairOptions::default();
     let endpoints = endpoints_around(&c.bumped, &c.lights, c.centre, c.disc, opts.grid);
     assert!(
         endpoints.len() >= 3,
@@ -158,53 +247,83 @@ fn check_case(c: &Case, max_iterations: usize, drop: f64, name: &str) -> Surface
     );
     let (faired, rep) = fair_surface(&c.bumped, &c.lights, &endpoints, &opts).unwrap();
     let (b, a) = (rep.residual_before, rep.residual_after);
+    let per_iteration = rep.iterations.iter().map(|i| i.time_s).fold(0.0, f64::max);
     eprintln!(
-        "{name}: {} stretches, {}x{} Jacobian, {} iterations, mean |d_s| {:.3e} -> {:.3e}, max {:.3e} -> {:.3e}",
+        "{name}: {} stretches, {} target + {} weak samples, {} unknowns, {} held on the boundary, {} iterations ({:?}, slowest {:.1} ms), mean |d_s| {:.3e} -> {:.3e}, max {:.3e} -> {:.3e}",
         endpoints.len(),
-        rep.iterations.first().map_or(0, |i| i.rows),
-        rep.iterations.first().map_or(0, |i| i.cols),
+        rep.targets.iter().map(|t| t.samples.len()).sum::<usize>(),
+        rep.keep_samples,
+        3 * rep.modified_control_points.len(),
+        rep.held_boundary_points.len(),
         rep.iterations.len(),
+        rep.stop,
+        1e3 * per_iteration,
         b.1,
         a.1,
         b.0,
         a.0
     );
-    // Within the paper's iteration counts (at most 8) the mean residual at
-    // the targets drops by `drop` (two to three orders of magnitude). With
-    // the paper's fixed 5 % truncation it stalls after ~1.5 orders (the
-    // residual left lies in the dropped singular directions); the
-    // truncation is lowered to 1e-3 as progress slows. What remains is the
-    // least-squares floor: the Hermite targets are not exactly highlight
-    // lines of any surface the selected control points can reach (more
-    // samples than effective unknowns — the rank at 1e-3 is ~50–100 of
-    // 3 × the selected points, as tangential moves hardly change d_s).
+    for it in &rep.iterations {
+        eprintln!(
+            "{name}:   objective {:.6e} mean {:.3e} damping {:.1e} {:.1} ms",
+            it.objective,
+            it.mean_abs,
+            it.damping,
+            1e3 * it.time_s
+        );
+    }
+    assert_eq!(rep.method, SurfaceFairMethod::Regularised);
+    // Converged by its stop test, within the paper's 4–8 iterations.
+    assert!(rep.converged, "{name}: stopped by {:?}", rep.stop);
+    assert_eq!(rep.stop, FairStop::Epsilon);
+    assert!(
+        rep.iterations.len() <= 8,
+        "{name}: {} iterations",
+        rep.iterations.len()
+    );
+    let last = rep.iterations.last().unwrap();
+    let prev = if rep.iterations.len() >= 2 {
+        rep.iterations[rep.iterations.len() - 2].objective
+    } else {
+        f64::INFINITY
+    };
+    assert!((prev - last.objective) / prev < opts.epsilon || rep.iterations.len() == 1);
+    for w in rep.iterations.windows(2) {
+        assert!(w[1].objective < w[0].objective);
+    }
+    // The targets are reached: mean |d_s| drops by `drop` (two orders of
+    // magnitude and more), max by 20, and further than with the paper's
+    // fixed 5 % truncation. (The regularised solver stops at the
+    // compromise with the weak targets and the thin-plate energy: its
+    // residual is 2–5 times that of the paper's solver with the truncation
+    // lowered to 1e-3, which makes the other lines wavier.)
     assert!(a.1 <= b.1 / drop, "{name}: mean {} -> {}", b.1, a.1);
-    // the fixed 5 % rule of the paper, for comparison: stalls higher
-    let fixed = SurfaceFairOptions {
+    let fixed5 = SurfaceFairOptions {
+        method: SurfaceFairMethod::Paper,
         min_truncation: opts.truncation,
         ..opts
     };
-    let (_, rep5) = fair_surface(&c.bumped, &c.lights, &endpoints, &fixed).unwrap();
+    let (_, rep5) = fair_surface(&c.bumped, &c.lights, &endpoints, &fixed5).unwrap();
     eprintln!(
-        "{name}: fixed 5 % truncation: mean |d_s| {:.3e} after {} iterations",
+        "{name}: paper's fixed 5 % truncation: mean |d_s| {:.3e} after {} iterations",
         rep5.residual_after.1,
         rep5.iterations.len()
     );
     assert!(
-        a.1 < 0.5 * rep5.residual_after.1,
-        "{name}: no gain over 5 %"
+        a.1 < rep5.residual_after.1,
+        "{name}: no better than the 5 % rule"
     );
     assert!(a.0 <= b.0 / 20.0, "{name}: max {} -> {}", b.0, a.0);
-    assert!(rep.iterations.len() <= max_iterations);
-    for w in rep.iterations.windows(2) {
-        assert!(w[1].mean_abs < w[0].mean_abs);
-    }
-    // Control points outside the selection: bit-identical.
+    // Control points outside the selection — the boundary rows among them —
+    // bit-identical.
     let sel: std::collections::HashSet<(usize, usize)> =
         rep.modified_control_points.iter().copied().collect();
-    for i in 0..c.bumped.count_u() {
-        for j in 0..c.bumped.count_v() {
+    let (nu, nv) = (c.bumped.count_u(), c.bumped.count_v());
+    for i in 0..nu {
+        for j in 0..nv {
             let (p, q) = (c.bumped.control_point(i, j), faired.control_point(i, j));
+            let boundary = i == 0 || j == 0 || i + 1 == nu || j + 1 == nv;
+            assert!(!(boundary && sel.contains(&(i, j))));
             if !sel.contains(&(i, j)) {
                 assert_eq!(
                     p.to_array().map(f64::to_bits),
@@ -241,22 +360,26 @@ fn check_case(c: &Case, max_iterations: usize, drop: f64, name: &str) -> Surface
     );
     // Highlight lines inside the disc move back towards the clean ones.
     let clean_lines = pre_images(&c.clean, &c.lights, opts.grid);
-    let before = deviation(
-        &pre_images(&c.bumped, &c.lights, opts.grid),
-        &clean_lines,
-        c.centre,
-        c.disc,
-    );
-    let after = deviation(
-        &pre_images(&faired, &c.lights, opts.grid),
-        &clean_lines,
-        c.centre,
-        c.disc,
-    );
+    let bumped_lines = pre_images(&c.bumped, &c.lights, opts.grid);
+    let faired_lines = pre_images(&faired, &c.lights, opts.grid);
+    let before = deviation(&bumped_lines, &clean_lines, c.centre, c.disc);
+    let after = deviation(&faired_lines, &clean_lines, c.centre, c.disc);
     eprintln!("{name}: pre-image deviation from the clean surface {before:.3e} -> {after:.3e}");
     assert!(
         after < 0.4 * before,
         "{name}: deviation {before} -> {after}"
+    );
+    // No line of any light gets wavier.
+    let tv = assert_no_line_wavier(
+        &bumped_lines,
+        &faired_lines,
+        c.lights.len(),
+        opts.grid,
+        name,
+    );
+    eprintln!(
+        "{name}: total variation of curvature, all lights: {:.3} -> {:.3}",
+        tv.0, tv.1
     );
     // And the surface itself: normal deviation from the clean surface.
     let kb = rep.knot_box;
@@ -281,6 +404,78 @@ fn check_case(c: &Case, max_iterations: usize, drop: f64, name: &str) -> Surface
         dev.0,
         dev.1
     );
+    // The paper's solver on the same stretches, for the record.
+    let paper = SurfaceFairOptions {
+        method: SurfaceFairMethod::Paper,
+        ..opts
+    };
+    let (pf, prep) = fair_surface(&c.bumped, &c.lights, &endpoints, &paper).unwrap();
+    let rises = tv_rises(
+        &bumped_lines,
+        &pre_images(&pf, &c.lights, opts.grid),
+        c.lights.len(),
+        opts.grid,
+    );
+    eprintln!(
+        "{name}: paper's solver: {} iterations ({:?}), mean |d_s| {:.3e}; {} lights with a higher curvature variation (worst +{:.0} %)",
+        prep.iterations.len(),
+        prep.stop,
+        prep.residual_after.1,
+        rises.0,
+        100.0 * rises.1
+    );
+    // Only every other light's stretches selected: the lines left out cross
+    // the moved region with their kinks and must not get wavier either.
+    let half: Vec<EndpointPair> = endpoints
+        .iter()
+        .filter(|e| {
+            c.lights
+                .iter()
+                .position(|l| l.radius() == e.radius)
+                .is_some_and(|k| k % 2 == 0)
+        })
+        .copied()
+        .collect();
+    assert!(!half.is_empty() && half.len() < endpoints.len());
+    let (hf, hrep) = fair_surface(&c.bumped, &c.lights, &half, &opts).unwrap();
+    assert!(
+        hrep.converged && hrep.iterations.len() <= 8,
+        "{name}: half: {:?} after {}",
+        hrep.stop,
+        hrep.iterations.len()
+    );
+    // Two orders of magnitude: the kinked lines left out are held by the
+    // weak targets and pull against the selected ones.
+    assert!(
+        hrep.residual_after.1 <= hrep.residual_before.1 / 50.0,
+        "{name}: half: mean {:?} -> {:?}",
+        hrep.residual_before,
+        hrep.residual_after
+    );
+    let tv = assert_no_line_wavier(
+        &bumped_lines,
+        &pre_images(&hf, &c.lights, opts.grid),
+        c.lights.len(),
+        opts.grid,
+        name,
+    );
+    let (hp, _) = fair_surface(&c.bumped, &c.lights, &half, &paper).unwrap();
+    let rises = tv_rises(
+        &bumped_lines,
+        &pre_images(&hp, &c.lights, opts.grid),
+        c.lights.len(),
+        opts.grid,
+    );
+    eprintln!(
+        "{name}: every other light: {} iterations, mean |d_s| {:.3e} -> {:.3e}, TV {:.3} -> {:.3}; paper's solver: {} lights wavier (worst +{:.0} %)",
+        hrep.iterations.len(),
+        hrep.residual_before.1,
+        hrep.residual_after.1,
+        tv.0,
+        tv.1,
+        rises.0,
+        100.0 * rises.1
+    );
     rep
 }
 
@@ -288,15 +483,18 @@ fn check_case(c: &Case, max_iterations: usize, drop: f64, name: &str) -> Surface
 fn fair_dome_15x15_removes_a_planted_bump() {
     let clean = height_surface(15, 15, 1.0, 1.0, |x, y| 0.8 - 0.4 * (x * x + y * y));
     let c = case(clean, (11, 7, 0.03), Vec3::new(0.0, 0.0, 3.0), 0.4, 9, 0.2);
-    let rep = check_case(&c, 8, 100.0, "dome");
+    let rep = check_case(&c, 80.0, "dome");
     // The selected control points are exactly those whose support meets
     // the knot box of the endpoints.
     let kb = rep.knot_box;
     for k in kb {
         assert!(c.bumped.knots_u().contains(&k) || c.bumped.knots_v().contains(&k));
     }
+    let mut all = rep.modified_control_points.clone();
+    all.extend(&rep.held_boundary_points);
+    all.sort();
     assert_eq!(
-        rep.modified_control_points,
+        all,
         c.bumped.control_points_in_box(kb[0], kb[1], kb[2], kb[3])
     );
 }
@@ -305,7 +503,7 @@ fn fair_dome_15x15_removes_a_planted_bump() {
 fn fair_saddle_21x20_removes_a_planted_bump() {
     let clean = height_surface(21, 20, 1.0, 1.0, |x, y| 0.35 * (x * x - y * y));
     let c = case(clean, (6, 13, 0.02), Vec3::new(0.0, 0.0, 2.0), 0.3, 9, 0.16);
-    check_case(&c, 8, 500.0, "saddle");
+    check_case(&c, 300.0, "saddle");
 }
 
 #[test]
@@ -321,7 +519,7 @@ fn fair_roof_panel_21x22_removes_a_planted_dent() {
         11,
         0.2,
     );
-    check_case(&c, 8, 300.0, "roof");
+    check_case(&c, 200.0, "roof");
 }
 
 #[test]

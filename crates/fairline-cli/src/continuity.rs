@@ -1,0 +1,193 @@
+//! `fairline continuity`: G0 / G1 / G2 across the shared boundaries of a
+//! set of B-spline patches (issue #20 item 5).
+
+use crate::common::{Report, bad_input, check_output};
+use crate::surface_highlight::{check_ext, surface_picture};
+use anyhow::Result;
+use fairline::bspline::continuity::{ContinuityOptions, SeamClass, continuity};
+use fairline::render::{PolylineLayer, RenderOptions, linear_to_srgb8};
+use serde_json::json;
+use std::path::PathBuf;
+
+/// Finds the boundary curves shared by the patches of SURFACES
+/// (geometrically, within a matching distance; also stretches shared over
+/// part of a side) and reports for each the largest position gap (G0), the
+/// largest angle between the tangent planes (G1, degrees) and the largest
+/// normal-curvature difference across the edge (G2), classified against the
+/// tolerances as gap / G0 / G1 / G2, with the worst location.
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Example:\n  fairline continuity teapot.json --report seams.json --png seams.png\n\nReport: {\"edges\":[{\"surfaces\":[i,j],\"sides\":[..],\"g0_max\":..,\"g1_max_deg\":..,\"g2_max\":..,\"g2_max_relative\":..,\"class\":\"G0\"|\"G1\"|\"G2\"|\"gap\",\"worst\":[x,y,z],\"length\":..}],\"classes\":{..},\"tolerance\":..,...}"
+)]
+pub struct Args {
+    /// Input surfaces (.json or .igs/.iges).
+    pub surface_file: PathBuf,
+    /// Position tolerance for G0, model units (default 1e-4 × the diagonal
+    /// of the control points' bounding box).
+    #[arg(long, value_name = "DIST")]
+    pub tolerance: Option<f64>,
+    /// Angle tolerance for G1, degrees.
+    #[arg(long, default_value_t = ContinuityOptions::default().angle_tolerance_deg, value_name = "DEG")]
+    pub angle_tolerance: f64,
+    /// Relative normal-curvature tolerance for G2.
+    #[arg(long, default_value_t = ContinuityOptions::default().curvature_tolerance, value_name = "FRACTION")]
+    pub curvature_tolerance: f64,
+    /// Sides closer than this are one shared edge, model units (default
+    /// max(100 × tolerance, 2e-3 × diagonal)).
+    #[arg(long, value_name = "DIST")]
+    pub match_distance: Option<f64>,
+    /// Samples along each shared edge.
+    #[arg(long, default_value_t = ContinuityOptions::default().samples, value_name = "N")]
+    pub samples: usize,
+    /// Write a JSON report.
+    #[arg(long, value_name = "FILE.json")]
+    pub report: Option<PathBuf>,
+    /// Picture: the patches with each shared edge coloured by class.
+    #[arg(long, value_name = "IMG.png")]
+    pub png: Option<PathBuf>,
+}
+
+/// Linear-light colour of a class in pictures.
+fn class_colour(c: SeamClass) -> [f32; 3] {
+    match c {
+        SeamClass::Gap => [0.85, 0.0, 0.0],
+        SeamClass::G0 => [1.0, 0.45, 0.0],
+        SeamClass::G1 => [0.0, 0.25, 1.0],
+        SeamClass::G2 => [0.0, 0.55, 0.05],
+    }
+}
+
+pub fn run(args: Args) -> Result<()> {
+    if let Some(p) = &args.png {
+        check_ext(p, "png", "--png")?;
+        check_output(&args.surface_file, p)?;
+    }
+    if let Some(p) = &args.report {
+        check_output(&args.surface_file, p)?;
+    }
+    let surfaces = crate::surface::load_surfaces(&args.surface_file)?;
+    let opts = ContinuityOptions {
+        tolerance: args.tolerance,
+        angle_tolerance_deg: args.angle_tolerance,
+        curvature_tolerance: args.curvature_tolerance,
+        match_distance: args.match_distance,
+        samples: args.samples,
+        ..Default::default()
+    };
+    let mut report = Report::new("continuity");
+    let result = report
+        .time(|| continuity(&surfaces, &opts))
+        .map_err(|e| bad_input(format!("{}: {e}", args.surface_file.display())))?;
+    let mut counts = [0usize; 4];
+    for s in &result.seams {
+        counts[s.class as usize] += 1;
+    }
+    let classes = [SeamClass::Gap, SeamClass::G0, SeamClass::G1, SeamClass::G2];
+    eprintln!(
+        "{}: {} patches, {} shared edges: {}; tolerance {:.3e}, {}°, {} % curvature{}",
+        args.surface_file.display(),
+        surfaces.len(),
+        result.seams.len(),
+        classes
+            .iter()
+            .map(|c| format!("{} {}", counts[*c as usize], c.name()))
+            .collect::<Vec<_>>()
+            .join(", "),
+        result.tolerance,
+        args.angle_tolerance,
+        100.0 * args.curvature_tolerance,
+        if result.degenerate_sides > 0 {
+            format!(
+                "; {} collapsed sides (poles) skipped",
+                result.degenerate_sides
+            )
+        } else {
+            String::new()
+        }
+    );
+    for s in result
+        .seams
+        .iter()
+        .filter(|s| s.class != SeamClass::G2)
+        .take(10)
+    {
+        eprintln!(
+            "  surfaces {} {:?} / {} {:?}: {} (gap {:.2e}, angle {:.3}°, curvature {:.1} %) worst at ({:.4}, {:.4}, {:.4})",
+            s.surfaces[0],
+            s.sides[0],
+            s.surfaces[1],
+            s.sides[1],
+            s.class.name(),
+            s.g0_max,
+            s.g1_max_deg,
+            100.0 * s.g2_max_relative,
+            s.worst.x,
+            s.worst.y,
+            s.worst.z
+        );
+    }
+    report.set(
+        "edges",
+        result
+            .seams
+            .iter()
+            .map(|s| {
+                json!({
+                    "surfaces": s.surfaces,
+                    "sides": s.sides,
+                    "range": s.range,
+                    "length": s.length,
+                    "g0_max": s.g0_max,
+                    "g1_max_deg": s.g1_max_deg,
+                    "g2_max": s.g2_max,
+                    "g2_max_relative": s.g2_max_relative,
+                    "class": s.class.name(),
+                    "worst": s.worst.to_array(),
+                    "degenerate_samples": s.degenerate_samples,
+                })
+            })
+            .collect::<Vec<_>>(),
+    );
+    report.set(
+        "classes",
+        json!({"gap": counts[0], "G0": counts[1], "G1": counts[2], "G2": counts[3]}),
+    );
+    report.set("surfaces", surfaces.len());
+    report.set("tolerance", result.tolerance);
+    report.set("angle_tolerance_deg", args.angle_tolerance);
+    report.set("curvature_tolerance", args.curvature_tolerance);
+    report.set("match_distance", result.match_distance);
+    report.set("degenerate_sides", result.degenerate_sides);
+    if let Some(p) = &args.png {
+        let lines: Vec<PolylineLayer> = result
+            .seams
+            .iter()
+            .map(|s| PolylineLayer {
+                points: s.points.clone(),
+                closed: false,
+                color: class_colour(s.class),
+                width_px: 3.0,
+            })
+            .collect();
+        let opts = RenderOptions::with_size(1000, 800);
+        let mut img = surface_picture(
+            &surfaces,
+            lines,
+            "continuity across patch boundaries",
+            &opts,
+        )?;
+        // legend: one swatch per class with its count
+        let scale = 2;
+        let (x0, mut y) = (12i64, 40i64);
+        for c in classes {
+            let colour = linear_to_srgb8(class_colour(c));
+            img.fill_rect(x0, y, 28, 8, colour);
+            let label = format!("{} ({})", c.name(), counts[c as usize]);
+            img.draw_text(x0 + 36, y - 4, &label, [20, 20, 20, 255], scale);
+            y += 24;
+        }
+        img.write_png(p)?;
+    }
+    report.write(args.report.as_deref())?;
+    Ok(())
+}

@@ -1,0 +1,566 @@
+//! Continuity across patch boundaries (issue #20 item 5): which boundary
+//! curves of a set of B-spline patches are shared — found geometrically, so
+//! patches need no topology, and a side may be shared over part of its
+//! length only (T-junctions) — and how smoothly the patches join along each
+//! shared stretch:
+//!
+//! - **G0**: the position gap |S_A − S_B| between a point of A's side and
+//!   the closest point of B's side;
+//! - **G1**: the angle between the tangent planes across the edge, measured
+//!   as the angle between A's inward cross-boundary direction d_A and the
+//!   reverse −d_B of B's (each the cross-boundary partial derivative made
+//!   orthogonal to its side's tangent): 0° for a smooth join, whatever the
+//!   patches' orientation;
+//! - **G2**: the difference of the normal curvatures across the edge,
+//!   κ_n(d) = II(d, d) / I(d, d) (fundamental forms of each patch, B's
+//!   normal turned to agree with A's), absolute (1 / length) and relative to
+//!   max(|κ_A|, |κ_B|, 1 / model size).
+//!
+//! An edge is classified `gap` when its largest gap exceeds the position
+//! tolerance, else `G0` when its largest angle exceeds the angle tolerance,
+//! else `G1` when its largest relative curvature difference exceeds the
+//! curvature tolerance, else `G2` (the classes of Rhino's
+//! GlobalEdgeContinuity / Alias surface continuity).
+
+use crate::Vec3;
+use crate::bspline::{BSplineSurface, SurfaceDerivatives};
+use rayon::prelude::*;
+use serde::Serialize;
+use thiserror::Error;
+
+/// A side of a patch's parameter rectangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PatchSide {
+    /// u = u_min, running in v.
+    UMin,
+    /// u = u_max, running in v.
+    UMax,
+    /// v = v_min, running in u.
+    VMin,
+    /// v = v_max, running in u.
+    VMax,
+}
+
+impl PatchSide {
+    /// The four sides.
+    pub const ALL: [PatchSide; 4] = [
+        PatchSide::UMin,
+        PatchSide::UMax,
+        PatchSide::VMin,
+        PatchSide::VMax,
+    ];
+
+    /// Parameter range of the running parameter t on `s`.
+    pub fn range(self, s: &BSplineSurface) -> [f64; 2] {
+        match self {
+            PatchSide::UMin | PatchSide::UMax => s.domain_v(),
+            PatchSide::VMin | PatchSide::VMax => s.domain_u(),
+        }
+    }
+
+    /// The (u, v) of running parameter t.
+    pub fn uv(self, s: &BSplineSurface, t: f64) -> (f64, f64) {
+        let (du, dv) = (s.domain_u(), s.domain_v());
+        match self {
+            PatchSide::UMin => (du[0], t),
+            PatchSide::UMax => (du[1], t),
+            PatchSide::VMin => (t, dv[0]),
+            PatchSide::VMax => (t, dv[1]),
+        }
+    }
+
+    /// Tangent dS/dt, its derivative, and the inward cross-boundary partial
+    /// derivative (±S_u or ±S_v) from the surface derivatives.
+    fn frame(self, d: &SurfaceDerivatives) -> (Vec3, Vec3, Vec3) {
+        match self {
+            PatchSide::UMin => (d.sv, d.svv, d.su),
+            PatchSide::UMax => (d.sv, d.svv, -d.su),
+            PatchSide::VMin => (d.su, d.suu, d.sv),
+            PatchSide::VMax => (d.su, d.suu, -d.sv),
+        }
+    }
+}
+
+/// Continuity class of a shared edge.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+pub enum SeamClass {
+    /// The sides are near each other but further apart than the position
+    /// tolerance.
+    #[serde(rename = "gap")]
+    Gap,
+    /// Closed, but the tangent planes differ by more than the angle tolerance.
+    G0,
+    /// Tangent-plane continuous, curvature differs.
+    G1,
+    /// Curvature continuous within the tolerances.
+    G2,
+}
+
+impl SeamClass {
+    /// "gap", "G0", "G1" or "G2".
+    pub fn name(self) -> &'static str {
+        match self {
+            SeamClass::Gap => "gap",
+            SeamClass::G0 => "G0",
+            SeamClass::G1 => "G1",
+            SeamClass::G2 => "G2",
+        }
+    }
+}
+
+/// Options of [`continuity`]. Lengths are in model units; `None` derives
+/// them from the diagonal D of the bounding box of all control points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContinuityOptions {
+    /// Position tolerance for G0 (default 1e-4 D).
+    pub tolerance: Option<f64>,
+    /// Angle tolerance for G1, degrees (0.5°).
+    pub angle_tolerance_deg: f64,
+    /// Relative curvature tolerance for G2 (0.05 = 5 %).
+    pub curvature_tolerance: f64,
+    /// Two sides closer than this are taken as one shared edge (default
+    /// max(100 × tolerance, 2e-3 D)); farther apart they are not neighbours.
+    pub match_distance: Option<f64>,
+    /// Samples per side when matching sides (64).
+    pub match_samples: usize,
+    /// Samples along each shared edge for the measures (64).
+    pub samples: usize,
+}
+
+impl Default for ContinuityOptions {
+    fn default() -> Self {
+        ContinuityOptions {
+            tolerance: None,
+            angle_tolerance_deg: 0.5,
+            curvature_tolerance: 0.05,
+            match_distance: None,
+            match_samples: 64,
+            samples: 64,
+        }
+    }
+}
+
+/// Why [`continuity`] could not run.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ContinuityError {
+    /// An option is out of range.
+    #[error("invalid option: {0}")]
+    Invalid(String),
+}
+
+/// One shared edge between side `sides[0]` of surface `surfaces[0]` and side
+/// `sides[1]` of surface `surfaces[1]` (the same surface for a closed
+/// patch), over the running-parameter range `range` of the first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Seam {
+    /// The two surfaces (indices in the input).
+    pub surfaces: [usize; 2],
+    /// Their sides.
+    pub sides: [PatchSide; 2],
+    /// Running-parameter range on the first surface's side.
+    pub range: [f64; 2],
+    /// Length of the shared stretch (model units).
+    pub length: f64,
+    /// Largest position gap (model units).
+    pub g0_max: f64,
+    /// Largest angle between the tangent planes (degrees).
+    pub g1_max_deg: f64,
+    /// Largest normal-curvature difference across the edge (1 / model units).
+    pub g2_max: f64,
+    /// Largest relative normal-curvature difference.
+    pub g2_max_relative: f64,
+    /// The class.
+    pub class: SeamClass,
+    /// Where the measure that decides the class is largest.
+    pub worst: Vec3,
+    /// Samples measured.
+    pub samples: usize,
+    /// Samples where a normal is undefined (poles): G0 only.
+    pub degenerate_samples: usize,
+    /// Points of the edge on the first surface (for pictures).
+    pub points: Vec<Vec3>,
+}
+
+/// What [`continuity`] found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContinuityReport {
+    /// The shared edges, ordered by (surfaces, sides, range).
+    pub seams: Vec<Seam>,
+    /// Position tolerance used.
+    pub tolerance: f64,
+    /// Matching distance used.
+    pub match_distance: f64,
+    /// Sides shorter than the matching distance (collapsed to a point:
+    /// poles), not analysed.
+    pub degenerate_sides: usize,
+}
+
+/// A sampled side.
+struct SideSamples {
+    surface: usize,
+    side: PatchSide,
+    ts: Vec<f64>,
+    points: Vec<Vec3>,
+    lo: Vec3,
+    hi: Vec3,
+    length: f64,
+}
+
+fn sample_side(s: &BSplineSurface, k: usize, side: PatchSide, n: usize) -> SideSamples {
+    let r = side.range(s);
+    let ts: Vec<f64> = (0..=n)
+        .map(|m| r[0] + (r[1] - r[0]) * m as f64 / n as f64)
+        .collect();
+    let points: Vec<Vec3> = ts
+        .iter()
+        .map(|&t| {
+            let (u, v) = side.uv(s, t);
+            s.eval(u, v)
+        })
+        .collect();
+    let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+    for p in &points {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    let length = points.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+    SideSamples {
+        surface: k,
+        side,
+        ts,
+        points,
+        lo,
+        hi,
+        length,
+    }
+}
+
+/// Closest point of side `b` to `p`: (running parameter, distance,
+/// whether the parameter is clamped at an end of the side). Starts from
+/// the nearest sample and refines by Newton on |C(t) − p|².
+fn closest_on_side(s: &BSplineSurface, b: &SideSamples, p: Vec3) -> (f64, f64) {
+    let mut best = 0;
+    let mut bd = f64::INFINITY;
+    for (k, q) in b.points.iter().enumerate() {
+        let d = (*q - p).length_squared();
+        if d < bd {
+            bd = d;
+            best = k;
+        }
+    }
+    let r = b.side.range(s);
+    let mut t = b.ts[best];
+    for _ in 0..20 {
+        let (u, v) = b.side.uv(s, t);
+        let d = s.derivatives(u, v);
+        let (c1, c2, _) = b.side.frame(&d);
+        let e = d.point - p;
+        let g = e.dot(c1);
+        let h = c1.dot(c1) + e.dot(c2);
+        let h = if h > 0.0 { h } else { c1.dot(c1) };
+        if !(h > 0.0 && h.is_finite()) {
+            break;
+        }
+        let step = g / h;
+        let nt = (t - step).clamp(r[0], r[1]);
+        if !nt.is_finite() {
+            break;
+        }
+        let done = (nt - t).abs() <= 1e-14 * (r[1] - r[0]).abs().max(1e-300);
+        t = nt;
+        if done {
+            break;
+        }
+    }
+    let (u, v) = b.side.uv(s, t);
+    let d = (s.eval(u, v) - p).length();
+    let _ = bd;
+    (t, d)
+}
+
+/// Normal curvature of `s` in the tangent direction `dir` at `d`, with
+/// normal `n` (II(d, d) / I(d, d)); `None` where the first fundamental form
+/// is singular.
+fn normal_curvature(d: &SurfaceDerivatives, n: Vec3, dir: Vec3) -> Option<f64> {
+    let (e, f, g) = (d.su.dot(d.su), d.su.dot(d.sv), d.sv.dot(d.sv));
+    let det = e * g - f * f;
+    if !(det > 1e-300 && det.is_finite()) {
+        return None;
+    }
+    let (x, y) = (dir.dot(d.su), dir.dot(d.sv));
+    let a = (g * x - f * y) / det;
+    let b = (e * y - f * x) / det;
+    let (l, m, nn) = (d.suu.dot(n), d.suv.dot(n), d.svv.dot(n));
+    let first = a * a * e + 2.0 * a * b * f + b * b * g;
+    if !(first > 0.0) {
+        return None;
+    }
+    let k = (a * a * l + 2.0 * a * b * m + b * b * nn) / first;
+    k.is_finite().then_some(k)
+}
+
+/// The unit inward cross-boundary direction (tangent to the surface,
+/// orthogonal to the side) and the unit normal at a side point.
+fn cross_direction(side: PatchSide, d: &SurfaceDerivatives) -> Option<(Vec3, Vec3)> {
+    let (tan, _, cross) = side.frame(d);
+    let n = d.normal()?;
+    let tl = tan.length_squared();
+    let c = if tl > 0.0 {
+        cross - (cross.dot(tan) / tl) * tan
+    } else {
+        cross
+    };
+    let c = c.try_normalize()?;
+    Some((c, n))
+}
+
+/// Measures of one sample: (gap, angle°, |Δκ|, relative Δκ) — the last
+/// three `None` at a pole.
+type SampleMeasure = (f64, Option<(f64, f64, f64)>);
+
+fn measure(
+    sa: &BSplineSurface,
+    a: &SideSamples,
+    sb: &BSplineSurface,
+    b: &SideSamples,
+    t: f64,
+    model: f64,
+) -> (Vec3, SampleMeasure) {
+    let (u, v) = a.side.uv(sa, t);
+    let da = sa.derivatives(u, v);
+    let (tb, gap) = closest_on_side(sb, b, da.point);
+    let (ub, vb) = b.side.uv(sb, tb);
+    let db = sb.derivatives(ub, vb);
+    let rest = (|| {
+        let (ca, na) = cross_direction(a.side, &da)?;
+        let (cb, nb) = cross_direction(b.side, &db)?;
+        // atan2(|a × b|, a · b): accurate near 0° where acos is not
+        let angle = ca.cross(-cb).length().atan2(ca.dot(-cb)).to_degrees();
+        let nb_aligned = if na.dot(nb) < 0.0 { -nb } else { nb };
+        let ka = normal_curvature(&da, na, ca)?;
+        let kb = normal_curvature(&db, nb_aligned, cb)?;
+        let diff = (ka - kb).abs();
+        let scale = ka.abs().max(kb.abs()).max(1.0 / model);
+        Some((angle, diff, diff / scale))
+    })();
+    (da.point, (gap, rest))
+}
+
+/// Shared edges of `surfaces` and their continuity; see the module
+/// documentation. Deterministic (the pairs are searched in parallel and
+/// sorted).
+pub fn continuity(
+    surfaces: &[BSplineSurface],
+    opts: &ContinuityOptions,
+) -> Result<ContinuityReport, ContinuityError> {
+    let bad = |m: &str| Err(ContinuityError::Invalid(m.to_string()));
+    if !(opts.angle_tolerance_deg >= 0.0 && opts.angle_tolerance_deg.is_finite()) {
+        return bad("angle tolerance must be finite and not negative");
+    }
+    if !(opts.curvature_tolerance >= 0.0 && opts.curvature_tolerance.is_finite()) {
+        return bad("curvature tolerance must be finite and not negative");
+    }
+    if !(2..=100_000).contains(&opts.match_samples) || !(2..=100_000).contains(&opts.samples) {
+        return bad("sample counts must be between 2 and 100000");
+    }
+    let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+    for s in surfaces {
+        let (a, b) = s.control_bounding_box();
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    let diag = if surfaces.is_empty() {
+        1.0
+    } else {
+        (hi - lo).length()
+    };
+    let model = if diag > 0.0 && diag.is_finite() {
+        diag
+    } else {
+        1.0
+    };
+    let tol = opts.tolerance.unwrap_or(1e-4 * model);
+    if !(tol > 0.0 && tol.is_finite()) {
+        return bad("position tolerance must be positive");
+    }
+    let matching = opts
+        .match_distance
+        .unwrap_or((100.0 * tol).max(2e-3 * model));
+    if !(matching >= tol && matching.is_finite()) {
+        return bad("match distance must be finite and at least the tolerance");
+    }
+    let sides: Vec<SideSamples> = surfaces
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(k, s)| {
+            PatchSide::ALL
+                .into_iter()
+                .map(move |side| sample_side(s, k, side, opts.match_samples))
+        })
+        .collect();
+    let (live, dead): (Vec<&SideSamples>, Vec<&SideSamples>) =
+        sides.iter().partition(|s| s.length > matching);
+    let pairs: Vec<(usize, usize)> = (0..live.len())
+        .flat_map(|a| (a + 1..live.len()).map(move |b| (a, b)))
+        .filter(|&(a, b)| {
+            let (x, y) = (live[a], live[b]);
+            let m = Vec3::splat(matching);
+            let overlap = (x.lo - m).cmple(y.hi).all() && (y.lo - m).cmple(x.hi).all();
+            // the same patch: only opposite sides (a closed patch's seam)
+            let same_ok = x.surface != y.surface
+                || matches!(
+                    (x.side, y.side),
+                    (PatchSide::UMin, PatchSide::UMax) | (PatchSide::VMin, PatchSide::VMax)
+                );
+            overlap && same_ok
+        })
+        .collect();
+    let mut seams: Vec<Seam> = pairs
+        .par_iter()
+        .flat_map_iter(|&(ia, ib)| {
+            seams_between(surfaces, live[ia], live[ib], tol, matching, model, opts)
+        })
+        .collect();
+    seams.sort_by(|x, y| {
+        (x.surfaces, x.sides)
+            .cmp(&(y.surfaces, y.sides))
+            .then(x.range[0].total_cmp(&y.range[0]))
+    });
+    Ok(ContinuityReport {
+        seams,
+        tolerance: tol,
+        match_distance: matching,
+        degenerate_sides: dead.len(),
+    })
+}
+
+/// The shared stretches of sides `a` and `b`, measured.
+fn seams_between(
+    surfaces: &[BSplineSurface],
+    a: &SideSamples,
+    b: &SideSamples,
+    tol: f64,
+    matching: f64,
+    model: f64,
+    opts: &ContinuityOptions,
+) -> Vec<Seam> {
+    let (sa, sb) = (&surfaces[a.surface], &surfaces[b.surface]);
+    let rb = b.side.range(sb);
+    // A point of a is on the shared stretch when b passes within the
+    // matching distance, and not only past b's end (then the closest point
+    // is b's end point, unless it is within the tolerance).
+    let on = |t: f64| -> bool {
+        let (u, v) = a.side.uv(sa, t);
+        let (tb, d) = closest_on_side(sb, b, sa.eval(u, v));
+        let end = (tb - rb[0]).abs() <= 1e-12 * (rb[1] - rb[0]).abs()
+            || (tb - rb[1]).abs() <= 1e-12 * (rb[1] - rb[0]).abs();
+        d <= matching && (!end || d <= tol)
+    };
+    let flags: Vec<bool> = a.ts.iter().map(|&t| on(t)).collect();
+    let mut out = Vec::new();
+    let n = flags.len();
+    let mut k = 0;
+    while k < n {
+        if !flags[k] {
+            k += 1;
+            continue;
+        }
+        let s = k;
+        while k < n && flags[k] {
+            k += 1;
+        }
+        let e = k - 1; // last flagged
+        // refine the ends by bisection between a flagged and an unflagged sample
+        let refine = |inside: f64, outside: f64| {
+            let (mut i, mut o) = (inside, outside);
+            for _ in 0..30 {
+                let m = 0.5 * (i + o);
+                if on(m) { i = m } else { o = m }
+            }
+            i
+        };
+        let t0 = if s > 0 {
+            refine(a.ts[s], a.ts[s - 1])
+        } else {
+            a.ts[s]
+        };
+        let t1 = if e + 1 < n {
+            refine(a.ts[e], a.ts[e + 1])
+        } else {
+            a.ts[e]
+        };
+        if !(t1 > t0) {
+            continue;
+        }
+        let m = opts.samples;
+        let ts: Vec<f64> = (0..=m)
+            .map(|j| t0 + (t1 - t0) * j as f64 / m as f64)
+            .collect();
+        let measured: Vec<(Vec3, SampleMeasure)> = ts
+            .iter()
+            .map(|&t| measure(sa, a, sb, b, t, model))
+            .collect();
+        let points: Vec<Vec3> = measured.iter().map(|x| x.0).collect();
+        let length: f64 = points.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+        // a corner touch or a crossing, not an edge
+        if length <= 2.0 * matching {
+            continue;
+        }
+        let mut g0 = (0.0f64, points[0]);
+        let mut g1 = (0.0f64, points[0]);
+        let mut g2 = 0.0f64;
+        let mut g2r = (0.0f64, points[0]);
+        let mut degenerate = 0;
+        for (p, (gap, rest)) in &measured {
+            if *gap > g0.0 {
+                g0 = (*gap, *p);
+            }
+            match rest {
+                Some((ang, diff, rel)) => {
+                    if *ang > g1.0 {
+                        g1 = (*ang, *p);
+                    }
+                    g2 = g2.max(*diff);
+                    if *rel > g2r.0 {
+                        g2r = (*rel, *p);
+                    }
+                }
+                None => degenerate += 1,
+            }
+        }
+        let class = if g0.0 > tol {
+            SeamClass::Gap
+        } else if g1.0 > opts.angle_tolerance_deg {
+            SeamClass::G0
+        } else if g2r.0 > opts.curvature_tolerance {
+            SeamClass::G1
+        } else {
+            SeamClass::G2
+        };
+        let worst = match class {
+            SeamClass::Gap => g0.1,
+            SeamClass::G0 => g1.1,
+            SeamClass::G1 | SeamClass::G2 => g2r.1,
+        };
+        out.push(Seam {
+            surfaces: [a.surface, b.surface],
+            sides: [a.side, b.side],
+            range: [t0, t1],
+            length,
+            g0_max: g0.0,
+            g1_max_deg: g1.0,
+            g2_max: g2,
+            g2_max_relative: g2r.0,
+            class,
+            worst,
+            samples: measured.len(),
+            degenerate_samples: degenerate,
+            points,
+        });
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests;
