@@ -844,6 +844,27 @@ fn page_in_headless_chromium_shades_stripes_and_runs_a_repair_session() {
     );
     b.eval("(() => { const m = document.getElementById('mode'); m.value = '1'; m.dispatchEvent(new Event('input')); const s = document.getElementById('sweep'); s.value = '0'; s.dispatchEvent(new Event('input')); })()");
 
+    // marking by picking: the sphere tool at the middle of the view marks
+    // the triangles around the picked one (ID-buffer pick + server sphere)
+    b.eval("document.getElementById('tool').value = 'sphere'");
+    let (mx, my) = ((cx + cw / 2) as f64, row as f64);
+    for t in ["mousePressed", "mouseReleased"] {
+        b.call(
+            "Input.dispatchMouseEvent",
+            json!({"type": t, "x": mx, "y": my, "button": "left", "clickCount": 1}),
+        );
+    }
+    b.wait_for(
+        "document.getElementById('regioninfo').textContent.includes('marked')",
+        30,
+    );
+    let marked: usize = b
+        .eval("parseInt(document.getElementById('regioninfo').textContent)")
+        .as_u64()
+        .unwrap() as usize;
+    assert!(marked > 10, "{marked} triangles marked by the sphere tool");
+    b.eval("document.getElementById('clearregion').click(); document.getElementById('tool').value = 'orbit'");
+
     // scripted session: detect, take the top region, fair it, compare, undo, download
     b.eval("document.getElementById('detect').click()");
     b.wait_for("document.querySelectorAll('#regions li').length > 0", 60);

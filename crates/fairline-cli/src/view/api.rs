@@ -174,8 +174,15 @@ fn route(shared: &Arc<Shared>, req: &HttpRequest, body: &[u8]) -> Answer {
                     binary(vec3_bytes(&d.step(step).positions, d.center))
                 }
                 (true, _, ["normals"]) => {
-                    let mesh = lock(shared).docs[k].tri_at(step);
-                    binary(vec3_bytes(&vertex_normals(&mesh), Vec3::ZERO))
+                    let normals = {
+                        let st = lock(shared);
+                        let d = &st.docs[k];
+                        match step {
+                            None => vertex_normals(&d.now),
+                            Some(_) => vertex_normals(&d.tri_at(step)),
+                        }
+                    };
+                    binary(vec3_bytes(&normals, Vec3::ZERO))
                 }
                 (true, _, ["indices"]) => {
                     let st = lock(shared);

@@ -127,9 +127,14 @@ pub fn run(args: Args) -> Result<()> {
     if !(2..=1024).contains(&args.grid) {
         return Err(bad_input("--grid must be between 2 and 1024"));
     }
-    let mut docs = vec![doc::Doc::open(&args.file, args.grid)?];
-    if let Some(f2) = &args.file2 {
-        docs.push(doc::Doc::open(f2, args.grid)?);
+    // the files must be readable before the URL is printed; they are read
+    // after it, so that the browser starts while a large mesh loads (its
+    // requests wait in the listen queue until the server answers)
+    let files: Vec<&PathBuf> = std::iter::once(&args.file)
+        .chain(args.file2.as_ref())
+        .collect();
+    for f in &files {
+        std::fs::File::open(f).map_err(|e| bad_input(format!("{}: {e}", f.display())))?;
     }
     let token = auth::new_token()?;
     let listener = std::net::TcpListener::bind(("127.0.0.1", args.port.unwrap_or(0)))
@@ -141,15 +146,19 @@ pub fn run(args: Args) -> Result<()> {
         writeln!(out, "{url}")?;
         out.flush()?;
     }
+    if !args.no_open {
+        open_browser(&url);
+    }
+    let mut docs = Vec::new();
+    for f in &files {
+        docs.push(doc::Doc::open(f, args.grid)?);
+    }
     let names: Vec<String> = docs.iter().map(|d| d.name.clone()).collect();
     eprintln!(
         "fairline view: serving {} on 127.0.0.1:{port} (saves go to {}); Ctrl-C to stop",
         names.join(" and "),
         save_dir.display()
     );
-    if !args.no_open {
-        open_browser(&url);
-    }
     let state = Arc::new(api::Shared {
         state: Mutex::new(api::State::new(docs, save_dir)),
         guard: auth::Guard::new(token, port),
