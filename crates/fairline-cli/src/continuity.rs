@@ -1,7 +1,8 @@
 //! `fairline continuity`: G0 / G1 / G2 across the shared boundaries of a
 //! set of B-spline patches (issue #20 item 5).
 
-use crate::common::{Report, bad_input, check_output};
+use crate::common::{Report, bad_input};
+use crate::output::{Job, say};
 use crate::surface_highlight::{check_ext, surface_picture};
 use anyhow::Result;
 use fairline::bspline::continuity::{ContinuityOptions, SeamClass, continuity};
@@ -60,11 +61,12 @@ fn class_colour(c: SeamClass) -> [f32; 3] {
 pub fn run(args: Args) -> Result<()> {
     if let Some(p) = &args.png {
         check_ext(p, "png", "--png")?;
-        check_output(&args.surface_file, p)?;
     }
-    if let Some(p) = &args.report {
-        check_output(&args.surface_file, p)?;
-    }
+    let job = Job::new("continuity")
+        .input(&args.surface_file)
+        .output_opt("--png", args.png.as_deref())
+        .output_opt("--report", args.report.as_deref())
+        .check()?;
     let surfaces = crate::surface::load_surfaces(&args.surface_file)?;
     let opts = ContinuityOptions {
         tolerance: args.tolerance,
@@ -83,7 +85,7 @@ pub fn run(args: Args) -> Result<()> {
         counts[s.class as usize] += 1;
     }
     let classes = [SeamClass::Gap, SeamClass::G0, SeamClass::G1, SeamClass::G2];
-    eprintln!(
+    let summary = format!(
         "{}: {} patches, {} shared edges: {}; tolerance {:.3e}, {}°, {} % curvature{}",
         args.surface_file.display(),
         surfaces.len(),
@@ -111,7 +113,7 @@ pub fn run(args: Args) -> Result<()> {
         .filter(|s| s.class != SeamClass::G2)
         .take(10)
     {
-        eprintln!(
+        say(&format!(
             "  surfaces {} {:?} / {} {:?}: {} (gap {:.2e}, angle {:.3}°, curvature {:.1} %) worst at ({:.4}, {:.4}, {:.4})",
             s.surfaces[0],
             s.sides[0],
@@ -124,7 +126,7 @@ pub fn run(args: Args) -> Result<()> {
             s.worst.x,
             s.worst.y,
             s.worst.z
-        );
+        ));
     }
     report.set(
         "edges",
@@ -189,5 +191,6 @@ pub fn run(args: Args) -> Result<()> {
         img.write_png(p)?;
     }
     report.write(args.report.as_deref())?;
+    job.finish(summary);
     Ok(())
 }

@@ -1,7 +1,8 @@
 //! `fairline repair`: turns a dirty mesh into one every command accepts, and
 //! the hint every refusal of dirty input ends with.
 
-use crate::common::{Report, check_output};
+use crate::common::Report;
+use crate::output::{Job, say, warn};
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
 
@@ -28,16 +29,11 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    check_output(&args.input, &args.output)?;
-    if let Some(r) = &args.report {
-        check_output(&args.input, r)?;
-        if r == &args.output {
-            return Err(crate::common::bad_input(format!(
-                "{}: the report and the output mesh are the same file",
-                r.display()
-            )));
-        }
-    }
+    let job = Job::new("repair")
+        .input(&args.input)
+        .output("OUT", &args.output)
+        .output_opt("--report", args.report.as_deref())
+        .check()?;
     let soup = fairline::io::read_soup(&args.input)?;
     let mut report = Report::new("repair");
     let repaired = report
@@ -83,22 +79,21 @@ pub fn run(args: Args) -> Result<()> {
     ];
     for (n, what) in changes {
         if n > 0 {
-            eprintln!("  {n} {what}");
+            say(&format!("  {n} {what}"));
         }
     }
     if !r.orientation_conflicts.is_empty() {
-        eprintln!(
-            "warning: {} faces could not be oriented consistently (non-orientable surface); left as they are",
+        warn(format_args!(
+            "{} faces could not be oriented consistently (non-orientable surface); left as they are",
             r.orientation_conflicts.len()
-        );
+        ));
     }
     if let Some(problem) = &r.remaining_problem {
-        eprintln!("warning: the output is still not a manifold: {problem}");
+        warn(format_args!("the output is still not a manifold: {problem}"));
     }
-    eprintln!(
-        "repair: {} → {}: {} vertices, {} faces → {} vertices, {} faces{}",
+    job.finish(format_args!(
+        "{}: {} vertices, {} faces → {} vertices, {} faces{}",
         args.input.display(),
-        args.output.display(),
         r.vertices_before,
         r.faces_before,
         r.vertices_after,
@@ -110,7 +105,7 @@ pub fn run(args: Args) -> Result<()> {
         } else {
             "; vertex indices changed (see vertex_source in the report)"
         }
-    );
+    ));
     Ok(())
 }
 

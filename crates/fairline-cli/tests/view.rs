@@ -875,9 +875,7 @@ fn page_in_headless_chromium_shades_stripes_and_runs_a_repair_session() {
     );
     std::thread::sleep(Duration::from_millis(500));
     let shot = b.screenshot();
-    let images = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/images");
-    std::fs::create_dir_all(&images).unwrap();
-    std::fs::write(images.join("workbench.png"), &shot.3).unwrap();
+    save_screenshot("workbench.png", &shot.3);
     b.eval(
         "(() => { const m = document.getElementById('method'); m.value = 'fair:highlight'; })()",
     );
@@ -1046,11 +1044,7 @@ fn page_shows_bspline_patches_and_fairs_a_surface_from_uv_endpoints() {
     b.wait_for("window.fairline.uvPanel.endpoints.length === 1", 10);
     std::thread::sleep(Duration::from_millis(300));
     let shot = b.screenshot();
-    std::fs::write(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/images/workbench-surface.png"),
-        &shot.3,
-    )
-    .unwrap();
+    save_screenshot("workbench-surface.png", &shot.3);
     b.eval("document.getElementById('fair-surface').click()");
     b.wait_for("document.body.dataset.lastJob", 300);
     let job = srv.json("/api/job", None);
@@ -1175,4 +1169,19 @@ fn workbench_timings() {
         );
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Keeps a screenshot the browser took: under the test's target folder
+/// always, and over the README's copy in docs/images/ only when
+/// `FAIRLINE_UPDATE_SCREENSHOTS` is set (a test run never changes tracked
+/// files otherwise).
+fn save_screenshot(name: &str, png: &[u8]) {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("screenshots");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join(name), png).unwrap();
+    if std::env::var_os("FAIRLINE_UPDATE_SCREENSHOTS").is_some() {
+        let images = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/images");
+        std::fs::create_dir_all(&images).unwrap();
+        std::fs::write(images.join(name), png).unwrap();
+    }
 }
