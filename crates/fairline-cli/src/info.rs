@@ -11,7 +11,9 @@ use std::path::PathBuf;
 /// bounding box, edge lengths. Works on broken (non-manifold, invalid) files
 /// too: it reports the defects instead of refusing.
 #[derive(clap::Args, Debug)]
-#[command(after_help = "Example:\n  fairline demo --out fairline-demo\n  fairline info fairline-demo/sphere.ply --json")]
+#[command(
+    after_help = "Example:\n  fairline demo --out fairline-demo\n  fairline info fairline-demo/sphere.ply --json"
+)]
 pub struct Args {
     /// Mesh file (.obj .ply .off .stl).
     pub mesh: PathBuf,

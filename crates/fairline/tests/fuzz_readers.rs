@@ -23,6 +23,9 @@ use fairline::io::{MeshFormat, read_soup_bytes, write_soup};
 use fairline::mesh::triangulate;
 use fairline::{Soup, SurfaceMesh, Vec3};
 
+/// A reader under test: the bytes and the file name for errors.
+type Reader = dyn Fn(&[u8], &str) -> Result<(), String>;
+
 /// Mutated inputs per seed file.
 const CASES: usize = 20_000;
 /// The longest one read may take (tiny files: microseconds normally).
@@ -171,7 +174,7 @@ fn mutate(seed: &[u8], rng: &mut Rng) -> Vec<u8> {
             }
             10 => {
                 // append garbage after the data
-                b.extend_from_slice(&b[..at.min(64)].to_vec());
+                b.extend_from_within(..at.min(64));
             }
             _ => {
                 // a binary u32 count overwritten by a huge or zero value
@@ -187,7 +190,7 @@ fn mutate(seed: &[u8], rng: &mut Rng) -> Vec<u8> {
 
 /// Reads `bytes` as `format` with `read`, checking no panic, the time bound
 /// and, on error, that the message starts with the file's name.
-fn check_one(name: &str, bytes: &[u8], read: &dyn Fn(&[u8], &str) -> Result<(), String>) -> bool {
+fn check_one(name: &str, bytes: &[u8], read: &Reader) -> bool {
     let t = Instant::now();
     let r = catch_unwind(AssertUnwindSafe(|| read(bytes, name)));
     let took = t.elapsed();
@@ -251,7 +254,7 @@ fn read_iges_bytes(bytes: &[u8], name: &str) -> Result<(), String> {
         .map_err(|e| format!("{name}: {e}"))
 }
 
-fn fuzz(name: &str, seed: &[u8], salt: u64, read: &dyn Fn(&[u8], &str) -> Result<(), String>) {
+fn fuzz(name: &str, seed: &[u8], salt: u64, read: &Reader) {
     // the seed itself is valid
     read(seed, name).unwrap_or_else(|e| panic!("seed {name} does not read: {e}"));
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15 ^ salt.wrapping_mul(0xff51_afd7_ed55_8ccd));
