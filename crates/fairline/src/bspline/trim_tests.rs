@@ -290,7 +290,7 @@ fn bspline_trim_torus_cut_by_a_curve_has_exact_area() {
         let theta = p.y.atan2(p.x);
         let rho = p.x.hypot(p.y) - big;
         let phi = p.z.atan2(rho);
-        assert!(theta >= -1e-9 && theta <= PI + 1e-9, "{theta}");
+        assert!((-1e-9..=PI + 1e-9).contains(&theta), "{theta}");
         assert!(phi >= -1e-6 && phi <= g(theta) + 1e-3, "{phi} {}", g(theta));
     }
 }
