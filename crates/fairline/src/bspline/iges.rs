@@ -15,15 +15,26 @@
 //! (`PROP3 = 1`) is built without weights (they are still read and checked to
 //! be numbers). A transformation matrix (entity 124, chained through its own
 //! directory entry) referenced by directory field 7 is applied to the control
-//! points. Trimming (entities 143 and 144) is ignored, but the surfaces it
-//! refers to are counted and flagged.
+//! points.
+//!
+//! Trimmed surfaces (entity 144, IGES 5.3 §4.34) on an entity 128 attach
+//! their outer and inner boundaries (entities 142) to the surface as
+//! trimming loops ([`BSplineSurface::set_trims`]). Each boundary is read from
+//! its parameter-space curve (142's `BPTR`), made of entities 126 (rational
+//! B-spline curve), 110 (line), 100 (circular arc, with its 124
+//! transformation) and 102 (composite curve). Boundaries given only in model
+//! space (`BPTR = 0`) are not projected (projection
+//! onto the surface is not implemented): that face stays untrimmed and is
+//! counted in [`IgesImport::skipped_trimmed`], as is a 144 on another
+//! surface type (e.g. 120, surface of revolution), which is skipped. Bounded surfaces (143) are
+//! flagged but not trimmed.
 
 use std::path::{Path, PathBuf};
 
 use glam::{DAffine3, DMat3};
 use thiserror::Error;
 
-use super::{BSplineError, BSplineSurface};
+use super::{BSplineError, BSplineSurface, TrimCurve, TrimLoop};
 use crate::Vec3;
 
 /// Why an IGES file could not be imported; names the file line and entity.
@@ -98,6 +109,9 @@ pub struct IgesSurface {
     pub transformed: bool,
     /// Referenced by a trimmed (144) or bounded (143) surface entity.
     pub trimmed: bool,
+    /// Directory entry of the entity 144 whose loops were attached to
+    /// [`Self::surface`], if any.
+    pub trim_entity: Option<usize>,
 }
 
 /// The result of [`read_iges`].
@@ -105,8 +119,13 @@ pub struct IgesSurface {
 pub struct IgesImport {
     /// Every entity 128, in directory order.
     pub surfaces: Vec<IgesSurface>,
-    /// How many of them are trimmed (their trimming was ignored).
+    /// How many of them are referenced by a trimmed (144) or bounded (143)
+    /// surface.
     pub trimmed: usize,
+    /// Entities 144 not applied: their base surface is not an entity 128,
+    /// or a boundary has no parameter-space curve (142 with `BPTR = 0`;
+    /// that face stays untrimmed).
+    pub skipped_trimmed: usize,
     /// Unit name from the Global section (field 15), if given.
     pub units: Option<String>,
 }
@@ -622,15 +641,325 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
         units,
         ..IgesImport::default()
     };
+    // Trimming loops of the 144s on entity-128 surfaces, by surface.
+    let mut loops_of: Vec<Option<(usize, Vec<TrimLoop>)>> = vec![None; g.dir.len()];
+    for k in 0..g.dir.len() {
+        if g.dir[k].entity_type != 144 {
+            continue;
+        }
+        let p = g.parameters(k)?;
+        let line = p.first().map_or(g.dir[k].line, |t| t.1);
+        let base = int(&g, k, &p, 1, line)?;
+        let Some(b) = g.entry(base) else {
+            return Err(g.entity_error(
+                k,
+                line,
+                format!("surface pointer {base} is not a directory entry"),
+            ));
+        };
+        if g.dir[b].entity_type != 128 {
+            out.skipped_trimmed += 1;
+            continue;
+        }
+        match read_entity_144(&g, k, b, &p, line)? {
+            Some(loops) => loops_of[b] = Some((2 * k + 1, loops)),
+            None => out.skipped_trimmed += 1,
+        }
+    }
     for (k, &is_trimmed) in trimmed.iter().enumerate() {
         if g.dir[k].entity_type != 128 {
             continue;
         }
-        let s = read_entity_128(&g, k, is_trimmed)?;
+        let mut s = read_entity_128(&g, k, is_trimmed)?;
+        if let Some((de, loops)) = loops_of[k].take() {
+            s.surface.set_trims(loops).map_err(|e| IgesError::Entity {
+                entity: de,
+                entity_type: 144,
+                line: g.dir[(de - 1) / 2].line,
+                message: e.to_string(),
+            })?;
+            s.trim_entity = Some(de);
+        }
         out.trimmed += usize::from(s.trimmed);
         out.surfaces.push(s);
     }
     Ok(out)
+}
+
+/// Entity 144, trimmed parametric surface (IGES 5.3 §4.34): `PTS N1 N2 PTO
+/// PTI1..PTIN2`. `N1 = 0` means the outer boundary is the boundary of the
+/// surface's domain. Each boundary is an entity 142 read by
+/// [`Iges::boundary_loop`].
+fn read_entity_144(
+    g: &Iges<'_>,
+    k: usize,
+    base: usize,
+    p: &[(Param, usize)],
+    line: usize,
+) -> Result<Option<Vec<TrimLoop>>, IgesError> {
+    let n1 = int(g, k, p, 2, line)?;
+    let n2 = int(g, k, p, 3, line)?;
+    let holes = usize::try_from(n2)
+        .ok()
+        .filter(|&n| n < p.len())
+        .ok_or_else(|| g.entity_error(k, line, format!("N2 = {n2} inner boundaries")))?;
+    let mut loops = Vec::with_capacity(holes + 1);
+    if n1 == 0 {
+        let (u, v) = g.parameter_range(base)?;
+        loops.push(
+            TrimLoop::polygon(&[[u[0], v[0]], [u[1], v[0]], [u[1], v[1]], [u[0], v[1]]])
+                .map_err(|m| g.entity_error(k, line, m))?,
+        );
+    } else {
+        let Some(outer) = g.boundary_loop(k, int(g, k, p, 4, line)?, line)? else {
+            return Ok(None);
+        };
+        loops.push(outer);
+    }
+    for h in 0..holes {
+        let Some(hole) = g.boundary_loop(k, int(g, k, p, 5 + h, line)?, line)? else {
+            return Ok(None);
+        };
+        loops.push(hole);
+    }
+    Ok(Some(loops))
+}
+
+/// A curve of an IGES file as NURBS pieces in model coordinates.
+struct Piece {
+    degree: usize,
+    knots: Vec<f64>,
+    points: Vec<Vec3>,
+    weights: Option<Vec<f64>>,
+}
+
+impl Piece {
+    fn to_trim(&self) -> Result<TrimCurve, String> {
+        TrimCurve::new(
+            self.degree,
+            self.knots.clone(),
+            self.points.iter().map(|p| [p.x, p.y]).collect(),
+            self.weights.clone(),
+        )
+    }
+}
+
+impl Iges<'_> {
+    /// `U0 U1 V0 V1` of entity 128 `k` (its last four parameters).
+    fn parameter_range(&self, k: usize) -> Result<([f64; 2], [f64; 2]), IgesError> {
+        let s = read_entity_128(self, k, true)?;
+        Ok((s.surface.domain_u(), s.surface.domain_v()))
+    }
+
+    /// Entity 142 (curve on a parametric surface, IGES 5.3 §4.32): `CRTN
+    /// SPTR BPTR CPTR PREF`. The parameter-space curve `BPTR` is used; a
+    /// boundary given only in model space (`BPTR = 0`) gives `None`
+    /// (projection onto the surface is not implemented).
+    fn boundary_loop(
+        &self,
+        owner: usize,
+        de: i64,
+        line: usize,
+    ) -> Result<Option<TrimLoop>, IgesError> {
+        let k = self.entry(de).ok_or_else(|| {
+            self.entity_error(
+                owner,
+                line,
+                format!("boundary pointer {de} is not a directory entry"),
+            )
+        })?;
+        if self.dir[k].entity_type != 142 {
+            return Err(self.entity_error(
+                owner,
+                line,
+                format!(
+                    "boundary {de} is entity {}, not 142",
+                    self.dir[k].entity_type
+                ),
+            ));
+        }
+        let p = self.parameters(k)?;
+        let l142 = p.first().map_or(self.dir[k].line, |t| t.1);
+        let bptr = int(self, k, &p, 3, l142)?;
+        if bptr == 0 {
+            return Ok(None);
+        }
+        let c = self.entry(bptr).ok_or_else(|| {
+            self.entity_error(k, l142, format!("BPTR {bptr} is not a directory entry"))
+        })?;
+        let mut pieces = Vec::new();
+        self.curve_pieces(c, 0, &mut pieces)?;
+        let curves = pieces
+            .iter()
+            .map(Piece::to_trim)
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|m| self.entity_error(c, self.dir[c].line, m))?;
+        if curves.is_empty() {
+            return Err(self.entity_error(k, l142, "the boundary curve is empty".into()));
+        }
+        Ok(Some(TrimLoop { curves }))
+    }
+
+    /// The NURBS pieces of curve entity `k`: 126 (rational B-spline curve),
+    /// 110 (line), 100 (circular arc, as rational quadratic arcs of at most
+    /// 90°, Piegl & Tiller A7.1) and 102 (composite curve, its members in
+    /// order); the entity's transformation matrix (124) is applied.
+    fn curve_pieces(&self, k: usize, depth: usize, out: &mut Vec<Piece>) -> Result<(), IgesError> {
+        let e = &self.dir[k];
+        if depth > 32 {
+            return Err(self.entity_error(k, e.line, "composite curves nest too deeply".into()));
+        }
+        let p = self.parameters(k)?;
+        let line = p.first().map_or(e.line, |t| t.1);
+        let start = out.len();
+        match e.entity_type {
+            102 => {
+                let n = int(self, k, &p, 1, line)?;
+                let n = usize::try_from(n)
+                    .ok()
+                    .filter(|&n| n < p.len())
+                    .ok_or_else(|| self.entity_error(k, line, format!("{n} member curves")))?;
+                for m in 0..n {
+                    let de = int(self, k, &p, 2 + m, line)?;
+                    let c = self.entry(de).ok_or_else(|| {
+                        self.entity_error(k, line, format!("member {de} is not a directory entry"))
+                    })?;
+                    self.curve_pieces(c, depth + 1, out)?;
+                }
+            }
+            110 => {
+                let mut r = [0.0; 6];
+                for (n, v) in r.iter_mut().enumerate() {
+                    *v = real(self, k, &p, n + 1, line)?;
+                }
+                out.push(Piece {
+                    degree: 1,
+                    knots: vec![0.0, 0.0, 1.0, 1.0],
+                    points: vec![Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5])],
+                    weights: None,
+                });
+            }
+            100 => {
+                let mut r = [0.0; 7];
+                for (n, v) in r.iter_mut().enumerate() {
+                    *v = real(self, k, &p, n + 1, line)?;
+                }
+                let (z, c) = (r[0], [r[1], r[2]]);
+                let a0 = (r[4] - c[1]).atan2(r[3] - c[0]);
+                let mut a1 = (r[6] - c[1]).atan2(r[5] - c[0]);
+                let radius = (r[3] - c[0]).hypot(r[4] - c[1]);
+                while a1 <= a0 {
+                    a1 += 2.0 * std::f64::consts::PI;
+                }
+                if !(radius > 0.0 && radius.is_finite()) {
+                    return Err(self.entity_error(k, line, "the arc has no radius".into()));
+                }
+                out.push(arc_piece(c, z, radius, a0, a1));
+            }
+            126 => out.push(self.read_entity_126(k, &p, line)?),
+            t => {
+                return Err(self.entity_error(
+                    k,
+                    line,
+                    format!("curve entity {t} is not supported in a trimming boundary (126, 110, 100, 102 are)"),
+                ));
+            }
+        }
+        if e.transform != 0 {
+            let t = self.entry(e.transform).ok_or_else(|| {
+                self.entity_error(
+                    k,
+                    e.line,
+                    format!(
+                        "transformation pointer {} is not a directory entry",
+                        e.transform
+                    ),
+                )
+            })?;
+            let m = self.transform(t, 0)?;
+            for piece in &mut out[start..] {
+                for q in &mut piece.points {
+                    *q = m.transform_point3(*q);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Entity 126, rational B-spline curve (IGES 5.3 §4.23): `K M PROP1..4`,
+    /// knots, weights, control points, `V0 V1`.
+    fn read_entity_126(
+        &self,
+        k: usize,
+        p: &[(Param, usize)],
+        line: usize,
+    ) -> Result<Piece, IgesError> {
+        let kk = int(self, k, p, 1, line)?;
+        let m = int(self, k, p, 2, line)?;
+        let (Ok(kk), Ok(m)) = (usize::try_from(kk), usize::try_from(m)) else {
+            return Err(self.entity_error(k, line, format!("K = {kk}, M = {m}")));
+        };
+        let count = kk + 1;
+        let nk = count + m + 1;
+        let needed = 7usize
+            .saturating_add(nk)
+            .saturating_add(count.saturating_mul(4))
+            .saturating_add(2);
+        if p.len() < needed {
+            return Err(self.entity_error(
+                k,
+                line_of(p, p.len(), line),
+                format!("{} parameters, but K={kk}, M={m} need {needed}", p.len()),
+            ));
+        }
+        let polynomial = int(self, k, p, 5, line)? == 1;
+        let reals = |from: usize, n: usize| -> Result<Vec<f64>, IgesError> {
+            (from..from + n)
+                .map(|i| real(self, k, p, i, line))
+                .collect()
+        };
+        let knots = reals(7, nk)?;
+        let weights = reals(7 + nk, count)?;
+        let xyz = reals(7 + nk + count, 3 * count)?;
+        Ok(Piece {
+            degree: m,
+            knots,
+            points: xyz.chunks(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect(),
+            weights: (!polynomial).then_some(weights),
+        })
+    }
+}
+
+/// A circular arc of `radius` around `c` in the plane `z`, from angle `a0`
+/// to `a1 > a0`, as a rational quadratic B-spline (Piegl & Tiller A7.1).
+fn arc_piece(c: [f64; 2], z: f64, radius: f64, a0: f64, a1: f64) -> Piece {
+    let sweep = a1 - a0;
+    let arcs = ((sweep / std::f64::consts::FRAC_PI_2).ceil() as usize).clamp(1, 4);
+    let d = sweep / arcs as f64;
+    let w1 = (0.5 * d).cos();
+    let at = |a: f64, r: f64| Vec3::new(c[0] + r * a.cos(), c[1] + r * a.sin(), z);
+    let mut points = vec![at(a0, radius)];
+    let mut weights = vec![1.0];
+    let mut knots = vec![0.0; 3];
+    for i in 0..arcs {
+        let am = a0 + (i as f64 + 0.5) * d;
+        points.push(at(am, radius / w1));
+        weights.push(w1);
+        points.push(at(a0 + (i + 1) as f64 * d, radius));
+        weights.push(1.0);
+        let t = (i + 1) as f64 / arcs as f64;
+        if i + 1 < arcs {
+            knots.push(t);
+            knots.push(t);
+        }
+    }
+    knots.extend([1.0; 3]);
+    Piece {
+        degree: 2,
+        knots,
+        points,
+        weights: Some(weights),
+    }
 }
 
 /// Entity 128, rational B-spline surface (IGES 5.3 §4.24).
@@ -738,6 +1067,7 @@ fn read_entity_128(g: &Iges<'_>, k: usize, trimmed: bool) -> Result<IgesSurface,
         parameter_range: [range[0], range[1], range[2], range[3]],
         transformed: transform.is_some(),
         trimmed,
+        trim_entity: None,
     })
 }
 

@@ -1,7 +1,10 @@
 //! The B-spline surface JSON format of DESIGN.md §5:
 //! `{"degree_u":3,"degree_v":3,"knots_u":[...],"knots_v":[...],
 //! "control_points":[[[x,y,z],...],...]}` with optional `"weights"` of the
-//! control net's shape; a file holds one surface or `{"surfaces":[...]}`.
+//! control net's shape and optional `"trims"` (closed loops of 2-D B-spline
+//! curves in (u, v), the first the outer boundary, the rest holes; each curve
+//! `{"degree","knots","control_points":[[u,v],...],"weights"?}`); a file holds
+//! one surface or `{"surfaces":[...]}`.
 //!
 //! Numbers are written as the shortest decimal that reads back to the same
 //! f64 and read exactly (serde_json `float_roundtrip`), so a round trip is
@@ -14,7 +17,7 @@ use std::path::{Path, PathBuf};
 use serde_json::{Map, Value};
 use thiserror::Error;
 
-use super::{BSplineError, BSplineSurface};
+use super::{BSplineError, BSplineSurface, TrimCurve, TrimLoop};
 use crate::Vec3;
 
 /// Why a surface JSON file could not be read or written.
@@ -229,8 +232,133 @@ fn surface_from_object(
             Some(out)
         }
     };
-    BSplineSurface::new(degree_u, degree_v, knots_u, knots_v, net, weights)
-        .map_err(|source| SurfaceJsonError::Surface { surface: k, source })
+    let surface = BSplineSurface::new(degree_u, degree_v, knots_u, knots_v, net, weights)
+        .map_err(|source| SurfaceJsonError::Surface { surface: k, source })?;
+    match o.get("trims") {
+        None | Some(Value::Null) => Ok(surface),
+        Some(t) => {
+            let loops = trims_from_value(k, t)?;
+            surface
+                .with_trims(loops)
+                .map_err(|e| field_error(k, "trims", &e.to_string()))
+        }
+    }
+}
+
+/// `"trims": [[curve, ...], ...]`, each curve
+/// `{"degree","knots","control_points":[[u,v],...],"weights"?}`.
+fn trims_from_value(k: usize, t: &Value) -> Result<Vec<TrimLoop>, SurfaceJsonError> {
+    let Value::Array(loops) = t else {
+        return Err(field_error(k, "trims", "expected an array of loops"));
+    };
+    let mut out = Vec::with_capacity(loops.len());
+    for (l, lp) in loops.iter().enumerate() {
+        let Value::Array(curves) = lp else {
+            return Err(field_error(
+                k,
+                &format!("trims[{l}]"),
+                "expected an array of curves",
+            ));
+        };
+        let mut cs = Vec::with_capacity(curves.len());
+        for (c, cv) in curves.iter().enumerate() {
+            let name = format!("trims[{l}][{c}]");
+            let Value::Object(co) = cv else {
+                return Err(field_error(k, &name, "expected a curve object"));
+            };
+            let get = |f: &str| {
+                co.get(f)
+                    .ok_or_else(|| field_error(k, &format!("{name}.{f}"), "missing"))
+            };
+            let nums = |f: &str, v: &Value| -> Result<Vec<f64>, SurfaceJsonError> {
+                let Value::Array(a) = v else {
+                    return Err(field_error(
+                        k,
+                        &format!("{name}.{f}"),
+                        "expected an array of numbers",
+                    ));
+                };
+                a.iter()
+                    .enumerate()
+                    .map(|(i, x)| {
+                        x.as_f64().ok_or_else(|| {
+                            field_error(k, &format!("{name}.{f}[{i}]"), "expected a number")
+                        })
+                    })
+                    .collect()
+            };
+            let degree = get("degree")?
+                .as_u64()
+                .and_then(|d| usize::try_from(d).ok())
+                .ok_or_else(|| {
+                    field_error(
+                        k,
+                        &format!("{name}.degree"),
+                        "expected a non-negative integer",
+                    )
+                })?;
+            let knots = nums("knots", get("knots")?)?;
+            let Value::Array(pts) = get("control_points")? else {
+                return Err(field_error(
+                    k,
+                    &format!("{name}.control_points"),
+                    "expected an array of [u, v] points",
+                ));
+            };
+            let mut points = Vec::with_capacity(pts.len());
+            for (i, p) in pts.iter().enumerate() {
+                let f = format!("control_points[{i}]");
+                let uv = nums(&f, p)?;
+                if uv.len() != 2 {
+                    return Err(field_error(
+                        k,
+                        &format!("{name}.{f}"),
+                        &format!("expected 2 coordinates, found {}", uv.len()),
+                    ));
+                }
+                points.push([uv[0], uv[1]]);
+            }
+            let weights = match co.get("weights") {
+                None | Some(Value::Null) => None,
+                Some(w) => Some(nums("weights", w)?),
+            };
+            let curve = TrimCurve::new(degree, knots, points, weights)
+                .map_err(|m| field_error(k, &name, &m))?;
+            cs.push(curve);
+        }
+        out.push(TrimLoop { curves: cs });
+    }
+    Ok(out)
+}
+
+fn trims_value(s: &BSplineSurface) -> Value {
+    let loops: Vec<Value> = s
+        .trims()
+        .iter()
+        .map(|l| {
+            let curves: Vec<Value> = l
+                .curves
+                .iter()
+                .map(|c| {
+                    let mut o = Map::new();
+                    o.insert("degree".into(), Value::from(c.degree()));
+                    o.insert("knots".into(), Value::from(c.knots().to_vec()));
+                    let pts: Vec<Value> = c
+                        .control_points()
+                        .iter()
+                        .map(|p| Value::from(p.to_vec()))
+                        .collect();
+                    o.insert("control_points".into(), Value::from(pts));
+                    if let Some(w) = c.weights() {
+                        o.insert("weights".into(), Value::from(w.to_vec()));
+                    }
+                    Value::Object(o)
+                })
+                .collect();
+            Value::from(curves)
+        })
+        .collect();
+    Value::from(loops)
 }
 
 fn surface_value(s: &BSplineSurface) -> Value {
@@ -255,6 +383,9 @@ fn surface_value(s: &BSplineSurface) -> Value {
     if let Some(w) = s.weights() {
         let rows: Vec<Value> = w.chunks(nv).map(|r| Value::from(r.to_vec())).collect();
         o.insert("weights".into(), Value::from(rows));
+    }
+    if s.is_trimmed() {
+        o.insert("trims".into(), trims_value(s));
     }
     Value::Object(o)
 }

@@ -37,6 +37,9 @@ mod surface;
 mod tessellate;
 #[cfg(test)]
 pub(crate) mod tests;
+mod trim;
+#[cfg(test)]
+mod trim_tests;
 
 pub use basis::{MAX_DEGREE, MAX_ORDER, clamped_uniform_knots, find_span};
 pub use iges::{IgesError, IgesImport, IgesSurface, parse_iges, read_iges};
@@ -48,7 +51,11 @@ pub use surface::{
     BSplineSurface, BasisSupport, Curvature, MIN_WEIGHT_RATIO, SurfaceBasis, SurfaceDerivatives,
     unit_normal,
 };
-pub use tessellate::{Tessellation, tessellate};
+pub use tessellate::{Tessellation, tessellate, trimmed_area};
+pub use trim::{
+    TRIM_FLATNESS, TrimCurve, TrimError, TrimLoop, TrimmedDomain, polygon_signed_area2,
+    winding_number,
+};
 
 use std::fmt;
 use thiserror::Error;

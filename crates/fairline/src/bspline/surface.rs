@@ -8,8 +8,10 @@ use glam::DVec4;
 use rayon::prelude::*;
 
 use super::basis::{BasisDerivs, MAX_DEGREE, MAX_ORDER, basis_funs, basis_funs_ders2, find_span};
+use super::trim::{TrimError, TrimLoop, TrimmedDomain};
 use super::{BSplineError, Direction};
 use crate::Vec3;
+use std::sync::Arc;
 
 /// A tensor-product B-spline surface of degrees `(p, q)`, non-rational or
 /// rational (NURBS), with clamped or unclamped knot vectors.
@@ -27,6 +29,8 @@ pub struct BSplineSurface {
     count_v: usize,
     points: Vec<Vec3>,
     weights: Option<Vec<f64>>,
+    /// Trimming loops (shared between clones; `None` = the whole domain).
+    trim: Option<Arc<TrimmedDomain>>,
 }
 
 /// Position and partial derivatives up to second order at one parameter.
@@ -369,6 +373,7 @@ impl BSplineSurface {
             count_v,
             points,
             weights,
+            trim: None,
         })
     }
 
@@ -501,6 +506,57 @@ impl BSplineSurface {
     /// Parameter domain in v: `[knots_v[q], knots_v[count_v]]`.
     pub fn domain_v(&self) -> [f64; 2] {
         [self.knots_v[self.degree_v], self.knots_v[self.count_v]]
+    }
+
+    /// Attaches trimming loops (first the outer boundary, then holes; see
+    /// [`TrimmedDomain`]), replacing any previous ones. The loops are
+    /// flattened once here (tolerance [`super::TRIM_FLATNESS`] × domain
+    /// diagonal). Control points, knots and weights are untouched.
+    pub fn set_trims(&mut self, loops: Vec<TrimLoop>) -> Result<(), TrimError> {
+        let domain = TrimmedDomain::new(loops, self.domain_u(), self.domain_v())?;
+        self.trim = Some(Arc::new(domain));
+        Ok(())
+    }
+
+    /// The surface with trimming loops attached; see [`Self::set_trims`].
+    pub fn with_trims(mut self, loops: Vec<TrimLoop>) -> Result<Self, TrimError> {
+        self.set_trims(loops)?;
+        Ok(self)
+    }
+
+    /// Removes the trimming loops (the whole domain becomes the face).
+    pub fn clear_trims(&mut self) {
+        self.trim = None;
+    }
+
+    /// The trimmed domain, `None` for an untrimmed surface.
+    pub fn trim(&self) -> Option<&TrimmedDomain> {
+        self.trim.as_deref()
+    }
+
+    /// The trimming loops (empty for an untrimmed surface).
+    pub fn trims(&self) -> &[TrimLoop] {
+        self.trim.as_deref().map_or(&[], TrimmedDomain::loops)
+    }
+
+    /// Whether trimming loops are attached.
+    pub fn is_trimmed(&self) -> bool {
+        self.trim.is_some()
+    }
+
+    /// Whether `(u, v)` belongs to the face: inside the parameter domain
+    /// and, for a trimmed surface, inside the trimming loops
+    /// ([`TrimmedDomain::contains`]).
+    pub fn contains_uv(&self, u: f64, v: f64) -> bool {
+        let [a, b] = self.domain_u();
+        let [c, d] = self.domain_v();
+        if !(u >= a && u <= b && v >= c && v <= d) {
+            return false;
+        }
+        match self.trim.as_deref() {
+            None => true,
+            Some(t) => t.contains(u, v),
+        }
     }
 
     /// The centre of the parameter domain.

@@ -243,7 +243,7 @@ fn quarter_circle() -> ([[f64; 2]; 3], [f64; 3]) {
 
 /// Full circle: nine rational quadratic control points, knots with double
 /// interior knots (Piegl & Tiller Ex. 7.2).
-fn full_circle() -> (Vec<[f64; 2]>, Vec<f64>, Vec<f64>) {
+pub(crate) fn full_circle() -> (Vec<[f64; 2]>, Vec<f64>, Vec<f64>) {
     let pts = vec![
         [1.0, 0.0],
         [1.0, 1.0],
@@ -315,7 +315,7 @@ fn bspline_rational_sphere_patch_is_exact() {
 
 /// Full torus: u around the z axis, v around the tube starting at the outer
 /// equator going up; `Su × Sv` points outward.
-fn torus(big: f64, small: f64) -> BSplineSurface {
+pub(crate) fn torus(big: f64, small: f64) -> BSplineSurface {
     let (c, w, knots) = full_circle();
     let mut net = Vec::new();
     let mut weights = Vec::new();

@@ -529,6 +529,9 @@ pub fn contour_field(
         }
         pieces.push((false, run));
     }
+    if surface.is_trimmed() {
+        pieces = clip_to_trims(surface, pieces);
+    }
     pieces
         .into_iter()
         .filter(|(_, uv)| uv.len() >= 2)
@@ -544,6 +547,62 @@ pub fn contour_field(
             }
         })
         .collect()
+}
+
+/// Keeps the parts of `(closed, uv)` polylines that lie in the trimmed face
+/// ([`BSplineSurface::contains_uv`]): a polyline is cut where it leaves the
+/// face, the cut point found by bisection (40 steps) on the segment between
+/// the inside and the outside point, so lines end on the trimming loop.
+fn clip_to_trims(
+    surface: &BSplineSurface,
+    pieces: Vec<(bool, Vec<[f64; 2]>)>,
+) -> Vec<(bool, Vec<[f64; 2]>)> {
+    let boundary = |inside: [f64; 2], outside: [f64; 2]| {
+        let (mut a, mut b) = (inside, outside);
+        for _ in 0..40 {
+            let m = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+            if surface.contains_uv(m[0], m[1]) {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+        a
+    };
+    let mut out = Vec::new();
+    for (closed, uv) in pieces {
+        let inside: Vec<bool> = uv.iter().map(|p| surface.contains_uv(p[0], p[1])).collect();
+        if inside.iter().all(|&x| x) {
+            out.push((closed, uv));
+            continue;
+        }
+        let n = uv.len();
+        // Start a loop at an outside point so that runs do not wrap.
+        let (shift, count) = if closed {
+            (inside.iter().position(|&x| !x).unwrap_or(0), n + 1)
+        } else {
+            (0, n)
+        };
+        let mut run: Vec<[f64; 2]> = Vec::new();
+        for k in 0..count {
+            let i = (shift + k) % n;
+            if inside[i] {
+                if run.is_empty() && k > 0 {
+                    let prev = (shift + k - 1) % n;
+                    run.push(boundary(uv[i], uv[prev]));
+                }
+                run.push(uv[i]);
+            } else if !run.is_empty() {
+                let prev = (shift + k + n - 1) % n;
+                run.push(boundary(uv[prev], uv[i]));
+                out.push((false, std::mem::take(&mut run)));
+            }
+        }
+        if !run.is_empty() {
+            out.push((false, run));
+        }
+    }
+    out
 }
 
 /// The point of the segment `p0 → p1` where the field equals `level`, with

@@ -321,3 +321,47 @@ fn teapot_signed_distance_matches_brute_force_minimisation() {
         );
     }
 }
+
+/// On a trimmed surface the lines stop at the trimming loop: the circle of
+/// `surface_circular_lines_on_a_plane_are_circles` on the plane trimmed to
+/// the parameter half `u ≤ 1/2` minus a round hole becomes open arcs whose
+/// every point lies in the face and whose ends lie on the loops.
+#[test]
+fn surface_lines_respect_trims() {
+    use crate::bspline::{TrimCurve, TrimLoop};
+    let s = plane();
+    let c = Vec3::new(0.3, -0.2, 1.5);
+    let light = SurfaceLight::Circular(CircularLight::new(c, Vec3::Z, 1.0).unwrap());
+    let opts = SurfaceHighlightOptions::default().grid(120);
+    let full = surface_highlight_lines(&s, &[light], &opts);
+    let hole = TrimCurve::new(
+        1,
+        vec![0.0, 0.0, 0.25, 0.5, 0.75, 1.0, 1.0],
+        vec![[0.3, 0.2], [0.4, 0.3], [0.3, 0.4], [0.2, 0.3], [0.3, 0.2]],
+        None,
+    )
+    .unwrap();
+    let trimmed = s
+        .clone()
+        .with_trims(vec![
+            TrimLoop::polygon(&[[0.0, 0.0], [0.5, 0.0], [0.5, 1.0], [0.0, 1.0]]).unwrap(),
+            TrimLoop { curves: vec![hole] },
+        ])
+        .unwrap();
+    let h = surface_highlight_lines(&trimmed, &[light], &opts);
+    assert!(!h.lines.is_empty());
+    let total = |ls: &[SurfaceHighlightLine]| ls.iter().map(|l| l.uv.len()).sum::<usize>();
+    assert!(total(&h.lines) < total(&full.lines));
+    for l in &h.lines {
+        assert!(!l.closed);
+        for uv in &l.uv {
+            assert!(trimmed.contains_uv(uv[0], uv[1]), "{uv:?} outside the face");
+        }
+        for end in [l.uv[0], l.uv[l.uv.len() - 1]] {
+            let on_cut = (end[0] - 0.5).abs() < 1e-9;
+            let on_hole = (end[0] - 0.3).abs() + (end[1] - 0.3).abs();
+            let on_hole = (on_hole - 0.1).abs() < 1e-9;
+            assert!(on_cut || on_hole, "end {end:?} not on a loop");
+        }
+    }
+}
