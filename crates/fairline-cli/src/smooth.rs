@@ -66,7 +66,8 @@ pub struct Args {
     pub exponent: f64,
     /// Iterations (laplace, taubin: steps / λ|μ pairs; implicit: time steps;
     /// spring, schneider-kobbelt: the most sweeps). Default 10, 1 for
-    /// implicit, 200 for spring, 50 for schneider-kobbelt.
+    /// implicit, 200 for spring (which stops earlier, once its sweeps stop
+    /// shrinking by 20 % each: the noise is gone), 50 for schneider-kobbelt.
     #[arg(long)]
     pub iterations: Option<usize>,
     /// λ (laplace: default 0.5; taubin: default from the pass band).

@@ -27,17 +27,33 @@ pub struct QuadricFit {
 /// fewer than five distinct neighbours within two rings, no initial normal
 /// can be defined, or the 5×5 normal equations are singular.
 pub fn quadric_fit(mesh: &SurfaceMesh, v: VertexId) -> Option<QuadricFit> {
+    quadric_fit_rings(mesh, v, 2)
+}
+
+/// [`quadric_fit`] over the `rings`-ring of `v` (at least one ring). A
+/// wider ring averages out noise in the vertex positions (the normal error
+/// from noise of amplitude σ falls like σ / (R √N) for a fit over N points
+/// within radius R) at the price of a bias of the order of the third and
+/// fourth derivatives times R and R².
+pub fn quadric_fit_rings(mesh: &SurfaceMesh, v: VertexId, rings: usize) -> Option<QuadricFit> {
     let p = mesh.positions();
     let x0 = p[v.idx()];
-    let mut ring: Vec<u32> = Vec::new();
-    for u in mesh.one_ring(v) {
-        ring.push(u.0);
-        for w in mesh.one_ring(u) {
-            ring.push(w.0);
+    let mut ring: Vec<u32> = vec![v.0];
+    let mut frontier: Vec<u32> = vec![v.0];
+    for _ in 0..rings.max(1) {
+        let mut next = Vec::new();
+        for &a in &frontier {
+            for u in mesh.one_ring(VertexId(a)) {
+                next.push(u.0);
+            }
         }
+        next.sort_unstable();
+        next.dedup();
+        next.retain(|u| ring.binary_search(u).is_err());
+        ring.extend_from_slice(&next);
+        ring.sort_unstable();
+        frontier = next;
     }
-    ring.sort_unstable();
-    ring.dedup();
     ring.retain(|&u| u != v.0 && p[u as usize] != x0);
     if ring.len() < 5 {
         return None;

@@ -19,9 +19,21 @@ pub struct SchneiderKobbeltOptions {
     /// always fixed (the G¹ boundary condition).
     pub constraints: Constraints,
     /// G¹ normals of constrained vertices (normalised). Constrained
-    /// vertices not listed get the normal of a quadric fit over the input
-    /// two-ring ([`geom::quadric_fit`]), falling back to the vertex normal.
+    /// boundary vertices not listed get the normal of a quadric fit over
+    /// their input `normal_fit_rings`-ring ([`geom::quadric_fit_rings`]),
+    /// falling back to the vertex normal.
     pub normals: Vec<(VertexId, Vec3)>,
+    /// Rings of the quadric fit ([`geom::quadric_fit_rings`]) that
+    /// estimates the G¹ normals not given in `normals`; `None` chooses them
+    /// from the mesh: a fit radius of 0.15 × the bounding-box diagonal,
+    /// i.e. ⌈0.15 · diagonal / ē⌉ rings, within 2..=12. A boundary vertex
+    /// sees half a disc, so a two-ring fit on a noisy mesh tilts the normal
+    /// by about σ/h (0.2 rad for noise of 0.2 edge lengths) and Δ_B H = 0
+    /// then bends the whole patch to honour it; wider rings average the
+    /// noise out but add the bias of the unmodelled higher-order terms.
+    /// Where the true normals are known, pass them in `normals`: with exact
+    /// normals the method is exact on a sphere cap.
+    pub normal_fit_rings: Option<usize>,
 }
 
 impl Default for SchneiderKobbeltOptions {
@@ -31,6 +43,7 @@ impl Default for SchneiderKobbeltOptions {
             epsilon: 1e-5,
             constraints: Constraints::default(),
             normals: Vec::new(),
+            normal_fit_rings: None,
         }
     }
 }
@@ -116,7 +129,17 @@ struct Eval {
 ///    like Jacobi on a Laplacian; a hand linearisation that freezes normals
 ///    and weights gave no descent direction on a 61×61 dented roof.)
 ///
-/// Iterates until max |t| / ē < ε (ē the input mean edge length); the report
+/// Closed meshes and meshes constrained only by fixed vertices: a free
+/// component that touches no constrained vertex has no Dirichlet data for
+/// H̃; its harmonic functions are the constants and H̃ is the area-weighted
+/// mean of H there. The Newton system is then rank deficient (a rigid
+/// motion or a scaling along the normals keeps Δ_B H = 0) and is solved with
+/// a Levenberg–Marquardt damping of 1e-10 relative (the least-norm step); a
+/// noisy closed sphere converges back onto a sphere.
+///
+/// Iterates until max |t| / ē < ε (ē the input mean edge length), or until
+/// the Newton step itself is below ε (the mesh already satisfies
+/// Δ_B H = 0 to round-off, e.g. a perfect sphere: converged, 0 iterations); the report
 /// gives the accepted iterations and the final residual max |H − H̃| · ē.
 /// A step is accepted only if it lowers the merit Σ_i (Σ_j w_ij (H_i − H_j))²;
 /// when no step length down to 1/64 does, the iteration stops unconverged
@@ -141,12 +164,24 @@ pub fn schneider_kobbelt(
     // G¹ normals of the constrained vertices: given, else a quadric fit over
     // the input two-ring (a boundary vertex sees only half a fan, which tilts
     // fan normals by O(h)), else the vertex normal
+    let fit_rings = opts.normal_fit_rings.unwrap_or_else(|| {
+        let (lo, hi) = mesh.positions().iter().fold(
+            (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let rings = 0.15 * (hi - lo).length() / ebar;
+        if rings.is_finite() {
+            (rings.ceil() as usize).clamp(2, 12)
+        } else {
+            2
+        }
+    });
     let mut normals0 = geom::vertex_normals_max(mesh);
     for i in 0..n {
         let v = VertexId(i as u32);
         if roles[i] != Role::Free
             && mesh.is_boundary_vertex(v)
-            && let Some(f) = geom::quadric_fit(mesh, v)
+            && let Some(f) = geom::quadric_fit_rings(mesh, v, fit_rings)
         {
             normals0[i] = f.normal;
         }
@@ -175,6 +210,35 @@ pub fn schneider_kobbelt(
         }
     }
     let m = unknown.len();
+    // Components of the free vertices (joined by free–free edges). A
+    // component that touches no constrained vertex — a closed mesh without
+    // fixed vertices — has no Dirichlet data: its harmonic functions are the
+    // constants, the Laplacian block is singular, and H̃ is the area-weighted
+    // mean of H over the component (the harmonic function nearest to H).
+    let mut component = vec![usize::MAX; m];
+    let mut floating: Vec<bool> = Vec::new();
+    for start in 0..m {
+        if component[start] != usize::MAX {
+            continue;
+        }
+        let id = floating.len();
+        let mut touches = false;
+        component[start] = id;
+        let mut stack = vec![unknown[start]];
+        while let Some(i) = stack.pop() {
+            for &j in &nbrs[i] {
+                let r = index[j];
+                if r == usize::MAX {
+                    touches = true;
+                } else if component[r] == usize::MAX {
+                    component[r] = id;
+                    stack.push(j);
+                }
+            }
+        }
+        floating.push(!touches);
+    }
+    let any_floating = floating.iter().any(|f| *f);
     let mut work = mesh.clone();
     let mut solver: Option<CholeskySolver> = None;
     let mut iterations = 0;
@@ -277,7 +341,24 @@ pub fn schneider_kobbelt(
         // (1) harmonic H̃ with Dirichlet values at the constrained vertices
         let mut trip = Vec::new();
         let mut htilde = vec![0.0; m];
+        let mut float_mean = vec![(0.0, 0.0); floating.len()];
+        if any_floating {
+            let area = geom::barycentric_vertex_areas(&work);
+            for (r, &i) in unknown.iter().enumerate() {
+                if floating[component[r]] {
+                    let e = &mut float_mean[component[r]];
+                    e.0 += area[i] * h_of(i);
+                    e.1 += area[i];
+                }
+            }
+        }
         for (r, &i) in unknown.iter().enumerate() {
+            if floating[component[r]] {
+                let (sum, total) = float_mean[component[r]];
+                htilde[r] = if total > 0.0 { sum / total } else { 0.0 };
+                trip.push((r, r, 1.0));
+                continue;
+            }
             let mut diag = 0.0;
             for h in work.outgoing(VertexId(i as u32)) {
                 let j = work.to_vertex(h).idx();
@@ -340,55 +421,108 @@ pub fn schneider_kobbelt(
                 probe.positions_mut()[i] = p[i];
             }
         }
-        let rhs: Vec<f64> = ev.f.iter().map(|x| -x).collect();
-        let jm = sparse_from_triplets(m, m, &jac)?;
-        let t = least_squares(jm.as_ref(), std::slice::from_ref(&rhs))?
-            .pop()
-            .unwrap_or_default();
-        // clamp |t_i| to half the mean length of its edges
-        let t: Vec<f64> = unknown
-            .iter()
-            .enumerate()
-            .map(|(r, &i)| {
-                let lmean = nbrs[i].iter().map(|&j| p[j].distance(p[i])).sum::<f64>()
-                    / nbrs[i].len().max(1) as f64;
-                let ti = t.get(r).copied().unwrap_or(0.0);
-                if ti.is_finite() && normals[i] != Vec3::ZERO {
-                    ti.clamp(-0.5 * lmean, 0.5 * lmean)
-                } else {
-                    0.0
+        // Levenberg–Marquardt damping δ = 1e-12 · max_c ‖J e_c‖² (1e-10
+        // where a component floats): on a
+        // closed mesh without fixed vertices the residuals sum to zero and
+        // moving along the normals of a rigid translation or a scaling leaves
+        // Δ_B H unchanged, so J is rank deficient and its normal equations
+        // singular; the damping picks the least-norm step. On open patches
+        // the damped step also kept a 41×41 noisy cap from stalling where
+        // the undamped Gauss–Newton steps ran into a region without descent.
+        let damped_solve = |jac: &[(usize, usize, f64)]| -> Result<Vec<f64>, SmoothError> {
+            let mut colsq = vec![0.0f64; m];
+            for &(_, c, v) in jac {
+                colsq[c] += v * v;
+            }
+            let delta = if any_floating { 1e-10 } else { 1e-12 }
+                * colsq.iter().fold(0.0f64, |a, b| a.max(*b));
+            let d = if delta > 0.0 { delta.sqrt() } else { 1e-300 };
+            let mut trip = jac.to_vec();
+            trip.extend((0..m).map(|c| (m + c, c, d)));
+            let mut rhs: Vec<f64> = ev.f.iter().map(|x| -x).collect();
+            rhs.resize(2 * m, 0.0);
+            let jm = sparse_from_triplets(2 * m, m, &trip)?;
+            Ok(least_squares(jm.as_ref(), std::slice::from_ref(&rhs))?
+                .pop()
+                .unwrap_or_default())
+        };
+        // the damped step first, the undamped one (unless the system is
+        // known to be singular) when it finds no descent
+        let undamped = if any_floating {
+            None
+        } else {
+            let rhs: Vec<f64> = ev.f.iter().map(|x| -x).collect();
+            let jm = sparse_from_triplets(m, m, &jac)?;
+            least_squares(jm.as_ref(), std::slice::from_ref(&rhs))
+                .ok()
+                .and_then(|mut t| t.pop())
+        };
+        let mut accepted: Option<(SurfaceMesh, Eval, f64)> = None;
+        let mut below_epsilon = false;
+        for attempt in 0..2 {
+            let t = match (attempt, &undamped) {
+                (0, _) => damped_solve(&jac)?,
+                (_, Some(t)) => t.clone(),
+                (_, None) => continue,
+            };
+            // clamp |t_i| to half the mean length of its edges
+            let t: Vec<f64> = unknown
+                .iter()
+                .enumerate()
+                .map(|(r, &i)| {
+                    let lmean = nbrs[i].iter().map(|&j| p[j].distance(p[i])).sum::<f64>()
+                        / nbrs[i].len().max(1) as f64;
+                    let ti = t.get(r).copied().unwrap_or(0.0);
+                    if ti.is_finite() && normals[i] != Vec3::ZERO {
+                        ti.clamp(-0.5 * lmean, 0.5 * lmean)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            let tmax = t.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            // backtracking on the merit ‖Σ_j w_ij (H_i − H_j)‖²: far from
+            // the solution the linearisation can overshoot; halve the step
+            // until the merit drops (a step that lowers it for no α ≥ 1/64
+            // is not taken). A Newton step below ε means convergence: it is
+            // taken when it lowers the merit (a merit at round-off level
+            // cannot be lowered, and the mesh then stays where it is).
+            let small = tmax / ebar < opts.epsilon;
+            let mut alpha = 1.0;
+            let mut trial = work.clone();
+            let found = loop {
+                for (r, &i) in unknown.iter().enumerate() {
+                    trial.positions_mut()[i] = p[i] + alpha * t[r] * normals[i];
                 }
-            })
-            .collect();
-        let tmax = t.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-        // backtracking on the merit ‖Σ_j w_ij (H_i − H_j)‖²: far from the
-        // solution the linearisation (normals and fit weights frozen) can
-        // overshoot; halve the step until the merit drops
-        // (a step that lowers it for no α ≥ 1/64 is not taken: the iteration
-        // has stalled and ends unconverged rather than drift uphill)
-        let mut alpha = 1.0;
-        let mut trial = work.clone();
-        let next_ev = loop {
-            for (r, &i) in unknown.iter().enumerate() {
-                trial.positions_mut()[i] = p[i] + alpha * t[r] * normals[i];
+                let e = evaluate(&trial);
+                if e.merit < ev.merit {
+                    break Some(e);
+                }
+                if small || alpha < 1.0 / 64.0 {
+                    break None;
+                }
+                alpha *= 0.5;
+            };
+            if let Some(e) = found {
+                accepted = Some((trial, e, alpha * tmax / ebar));
+                break;
             }
-            let e = evaluate(&trial);
-            if e.merit < ev.merit {
-                break Some(e);
+            if small {
+                below_epsilon = true;
+                break;
             }
-            if alpha < 1.0 / 64.0 {
-                break None;
+        }
+        match accepted {
+            Some((trial, e, worst)) => {
+                iterations += 1;
+                work = trial;
+                ev = e;
+                last_step = worst;
             }
-            alpha *= 0.5;
-        };
-        let Some(next_ev) = next_ev else {
-            break;
-        };
-        iterations += 1;
-        let worst = alpha * tmax / ebar;
-        work = trial;
-        ev = next_ev;
-        last_step = worst;
+            // the loop head computes the final residual and stops
+            None if below_epsilon => last_step = 0.0,
+            None => break,
+        }
     }
     let cur = work.positions().to_vec();
     let max_displacement = max_distance(&cur, &input);
