@@ -82,6 +82,14 @@ pub struct Args {
     pub report: Option<PathBuf>,
 }
 
+/// `e` with the region file's name in front, when there is one.
+fn name_region(e: anyhow::Error, region: Option<&std::path::Path>) -> anyhow::Error {
+    match region {
+        Some(p) => e.context(p.display().to_string()),
+        None => e,
+    }
+}
+
 /// Library errors that are the user's input (region, options) exit with 2.
 fn to_error(e: FairError) -> anyhow::Error {
     match e {
@@ -204,7 +212,8 @@ pub fn run(args: Args) -> Result<()> {
             Err(FairError::NoMovableVertex(msg)) if args.auto => {
                 skipped.push(json!({"region": k, "reason": msg}));
             }
-            Err(e) => return Err(to_error(e)),
+            // a region that cannot be faired is the region file's fault: name it
+            Err(e) => return Err(name_region(to_error(e), args.region.as_deref())),
         }
     }
     bar.finish_and_clear();
