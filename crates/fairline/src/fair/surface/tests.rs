@@ -484,8 +484,8 @@ fn fair_dome_15x15_removes_a_planted_bump() {
     let clean = height_surface(15, 15, 1.0, 1.0, |x, y| 0.8 - 0.4 * (x * x + y * y));
     let c = case(clean, (11, 7, 0.03), Vec3::new(0.0, 0.0, 3.0), 0.4, 9, 0.2);
     // The thin-plate energy resists the one-point correction most on the
-    // dome: 0.61 of the defect's normal deviation is left (0.5 with the
-    // paper's solver, which makes other lines wavier).
+    // dome: 0.61 of the defect's normal deviation is left (with the
+    // paper's solver, 0.27, which lets other lines drift).
     let rep = check_case(&c, 80.0, 0.7, "dome");
     // The selected control points are exactly those whose support meets
     // the knot box of the endpoints.
