@@ -34,7 +34,7 @@ pub struct Args {
     #[arg(long, default_value_t = ContinuityOptions::default().curvature_tolerance, value_name = "FRACTION")]
     pub curvature_tolerance: f64,
     /// Sides closer than this are one shared edge, model units (default
-    /// max(100 × tolerance, 2e-3 × diagonal)).
+    /// 10 × tolerance).
     #[arg(long, value_name = "DIST")]
     pub match_distance: Option<f64>,
     /// Samples along each shared edge.

@@ -120,7 +120,7 @@ pub struct ContinuityOptions {
     /// Relative curvature tolerance for G2 (0.05 = 5 %).
     pub curvature_tolerance: f64,
     /// Two sides closer than this are taken as one shared edge (default
-    /// max(100 × tolerance, 2e-3 D)); farther apart they are not neighbours.
+    /// 10 × tolerance); farther apart they are not neighbours.
     pub match_distance: Option<f64>,
     /// Samples per side when matching sides (64).
     pub match_samples: usize,
@@ -384,9 +384,7 @@ pub fn continuity(
     if !(tol > 0.0 && tol.is_finite()) {
         return bad("position tolerance must be positive");
     }
-    let matching = opts
-        .match_distance
-        .unwrap_or((100.0 * tol).max(2e-3 * model));
+    let matching = opts.match_distance.unwrap_or(10.0 * tol);
     if !(matching >= tol && matching.is_finite()) {
         return bad("match distance must be finite and at least the tolerance");
     }
