@@ -479,6 +479,174 @@ fn check_case(c: &Case, drop: f64, closer: f64, name: &str) -> SurfaceFairReport
     rep
 }
 
+/// The guarantees of the paper's method (`--method paper`, the default up to
+/// session 15), with the thresholds it was tested against then, unchanged:
+/// the regularised default trades some target residual for keeping every
+/// other line fair (see `check_case`), the paper's method keeps these.
+fn check_case_paper(c: &Case, max_iterations: usize, drop: f64, name: &str) -> SurfaceFairReport {
+    let opts = SurfaceFairOptions {
+        max_iterations,
+        method: SurfaceFairMethod::Paper,
+        boundary: BoundaryControl::Free,
+        ..Default::default()
+    };
+    let endpoints = endpoints_around(&c.bumped, &c.lights, c.centre, c.disc, opts.grid);
+    assert!(
+        endpoints.len() >= 3,
+        "{name}: {} stretches",
+        endpoints.len()
+    );
+    let (faired, rep) = fair_surface(&c.bumped, &c.lights, &endpoints, &opts).unwrap();
+    let (b, a) = (rep.residual_before, rep.residual_after);
+    eprintln!(
+        "{name}: {} stretches, {}x{} Jacobian, {} iterations, mean |d_s| {:.3e} -> {:.3e}, max {:.3e} -> {:.3e}",
+        endpoints.len(),
+        rep.iterations.first().map_or(0, |i| i.rows),
+        rep.iterations.first().map_or(0, |i| i.cols),
+        rep.iterations.len(),
+        b.1,
+        a.1,
+        b.0,
+        a.0
+    );
+    // Within the paper's iteration counts (at most 8) the mean residual at
+    // the targets drops by `drop` (two to three orders of magnitude). With
+    // the paper's fixed 5 % truncation it stalls after ~1.5 orders (the
+    // residual left lies in the dropped singular directions); the
+    // truncation is lowered to 1e-3 as progress slows. What remains is the
+    // least-squares floor: the Hermite targets are not exactly highlight
+    // lines of any surface the selected control points can reach (more
+    // samples than effective unknowns — the rank at 1e-3 is ~50–100 of
+    // 3 × the selected points, as tangential moves hardly change d_s).
+    assert!(a.1 <= b.1 / drop, "{name}: mean {} -> {}", b.1, a.1);
+    // the fixed 5 % rule of the paper, for comparison: stalls higher
+    let fixed = SurfaceFairOptions {
+        min_truncation: opts.truncation,
+        ..opts
+    };
+    let (_, rep5) = fair_surface(&c.bumped, &c.lights, &endpoints, &fixed).unwrap();
+    eprintln!(
+        "{name}: fixed 5 % truncation: mean |d_s| {:.3e} after {} iterations",
+        rep5.residual_after.1,
+        rep5.iterations.len()
+    );
+    assert!(
+        a.1 < 0.5 * rep5.residual_after.1,
+        "{name}: no gain over 5 %"
+    );
+    assert!(a.0 <= b.0 / 20.0, "{name}: max {} -> {}", b.0, a.0);
+    assert!(rep.iterations.len() <= max_iterations);
+    for w in rep.iterations.windows(2) {
+        assert!(w[1].mean_abs < w[0].mean_abs);
+    }
+    // Control points outside the selection: bit-identical.
+    let sel: std::collections::HashSet<(usize, usize)> =
+        rep.modified_control_points.iter().copied().collect();
+    for i in 0..c.bumped.count_u() {
+        for j in 0..c.bumped.count_v() {
+            let (p, q) = (c.bumped.control_point(i, j), faired.control_point(i, j));
+            if !sel.contains(&(i, j)) {
+                assert_eq!(
+                    p.to_array().map(f64::to_bits),
+                    q.to_array().map(f64::to_bits)
+                );
+            }
+        }
+    }
+    assert!(rep.max_displacement > 0.0);
+    // The surface outside the selected points' support: bit-identical.
+    let n = 61;
+    let mut outside = 0;
+    for a in 0..n {
+        for bb in 0..n {
+            let (u, v) = (a as f64 / (n - 1) as f64, bb as f64 / (n - 1) as f64);
+            let sup = c.bumped.basis_support(u, v);
+            let touches = rep
+                .modified_control_points
+                .iter()
+                .any(|&(i, j)| sup.rows.contains(&i) && sup.cols.contains(&j));
+            if !touches {
+                outside += 1;
+                let (p, q) = (c.bumped.eval(u, v), faired.eval(u, v));
+                assert_eq!(
+                    p.to_array().map(f64::to_bits),
+                    q.to_array().map(f64::to_bits)
+                );
+            }
+        }
+    }
+    assert!(
+        outside > n * n / 3,
+        "{name}: only {outside} samples outside the support"
+    );
+    // Highlight lines inside the disc move back towards the clean ones.
+    let clean_lines = pre_images(&c.clean, &c.lights, opts.grid);
+    let before = deviation(
+        &pre_images(&c.bumped, &c.lights, opts.grid),
+        &clean_lines,
+        c.centre,
+        c.disc,
+    );
+    let after = deviation(
+        &pre_images(&faired, &c.lights, opts.grid),
+        &clean_lines,
+        c.centre,
+        c.disc,
+    );
+    eprintln!("{name}: pre-image deviation from the clean surface {before:.3e} -> {after:.3e}");
+    assert!(
+        after < 0.4 * before,
+        "{name}: deviation {before} -> {after}"
+    );
+    // And the surface itself: normal deviation from the clean surface.
+    let kb = rep.knot_box;
+    let mut dev = (0.0f64, 0.0f64);
+    for a in 0..=40 {
+        for bb in 0..=40 {
+            let u = kb[0] + (kb[1] - kb[0]) * a as f64 / 40.0;
+            let v = kb[2] + (kb[3] - kb[2]) * bb as f64 / 40.0;
+            let p0 = c.clean.eval(u, v);
+            let nn = c.clean.normal(u, v).unwrap();
+            dev.0 = dev.0.max((c.bumped.eval(u, v) - p0).dot(nn).abs());
+            dev.1 = dev.1.max((faired.eval(u, v) - p0).dot(nn).abs());
+        }
+    }
+    eprintln!(
+        "{name}: normal deviation from the clean surface {:.3e} -> {:.3e}",
+        dev.0, dev.1
+    );
+    assert!(
+        dev.1 < 0.5 * dev.0,
+        "{name}: surface deviation {} -> {}",
+        dev.0,
+        dev.1
+    );
+    rep
+}
+
+
+#[test]
+fn fair_paper_method_keeps_its_guarantees_on_dome_saddle_and_roof() {
+    let clean = height_surface(15, 15, 1.0, 1.0, |x, y| 0.8 - 0.4 * (x * x + y * y));
+    let c = case(clean, (11, 7, 0.03), Vec3::new(0.0, 0.0, 3.0), 0.4, 9, 0.2);
+    check_case_paper(&c, 8, 100.0, "dome (paper)");
+    let clean = height_surface(21, 20, 1.0, 1.0, |x, y| 0.35 * (x * x - y * y));
+    let c = case(clean, (6, 13, 0.02), Vec3::new(0.0, 0.0, 2.0), 0.3, 9, 0.16);
+    check_case_paper(&c, 8, 500.0, "saddle (paper)");
+    let clean = height_surface(21, 22, 1.5, 1.0, |x, y| {
+        0.3 - 0.12 * x * x - 0.05 * y * y + 0.02 * x * y
+    });
+    let c = case(
+        clean,
+        (8, 12, -0.015),
+        Vec3::new(2.0, 1.5, 2.5),
+        0.3,
+        11,
+        0.2,
+    );
+    check_case_paper(&c, 8, 300.0, "roof (paper)");
+}
+
 #[test]
 fn fair_dome_15x15_removes_a_planted_bump() {
     let clean = height_surface(15, 15, 1.0, 1.0, |x, y| 0.8 - 0.4 * (x * x + y * y));
