@@ -325,21 +325,18 @@ fn highlight_section(demo: &Demo) -> Result<Section> {
     let dented = build(dented_height);
     let clean = build(panel_height);
     let light = LightArray::new(Vec3::new(0.0, 0.0, 6.0), Vec3::Z, Vec3::X, 0.1)?;
-    let opts = DetectOptions {
-        plane_normal: Some(light.plane_normal()),
-        ..DetectOptions::default()
-    };
+    let opts = DetectOptions::default();
     let t = std::time::Instant::now();
     let model = HighlightModel::new(&dented, light, Default::default())?;
     let lines = model.lines(&dented);
     let model_ms = t.elapsed().as_secs_f64() * 1e3;
-    let det = detect_irregularities(&dented, &lines, light.spacing(), &opts)?;
+    let det = detect_irregularities(&dented, &light, &lines, &opts)?;
     let clean_lines = HighlightModel::new(&clean, light, Default::default())?.lines(&clean);
-    let clean_det = detect_irregularities(&clean, &clean_lines, light.spacing(), &opts)?;
+    let clean_det = detect_irregularities(&clean, &light, &clean_lines, &opts)?;
     let stretches: Vec<Vec<Vec3>> = det
         .lines
         .iter()
-        .flat_map(|l| l.stretches.iter().map(|s| s.points.clone()))
+        .flat_map(|l| l.stretches.iter().cloned())
         .collect();
     let faces = det.all_faces();
     let view = (
@@ -505,15 +502,7 @@ fn fair_section(demo: &Demo) -> Result<Section> {
     )?;
     let model = HighlightModel::new(&mesh, light, Default::default())?;
     let lines = model.lines(&mesh);
-    let det = detect_irregularities(
-        &mesh,
-        &lines,
-        light.spacing(),
-        &DetectOptions {
-            plane_normal: Some(light.plane_normal()),
-            ..DetectOptions::default()
-        },
-    )?;
+    let det = detect_irregularities(&mesh, &light, &lines, &DetectOptions::default())?;
     let best = det
         .regions
         .first()
@@ -527,8 +516,8 @@ fn fair_section(demo: &Demo) -> Result<Section> {
         &FairOptions::default().method(FairMethod::DiffusionFlow),
     )?;
     let mut opts = demo.opts.clone();
-    opts.view_dir = -light.plane_normal() + 0.35 * light.across();
-    opts.up = light.direction();
+    opts.view_dir = crate::highlight_png::default_view(light.plane_normal(), light.across());
+    opts.up = light.across();
     let img = demo.save("fair-before-after.png", &fairing_picture(&mesh, &r, &opts)?)?;
     let img_flow = demo.save(
         "fair-diffusion-flow.png",

@@ -9,27 +9,41 @@ use fairline::mesh::FaceId;
 use serde_json::json;
 use std::path::PathBuf;
 
-/// Finds wiggles, inflection clusters and kinks in the highlight lines of a
-/// linear light array (curvature of each line compared with its own running
-/// mean over one spacing, normalised by the spacing) and turns them into
-/// connected face regions, ranked by score. Writes the union of all regions
-/// as region JSON {"faces":[...]} (faces of the input mesh); the report lists
-/// each region with its score, size, centre and the lines involved.
+/// Finds surface defects that disturb the highlight lines — bumps, dents,
+/// flat spots, ripples, kinks up to about two light spacings across — and
+/// turns them into connected face regions, ranked by score. The surface's
+/// normals (from a fine local quadric fit) are compared with a smooth cubic
+/// fit over two spacings around each point; the score is the highlight-line
+/// displacement that difference causes, in tenths of a spacing (score 1 =
+/// the line is displaced by 0.1 spacing against the smooth surface's line).
+/// Smooth shape (strong curvature, saddles, cylinders) scores near 0; on
+/// noisy scans the threshold rises above the noise (reported). Writes the
+/// union of all regions as region JSON {"faces":[...]} (faces of the input
+/// mesh) with two rings of support faces added around each region (what
+/// fairing needs to move every vertex of it), ready for `fairline fair
+/// --region`; the report lists each region
+/// with its score, area, centre and the lines crossing it.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  fairline detect panel.obj -o region.json --report detect.json\n  fairline detect spot.ply --plane-normal 0,1,1 --spacing 0.02 -o region.json --png detect.png"
+    after_help = "Examples:\n  fairline detect panel.obj -o region.json --png detect.png --report detect.json\n  fairline detect panel.obj -o region.json && fairline fair panel.obj --region region.json -o faired.obj\n  fairline detect lego_open.ply --up y -o region.json --png detect.png"
 )]
 pub struct Args {
     /// Input triangle (or polygon) mesh.
     pub mesh: PathBuf,
     #[command(flatten)]
     pub light: LightArgs,
-    /// Flag where |κ − κ̄|·s exceeds this (dimensionless).
-    #[arg(long, default_value_t = DetectOptions::default().wiggle_threshold)]
+    /// Flag where the score (highlight displacement in tenths of a spacing)
+    /// exceeds this; raised automatically above the noise of a scan.
+    #[arg(long, default_value_t = DetectOptions::default().threshold)]
     pub threshold: f64,
-    /// Region radius around flagged points, in light spacings.
-    #[arg(long, default_value_t = DetectOptions::default().region_radius)]
-    pub region_radius: f64,
+    /// Radius of the smooth comparison surface, in light spacings: defects
+    /// up to about this size are found, larger shape is taken as intended.
+    #[arg(long, default_value_t = DetectOptions::default().smooth_radius)]
+    pub smooth_radius: f64,
+    /// Faces within this distance of a flagged point go into a region, in
+    /// light spacings.
+    #[arg(long, alias = "region-radius", default_value_t = DetectOptions::default().region_margin)]
+    pub region_margin: f64,
     /// Keep only the best N regions in the output (default: all).
     #[arg(long)]
     pub max_regions: Option<usize>,
@@ -76,23 +90,33 @@ pub fn run(args: Args) -> Result<()> {
     }
     let (mesh, source) = read_triangles(&args.mesh)?;
     let light = args.light.light_array(&mesh)?;
-    let opts = DetectOptions {
-        wiggle_threshold: args.threshold,
-        region_radius: args.region_radius,
-        plane_normal: Some(light.plane_normal()),
-        ..DetectOptions::default()
-    };
+    let opts = DetectOptions::default()
+        .threshold(args.threshold)
+        .smooth_radius(args.smooth_radius)
+        .region_margin(args.region_margin);
     let mut report = Report::new("detect");
     let bar = spinner("detecting irregularities");
     let (lines, mut det) = report
         .time(|| -> Result<_, fairline::highlight::HighlightError> {
             let model = HighlightModel::new(&mesh, light, args.light.options())?;
             let lines = model.lines(&mesh);
-            let det = detect_irregularities(&mesh, &lines, light.spacing(), &opts)?;
+            let det = detect_irregularities(&mesh, &light, &lines, &opts)?;
             Ok((lines, det))
         })
         .map_err(to_input_error)?;
     bar.finish_and_clear();
+    if let Some(w) = crate::highlight_png::line_warning(&args.mesh, &lines, &light) {
+        eprintln!("{w}");
+    }
+    if det.threshold > args.threshold {
+        eprintln!(
+            "note: {}: the surface is noisy (median score {:.2}, fine-fit residual {:.3e}); only scores above {:.2} are flagged",
+            args.mesh.display(),
+            det.median_score,
+            det.noise_level,
+            det.threshold
+        );
+    }
     if let Some(n) = args.max_regions {
         det.regions.truncate(n);
     }
@@ -106,7 +130,13 @@ pub fn run(args: Args) -> Result<()> {
         out.dedup();
         out
     };
-    let all = to_input(&det.all_faces());
+    // the written region holds two more rings of faces: the support that
+    // fairing needs to move every vertex of the suggested region
+    let all = to_input(&fairline::fair::grow_region(
+        &mesh,
+        &det.all_faces(),
+        SUPPORT_RINGS,
+    ));
     write_json(&args.output, &json!({"faces": all}))?;
     let regions: Vec<_> = det
         .regions
@@ -115,23 +145,10 @@ pub fn run(args: Args) -> Result<()> {
             json!({
                 "score": r.score,
                 "faces": to_input(&r.faces).len(),
+                "area": r.area,
                 "center": r.center.to_array(),
+                "flagged_sites": r.flagged_sites,
                 "lines": r.lines,
-            })
-        })
-        .collect();
-    let flagged: Vec<_> = det
-        .lines
-        .iter()
-        .filter(|l| !l.stretches.is_empty())
-        .map(|l| {
-            json!({
-                "line": l.line,
-                "index": l.index,
-                "score": l.score,
-                "max_wiggle": l.max_wiggle,
-                "inflections": l.inflections,
-                "stretches": l.stretches.len(),
             })
         })
         .collect();
@@ -141,24 +158,40 @@ pub fn run(args: Args) -> Result<()> {
     report.set("light", light);
     report.set("region_faces", all.len());
     report.set("regions", regions);
-    report.set("flagged_lines", flagged);
+    report.set("threshold", det.threshold);
+    report.set("median_score", det.median_score);
+    report.set("noise_level", det.noise_level);
+    report.set("sites", det.sites.len());
+    report.set("judged_sites", det.judged_sites);
+    report.set("flagged_sites", det.flagged_sites);
+    report.set("flagged_area_fraction", det.flagged_area_fraction);
+    report.set("smooth_radius", det.smooth_radius);
+    report.set("fine_radius", det.fine_radius);
     if let Some(png) = &args.png {
         let stretches: Vec<Vec<fairline::Vec3>> = det
             .lines
             .iter()
-            .flat_map(|l| l.stretches.iter().map(|s| s.points.clone()))
+            .flat_map(|l| l.stretches.iter().cloned())
             .collect();
         let view = args.view.unwrap_or(crate::highlight_png::default_view(
             light.plane_normal(),
             light.across(),
         ));
         let title = format!(
-            "{}: {} region(s)",
+            "{}: {} region(s){}",
             args.mesh
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default(),
-            det.regions.len()
+            det.regions.len(),
+            if det.regions.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    ", best score {:.1}; orange = suggested region, red = lines across it",
+                    det.max_score()
+                )
+            }
         );
         let faces = det.all_faces();
         crate::highlight_png::write(
@@ -187,3 +220,8 @@ pub fn run(args: Args) -> Result<()> {
     ));
     Ok(())
 }
+
+/// Rings of faces added around the suggested regions in the written region
+/// JSON: a vertex moves under fairing only when all faces around it and
+/// around its neighbours are in the region (Yong et al. §3.1).
+const SUPPORT_RINGS: usize = 2;

@@ -32,9 +32,14 @@ pub enum Method {
 /// changes nothing outside the region: every vertex, normal and highlight
 /// node outside stays bit-identical. The region is region JSON
 /// ({"faces":[..]}, {"vertices":[..]} or {"sphere":{"center":[x,y,z],"radius":r}}),
-/// e.g. the output of `fairline detect`; with --auto the irregular regions
-/// are detected (and grown by four rings of faces) and faired in turn. Use
-/// the same light options as for `highlight`/`detect`.
+/// e.g. the output of `fairline detect` (which already holds the two rings
+/// of support faces fairing needs: a vertex can move only when all faces
+/// around it and around its neighbours are in the region); --grow N adds N
+/// rings of faces to any region. With --auto the irregular regions are
+/// detected, grown by four rings and faired in turn. The report measures
+/// the detection score (`fairline detect`) inside the region before and
+/// after with the same lights. Use the same light options as for
+/// `highlight`/`detect`.
 #[derive(clap::Args, Debug)]
 #[command(
     after_help = "Examples:\n  fairline fair panel.obj --region region.json -o panel-faired.obj --png fair.png --report fair.json\n  fairline detect panel.obj -o region.json && fairline fair panel.obj --region region.json -o faired.obj\n  fairline fair panel.obj --auto -o faired.obj\n  fairline fair panel.obj --region region.json --method diffusion-flow -o flow.obj"
@@ -53,6 +58,10 @@ pub struct Args {
     /// Detect irregular regions and fair each in turn.
     #[arg(long)]
     pub auto: bool,
+    /// Grow the region by N rings of faces (faces sharing a vertex with it)
+    /// before fairing.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub grow: usize,
     #[command(flatten)]
     pub light: LightArgs,
     /// Output mesh (.obj .ply .off .stl).
@@ -93,8 +102,10 @@ fn name_region(e: anyhow::Error, region: Option<&std::path::Path>) -> anyhow::Er
 /// Library errors that are the user's input (region, options) exit with 2.
 fn to_error(e: FairError) -> anyhow::Error {
     match e {
+        FairError::NoMovableVertex(msg) => bad_input(format!(
+            "{msg}; a vertex can move only when every face around it and around its neighbours is in the region: enlarge the region or pass --grow 2"
+        )),
         FairError::Region(_)
-        | FairError::NoMovableVertex(_)
         | FairError::InvalidOption(_)
         | FairError::Mesh(_)
         | FairError::Highlight(_) => bad_input(e.to_string()),
@@ -179,19 +190,57 @@ pub fn run(args: Args) -> Result<()> {
             .time(|| -> Result<_, fairline::highlight::HighlightError> {
                 let model = HighlightModel::new(&mesh, light, args.light.options())?;
                 let lines = model.lines(&mesh);
-                let opts = DetectOptions {
-                    plane_normal: Some(light.plane_normal()),
-                    ..DetectOptions::default()
-                };
-                detect_irregularities(&mesh, &lines, light.spacing(), &opts)
+                detect_irregularities(&mesh, &light, &lines, &DetectOptions::default())
             })
             .map_err(to_input_error)?;
         report.set("detected_regions", det.regions.len());
+        if det.regions.is_empty() {
+            eprintln!(
+                "note: {}: --auto found no defect above the detection threshold; nothing to fair",
+                args.mesh.display()
+            );
+        }
         det.regions
             .iter()
-            .map(|r| grow_region(&mesh, &r.faces, 4))
+            .enumerate()
+            .map(|(k, r)| {
+                let grown = grow_region(&mesh, &r.faces, AUTO_RINGS);
+                eprintln!(
+                    "note: --auto: region {} (score {:.1}) grown by {AUTO_RINGS} rings of faces: {} -> {} faces",
+                    k + 1,
+                    r.score,
+                    r.faces.len(),
+                    grown.len()
+                );
+                grown
+            })
             .collect()
     };
+    let regions: Vec<Vec<FaceId>> = if args.grow > 0 {
+        regions
+            .iter()
+            .map(|f| {
+                let grown = grow_region(&mesh, f, args.grow);
+                eprintln!(
+                    "note: region grown by {} rings of faces: {} -> {} faces",
+                    args.grow,
+                    f.len(),
+                    grown.len()
+                );
+                grown
+            })
+            .collect()
+    } else {
+        regions
+    };
+    // the detection score inside the regions, before (same lights as after)
+    let region_faces: Vec<FaceId> = {
+        let mut all: Vec<FaceId> = regions.iter().flatten().copied().collect();
+        all.sort_unstable();
+        all.dedup();
+        all
+    };
+    let score_before = region_score(&mesh, &light, &args.light, &region_faces)?;
     let mut current: SurfaceMesh = mesh.clone();
     let mut results: Vec<Value> = Vec::new();
     let mut first: Option<FairResult> = None;
@@ -218,6 +267,21 @@ pub fn run(args: Args) -> Result<()> {
     }
     bar.finish_and_clear();
     fairline::io::write_mesh(&args.output, &current)?;
+    let score_after = region_score(&current, &light, &args.light, &region_faces)?;
+    report.set("detect_score_before", score_before);
+    report.set("detect_score_after", score_after);
+    if score_after > score_before && score_after > DetectOptions::default().threshold {
+        report.warn(format!(
+            "{}: the detection score inside the region got worse ({score_before:.2} -> {score_after:.2}); try a larger region (--grow 2) or --method diffusion-flow",
+            args.mesh.display()
+        ));
+    } else if score_after > DetectOptions::default().threshold {
+        report.warn(format!(
+            "{}: a defect remains inside the region (detection score {score_before:.2} -> {score_after:.2}, threshold {:.2}); try --grow 2 or more iterations",
+            args.mesh.display(),
+            DetectOptions::default().threshold
+        ));
+    }
     if first.is_none() {
         report.warn("no region was faired (nothing detected): the output is the input unchanged");
         if let Some(png) = &args.png {
@@ -227,8 +291,8 @@ pub fn run(args: Args) -> Result<()> {
     }
     if let (Some(png), Some(r)) = (&args.png, &first) {
         let mut opts = RenderOptions::with_size(900, 700);
-        opts.view_dir = -light.plane_normal() + 0.35 * light.across();
-        opts.up = light.direction();
+        opts.view_dir = crate::highlight_png::default_view(light.plane_normal(), light.across());
+        opts.up = light.across();
         let img = fairing_picture(&mesh, r, &opts)?;
         img.write_png(png)?;
     }
@@ -309,4 +373,38 @@ pub fn run(args: Args) -> Result<()> {
         if converged { "converged" } else { "not converged" }
     ));
     Ok(())
+}
+
+/// Rings of faces `--auto` adds around a detected region.
+const AUTO_RINGS: usize = 4;
+
+/// The largest detection score (see `fairline detect`) at sites inside the
+/// faces `faces`, with the lights `light`; 0 when none is judged.
+fn region_score(
+    mesh: &SurfaceMesh,
+    light: &fairline::highlight::LightArray,
+    args: &crate::highlight::LightArgs,
+    faces: &[FaceId],
+) -> Result<f64> {
+    if faces.is_empty() {
+        return Ok(0.0);
+    }
+    let model = HighlightModel::new(mesh, *light, args.options()).map_err(to_input_error)?;
+    let lines = model.lines(mesh);
+    let det = detect_irregularities(mesh, light, &lines, &DetectOptions::default())
+        .map_err(to_input_error)?;
+    let mut inside = vec![false; mesh.vertex_count()];
+    for f in faces {
+        if f.idx() < mesh.face_count() {
+            for v in mesh.face_vertices(*f) {
+                inside[v.idx()] = true;
+            }
+        }
+    }
+    Ok(det
+        .sites
+        .iter()
+        .filter(|s| inside[s.vertex.idx()])
+        .filter_map(|s| s.score)
+        .fold(0.0, f64::max))
 }

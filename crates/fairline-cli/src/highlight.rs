@@ -6,7 +6,7 @@ use crate::common::{Report, bad_input, parse_list, parse_vec3, read_json, spinne
 use anyhow::{Context, Result};
 use fairline::highlight::{
     CircularLight, CircularLights, HighlightBands, HighlightError, HighlightLine, HighlightLines,
-    HighlightModel, HighlightOptions, LightArray, circular_highlight_bands,
+    HighlightModel, HighlightOptions, LightArray, UpAxis, circular_highlight_bands,
     circular_highlight_lines,
 };
 use fairline::mesh::FaceId;
@@ -14,15 +14,55 @@ use fairline::{SurfaceMesh, Vec3};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
+/// The `--up` choice of the default lights.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Up {
+    /// From the part's principal axes.
+    Auto,
+    /// +x.
+    X,
+    /// +y.
+    Y,
+    /// +z.
+    Z,
+}
+
+impl Up {
+    /// The library's axis choice.
+    pub fn axis(self) -> UpAxis {
+        match self {
+            Up::Auto => UpAxis::Auto,
+            Up::X => UpAxis::X,
+            Up::Y => UpAxis::Y,
+            Up::Z => UpAxis::Z,
+        }
+    }
+    /// The axis vector, `None` for auto.
+    pub fn vector(self) -> Option<Vec3> {
+        match self {
+            Up::Auto => None,
+            Up::X => Some(Vec3::X),
+            Up::Y => Some(Vec3::Y),
+            Up::Z => Some(Vec3::Z),
+        }
+    }
+}
+
 /// Options describing the linear light array (shared with `detect`).
 #[derive(clap::Args, Debug, Clone)]
 pub struct LightArgs {
     /// Light direction H (made orthogonal to the plane normal).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
     pub direction: Option<Vec3>,
-    /// Normal Z of the light plane (default: the view direction, +z).
+    /// Normal Z of the light plane (default: from --up).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
     pub plane_normal: Option<Vec3>,
+    /// Which side the lights are on when --plane-normal is not given: auto
+    /// (the part's principal axis of least extent, turned to the side most
+    /// of the surface faces; lights run along its longest axis), or +x, +y,
+    /// +z (e.g. --up y for y-up models).
+    #[arg(long, value_enum, default_value_t = Up::Auto)]
+    pub up: Up,
     /// Point A0 on light 0 (default: one bounding-box diagonal above the
     /// centre along the plane normal).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
@@ -55,7 +95,18 @@ impl LightArgs {
         }
         let (lo, hi) = fairline::mesh::bounding_box(mesh.positions())
             .ok_or_else(|| bad_input("the mesh has no vertices"))?;
-        self.light_array_in_box(lo, hi)
+        if self.plane_normal.is_some() {
+            return self.light_array_in_box(lo, hi);
+        }
+        let base = LightArray::default_for_mesh(mesh, self.up.axis())
+            .ok_or_else(|| bad_input("the mesh has no finite vertices"))?;
+        LightArray::new(
+            self.plane_point.unwrap_or(base.plane_point()),
+            base.plane_normal(),
+            self.direction.unwrap_or(base.direction()),
+            self.spacing.unwrap_or(base.spacing()),
+        )
+        .map_err(to_input_error)
     }
 
     /// The light array: from the file, or the defaults for the bounding box
@@ -64,7 +115,7 @@ impl LightArgs {
         if let Some(path) = &self.lights {
             return read_json::<LightArray>(path);
         }
-        let base = LightArray::default_for(lo, hi, self.plane_normal);
+        let base = LightArray::default_for(lo, hi, self.plane_normal.or(self.up.vector()));
         LightArray::new(
             self.plane_point.unwrap_or(base.plane_point()),
             self.plane_normal.unwrap_or(base.plane_normal()),
@@ -382,6 +433,9 @@ pub fn run(args: Args) -> Result<()> {
             })
             .map_err(to_input_error)?;
         report.set("light", json!({"kind": "linear", "array": light}));
+        if let Some(w) = crate::highlight_png::line_warning(&args.mesh, &lines, &light) {
+            eprintln!("{w}");
+        }
         view_up = (
             crate::highlight_png::default_view(light.plane_normal(), light.across()),
             light.across(),

@@ -133,3 +133,46 @@ pub fn image(mesh: &SurfaceMesh, overlay: Overlay<'_>, size: (u32, u32)) -> Resu
     };
     Ok(render(&scene, &opts)?)
 }
+
+/// A `warning:` text when the lights give no highlight line, or only
+/// fragments (median line shorter than two spacings, or more than four
+/// pieces per light), with the options to try; `None` when the lines are
+/// readable.
+pub fn line_warning(
+    what: &Path,
+    lines: &HighlightLines,
+    light: &fairline::highlight::LightArray,
+) -> Option<String> {
+    let name = what.display();
+    if lines.lines.is_empty() {
+        return Some(format!(
+            "warning: {name}: no highlight line found: the light plane (normal {}) sees no part of the surface at these light positions; try --up x, --up y or --up z, or --plane-normal X,Y,Z",
+            fmt_vec(light.plane_normal())
+        ));
+    }
+    let s = light.spacing();
+    let mut lengths: Vec<f64> = lines
+        .lines
+        .iter()
+        .map(|l| l.points.windows(2).map(|w| (w[1] - w[0]).length()).sum())
+        .collect();
+    lengths.sort_by(f64::total_cmp);
+    let median = lengths[lengths.len() / 2];
+    let mut indices: Vec<i64> = lines.lines.iter().map(|l| l.index).collect();
+    indices.sort_unstable();
+    indices.dedup();
+    let per_light = lines.lines.len() as f64 / indices.len().max(1) as f64;
+    if median < 2.0 * s || per_light > 4.0 {
+        return Some(format!(
+            "warning: {name}: the highlight lines are fragmented ({} pieces on {} lights, median length {:.1} spacings); try another --up (x, y, z) or --plane-normal, or a larger --spacing",
+            lines.lines.len(),
+            indices.len(),
+            if s > 0.0 { median / s } else { 0.0 }
+        ));
+    }
+    None
+}
+
+fn fmt_vec(v: Vec3) -> String {
+    format!("{:.3},{:.3},{:.3}", v.x, v.y, v.z)
+}

@@ -58,7 +58,7 @@ pub struct Args {
     #[command(flatten)]
     pub light: LightArgs,
     /// With --highlight: flag where |κ − κ̄|·s exceeds this (see `detect`).
-    #[arg(long, default_value_t = DetectOptions::default().wiggle_threshold, requires = "highlight")]
+    #[arg(long, default_value_t = DetectOptions::default().threshold, requires = "highlight")]
     pub threshold: f64,
     /// Surface index in a multi-surface file (default: all surfaces).
     #[arg(long)]
@@ -158,17 +158,13 @@ pub fn run(args: Args) -> Result<()> {
             let model = HighlightModel::new(tri_mesh, light, args.light.options())
                 .map_err(to_input_error)?;
             let lines = model.lines(tri_mesh);
-            let det_opts = DetectOptions {
-                wiggle_threshold: args.threshold,
-                plane_normal: Some(light.plane_normal()),
-                ..DetectOptions::default()
-            };
-            let det = detect_irregularities(tri_mesh, &lines, light.spacing(), &det_opts)
+            let det_opts = DetectOptions::default().threshold(args.threshold);
+            let det = detect_irregularities(tri_mesh, &light, &lines, &det_opts)
                 .map_err(to_input_error)?;
             let stretches: Vec<Vec<Vec3>> = det
                 .lines
                 .iter()
-                .flat_map(|l| l.stretches.iter().map(|s| s.points.clone()))
+                .flat_map(|l| l.stretches.iter().cloned())
                 .collect();
             picture.polylines = crate::highlight_png::line_layers(&lines, &stretches);
             summary = Some(serde_json::json!({

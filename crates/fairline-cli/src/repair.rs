@@ -89,7 +89,9 @@ pub fn run(args: Args) -> Result<()> {
         ));
     }
     if let Some(problem) = &r.remaining_problem {
-        warn(format_args!("the output is still not a manifold: {problem}"));
+        warn(format_args!(
+            "the output is still not a manifold: {problem}"
+        ));
     }
     job.finish(format_args!(
         "{}: {} vertices, {} faces → {} vertices, {} faces{}",

@@ -174,14 +174,11 @@ fn main() {
         });
         let model = HighlightModel::new(mesh, light, opts).expect("tri");
         let t_band = timed(runs, || model.bands(mesh, 0.1 * light.spacing()));
-        let det_opts = DetectOptions {
-            plane_normal: Some(light.plane_normal()),
-            ..DetectOptions::default()
-        };
+        let det_opts = DetectOptions::default();
         let t_det = timed(heavy, || {
             let m = HighlightModel::new(mesh, light, opts).expect("tri");
             let lines = m.lines(mesh);
-            detect_irregularities(mesh, &lines, light.spacing(), &det_opts).expect("detect")
+            detect_irregularities(mesh, &light, &lines, &det_opts).expect("detect")
         });
         row(&[mesh.vertex_count().to_string(), t_circ, t_band, t_det]);
     }

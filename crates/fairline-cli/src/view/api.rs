@@ -502,19 +502,16 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     let d = &st.docs[k];
     let (mesh, center, file) = (&d.now, d.center, d.current_file());
     let defaults = DetectOptions::default();
-    let opts = DetectOptions {
-        wiggle_threshold: req.threshold.unwrap_or(defaults.wiggle_threshold),
-        region_radius: req.region_radius.unwrap_or(defaults.region_radius),
-        plane_normal: Some(req.light.plane_normal()),
-        ..defaults
-    };
+    let opts = defaults
+        .threshold(req.threshold.unwrap_or(defaults.threshold))
+        .region_margin(req.region_radius.unwrap_or(defaults.region_margin));
     let t = Instant::now();
     let model = match HighlightModel::new(mesh, req.light, HighlightOptions::default()) {
         Ok(m) => m,
         Err(e) => return bad(e),
     };
     let lines = model.lines(mesh);
-    let det = match detect_irregularities(mesh, &lines, req.light.spacing(), &opts) {
+    let det = match detect_irregularities(mesh, &req.light, &lines, &opts) {
         Ok(d) => d,
         Err(e) => return bad(e),
     };
@@ -526,11 +523,11 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     for l in &det.lines {
         for s in &l.stretches {
             let start = floats.len() / 3;
-            for p in &s.points {
+            for p in s {
                 let q = *p - center;
                 floats.extend([q.x as f32, q.y as f32, q.z as f32]);
             }
-            stretches.push(json!({"line": l.line, "index": l.index, "score": s.score, "start": start, "count": s.points.len()}));
+            stretches.push(json!({"line": l.line, "index": l.index, "score": l.score, "start": start, "count": s.len()}));
         }
     }
     let regions: Vec<Value> = det
@@ -553,7 +550,7 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         command.push_str(&format!(" --threshold {t}"));
     }
     if let Some(r) = req.region_radius {
-        command.push_str(&format!(" --region-radius {r}"));
+        command.push_str(&format!(" --region-margin {r}"));
     }
     let header = json!({
         "lines": meta,

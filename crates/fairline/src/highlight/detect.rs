@@ -1,46 +1,84 @@
-//! Detection of irregular stretches of highlight lines and their conversion
-//! into suggested fairing regions (beyond Yong et al.: §3.1 leaves the
-//! choice of the irregular region R to the user; this module proposes one).
+//! Detection of surface defects that disturb highlight lines, and their
+//! conversion into suggested fairing regions (beyond Yong et al.: §3.1
+//! leaves the choice of the irregular region R to the user; this module
+//! proposes one).
 //!
-//! Fairness measure, per highlight line:
-//! 1. the polyline is resampled at a uniform arc-length step h (default
-//!    max(1.5 × mean edge length, s/25), s the light spacing), which removes
-//!    the kinks every mesh edge puts into a contour line;
-//! 2. the discrete curvature vector at each sample is κ_j = (u_j − u_{j−1})/h
-//!    with u the unit chord directions (|κ_j| ≈ turning angle / local
-//!    length), lightly smoothed over three samples;
-//! 3. its slow part κ̄_j is the mean over a window of length w·s (default
-//!    w = 2); the *wiggle* W_j = |κ_j − κ̄_j|·s is the curvature variation
-//!    normalised by the spacing (dimensionless; 0 for circles and straight
-//!    lines, and slowly varying for smooth surfaces);
-//! 4. a sample is flagged when W_j exceeds `wiggle_threshold` (default 0.3),
-//!    when its turning angle exceeds `kink_angle` (default 0.35 rad, 20°),
-//!    or when it lies between two inflections (the curvature vector reverses
-//!    with |κ|·s > `inflection_curvature`, default 0.5) closer than the
-//!    window: an inflection cluster.
+//! # The measure: the surface against its own smooth version
 //!
-//! When the light plane normal Z is given, samples where |Z·N| < 0.3 are
-//! not judged (near silhouettes lines crowd and bend for reasons that have
-//! nothing to do with fairness).
+//! A highlight line is displaced where the surface normal differs from the
+//! normal the "intended" smooth surface would have there (Yong et al.
+//! Eq. (1): d_P depends on the normal N_P). The lines themselves are not
+//! judged node by node: where |∇d| is small (summits, saddles) the O(h)
+//! error of vertex normals becomes large node jitter along the line that a
+//! curvature test on polylines reads as wiggles, more so on finer meshes
+//! (DESIGN.md §3, last note on Yong et al.). Instead the normals are
+//! compared at two scales:
 //!
-//! Flagged samples closer than the window form stretches; a stretch's score
-//! is Σ W_j·h/s (its integrated wiggle measured in spacings; a kink counts
-//! as W = `wiggle_threshold` × turning angle / `kink_angle`). The faces whose
-//! centroid lies within `region_radius` (default 0.75 s) of a flagged sample,
-//! grown from the faces at the flagged nodes through face adjacency (hence
-//! connected), are united over all lines; each connected component is a
-//! suggested region whose score is the sum of its stretches' scores.
+//! 1. **Sites.** One vertex per cube of side `site_spacing`·s (default s/4,
+//!    s the light spacing); the sites cover the surface evenly whatever the
+//!    triangle size.
+//! 2. **Fine scale — what the surface is.** At each site a weighted
+//!    least-squares quadric height field over the vertices within
+//!    r_f = max(`fine_radius`·s, 2.5 h) (h the mean edge length) gives the
+//!    site's denoised position p̂ and normal n̂. A fit instead of the vertex
+//!    normal makes the measure independent of the triangulation (vertex
+//!    normals carry an O(h) error on irregular meshes); its weighted RMS
+//!    residual is the local noise of the sampling.
+//! 3. **Coarse scale — what the surface should be.** Around each site, a
+//!    cubic height field over the tangent plane is fitted to the positions
+//!    *and* normals of the sites within R = `smooth_radius`·s (default
+//!    1.5 s), leaving out those within 0.35 R of the judged site (the fit
+//!    interpolates across the hole, so a defect there does not bend it
+//!    toward itself), by iteratively reweighted least squares (Tukey
+//!    biweight on the normal residuals, three passes), so a defect's slope
+//!    does not bend the smooth fit either. Smooth shape — strong curvature,
+//!    saddles, cylinders, tori — is a cubic to within the fit's truncation
+//!    error O(|∇³n|·R⁴) and is not reported; a bump, dent, flat spot,
+//!    ripple or kink of lateral size up to about R is not a cubic and is.
+//!    Where the neighbourhood is one-sided (near a mesh boundary: its
+//!    weighted centroid lies more than 0.05 R from the site) the fit keeps
+//!    the near sites and shrinks to 0.6 R, since a one-sided cubic errs
+//!    more at its edge; mesh-boundary vertices themselves are not judged.
+//! 4. **Score.** θ = angle between the fine normal n̂ and the coarse fit's
+//!    normal at the site; L = distance of p̂ from the light plane (at least
+//!    s). A normal error θ displaces the highlight line of a light array at
+//!    distance L, seen head on, by about L·θ; the score is that displacement
+//!    in tenths of a spacing:
+//!
+//!    **score = θ·L / (0.1·s)** — a score of 1 means the highlight line is
+//!    displaced by one tenth of the light spacing against the line the
+//!    smooth surface would show. The score does not depend on the light
+//!    direction H: the normal error is compared in every direction at once,
+//!    which is what a set of light arrays rotated about Z would show.
+//! 5. **Noise.** The noise level is the median fine-fit residual (mesh
+//!    units, reported), and the score noise the median site score. A site
+//!    is flagged when its score exceeds max(`threshold`, `noise_factor` ×
+//!    median score) (defaults 1 and 4): on a clean model the median score
+//!    is far below 1 and the threshold is 1; on a noisy scan the threshold
+//!    rises above the noise and only what stands out of it is flagged.
+//!
+//! # Regions
+//!
+//! The faces whose centroid lies within `region_margin`·s (default 0.75 s)
+//! of a flagged site are united; each connected component, with the holes
+//! it encloses filled (a bump's summit has the smooth normal, its flanks
+//! do not), is a suggested region. Its score is the largest site score
+//! inside; regions are ranked by it. Sites where no fit is possible (fewer
+//! sites than coefficients inside R, normals turning by more than 72°) are
+//! not judged and counted in the result.
 
-use super::{HighlightError, HighlightLine, HighlightLines, NodeId};
+use super::{HighlightError, HighlightLines, LightArray, NodeId};
 use crate::Vec3;
 use crate::geom;
-use crate::mesh::{FaceId, SurfaceMesh};
+use crate::mesh::{FaceId, SurfaceMesh, VertexId};
+use crate::solve::solve_spd;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
 /// A small multiplicative hasher for integer cell keys (the default SipHash
-/// dominated region growing); not for untrusted keys, which these are not.
+/// dominated the neighbour queries); not for untrusted keys, which these
+/// are not.
 #[derive(Default)]
 struct CellHasher(u64);
 
@@ -61,122 +99,176 @@ impl Hasher for CellHasher {
     }
 }
 
-/// Flagged sample points per grid cell.
-type CellMap = HashMap<(i64, i64, i64), Vec<Vec3>, BuildHasherDefault<CellHasher>>;
+type Cell = (i64, i64, i64);
+type CellMap = HashMap<Cell, Vec<u32>, BuildHasherDefault<CellHasher>>;
 
-/// The 26 cells around a cell.
-const NEIGHBOUR_CELLS: [(i64, i64, i64); 26] = {
-    let mut out = [(0, 0, 0); 26];
-    let mut n = 0;
-    let mut d = 0;
-    while d < 27 {
-        let c = (d / 9 - 1, (d / 3) % 3 - 1, d % 3 - 1);
-        if !(c.0 == 0 && c.1 == 0 && c.2 == 0) {
-            out[n] = c;
-            n += 1;
-        }
-        d += 1;
+/// A uniform grid of points for radius queries.
+struct Grid {
+    size: f64,
+    cells: CellMap,
+}
+
+impl Grid {
+    fn cell(size: f64, x: Vec3) -> Cell {
+        let c = (x / size).floor();
+        (c.x as i64, c.y as i64, c.z as i64)
     }
-    out
-};
+    fn new(size: f64, points: impl Iterator<Item = (u32, Vec3)>) -> Self {
+        let mut cells: CellMap = HashMap::default();
+        for (i, p) in points {
+            cells.entry(Self::cell(size, p)).or_default().push(i);
+        }
+        Grid { size, cells }
+    }
+    /// Calls `f` with every stored index in the 27 cells around `x`
+    /// (a superset of the points within `size` of `x`).
+    fn around(&self, x: Vec3, mut f: impl FnMut(u32)) {
+        let (i, j, k) = Self::cell(self.size, x);
+        for di in -1..=1 {
+            for dj in -1..=1 {
+                for dk in -1..=1 {
+                    let c = (
+                        i.saturating_add(di),
+                        j.saturating_add(dj),
+                        k.saturating_add(dk),
+                    );
+                    if let Some(v) = self.cells.get(&c) {
+                        for &p in v {
+                            f(p);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
 
-/// Options of [`detect_irregularities`]; lengths relative to the spacing s.
+/// Options of [`detect_irregularities`]; lengths in light spacings s.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct DetectOptions {
-    /// Resampling step h in mesh units; `None` = max(1.5 × mean edge
-    /// length, s/25).
-    pub sample_step: Option<f64>,
-    /// Window length for the slow curvature part, in spacings (default 2).
-    pub window: f64,
-    /// Flag where |κ − κ̄|·s exceeds this (default 0.3).
-    pub wiggle_threshold: f64,
-    /// Flag where one sample turns by more than this many radians (0.35).
-    pub kink_angle: f64,
-    /// |κ|·s above which a reversal of the curvature vector counts as an
-    /// inflection (default 0.5).
-    pub inflection_curvature: f64,
-    /// Radius around flagged samples that goes into a region, in spacings
-    /// (default 0.75).
-    pub region_radius: f64,
-    /// Stretches scoring below this are ignored (default 0.05).
-    pub min_score: f64,
-    /// The light plane normal Z; when given, line samples where the surface
-    /// normal N has |Z·N| < `min_normal_cos` are not judged (near
-    /// silhouettes highlight lines crowd and bend for reasons unrelated to
-    /// fairness). Default `None`.
-    pub plane_normal: Option<Vec3>,
-    /// See `plane_normal` (default 0.3).
-    pub min_normal_cos: f64,
+    /// Flag sites whose score (highlight displacement in tenths of a
+    /// spacing, see the module documentation) exceeds this (default 1).
+    pub threshold: f64,
+    /// Radius R of the smooth (cubic) fit, in spacings (default 1.5): defects
+    /// up to about this lateral size are found; shape at larger scales is
+    /// taken as intended.
+    pub smooth_radius: f64,
+    /// Radius of the fine (quadric) fit, in spacings (default 0.25; at
+    /// least 2.5 mean edge lengths are used).
+    pub fine_radius: f64,
+    /// Distance between sites, in spacings (default 0.25).
+    pub site_spacing: f64,
+    /// Faces within this distance of a flagged site go into a region, in
+    /// spacings (default 0.75).
+    pub region_margin: f64,
+    /// The threshold is raised to this many times the median site score
+    /// (the score noise) on noisy meshes (default 4).
+    pub noise_factor: f64,
 }
 
 impl Default for DetectOptions {
     fn default() -> Self {
         DetectOptions {
-            sample_step: None,
-            window: 2.0,
-            wiggle_threshold: 0.3,
-            kink_angle: 0.35,
-            inflection_curvature: 0.5,
-            region_radius: 0.75,
-            min_score: 0.05,
-            plane_normal: None,
-            min_normal_cos: 0.3,
+            threshold: 1.0,
+            smooth_radius: 1.5,
+            fine_radius: 0.25,
+            site_spacing: 0.25,
+            region_margin: 0.75,
+            noise_factor: 4.0,
         }
     }
 }
 
-/// A flagged stretch of one highlight line.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Stretch {
-    /// Arc length (mesh units) where the stretch starts and ends.
-    pub arc: (f64, f64),
-    /// Integrated normalised wiggle Σ W_j·h/s.
-    pub score: f64,
-    /// The flagged sample points.
-    pub points: Vec<Vec3>,
+impl DetectOptions {
+    /// Sets the score threshold.
+    pub fn threshold(mut self, t: f64) -> Self {
+        self.threshold = t;
+        self
+    }
+    /// Sets the smooth-fit radius (spacings).
+    pub fn smooth_radius(mut self, r: f64) -> Self {
+        self.smooth_radius = r;
+        self
+    }
+    /// Sets the region margin (spacings).
+    pub fn region_margin(mut self, r: f64) -> Self {
+        self.region_margin = r;
+        self
+    }
 }
 
-/// Fairness of one highlight line.
+/// One site of the measure.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Site {
+    /// The vertex the site sits on.
+    pub vertex: VertexId,
+    /// Denoised position p̂ from the fine fit (mesh units).
+    pub position: Vec3,
+    /// Score θ·L/(0.1·s) (dimensionless); `None` when not judged.
+    pub score: Option<f64>,
+}
+
+/// Highlight lines crossing the suggested regions (for pictures and
+/// reports).
 #[derive(Clone, Debug, PartialEq)]
 pub struct LineFairness {
-    /// Position of the line in the [`HighlightLines`] it came from.
+    /// Position of the line in the [`HighlightLines`] given.
     pub line: usize,
     /// Its light index m.
     pub index: i64,
     /// Its length (mesh units).
     pub length: f64,
-    /// Largest normalised wiggle |κ − κ̄|·s along the line.
-    pub max_wiggle: f64,
-    /// Root-mean-square normalised wiggle along the line.
-    pub rms_wiggle: f64,
-    /// Number of inflections (reversals of the curvature vector).
-    pub inflections: usize,
-    /// Sum of the scores of its stretches (for ranking lines).
+    /// Largest score of a region the line crosses (0 when none).
     pub score: f64,
-    /// Flagged stretches.
-    pub stretches: Vec<Stretch>,
+    /// The stretches of the line inside regions, as polylines.
+    pub stretches: Vec<Vec<Vec3>>,
 }
 
-/// A suggested fairing region: a connected face set (DESIGN.md §5 region).
+/// A suggested fairing region: a connected face set (DESIGN.md §5 region)
+/// without holes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct IrregularRegion {
     /// Faces, ascending.
     pub faces: Vec<FaceId>,
-    /// Sum of the scores of the stretches inside (for ranking).
+    /// Largest site score inside (for ranking).
     pub score: f64,
-    /// Area-free centre: mean of the flagged sample points inside.
+    /// Score-weighted centre of the flagged sites inside (mesh units).
     pub center: Vec3,
-    /// Lines (positions in the input) with stretches inside.
+    /// Area of the faces (mesh units²).
+    pub area: f64,
+    /// Number of flagged sites inside.
+    pub flagged_sites: usize,
+    /// Lines (positions in the input) crossing the region.
     pub lines: Vec<usize>,
 }
 
 /// Result of [`detect_irregularities`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Detection {
-    /// Per-line fairness, in line order.
-    pub lines: Vec<LineFairness>,
     /// Regions by decreasing score.
     pub regions: Vec<IrregularRegion>,
+    /// Lines crossing regions (only those), in line order.
+    pub lines: Vec<LineFairness>,
+    /// Every site, judged or not.
+    pub sites: Vec<Site>,
+    /// Number of judged sites.
+    pub judged_sites: usize,
+    /// Number of flagged sites.
+    pub flagged_sites: usize,
+    /// The threshold applied: max(threshold, noise_factor × median score).
+    pub threshold: f64,
+    /// Median site score (the score noise; dimensionless).
+    pub median_score: f64,
+    /// Median weighted RMS residual of the fine fits (mesh units): the
+    /// sampling noise of the surface.
+    pub noise_level: f64,
+    /// Area of all regions over the mesh area (0–1).
+    pub flagged_area_fraction: f64,
+    /// Fine-fit radius used (mesh units).
+    pub fine_radius: f64,
+    /// Smooth-fit radius used (mesh units).
+    pub smooth_radius: f64,
 }
 
 impl Detection {
@@ -191,235 +283,265 @@ impl Detection {
         f.dedup();
         f
     }
+    /// The largest region score (0 when nothing was flagged).
+    pub fn max_score(&self) -> f64 {
+        self.regions.first().map_or(0.0, |r| r.score)
+    }
 }
 
-struct Sample {
-    p: Vec3,
-    /// index of the polyline segment the sample lies on
-    seg: usize,
+/// Orthonormal tangent frame (bx, by) of a unit normal.
+fn frame(n: Vec3) -> (Vec3, Vec3) {
+    let bx = n.any_orthonormal_vector();
+    (bx, n.cross(bx))
 }
 
-fn resample(points: &[Vec3], closed: bool, h: f64) -> (Vec<Sample>, f64, f64) {
-    let mut pts: Vec<Vec3> = points.to_vec();
-    if closed && pts.len() > 2 {
-        pts.push(pts[0]);
-    }
-    let mut cum = Vec::with_capacity(pts.len());
-    let mut l = 0.0;
-    cum.push(0.0);
-    for w in pts.windows(2) {
-        l += (w[1] - w[0]).length();
-        cum.push(l);
-    }
-    if !(l > 0.0) || pts.len() < 2 {
-        return (Vec::new(), 0.0, l);
-    }
-    let n = ((l / h).round() as usize).max(1);
-    let step = l / n as f64;
-    let count = if closed { n } else { n + 1 };
-    let mut out = Vec::with_capacity(count);
-    let mut k = 0;
-    for j in 0..count {
-        let t = (j as f64 * step).min(l);
-        while k + 2 < cum.len() && cum[k + 1] < t {
-            k += 1;
+/// Monomials 1, x, y, x², xy, y², x³, x²y, xy², y³ (the first N).
+fn monomials<const N: usize>(x: f64, y: f64) -> [f64; N] {
+    let all = [
+        1.0,
+        x,
+        y,
+        x * x,
+        x * y,
+        y * y,
+        x * x * x,
+        x * x * y,
+        x * y * y,
+        y * y * y,
+    ];
+    let mut out = [0.0; N];
+    out.copy_from_slice(&all[..N]);
+    out
+}
+
+/// Fine fit: weighted least-squares height field (N = 10: cubic, N = 6:
+/// quadric) over the neighbours in the frame of `n0`, coordinates scaled by
+/// r, weights (1 − ρ²)². Returns the denoised position, normal and
+/// weighted RMS residual (mesh units); `None` with fewer than N + 4 points.
+fn fine_fit<const N: usize>(p0: Vec3, n0: Vec3, pts: &[Vec3], r: f64) -> Option<(Vec3, Vec3, f64)> {
+    let (bx, by) = frame(n0);
+    let mut ata = [[0.0f64; N]; N];
+    let mut atb = [0.0f64; N];
+    let mut wsum = 0.0;
+    let mut rows: Vec<([f64; N], f64, f64)> = Vec::with_capacity(pts.len());
+    for &q in pts {
+        let d = (q - p0) / r;
+        let (x, y, z) = (d.dot(bx), d.dot(by), d.dot(n0));
+        let w = (1.0 - x * x - y * y).max(0.0).powi(2);
+        if w <= 0.0 {
+            continue;
         }
-        let len = cum[k + 1] - cum[k];
-        let a = if len > 0.0 {
-            ((t - cum[k]) / len).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        out.push(Sample {
-            p: pts[k].lerp(pts[k + 1], a),
-            seg: k,
+        let row = monomials::<N>(x, y);
+        for i in 0..N {
+            for j in i..N {
+                ata[i][j] += w * row[i] * row[j];
+            }
+            atb[i] += w * row[i] * z;
+        }
+        wsum += w;
+        rows.push((row, z, w));
+    }
+    if rows.len() < N + 4 {
+        return None;
+    }
+    let c = solve_spd(&ata, &atb)?;
+    let mut res = 0.0;
+    for (row, z, w) in &rows {
+        let f: f64 = row.iter().zip(&c).map(|(a, b)| a * b).sum();
+        res += w * (z - f) * (z - f);
+    }
+    let rms = if wsum > 0.0 {
+        (res / wsum).sqrt() * r
+    } else {
+        0.0
+    };
+    let n = (n0 - c[1] * bx - c[2] * by).normalize_or_zero();
+    if n == Vec3::ZERO {
+        return None;
+    }
+    Some((p0 + c[0] * r * n0, n, rms))
+}
+
+/// Coarse fit: IRLS cubic height field through the neighbour sites'
+/// positions and normals (frame of `n0` at `p0`, scaled by `r`); returns
+/// the fit's unit normal at the origin. `floor` is the smallest robust
+/// scale of the slope residuals (radians).
+fn smooth_normal(p0: Vec3, n0: Vec3, nb: &[(Vec3, Vec3)], r: f64, floor: f64) -> Option<Vec3> {
+    let (bx, by) = frame(n0);
+    struct Row {
+        x: f64,
+        y: f64,
+        z: f64,
+        gx: f64,
+        gy: f64,
+        w: f64,
+    }
+    let mut all_rows: Vec<Row> = Vec::with_capacity(nb.len());
+    for &(q, nq) in nb {
+        let d = (q - p0) / r;
+        let (x, y, z) = (d.dot(bx), d.dot(by), d.dot(n0));
+        let rr = x * x + y * y;
+        let w = (1.0 - rr).max(0.0).powi(2);
+        let nz = nq.dot(n0);
+        if w <= 0.0 || nz < 0.3 {
+            continue;
+        }
+        all_rows.push(Row {
+            x,
+            y,
+            z,
+            gx: -nq.dot(bx) / nz,
+            gy: -nq.dot(by) / nz,
+            w,
         });
     }
-    (out, step, l)
-}
-
-/// Fairness analysis of one line; returns the fairness and the source
-/// segment (node index) of each flagged sample.
-fn analyse(
-    line_no: usize,
-    line: &HighlightLine,
-    judged: &[bool],
-    s: f64,
-    h: f64,
-    o: &DetectOptions,
-) -> (LineFairness, Vec<Vec<usize>>) {
-    let (index, closed) = (line.index, line.closed);
-    let (smp, step, length) = resample(&line.points, closed, h);
-    let n = smp.len();
-    let mut fair = LineFairness {
-        line: line_no,
-        index,
-        length,
-        max_wiggle: 0.0,
-        rms_wiggle: 0.0,
-        inflections: 0,
-        score: 0.0,
-        stretches: Vec::new(),
-    };
-    if n < 5 || !(step > 0.0) {
-        return (fair, Vec::new());
-    }
-    let at = |j: isize| -> Option<usize> {
-        if closed {
-            Some(j.rem_euclid(n as isize) as usize)
-        } else if j >= 0 && (j as usize) < n {
-            Some(j as usize)
+    // one-sided neighbourhood (mesh boundary): a cubic fitted on one side
+    // of the site errs more at the site, so the fit shrinks to 0.6 R there
+    // and keeps the sites near the judged one; elsewhere it leaves them out
+    let mut rows: Vec<Row> = Vec::with_capacity(all_rows.len());
+    let wsum: f64 = all_rows.iter().map(|r| r.w).sum();
+    if wsum > 0.0 {
+        let cx = all_rows.iter().map(|r| r.w * r.x).sum::<f64>() / wsum;
+        let cy = all_rows.iter().map(|r| r.w * r.y).sum::<f64>() / wsum;
+        if cx.hypot(cy) > BOUNDARY_OFFSET {
+            let k = BOUNDARY_SHRINK;
+            rows = all_rows;
+            rows.retain(|r| r.x * r.x + r.y * r.y < k * k);
+            for r in &mut rows {
+                (r.x, r.y, r.z) = (r.x / k, r.y / k, r.z / k);
+                r.w = (1.0 - r.x * r.x - r.y * r.y).max(0.0).powi(2);
+            }
         } else {
-            None
+            rows = all_rows;
+            rows.retain(|r| r.x * r.x + r.y * r.y >= HOLE * HOLE);
         }
+    }
+    if rows.len() < 12 {
+        return None;
+    }
+    let basis = |x: f64, y: f64| -> ([f64; 10], [f64; 10], [f64; 10]) {
+        (
+            [
+                1.0,
+                x,
+                y,
+                x * x,
+                x * y,
+                y * y,
+                x * x * x,
+                x * x * y,
+                x * y * y,
+                y * y * y,
+            ],
+            [
+                0.0,
+                1.0,
+                0.0,
+                2.0 * x,
+                y,
+                0.0,
+                3.0 * x * x,
+                2.0 * x * y,
+                y * y,
+                0.0,
+            ],
+            [
+                0.0,
+                0.0,
+                1.0,
+                0.0,
+                x,
+                2.0 * y,
+                0.0,
+                x * x,
+                2.0 * x * y,
+                3.0 * y * y,
+            ],
+        )
     };
-    // curvature vectors and turning angles
-    let mut kappa = vec![Vec3::ZERO; n];
-    let mut turn = vec![0.0; n];
-    let mut has = vec![false; n];
-    for j in 0..n {
-        let (Some(a), Some(c)) = (at(j as isize - 1), at(j as isize + 1)) else {
-            continue;
-        };
-        let seg = smp[j].seg;
-        if !judged.get(seg).copied().unwrap_or(true)
-            || !judged.get(seg + 1).copied().unwrap_or(true)
-        {
-            continue;
-        }
-        let u0 = (smp[j].p - smp[a].p).normalize_or_zero();
-        let u1 = (smp[c].p - smp[j].p).normalize_or_zero();
-        if u0 == Vec3::ZERO || u1 == Vec3::ZERO {
-            continue;
-        }
-        kappa[j] = (u1 - u0) / step;
-        turn[j] = u0.dot(u1).clamp(-1.0, 1.0).acos();
-        has[j] = true;
-    }
-    // light smoothing (3 taps)
-    let mut ks = vec![Vec3::ZERO; n];
-    for j in 0..n {
-        if !has[j] {
-            continue;
-        }
-        let mut sum = Vec3::ZERO;
-        let mut cnt = 0.0;
-        for dj in -1..=1 {
-            if let Some(i) = at(j as isize + dj)
-                && has[i]
-            {
-                sum += kappa[i];
-                cnt += 1.0;
+    let mut robust = vec![1.0f64; rows.len()];
+    let mut coef = [0.0f64; 10];
+    for pass in 0..3 {
+        let mut ata = [[0.0f64; 10]; 10];
+        let mut atb = [0.0f64; 10];
+        for (row, &rw) in rows.iter().zip(&robust) {
+            let w = row.w * rw;
+            if w <= 0.0 {
+                continue;
+            }
+            let (v, dx, dy) = basis(row.x, row.y);
+            for i in 0..10 {
+                for j in i..10 {
+                    ata[i][j] += w * (v[i] * v[j] + dx[i] * dx[j] + dy[i] * dy[j]);
+                }
+                atb[i] += w * (v[i] * row.z + dx[i] * row.gx + dy[i] * row.gy);
             }
         }
-        ks[j] = sum / cnt;
-    }
-    // slow part over the window (prefix sums; clipped at open ends)
-    let half = ((o.window * s / step) * 0.5).round().max(1.0) as isize;
-    let mut wig = vec![0.0; n];
-    for j in 0..n {
-        if !has[j] {
-            continue;
+        coef = solve_spd(&ata, &atb)?;
+        if pass == 2 {
+            break;
         }
-        let mut sum = Vec3::ZERO;
-        let mut cnt = 0.0;
-        for dj in -half..=half {
-            if let Some(i) = at(j as isize + dj)
-                && has[i]
-                && (closed || (i as isize - j as isize).abs() <= half)
-            {
-                sum += ks[i];
-                cnt += 1.0;
-            }
-        }
-        let slow = sum / cnt;
-        wig[j] = (ks[j] - slow).length() * s;
-    }
-    let mut flagged: Vec<bool> = (0..n)
-        .map(|j| has[j] && (wig[j] > o.wiggle_threshold || turn[j] > o.kink_angle))
-        .collect();
-    // inflections: reversals of the smoothed curvature vector
-    let mut infl: Vec<usize> = Vec::new();
-    for j in 0..n {
-        let Some(i) = at(j as isize + 1) else {
-            continue;
-        };
-        if has[j]
-            && has[i]
-            && ks[j].length() * s > o.inflection_curvature
-            && ks[i].length() * s > o.inflection_curvature
-            && ks[j].dot(ks[i]) < 0.0
-        {
-            infl.push(j);
+        // slope residuals and their robust scale
+        let res: Vec<f64> = rows
+            .iter()
+            .map(|row| {
+                let (_, dx, dy) = basis(row.x, row.y);
+                let fx: f64 = dx.iter().zip(&coef).map(|(a, b)| a * b).sum();
+                let fy: f64 = dy.iter().zip(&coef).map(|(a, b)| a * b).sum();
+                ((fx - row.gx).powi(2) + (fy - row.gy).powi(2)).sqrt()
+            })
+            .collect();
+        let mut sorted = res.clone();
+        sorted.sort_by(f64::total_cmp);
+        let med = sorted[sorted.len() / 2];
+        let scale = (1.4826 * med).max(floor);
+        let c = 4.685 * scale;
+        for (rw, e) in robust.iter_mut().zip(&res) {
+            let u = e / c;
+            *rw = if u < 1.0 { (1.0 - u * u).powi(2) } else { 0.0 };
         }
     }
-    fair.inflections = infl.len();
-    let win = (o.window * s / step).round().max(1.0) as usize;
-    for w in infl.windows(2) {
-        if w[1] - w[0] <= win {
-            for f in flagged.iter_mut().take(w[1] + 1).skip(w[0]) {
-                *f = true;
-            }
-        }
-    }
-    fair.max_wiggle = wig.iter().copied().fold(0.0, f64::max);
-    let cnt = has.iter().filter(|&&x| x).count().max(1) as f64;
-    fair.rms_wiggle = (wig.iter().map(|w| w * w).sum::<f64>() / cnt).sqrt();
-    // stretches: flagged samples with gaps below the window merged
-    let mut stretches: Vec<(usize, usize)> = Vec::new();
-    for j in 0..n {
-        if !flagged[j] {
-            continue;
-        }
-        match stretches.last_mut() {
-            Some(last) if j - last.1 <= win => last.1 = j,
-            _ => stretches.push((j, j)),
-        }
-    }
-    let mut segs = Vec::new();
-    for (a, b) in stretches {
-        let score: f64 = (a..=b)
-            .map(|j| wig[j].max(o.wiggle_threshold * turn[j] / o.kink_angle))
-            .sum::<f64>()
-            * step
-            / s;
-        if !(score >= o.min_score) {
-            continue;
-        }
-        fair.stretches.push(Stretch {
-            arc: (a as f64 * step, b as f64 * step),
-            score,
-            points: (a..=b).map(|j| smp[j].p).collect(),
-        });
-        segs.push((a..=b).map(|j| smp[j].seg).collect());
-        fair.score += score;
-    }
-    (fair, segs)
+    let n = (n0 - coef[1] * bx - coef[2] * by).normalize_or_zero();
+    (n != Vec3::ZERO).then_some(n)
 }
 
-/// Detects irregular stretches of highlight lines and turns them into
-/// suggested fairing regions (see the module documentation for the measure,
-/// defaults and region construction). `spacing` is the light spacing s
-/// (mesh units) the wiggle is normalised by. Errors on non-triangle meshes
-/// and invalid options; lines with fewer than five samples are scored 0.
+/// Weighted centroid offset of a neighbourhood (in smooth radii) above
+/// which the site counts as near a boundary.
+const BOUNDARY_OFFSET: f64 = 0.05;
+/// The smooth fit leaves out the sites within this many smooth radii of
+/// the site it judges, so a defect there does not bend the fit toward
+/// itself (the fit interpolates across the hole).
+const HOLE: f64 = 0.35;
+/// Radius of the smooth fit near a boundary, in smooth radii.
+const BOUNDARY_SHRINK: f64 = 0.6;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Finds surface defects that displace the highlight lines of `light` and
+/// turns them into suggested fairing regions (see the module documentation
+/// for the measure, its score and defaults). `lines` are the highlight
+/// lines of `light` on `mesh` (used only to report which lines cross each
+/// region). Errors on non-triangle meshes and invalid options.
 pub fn detect_irregularities(
     mesh: &SurfaceMesh,
+    light: &LightArray,
     lines: &HighlightLines,
-    spacing: f64,
     options: &DetectOptions,
 ) -> Result<Detection, HighlightError> {
     mesh.require_triangles()?;
     let o = options;
-    if !(spacing > 0.0) || !spacing.is_finite() {
-        return Err(HighlightError::InvalidOption(format!(
-            "spacing must be positive, got {spacing}"
-        )));
-    }
     for (name, v) in [
-        ("window", o.window),
-        ("wiggle_threshold", o.wiggle_threshold),
-        ("kink_angle", o.kink_angle),
-        ("region_radius", o.region_radius),
+        ("threshold", o.threshold),
+        ("smooth_radius", o.smooth_radius),
+        ("fine_radius", o.fine_radius),
+        ("site_spacing", o.site_spacing),
+        ("region_margin", o.region_margin),
     ] {
         if !(v > 0.0) || !v.is_finite() {
             return Err(HighlightError::InvalidOption(format!(
@@ -427,141 +549,166 @@ pub fn detect_irregularities(
             )));
         }
     }
-    let h = match o.sample_step {
-        Some(h) if h > 0.0 && h.is_finite() => h,
-        Some(h) => {
-            return Err(HighlightError::InvalidOption(format!(
-                "sample_step must be positive, got {h}"
-            )));
+    if !(o.noise_factor >= 0.0) || !o.noise_factor.is_finite() {
+        return Err(HighlightError::InvalidOption(format!(
+            "noise_factor must be non-negative, got {}",
+            o.noise_factor
+        )));
+    }
+    let s = light.spacing();
+    let z = light.plane_normal();
+    let a0 = light.plane_point();
+    let p = mesh.positions();
+    let normals = geom::vertex_normals(mesh);
+    let h = geom::mean_edge_length(mesh);
+    let h = if h > 0.0 && h.is_finite() { h } else { s };
+    let fine_r = (o.fine_radius * s).max(2.5 * h);
+    let smooth_r = (o.smooth_radius * s).max(2.0 * fine_r);
+    let cell = o.site_spacing * s;
+    // sites: the lowest-index vertex of each cube of side `cell`
+    let mut site_of_cell: HashMap<Cell, u32, BuildHasherDefault<CellHasher>> = HashMap::default();
+    for (i, &q) in p.iter().enumerate() {
+        if normals[i] == Vec3::ZERO || !q.is_finite() {
+            continue;
         }
-        None => {
-            let e = geom::mean_edge_length(mesh);
-            let h = (1.5 * e).max(spacing / 25.0);
-            if h > 0.0 && h.is_finite() {
-                h
-            } else {
-                spacing / 25.0
-            }
-        }
-    };
-    // which nodes are judged: |Z·N| >= min_normal_cos at the node
-    let normals = o.plane_normal.map(|_| geom::vertex_normals(mesh));
-    let z = o.plane_normal.and_then(|z| z.try_normalize());
-    let judged_node = |nd: NodeId| -> bool {
-        let (Some(z), Some(nrm)) = (z, normals.as_ref()) else {
-            return true;
-        };
-        let n = match nd {
-            NodeId::Vertex(v, _) => nrm[v.idx()],
-            NodeId::Edge(e, _) => {
-                let (a, b) = mesh.edge_vertices(e);
-                nrm[a.idx()] + nrm[b.idx()]
-            }
-        };
-        n.normalize_or_zero().dot(z).abs() >= o.min_normal_cos
-    };
-    let analysed: Vec<(LineFairness, Vec<Vec<usize>>)> = lines
-        .lines
+        site_of_cell.entry(Grid::cell(cell, q)).or_insert(i as u32);
+    }
+    let mut site_vertices: Vec<u32> = site_of_cell.into_values().collect();
+    site_vertices.sort_unstable();
+    let fine_cell = 1.6 * fine_r;
+    let vgrid = Grid::new(fine_cell, p.iter().enumerate().map(|(i, &q)| (i as u32, q)));
+    // fine fits
+    let fine: Vec<Option<(Vec3, Vec3, f64)>> = site_vertices
         .par_iter()
-        .enumerate()
-        .map(|(i, l)| {
-            let mut judged: Vec<bool> = l.nodes.iter().map(|&nd| judged_node(nd)).collect();
-            if l.closed && !judged.is_empty() {
-                judged.push(judged[0]);
-            }
-            analyse(i, l, &judged, spacing, h, o)
+        .map(|&v| {
+            let (p0, n0) = (p[v as usize], normals[v as usize]);
+            // candidates within 1.6 r_f (the grid cell is 1.6 r_f)
+            let mut near: Vec<(f64, Vec3)> = Vec::new();
+            vgrid.around(p0, |u| {
+                let q = p[u as usize];
+                let d2 = (q - p0).length_squared();
+                if d2 < fine_cell * fine_cell && normals[u as usize].dot(n0) > 0.5 {
+                    near.push((d2, q));
+                }
+            });
+            // a cubic over r_f; where too few points (boundaries, corners),
+            // over a radius grown to hold 20 of them; else a quadric
+            let within = |r: f64| -> Vec<Vec3> {
+                near.iter()
+                    .filter(|(d2, _)| *d2 < r * r)
+                    .map(|x| x.1)
+                    .collect()
+            };
+            let pts = within(fine_r);
+            let fit = if pts.len() >= 20 {
+                fine_fit::<10>(p0, n0, &pts, fine_r)
+            } else {
+                let mut d2: Vec<f64> = near.iter().map(|x| x.0).collect();
+                d2.sort_by(f64::total_cmp);
+                let r = d2
+                    .get(19)
+                    .map_or(fine_cell, |d| d.sqrt() * 1.05)
+                    .min(fine_cell);
+                fine_fit::<10>(p0, n0, &within(r), r)
+            };
+            fit.or_else(|| fine_fit::<6>(p0, n0, &pts, fine_r))
+                .or_else(|| Some((p0, n0, f64::NAN)))
+                .filter(|(q, n, _)| q.is_finite() && n.is_finite())
         })
         .collect();
-    let radius = o.region_radius * spacing;
-    let p = mesh.positions();
+    let noise_level = median(
+        fine.iter()
+            .flatten()
+            .map(|f| f.2)
+            .filter(|r| r.is_finite())
+            .collect(),
+    );
+    let sgrid = Grid::new(
+        smooth_r,
+        fine.iter()
+            .enumerate()
+            .filter_map(|(i, f)| f.map(|(q, _, _)| (i as u32, q))),
+    );
+    // coarse fits and scores
+    let scores: Vec<Option<f64>> = (0..site_vertices.len())
+        .into_par_iter()
+        .map(|i| {
+            if mesh.is_boundary_vertex(VertexId(site_vertices[i])) {
+                return None;
+            }
+            let (pi, ni, _) = fine[i]?;
+            let dist = (a0 - pi).dot(z).abs().max(s);
+            let theta0 = 0.1 * s / dist;
+            let mut nb = Vec::new();
+            sgrid.around(pi, |j| {
+                if let Some((q, nq, _)) = fine[j as usize]
+                    && (q - pi).length_squared() < smooth_r * smooth_r
+                    && nq.dot(ni) > 0.3
+                {
+                    nb.push((q, nq));
+                }
+            });
+            let ns = smooth_normal(pi, ni, &nb, smooth_r, 0.5 * theta0)?;
+            let theta = ni.dot(ns).clamp(-1.0, 1.0).acos();
+            let score = theta / theta0;
+            score.is_finite().then_some(score)
+        })
+        .collect();
+    let judged: Vec<f64> = scores.iter().flatten().copied().collect();
+    let judged_sites = judged.len();
+    let median_score = median(judged);
+    let threshold = o.threshold.max(o.noise_factor * median_score);
+    let sites: Vec<Site> = site_vertices
+        .iter()
+        .zip(&fine)
+        .zip(&scores)
+        .map(|((&v, f), &score)| Site {
+            vertex: VertexId(v),
+            position: f.map_or(p[v as usize], |f| f.0),
+            score,
+        })
+        .collect();
+    let flagged: Vec<usize> = (0..sites.len())
+        .filter(|&i| sites[i].score.is_some_and(|sc| sc > threshold))
+        .collect();
+    // faces near flagged sites
+    let margin = (o.region_margin * s).max(cell);
+    let fgrid = Grid::new(
+        margin,
+        flagged.iter().map(|&i| (i as u32, sites[i].position)),
+    );
+    let nf = mesh.face_count();
     let centroid = |f: FaceId| {
         let [a, b, c] = mesh.triangle(f);
         (p[a.idx()] + p[b.idx()] + p[c.idx()]) / 3.0
     };
-    let node_faces = |nd: NodeId| -> Vec<FaceId> {
-        match nd {
-            NodeId::Edge(e, _) => [0, 1]
-                .iter()
-                .filter_map(|&i| mesh.face(mesh.edge_halfedge(e, i)))
-                .collect(),
-            NodeId::Vertex(v, _) => mesh.vertex_faces(v).collect(),
-        }
+    let mut in_region: Vec<bool> = if flagged.is_empty() {
+        vec![false; nf]
+    } else {
+        (0..nf)
+            .into_par_iter()
+            .map(|f| {
+                let c = centroid(FaceId(f as u32));
+                let mut hit = false;
+                fgrid.around(c, |i| {
+                    hit |= (sites[i as usize].position - c).length_squared() <= margin * margin;
+                });
+                hit
+            })
+            .collect()
     };
-    // per stretch: grown face sets
-    let mut in_region = vec![false; mesh.face_count()];
-    let mut stretch_faces: Vec<(usize, f64, Vec3, Vec<FaceId>)> = Vec::new();
-    let mut mark = vec![u32::MAX; mesh.face_count()];
-    let mut stamp = 0u32;
-    for (li, (fair, segs)) in analysed.iter().enumerate() {
-        let line = &lines.lines[li];
-        for (st, seg_ids) in fair.stretches.iter().zip(segs) {
-            stamp += 1;
-            let mut queue: Vec<FaceId> = Vec::new();
-            for &k in seg_ids {
-                let nodes = &line.nodes;
-                for nd in [nodes.get(k), nodes.get((k + 1) % nodes.len().max(1))]
-                    .into_iter()
-                    .flatten()
-                {
-                    for f in node_faces(*nd) {
-                        if mark[f.idx()] != stamp {
-                            mark[f.idx()] = stamp;
-                            queue.push(f);
-                        }
-                    }
-                }
-            }
-            // flagged samples bucketed in cubes of side `radius`: a face is
-            // near when a sample in its own cube or one of the 26 around it
-            // is close (own cube first: the usual hit inside a region)
-            let cell = |x: Vec3| {
-                let c = (x / radius).floor();
-                (c.x as i64, c.y as i64, c.z as i64)
-            };
-            let mut grid: CellMap = HashMap::default();
-            for &q in &st.points {
-                grid.entry(cell(q)).or_default().push(q);
-            }
-            let near = |x: Vec3| {
-                let (i, j, k) = cell(x);
-                let hit = |c: (i64, i64, i64)| {
-                    grid.get(&c)
-                        .is_some_and(|pts| pts.iter().any(|q| (x - *q).length() <= radius))
-                };
-                hit((i, j, k))
-                    || NEIGHBOUR_CELLS.iter().any(|&(di, dj, dk)| {
-                        hit((
-                            i.saturating_add(di),
-                            j.saturating_add(dj),
-                            k.saturating_add(dk),
-                        ))
-                    })
-            };
-            let mut faces = Vec::new();
-            while let Some(f) = queue.pop() {
-                faces.push(f);
-                for hh in mesh.face_halfedges(f) {
-                    if let Some(g) = mesh.face(mesh.opposite(hh))
-                        && mark[g.idx()] != stamp
-                    {
-                        mark[g.idx()] = stamp;
-                        if near(centroid(g)) {
-                            queue.push(g);
-                        }
-                    }
-                }
-            }
-            for f in &faces {
-                in_region[f.idx()] = true;
-            }
-            let c = st.points.iter().copied().sum::<Vec3>() / st.points.len().max(1) as f64;
-            stretch_faces.push((li, st.score, c, faces));
+    for &i in &flagged {
+        for f in mesh.vertex_faces(sites[i].vertex) {
+            in_region[f.idx()] = true;
         }
     }
-    // connected components of the union
-    let mut comp = vec![u32::MAX; mesh.face_count()];
+    fill_holes(mesh, &mut in_region);
+    // connected components
+    let areas = geom::face_areas(mesh);
+    let total_area: f64 = areas.iter().sum();
+    let mut comp = vec![u32::MAX; nf];
     let mut regions: Vec<IrregularRegion> = Vec::new();
-    for f0 in 0..mesh.face_count() {
+    for f0 in 0..nf {
         if !in_region[f0] || comp[f0] != u32::MAX {
             continue;
         }
@@ -582,39 +729,158 @@ pub fn detect_irregularities(
             }
         }
         faces.sort_unstable();
+        let area = faces.iter().map(|f| areas[f.idx()]).sum();
         regions.push(IrregularRegion {
             faces,
             score: 0.0,
             center: Vec3::ZERO,
+            area,
+            flagged_sites: 0,
             lines: Vec::new(),
         });
     }
     let mut weight = vec![0.0; regions.len()];
-    for (li, score, c, faces) in &stretch_faces {
-        // a stretch may touch several components: share its score by faces
-        let mut ids: Vec<usize> = faces.iter().map(|f| comp[f.idx()] as usize).collect();
-        ids.sort_unstable();
-        let total = ids.len() as f64;
-        for chunk in ids.chunk_by(|a, b| a == b) {
-            let r = chunk[0];
-            let share = score * chunk.len() as f64 / total;
-            regions[r].score += share;
-            regions[r].center += share * *c;
-            weight[r] += share;
-            regions[r].lines.push(*li);
+    for &i in &flagged {
+        let Some(f) = mesh.vertex_faces(sites[i].vertex).next() else {
+            continue;
+        };
+        let r = comp[f.idx()];
+        if r == u32::MAX {
+            continue;
         }
+        let r = r as usize;
+        let sc = sites[i].score.unwrap_or(0.0);
+        regions[r].score = regions[r].score.max(sc);
+        regions[r].center += sc * sites[i].position;
+        regions[r].flagged_sites += 1;
+        weight[r] += sc;
     }
     for (r, w) in regions.iter_mut().zip(&weight) {
         if *w > 0.0 {
             r.center /= *w;
         }
-        r.lines.sort_unstable();
-        r.lines.dedup();
+    }
+    // lines crossing the regions
+    let node_region = |nd: NodeId| -> Option<u32> {
+        let f = match nd {
+            NodeId::Edge(e, _) => [0, 1].iter().find_map(|&k| {
+                mesh.face(mesh.edge_halfedge(e, k))
+                    .filter(|f| in_region[f.idx()])
+            }),
+            NodeId::Vertex(v, _) => mesh.vertex_faces(v).find(|f| in_region[f.idx()]),
+        }?;
+        Some(comp[f.idx()])
+    };
+    let mut line_out: Vec<LineFairness> = Vec::new();
+    for (li, line) in lines.lines.iter().enumerate() {
+        let mut stretches: Vec<Vec<Vec3>> = Vec::new();
+        let mut current: Vec<Vec3> = Vec::new();
+        let mut score: f64 = 0.0;
+        for (k, (&nd, &q)) in line.nodes.iter().zip(&line.points).enumerate() {
+            match node_region(nd) {
+                Some(r) if (r as usize) < regions.len() => {
+                    current.push(q);
+                    score = score.max(regions[r as usize].score);
+                    if !regions[r as usize].lines.contains(&li) {
+                        regions[r as usize].lines.push(li);
+                    }
+                }
+                _ => {
+                    if current.len() > 1 {
+                        stretches.push(std::mem::take(&mut current));
+                    }
+                    current.clear();
+                }
+            }
+            let _ = k;
+        }
+        if current.len() > 1 {
+            stretches.push(current);
+        }
+        if !stretches.is_empty() {
+            let length = line.points.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+            line_out.push(LineFairness {
+                line: li,
+                index: line.index,
+                length,
+                score,
+                stretches,
+            });
+        }
     }
     regions.retain(|r| r.score > 0.0);
+    for r in &mut regions {
+        r.lines.sort_unstable();
+    }
     regions.sort_by(|a, b| b.score.total_cmp(&a.score).then(a.faces.cmp(&b.faces)));
+    let region_area: f64 = regions.iter().map(|r| r.area).sum();
+    let flagged_area_fraction = if total_area > 0.0 {
+        (region_area / total_area).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     Ok(Detection {
-        lines: analysed.into_iter().map(|(f, _)| f).collect(),
         regions,
+        lines: line_out,
+        flagged_sites: flagged.len(),
+        sites,
+        judged_sites,
+        threshold,
+        median_score,
+        noise_level,
+        flagged_area_fraction,
+        fine_radius: fine_r,
+        smooth_radius: smooth_r,
     })
+}
+
+/// Fills the holes of a face set: complement components that touch no mesh
+/// boundary, are not the largest complement component and are smaller than
+/// the set itself are added to it.
+fn fill_holes(mesh: &SurfaceMesh, in_region: &mut [bool]) {
+    let nf = mesh.face_count();
+    let region_faces = in_region.iter().filter(|&&b| b).count();
+    if region_faces == 0 {
+        return;
+    }
+    let mut comp = vec![u32::MAX; nf];
+    let mut parts: Vec<(Vec<FaceId>, bool)> = Vec::new();
+    for f0 in 0..nf {
+        if in_region[f0] || comp[f0] != u32::MAX {
+            continue;
+        }
+        let id = parts.len() as u32;
+        let mut faces = Vec::new();
+        let mut boundary = false;
+        let mut stack = vec![FaceId(f0 as u32)];
+        comp[f0] = id;
+        while let Some(f) = stack.pop() {
+            faces.push(f);
+            for hh in mesh.face_halfedges(f) {
+                match mesh.face(mesh.opposite(hh)) {
+                    Some(g) => {
+                        if !in_region[g.idx()] && comp[g.idx()] == u32::MAX {
+                            comp[g.idx()] = id;
+                            stack.push(g);
+                        }
+                    }
+                    None => boundary = true,
+                }
+            }
+        }
+        parts.push((faces, boundary));
+    }
+    let largest = parts
+        .iter()
+        .enumerate()
+        .max_by_key(|(i, (f, _))| (f.len(), std::cmp::Reverse(*i)))
+        .map(|(i, _)| i);
+    for (i, (faces, boundary)) in parts.iter().enumerate() {
+        if Some(i) == largest || *boundary || faces.len() >= region_faces {
+            continue;
+        }
+        for f in faces {
+            in_region[f.idx()] = true;
+        }
+    }
 }

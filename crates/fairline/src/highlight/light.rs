@@ -3,6 +3,9 @@
 
 use super::HighlightError;
 use crate::Vec3;
+use crate::mesh::SurfaceMesh;
+use crate::solve::symmetric_eigen3;
+use glam::DMat3;
 use serde::{Deserialize, Serialize};
 
 /// Smallest |sin| of the angle between the light direction and the plane
@@ -17,6 +20,21 @@ fn unit(v: Vec3, what: &str) -> Result<Vec3, HighlightError> {
         )));
     }
     Ok(v / len)
+}
+
+/// Which way is "up" for the default lights of a part: the light plane's
+/// normal Z (see [`LightArray::default_for_mesh`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum UpAxis {
+    /// From the part: its principal axis of least extent.
+    #[default]
+    Auto,
+    /// +x.
+    X,
+    /// +y.
+    Y,
+    /// +z.
+    Z,
 }
 
 /// An array of coplanar, parallel, equally spaced linear light sources
@@ -157,6 +175,121 @@ impl LightArray {
             direction: h,
             spacing,
         }
+    }
+
+    /// The default light array for a part, chosen from the part itself:
+    ///
+    /// - the plane normal Z is the `up` axis (+x, +y or +z), or with
+    ///   [`UpAxis::Auto`] the principal axis of least extent of the vertex
+    ///   cloud (the normal of a panel, the side of an elongated part), turned
+    ///   to the side that the larger share of the surface area faces (for a
+    ///   closed part, the side whose largest coordinate component is
+    ///   positive);
+    /// - the light direction H is the principal axis of largest extent made
+    ///   orthogonal to Z, so the lights run along the part and the lines
+    ///   cross its shorter side;
+    /// - about 20 lights across the part's extent along Z × H, light 0 over
+    ///   the bounding-box centre, the plane one bounding-box diagonal above
+    ///   the centre along Z.
+    ///
+    /// `None` for a mesh without finite vertices.
+    pub fn default_for_mesh(mesh: &SurfaceMesh, up: UpAxis) -> Option<Self> {
+        let p: Vec<Vec3> = mesh
+            .positions()
+            .iter()
+            .copied()
+            .filter(|q| q.is_finite())
+            .collect();
+        if p.is_empty() {
+            return None;
+        }
+        let (lo, hi) = crate::mesh::bounding_box(&p)?;
+        let centre = 0.5 * (lo + hi);
+        let mean = p.iter().copied().sum::<Vec3>() / p.len() as f64;
+        let mut cov = DMat3::ZERO;
+        for q in &p {
+            let d = *q - mean;
+            cov += DMat3::from_cols(d * d.x, d * d.y, d * d.z);
+        }
+        let (values, vectors) = symmetric_eigen3(cov / p.len() as f64);
+        let mut order = [0usize, 1, 2];
+        order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
+        let least = vectors.col(order[0]);
+        let largest = vectors.col(order[2]);
+        let z = match up {
+            UpAxis::X => Vec3::X,
+            UpAxis::Y => Vec3::Y,
+            UpAxis::Z => Vec3::Z,
+            UpAxis::Auto => {
+                let z = least.try_normalize().unwrap_or(Vec3::Z);
+                let area_normal: Vec3 = crate::geom::face_normals(mesh)
+                    .iter()
+                    .zip(crate::geom::face_areas(mesh))
+                    .map(|(n, a)| *n * a)
+                    .sum();
+                let total: f64 = crate::geom::face_areas(mesh).iter().sum();
+                let facing = area_normal.dot(z);
+                let sign = if total > 0.0 && facing.abs() > 1e-3 * total {
+                    facing.signum()
+                } else {
+                    let a = z.abs();
+                    let k = if a.x >= a.y && a.x >= a.z {
+                        z.x
+                    } else if a.y >= a.z {
+                        z.y
+                    } else {
+                        z.z
+                    };
+                    if k < 0.0 { -1.0 } else { 1.0 }
+                };
+                sign * z
+            }
+        };
+        let mut h = largest - largest.dot(z) * z;
+        if !(h.length() > 0.1) {
+            let mid = vectors.col(order[1]);
+            h = mid - mid.dot(z) * z;
+        }
+        let h = h
+            .try_normalize()
+            .unwrap_or_else(|| z.any_orthonormal_vector());
+        // a deterministic sign for H: its largest component positive
+        let a = h.abs();
+        let k = if a.x >= a.y && a.x >= a.z {
+            h.x
+        } else if a.y >= a.z {
+            h.y
+        } else {
+            h.z
+        };
+        let h = if k < 0.0 { -h } else { h };
+        let across = z.cross(h);
+        let (mut amin, mut amax) = (f64::INFINITY, f64::NEG_INFINITY);
+        for q in &p {
+            let t = q.dot(across);
+            amin = amin.min(t);
+            amax = amax.max(t);
+        }
+        let width = amax - amin;
+        let diag = (hi - lo).length();
+        let spacing = if width > 0.0 && width.is_finite() {
+            width / 20.0
+        } else if diag > 0.0 && diag.is_finite() {
+            diag / 20.0
+        } else {
+            1.0
+        };
+        let lift = if diag > 0.0 && diag.is_finite() {
+            diag
+        } else {
+            1.0
+        };
+        Some(LightArray {
+            plane_point: centre + lift * z,
+            plane_normal: z,
+            direction: h,
+            spacing,
+        })
     }
 
     /// A copy with a different spacing (> 0, finite), e.g. for a denser array.

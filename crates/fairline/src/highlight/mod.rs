@@ -18,8 +18,10 @@ pub mod surface;
 
 pub use circular::{circular_highlight_bands, circular_highlight_lines};
 pub use contour::{HighlightLine, HighlightLines, NodeId};
-pub use detect::{DetectOptions, Detection, IrregularRegion, LineFairness, detect_irregularities};
-pub use light::{CircleApproach, CircularLight, CircularLights, LightArray};
+pub use detect::{
+    DetectOptions, Detection, IrregularRegion, LineFairness, Site, detect_irregularities,
+};
+pub use light::{CircleApproach, CircularLight, CircularLights, LightArray, UpAxis};
 pub use linear::{HighlightModel, HighlightOptions, highlight_lines};
 /// The one quartic solver (Nishiyama et al. Eq. (2.15)–(2.16)), shared by
 /// circular lights on meshes and on B-spline surfaces.
@@ -62,5 +64,7 @@ pub struct HighlightBands {
     pub upper: HighlightLines,
 }
 
+#[cfg(test)]
+mod detect_tests;
 #[cfg(test)]
 mod tests;

@@ -26,7 +26,7 @@ pub use cholesky::{
     sparse_from_triplets,
 };
 pub use ordering::nested_dissection;
-pub use small::{function_of_eigen3, symmetric_eigen3, symmetric_function3};
+pub use small::{function_of_eigen3, solve_spd, symmetric_eigen3, symmetric_function3};
 pub use vector_amg::{SymmetricBlock, VectorAmg, VectorAmgOptions, VectorOperator};
 
 use thiserror::Error;

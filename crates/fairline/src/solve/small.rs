@@ -109,3 +109,52 @@ mod tests {
         assert!(close(inv * m, DMat3::IDENTITY, 1e-12));
     }
 }
+
+/// Solves the dense symmetric positive definite system A x = b of a small
+/// least-squares fit (normal equations, N ≤ ~10) by Cholesky factorisation
+/// (Golub & Van Loan §4.2). Only the upper triangle of `a` (i ≤ j) is read.
+/// `None` when a pivot falls below 1e-12 times the largest diagonal entry
+/// (rank-deficient fit) or the input is not finite.
+pub fn solve_spd<const N: usize>(a: &[[f64; N]; N], b: &[f64; N]) -> Option<[f64; N]> {
+    let scale = (0..N).map(|i| a[i][i]).fold(0.0f64, f64::max);
+    if !(scale > 0.0) || !scale.is_finite() {
+        return None;
+    }
+    // lower factor L with A = L Lᵀ
+    let mut l = [[0.0f64; N]; N];
+    for j in 0..N {
+        let mut d = a[j][j];
+        for k in 0..j {
+            d -= l[j][k] * l[j][k];
+        }
+        if !(d > 1e-12 * scale) {
+            return None;
+        }
+        let djj = d.sqrt();
+        l[j][j] = djj;
+        for i in j + 1..N {
+            let mut s = a[j][i];
+            for k in 0..j {
+                s -= l[i][k] * l[j][k];
+            }
+            l[i][j] = s / djj;
+        }
+    }
+    let mut y = [0.0f64; N];
+    for i in 0..N {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= l[i][k] * y[k];
+        }
+        y[i] = s / l[i][i];
+    }
+    let mut x = [0.0f64; N];
+    for i in (0..N).rev() {
+        let mut s = y[i];
+        for k in i + 1..N {
+            s -= l[k][i] * x[k];
+        }
+        x[i] = s / l[i][i];
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}

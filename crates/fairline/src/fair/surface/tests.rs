@@ -624,7 +624,6 @@ fn check_case_paper(c: &Case, max_iterations: usize, drop: f64, name: &str) -> S
     rep
 }
 
-
 #[test]
 fn fair_paper_method_keeps_its_guarantees_on_dome_saddle_and_roof() {
     let clean = height_surface(15, 15, 1.0, 1.0, |x, y| 0.8 - 0.4 * (x * x + y * y));
