@@ -934,7 +934,8 @@ pub fn fair_surface(
     let targets = target_curves(surface, lights, endpoints, opts)?;
     let ends: Vec<[f64; 2]> = targets.iter().flat_map(|t| [t.start, t.end]).collect();
     let kb = knot_box(surface, &ends);
-    let (held, selected): (Vec<(usize, usize)>, Vec<(usize, usize)>) = surface
+    type ControlIndices = Vec<(usize, usize)>;
+    let (held, selected): (ControlIndices, ControlIndices) = surface
         .control_points_in_box(kb[0], kb[1], kb[2], kb[3])
         .into_iter()
         .partition(|&(i, j)| on_held_boundary(surface, opts.boundary, i, j));

@@ -612,7 +612,7 @@ pub fn detect_irregularities(
                 fine_fit::<10>(p0, n0, &within(r), r)
             };
             fit.or_else(|| fine_fit::<6>(p0, n0, &pts, fine_r))
-                .or_else(|| Some((p0, n0, f64::NAN)))
+                .or(Some((p0, n0, f64::NAN)))
                 .filter(|(q, n, _)| q.is_finite() && n.is_finite())
         })
         .collect();

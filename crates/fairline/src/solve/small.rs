@@ -75,41 +75,6 @@ pub fn function_of_eigen3(values: DVec3, vectors: DMat3, f: impl Fn(f64) -> f64)
     scaled * vectors.transpose()
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn close(a: DMat3, b: DMat3, tol: f64) -> bool {
-        (0..3).all(|j| (a.col(j) - b.col(j)).abs().max_element() <= tol)
-    }
-
-    #[test]
-    fn eigen_reconstructs_and_is_orthonormal() {
-        let r = DMat3::from_axis_angle(DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7);
-        let m = r * DMat3::from_diagonal(DVec3::new(5.0, -1.0, 1e-9)) * r.transpose();
-        let (l, v) = symmetric_eigen3(m);
-        let back = v * DMat3::from_diagonal(l) * v.transpose();
-        assert!(close(back, m, 1e-13), "{back} vs {m}");
-        assert!(close(v.transpose() * v, DMat3::IDENTITY, 1e-14));
-        let mut sorted = l.to_array();
-        sorted.sort_by(f64::total_cmp);
-        assert!((sorted[0] + 1.0).abs() < 1e-13 && (sorted[2] - 5.0).abs() < 1e-13);
-        // repeated eigenvalues and a diagonal input
-        let (l, _) = symmetric_eigen3(DMat3::from_diagonal(DVec3::new(2.0, 2.0, 3.0)));
-        assert_eq!(l, DVec3::new(2.0, 2.0, 3.0));
-    }
-
-    #[test]
-    fn square_root_squares_back() {
-        let r = DMat3::from_axis_angle(DVec3::new(-1.0, 0.5, 2.0).normalize(), 1.3);
-        let m = r * DMat3::from_diagonal(DVec3::new(4.0, 0.25, 9.0)) * r.transpose();
-        let s = symmetric_function3(m, f64::sqrt);
-        assert!(close(s * s, m, 1e-12));
-        let inv = symmetric_function3(m, |x| 1.0 / x);
-        assert!(close(inv * m, DMat3::IDENTITY, 1e-12));
-    }
-}
-
 /// Solves the dense symmetric positive definite system A x = b of a small
 /// least-squares fit (normal equations, N ≤ ~10) by Cholesky factorisation
 /// (Golub & Van Loan §4.2). Only the upper triangle of `a` (i ≤ j) is read.
@@ -157,4 +122,39 @@ pub fn solve_spd<const N: usize>(a: &[[f64; N]; N], b: &[f64; N]) -> Option<[f64
         x[i] = s / l[i][i];
     }
     x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: DMat3, b: DMat3, tol: f64) -> bool {
+        (0..3).all(|j| (a.col(j) - b.col(j)).abs().max_element() <= tol)
+    }
+
+    #[test]
+    fn eigen_reconstructs_and_is_orthonormal() {
+        let r = DMat3::from_axis_angle(DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7);
+        let m = r * DMat3::from_diagonal(DVec3::new(5.0, -1.0, 1e-9)) * r.transpose();
+        let (l, v) = symmetric_eigen3(m);
+        let back = v * DMat3::from_diagonal(l) * v.transpose();
+        assert!(close(back, m, 1e-13), "{back} vs {m}");
+        assert!(close(v.transpose() * v, DMat3::IDENTITY, 1e-14));
+        let mut sorted = l.to_array();
+        sorted.sort_by(f64::total_cmp);
+        assert!((sorted[0] + 1.0).abs() < 1e-13 && (sorted[2] - 5.0).abs() < 1e-13);
+        // repeated eigenvalues and a diagonal input
+        let (l, _) = symmetric_eigen3(DMat3::from_diagonal(DVec3::new(2.0, 2.0, 3.0)));
+        assert_eq!(l, DVec3::new(2.0, 2.0, 3.0));
+    }
+
+    #[test]
+    fn square_root_squares_back() {
+        let r = DMat3::from_axis_angle(DVec3::new(-1.0, 0.5, 2.0).normalize(), 1.3);
+        let m = r * DMat3::from_diagonal(DVec3::new(4.0, 0.25, 9.0)) * r.transpose();
+        let s = symmetric_function3(m, f64::sqrt);
+        assert!(close(s * s, m, 1e-12));
+        let inv = symmetric_function3(m, |x| 1.0 / x);
+        assert!(close(inv * m, DMat3::IDENTITY, 1e-12));
+    }
 }

@@ -184,12 +184,12 @@ fn continuity_rejects_bad_options_and_survives_degenerate_patches() {
         tolerance: Some(-1.0),
         ..Default::default()
     };
-    assert!(continuity(&[a.clone()], &bad).is_err());
+    assert!(continuity(std::slice::from_ref(&a), &bad).is_err());
     let bad = ContinuityOptions {
         angle_tolerance_deg: f64::NAN,
         ..Default::default()
     };
-    assert!(continuity(&[a.clone()], &bad).is_err());
+    assert!(continuity(std::slice::from_ref(&a), &bad).is_err());
     // A patch collapsed to a point and an empty input.
     let point = bezier([[Vec3::ONE; 4]; 4]);
     let r = continuity(&[point, a], &ContinuityOptions::default()).unwrap();
