@@ -18,7 +18,7 @@ use std::path::PathBuf;
 /// tolerances as gap / G0 / G1 / G2, with the worst location.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Example:\n  fairline continuity teapot.json --report seams.json --png seams.png\n\nReport: {\"edges\":[{\"surfaces\":[i,j],\"sides\":[..],\"g0_max\":..,\"g1_max_deg\":..,\"g2_max\":..,\"g2_max_relative\":..,\"class\":\"G0\"|\"G1\"|\"G2\"|\"gap\",\"worst\":[x,y,z],\"length\":..}],\"classes\":{..},\"tolerance\":..,...}"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline continuity fairline-demo/bspline-panel-dented.json --report seams.json --png seams.png\n\nReport: {\"edges\":[{\"surfaces\":[i,j],\"sides\":[..],\"g0_max\":..,\"g1_max_deg\":..,\"g2_max\":..,\"g2_max_relative\":..,\"class\":\"G0\"|\"G1\"|\"G2\"|\"gap\",\"worst\":[x,y,z],\"length\":..}],\"classes\":{..},\"tolerance\":..,...}"
 )]
 pub struct Args {
     /// Input surfaces (.json or .igs/.iges).

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 /// entity-128 surfaces, exact), or to a mesh (tessellated, 64 × 64 per surface).
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  fairline convert bunny.obj bunny.ply\n  fairline convert impeller.igs impeller.json"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline convert fairline-demo/wavy.obj wavy.ply\n  fairline convert fairline-demo/bspline-panel-dented.json panel-mesh.obj"
 )]
 pub struct Args {
     /// Input mesh.

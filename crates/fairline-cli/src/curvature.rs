@@ -20,7 +20,7 @@ pub enum Method {
 /// Polygon meshes are triangulated first (vertices unchanged).
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Example:\n  fairline curvature spot.ply -o spot-curvature.ply --method rusinkiewicz --report r.json"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline curvature fairline-demo/sphere.ply -o sphere-curvature.ply --method rusinkiewicz --report r.json"
 )]
 pub struct Args {
     /// Input mesh.

@@ -25,7 +25,7 @@ use std::path::PathBuf;
 /// with its score, area, centre and the lines crossing it.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  fairline detect panel.obj -o region.json --png detect.png --report detect.json\n  fairline detect panel.obj -o region.json && fairline fair panel.obj --region region.json -o faired.obj\n  fairline detect lego_open.ply --up y -o region.json --png detect.png"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline detect fairline-demo/dented-panel.obj -o region.json --png detect.png --report detect.json\n  fairline detect fairline-demo/dented-panel.obj -o region.json && fairline fair fairline-demo/dented-panel.obj --region region.json -o faired.obj\n  fairline detect fairline-demo/wavy.obj --up y -o region-y.json"
 )]
 pub struct Args {
     /// Input triangle (or polygon) mesh.

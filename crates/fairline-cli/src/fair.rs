@@ -42,7 +42,7 @@ pub enum Method {
 /// `highlight`/`detect`.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  fairline fair panel.obj --region region.json -o panel-faired.obj --png fair.png --report fair.json\n  fairline detect panel.obj -o region.json && fairline fair panel.obj --region region.json -o faired.obj\n  fairline fair panel.obj --auto -o faired.obj\n  fairline fair panel.obj --region region.json --method diffusion-flow -o flow.obj"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline fair fairline-demo/dented-panel.obj --region fairline-demo/dented-panel-region.json -o panel-faired.obj --png fair.png --report fair.json\n  fairline detect fairline-demo/dented-panel.obj -o region.json && fairline fair fairline-demo/dented-panel.obj --region region.json -o faired.obj\n  fairline fair fairline-demo/dented-panel.obj --auto -o faired-auto.obj\n  fairline fair fairline-demo/dented-panel.obj --region fairline-demo/dented-panel-region.json --method diffusion-flow -o flow.obj"
 )]
 pub struct Args {
     /// Input triangle mesh.

@@ -35,7 +35,7 @@ use std::path::PathBuf;
 /// ENDPOINTS.json: {"endpoints":[{"radius":r,"start":[u,v],"end":[u,v]},...]}.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Example:\n  fairline fair-surface roof.json --lights lights.json --endpoints ends.json -o roof-faired.json --report fair.json --png fair.png --svg uv.svg"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline fair-surface fairline-demo/bspline-panel-dented.json --lights fairline-demo/bspline-panel-lights.json --endpoints fairline-demo/bspline-panel-endpoints.json -o panel-faired.json --report fair.json --png fair.png --svg uv.svg"
 )]
 pub struct Args {
     /// Input surface (.json or .igs/.iges).
@@ -482,6 +482,19 @@ pub fn demo_section(demo: &crate::demo::Demo) -> Result<crate::demo::Section> {
     )?;
     write_surfaces_json(demo.out.join("bspline-panel-dented.json"), &[dented])?;
     write_surfaces_json(demo.out.join("bspline-panel-faired.json"), &[faired])?;
+    // the lights and endpoints as files, so that the same fairing can be
+    // run from the shell: fairline fair-surface bspline-panel-dented.json
+    //   --lights bspline-panel-lights.json --endpoints bspline-panel-endpoints.json
+    let light_file = fairline::highlight::CircularLights {
+        center: a.to_array(),
+        axis: [0.0, 0.0, 1.0],
+        radii: lights.iter().map(|l| l.radius()).collect(),
+    };
+    crate::common::write_json(&demo.out.join("bspline-panel-lights.json"), &light_file)?;
+    crate::common::write_json(
+        &demo.out.join("bspline-panel-endpoints.json"),
+        &fairline::fair::Endpoints { endpoints },
+    )?;
     Ok(crate::demo::Section {
         title: "B-spline fairing".into(),
         text: "A bicubic roof-panel-like B-spline surface (21 x 22 control points) with one control point pushed down: 11 concentric circular lights above it show the dent as kinks in their highlight lines. The stretches around the dent are replaced by cubic Hermite targets in (u, v) and the control points over the knot box of the endpoints are moved by Gauss-Newton with a truncated SVD (Nishiyama et al.); everything else is unchanged. ".into(),

@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 /// the vertex list changed).
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Example:\n  fairline repair ../shared/data/meshes/bunny_res4.ply bunny-repaired.ply --report repair.json"
+    after_help = "Example:\n  fairline repair fairline-demo/sphere.ply sphere-repaired.ply --report repair.json"
 )]
 pub struct Args {
     /// Input mesh (.obj .ply .off .stl).

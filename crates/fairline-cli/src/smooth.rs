@@ -47,7 +47,7 @@ pub enum Weights {
 /// preservation (closed meshes) and tangential-only motion.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  fairline smooth scan.ply --method taubin --iterations 10 --pass-band 0.1 -o smooth.ply\n  fairline smooth bunny.obj --method implicit --time-step 2 --preserve-volume -o out.obj --report r.json\n  fairline smooth facade.obj --method laplace --weights edge --fix-boundary --fixed keep.json -o out.obj --png cmp.png"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline smooth fairline-demo/wavy.obj --method taubin --iterations 10 --pass-band 0.1 -o smooth.obj\n  fairline smooth fairline-demo/sphere.ply --method implicit --time-step 2 --preserve-volume -o out.ply --report r.json\n  fairline smooth fairline-demo/quad-saddle.obj --method laplace --weights edge --fix-boundary -o out.obj --png cmp.png"
 )]
 pub struct Args {
     /// Input mesh (.obj .ply .off .stl).
@@ -313,7 +313,7 @@ pub fn run(args: Args) -> Result<()> {
 /// length, so the same value behaves the same on a mesh of any size.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  fairline fair-quad facade.obj -o faired.obj\n  fairline fair-quad facade.obj --weight 0.005 --deviation 0.05 --deviation-factor 0.5 --iterations 4 --fix-boundary -o faired.obj --png cmp.png --report r.json"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline fair-quad fairline-demo/quad-saddle.obj -o faired.obj\n  fairline fair-quad fairline-demo/quad-saddle.obj --weight 0.005 --deviation 0.05 --deviation-factor 0.5 --iterations 4 --fix-boundary -o faired.obj --png cmp.png --report r.json"
 )]
 pub struct QuadArgs {
     /// Input quad mesh (.obj .ply .off).

@@ -92,7 +92,7 @@ use std::sync::{Arc, Mutex};
 /// line of standard output and serves until interrupted (Ctrl-C).
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  fairline view bunny.ply\n  fairline view panel.obj panel-faired.obj --no-open\n  fairline view roof.json --port 8765 --save-dir out"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline view fairline-demo/dented-panel.obj\n  fairline view fairline-demo/dented-roof.obj fairline-demo/dented-roof-faired.obj --no-open\n  fairline view fairline-demo/bspline-panel-dented.json --port 8765 --save-dir out"
 )]
 pub struct Args {
     /// Mesh or surface to open.
