@@ -59,7 +59,7 @@
 //!
 //! # Regions
 //!
-//! The faces whose centroid lies within `region_margin`·s (default 0.75 s)
+//! The faces whose centroid lies within `region_margin`·s (default 1 s)
 //! of a flagged site are united; each connected component, with the holes
 //! it encloses filled (a bump's summit has the smooth normal, its flanks
 //! do not), is a suggested region. Its score is the largest site score
@@ -160,7 +160,7 @@ pub struct DetectOptions {
     /// Distance between sites, in spacings (default 0.25).
     pub site_spacing: f64,
     /// Faces within this distance of a flagged site go into a region, in
-    /// spacings (default 0.75).
+    /// spacings (default 1).
     pub region_margin: f64,
     /// The threshold is raised to this many times the median site score
     /// (the score noise) on noisy meshes (default 4).
@@ -174,7 +174,7 @@ impl Default for DetectOptions {
             smooth_radius: 1.5,
             fine_radius: 0.25,
             site_spacing: 0.25,
-            region_margin: 0.75,
+            region_margin: 1.0,
             noise_factor: 4.0,
         }
     }
