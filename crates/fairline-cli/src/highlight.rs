@@ -191,7 +191,7 @@ pub fn read_triangles(path: &Path) -> Result<(SurfaceMesh, Option<Vec<FaceId>>)>
 /// squares, refined onto the true zero; JSON lines carry "uv" and "points".
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline highlight fairline-demo/sphere.ply -o sphere-lines.json --png sphere-lines.png\n  fairline highlight fairline-demo/dented-panel.obj --direction 0,1,0 --plane-normal 0,0,1 --plane-point 0,0,5 --spacing 0.1 -o lines.obj\n  fairline highlight fairline-demo/dented-panel.obj --circle-center 0,0,5 --circle-axis 0,0,1 --radii 1,2,3 --band 0.05 -o circles.json\n  fairline highlight fairline-demo/bspline-panel-dented.json --lights fairline-demo/bspline-panel-lights.json --grid 300 -o surface-lines.json --png surface-lines.png --svg uv.svg"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline highlight fairline-demo/sphere.ply -o sphere-lines.json --png sphere-lines.png\n  fairline highlight fairline-demo/dented-panel.obj --direction 0,1,0 --plane-normal 0,0,1 --plane-point 0,0,5 --spacing 0.1 -o lines.obj\n  fairline highlight fairline-demo/dented-panel.obj --circle-center 0,0,5 --circle-axis 0,0,1 --radii 1,2,3 --band 0.05 -o circles.json\n  fairline highlight fairline-demo/bspline-panel-dented.json --circle-center 2,1.5,2.5 --circle-axis 0,0,1 --radii 2.4,2.6,2.8,3.0 --grid 300 -o surface-lines.json --png surface-lines.png --svg uv.svg"
 )]
 pub struct Args {
     /// Input triangle (or polygon) mesh.
