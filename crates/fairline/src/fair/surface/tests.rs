@@ -237,6 +237,41 @@ fn tv_rises(
 /// Runs the whole check on one case and returns the report: the default
 /// (regularised) solver on all stretches around the defect and on the
 /// stretches of every other light only.
+/// The faired surface equals the bumped one bit for bit at every sample of
+/// a 61 × 61 (u, v) grid whose basis support meets no moved control point,
+/// and more than a third of the samples are such.
+fn assert_bit_identical_outside_support(
+    c: &Case,
+    rep: &SurfaceFairReport,
+    faired: &BSplineSurface,
+    name: &str,
+) {
+    let n = 61;
+    let mut outside = 0;
+    for a in 0..n {
+        for bb in 0..n {
+            let (u, v) = (a as f64 / (n - 1) as f64, bb as f64 / (n - 1) as f64);
+            let sup = c.bumped.basis_support(u, v);
+            let touches = rep
+                .modified_control_points
+                .iter()
+                .any(|&(i, j)| sup.rows.contains(&i) && sup.cols.contains(&j));
+            if !touches {
+                outside += 1;
+                let (p, q) = (c.bumped.eval(u, v), faired.eval(u, v));
+                assert_eq!(
+                    p.to_array().map(f64::to_bits),
+                    q.to_array().map(f64::to_bits)
+                );
+            }
+        }
+    }
+    assert!(
+        outside > n * n / 3,
+        "{name}: only {outside} samples outside the support"
+    );
+}
+
 fn check_case(c: &Case, drop: f64, closer: f64, name: &str) -> SurfaceFairReport {
     let opts = SurfaceFairOptions::default();
     let endpoints = endpoints_around(&c.bumped, &c.lights, c.centre, c.disc, opts.grid);
@@ -334,30 +369,7 @@ fn check_case(c: &Case, drop: f64, closer: f64, name: &str) -> SurfaceFairReport
     }
     assert!(rep.max_displacement > 0.0);
     // The surface outside the selected points' support: bit-identical.
-    let n = 61;
-    let mut outside = 0;
-    for a in 0..n {
-        for bb in 0..n {
-            let (u, v) = (a as f64 / (n - 1) as f64, bb as f64 / (n - 1) as f64);
-            let sup = c.bumped.basis_support(u, v);
-            let touches = rep
-                .modified_control_points
-                .iter()
-                .any(|&(i, j)| sup.rows.contains(&i) && sup.cols.contains(&j));
-            if !touches {
-                outside += 1;
-                let (p, q) = (c.bumped.eval(u, v), faired.eval(u, v));
-                assert_eq!(
-                    p.to_array().map(f64::to_bits),
-                    q.to_array().map(f64::to_bits)
-                );
-            }
-        }
-    }
-    assert!(
-        outside > n * n / 3,
-        "{name}: only {outside} samples outside the support"
-    );
+    assert_bit_identical_outside_support(c, &rep, &faired, name);
     // Highlight lines inside the disc move back towards the clean ones.
     let clean_lines = pre_images(&c.clean, &c.lights, opts.grid);
     let bumped_lines = pre_images(&c.bumped, &c.lights, opts.grid);
@@ -555,30 +567,7 @@ fn check_case_paper(c: &Case, max_iterations: usize, drop: f64, name: &str) -> S
     }
     assert!(rep.max_displacement > 0.0);
     // The surface outside the selected points' support: bit-identical.
-    let n = 61;
-    let mut outside = 0;
-    for a in 0..n {
-        for bb in 0..n {
-            let (u, v) = (a as f64 / (n - 1) as f64, bb as f64 / (n - 1) as f64);
-            let sup = c.bumped.basis_support(u, v);
-            let touches = rep
-                .modified_control_points
-                .iter()
-                .any(|&(i, j)| sup.rows.contains(&i) && sup.cols.contains(&j));
-            if !touches {
-                outside += 1;
-                let (p, q) = (c.bumped.eval(u, v), faired.eval(u, v));
-                assert_eq!(
-                    p.to_array().map(f64::to_bits),
-                    q.to_array().map(f64::to_bits)
-                );
-            }
-        }
-    }
-    assert!(
-        outside > n * n / 3,
-        "{name}: only {outside} samples outside the support"
-    );
+    assert_bit_identical_outside_support(c, &rep, &faired, name);
     // Highlight lines inside the disc move back towards the clean ones.
     let clean_lines = pre_images(&c.clean, &c.lights, opts.grid);
     let before = deviation(
