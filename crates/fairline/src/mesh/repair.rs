@@ -103,7 +103,9 @@ pub struct RepairReport {
     /// True when the output is a valid oriented manifold (every fairline
     /// command accepts it).
     pub manifold: bool,
-    /// Why the output is still refused, when it is.
+    /// Why the output is still refused, when it is (left out of the
+    /// serialised report when there is none: reports never hold `null`).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub remaining_problem: Option<String>,
 }
 

@@ -1,0 +1,739 @@
+"""fairline: highlight lines, fairing, smoothing and feature enhancement of
+surfaces, with numpy arrays in and out.
+
+Every function mirrors a command of the ``fairline`` command-line tool with
+its option names in snake_case (``--pass-band`` → ``pass_band``;
+``--lambda`` → ``lambda_``, since ``lambda`` is a Python keyword) and the
+CLI's defaults. Meshes are ``V``, an (n, 3) float64 array of positions, and
+``F``, an (m, 3) or (m, 4) integer array of faces or a list of faces for
+meshes with mixed polygons; a ``trimesh.Trimesh`` may be passed as ``V``
+(with ``F`` left out). Algorithms return their result and a report ``dict``
+with the keys of the CLI's ``--report`` JSON (``"command"``, ``"time_s"``,
+…); report warnings are also issued as :class:`FairlineWarning`.
+
+Errors raise :class:`FairlineError` (a :class:`ValueError`) with the CLI's
+message; see :mod:`fairline._errors`. Computations release the GIL.
+
+Example::
+
+    import fairline
+    V, F = fairline.read_mesh("fairline-demo/wavy.obj")
+    V2, report = fairline.smooth(V, F, method="taubin", iterations=10)
+    values, _ = fairline.curvature(V2, F)
+    print(report["max_displacement"], values["mean"].max())
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import warnings
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _native
+from ._errors import FairlineComputationError, FairlineError, FairlineFileError
+
+__version__ = _native.__version__
+
+__all__ = [
+    "FairlineError",
+    "FairlineFileError",
+    "FairlineComputationError",
+    "FairlineWarning",
+    "read_mesh",
+    "write_mesh",
+    "curvature",
+    "highlight_lines",
+    "detect",
+    "fair",
+    "smooth",
+    "fair_quad",
+    "enhance",
+    "repair",
+    "read_surfaces",
+    "write_surfaces",
+    "surface_highlight_lines",
+    "fair_surface",
+    "from_trimesh",
+    "to_trimesh",
+]
+
+PathLike = Union[str, "os.PathLike[str]"]
+Faces = Union[np.ndarray, Sequence[Sequence[int]]]
+Vector = Sequence[float]
+
+
+class FairlineWarning(UserWarning):
+    """A warning of a fairline computation (the CLI's ``warning:`` lines):
+    something did not converge or got worse. Also listed under
+    ``"warnings"`` in the report."""
+
+
+# ---- array conversions ---------------------------------------------------
+
+_U32_MAX = 2**32 - 1
+
+
+def _vertices(V: Any) -> np.ndarray:
+    """``V`` as a C-contiguous (n, 3) float64 array (integer and smaller
+    float types are converted exactly); anything else raises."""
+    try:
+        a = np.asarray(V)
+    except (TypeError, ValueError) as e:
+        raise FairlineError(f"V must be an (n, 3) array of numbers: {e}") from None
+    if a.dtype.kind not in "fiu":
+        raise FairlineError(f"V must hold real numbers, got dtype {a.dtype}")
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise FairlineError(f"V must have shape (n, 3), got {a.shape}")
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _index_array(a: np.ndarray, what: str) -> np.ndarray:
+    if a.dtype.kind not in "iu":
+        raise FairlineError(f"{what} must hold integers, got dtype {a.dtype}")
+    return a
+
+
+def _faces(F: Any, n_vertices: int) -> Tuple[np.ndarray, np.ndarray]:
+    """Faces as flat uint32 indices plus offsets (face f is
+    ``indices[offsets[f]:offsets[f+1]]``)."""
+    rows: Optional[List[np.ndarray]] = None
+    if isinstance(F, np.ndarray):
+        a: Optional[np.ndarray] = F
+    else:
+        try:
+            rows = [np.asarray(f) for f in F]
+        except TypeError:
+            raise FairlineError("F must be an integer array or a list of faces") from None
+        if not rows:
+            a = np.zeros((0, 3), dtype=np.int64)
+        elif all(r.ndim == 1 for r in rows) and len({r.shape[0] for r in rows}) == 1:
+            a = np.stack(rows)
+        else:
+            a = None
+    if a is not None:
+        if a.size:
+            _index_array(a, "F")
+        if a.ndim != 2:
+            raise FairlineError(
+                f"F must have shape (m, 3) or (m, 4), or be a list of faces; got shape {a.shape}"
+            )
+    if a is not None:
+        m, k = a.shape
+        flat = a.reshape(-1)
+        offsets = np.arange(0, m * k + 1, k, dtype=np.int64) if k > 0 else np.zeros(m + 1, dtype=np.int64)
+    else:
+        assert rows is not None
+        for f, r in enumerate(rows):
+            if r.ndim != 1:
+                raise FairlineError(f"F: face {f} must be a list of vertex indices, got shape {r.shape}")
+            _index_array(r, f"F: face {f}")
+        flat = np.concatenate(rows) if rows else np.zeros(0, dtype=np.int64)
+        offsets = np.concatenate([[0], np.cumsum([len(r) for r in rows])])
+    if flat.size:
+        if flat.min() < 0:
+            pos = int(np.argmax(flat < 0))
+            face = int(np.searchsorted(offsets, pos, side="right") - 1)
+            raise FairlineError(
+                f"face {face} refers to vertex {int(flat[pos])}, but vertex indices start at 0"
+            )
+        if flat.max() > _U32_MAX:
+            pos = int(np.argmax(flat > _U32_MAX))
+            face = int(np.searchsorted(offsets, pos, side="right") - 1)
+            raise FairlineError(
+                f"face {face} refers to vertex {int(flat[pos])}, but the mesh has {n_vertices} vertices"
+            )
+    if offsets[-1] > _U32_MAX:
+        raise FairlineError("mesh too large for 32-bit indices")
+    return (
+        np.ascontiguousarray(flat, dtype=np.uint32),
+        np.ascontiguousarray(offsets, dtype=np.uint32),
+    )
+
+
+def _mesh(V: Any, F: Any) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(V, indices, offsets) for the native layer; a ``trimesh.Trimesh`` (or
+    anything with ``vertices`` and ``faces``) may stand in for ``V``."""
+    if F is None:
+        if hasattr(V, "vertices") and hasattr(V, "faces"):
+            V, F = V.vertices, V.faces
+        else:
+            raise FairlineError("F is missing: give V and F, or a trimesh.Trimesh as V")
+    v = _vertices(V)
+    indices, offsets = _faces(F, len(v))
+    return v, indices, offsets
+
+
+def _faces_out(indices: np.ndarray, offsets: np.ndarray) -> Faces:
+    """(m, k) int64 when every face has k vertices, else a list of arrays."""
+    sizes = np.diff(offsets.astype(np.int64))
+    idx = indices.astype(np.int64)
+    if len(sizes) == 0:
+        return np.zeros((0, 3), dtype=np.int64)
+    if np.all(sizes == sizes[0]):
+        return idx.reshape(-1, int(sizes[0]))
+    return [idx[a:b] for a, b in zip(offsets[:-1].astype(np.int64), offsets[1:].astype(np.int64))]
+
+
+def _report(text: str) -> Dict[str, Any]:
+    """The report dict; its warnings are issued as FairlineWarning."""
+    report = json.loads(text)
+    for w in report.get("warnings", []):
+        warnings.warn(f"fairline {report.get('command', '')}: {w}", FairlineWarning, stacklevel=3)
+    return report
+
+
+def _vec(name: str, v: Optional[Vector]) -> Optional[List[float]]:
+    if v is None:
+        return None
+    try:
+        a = np.asarray(v, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        raise FairlineError(f"{name} must be three numbers, got {v!r}") from None
+    if a.shape != (3,):
+        raise FairlineError(f"{name} must be three numbers, got {v!r}")
+    return [float(x) for x in a]
+
+
+def _fixed(fixed: Optional[Sequence[int]]) -> Optional[List[int]]:
+    if fixed is None:
+        return None
+    a = np.asarray(fixed)
+    if a.size == 0:
+        return []
+    if a.ndim != 1 or a.dtype.kind not in "iu":
+        raise FairlineError(f"fixed must be a list of vertex indices, got {a.dtype} with shape {a.shape}")
+    if a.dtype.kind == "u" and a.size and int(a.max()) > 2**63 - 1:
+        raise FairlineError("fixed: vertex index too large")
+    return [int(x) for x in a]
+
+
+def _json_text(name: str, value: Any) -> Optional[str]:
+    """A dictionary (or a JSON file's path) as JSON text for the native layer."""
+    if value is None:
+        return None
+    if isinstance(value, (str, os.PathLike)):
+        path = os.fspath(value)
+        try:
+            with open(path, encoding="utf-8") as f:
+                return f.read()
+        except OSError as e:
+            raise FairlineFileError(f"{path}: {e.strerror or e}") from None
+    try:
+        return json.dumps(value, default=_jsonable, allow_nan=False)
+    except (TypeError, ValueError) as e:
+        raise FairlineError(f"{name}: {e}") from None
+
+
+def _jsonable(o: Any) -> Any:
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, np.generic):
+        return o.item()
+    raise TypeError(f"{type(o).__name__} is not JSON serialisable")
+
+
+def _light_kwargs(direction, plane_normal, up, plane_point, spacing, lights, min_normal_cos) -> Dict[str, Any]:
+    return dict(
+        direction=_vec("direction", direction),
+        plane_normal=_vec("plane_normal", plane_normal),
+        up=up,
+        plane_point=_vec("plane_point", plane_point),
+        spacing=None if spacing is None else float(spacing),
+        lights=_json_text("lights", lights),
+        min_normal_cos=float(min_normal_cos),
+    )
+
+
+# ---- files ------------------------------------------------------------------
+
+
+def read_mesh(path: PathLike) -> Tuple[np.ndarray, Faces]:
+    """Reads a mesh file (``.obj .ply .off .stl``, chosen by extension).
+
+    Returns ``(V, F)``: positions (n, 3) float64 and faces, (m, k) int64 when
+    every face has k vertices, else a list of int64 arrays. Nothing is
+    checked beyond what the file format demands (index range, face size,
+    finite coordinates), so dirty meshes can be read and :func:`repair`-ed.
+    Coordinates are exact (f64 text round trip, binary doubles).
+
+    Raises :class:`FairlineError` naming the file, line and element
+    (``bunny.ply:12: vertex 3: expected 3 coordinates, found 2``), or
+    :class:`FairlineFileError` when the file cannot be opened.
+    """
+    v, indices, offsets = _native.read_mesh(os.fspath(path))
+    return v, _faces_out(indices, offsets)
+
+
+def write_mesh(path: PathLike, V: Any, F: Faces = None) -> None:
+    """Writes a mesh file atomically, format by extension (``.obj .ply .off
+    .stl``); OBJ/OFF print exact shortest round-trip numbers, PLY is binary
+    doubles, STL is f32 by definition. Refuses non-finite coordinates and
+    out-of-range indices (nothing is written then)."""
+    v, indices, offsets = _mesh(V, F)
+    _native.write_mesh(os.fspath(path), v, indices, offsets)
+
+
+# ---- mesh algorithms ----------------------------------------------------------
+
+
+def curvature(V: Any, F: Faces = None, method: str = "rusinkiewicz") -> Tuple[Dict[str, np.ndarray], Dict[str, Any]]:
+    """Per-vertex principal curvatures (``fairline curvature``).
+
+    ``method``: ``"rusinkiewicz"`` (per-face shape-operator fit,
+    Rusinkiewicz 2004) or ``"meyer"`` (mean-curvature normal and angle
+    defect, Meyer et al. 2003). Polygon meshes are triangulated first.
+
+    Returns ``(values, report)``; ``values`` has ``normals`` (n, 3), ``k1``,
+    ``k2`` (k1 ≥ k2; a sphere of radius r with outward normals gives +1/r),
+    ``mean``, ``gauss`` (n,), and the principal directions ``d1``, ``d2``
+    (n, 3) — the columns the CLI writes to its PLY, bit for bit.
+    """
+    v, indices, offsets = _mesh(V, F)
+    cols, report = _native.curvature(v, indices, offsets, method=method)
+    c = dict(cols)
+    values = {
+        "normals": np.column_stack([c["nx"], c["ny"], c["nz"]]),
+        "k1": c["k1"],
+        "k2": c["k2"],
+        "mean": c["mean"],
+        "gauss": c["gauss"],
+        "d1": np.column_stack([c["d1x"], c["d1y"], c["d1z"]]),
+        "d2": np.column_stack([c["d2x"], c["d2y"], c["d2z"]]),
+    }
+    return values, _report(report)
+
+
+def smooth(
+    V: Any,
+    F: Faces = None,
+    method: str = "taubin",
+    *,
+    weights: str = "uniform",
+    exponent: float = -1.0,
+    iterations: Optional[int] = None,
+    lambda_: Optional[float] = None,
+    mu: Optional[float] = None,
+    pass_band: float = 0.1,
+    time_step: float = 1.0,
+    epsilon: Optional[float] = None,
+    fix_boundary: bool = False,
+    hierarchical_boundary: bool = False,
+    fixed: Optional[Sequence[int]] = None,
+    preserve_volume: bool = False,
+    tangential: bool = False,
+) -> Tuple[np.ndarray, Dict[str, Any]]:
+    """The classic smoothing family (``fairline smooth``, Grüner thesis ch. 3).
+
+    ``method``: ``"laplace"`` (x' = x + λΔx), ``"taubin"`` (λ|μ pairs),
+    ``"implicit"`` (backward Euler, cotangent Laplacian; triangles),
+    ``"spring"`` (Yamada et al.; boundary fixed) or ``"schneider-kobbelt"``
+    (Δ_B H = 0 with G¹ boundary; triangles).
+
+    ``weights`` (laplace, taubin): ``"uniform"``, ``"edge"`` (|e|^exponent)
+    or ``"cotan"``. ``iterations``: default 10, 1 for implicit, 200 for
+    spring, 50 for schneider-kobbelt. ``lambda_``: laplace 0.5; taubin from
+    ``pass_band`` (1/λ + 1/μ = k_PB) unless given with ``mu``.
+    ``time_step``: implicit, in units of the squared mean edge length.
+    ``epsilon``: convergence threshold (spring, schneider-kobbelt).
+    Constraints: ``fix_boundary``, ``hierarchical_boundary``, ``fixed``
+    (vertex indices that never move), ``preserve_volume`` (closed meshes),
+    ``tangential`` (tangent-plane motion only).
+
+    Returns ``(V_new, report)``; report keys ``iterations converged
+    volume_before volume_after max_displacement`` (+ ``lambda mu pass_band
+    transfer`` for Taubin, ``residual`` for Schneider–Kobbelt).
+    """
+    v, indices, offsets = _mesh(V, F)
+    out, report = _native.smooth(
+        v, indices, offsets, method=method, weights=weights, exponent=float(exponent),
+        iterations=iterations, lambda_=lambda_, mu=mu, pass_band=float(pass_band),
+        time_step=float(time_step), epsilon=epsilon, fix_boundary=bool(fix_boundary),
+        hierarchical_boundary=bool(hierarchical_boundary), fixed=_fixed(fixed),
+        preserve_volume=bool(preserve_volume), tangential=bool(tangential),
+    )
+    return out, _report(report)
+
+
+def fair_quad(
+    V: Any,
+    F: Faces = None,
+    *,
+    weight: float = 0.01,
+    deviation: float = 0.1,
+    deviation_factor: float = 0.5,
+    iterations: int = 3,
+    fix_boundary: bool = False,
+    fixed: Optional[Sequence[int]] = None,
+) -> Tuple[np.ndarray, Dict[str, Any]]:
+    """Structure-line fairing of a quad mesh (``fairline fair-quad``,
+    Grüner thesis ch. 4, Eq. (30)–(34)): zigzagging structure lines are
+    straightened by a sparse least-squares fit with a penalty ω‖p − p⁰‖²
+    (``weight``, scale-invariant) that keeps the shape; runs whose deviation
+    exceeds ``deviation`` free their middle points, the deviation shrinks by
+    ``deviation_factor`` per iteration. Corners never move.
+
+    Returns ``(V_new, report)``; report keys ``structure_lines
+    free_vertices structure_energy_before structure_energy_after
+    max_displacement iterations``.
+    """
+    v, indices, offsets = _mesh(V, F)
+    out, report = _native.fair_quad(
+        v, indices, offsets, weight=float(weight), deviation=float(deviation),
+        deviation_factor=float(deviation_factor), iterations=int(iterations),
+        fix_boundary=bool(fix_boundary), fixed=_fixed(fixed),
+    )
+    return out, _report(report)
+
+
+def enhance(
+    V: Any,
+    F: Faces = None,
+    *,
+    lambda_: float = 1.0,
+    mu: float = 0.5,
+    iterations: int = 1,
+    solver: str = "auto",
+    fixed: Optional[Sequence[int]] = None,
+) -> Tuple[np.ndarray, Dict[str, Any]]:
+    """Feature enhancement by vertex flow (``fairline enhance``, Ji et al.
+    2011): vertices slide from flat regions toward ridges and valleys,
+    minimising F_em + λ F_sd + μ F_smo; connectivity unchanged, boundary and
+    ``fixed`` vertices bit-identical. ``solver``: ``"auto"``, ``"cg"``,
+    ``"amg"`` or ``"direct"``. Triangle meshes only.
+
+    Returns ``(V_new, report)``; report keys include ``flipped_triangles
+    quality_before quality_after histogram_before histogram_after
+    max_displacement solver cg_iterations timings``.
+    """
+    v, indices, offsets = _mesh(V, F)
+    out, report = _native.enhance(
+        v, indices, offsets, lambda_=float(lambda_), mu=float(mu), iterations=int(iterations),
+        solver=solver, fixed=_fixed(fixed),
+    )
+    return out, _report(report)
+
+
+def repair(V: Any, F: Faces = None) -> Tuple[np.ndarray, Faces, Dict[str, Any]]:
+    """Repairs a dirty mesh (``fairline repair``): splits non-manifold edges
+    and vertices, removes duplicate and zero-area faces and unreferenced
+    vertices, makes the orientation consistent. Every kept vertex keeps its
+    coordinates bit-identical and its order; split copies are appended.
+
+    Returns ``(V_new, F_new, report)``; the report lists every change
+    (``removed_faces``, ``split_edges``, ``flipped_faces``,
+    ``vertex_source`` when the vertex list changed, …).
+    """
+    v, indices, offsets = _mesh(V, F)
+    (v2, i2, o2), report = _native.repair(v, indices, offsets)
+    return v2, _faces_out(i2, o2), _report(report)
+
+
+def _lines(doc: Dict[str, Any]) -> Dict[str, Any]:
+    """Lines document with ``points`` (and ``uv``) as float64 arrays."""
+
+    def conv(lines: List[Dict[str, Any]]) -> List[Dict[str, Any]]:
+        for line in lines:
+            line["points"] = np.asarray(line["points"], dtype=np.float64).reshape(-1, 3)
+            if "uv" in line:
+                line["uv"] = np.asarray(line["uv"], dtype=np.float64).reshape(-1, 2)
+        return lines
+
+    conv(doc["lines"])
+    if "bands" in doc:
+        conv(doc["bands"]["lower"])
+        conv(doc["bands"]["upper"])
+    return doc
+
+
+def highlight_lines(
+    V: Any,
+    F: Faces = None,
+    *,
+    direction: Optional[Vector] = None,
+    plane_normal: Optional[Vector] = None,
+    up: str = "auto",
+    plane_point: Optional[Vector] = None,
+    spacing: Optional[float] = None,
+    lights: Any = None,
+    min_normal_cos: float = 0.1,
+    circle_center: Optional[Vector] = None,
+    circle_axis: Optional[Vector] = None,
+    radii: Optional[Sequence[float]] = None,
+    band: Optional[float] = None,
+) -> Tuple[Dict[str, Any], Dict[str, Any]]:
+    """Highlight lines of a triangle (or polygon) mesh (``fairline
+    highlight``): under a linear light array (Yong et al. Algorithm 1) or,
+    with ``circle_center``/``circle_axis``/``radii``, under concentric
+    circular lights (Nishiyama et al. Eq. (2.18)).
+
+    Linear lights default from the mesh (``up``: ``"auto"``, ``"x"``,
+    ``"y"``, ``"z"``; about 20 lights across); ``direction``,
+    ``plane_normal``, ``plane_point``, ``spacing`` override, or ``lights``
+    gives the whole array as the CLI's lights JSON (a dict, or a path):
+    ``{"plane_point","plane_normal","direction","spacing"}`` or the circular
+    ``{"center","axis","radii"}``. ``band`` adds the ±ρ band boundaries.
+
+    Returns ``(lines, report)``: ``lines`` is the CLI's output JSON,
+    ``{"lines": [{"index", "closed", "points": (k, 3) array, "radius"?}],
+    "bands"?: {...}}``.
+    """
+    v, indices, offsets = _mesh(V, F)
+    doc, report = _native.highlight_lines(
+        v, indices, offsets,
+        **_light_kwargs(direction, plane_normal, up, plane_point, spacing, lights, min_normal_cos),
+        circle_center=_vec("circle_center", circle_center),
+        circle_axis=_vec("circle_axis", circle_axis),
+        radii=None if radii is None else [float(r) for r in radii],
+        band=None if band is None else float(band),
+    )
+    return _lines(json.loads(doc)), _report(report)
+
+
+def detect(
+    V: Any,
+    F: Faces = None,
+    *,
+    direction: Optional[Vector] = None,
+    plane_normal: Optional[Vector] = None,
+    up: str = "auto",
+    plane_point: Optional[Vector] = None,
+    spacing: Optional[float] = None,
+    lights: Any = None,
+    min_normal_cos: float = 0.1,
+    threshold: float = 1.0,
+    smooth_radius: float = 1.5,
+    region_margin: float = 1.0,
+    max_regions: Optional[int] = None,
+) -> Tuple[np.ndarray, Dict[str, Any]]:
+    """Finds defects that disturb the highlight lines (``fairline detect``)
+    and turns them into a fairing region: the surface's normals are
+    compared with a smooth cubic fit over ``smooth_radius`` light spacings;
+    the score is the highlight-line displacement that causes, in tenths of a
+    spacing, flagged above ``threshold`` (raised above the noise of scans).
+    Light options as for :func:`highlight_lines` (linear lights only).
+
+    Returns ``(region_faces, report)``: the face indices the CLI writes as
+    region JSON (regions plus two rings of support faces, ready for
+    :func:`fair`), and the report ranking the regions.
+    """
+    v, indices, offsets = _mesh(V, F)
+    faces, report = _native.detect(
+        v, indices, offsets,
+        **_light_kwargs(direction, plane_normal, up, plane_point, spacing, lights, min_normal_cos),
+        threshold=float(threshold), smooth_radius=float(smooth_radius),
+        region_margin=float(region_margin), max_regions=max_regions,
+    )
+    return faces.astype(np.int64), _report(report)
+
+
+def fair(
+    V: Any,
+    F: Faces = None,
+    region: Any = None,
+    *,
+    auto: bool = False,
+    grow: int = 0,
+    direction: Optional[Vector] = None,
+    plane_normal: Optional[Vector] = None,
+    up: str = "auto",
+    plane_point: Optional[Vector] = None,
+    spacing: Optional[float] = None,
+    lights: Any = None,
+    min_normal_cos: float = 0.1,
+    max_iterations: int = 50,
+    epsilon: float = 0.001,
+    method: str = "highlight",
+    fair_weight: float = 1.0,
+    diff_weight: float = 1.0,
+) -> Tuple[np.ndarray, Dict[str, Any]]:
+    """Highlight-line fairing inside a region (``fairline fair``, Yong et
+    al. §3, Algorithm 2): moves only vertices whose motion changes nothing
+    outside the region until the highlight lines inside follow smooth
+    desired curves. ``method``: ``"highlight"`` or ``"diffusion-flow"``
+    (baseline).
+
+    ``region``: face indices (e.g. :func:`detect`'s result), or the CLI's
+    region JSON as a dict (``{"faces"}``, ``{"vertices"}``,
+    ``{"sphere": {"center", "radius"}}``) or a path to it; or
+    ``auto=True`` to detect the regions and fair each in turn. ``grow``
+    adds rings of faces. Light options as for :func:`detect`.
+
+    Returns ``(V_new, report)`` with the CLI's report keys
+    (``iterations converged movable_vertices willmore_before
+    willmore_after highlight_deviation_before highlight_deviation_after
+    max_displacement history detect_score_before detect_score_after`` …).
+    """
+    v, indices, offsets = _mesh(V, F)
+    if region is None:
+        region_text = None
+    elif isinstance(region, (dict, str, os.PathLike)):
+        region_text = _json_text("region", region)
+    else:
+        faces = np.asarray(region)
+        if faces.ndim != 1 or (faces.size and faces.dtype.kind not in "iu"):
+            raise FairlineError("region must be a list of face indices, a region dict or a path")
+        region_text = json.dumps({"faces": [int(f) for f in faces]})
+    out, report = _native.fair(
+        v, indices, offsets, region=region_text, auto=bool(auto), grow=int(grow),
+        **_light_kwargs(direction, plane_normal, up, plane_point, spacing, lights, min_normal_cos),
+        max_iterations=int(max_iterations), epsilon=float(epsilon), method=method,
+        fair_weight=float(fair_weight), diff_weight=float(diff_weight),
+    )
+    return out, _report(report)
+
+
+# ---- B-spline surfaces --------------------------------------------------------
+
+Surface = Dict[str, Any]
+
+
+def _surfaces_from(text: str) -> List[Surface]:
+    doc = json.loads(text)
+    out = doc["surfaces"]
+    for s in out:
+        if "control_points" in s:
+            try:
+                s["control_points"] = np.asarray(s["control_points"], dtype=np.float64)
+            except ValueError:
+                pass  # ragged rows stay lists; the library refuses them
+        if "weights" in s:
+            try:
+                s["weights"] = np.asarray(s["weights"], dtype=np.float64)
+            except ValueError:
+                pass
+    return out
+
+
+def _surfaces_text(surfaces: Union[Surface, Sequence[Surface]]) -> str:
+    if isinstance(surfaces, dict):
+        doc = surfaces if "surfaces" in surfaces else {"surfaces": [surfaces]}
+    else:
+        doc = {"surfaces": list(surfaces)}
+    text = _json_text("surfaces", doc)
+    assert text is not None
+    return text
+
+
+def read_surfaces(path: PathLike) -> List[Surface]:
+    """Reads B-spline surfaces from fairline JSON or IGES (entity 128).
+
+    Returns a list of dicts in the JSON format of DESIGN.md §5
+    (``degree_u``, ``degree_v``, ``knots_u``, ``knots_v``,
+    ``control_points`` as an (nu, nv, 3) float64 array, ``weights`` when
+    rational, ``trim`` when trimmed). Numbers are exact.
+    """
+    return _surfaces_from(_native.read_surfaces(os.fspath(path)))
+
+
+def write_surfaces(path: PathLike, surfaces: Union[Surface, Sequence[Surface]]) -> None:
+    """Writes surfaces (a dict or a list of dicts as :func:`read_surfaces`
+    returns) to a ``.json`` file atomically; the library checks them first."""
+    _native.write_surfaces(os.fspath(path), _surfaces_text(surfaces))
+
+
+def surface_highlight_lines(
+    surfaces: Union[Surface, Sequence[Surface]],
+    *,
+    circle_center: Optional[Vector] = None,
+    circle_axis: Optional[Vector] = None,
+    radii: Optional[Sequence[float]] = None,
+    band: Optional[float] = None,
+    grid: int = 200,
+    surface: Optional[int] = None,
+    direction: Optional[Vector] = None,
+    plane_normal: Optional[Vector] = None,
+    up: str = "auto",
+    plane_point: Optional[Vector] = None,
+    spacing: Optional[float] = None,
+    lights: Any = None,
+    min_normal_cos: float = 0.1,
+) -> Tuple[Dict[str, Any], Dict[str, Any]]:
+    """Highlight lines of B-spline surfaces (``fairline highlight
+    SURFACE.json``, Nishiyama et al. §2): d_s sampled on a ``grid`` ×
+    ``grid`` (u, v) grid, contoured, refined onto the true zero. Circular
+    lights with ``circle_center``/``circle_axis``/``radii``, else linear
+    lights (options as :func:`highlight_lines`). ``surface``: only this one.
+
+    Returns ``(lines, report)``: lines carry ``uv`` (k, 2) and ``points``
+    (k, 3) arrays, ``light``, ``level``, ``closed`` and ``radius`` or
+    ``index``.
+    """
+    doc, report = _native.surface_highlight_lines(
+        _surfaces_text(surfaces),
+        circle_center=_vec("circle_center", circle_center),
+        circle_axis=_vec("circle_axis", circle_axis),
+        radii=None if radii is None else [float(r) for r in radii],
+        band=None if band is None else float(band),
+        grid=int(grid),
+        surface=surface,
+        **_light_kwargs(direction, plane_normal, up, plane_point, spacing, lights, min_normal_cos),
+    )
+    return _lines(json.loads(doc)), _report(report)
+
+
+def fair_surface(
+    surfaces: Union[Surface, Sequence[Surface]],
+    lights: Any,
+    endpoints: Any,
+    *,
+    surface: int = 0,
+    max_iterations: int = 20,
+    epsilon: float = 0.0001,
+    truncation: float = 0.05,
+    min_truncation: float = 0.001,
+    sample_spacing: float = 0.005,
+    grid: int = 200,
+    method: str = "regularised",
+    boundary: str = "fixed",
+    keep_weight: float = 0.01,
+    fairness_weight: float = 0.003,
+) -> Tuple[List[Surface], Dict[str, Any]]:
+    """Circular-highlight fairing of a B-spline surface (``fairline
+    fair-surface``, Nishiyama et al. §3): each endpoint pair is snapped onto
+    the pre-image of its light, joined by a cubic Hermite target, and the
+    control points over the endpoints' knot box move. ``method``:
+    ``"regularised"`` (Levenberg–Marquardt, keeps every other line fair) or
+    ``"paper"`` (Gauss–Newton, truncated SVD); ``boundary``: ``"fixed"``,
+    ``"tangent"`` or ``"free"``.
+
+    ``lights``: ``{"center","axis","radii"}``; ``endpoints``:
+    ``{"endpoints": [{"radius", "start": [u, v], "end": [u, v]}]}`` (dicts
+    or paths to the CLI's JSON files).
+
+    Returns ``(surfaces, report)``: all surfaces with surface ``surface``
+    faired (every other control point bit-identical), and the report.
+    """
+    out, report = _native.fair_surface(
+        _surfaces_text(surfaces), _json_text("lights", lights), _json_text("endpoints", endpoints),
+        surface=int(surface), max_iterations=int(max_iterations), epsilon=float(epsilon),
+        truncation=float(truncation), min_truncation=float(min_truncation),
+        sample_spacing=float(sample_spacing), grid=int(grid), method=method, boundary=boundary,
+        keep_weight=float(keep_weight), fairness_weight=float(fairness_weight),
+    )
+    return _surfaces_from(out), _report(report)
+
+
+# ---- trimesh adapters -----------------------------------------------------------
+
+
+def from_trimesh(mesh: Any) -> Tuple[np.ndarray, np.ndarray]:
+    """``(V, F)`` of a ``trimesh.Trimesh`` as float64 / int64 copies."""
+    return (
+        np.array(mesh.vertices, dtype=np.float64, copy=True),
+        np.array(mesh.faces, dtype=np.int64, copy=True),
+    )
+
+
+def to_trimesh(V: Any, F: Faces, **kwargs: Any) -> Any:
+    """A ``trimesh.Trimesh`` of ``V`` and triangle faces ``F`` with
+    ``process=False`` (vertices kept as they are, in their order). Needs
+    the optional ``trimesh`` package."""
+    try:
+        import trimesh
+    except ImportError:
+        raise ImportError("fairline.to_trimesh needs the trimesh package: pip install trimesh") from None
+    kwargs.setdefault("process", False)
+    return trimesh.Trimesh(vertices=_vertices(V), faces=np.asarray(F, dtype=np.int64), **kwargs)

@@ -1,0 +1,147 @@
+"""Type stubs of the native layer (python/src/*.rs). Use the documented
+functions of the ``fairline`` package instead: they check shapes and types
+and convert the JSON texts returned here into dicts and arrays."""
+
+from typing import List, Optional, Sequence, Tuple
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+_F64_2 = npt.NDArray[np.float64]
+_U32 = npt.NDArray[np.uint32]
+_Soup = Tuple[_F64_2, _U32, _U32]
+
+def read_mesh(path: str) -> _Soup: ...
+def write_mesh(path: str, v: _F64_2, indices: _U32, offsets: _U32) -> None: ...
+def curvature(
+    v: _F64_2, indices: _U32, offsets: _U32, method: str = "rusinkiewicz"
+) -> Tuple[List[Tuple[str, npt.NDArray[np.float64]]], str]: ...
+def smooth(
+    v: _F64_2,
+    indices: _U32,
+    offsets: _U32,
+    method: str = "taubin",
+    weights: str = "uniform",
+    exponent: float = -1.0,
+    iterations: Optional[int] = None,
+    lambda_: Optional[float] = None,
+    mu: Optional[float] = None,
+    pass_band: float = 0.1,
+    time_step: float = 1.0,
+    epsilon: Optional[float] = None,
+    fix_boundary: bool = False,
+    hierarchical_boundary: bool = False,
+    fixed: Optional[Sequence[int]] = None,
+    preserve_volume: bool = False,
+    tangential: bool = False,
+) -> Tuple[_F64_2, str]: ...
+def fair_quad(
+    v: _F64_2,
+    indices: _U32,
+    offsets: _U32,
+    weight: float = 0.01,
+    deviation: float = 0.1,
+    deviation_factor: float = 0.5,
+    iterations: int = 3,
+    fix_boundary: bool = False,
+    fixed: Optional[Sequence[int]] = None,
+) -> Tuple[_F64_2, str]: ...
+def enhance(
+    v: _F64_2,
+    indices: _U32,
+    offsets: _U32,
+    lambda_: float = 1.0,
+    mu: float = 0.5,
+    iterations: int = 1,
+    solver: str = "auto",
+    fixed: Optional[Sequence[int]] = None,
+) -> Tuple[_F64_2, str]: ...
+def repair(v: _F64_2, indices: _U32, offsets: _U32) -> Tuple[_Soup, str]: ...
+def highlight_lines(
+    v: _F64_2,
+    indices: _U32,
+    offsets: _U32,
+    direction: Optional[Sequence[float]] = None,
+    plane_normal: Optional[Sequence[float]] = None,
+    up: str = "auto",
+    plane_point: Optional[Sequence[float]] = None,
+    spacing: Optional[float] = None,
+    lights: Optional[str] = None,
+    min_normal_cos: Optional[float] = None,
+    circle_center: Optional[Sequence[float]] = None,
+    circle_axis: Optional[Sequence[float]] = None,
+    radii: Optional[Sequence[float]] = None,
+    band: Optional[float] = None,
+) -> Tuple[str, str]: ...
+def detect(
+    v: _F64_2,
+    indices: _U32,
+    offsets: _U32,
+    direction: Optional[Sequence[float]] = None,
+    plane_normal: Optional[Sequence[float]] = None,
+    up: str = "auto",
+    plane_point: Optional[Sequence[float]] = None,
+    spacing: Optional[float] = None,
+    lights: Optional[str] = None,
+    min_normal_cos: Optional[float] = None,
+    threshold: Optional[float] = None,
+    smooth_radius: Optional[float] = None,
+    region_margin: Optional[float] = None,
+    max_regions: Optional[int] = None,
+) -> Tuple[_U32, str]: ...
+def fair(
+    v: _F64_2,
+    indices: _U32,
+    offsets: _U32,
+    region: Optional[str] = None,
+    auto: bool = False,
+    grow: int = 0,
+    direction: Optional[Sequence[float]] = None,
+    plane_normal: Optional[Sequence[float]] = None,
+    up: str = "auto",
+    plane_point: Optional[Sequence[float]] = None,
+    spacing: Optional[float] = None,
+    lights: Optional[str] = None,
+    min_normal_cos: Optional[float] = None,
+    max_iterations: Optional[int] = None,
+    epsilon: Optional[float] = None,
+    method: str = "highlight",
+    fair_weight: Optional[float] = None,
+    diff_weight: Optional[float] = None,
+) -> Tuple[_F64_2, str]: ...
+def read_surfaces(path: str) -> str: ...
+def write_surfaces(path: str, surfaces: str) -> None: ...
+def surface_highlight_lines(
+    surfaces: str,
+    circle_center: Optional[Sequence[float]] = None,
+    circle_axis: Optional[Sequence[float]] = None,
+    radii: Optional[Sequence[float]] = None,
+    band: Optional[float] = None,
+    grid: int = 200,
+    surface: Optional[int] = None,
+    direction: Optional[Sequence[float]] = None,
+    plane_normal: Optional[Sequence[float]] = None,
+    up: str = "auto",
+    plane_point: Optional[Sequence[float]] = None,
+    spacing: Optional[float] = None,
+    lights: Optional[str] = None,
+    min_normal_cos: Optional[float] = None,
+) -> Tuple[str, str]: ...
+def fair_surface(
+    surfaces: str,
+    lights: str,
+    endpoints: str,
+    surface: int = 0,
+    max_iterations: Optional[int] = None,
+    epsilon: Optional[float] = None,
+    truncation: Optional[float] = None,
+    min_truncation: Optional[float] = None,
+    sample_spacing: Optional[float] = None,
+    grid: Optional[int] = None,
+    method: str = "regularised",
+    boundary: str = "fixed",
+    keep_weight: Optional[float] = None,
+    fairness_weight: Optional[float] = None,
+) -> Tuple[str, str]: ...

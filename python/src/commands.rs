@@ -1,0 +1,1277 @@
+//! Mesh commands: `read_mesh`, `write_mesh`, `curvature`, `highlight_lines`,
+//! `detect`, `fair`, `smooth`, `fair_quad`, `enhance`, `repair`.
+//!
+//! Each mirrors one CLI command (crates/fairline-cli/src/<command>.rs):
+//! the same library calls with the same options and defaults, the same
+//! refusals with the same messages, the same report keys. What the CLI does
+//! with files (reading the mesh, writing outputs, pictures) is left out:
+//! arrays come in and go out.
+
+#![allow(clippy::too_many_arguments)]
+
+use crate::report::Report;
+use crate::{Failure, Res, SoupArrays, mesh_from, positions_array, soup_arrays, soup_from};
+use fairline::highlight::{
+    CircularLight, CircularLights, DetectOptions, HighlightBands, HighlightError, HighlightLine,
+    HighlightLines, HighlightModel, HighlightOptions, LightArray, UpAxis, circular_highlight_bands,
+    circular_highlight_lines, detect_irregularities,
+};
+use fairline::mesh::{FaceId, Stats, VertexId};
+use fairline::{SurfaceMesh, Vec3};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use serde_json::{Value, json};
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(curvature, m)?)?;
+    m.add_function(wrap_pyfunction!(smooth, m)?)?;
+    m.add_function(wrap_pyfunction!(fair_quad, m)?)?;
+    m.add_function(wrap_pyfunction!(enhance, m)?)?;
+    m.add_function(wrap_pyfunction!(repair, m)?)?;
+    m.add_function(wrap_pyfunction!(highlight_lines, m)?)?;
+    m.add_function(wrap_pyfunction!(detect, m)?)?;
+    m.add_function(wrap_pyfunction!(fair, m)?)?;
+    Ok(())
+}
+
+type V<'py> = PyReadonlyArray2<'py, f64>;
+type Idx<'py> = PyReadonlyArray1<'py, u32>;
+
+/// Reads a mesh file as positions and faces (no connectivity checks, so
+/// dirty files can be read and repaired); errors name the file and line as
+/// the CLI's do.
+#[pyfunction]
+fn read_mesh<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<SoupArrays<'py>> {
+    let soup = py.detach(|| fairline::io::read_soup(&path).map_err(Failure::from))?;
+    Ok(soup_arrays(py, &soup))
+}
+
+/// Writes a mesh file atomically (format by extension).
+#[pyfunction]
+fn write_mesh(
+    py: Python<'_>,
+    path: std::path::PathBuf,
+    v: V<'_>,
+    indices: Idx<'_>,
+    offsets: Idx<'_>,
+) -> PyResult<()> {
+    let soup = soup_from(&v, &indices, &offsets)?;
+    py.detach(|| fairline::io::write_soup(&path, &soup).map_err(Failure::from))?;
+    Ok(())
+}
+
+/// Per-vertex curvature columns in the CLI's PLY order, plus the report.
+type CurvatureOut<'py> = (Vec<(String, Bound<'py, PyArray1<f64>>)>, String);
+
+/// `fairline curvature` (crates/fairline-cli/src/curvature.rs).
+#[pyfunction]
+#[pyo3(signature = (v, indices, offsets, method = "rusinkiewicz"))]
+fn curvature<'py>(
+    py: Python<'py>,
+    v: V<'py>,
+    indices: Idx<'py>,
+    offsets: Idx<'py>,
+    method: &str,
+) -> PyResult<CurvatureOut<'py>> {
+    use fairline::geom::{CurvatureMethod, principal_curvatures};
+    let m = match method {
+        "rusinkiewicz" => CurvatureMethod::Rusinkiewicz,
+        "meyer" => CurvatureMethod::Meyer,
+        other => return Err(bad_choice("method", other, &["rusinkiewicz", "meyer"]).into()),
+    };
+    let soup = soup_from(&v, &indices, &offsets)?;
+    let (cols, report) = py.detach(|| -> Res<_> {
+        let mesh = mesh_from(&soup)?;
+        let mut report = Report::new("curvature");
+        let (c, triangulated) = report.time(|| -> Res<_> {
+            Ok(if mesh.is_triangle_mesh() {
+                (principal_curvatures(&mesh, m), false)
+            } else {
+                let t = fairline::mesh::triangulate(&mesh)
+                    .map_err(|e| Failure::bad(format!("triangulating its polygons: {e}")))?;
+                (principal_curvatures(&t.mesh, m), true)
+            })
+        })?;
+        let mean = c.mean();
+        let gauss = c.gauss();
+        let comp = |f: fn(&Vec3) -> f64, v: &[Vec3]| v.iter().map(f).collect::<Vec<f64>>();
+        let cols: Vec<(&str, Vec<f64>)> = vec![
+            ("nx", comp(|v| v.x, &c.normals)),
+            ("ny", comp(|v| v.y, &c.normals)),
+            ("nz", comp(|v| v.z, &c.normals)),
+            ("k1", c.k1.clone()),
+            ("k2", c.k2.clone()),
+            ("mean", mean.clone()),
+            ("gauss", gauss.clone()),
+            ("d1x", comp(|v| v.x, &c.d1)),
+            ("d1y", comp(|v| v.y, &c.d1)),
+            ("d1z", comp(|v| v.z, &c.d1)),
+            ("d2x", comp(|v| v.x, &c.d2)),
+            ("d2y", comp(|v| v.y, &c.d2)),
+            ("d2z", comp(|v| v.z, &c.d2)),
+        ];
+        // one row per input vertex, as the CLI writes them
+        let cols: Vec<(String, Vec<f64>)> = cols
+            .into_iter()
+            .map(|(n, v)| (n.to_string(), mesh.original_values(&v).to_vec()))
+            .collect();
+        report.set("method", method);
+        report.set("vertices", mesh.original_vertex_count());
+        report.set("triangulated", triangulated);
+        report.set("k1", Stats::of(c.k1.iter().copied()));
+        report.set("k2", Stats::of(c.k2.iter().copied()));
+        report.set("mean", Stats::of(mean.iter().copied()));
+        report.set("gauss", Stats::of(gauss.iter().copied()));
+        Ok((cols, report.to_json()))
+    })?;
+    let cols = cols
+        .into_iter()
+        .map(|(n, v)| (n, PyArray1::from_vec(py, v)))
+        .collect();
+    Ok((cols, report))
+}
+
+/// `option must be one of a, b; got x`.
+pub(crate) fn bad_choice(option: &str, got: &str, allowed: &[&str]) -> Failure {
+    Failure::bad(format!(
+        "{option} must be one of {}; got {got:?}",
+        allowed.join(", ")
+    ))
+}
+
+/// Fixed vertices given as indices: each must be a vertex of `mesh` (the
+/// check and message of the CLI's `--fixed` file, with `fixed[k]` for
+/// `vertices[k]`).
+fn fixed_vertices(fixed: &[i64], count: usize) -> Res<Vec<VertexId>> {
+    fixed
+        .iter()
+        .enumerate()
+        .map(|(k, &v)| {
+            if v < 0 || v as u64 >= count as u64 {
+                Err(Failure::bad(format!(
+                    "fixed[{k}] = {v} is not a vertex (the mesh has {count})"
+                )))
+            } else {
+                Ok(VertexId(v as u32))
+            }
+        })
+        .collect()
+}
+
+fn finite(name: &str, v: Option<f64>) -> Res<()> {
+    match v {
+        Some(x) if !x.is_finite() => Err(Failure::bad(format!("{name} must be finite"))),
+        _ => Ok(()),
+    }
+}
+
+/// New positions and the report.
+type PositionsOut<'py> = (Bound<'py, PyArray2<f64>>, String);
+
+/// `fairline smooth` (crates/fairline-cli/src/smooth.rs `run`).
+#[pyfunction]
+#[pyo3(signature = (v, indices, offsets, method = "taubin", weights = "uniform", exponent = -1.0,
+    iterations = None, lambda_ = None, mu = None, pass_band = 0.1, time_step = 1.0, epsilon = None,
+    fix_boundary = false, hierarchical_boundary = false, fixed = None, preserve_volume = false,
+    tangential = false))]
+fn smooth<'py>(
+    py: Python<'py>,
+    v: V<'py>,
+    indices: Idx<'py>,
+    offsets: Idx<'py>,
+    method: &str,
+    weights: &str,
+    exponent: f64,
+    iterations: Option<usize>,
+    lambda_: Option<f64>,
+    mu: Option<f64>,
+    pass_band: f64,
+    time_step: f64,
+    epsilon: Option<f64>,
+    fix_boundary: bool,
+    hierarchical_boundary: bool,
+    fixed: Option<Vec<i64>>,
+    preserve_volume: bool,
+    tangential: bool,
+) -> PyResult<PositionsOut<'py>> {
+    use fairline::geom::LaplaceWeights;
+    use fairline::smooth::{
+        Constraints, ImplicitOptions, LaplaceOptions, SchneiderKobbeltOptions, SmoothError,
+        SpringOptions, TaubinOptions, implicit_smooth, laplace_smooth, schneider_kobbelt,
+        spring_smooth, taubin_smooth,
+    };
+    const METHODS: [&str; 5] = [
+        "laplace",
+        "taubin",
+        "implicit",
+        "spring",
+        "schneider-kobbelt",
+    ];
+    if !METHODS.contains(&method) {
+        return Err(bad_choice("method", method, &METHODS).into());
+    }
+    let weights = match weights {
+        "uniform" => LaplaceWeights::Uniform,
+        "edge" => LaplaceWeights::EdgeLength { exponent },
+        "cotan" => LaplaceWeights::Cotangent,
+        other => return Err(bad_choice("weights", other, &["uniform", "edge", "cotan"]).into()),
+    };
+    for (n, x) in [
+        ("lambda_", lambda_),
+        ("mu", mu),
+        ("pass_band", Some(pass_band)),
+        ("time_step", Some(time_step)),
+        ("epsilon", epsilon),
+        ("exponent", Some(exponent)),
+    ] {
+        finite(n, x)?;
+    }
+    if iterations == Some(0) {
+        return Err(Failure::bad("iterations must be at least 1").into());
+    }
+    let soup = soup_from(&v, &indices, &offsets)?;
+    let method = method.to_string();
+    let (p, report) = py.detach(move || -> Res<_> {
+        let mut mesh = mesh_from(&soup)?;
+        let fixed = fixed_vertices(fixed.as_deref().unwrap_or(&[]), mesh.vertex_count())?;
+        let constraints = Constraints {
+            fixed,
+            fix_boundary,
+            hierarchical_boundary,
+            preserve_volume,
+            tangential_only: tangential,
+        };
+        let mut report = Report::new("smooth");
+        let result = report.time(|| match method.as_str() {
+            "laplace" => {
+                let o = LaplaceOptions {
+                    weights,
+                    lambda: lambda_.unwrap_or(0.5),
+                    iterations: iterations.unwrap_or(10),
+                    constraints,
+                };
+                laplace_smooth(&mut mesh, &o).map(|r| (r, None))
+            }
+            "taubin" => {
+                let o = TaubinOptions {
+                    weights,
+                    lambda: lambda_,
+                    mu,
+                    pass_band,
+                    iterations: iterations.unwrap_or(10),
+                    constraints,
+                };
+                taubin_smooth(&mut mesh, &o).map(|(r, p)| (r, Some(p)))
+            }
+            "implicit" => {
+                let o = ImplicitOptions {
+                    time_step,
+                    iterations: iterations.unwrap_or(1),
+                    constraints,
+                };
+                implicit_smooth(&mut mesh, &o).map(|r| (r, None))
+            }
+            "spring" => {
+                let d = SpringOptions::default();
+                let o = SpringOptions {
+                    epsilon: epsilon.unwrap_or(d.epsilon),
+                    max_iterations: iterations.unwrap_or(d.max_iterations),
+                    constraints,
+                    ..d
+                };
+                spring_smooth(&mut mesh, &o).map(|r| (r, None))
+            }
+            _ => {
+                let d = SchneiderKobbeltOptions::default();
+                let o = SchneiderKobbeltOptions {
+                    epsilon: epsilon.unwrap_or(d.epsilon),
+                    max_iterations: iterations.unwrap_or(d.max_iterations),
+                    constraints,
+                    ..d
+                };
+                schneider_kobbelt(&mut mesh, &o).map(|r| (r, None))
+            }
+        });
+        let (r, params) = result.map_err(|e| match e {
+            SmoothError::Solve(_) => Failure::computation(e.to_string()),
+            other => Failure::bad(other.to_string()),
+        })?;
+        report.set("method", &method);
+        report.set("vertices", mesh.vertex_count());
+        report.set("iterations", r.iterations);
+        report.set("converged", r.converged);
+        report.set("volume_before", r.volume_before);
+        report.set("volume_after", r.volume_after);
+        report.set("max_displacement", r.max_displacement);
+        if let Some(res) = r.residual {
+            report.set("residual", res);
+        }
+        if let Some(p) = params {
+            report.set("lambda", p.lambda);
+            report.set("mu", p.mu);
+            report.set("pass_band", p.pass_band);
+            report.set("transfer", p.transfer_samples());
+        }
+        if !r.converged {
+            report.warn(format!(
+                "{method} did not converge in {} iteration(s); try more --iterations or a larger --epsilon",
+                r.iterations
+            ));
+        }
+        Ok((output_positions(&mesh), report.to_json()))
+    })?;
+    Ok((positions_array(py, &p), report))
+}
+
+/// The positions the CLI writes: the input's vertex list (split copies of
+/// non-manifold vertices merged back; they are pinned, so bit-identical).
+fn output_positions(mesh: &SurfaceMesh) -> Vec<Vec3> {
+    mesh.original_values(mesh.positions()).to_vec()
+}
+
+/// `fairline fair-quad` (crates/fairline-cli/src/smooth.rs `run_quad`).
+#[pyfunction]
+#[pyo3(signature = (v, indices, offsets, weight = 0.01, deviation = 0.1, deviation_factor = 0.5,
+    iterations = 3, fix_boundary = false, fixed = None))]
+fn fair_quad<'py>(
+    py: Python<'py>,
+    v: V<'py>,
+    indices: Idx<'py>,
+    offsets: Idx<'py>,
+    weight: f64,
+    deviation: f64,
+    deviation_factor: f64,
+    iterations: usize,
+    fix_boundary: bool,
+    fixed: Option<Vec<i64>>,
+) -> PyResult<PositionsOut<'py>> {
+    use fairline::fair::{QuadFairError, QuadFairOptions, fair_structure_lines};
+    if !weight.is_finite() || weight <= 0.0 {
+        return Err(Failure::bad("weight must be a positive number").into());
+    }
+    if !deviation.is_finite() || deviation < 0.0 {
+        return Err(Failure::bad("deviation must be ≥ 0").into());
+    }
+    if !deviation_factor.is_finite() || deviation_factor <= 0.0 {
+        return Err(Failure::bad("deviation_factor must be positive").into());
+    }
+    let soup = soup_from(&v, &indices, &offsets)?;
+    let (p, report) = py.detach(move || -> Res<_> {
+        let mut mesh = mesh_from(&soup)?;
+        if !mesh.faces().any(|f| mesh.face_size(f) == 4) {
+            return Err(Failure::bad(
+                "fair-quad needs a quad mesh (no quadrilateral found)",
+            ));
+        }
+        let fixed = fixed_vertices(fixed.as_deref().unwrap_or(&[]), mesh.vertex_count())?;
+        let opts = QuadFairOptions {
+            weight,
+            deviation,
+            deviation_factor,
+            iterations,
+            fix_boundary,
+            fixed,
+        };
+        let mut report = Report::new("fair-quad");
+        let r = report
+            .time(|| fair_structure_lines(&mut mesh, &opts))
+            .map_err(|e| match e {
+                QuadFairError::Solve(_) => Failure::computation(e.to_string()),
+                other => Failure::bad(other.to_string()),
+            })?;
+        report.set("vertices", mesh.vertex_count());
+        report.set("structure_lines", r.structure_lines);
+        report.set("free_vertices", r.free_vertices);
+        report.set("structure_energy_before", r.structure_energy_before);
+        report.set("structure_energy_after", r.structure_energy_after);
+        report.set("max_displacement", r.max_displacement);
+        report.set("iterations", r.iterations);
+        if r.structure_energy_after > r.structure_energy_before {
+            report.warn(format!(
+                "the structure-line energy got worse: {:.4e} before, {:.4e} after; try a larger --weight",
+                r.structure_energy_before, r.structure_energy_after
+            ));
+        }
+        Ok((output_positions(&mesh), report.to_json()))
+    })?;
+    Ok((positions_array(py, &p), report))
+}
+
+/// `fairline enhance` (crates/fairline-cli/src/enhance.rs).
+#[pyfunction]
+#[pyo3(signature = (v, indices, offsets, lambda_ = 1.0, mu = 0.5, iterations = 1,
+    solver = "auto", fixed = None))]
+fn enhance<'py>(
+    py: Python<'py>,
+    v: V<'py>,
+    indices: Idx<'py>,
+    offsets: Idx<'py>,
+    lambda_: f64,
+    mu: f64,
+    iterations: usize,
+    solver: &str,
+    fixed: Option<Vec<i64>>,
+) -> PyResult<PositionsOut<'py>> {
+    use fairline::enhance::{EnhanceError, EnhanceOptions, EnhanceSolver, enhance_features};
+    let solver = match solver {
+        "auto" => EnhanceSolver::Auto,
+        "direct" => EnhanceSolver::Direct,
+        "cg" => EnhanceSolver::Cg,
+        "amg" => EnhanceSolver::Amg,
+        other => {
+            return Err(bad_choice("solver", other, &["auto", "direct", "cg", "amg"]).into());
+        }
+    };
+    let soup = soup_from(&v, &indices, &offsets)?;
+    let (p, report) = py.detach(move || -> Res<_> {
+        let mesh = mesh_from(&soup)?;
+        if !mesh.is_triangle_mesh() {
+            return Err(Failure::bad(
+                "enhance needs a triangle mesh (triangulate it first, e.g. with `fairline convert`)",
+            ));
+        }
+        let mut fixed_ids = Vec::new();
+        for (k, &f) in fixed.as_deref().unwrap_or(&[]).iter().enumerate() {
+            // the library names a vertex beyond the mesh; a negative or
+            // too-large index cannot even be a vertex id
+            if f < 0 || f > u32::MAX as i64 {
+                return Err(Failure::bad(format!(
+                    "fixed[{k}] = {f} is not a vertex (the mesh has {})",
+                    mesh.vertex_count()
+                )));
+            }
+            fixed_ids.push(VertexId(f as u32));
+        }
+        let options = EnhanceOptions::default()
+            .lambda(lambda_)
+            .mu(mu)
+            .iterations(iterations)
+            .solver(solver)
+            .fixed(fixed_ids);
+        let mut report = Report::new("enhance");
+        let result = report
+            .time(|| enhance_features(&mesh, &options))
+            .map_err(|e| match e {
+                EnhanceError::FixedVertexOutOfRange { vertex, vertices } => Failure::bad(format!(
+                    "fixed vertex {vertex} does not exist; the mesh has {vertices} vertices (0 to {})",
+                    vertices.saturating_sub(1)
+                )),
+                e @ EnhanceError::InvalidOption(_) => Failure::bad(e.to_string()),
+                e => Failure::computation(format!("vertex flow: {e}")),
+            })?;
+        let mut out = mesh.clone();
+        out.set_positions(result.positions)?;
+        let r = &result.report;
+        report.set("vertices", r.vertices);
+        report.set("free_vertices", r.free_vertices);
+        report.set("iterations", r.iterations);
+        report.set("lambda", lambda_);
+        report.set("mu", mu);
+        report.set("flipped_triangles", r.flipped_triangles);
+        report.set("backtracked_vertices", r.backtracked_vertices);
+        report.set("quality_before", &r.quality_before);
+        report.set("quality_after", &r.quality_after);
+        report.set("histogram_before", &r.quality_before.histogram);
+        report.set("histogram_after", &r.quality_after.histogram);
+        report.set("max_displacement", r.max_displacement);
+        report.set("mean_displacement", r.mean_displacement);
+        report.set("max_distance_to_input", r.max_distance_to_input);
+        report.set("mean_distance_to_input", r.mean_distance_to_input);
+        report.set("edge_length", r.edge_length);
+        report.set("solver", r.solver);
+        report.set("cg_iterations", r.cg_iterations);
+        report.set("cg_relative_residual", r.cg_relative_residual);
+        report.set("direct_fallbacks", r.direct_fallbacks);
+        report.set("timings", &r.timings);
+        if r.flipped_triangles > 0 {
+            report.warn(format!(
+                "{} triangle(s) flipped their orientation; try a smaller --lambda or fewer --iterations",
+                r.flipped_triangles
+            ));
+        }
+        Ok((output_positions(&out), report.to_json()))
+    })?;
+    Ok((positions_array(py, &p), report))
+}
+
+/// `fairline repair` (crates/fairline-cli/src/repair.rs): the repaired
+/// soup and the report.
+#[pyfunction]
+fn repair<'py>(
+    py: Python<'py>,
+    v: V<'py>,
+    indices: Idx<'py>,
+    offsets: Idx<'py>,
+) -> PyResult<(SoupArrays<'py>, String)> {
+    let soup = soup_from(&v, &indices, &offsets)?;
+    let (out, report) = py.detach(move || -> Res<_> {
+        let mut report = Report::new("repair");
+        let repaired = report
+            .time(|| fairline::mesh::repair(&soup))
+            .map_err(|e| Failure::bad(format!("cannot repair: {e}")))?;
+        let r = &repaired.report;
+        match serde_json::to_value(r) {
+            Ok(Value::Object(m)) => {
+                for (k, v) in m {
+                    report.set(&k, v);
+                }
+            }
+            _ => return Err(Failure::computation("the repair report could not be written")),
+        }
+        if !r.orientation_conflicts.is_empty() {
+            report.warn(format!(
+                "{} faces could not be oriented consistently (non-orientable surface); left as they are",
+                r.orientation_conflicts.len()
+            ));
+        }
+        if let Some(problem) = &r.remaining_problem {
+            report.warn(format!("the output is still not a manifold: {problem}"));
+        }
+        Ok((repaired.soup, report.to_json()))
+    })?;
+    Ok((soup_arrays(py, &out), report))
+}
+
+// ---- highlight lines -------------------------------------------------
+
+/// The light options shared by `highlight_lines`, `detect` and `fair`
+/// (the CLI's `LightArgs`, crates/fairline-cli/src/highlight.rs).
+pub(crate) struct LightOptions {
+    direction: Option<Vec3>,
+    plane_normal: Option<Vec3>,
+    up: UpAxis,
+    up_vector: Option<Vec3>,
+    plane_point: Option<Vec3>,
+    spacing: Option<f64>,
+    /// The `lights` dictionary as JSON text.
+    lights: Option<Value>,
+    min_normal_cos: Option<f64>,
+}
+
+pub(crate) fn vec3(name: &str, v: Option<[f64; 3]>) -> Res<Option<Vec3>> {
+    match v {
+        Some(a) if a.iter().any(|x| !x.is_finite()) => Err(Failure::bad(format!(
+            "{name} must be three finite numbers, got {a:?}"
+        ))),
+        Some(a) => Ok(Some(Vec3::from_array(a))),
+        None => Ok(None),
+    }
+}
+
+impl LightOptions {
+    pub(crate) fn new(
+        direction: Option<[f64; 3]>,
+        plane_normal: Option<[f64; 3]>,
+        up: &str,
+        plane_point: Option<[f64; 3]>,
+        spacing: Option<f64>,
+        lights: Option<String>,
+        min_normal_cos: Option<f64>,
+    ) -> Res<Self> {
+        let (up, up_vector) = match up {
+            "auto" => (UpAxis::Auto, None),
+            "x" => (UpAxis::X, Some(Vec3::X)),
+            "y" => (UpAxis::Y, Some(Vec3::Y)),
+            "z" => (UpAxis::Z, Some(Vec3::Z)),
+            other => return Err(bad_choice("up", other, &["auto", "x", "y", "z"])),
+        };
+        let lights = match lights {
+            Some(text) => Some(
+                serde_json::from_str::<Value>(&text)
+                    .map_err(|e| Failure::bad(format!("lights: {e}")))?,
+            ),
+            None => None,
+        };
+        if lights.is_some()
+            && (direction.is_some()
+                || plane_normal.is_some()
+                || plane_point.is_some()
+                || spacing.is_some())
+        {
+            return Err(Failure::bad(
+                "lights cannot be given together with direction, plane_normal, plane_point or spacing",
+            ));
+        }
+        Ok(LightOptions {
+            direction: vec3("direction", direction)?,
+            plane_normal: vec3("plane_normal", plane_normal)?,
+            up,
+            up_vector,
+            plane_point: vec3("plane_point", plane_point)?,
+            spacing,
+            lights,
+            min_normal_cos,
+        })
+    }
+
+    /// The circular lights of the `lights` dictionary when it has the
+    /// circular form (recognised by its "center" key).
+    fn circular(&self) -> Res<Option<CircularLights>> {
+        match &self.lights {
+            Some(v) if v.get("center").is_some() => serde_json::from_value(v.clone())
+                .map(Some)
+                .map_err(|e| Failure::bad(format!("lights: {e}"))),
+            _ => Ok(None),
+        }
+    }
+
+    /// The linear light array (the CLI's `LightArgs::light_array`).
+    fn light_array(&self, mesh: &SurfaceMesh) -> Res<LightArray> {
+        if let Some(v) = &self.lights {
+            if v.get("center").is_some() {
+                return Err(Failure::bad(
+                    "lights: circular lights are drawn by `highlight_lines` only; this function needs a linear light array {\"plane_point\",\"plane_normal\",\"direction\",\"spacing\"}",
+                ));
+            }
+            return serde_json::from_value(v.clone())
+                .map_err(|e| Failure::bad(format!("lights: {e}")));
+        }
+        let (lo, hi) = fairline::mesh::bounding_box(mesh.positions())
+            .ok_or_else(|| Failure::bad("the mesh has no vertices"))?;
+        if self.plane_normal.is_some() {
+            return self.light_array_in_box(lo, hi);
+        }
+        let base = LightArray::default_for_mesh(mesh, self.up)
+            .ok_or_else(|| Failure::bad("the mesh has no finite vertices"))?;
+        LightArray::new(
+            self.plane_point.unwrap_or(base.plane_point()),
+            base.plane_normal(),
+            self.direction.unwrap_or(base.direction()),
+            self.spacing.unwrap_or(base.spacing()),
+        )
+        .map_err(highlight_error)
+    }
+
+    /// The light array from the dictionary, or the defaults for the box
+    /// `lo`–`hi` with the given fields overridden.
+    pub(crate) fn light_array_in_box(&self, lo: Vec3, hi: Vec3) -> Res<LightArray> {
+        if let Some(v) = &self.lights {
+            return serde_json::from_value(v.clone())
+                .map_err(|e| Failure::bad(format!("lights: {e}")));
+        }
+        let base = LightArray::default_for(lo, hi, self.plane_normal.or(self.up_vector));
+        LightArray::new(
+            self.plane_point.unwrap_or(base.plane_point()),
+            self.plane_normal.unwrap_or(base.plane_normal()),
+            self.direction.unwrap_or(base.direction()),
+            self.spacing.unwrap_or(base.spacing()),
+        )
+        .map_err(highlight_error)
+    }
+
+    /// `min_normal_cos`, or the library's default as the CLI's.
+    pub(crate) fn min_normal_cos(&self) -> f64 {
+        self.min_normal_cos
+            .unwrap_or(HighlightOptions::default().min_normal_cos)
+    }
+
+    /// Model options (the CLI's `LightArgs::options`).
+    fn options(&self) -> HighlightOptions {
+        HighlightOptions::default().min_normal_cos(self.min_normal_cos())
+    }
+}
+
+/// Library errors about lights, options or the mesh are bad input.
+pub(crate) fn highlight_error(e: HighlightError) -> Failure {
+    Failure::bad(e.to_string())
+}
+
+/// The mesh, triangulated when it has polygons, and for each triangle the
+/// input face it came from (the CLI's `read_triangles`).
+fn triangles(soup: &fairline::Soup) -> Res<(SurfaceMesh, Option<Vec<FaceId>>)> {
+    let mesh = mesh_from(soup)?;
+    if mesh.is_triangle_mesh() {
+        Ok((mesh, None))
+    } else {
+        let t = fairline::mesh::triangulate(&mesh)
+            .map_err(|e| Failure::bad(format!("triangulating its polygons: {e}")))?;
+        Ok((t.mesh, Some(t.source_face)))
+    }
+}
+
+fn line_json(l: &HighlightLine, radii: Option<&[f64]>) -> Value {
+    let pts: Vec<[f64; 3]> = l.points.iter().map(|p| p.to_array()).collect();
+    let mut v = json!({"index": l.index, "closed": l.closed, "points": pts});
+    if let Some(r) = radii.and_then(|r| r.get(l.index as usize)) {
+        v["radius"] = json!(r);
+    }
+    v
+}
+
+fn lines_json(lines: &HighlightLines, radii: Option<&[f64]>) -> Vec<Value> {
+    lines.lines.iter().map(|l| line_json(l, radii)).collect()
+}
+
+/// The CLI's lines JSON: `{"lines":[..]}` (+ `"bands"`).
+fn lines_document(
+    lines: &HighlightLines,
+    bands: Option<&HighlightBands>,
+    radii: Option<&[f64]>,
+) -> Value {
+    let mut v = json!({"lines": lines_json(lines, radii)});
+    if let Some(b) = bands {
+        v["bands"] = json!({
+            "radius": b.radius,
+            "lower": lines_json(&b.lower, radii),
+            "upper": lines_json(&b.upper, radii),
+        });
+    }
+    v
+}
+
+/// `fairline highlight` on a mesh (crates/fairline-cli/src/highlight.rs):
+/// the lines document (as the CLI's JSON output) and the report.
+#[pyfunction]
+#[pyo3(signature = (v, indices, offsets, direction = None, plane_normal = None, up = "auto",
+    plane_point = None, spacing = None, lights = None, min_normal_cos = None,
+    circle_center = None, circle_axis = None, radii = None, band = None))]
+fn highlight_lines(
+    py: Python<'_>,
+    v: V<'_>,
+    indices: Idx<'_>,
+    offsets: Idx<'_>,
+    direction: Option<[f64; 3]>,
+    plane_normal: Option<[f64; 3]>,
+    up: &str,
+    plane_point: Option<[f64; 3]>,
+    spacing: Option<f64>,
+    lights: Option<String>,
+    min_normal_cos: Option<f64>,
+    circle_center: Option<[f64; 3]>,
+    circle_axis: Option<[f64; 3]>,
+    radii: Option<Vec<f64>>,
+    band: Option<f64>,
+) -> PyResult<(String, String)> {
+    let light = LightOptions::new(
+        direction,
+        plane_normal,
+        up,
+        plane_point,
+        spacing,
+        lights,
+        min_normal_cos,
+    )?;
+    let circle_given = [
+        circle_center.is_some(),
+        circle_axis.is_some(),
+        radii.is_some(),
+    ];
+    if circle_given.iter().any(|&b| b) && !circle_given.iter().all(|&b| b) {
+        return Err(Failure::bad(
+            "circular lights need circle_center, circle_axis and radii together",
+        )
+        .into());
+    }
+    if circle_given[0] && light.lights.is_some() {
+        return Err(Failure::bad("circle_center cannot be given together with lights").into());
+    }
+    if let Some(r) = &radii
+        && r.iter().any(|x| !x.is_finite())
+    {
+        return Err(Failure::bad("radii must be finite numbers").into());
+    }
+    if let Some(b) = band
+        && !(b > 0.0 && b.is_finite())
+    {
+        return Err(Failure::bad(format!("band must be a positive number, got {b}")).into());
+    }
+    let circle_center = vec3("circle_center", circle_center)?;
+    let circle_axis = vec3("circle_axis", circle_axis)?;
+    let soup = soup_from(&v, &indices, &offsets)?;
+    let out = py.detach(move || -> Res<_> {
+        let (mesh, _) = triangles(&soup)?;
+        let mut report = Report::new("highlight");
+        report.set("vertices", mesh.vertex_count());
+        report.set("faces", mesh.face_count());
+        let circular = match (circle_center, circle_axis, radii) {
+            (Some(c), Some(t), Some(radii)) => Some(CircularLights {
+                center: c.to_array(),
+                axis: t.to_array(),
+                radii,
+            }),
+            _ => light.circular()?,
+        };
+        let (lines, bands, radii) = if let Some(spec) = circular {
+            let radii = spec.radii.clone();
+            let lights: Vec<CircularLight> = spec.lights().map_err(highlight_error)?;
+            if lights.is_empty() {
+                return Err(Failure::bad("circular lights need at least one radius"));
+            }
+            let (lines, bands) = report
+                .time(|| -> Result<_, HighlightError> {
+                    let lines = circular_highlight_lines(&mesh, &lights)?;
+                    let bands = match band {
+                        Some(rho) => Some(circular_highlight_bands(&mesh, &lights, rho)?),
+                        None => None,
+                    };
+                    Ok((lines, bands))
+                })
+                .map_err(highlight_error)?;
+            report.set(
+                "light",
+                json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii}),
+            );
+            (lines, bands, Some(radii))
+        } else {
+            let array = light.light_array(&mesh)?;
+            let opts = light.options();
+            let (lines, bands) = report
+                .time(|| -> Result<_, HighlightError> {
+                    let model = HighlightModel::new(&mesh, array, opts)?;
+                    let lines = model.lines(&mesh);
+                    let bands = match band {
+                        Some(rho) => Some(model.bands(&mesh, rho)?),
+                        None => None,
+                    };
+                    Ok((lines, bands))
+                })
+                .map_err(highlight_error)?;
+            report.set("light", json!({"kind": "linear", "array": array}));
+            (lines, bands, None)
+        };
+        let document = lines_document(&lines, bands.as_ref(), radii.as_deref());
+        report.set(
+            "summary",
+            json!({
+                "lines": lines.lines.len(),
+                "closed_lines": lines.lines.iter().filter(|l| l.closed).count(),
+                "nodes": lines.node_count(),
+            }),
+        );
+        report.set("lines", lines.lines.len());
+        report.set(
+            "closed_lines",
+            lines.lines.iter().filter(|l| l.closed).count(),
+        );
+        report.set("nodes", lines.node_count());
+        if let Some(b) = &bands {
+            report.set(
+                "band",
+                json!({"radius": b.radius, "lower_lines": b.lower.lines.len(), "upper_lines": b.upper.lines.len()}),
+            );
+        }
+        if lines.lines.is_empty() {
+            report.warn("no highlight line crosses the mesh; try other light options (--plane-normal, --direction, --spacing)");
+        }
+        Ok((document.to_string(), report.to_json()))
+    })?;
+    Ok(out)
+}
+
+/// Rings of support faces around the suggested regions (the CLI's
+/// `detect::SUPPORT_RINGS`).
+const SUPPORT_RINGS: usize = 2;
+
+/// `fairline detect` (crates/fairline-cli/src/detect.rs): the region's
+/// faces (as the CLI's `-o` JSON `faces`) and the report.
+#[pyfunction]
+#[pyo3(signature = (v, indices, offsets, direction = None, plane_normal = None, up = "auto",
+    plane_point = None, spacing = None, lights = None, min_normal_cos = None,
+    threshold = None, smooth_radius = None, region_margin = None, max_regions = None))]
+fn detect<'py>(
+    py: Python<'py>,
+    v: V<'py>,
+    indices: Idx<'py>,
+    offsets: Idx<'py>,
+    direction: Option<[f64; 3]>,
+    plane_normal: Option<[f64; 3]>,
+    up: &str,
+    plane_point: Option<[f64; 3]>,
+    spacing: Option<f64>,
+    lights: Option<String>,
+    min_normal_cos: Option<f64>,
+    threshold: Option<f64>,
+    smooth_radius: Option<f64>,
+    region_margin: Option<f64>,
+    max_regions: Option<usize>,
+) -> PyResult<(Bound<'py, PyArray1<u32>>, String)> {
+    let light = LightOptions::new(
+        direction,
+        plane_normal,
+        up,
+        plane_point,
+        spacing,
+        lights,
+        min_normal_cos,
+    )?;
+    let soup = soup_from(&v, &indices, &offsets)?;
+    let (faces, report) = py.detach(move || -> Res<_> {
+        let (mesh, source) = triangles(&soup)?;
+        let array = light.light_array(&mesh)?;
+        let d = DetectOptions::default();
+        let threshold = threshold.unwrap_or(d.threshold);
+        let opts = DetectOptions::default()
+            .threshold(threshold)
+            .smooth_radius(smooth_radius.unwrap_or(d.smooth_radius))
+            .region_margin(region_margin.unwrap_or(d.region_margin));
+        let mut report = Report::new("detect");
+        let (lines, mut det) = report
+            .time(|| -> Result<_, HighlightError> {
+                let model = HighlightModel::new(&mesh, array, light.options())?;
+                let lines = model.lines(&mesh);
+                let det = detect_irregularities(&mesh, &array, &lines, &opts)?;
+                Ok((lines, det))
+            })
+            .map_err(highlight_error)?;
+        if let Some(n) = max_regions {
+            det.regions.truncate(n);
+        }
+        let to_input = |faces: &[FaceId]| -> Vec<u32> {
+            let mut out: Vec<u32> = match &source {
+                Some(src) => faces.iter().map(|f| src[f.idx()].0).collect(),
+                None => faces.iter().map(|f| f.0).collect(),
+            };
+            out.sort_unstable();
+            out.dedup();
+            out
+        };
+        let all = to_input(&fairline::fair::grow_region(
+            &mesh,
+            &det.all_faces(),
+            SUPPORT_RINGS,
+        ));
+        let regions: Vec<_> = det
+            .regions
+            .iter()
+            .map(|r| {
+                json!({
+                    "score": r.score,
+                    "faces": to_input(&r.faces).len(),
+                    "area": r.area,
+                    "center": r.center.to_array(),
+                    "flagged_sites": r.flagged_sites,
+                    "lines": r.lines,
+                })
+            })
+            .collect();
+        report.set("vertices", mesh.vertex_count());
+        report.set("lines", lines.lines.len());
+        report.set("spacing", array.spacing());
+        report.set("light", array);
+        report.set("region_faces", all.len());
+        report.set("regions", regions);
+        report.set("threshold", det.threshold);
+        report.set("median_score", det.median_score);
+        report.set("noise_level", det.noise_level);
+        report.set("sites", det.sites.len());
+        report.set("judged_sites", det.judged_sites);
+        report.set("flagged_sites", det.flagged_sites);
+        report.set("flagged_area_fraction", det.flagged_area_fraction);
+        report.set("smooth_radius", det.smooth_radius);
+        report.set("fine_radius", det.fine_radius);
+        if lines.lines.is_empty() {
+            report.warn("no highlight line crosses the mesh, so nothing could be detected; try other light options (--plane-normal, --direction, --spacing)");
+        }
+        Ok((all, report.to_json()))
+    })?;
+    Ok((PyArray1::from_vec(py, faces), report))
+}
+
+/// Rings of faces `auto` adds around a detected region (the CLI's
+/// `fair::AUTO_RINGS`).
+const AUTO_RINGS: usize = 4;
+
+/// `fairline fair` (crates/fairline-cli/src/fair.rs): new positions and
+/// the report. `region` is region JSON text ({"faces"}, {"vertices"} or
+/// {"sphere"}); `auto` detects the regions instead.
+#[pyfunction]
+#[pyo3(signature = (v, indices, offsets, region = None, auto = false, grow = 0,
+    direction = None, plane_normal = None, up = "auto", plane_point = None, spacing = None,
+    lights = None, min_normal_cos = None, max_iterations = None, epsilon = None,
+    method = "highlight", fair_weight = None, diff_weight = None))]
+fn fair<'py>(
+    py: Python<'py>,
+    v: V<'py>,
+    indices: Idx<'py>,
+    offsets: Idx<'py>,
+    region: Option<String>,
+    auto: bool,
+    grow: usize,
+    direction: Option<[f64; 3]>,
+    plane_normal: Option<[f64; 3]>,
+    up: &str,
+    plane_point: Option<[f64; 3]>,
+    spacing: Option<f64>,
+    lights: Option<String>,
+    min_normal_cos: Option<f64>,
+    max_iterations: Option<usize>,
+    epsilon: Option<f64>,
+    method: &str,
+    fair_weight: Option<f64>,
+    diff_weight: Option<f64>,
+) -> PyResult<PositionsOut<'py>> {
+    use fairline::fair::{
+        FairError, FairMethod, FairOptions, FairResult, RegionSpec, fair_highlight_lines_with,
+        grow_region,
+    };
+    let fair_method = match method {
+        "highlight" => FairMethod::Highlight,
+        "diffusion-flow" => FairMethod::DiffusionFlow,
+        other => {
+            return Err(bad_choice("method", other, &["highlight", "diffusion-flow"]).into());
+        }
+    };
+    match (&region, auto) {
+        (Some(_), true) => {
+            return Err(Failure::bad("region and auto=True cannot be given together").into());
+        }
+        (None, false) => {
+            return Err(Failure::bad("give a region, or auto=True to detect the regions").into());
+        }
+        _ => {}
+    }
+    let light = LightOptions::new(
+        direction,
+        plane_normal,
+        up,
+        plane_point,
+        spacing,
+        lights,
+        min_normal_cos,
+    )?;
+    let method = method.to_string();
+    let soup = soup_from(&v, &indices, &offsets)?;
+    let out = py.detach(move || -> Res<_> {
+        let mesh = mesh_from(&soup)?;
+        if !mesh.is_triangle_mesh() {
+            return Err(Failure::bad(
+                "highlight-line fairing needs a triangle mesh (this one has polygons; triangulate it first, e.g. with `fairline convert`)",
+            ));
+        }
+        let array = light.light_array(&mesh)?;
+        let d = FairOptions::default();
+        let options = FairOptions {
+            method: fair_method,
+            fair_weight: fair_weight.unwrap_or(d.fair_weight),
+            diff_weight: diff_weight.unwrap_or(d.diff_weight),
+            max_iterations: max_iterations.unwrap_or(d.max_iterations),
+            epsilon: epsilon.unwrap_or(d.epsilon),
+            highlight: light.options(),
+        };
+        let to_error = |e: FairError| -> Failure {
+            let f = match e {
+                FairError::NoMovableVertex(msg) => Failure::bad(format!(
+                    "{msg}; a vertex can move only when every face around it and around its neighbours is in the region: enlarge the region or pass --grow 2"
+                )),
+                FairError::Solve(_) => Failure::computation(e.to_string()),
+                other => Failure::bad(other.to_string()),
+            };
+            if region.is_some() {
+                Failure {
+                    kind: f.kind,
+                    message: format!("region: {}", f.message),
+                }
+            } else {
+                f
+            }
+        };
+        let mut report = Report::new("fair");
+        let regions: Vec<Vec<FaceId>> = if let Some(text) = &region {
+            let spec = RegionSpec::from_json(text)
+                .map_err(|e| Failure::bad(format!("region: {e}")))?;
+            vec![
+                spec.faces(&mesh)
+                    .map_err(|e| Failure::bad(format!("region: {e}")))?,
+            ]
+        } else {
+            let det = report
+                .time(|| -> Result<_, HighlightError> {
+                    let model = HighlightModel::new(&mesh, array, light.options())?;
+                    let lines = model.lines(&mesh);
+                    detect_irregularities(&mesh, &array, &lines, &DetectOptions::default())
+                })
+                .map_err(highlight_error)?;
+            report.set("detected_regions", det.regions.len());
+            det.regions
+                .iter()
+                .map(|r| grow_region(&mesh, &r.faces, AUTO_RINGS))
+                .collect()
+        };
+        let regions: Vec<Vec<FaceId>> = if grow > 0 {
+            regions
+                .iter()
+                .map(|f| grow_region(&mesh, f, grow))
+                .collect()
+        } else {
+            regions
+        };
+        let region_faces: Vec<FaceId> = {
+            let mut all: Vec<FaceId> = regions.iter().flatten().copied().collect();
+            all.sort_unstable();
+            all.dedup();
+            all
+        };
+        let score_before = region_score(&mesh, &array, &light, &region_faces)?;
+        let mut current: SurfaceMesh = mesh.clone();
+        let mut results: Vec<Value> = Vec::new();
+        let mut first: Option<FairResult> = None;
+        let mut skipped: Vec<Value> = Vec::new();
+        for (k, faces) in regions.iter().enumerate() {
+            let outcome = report
+                .time(|| fair_highlight_lines_with(&current, &array, faces, &options, &mut |_| {}));
+            match outcome {
+                Ok(r) => {
+                    results.push(fair_result_json(&r));
+                    current = r.mesh.clone();
+                    if first.is_none() {
+                        first = Some(r);
+                    }
+                }
+                Err(FairError::NoMovableVertex(msg)) if auto => {
+                    skipped.push(json!({"region": k, "reason": msg}));
+                }
+                Err(e) => return Err(to_error(e)),
+            }
+        }
+        let score_after = region_score(&current, &array, &light, &region_faces)?;
+        report.set("detect_score_before", score_before);
+        report.set("detect_score_after", score_after);
+        let threshold = DetectOptions::default().threshold;
+        if score_after > score_before && score_after > threshold {
+            report.warn(format!(
+                "the detection score inside the region got worse ({score_before:.2} -> {score_after:.2}); try a larger region (--grow 2) or --method diffusion-flow"
+            ));
+        } else if score_after > threshold {
+            report.warn(format!(
+                "a defect remains inside the region (detection score {score_before:.2} -> {score_after:.2}, threshold {threshold:.2}); try --grow 2 or more iterations"
+            ));
+        }
+        if first.is_none() {
+            report.warn("no region was faired (nothing detected): the output is the input unchanged");
+        }
+        report.set("method", &method);
+        report.set("light", array);
+        report.set("regions", results.len());
+        if auto {
+            report.set("skipped_regions", skipped);
+        }
+        let total_moved = current
+            .positions()
+            .iter()
+            .zip(mesh.positions())
+            .map(|(a, b)| (*a - *b).length())
+            .fold(0.0, f64::max);
+        match results.as_slice() {
+            [Value::Object(m)] => {
+                for (key, v) in m {
+                    report.set(key, v.clone());
+                }
+            }
+            _ => {
+                let sum =
+                    |key: &str| -> f64 { results.iter().filter_map(|r| r[key].as_f64()).sum() };
+                let max = |key: &str| -> f64 {
+                    results
+                        .iter()
+                        .filter_map(|r| r[key].as_f64())
+                        .fold(0.0, f64::max)
+                };
+                report.set("iterations", sum("iterations") as u64);
+                report.set(
+                    "converged",
+                    results.iter().all(|r| r["converged"] == json!(true)),
+                );
+                report.set("movable_vertices", sum("movable_vertices") as u64);
+                report.set("willmore_before", sum("willmore_before"));
+                report.set("willmore_after", sum("willmore_after"));
+                report.set(
+                    "highlight_deviation_before",
+                    max("highlight_deviation_before"),
+                );
+                report.set("highlight_deviation_after", max("highlight_deviation_after"));
+                report.set("max_displacement", total_moved);
+                report.set("per_region", results.clone());
+            }
+        }
+        let converged = results.iter().all(|r| r["converged"] == json!(true));
+        let deviation = |key: &str| {
+            results
+                .iter()
+                .filter_map(|r| r[key].as_f64())
+                .fold(0.0, f64::max)
+        };
+        let (before, after) = (
+            deviation("highlight_deviation_before"),
+            deviation("highlight_deviation_after"),
+        );
+        if !converged {
+            report.warn(format!(
+                "fairing did not converge within --max-iterations {}; try more iterations or a larger region (--grow, --auto)",
+                options.max_iterations
+            ));
+        }
+        if after > before {
+            report.warn(format!(
+                "the highlight-line deviation got worse: {before:.4e} before, {after:.4e} after"
+            ));
+        }
+        Ok((output_positions(&current), report.to_json()))
+    })?;
+    Ok((positions_array(py, &out.0), out.1))
+}
+
+/// The CLI's per-region fairing report (`fair::result_json`).
+fn fair_result_json(r: &fairline::fair::FairResult) -> Value {
+    json!({
+        "iterations": r.iterations,
+        "converged": r.converged,
+        "movable_vertices": r.region.movable.len(),
+        "inside_vertices": r.region.inside_vertices.len(),
+        "region_faces": r.region.in_region.iter().filter(|&&b| b).count(),
+        "willmore_before": r.willmore_before,
+        "willmore_after": r.willmore_after,
+        "highlight_deviation_before": r.deviation_before.rms,
+        "highlight_deviation_after": r.deviation_after.rms,
+        "highlight_deviation_max_before": r.deviation_before.max,
+        "highlight_deviation_max_after": r.deviation_after.max,
+        "desired_lines": r.desired_before.lines.len(),
+        "max_displacement": r.max_displacement,
+        "mean_edge_length": r.mean_edge_length,
+        "history": r.history.iter().map(|h| json!({
+            "iteration": h.iteration,
+            "f_fair": h.f_fair,
+            "f_diff": h.f_diff,
+            "objective": h.objective,
+            "predicted": h.predicted,
+            "achieved": h.achieved,
+            "accepted": h.accepted,
+            "max_step": h.max_step,
+            "step_ratio": h.step_ratio,
+            "active_bounds": h.active_bounds,
+            "target_nodes": h.target_nodes,
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// The largest detection score at sites inside `faces` (the CLI's
+/// `fair::region_score`); 0 when none is judged.
+fn region_score(
+    mesh: &SurfaceMesh,
+    light: &LightArray,
+    opts: &LightOptions,
+    faces: &[FaceId],
+) -> Res<f64> {
+    if faces.is_empty() {
+        return Ok(0.0);
+    }
+    let model = HighlightModel::new(mesh, *light, opts.options()).map_err(highlight_error)?;
+    let lines = model.lines(mesh);
+    let det = detect_irregularities(mesh, light, &lines, &DetectOptions::default())
+        .map_err(highlight_error)?;
+    let mut inside = vec![false; mesh.vertex_count()];
+    for f in faces {
+        if f.idx() < mesh.face_count() {
+            for v in mesh.face_vertices(*f) {
+                inside[v.idx()] = true;
+            }
+        }
+    }
+    Ok(det
+        .sites
+        .iter()
+        .filter(|s| inside[s.vertex.idx()])
+        .filter_map(|s| s.score)
+        .fold(0.0, f64::max))
+}

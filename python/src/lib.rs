@@ -1,0 +1,183 @@
+//! `fairline._native`: the thin PyO3 layer between numpy and the `fairline`
+//! library. Every function here takes plain arrays (positions `V` as an
+//! (n, 3) float64 array, faces as a flat `u32` index array plus offsets, as
+//! in [`fairline::Soup`]), options with the CLI's names and defaults, and
+//! returns arrays plus the report as JSON text (the keys of the CLI's
+//! `--report`). The pure-Python package `fairline` (python/fairline) wraps
+//! these with shape/dtype checks, docstrings and numpy/trimesh conversions.
+//!
+//! Only this layer knows the library's current API: when the library is
+//! reshaped (issue #17 items 1–3), only these files change.
+//!
+//! Every computation runs with the GIL released (`Python::detach`).
+
+#![forbid(unsafe_code)]
+
+mod commands;
+mod report;
+mod surfaces;
+
+use fairline::{Soup, SurfaceMesh, Vec3};
+use numpy::{
+    PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+};
+use pyo3::prelude::*;
+use pyo3::types::PyType;
+
+/// What kind of failure an error is; decides the Python exception class
+/// (python/fairline/_errors.py), in step with the CLI's exit status.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// Bad input or options (CLI exit status 2): `FairlineError`, a ValueError.
+    BadInput,
+    /// A file could not be opened, read or written by the operating system:
+    /// `FairlineFileError` (also an OSError).
+    File,
+    /// The computation failed (CLI exit status 1):
+    /// `FairlineComputationError` (also a RuntimeError).
+    Computation,
+}
+
+/// An error on its way to Python: its kind and the message the CLI prints
+/// after `error: `.
+#[derive(Debug)]
+pub struct Failure {
+    pub kind: Kind,
+    pub message: String,
+}
+
+impl Failure {
+    pub fn bad(message: impl Into<String>) -> Self {
+        Failure {
+            kind: Kind::BadInput,
+            message: message.into(),
+        }
+    }
+    pub fn computation(message: impl Into<String>) -> Self {
+        Failure {
+            kind: Kind::Computation,
+            message: message.into(),
+        }
+    }
+}
+
+impl From<fairline::io::IoError> for Failure {
+    fn from(e: fairline::io::IoError) -> Self {
+        let kind = match &e {
+            fairline::io::IoError::Io { .. } => Kind::File,
+            _ => Kind::BadInput,
+        };
+        Failure {
+            kind,
+            message: e.to_string(),
+        }
+    }
+}
+
+impl From<fairline::MeshError> for Failure {
+    fn from(e: fairline::MeshError) -> Self {
+        Failure::bad(e.to_string())
+    }
+}
+
+impl From<Failure> for PyErr {
+    fn from(f: Failure) -> PyErr {
+        let class = match f.kind {
+            Kind::BadInput => "FairlineError",
+            Kind::File => "FairlineFileError",
+            Kind::Computation => "FairlineComputationError",
+        };
+        Python::attach(|py| {
+            let cls = py
+                .import("fairline._errors")
+                .and_then(|m| m.getattr(class))
+                .and_then(|c| c.cast_into::<PyType>().map_err(PyErr::from));
+            match cls {
+                Ok(cls) => PyErr::from_type(cls, f.message),
+                // the package is always importable when this module is; if
+                // not, a plain ValueError still carries the message
+                Err(_) => pyo3::exceptions::PyValueError::new_err(f.message),
+            }
+        })
+    }
+}
+
+pub type Res<T> = Result<T, Failure>;
+
+/// Positions and faces from the arrays the Python layer hands over.
+///
+/// `v` must be (n, 3); `offsets` must start at 0, never decrease and end at
+/// `indices.len()` (the Python layer builds them; checked again here so
+/// that no input can panic).
+pub fn soup_from(
+    v: &PyReadonlyArray2<'_, f64>,
+    indices: &PyReadonlyArray1<'_, u32>,
+    offsets: &PyReadonlyArray1<'_, u32>,
+) -> Res<Soup> {
+    let shape = v.shape();
+    if shape.len() != 2 || shape[1] != 3 {
+        return Err(Failure::bad(format!(
+            "V must have shape (n, 3), got {shape:?}"
+        )));
+    }
+    let view = v.as_array();
+    let positions: Vec<Vec3> = view
+        .rows()
+        .into_iter()
+        .map(|r| Vec3::new(r[0], r[1], r[2]))
+        .collect();
+    let indices: Vec<u32> = indices.as_array().iter().copied().collect();
+    let offsets: Vec<u32> = offsets.as_array().iter().copied().collect();
+    if offsets.first() != Some(&0)
+        || offsets.windows(2).any(|w| w[1] < w[0])
+        || offsets.last().map(|&o| o as usize) != Some(indices.len())
+    {
+        return Err(Failure::bad(
+            "F: face offsets must start at 0, never decrease and end at the number of indices",
+        ));
+    }
+    Ok(Soup {
+        positions,
+        offsets,
+        indices,
+    })
+}
+
+/// A [`SurfaceMesh`] from the arrays (errors as the library names them:
+/// `face 3 refers to vertex 10, but the mesh has 5 vertices`).
+pub fn mesh_from(soup: &Soup) -> Res<SurfaceMesh> {
+    Ok(SurfaceMesh::from_soup(soup)?)
+}
+
+/// Positions as an (n, 3) array.
+pub fn positions_array<'py>(py: Python<'py>, p: &[Vec3]) -> Bound<'py, PyArray2<f64>> {
+    let flat: Vec<f64> = p.iter().flat_map(|q| q.to_array()).collect();
+    // the flat vector has exactly 3 n entries, so the reshape cannot fail
+    PyArray1::from_vec(py, flat)
+        .reshape([p.len(), 3])
+        .unwrap_or_else(|_| PyArray2::zeros(py, [0, 3], false))
+}
+
+/// Positions and faces of a soup as (V, indices, offsets).
+pub type SoupArrays<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<u32>>,
+    Bound<'py, PyArray1<u32>>,
+);
+
+pub fn soup_arrays<'py>(py: Python<'py>, soup: &Soup) -> SoupArrays<'py> {
+    (
+        positions_array(py, &soup.positions),
+        PyArray1::from_slice(py, &soup.indices),
+        PyArray1::from_slice(py, &soup.offsets),
+    )
+}
+
+/// The native module.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    commands::register(m)?;
+    surfaces::register(m)?;
+    Ok(())
+}

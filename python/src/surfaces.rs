@@ -1,0 +1,457 @@
+//! B-spline surfaces: `read_surfaces`, `write_surfaces`,
+//! `surface_highlight_lines`, `fair_surface`.
+//!
+//! Surfaces cross into Python as the JSON of DESIGN.md §5 (fairline's
+//! surface file format, numbers printed exactly), which the Python layer
+//! turns into dictionaries; so reading, writing and every function keep the
+//! library's one definition of that format.
+
+#![allow(clippy::too_many_arguments)]
+
+use crate::commands::{LightOptions, bad_choice, highlight_error, vec3};
+use crate::report::Report;
+use crate::{Failure, Res};
+use fairline::Vec3;
+use fairline::bspline::{
+    BSplineSurface, parse_surfaces_json, read_iges, read_surfaces_json, surfaces_to_json,
+    write_surfaces_json,
+};
+use fairline::highlight::{
+    CircularLight, CircularLights, SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceLight,
+    linear_lights, surface_highlight_lines as library_surface_lines,
+};
+use pyo3::prelude::*;
+use serde_json::{Value, json};
+use std::path::PathBuf;
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(read_surfaces, m)?)?;
+    m.add_function(wrap_pyfunction!(write_surfaces, m)?)?;
+    m.add_function(wrap_pyfunction!(surface_highlight_lines, m)?)?;
+    m.add_function(wrap_pyfunction!(fair_surface, m)?)?;
+    Ok(())
+}
+
+/// All surfaces of a .json or .igs/.iges file (the CLI's
+/// `surface::load_surfaces`), errors naming the file.
+fn load_surfaces(path: &std::path::Path) -> Res<Vec<BSplineSurface>> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default();
+    let named = |msg: String| {
+        let shown = path.display().to_string();
+        if msg.contains(&shown) {
+            msg
+        } else {
+            format!("{shown}: {msg}")
+        }
+    };
+    let surfaces = match ext.as_str() {
+        "json" => read_surfaces_json(path).map_err(|e| file_failure(&e, named(e.to_string())))?,
+        "igs" | "iges" => read_iges(path)
+            .map_err(|e| file_failure(&e, named(e.to_string())))?
+            .surfaces
+            .into_iter()
+            .map(|s| s.surface)
+            .collect(),
+        _ => {
+            return Err(Failure::bad(format!(
+                "{}: unknown surface format (expected extension .json, .igs or .iges)",
+                path.display()
+            )));
+        }
+    };
+    if surfaces.is_empty() {
+        return Err(Failure::bad(format!(
+            "{}: the file holds no B-spline surface",
+            path.display()
+        )));
+    }
+    Ok(surfaces)
+}
+
+/// A file that the operating system could not open is a `File` failure,
+/// anything else about its content bad input.
+fn file_failure(e: &(dyn std::error::Error + 'static), message: String) -> Failure {
+    let mut cause: Option<&(dyn std::error::Error + 'static)> = Some(e);
+    while let Some(c) = cause {
+        if c.downcast_ref::<std::io::Error>().is_some() {
+            return Failure {
+                kind: crate::Kind::File,
+                message,
+            };
+        }
+        cause = c.source();
+    }
+    Failure::bad(message)
+}
+
+/// Surfaces from the JSON text the Python layer hands over.
+fn parse(text: &str, what: &str) -> Res<Vec<BSplineSurface>> {
+    parse_surfaces_json(text).map_err(|e| Failure::bad(format!("{what}: {e}")))
+}
+
+/// Reads a surface file; returns `{"surfaces":[...]}` JSON text.
+#[pyfunction]
+fn read_surfaces(py: Python<'_>, path: PathBuf) -> PyResult<String> {
+    let text = py.detach(|| load_surfaces(&path).map(|s| surfaces_to_json(&s)))?;
+    Ok(text)
+}
+
+/// Writes surfaces (JSON text) to a .json file atomically.
+#[pyfunction]
+fn write_surfaces(py: Python<'_>, path: PathBuf, surfaces: String) -> PyResult<()> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    if ext.as_deref() != Some("json") {
+        return Err(
+            Failure::bad(format!("{}: surfaces are written as .json", path.display())).into(),
+        );
+    }
+    let surfaces = parse(&surfaces, "surfaces")?;
+    py.detach(|| {
+        write_surfaces_json(&path, &surfaces).map_err(|e| file_failure(&e, e.to_string()))
+    })?;
+    Ok(())
+}
+
+/// One line as the CLI writes it (surface_highlight.rs `line_json`).
+fn line_json(l: &SurfaceHighlightLine, lights: &[SurfaceLight], surface: Option<usize>) -> Value {
+    let uv: Vec<[f64; 2]> = l.uv.clone();
+    let pts: Vec<[f64; 3]> = l.points.iter().map(|p| p.to_array()).collect();
+    let mut v =
+        json!({"light": l.light, "level": l.level, "closed": l.closed, "uv": uv, "points": pts});
+    if let Some(r) = l.radius {
+        v["radius"] = json!(r);
+    }
+    if let Some(SurfaceLight::Linear { index, .. }) = lights.get(l.light) {
+        v["index"] = json!(index);
+    }
+    if let Some(s) = surface {
+        v["surface"] = json!(s);
+    }
+    v
+}
+
+/// `fairline highlight SURFACES.json` (crates/fairline-cli/src/
+/// surface_highlight.rs): the lines document and the report.
+#[pyfunction]
+#[pyo3(signature = (surfaces, circle_center = None, circle_axis = None, radii = None, band = None,
+    grid = 200, surface = None, direction = None, plane_normal = None, up = "auto",
+    plane_point = None, spacing = None, lights = None, min_normal_cos = None))]
+fn surface_highlight_lines(
+    py: Python<'_>,
+    surfaces: String,
+    circle_center: Option<[f64; 3]>,
+    circle_axis: Option<[f64; 3]>,
+    radii: Option<Vec<f64>>,
+    band: Option<f64>,
+    grid: usize,
+    surface: Option<usize>,
+    direction: Option<[f64; 3]>,
+    plane_normal: Option<[f64; 3]>,
+    up: &str,
+    plane_point: Option<[f64; 3]>,
+    spacing: Option<f64>,
+    lights: Option<String>,
+    min_normal_cos: Option<f64>,
+) -> PyResult<(String, String)> {
+    if !(2..=4000).contains(&grid) {
+        return Err(Failure::bad(format!("grid must be between 2 and 4000, got {grid}")).into());
+    }
+    if let Some(b) = band
+        && !(b > 0.0 && b.is_finite())
+    {
+        return Err(Failure::bad(format!("band must be a positive number, got {b}")).into());
+    }
+    let given = [
+        circle_center.is_some(),
+        circle_axis.is_some(),
+        radii.is_some(),
+    ];
+    if given.iter().any(|&b| b) && !given.iter().all(|&b| b) {
+        return Err(Failure::bad(
+            "circular lights need circle_center, circle_axis and radii together",
+        )
+        .into());
+    }
+    let light = LightOptions::new(
+        direction,
+        plane_normal,
+        up,
+        plane_point,
+        spacing,
+        lights,
+        min_normal_cos,
+    )?;
+    let circle_center = vec3("circle_center", circle_center)?;
+    let circle_axis = vec3("circle_axis", circle_axis)?;
+    let all = parse(&surfaces, "surfaces")?;
+    let out = py.detach(move || -> Res<_> {
+        if all.is_empty() {
+            return Err(Failure::bad("surfaces: no B-spline surface given"));
+        }
+        let chosen: Vec<(usize, BSplineSurface)> = match surface {
+            Some(k) => {
+                let s = all.get(k).cloned().ok_or_else(|| {
+                    Failure::bad(format!(
+                        "surface {k} is out of range (the file holds {} surfaces)",
+                        all.len()
+                    ))
+                })?;
+                vec![(k, s)]
+            }
+            None => all.into_iter().enumerate().collect(),
+        };
+        let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+        for (_, s) in &chosen {
+            let (a, b) = s.control_bounding_box();
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
+        let mut report = Report::new("highlight");
+        report.set("surfaces", chosen.len());
+        report.set("grid", grid);
+        let opts = SurfaceHighlightOptions::default().grid(grid).band(band);
+        let circular = if let (Some(c), Some(t), Some(radii)) = (circle_center, circle_axis, radii)
+        {
+            let spec = CircularLights {
+                center: c.to_array(),
+                axis: t.to_array(),
+                radii,
+            };
+            let lights = spec.lights().map_err(highlight_error)?;
+            report.set(
+                "light",
+                json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii}),
+            );
+            Some(lights)
+        } else {
+            None
+        };
+        let array = match circular {
+            Some(_) => None,
+            None => {
+                let a = light.light_array_in_box(lo, hi)?;
+                report.set("light", json!({"kind": "linear", "array": a}));
+                Some(a)
+            }
+        };
+        let min_cos = light.min_normal_cos();
+        let results: Vec<(usize, Vec<SurfaceLight>, _)> = report.time(|| {
+            chosen
+                .iter()
+                .map(|(k, s)| {
+                    let lights: Vec<SurfaceLight> = match (&circular, array) {
+                        (Some(c), _) => c.iter().map(|l| SurfaceLight::Circular(*l)).collect(),
+                        (None, Some(a)) => linear_lights(s, a, min_cos, grid.min(400), 100),
+                        (None, None) => Vec::new(),
+                    };
+                    let h = library_surface_lines(s, &lights, &opts);
+                    (*k, lights, h)
+                })
+                .collect()
+        });
+        let multi = chosen.len() > 1;
+        let tag = |k: usize| multi.then_some(k);
+        let mut lines = Vec::new();
+        let (mut lower, mut upper) = (Vec::new(), Vec::new());
+        for (k, lights, h) in &results {
+            lines.extend(h.lines.iter().map(|l| line_json(l, lights, tag(*k))));
+            lower.extend(h.band_lower.iter().map(|l| line_json(l, lights, tag(*k))));
+            upper.extend(h.band_upper.iter().map(|l| line_json(l, lights, tag(*k))));
+        }
+        let line_count = lines.len();
+        let mut doc = json!({"lines": lines});
+        if let Some(rho) = band {
+            doc["bands"] = json!({"radius": rho, "lower": lower, "upper": upper});
+        }
+        report.set("lines", line_count);
+        report.set(
+            "closed_lines",
+            results
+                .iter()
+                .map(|(_, _, h)| h.lines.iter().filter(|l| l.closed).count())
+                .sum::<usize>(),
+        );
+        report.set(
+            "points",
+            results
+                .iter()
+                .map(|(_, _, h)| h.lines.iter().map(|l| l.uv.len()).sum::<usize>())
+                .sum::<usize>(),
+        );
+        if line_count == 0 {
+            report.warn("no highlight line pre-image was found on the surface; try other radii, --circle-center or --circle-axis");
+        }
+        Ok((doc.to_string(), report.to_json()))
+    })?;
+    Ok(out)
+}
+
+/// `fairline fair-surface` (crates/fairline-cli/src/fair_surface.rs): all
+/// surfaces with surface `surface` faired (JSON text) and the report.
+/// `lights` and `endpoints` are the JSON texts of the CLI's files.
+#[pyfunction]
+#[pyo3(signature = (surfaces, lights, endpoints, surface = 0, max_iterations = None,
+    epsilon = None, truncation = None, min_truncation = None, sample_spacing = None, grid = None,
+    method = "regularised", boundary = "fixed", keep_weight = None, fairness_weight = None))]
+fn fair_surface(
+    py: Python<'_>,
+    surfaces: String,
+    lights: String,
+    endpoints: String,
+    surface: usize,
+    max_iterations: Option<usize>,
+    epsilon: Option<f64>,
+    truncation: Option<f64>,
+    min_truncation: Option<f64>,
+    sample_spacing: Option<f64>,
+    grid: Option<usize>,
+    method: &str,
+    boundary: &str,
+    keep_weight: Option<f64>,
+    fairness_weight: Option<f64>,
+) -> PyResult<(String, String)> {
+    use fairline::fair::{
+        BoundaryControl, Endpoints, SurfaceFairError, SurfaceFairMethod, SurfaceFairOptions,
+        fair_surface as library_fair_surface,
+    };
+    let method = match method {
+        "regularised" => SurfaceFairMethod::Regularised,
+        "paper" => SurfaceFairMethod::Paper,
+        other => return Err(bad_choice("method", other, &["regularised", "paper"]).into()),
+    };
+    let boundary = match boundary {
+        "fixed" => BoundaryControl::Fixed,
+        "tangent" => BoundaryControl::FixedWithTangents,
+        "free" => BoundaryControl::Free,
+        other => {
+            return Err(bad_choice("boundary", other, &["fixed", "tangent", "free"]).into());
+        }
+    };
+    let mut all = parse(&surfaces, "surfaces")?;
+    if surface >= all.len() {
+        return Err(Failure::bad(format!(
+            "surface {surface} is out of range (the file holds {} surfaces)",
+            all.len()
+        ))
+        .into());
+    }
+    let spec: CircularLights =
+        serde_json::from_str(&lights).map_err(|e| Failure::bad(format!("lights: {e}")))?;
+    let lights: Vec<CircularLight> = spec
+        .lights()
+        .map_err(|e| Failure::bad(format!("lights: {e}")))?;
+    let ends: Endpoints =
+        serde_json::from_str(&endpoints).map_err(|e| Failure::bad(format!("endpoints: {e}")))?;
+    let d = SurfaceFairOptions::default();
+    let truncation = truncation.unwrap_or(d.truncation);
+    let min_truncation = min_truncation.unwrap_or(d.min_truncation);
+    let opts = SurfaceFairOptions {
+        grid: grid.unwrap_or(d.grid),
+        sample_spacing: sample_spacing.unwrap_or(d.sample_spacing),
+        truncation,
+        // as the CLI: a larger floor is taken as `truncation`; NaN is left
+        // for the library's option check to refuse
+        min_truncation: if min_truncation > truncation {
+            truncation
+        } else {
+            min_truncation
+        },
+        epsilon: epsilon.unwrap_or(d.epsilon),
+        max_iterations: max_iterations.unwrap_or(d.max_iterations),
+        method,
+        boundary,
+        keep_weight: keep_weight.unwrap_or(d.keep_weight),
+        fairness_weight: fairness_weight.unwrap_or(d.fairness_weight),
+        ..d
+    };
+    let out = py.detach(move || -> Res<_> {
+        let input = all[surface].clone();
+        let mut report = Report::new("fair-surface");
+        let (faired, rep) = report
+            .time(|| library_fair_surface(&input, &lights, &ends.endpoints, &opts))
+            .map_err(|e| match e {
+                SurfaceFairError::Svd | SurfaceFairError::Surface(_) => {
+                    Failure::computation(e.to_string())
+                }
+                SurfaceFairError::NothingToMove(_) => {
+                    Failure::bad(format!("{e} (boundary=\"free\")"))
+                }
+                other => Failure::bad(other.to_string()),
+            })?;
+        report.set("method", rep.method);
+        report.set("boundary", opts.boundary);
+        report.set(
+            "held_boundary_points",
+            rep.held_boundary_points
+                .iter()
+                .map(|&(i, j)| [i, j])
+                .collect::<Vec<_>>(),
+        );
+        report.set("keep_samples", rep.keep_samples);
+        report.set(
+            "snap_distances",
+            rep.targets
+                .iter()
+                .map(|t| t.snap_distance)
+                .collect::<Vec<_>>(),
+        );
+        report.set("iterations", rep.iterations.len());
+        report.set("converged", rep.converged);
+        report.set("stop", rep.stop);
+        report.set("modified_control_points", rep.modified_control_points.len());
+        report.set(
+            "modified_indices",
+            rep.modified_control_points
+                .iter()
+                .map(|&(i, j)| [i, j])
+                .collect::<Vec<_>>(),
+        );
+        report.set(
+            "residual_before",
+            json!({"max": rep.residual_before.0, "mean": rep.residual_before.1}),
+        );
+        report.set(
+            "residual_after",
+            json!({"max": rep.residual_after.0, "mean": rep.residual_after.1}),
+        );
+        report.set("history", &rep.iterations);
+        let samples: usize = rep.targets.iter().map(|t| t.samples.len()).sum();
+        report.set(
+            "jacobian",
+            json!({"rows": samples.saturating_sub(rep.undefined_samples), "cols": 3 * rep.modified_control_points.len()}),
+        );
+        report.set("undefined_samples", rep.undefined_samples);
+        report.set("knot_box", rep.knot_box);
+        report.set("max_displacement", rep.max_displacement);
+        report.set(
+            "targets",
+            rep.targets
+                .iter()
+                .map(|t| json!({"radius": t.radius, "start": t.start, "end": t.end, "tangent_start": t.tangent_start, "tangent_end": t.tangent_end, "samples": t.samples.len()}))
+                .collect::<Vec<_>>(),
+        );
+        all[surface] = faired;
+        if !rep.converged {
+            report.warn(format!(
+                "fairing did not converge ({:?} after {} iteration(s)); try --max-iterations or other endpoints",
+                rep.stop,
+                rep.iterations.len()
+            ));
+        }
+        if rep.residual_after.0 > rep.residual_before.0 {
+            report.warn(format!(
+                "the largest highlight residual got worse: {:.4e} before, {:.4e} after",
+                rep.residual_before.0, rep.residual_after.0
+            ));
+        }
+        Ok((surfaces_to_json(&all), report.to_json()))
+    })?;
+    Ok(out)
+}

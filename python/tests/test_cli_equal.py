@@ -1,0 +1,316 @@
+"""The package gives the CLI's results bit for bit on the same input: the
+same positions, curvature columns, lines, regions, surfaces and reports
+(every key except the computation time)."""
+
+from __future__ import annotations
+
+import inspect
+import json
+import re
+
+import numpy as np
+import pytest
+
+import fairline
+from conftest import cli_report, read_ply, run, same_report
+
+
+def exact(a, b):
+    """Equal shapes and bit-identical float64 values."""
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    assert a.shape == b.shape
+    assert np.array_equal(a.view(np.uint64), b.view(np.uint64)), f"largest difference {np.abs(a - b).max()}"
+
+
+# ---- reading and writing -------------------------------------------------
+
+
+def test_read_mesh_equals_an_independent_obj_parse(demo):
+    path = demo / "wavy.obj"
+    V, F = fairline.read_mesh(path)
+    vs, fs = [], []
+    for line in path.read_text().splitlines():
+        w = line.split()
+        if w[:1] == ["v"]:
+            vs.append([float(x) for x in w[1:4]])
+        elif w[:1] == ["f"]:
+            fs.append([int(x.split("/")[0]) - 1 for x in w[1:]])
+    exact(V, vs)
+    assert V.dtype == np.float64 and F.dtype == np.int64
+    assert np.array_equal(F, np.array(fs))
+
+
+def test_read_mesh_equals_an_independent_ply_parse(demo):
+    V, F = fairline.read_mesh(demo / "sphere.ply")
+    names, values, faces = read_ply(demo / "sphere.ply")
+    assert names[:3] == ["x", "y", "z"]
+    exact(V, values[:, :3])
+    assert np.array_equal(F, np.array(faces))
+
+
+@pytest.mark.parametrize("ext", ["obj", "ply", "off", "stl"])
+def test_write_mesh_writes_the_bytes_of_fairline_convert(cli, demo, tmp_path, ext):
+    src = demo / "quad-saddle.obj" if ext != "stl" else demo / "wavy.obj"
+    run(cli, "convert", src, tmp_path / f"cli.{ext}")
+    V, F = fairline.read_mesh(src)
+    fairline.write_mesh(tmp_path / f"py.{ext}", V, F)
+    assert (tmp_path / f"py.{ext}").read_bytes() == (tmp_path / f"cli.{ext}").read_bytes()
+
+
+# ---- algorithms ------------------------------------------------------------
+
+
+@pytest.mark.parametrize("method", ["rusinkiewicz", "meyer"])
+@pytest.mark.parametrize("name", ["sphere.ply", "quad-saddle.obj"])
+def test_curvature_equals_cli(cli, demo, tmp_path, method, name):
+    run(cli, "curvature", demo / name, "-o", tmp_path / "c.ply", "--method", method, "--report", tmp_path / "r.json")
+    names, values, _ = read_ply(tmp_path / "c.ply")
+    col = {n: values[:, k] for k, n in enumerate(names)}
+    V, F = fairline.read_mesh(demo / name)
+    c, report = fairline.curvature(V, F, method=method)
+    for key in ["k1", "k2", "mean", "gauss"]:
+        exact(c[key], col[key])
+    exact(c["normals"], np.column_stack([col["nx"], col["ny"], col["nz"]]))
+    exact(c["d1"], np.column_stack([col["d1x"], col["d1y"], col["d1z"]]))
+    exact(c["d2"], np.column_stack([col["d2x"], col["d2y"], col["d2z"]]))
+    same_report(report, cli_report(tmp_path / "r.json"))
+
+
+SMOOTH_CASES = [
+    ("wavy.obj", {}, []),
+    ("wavy.obj", {"method": "taubin", "iterations": 7, "pass_band": 0.05}, ["--method", "taubin", "--iterations", "7", "--pass-band", "0.05"]),
+    ("wavy.obj", {"method": "taubin", "lambda_": 0.6, "mu": -0.62}, ["--method", "taubin", "--lambda", "0.6", "--mu", "-0.62"]),
+    ("quad-saddle.obj", {"method": "laplace", "weights": "edge", "fix_boundary": True}, ["--method", "laplace", "--weights", "edge", "--fix-boundary"]),
+    ("sphere.ply", {"method": "implicit", "time_step": 2.0, "preserve_volume": True}, ["--method", "implicit", "--time-step", "2", "--preserve-volume"]),
+    ("wavy.obj", {"method": "spring"}, ["--method", "spring"]),
+    ("wavy.obj", {"method": "schneider-kobbelt", "iterations": 5}, ["--method", "schneider-kobbelt", "--iterations", "5"]),
+    ("wavy.obj", {"method": "laplace", "weights": "cotan", "tangential": True, "fixed": [0, 5, 9]}, ["--method", "laplace", "--weights", "cotan", "--tangential", "--fixed", "FIXED"]),
+    ("quad-saddle.obj", {"method": "laplace", "hierarchical_boundary": True}, ["--method", "laplace", "--hierarchical-boundary"]),
+]
+
+
+@pytest.mark.parametrize("name,kwargs,args", SMOOTH_CASES)
+def test_smooth_equals_cli(cli, demo, tmp_path, name, kwargs, args):
+    if "FIXED" in args:
+        (tmp_path / "fixed.json").write_text(json.dumps({"vertices": kwargs["fixed"]}))
+        args = [tmp_path / "fixed.json" if a == "FIXED" else a for a in args]
+    run(cli, "smooth", demo / name, *args, "-o", tmp_path / "s.ply", "--report", tmp_path / "r.json")
+    _, values, _ = read_ply(tmp_path / "s.ply")
+    V, F = fairline.read_mesh(demo / name)
+    V2, report = fairline.smooth(V, F, **kwargs)
+    exact(V2, values)
+    same_report(report, cli_report(tmp_path / "r.json"))
+
+
+def zigzag_quads(n=13):
+    """A free-form quad grid whose structure lines zigzag (the CLI demo's
+    `zigzag_freeform`)."""
+    f = lambda x, y: 0.3 * np.sin(1.5 * x) * (1.0 + 0.5 * y * y) + 0.2 * x * y
+    h = 2.0 / (n - 1)
+    V, F = [], []
+    for j in range(n):
+        for i in range(n):
+            x, y = -1 + i * h, -1 + j * h
+            if 0 < i < n - 1 and 0 < j < n - 1:
+                x += 0.2 * h if j % 2 == 0 else -0.2 * h
+                y += 0.1 * h if i % 2 == 0 else -0.1 * h
+            V.append([x, y, f(x, y)])
+    for j in range(n - 1):
+        for i in range(n - 1):
+            a = j * n + i
+            F.append([a, a + 1, a + n + 1, a + n])
+    return np.array(V), np.array(F)
+
+
+@pytest.mark.parametrize("kwargs,args", [({}, []), ({"weight": 0.005, "deviation": 0.05, "iterations": 4, "fix_boundary": True},
+                                          ["--weight", "0.005", "--deviation", "0.05", "--iterations", "4", "--fix-boundary"])])
+def test_fair_quad_equals_cli(cli, tmp_path, kwargs, args):
+    V, F = zigzag_quads()
+    fairline.write_mesh(tmp_path / "zigzag.obj", V, F)
+    run(cli, "fair-quad", tmp_path / "zigzag.obj", *args, "-o", tmp_path / "q.ply", "--report", tmp_path / "r.json")
+    _, values, _ = read_ply(tmp_path / "q.ply")
+    V2, report = fairline.fair_quad(V, F, **kwargs)
+    exact(V2, values)
+    same_report(report, cli_report(tmp_path / "r.json"))
+    assert report["max_displacement"] > 0
+    assert report["structure_energy_after"] < report["structure_energy_before"]
+
+
+@pytest.mark.parametrize("kwargs,args", [({}, []), ({"lambda_": 0.5, "solver": "cg"}, ["--lambda", "0.5", "--solver", "cg"])])
+def test_enhance_equals_cli(cli, demo, tmp_path, kwargs, args):
+    run(cli, "enhance", demo / "rounded-cube.obj", *args, "-o", tmp_path / "e.ply", "--report", tmp_path / "r.json")
+    _, values, _ = read_ply(tmp_path / "e.ply")
+    V, F = fairline.read_mesh(demo / "rounded-cube.obj")
+    V2, report = fairline.enhance(V, F, **kwargs)
+    exact(V2, values)
+    same_report(report, cli_report(tmp_path / "r.json"))
+
+
+def test_repair_equals_cli(cli, tmp_path):
+    # a dirty mesh: a duplicate face, a zero-area face, an unreferenced
+    # vertex, one face against the orientation of its neighbours
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0], [5, 5, 5], [3, 0, 0]], dtype=float)
+    F = [[0, 1, 2], [0, 2, 3], [1, 4, 2], [2, 1, 0], [4, 6, 1], [2, 4, 1]]
+    fairline.write_mesh(tmp_path / "dirty.obj", V, [list(f) for f in F])
+    run(cli, "repair", tmp_path / "dirty.obj", tmp_path / "clean.ply", "--report", tmp_path / "r.json")
+    _, values, faces = read_ply(tmp_path / "clean.ply")
+    V2, F2, report = fairline.repair(*fairline.read_mesh(tmp_path / "dirty.obj"))
+    exact(V2, values)
+    assert np.array_equal(np.asarray(F2), np.array(faces))
+    same_report(report, cli_report(tmp_path / "r.json"))
+    assert report["removed_faces"], "the dirty mesh must need repairs"
+
+
+HIGHLIGHT_CASES = [
+    ("sphere.ply", {}, []),
+    ("dented-panel.obj", {"direction": [0, 1, 0], "plane_normal": [0, 0, 1], "plane_point": [0, 0, 5], "spacing": 0.1, "band": 0.02},
+     ["--direction", "0,1,0", "--plane-normal", "0,0,1", "--plane-point", "0,0,5", "--spacing", "0.1", "--band", "0.02"]),
+    ("dented-panel.obj", {"circle_center": [0, 0, 5], "circle_axis": [0, 0, 1], "radii": [1, 2, 3], "band": 0.05},
+     ["--circle-center", "0,0,5", "--circle-axis", "0,0,1", "--radii", "1,2,3", "--band", "0.05"]),
+    ("quad-saddle.obj", {"up": "y"}, ["--up", "y"]),
+]
+
+
+def same_lines(ours, theirs):
+    assert len(ours) == len(theirs)
+    for a, b in zip(ours, theirs):
+        assert {k: v for k, v in a.items() if k not in ("points", "uv")} == {k: v for k, v in b.items() if k not in ("points", "uv")}
+        exact(a["points"], np.asarray(b["points"]).reshape(-1, 3))
+        if "uv" in b:
+            exact(a["uv"], np.asarray(b["uv"]).reshape(-1, 2))
+
+
+def same_document(ours, theirs):
+    assert ours.keys() == theirs.keys()
+    same_lines(ours["lines"], theirs["lines"])
+    if "bands" in theirs:
+        assert ours["bands"]["radius"] == theirs["bands"]["radius"]
+        same_lines(ours["bands"]["lower"], theirs["bands"]["lower"])
+        same_lines(ours["bands"]["upper"], theirs["bands"]["upper"])
+
+
+@pytest.mark.parametrize("name,kwargs,args", HIGHLIGHT_CASES)
+def test_highlight_lines_equal_cli(cli, demo, tmp_path, name, kwargs, args):
+    run(cli, "highlight", demo / name, *args, "-o", tmp_path / "l.json", "--report", tmp_path / "r.json")
+    lines, report = fairline.highlight_lines(*fairline.read_mesh(demo / name), **kwargs)
+    same_document(lines, json.loads((tmp_path / "l.json").read_text()))
+    same_report(report, cli_report(tmp_path / "r.json"))
+    assert lines["lines"], "lights that cross the mesh must give lines"
+
+
+def test_highlight_lines_from_a_lights_file_equal_cli(cli, demo, tmp_path):
+    lights = {"plane_point": [0.1, 0, 4], "plane_normal": [0, 0.1, 1], "direction": [1, 0, 0], "spacing": 0.15}
+    (tmp_path / "lights.json").write_text(json.dumps(lights))
+    run(cli, "highlight", demo / "dented-panel.obj", "--lights", tmp_path / "lights.json", "-o", tmp_path / "l.json", "--report", tmp_path / "r.json")
+    V, F = fairline.read_mesh(demo / "dented-panel.obj")
+    for given in (lights, tmp_path / "lights.json"):
+        doc, report = fairline.highlight_lines(V, F, lights=given)
+        same_document(doc, json.loads((tmp_path / "l.json").read_text()))
+        same_report(report, cli_report(tmp_path / "r.json"))
+
+
+def test_detect_equals_cli(cli, demo, tmp_path):
+    run(cli, "detect", demo / "dented-panel.obj", "-o", tmp_path / "region.json", "--report", tmp_path / "r.json")
+    faces, report = fairline.detect(*fairline.read_mesh(demo / "dented-panel.obj"))
+    assert faces.tolist() == json.loads((tmp_path / "region.json").read_text())["faces"]
+    same_report(report, cli_report(tmp_path / "r.json"))
+    assert report["regions"], "the dented panel's dent must be found"
+
+
+def test_fair_equals_cli(cli, demo, tmp_path):
+    region = demo / "dented-panel-region.json"
+    run(cli, "fair", demo / "dented-panel.obj", "--region", region, "--max-iterations", "5", "-o", tmp_path / "f.ply", "--report", tmp_path / "r.json")
+    _, values, _ = read_ply(tmp_path / "f.ply")
+    V, F = fairline.read_mesh(demo / "dented-panel.obj")
+    faces = json.loads(region.read_text())["faces"]
+    for given in (faces, {"faces": faces}, region):
+        V2, report = fairline.fair(V, F, given, max_iterations=5)
+        exact(V2, values)
+        same_report(report, cli_report(tmp_path / "r.json"), input_path=demo / "dented-panel.obj")
+    assert report["max_displacement"] > 0
+
+
+def test_fair_auto_equals_cli(cli, demo, tmp_path):
+    run(cli, "fair", demo / "dented-panel.obj", "--auto", "--max-iterations", "3", "-o", tmp_path / "f.ply", "--report", tmp_path / "r.json")
+    _, values, _ = read_ply(tmp_path / "f.ply")
+    V2, report = fairline.fair(*fairline.read_mesh(demo / "dented-panel.obj"), auto=True, max_iterations=3)
+    exact(V2, values)
+    same_report(report, cli_report(tmp_path / "r.json"), input_path=demo / "dented-panel.obj")
+
+
+# ---- B-spline surfaces -----------------------------------------------------
+
+
+def test_read_and_write_surfaces_keep_every_number(cli, demo, tmp_path):
+    path = demo / "bspline-panel-dented.json"
+    surfaces = fairline.read_surfaces(path)
+    raw = json.loads(path.read_text())["surfaces"]
+    assert len(surfaces) == len(raw)
+    exact(surfaces[0]["control_points"], raw[0]["control_points"])
+    fairline.write_surfaces(tmp_path / "copy.json", surfaces)
+    run(cli, "convert", path, tmp_path / "cli.json")
+    assert (tmp_path / "copy.json").read_bytes() == (tmp_path / "cli.json").read_bytes()
+
+
+def test_surface_highlight_lines_equal_cli(cli, demo, tmp_path):
+    args = ["--circle-center", "2,1.5,2.5", "--circle-axis", "0,0,1", "--radii", "2.4,2.6,2.8", "--grid", "120"]
+    run(cli, "highlight", demo / "bspline-panel-dented.json", *args, "-o", tmp_path / "l.json", "--report", tmp_path / "r.json")
+    surfaces = fairline.read_surfaces(demo / "bspline-panel-dented.json")
+    lines, report = fairline.surface_highlight_lines(surfaces, circle_center=[2, 1.5, 2.5], circle_axis=[0, 0, 1], radii=[2.4, 2.6, 2.8], grid=120)
+    same_document(lines, json.loads((tmp_path / "l.json").read_text()))
+    same_report(report, cli_report(tmp_path / "r.json"))
+    assert lines["lines"]
+
+
+def test_fair_surface_equals_cli(cli, demo, tmp_path):
+    lights, ends = demo / "bspline-panel-lights.json", demo / "bspline-panel-endpoints.json"
+    run(cli, "fair-surface", demo / "bspline-panel-dented.json", "--lights", lights, "--endpoints", ends, "--max-iterations", "3",
+        "-o", tmp_path / "out.json", "--report", tmp_path / "r.json")
+    surfaces = fairline.read_surfaces(demo / "bspline-panel-dented.json")
+    faired, report = fairline.fair_surface(surfaces, json.loads(lights.read_text()), ends, max_iterations=3)
+    theirs = json.loads((tmp_path / "out.json").read_text())["surfaces"]
+    exact(faired[0]["control_points"], theirs[0]["control_points"])
+    same_report(report, cli_report(tmp_path / "r.json"))
+    assert report["modified_control_points"] > 0
+    fairline.write_surfaces(tmp_path / "py.json", faired)
+    assert (tmp_path / "py.json").read_bytes() == (tmp_path / "out.json").read_bytes()
+
+
+# ---- defaults ------------------------------------------------------------------
+
+
+FUNCTIONS = {
+    "curvature": fairline.curvature,
+    "smooth": fairline.smooth,
+    "fair-quad": fairline.fair_quad,
+    "enhance": fairline.enhance,
+    "highlight": fairline.highlight_lines,
+    "detect": fairline.detect,
+    "fair": fairline.fair,
+    "fair-surface": fairline.fair_surface,
+}
+
+
+@pytest.mark.parametrize("command", sorted(FUNCTIONS))
+def test_every_default_is_the_clis(cli, command):
+    """Each option with a default in `fairline COMMAND --help` has a
+    parameter of the same name (snake_case) with the same default."""
+    text = run(cli, command, "--help").stdout
+    params = inspect.signature(FUNCTIONS[command]).parameters
+    found = 0
+    # clap prints `--name <V>` then the help text, ending in [default: x]
+    for m in re.finditer(r"--([a-z0-9-]+)(?: <[^>]+>)?\n((?:.(?!\n\s+-))*?)\[default: ([^\]]+)\]", text, re.S):
+        name, value = m.group(1).replace("-", "_"), m.group(3)
+        if name == "lambda":
+            name = "lambda_"
+        if name in ("grid",) and command == "highlight":
+            continue  # B-spline option: surface_highlight_lines has it
+        assert name in params, f"{command}: --{m.group(1)} has no parameter"
+        default = params[name].default
+        if isinstance(default, str):
+            assert default == value, f"{command} {name}: {default!r} != {value!r}"
+        else:
+            assert float(default) == float(value), f"{command} {name}: {default!r} != {value!r}"
+        found += 1
+    assert found > 0 or command == "curvature" and params["method"].default == "rusinkiewicz"

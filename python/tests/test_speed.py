@@ -1,0 +1,62 @@
+"""In-process speed against the peers: curvature on a 450 241-vertex mesh
+(the size of BENCHMARKS.md's large cases) at least 10x faster than
+libigl's ``igl.principal_curvature`` (pip package ``libigl``), measured as
+the median of repeated calls in this process. The numbers are printed
+(run pytest with ``-s`` to see them) and recorded in BENCHMARKS.md."""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+import pytest
+
+import fairline
+from conftest import need
+
+N = 671  # 671 x 671 = 450 241 vertices
+
+
+def torus(n: int = N):
+    """A closed wavy torus grid: n*n vertices, 2 n*n triangles."""
+    u = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    uu, vv = np.meshgrid(u, u, indexing="ij")
+    r = 0.35 + 0.02 * np.sin(5 * uu) * np.cos(3 * vv)
+    V = np.stack([(1 + r * np.cos(vv)) * np.cos(uu), (1 + r * np.cos(vv)) * np.sin(uu), r * np.sin(vv)], axis=-1).reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    a = (i * n + j).ravel()
+    b = (((i + 1) % n) * n + j).ravel()
+    c = (((i + 1) % n) * n + (j + 1) % n).ravel()
+    d = (i * n + (j + 1) % n).ravel()
+    F = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    return V, F
+
+
+def median_time(f, runs):
+    times = []
+    for _ in range(runs):
+        t = time.perf_counter()
+        f()
+        times.append(time.perf_counter() - t)
+    return float(np.median(times))
+
+
+@pytest.mark.skipif(os.environ.get("FAIRLINE_SKIP_SPEED") == "1", reason="FAIRLINE_SKIP_SPEED=1")
+def test_curvature_is_10x_faster_than_libigl():
+    igl = need("igl")
+    V, F = torus()
+    assert len(V) == 450_241
+    F32 = F.astype(np.int64)
+    ours = median_time(lambda: fairline.curvature(V, F), 5)
+    theirs = median_time(lambda: igl.principal_curvature(V, F32), 3)
+    # the two estimate the same quantity: mean curvature agrees in the bulk
+    c, _ = fairline.curvature(V, F)
+    _, _, k1, k2 = igl.principal_curvature(V, F32)[:4]
+    ours_h = 0.5 * (c["k1"] + c["k2"])
+    theirs_h = 0.5 * (k1 + k2)
+    # sign conventions differ between the two; compare magnitudes
+    rel = np.median(np.abs(np.abs(ours_h) - np.abs(theirs_h)) / np.abs(theirs_h))
+    print(f"\ncurvature, {len(V)} vertices: fairline {ours:.3f} s, igl.principal_curvature {theirs:.3f} s, ratio {theirs / ours:.1f}x; median relative |H| difference {rel:.2e}")
+    assert rel < 0.05
+    assert theirs >= 10 * ours, f"fairline {ours:.3f} s vs libigl {theirs:.3f} s: only {theirs / ours:.1f}x"
