@@ -293,16 +293,7 @@ def curvature(V: Any, F: Faces = None, method: str = "rusinkiewicz") -> Tuple[Di
     """
     v, indices, offsets = _mesh(V, F)
     cols, report = _native.curvature(v, indices, offsets, method=method)
-    c = dict(cols)
-    values = {
-        "normals": np.column_stack([c["nx"], c["ny"], c["nz"]]),
-        "k1": c["k1"],
-        "k2": c["k2"],
-        "mean": c["mean"],
-        "gauss": c["gauss"],
-        "d1": np.column_stack([c["d1x"], c["d1y"], c["d1z"]]),
-        "d2": np.column_stack([c["d2x"], c["d2y"], c["d2z"]]),
-    }
+    values = dict(cols)
     return values, _report(report)
 
 

@@ -44,7 +44,7 @@ type Idx<'py> = PyReadonlyArray1<'py, u32>;
 /// the CLI's do.
 #[pyfunction]
 fn read_mesh<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<SoupArrays<'py>> {
-    let soup = py.detach(|| fairline::io::read_soup(&path).map_err(Failure::from))?;
+    let soup = crate::compute(py, || fairline::io::read_soup(&path).map_err(Failure::from))?;
     Ok(soup_arrays(py, &soup))
 }
 
@@ -58,14 +58,19 @@ fn write_mesh(
     offsets: Idx<'_>,
 ) -> PyResult<()> {
     let soup = soup_from(&v, &indices, &offsets)?;
-    py.detach(|| fairline::io::write_soup(&path, &soup).map_err(Failure::from))?;
+    crate::compute(py, || {
+        fairline::io::write_soup(&path, &soup).map_err(Failure::from)
+    })?;
     Ok(())
 }
 
-/// Per-vertex curvature columns in the CLI's PLY order, plus the report.
-type CurvatureOut<'py> = (Vec<(String, Bound<'py, PyArray1<f64>>)>, String);
+/// Per-vertex curvature: (name, array) pairs — `normals`, `d1`, `d2` as
+/// (n, 3), `k1`, `k2`, `mean`, `gauss` as (n,) — plus the report.
+type CurvatureOut<'py> = (Vec<(&'static str, Bound<'py, PyAny>)>, String);
 
-/// `fairline curvature` (crates/fairline-cli/src/curvature.rs).
+/// `fairline curvature` (crates/fairline-cli/src/curvature.rs): the
+/// values of the columns the CLI writes to its PLY, one row per input
+/// vertex.
 #[pyfunction]
 #[pyo3(signature = (v, indices, offsets, method = "rusinkiewicz"))]
 fn curvature<'py>(
@@ -82,7 +87,7 @@ fn curvature<'py>(
         other => return Err(bad_choice("method", other, &["rusinkiewicz", "meyer"]).into()),
     };
     let soup = soup_from(&v, &indices, &offsets)?;
-    let (cols, report) = py.detach(|| -> Res<_> {
+    let (c, mean, gauss, n, report) = crate::compute(py, || -> Res<_> {
         let mesh = mesh_from(&soup)?;
         let mut report = Report::new("curvature");
         let (c, triangulated) = report.time(|| -> Res<_> {
@@ -96,27 +101,6 @@ fn curvature<'py>(
         })?;
         let mean = c.mean();
         let gauss = c.gauss();
-        let comp = |f: fn(&Vec3) -> f64, v: &[Vec3]| v.iter().map(f).collect::<Vec<f64>>();
-        let cols: Vec<(&str, Vec<f64>)> = vec![
-            ("nx", comp(|v| v.x, &c.normals)),
-            ("ny", comp(|v| v.y, &c.normals)),
-            ("nz", comp(|v| v.z, &c.normals)),
-            ("k1", c.k1.clone()),
-            ("k2", c.k2.clone()),
-            ("mean", mean.clone()),
-            ("gauss", gauss.clone()),
-            ("d1x", comp(|v| v.x, &c.d1)),
-            ("d1y", comp(|v| v.y, &c.d1)),
-            ("d1z", comp(|v| v.z, &c.d1)),
-            ("d2x", comp(|v| v.x, &c.d2)),
-            ("d2y", comp(|v| v.y, &c.d2)),
-            ("d2z", comp(|v| v.z, &c.d2)),
-        ];
-        // one row per input vertex, as the CLI writes them
-        let cols: Vec<(String, Vec<f64>)> = cols
-            .into_iter()
-            .map(|(n, v)| (n.to_string(), mesh.original_values(&v).to_vec()))
-            .collect();
         report.set("method", method);
         report.set("vertices", mesh.original_vertex_count());
         report.set("triangulated", triangulated);
@@ -124,13 +108,23 @@ fn curvature<'py>(
         report.set("k2", Stats::of(c.k2.iter().copied()));
         report.set("mean", Stats::of(mean.iter().copied()));
         report.set("gauss", Stats::of(gauss.iter().copied()));
-        Ok((cols, report.to_json()))
+        // one row per input vertex, as the CLI writes them (a split
+        // non-manifold vertex takes the values of the fan that kept its index)
+        let n = mesh.original_vertex_count();
+        Ok((c, mean, gauss, n, report.to_json()))
     })?;
-    let cols = cols
-        .into_iter()
-        .map(|(n, v)| (n, PyArray1::from_vec(py, v)))
-        .collect();
-    Ok((cols, report))
+    let rows = |v: &[Vec3]| positions_array(py, &v[..n.min(v.len())]).into_any();
+    let col = |v: &[f64]| PyArray1::from_slice(py, &v[..n.min(v.len())]).into_any();
+    let values = vec![
+        ("normals", rows(&c.normals)),
+        ("k1", col(&c.k1)),
+        ("k2", col(&c.k2)),
+        ("mean", col(&mean)),
+        ("gauss", col(&gauss)),
+        ("d1", rows(&c.d1)),
+        ("d2", rows(&c.d2)),
+    ];
+    Ok((values, report))
 }
 
 /// `option must be one of a, b; got x`.
@@ -233,7 +227,7 @@ fn smooth<'py>(
     }
     let soup = soup_from(&v, &indices, &offsets)?;
     let method = method.to_string();
-    let (p, report) = py.detach(move || -> Res<_> {
+    let (p, report) = crate::compute(py, move || -> Res<_> {
         let mut mesh = mesh_from(&soup)?;
         let fixed = fixed_vertices(fixed.as_deref().unwrap_or(&[]), mesh.vertex_count())?;
         let constraints = Constraints {
@@ -358,7 +352,7 @@ fn fair_quad<'py>(
         return Err(Failure::bad("deviation_factor must be positive").into());
     }
     let soup = soup_from(&v, &indices, &offsets)?;
-    let (p, report) = py.detach(move || -> Res<_> {
+    let (p, report) = crate::compute(py, move || -> Res<_> {
         let mut mesh = mesh_from(&soup)?;
         if !mesh.faces().any(|f| mesh.face_size(f) == 4) {
             return Err(Failure::bad(
@@ -425,7 +419,7 @@ fn enhance<'py>(
         }
     };
     let soup = soup_from(&v, &indices, &offsets)?;
-    let (p, report) = py.detach(move || -> Res<_> {
+    let (p, report) = crate::compute(py, move || -> Res<_> {
         let mesh = mesh_from(&soup)?;
         if !mesh.is_triangle_mesh() {
             return Err(Failure::bad(
@@ -506,7 +500,7 @@ fn repair<'py>(
     offsets: Idx<'py>,
 ) -> PyResult<(SoupArrays<'py>, String)> {
     let soup = soup_from(&v, &indices, &offsets)?;
-    let (out, report) = py.detach(move || -> Res<_> {
+    let (out, report) = crate::compute(py, move || -> Res<_> {
         let mut report = Report::new("repair");
         let repaired = report
             .time(|| fairline::mesh::repair(&soup))
@@ -518,7 +512,11 @@ fn repair<'py>(
                     report.set(&k, v);
                 }
             }
-            _ => return Err(Failure::computation("the repair report could not be written")),
+            _ => {
+                return Err(Failure::computation(
+                    "the repair report could not be written",
+                ));
+            }
         }
         if !r.orientation_conflicts.is_empty() {
             report.warn(format!(
@@ -780,7 +778,7 @@ fn highlight_lines(
     let circle_center = vec3("circle_center", circle_center)?;
     let circle_axis = vec3("circle_axis", circle_axis)?;
     let soup = soup_from(&v, &indices, &offsets)?;
-    let out = py.detach(move || -> Res<_> {
+    let out = crate::compute(py, move || -> Res<_> {
         let (mesh, _) = triangles(&soup)?;
         let mut report = Report::new("highlight");
         report.set("vertices", mesh.vertex_count());
@@ -897,7 +895,7 @@ fn detect<'py>(
         min_normal_cos,
     )?;
     let soup = soup_from(&v, &indices, &offsets)?;
-    let (faces, report) = py.detach(move || -> Res<_> {
+    let (faces, report) = crate::compute(py, move || -> Res<_> {
         let (mesh, source) = triangles(&soup)?;
         let array = light.light_array(&mesh)?;
         let d = DetectOptions::default();
@@ -1033,7 +1031,7 @@ fn fair<'py>(
     )?;
     let method = method.to_string();
     let soup = soup_from(&v, &indices, &offsets)?;
-    let out = py.detach(move || -> Res<_> {
+    let out = crate::compute(py, move || -> Res<_> {
         let mesh = mesh_from(&soup)?;
         if !mesh.is_triangle_mesh() {
             return Err(Failure::bad(
@@ -1069,8 +1067,8 @@ fn fair<'py>(
         };
         let mut report = Report::new("fair");
         let regions: Vec<Vec<FaceId>> = if let Some(text) = &region {
-            let spec = RegionSpec::from_json(text)
-                .map_err(|e| Failure::bad(format!("region: {e}")))?;
+            let spec =
+                RegionSpec::from_json(text).map_err(|e| Failure::bad(format!("region: {e}")))?;
             vec![
                 spec.faces(&mesh)
                     .map_err(|e| Failure::bad(format!("region: {e}")))?,
@@ -1139,7 +1137,8 @@ fn fair<'py>(
             ));
         }
         if first.is_none() {
-            report.warn("no region was faired (nothing detected): the output is the input unchanged");
+            report
+                .warn("no region was faired (nothing detected): the output is the input unchanged");
         }
         report.set("method", &method);
         report.set("light", array);
@@ -1180,7 +1179,10 @@ fn fair<'py>(
                     "highlight_deviation_before",
                     max("highlight_deviation_before"),
                 );
-                report.set("highlight_deviation_after", max("highlight_deviation_after"));
+                report.set(
+                    "highlight_deviation_after",
+                    max("highlight_deviation_after"),
+                );
                 report.set("max_displacement", total_moved);
                 report.set("per_region", results.clone());
             }

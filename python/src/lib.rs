@@ -120,14 +120,27 @@ pub fn soup_from(
             "V must have shape (n, 3), got {shape:?}"
         )));
     }
-    let view = v.as_array();
-    let positions: Vec<Vec3> = view
-        .rows()
-        .into_iter()
-        .map(|r| Vec3::new(r[0], r[1], r[2]))
-        .collect();
-    let indices: Vec<u32> = indices.as_array().iter().copied().collect();
-    let offsets: Vec<u32> = offsets.as_array().iter().copied().collect();
+    // contiguous arrays (what the Python layer passes) are copied in one go
+    let positions: Vec<Vec3> = match v.as_slice() {
+        Ok(flat) => flat
+            .chunks_exact(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect(),
+        Err(_) => v
+            .as_array()
+            .rows()
+            .into_iter()
+            .map(|r| Vec3::new(r[0], r[1], r[2]))
+            .collect(),
+    };
+    let copy = |a: &PyReadonlyArray1<'_, u32>| -> Vec<u32> {
+        match a.as_slice() {
+            Ok(s) => s.to_vec(),
+            Err(_) => a.as_array().iter().copied().collect(),
+        }
+    };
+    let indices = copy(indices);
+    let offsets = copy(offsets);
     if offsets.first() != Some(&0)
         || offsets.windows(2).any(|w| w[1] < w[0])
         || offsets.last().map(|&o| o as usize) != Some(indices.len())
@@ -171,6 +184,14 @@ pub fn soup_arrays<'py>(py: Python<'py>, soup: &Soup) -> SoupArrays<'py> {
         PyArray1::from_slice(py, &soup.indices),
         PyArray1::from_slice(py, &soup.offsets),
     )
+}
+
+/// Runs `f` with the GIL released, on a worker of rayon's pool as the CLI
+/// runs its commands (crates/fairline-cli/src/main.rs): the library's
+/// parallel loops then start from a worker instead of handing every loop to
+/// the pool and sleeping until it is done.
+pub fn compute<T: Send>(py: Python<'_>, f: impl FnOnce() -> Res<T> + Send) -> Res<T> {
+    py.detach(|| rayon::scope(|_| f()))
 }
 
 /// The native module.

@@ -96,7 +96,7 @@ fn parse(text: &str, what: &str) -> Res<Vec<BSplineSurface>> {
 /// Reads a surface file; returns `{"surfaces":[...]}` JSON text.
 #[pyfunction]
 fn read_surfaces(py: Python<'_>, path: PathBuf) -> PyResult<String> {
-    let text = py.detach(|| load_surfaces(&path).map(|s| surfaces_to_json(&s)))?;
+    let text = crate::compute(py, || load_surfaces(&path).map(|s| surfaces_to_json(&s)))?;
     Ok(text)
 }
 
@@ -113,7 +113,7 @@ fn write_surfaces(py: Python<'_>, path: PathBuf, surfaces: String) -> PyResult<(
         );
     }
     let surfaces = parse(&surfaces, "surfaces")?;
-    py.detach(|| {
+    crate::compute(py, || {
         write_surfaces_json(&path, &surfaces).map_err(|e| file_failure(&e, e.to_string()))
     })?;
     Ok(())
@@ -191,7 +191,7 @@ fn surface_highlight_lines(
     let circle_center = vec3("circle_center", circle_center)?;
     let circle_axis = vec3("circle_axis", circle_axis)?;
     let all = parse(&surfaces, "surfaces")?;
-    let out = py.detach(move || -> Res<_> {
+    let out = crate::compute(py, move || -> Res<_> {
         if all.is_empty() {
             return Err(Failure::bad("surfaces: no B-spline surface given"));
         }
@@ -371,7 +371,7 @@ fn fair_surface(
         fairness_weight: fairness_weight.unwrap_or(d.fairness_weight),
         ..d
     };
-    let out = py.detach(move || -> Res<_> {
+    let out = crate::compute(py, move || -> Res<_> {
         let input = all[surface].clone();
         let mut report = Report::new("fair-surface");
         let (faired, rep) = report

@@ -106,11 +106,18 @@ def cli_report(path: Path) -> dict:
 
 
 def same_report(ours: dict, theirs: dict, ignore=("time_s", "timings"), input_path=None) -> None:
-    """Every key equal (numbers bit for bit) except computation times.
+    """Every key equal (numbers bit for bit) except computation times (at
+    any depth: fair-surface's history has one per iteration).
     Warnings the CLI starts with `INPUT: ` (naming its input file) are
     compared without that prefix: arrays have no file name."""
-    a = {k: v for k, v in ours.items() if k not in ignore}
-    b = {k: v for k, v in theirs.items() if k not in ignore}
+    def strip(v):
+        if isinstance(v, dict):
+            return {k: strip(x) for k, x in v.items() if k not in ignore}
+        if isinstance(v, list):
+            return [strip(x) for x in v]
+        return v
+
+    a, b = strip(ours), strip(theirs)
     if input_path is not None and "warnings" in b:
         prefix = f"{input_path}: "
         b["warnings"] = [w[len(prefix):] if w.startswith(prefix) else w for w in b["warnings"]]
