@@ -402,7 +402,7 @@ pub fn write_iges(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::Vec3;
     use crate::bspline::tests::{Rng, full_circle, torus};
@@ -475,7 +475,7 @@ mod tests {
     /// A random rational surface of degrees (3, 5) with interior knots and
     /// full-precision coordinates, trimmed by a rectangle with a circular
     /// hole and a triangular hole (a loop of three separate lines).
-    fn generated() -> Vec<BSplineSurface> {
+    pub(crate) fn generated() -> Vec<BSplineSurface> {
         let mut rng = Rng::new(20);
         let (nu, nv) = (7, 8);
         let knots = |n: usize, p: usize, rng: &mut Rng| {

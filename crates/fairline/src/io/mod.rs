@@ -22,6 +22,8 @@ mod obj;
 mod off;
 mod ply;
 mod stl;
+pub mod step;
+pub mod surface_file;
 pub mod units;
 
 use std::fmt;
