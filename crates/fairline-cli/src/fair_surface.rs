@@ -125,7 +125,12 @@ fn to_cli(e: SurfaceFairError) -> anyhow::Error {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    check_ext(&args.output, "json", "-o")?;
+    if !crate::surface::is_surface_path(&args.output) {
+        return Err(bad_input(format!(
+            "{}: -o must name a surface file (.json, .igs/.iges or .step/.stp)",
+            args.output.display()
+        )));
+    }
     if let Some(p) = &args.png {
         check_ext(p, "png", "--png")?;
     }

@@ -209,7 +209,11 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
             surfaces.len()
         );
         let _ = writeln!(out, "control points      {control_points}");
-        let _ = writeln!(out, "unit                {}", unit.as_deref().unwrap_or("(none)"));
+        let _ = writeln!(
+            out,
+            "unit                {}",
+            unit.as_deref().unwrap_or("(none)")
+        );
         let _ = writeln!(out, "bounding box        {lo:?} .. {hi:?} (control points)");
         let _ = writeln!(out, "area                {area} (trimmed faces)");
         print_stdout(&out)?;

@@ -7,9 +7,9 @@
 mod common;
 
 use common::{json, ok, run, s, tmp};
+use fairline::Vec3;
 use fairline::bspline::{BSplineSurface, TrimCurve, TrimLoop, read_surfaces_json};
 use fairline::io::surface_file::read_surface_file;
-use fairline::Vec3;
 
 /// A rational trimmed patch and an untrimmed bicubic one.
 fn part() -> Vec<BSplineSurface> {
@@ -78,8 +78,14 @@ fn convert_between_json_iges_and_step_keeps_every_number() {
     let info = d.join("info.json");
     ok(&run(&["info", s(&stp), "--report", s(&info)]));
     let r = json(&info);
-    assert_eq!((r["surfaces"].as_u64(), r["trimmed"].as_u64()), (Some(2), Some(1)));
-    assert_eq!((r["rational"].as_u64(), r["unit"].as_str()), (Some(1), Some("MM")));
+    assert_eq!(
+        (r["surfaces"].as_u64(), r["trimmed"].as_u64()),
+        (Some(2), Some(1))
+    );
+    assert_eq!(
+        (r["rational"].as_u64(), r["unit"].as_str()),
+        (Some(1), Some("MM"))
+    );
     let area = r["area"].as_f64().unwrap();
     let want: f64 = part()
         .iter()
@@ -137,7 +143,10 @@ fn bad_step_input_exits_2_naming_the_entity() {
     let o = run(&["convert", s(&f), s(&out)]);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("bad.stp") && err.contains("#5 OFFSET_SURFACE"), "{err}");
+    assert!(
+        err.contains("bad.stp") && err.contains("#5 OFFSET_SURFACE"),
+        "{err}"
+    );
     assert!(!out.exists());
     let o = run(&["convert", s(&d.join("missing.step")), s(&out)]);
     assert_eq!(o.status.code(), Some(2));

@@ -518,14 +518,11 @@ pub(crate) mod tests {
             .with_trims(vec![
                 TrimLoop::polygon(&[[0.05, 0.05], [0.95, 0.05], [0.95, 0.95], [0.05, 0.95]])
                     .unwrap(),
-                TrimLoop {
-                    curves: vec![hole],
-                },
+                TrimLoop { curves: vec![hole] },
                 triangle,
             ])
             .unwrap();
-        let polynomial =
-            BSplineSurface::from_flat(3, 5, ku, kv, [nu, nv], pts, None).unwrap();
+        let polynomial = BSplineSurface::from_flat(3, 5, ku, kv, [nu, nv], pts, None).unwrap();
         vec![rational, trimmed, polynomial, torus(3.0, 1.0)]
     }
 
@@ -569,7 +566,11 @@ pub(crate) mod tests {
             product: "caf\u{e9}".into(),
             ..options()
         };
-        assert!(surfaces_to_iges(s, &bad).unwrap_err().contains("product name"));
+        assert!(
+            surfaces_to_iges(s, &bad)
+                .unwrap_err()
+                .contains("product name")
+        );
         let dir = std::env::temp_dir().join(format!("fairline-iges-write-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("out.igs");

@@ -21,8 +21,8 @@ pub mod iges_write;
 mod obj;
 mod off;
 mod ply;
-mod stl;
 pub mod step;
+mod stl;
 pub mod surface_file;
 pub mod units;
 

@@ -15,8 +15,7 @@ use super::iges_write::{IgesWriteOptions, write_iges};
 use super::step::{StepError, StepWriteOptions, read_step, write_step};
 use super::units::LengthUnit;
 use crate::bspline::{
-    BSplineSurface, IgesError, SurfaceJsonError, read_iges, read_surfaces_json,
-    write_surfaces_json,
+    BSplineSurface, IgesError, SurfaceJsonError, read_iges, read_surfaces_json, write_surfaces_json,
 };
 
 /// A surface file format.
@@ -152,7 +151,8 @@ mod tests {
     #[test]
     fn surface_files_round_trip_through_every_format() {
         let surfaces = crate::io::iges_write::tests::generated();
-        let dir = std::env::temp_dir().join(format!("fairline-surface-file-{}", std::process::id()));
+        let dir =
+            std::env::temp_dir().join(format!("fairline-surface-file-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         for name in ["a.json", "a.IGS", "a.iges", "a.step", "a.stp"] {
             let p = dir.join(name);
@@ -162,7 +162,9 @@ mod tests {
             let want = (!name.ends_with("json")).then(LengthUnit::inch);
             assert_eq!(back.unit, want, "{name}");
         }
-        let err = read_surface_file(dir.join("a.obj")).unwrap_err().to_string();
+        let err = read_surface_file(dir.join("a.obj"))
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("unknown surface format"), "{err}");
         assert!(write_surface_file(dir.join("a.txt"), &surfaces, None).is_err());
         std::fs::remove_dir_all(&dir).unwrap();

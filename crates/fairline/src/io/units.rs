@@ -94,7 +94,10 @@ mod tests {
 
     #[test]
     fn units_iges_names_and_flags() {
-        assert_eq!(LengthUnit::from_iges_name("mm"), Some(LengthUnit::millimetre()));
+        assert_eq!(
+            LengthUnit::from_iges_name("mm"),
+            Some(LengthUnit::millimetre())
+        );
         assert_eq!(LengthUnit::from_iges_name("INCH"), Some(LengthUnit::inch()));
         assert_eq!(LengthUnit::from_iges_name("parsec"), None);
         assert_eq!(LengthUnit::millimetre().iges_flag(), 2);

@@ -94,7 +94,8 @@ impl ArcMap {
     /// per radian.
     pub fn new(a0: f64, a1: f64, scale: f64) -> Self {
         let sweep = a1 - a0;
-        let arcs = ((sweep.abs() / std::f64::consts::FRAC_PI_2 - 1e-9).ceil() as usize).clamp(1, 64);
+        let arcs =
+            ((sweep.abs() / std::f64::consts::FRAC_PI_2 - 1e-9).ceil() as usize).clamp(1, 64);
         Self {
             start: a0,
             sweep,
@@ -178,7 +179,12 @@ pub fn ellipse_arc(c: Vec3, x: Vec3, y: Vec3, rx: f64, ry: f64, map: &ArcMap) ->
 /// the unit `z`, through the angles of `map` measured from the profile's own
 /// position (Piegl & Tiller A8.1): `u` is the angle direction, `v` the
 /// profile's parameter. Control points `P_ij` are laid out `i` along u.
-pub fn revolve(c: Vec3, z: Vec3, profile: &Nurbs3, map: &ArcMap) -> (Vec<f64>, Vec<Vec3>, Vec<f64>) {
+pub fn revolve(
+    c: Vec3,
+    z: Vec3,
+    profile: &Nurbs3,
+    map: &ArcMap,
+) -> (Vec<f64>, Vec<Vec3>, Vec<f64>) {
     let ctl = map.controls();
     let nv = profile.points.len();
     let mut points = Vec::with_capacity(ctl.len() * nv);

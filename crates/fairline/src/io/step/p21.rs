@@ -168,7 +168,10 @@ impl<'a> Lexer<'a> {
                 Ok(())
             }
             Some(x) => self.err(format!("expected `{}`, found `{}`", c as char, x as char)),
-            None => self.err(format!("expected `{}`, found the end of the file", c as char)),
+            None => self.err(format!(
+                "expected `{}`, found the end of the file",
+                c as char
+            )),
         }
     }
 
@@ -263,7 +266,11 @@ impl<'a> Lexer<'a> {
                 self.pos += 1;
                 Ok(Value::Binary(b))
             }
-            b'.' if self.s.get(self.pos + 1).is_some_and(u8::is_ascii_alphabetic) => {
+            b'.' if self
+                .s
+                .get(self.pos + 1)
+                .is_some_and(u8::is_ascii_alphabetic) =>
+            {
                 self.pos += 1;
                 let start = self.pos;
                 while self
@@ -452,7 +459,11 @@ fn data_section(lx: &mut Lexer<'_>, ex: &mut Exchange) -> Res<()> {
             parts.push((name, params));
         }
         lx.expect(b';')?;
-        if ex.instances.insert(id, Instance { id, parts, line }).is_some() {
+        if ex
+            .instances
+            .insert(id, Instance { id, parts, line })
+            .is_some()
+        {
             return Err(SyntaxError {
                 line,
                 message: format!("#{id} is defined twice"),
@@ -499,7 +510,11 @@ mod tests {
         assert_eq!(ex.instances[&3].parts[0].1[0].number(), Some(25.4));
         assert_eq!(
             ex.instances[&4].parts[0].1,
-            vec![Value::Unset, Value::Binary("0FF".into()), Value::List(vec![])]
+            vec![
+                Value::Unset,
+                Value::Binary("0FF".into()),
+                Value::List(vec![])
+            ]
         );
     }
 
@@ -517,9 +532,15 @@ mod tests {
             ")".repeat(10_000)
         );
         assert!(bad(&deep).message.contains("nest deeper"));
-        assert!(bad("ISO-10303-21;DATA;#1=A(1e999);ENDSEC;END-ISO-10303-21;")
-            .message
-            .contains("finite"));
-        assert!(bad("ISO-10303-21;DATA;#1=A('x);").message.contains("never closed"));
+        assert!(
+            bad("ISO-10303-21;DATA;#1=A(1e999);ENDSEC;END-ISO-10303-21;")
+                .message
+                .contains("finite")
+        );
+        assert!(
+            bad("ISO-10303-21;DATA;#1=A('x);")
+                .message
+                .contains("never closed")
+        );
     }
 }

@@ -64,6 +64,10 @@ pub struct StepImport {
 
 type R<T> = Result<T, StepError>;
 
+/// The map from natural coordinates of an analytic face to the parameters
+/// of its NURBS.
+type ToUv = Box<dyn Fn(f64, f64) -> [f64; 2]>;
+
 /// A 3-D (or 2-D, `z = 0`) curve of the file.
 #[derive(Clone, Debug)]
 enum Curve {
@@ -183,8 +187,12 @@ impl<'a> Reader<'a> {
     }
 
     fn at<'v>(&self, i: &Instance, p: &'v [Value], k: usize) -> R<&'v Value> {
-        p.get(k)
-            .ok_or_else(|| self.err(i, format!("has {} parameters, needs at least {}", p.len(), k + 1)))
+        p.get(k).ok_or_else(|| {
+            self.err(
+                i,
+                format!("has {} parameters, needs at least {}", p.len(), k + 1),
+            )
+        })
     }
 
     fn num(&self, i: &Instance, p: &[Value], k: usize) -> R<f64> {
@@ -239,7 +247,10 @@ impl<'a> Reader<'a> {
         l.iter()
             .map(|v| match v {
                 Value::Ref(id) => self.get(*id, i),
-                _ => Err(self.err(i, "a list holds something other than entity references".into())),
+                _ => Err(self.err(
+                    i,
+                    "a list holds something other than entity references".into(),
+                )),
             })
             .collect()
     }
@@ -290,7 +301,7 @@ impl<'a> Reader<'a> {
         let xr = xr.unwrap_or_else(|| if z.x.abs() < 0.9 { Vec3::X } else { Vec3::Y });
         let x = xr - xr.dot(z) * z;
         let l = x.length();
-        if !(l > 1e-12) {
+        if l <= 1e-12 || !l.is_finite() {
             return Err(self.err(i, "the reference direction is parallel to the axis".into()));
         }
         let x = x / l;
@@ -313,14 +324,23 @@ impl<'a> Reader<'a> {
                 let (c, x, y, _) = self.placement(self.refer(i, p, 1)?)?;
                 let rx = self.num(i, p, 2)?;
                 let ry = if i.type_name() == "ELLIPSE" { self.num(i, p, 3)? } else { rx };
-                if !(rx > 0.0 && ry > 0.0) {
+                if rx <= 0.0 || ry <= 0.0 {
                     return Err(self.err(i, "the radius is not positive".into()));
                 }
                 Ok(Curve::Conic { c, x, y, rx, ry })
             }
             "SURFACE_CURVE" | "SEAM_CURVE" => {
-                let p = self.params(i, &["SURFACE_CURVE", "SEAM_CURVE"])?;
-                self.curve(self.refer(i, p, 1)?)
+                // Resolved iteratively: a file may chain (or cycle) them.
+                let mut c = i;
+                for _ in 0..16 {
+                    let p = self.params(c, &["SURFACE_CURVE", "SEAM_CURVE"])?;
+                    let next = self.refer(c, p, 1)?;
+                    if !matches!(next.type_name(), "SURFACE_CURVE" | "SEAM_CURVE") {
+                        return self.curve(next);
+                    }
+                    c = next;
+                }
+                Err(self.err(i, "surface curves nest too deeply".into()))
             }
             _ if i.is("B_SPLINE_CURVE_WITH_KNOTS") => Ok(Curve::Spline(self.bspline_curve(i)?)),
             t => Err(self.err(
@@ -335,7 +355,10 @@ impl<'a> Reader<'a> {
         let m = self.numbers(i, mults)?;
         let v = self.numbers(i, values)?;
         if m.len() != v.len() {
-            return Err(self.err(i, format!("{} multiplicities for {} knots", m.len(), v.len())));
+            return Err(self.err(
+                i,
+                format!("{} multiplicities for {} knots", m.len(), v.len()),
+            ));
         }
         let mut out = Vec::new();
         for (&m, &k) in m.iter().zip(&v) {
@@ -520,7 +543,12 @@ impl<'a> Reader<'a> {
     fn edge_nurbs(&self, e: &EdgeUse) -> Option<Nurbs3> {
         let [t0, t1] = self.edge_range(e);
         match &e.curve {
-            Curve::Line { .. } => Some(Nurbs3::segment(e.curve.eval(t0), e.curve.eval(t1), 0.0, 1.0)),
+            Curve::Line { .. } => Some(Nurbs3::segment(
+                e.curve.eval(t0),
+                e.curve.eval(t1),
+                0.0,
+                1.0,
+            )),
             Curve::Conic { c, x, y, rx, ry } => {
                 let map = ArcMap::new(t0.min(t1), t0.max(t1), 1.0);
                 let a = ellipse_arc(*c, *x, *y, *rx, *ry, &map);
@@ -674,11 +702,18 @@ fn unit_size(ex: &Exchange, i: &Instance, depth: usize) -> Option<f64> {
         return Some(prefix);
     }
     if let Some(cb) = i.part("CONVERSION_BASED_UNIT") {
-        let Some(Value::Ref(m)) = cb.get(1) else { return None };
+        let Some(Value::Ref(m)) = cb.get(1) else {
+            return None;
+        };
         let m = ex.instances.get(m)?;
-        let (_, p) = m.parts.iter().find(|(n, _)| n.contains("MEASURE_WITH_UNIT"))?;
+        let (_, p) = m
+            .parts
+            .iter()
+            .find(|(n, _)| n.contains("MEASURE_WITH_UNIT"))?;
         let factor = p.first()?.number()?;
-        let Some(Value::Ref(u)) = p.get(1) else { return None };
+        let Some(Value::Ref(u)) = p.get(1) else {
+            return None;
+        };
         let base = unit_size(ex, ex.instances.get(u)?, depth + 1)?;
         return Some(factor * base).filter(|x| x.is_finite() && *x > 0.0);
     }
@@ -810,8 +845,12 @@ impl<'a> Reader<'a> {
         };
         for a in assoc {
             let Value::Ref(pid) = a else { continue };
-            let Some(pc) = self.ex.instances.get(pid) else { continue };
-            let Some(pp) = pc.part("PCURVE") else { continue };
+            let Some(pc) = self.ex.instances.get(pid) else {
+                continue;
+            };
+            let Some(pp) = pc.part("PCURVE") else {
+                continue;
+            };
             if !matches!(pp.get(1), Some(Value::Ref(b)) if *b == sid) {
                 continue;
             }
@@ -868,14 +907,15 @@ impl<'a> Reader<'a> {
             let [t0, t1] = if e.closed {
                 if e.forward { span } else { [span[1], span[0]] }
             } else {
-                let param = |q: Vec3| {
-                    nearest_param(span[0], span[1], 400, |t| on_surface(t).distance(q))
-                };
+                let param =
+                    |q: Vec3| nearest_param(span[0], span[1], 400, |t| on_surface(t).distance(q));
                 [param(e.start), param(e.end)]
             };
             if let Curve::Line { .. } = &curve {
                 let (a, b) = (curve.eval(t0), curve.eval(t1));
-                return Ok(Some(TrimCurve::line([a.x, a.y], [b.x, b.y]).map_err(|m| self.err(c2, m))?));
+                return Ok(Some(
+                    TrimCurve::line([a.x, a.y], [b.x, b.y]).map_err(|m| self.err(c2, m))?,
+                ));
             }
             let n = 256;
             let pts: Vec<[f64; 2]> = (0..=n)
@@ -945,21 +985,31 @@ impl<'a> Reader<'a> {
                 let vp = self.params(v, &["VECTOR"])?;
                 let d = self.direction(self.refer(v, vp, 1)?)?;
                 let profile = self.whole_nurbs(ci, &curve)?;
-                Ok(((Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z), Analytic::Extrusion { profile, d }))
+                Ok((
+                    (Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z),
+                    Analytic::Extrusion { profile, d },
+                ))
             }
             _ => {
                 let frame = self.placement(self.refer(si, p, 1)?)?;
                 let kind = match t {
                     "PLANE" => Analytic::Plane,
-                    "CYLINDRICAL_SURFACE" => Analytic::Cylinder { r: positive(self.num(si, p, 2)?, "radius")? },
+                    "CYLINDRICAL_SURFACE" => Analytic::Cylinder {
+                        r: positive(self.num(si, p, 2)?, "radius")?,
+                    },
                     "CONICAL_SURFACE" => {
                         let a = self.num(si, p, 3)? * self.angle;
-                        if !(a.abs() < 0.5 * PI - 1e-9) {
+                        if a.abs() >= 0.5 * PI - 1e-9 {
                             return Err(self.err(si, format!("semi-angle {a} rad")));
                         }
-                        Analytic::Cone { r: self.num(si, p, 2)?, tan: a.tan() }
+                        Analytic::Cone {
+                            r: self.num(si, p, 2)?,
+                            tan: a.tan(),
+                        }
                     }
-                    "SPHERICAL_SURFACE" => Analytic::Sphere { r: positive(self.num(si, p, 2)?, "radius")? },
+                    "SPHERICAL_SURFACE" => Analytic::Sphere {
+                        r: positive(self.num(si, p, 2)?, "radius")?,
+                    },
                     _ => Analytic::Torus {
                         big: positive(self.num(si, p, 2)?, "major radius")?,
                         small: positive(self.num(si, p, 3)?, "minor radius")?,
@@ -974,7 +1024,14 @@ impl<'a> Reader<'a> {
     fn whole_nurbs(&self, ci: &Instance, c: &Curve) -> R<Nurbs3> {
         match c {
             Curve::Spline(n) => Ok(n.clone()),
-            Curve::Conic { c, x, y, rx, ry } => Ok(ellipse_arc(*c, *x, *y, *rx, *ry, &ArcMap::new(0.0, TAU, 1.0))),
+            Curve::Conic { c, x, y, rx, ry } => Ok(ellipse_arc(
+                *c,
+                *x,
+                *y,
+                *rx,
+                *ry,
+                &ArcMap::new(0.0, TAU, 1.0),
+            )),
             Curve::Line { .. } => Err(self.err(
                 ci,
                 "an unbounded LINE cannot be swept into a bounded surface".into(),
@@ -984,18 +1041,42 @@ impl<'a> Reader<'a> {
 
     /// An analytic face: natural coordinates of the bounds, the NURBS over
     /// their extent, and the bounds mapped into its parameters.
-    fn analytic_face(&self, f: &Instance, si: &'a Instance, loops: &[(bool, Vec<EdgeUse>)]) -> R<BSplineSurface> {
+    fn analytic_face(
+        &self,
+        f: &Instance,
+        si: &'a Instance,
+        loops: &[(bool, Vec<EdgeUse>)],
+    ) -> R<BSplineSurface> {
         let ((o, x, y, z), kind) = self.analytic(si)?;
         if loops.is_empty() {
-            return Err(self.err(f, "a face on an unbounded surface needs at least one edge loop".into()));
+            return Err(self.err(
+                f,
+                "a face on an unbounded surface needs at least one edge loop".into(),
+            ));
         }
         if let Analytic::Plane = kind {
             return self.plane_face(f, (o, x, y, z), loops);
         }
         // Natural coordinates (a, b): a is the angle about the axis (or the
         // profile parameter of an extrusion), b the second coordinate.
-        let wraps_b = matches!(kind, Analytic::Torus { .. });
-        let wraps_a = !matches!(kind, Analytic::Extrusion { .. });
+        // Periods of the coordinates: angles wrap by 2π, the parameter of a
+        // closed swept profile by its domain length.
+        let closed_period = |n: &Nurbs3| {
+            let [t0, t1] = n.domain();
+            (n.points.first() == n.points.last()).then_some(t1 - t0)
+        };
+        let (period_a, period_b) = match &kind {
+            Analytic::Torus { .. } => (Some(TAU), Some(TAU)),
+            Analytic::Revolution { profile } => (Some(TAU), closed_period(profile)),
+            Analytic::Extrusion { profile, .. } => (closed_period(profile), None),
+            _ => (Some(TAU), None),
+        };
+        let wrap = |x: f64, near: f64, period: Option<f64>| match period {
+            Some(p) if p > 0.0 => x + p * ((near - x) / p).round(),
+            _ => x,
+        };
+        let winds =
+            |x: f64, y: f64, period: Option<f64>| period.is_some_and(|p| (x - y).abs() > 0.5 * p);
         let natural = |q: Vec3| -> (f64, f64, bool) {
             let d = q - o;
             let (lx, ly, h) = (d.dot(x), d.dot(y), d.dot(z));
@@ -1008,7 +1089,7 @@ impl<'a> Reader<'a> {
                 Analytic::Torus { big, .. } => (a, h.atan2(rho - big), on_axis),
                 Analytic::Revolution { profile, .. } => {
                     let [t0, t1] = profile.domain();
-                    let t = nearest_param(t0, t1, 64 * profile.points.len(), |t| {
+                    let t = nearest_param(t0, t1, (16 * profile.points.len()).min(2000), |t| {
                         let p = profile.eval(t) - o;
                         let ph = p.dot(z);
                         let pr = (p - ph * z).length();
@@ -1019,7 +1100,9 @@ impl<'a> Reader<'a> {
                 Analytic::Extrusion { profile, d: dir } => {
                     let [t0, t1] = profile.domain();
                     let perp = |v: Vec3| v - v.dot(*dir) * *dir;
-                    let t = nearest_param(t0, t1, 64 * profile.points.len(), |t| perp(q - profile.eval(t)).length());
+                    let t = nearest_param(t0, t1, (16 * profile.points.len()).min(2000), |t| {
+                        perp(q - profile.eval(t)).length()
+                    });
                     (t, (q - profile.eval(t)).dot(*dir), false)
                 }
                 Analytic::Plane => (lx, ly, false),
@@ -1029,7 +1112,8 @@ impl<'a> Reader<'a> {
         for (_, edges) in loops {
             let mut pts: Vec<(f64, f64, bool)> = Vec::new();
             for e in edges {
-                let mut ep: Vec<(f64, f64, bool)> = self.edge_points(e).into_iter().map(natural).collect();
+                let mut ep: Vec<(f64, f64, bool)> =
+                    self.edge_points(e).into_iter().map(natural).collect();
                 if !pts.is_empty() {
                     ep.remove(0);
                 }
@@ -1050,17 +1134,13 @@ impl<'a> Reader<'a> {
             for (a, b, _) in pts {
                 let (mut a, mut b) = (a, b);
                 if let Some(&(pa, pb)) = out.last() {
-                    if wraps_a {
-                        a += TAU * ((pa - a) / TAU).round();
-                    }
-                    if wraps_b {
-                        b += TAU * ((pb - b) / TAU).round();
-                    }
+                    a = wrap(a, pa, period_a);
+                    b = wrap(b, pb, period_b);
                 }
                 out.push((a, b));
             }
             if let (Some(f0), Some(l0)) = (out.first(), out.last())
-                && ((wraps_a && (f0.0 - l0.0).abs() > PI) || (wraps_b && (f0.1 - l0.1).abs() > PI))
+                && (winds(f0.0, l0.0, period_a) || winds(f0.1, l0.1, period_b))
             {
                 return Err(self.err(
                     f,
@@ -1072,51 +1152,121 @@ impl<'a> Reader<'a> {
         // Holes shifted by whole turns next to the outer loop.
         let mean = |l: &[(f64, f64)]| {
             let n = l.len().max(1) as f64;
-            (l.iter().map(|p| p.0).sum::<f64>() / n, l.iter().map(|p| p.1).sum::<f64>() / n)
+            (
+                l.iter().map(|p| p.0).sum::<f64>() / n,
+                l.iter().map(|p| p.1).sum::<f64>() / n,
+            )
         };
         let (ma, mb) = mean(&nat[0]);
         for l in nat.iter_mut().skip(1) {
             let (la, lb) = mean(l);
-            let sa = if wraps_a { TAU * ((ma - la) / TAU).round() } else { 0.0 };
-            let sb = if wraps_b { TAU * ((mb - lb) / TAU).round() } else { 0.0 };
+            let (sa, sb) = (wrap(la, ma, period_a) - la, wrap(lb, mb, period_b) - lb);
             for p in l.iter_mut() {
                 p.0 += sa;
                 p.1 += sb;
             }
         }
         let all = nat.iter().flatten();
-        let (mut a0, mut a1, mut b0, mut b1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+        let (mut a0, mut a1, mut b0, mut b1) = (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        );
         for &(a, b) in all {
             a0 = a0.min(a);
             a1 = a1.max(a);
             b0 = b0.min(b);
             b1 = b1.max(b);
         }
-        if !(a1 > a0 && b1 > b0) || (wraps_a && a1 - a0 > TAU + 1e-6) || (wraps_b && b1 - b0 > TAU + 1e-6) {
+        let too_wide = |lo: f64, hi: f64, period: Option<f64>| {
+            period.is_some_and(|p| hi - lo > p * (1.0 + 1e-9))
+        };
+        if a1 <= a0 || b1 <= b0 || too_wide(a0, a1, period_a) || too_wide(b0, b1, period_b) {
             return Err(self.err(f, "the bounds enclose no area on the surface".into()));
         }
-        let (a1, b1) = (if wraps_a { a1.min(a0 + TAU) } else { a1 }, if wraps_b { b1.min(b0 + TAU) } else { b1 });
+        let clip = |lo: f64, hi: f64, period: Option<f64>| period.map_or(hi, |p| hi.min(lo + p));
+        let (a1, b1) = (clip(a0, a1, period_a), clip(b0, b1, period_b));
+        // A swept profile's parameter must stay in its domain: shift whole
+        // periods into it, or refuse a face across the profile's seam.
+        let profile_coordinate = match &kind {
+            Analytic::Revolution { profile } => Some((1, profile.domain(), period_b)),
+            Analytic::Extrusion { profile, .. } => Some((0, profile.domain(), period_a)),
+            _ => None,
+        };
+        let (mut a0, mut a1, mut b0, mut b1) = (a0, a1, b0, b1);
+        if let Some((axis, [t0, t1], period)) = profile_coordinate {
+            let (lo, hi) = if axis == 0 { (a0, a1) } else { (b0, b1) };
+            let shift = match period {
+                Some(p) if p > 0.0 && lo < t0 - 1e-9 * p => p * ((t0 - lo) / p).ceil(),
+                Some(p) if p > 0.0 && lo >= t1 => -p * ((lo - t0) / p).floor(),
+                _ => 0.0,
+            };
+            let tol = 1e-9 * (t1 - t0);
+            if lo + shift < t0 - tol || hi + shift > t1 + tol {
+                return Err(self.err(f, "the face crosses the seam of its swept profile".into()));
+            }
+            for p in nat.iter_mut().flatten() {
+                if axis == 0 {
+                    p.0 += shift;
+                } else {
+                    p.1 += shift;
+                }
+            }
+            if axis == 0 {
+                (a0, a1) = (a0 + shift, a1 + shift);
+            } else {
+                (b0, b1) = (b0 + shift, b1 + shift);
+            }
+        }
         // The NURBS (u along a, v along b) and the map of (a, b) to (u, v).
-        let (surface, to_uv): (BSplineSurface, Box<dyn Fn(f64, f64) -> [f64; 2]>) = match &kind {
+        let (surface, to_uv): (BSplineSurface, ToUv) = match &kind {
             Analytic::Cylinder { r } | Analytic::Cone { r, .. } => {
-                let tan = if let Analytic::Cone { tan, .. } = kind { tan } else { 0.0 };
+                let tan = if let Analytic::Cone { tan, .. } = kind {
+                    tan
+                } else {
+                    0.0
+                };
                 let radius = |h: f64| r + h * tan;
                 let scale = radius(b0).abs().max(radius(b1).abs()).max(1e-300);
                 let map = ArcMap::new(a0, a1, scale);
-                let profile = Nurbs3::segment(o + radius(b0) * x + b0 * z, o + radius(b1) * x + b1 * z, b0, b1);
-                (self.revolved(f, o, z, &profile, &map)?, Box::new(move |a, b| [map.param(a), b]))
+                let profile = Nurbs3::segment(
+                    o + radius(b0) * x + b0 * z,
+                    o + radius(b1) * x + b1 * z,
+                    b0,
+                    b1,
+                );
+                (
+                    self.revolved(f, o, z, &profile, &map)?,
+                    Box::new(move |a, b| [map.param(a), b]),
+                )
             }
             Analytic::Sphere { r } | Analytic::Torus { small: r, .. } => {
-                let big = if let Analytic::Torus { big, .. } = kind { big } else { 0.0 };
+                let big = if let Analytic::Torus { big, .. } = kind {
+                    big
+                } else {
+                    0.0
+                };
                 let amap = ArcMap::new(a0, a1, big + r);
                 let bmap = ArcMap::new(b0, b1, *r);
                 let profile = arc(o + big * x, x, z, *r, &bmap);
-                (self.revolved(f, o, z, &profile, &amap)?, Box::new(move |a, b| [amap.param(a), bmap.param(b)]))
+                (
+                    self.revolved(f, o, z, &profile, &amap)?,
+                    Box::new(move |a, b| [amap.param(a), bmap.param(b)]),
+                )
             }
             Analytic::Revolution { profile, .. } => {
-                let scale = profile.points.iter().map(|q| ((*q - o) - (*q - o).dot(z) * z).length()).fold(0.0, f64::max).max(1e-300);
+                let scale = profile
+                    .points
+                    .iter()
+                    .map(|q| ((*q - o) - (*q - o).dot(z) * z).length())
+                    .fold(0.0, f64::max)
+                    .max(1e-300);
                 let map = ArcMap::new(a0, a1, scale);
-                (self.revolved(f, o, z, profile, &map)?, Box::new(move |a, b| [map.param(a), b]))
+                (
+                    self.revolved(f, o, z, profile, &map)?,
+                    Box::new(move |a, b| [map.param(a), b]),
+                )
             }
             Analytic::Extrusion { profile, d, .. } => {
                 let n = profile.points.len();
@@ -1153,16 +1303,36 @@ impl<'a> Reader<'a> {
         self.attach(f, surface, trims, loops[0].0)
     }
 
-    fn revolved(&self, f: &Instance, o: Vec3, z: Vec3, profile: &Nurbs3, map: &ArcMap) -> R<BSplineSurface> {
+    fn revolved(
+        &self,
+        f: &Instance,
+        o: Vec3,
+        z: Vec3,
+        profile: &Nurbs3,
+        map: &ArcMap,
+    ) -> R<BSplineSurface> {
         let (ku, pts, w) = revolve(o, z, profile, map);
         let nu = ku.len() - 3;
-        BSplineSurface::from_flat(2, profile.degree, ku, profile.knots.clone(), [nu, profile.points.len()], pts, Some(w))
-            .map_err(|e| self.err(f, e.to_string()))
+        BSplineSurface::from_flat(
+            2,
+            profile.degree,
+            ku,
+            profile.knots.clone(),
+            [nu, profile.points.len()],
+            pts,
+            Some(w),
+        )
+        .map_err(|e| self.err(f, e.to_string()))
     }
 
     /// A planar face: a bilinear patch over the bounds' box in the plane's
     /// frame, the bounds mapped exactly (affine map of their NURBS).
-    fn plane_face(&self, f: &Instance, (o, x, y, _z): (Vec3, Vec3, Vec3, Vec3), loops: &[(bool, Vec<EdgeUse>)]) -> R<BSplineSurface> {
+    fn plane_face(
+        &self,
+        f: &Instance,
+        (o, x, y, _z): (Vec3, Vec3, Vec3, Vec3),
+        loops: &[(bool, Vec<EdgeUse>)],
+    ) -> R<BSplineSurface> {
         let local = |q: Vec3| [(q - o).dot(x), (q - o).dot(y)];
         let mut curves: Vec<Vec<TrimCurve>> = Vec::new();
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
@@ -1170,9 +1340,15 @@ impl<'a> Reader<'a> {
             let mut l = Vec::new();
             for e in edges {
                 let c = match self.edge_nurbs(e) {
-                    Some(n) => TrimCurve::new(n.degree, n.knots, n.points.iter().map(|q| local(*q)).collect(), n.weights),
+                    Some(n) => TrimCurve::new(
+                        n.degree,
+                        n.knots,
+                        n.points.iter().map(|q| local(*q)).collect(),
+                        n.weights,
+                    ),
                     None => {
-                        let pts: Vec<[f64; 2]> = self.edge_points(e).into_iter().map(local).collect();
+                        let pts: Vec<[f64; 2]> =
+                            self.edge_points(e).into_iter().map(local).collect();
                         polyline(&pts)
                     }
                 }
@@ -1186,7 +1362,7 @@ impl<'a> Reader<'a> {
             }
             curves.push(l);
         }
-        if !(hi[0] > lo[0] && hi[1] > lo[1]) {
+        if hi[0] <= lo[0] || hi[1] <= lo[1] {
             return Err(self.err(f, "the bounds enclose no area".into()));
         }
         let corner = |a: f64, b: f64| o + a * x + b * y;
@@ -1196,11 +1372,19 @@ impl<'a> Reader<'a> {
             vec![lo[0], lo[0], hi[0], hi[0]],
             vec![lo[1], lo[1], hi[1], hi[1]],
             [2, 2],
-            vec![corner(lo[0], lo[1]), corner(lo[0], hi[1]), corner(hi[0], lo[1]), corner(hi[0], hi[1])],
+            vec![
+                corner(lo[0], lo[1]),
+                corner(lo[0], hi[1]),
+                corner(hi[0], lo[1]),
+                corner(hi[0], hi[1]),
+            ],
             None,
         )
         .map_err(|e| self.err(f, e.to_string()))?;
-        let trims = curves.into_iter().map(|curves| TrimLoop { curves }).collect();
+        let trims = curves
+            .into_iter()
+            .map(|curves| TrimLoop { curves })
+            .collect();
         self.attach(f, s, trims, loops[0].0)
     }
 }
@@ -1254,7 +1438,7 @@ pub(crate) fn invert_point(s: &BSplineSurface, q: Vec3, guess: Option<(f64, f64)
             let b = d.su.dot(d.sv) + r.dot(d.suv);
             let c = d.sv.length_squared() + r.dot(d.svv);
             let det = a * c - b * b;
-            if !(det.abs() > 1e-300) || !det.is_finite() {
+            if det.abs() <= 1e-300 || !det.is_finite() {
                 break;
             }
             let du = (c * f - b * g) / det;

@@ -84,7 +84,11 @@ impl Data {
     }
 
     fn point2(&mut self, p: [f64; 2]) -> u64 {
-        self.add(format!("CARTESIAN_POINT('',({},{}))", real(p[0]), real(p[1])))
+        self.add(format!(
+            "CARTESIAN_POINT('',({},{}))",
+            real(p[0]),
+            real(p[1])
+        ))
     }
 }
 
@@ -233,14 +237,15 @@ fn face(d: &mut Data, s: &BSplineSurface, ctx2: u64) -> u64 {
             let dr = d.add(format!("DEFINITIONAL_REPRESENTATION('',(#{c2}),#{ctx2})"));
             let pc = d.add(format!("PCURVE('',#{sid},#{dr})"));
             let sc = d.add(format!("SURFACE_CURVE('',#{c3},(#{pc}),.PCURVE_S1.)"));
-            let ec = d.add(format!(
-                "EDGE_CURVE('',#{},#{v_end},#{sc},.T.)",
-                verts[k]
-            ));
+            let ec = d.add(format!("EDGE_CURVE('',#{},#{v_end},#{sc},.T.)", verts[k]));
             edges.push(d.add(format!("ORIENTED_EDGE('',*,*,#{ec},.T.)")));
         }
         let el = d.add(format!("EDGE_LOOP('',{})", refs(&edges)));
-        let kind = if l == 0 { "FACE_OUTER_BOUND" } else { "FACE_BOUND" };
+        let kind = if l == 0 {
+            "FACE_OUTER_BOUND"
+        } else {
+            "FACE_BOUND"
+        };
         bounds.push(d.add(format!("{kind}('',#{el},.T.)")));
     }
     d.add(format!("ADVANCED_FACE('',{},#{sid},.T.)", refs(&bounds)))
@@ -298,7 +303,10 @@ pub fn surfaces_to_step(
         }
     }
     if !(options.unit.metres > 0.0 && options.unit.metres.is_finite()) {
-        return Err(format!("the unit size {} m is not positive", options.unit.metres));
+        return Err(format!(
+            "the unit size {} m is not positive",
+            options.unit.metres
+        ));
     }
     let product = step_string(&options.product);
     let mut d = Data::default();
@@ -309,7 +317,9 @@ pub fn surfaces_to_step(
     let pc = d.add(format!("PRODUCT_CONTEXT('',#{app},'mechanical')"));
     let prod = d.add(format!("PRODUCT('{product}','{product}','',(#{pc}))"));
     let pdf = d.add(format!("PRODUCT_DEFINITION_FORMATION('','',#{prod})"));
-    let pdc = d.add(format!("PRODUCT_DEFINITION_CONTEXT('part definition',#{app},'design')"));
+    let pdc = d.add(format!(
+        "PRODUCT_DEFINITION_CONTEXT('part definition',#{app},'design')"
+    ));
     let pd = d.add(format!("PRODUCT_DEFINITION('design','',#{pdf},#{pdc})"));
     let pds = d.add(format!("PRODUCT_DEFINITION_SHAPE('','',#{pd})"));
     let lu = length_unit(&mut d, &options.unit);
