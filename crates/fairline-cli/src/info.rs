@@ -12,10 +12,11 @@ use std::path::PathBuf;
 /// bounding box, edge lengths. Works on broken (non-manifold, invalid) files
 /// too: it reports the defects instead of refusing. For a surface file
 /// (.json, .igs/.iges, .step/.stp): surfaces, trimmed and rational ones,
-/// degrees, control points, length unit, bounding box and total trimmed area.
+/// degrees, control points, length unit, bounding box and (`--area`) the
+/// total trimmed area.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Example:\n  fairline demo --out fairline-demo\n  fairline info fairline-demo/sphere.ply --json\n  fairline info fairline-demo/bspline-panel-dented.json"
+    after_help = "Example:\n  fairline demo --out fairline-demo\n  fairline info fairline-demo/sphere.ply --json\n  fairline info fairline-demo/bspline-panel-dented.json --area"
 )]
 pub struct Args {
     /// Mesh file (.obj .ply .off .stl) or surface file (.json .igs .step).
@@ -23,6 +24,11 @@ pub struct Args {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Surface files: also compute the total trimmed area (Gauss quadrature
+    /// over a 64 × 64 trimmed tessellation per surface; about 10 s for the
+    /// 247 faces of the impeller on a loaded 2-core machine).
+    #[arg(long)]
+    pub area: bool,
     /// Also write the JSON to this file.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
@@ -155,11 +161,13 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
     let file = crate::surface::load_surface_file(&args.mesh)?;
     let surfaces = &file.surfaces;
     let mut report = Report::new("info");
-    let area: f64 = report.time(|| {
-        surfaces
-            .iter()
-            .map(|s| fairline::bspline::trimmed_area(s, 64, 64))
-            .sum()
+    let area: Option<f64> = report.time(|| {
+        args.area.then(|| {
+            surfaces
+                .iter()
+                .map(|s| fairline::bspline::trimmed_area(s, 64, 64))
+                .sum()
+        })
     });
     let (mut lo, mut hi) = (
         fairline::Vec3::splat(f64::INFINITY),
@@ -184,7 +192,9 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
     report.set("rational", rational);
     report.set("max_degree", max_degree);
     report.set("control_points", control_points);
-    report.set("area", area);
+    if let Some(a) = area {
+        report.set("area", a);
+    }
     report.set("bounding_box", [lo.to_array(), hi.to_array()]);
     if let Some(u) = &unit {
         report.set("unit", u);
@@ -215,7 +225,9 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
             unit.as_deref().unwrap_or("(none)")
         );
         let _ = writeln!(out, "bounding box        {lo:?} .. {hi:?} (control points)");
-        let _ = writeln!(out, "area                {area} (trimmed faces)");
+        if let Some(a) = area {
+            let _ = writeln!(out, "area                {a} (trimmed faces)");
+        }
         print_stdout(&out)?;
     }
     job.finish(summary);

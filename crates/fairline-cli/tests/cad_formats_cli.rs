@@ -76,7 +76,7 @@ fn convert_between_json_iges_and_step_keeps_every_number() {
     ok(&run(&["convert", s(&stp), s(&mesh)]));
     // `info` describes a surface file.
     let info = d.join("info.json");
-    ok(&run(&["info", s(&stp), "--report", s(&info)]));
+    ok(&run(&["info", s(&stp), "--area", "--report", s(&info)]));
     let r = json(&info);
     assert_eq!(
         (r["surfaces"].as_u64(), r["trimmed"].as_u64()),

@@ -471,13 +471,8 @@ fn step_reader_never_panics_on_mutations() {
 
 /// Edges of the quarter (0 ≤ angle ≤ 90°) of a surface of revolution about
 /// z between two parallel circles: `(r0, z0)` and `(r1, z1)`, the
-/// generators in the planes y = 0 and x = 0 given by `generator`.
-fn quarter_loop(
-    f: &mut File,
-    (r0, z0): (f64, f64),
-    (r1, z1): (f64, f64),
-    generator: &mut dyn FnMut(&mut File, [f64; 3], [f64; 3], u64, u64) -> u64,
-) -> u64 {
+/// generators straight lines in the planes y = 0 and x = 0.
+fn quarter_loop(f: &mut File, (r0, z0): (f64, f64), (r1, z1): (f64, f64)) -> u64 {
     let (a, b) = ([r0, 0.0, z0], [0.0, r0, z0]);
     let (c, dd) = ([0.0, r1, z1], [r1, 0.0, z1]);
     let (va, vb, vc, vd) = (f.vertex(a), f.vertex(b), f.vertex(c), f.vertex(dd));
@@ -490,7 +485,7 @@ fn quarter_loop(
         vb,
         true,
     );
-    let side1 = generator(f, b, c, vb, vc);
+    let side1 = f.line(b, c, vb, vc);
     let top = f.circle(
         [0.0, 0.0, z1],
         [0.0, 0.0, 1.0],
@@ -500,7 +495,7 @@ fn quarter_loop(
         vc,
         true,
     );
-    let side0 = generator(f, a, dd, va, vd);
+    let side0 = f.line(a, dd, va, vd);
     f.bound(
         &[(bottom, true), (side1, true), (top, false), (side0, false)],
         true,
@@ -527,9 +522,7 @@ fn step_cone_torus_revolution_and_extrusion_faces_have_exact_areas() {
     let cone = f.add(&format!("CONICAL_SURFACE('',#{frame},1.,30.)"));
     let t = (PI / 6.0).tan();
     let r1 = 1.0 + 2.0 * t;
-    let b = quarter_loop(&mut f, (1.0, 0.0), (r1, 2.0), &mut |f, a, b, va, vb| {
-        f.line(a, b, va, vb)
-    });
+    let b = quarter_loop(&mut f, (1.0, 0.0), (r1, 2.0));
     f.face(&[b], cone);
     let imp = parse_step(&f.text()).unwrap();
     let slant = 2.0 / (PI / 6.0).cos();
@@ -616,9 +609,7 @@ fn step_cone_torus_revolution_and_extrusion_faces_have_exact_areas() {
     let (o, z) = (f.point([0.0; 3]), f.dir([0.0, 0.0, 1.0]));
     let axis = f.add(&format!("AXIS1_PLACEMENT('',#{o},#{z})"));
     let rev = f.add(&format!("SURFACE_OF_REVOLUTION('',#{profile},#{axis})"));
-    let b = quarter_loop(&mut f, (1.0, 0.0), (2.0, 2.0), &mut |f, a, b, va, vb| {
-        f.line(a, b, va, vb)
-    });
+    let b = quarter_loop(&mut f, (1.0, 0.0), (2.0, 2.0));
     f.face(&[b], rev);
     let imp = parse_step(&f.text()).unwrap();
     assert_close(
@@ -635,9 +626,7 @@ fn step_cone_torus_revolution_and_extrusion_faces_have_exact_areas() {
     let z = f.dir([0.0, 0.0, 1.0]);
     let vec = f.add(&format!("VECTOR('',#{z},1.)"));
     let ext = f.add(&format!("SURFACE_OF_LINEAR_EXTRUSION('',#{circle},#{vec})"));
-    let b = quarter_loop(&mut f, (2.0, 0.0), (2.0, 3.0), &mut |f, a, b, va, vb| {
-        f.line(a, b, va, vb)
-    });
+    let b = quarter_loop(&mut f, (2.0, 0.0), (2.0, 3.0));
     f.face(&[b], ext);
     let imp = parse_step(&f.text()).unwrap();
     // Lateral area 2π·r·h over four.
