@@ -8,16 +8,18 @@ use std::path::PathBuf;
 /// Converts between mesh formats by extension (.obj .ply .off .stl). Polygons
 /// are kept where the format allows (STL is triangulated). Coordinates are
 /// written exactly (shortest round-trip decimal, or binary doubles in PLY).
-/// B-spline surfaces (.igs/.iges, .json) convert to surface JSON (all
-/// entity-128 surfaces, exact), or to a mesh (tessellated, 64 × 64 per surface).
+/// B-spline surfaces (.json, .igs/.iges, .step/.stp) convert between these
+/// three formats by extension, exactly (control points, knots, weights and
+/// trimming curves bit-identical; the length unit kept), or to a mesh
+/// (tessellated, 64 × 64 per surface).
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline convert fairline-demo/wavy.obj wavy.ply\n  fairline convert fairline-demo/bspline-panel-dented.json panel-mesh.obj"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline convert fairline-demo/wavy.obj wavy.ply\n  fairline convert fairline-demo/bspline-panel-dented.json panel-mesh.obj\n  fairline convert fairline-demo/bspline-panel-dented.json panel.igs\n  fairline convert fairline-demo/bspline-panel-dented.json panel.step"
 )]
 pub struct Args {
-    /// Input mesh.
+    /// Input mesh or surface file.
     pub input: PathBuf,
-    /// Output mesh; never the input file.
+    /// Output mesh or surface file; never the input file.
     pub output: PathBuf,
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
@@ -31,25 +33,26 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--report", args.report.as_deref())
         .check()?;
     if crate::surface::is_surface_path(&args.input) {
-        let surfaces = crate::surface::load_surfaces(&args.input)?;
+        let input = crate::surface::load_surface_file(&args.input)?;
+        let surfaces = input.surfaces;
         let mut report = Report::new("convert");
         report.set("surfaces", surfaces.len());
+        report.set(
+            "trimmed",
+            surfaces.iter().filter(|s| s.is_trimmed()).count(),
+        );
         if crate::surface::is_surface_path(&args.output) {
-            let ext = args
-                .output
-                .extension()
-                .and_then(|e| e.to_str())
-                .unwrap_or("");
-            if !ext.eq_ignore_ascii_case("json") {
-                return Err(crate::common::bad_input(format!(
-                    "{}: surfaces are written as .json (IGES output is not supported)",
-                    args.output.display()
-                )));
-            }
-            fairline::bspline::write_surfaces_json(&args.output, &surfaces)?;
+            fairline::io::surface_file::write_surface_file(
+                &args.output,
+                &surfaces,
+                input.unit.as_ref(),
+            )?;
             report.write(args.report.as_deref())?;
-            job.finish(format_args!("{} surface(s) converted", surfaces.len()));
-            return Ok(());
+            job.finish(format_args!(
+                "{} surface(s) converted ({} trimmed)",
+                surfaces.len(),
+                surfaces.iter().filter(|s| s.is_trimmed()).count()
+            ));
         } else {
             let mesh = crate::surface::tessellated_mesh(&surfaces, 64)?;
             report.set("vertices", mesh.vertex_count());

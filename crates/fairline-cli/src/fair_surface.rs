@@ -29,7 +29,9 @@ use std::path::PathBuf;
 /// wavier; `--method paper` is the paper's Gauss–Newton with a truncated
 /// SVD. Control points on the patch boundary stay fixed unless `--boundary
 /// free`. All other control points are written back bit-identical. Output: the surface file (all
-/// surfaces of the input, surface --surface replaced), as JSON.
+/// surfaces of the input, surface --surface replaced, trims kept) as JSON,
+/// IGES (.igs/.iges) or STEP (.step/.stp) by the extension of -o; IGES and
+/// STEP keep the input's length unit.
 ///
 /// LIGHTS.json: {"center":[x,y,z],"axis":[x,y,z],"radii":[r1,...]};
 /// ENDPOINTS.json: {"endpoints":[{"radius":r,"start":[u,v],"end":[u,v]},...]}.
@@ -38,7 +40,7 @@ use std::path::PathBuf;
     after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline fair-surface fairline-demo/bspline-panel-dented.json --lights fairline-demo/bspline-panel-lights.json --endpoints fairline-demo/bspline-panel-endpoints.json -o panel-faired.json --report fair.json --png fair.png --svg uv.svg"
 )]
 pub struct Args {
-    /// Input surface (.json or .igs/.iges).
+    /// Input surface (.json, .igs/.iges or .step/.stp).
     pub surface_file: PathBuf,
     /// Circular lights JSON.
     #[arg(long, value_name = "LIGHTS.json")]
@@ -46,8 +48,8 @@ pub struct Args {
     /// Endpoints JSON.
     #[arg(long, value_name = "ENDPOINTS.json")]
     pub endpoints: PathBuf,
-    /// Output surface JSON.
-    #[arg(short, long, value_name = "OUT.json")]
+    /// Output surfaces: .json, .igs/.iges or .step/.stp.
+    #[arg(short, long, value_name = "OUT.json|igs|step")]
     pub output: PathBuf,
     /// Which surface of the file to fair.
     #[arg(long, default_value_t = 0, value_name = "K")]
@@ -123,7 +125,12 @@ fn to_cli(e: SurfaceFairError) -> anyhow::Error {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    check_ext(&args.output, "json", "-o")?;
+    if !crate::surface::is_surface_path(&args.output) {
+        return Err(bad_input(format!(
+            "{}: -o must name a surface file (.json, .igs/.iges or .step/.stp)",
+            args.output.display()
+        )));
+    }
     if let Some(p) = &args.png {
         check_ext(p, "png", "--png")?;
     }
@@ -139,7 +146,9 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--svg", args.svg.as_deref())
         .output_opt("--report", args.report.as_deref())
         .check()?;
-    let mut surfaces = crate::surface::load_surfaces(&args.surface_file)?;
+    let input = crate::surface::load_surface_file(&args.surface_file)?;
+    let unit = input.unit;
+    let mut surfaces = input.surfaces;
     if args.surface >= surfaces.len() {
         return Err(bad_input(format!(
             "{}: --surface {} is out of range (the file holds {} surfaces)",
@@ -343,7 +352,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     surfaces[args.surface] = faired;
-    write_surfaces_json(&args.output, &surfaces)?;
+    fairline::io::surface_file::write_surface_file(&args.output, &surfaces, unit.as_ref())?;
     if !rep.converged {
         report.warn(format!(
             "fairing did not converge ({:?} after {} iteration(s)); try --max-iterations or other endpoints",

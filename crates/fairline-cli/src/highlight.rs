@@ -154,12 +154,7 @@ pub fn to_input_error(e: HighlightError) -> anyhow::Error {
 /// Reads a mesh and triangulates polygons; also returns, for each
 /// triangle, the input face it came from (None when nothing changed).
 pub fn read_triangles(path: &Path) -> Result<(SurfaceMesh, Option<Vec<FaceId>>)> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    if ext == "json" || ext == "igs" || ext == "iges" {
+    if crate::surface::is_surface_path(path) {
         return Err(bad_input(format!(
             "{}: B-spline surfaces are not handled by this command yet; give a mesh (.obj .ply .off .stl)",
             path.display()
@@ -186,7 +181,7 @@ pub fn read_triangles(path: &Path) -> Result<(SurfaceMesh, Option<Vec<FaceId>>)>
 /// (circular lines also carry "radius"; bands under "bands"), or OBJ `l`
 /// polylines (groups lines, band_lower, band_upper).
 ///
-/// B-spline surfaces (.json, .igs/.iges) are handled as in Nishiyama et al.
+/// B-spline surfaces (.json, .igs/.iges, .step/.stp) are handled as in Nishiyama et al.
 /// §2: d_s sampled on a --grid × --grid (u, v) grid, contoured by marching
 /// squares, refined onto the true zero; JSON lines carry "uv" and "points".
 #[derive(clap::Args, Debug)]

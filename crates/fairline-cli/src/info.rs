@@ -1,4 +1,5 @@
-//! `fairline info`: counts and defects of a mesh file.
+//! `fairline info`: counts and defects of a mesh file, or the contents of a
+//! surface file (.json, .igs/.iges, .step/.stp).
 
 use crate::common::Report;
 use crate::output::{Job, print_stdout};
@@ -9,17 +10,25 @@ use std::path::PathBuf;
 /// Counts and defects of a mesh: vertices, faces, edges, boundary loops,
 /// non-manifold edges and vertices, components, genus, degenerate faces,
 /// bounding box, edge lengths. Works on broken (non-manifold, invalid) files
-/// too: it reports the defects instead of refusing.
+/// too: it reports the defects instead of refusing. For a surface file
+/// (.json, .igs/.iges, .step/.stp): surfaces, trimmed and rational ones,
+/// degrees, control points, length unit, bounding box and (`--area`) the
+/// total trimmed area.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Example:\n  fairline demo --out fairline-demo\n  fairline info fairline-demo/sphere.ply --json"
+    after_help = "Example:\n  fairline demo --out fairline-demo\n  fairline info fairline-demo/sphere.ply --json\n  fairline info fairline-demo/bspline-panel-dented.json --area"
 )]
 pub struct Args {
-    /// Mesh file (.obj .ply .off .stl).
+    /// Mesh file (.obj .ply .off .stl) or surface file (.json .igs .step).
     pub mesh: PathBuf,
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Surface files: also compute the total trimmed area (Gauss quadrature
+    /// over a 64 × 64 trimmed tessellation per surface; about 10 s for the
+    /// 247 faces of the impeller on a loaded 2-core machine).
+    #[arg(long)]
+    pub area: bool,
     /// Also write the JSON to this file.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
@@ -30,6 +39,9 @@ pub fn run(args: Args) -> Result<()> {
         .input(&args.mesh)
         .output_opt("--report", args.report.as_deref())
         .check()?;
+    if crate::surface::is_surface_path(&args.mesh) {
+        return surface_info(&args, &job);
+    }
     let soup = fairline::io::read_soup(&args.mesh)?;
     let mut report = Report::new("info");
     let info = report.time(|| fairline::mesh::inspect(&soup));
@@ -140,6 +152,84 @@ hint                run `fairline repair {} OUT` to repair it",
         ),
     };
     print_stdout(&out)?;
+    job.finish(summary);
+    Ok(())
+}
+
+/// `info` of a surface file: what it holds, in its own unit.
+fn surface_info(args: &Args, job: &Job) -> Result<()> {
+    let file = crate::surface::load_surface_file(&args.mesh)?;
+    let surfaces = &file.surfaces;
+    let mut report = Report::new("info");
+    let area: Option<f64> = report.time(|| {
+        args.area.then(|| {
+            surfaces
+                .iter()
+                .map(|s| fairline::bspline::trimmed_area(s, 64, 64))
+                .sum()
+        })
+    });
+    let (mut lo, mut hi) = (
+        fairline::Vec3::splat(f64::INFINITY),
+        fairline::Vec3::splat(f64::NEG_INFINITY),
+    );
+    for s in surfaces {
+        let (a, b) = s.control_bounding_box();
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    let trimmed = surfaces.iter().filter(|s| s.is_trimmed()).count();
+    let rational = surfaces.iter().filter(|s| s.is_rational()).count();
+    let max_degree = surfaces
+        .iter()
+        .map(|s| s.degree_u().max(s.degree_v()))
+        .max()
+        .unwrap_or(0);
+    let control_points: usize = surfaces.iter().map(|s| s.control_points().len()).sum();
+    let unit = file.unit.as_ref().map(|u| u.name.clone());
+    report.set("surfaces", surfaces.len());
+    report.set("trimmed", trimmed);
+    report.set("rational", rational);
+    report.set("max_degree", max_degree);
+    report.set("control_points", control_points);
+    if let Some(a) = area {
+        report.set("area", a);
+    }
+    report.set("bounding_box", [lo.to_array(), hi.to_array()]);
+    if let Some(u) = &unit {
+        report.set("unit", u);
+    }
+    report.write(args.report.as_deref())?;
+    let summary = format!(
+        "{}: {} surface(s), {trimmed} trimmed, {rational} rational",
+        args.mesh.display(),
+        surfaces.len()
+    );
+    if args.json {
+        print_stdout(&format!(
+            "{}\n",
+            serde_json::to_string_pretty(&report.to_json())?
+        ))?;
+    } else {
+        let mut out = String::new();
+        let _ = writeln!(out, "file                {}", args.mesh.display());
+        let _ = writeln!(
+            out,
+            "surfaces            {} ({trimmed} trimmed, {rational} rational, degree <= {max_degree})",
+            surfaces.len()
+        );
+        let _ = writeln!(out, "control points      {control_points}");
+        let _ = writeln!(
+            out,
+            "unit                {}",
+            unit.as_deref().unwrap_or("(none)")
+        );
+        let _ = writeln!(out, "bounding box        {lo:?} .. {hi:?} (control points)");
+        if let Some(a) = area {
+            let _ = writeln!(out, "area                {a} (trimmed faces)");
+        }
+        print_stdout(&out)?;
+    }
     job.finish(summary);
     Ok(())
 }

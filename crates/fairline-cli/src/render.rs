@@ -34,7 +34,7 @@ pub enum Scalar {
     after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline render fairline-demo/sphere.ply --png sphere.png\n  fairline render fairline-demo/rounded-cube.obj --png cube-mean.png --scalar mean --view 1,0.3,-0.5 --size 1600x1200\n  fairline render fairline-demo/dented-panel.obj --png panel-lines.png --highlight --plane-normal 0,0,1 --direction 0,1,0 --spacing 0.05"
 )]
 pub struct Args {
-    /// Mesh (.obj .ply .off .stl) or surface (.json .igs).
+    /// Mesh (.obj .ply .off .stl) or surface (.json .igs .step).
     pub input: PathBuf,
     /// Output PNG.
     #[arg(long, value_name = "IMG.png")]

@@ -1,47 +1,34 @@
-//! Loading B-spline surfaces from the command line (.json or .igs/.iges)
-//! and turning them into meshes for drawing.
+//! Loading B-spline surfaces from the command line (.json, .igs/.iges or
+//! .step/.stp, by extension through `fairline::io::surface_file`) and
+//! turning them into meshes for drawing.
 
 use crate::common::bad_input;
 use anyhow::Result;
 use fairline::SurfaceMesh;
-use fairline::bspline::{BSplineSurface, read_iges, read_surfaces_json, tessellate};
+use fairline::bspline::{BSplineSurface, tessellate};
+use fairline::io::surface_file::{SurfaceFile, SurfaceFormat, read_surface_file};
 use std::path::Path;
 
-/// True when the path names a surface file (.json, .igs, .iges).
+/// True when the path names a surface file (.json, .igs/.iges, .step/.stp).
 pub fn is_surface_path(path: &Path) -> bool {
-    matches!(
-        path.extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase())
-            .as_deref(),
-        Some("json" | "igs" | "iges")
-    )
+    SurfaceFormat::from_path(path).is_some()
 }
 
-/// All surfaces of a JSON or IGES file.
-pub fn load_surfaces(path: &Path) -> Result<Vec<BSplineSurface>> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .unwrap_or_default();
-    let surfaces = if ext == "json" {
-        read_surfaces_json(path).map_err(|e| crate::output::name_file(path, e))?
-    } else {
-        read_iges(path)
-            .map_err(|e| crate::output::name_file(path, e))?
-            .surfaces
-            .into_iter()
-            .map(|s| s.surface)
-            .collect()
-    };
-    if surfaces.is_empty() {
+/// All surfaces of a JSON, IGES or STEP file, with the file's length unit.
+pub fn load_surface_file(path: &Path) -> Result<SurfaceFile> {
+    let file = read_surface_file(path).map_err(|e| crate::output::name_file(path, e))?;
+    if file.surfaces.is_empty() {
         return Err(bad_input(format!(
             "{}: the file holds no B-spline surface",
             path.display()
         )));
     }
-    Ok(surfaces)
+    Ok(file)
+}
+
+/// All surfaces of a JSON, IGES or STEP file.
+pub fn load_surfaces(path: &Path) -> Result<Vec<BSplineSurface>> {
+    Ok(load_surface_file(path)?.surfaces)
 }
 
 /// One surface by index (`--surface K`).

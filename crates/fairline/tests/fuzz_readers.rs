@@ -1,6 +1,6 @@
 //! Seeded, deterministic mutation fuzzing of every reader (issue #16 build
 //! item 4): OBJ, PLY (ascii, binary little- and big-endian), OFF, STL (ascii
-//! and binary), surface JSON and IGES. Valid seed files are mutated (byte and
+//! and binary), surface JSON, IGES and STEP (issue #20). Valid seed files are mutated (byte and
 //! bit flips, truncation, duplicated / deleted / swapped lines, huge numbers,
 //! NaN text, negative counts, random keywords, line-ending changes) by a
 //! xorshift generator with a fixed seed, so every run tries the same inputs.
@@ -71,6 +71,16 @@ const NASTY: &[&str] = &[
     "3.4e39",
 ];
 const KEYWORDS: &[&str] = &[
+    "#1",
+    "$",
+    ".T.",
+    "(",
+    ")",
+    "'",
+    "/*",
+    "CIRCLE",
+    "B_SPLINE_CURVE_WITH_KNOTS",
+    "ENDSEC;",
     "v",
     "f",
     "vt",
@@ -251,6 +261,21 @@ fn read_iges_bytes(bytes: &[u8], name: &str) -> Result<(), String> {
     let text = String::from_utf8_lossy(bytes);
     parse_iges(&text)
         .map(|_| ())
+        .map_err(|e| format!("{name}: {e}"))
+}
+
+fn read_step_bytes(bytes: &[u8], name: &str) -> Result<(), String> {
+    fairline::io::step::parse_step_bytes(bytes)
+        .map(|imp| {
+            for s in imp.surfaces {
+                let (u, v) = s.surface.domain_center();
+                let p = s.surface.eval(u, v);
+                assert!(
+                    p.is_finite(),
+                    "{name}: a surface that reads evaluates to {p}"
+                );
+            }
+        })
         .map_err(|e| format!("{name}: {e}"))
 }
 
@@ -474,6 +499,28 @@ fn fuzz_iges() {
     fuzz("seed.igs", &seed, 10, &read_iges_bytes);
 }
 
+/// STEP: a hand-written file of analytic faces (a plane with a hole, a half
+/// cylinder: lines, circles, vertex and edge orientation) and a written one
+/// (rational B-spline face with p-curves, an untrimmed surface, units).
+#[test]
+fn fuzz_step() {
+    let analytic = include_bytes!("corpus/step/ok-plane-hole-half-cylinder.step");
+    fuzz("seed.step", analytic, 11, &read_step_bytes);
+    let trimmed = seed_surface(true)
+        .with_trims(vec![
+            fairline::bspline::TrimLoop::polygon(&[[0.1, 0.1], [0.9, 0.2], [0.5, 0.9]]).unwrap(),
+        ])
+        .unwrap();
+    let written = fairline::io::step::surfaces_to_step(
+        &[trimmed, seed_surface(false)],
+        &fairline::io::step::StepWriteOptions::default(),
+    )
+    .unwrap();
+    let imp = fairline::io::step::parse_step(&written).unwrap();
+    assert_eq!(imp.surfaces.len(), 2, "the seed holds two surfaces");
+    fuzz("written.step", written.as_bytes(), 12, &read_step_bytes);
+}
+
 /// The inputs that once failed (`tests/corpus/<what>/<file>`), read through
 /// the file-opening functions so the file name check covers them too. Each
 /// file's expected outcome is in its name: `ok-*` must read, `err-*` must be
@@ -498,6 +545,9 @@ fn corpus_of_once_failing_inputs() {
                     .map(|_| ())
                     .map_err(|e| e.to_string()),
                 "igs" | "iges" => read_iges(&p).map(|_| ()).map_err(|e| e.to_string()),
+                "step" | "stp" => fairline::io::step::read_step(&p)
+                    .map(|_| ())
+                    .map_err(|e| e.to_string()),
                 _ => {
                     let soup = fairline::io::read_soup(&p).map_err(|e| e.to_string())?;
                     if name.starts_with("mesh-ok") {

@@ -85,7 +85,7 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 /// Opens meshes (.obj .ply .off .stl) or B-spline surfaces (.json .igs
-/// .iges) in the browser: exact highlight shading on the GPU, the
+/// .iges .step .stp) in the browser: exact highlight shading on the GPU, the
 /// library's highlight lines and detected irregularities, marking a region
 /// and fairing or smoothing it, with undo/redo and the equivalent command
 /// for each step. Prints the page URL (with its access token) as the first

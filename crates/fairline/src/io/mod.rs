@@ -1,4 +1,6 @@
-//! Mesh files: OBJ, PLY (ascii and binary), OFF and STL.
+//! Mesh files: OBJ, PLY (ascii and binary), OFF and STL; CAD surface files:
+//! IGES writing ([`iges_write`]), STEP reading and writing ([`step`]) and
+//! the choice of surface format by extension ([`surface_file`]).
 //!
 //! Every reader produces a [`Soup`] (positions plus polygons, no
 //! connectivity); [`read_mesh`] then builds a [`SurfaceMesh`]. Readers never
@@ -15,10 +17,14 @@
 //!
 //! The format is chosen by the file extension ([`MeshFormat::from_path`]).
 
+pub mod iges_write;
 mod obj;
 mod off;
 mod ply;
+pub mod step;
 mod stl;
+pub mod surface_file;
+pub mod units;
 
 use std::fmt;
 use std::fs::File;

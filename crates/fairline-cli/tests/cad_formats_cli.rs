@@ -1,0 +1,154 @@
+//! Command-line tests of the way back to CAD (issue #20 items 2–3):
+//! `convert` between surface JSON, IGES and STEP keeps every number and
+//! trim; `fair-surface -o OUT.igs|.step` writes the faired part; commands
+//! that take surfaces take STEP files; bad STEP input exits 2 naming the
+//! entity, nothing written.
+
+mod common;
+
+use common::{json, ok, run, s, tmp};
+use fairline::Vec3;
+use fairline::bspline::{BSplineSurface, TrimCurve, TrimLoop, read_surfaces_json};
+use fairline::io::surface_file::read_surface_file;
+
+/// A rational trimmed patch and an untrimmed bicubic one.
+fn part() -> Vec<BSplineSurface> {
+    let net = |f: &dyn Fn(usize, usize) -> f64| -> Vec<Vec<Vec3>> {
+        (0..4)
+            .map(|i| {
+                (0..4)
+                    .map(|j| Vec3::new(i as f64 / 3.0, j as f64 / 3.0, f(i, j)))
+                    .collect()
+            })
+            .collect()
+    };
+    let w: Vec<Vec<f64>> = (0..4)
+        .map(|i| (0..4).map(|j| 1.0 + 0.1 * ((i * j) % 3) as f64).collect())
+        .collect();
+    let a = BSplineSurface::bezier(net(&|i, j| 0.1 * (i * j) as f64 / 7.0), Some(w))
+        .unwrap()
+        .with_trims(vec![
+            TrimLoop::polygon(&[[0.1, 0.1], [0.9, 0.1], [0.9, 0.9], [0.1, 0.9]]).unwrap(),
+            TrimLoop {
+                curves: vec![
+                    TrimCurve::new(
+                        2,
+                        vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0],
+                        vec![[0.4, 0.4], [0.5, 0.7], [0.6, 0.4]],
+                        Some(vec![1.0, 0.7, 1.0]),
+                    )
+                    .unwrap(),
+                    TrimCurve::line([0.6, 0.4], [0.4, 0.4]).unwrap(),
+                ],
+            },
+        ])
+        .unwrap();
+    let b = BSplineSurface::bezier(net(&|i, j| ((i + j) as f64 / 3.0).sin()), None).unwrap();
+    vec![a, b]
+}
+
+#[test]
+fn convert_between_json_iges_and_step_keeps_every_number() {
+    let d = tmp("cad-convert");
+    let src = d.join("part.json");
+    fairline::bspline::write_surfaces_json(&src, &part()).unwrap();
+    let (igs, stp, back) = (d.join("part.igs"), d.join("part.step"), d.join("back.json"));
+    let rep = d.join("rep.json");
+    let o = run(&["convert", s(&src), s(&igs), "--report", s(&rep)]);
+    ok(&o);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("2 surface(s) converted (1 trimmed)"));
+    assert_eq!(json(&rep)["trimmed"], 1);
+    ok(&run(&["convert", s(&igs), s(&stp)]));
+    ok(&run(&["convert", s(&stp), s(&back)]));
+    assert_eq!(read_surfaces_json(&back).unwrap(), part());
+    // Both CAD files hold the same surfaces, in millimetres.
+    for f in [&igs, &stp] {
+        let file = read_surface_file(f).unwrap();
+        assert_eq!(file.surfaces, part());
+        assert_eq!(file.unit.map(|u| u.name), Some("MM".to_string()));
+    }
+    // A STEP file can be drawn, checked for continuity and tessellated.
+    let png = d.join("part.png");
+    ok(&run(&["render", s(&stp), "--png", s(&png)]));
+    assert!(png.metadata().unwrap().len() > 1000);
+    ok(&run(&["continuity", s(&stp)]));
+    let mesh = d.join("part.obj");
+    ok(&run(&["convert", s(&stp), s(&mesh)]));
+    // `info` describes a surface file.
+    let info = d.join("info.json");
+    ok(&run(&["info", s(&stp), "--area", "--report", s(&info)]));
+    let r = json(&info);
+    assert_eq!(
+        (r["surfaces"].as_u64(), r["trimmed"].as_u64()),
+        (Some(2), Some(1))
+    );
+    assert_eq!(
+        (r["rational"].as_u64(), r["unit"].as_str()),
+        (Some(1), Some("MM"))
+    );
+    let area = r["area"].as_f64().unwrap();
+    let want: f64 = part()
+        .iter()
+        .map(|s| fairline::bspline::trimmed_area(s, 64, 64))
+        .sum();
+    assert!((area - want).abs() <= 1e-12 * want, "{area} vs {want}");
+}
+
+#[test]
+fn fair_surface_writes_iges_and_step() {
+    let d = tmp("cad-fair");
+    let o = common::bin()
+        .current_dir(&d)
+        .args(["demo", "--out", "demo"])
+        .output()
+        .unwrap();
+    ok(&o);
+    let dented = d.join("demo/bspline-panel-dented.json");
+    let lights = d.join("demo/bspline-panel-lights.json");
+    let ends = d.join("demo/bspline-panel-endpoints.json");
+    let mut results = Vec::new();
+    for name in ["out.json", "out.igs", "out.step"] {
+        let out = d.join(name);
+        let o = run(&[
+            "fair-surface",
+            s(&dented),
+            "--lights",
+            s(&lights),
+            "--endpoints",
+            s(&ends),
+            "-o",
+            s(&out),
+        ]);
+        ok(&o);
+        results.push(read_surface_file(&out).unwrap().surfaces);
+    }
+    assert_eq!(results[0], results[1]);
+    assert_eq!(results[0], results[2]);
+    assert_ne!(results[0], read_surfaces_json(&dented).unwrap());
+}
+
+#[test]
+fn bad_step_input_exits_2_naming_the_entity() {
+    let d = tmp("cad-bad");
+    let f = d.join("bad.stp");
+    std::fs::write(
+        &f,
+        "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT('',(0.,0.,0.));\n\
+         #2=DIRECTION('',(0.,0.,1.));\n#3=AXIS2_PLACEMENT_3D('',#1,#2,$);\n\
+         #4=PLANE('',#3);\n#5=OFFSET_SURFACE('',#4,1.,.F.);\n#6=ADVANCED_FACE('',(),#5,.T.);\n\
+         ENDSEC;\nEND-ISO-10303-21;\n",
+    )
+    .unwrap();
+    let out = d.join("out.igs");
+    let o = run(&["convert", s(&f), s(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("bad.stp") && err.contains("#5 OFFSET_SURFACE"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let o = run(&["convert", s(&d.join("missing.step")), s(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!out.exists());
+}

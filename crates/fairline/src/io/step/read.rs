@@ -1,0 +1,1466 @@
+//! STEP geometry to trimmed B-spline surfaces (ISO 10303-42 geometry and
+//! topology, as used by AP203, AP214 and AP242).
+//!
+//! Every `ADVANCED_FACE` (and `FACE_SURFACE`) becomes one surface:
+//!
+//! - `B_SPLINE_SURFACE_WITH_KNOTS` (rational: the complex instance with
+//!   `RATIONAL_B_SPLINE_SURFACE`) is taken as it is. Its bounds become
+//!   trimming loops from the edges' `PCURVE`s on this surface when present
+//!   (B-spline or line p-curves; exact when an edge covers its whole
+//!   p-curve), otherwise from the edge curves sampled and projected onto the
+//!   surface by Newton point inversion (Piegl & Tiller §6.1).
+//! - `PLANE`, `CYLINDRICAL_SURFACE`, `CONICAL_SURFACE`, `SPHERICAL_SURFACE`,
+//!   `TOROIDAL_SURFACE`, `SURFACE_OF_REVOLUTION` and
+//!   `SURFACE_OF_LINEAR_EXTRUSION` are converted exactly to NURBS over the
+//!   part of the surface the face's edges span (rational quadratic arcs of
+//!   at most 90°, see [`super::nurbs`]). Their bounds are mapped into the
+//!   NURBS parameters in closed form (angles through [`ArcMap::param`]),
+//!   exactly as rational curves on planes and as dense polylines otherwise
+//!   (edges along parameter lines are straight in parameter space, so
+//!   exact too). The NURBS parameterisation differs from STEP's
+//!   (angle-based), so p-curves on analytic surfaces are not used.
+//!
+//! Bounded B-spline surfaces that belong to no face (items of a
+//! representation or a geometric set) are read untrimmed. Edge curves may
+//! be `LINE`, `CIRCLE`, `ELLIPSE`, `B_SPLINE_CURVE_WITH_KNOTS` (rational
+//! too), or a `SURFACE_CURVE`/`SEAM_CURVE` over one of them. Anything else
+//! is refused with an error naming the entity `#id`. Coordinates stay in the
+//! file's length unit, which is reported.
+
+use std::collections::HashSet;
+use std::f64::consts::{PI, TAU};
+
+use super::StepError;
+use super::nurbs::{ArcMap, Nurbs3, arc, ellipse_arc, revolve};
+use super::p21::{Exchange, Instance, Value};
+use crate::Vec3;
+use crate::bspline::{BSplineSurface, TrimCurve, TrimLoop};
+use crate::io::units::LengthUnit;
+
+/// One surface read from a STEP file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepSurface {
+    /// The surface, trimmed by its face's bounds.
+    pub surface: BSplineSurface,
+    /// `#id` of the face (or of the surface itself when it is in no face).
+    pub entity: u64,
+    /// `#id` of the underlying surface entity.
+    pub surface_entity: u64,
+    /// Its STEP type (`PLANE`, `B_SPLINE_SURFACE_WITH_KNOTS`, …).
+    pub surface_type: String,
+    /// The face's `same_sense`: false when the face's normal is opposite
+    /// to the surface's `Su × Sv`.
+    pub same_sense: bool,
+}
+
+/// The result of [`super::read_step`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StepImport {
+    /// Faces and free surfaces, in the order of their `#id`.
+    pub surfaces: Vec<StepSurface>,
+    /// The length unit of the file (first `LENGTH_UNIT`), if it names one.
+    pub unit: Option<LengthUnit>,
+}
+
+type R<T> = Result<T, StepError>;
+
+/// The map from natural coordinates of an analytic face to the parameters
+/// of its NURBS.
+type ToUv = Box<dyn Fn(f64, f64) -> [f64; 2]>;
+
+/// A 3-D (or 2-D, `z = 0`) curve of the file.
+#[derive(Clone, Debug)]
+enum Curve {
+    /// `p + t·d`.
+    Line { p: Vec3, d: Vec3 },
+    /// `c + rx·cos t·x + ry·sin t·y` (circle when `rx == ry`).
+    Conic {
+        c: Vec3,
+        x: Vec3,
+        y: Vec3,
+        rx: f64,
+        ry: f64,
+    },
+    /// A B-spline curve.
+    Spline(Nurbs3),
+}
+
+impl Curve {
+    fn eval(&self, t: f64) -> Vec3 {
+        match self {
+            Curve::Line { p, d } => *p + t * *d,
+            Curve::Conic { c, x, y, rx, ry } => *c + rx * t.cos() * *x + ry * t.sin() * *y,
+            Curve::Spline(n) => n.eval(t),
+        }
+    }
+
+    /// The parameter of the curve point nearest to `q` (closed forms for
+    /// lines and conics, sampling and golden-section refinement otherwise),
+    /// measured by `dist`.
+    fn param_of(&self, q: Vec3) -> f64 {
+        match self {
+            Curve::Line { p, d } => {
+                let l2 = d.length_squared();
+                if l2 > 0.0 { (q - *p).dot(*d) / l2 } else { 0.0 }
+            }
+            Curve::Conic { c, x, y, rx, ry } => {
+                let r = q - *c;
+                (r.dot(*y) / ry).atan2(r.dot(*x) / rx)
+            }
+            Curve::Spline(n) => {
+                let [a, b] = n.domain();
+                nearest_param(a, b, 64 * n.points.len().max(4), |t| n.eval(t).distance(q))
+            }
+        }
+    }
+}
+
+/// The `t ∈ [a, b]` minimising `f`: the best of `samples + 1` equally spaced
+/// samples, refined by golden-section search on its two neighbouring
+/// intervals.
+fn nearest_param(a: f64, b: f64, samples: usize, f: impl Fn(f64) -> f64) -> f64 {
+    let n = samples.clamp(8, 20_000);
+    let at = |k: usize| a + (b - a) * k as f64 / n as f64;
+    let best = (0..=n)
+        .map(|k| (k, f(at(k))))
+        .min_by(|x, y| x.1.total_cmp(&y.1))
+        .map_or(0, |x| x.0);
+    let (mut lo, mut hi) = (at(best.saturating_sub(1)), at((best + 1).min(n)));
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..80 {
+        let m1 = hi - g * (hi - lo);
+        let m2 = lo + g * (hi - lo);
+        if f(m1) <= f(m2) {
+            hi = m2;
+        } else {
+            lo = m1;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// An oriented edge of a face bound, as a piece of a curve.
+struct EdgeUse {
+    /// `#id` of the EDGE_CURVE.
+    edge: u64,
+    /// Its curve (a SURFACE_CURVE resolved to its 3-D curve).
+    curve: Curve,
+    /// The instance the curve came from (for p-curves).
+    curve_entity: u64,
+    /// Start and end points in traversal order.
+    start: Vec3,
+    end: Vec3,
+    /// Start and end vertices are the same.
+    closed: bool,
+    /// Traversal runs along the curve's parameter direction.
+    forward: bool,
+}
+
+struct Reader<'a> {
+    ex: &'a Exchange,
+    /// Radians per angle unit of the file.
+    angle: f64,
+}
+
+impl<'a> Reader<'a> {
+    fn get(&self, id: u64, from: &Instance) -> R<&'a Instance> {
+        self.ex
+            .instances
+            .get(&id)
+            .ok_or_else(|| self.err(from, format!("refers to #{id}, which is not defined")))
+    }
+
+    fn err(&self, i: &Instance, message: String) -> StepError {
+        StepError::Entity {
+            id: i.id,
+            line: i.line,
+            message: format!("{}: {message}", i.type_name()),
+        }
+    }
+
+    /// The parameters of a simple instance of one of `types`.
+    fn params(&self, i: &'a Instance, types: &[&str]) -> R<&'a [Value]> {
+        match i.parts.as_slice() {
+            [(n, p)] if types.contains(&n.as_str()) => Ok(p),
+            _ => Err(self.err(i, format!("expected {}", types.join(" or ")))),
+        }
+    }
+
+    fn at<'v>(&self, i: &Instance, p: &'v [Value], k: usize) -> R<&'v Value> {
+        p.get(k).ok_or_else(|| {
+            self.err(
+                i,
+                format!("has {} parameters, needs at least {}", p.len(), k + 1),
+            )
+        })
+    }
+
+    fn num(&self, i: &Instance, p: &[Value], k: usize) -> R<f64> {
+        self.at(i, p, k)?
+            .number()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| self.err(i, format!("parameter {k} is not a number")))
+    }
+
+    fn int(&self, i: &Instance, p: &[Value], k: usize) -> R<usize> {
+        let x = self.num(i, p, k)?;
+        if x >= 0.0 && x.fract() == 0.0 && x < 1e9 {
+            Ok(x as usize)
+        } else {
+            Err(self.err(i, format!("parameter {k} is not a count ({x})")))
+        }
+    }
+
+    fn refer(&self, i: &'a Instance, p: &[Value], k: usize) -> R<&'a Instance> {
+        match self.at(i, p, k)? {
+            Value::Ref(id) => self.get(*id, i),
+            _ => Err(self.err(i, format!("parameter {k} is not an entity reference"))),
+        }
+    }
+
+    fn list<'v>(&self, i: &Instance, p: &'v [Value], k: usize) -> R<&'v [Value]> {
+        match self.at(i, p, k)? {
+            Value::List(l) => Ok(l),
+            _ => Err(self.err(i, format!("parameter {k} is not a list"))),
+        }
+    }
+
+    fn flag(&self, i: &Instance, p: &[Value], k: usize) -> R<bool> {
+        match self.at(i, p, k)? {
+            Value::Enum(e) if e == "T" => Ok(true),
+            Value::Enum(e) if e == "F" => Ok(false),
+            _ => Err(self.err(i, format!("parameter {k} is not .T. or .F."))),
+        }
+    }
+
+    fn numbers(&self, i: &Instance, l: &[Value]) -> R<Vec<f64>> {
+        l.iter()
+            .map(|v| {
+                v.number()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| self.err(i, "a list holds something other than numbers".into()))
+            })
+            .collect()
+    }
+
+    fn refs(&self, i: &'a Instance, l: &[Value]) -> R<Vec<&'a Instance>> {
+        l.iter()
+            .map(|v| match v {
+                Value::Ref(id) => self.get(*id, i),
+                _ => Err(self.err(
+                    i,
+                    "a list holds something other than entity references".into(),
+                )),
+            })
+            .collect()
+    }
+
+    /// CARTESIAN_POINT (2-D points get `z = 0`).
+    fn point(&self, i: &'a Instance) -> R<Vec3> {
+        let p = self.params(i, &["CARTESIAN_POINT"])?;
+        let c = self.numbers(i, self.list(i, p, 1)?)?;
+        match c.as_slice() {
+            [x, y] => Ok(Vec3::new(*x, *y, 0.0)),
+            [x, y, z] => Ok(Vec3::new(*x, *y, *z)),
+            _ => Err(self.err(i, format!("{} coordinates", c.len()))),
+        }
+    }
+
+    /// DIRECTION, normalised.
+    fn direction(&self, i: &'a Instance) -> R<Vec3> {
+        let p = self.params(i, &["DIRECTION"])?;
+        let c = self.numbers(i, self.list(i, p, 1)?)?;
+        let d = match c.as_slice() {
+            [x, y] => Vec3::new(*x, *y, 0.0),
+            [x, y, z] => Vec3::new(*x, *y, *z),
+            _ => return Err(self.err(i, format!("{} components", c.len()))),
+        };
+        let l = d.length();
+        if l > 0.0 && l.is_finite() {
+            Ok(d / l)
+        } else {
+            Err(self.err(i, "the direction has no length".into()))
+        }
+    }
+
+    /// AXIS2_PLACEMENT_3D / _2D: origin and the axes x, y, z.
+    fn placement(&self, i: &'a Instance) -> R<(Vec3, Vec3, Vec3, Vec3)> {
+        let p = self.params(i, &["AXIS2_PLACEMENT_3D", "AXIS2_PLACEMENT_2D"])?;
+        let o = self.point(self.refer(i, p, 1)?)?;
+        let opt_dir = |k: usize| -> R<Option<Vec3>> {
+            match p.get(k) {
+                Some(Value::Ref(_)) => Ok(Some(self.direction(self.refer(i, p, k)?)?)),
+                _ => Ok(None),
+            }
+        };
+        let (z, xr) = if i.type_name() == "AXIS2_PLACEMENT_2D" {
+            (Vec3::Z, opt_dir(2)?)
+        } else {
+            (opt_dir(2)?.unwrap_or(Vec3::Z), opt_dir(3)?)
+        };
+        let xr = xr.unwrap_or_else(|| if z.x.abs() < 0.9 { Vec3::X } else { Vec3::Y });
+        let x = xr - xr.dot(z) * z;
+        let l = x.length();
+        if l <= 1e-12 || !l.is_finite() {
+            return Err(self.err(i, "the reference direction is parallel to the axis".into()));
+        }
+        let x = x / l;
+        Ok((o, x, z.cross(x), z))
+    }
+
+    /// A curve entity as a [`Curve`].
+    fn curve(&self, i: &'a Instance) -> R<Curve> {
+        match i.type_name() {
+            "LINE" => {
+                let p = self.params(i, &["LINE"])?;
+                let o = self.point(self.refer(i, p, 1)?)?;
+                let v = self.refer(i, p, 2)?;
+                let vp = self.params(v, &["VECTOR"])?;
+                let d = self.direction(self.refer(v, vp, 1)?)? * self.num(v, vp, 2)?;
+                Ok(Curve::Line { p: o, d })
+            }
+            "CIRCLE" | "ELLIPSE" => {
+                let p = self.params(i, &["CIRCLE", "ELLIPSE"])?;
+                let (c, x, y, _) = self.placement(self.refer(i, p, 1)?)?;
+                let rx = self.num(i, p, 2)?;
+                let ry = if i.type_name() == "ELLIPSE" { self.num(i, p, 3)? } else { rx };
+                if rx <= 0.0 || ry <= 0.0 {
+                    return Err(self.err(i, "the radius is not positive".into()));
+                }
+                Ok(Curve::Conic { c, x, y, rx, ry })
+            }
+            "SURFACE_CURVE" | "SEAM_CURVE" => {
+                // Resolved iteratively: a file may chain (or cycle) them.
+                let mut c = i;
+                for _ in 0..16 {
+                    let p = self.params(c, &["SURFACE_CURVE", "SEAM_CURVE"])?;
+                    let next = self.refer(c, p, 1)?;
+                    if !matches!(next.type_name(), "SURFACE_CURVE" | "SEAM_CURVE") {
+                        return self.curve(next);
+                    }
+                    c = next;
+                }
+                Err(self.err(i, "surface curves nest too deeply".into()))
+            }
+            _ if i.is("B_SPLINE_CURVE_WITH_KNOTS") => Ok(Curve::Spline(self.bspline_curve(i)?)),
+            t => Err(self.err(
+                i,
+                format!("curve type {t} is not supported (LINE, CIRCLE, ELLIPSE, B_SPLINE_CURVE_WITH_KNOTS, SURFACE_CURVE are)"),
+            )),
+        }
+    }
+
+    /// Knots from distinct values and multiplicities.
+    fn knots(&self, i: &Instance, mults: &[Value], values: &[Value]) -> R<Vec<f64>> {
+        let m = self.numbers(i, mults)?;
+        let v = self.numbers(i, values)?;
+        if m.len() != v.len() {
+            return Err(self.err(
+                i,
+                format!("{} multiplicities for {} knots", m.len(), v.len()),
+            ));
+        }
+        let mut out = Vec::new();
+        for (&m, &k) in m.iter().zip(&v) {
+            if !(m >= 1.0 && m.fract() == 0.0 && m <= 64.0) {
+                return Err(self.err(i, format!("knot multiplicity {m}")));
+            }
+            out.extend(std::iter::repeat_n(k, m as usize));
+        }
+        Ok(out)
+    }
+
+    /// B_SPLINE_CURVE_WITH_KNOTS, simple or complex (with
+    /// RATIONAL_B_SPLINE_CURVE).
+    fn bspline_curve(&self, i: &'a Instance) -> R<Nurbs3> {
+        let (head, tail): (&[Value], &[Value]) = match i.part("B_SPLINE_CURVE") {
+            Some(h) => (h, i.part("B_SPLINE_CURVE_WITH_KNOTS").unwrap_or(&[])),
+            None => {
+                let p = self.params(i, &["B_SPLINE_CURVE_WITH_KNOTS"])?;
+                (p.get(1..6).unwrap_or(&[]), p.get(6..).unwrap_or(&[]))
+            }
+        };
+        let degree = self.int(i, head, 0)?;
+        let pts = self
+            .refs(i, self.list(i, head, 1)?)?
+            .into_iter()
+            .map(|p| self.point(p))
+            .collect::<R<Vec<_>>>()?;
+        let knots = self.knots(i, self.list(i, tail, 0)?, self.list(i, tail, 1)?)?;
+        let weights = match i.part("RATIONAL_B_SPLINE_CURVE") {
+            Some(w) => Some(self.numbers(i, self.list(i, w, 0)?)?),
+            None => None,
+        };
+        let c = TrimCurve::new(
+            degree,
+            knots.clone(),
+            pts.iter().map(|p| [p.x, p.y]).collect(),
+            weights.clone(),
+        )
+        .map_err(|m| self.err(i, m))?;
+        // Validated above (degree, knot count, weights) so that evaluation
+        // cannot fail.
+        drop(c);
+        Ok(Nurbs3 {
+            degree,
+            knots,
+            points: pts,
+            weights,
+        })
+    }
+
+    /// B_SPLINE_SURFACE_WITH_KNOTS, simple or complex (with
+    /// RATIONAL_B_SPLINE_SURFACE).
+    fn bspline_surface(&self, i: &'a Instance) -> R<BSplineSurface> {
+        let (head, tail): (&[Value], &[Value]) = match i.part("B_SPLINE_SURFACE") {
+            Some(h) => (h, i.part("B_SPLINE_SURFACE_WITH_KNOTS").unwrap_or(&[])),
+            None => {
+                let p = self.params(i, &["B_SPLINE_SURFACE_WITH_KNOTS"])?;
+                (p.get(1..8).unwrap_or(&[]), p.get(8..).unwrap_or(&[]))
+            }
+        };
+        let (du, dv) = (self.int(i, head, 0)?, self.int(i, head, 1)?);
+        let rows = self.list(i, head, 2)?;
+        let mut points = Vec::new();
+        let mut count_v = None;
+        for row in rows {
+            let Value::List(r) = row else {
+                return Err(self.err(i, "control points are not a list of lists".into()));
+            };
+            if *count_v.get_or_insert(r.len()) != r.len() {
+                return Err(self.err(i, "control point rows differ in length".into()));
+            }
+            for p in self.refs(i, r)? {
+                points.push(self.point(p)?);
+            }
+        }
+        let ku = self.knots(i, self.list(i, tail, 0)?, self.list(i, tail, 2)?)?;
+        let kv = self.knots(i, self.list(i, tail, 1)?, self.list(i, tail, 3)?)?;
+        let weights = match i.part("RATIONAL_B_SPLINE_SURFACE") {
+            Some(w) => {
+                let mut out = Vec::new();
+                for row in self.list(i, w, 0)? {
+                    let Value::List(r) = row else {
+                        return Err(self.err(i, "weights are not a list of lists".into()));
+                    };
+                    out.extend(self.numbers(i, r)?);
+                }
+                Some(out)
+            }
+            None => None,
+        };
+        BSplineSurface::from_flat(
+            du,
+            dv,
+            ku,
+            kv,
+            [rows.len(), count_v.unwrap_or(0)],
+            points,
+            weights,
+        )
+        .map_err(|e| self.err(i, e.to_string()))
+    }
+
+    /// The edges of one FACE_BOUND's EDGE_LOOP (None for a VERTEX_LOOP).
+    fn bound_edges(&self, bound: &'a Instance) -> R<Option<(bool, Vec<EdgeUse>)>> {
+        let p = self.params(bound, &["FACE_OUTER_BOUND", "FACE_BOUND"])?;
+        let outer = bound.type_name() == "FACE_OUTER_BOUND";
+        let lp = self.refer(bound, p, 1)?;
+        let sense = self.flag(bound, p, 2)?;
+        if lp.type_name() == "VERTEX_LOOP" {
+            return Ok(None);
+        }
+        let lpp = self.params(lp, &["EDGE_LOOP"])?;
+        let mut edges = Vec::new();
+        for oe in self.refs(lp, self.list(lp, lpp, 1)?)? {
+            let op = self.params(oe, &["ORIENTED_EDGE"])?;
+            let ec = self.refer(oe, op, 3)?;
+            let orientation = self.flag(oe, op, 4)?;
+            let ep = self.params(ec, &["EDGE_CURVE"])?;
+            let vertex = |k: usize| -> R<(u64, Vec3)> {
+                let v = self.refer(ec, ep, k)?;
+                let vp = self.params(v, &["VERTEX_POINT"])?;
+                Ok((v.id, self.point(self.refer(v, vp, 1)?)?))
+            };
+            let (v1, v2) = (vertex(1)?, vertex(2)?);
+            let ci = self.refer(ec, ep, 3)?;
+            let curve = self.curve(ci)?;
+            let same = self.flag(ec, ep, 4)?;
+            let (start, end) = if orientation { (v1, v2) } else { (v2, v1) };
+            edges.push(EdgeUse {
+                edge: ec.id,
+                curve,
+                curve_entity: ci.id,
+                start: start.1,
+                end: end.1,
+                closed: v1.0 == v2.0 || v1.1 == v2.1,
+                forward: same == orientation,
+            });
+        }
+        if !sense {
+            edges.reverse();
+            for e in &mut edges {
+                std::mem::swap(&mut e.start, &mut e.end);
+                e.forward = !e.forward;
+            }
+        }
+        Ok(Some((outer, edges)))
+    }
+
+    /// The traversal parameters `[t_start, t_end]` of an edge on its curve.
+    fn edge_range(&self, e: &EdgeUse) -> [f64; 2] {
+        match &e.curve {
+            Curve::Line { .. } => [e.curve.param_of(e.start), e.curve.param_of(e.end)],
+            Curve::Conic { .. } => {
+                let t0 = e.curve.param_of(e.start);
+                let mut t1 = e.curve.param_of(e.end);
+                if e.closed {
+                    t1 = if e.forward { t0 + TAU } else { t0 - TAU };
+                } else if e.forward {
+                    while t1 <= t0 {
+                        t1 += TAU;
+                    }
+                } else {
+                    while t1 >= t0 {
+                        t1 -= TAU;
+                    }
+                }
+                [t0, t1]
+            }
+            Curve::Spline(n) => {
+                let [a, b] = n.domain();
+                if e.closed {
+                    if e.forward { [a, b] } else { [b, a] }
+                } else {
+                    [e.curve.param_of(e.start), e.curve.param_of(e.end)]
+                }
+            }
+        }
+    }
+
+    /// The edge as an exact NURBS curve in traversal order where one
+    /// exists (lines, conic arcs, whole B-spline curves), else `None`.
+    fn edge_nurbs(&self, e: &EdgeUse) -> Option<Nurbs3> {
+        let [t0, t1] = self.edge_range(e);
+        match &e.curve {
+            Curve::Line { .. } => Some(Nurbs3::segment(
+                e.curve.eval(t0),
+                e.curve.eval(t1),
+                0.0,
+                1.0,
+            )),
+            Curve::Conic { c, x, y, rx, ry } => {
+                let map = ArcMap::new(t0.min(t1), t0.max(t1), 1.0);
+                let a = ellipse_arc(*c, *x, *y, *rx, *ry, &map);
+                Some(if t1 < t0 { a.reversed() } else { a })
+            }
+            Curve::Spline(n) => {
+                let [a, b] = n.domain();
+                let tol = 1e-9 * (b - a);
+                if (t0 - a).abs() <= tol && (t1 - b).abs() <= tol {
+                    Some(n.clone())
+                } else if (t0 - b).abs() <= tol && (t1 - a).abs() <= tol {
+                    Some(n.reversed())
+                } else {
+                    None
+                }
+            }
+        }
+    }
+
+    /// Dense points along an edge in traversal order (both ends included).
+    fn edge_points(&self, e: &EdgeUse) -> Vec<Vec3> {
+        let [t0, t1] = self.edge_range(e);
+        let n = match &e.curve {
+            Curve::Line { .. } => 32,
+            Curve::Conic { .. } => ((t1 - t0).abs().to_degrees() * 2.0).ceil() as usize,
+            Curve::Spline(s) => 16 * s.points.len() * s.degree,
+        }
+        .clamp(8, 4000);
+        (0..=n)
+            .map(|k| e.curve.eval(t0 + (t1 - t0) * k as f64 / n as f64))
+            .collect()
+    }
+}
+
+/// Reads the faces (and free bounded B-spline surfaces) of a parsed file.
+pub(super) fn read(ex: &Exchange) -> R<StepImport> {
+    let (unit, angle) = units(ex);
+    let rd = Reader { ex, angle };
+    let mut out = StepImport {
+        unit,
+        ..StepImport::default()
+    };
+    // Who refers to whom: surfaces referred to only by representations and
+    // sets are free (not a face's, a p-curve's or a swept surface's basis).
+    let mut bound_elsewhere: HashSet<u64> = HashSet::new();
+    for i in ex.instances.values() {
+        let container = i
+            .parts
+            .iter()
+            .all(|(n, _)| n.contains("REPRESENTATION") || n.ends_with("SET"));
+        if !container {
+            for (_, p) in &i.parts {
+                collect_refs(p, &mut bound_elsewhere);
+            }
+        }
+    }
+    let mut ids: Vec<u64> = ex.order.clone();
+    ids.sort_unstable();
+    for id in ids {
+        let i = &ex.instances[&id];
+        match i.type_name() {
+            "ADVANCED_FACE" | "FACE_SURFACE" => out.surfaces.push(rd.face(i)?),
+            _ if i.is("B_SPLINE_SURFACE_WITH_KNOTS") && !bound_elsewhere.contains(&id) => {
+                out.surfaces.push(StepSurface {
+                    surface: rd.bspline_surface(i)?,
+                    entity: id,
+                    surface_entity: id,
+                    surface_type: "B_SPLINE_SURFACE_WITH_KNOTS".into(),
+                    same_sense: true,
+                });
+            }
+            _ => {}
+        }
+    }
+    Ok(out)
+}
+
+fn collect_refs(v: &[Value], out: &mut HashSet<u64>) {
+    for x in v {
+        match x {
+            Value::Ref(id) => {
+                out.insert(*id);
+            }
+            Value::List(l) => collect_refs(l, out),
+            Value::Typed(_, b) => collect_refs(std::slice::from_ref(b), out),
+            _ => {}
+        }
+    }
+}
+
+/// The file's length unit and radians per plane-angle unit (1 when
+/// absent): the units a GLOBAL_UNIT_ASSIGNED_CONTEXT assigns, else the first
+/// LENGTH_UNIT / PLANE_ANGLE_UNIT instances.
+fn units(ex: &Exchange) -> (Option<LengthUnit>, f64) {
+    let mut ids: Vec<u64> = ex.order.clone();
+    ids.sort_unstable();
+    let mut candidates: Vec<&Instance> = Vec::new();
+    for id in &ids {
+        if let Some(Value::List(l)) = ex.instances[id]
+            .part("GLOBAL_UNIT_ASSIGNED_CONTEXT")
+            .and_then(|p| p.first())
+        {
+            for v in l {
+                if let Value::Ref(u) = v
+                    && let Some(i) = ex.instances.get(u)
+                {
+                    candidates.push(i);
+                }
+            }
+        }
+    }
+    candidates.extend(ids.iter().map(|id| &ex.instances[id]));
+    let mut length = None;
+    let mut angle = None;
+    for i in candidates {
+        if length.is_none() && i.is("LENGTH_UNIT") {
+            length = unit_size(ex, i, 0).map(|m| {
+                let named = LengthUnit::from_iges_name(&unit_name(i))
+                    .filter(|u| (u.metres - m).abs() <= 1e-9 * m);
+                named.unwrap_or(LengthUnit {
+                    name: unit_name(i),
+                    metres: m,
+                })
+            });
+        }
+        if angle.is_none() && i.is("PLANE_ANGLE_UNIT") {
+            angle = unit_size(ex, i, 0);
+        }
+    }
+    (length, angle.filter(|a| *a > 0.0).unwrap_or(1.0))
+}
+
+/// Metres (or radians) per unit of an SI_UNIT or CONVERSION_BASED_UNIT.
+fn unit_size(ex: &Exchange, i: &Instance, depth: usize) -> Option<f64> {
+    if depth > 8 {
+        return None;
+    }
+    if let Some(si) = i.part("SI_UNIT") {
+        let prefix = match si.first() {
+            Some(Value::Enum(p)) => match p.as_str() {
+                "MILLI" => 1e-3,
+                "CENTI" => 1e-2,
+                "DECI" => 1e-1,
+                "KILO" => 1e3,
+                "MICRO" => 1e-6,
+                "NANO" => 1e-9,
+                _ => return None,
+            },
+            _ => 1.0,
+        };
+        return Some(prefix);
+    }
+    if let Some(cb) = i.part("CONVERSION_BASED_UNIT") {
+        let Some(Value::Ref(m)) = cb.get(1) else {
+            return None;
+        };
+        let m = ex.instances.get(m)?;
+        let (_, p) = m
+            .parts
+            .iter()
+            .find(|(n, _)| n.contains("MEASURE_WITH_UNIT"))?;
+        let factor = p.first()?.number()?;
+        let Some(Value::Ref(u)) = p.get(1) else {
+            return None;
+        };
+        let base = unit_size(ex, ex.instances.get(u)?, depth + 1)?;
+        return Some(factor * base).filter(|x| x.is_finite() && *x > 0.0);
+    }
+    None
+}
+
+fn unit_name(i: &Instance) -> String {
+    if let Some(cb) = i.part("CONVERSION_BASED_UNIT")
+        && let Some(Value::Text(t)) = cb.first()
+    {
+        return t.to_ascii_uppercase();
+    }
+    match i.part("SI_UNIT") {
+        Some([Value::Enum(p), Value::Enum(_)]) if p == "MILLI" => "MM".into(),
+        Some([Value::Enum(p), Value::Enum(_)]) if p == "CENTI" => "CM".into(),
+        Some([Value::Enum(p), Value::Enum(_)]) if p == "KILO" => "KM".into(),
+        Some([Value::Enum(p), Value::Enum(_)]) if p == "MICRO" => "UM".into(),
+        _ => "M".into(),
+    }
+}
+
+/// What an analytic surface is, in its placement frame `(o, x, y, z)`.
+#[derive(Clone, Debug)]
+enum Analytic {
+    Plane,
+    Cylinder { r: f64 },
+    Cone { r: f64, tan: f64 },
+    Sphere { r: f64 },
+    Torus { big: f64, small: f64 },
+    Revolution { profile: Nurbs3 },
+    Extrusion { profile: Nurbs3, d: Vec3 },
+}
+
+impl<'a> Reader<'a> {
+    fn face(&self, f: &'a Instance) -> R<StepSurface> {
+        let p = self.params(f, &["ADVANCED_FACE", "FACE_SURFACE"])?;
+        let bounds = self.refs(f, self.list(f, p, 1)?)?;
+        let si = self.refer(f, p, 2)?;
+        let same_sense = self.flag(f, p, 3)?;
+        let mut loops: Vec<(bool, Vec<EdgeUse>)> = Vec::new();
+        for b in bounds {
+            if let Some(l) = self.bound_edges(b)? {
+                loops.push(l);
+            }
+        }
+        // The outer bound first (FACE_OUTER_BOUND, else decided later by area).
+        loops.sort_by_key(|l| !l.0);
+        let surface = if si.is("B_SPLINE_SURFACE_WITH_KNOTS") {
+            let s = self.bspline_surface(si)?;
+            let trims = loops
+                .iter()
+                .map(|(_, edges)| self.bspline_loop(&s, si.id, edges))
+                .collect::<R<Vec<_>>>()?;
+            self.attach(f, s, trims, loops.first().is_some_and(|l| l.0))?
+        } else {
+            self.analytic_face(f, si, &loops)?
+        };
+        Ok(StepSurface {
+            surface,
+            entity: f.id,
+            surface_entity: si.id,
+            surface_type: si.type_name().to_string(),
+            same_sense,
+        })
+    }
+
+    /// Attaches loops; when no loop was marked outer, the one enclosing the
+    /// largest parameter area goes first.
+    fn attach(
+        &self,
+        f: &Instance,
+        s: BSplineSurface,
+        mut trims: Vec<TrimLoop>,
+        outer_known: bool,
+    ) -> R<BSplineSurface> {
+        if trims.is_empty() {
+            return Ok(s);
+        }
+        if !outer_known && trims.len() > 1 {
+            let area = |l: &TrimLoop| {
+                let mut pts = Vec::new();
+                for c in &l.curves {
+                    c.flatten_into(1e-6, &mut pts);
+                }
+                crate::bspline::polygon_signed_area2(&pts).abs()
+            };
+            let k = (0..trims.len())
+                .max_by(|&a, &b| area(&trims[a]).total_cmp(&area(&trims[b])))
+                .unwrap_or(0);
+            trims.swap(0, k);
+        }
+        s.with_trims(trims).map_err(|e| self.err(f, e.to_string()))
+    }
+
+    /// A loop on a B-spline surface: p-curves on it when the edges have
+    /// them, else the edge points projected onto the surface.
+    fn bspline_loop(&self, s: &BSplineSurface, sid: u64, edges: &[EdgeUse]) -> R<TrimLoop> {
+        let mut curves = Vec::with_capacity(edges.len());
+        let mut guess = None;
+        for e in edges {
+            if let Some(c) = self.pcurve_trim(s, sid, e)? {
+                curves.push(c);
+                continue;
+            }
+            let pts: Vec<[f64; 2]> = self
+                .edge_points(e)
+                .into_iter()
+                .map(|q| {
+                    let uv = invert_point(s, q, guess);
+                    guess = Some(uv);
+                    [uv.0, uv.1]
+                })
+                .collect();
+            curves.push(polyline(&pts).map_err(|m| self.err(&self.ex.instances[&e.edge], m))?);
+        }
+        Ok(TrimLoop { curves })
+    }
+
+    /// The edge's p-curve on surface `sid` (from its SURFACE_CURVE's
+    /// associated geometry) as a trim curve in traversal order: exact when
+    /// the edge covers the whole p-curve, else sampled between the vertices.
+    fn pcurve_trim(&self, s: &BSplineSurface, sid: u64, e: &EdgeUse) -> R<Option<TrimCurve>> {
+        let ci = &self.ex.instances[&e.curve_entity];
+        let Some(sc) = ci.part("SURFACE_CURVE").or_else(|| ci.part("SEAM_CURVE")) else {
+            return Ok(None);
+        };
+        let Some(Value::List(assoc)) = sc.get(2) else {
+            return Ok(None);
+        };
+        for a in assoc {
+            let Value::Ref(pid) = a else { continue };
+            let Some(pc) = self.ex.instances.get(pid) else {
+                continue;
+            };
+            let Some(pp) = pc.part("PCURVE") else {
+                continue;
+            };
+            if !matches!(pp.get(1), Some(Value::Ref(b)) if *b == sid) {
+                continue;
+            }
+            let dr = self.refer(pc, pp, 2)?;
+            let drp = self.params(dr, &["DEFINITIONAL_REPRESENTATION"])?;
+            let items = self.refs(dr, self.list(dr, drp, 1)?)?;
+            let Some(c2) = items.first() else { continue };
+            let curve = match self.curve(c2) {
+                Ok(c) => c,
+                Err(_) => continue,
+            };
+            let on_surface = |t: f64| {
+                let q = curve.eval(t);
+                s.eval(q.x, q.y)
+            };
+            let span = match &curve {
+                Curve::Spline(n) => n.domain(),
+                Curve::Line { .. } => {
+                    // Range from the 3-D curve's parameters (same
+                    // parameterisation, ISO 10303-42 surface_curve).
+                    let [a, b] = self.edge_range(e);
+                    [a.min(b), a.max(b)]
+                }
+                Curve::Conic { .. } => [0.0, TAU],
+            };
+            // The whole p-curve when its ends map onto the edge's vertices
+            // (in the traversal direction), else the part between the
+            // vertices' nearest parameters.
+            let size = {
+                let (lo, hi) = s.control_bounding_box();
+                (hi - lo).length().max(1e-300)
+            };
+            let near = |a: Vec3, b: Vec3| a.distance(b) <= 1e-9 * size;
+            if let Curve::Spline(n) = &curve {
+                let (sa, sb) = (on_surface(span[0]), on_surface(span[1]));
+                let whole = if e.forward && near(sa, e.start) && near(sb, e.end) {
+                    Some(n.clone())
+                } else if !e.forward && near(sb, e.start) && near(sa, e.end) {
+                    Some(n.reversed())
+                } else {
+                    None
+                };
+                if let Some(w) = whole {
+                    let c = TrimCurve::new(
+                        w.degree,
+                        w.knots,
+                        w.points.iter().map(|p| [p.x, p.y]).collect(),
+                        w.weights,
+                    )
+                    .map_err(|m| self.err(c2, m))?;
+                    return Ok(Some(c));
+                }
+            }
+            let [t0, t1] = if e.closed {
+                if e.forward { span } else { [span[1], span[0]] }
+            } else {
+                let param =
+                    |q: Vec3| nearest_param(span[0], span[1], 400, |t| on_surface(t).distance(q));
+                [param(e.start), param(e.end)]
+            };
+            if let Curve::Line { .. } = &curve {
+                let (a, b) = (curve.eval(t0), curve.eval(t1));
+                return Ok(Some(
+                    TrimCurve::line([a.x, a.y], [b.x, b.y]).map_err(|m| self.err(c2, m))?,
+                ));
+            }
+            let n = 256;
+            let pts: Vec<[f64; 2]> = (0..=n)
+                .map(|k| {
+                    let q = curve.eval(t0 + (t1 - t0) * k as f64 / n as f64);
+                    [q.x, q.y]
+                })
+                .collect();
+            return Ok(Some(polyline(&pts).map_err(|m| self.err(c2, m))?));
+        }
+        Ok(None)
+    }
+
+    fn analytic(&self, si: &'a Instance) -> R<((Vec3, Vec3, Vec3, Vec3), Analytic)> {
+        let t = si.type_name();
+        let p = self.params(
+            si,
+            &[
+                "PLANE",
+                "CYLINDRICAL_SURFACE",
+                "CONICAL_SURFACE",
+                "SPHERICAL_SURFACE",
+                "TOROIDAL_SURFACE",
+                "SURFACE_OF_REVOLUTION",
+                "SURFACE_OF_LINEAR_EXTRUSION",
+            ],
+        )
+        .map_err(|_| {
+            self.err(
+                si,
+                format!("surface type {t} is not supported (B_SPLINE_SURFACE_WITH_KNOTS, PLANE, CYLINDRICAL_SURFACE, CONICAL_SURFACE, SPHERICAL_SURFACE, TOROIDAL_SURFACE, SURFACE_OF_REVOLUTION, SURFACE_OF_LINEAR_EXTRUSION are)"),
+            )
+        })?;
+        let positive = |x: f64, what: &str| -> R<f64> {
+            if x > 0.0 && x.is_finite() {
+                Ok(x)
+            } else {
+                Err(self.err(si, format!("the {what} {x} is not positive")))
+            }
+        };
+        match t {
+            "SURFACE_OF_REVOLUTION" => {
+                let ci = self.refer(si, p, 1)?;
+                let curve = self.curve(ci)?;
+                let ax = self.refer(si, p, 2)?;
+                let axp = self.params(ax, &["AXIS1_PLACEMENT"])?;
+                let o = self.point(self.refer(ax, axp, 1)?)?;
+                let z = match axp.get(2) {
+                    Some(Value::Ref(_)) => self.direction(self.refer(ax, axp, 2)?)?,
+                    _ => Vec3::Z,
+                };
+                let profile = self.whole_nurbs(ci, &curve)?;
+                // The reference direction: where the profile lies.
+                let rho = profile
+                    .points
+                    .iter()
+                    .map(|q| (*q - o) - (*q - o).dot(z) * z)
+                    .find(|r| r.length() > 1e-9 * (1.0 + (*r).length()))
+                    .ok_or_else(|| self.err(si, "the profile lies on the axis".into()))?
+                    .normalize();
+                Ok(((o, rho, z.cross(rho), z), Analytic::Revolution { profile }))
+            }
+            "SURFACE_OF_LINEAR_EXTRUSION" => {
+                let ci = self.refer(si, p, 1)?;
+                let curve = self.curve(ci)?;
+                let v = self.refer(si, p, 2)?;
+                let vp = self.params(v, &["VECTOR"])?;
+                let d = self.direction(self.refer(v, vp, 1)?)?;
+                let profile = self.whole_nurbs(ci, &curve)?;
+                Ok((
+                    (Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z),
+                    Analytic::Extrusion { profile, d },
+                ))
+            }
+            _ => {
+                let frame = self.placement(self.refer(si, p, 1)?)?;
+                let kind = match t {
+                    "PLANE" => Analytic::Plane,
+                    "CYLINDRICAL_SURFACE" => Analytic::Cylinder {
+                        r: positive(self.num(si, p, 2)?, "radius")?,
+                    },
+                    "CONICAL_SURFACE" => {
+                        let a = self.num(si, p, 3)? * self.angle;
+                        if a.abs() >= 0.5 * PI - 1e-9 {
+                            return Err(self.err(si, format!("semi-angle {a} rad")));
+                        }
+                        Analytic::Cone {
+                            r: self.num(si, p, 2)?,
+                            tan: a.tan(),
+                        }
+                    }
+                    "SPHERICAL_SURFACE" => Analytic::Sphere {
+                        r: positive(self.num(si, p, 2)?, "radius")?,
+                    },
+                    _ => Analytic::Torus {
+                        big: positive(self.num(si, p, 2)?, "major radius")?,
+                        small: positive(self.num(si, p, 3)?, "minor radius")?,
+                    },
+                };
+                Ok((frame, kind))
+            }
+        }
+    }
+
+    /// A swept surface's whole basis curve as NURBS.
+    fn whole_nurbs(&self, ci: &Instance, c: &Curve) -> R<Nurbs3> {
+        match c {
+            Curve::Spline(n) => Ok(n.clone()),
+            Curve::Conic { c, x, y, rx, ry } => Ok(ellipse_arc(
+                *c,
+                *x,
+                *y,
+                *rx,
+                *ry,
+                &ArcMap::new(0.0, TAU, 1.0),
+            )),
+            Curve::Line { .. } => Err(self.err(
+                ci,
+                "an unbounded LINE cannot be swept into a bounded surface".into(),
+            )),
+        }
+    }
+
+    /// An analytic face: natural coordinates of the bounds, the NURBS over
+    /// their extent, and the bounds mapped into its parameters.
+    fn analytic_face(
+        &self,
+        f: &Instance,
+        si: &'a Instance,
+        loops: &[(bool, Vec<EdgeUse>)],
+    ) -> R<BSplineSurface> {
+        let ((o, x, y, z), kind) = self.analytic(si)?;
+        if loops.is_empty() {
+            return Err(self.err(
+                f,
+                "a face on an unbounded surface needs at least one edge loop".into(),
+            ));
+        }
+        if let Analytic::Plane = kind {
+            return self.plane_face(f, (o, x, y, z), loops);
+        }
+        // Natural coordinates (a, b): a is the angle about the axis (or the
+        // profile parameter of an extrusion), b the second coordinate.
+        // Periods of the coordinates: angles wrap by 2π, the parameter of a
+        // closed swept profile by its domain length.
+        let closed_period = |n: &Nurbs3| {
+            let [t0, t1] = n.domain();
+            (n.points.first() == n.points.last()).then_some(t1 - t0)
+        };
+        let (period_a, period_b) = match &kind {
+            Analytic::Torus { .. } => (Some(TAU), Some(TAU)),
+            Analytic::Revolution { profile } => (Some(TAU), closed_period(profile)),
+            Analytic::Extrusion { profile, .. } => (closed_period(profile), None),
+            _ => (Some(TAU), None),
+        };
+        let wrap = |x: f64, near: f64, period: Option<f64>| match period {
+            Some(p) if p > 0.0 => x + p * ((near - x) / p).round(),
+            _ => x,
+        };
+        let winds =
+            |x: f64, y: f64, period: Option<f64>| period.is_some_and(|p| (x - y).abs() > 0.5 * p);
+        let natural = |q: Vec3| -> (f64, f64, bool) {
+            let d = q - o;
+            let (lx, ly, h) = (d.dot(x), d.dot(y), d.dot(z));
+            let rho = lx.hypot(ly);
+            let on_axis = rho <= 1e-12 * (1.0 + d.length());
+            let a = ly.atan2(lx);
+            match &kind {
+                Analytic::Cylinder { .. } | Analytic::Cone { .. } => (a, h, on_axis),
+                Analytic::Sphere { .. } => (a, h.atan2(rho), on_axis),
+                Analytic::Torus { big, .. } => (a, h.atan2(rho - big), on_axis),
+                Analytic::Revolution { profile, .. } => {
+                    let [t0, t1] = profile.domain();
+                    let t = nearest_param(t0, t1, (16 * profile.points.len()).min(2000), |t| {
+                        let p = profile.eval(t) - o;
+                        let ph = p.dot(z);
+                        let pr = (p - ph * z).length();
+                        (pr - rho).hypot(ph - h)
+                    });
+                    (a, t, on_axis)
+                }
+                Analytic::Extrusion { profile, d: dir } => {
+                    let [t0, t1] = profile.domain();
+                    let perp = |v: Vec3| v - v.dot(*dir) * *dir;
+                    let t = nearest_param(t0, t1, (16 * profile.points.len()).min(2000), |t| {
+                        perp(q - profile.eval(t)).length()
+                    });
+                    (t, (q - profile.eval(t)).dot(*dir), false)
+                }
+                Analytic::Plane => (lx, ly, false),
+            }
+        };
+        let mut nat: Vec<Vec<(f64, f64)>> = Vec::with_capacity(loops.len());
+        for (_, edges) in loops {
+            let mut pts: Vec<(f64, f64, bool)> = Vec::new();
+            for e in edges {
+                let mut ep: Vec<(f64, f64, bool)> =
+                    self.edge_points(e).into_iter().map(natural).collect();
+                if !pts.is_empty() {
+                    ep.remove(0);
+                }
+                pts.extend(ep);
+            }
+            // Points on the axis take the angle of a neighbour.
+            if let Some(k) = pts.iter().position(|p| !p.2) {
+                let n = pts.len();
+                for s in 1..n {
+                    let (prev, cur) = ((k + s - 1) % n, (k + s) % n);
+                    if pts[cur].2 {
+                        pts[cur].0 = pts[prev].0;
+                    }
+                }
+            }
+            // Unwrap angles along the loop.
+            let mut out: Vec<(f64, f64)> = Vec::with_capacity(pts.len());
+            for (a, b, _) in pts {
+                let (mut a, mut b) = (a, b);
+                if let Some(&(pa, pb)) = out.last() {
+                    a = wrap(a, pa, period_a);
+                    b = wrap(b, pb, period_b);
+                }
+                out.push((a, b));
+            }
+            if let (Some(f0), Some(l0)) = (out.first(), out.last())
+                && (winds(f0.0, l0.0, period_a) || winds(f0.1, l0.1, period_b))
+            {
+                return Err(self.err(
+                    f,
+                    "a bound winds around the surface's axis (a periodic face bounded without a seam edge is not supported)".into(),
+                ));
+            }
+            nat.push(out);
+        }
+        // Holes shifted by whole turns next to the outer loop.
+        let mean = |l: &[(f64, f64)]| {
+            let n = l.len().max(1) as f64;
+            (
+                l.iter().map(|p| p.0).sum::<f64>() / n,
+                l.iter().map(|p| p.1).sum::<f64>() / n,
+            )
+        };
+        let (ma, mb) = mean(&nat[0]);
+        for l in nat.iter_mut().skip(1) {
+            let (la, lb) = mean(l);
+            let (sa, sb) = (wrap(la, ma, period_a) - la, wrap(lb, mb, period_b) - lb);
+            for p in l.iter_mut() {
+                p.0 += sa;
+                p.1 += sb;
+            }
+        }
+        let all = nat.iter().flatten();
+        let (mut a0, mut a1, mut b0, mut b1) = (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        );
+        for &(a, b) in all {
+            a0 = a0.min(a);
+            a1 = a1.max(a);
+            b0 = b0.min(b);
+            b1 = b1.max(b);
+        }
+        let too_wide = |lo: f64, hi: f64, period: Option<f64>| {
+            period.is_some_and(|p| hi - lo > p * (1.0 + 1e-9))
+        };
+        if a1 <= a0 || b1 <= b0 || too_wide(a0, a1, period_a) || too_wide(b0, b1, period_b) {
+            return Err(self.err(f, "the bounds enclose no area on the surface".into()));
+        }
+        let clip = |lo: f64, hi: f64, period: Option<f64>| period.map_or(hi, |p| hi.min(lo + p));
+        let (a1, b1) = (clip(a0, a1, period_a), clip(b0, b1, period_b));
+        // A swept profile's parameter must stay in its domain: shift whole
+        // periods into it, or refuse a face across the profile's seam.
+        let profile_coordinate = match &kind {
+            Analytic::Revolution { profile } => Some((1, profile.domain(), period_b)),
+            Analytic::Extrusion { profile, .. } => Some((0, profile.domain(), period_a)),
+            _ => None,
+        };
+        let (mut a0, mut a1, mut b0, mut b1) = (a0, a1, b0, b1);
+        if let Some((axis, [t0, t1], period)) = profile_coordinate {
+            let (lo, hi) = if axis == 0 { (a0, a1) } else { (b0, b1) };
+            let shift = match period {
+                Some(p) if p > 0.0 && lo < t0 - 1e-9 * p => p * ((t0 - lo) / p).ceil(),
+                Some(p) if p > 0.0 && lo >= t1 => -p * ((lo - t0) / p).floor(),
+                _ => 0.0,
+            };
+            let tol = 1e-9 * (t1 - t0);
+            if lo + shift < t0 - tol || hi + shift > t1 + tol {
+                return Err(self.err(f, "the face crosses the seam of its swept profile".into()));
+            }
+            for p in nat.iter_mut().flatten() {
+                if axis == 0 {
+                    p.0 += shift;
+                } else {
+                    p.1 += shift;
+                }
+            }
+            if axis == 0 {
+                (a0, a1) = (a0 + shift, a1 + shift);
+            } else {
+                (b0, b1) = (b0 + shift, b1 + shift);
+            }
+        }
+        // The NURBS (u along a, v along b) and the map of (a, b) to (u, v).
+        let (surface, to_uv): (BSplineSurface, ToUv) = match &kind {
+            Analytic::Cylinder { r } | Analytic::Cone { r, .. } => {
+                let tan = if let Analytic::Cone { tan, .. } = kind {
+                    tan
+                } else {
+                    0.0
+                };
+                let radius = |h: f64| r + h * tan;
+                let scale = radius(b0).abs().max(radius(b1).abs()).max(1e-300);
+                let map = ArcMap::new(a0, a1, scale);
+                let profile = Nurbs3::segment(
+                    o + radius(b0) * x + b0 * z,
+                    o + radius(b1) * x + b1 * z,
+                    b0,
+                    b1,
+                );
+                (
+                    self.revolved(f, o, z, &profile, &map)?,
+                    Box::new(move |a, b| [map.param(a), b]),
+                )
+            }
+            Analytic::Sphere { r } | Analytic::Torus { small: r, .. } => {
+                let big = if let Analytic::Torus { big, .. } = kind {
+                    big
+                } else {
+                    0.0
+                };
+                let amap = ArcMap::new(a0, a1, big + r);
+                let bmap = ArcMap::new(b0, b1, *r);
+                let profile = arc(o + big * x, x, z, *r, &bmap);
+                (
+                    self.revolved(f, o, z, &profile, &amap)?,
+                    Box::new(move |a, b| [amap.param(a), bmap.param(b)]),
+                )
+            }
+            Analytic::Revolution { profile, .. } => {
+                let scale = profile
+                    .points
+                    .iter()
+                    .map(|q| ((*q - o) - (*q - o).dot(z) * z).length())
+                    .fold(0.0, f64::max)
+                    .max(1e-300);
+                let map = ArcMap::new(a0, a1, scale);
+                (
+                    self.revolved(f, o, z, profile, &map)?,
+                    Box::new(move |a, b| [map.param(a), b]),
+                )
+            }
+            Analytic::Extrusion { profile, d, .. } => {
+                let n = profile.points.len();
+                let mut pts = Vec::with_capacity(2 * n);
+                let mut w = Vec::with_capacity(2 * n);
+                for (i, q) in profile.points.iter().enumerate() {
+                    let wi = profile.weights.as_ref().map_or(1.0, |ws| ws[i]);
+                    pts.push(*q + b0 * *d);
+                    pts.push(*q + b1 * *d);
+                    w.extend([wi, wi]);
+                }
+                let s = BSplineSurface::from_flat(
+                    profile.degree,
+                    1,
+                    profile.knots.clone(),
+                    vec![b0, b0, b1, b1],
+                    [n, 2],
+                    pts,
+                    profile.weights.is_some().then_some(w),
+                )
+                .map_err(|e| self.err(f, e.to_string()))?;
+                (s, Box::new(|a, b| [a, b]))
+            }
+            Analytic::Plane => unreachable!("planes are handled by plane_face"),
+        };
+        let trims = nat
+            .iter()
+            .map(|l| {
+                let pts: Vec<[f64; 2]> = l.iter().map(|&(a, b)| to_uv(a, b)).collect();
+                polyline(&pts).map(|c| TrimLoop { curves: vec![c] })
+            })
+            .collect::<Result<Vec<_>, String>>()
+            .map_err(|m| self.err(f, m))?;
+        self.attach(f, surface, trims, loops[0].0)
+    }
+
+    fn revolved(
+        &self,
+        f: &Instance,
+        o: Vec3,
+        z: Vec3,
+        profile: &Nurbs3,
+        map: &ArcMap,
+    ) -> R<BSplineSurface> {
+        let (ku, pts, w) = revolve(o, z, profile, map);
+        let nu = ku.len() - 3;
+        BSplineSurface::from_flat(
+            2,
+            profile.degree,
+            ku,
+            profile.knots.clone(),
+            [nu, profile.points.len()],
+            pts,
+            Some(w),
+        )
+        .map_err(|e| self.err(f, e.to_string()))
+    }
+
+    /// A planar face: a bilinear patch over the bounds' box in the plane's
+    /// frame, the bounds mapped exactly (affine map of their NURBS).
+    fn plane_face(
+        &self,
+        f: &Instance,
+        (o, x, y, _z): (Vec3, Vec3, Vec3, Vec3),
+        loops: &[(bool, Vec<EdgeUse>)],
+    ) -> R<BSplineSurface> {
+        let local = |q: Vec3| [(q - o).dot(x), (q - o).dot(y)];
+        let mut curves: Vec<Vec<TrimCurve>> = Vec::new();
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for (_, edges) in loops {
+            let mut l = Vec::new();
+            for e in edges {
+                let c = match self.edge_nurbs(e) {
+                    Some(n) => TrimCurve::new(
+                        n.degree,
+                        n.knots,
+                        n.points.iter().map(|q| local(*q)).collect(),
+                        n.weights,
+                    ),
+                    None => {
+                        let pts: Vec<[f64; 2]> =
+                            self.edge_points(e).into_iter().map(local).collect();
+                        polyline(&pts)
+                    }
+                }
+                .map_err(|m| self.err(&self.ex.instances[&e.edge], m))?;
+                for q in self.edge_points(e) {
+                    let [a, b] = local(q);
+                    lo = [lo[0].min(a), lo[1].min(b)];
+                    hi = [hi[0].max(a), hi[1].max(b)];
+                }
+                l.push(c);
+            }
+            curves.push(l);
+        }
+        if hi[0] <= lo[0] || hi[1] <= lo[1] {
+            return Err(self.err(f, "the bounds enclose no area".into()));
+        }
+        let corner = |a: f64, b: f64| o + a * x + b * y;
+        let s = BSplineSurface::from_flat(
+            1,
+            1,
+            vec![lo[0], lo[0], hi[0], hi[0]],
+            vec![lo[1], lo[1], hi[1], hi[1]],
+            [2, 2],
+            vec![
+                corner(lo[0], lo[1]),
+                corner(lo[0], hi[1]),
+                corner(hi[0], lo[1]),
+                corner(hi[0], hi[1]),
+            ],
+            None,
+        )
+        .map_err(|e| self.err(f, e.to_string()))?;
+        let trims = curves
+            .into_iter()
+            .map(|curves| TrimLoop { curves })
+            .collect();
+        self.attach(f, s, trims, loops[0].0)
+    }
+}
+
+/// A degree-1 trim curve through `pts` (chord-length-free uniform knots).
+fn polyline(pts: &[[f64; 2]]) -> Result<TrimCurve, String> {
+    let mut p: Vec<[f64; 2]> = Vec::with_capacity(pts.len());
+    for q in pts {
+        if p.last() != Some(q) {
+            p.push(*q);
+        }
+    }
+    if p.len() < 2 {
+        return Err("the edge has no length in the surface's parameters".into());
+    }
+    let n = p.len();
+    let mut knots = vec![0.0];
+    knots.extend((0..n).map(|k| k as f64 / (n - 1) as f64));
+    knots.push(1.0);
+    TrimCurve::new(1, knots, p, None)
+}
+
+/// The parameters of the point of `s` nearest to `q`: a grid search (or the
+/// given guess), then Newton iterations on `Su·(S − q) = Sv·(S − q) = 0`
+/// (Piegl & Tiller §6.1), clamped to the domain; a grid search again when
+/// the guess leads astray.
+pub(crate) fn invert_point(s: &BSplineSurface, q: Vec3, guess: Option<(f64, f64)>) -> (f64, f64) {
+    let ([u0, u1], [v0, v1]) = (s.domain_u(), s.domain_v());
+    let grid = || {
+        let n = 24;
+        let mut best = (f64::INFINITY, (u0, v0));
+        for i in 0..=n {
+            for j in 0..=n {
+                let u = u0 + (u1 - u0) * i as f64 / n as f64;
+                let v = v0 + (v1 - v0) * j as f64 / n as f64;
+                let d = s.eval(u, v).distance_squared(q);
+                if d < best.0 {
+                    best = (d, (u, v));
+                }
+            }
+        }
+        best.1
+    };
+    let newton = |(mut u, mut v): (f64, f64)| {
+        for _ in 0..30 {
+            let d = s.derivatives(u, v);
+            let r = d.point - q;
+            let f = d.su.dot(r);
+            let g = d.sv.dot(r);
+            let a = d.su.length_squared() + r.dot(d.suu);
+            let b = d.su.dot(d.sv) + r.dot(d.suv);
+            let c = d.sv.length_squared() + r.dot(d.svv);
+            let det = a * c - b * b;
+            if det.abs() <= 1e-300 || !det.is_finite() {
+                break;
+            }
+            let du = (c * f - b * g) / det;
+            let dv = (a * g - b * f) / det;
+            let (nu, nv) = ((u - du).clamp(u0, u1), (v - dv).clamp(v0, v1));
+            let moved = (nu - u).abs() + (nv - v).abs();
+            (u, v) = (nu, nv);
+            if moved <= 1e-15 * (1.0 + u.abs() + v.abs()) {
+                break;
+            }
+        }
+        (u, v)
+    };
+    let size = {
+        let (a, b) = s.control_bounding_box();
+        (b - a).length().max(1e-300)
+    };
+    if let Some(g) = guess {
+        let r = newton(g);
+        if s.eval(r.0, r.1).distance(q) <= 1e-7 * size {
+            return r;
+        }
+    }
+    newton(grid())
+}

@@ -1,0 +1,172 @@
+//! Surface files by extension: the one place that maps `.json`,
+//! `.igs`/`.iges` and `.step`/`.stp` to their readers and writers.
+//!
+//! Reading keeps the file's length unit ([`SurfaceFile::unit`]; JSON has
+//! none) and writing puts it back, so converting between formats changes
+//! no coordinate. Every writer keeps control points, knots, weights and
+//! trimming curves bit-identical on a read → write → read round trip.
+
+use std::path::{Path, PathBuf};
+
+use thiserror::Error;
+
+use super::IoError;
+use super::iges_write::{IgesWriteOptions, write_iges};
+use super::step::{StepError, StepWriteOptions, read_step, write_step};
+use super::units::LengthUnit;
+use crate::bspline::{
+    BSplineSurface, IgesError, SurfaceJsonError, read_iges, read_surfaces_json, write_surfaces_json,
+};
+
+/// A surface file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SurfaceFormat {
+    /// fairline's surface JSON (DESIGN.md §5).
+    Json,
+    /// IGES 5.3 (entity 128, trims as 144/142).
+    Iges,
+    /// STEP ISO 10303-21 (AP203/AP214/AP242 geometry).
+    Step,
+}
+
+impl SurfaceFormat {
+    /// The format named by the extension (case-insensitive): `.json`,
+    /// `.igs`/`.iges`, `.step`/`.stp`; `None` otherwise.
+    pub fn from_path(path: impl AsRef<Path>) -> Option<Self> {
+        let ext = path
+            .as_ref()
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("json") => Some(Self::Json),
+            Some("igs" | "iges") => Some(Self::Iges),
+            Some("step" | "stp") => Some(Self::Step),
+            _ => None,
+        }
+    }
+}
+
+/// The surfaces of a file and its length unit.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SurfaceFile {
+    /// Every surface, in file order (trimmed where the file trims them).
+    pub surfaces: Vec<BSplineSurface>,
+    /// The length unit the file declares (none for JSON, or when the file
+    /// names no unit fairline knows).
+    pub unit: Option<LengthUnit>,
+}
+
+/// Why a surface file could not be read or written.
+#[derive(Debug, Error)]
+pub enum SurfaceFileError {
+    /// Surface JSON.
+    #[error(transparent)]
+    Json(#[from] SurfaceJsonError),
+    /// IGES.
+    #[error(transparent)]
+    Iges(#[from] IgesError),
+    /// STEP.
+    #[error(transparent)]
+    Step(#[from] StepError),
+    /// Writing.
+    #[error(transparent)]
+    Io(#[from] IoError),
+    /// The extension names no surface format.
+    #[error(
+        "{}: unknown surface format (expected extension .json, .igs/.iges or .step/.stp)",
+        path.display()
+    )]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+    },
+}
+
+/// Reads every surface of a file, choosing the reader by extension.
+pub fn read_surface_file(path: impl AsRef<Path>) -> Result<SurfaceFile, SurfaceFileError> {
+    let path = path.as_ref();
+    match SurfaceFormat::from_path(path) {
+        Some(SurfaceFormat::Json) => Ok(SurfaceFile {
+            surfaces: read_surfaces_json(path)?,
+            unit: None,
+        }),
+        Some(SurfaceFormat::Iges) => {
+            let imp = read_iges(path)?;
+            Ok(SurfaceFile {
+                unit: imp.units.as_deref().and_then(LengthUnit::from_iges_name),
+                surfaces: imp.surfaces.into_iter().map(|s| s.surface).collect(),
+            })
+        }
+        Some(SurfaceFormat::Step) => {
+            let imp = read_step(path)?;
+            Ok(SurfaceFile {
+                unit: imp.unit,
+                surfaces: imp.surfaces.into_iter().map(|s| s.surface).collect(),
+            })
+        }
+        None => Err(SurfaceFileError::UnknownFormat {
+            path: path.to_path_buf(),
+        }),
+    }
+}
+
+/// Writes surfaces in the format the extension names (atomically), in
+/// `unit` (millimetres when `None`; JSON carries no unit).
+pub fn write_surface_file(
+    path: impl AsRef<Path>,
+    surfaces: &[BSplineSurface],
+    unit: Option<&LengthUnit>,
+) -> Result<(), SurfaceFileError> {
+    let path = path.as_ref();
+    let unit = unit.cloned().unwrap_or_else(LengthUnit::millimetre);
+    match SurfaceFormat::from_path(path) {
+        Some(SurfaceFormat::Json) => Ok(write_surfaces_json(path, surfaces)?),
+        Some(SurfaceFormat::Iges) => Ok(write_iges(
+            path,
+            surfaces,
+            &IgesWriteOptions {
+                unit,
+                ..IgesWriteOptions::default()
+            },
+        )?),
+        Some(SurfaceFormat::Step) => Ok(write_step(
+            path,
+            surfaces,
+            &StepWriteOptions {
+                unit,
+                ..StepWriteOptions::default()
+            },
+        )?),
+        None => Err(SurfaceFileError::UnknownFormat {
+            path: path.to_path_buf(),
+        }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn surface_files_round_trip_through_every_format() {
+        let surfaces = crate::io::iges_write::tests::generated();
+        let dir =
+            std::env::temp_dir().join(format!("fairline-surface-file-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for name in ["a.json", "a.IGS", "a.iges", "a.step", "a.stp"] {
+            let p = dir.join(name);
+            write_surface_file(&p, &surfaces, Some(&LengthUnit::inch())).unwrap();
+            let back = read_surface_file(&p).unwrap();
+            assert_eq!(back.surfaces, surfaces, "{name}");
+            let want = (!name.ends_with("json")).then(LengthUnit::inch);
+            assert_eq!(back.unit, want, "{name}");
+        }
+        let err = read_surface_file(dir.join("a.obj"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("unknown surface format"), "{err}");
+        assert!(write_surface_file(dir.join("a.txt"), &surfaces, None).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
