@@ -515,3 +515,4 @@ fn auto_chooses_the_solver_by_the_geometry() {
     assert!(auto.positions == cg.positions, "auto is not block Jacobi");
     assert_eq!(auto.report.cg_iterations, cg.report.cg_iterations);
 }
+
