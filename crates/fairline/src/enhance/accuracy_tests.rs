@@ -286,12 +286,7 @@ fn rounded_cube_truth(n: u32, radius: f64) -> Truth {
         closest: Box::new(move |p| rounded_box_closest(p, radius)),
         samples: uniform_rounded_cube(8 * n, radius).positions().to_vec(),
         near_feature: Box::new(move |p| {
-            p.abs()
-                .to_array()
-                .iter()
-                .filter(|c| **c > a - w)
-                .count()
-                >= 2
+            p.abs().to_array().iter().filter(|c| **c > a - w).count() >= 2
         }),
     }
 }
@@ -320,12 +315,7 @@ fn sharp_cube_truth(subdivisions: u32) -> Truth {
         closest: Box::new(|p| rounded_box_closest(p, 0.0)),
         samples: uniform_rounded_cube(80, 0.0).positions().to_vec(),
         near_feature: Box::new(move |p| {
-            p.abs()
-                .to_array()
-                .iter()
-                .filter(|c| **c > 1.0 - w)
-                .count()
-                >= 2
+            p.abs().to_array().iter().filter(|c| **c > 1.0 - w).count() >= 2
         }),
     }
 }
@@ -393,7 +383,11 @@ fn profile_points(profile: &Profile, n: u32) -> Vec<DVec2> {
     let mut at = profile.0[0].at(0.0);
     for &p in &profile.0 {
         let reversed = p.at(p.length()).distance(at) < p.at(0.0).distance(at);
-        at = if reversed { p.at(0.0) } else { p.at(p.length()) };
+        at = if reversed {
+            p.at(0.0)
+        } else {
+            p.at(p.length())
+        };
         pieces.push((p, reversed));
     }
     let total = profile.length();
@@ -554,8 +548,7 @@ impl<'a> FaceGrid<'a> {
                         if dx.abs().max(dy.abs()).max(dz.abs()) != r {
                             continue;
                         }
-                        let Some(faces) = self.cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz])
-                        else {
+                        let Some(faces) = self.cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
                             continue;
                         };
                         for &f in faces {
@@ -675,7 +668,11 @@ fn ground_truth_meshes_lie_on_their_surfaces() {
             exact += usize::from((d - t).abs() < 1e-9);
             total += 1;
         }
-        assert!(exact * 10 >= total * 9, "{}: {exact} of {total}", truth.name);
+        assert!(
+            exact * 10 >= total * 9,
+            "{}: {exact} of {total}",
+            truth.name
+        );
         // the sampled surface → mesh distance of the input is its chord sag
         let acc = accuracy(&truth, truth.mesh.positions());
         println!(
@@ -692,8 +689,22 @@ fn ground_truth_meshes_lie_on_their_surfaces() {
     }
 }
 
-/// The table of issue #21 item 2: input, the paper's method (no
-/// projection) and the default (smooth projection) on each shape.
+/// The table of issue #21 item 2 (BENCHMARKS.md, session 17): input, the
+/// paper's method (no projection), the projection onto the input mesh and
+/// the default (smooth projection) on each shape; and the claims.
+///
+/// With the defaults (λ = 1, μ = ½, one solve):
+/// - on the shapes with rounded features (rounded cube, filleted cylinder),
+///   which the coarse input under-samples, the two-sided Hausdorff and RMS
+///   distances fall by at least 15 % (rounded cube: 40 % and 30 %), and the
+///   normal error near the features falls;
+/// - on the shapes with sharp creases, which no smooth fit reconstructs,
+///   the sharp cube still improves (both distances and the normals), and
+///   the fandisk-like part stays within 10 % (Hausdorff) and 5 % (RMS) of
+///   its input;
+/// - everywhere the default is closer to the truth than the paper's
+///   method, whose distances exceed the input's, and the mean triangle
+///   quality stays at least 0.8, without flips.
 #[test]
 fn vertex_flow_approximates_known_surfaces_better_than_its_input() {
     println!(
@@ -722,12 +733,43 @@ fn vertex_flow_approximates_known_surfaces_better_than_its_input() {
         row("Ji et al. (no projection)", &paper);
         let (mesh_proj, _) = run(EnhanceOptions::default().projection(Projection::Mesh));
         row("projected onto the input mesh", &mesh_proj);
-        let (smooth, out) = run(EnhanceOptions::default());
-        row("default (smooth projection)", &smooth);
-        for it in [2, 3] {
-            let (s, _) = run(EnhanceOptions::default().iterations(it));
-            row(&format!("default, {it} iterations"), &s);
+        let (out, result) = run(EnhanceOptions::default());
+        row("default (smooth projection)", &out);
+        let name = truth.name;
+        let ratio = |a: f64, b: f64| a / b;
+        let (h, rms) = (
+            ratio(out.hausdorff, input.hausdorff),
+            ratio(out.rms, input.rms),
+        );
+        match name {
+            "rounded cube" | "filleted cylinder" => {
+                let (hmax, rmax) = if name == "rounded cube" {
+                    (0.6, 0.7)
+                } else {
+                    (0.85, 0.85)
+                };
+                assert!(h <= hmax && rms <= rmax, "{name}: {h:.3} {rms:.3}");
+                assert!(out.normal_error_deg < input.normal_error_deg, "{name}");
+            }
+            "sharp cube" => {
+                assert!(h < 0.95 && rms < 0.95, "{name}: {h:.3} {rms:.3}");
+                assert!(out.normal_error_deg < input.normal_error_deg, "{name}");
+            }
+            _ => {
+                assert!(h <= 1.1 && rms <= 1.05, "{name}: {h:.3} {rms:.3}");
+            }
         }
-        assert_eq!(out.report.flipped_triangles, 0, "{}", truth.name);
+        // the paper's method leaves the surface; the default does not
+        assert!(
+            paper.hausdorff > input.hausdorff && paper.rms > input.rms,
+            "{name}"
+        );
+        assert!(
+            out.hausdorff < paper.hausdorff && out.rms < paper.rms,
+            "{name}"
+        );
+        assert!(out.normal_error_deg < paper.normal_error_deg, "{name}");
+        assert!(out.quality >= 0.8, "{name}: quality {}", out.quality);
+        assert_eq!(result.report.flipped_triangles, 0, "{name}");
     }
 }
