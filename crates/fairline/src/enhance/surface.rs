@@ -200,9 +200,8 @@ fn line_triangle(x: Vec3, d: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Option<(f64, [f
     let q = s.cross(e1);
     let v = d.dot(q) * inv;
     let t = e2.dot(q) * inv;
-    if !(u >= -EDGE_TOLERANCE && v >= -EDGE_TOLERANCE && u + v <= 1.0 + EDGE_TOLERANCE)
-        || !t.is_finite()
-    {
+    let inside = u >= -EDGE_TOLERANCE && v >= -EDGE_TOLERANCE && u + v <= 1.0 + EDGE_TOLERANCE;
+    if !(inside && t.is_finite()) {
         return None;
     }
     let w = [(1.0 - u - v).max(0.0), u.max(0.0), v.max(0.0)];
