@@ -1,10 +1,12 @@
-//! Detection and repair of flipped triangles after a vertex-flow solve
-//! (Ji et al. §5: "we rectify the topological errors in the post-processing
-//! if triangle flips occur").
+//! Detection and repair of flipped and collapsing triangles after a
+//! vertex-flow solve (Ji et al. §5: "we rectify the topological errors in
+//! the post-processing if triangle flips occur"), and the quality bound:
+//! no triangle ends with a quality 2r/R below [`QUALITY_FLOOR`] times its
+//! input quality.
 
 use super::REPAIR_HALVINGS;
 use crate::Vec3;
-use crate::geom::triangle_normal_area;
+use crate::geom::{triangle_normal_area, triangle_quality};
 use crate::mesh::{FaceId, SurfaceMesh};
 use rayon::prelude::*;
 
@@ -20,54 +22,91 @@ pub(super) fn normals_at(mesh: &SurfaceMesh, positions: &[Vec3]) -> Vec<Vec3> {
         .collect()
 }
 
-/// Unit face normals of the (normalised) input mesh.
-pub(super) fn face_normals_of(mesh: &SurfaceMesh) -> Vec<Vec3> {
-    normals_at(mesh, mesh.positions())
+/// Share of its input quality 2r/R below which a triangle counts as
+/// collapsing and its vertices' steps are shortened like those of a flipped
+/// one: every output triangle keeps at least a quarter of its input quality
+/// (the documented bound of the flow's triangle quality; the paper relies on
+/// μ alone, which keeps the mean but lets single triangles collapse to
+/// slivers).
+pub const QUALITY_FLOOR: f64 = 0.25;
+
+/// The input of the repair: normal and quality of every input face.
+pub(super) struct InputFaces {
+    normals: Vec<Vec3>,
+    qualities: Vec<f64>,
 }
 
-/// Faces whose normal at `positions` points against (or is perpendicular
-/// to) their input normal, or which collapsed. Faces degenerate in the input
-/// are never flagged.
-pub(super) fn flipped_faces(
-    mesh: &SurfaceMesh,
-    input_normals: &[Vec3],
-    positions: &[Vec3],
-) -> Vec<u32> {
-    (0..mesh.face_count() as u32)
+impl InputFaces {
+    /// Unit face normals and qualities of the (normalised) input mesh.
+    pub fn of(mesh: &SurfaceMesh) -> InputFaces {
+        let p = mesh.positions();
+        InputFaces {
+            normals: normals_at(mesh, p),
+            qualities: (0..mesh.face_count() as u32)
+                .into_par_iter()
+                .map(|f| {
+                    let [a, b, c] = mesh.triangle(FaceId(f)).map(|v| p[v.idx()]);
+                    triangle_quality(a, b, c)
+                })
+                .collect(),
+        }
+    }
+}
+
+/// Whether face `f` at `positions` is flipped (its normal against, or
+/// perpendicular to, its input normal, or collapsed), and whether it fell
+/// below [`QUALITY_FLOOR`] of its input quality. Faces degenerate in the
+/// input are never flagged.
+fn face_state(mesh: &SurfaceMesh, input: &InputFaces, positions: &[Vec3], f: u32) -> (bool, bool) {
+    let n0 = input.normals[f as usize];
+    if n0 == Vec3::ZERO {
+        return (false, false);
+    }
+    let [a, b, c] = mesh.triangle(FaceId(f)).map(|v| positions[v.idx()]);
+    let n = triangle_normal_area(a, b, c).0;
+    let flipped = !(n.dot(n0) > 0.0);
+    let degraded = triangle_quality(a, b, c) < QUALITY_FLOOR * input.qualities[f as usize];
+    (flipped, degraded)
+}
+
+/// Faces flipped or below the quality floor at `positions`, and how many of
+/// them are flipped.
+fn bad_faces(mesh: &SurfaceMesh, input: &InputFaces, positions: &[Vec3]) -> (Vec<u32>, usize) {
+    let states: Vec<(u32, bool)> = (0..mesh.face_count() as u32)
         .into_par_iter()
-        .filter(|&f| {
-            let n0 = input_normals[f as usize];
-            if n0 == Vec3::ZERO {
-                return false;
-            }
-            let [a, b, c] = mesh.triangle(FaceId(f)).map(|v| positions[v.idx()]);
-            let n = triangle_normal_area(a, b, c).0;
-            !(n.dot(n0) > 0.0)
+        .filter_map(|f| {
+            let (flipped, degraded) = face_state(mesh, input, positions, f);
+            (flipped || degraded).then_some((f, flipped))
         })
-        .collect()
+        .collect();
+    let flipped = states.iter().filter(|s| s.1).count();
+    (states.into_iter().map(|s| s.0).collect(), flipped)
 }
 
 /// What [`repair_flips`] did.
 pub(super) struct RepairOutcome {
     /// Faces flipped before the repair.
     pub flipped: usize,
+    /// Faces not flipped but below the quality floor before the repair.
+    pub degraded: usize,
     /// Vertices whose step was shortened or undone.
     pub backtracked: Vec<usize>,
 }
 
-/// Repairs flipped faces of `target` (the solution of a step that started at
-/// the flip-free `start`): the steps of the vertices of flipped faces are
-/// halved, [`REPAIR_HALVINGS`] times at most, then reset to zero, until no
-/// face is flipped. Terminates: a face whose vertices are all back at
-/// `start` is not flipped, and every round moves at least one vertex back.
+/// Repairs flipped and collapsing faces of `target` (the solution of a step
+/// that started at `start`, where no face is either): the steps of the
+/// vertices of such faces are halved, [`REPAIR_HALVINGS`] times at most,
+/// then reset to zero, until no face is flipped or below the quality floor.
+/// Terminates: a face whose vertices are all back at `start` is neither,
+/// and every round moves at least one vertex back.
 pub(super) fn repair_flips(
     mesh: &SurfaceMesh,
-    input_normals: &[Vec3],
+    input: &InputFaces,
     start: &[Vec3],
     target: &mut [Vec3],
 ) -> RepairOutcome {
-    let mut flagged = flipped_faces(mesh, input_normals, target);
-    let flipped = flagged.len();
+    let (mut flagged, flipped) = bad_faces(mesh, input, target);
+    let degraded = flagged.len() - flipped;
     let mut backtracked = vec![false; target.len()];
     let mut touched = vec![false; target.len()];
     let mut round = 0;
@@ -94,10 +133,11 @@ pub(super) fn repair_flips(
             break;
         }
         round += 1;
-        flagged = flipped_faces(mesh, input_normals, target);
+        flagged = bad_faces(mesh, input, target).0;
     }
     RepairOutcome {
         flipped,
+        degraded,
         backtracked: (0..backtracked.len()).filter(|&v| backtracked[v]).collect(),
     }
 }

@@ -515,3 +515,33 @@ fn auto_chooses_the_solver_by_the_geometry() {
     assert!(auto.positions == cg.positions, "auto is not block Jacobi");
     assert_eq!(auto.report.cg_iterations, cg.report.cg_iterations);
 }
+
+/// The documented quality bound: whatever λ and μ, no output triangle has
+/// less than [`QUALITY_FLOOR`] of its input quality 2r/R (the repair
+/// shortens the steps of the vertices of any that would), while μ = 0 and
+/// a small λ do push some triangles to it.
+#[test]
+fn every_triangle_keeps_a_quarter_of_its_input_quality() {
+    let m = rounded_cube(12, 0.3);
+    let q_in = crate::geom::triangle_qualities(&m);
+    let mut degraded = 0;
+    for o in [
+        EnhanceOptions::default(),
+        EnhanceOptions::default().mu(0.0),
+        EnhanceOptions::default().lambda(0.05).mu(0.0).iterations(3),
+    ] {
+        let out = enhance_features(&m, &o).unwrap();
+        let mut r = m.clone();
+        r.set_positions(out.positions.clone()).unwrap();
+        let q_out = crate::geom::triangle_qualities(&r);
+        for (f, (a, b)) in q_in.iter().zip(&q_out).enumerate() {
+            assert!(*b >= QUALITY_FLOOR * a, "face {f}: {a} -> {b} with {o:?}");
+        }
+        assert_eq!(count_flips(&m, &out.positions), 0);
+        degraded += out.report.degraded_triangles;
+    }
+    assert!(
+        degraded > 0,
+        "the bound was never needed: the test proves nothing"
+    );
+}
