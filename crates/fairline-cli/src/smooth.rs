@@ -209,6 +209,11 @@ pub fn run(args: Args) -> Result<()> {
         },
         Weights::Cotan => LaplaceWeights::Cotangent,
     };
+    // Δ_B H = 0 on a closed mesh with nothing fixed has no boundary data:
+    // its solutions are the surfaces of constant mean curvature
+    let unanchored = matches!(args.method, Method::SchneiderKobbelt)
+        && mesh.is_closed()
+        && constraints.fixed.is_empty();
     // the input is kept only for the before/after picture
     let input = args.png.is_some().then(|| mesh.clone());
     let mut report = Report::new("smooth");
@@ -293,6 +298,13 @@ pub fn run(args: Args) -> Result<()> {
             "{name} did not converge in {} iteration(s); try more --iterations or a larger --epsilon",
             r.iterations
         ));
+    }
+    if unanchored {
+        report.warn(
+            "schneider-kobbelt on a closed mesh without --fixed vertices: nothing holds the shape, \
+             and Δ_B H = 0 pulls it toward constant mean curvature (a sphere-like blob), erasing \
+             features such as ears or legs; fix the vertices that must stay (--fixed) to keep them",
+        );
     }
     report.write(args.report.as_deref())?;
     job.finish(format_args!(

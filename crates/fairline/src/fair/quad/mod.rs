@@ -30,8 +30,8 @@ mod reference;
 mod solver;
 
 pub use network::{PolylineNetworkOptions, PolylineNetworkReport, fair_polyline_network};
-pub(crate) use solver::DIRECT_LIMIT;
 use reference::ReferenceSurface;
+pub(crate) use solver::DIRECT_LIMIT;
 use solver::{Lines, System, line_families};
 
 use crate::Vec3;
@@ -232,7 +232,10 @@ pub(crate) fn fair_structure_lines_with(
         ));
     }
     let n = mesh.vertex_count();
-    let boundary: Vec<bool> = mesh.vertices().map(|v| mesh.is_boundary_vertex(v)).collect();
+    let boundary: Vec<bool> = mesh
+        .vertices()
+        .map(|v| mesh.is_boundary_vertex(v))
+        .collect();
     let mut hard_fixed = vec![false; n];
     for v in mesh.vertices() {
         let b = mesh.is_boundary_vertex(v);
@@ -421,7 +424,6 @@ pub(crate) fn fair_structure_lines_with(
     mesh.set_positions(cur)?;
     Ok(report)
 }
-
 
 #[cfg(test)]
 mod tests;

@@ -150,4 +150,3 @@ pub fn fair_polyline_network(
     }
     Ok(report)
 }
-

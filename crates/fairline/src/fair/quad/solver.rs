@@ -156,7 +156,10 @@ impl System<'_> {
     /// mean square error of the displacements is at most ε·ē whatever the
     /// mesh's size, scale or position. `None` if the iteration does not
     /// reach it (the caller then factors N).
-    pub(super) fn solve_iterative(&self, lines: &Lines<'_>) -> Result<Option<Vec<Vec3>>, QuadFairError> {
+    pub(super) fn solve_iterative(
+        &self,
+        lines: &Lines<'_>,
+    ) -> Result<Option<Vec<Vec3>>, QuadFairError> {
         let (runs, coef, index, cur, omega) =
             (self.runs, self.coef, self.index, self.cur, self.omega);
         let m = self.unknowns.len();
@@ -580,4 +583,3 @@ pub(super) fn line_families(lines: &[StructureLine], n: usize) -> Vec<u8> {
     }
     family
 }
-

@@ -420,7 +420,11 @@ fn turning_per_point(m: &SurfaceMesh, f: &dyn Fn(f64, f64) -> f64) -> (Vec<f64>,
         let k = v.len();
         let count = if l.closed { k } else { k.saturating_sub(2) };
         for i in 0..count {
-            let (a, b, c) = (p[v[i].idx()], p[v[(i + 1) % k].idx()], p[v[(i + 2) % k].idx()]);
+            let (a, b, c) = (
+                p[v[i].idx()],
+                p[v[(i + 1) % k].idx()],
+                p[v[(i + 2) % k].idx()],
+            );
             let (e0, e1) = (b - a, c - b);
             space.push(e0.angle_between(e1).to_degrees());
             let e = 1e-6;
