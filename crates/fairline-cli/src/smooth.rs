@@ -209,6 +209,11 @@ pub fn run(args: Args) -> Result<()> {
         },
         Weights::Cotan => LaplaceWeights::Cotangent,
     };
+    // Δ_B H = 0 on a closed mesh with nothing fixed has no boundary data:
+    // its solutions are the surfaces of constant mean curvature
+    let unanchored = matches!(args.method, Method::SchneiderKobbelt)
+        && mesh.is_closed()
+        && constraints.fixed.is_empty();
     // the input is kept only for the before/after picture
     let input = args.png.is_some().then(|| mesh.clone());
     let mut report = Report::new("smooth");
@@ -294,6 +299,13 @@ pub fn run(args: Args) -> Result<()> {
             r.iterations
         ));
     }
+    if unanchored {
+        report.warn(
+            "schneider-kobbelt on a closed mesh without --fixed vertices: nothing holds the shape, \
+             and Δ_B H = 0 pulls it toward constant mean curvature (a sphere-like blob), erasing \
+             features such as ears or legs; fix the vertices that must stay (--fixed) to keep them",
+        );
+    }
     report.write(args.report.as_deref())?;
     job.finish(format_args!(
         "{name}, {} iteration(s){} on {} vertices, largest move {:.3e}",
@@ -309,6 +321,8 @@ pub fn run(args: Args) -> Result<()> {
 /// zigzagging structure lines are straightened by a sparse least-squares
 /// fit of the linearised direction residual of every run of four points,
 /// with a penalty ω‖p − p⁰‖² that keeps the shape. Corners never move.
+/// The points slide along a smooth fit of the input surface, so the surface
+/// keeps its shape (`--off-surface`: the thesis' method as printed).
 /// The weight is scale-invariant: ω is divided by the squared mean edge
 /// length, so the same value behaves the same on a mesh of any size.
 #[derive(clap::Args, Debug)]
@@ -328,8 +342,9 @@ pub struct QuadArgs {
     /// their two middle points.
     #[arg(long, default_value_t = 0.1)]
     pub deviation: f64,
-    /// Factor applied to the deviation after every iteration (e.g. 0.5).
-    #[arg(long, default_value_t = 0.5)]
+    /// Factor applied to the deviation after every iteration (the thesis
+    /// halves it; 0.1 leaves less of a wave in three iterations).
+    #[arg(long, default_value_t = 0.1)]
     pub deviation_factor: f64,
     /// Iterations.
     #[arg(long, default_value_t = 3)]
@@ -337,6 +352,11 @@ pub struct QuadArgs {
     /// Keep every boundary vertex fixed (corners are always fixed).
     #[arg(long)]
     pub fix_boundary: bool,
+    /// Let the points leave the input surface (the thesis' Eq. (34) as
+    /// printed). By default they slide along a smooth fit of the input
+    /// surface, so straightening the lines does not deform the surface.
+    #[arg(long)]
+    pub off_surface: bool,
     /// JSON file `{"vertices":[...]}` of vertices that never move.
     #[arg(long, value_name = "FILE.json")]
     pub fixed: Option<PathBuf>,
@@ -385,6 +405,7 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
         iterations: args.iterations,
         fix_boundary: args.fix_boundary,
         fixed,
+        on_surface: !args.off_surface,
     };
     let mut report = Report::new("fair-quad");
     let bar = spinner("fairing structure lines");

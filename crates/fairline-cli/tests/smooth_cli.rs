@@ -87,6 +87,12 @@ fn fair_quad_straightens_a_zigzag_grid_keeps_fixed_vertices_and_writes_a_picture
         assert_eq!(a[v], b[v], "vertex {v}");
     }
     assert!(std::fs::metadata(&png).unwrap().len() > 1000);
+    // the thesis' method as printed (points may leave the surface) is a
+    // different result
+    let off = d.join("off.obj");
+    let o = run(&["fair-quad", s(&input), "-o", s(&off), "--off-surface"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ne!(read_obj_vertices(&off), b);
 }
 
 #[test]

@@ -32,7 +32,7 @@ pub use measures::{
 pub use normals::{
     face_normals, triangle_normal_area, vertex_normal, vertex_normals, vertex_normals_max,
 };
-pub use quadric::{QuadricFit, quadric_fit, quadric_fit_rings};
+pub use quadric::{QuadricFit, QuadricPatch, quadric_fit, quadric_fit_rings, quadric_patch_rings};
 
 /// Relative threshold below which a triangle counts as degenerate: its double
 /// area is at most `DEGENERATE_RELATIVE_AREA` times the sum of its squared

@@ -36,6 +36,66 @@ pub fn quadric_fit(mesh: &SurfaceMesh, v: VertexId) -> Option<QuadricFit> {
 /// within radius R) at the price of a bias of the order of the third and
 /// fourth derivatives times R and R².
 pub fn quadric_fit_rings(mesh: &SurfaceMesh, v: VertexId, rings: usize) -> Option<QuadricFit> {
+    let patch = quadric_patch_rings(mesh, v, rings)?;
+    Some(QuadricFit {
+        normal: patch.normal(),
+        mean: patch.mean(),
+    })
+}
+
+/// The fitted height function of [`quadric_patch_rings`]: the graph
+/// z = a u² + b uw + c w² + d u + e w over the plane through the vertex
+/// `origin` spanned by `u_axis`, `w_axis`, heights along `axis` (the normal
+/// of the first fitting pass). It interpolates the vertex and approximates
+/// the surface around it with an error of the order of the third
+/// derivatives times the cube of the distance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QuadricPatch {
+    /// The vertex the patch is fitted at (height 0).
+    pub origin: Vec3,
+    /// First in-plane axis (unit).
+    pub u_axis: Vec3,
+    /// Second in-plane axis (unit, `axis × u_axis`).
+    pub w_axis: Vec3,
+    /// Height axis (unit).
+    pub axis: Vec3,
+    /// Coefficients [a, b, c, d, e] of the height function.
+    pub coefficients: [f64; 5],
+}
+
+impl QuadricPatch {
+    /// Height of the graph over the in-plane coordinates (u, w).
+    pub fn height(&self, u: f64, w: f64) -> f64 {
+        let [a, b, c, d, e] = self.coefficients;
+        a * u * u + b * u * w + c * w * w + d * u + e * w
+    }
+
+    /// The point of the graph above or below `x` along [`Self::axis`]
+    /// (same in-plane coordinates): `x` moved onto the patch.
+    pub fn project(&self, x: Vec3) -> Vec3 {
+        let r = x - self.origin;
+        let (u, w) = (r.dot(self.u_axis), r.dot(self.w_axis));
+        self.origin + u * self.u_axis + w * self.w_axis + self.height(u, w) * self.axis
+    }
+
+    /// Unit normal of the graph at the origin, (−d, −e, 1) in the frame.
+    pub fn normal(&self) -> Vec3 {
+        let [_, _, _, d, e] = self.coefficients;
+        (self.axis - d * self.u_axis - e * self.w_axis).normalize_or_zero()
+    }
+
+    /// Mean curvature of the graph at the origin (geom's sign convention).
+    pub fn mean(&self) -> f64 {
+        let [a, b, c, d, e] = self.coefficients;
+        let g = 1.0 + d * d + e * e;
+        -((1.0 + e * e) * a - d * e * b + (1.0 + d * d) * c) / g.powf(1.5)
+    }
+}
+
+/// The quadric fit of [`quadric_fit_rings`] as a surface patch: the height
+/// function of the second pass, in the frame of the first pass' normal.
+/// `None` in the cases listed at [`quadric_fit`].
+pub fn quadric_patch_rings(mesh: &SurfaceMesh, v: VertexId, rings: usize) -> Option<QuadricPatch> {
     let p = mesh.positions();
     let x0 = p[v.idx()];
     let mut ring: Vec<u32> = vec![v.0];
@@ -63,7 +123,7 @@ pub fn quadric_fit_rings(mesh: &SurfaceMesh, v: VertexId, rings: usize) -> Optio
         return None;
     }
     let mut n = n0;
-    let mut mean = 0.0;
+    let mut patch = None;
     for _ in 0..2 {
         let bx = n.any_orthonormal_vector();
         let by = n.cross(bx);
@@ -89,17 +149,21 @@ pub fn quadric_fit_rings(mesh: &SurfaceMesh, v: VertexId, rings: usize) -> Optio
         }
         let s = solve5(ata, atb)?;
         // back to unscaled coordinates: second-order terms scale by 1/scale
-        let (a, b, c) = (s[0] / scale, s[1] / scale, s[2] / scale);
-        let (d, e) = (s[3], s[4]);
-        let g = 1.0 + d * d + e * e;
-        mean = -((1.0 + e * e) * a - d * e * b + (1.0 + d * d) * c) / g.powf(1.5);
-        let m = (n - d * bx - e * by).normalize_or_zero();
-        if m == Vec3::ZERO || !mean.is_finite() {
+        let here = QuadricPatch {
+            origin: x0,
+            u_axis: bx,
+            w_axis: by,
+            axis: n,
+            coefficients: [s[0] / scale, s[1] / scale, s[2] / scale, s[3], s[4]],
+        };
+        let m = here.normal();
+        if m == Vec3::ZERO || !here.mean().is_finite() {
             return None;
         }
         n = m;
+        patch = Some(here);
     }
-    Some(QuadricFit { normal: n, mean })
+    patch
 }
 
 /// Gaussian elimination with partial pivoting; `None` when singular.

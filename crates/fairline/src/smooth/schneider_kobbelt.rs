@@ -429,23 +429,23 @@ pub fn schneider_kobbelt(
         // singular; the damping picks the least-norm step. On open patches
         // the damped step also kept a 41×41 noisy cap from stalling where
         // the undamped Gauss–Newton steps ran into a region without descent.
-        let damped_solve = |jac: &[(usize, usize, f64)]| -> Result<Vec<f64>, SmoothError> {
-            let mut colsq = vec![0.0f64; m];
-            for &(_, c, v) in jac {
-                colsq[c] += v * v;
-            }
-            let delta = if any_floating { 1e-10 } else { 1e-12 }
-                * colsq.iter().fold(0.0f64, |a, b| a.max(*b));
-            let d = if delta > 0.0 { delta.sqrt() } else { 1e-300 };
-            let mut trip = jac.to_vec();
-            trip.extend((0..m).map(|c| (m + c, c, d)));
-            let mut rhs: Vec<f64> = ev.f.iter().map(|x| -x).collect();
-            rhs.resize(2 * m, 0.0);
-            let jm = sparse_from_triplets(2 * m, m, &trip)?;
-            Ok(least_squares(jm.as_ref(), std::slice::from_ref(&rhs))?
-                .pop()
-                .unwrap_or_default())
-        };
+        let damped_solve =
+            |jac: &[(usize, usize, f64)], relative: f64| -> Result<Vec<f64>, SmoothError> {
+                let mut colsq = vec![0.0f64; m];
+                for &(_, c, v) in jac {
+                    colsq[c] += v * v;
+                }
+                let delta = relative * colsq.iter().fold(0.0f64, |a, b| a.max(*b));
+                let d = if delta > 0.0 { delta.sqrt() } else { 1e-300 };
+                let mut trip = jac.to_vec();
+                trip.extend((0..m).map(|c| (m + c, c, d)));
+                let mut rhs: Vec<f64> = ev.f.iter().map(|x| -x).collect();
+                rhs.resize(2 * m, 0.0);
+                let jm = sparse_from_triplets(2 * m, m, &trip)?;
+                Ok(least_squares(jm.as_ref(), std::slice::from_ref(&rhs))?
+                    .pop()
+                    .unwrap_or_default())
+            };
         // the damped step first, the undamped one (unless the system is
         // known to be singular) when it finds no descent
         let undamped = if any_floating {
@@ -459,11 +459,32 @@ pub fn schneider_kobbelt(
         };
         let mut accepted: Option<(SurfaceMesh, Eval, f64)> = None;
         let mut below_epsilon = false;
-        for attempt in 0..2 {
+        // Attempts, in order: the lightly damped step, the undamped one,
+        // then Levenberg–Marquardt steps with ever stronger damping. Far from
+        // Δ_B H = 0 (the cow "Spot": ears, horns and legs) the Gauss–Newton
+        // step, clamped to half an edge, often lowers the merit for no step
+        // length down to 1/64 and the iteration used to stop after one step;
+        // a strongly damped step turns toward −Jᵀf, which lowers the merit
+        // for a small enough length whenever f is not stationary.
+        let light = if any_floating { 1e-10 } else { 1e-12 };
+        let attempts: [Option<f64>; 6] = [
+            Some(light),
+            None,
+            Some(1e-6),
+            Some(1e-3),
+            Some(1e-1),
+            Some(10.0),
+        ];
+        // size of the lightly damped (Newton) step: the convergence measure,
+        // whichever attempt is taken (a strongly damped step is short by
+        // construction and says nothing about convergence)
+        let mut newton_step = f64::INFINITY;
+        for attempt in attempts {
+            let newton = attempt.is_none_or(|relative| relative <= light);
             let t = match (attempt, &undamped) {
-                (0, _) => damped_solve(&jac)?,
-                (_, Some(t)) => t.clone(),
-                (_, None) => continue,
+                (Some(relative), _) => damped_solve(&jac, relative)?,
+                (None, Some(t)) => t.clone(),
+                (None, None) => continue,
             };
             // clamp |t_i| to half the mean length of its edges
             let t: Vec<f64> = unknown
@@ -487,7 +508,10 @@ pub fn schneider_kobbelt(
             // is not taken). A Newton step below ε means convergence: it is
             // taken when it lowers the merit (a merit at round-off level
             // cannot be lowered, and the mesh then stays where it is).
-            let small = tmax / ebar < opts.epsilon;
+            if attempt == Some(light) {
+                newton_step = tmax / ebar;
+            }
+            let small = newton && tmax / ebar < opts.epsilon;
             let mut alpha = 1.0;
             let mut trial = work.clone();
             let found = loop {
@@ -504,7 +528,12 @@ pub fn schneider_kobbelt(
                 alpha *= 0.5;
             };
             if let Some(e) = found {
-                accepted = Some((trial, e, alpha * tmax / ebar));
+                let size = if newton {
+                    alpha * tmax / ebar
+                } else {
+                    newton_step
+                };
+                accepted = Some((trial, e, size));
                 break;
             }
             if small {

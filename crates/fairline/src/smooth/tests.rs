@@ -850,39 +850,127 @@ fn schneider_kobbelt_fairs_closed_meshes_with_and_without_fixed_vertices() {
 /// noise 0.3–1 % of the radius): the RMS distance to the sphere must end at
 /// most Taubin's on every cap, and the iteration must converge. (With the
 /// former two-ring normals it ended at 2.2× Taubin's RMS on the 21² cap and
-/// above the input's on the 41² cap.) Numbers: BENCHMARKS.md, session 16.
+/// above the input's on the 41² cap.) Numbers: BENCHMARKS.md, sessions 16
+/// and 17.
 #[test]
 fn schneider_kobbelt_against_taubin_on_noisy_sphere_caps() {
     for (n, amp, noisy) in noisy_caps() {
-        let (_, rms0) = sphere_distance(&noisy);
+        let (max0, rms0) = sphere_distance(&noisy);
         let mut sk = noisy.clone();
         let r = schneider_kobbelt(&mut sk, &SchneiderKobbeltOptions::default()).unwrap();
         let mut tb = noisy.clone();
         taubin_smooth(&mut tb, &TaubinOptions::default()).unwrap();
         let (msk, rsk) = sphere_distance(&sk);
         let (mtb, rtb) = sphere_distance(&tb);
+        // the same away from the boundary: vertices three or more rings in
+        let ring = rings_from_boundary(&noisy);
+        let inner = |m: &SurfaceMesh| {
+            m.positions()
+                .iter()
+                .zip(&ring)
+                .filter(|(_, r)| **r >= 3)
+                .map(|(p, _)| (p.length() - 1.0).abs())
+                .fold(0.0f64, f64::max)
+        };
+        let (isk, itb) = (inner(&sk), inner(&tb));
+        let worst = sk
+            .positions()
+            .iter()
+            .zip(&ring)
+            .max_by(|a, b| {
+                (a.0.length() - 1.0)
+                    .abs()
+                    .total_cmp(&(b.0.length() - 1.0).abs())
+            })
+            .map(|(_, r)| *r)
+            .unwrap_or(0);
         eprintln!(
-            "cap {n}x{n} noise {amp}: input rms {rms0:.2e}; schneider-kobbelt max {msk:.2e} rms {rsk:.2e} ({} it); taubin max {mtb:.2e} rms {rtb:.2e}",
+            "cap {n}x{n} noise {amp}: input max {max0:.2e} rms {rms0:.2e}; schneider-kobbelt max {msk:.2e} (ring {worst}) rms {rsk:.2e} inner max {isk:.2e} ({} it); taubin max {mtb:.2e} rms {rtb:.2e} inner max {itb:.2e}",
             r.iterations
         );
         assert!(r.converged, "{r:?}");
         assert!(rsk <= rtb, "cap {n} {amp}: rms {rsk} vs taubin {rtb}");
+        // the max is NOT below Taubin's on three of the four caps (documented
+        // in BENCHMARKS.md, session 17: worst vertices one or two rings from
+        // the boundary); this guards the documented margin of at most 35 %
+        assert!(
+            msk <= 1.35 * mtb,
+            "cap {n} {amp}: max {msk} vs taubin {mtb}"
+        );
     }
 }
 
+/// Ring distance of every vertex from the boundary (0 on it).
+fn rings_from_boundary(m: &SurfaceMesh) -> Vec<usize> {
+    let mut d = vec![usize::MAX; m.vertex_count()];
+    let mut frontier: Vec<VertexId> = m.vertices().filter(|v| m.is_boundary_vertex(*v)).collect();
+    for v in &frontier {
+        d[v.idx()] = 0;
+    }
+    let mut k = 0;
+    while !frontier.is_empty() {
+        k += 1;
+        let mut next = Vec::new();
+        for v in frontier {
+            for u in m.one_ring(v) {
+                if d[u.idx()] == usize::MAX {
+                    d[u.idx()] = k;
+                    next.push(u);
+                }
+            }
+        }
+        frontier = next;
+    }
+    d
+}
+
+/// Schneider–Kobbelt on the cow "Spot" (closed, no constraints; issue #21
+/// item 4): it used to stop after one iteration because no step length of
+/// the clamped Gauss–Newton step lowered the merit. With the
+/// Levenberg–Marquardt fallback it keeps descending: more than one accepted
+/// iteration, each lowering the merit, the residual max |H − H̃|·ē below the
+/// input's, and nothing non-finite.
+#[test]
+fn schneider_kobbelt_keeps_descending_on_spot() {
+    let Some(path) = crate::shared_data::shared_data("meshes/spot.ply") else {
+        return; // fails under CI; said loudly otherwise (shared_data.rs)
+    };
+    let spot = crate::io::read_mesh(&path).unwrap();
+    let mut m = spot.clone();
+    let r0 = schneider_kobbelt(
+        &mut m,
+        &SchneiderKobbeltOptions {
+            max_iterations: 0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let mut m = spot.clone();
+    let o = SchneiderKobbeltOptions {
+        max_iterations: 10,
+        ..Default::default()
+    };
+    let r = schneider_kobbelt(&mut m, &o).unwrap();
+    let (res0, res) = (r0.residual.unwrap(), r.residual.unwrap());
+    eprintln!(
+        "spot schneider-kobbelt: {} iterations, converged {}, residual {res0:.3} -> {res:.3}, largest move {:.3e}",
+        r.iterations, r.converged, r.max_displacement
+    );
+    assert!(r.iterations > 1, "{r:?}");
+    assert!(res < res0, "residual {res0} -> {res}");
+    assert!(m.positions().iter().all(|p| p.is_finite()));
+}
+
+/// Issue #21 item 5: the spring model's defaults on the cow "Spot" (the
+/// real mesh of ../shared/data) keep its legs and horns: the relative
+/// stopping rule ends the iteration with the volume within 1 % and no vertex
+/// moved by more than two mean edge lengths, where the old fixed count of
+/// 200 sweeps moved them more than twice as far.
 #[test]
 fn spring_defaults_keep_the_legs_and_horns_of_spot() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/meshes/spot.ply");
-    if !path.exists() {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "{} is missing and CI is set",
-            path.display()
-        );
-        eprintln!("SKIPPED LOUDLY: {} not found (not CI)", path.display());
-        return;
-    }
+    let Some(path) = crate::shared_data::shared_data("meshes/spot.ply") else {
+        return; // fails under CI; said loudly otherwise (shared_data.rs)
+    };
     let spot = crate::io::read_mesh(&path).unwrap();
     let e = geom::mean_edge_length(&spot);
     let mut a = spot.clone();
