@@ -183,7 +183,6 @@ pub fn run(args: Args) -> Result<()> {
         max_iterations: args.max_iterations,
         epsilon: args.epsilon,
         highlight: args.light.options(),
-        ..FairOptions::default()
     };
     let mut report = Report::new("fair");
     // the regions to fair, in turn

@@ -332,9 +332,7 @@ mod tests {
     /// shrinks — the trade-off recorded in BENCHMARKS.md).
     #[test]
     fn laplacian_weight_moves_the_result_toward_diffusion_flow() {
-        let mut o = FairOptions::default();
-        o.laplacian_weight = 1.0;
-        let rows = against_flow(&o);
+        let rows = against_flow(&FairOptions::default().laplacian_weight(1.0));
         for (c, m, f) in &rows {
             for k in 0..4 {
                 assert!(m[k] < 1.1 * f[k], "{c}: {} vs flow {}", show(m), show(f));
@@ -348,11 +346,7 @@ mod tests {
     #[test]
     #[ignore]
     fn family_table() {
-        let with_lap = |w3: f64| {
-            let mut o = FairOptions::default();
-            o.laplacian_weight = w3;
-            o
-        };
+        let with_lap = |w3: f64| FairOptions::default().laplacian_weight(w3);
         let variants: Vec<(&str, FairOptions)> = vec![
             ("default", FairOptions::default()),
             (
