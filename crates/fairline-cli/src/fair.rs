@@ -19,9 +19,13 @@ use std::path::PathBuf;
 /// The energy to minimise.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
-    /// Yong et al.: Willmore energy + distance of the highlight lines to
-    /// their desired curves.
+    /// Willmore energy + curvature-Laplacian fairness term (the energy of
+    /// surface diffusion flow, weight --laplacian-weight) + distance of
+    /// the highlight lines to their desired curves.
     Highlight,
+    /// Yong et al. exactly: Willmore energy + distance of the highlight
+    /// lines to their desired curves (no curvature-Laplacian term).
+    Paper,
     /// Baseline: surface diffusion flow ∂V/∂t = N Δ_B H (Xu et al.).
     DiffusionFlow,
 }
@@ -42,7 +46,7 @@ pub enum Method {
 /// `highlight`/`detect`.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline fair fairline-demo/dented-panel.obj --region fairline-demo/dented-panel-region.json -o panel-faired.obj --png fair.png --report fair.json\n  fairline detect fairline-demo/dented-panel.obj -o region.json && fairline fair fairline-demo/dented-panel.obj --region region.json -o faired.obj\n  fairline fair fairline-demo/dented-panel.obj --auto -o faired-auto.obj\n  fairline fair fairline-demo/dented-panel.obj --region fairline-demo/dented-panel-region.json --method diffusion-flow -o flow.obj"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline fair fairline-demo/dented-panel.obj --region fairline-demo/dented-panel-region.json -o panel-faired.obj --png fair.png --report fair.json\n  fairline detect fairline-demo/dented-panel.obj -o region.json && fairline fair fairline-demo/dented-panel.obj --region region.json -o faired.obj\n  fairline fair fairline-demo/dented-panel.obj --auto -o faired-auto.obj\n  fairline fair fairline-demo/dented-panel.obj --region fairline-demo/dented-panel-region.json --method diffusion-flow -o flow.obj\n  fairline fair fairline-demo/dented-panel.obj --region fairline-demo/dented-panel-region.json --method paper -o paper.obj"
 )]
 pub struct Args {
     /// Input triangle mesh.
@@ -82,6 +86,10 @@ pub struct Args {
     /// Weight ω2 of the highlight-line difference energy.
     #[arg(long, default_value_t = FairOptions::default().diff_weight)]
     pub diff_weight: f64,
+    /// Weight ω3 of the curvature-Laplacian fairness term
+    /// D⁴ ∫(Δ_B H)² dA (D the region's diameter); --method highlight only.
+    #[arg(long, default_value_t = FairOptions::default().laplacian_weight)]
+    pub laplacian_weight: f64,
     /// Before/after picture with highlight lines, region outline and
     /// desired curves.
     #[arg(long, value_name = "IMG.png")]
@@ -166,10 +174,12 @@ pub fn run(args: Args) -> Result<()> {
     let options = FairOptions {
         method: match args.method {
             Method::Highlight => FairMethod::Highlight,
+            Method::Paper => FairMethod::Paper,
             Method::DiffusionFlow => FairMethod::DiffusionFlow,
         },
         fair_weight: args.fair_weight,
         diff_weight: args.diff_weight,
+        laplacian_weight: args.laplacian_weight,
         max_iterations: args.max_iterations,
         epsilon: args.epsilon,
         highlight: args.light.options(),

@@ -7,6 +7,8 @@
 
 mod desired;
 mod error;
+#[cfg(test)]
+pub(crate) mod family;
 pub mod highlight;
 pub mod quad;
 pub mod region;
