@@ -291,9 +291,23 @@ pub fn run(args: Args) -> Result<()> {
     }
     if let (Some(png), Some(r)) = (&args.png, &first) {
         let mut opts = RenderOptions::with_size(900, 700);
-        opts.view_dir = crate::highlight_png::default_view(light.plane_normal(), light.across());
-        opts.up = light.across();
-        let img = fairing_picture(&mesh, r, &opts)?;
+        (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
+        let mut img = fairing_picture(&mesh, r, &opts)?;
+        // the colours of fairline::fair::fairing_picture
+        crate::highlight_png::draw_key(
+            &mut img,
+            &[
+                (
+                    [0.02, 0.02, 0.02],
+                    format!(
+                        "highlight lines, light spacing {}",
+                        crate::highlight_png::fmt_len(light.spacing())
+                    ),
+                ),
+                ([0.85, 0.05, 0.05], "region outline".into()),
+                ([0.05, 0.25, 0.95], "desired lines (before)".into()),
+            ],
+        );
         img.write_png(png)?;
     }
     report.set("method", crate::output::option_value(&args.method));
