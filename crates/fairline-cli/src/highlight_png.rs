@@ -138,8 +138,8 @@ pub fn key_entries(overlay: &Overlay<'_>) -> Vec<([f32; 3], String)> {
     key
 }
 
-/// Draws a key (a swatch and a label per entry) in the top-left corner of
-/// `img`, below the title strip, on a light panel.
+/// Draws a key (a swatch and a label per entry) in the bottom-left corner
+/// of `img` (away from the titles), on a light panel.
 pub fn draw_key(img: &mut Image, entries: &[([f32; 3], String)]) {
     if entries.is_empty() {
         return;
@@ -152,13 +152,14 @@ pub fn draw_key(img: &mut Image, entries: &[([f32; 3], String)]) {
         .map(|(_, l)| Image::text_width(l, scale))
         .max()
         .unwrap_or(0) as i64;
-    let (x0, y0) = (8i64, (Image::text_height(scale.max(2)) + 20) as i64);
     let pad = (4 * scale) as i64;
+    let panel_h = 2 * pad + row * entries.len() as i64;
+    let (x0, y0) = (8i64, img.height as i64 - panel_h - 8);
     img.fill_rect(
         x0,
         y0,
         (2 * pad + swatch + 2 * pad + text_w) as u32,
-        (2 * pad + row * entries.len() as i64) as u32,
+        panel_h as u32,
         [250, 250, 250, 255],
     );
     for (i, (colour, label)) in entries.iter().enumerate() {
