@@ -464,15 +464,16 @@ fn detect_section(demo: &Demo) -> Result<Section> {
     let size = (demo.opts.width, demo.opts.height);
     let mut values = Vec::new();
     let mut images = Vec::new();
+    // the lights `fairline detect` chooses with no options for the clean
+    // hills, the same for both (one camera, one scale)
+    let light = LightArray::default_for_mesh(&clean, UpAxis::Auto)
+        .context("the hills have no finite vertices")?;
+    let k = light.readable_multiple(&clean);
+    let shown_light = light.with_spacing(light.spacing() * f64::from(k))?;
     for (mesh, file, what) in [
         (&clean, "detect-curved-clean.png", "clean hills"),
         (&bumped, "detect-curved-bump.png", "hills with a small bump"),
     ] {
-        // the lights `fairline detect` chooses with no options
-        let light = LightArray::default_for_mesh(mesh, UpAxis::Auto)
-            .context("the hills have no finite vertices")?;
-        let k = light.readable_multiple(mesh);
-        let shown_light = light.with_spacing(light.spacing() * f64::from(k))?;
         let (_, shown, det) = detect_with_lines(
             mesh,
             &light,
@@ -524,7 +525,7 @@ fn detect_section(demo: &Demo) -> Result<Section> {
     Ok(Section {
         title: "Detection: quiet on curved shape, finds a small defect".into(),
         text: format!(
-            "Strongly curved sin·sin hills ({n} × {n} vertices over [−1, 1]², summits, saddles and valleys) checked by `fairline detect` with no options: the clean surface gets no region — strong but smooth curvature is shape, not a defect. The same hills with a bump {amplitude:.4} high (0.1 % of the bounding-box diagonal) and σ = {sigma} wide at ({cx}, {cy}) get one region, ranked first, around the bump. The measure compares the surface's normals with a smooth cubic fit over 1.5 light spacings (README, Detection)."
+            "Strongly curved sin·sin hills ({n} × {n} vertices over [−1, 1]², summits, saddles and valleys) checked with the lights `fairline detect` chooses for them with no options: the clean surface gets no region — strong but smooth curvature is shape, not a defect. The same hills with a bump {amplitude:.4} high (0.1 % of the bounding-box diagonal) and σ = {sigma} wide at ({cx}, {cy}) get one region, ranked first, around the bump. The measure compares the surface's normals with a smooth cubic fit over 1.5 light spacings (README, Detection)."
         ),
         images,
         values: json!(values),

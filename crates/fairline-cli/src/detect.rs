@@ -16,8 +16,12 @@ use std::path::PathBuf;
 /// fit over two spacings around each point; the score is the highlight-line
 /// displacement that difference causes, in tenths of a spacing (score 1 =
 /// the line is displaced by 0.1 spacing against the smooth surface's line).
-/// Smooth shape (strong curvature, saddles, cylinders) scores near 0; on
-/// noisy scans the threshold rises above the noise (reported). Writes the
+/// Smooth shape (strong curvature, saddles, cylinders) scores near 0;
+/// shape finer than the smooth radius (ears, horns, legs, creases: the
+/// surface turns by more than 1 rad within it) is counted as shape and not
+/// judged (reported); on noisy scans the threshold rises above the noise
+/// (reported). The picture draws the readable lines (round parts: every
+/// k-th line, see `highlight`) with a key. Writes the
 /// union of all regions as region JSON {"faces":[...]} (faces of the input
 /// mesh) with two rings of support faces added around each region (what
 /// fairing needs to move every vertex of it), ready for `fairline fair

@@ -859,7 +859,8 @@ pub fn detect_irregularities(
         r.lines.sort_unstable();
     }
     regions.sort_by(|a, b| b.score.total_cmp(&a.score).then(a.faces.cmp(&b.faces)));
-    let region_area: f64 = regions.iter().map(|r| r.area).sum();
+    // a fold from +0.0 (an empty `sum` of f64 is −0.0, which reports print)
+    let region_area: f64 = regions.iter().map(|r| r.area).fold(0.0, |a, b| a + b);
     let flagged_area_fraction = if total_area > 0.0 {
         (region_area / total_area).clamp(0.0, 1.0)
     } else {
