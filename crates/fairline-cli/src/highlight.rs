@@ -67,7 +67,8 @@ pub struct LightArgs {
     /// centre along the plane normal).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
     pub plane_point: Option<Vec3>,
-    /// Spacing s between lights (default: about 20 lights across the mesh).
+    /// Spacing s between lights (default: about 20 lights across a panel;
+    /// for drawing, wider on round parts so the lines stay readable).
     #[arg(long)]
     pub spacing: Option<f64>,
     /// Lights from JSON (DESIGN.md §5): a linear array
@@ -195,7 +196,11 @@ pub fn read_triangles(path: &Path) -> Result<(SurfaceMesh, Option<Vec<FaceId>>)>
 /// corrected in DESIGN.md §3), or, with --circle-center/--circle-axis/--radii,
 /// under concentric circular lights (Nishiyama et al. Eq. (2.18), zero level
 /// per radius). Lights default to a plane one bounding-box diagonal above the
-/// mesh along +z with about 20 lights across. --band ρ adds the band
+/// part, facing its thinnest principal direction (--up), about 20 lights
+/// across a panel; on round parts the spacing grows so the lines stay
+/// readable (every k-th line, k from the median highlight-distance
+/// gradient), and the picture leaves out lines crowded toward silhouettes
+/// and tiny pieces (the output keeps all lines). --band ρ adds the band
 /// boundaries at ±ρ. Output JSON {"lines":[{"index":m,"closed":b,"points":[[x,y,z],..]}]}
 /// (circular lines also carry "radius"; bands under "bands"), or OBJ `l`
 /// polylines (groups lines, band_lower, band_upper).

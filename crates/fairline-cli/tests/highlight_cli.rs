@@ -618,7 +618,10 @@ fn demo_finds_the_planted_dent() {
     assert_eq!(c[0]["regions"], 0, "{c}");
     assert!(c[1]["regions"].as_u64().unwrap() >= 1, "{c}");
     assert!(
-        c[1]["top_region_centre_distance_from_bump"].as_f64().unwrap() < 0.1,
+        c[1]["top_region_centre_distance_from_bump"]
+            .as_f64()
+            .unwrap()
+            < 0.1,
         "{c}"
     );
     for png in ["detect-curved-clean.png", "detect-curved-bump.png"] {
