@@ -4,7 +4,7 @@
 use crate::common::{Report, bad_input, spinner, write_json};
 use crate::highlight::{LightArgs, read_triangles, to_input_error};
 use anyhow::Result;
-use fairline::highlight::{DetectOptions, HighlightModel, detect_irregularities};
+use fairline::highlight::DetectOptions;
 use fairline::mesh::FaceId;
 use serde_json::json;
 use std::path::PathBuf;
@@ -16,8 +16,12 @@ use std::path::PathBuf;
 /// fit over two spacings around each point; the score is the highlight-line
 /// displacement that difference causes, in tenths of a spacing (score 1 =
 /// the line is displaced by 0.1 spacing against the smooth surface's line).
-/// Smooth shape (strong curvature, saddles, cylinders) scores near 0; on
-/// noisy scans the threshold rises above the noise (reported). Writes the
+/// Smooth shape (strong curvature, saddles, cylinders) scores near 0;
+/// shape finer than the smooth radius (ears, horns, legs, creases: the
+/// surface turns by more than 1 rad within it) is counted as shape and not
+/// judged (reported); on noisy scans the threshold rises above the noise
+/// (reported). The picture draws the readable lines (round parts: every
+/// k-th line, see `highlight`) with a key. Writes the
 /// union of all regions as region JSON {"faces":[...]} (faces of the input
 /// mesh) with two rings of support faces added around each region (what
 /// fairing needs to move every vertex of it), ready for `fairline fair
@@ -58,6 +62,9 @@ pub struct Args {
     /// object; default: down the light-plane normal, slightly tilted).
     #[arg(long, value_parser = crate::common::parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
     pub view: Option<fairline::Vec3>,
+    /// Size of the --png picture, WxH.
+    #[arg(long, value_parser = crate::common::parse_size, default_value = "1200x900", requires = "png")]
+    pub size: (u32, u32),
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
@@ -96,17 +103,40 @@ pub fn run(args: Args) -> Result<()> {
         .region_margin(args.region_margin);
     let mut report = Report::new("detect");
     let bar = spinner("detecting irregularities");
-    let (lines, mut det) = report
-        .time(|| -> Result<_, fairline::highlight::HighlightError> {
-            let model = HighlightModel::new(&mesh, light, args.light.options())?;
-            let lines = model.lines(&mesh);
-            let det = detect_irregularities(&mesh, &light, &lines, &opts)?;
-            Ok((lines, det))
+    // the measure works at the scale of `light`; the lines shown and
+    // listed are those of the readable lights (a subset of the lines of
+    // `light` on round parts, the same lines on panels)
+    let shown_light = args.light.readable(&mesh, light)?;
+    let (lines, shown, mut det) = report
+        .time(|| {
+            crate::highlight_png::detect_with_lines(
+                &mesh,
+                &light,
+                &shown_light,
+                args.light.options(),
+                &opts,
+            )
         })
         .map_err(to_input_error)?;
     bar.finish_and_clear();
-    if let Some(w) = crate::highlight_png::line_warning(&args.mesh, &lines, &light) {
+    if let Some(w) = crate::highlight_png::line_warning(
+        &args.mesh,
+        &lines,
+        &shown,
+        &shown_light,
+        fairline::highlight::readable::part_width(mesh.positions(), light.across()),
+    ) {
         eprintln!("{w}");
+    }
+    if det.shape_sites > 0 {
+        eprintln!(
+            "note: {}: {} of {} sites are shape finer than the measure's scale (the surface turns by more than {:.0}° within {:.3} of them: ears, horns, creases, tight fillets) and were not judged",
+            args.mesh.display(),
+            det.shape_sites,
+            det.sites.len(),
+            DetectOptions::default().max_turn.to_degrees(),
+            det.smooth_radius
+        );
     }
     if det.threshold > args.threshold {
         eprintln!(
@@ -155,6 +185,12 @@ pub fn run(args: Args) -> Result<()> {
     report.set("vertices", mesh.vertex_count());
     report.set("lines", lines.lines.len());
     report.set("spacing", light.spacing());
+    report.set("drawn_spacing", shown_light.spacing());
+    report.set(
+        "drawn",
+        crate::highlight_png::stats_json(&mesh, &shown_light, &shown),
+    );
+    report.set("shape_sites", det.shape_sites);
     report.set("light", light);
     report.set("region_faces", all.len());
     report.set("regions", regions);
@@ -168,11 +204,7 @@ pub fn run(args: Args) -> Result<()> {
     report.set("smooth_radius", det.smooth_radius);
     report.set("fine_radius", det.fine_radius);
     if let Some(png) = &args.png {
-        let stretches: Vec<Vec<fairline::Vec3>> = det
-            .lines
-            .iter()
-            .flat_map(|l| l.stretches.iter().cloned())
-            .collect();
+        let stretches = crate::highlight_png::stretches(&det);
         let view = args.view.unwrap_or(crate::highlight_png::default_view(
             light.plane_normal(),
             light.across(),
@@ -187,23 +219,22 @@ pub fn run(args: Args) -> Result<()> {
             if det.regions.is_empty() {
                 String::new()
             } else {
-                format!(
-                    ", best score {:.1}; orange = suggested region, red = lines across it",
-                    det.max_score()
-                )
+                format!(", best score {:.1}", det.max_score())
             }
         );
         let faces = det.all_faces();
         crate::highlight_png::write(
+            args.size,
             png,
             &mesh,
             crate::highlight_png::Overlay {
-                lines: &lines,
+                lines: &shown,
                 bands: None,
                 flagged: &stretches,
                 region: Some(&faces),
                 view: (view, light.across()),
                 title,
+                spacing: Some(shown_light.spacing()),
             },
         )?;
     }

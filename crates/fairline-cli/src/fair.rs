@@ -250,7 +250,7 @@ pub fn run(args: Args) -> Result<()> {
         all.dedup();
         all
     };
-    let score_before = region_score(&mesh, &light, &args.light, &region_faces)?;
+    let (score_before, threshold) = region_score(&mesh, &light, &args.light, &region_faces)?;
     let mut current: SurfaceMesh = mesh.clone();
     let mut results: Vec<Value> = Vec::new();
     let mut first: Option<FairResult> = None;
@@ -277,19 +277,22 @@ pub fn run(args: Args) -> Result<()> {
     }
     bar.finish_and_clear();
     fairline::io::write_mesh(&args.output, &current)?;
-    let score_after = region_score(&current, &light, &args.light, &region_faces)?;
+    // the threshold `detect` applies to the input (raised above the noise
+    // of a scan), so the report and `detect`'s picture agree on what a
+    // defect is
+    let (score_after, _) = region_score(&current, &light, &args.light, &region_faces)?;
     report.set("detect_score_before", score_before);
     report.set("detect_score_after", score_after);
-    if score_after > score_before && score_after > DetectOptions::default().threshold {
+    report.set("detect_threshold", threshold);
+    if score_after > score_before && score_after > threshold {
         report.warn(format!(
             "{}: the detection score inside the region got worse ({score_before:.2} -> {score_after:.2}); try a larger region (--grow 2) or --method diffusion-flow",
             args.mesh.display()
         ));
-    } else if score_after > DetectOptions::default().threshold {
+    } else if score_after > threshold {
         report.warn(format!(
-            "{}: a defect remains inside the region (detection score {score_before:.2} -> {score_after:.2}, threshold {:.2}); try --grow 2 or more iterations",
+            "{}: a defect remains inside the region (detection score {score_before:.2} -> {score_after:.2}, threshold {threshold:.2}); try --grow 2 or more iterations",
             args.mesh.display(),
-            DetectOptions::default().threshold
         ));
     }
     if first.is_none() {
@@ -301,9 +304,23 @@ pub fn run(args: Args) -> Result<()> {
     }
     if let (Some(png), Some(r)) = (&args.png, &first) {
         let mut opts = RenderOptions::with_size(900, 700);
-        opts.view_dir = crate::highlight_png::default_view(light.plane_normal(), light.across());
-        opts.up = light.across();
-        let img = fairing_picture(&mesh, r, &opts)?;
+        (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
+        let mut img = fairing_picture(&mesh, r, &opts)?;
+        // the colours of fairline::fair::fairing_picture
+        crate::highlight_png::draw_key(
+            &mut img,
+            &[
+                (
+                    [0.02, 0.02, 0.02],
+                    format!(
+                        "highlight lines, light spacing {}",
+                        crate::highlight_png::fmt_len(light.spacing())
+                    ),
+                ),
+                ([0.85, 0.05, 0.05], "region outline".into()),
+                ([0.05, 0.25, 0.95], "desired lines (before)".into()),
+            ],
+        );
         img.write_png(png)?;
     }
     report.set("method", crate::output::option_value(&args.method));
@@ -373,12 +390,12 @@ pub fn run(args: Args) -> Result<()> {
     }
     if after > before {
         report.warn(format!(
-            "the highlight-line deviation got worse: {before:.4e} before, {after:.4e} after"
+            "the highlight-line deviation (distance of the lines inside the region from their own smoothed curves) got worse: {before:.4e} before, {after:.4e} after; the detection score (as `detect` measures it, same lights) went {score_before:.2} -> {score_after:.2}"
         ));
     }
     report.write(args.report.as_deref())?;
     job.finish(format_args!(
-        "{} region(s) faired, {}, highlight deviation {before:.3e} → {after:.3e}, largest move {total_moved:.3e}",
+        "{} region(s) faired, {}, detection score {score_before:.2} → {score_after:.2} (threshold {threshold:.2}), highlight deviation {before:.3e} → {after:.3e}, largest move {total_moved:.3e}",
         results.len(),
         if converged { "converged" } else { "not converged" }
     ));
@@ -389,15 +406,17 @@ pub fn run(args: Args) -> Result<()> {
 const AUTO_RINGS: usize = 4;
 
 /// The largest detection score (see `fairline detect`) at sites inside the
-/// faces `faces`, with the lights `light`; 0 when none is judged.
+/// faces `faces`, with the lights `light` (0 when none is judged), and the
+/// threshold detection applies on this mesh (the default, or higher on a
+/// noisy scan).
 fn region_score(
     mesh: &SurfaceMesh,
     light: &fairline::highlight::LightArray,
     args: &crate::highlight::LightArgs,
     faces: &[FaceId],
-) -> Result<f64> {
+) -> Result<(f64, f64)> {
     if faces.is_empty() {
-        return Ok(0.0);
+        return Ok((0.0, DetectOptions::default().threshold));
     }
     let model = HighlightModel::new(mesh, *light, args.options()).map_err(to_input_error)?;
     let lines = model.lines(mesh);
@@ -411,10 +430,11 @@ fn region_score(
             }
         }
     }
-    Ok(det
+    let score = det
         .sites
         .iter()
         .filter(|s| inside[s.vertex.idx()])
         .filter_map(|s| s.score)
-        .fold(0.0, f64::max))
+        .fold(0.0, f64::max);
+    Ok((score, det.threshold))
 }

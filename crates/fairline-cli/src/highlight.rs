@@ -6,7 +6,7 @@ use crate::common::{Report, bad_input, parse_list, parse_vec3, read_json, spinne
 use anyhow::{Context, Result};
 use fairline::highlight::{
     CircularLight, CircularLights, HighlightBands, HighlightError, HighlightLine, HighlightLines,
-    HighlightModel, HighlightOptions, LightArray, UpAxis, circular_highlight_bands,
+    HighlightModel, HighlightOptions, LightArray, Readability, UpAxis, circular_highlight_bands,
     circular_highlight_lines,
 };
 use fairline::mesh::FaceId;
@@ -67,7 +67,8 @@ pub struct LightArgs {
     /// centre along the plane normal).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
     pub plane_point: Option<Vec3>,
-    /// Spacing s between lights (default: about 20 lights across the mesh).
+    /// Spacing s between lights (default: about 20 lights across a panel;
+    /// for drawing, wider on round parts so the lines stay readable).
     #[arg(long)]
     pub spacing: Option<f64>,
     /// Lights from JSON (DESIGN.md §5): a linear array
@@ -125,6 +126,20 @@ impl LightArgs {
         .map_err(to_input_error)
     }
 
+    /// The lights to draw and read lines with: `light` itself when the
+    /// spacing was given (--spacing or --lights), else `light` with its
+    /// spacing multiplied by [`LightArray::readable_multiple`] (round parts
+    /// get fewer, readable lines; panels keep about 20 across).
+    pub fn readable(&self, mesh: &SurfaceMesh, light: LightArray) -> Result<LightArray> {
+        if self.spacing.is_some() || self.lights.is_some() {
+            return Ok(light);
+        }
+        let k = light.readable_multiple(mesh);
+        light
+            .with_spacing(light.spacing() * f64::from(k))
+            .map_err(to_input_error)
+    }
+
     /// Model options.
     pub fn options(&self) -> HighlightOptions {
         HighlightOptions::default().min_normal_cos(self.min_normal_cos)
@@ -176,7 +191,11 @@ pub fn read_triangles(path: &Path) -> Result<(SurfaceMesh, Option<Vec<FaceId>>)>
 /// corrected in DESIGN.md §3), or, with --circle-center/--circle-axis/--radii,
 /// under concentric circular lights (Nishiyama et al. Eq. (2.18), zero level
 /// per radius). Lights default to a plane one bounding-box diagonal above the
-/// mesh along +z with about 20 lights across. --band ρ adds the band
+/// part, facing its thinnest principal direction (--up), about 20 lights
+/// across a panel; on round parts the spacing grows so the lines stay
+/// readable (every k-th line, k from the median highlight-distance
+/// gradient), and the picture leaves out lines crowded toward silhouettes
+/// and tiny pieces (the output keeps all lines). --band ρ adds the band
 /// boundaries at ±ρ. Output JSON {"lines":[{"index":m,"closed":b,"points":[[x,y,z],..]}]}
 /// (circular lines also carry "radius"; bands under "bands"), or OBJ `l`
 /// polylines (groups lines, band_lower, band_upper).
@@ -226,6 +245,9 @@ pub struct Args {
     /// B-spline surfaces: use only this surface of the file (default: all).
     #[arg(long, value_name = "K")]
     pub surface: Option<usize>,
+    /// Size of the --png picture, WxH.
+    #[arg(long, value_parser = crate::common::parse_size, default_value = "1200x900", requires = "png")]
+    pub size: (u32, u32),
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
@@ -373,6 +395,9 @@ pub fn run(args: Args) -> Result<()> {
     report.set("faces", mesh.face_count());
     let bar = spinner("highlight lines");
     let view_up: (Vec3, Vec3);
+    // the readable drawing of linear lights (None: draw all lines)
+    let mut drawn: Option<HighlightLines> = None;
+    let mut spacing = None;
     let circular = match (args.circle_center, args.circle_axis, args.radii.clone()) {
         (Some(c), Some(t), Some(Radii(radii))) => Some(CircularLights {
             center: c.to_array(),
@@ -415,8 +440,9 @@ pub fn run(args: Args) -> Result<()> {
         (lines, bands, Some(radii))
     } else {
         let light = args.light.light_array(&mesh)?;
+        let light = args.light.readable(&mesh, light)?;
         let opts = args.light.options();
-        let (lines, bands) = report
+        let (lines, bands, shown) = report
             .time(|| -> Result<_, HighlightError> {
                 let model = HighlightModel::new(&mesh, light, opts)?;
                 let lines = model.lines(&mesh);
@@ -424,17 +450,28 @@ pub fn run(args: Args) -> Result<()> {
                     Some(rho) => Some(model.bands(&mesh, rho)?),
                     None => None,
                 };
-                Ok((lines, bands))
+                let shown =
+                    model.readable_lines(&mesh, &lines, &Readability::for_part(&mesh, &light));
+                Ok((lines, bands, shown))
             })
             .map_err(to_input_error)?;
         report.set("light", json!({"kind": "linear", "array": light}));
-        if let Some(w) = crate::highlight_png::line_warning(&args.mesh, &lines, &light) {
+        report.set(
+            "drawn",
+            crate::highlight_png::stats_json(&mesh, &light, &shown),
+        );
+        if let Some(w) = crate::highlight_png::line_warning(
+            &args.mesh,
+            &lines,
+            &shown,
+            &light,
+            fairline::highlight::readable::part_width(mesh.positions(), light.across()),
+        ) {
             eprintln!("{w}");
         }
-        view_up = (
-            crate::highlight_png::default_view(light.plane_normal(), light.across()),
-            light.across(),
-        );
+        drawn = Some(shown);
+        view_up = crate::highlight_png::default_camera(&light);
+        spacing = Some(light.spacing());
         (lines, bands, None)
     };
     bar.finish_and_clear();
@@ -456,24 +493,31 @@ pub fn run(args: Args) -> Result<()> {
             all
         });
         let view = args.view.unwrap_or(view_up.0);
-        let title = format!(
-            "{}: {} highlight lines",
-            args.mesh
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default(),
-            lines.lines.len()
-        );
+        let name = args
+            .mesh
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let title = match &drawn {
+            Some(d) if d.lines.len() != lines.lines.len() => format!(
+                "{name}: {} of {} line pieces drawn",
+                d.lines.len(),
+                lines.lines.len()
+            ),
+            _ => format!("{name}: {} highlight lines", lines.lines.len()),
+        };
         crate::highlight_png::write(
+            args.size,
             png,
             &mesh,
             crate::highlight_png::Overlay {
-                lines: &lines,
+                lines: drawn.as_ref().unwrap_or(&lines),
                 bands: band_lines.as_ref(),
                 flagged: &[],
                 region: None,
                 view: (view, view_up.1),
                 title,
+                spacing,
             },
         )?;
     }

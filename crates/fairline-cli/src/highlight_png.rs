@@ -6,10 +6,10 @@ use crate::common::bad_input;
 use anyhow::Result;
 use fairline::SurfaceMesh;
 use fairline::Vec3;
-use fairline::highlight::HighlightLines;
+use fairline::highlight::{HighlightLines, LightArray, LineStats};
 use fairline::mesh::FaceId;
 use fairline::picture::MeshView;
-use fairline::render::{Image, PolylineLayer, RenderOptions, Scene, render};
+use fairline::render::{Image, PolylineLayer, RenderOptions, Scene, linear_to_srgb8, render};
 use std::path::Path;
 
 /// Dark ink for highlight lines (linear light).
@@ -41,6 +41,38 @@ pub fn check_png(path: &Path) -> Result<()> {
 /// tilted a little so the relief shows.
 pub fn default_view(z: Vec3, across: Vec3) -> Vec3 {
     -z + 0.35 * across
+}
+
+/// The one camera of a part's pictures (render, highlight, detect, fair):
+/// viewing direction [`default_view`] and up vector Z × H of the part's
+/// light array.
+pub fn default_camera(light: &LightArray) -> (Vec3, Vec3) {
+    (
+        default_view(light.plane_normal(), light.across()),
+        light.across(),
+    )
+}
+
+/// Report entry for the drawn lines: pieces, lights, pieces per light,
+/// median and total length (also relative to the part's width across the
+/// lights).
+pub fn stats_json(
+    mesh: &SurfaceMesh,
+    light: &LightArray,
+    lines: &HighlightLines,
+) -> serde_json::Value {
+    let st = LineStats::of(lines);
+    let width = fairline::highlight::readable::part_width(mesh.positions(), light.across());
+    serde_json::json!({
+        "pieces": st.pieces,
+        "lights": st.lights,
+        "pieces_per_light": st.pieces_per_light,
+        "median_length": st.median_length,
+        "median_length_over_width": st.median_length / width,
+        "n50_length": st.n50_length,
+        "n50_length_over_width": st.n50_length / width,
+        "total_length": st.total_length,
+    })
 }
 
 /// Polyline layers for highlight lines (dark ink, 1.6 px) and irregular
@@ -79,16 +111,102 @@ pub struct Overlay<'a> {
     pub view: (Vec3, Vec3),
     /// Title at the top.
     pub title: String,
+    /// Light spacing of the drawn lines (for the key; `None` for circular
+    /// lights).
+    pub spacing: Option<f64>,
 }
 
-/// Renders the mesh with the overlay and writes the PNG.
-pub fn write(path: &Path, mesh: &SurfaceMesh, overlay: Overlay<'_>) -> Result<()> {
-    image(mesh, overlay, (1200, 900))?.write_png(path)?;
+/// The key of a highlight picture: what each colour means, one entry per
+/// thing drawn (lines, band boundaries, flagged stretches, regions).
+pub fn key_entries(overlay: &Overlay<'_>) -> Vec<([f32; 3], String)> {
+    let mut key = vec![(
+        LINE,
+        match overlay.spacing {
+            Some(s) => format!("highlight lines, light spacing {}", fmt_len(s)),
+            None => "highlight lines".into(),
+        },
+    )];
+    if overlay.bands.is_some() {
+        key.push((BAND, "band boundaries".into()));
+    }
+    if overlay.region.is_some_and(|r| !r.is_empty()) {
+        key.push((REGION, "suggested fairing region".into()));
+    }
+    if !overlay.flagged.is_empty() {
+        key.push((WARN, "lines across a region".into()));
+    }
+    key
+}
+
+/// Draws a key (a swatch and a label per entry) in the bottom-left corner
+/// of `img` (away from the titles), on a light panel.
+pub fn draw_key(img: &mut Image, entries: &[([f32; 3], String)]) {
+    if entries.is_empty() {
+        return;
+    }
+    let scale = if img.width >= 1000 { 2 } else { 1 };
+    let row = (Image::text_height(scale) + 6 * scale) as i64;
+    let swatch = (14 * scale) as i64;
+    let text_w = entries
+        .iter()
+        .map(|(_, l)| Image::text_width(l, scale))
+        .max()
+        .unwrap_or(0) as i64;
+    let pad = (4 * scale) as i64;
+    let panel_h = 2 * pad + row * entries.len() as i64;
+    let (x0, y0) = (8i64, img.height as i64 - panel_h - 8);
+    img.fill_rect(
+        x0,
+        y0,
+        (2 * pad + swatch + 2 * pad + text_w) as u32,
+        panel_h as u32,
+        [250, 250, 250, 255],
+    );
+    for (i, (colour, label)) in entries.iter().enumerate() {
+        let y = y0 + pad + i as i64 * row;
+        let c = linear_to_srgb8(*colour);
+        img.fill_rect(
+            x0 + pad,
+            y + row / 2 - scale as i64 * 2,
+            swatch as u32,
+            4 * scale,
+            c,
+        );
+        img.draw_text(
+            x0 + 3 * pad + swatch,
+            y + 2,
+            label,
+            [20, 20, 20, 255],
+            scale,
+        );
+    }
+}
+
+/// A length for a key or a message: 3 significant digits.
+pub fn fmt_len(x: f64) -> String {
+    if x != 0.0 && (x.abs() >= 1e4 || x.abs() < 1e-3) {
+        format!("{x:.2e}")
+    } else {
+        let digits = (2 - x.abs().log10().floor() as i32).clamp(0, 6) as usize;
+        format!("{x:.digits$}")
+    }
+}
+
+/// Renders the mesh with the overlay into a picture of `size` (W, H) and
+/// writes the PNG.
+pub fn write(
+    size: (u32, u32),
+    path: &Path,
+    mesh: &SurfaceMesh,
+    overlay: Overlay<'_>,
+) -> Result<()> {
+    image(mesh, overlay, size)?.write_png(path)?;
     Ok(())
 }
 
 /// Renders the mesh with the overlay into an image of `size` (W, H).
 pub fn image(mesh: &SurfaceMesh, overlay: Overlay<'_>, size: (u32, u32)) -> Result<Image> {
+    let key = key_entries(&overlay);
     let Overlay {
         lines,
         bands,
@@ -96,6 +214,7 @@ pub fn image(mesh: &SurfaceMesh, overlay: Overlay<'_>, size: (u32, u32)) -> Resu
         region,
         view: (view, up),
         title,
+        spacing: _,
     } = overlay;
     let mv = MeshView::new(mesh);
     let base = [0.55f32, 0.57, 0.60];
@@ -131,17 +250,21 @@ pub fn image(mesh: &SurfaceMesh, overlay: Overlay<'_>, size: (u32, u32)) -> Resu
         legend: None,
         title: Some(title),
     };
-    Ok(render(&scene, &opts)?)
+    let mut img = render(&scene, &opts)?;
+    draw_key(&mut img, &key);
+    Ok(img)
 }
 
-/// A `warning:` text when the lights give no highlight line, or only
-/// fragments (median line shorter than two spacings, or more than four
-/// pieces per light), with the options to try; `None` when the lines are
-/// readable.
+/// A `warning:` text when the lights give no highlight line, or when the
+/// drawn (readable) lines are fragmented (see [`fragmented`]; `width` is
+/// the part's width across the lights), with the options to try; `None`
+/// when the lines are readable.
 pub fn line_warning(
     what: &Path,
     lines: &HighlightLines,
-    light: &fairline::highlight::LightArray,
+    drawn: &HighlightLines,
+    light: &LightArray,
+    width: f64,
 ) -> Option<String> {
     let name = what.display();
     if lines.lines.is_empty() {
@@ -150,28 +273,75 @@ pub fn line_warning(
             fmt_vec(light.plane_normal())
         ));
     }
-    let s = light.spacing();
-    let mut lengths: Vec<f64> = lines
-        .lines
-        .iter()
-        .map(|l| l.points.windows(2).map(|w| (w[1] - w[0]).length()).sum())
-        .collect();
-    lengths.sort_by(f64::total_cmp);
-    let median = lengths[lengths.len() / 2];
-    let mut indices: Vec<i64> = lines.lines.iter().map(|l| l.index).collect();
-    indices.sort_unstable();
-    indices.dedup();
-    let per_light = lines.lines.len() as f64 / indices.len().max(1) as f64;
-    if median < 2.0 * s || per_light > 4.0 {
+    if drawn.lines.is_empty() {
         return Some(format!(
-            "warning: {name}: the highlight lines are fragmented ({} pieces on {} lights, median length {:.1} spacings); try another --up (x, y, z) or --plane-normal, or a larger --spacing",
-            lines.lines.len(),
-            indices.len(),
-            if s > 0.0 { median / s } else { 0.0 }
+            "warning: {name}: the {} highlight line pieces are all too crowded or too short to draw; try a larger --spacing or another --up (x, y, z)",
+            lines.lines.len()
+        ));
+    }
+    let st = LineStats::of(drawn);
+    if fragmented(&st, width) {
+        return Some(format!(
+            "warning: {name}: the highlight lines are fragmented (half of the drawn length is in pieces shorter than {:.2} of the part's width; {} pieces on {} lights); try another --up (x, y, z) or --plane-normal, or a larger --spacing",
+            if width > 0.0 {
+                st.n50_length / width
+            } else {
+                0.0
+            },
+            st.pieces,
+            st.lights,
         ));
     }
     None
 }
+
+/// Detection at the scale of `light` (the measure) with the lines of
+/// `shown_light` (the readable lights: `light` itself or a subset of its
+/// lines): returns all lines of `shown_light`, their readable drawing, and
+/// the detection, whose stretches lie on the drawn lines.
+pub fn detect_with_lines(
+    mesh: &SurfaceMesh,
+    light: &LightArray,
+    shown_light: &LightArray,
+    highlight: fairline::highlight::HighlightOptions,
+    detect: &fairline::highlight::DetectOptions,
+) -> Result<
+    (
+        HighlightLines,
+        HighlightLines,
+        fairline::highlight::Detection,
+    ),
+    fairline::highlight::HighlightError,
+> {
+    let model = fairline::highlight::HighlightModel::new(mesh, *shown_light, highlight)?;
+    let lines = model.lines(mesh);
+    let shown = model.readable_lines(
+        mesh,
+        &lines,
+        &fairline::highlight::Readability::for_part(mesh, shown_light),
+    );
+    let det = fairline::highlight::detect_irregularities(mesh, light, &shown, detect)?;
+    Ok((lines, shown, det))
+}
+
+/// The irregular stretches of a detection (lines across its regions).
+pub fn stretches(det: &fairline::highlight::Detection) -> Vec<Vec<Vec3>> {
+    det.lines
+        .iter()
+        .flat_map(|l| l.stretches.iter().cloned())
+        .collect()
+}
+
+/// Whether drawn lines are fragmented: half of their length lies in pieces
+/// shorter than 0.15 of the part's `width` across the lights (a
+/// length-weighted median, [`LineStats::n50_length`]).
+pub fn fragmented(st: &LineStats, width: f64) -> bool {
+    st.n50_length < FRAGMENT_N50_OF_WIDTH * width
+}
+
+/// The drawn lines are called fragmented below this N50 (fraction of the
+/// part's width); tests/real_highlight.rs holds every real mesh to it.
+pub const FRAGMENT_N50_OF_WIDTH: f64 = 0.15;
 
 fn fmt_vec(v: Vec3) -> String {
     format!("{:.3},{:.3},{:.3}", v.x, v.y, v.z)

@@ -5,7 +5,7 @@ use crate::highlight::{LightArgs, to_input_error};
 use anyhow::{Context, Result};
 use fairline::Vec3;
 use fairline::geom::{CurvatureMethod, principal_curvatures};
-use fairline::highlight::{DetectOptions, HighlightModel, detect_irregularities};
+use fairline::highlight::{DetectOptions, HighlightModel, Readability, detect_irregularities};
 use fairline::picture::{Picture, ScalarField, mesh_picture};
 use fairline::render::{Colormap, RenderOptions};
 use std::path::PathBuf;
@@ -128,17 +128,14 @@ pub fn run(args: Args) -> Result<()> {
             .mesh;
         &tri
     };
-    let light = if args.highlight {
-        let light = args.light.light_array(tri_mesh)?;
-        if args.view.is_none() {
-            opts.view_dir =
-                crate::highlight_png::default_view(light.plane_normal(), light.across());
-            opts.up = light.across();
-        }
-        Some(light)
-    } else {
-        None
-    };
+    // one camera per part: the view of highlight, detect and fair, from
+    // the part's default lights, with or without --highlight
+    let light = args.light.light_array(tri_mesh)?;
+    if args.view.is_none() {
+        (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
+    }
+    let light = args.highlight.then_some(light);
+    let mut key = Vec::new();
     let mut report = Report::new("render");
     let mut summary = None;
     let bar = crate::common::spinner("rendering");
@@ -155,9 +152,15 @@ pub fn run(args: Args) -> Result<()> {
             ..Default::default()
         };
         if let Some(light) = light {
-            let model = HighlightModel::new(tri_mesh, light, args.light.options())
+            let shown_light = args.light.readable(tri_mesh, light)?;
+            let model = HighlightModel::new(tri_mesh, shown_light, args.light.options())
                 .map_err(to_input_error)?;
-            let lines = model.lines(tri_mesh);
+            let all = model.lines(tri_mesh);
+            let lines = model.readable_lines(
+                tri_mesh,
+                &all,
+                &Readability::for_part(tri_mesh, &shown_light),
+            );
             let det_opts = DetectOptions::default().threshold(args.threshold);
             let det = detect_irregularities(tri_mesh, &light, &lines, &det_opts)
                 .map_err(to_input_error)?;
@@ -167,9 +170,20 @@ pub fn run(args: Args) -> Result<()> {
                 .flat_map(|l| l.stretches.iter().cloned())
                 .collect();
             picture.polylines = crate::highlight_png::line_layers(&lines, &stretches);
+            key = crate::highlight_png::key_entries(&crate::highlight_png::Overlay {
+                lines: &lines,
+                bands: None,
+                flagged: &stretches,
+                region: None,
+                view: (opts.view_dir, opts.up),
+                title: String::new(),
+                spacing: Some(shown_light.spacing()),
+            });
             summary = Some(serde_json::json!({
-                "light": light,
-                "lines": lines.lines.len(),
+                "light": shown_light,
+                "detect_light": light,
+                "lines": all.lines.len(),
+                "drawn": crate::highlight_png::stats_json(tri_mesh, &shown_light, &lines),
                 "nodes": lines.node_count(),
                 "irregular_stretches": stretches.len(),
                 "regions": det.regions.len(),
@@ -196,7 +210,9 @@ pub fn run(args: Args) -> Result<()> {
                 range: None,
             });
         }
-        Ok(mesh_picture(&mesh, &picture, &opts)?)
+        let mut img = mesh_picture(&mesh, &picture, &opts)?;
+        crate::highlight_png::draw_key(&mut img, &key);
+        Ok(img)
     })?;
     bar.finish_and_clear();
     image.write_png(&args.png)?;

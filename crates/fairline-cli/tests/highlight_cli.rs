@@ -610,4 +610,22 @@ fn demo_finds_the_planted_dent() {
     }
     let (_, red) = dark_and_red(&out.join("highlight-dent-lines.png"));
     assert!(red > 20, "red stretches at the dent: {red}");
+    // the detection section: strongly curved hills stay quiet, the same
+    // hills with a bump of 0.1 % of the diagonal (σ = 0.1) get a region
+    // centred on it, ranked first
+    let c = &r["sections"]["Detection: quiet on curved shape, finds a small defect"];
+    assert_eq!(c[0]["surface"], "clean hills", "{c}");
+    assert_eq!(c[0]["regions"], 0, "{c}");
+    assert!(c[1]["regions"].as_u64().unwrap() >= 1, "{c}");
+    assert!(
+        c[1]["top_region_centre_distance_from_bump"]
+            .as_f64()
+            .unwrap()
+            < 0.1,
+        "{c}"
+    );
+    for png in ["detect-curved-clean.png", "detect-curved-bump.png"] {
+        let (dark, _) = dark_and_red(&out.join(png));
+        assert!(dark > 200, "{png}: {dark} dark pixels");
+    }
 }

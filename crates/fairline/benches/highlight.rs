@@ -7,7 +7,10 @@
 //!
 //! Run: `cargo bench -p fairline --bench highlight`
 //! (`FAIRLINE_BENCH_RUNS`, `FAIRLINE_BENCH_SIZES` override runs and sizes;
-//! `FAIRLINE_BENCH_ONLY=model` runs only the whole-model table).
+//! `FAIRLINE_BENCH_ONLY=model` runs only the whole-model table;
+//! `FAIRLINE_BENCH_ONLY=defaults` only the table with the default lights a
+//! command chooses for a part, on the 450k height field and on the
+//! Stanford bunny scan of ../shared/data split to about 575k vertices).
 
 mod common;
 
@@ -15,8 +18,8 @@ use common::{cpu_ns, median_secs, row, runs, sizes, test_surface};
 use fairline::Vec3;
 use fairline::geom;
 use fairline::highlight::{
-    CircularLight, DetectOptions, HighlightModel, HighlightOptions, LightArray,
-    circular_highlight_lines, detect_irregularities,
+    CircularLight, DetectOptions, HighlightModel, HighlightOptions, LightArray, Readability,
+    UpAxis, circular_highlight_lines, detect_irregularities,
 };
 use fairline::mesh::{SurfaceMesh, VertexId, bounding_box};
 
@@ -41,9 +44,99 @@ fn timed<T>(runs: usize, mut f: impl FnMut() -> T) -> String {
     format!("{} ({})", ms(wall), ms(cpu))
 }
 
+/// Each triangle split into four at its edge midpoints (a shared midpoint
+/// per edge), `times` times: a real scan at a larger vertex count, with
+/// the scan's own shape and irregular sampling.
+fn split4(mesh: &SurfaceMesh, times: u32) -> SurfaceMesh {
+    let mut m = mesh.clone();
+    for _ in 0..times {
+        let mut pos = m.positions().to_vec();
+        let mut mid = std::collections::HashMap::new();
+        let mut faces: Vec<[u32; 3]> = Vec::with_capacity(4 * m.face_count());
+        for f in m.faces() {
+            let t = m.triangle(f).map(|v| v.0);
+            let mut e = [0u32; 3];
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                let key = (a.min(b), a.max(b));
+                e[k] = *mid.entry(key).or_insert_with(|| {
+                    pos.push(0.5 * (pos[a as usize] + pos[b as usize]));
+                    (pos.len() - 1) as u32
+                });
+            }
+            faces.push([t[0], e[0], e[2]]);
+            faces.push([t[1], e[1], e[0]]);
+            faces.push([t[2], e[2], e[1]]);
+            faces.push([e[0], e[1], e[2]]);
+        }
+        m = SurfaceMesh::new(pos, &faces).expect("split mesh");
+    }
+    m
+}
+
+/// The default lights of a part, as `fairline highlight` chooses them with
+/// no options: the readable spacing, and the model with all its nodes.
+fn default_lights_table(runs: usize, opts: HighlightOptions) {
+    let mut meshes: Vec<(String, SurfaceMesh)> =
+        vec![("height field".into(), test_surface(450_000))];
+    let bunny = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/meshes/bunny_zipper.ply");
+    match fairline::io::read_mesh(&bunny) {
+        Ok(m) => meshes.push(("bunny_zipper split 4x4".into(), split4(&m, 2))),
+        Err(e) => println!("(bunny scan skipped: {e})"),
+    }
+    println!(
+        "\nDefault lights of the part (readable_for_mesh, up auto): wall median of {runs} runs (CPU per run), ms\n"
+    );
+    row(&[
+        "mesh".into(),
+        "vertices".into(),
+        "choose lights ms".into(),
+        "model ms".into(),
+        "model + polylines ms".into(),
+        "readable drawing ms".into(),
+        "spacing / width".into(),
+        "lines".into(),
+        "nodes".into(),
+    ]);
+    row(&vec!["---".to_string(); 9]);
+    for (name, mesh) in &meshes {
+        let t_choose = timed(runs, || LightArray::readable_for_mesh(mesh, UpAxis::Auto));
+        let light = LightArray::readable_for_mesh(mesh, UpAxis::Auto).expect("vertices");
+        let t_model = timed(runs, || {
+            HighlightModel::new(mesh, light, opts).expect("tri")
+        });
+        let t_total = timed(runs, || {
+            HighlightModel::new(mesh, light, opts)
+                .expect("tri")
+                .lines(mesh)
+        });
+        let model = HighlightModel::new(mesh, light, opts).expect("tri");
+        let lines = model.lines(mesh);
+        let r = Readability::for_part(mesh, &light);
+        let t_draw = timed(runs, || model.readable_lines(mesh, &lines, &r));
+        let width = fairline::highlight::readable::part_width(mesh.positions(), light.across());
+        row(&[
+            name.clone(),
+            mesh.vertex_count().to_string(),
+            t_choose,
+            t_model,
+            t_total,
+            t_draw,
+            format!("1/{:.1}", width / light.spacing()),
+            lines.lines.len().to_string(),
+            lines.node_count().to_string(),
+        ]);
+    }
+}
+
 fn main() {
     let runs = runs(7);
     let opts = HighlightOptions::default();
+    if std::env::var("FAIRLINE_BENCH_ONLY").is_ok_and(|s| s == "defaults") {
+        default_lights_table(runs, opts);
+        return;
+    }
     let sizes = sizes(&[110_000, 450_000, 1_000_000, 2_000_000]);
     let meshes: Vec<SurfaceMesh> = sizes.iter().map(|&n| test_surface(n)).collect();
 

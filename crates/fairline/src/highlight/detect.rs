@@ -56,6 +56,15 @@
 //!    median score) (defaults 1 and 4): on a clean model the median score
 //!    is far below 1 and the threshold is 1; on a noisy scan the threshold
 //!    rises above the noise and only what stands out of it is flagged.
+//! 6. **Shape finer than the scale.** The measure assumes the intended
+//!    surface is smooth at the scale R. Where the normals within R turn by
+//!    more than `max_turn` (default 1 rad, κ·R ≳ 1) from the site's normal
+//!    — the ears and horns of a figure, a crease, a fillet or a thin wall
+//!    narrower than R — no cubic over R stands for it, and the fit's misfit
+//!    would be read as a defect of enormous score. Such sites are shape, not
+//!    defects at this scale: they are not judged and are counted apart
+//!    ([`Detection::shape_sites`]). A denser array (smaller spacing) judges
+//!    them at their own scale.
 //!
 //! # Regions
 //!
@@ -165,6 +174,16 @@ pub struct DetectOptions {
     /// The threshold is raised to this many times the median site score
     /// (the score noise) on noisy meshes (default 4).
     pub noise_factor: f64,
+    /// Largest angle (radians, default 1) by which the surface normals
+    /// within the smooth radius R may turn away from a site's normal for
+    /// the site to be judged. Where they turn by more (κ·R ≳ 1: ears, horns,
+    /// creases, fillets tighter than R) no cubic over R can stand for the
+    /// intended surface: the shape there is finer than the scale of the
+    /// measure, so it is counted as shape ([`Detection::shape_sites`]) and
+    /// not judged. A defect of the kind the measure is for turns the
+    /// normal by a few degrees at most (a 0.1 %-of-diagonal bump a spacing
+    /// wide: about 1°).
+    pub max_turn: f64,
 }
 
 impl Default for DetectOptions {
@@ -176,6 +195,7 @@ impl Default for DetectOptions {
             site_spacing: 0.25,
             region_margin: 1.0,
             noise_factor: 4.0,
+            max_turn: 1.0,
         }
     }
 }
@@ -189,6 +209,12 @@ impl DetectOptions {
     /// Sets the smooth-fit radius (spacings).
     pub fn smooth_radius(mut self, r: f64) -> Self {
         self.smooth_radius = r;
+        self
+    }
+    /// Sets the largest normal turn within the smooth radius at which a
+    /// site is judged (radians).
+    pub fn max_turn(mut self, a: f64) -> Self {
+        self.max_turn = a;
         self
     }
     /// Sets the region margin (spacings).
@@ -254,6 +280,10 @@ pub struct Detection {
     pub sites: Vec<Site>,
     /// Number of judged sites.
     pub judged_sites: usize,
+    /// Number of sites not judged because the surface turns by more than
+    /// [`DetectOptions::max_turn`] within the smooth radius (shape finer
+    /// than the measure's scale: ears, horns, creases).
+    pub shape_sites: usize,
     /// Number of flagged sites.
     pub flagged_sites: usize,
     /// The threshold applied: max(threshold, noise_factor × median score).
@@ -542,6 +572,7 @@ pub fn detect_irregularities(
         ("fine_radius", o.fine_radius),
         ("site_spacing", o.site_spacing),
         ("region_margin", o.region_margin),
+        ("max_turn", o.max_turn),
     ] {
         if !(v > 0.0) || !v.is_finite() {
             return Err(HighlightError::InvalidOption(format!(
@@ -629,31 +660,46 @@ pub fn detect_irregularities(
             .enumerate()
             .filter_map(|(i, f)| f.map(|(q, _, _)| (i as u32, q))),
     );
-    // coarse fits and scores
-    let scores: Vec<Option<f64>> = (0..site_vertices.len())
+    // coarse fits and scores; sites where the surface turns by more than
+    // `max_turn` within R are shape finer than the measure (second field)
+    let min_turn_cos = o.max_turn.min(std::f64::consts::PI).cos();
+    let judgements: Vec<(Option<f64>, bool)> = (0..site_vertices.len())
         .into_par_iter()
         .map(|i| {
             if mesh.is_boundary_vertex(VertexId(site_vertices[i])) {
-                return None;
+                return (None, false);
             }
-            let (pi, ni, _) = fine[i]?;
+            let Some((pi, ni, _)) = fine[i] else {
+                return (None, false);
+            };
             let dist = (a0 - pi).dot(z).abs().max(s);
             let theta0 = 0.1 * s / dist;
             let mut nb = Vec::new();
+            let mut least_cos = 1.0f64;
             sgrid.around(pi, |j| {
                 if let Some((q, nq, _)) = fine[j as usize]
                     && (q - pi).length_squared() < smooth_r * smooth_r
-                    && nq.dot(ni) > 0.3
                 {
-                    nb.push((q, nq));
+                    let c = nq.dot(ni);
+                    least_cos = least_cos.min(c);
+                    if c > 0.3 {
+                        nb.push((q, nq));
+                    }
                 }
             });
-            let ns = smooth_normal(pi, ni, &nb, smooth_r, 0.5 * theta0)?;
-            let theta = ni.dot(ns).clamp(-1.0, 1.0).acos();
-            let score = theta / theta0;
-            score.is_finite().then_some(score)
+            if least_cos < min_turn_cos {
+                return (None, true);
+            }
+            let score = smooth_normal(pi, ni, &nb, smooth_r, 0.5 * theta0).and_then(|ns| {
+                let theta = ni.dot(ns).clamp(-1.0, 1.0).acos();
+                let score = theta / theta0;
+                score.is_finite().then_some(score)
+            });
+            (score, false)
         })
         .collect();
+    let shape_sites = judgements.iter().filter(|j| j.1).count();
+    let scores: Vec<Option<f64>> = judgements.into_iter().map(|j| j.0).collect();
     let judged: Vec<f64> = scores.iter().flatten().copied().collect();
     let judged_sites = judged.len();
     let median_score = median(judged);
@@ -813,7 +859,8 @@ pub fn detect_irregularities(
         r.lines.sort_unstable();
     }
     regions.sort_by(|a, b| b.score.total_cmp(&a.score).then(a.faces.cmp(&b.faces)));
-    let region_area: f64 = regions.iter().map(|r| r.area).sum();
+    // a fold from +0.0 (an empty `sum` of f64 is −0.0, which reports print)
+    let region_area: f64 = regions.iter().map(|r| r.area).fold(0.0, |a, b| a + b);
     let flagged_area_fraction = if total_area > 0.0 {
         (region_area / total_area).clamp(0.0, 1.0)
     } else {
@@ -825,6 +872,7 @@ pub fn detect_irregularities(
         flagged_sites: flagged.len(),
         sites,
         judged_sites,
+        shape_sites,
         threshold,
         median_score,
         noise_level,

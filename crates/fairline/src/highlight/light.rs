@@ -192,6 +192,9 @@ impl LightArray {
     ///   the bounding-box centre, the plane one bounding-box diagonal above
     ///   the centre along Z.
     ///
+    /// This spacing is the scale of detection (`detect_irregularities`); for
+    /// drawing, [`Self::readable_for_mesh`] thins the lines on round parts.
+    ///
     /// `None` for a mesh without finite vertices.
     pub fn default_for_mesh(mesh: &SurfaceMesh, up: UpAxis) -> Option<Self> {
         let p: Vec<Vec3> = mesh
@@ -292,6 +295,41 @@ impl LightArray {
         })
     }
 
+    /// How many spacings of `self` apart the lines must be drawn to be
+    /// readable on `mesh`: k = max(1, round(ĝ/3)), with ĝ the area-weighted
+    /// median of the highlight-distance gradient |∇d| over the lit triangles
+    /// (neighbouring lines lie s/|∇d| apart on the surface, see
+    /// [`super::readable`]). The lines of the array with spacing k·s and the
+    /// same light 0 are exactly the lines of `self` whose index is a
+    /// multiple of k.
+    ///
+    /// With the default spacing s = w/20 (w the part's width across the
+    /// lights) this keeps the median line separation at about w/60 or more:
+    /// a panel facing the lights has ĝ ≈ 1–3 and keeps k = 1 (about 20
+    /// lights across); on a round part d_P grows like the tangent of the
+    /// normal's angle to Z (ĝ of 15–30 on the figures in ../shared/data),
+    /// and without thinning the lines would lie w/300–w/600 apart, below
+    /// what a picture resolves, and break into hatching.
+    pub fn readable_multiple(&self, mesh: &SurfaceMesh) -> u32 {
+        let (d, branch) = vertex_distances(mesh, self);
+        match super::readable::median_distance_gradient(mesh, &d, &branch) {
+            Some(g) if g.is_finite() && g > 0.0 => (g / 3.0).round().clamp(1.0, 1000.0) as u32,
+            _ => 1,
+        }
+    }
+
+    /// The default lights for reading the lines on a part:
+    /// [`Self::default_for_mesh`] with its spacing multiplied by
+    /// [`Self::readable_multiple`].
+    pub fn readable_for_mesh(mesh: &SurfaceMesh, up: UpAxis) -> Option<Self> {
+        let base = Self::default_for_mesh(mesh, up)?;
+        let k = base.readable_multiple(mesh);
+        Some(LightArray {
+            spacing: base.spacing * f64::from(k),
+            ..base
+        })
+    }
+
     /// A copy with a different spacing (> 0, finite), e.g. for a denser array.
     pub fn with_spacing(self, spacing: f64) -> Result<Self, HighlightError> {
         LightArray::new(self.plane_point, self.plane_normal, self.direction, spacing)
@@ -338,6 +376,18 @@ impl LightArray {
         let d = (p - self.plane_point).cross(n).dot(self.direction) / zn;
         d.is_finite().then_some(d)
     }
+}
+
+/// Highlight distance d_P (Eq. (1)) and branch (sign of Z·N, 0 where
+/// |Z·N| is below the default `min_normal_cos`) of every vertex, with the
+/// area-weighted vertex normals of Yong et al. Eq. (3).
+pub(crate) fn vertex_distances(mesh: &SurfaceMesh, light: &LightArray) -> (Vec<f64>, Vec<i8>) {
+    let min_cos = super::HighlightOptions::default().min_normal_cos;
+    crate::geom::vertex_normals(mesh)
+        .iter()
+        .zip(mesh.positions())
+        .map(|(&n, &p)| super::linear::vertex_distance(light, p, n, min_cos))
+        .unzip()
 }
 
 /// A circular light source L(θ) = A + R(cos θ n + sin θ b), Nishiyama et

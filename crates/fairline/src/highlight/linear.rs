@@ -4,6 +4,7 @@
 use super::HighlightError;
 use super::contour::{self, Levels, NodeId, Segment};
 use super::light::LightArray;
+use super::readable::Readability;
 use super::{HighlightBands, HighlightLines};
 use crate::Vec3;
 use crate::geom;
@@ -77,7 +78,7 @@ pub struct HighlightModel {
 
 /// Distance value and branch of one vertex.
 #[inline]
-fn vertex_distance(light: &LightArray, p: Vec3, n: Vec3, min_cos: f64) -> (f64, i8) {
+pub(crate) fn vertex_distance(light: &LightArray, p: Vec3, n: Vec3, min_cos: f64) -> (f64, i8) {
     match light.highlight_distance(p, n, min_cos) {
         Some(d) => (
             d,
@@ -199,6 +200,26 @@ impl HighlightModel {
         contour::chain(mesh, &self.segments, |n| {
             contour::node_position(mesh, &self.distances, levels, n)
         })
+    }
+
+    /// The readable drawing of `lines` (this model's lines): cut where
+    /// neighbouring lines lie closer than `r.min_separation` on the surface
+    /// (spacing/|∇d|, see [`super::readable`]) and without pieces shorter
+    /// than `r.min_length`. For pictures only; the lines are the data.
+    pub fn readable_lines(
+        &self,
+        mesh: &SurfaceMesh,
+        lines: &HighlightLines,
+        r: &Readability,
+    ) -> HighlightLines {
+        super::readable::readable_lines(
+            mesh,
+            &self.distances,
+            &self.branch,
+            self.light.spacing(),
+            lines,
+            r,
+        )
     }
 
     /// [`Self::lines`] by the previous sort-based chaining, for tests.

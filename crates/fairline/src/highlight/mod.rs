@@ -14,6 +14,7 @@ pub mod detect;
 mod light;
 mod linear;
 pub mod quartic;
+pub mod readable;
 pub mod surface;
 
 pub use circular::{circular_highlight_bands, circular_highlight_lines};
@@ -26,6 +27,7 @@ pub use linear::{HighlightModel, HighlightOptions, highlight_lines};
 /// The one quartic solver (Nishiyama et al. Eq. (2.15)–(2.16)), shared by
 /// circular lights on meshes and on B-spline surfaces.
 pub use quartic::{Roots, quartic_roots};
+pub use readable::{LineStats, Readability};
 pub use surface::{
     SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight, linear_lights,
     surface_highlight_lines, surface_signed_distance,
