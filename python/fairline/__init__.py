@@ -354,17 +354,21 @@ def fair_quad(
     *,
     weight: float = 0.01,
     deviation: float = 0.1,
-    deviation_factor: float = 0.5,
+    deviation_factor: float = 0.1,
     iterations: int = 3,
     fix_boundary: bool = False,
     fixed: Optional[Sequence[int]] = None,
+    off_surface: bool = False,
 ) -> Tuple[np.ndarray, Dict[str, Any]]:
     """Structure-line fairing of a quad mesh (``fairline fair-quad``,
     Grüner thesis ch. 4, Eq. (30)–(34)): zigzagging structure lines are
     straightened by a sparse least-squares fit with a penalty ω‖p − p⁰‖²
     (``weight``, scale-invariant) that keeps the shape; runs whose deviation
     exceeds ``deviation`` free their middle points, the deviation shrinks by
-    ``deviation_factor`` per iteration. Corners never move.
+    ``deviation_factor`` per iteration. Corners never move. By default the
+    moved points are put back onto a smooth fit of the input surface after
+    every solve (they slide along it while the lines straighten);
+    ``off_surface=True`` gives the thesis' method as printed.
 
     Returns ``(V_new, report)``; report keys ``structure_lines
     free_vertices structure_energy_before structure_energy_after
@@ -374,7 +378,7 @@ def fair_quad(
     out, report = _native.fair_quad(
         v, indices, offsets, weight=float(weight), deviation=float(deviation),
         deviation_factor=float(deviation_factor), iterations=int(iterations),
-        fix_boundary=bool(fix_boundary), fixed=_fixed(fixed),
+        fix_boundary=bool(fix_boundary), fixed=_fixed(fixed), off_surface=bool(off_surface),
     )
     return out, _report(report)
 
@@ -388,12 +392,16 @@ def enhance(
     iterations: int = 1,
     solver: str = "auto",
     fixed: Optional[Sequence[int]] = None,
+    projection: str = "smooth",
 ) -> Tuple[np.ndarray, Dict[str, Any]]:
     """Feature enhancement by vertex flow (``fairline enhance``, Ji et al.
     2011): vertices slide from flat regions toward ridges and valleys,
     minimising F_em + λ F_sd + μ F_smo; connectivity unchanged, boundary and
     ``fixed`` vertices bit-identical. ``solver``: ``"auto"``, ``"cg"``,
-    ``"amg"`` or ``"direct"``. Triangle meshes only.
+    ``"amg"`` or ``"direct"``. ``projection``: ``"smooth"`` (moved vertices
+    are put back onto a smooth fit of the input surface), ``"mesh"`` (onto
+    the input triangles) or ``"none"`` (the paper's method as published).
+    Triangle meshes only.
 
     Returns ``(V_new, report)``; report keys include ``flipped_triangles
     quality_before quality_after histogram_before histogram_after
@@ -402,7 +410,7 @@ def enhance(
     v, indices, offsets = _mesh(V, F)
     out, report = _native.enhance(
         v, indices, offsets, lambda_=float(lambda_), mu=float(mu), iterations=int(iterations),
-        solver=solver, fixed=_fixed(fixed),
+        solver=solver, fixed=_fixed(fixed), projection=projection,
     )
     return out, _report(report)
 
@@ -539,12 +547,14 @@ def fair(
     method: str = "highlight",
     fair_weight: float = 1.0,
     diff_weight: float = 1.0,
+    laplacian_weight: float = 0.0,
 ) -> Tuple[np.ndarray, Dict[str, Any]]:
     """Highlight-line fairing inside a region (``fairline fair``, Yong et
     al. §3, Algorithm 2): moves only vertices whose motion changes nothing
     outside the region until the highlight lines inside follow smooth
-    desired curves. ``method``: ``"highlight"`` or ``"diffusion-flow"``
-    (baseline).
+    desired curves. ``method``: ``"highlight"``, ``"paper"`` (Yong et
+    al.'s energy exactly) or ``"diffusion-flow"`` (baseline);
+    ``laplacian_weight`` adds a surface-diffusion term to ``"highlight"``.
 
     ``region``: face indices (e.g. :func:`detect`'s result), or the CLI's
     region JSON as a dict (``{"faces"}``, ``{"vertices"}``,
@@ -572,6 +582,7 @@ def fair(
         **_light_kwargs(direction, plane_normal, up, plane_point, spacing, lights, min_normal_cos),
         max_iterations=int(max_iterations), epsilon=float(epsilon), method=method,
         fair_weight=float(fair_weight), diff_weight=float(diff_weight),
+        laplacian_weight=float(laplacian_weight),
     )
     return out, _report(report)
 

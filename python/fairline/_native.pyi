@@ -43,10 +43,11 @@ def fair_quad(
     offsets: _U32,
     weight: float = 0.01,
     deviation: float = 0.1,
-    deviation_factor: float = 0.5,
+    deviation_factor: float = 0.1,
     iterations: int = 3,
     fix_boundary: bool = False,
     fixed: Optional[Sequence[int]] = None,
+    off_surface: bool = False,
 ) -> Tuple[_F64_2, str]: ...
 def enhance(
     v: _F64_2,
@@ -57,6 +58,7 @@ def enhance(
     iterations: int = 1,
     solver: str = "auto",
     fixed: Optional[Sequence[int]] = None,
+    projection: str = "smooth",
 ) -> Tuple[_F64_2, str]: ...
 def repair(v: _F64_2, indices: _U32, offsets: _U32) -> Tuple[_Soup, str]: ...
 def highlight_lines(
@@ -110,6 +112,7 @@ def fair(
     method: str = "highlight",
     fair_weight: Optional[float] = None,
     diff_weight: Optional[float] = None,
+    laplacian_weight: Optional[float] = None,
 ) -> Tuple[_F64_2, str]: ...
 def read_surfaces(path: str) -> str: ...
 def write_surfaces(path: str, surfaces: str) -> None: ...

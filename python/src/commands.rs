@@ -13,8 +13,8 @@ use crate::report::Report;
 use crate::{Failure, Res, SoupArrays, mesh_from, positions_array, soup_arrays, soup_from};
 use fairline::highlight::{
     CircularLight, CircularLights, DetectOptions, HighlightBands, HighlightError, HighlightLine,
-    HighlightLines, HighlightModel, HighlightOptions, LightArray, UpAxis, circular_highlight_bands,
-    circular_highlight_lines, detect_irregularities,
+    HighlightLines, HighlightModel, HighlightOptions, LightArray, LineStats, Readability, UpAxis,
+    circular_highlight_bands, circular_highlight_lines, detect_irregularities,
 };
 use fairline::mesh::{FaceId, Stats, VertexId};
 use fairline::{SurfaceMesh, Vec3};
@@ -237,6 +237,9 @@ fn smooth<'py>(
             preserve_volume,
             tangential_only: tangential,
         };
+        // Δ_B H = 0 on a closed mesh with nothing fixed has no boundary data
+        let unanchored =
+            method == "schneider-kobbelt" && mesh.is_closed() && constraints.fixed.is_empty();
         let mut report = Report::new("smooth");
         let result = report.time(|| match method.as_str() {
             "laplace" => {
@@ -314,6 +317,13 @@ fn smooth<'py>(
                 r.iterations
             ));
         }
+        if unanchored {
+            report.warn(
+                "schneider-kobbelt on a closed mesh without --fixed vertices: nothing holds the shape, \
+                 and Δ_B H = 0 pulls it toward constant mean curvature (a sphere-like blob), erasing \
+                 features such as ears or legs; fix the vertices that must stay (--fixed) to keep them",
+            );
+        }
         Ok((output_positions(&mesh), report.to_json()))
     })?;
     Ok((positions_array(py, &p), report))
@@ -327,8 +337,8 @@ fn output_positions(mesh: &SurfaceMesh) -> Vec<Vec3> {
 
 /// `fairline fair-quad` (crates/fairline-cli/src/smooth.rs `run_quad`).
 #[pyfunction]
-#[pyo3(signature = (v, indices, offsets, weight = 0.01, deviation = 0.1, deviation_factor = 0.5,
-    iterations = 3, fix_boundary = false, fixed = None))]
+#[pyo3(signature = (v, indices, offsets, weight = 0.01, deviation = 0.1, deviation_factor = 0.1,
+    iterations = 3, fix_boundary = false, fixed = None, off_surface = false))]
 fn fair_quad<'py>(
     py: Python<'py>,
     v: V<'py>,
@@ -340,6 +350,7 @@ fn fair_quad<'py>(
     iterations: usize,
     fix_boundary: bool,
     fixed: Option<Vec<i64>>,
+    off_surface: bool,
 ) -> PyResult<PositionsOut<'py>> {
     use fairline::fair::{QuadFairError, QuadFairOptions, fair_structure_lines};
     if !weight.is_finite() || weight <= 0.0 {
@@ -367,6 +378,7 @@ fn fair_quad<'py>(
             iterations,
             fix_boundary,
             fixed,
+            on_surface: !off_surface,
         };
         let mut report = Report::new("fair-quad");
         let r = report
@@ -396,7 +408,7 @@ fn fair_quad<'py>(
 /// `fairline enhance` (crates/fairline-cli/src/enhance.rs).
 #[pyfunction]
 #[pyo3(signature = (v, indices, offsets, lambda_ = 1.0, mu = 0.5, iterations = 1,
-    solver = "auto", fixed = None))]
+    solver = "auto", fixed = None, projection = "smooth"))]
 fn enhance<'py>(
     py: Python<'py>,
     v: V<'py>,
@@ -407,8 +419,19 @@ fn enhance<'py>(
     iterations: usize,
     solver: &str,
     fixed: Option<Vec<i64>>,
+    projection: &str,
 ) -> PyResult<PositionsOut<'py>> {
-    use fairline::enhance::{EnhanceError, EnhanceOptions, EnhanceSolver, enhance_features};
+    use fairline::enhance::{
+        EnhanceError, EnhanceOptions, EnhanceSolver, Projection, enhance_features,
+    };
+    let projection = match projection {
+        "smooth" => Projection::Smooth,
+        "mesh" => Projection::Mesh,
+        "none" => Projection::None,
+        other => {
+            return Err(bad_choice("projection", other, &["smooth", "mesh", "none"]).into());
+        }
+    };
     let solver = match solver {
         "auto" => EnhanceSolver::Auto,
         "direct" => EnhanceSolver::Direct,
@@ -443,6 +466,7 @@ fn enhance<'py>(
             .mu(mu)
             .iterations(iterations)
             .solver(solver)
+            .projection(projection)
             .fixed(fixed_ids);
         let mut report = Report::new("enhance");
         let result = report
@@ -464,6 +488,7 @@ fn enhance<'py>(
         report.set("lambda", lambda_);
         report.set("mu", mu);
         report.set("flipped_triangles", r.flipped_triangles);
+        report.set("degraded_triangles", r.degraded_triangles);
         report.set("backtracked_vertices", r.backtracked_vertices);
         report.set("quality_before", &r.quality_before);
         report.set("quality_after", &r.quality_after);
@@ -475,6 +500,7 @@ fn enhance<'py>(
         report.set("mean_distance_to_input", r.mean_distance_to_input);
         report.set("edge_length", r.edge_length);
         report.set("solver", r.solver);
+        report.set("projection", r.projection);
         report.set("cg_iterations", r.cg_iterations);
         report.set("cg_relative_residual", r.cg_relative_residual);
         report.set("direct_fallbacks", r.direct_fallbacks);
@@ -665,10 +691,42 @@ impl LightOptions {
             .unwrap_or(HighlightOptions::default().min_normal_cos)
     }
 
+    /// The lights to draw and read lines with (the CLI's
+    /// `LightArgs::readable`): `light` itself when the spacing was given
+    /// (`spacing` or `lights`), else `light` with its spacing multiplied by
+    /// [`LightArray::readable_multiple`].
+    fn readable(&self, mesh: &SurfaceMesh, light: LightArray) -> Res<LightArray> {
+        if self.spacing.is_some() || self.lights.is_some() {
+            return Ok(light);
+        }
+        let k = light.readable_multiple(mesh);
+        light
+            .with_spacing(light.spacing() * f64::from(k))
+            .map_err(highlight_error)
+    }
+
     /// Model options (the CLI's `LightArgs::options`).
     fn options(&self) -> HighlightOptions {
         HighlightOptions::default().min_normal_cos(self.min_normal_cos())
     }
+}
+
+/// The report entry for the drawn (readable) lines, as the CLI's
+/// `highlight_png::stats_json`: pieces, lights, pieces per light, median,
+/// N50 and total length (also relative to the part's width).
+fn drawn_json(mesh: &SurfaceMesh, light: &LightArray, lines: &HighlightLines) -> Value {
+    let st = LineStats::of(lines);
+    let width = fairline::highlight::readable::part_width(mesh.positions(), light.across());
+    json!({
+        "pieces": st.pieces,
+        "lights": st.lights,
+        "pieces_per_light": st.pieces_per_light,
+        "median_length": st.median_length,
+        "median_length_over_width": st.median_length / width,
+        "n50_length": st.n50_length,
+        "n50_length_over_width": st.n50_length / width,
+        "total_length": st.total_length,
+    })
 }
 
 /// Library errors about lights, options or the mesh are bad input.
@@ -814,8 +872,9 @@ fn highlight_lines(
             (lines, bands, Some(radii))
         } else {
             let array = light.light_array(&mesh)?;
+            let array = light.readable(&mesh, array)?;
             let opts = light.options();
-            let (lines, bands) = report
+            let (lines, bands, shown) = report
                 .time(|| -> Result<_, HighlightError> {
                     let model = HighlightModel::new(&mesh, array, opts)?;
                     let lines = model.lines(&mesh);
@@ -823,10 +882,13 @@ fn highlight_lines(
                         Some(rho) => Some(model.bands(&mesh, rho)?),
                         None => None,
                     };
-                    Ok((lines, bands))
+                    let shown =
+                        model.readable_lines(&mesh, &lines, &Readability::for_part(&mesh, &array));
+                    Ok((lines, bands, shown))
                 })
                 .map_err(highlight_error)?;
             report.set("light", json!({"kind": "linear", "array": array}));
+            report.set("drawn", drawn_json(&mesh, &array, &shown));
             (lines, bands, None)
         };
         let document = lines_document(&lines, bands.as_ref(), radii.as_deref());
@@ -905,12 +967,20 @@ fn detect<'py>(
             .smooth_radius(smooth_radius.unwrap_or(d.smooth_radius))
             .region_margin(region_margin.unwrap_or(d.region_margin));
         let mut report = Report::new("detect");
-        let (lines, mut det) = report
+        // the measure works at the scale of `array`; the lines listed are
+        // those of the readable lights (the CLI's `detect_with_lines`)
+        let shown_light = light.readable(&mesh, array)?;
+        let (lines, shown, mut det) = report
             .time(|| -> Result<_, HighlightError> {
-                let model = HighlightModel::new(&mesh, array, light.options())?;
+                let model = HighlightModel::new(&mesh, shown_light, light.options())?;
                 let lines = model.lines(&mesh);
-                let det = detect_irregularities(&mesh, &array, &lines, &opts)?;
-                Ok((lines, det))
+                let shown = model.readable_lines(
+                    &mesh,
+                    &lines,
+                    &Readability::for_part(&mesh, &shown_light),
+                );
+                let det = detect_irregularities(&mesh, &array, &shown, &opts)?;
+                Ok((lines, shown, det))
             })
             .map_err(highlight_error)?;
         if let Some(n) = max_regions {
@@ -947,6 +1017,9 @@ fn detect<'py>(
         report.set("vertices", mesh.vertex_count());
         report.set("lines", lines.lines.len());
         report.set("spacing", array.spacing());
+        report.set("drawn_spacing", shown_light.spacing());
+        report.set("drawn", drawn_json(&mesh, &shown_light, &shown));
+        report.set("shape_sites", det.shape_sites);
         report.set("light", array);
         report.set("region_faces", all.len());
         report.set("regions", regions);
@@ -978,7 +1051,7 @@ const AUTO_RINGS: usize = 4;
 #[pyo3(signature = (v, indices, offsets, region = None, auto = false, grow = 0,
     direction = None, plane_normal = None, up = "auto", plane_point = None, spacing = None,
     lights = None, min_normal_cos = None, max_iterations = None, epsilon = None,
-    method = "highlight", fair_weight = None, diff_weight = None))]
+    method = "highlight", fair_weight = None, diff_weight = None, laplacian_weight = None))]
 fn fair<'py>(
     py: Python<'py>,
     v: V<'py>,
@@ -999,6 +1072,7 @@ fn fair<'py>(
     method: &str,
     fair_weight: Option<f64>,
     diff_weight: Option<f64>,
+    laplacian_weight: Option<f64>,
 ) -> PyResult<PositionsOut<'py>> {
     use fairline::fair::{
         FairError, FairMethod, FairOptions, FairResult, RegionSpec, fair_highlight_lines_with,
@@ -1006,9 +1080,12 @@ fn fair<'py>(
     };
     let fair_method = match method {
         "highlight" => FairMethod::Highlight,
+        "paper" => FairMethod::Paper,
         "diffusion-flow" => FairMethod::DiffusionFlow,
         other => {
-            return Err(bad_choice("method", other, &["highlight", "diffusion-flow"]).into());
+            return Err(
+                bad_choice("method", other, &["highlight", "paper", "diffusion-flow"]).into(),
+            );
         }
     };
     match (&region, auto) {
@@ -1044,6 +1121,7 @@ fn fair<'py>(
             method: fair_method,
             fair_weight: fair_weight.unwrap_or(d.fair_weight),
             diff_weight: diff_weight.unwrap_or(d.diff_weight),
+            laplacian_weight: laplacian_weight.unwrap_or(d.laplacian_weight),
             max_iterations: max_iterations.unwrap_or(d.max_iterations),
             epsilon: epsilon.unwrap_or(d.epsilon),
             highlight: light.options(),
@@ -1101,7 +1179,7 @@ fn fair<'py>(
             all.dedup();
             all
         };
-        let score_before = region_score(&mesh, &array, &light, &region_faces)?;
+        let (score_before, threshold) = region_score(&mesh, &array, &light, &region_faces)?;
         let mut current: SurfaceMesh = mesh.clone();
         let mut results: Vec<Value> = Vec::new();
         let mut first: Option<FairResult> = None;
@@ -1123,10 +1201,12 @@ fn fair<'py>(
                 Err(e) => return Err(to_error(e)),
             }
         }
-        let score_after = region_score(&current, &array, &light, &region_faces)?;
+        // the threshold `detect` applies to the input (raised above the
+        // noise of a scan), as the CLI's
+        let (score_after, _) = region_score(&current, &array, &light, &region_faces)?;
         report.set("detect_score_before", score_before);
         report.set("detect_score_after", score_after);
-        let threshold = DetectOptions::default().threshold;
+        report.set("detect_threshold", threshold);
         if score_after > score_before && score_after > threshold {
             report.warn(format!(
                 "the detection score inside the region got worse ({score_before:.2} -> {score_after:.2}); try a larger region (--grow 2) or --method diffusion-flow"
@@ -1206,7 +1286,7 @@ fn fair<'py>(
         }
         if after > before {
             report.warn(format!(
-                "the highlight-line deviation got worse: {before:.4e} before, {after:.4e} after"
+                "the highlight-line deviation (distance of the lines inside the region from their own smoothed curves) got worse: {before:.4e} before, {after:.4e} after; the detection score (as `detect` measures it, same lights) went {score_before:.2} -> {score_after:.2}"
             ));
         }
         Ok((output_positions(&current), report.to_json()))
@@ -1254,9 +1334,9 @@ fn region_score(
     light: &LightArray,
     opts: &LightOptions,
     faces: &[FaceId],
-) -> Res<f64> {
+) -> Res<(f64, f64)> {
     if faces.is_empty() {
-        return Ok(0.0);
+        return Ok((0.0, DetectOptions::default().threshold));
     }
     let model = HighlightModel::new(mesh, *light, opts.options()).map_err(highlight_error)?;
     let lines = model.lines(mesh);
@@ -1270,10 +1350,11 @@ fn region_score(
             }
         }
     }
-    Ok(det
+    let score = det
         .sites
         .iter()
         .filter(|s| inside[s.vertex.idx()])
         .filter_map(|s| s.score)
-        .fold(0.0, f64::max))
+        .fold(0.0, f64::max);
+    Ok((score, det.threshold))
 }

@@ -12,10 +12,7 @@ use crate::commands::{LightOptions, bad_choice, highlight_error, vec3};
 use crate::report::Report;
 use crate::{Failure, Res};
 use fairline::Vec3;
-use fairline::bspline::{
-    BSplineSurface, parse_surfaces_json, read_iges, read_surfaces_json, surfaces_to_json,
-    write_surfaces_json,
-};
+use fairline::bspline::{BSplineSurface, parse_surfaces_json, surfaces_to_json};
 use fairline::highlight::{
     CircularLight, CircularLights, SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceLight,
     linear_lights, surface_highlight_lines as library_surface_lines,
@@ -32,14 +29,10 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// All surfaces of a .json or .igs/.iges file (the CLI's
-/// `surface::load_surfaces`), errors naming the file.
+/// All surfaces of a .json, .igs/.iges or .step/.stp file (the CLI's
+/// `surface::load_surfaces`, through `fairline::io::surface_file`), errors
+/// naming the file.
 fn load_surfaces(path: &std::path::Path) -> Res<Vec<BSplineSurface>> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .unwrap_or_default();
     let named = |msg: String| {
         let shown = path.display().to_string();
         if msg.contains(&shown) {
@@ -48,21 +41,9 @@ fn load_surfaces(path: &std::path::Path) -> Res<Vec<BSplineSurface>> {
             format!("{shown}: {msg}")
         }
     };
-    let surfaces = match ext.as_str() {
-        "json" => read_surfaces_json(path).map_err(|e| file_failure(&e, named(e.to_string())))?,
-        "igs" | "iges" => read_iges(path)
-            .map_err(|e| file_failure(&e, named(e.to_string())))?
-            .surfaces
-            .into_iter()
-            .map(|s| s.surface)
-            .collect(),
-        _ => {
-            return Err(Failure::bad(format!(
-                "{}: unknown surface format (expected extension .json, .igs or .iges)",
-                path.display()
-            )));
-        }
-    };
+    let surfaces = fairline::io::surface_file::read_surface_file(path)
+        .map_err(|e| file_failure(&e, named(e.to_string())))?
+        .surfaces;
     if surfaces.is_empty() {
         return Err(Failure::bad(format!(
             "{}: the file holds no B-spline surface",
@@ -100,21 +81,21 @@ fn read_surfaces(py: Python<'_>, path: PathBuf) -> PyResult<String> {
     Ok(text)
 }
 
-/// Writes surfaces (JSON text) to a .json file atomically.
+/// Writes surfaces (JSON text) atomically, as .json, .igs/.iges or
+/// .step/.stp by the extension (`fairline::io::surface_file`).
 #[pyfunction]
 fn write_surfaces(py: Python<'_>, path: PathBuf, surfaces: String) -> PyResult<()> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase());
-    if ext.as_deref() != Some("json") {
-        return Err(
-            Failure::bad(format!("{}: surfaces are written as .json", path.display())).into(),
-        );
+    if fairline::io::surface_file::SurfaceFormat::from_path(&path).is_none() {
+        return Err(Failure::bad(format!(
+            "{}: surfaces are written as .json, .igs/.iges or .step/.stp",
+            path.display()
+        ))
+        .into());
     }
     let surfaces = parse(&surfaces, "surfaces")?;
     crate::compute(py, || {
-        write_surfaces_json(&path, &surfaces).map_err(|e| file_failure(&e, e.to_string()))
+        fairline::io::surface_file::write_surface_file(&path, &surfaces, None)
+            .map_err(|e| file_failure(&e, e.to_string()))
     })?;
     Ok(())
 }

@@ -103,7 +103,7 @@ def test_non_manifold_edge_is_named():
         (lambda: fairline.fair(TRI_V, TRI_F), "give a region, or auto=True"),
         (lambda: fairline.fair(TRI_V, TRI_F, [0], auto=True), "region and auto=True cannot be given together"),
         (lambda: fairline.fair(TRI_V, TRI_F, {"faces": [5]}), "region: "),
-        (lambda: fairline.fair(TRI_V, TRI_F, [0], method="newton"), "method must be one of highlight, diffusion-flow"),
+        (lambda: fairline.fair(TRI_V, TRI_F, [0], method="newton"), "method must be one of highlight, paper, diffusion-flow"),
         (lambda: fairline.surface_highlight_lines({"degree_u": 3}), "surfaces: "),
         (lambda: fairline.fair_surface([], {"center": [0, 0, 0], "axis": [0, 0, 1], "radii": [1]}, {"endpoints": []}), "surface 0 is out of range"),
     ],
@@ -128,7 +128,7 @@ def test_bad_files_name_file_and_line(tmp_path):
     (tmp_path / "s.json").write_text('{"surfaces": [{"degree_u": 3}]}')
     with pytest.raises(FairlineError, match=r"s\.json"):
         fairline.read_surfaces(tmp_path / "s.json")
-    with pytest.raises(FairlineError, match="surfaces are written as .json"):
+    with pytest.raises(FairlineError, match=r"surfaces are written as \.json, \.igs/\.iges or \.step/\.stp"):
         fairline.write_surfaces(tmp_path / "s.obj", [])
     with pytest.raises(FairlineFileError):
         fairline.write_mesh(tmp_path / "no-such-dir" / "m.obj", TRI_V, TRI_F)
