@@ -1327,7 +1327,8 @@ fn fair_result_json(r: &fairline::fair::FairResult) -> Value {
     })
 }
 
-/// The largest detection score at sites inside `faces` (the CLI's
+/// The largest detection score at sites inside `faces` and the threshold
+/// (`fairline::highlight::region_detection_score`, as the CLI's
 /// `fair::region_score`); 0 when none is judged.
 fn region_score(
     mesh: &SurfaceMesh,
@@ -1335,26 +1336,6 @@ fn region_score(
     opts: &LightOptions,
     faces: &[FaceId],
 ) -> Res<(f64, f64)> {
-    if faces.is_empty() {
-        return Ok((0.0, DetectOptions::default().threshold));
-    }
-    let model = HighlightModel::new(mesh, *light, opts.options()).map_err(highlight_error)?;
-    let lines = model.lines(mesh);
-    let det = detect_irregularities(mesh, light, &lines, &DetectOptions::default())
-        .map_err(highlight_error)?;
-    let mut inside = vec![false; mesh.vertex_count()];
-    for f in faces {
-        if f.idx() < mesh.face_count() {
-            for v in mesh.face_vertices(*f) {
-                inside[v.idx()] = true;
-            }
-        }
-    }
-    let score = det
-        .sites
-        .iter()
-        .filter(|s| inside[s.vertex.idx()])
-        .filter_map(|s| s.score)
-        .fold(0.0, f64::max);
-    Ok((score, det.threshold))
+    fairline::highlight::region_detection_score(mesh, light, opts.options(), faces)
+        .map_err(highlight_error)
 }

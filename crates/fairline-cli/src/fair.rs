@@ -10,7 +10,9 @@ use fairline::fair::{
     FairError, FairMethod, FairOptions, FairResult, RegionSpec, fair_highlight_lines_with,
     fairing_picture, grow_region,
 };
-use fairline::highlight::{DetectOptions, HighlightModel, detect_irregularities};
+use fairline::highlight::{
+    DetectOptions, HighlightModel, detect_irregularities, region_detection_score,
+};
 use fairline::mesh::FaceId;
 use fairline::render::RenderOptions;
 use serde_json::{Value, json};
@@ -415,26 +417,5 @@ fn region_score(
     args: &crate::highlight::LightArgs,
     faces: &[FaceId],
 ) -> Result<(f64, f64)> {
-    if faces.is_empty() {
-        return Ok((0.0, DetectOptions::default().threshold));
-    }
-    let model = HighlightModel::new(mesh, *light, args.options()).map_err(to_input_error)?;
-    let lines = model.lines(mesh);
-    let det = detect_irregularities(mesh, light, &lines, &DetectOptions::default())
-        .map_err(to_input_error)?;
-    let mut inside = vec![false; mesh.vertex_count()];
-    for f in faces {
-        if f.idx() < mesh.face_count() {
-            for v in mesh.face_vertices(*f) {
-                inside[v.idx()] = true;
-            }
-        }
-    }
-    let score = det
-        .sites
-        .iter()
-        .filter(|s| inside[s.vertex.idx()])
-        .filter_map(|s| s.score)
-        .fold(0.0, f64::max);
-    Ok((score, det.threshold))
+    region_detection_score(mesh, light, args.options(), faces).map_err(to_input_error)
 }

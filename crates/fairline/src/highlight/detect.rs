@@ -553,6 +553,43 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// The detection score of a region: the largest score (default
+/// [`DetectOptions`]) at the sites on the vertices of `faces`, 0 when none
+/// is judged, together with the threshold the detection applied to the
+/// whole mesh (raised above the noise of a scan). This is what `fair`
+/// reports before and after fairing, so that its numbers agree with what
+/// `detect` shows under the same lights. Faces out of range are ignored;
+/// an empty region scores 0 against the default threshold.
+pub fn region_detection_score(
+    mesh: &SurfaceMesh,
+    light: &LightArray,
+    highlight: super::HighlightOptions,
+    faces: &[FaceId],
+) -> Result<(f64, f64), HighlightError> {
+    let options = DetectOptions::default();
+    if faces.is_empty() {
+        return Ok((0.0, options.threshold));
+    }
+    let model = super::HighlightModel::new(mesh, *light, highlight)?;
+    let lines = model.lines(mesh);
+    let det = detect_irregularities(mesh, light, &lines, &options)?;
+    let mut inside = vec![false; mesh.vertex_count()];
+    for f in faces {
+        if f.idx() < mesh.face_count() {
+            for v in mesh.face_vertices(*f) {
+                inside[v.idx()] = true;
+            }
+        }
+    }
+    let score = det
+        .sites
+        .iter()
+        .filter(|s| inside[s.vertex.idx()])
+        .filter_map(|s| s.score)
+        .fold(0.0, f64::max);
+    Ok((score, det.threshold))
+}
+
 /// Finds surface defects that displace the highlight lines of `light` and
 /// turns them into suggested fairing regions (see the module documentation
 /// for the measure, its score and defaults). `lines` are the highlight

@@ -21,6 +21,7 @@ pub use circular::{circular_highlight_bands, circular_highlight_lines};
 pub use contour::{HighlightLine, HighlightLines, NodeId};
 pub use detect::{
     DetectOptions, Detection, IrregularRegion, LineFairness, Site, detect_irregularities,
+    region_detection_score,
 };
 pub use light::{CircleApproach, CircularLight, CircularLights, LightArray, UpAxis};
 pub use linear::{HighlightModel, HighlightOptions, highlight_lines};
