@@ -307,7 +307,25 @@ pub fn run(args: Args) -> Result<()> {
     if let (Some(png), Some(r)) = (&args.png, &first) {
         let mut opts = RenderOptions::with_size(900, 700);
         (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
-        let mut img = fairing_picture(&mesh, r, &opts)?;
+        // on round parts the picture draws every k-th line (and its desired
+        // curve), the lines `highlight` and `detect` show with the same
+        // defaults; k = 1 on panels and whenever the spacing was given
+        let shown_light = args.light.readable(&mesh, light)?;
+        let k = (shown_light.spacing() / light.spacing()).round().max(1.0) as i64;
+        let thinned;
+        let drawn: &FairResult = if k > 1 {
+            let mut c = r.clone();
+            c.lines_before.lines.retain(|l| l.index.rem_euclid(k) == 0);
+            c.lines_after.lines.retain(|l| l.index.rem_euclid(k) == 0);
+            c.desired_before
+                .lines
+                .retain(|d| d.index.rem_euclid(k) == 0);
+            thinned = c;
+            &thinned
+        } else {
+            r
+        };
+        let mut img = fairing_picture(&mesh, drawn, &opts)?;
         // the colours of fairline::fair::fairing_picture
         crate::highlight_png::draw_key(
             &mut img,
@@ -316,7 +334,7 @@ pub fn run(args: Args) -> Result<()> {
                     [0.02, 0.02, 0.02],
                     format!(
                         "highlight lines, light spacing {}",
-                        crate::highlight_png::fmt_len(light.spacing())
+                        crate::highlight_png::fmt_len(shown_light.spacing())
                     ),
                 ),
                 ([0.85, 0.05, 0.05], "region outline".into()),

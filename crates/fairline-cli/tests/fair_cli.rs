@@ -271,3 +271,64 @@ fn real_mesh_spot_back() {
     }
     let _ = Vec3::ZERO;
 }
+
+/// Dark (line-ink) pixels of a picture.
+fn dark_pixels(png: &Path) -> usize {
+    let img = fairline::render::Image::decode_png(&std::fs::read(png).unwrap()).unwrap();
+    img.pixels
+        .iter()
+        .filter(|p| p[0] < 60 && p[1] < 60 && p[2] < 90)
+        .count()
+}
+
+/// On a round part the before/after picture draws every k-th highlight
+/// line, as `highlight` and `detect` do with the default lights (issue #18:
+/// the picture was hatched), while the fairing itself runs at the detail
+/// spacing: the same run with that spacing given explicitly writes the same
+/// mesh bytes and a picture with all lines (many more dark pixels).
+#[test]
+fn fair_picture_on_a_round_part_draws_the_readable_lines() {
+    let Some(p) = data("meshes/spot.ply") else {
+        return;
+    };
+    let d = tmp("spot-picture");
+    let (out_a, png_a, rep_a) = (d.join("a.ply"), d.join("a.png"), d.join("a.json"));
+    ok(&run(&[
+        "fair",
+        s(&p),
+        "--auto",
+        "-o",
+        s(&out_a),
+        "--png",
+        s(&png_a),
+        "--report",
+        s(&rep_a),
+    ]));
+    let spacing = json(&rep_a)["light"]["spacing"].as_f64().unwrap();
+    let (out_b, png_b) = (d.join("b.ply"), d.join("b.png"));
+    ok(&run(&[
+        "fair",
+        s(&p),
+        "--auto",
+        "--spacing",
+        &format!("{spacing:?}"),
+        "-o",
+        s(&out_b),
+        "--png",
+        s(&png_b),
+    ]));
+    assert_eq!(
+        std::fs::read(&out_a).unwrap(),
+        std::fs::read(&out_b).unwrap(),
+        "the picture must not change the fairing"
+    );
+    let (readable, all) = (dark_pixels(&png_a), dark_pixels(&png_b));
+    assert!(
+        readable > 500,
+        "the readable picture still shows lines: {readable}"
+    );
+    assert!(
+        2 * readable < all,
+        "readable picture {readable} dark pixels, all lines {all}"
+    );
+}
