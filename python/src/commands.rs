@@ -1189,7 +1189,7 @@ fn fair<'py>(
                 .time(|| fair_highlight_lines_with(&current, &array, faces, &options, &mut |_| {}));
             match outcome {
                 Ok(r) => {
-                    results.push(fair_result_json(&r));
+                    results.push(r.report_json());
                     current = r.mesh.clone();
                     if first.is_none() {
                         first = Some(r);
@@ -1294,38 +1294,6 @@ fn fair<'py>(
     Ok((positions_array(py, &out.0), out.1))
 }
 
-/// The CLI's per-region fairing report (`fair::result_json`).
-fn fair_result_json(r: &fairline::fair::FairResult) -> Value {
-    json!({
-        "iterations": r.iterations,
-        "converged": r.converged,
-        "movable_vertices": r.region.movable.len(),
-        "inside_vertices": r.region.inside_vertices.len(),
-        "region_faces": r.region.in_region.iter().filter(|&&b| b).count(),
-        "willmore_before": r.willmore_before,
-        "willmore_after": r.willmore_after,
-        "highlight_deviation_before": r.deviation_before.rms,
-        "highlight_deviation_after": r.deviation_after.rms,
-        "highlight_deviation_max_before": r.deviation_before.max,
-        "highlight_deviation_max_after": r.deviation_after.max,
-        "desired_lines": r.desired_before.lines.len(),
-        "max_displacement": r.max_displacement,
-        "mean_edge_length": r.mean_edge_length,
-        "history": r.history.iter().map(|h| json!({
-            "iteration": h.iteration,
-            "f_fair": h.f_fair,
-            "f_diff": h.f_diff,
-            "objective": h.objective,
-            "predicted": h.predicted,
-            "achieved": h.achieved,
-            "accepted": h.accepted,
-            "max_step": h.max_step,
-            "step_ratio": h.step_ratio,
-            "active_bounds": h.active_bounds,
-            "target_nodes": h.target_nodes,
-        })).collect::<Vec<_>>(),
-    })
-}
 
 /// The largest detection score at sites inside `faces` and the threshold
 /// (`fairline::highlight::region_detection_score`, as the CLI's

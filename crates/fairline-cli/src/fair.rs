@@ -123,38 +123,6 @@ fn to_error(e: FairError) -> anyhow::Error {
     }
 }
 
-pub(crate) fn result_json(r: &FairResult) -> Value {
-    json!({
-        "iterations": r.iterations,
-        "converged": r.converged,
-        "movable_vertices": r.region.movable.len(),
-        "inside_vertices": r.region.inside_vertices.len(),
-        "region_faces": r.region.in_region.iter().filter(|&&b| b).count(),
-        "willmore_before": r.willmore_before,
-        "willmore_after": r.willmore_after,
-        "highlight_deviation_before": r.deviation_before.rms,
-        "highlight_deviation_after": r.deviation_after.rms,
-        "highlight_deviation_max_before": r.deviation_before.max,
-        "highlight_deviation_max_after": r.deviation_after.max,
-        "desired_lines": r.desired_before.lines.len(),
-        "max_displacement": r.max_displacement,
-        "mean_edge_length": r.mean_edge_length,
-        "history": r.history.iter().map(|h| json!({
-            "iteration": h.iteration,
-            "f_fair": h.f_fair,
-            "f_diff": h.f_diff,
-            "objective": h.objective,
-            "predicted": h.predicted,
-            "achieved": h.achieved,
-            "accepted": h.accepted,
-            "max_step": h.max_step,
-            "step_ratio": h.step_ratio,
-            "active_bounds": h.active_bounds,
-            "target_nodes": h.target_nodes,
-        })).collect::<Vec<_>>(),
-    })
-}
-
 pub fn run(args: Args) -> Result<()> {
     let mut job = crate::output::Job::new("fair")
         .input(&args.mesh)
@@ -264,7 +232,7 @@ pub fn run(args: Args) -> Result<()> {
         });
         match outcome {
             Ok(r) => {
-                results.push(result_json(&r));
+                results.push(r.report_json());
                 current = r.mesh.clone();
                 if first.is_none() {
                     first = Some(r);

@@ -903,7 +903,7 @@ fn run_method(
                 *progress.lock().unwrap_or_else(|e| e.into_inner()) = (done / total).min(1.0);
             })
             .map_err(|e| e.to_string())?;
-            let mut report = crate::fair::result_json(&r);
+            let mut report = r.report_json();
             report["command"] = json!("fair");
             report["time_s"] = json!(t.elapsed().as_secs_f64());
             let m = o.method.as_deref().unwrap_or("highlight");

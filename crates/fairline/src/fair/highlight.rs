@@ -602,6 +602,46 @@ pub fn grow_region(mesh: &SurfaceMesh, faces: &[FaceId], rings: usize) -> Vec<Fa
     mesh.faces().filter(|f| inr[f.idx()]).collect()
 }
 
+impl FairResult {
+    /// The report of one fairing run as JSON, the keys of `fairline fair
+    /// --report` (and of the workbench's and the Python package's reports):
+    /// iterations, convergence, region sizes, the Willmore energy and the
+    /// highlight-line deviation (RMS and max) before and after, the largest
+    /// displacement and the per-iteration history (Yong et al. Algorithm 2).
+    pub fn report_json(&self) -> serde_json::Value {
+        let r = self;
+        serde_json::json!({
+            "iterations": r.iterations,
+            "converged": r.converged,
+            "movable_vertices": r.region.movable.len(),
+            "inside_vertices": r.region.inside_vertices.len(),
+            "region_faces": r.region.in_region.iter().filter(|&&b| b).count(),
+            "willmore_before": r.willmore_before,
+            "willmore_after": r.willmore_after,
+            "highlight_deviation_before": r.deviation_before.rms,
+            "highlight_deviation_after": r.deviation_after.rms,
+            "highlight_deviation_max_before": r.deviation_before.max,
+            "highlight_deviation_max_after": r.deviation_after.max,
+            "desired_lines": r.desired_before.lines.len(),
+            "max_displacement": r.max_displacement,
+            "mean_edge_length": r.mean_edge_length,
+            "history": r.history.iter().map(|h| serde_json::json!({
+                "iteration": h.iteration,
+                "f_fair": h.f_fair,
+                "f_diff": h.f_diff,
+                "objective": h.objective,
+                "predicted": h.predicted,
+                "achieved": h.achieved,
+                "accepted": h.accepted,
+                "max_step": h.max_step,
+                "step_ratio": h.step_ratio,
+                "active_bounds": h.active_bounds,
+                "target_nodes": h.target_nodes,
+            })).collect::<Vec<_>>(),
+        })
+    }
+}
+
 /// Before/after picture of a fairing run (Yong et al. Fig. 7): on the
 /// left the input with its highlight lines (dark), the region outline (red)
 /// and the desired OGH curves (blue); on the right the faired mesh with
