@@ -1294,7 +1294,6 @@ fn fair<'py>(
     Ok((positions_array(py, &out.0), out.1))
 }
 
-
 /// The largest detection score at sites inside `faces` and the threshold
 /// (`fairline::highlight::region_detection_score`, as the CLI's
 /// `fair::region_score`); 0 when none is judged.
