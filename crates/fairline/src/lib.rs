@@ -22,6 +22,7 @@
 #![forbid(unsafe_code)]
 
 pub mod bspline;
+pub mod control;
 pub mod curves;
 pub mod enhance;
 pub mod fair;
@@ -43,4 +44,5 @@ mod shared_data;
 /// A 3-vector of f64 (position, normal, direction).
 pub type Vec3 = glam::DVec3;
 
+pub use control::{Cancelled, Control, Output, Progress, SurfaceOutput};
 pub use mesh::{EdgeId, FaceId, HalfedgeId, MeshError, Soup, SurfaceMesh, VertexId};
