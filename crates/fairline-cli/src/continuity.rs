@@ -3,7 +3,7 @@
 
 use crate::common::{Report, bad_input};
 use crate::output::{Job, say};
-use crate::surface_highlight::{check_ext, surface_picture};
+use crate::surface_highlight::surface_picture;
 use anyhow::Result;
 use fairline::bspline::continuity::{ContinuityOptions, SeamClass, continuity};
 use fairline::render::{PolylineLayer, RenderOptions, linear_to_srgb8};
@@ -60,7 +60,7 @@ fn class_colour(c: SeamClass) -> [f32; 3] {
 
 pub fn run(args: Args) -> Result<()> {
     if let Some(p) = &args.png {
-        check_ext(p, "png", "--png")?;
+        crate::output::require_extension("--png", p, &["png"])?;
     }
     let job = Job::new("continuity")
         .input(&args.surface_file)

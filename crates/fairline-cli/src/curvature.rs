@@ -1,6 +1,6 @@
 //! `fairline curvature`: per-vertex principal curvatures written as PLY.
 
-use crate::common::{Report, bad_input, spinner};
+use crate::common::{Report, spinner};
 use anyhow::{Context, Result};
 use fairline::geom::{CurvatureMethod, principal_curvatures};
 use fairline::mesh::Stats;
@@ -37,18 +37,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let ext = args
-        .output
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    if ext != "ply" {
-        return Err(bad_input(format!(
-            "{}: curvature output must be a .ply file",
-            args.output.display()
-        )));
-    }
+    crate::output::require_extension("-o", &args.output, &["ply"])?;
     let job = crate::output::Job::new("curvature")
         .input(&args.mesh)
         .output("-o", &args.output)
@@ -76,26 +65,41 @@ pub fn run(args: Args) -> Result<()> {
     let gauss = c.gauss();
     let comp =
         |f: fn(&fairline::Vec3) -> f64, v: &[fairline::Vec3]| v.iter().map(f).collect::<Vec<f64>>();
-    let cols: Vec<(&str, Vec<f64>)> = vec![
-        ("nx", comp(|v| v.x, &c.normals)),
-        ("ny", comp(|v| v.y, &c.normals)),
-        ("nz", comp(|v| v.z, &c.normals)),
-        ("k1", c.k1.clone()),
-        ("k2", c.k2.clone()),
-        ("mean", mean.clone()),
-        ("gauss", gauss.clone()),
-        ("d1x", comp(|v| v.x, &c.d1)),
-        ("d1y", comp(|v| v.y, &c.d1)),
-        ("d1z", comp(|v| v.z, &c.d1)),
-        ("d2x", comp(|v| v.x, &c.d2)),
-        ("d2y", comp(|v| v.y, &c.d2)),
-        ("d2z", comp(|v| v.z, &c.d2)),
+    let n = [
+        comp(|v| v.x, &c.normals),
+        comp(|v| v.y, &c.normals),
+        comp(|v| v.z, &c.normals),
+    ];
+    let d1 = [
+        comp(|v| v.x, &c.d1),
+        comp(|v| v.y, &c.d1),
+        comp(|v| v.z, &c.d1),
+    ];
+    let d2 = [
+        comp(|v| v.x, &c.d2),
+        comp(|v| v.y, &c.d2),
+        comp(|v| v.z, &c.d2),
+    ];
+    let cols: [(&str, &[f64]); 13] = [
+        ("nx", &n[0]),
+        ("ny", &n[1]),
+        ("nz", &n[2]),
+        ("k1", &c.k1),
+        ("k2", &c.k2),
+        ("mean", &mean),
+        ("gauss", &gauss),
+        ("d1x", &d1[0]),
+        ("d1y", &d1[1]),
+        ("d1z", &d1[2]),
+        ("d2x", &d2[0]),
+        ("d2y", &d2[1]),
+        ("d2z", &d2[2]),
     ];
     // one row per input vertex: a split non-manifold vertex takes the values
     // of the fan that kept its index
     let props: Vec<(&str, &[f64])> = cols
         .iter()
-        .map(|(n, v)| (*n, mesh.original_values(v)))
+        .map(|&(name, v)| (name, mesh.original_values(v)))
         .collect();
     fairline::io::write_ply_with_vertex_properties(&args.output, &mesh.to_soup(), &props)?;
     report.set("method", crate::output::option_value(&args.method));

@@ -71,19 +71,9 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if !args
-        .output
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
-    {
-        return Err(bad_input(format!(
-            "{}: the region is written as .json",
-            args.output.display()
-        )));
-    }
+    crate::output::require_extension("-o", &args.output, &["json"])?;
     if let Some(p) = &args.png {
-        crate::highlight_png::check_png(p)?;
+        crate::output::require_extension("--png", p, &["png"])?;
     }
     let job = crate::output::Job::new("detect")
         .input(&args.mesh)

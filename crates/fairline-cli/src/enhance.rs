@@ -113,17 +113,8 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--png", args.png.as_deref())
         .output_opt("--report", args.report.as_deref())
         .check()?;
-    if let Some(png) = &args.png
-        && png
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase)
-            != Some("png".into())
-    {
-        return Err(bad_input(format!(
-            "{}: --png must name a .png file",
-            png.display()
-        )));
+    if let Some(png) = &args.png {
+        crate::output::require_extension("--png", png, &["png"])?;
     }
     let mesh = fairline::io::read_mesh(&args.mesh)?;
     crate::repair::note_split_vertices(&args.mesh, &mesh);

@@ -3,7 +3,7 @@
 
 use crate::common::{Report, bad_input, read_json};
 use crate::surface_highlight::{
-    PALETTE, check_ext, palette_srgb, plot_lines, polylines, surface_picture, uv_picture, uv_plot,
+    PALETTE, palette_srgb, plot_lines, polylines, surface_picture, uv_picture, uv_plot,
 };
 use anyhow::Result;
 use fairline::bspline::{BSplineSurface, write_surfaces_json};
@@ -132,10 +132,10 @@ pub fn run(args: Args) -> Result<()> {
         )));
     }
     if let Some(p) = &args.png {
-        check_ext(p, "png", "--png")?;
+        crate::output::require_extension("--png", p, &["png"])?;
     }
     if let Some(p) = &args.svg {
-        check_ext(p, "svg", "--svg")?;
+        crate::output::require_extension("--svg", p, &["svg"])?;
     }
     let job = crate::output::Job::new("fair-surface")
         .input(&args.surface_file)

@@ -272,20 +272,15 @@ pub enum LinesFormat {
 
 /// The format of `path` from its extension.
 pub fn lines_format(path: &Path) -> Result<LinesFormat> {
-    match path
+    crate::output::require_extension("-o", path, &["json", "obj"])?;
+    let obj = path
         .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase()
-        .as_str()
-    {
-        "json" => Ok(LinesFormat::Json),
-        "obj" => Ok(LinesFormat::Obj),
-        _ => Err(bad_input(format!(
-            "{}: highlight lines are written as .json or .obj",
-            path.display()
-        ))),
-    }
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    Ok(if obj {
+        LinesFormat::Obj
+    } else {
+        LinesFormat::Json
+    })
 }
 
 fn line_json(l: &HighlightLine, radii: Option<&[f64]>) -> Value {
@@ -370,7 +365,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     lines_format(&args.output)?;
     if let Some(p) = &args.png {
-        crate::highlight_png::check_png(p)?;
+        crate::output::require_extension("--png", p, &["png"])?;
     }
     let job = crate::output::Job::new("highlight")
         .input(&args.mesh)

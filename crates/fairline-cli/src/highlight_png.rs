@@ -2,7 +2,6 @@
 //! smooth-shaded mesh, irregular stretches in a warning colour, suggested
 //! regions tinted.
 
-use crate::common::bad_input;
 use anyhow::Result;
 use fairline::SurfaceMesh;
 use fairline::Vec3;
@@ -20,22 +19,6 @@ const WARN: [f32; 3] = [0.95, 0.12, 0.02];
 const BAND: [f32; 3] = [0.1, 0.25, 0.75];
 /// Tint of faces in a suggested region (linear light).
 const REGION: [f32; 3] = [0.85, 0.55, 0.25];
-
-/// Checks that `path` names a .png file.
-pub fn check_png(path: &Path) -> Result<()> {
-    if path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("png"))
-    {
-        Ok(())
-    } else {
-        Err(bad_input(format!(
-            "{}: --png must name a .png file",
-            path.display()
-        )))
-    }
-}
 
 /// The default view for lights with plane normal Z: looking down −Z,
 /// tilted a little so the relief shows.

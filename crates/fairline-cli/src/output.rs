@@ -312,6 +312,26 @@ fn check_output_path(option: &str, out: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Refuses (exit status 2, before anything is read or written) an output
+/// `path`, given as `option` (`-o`, `--png`), whose extension is none of
+/// `allowed` (without the dot, compared ignoring ASCII case): the one check
+/// of output file types of every command.
+pub fn require_extension(option: &str, path: &Path, allowed: &[&str]) -> Result<()> {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if allowed.iter().any(|a| a.eq_ignore_ascii_case(ext)) {
+        return Ok(());
+    }
+    let names: Vec<String> = allowed.iter().map(|a| format!(".{a}")).collect();
+    let listed = match names.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+        _ => names.join(""),
+    };
+    Err(bad_input(format!(
+        "{}: {option} must name a {listed} file; nothing written",
+        path.display()
+    )))
+}
+
 /// The spelling of an option value on the command line
 /// (`schneider-kobbelt`), used for report values so that they match.
 pub fn option_value<T: clap::ValueEnum>(value: &T) -> String {
@@ -512,6 +532,25 @@ mod tests {
         assert!(!foreign.join(OWNED_FOLDER_MARKER).exists());
         assert!(owned_folder("--out", &foreign.join("scan.ply")).is_err());
         std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn output_extensions_are_checked_ignoring_case() {
+        assert!(require_extension("--png", Path::new("a/b.PNG"), &["png"]).is_ok());
+        assert!(require_extension("-o", Path::new("l.obj"), &["json", "obj"]).is_ok());
+        let e = require_extension("--png", Path::new("b.jpg"), &["png"]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "b.jpg: --png must name a .png file; nothing written"
+        );
+        assert_eq!(crate::common::exit_code(&e), crate::common::EXIT_BAD_INPUT);
+        let e = require_extension("-o", Path::new("noext"), &["json", "obj"]).unwrap_err();
+        assert!(
+            e.to_string()
+                .ends_with("-o must name a .json or .obj file; nothing written")
+        );
+        let e = require_extension("-o", Path::new("x.svg"), &["png", "svg", "pdf"]).unwrap_err();
+        assert!(e.to_string().contains("a .png, .svg or .pdf file"), "{e}");
     }
 
     #[test]

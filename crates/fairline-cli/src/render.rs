@@ -81,19 +81,7 @@ pub fn options(view: Option<Vec3>, size: (u32, u32)) -> Result<RenderOptions> {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if args
-        .png
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .as_deref()
-        != Some("png")
-    {
-        return Err(bad_input(format!(
-            "{}: --png must name a .png file",
-            args.png.display()
-        )));
-    }
+    crate::output::require_extension("--png", &args.png, &["png"])?;
     let job = crate::output::Job::new("render")
         .input(&args.input)
         .input_opt(args.light.lights.as_deref())

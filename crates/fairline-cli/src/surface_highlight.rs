@@ -5,6 +5,7 @@
 
 use crate::common::{Report, bad_input, write_json};
 use crate::highlight::{Args, Radii, to_input_error};
+use crate::output::require_extension;
 use anyhow::Result;
 use fairline::Vec3;
 use fairline::bspline::BSplineSurface;
@@ -15,7 +16,6 @@ use fairline::highlight::{
 use fairline::picture::{Picture, mesh_picture};
 use fairline::render::{PolylineLayer, RenderOptions, SvgPlot};
 use serde_json::{Value, json};
-use std::path::Path;
 
 /// Colours of successive lights (linear light, sRGB-ish) for pictures.
 pub const PALETTE: [[f32; 3]; 6] = [
@@ -55,22 +55,6 @@ pub fn line_json(
         v["surface"] = json!(s);
     }
     v
-}
-
-/// Validates an output picture path.
-pub fn check_ext(path: &Path, ext: &str, option: &str) -> Result<()> {
-    let ok = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case(ext));
-    if ok {
-        Ok(())
-    } else {
-        Err(bad_input(format!(
-            "{}: {option} must name a .{ext} file",
-            path.display()
-        )))
-    }
 }
 
 /// Polylines of surface highlight lines for a picture, coloured by light.
@@ -158,22 +142,12 @@ pub fn plot_lines(plot: &mut SvgPlot, lines: &[&SurfaceHighlightLine], width: f6
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if !args
-        .output
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
-    {
-        return Err(bad_input(format!(
-            "{}: highlight lines of B-spline surfaces are written as .json",
-            args.output.display()
-        )));
-    }
+    require_extension("-o", &args.output, &["json"])?;
     if let Some(p) = &args.png {
-        check_ext(p, "png", "--png")?;
+        require_extension("--png", p, &["png"])?;
     }
     if let Some(p) = &args.svg {
-        check_ext(p, "svg", "--svg")?;
+        require_extension("--svg", p, &["svg"])?;
     }
     let job = crate::output::Job::new("highlight")
         .input(&args.mesh)

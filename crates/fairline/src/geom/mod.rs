@@ -34,10 +34,9 @@ pub use normals::{
 };
 pub use quadric::{QuadricFit, QuadricPatch, quadric_fit, quadric_fit_rings, quadric_patch_rings};
 
-/// Relative threshold below which a triangle counts as degenerate: its double
-/// area is at most `DEGENERATE_RELATIVE_AREA` times the sum of its squared
-/// edge lengths.
-pub const DEGENERATE_RELATIVE_AREA: f64 = 1e-14;
+/// The degenerate-face threshold, defined with the meshes (whose inspection
+/// counts degenerate faces) and used by every area and normal here.
+pub use crate::mesh::DEGENERATE_RELATIVE_AREA;
 
 /// Largest magnitude a cotangent is allowed to take (angles below about
 /// 1e-6 rad); keeps near-degenerate triangles from dominating a Laplacian.

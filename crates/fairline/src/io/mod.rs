@@ -222,7 +222,7 @@ pub fn read_soup_bytes(
 pub fn read_mesh(path: impl AsRef<Path>) -> Result<SurfaceMesh, IoError> {
     let path = path.as_ref();
     let soup = read_soup(path)?;
-    SurfaceMesh::from_soup(&soup).map_err(|source| IoError::Mesh {
+    SurfaceMesh::from_owned_soup(soup).map_err(|source| IoError::Mesh {
         path: path.to_path_buf(),
         source,
     })
@@ -509,7 +509,9 @@ where
     // panic in `write`, or success (then the name is already gone).
     let guard = LiveTemp(tmp);
     let result = (|| {
-        let mut w = BufWriter::new(file);
+        // large enough that a 20 MB mesh takes a few dozen write calls
+        // rather than thousands of 8 KiB ones
+        let mut w = BufWriter::with_capacity(WRITE_BUFFER_BYTES, file);
         write(&mut w)?;
         w.flush()?;
         let file = w.into_inner().map_err(|e| e.into_error())?;
@@ -520,6 +522,9 @@ where
     drop(guard);
     result.map_err(io_err)
 }
+
+/// Buffer size of [`atomic_write`]'s writer.
+const WRITE_BUFFER_BYTES: usize = 1 << 20;
 
 /// A temporary file of [`atomic_write`]: removed and unlisted when dropped.
 struct LiveTemp(PathBuf);

@@ -99,29 +99,8 @@ pub(super) fn read(bytes: &[u8], path: &Path) -> Result<Soup, IoError> {
             ));
         };
         last_line = ln;
-        let mut t = tokens(line);
-        let mut xyz = [0.0; 3];
-        for (k, c) in xyz.iter_mut().enumerate() {
-            let Some(tok) = t.next() else {
-                return Err(err(
-                    ln,
-                    format!("vertex {v}: expected 3 coordinates, found {k}"),
-                ));
-            };
-            *c = parse_f64(tok).ok_or_else(|| {
-                err(
-                    ln,
-                    format!("vertex {v}: cannot read coordinate '{}'", show(tok)),
-                )
-            })?;
-            if !c.is_finite() {
-                return Err(err(
-                    ln,
-                    format!("vertex {v}: coordinate '{}' is not finite", show(tok)),
-                ));
-            }
-        }
-        soup.positions.push(Vec3::from_array(xyz));
+        let p = vertex_line(line).map_err(|m| err(ln, format!("vertex {v}: {m}")))?;
+        soup.positions.push(p);
     }
     let mut corners = Vec::new();
     for f in 0..nf {
@@ -132,42 +111,7 @@ pub(super) fn read(bytes: &[u8], path: &Path) -> Result<Soup, IoError> {
             ));
         };
         last_line = ln;
-        let mut t = tokens(line);
-        let first = t.next().unwrap_or_default();
-        let n = parse_i64(first).filter(|&n| n >= 0).ok_or_else(|| {
-            err(
-                ln,
-                format!("face {f}: cannot read vertex count '{}'", show(first)),
-            )
-        })?;
-        if n < 3 {
-            return Err(err(
-                ln,
-                format!("face {f}: has {n} vertices; a face needs at least 3"),
-            ));
-        }
-        corners.clear();
-        for k in 0..n {
-            let Some(tok) = t.next() else {
-                return Err(err(
-                    ln,
-                    format!("face {f}: expected {n} vertex indices, found {k}"),
-                ));
-            };
-            let i = parse_i64(tok).ok_or_else(|| {
-                err(
-                    ln,
-                    format!("face {f}: cannot read vertex index '{}'", show(tok)),
-                )
-            })?;
-            if i < 0 || i as u64 >= nv as u64 {
-                return Err(err(
-                    ln,
-                    format!("face {f}: vertex index {i} out of range ({nv} vertices)"),
-                ));
-            }
-            corners.push(i as u32);
-        }
+        face_line(line, nv, &mut corners).map_err(|m| err(ln, format!("face {f}: {m}")))?;
         push_face(&mut soup, &corners).map_err(|m| err(ln, format!("face {f}: {m}")))?;
     }
     // lines beyond the header's counts would be lost silently
@@ -178,6 +122,48 @@ pub(super) fn read(bytes: &[u8], path: &Path) -> Result<Soup, IoError> {
         ));
     }
     Ok(soup)
+}
+
+/// The position on a vertex line (`x y z`, further values ignored).
+fn vertex_line(line: &[u8]) -> Result<Vec3, String> {
+    let mut t = tokens(line);
+    let mut xyz = [0.0; 3];
+    for (k, c) in xyz.iter_mut().enumerate() {
+        let Some(tok) = t.next() else {
+            return Err(format!("expected 3 coordinates, found {k}"));
+        };
+        *c = parse_f64(tok).ok_or_else(|| format!("cannot read coordinate '{}'", show(tok)))?;
+        if !c.is_finite() {
+            return Err(format!("coordinate '{}' is not finite", show(tok)));
+        }
+    }
+    Ok(Vec3::from_array(xyz))
+}
+
+/// The vertex indices of a face line (`n i1 .. in [colour]`) into
+/// `corners`, checked against the `nv` vertices.
+fn face_line(line: &[u8], nv: usize, corners: &mut Vec<u32>) -> Result<(), String> {
+    let mut t = tokens(line);
+    let first = t.next().unwrap_or_default();
+    let n = parse_i64(first)
+        .filter(|&n| n >= 0)
+        .ok_or_else(|| format!("cannot read vertex count '{}'", show(first)))?;
+    if n < 3 {
+        return Err(format!("has {n} vertices; a face needs at least 3"));
+    }
+    corners.clear();
+    for k in 0..n {
+        let Some(tok) = t.next() else {
+            return Err(format!("expected {n} vertex indices, found {k}"));
+        };
+        let i =
+            parse_i64(tok).ok_or_else(|| format!("cannot read vertex index '{}'", show(tok)))?;
+        if i < 0 || i as u64 >= nv as u64 {
+            return Err(format!("vertex index {i} out of range ({nv} vertices)"));
+        }
+        corners.push(i as u32);
+    }
+    Ok(())
 }
 
 /// Writes a plain OFF file with `{}`-formatted coordinates.

@@ -422,6 +422,7 @@ fn extra_props(el: &Element, plan: &Plan) -> Vec<usize> {
         .collect()
 }
 
+/// The binary body: every element in header order, each by its role.
 fn read_binary(
     bytes: &[u8],
     path: &Path,
@@ -429,22 +430,20 @@ fn read_binary(
     plan: &Plan,
     big: bool,
 ) -> Result<(Soup, Extra), IoError> {
+    let mut body = BinaryBody {
+        bytes,
+        path,
+        big,
+        pos: header.body_start,
+    };
     let mut soup = Soup::new();
     let mut extra: Extra = Vec::new();
-    let mut pos = header.body_start;
-    let err = |at: usize, m: String| format_err(path, Location::Byte(at), m);
-    let eof = |at: usize, what: &str, i: usize| {
-        err(
-            at,
-            format!("{what} {i}: file ends inside the element (truncated file?)"),
-        )
-    };
     for (el, &role) in header.elements.iter().zip(&plan.roles) {
-        let remaining = bytes.len() - pos;
+        let remaining = bytes.len() - body.pos;
         let min = el.min_size();
         if min.checked_mul(el.count).is_none_or(|n| n > remaining) {
-            return Err(err(
-                pos,
+            return Err(body.err(
+                body.pos,
                 format!(
                     "element {}: the header announces {} rows of at least {min} bytes, but only {remaining} bytes remain (truncated file?)",
                     el.name, el.count
@@ -452,169 +451,278 @@ fn read_binary(
             ));
         }
         match role {
-            Role::Vertex => {
-                let cols = extra_props(el, plan);
-                extra = cols
-                    .iter()
-                    .map(|&c| (el.props[c].name.clone(), Vec::with_capacity(el.count)))
-                    .collect();
-                soup.positions.reserve_exact(el.count);
-                let tys: Vec<Scalar> = el
-                    .props
-                    .iter()
-                    .map(|p| match p.kind {
-                        Kind::Scalar(s) | Kind::List { count: s, .. } => s,
-                    })
-                    .collect();
-                if let Some(stride) = el.fixed_size() {
-                    // fast path: fixed layout, direct slicing
-                    let mut offs = Vec::with_capacity(el.props.len());
-                    let mut o = 0;
-                    for t in &tys {
-                        offs.push(o);
-                        o += t.size();
+            Role::Vertex => extra = body.vertices(el, plan, &mut soup)?,
+            Role::Face => body.faces(el, plan, &mut soup)?,
+            Role::Skip => body.skip(el)?,
+        }
+    }
+    trailing_bytes(bytes, body.pos, path)?;
+    Ok((soup, extra))
+}
+
+/// A binary PLY body being read: the bytes, the byte order and the position
+/// of the next row.
+struct BinaryBody<'a> {
+    bytes: &'a [u8],
+    path: &'a Path,
+    big: bool,
+    pos: usize,
+}
+
+impl BinaryBody<'_> {
+    /// An error at byte `at`.
+    fn err(&self, at: usize, m: String) -> IoError {
+        format_err(self.path, Location::Byte(at), m)
+    }
+
+    /// The error of a row `i` of element `what` starting at `at` that the
+    /// file ends inside.
+    fn eof(&self, at: usize, what: &str, i: usize) -> IoError {
+        self.err(
+            at,
+            format!("{what} {i}: file ends inside the element (truncated file?)"),
+        )
+    }
+
+    /// The vertex element: positions into `soup`, and the extra scalar
+    /// properties when the plan collects them. Rows without lists (the
+    /// usual case) are sliced at fixed offsets.
+    fn vertices(&mut self, el: &Element, plan: &Plan, soup: &mut Soup) -> Result<Extra, IoError> {
+        let (bytes, big) = (self.bytes, self.big);
+        let cols = extra_props(el, plan);
+        let mut extra: Extra = cols
+            .iter()
+            .map(|&c| (el.props[c].name.clone(), Vec::with_capacity(el.count)))
+            .collect();
+        soup.positions.reserve_exact(el.count);
+        let tys: Vec<Scalar> = el
+            .props
+            .iter()
+            .map(|p| match p.kind {
+                Kind::Scalar(s) | Kind::List { count: s, .. } => s,
+            })
+            .collect();
+        let Some(stride) = el.fixed_size() else {
+            return self.vertices_with_lists(el, plan, soup, cols, extra);
+        };
+        let mut offs = Vec::with_capacity(el.props.len());
+        let mut o = 0;
+        for t in &tys {
+            offs.push(o);
+            o += t.size();
+        }
+        let [ix, iy, iz] = plan.xyz;
+        let (tx, ty, tz) = (tys[ix], tys[iy], tys[iz]);
+        let (ox, oy, oz) = (offs[ix], offs[iy], offs[iz]);
+        let pos = self.pos;
+        let body = &bytes[pos..pos + stride * el.count];
+        for (i, row) in body.chunks_exact(stride).enumerate() {
+            let p = Vec3::new(
+                tx.get(&row[ox..], big),
+                ty.get(&row[oy..], big),
+                tz.get(&row[oz..], big),
+            );
+            if !p.is_finite() {
+                return Err(self.err(
+                    pos + i * stride,
+                    format!("vertex {i}: coordinate is not finite ({p})"),
+                ));
+            }
+            soup.positions.push(p);
+            for (k, &c) in cols.iter().enumerate() {
+                extra[k].1.push(tys[c].get(&row[offs[c]..], big));
+            }
+        }
+        self.pos += stride * el.count;
+        Ok(extra)
+    }
+
+    /// The vertex element when its rows hold list properties (skipped):
+    /// every row is walked property by property.
+    fn vertices_with_lists(
+        &mut self,
+        el: &Element,
+        plan: &Plan,
+        soup: &mut Soup,
+        cols: Vec<usize>,
+        mut extra: Extra,
+    ) -> Result<Extra, IoError> {
+        let (bytes, big) = (self.bytes, self.big);
+        let mut vals = vec![0.0; el.props.len()];
+        for i in 0..el.count {
+            let start = self.pos;
+            for (j, prop) in el.props.iter().enumerate() {
+                match prop.kind {
+                    Kind::Scalar(s) => {
+                        let b = bytes
+                            .get(self.pos..self.pos + s.size())
+                            .ok_or_else(|| self.eof(start, "vertex", i))?;
+                        vals[j] = s.get(b, big);
+                        self.pos += s.size();
                     }
-                    let [ix, iy, iz] = plan.xyz;
-                    let (tx, ty, tz) = (tys[ix], tys[iy], tys[iz]);
-                    let (ox, oy, oz) = (offs[ix], offs[iy], offs[iz]);
-                    let body = &bytes[pos..pos + stride * el.count];
-                    for (i, row) in body.chunks_exact(stride).enumerate() {
-                        let p = Vec3::new(
-                            tx.get(&row[ox..], big),
-                            ty.get(&row[oy..], big),
-                            tz.get(&row[oz..], big),
-                        );
-                        if !p.is_finite() {
-                            return Err(err(
-                                pos + i * stride,
-                                format!("vertex {i}: coordinate is not finite ({p})"),
-                            ));
-                        }
-                        soup.positions.push(p);
-                        for (k, &c) in cols.iter().enumerate() {
-                            extra[k].1.push(tys[c].get(&row[offs[c]..], big));
-                        }
+                    Kind::List { count, item } => {
+                        self.pos = skip_list(bytes, self.pos, count, item, big)
+                            .ok_or_else(|| self.eof(start, "vertex", i))?;
                     }
-                    pos += stride * el.count;
-                } else {
-                    let mut vals = vec![0.0; el.props.len()];
-                    for i in 0..el.count {
-                        let start = pos;
-                        for (j, prop) in el.props.iter().enumerate() {
-                            match prop.kind {
-                                Kind::Scalar(s) => {
-                                    let b = bytes
-                                        .get(pos..pos + s.size())
-                                        .ok_or_else(|| eof(start, "vertex", i))?;
-                                    vals[j] = s.get(b, big);
-                                    pos += s.size();
-                                }
-                                Kind::List { count, item } => {
-                                    pos = skip_list(bytes, pos, count, item, big)
-                                        .ok_or_else(|| eof(start, "vertex", i))?;
-                                }
-                            }
+                }
+            }
+            let p = Vec3::new(vals[plan.xyz[0]], vals[plan.xyz[1]], vals[plan.xyz[2]]);
+            if !p.is_finite() {
+                return Err(self.err(start, format!("vertex {i}: coordinate is not finite ({p})")));
+            }
+            soup.positions.push(p);
+            for (k, &c) in cols.iter().enumerate() {
+                extra[k].1.push(vals[c]);
+            }
+        }
+        Ok(extra)
+    }
+
+    /// The face element: the vertex index list of every row into `soup`
+    /// (indices checked against the vertex count), other properties skipped.
+    fn faces(&mut self, el: &Element, plan: &Plan, soup: &mut Soup) -> Result<(), IoError> {
+        let (bytes, big) = (self.bytes, self.big);
+        soup.offsets.reserve_exact(el.count);
+        if let [
+            Property {
+                kind:
+                    Kind::List {
+                        count: Scalar::U8,
+                        item: item @ (Scalar::I32 | Scalar::U32),
+                    },
+                ..
+            },
+        ] = el.props.as_slice()
+        {
+            return self.faces_uchar_int(el.count, *item == Scalar::I32, plan.nv, soup);
+        }
+        let nv = plan.nv as f64;
+        let mut corners: Vec<u32> = Vec::new();
+        for f in 0..el.count {
+            let start = self.pos;
+            for (j, prop) in el.props.iter().enumerate() {
+                match prop.kind {
+                    Kind::Scalar(s) => {
+                        if self.pos + s.size() > bytes.len() {
+                            return Err(self.eof(start, "face", f));
                         }
-                        let p = Vec3::new(vals[plan.xyz[0]], vals[plan.xyz[1]], vals[plan.xyz[2]]);
-                        if !p.is_finite() {
-                            return Err(err(
+                        self.pos += s.size();
+                    }
+                    Kind::List { count, item } if j == plan.face_list => {
+                        let b = bytes
+                            .get(self.pos..self.pos + count.size())
+                            .ok_or_else(|| self.eof(start, "face", f))?;
+                        let n = count.get(b, big);
+                        self.pos += count.size();
+                        if n < 3.0 {
+                            return Err(self.err(
                                 start,
-                                format!("vertex {i}: coordinate is not finite ({p})"),
+                                format!("face {f}: has {n} vertices; a face needs at least 3"),
                             ));
                         }
-                        soup.positions.push(p);
-                        for (k, &c) in cols.iter().enumerate() {
-                            extra[k].1.push(vals[c]);
+                        let n = n as usize;
+                        let len = n
+                            .checked_mul(item.size())
+                            .ok_or_else(|| self.eof(start, "face", f))?;
+                        let items = bytes
+                            .get(self.pos..)
+                            .and_then(|r| r.get(..len))
+                            .ok_or_else(|| self.eof(start, "face", f))?;
+                        corners.clear();
+                        for b in items.chunks_exact(item.size()) {
+                            let v = item.get(b, big);
+                            if !(v >= 0.0 && v < nv && v.fract() == 0.0) {
+                                return Err(self.err(
+                                    start,
+                                    format!(
+                                        "face {f}: vertex index {v} out of range ({} vertices)",
+                                        plan.nv
+                                    ),
+                                ));
+                            }
+                            corners.push(v as u32);
                         }
+                        self.pos += len;
+                        push_face(soup, &corners)
+                            .map_err(|m| self.err(start, format!("face {f}: {m}")))?;
                     }
-                }
-            }
-            Role::Face => {
-                soup.offsets.reserve_exact(el.count);
-                let nv = plan.nv as f64;
-                let mut corners: Vec<u32> = Vec::new();
-                for f in 0..el.count {
-                    let start = pos;
-                    for (j, prop) in el.props.iter().enumerate() {
-                        match prop.kind {
-                            Kind::Scalar(s) => {
-                                if pos + s.size() > bytes.len() {
-                                    return Err(eof(start, "face", f));
-                                }
-                                pos += s.size();
-                            }
-                            Kind::List { count, item } if j == plan.face_list => {
-                                let b = bytes
-                                    .get(pos..pos + count.size())
-                                    .ok_or_else(|| eof(start, "face", f))?;
-                                let n = count.get(b, big);
-                                pos += count.size();
-                                if n < 3.0 {
-                                    return Err(err(
-                                        start,
-                                        format!(
-                                            "face {f}: has {n} vertices; a face needs at least 3"
-                                        ),
-                                    ));
-                                }
-                                let n = n as usize;
-                                let len = n
-                                    .checked_mul(item.size())
-                                    .ok_or_else(|| eof(start, "face", f))?;
-                                let items = bytes
-                                    .get(pos..)
-                                    .and_then(|r| r.get(..len))
-                                    .ok_or_else(|| eof(start, "face", f))?;
-                                corners.clear();
-                                for b in items.chunks_exact(item.size()) {
-                                    let v = item.get(b, big);
-                                    if !(v >= 0.0 && v < nv && v.fract() == 0.0) {
-                                        return Err(err(
-                                            start,
-                                            format!(
-                                                "face {f}: vertex index {v} out of range ({} vertices)",
-                                                plan.nv
-                                            ),
-                                        ));
-                                    }
-                                    corners.push(v as u32);
-                                }
-                                pos += len;
-                                push_face(&mut soup, &corners)
-                                    .map_err(|m| err(start, format!("face {f}: {m}")))?;
-                            }
-                            Kind::List { count, item } => {
-                                pos = skip_list(bytes, pos, count, item, big)
-                                    .ok_or_else(|| eof(start, "face", f))?;
-                            }
-                        }
-                    }
-                }
-            }
-            Role::Skip => {
-                if let Some(stride) = el.fixed_size() {
-                    pos += stride * el.count;
-                } else {
-                    for i in 0..el.count {
-                        let start = pos;
-                        for prop in &el.props {
-                            pos = match prop.kind {
-                                Kind::Scalar(s) => {
-                                    Some(pos + s.size()).filter(|&p| p <= bytes.len())
-                                }
-                                Kind::List { count, item } => {
-                                    skip_list(bytes, pos, count, item, big)
-                                }
-                            }
-                            .ok_or_else(|| eof(start, &el.name, i))?;
-                        }
+                    Kind::List { count, item } => {
+                        self.pos = skip_list(bytes, self.pos, count, item, big)
+                            .ok_or_else(|| self.eof(start, "face", f))?;
                     }
                 }
             }
         }
+        Ok(())
     }
-    trailing_bytes(bytes, pos, path)?;
-    Ok((soup, extra))
+
+    /// The usual face element, `list uchar int vertex_indices` (or `uint`)
+    /// and nothing else, read straight from the bytes: the same checks and
+    /// messages as [`Self::faces`] without converting every index to `f64`.
+    fn faces_uchar_int(
+        &mut self,
+        count: usize,
+        signed: bool,
+        nv: usize,
+        soup: &mut Soup,
+    ) -> Result<(), IoError> {
+        let (bytes, big) = (self.bytes, self.big);
+        let mut corners: Vec<u32> = Vec::with_capacity(8);
+        for f in 0..count {
+            let start = self.pos;
+            let n = usize::from(*bytes.get(start).ok_or_else(|| self.eof(start, "face", f))?);
+            if n < 3 {
+                return Err(self.err(
+                    start,
+                    format!("face {f}: has {n} vertices; a face needs at least 3"),
+                ));
+            }
+            let items = bytes
+                .get(start + 1..start + 1 + 4 * n)
+                .ok_or_else(|| self.eof(start, "face", f))?;
+            corners.clear();
+            for b in items.chunks_exact(4) {
+                let raw = [b[0], b[1], b[2], b[3]];
+                let v = match (signed, big) {
+                    (true, false) => i64::from(i32::from_le_bytes(raw)),
+                    (true, true) => i64::from(i32::from_be_bytes(raw)),
+                    (false, false) => i64::from(u32::from_le_bytes(raw)),
+                    (false, true) => i64::from(u32::from_be_bytes(raw)),
+                };
+                if v < 0 || v as u64 >= nv as u64 {
+                    return Err(self.err(
+                        start,
+                        format!("face {f}: vertex index {v} out of range ({nv} vertices)"),
+                    ));
+                }
+                corners.push(v as u32);
+            }
+            self.pos = start + 1 + 4 * n;
+            push_face(soup, &corners).map_err(|m| self.err(start, format!("face {f}: {m}")))?;
+        }
+        Ok(())
+    }
+
+    /// An element the reader does not use (edges, materials, ...).
+    fn skip(&mut self, el: &Element) -> Result<(), IoError> {
+        if let Some(stride) = el.fixed_size() {
+            self.pos += stride * el.count;
+            return Ok(());
+        }
+        for i in 0..el.count {
+            let start = self.pos;
+            for prop in &el.props {
+                self.pos = match prop.kind {
+                    Kind::Scalar(s) => Some(self.pos + s.size()).filter(|&p| p <= self.bytes.len()),
+                    Kind::List { count, item } => {
+                        skip_list(self.bytes, self.pos, count, item, self.big)
+                    }
+                }
+                .ok_or_else(|| self.eof(start, &el.name, i))?;
+            }
+        }
+        Ok(())
+    }
 }
 
 /// The position after a list property starting at `pos`, or `None` when the
@@ -629,6 +737,7 @@ fn skip_list(bytes: &[u8], pos: usize, count: Scalar, item: Scalar, big: bool) -
     (end <= bytes.len()).then_some(end)
 }
 
+/// The ascii body: every element in header order, one row per line.
 fn read_ascii(
     bytes: &[u8],
     path: &Path,
@@ -688,105 +797,17 @@ fn read_ascii(
             let err = |m: String| format_err(path, Location::Line(ln), format!("{what} {i}: {m}"));
             toks.clear();
             toks.extend(tokens(line));
-            let mut k = 0;
-            for (j, prop) in el.props.iter().enumerate() {
-                let rest = el.props.len() - j - 1;
-                match prop.kind {
-                    Kind::Scalar(s) => {
-                        let Some(tok) = toks.get(k) else {
-                            return Err(err(format!(
-                                "expected {} values, found {}",
-                                k + 1 + rest,
-                                toks.len()
-                            )));
-                        };
-                        let v = parse_f64(tok).ok_or_else(|| {
-                            err(format!(
-                                "cannot read '{}' as property {} ({})",
-                                show(tok),
-                                prop.name,
-                                s.name()
-                            ))
-                        })?;
-                        if !s.holds(v) {
-                            return Err(err(format!(
-                                "value '{}' of property {} does not fit its type {}",
-                                show(tok),
-                                prop.name,
-                                s.name()
-                            )));
-                        }
-                        vals[j] = v;
-                        k += 1;
-                    }
-                    Kind::List { count, item } => {
-                        let Some(tok) = toks.get(k) else {
-                            return Err(err(format!(
-                                "expected {} values, found {}",
-                                k + 1 + rest,
-                                toks.len()
-                            )));
-                        };
-                        let n = parse_i64(tok)
-                            .filter(|&n| n >= 0 && count.holds(n as f64))
-                            .ok_or_else(|| {
-                                err(format!(
-                                    "cannot read list length '{}' of property {} ({})",
-                                    show(tok),
-                                    prop.name,
-                                    count.name()
-                                ))
-                            })?;
-                        let need = (n as u64).saturating_add((k + 1 + rest) as u64);
-                        if need > toks.len() as u64 {
-                            return Err(err(format!(
-                                "expected {need} values, found {}",
-                                toks.len()
-                            )));
-                        }
-                        let n = n as usize;
-                        let items = &toks[k + 1..k + 1 + n];
-                        if role == Role::Face && j == plan.face_list {
-                            if n < 3 {
-                                return Err(err(format!(
-                                    "has {n} vertices; a face needs at least 3"
-                                )));
-                            }
-                            corners.clear();
-                            for tok in items {
-                                let v = parse_i64(tok)
-                                    .filter(|&v| item.holds(v as f64))
-                                    .ok_or_else(|| {
-                                        err(format!(
-                                            "cannot read vertex index '{}' ({})",
-                                            show(tok),
-                                            item.name()
-                                        ))
-                                    })?;
-                                if v < 0 || v as u64 >= plan.nv as u64 {
-                                    return Err(err(format!(
-                                        "vertex index {v} out of range ({} vertices)",
-                                        plan.nv
-                                    )));
-                                }
-                                corners.push(v as u32);
-                            }
-                            push_face(&mut soup, &corners).map_err(|m| err(m.into()))?;
-                        } else if let Some(tok) = items
-                            .iter()
-                            .find(|t| parse_f64(t).is_none_or(|v| !item.holds(v)))
-                        {
-                            return Err(err(format!(
-                                "cannot read '{}' in list {} as {}",
-                                show(tok),
-                                prop.name,
-                                item.name()
-                            )));
-                        }
-                        k += 1 + n;
-                    }
-                }
-            }
+            let face_list = (role == Role::Face).then_some(plan.face_list);
+            let k = ascii_row(
+                el,
+                &toks,
+                face_list,
+                plan.nv,
+                &mut vals,
+                &mut corners,
+                &mut soup,
+            )
+            .map_err(err)?;
             if k < toks.len() {
                 return Err(err(format!("expected {k} values, found {}", toks.len())));
             }
@@ -811,6 +832,107 @@ fn read_ascii(
         ));
     }
     Ok((soup, extra))
+}
+
+/// Parses one ascii row (`toks`) of element `el`: scalar values into
+/// `vals` (by property), and, when `face_list` names the face's index
+/// list, its vertex indices (checked against the `nv` vertices) as a face
+/// of `soup`; other lists are checked and skipped. Returns the number of
+/// tokens used, or the message of the first problem.
+fn ascii_row(
+    el: &Element,
+    toks: &[&[u8]],
+    face_list: Option<usize>,
+    nv: usize,
+    vals: &mut [f64],
+    corners: &mut Vec<u32>,
+    soup: &mut Soup,
+) -> Result<usize, String> {
+    let mut k = 0;
+    for (j, prop) in el.props.iter().enumerate() {
+        let rest = el.props.len() - j - 1;
+        let Some(tok) = toks.get(k) else {
+            return Err(format!(
+                "expected {} values, found {}",
+                k + 1 + rest,
+                toks.len()
+            ));
+        };
+        match prop.kind {
+            Kind::Scalar(s) => {
+                let v = parse_f64(tok).ok_or_else(|| {
+                    format!(
+                        "cannot read '{}' as property {} ({})",
+                        show(tok),
+                        prop.name,
+                        s.name()
+                    )
+                })?;
+                if !s.holds(v) {
+                    return Err(format!(
+                        "value '{}' of property {} does not fit its type {}",
+                        show(tok),
+                        prop.name,
+                        s.name()
+                    ));
+                }
+                vals[j] = v;
+                k += 1;
+            }
+            Kind::List { count, item } => {
+                let n = parse_i64(tok)
+                    .filter(|&n| n >= 0 && count.holds(n as f64))
+                    .ok_or_else(|| {
+                        format!(
+                            "cannot read list length '{}' of property {} ({})",
+                            show(tok),
+                            prop.name,
+                            count.name()
+                        )
+                    })?;
+                let need = (n as u64).saturating_add((k + 1 + rest) as u64);
+                if need > toks.len() as u64 {
+                    return Err(format!("expected {need} values, found {}", toks.len()));
+                }
+                let n = n as usize;
+                let items = &toks[k + 1..k + 1 + n];
+                if face_list == Some(j) {
+                    if n < 3 {
+                        return Err(format!("has {n} vertices; a face needs at least 3"));
+                    }
+                    corners.clear();
+                    for tok in items {
+                        let v = parse_i64(tok)
+                            .filter(|&v| item.holds(v as f64))
+                            .ok_or_else(|| {
+                                format!(
+                                    "cannot read vertex index '{}' ({})",
+                                    show(tok),
+                                    item.name()
+                                )
+                            })?;
+                        if v < 0 || v as u64 >= nv as u64 {
+                            return Err(format!("vertex index {v} out of range ({nv} vertices)"));
+                        }
+                        corners.push(v as u32);
+                    }
+                    push_face(soup, corners).map_err(String::from)?;
+                } else if let Some(tok) = items
+                    .iter()
+                    .find(|t| parse_f64(t).is_none_or(|v| !item.holds(v)))
+                {
+                    return Err(format!(
+                        "cannot read '{}' in list {} as {}",
+                        show(tok),
+                        prop.name,
+                        item.name()
+                    ));
+                }
+                k += 1 + n;
+            }
+        }
+    }
+    Ok(k)
 }
 
 /// Writes a binary little-endian PLY with double coordinates, the extra

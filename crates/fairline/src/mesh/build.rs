@@ -270,6 +270,10 @@ fn group_chunks(start: &[u32], parallel: bool) -> Vec<usize> {
 /// be oriented (Möbius strip), naming a face of the conflict.
 pub(super) fn orient(soup: &Soup, edges: &EdgeTable) -> Result<(Vec<u8>, usize), MeshError> {
     let nf = soup.face_count();
+    if consistently_oriented(soup, edges) {
+        // the search would keep every face as it is
+        return Ok((vec![0; nf], 0));
+    }
     let mut flip: Vec<u8> = vec![2; nf]; // 2 = unvisited
     let mut queue = Vec::new();
     let mut flipped = 0usize;
@@ -315,6 +319,23 @@ pub(super) fn orient(soup: &Soup, edges: &EdgeTable) -> Result<(Vec<u8>, usize),
         }
     }
     Ok((flip, flipped))
+}
+
+/// True when the two faces of every interior edge traverse it in opposite
+/// directions (the usual input): then [`orient`] reverses nothing, and its
+/// sequential search is skipped for this parallel check.
+fn consistently_oriented(soup: &Soup, edges: &EdgeTable) -> bool {
+    let consistent = |e: usize| {
+        let [(_, c), (g, d)] = edges.incidences[e];
+        let lo = edges.lo_hi[e].0;
+        g == NONE || (soup.indices[c as usize] == lo) != (soup.indices[d as usize] == lo)
+    };
+    let ne = edges.incidences.len();
+    if ne >= PARALLEL_FACES {
+        (0..ne).into_par_iter().all(consistent)
+    } else {
+        (0..ne).all(consistent)
+    }
 }
 
 /// The halfedge arrays without the boundary links.
@@ -548,9 +569,50 @@ pub(super) fn build(soup: &Soup) -> Result<SurfaceMesh, MeshError> {
     build_with_flips(soup).map(|(mesh, _)| mesh)
 }
 
+/// [`build`] of a soup that is given away: its positions become the mesh's
+/// without a copy.
+pub(super) fn build_owned(soup: Soup) -> Result<SurfaceMesh, MeshError> {
+    Ok(match build_steps(&soup)? {
+        Built::Input {
+            he, v_out, flipped, ..
+        } => SurfaceMesh::from_parts(soup.positions, he, v_out, flipped, None),
+        Built::Split { mesh, .. } => mesh,
+    })
+}
+
 /// [`build`], also returning which faces were reversed (1) for a consistent
 /// orientation.
 pub(super) fn build_with_flips(soup: &Soup) -> Result<(SurfaceMesh, Vec<u8>), MeshError> {
+    Ok(match build_steps(soup)? {
+        Built::Input {
+            he,
+            v_out,
+            flipped,
+            flip,
+        } => {
+            let positions = soup.positions.clone();
+            let mesh = SurfaceMesh::from_parts(positions, he, v_out, flipped, None);
+            (mesh, flip)
+        }
+        Built::Split { mesh, flip } => (mesh, flip),
+    })
+}
+
+/// What the steps make of a soup.
+enum Built {
+    /// Connectivity over the input's vertices, as they are.
+    Input {
+        he: Halfedges,
+        v_out: Vec<u32>,
+        flipped: usize,
+        flip: Vec<u8>,
+    },
+    /// Non-manifold vertices were split: a mesh with its own positions.
+    Split { mesh: SurfaceMesh, flip: Vec<u8> },
+}
+
+/// Steps 1 to 5 of the module documentation.
+fn build_steps(soup: &Soup) -> Result<Built, MeshError> {
     validate(soup)?;
     let edges = match_edges(soup)?;
     let (flip, flipped) = orient(soup, &edges)?;
@@ -558,9 +620,12 @@ pub(super) fn build_with_flips(soup: &Soup) -> Result<(SurfaceMesh, Vec<u8>), Me
     let bad_vertex = match link_boundary(soup.positions.len(), &mut he) {
         Ok(v_out) => match first_multi_fan_vertex(&he, &v_out) {
             None => {
-                let positions = soup.positions.clone();
-                let mesh = SurfaceMesh::from_parts(positions, he, v_out, flipped, None);
-                return Ok((mesh, flip));
+                return Ok(Built::Input {
+                    he,
+                    v_out,
+                    flipped,
+                    flip,
+                });
             }
             Some(v) => v,
         },
@@ -569,6 +634,7 @@ pub(super) fn build_with_flips(soup: &Soup) -> Result<(SurfaceMesh, Vec<u8>), Me
     // Several fans meet at some vertex: split it, one copy per fan.
     let refused = MeshError::NonManifoldVertex { vertex: bad_vertex };
     let (split, source) = split_fans(soup, &edges).ok_or(refused.clone())?;
+    drop(edges);
     let nv = soup.positions.len();
     let edges = match_edges(&split)?;
     let (flip, flipped) = orient(&split, &edges)?;
@@ -593,5 +659,5 @@ pub(super) fn build_with_flips(soup: &Soup) -> Result<(SurfaceMesh, Vec<u8>), Me
             marked,
         }),
     );
-    Ok((mesh, flip))
+    Ok(Built::Split { mesh, flip })
 }

@@ -110,7 +110,7 @@ pub struct MeshInfo {
 
 /// Area of a polygon (half the length of its Newell vector about the
 /// centroid) and whether it is degenerate: twice its area at most
-/// [`crate::geom::DEGENERATE_RELATIVE_AREA`] times the sum of its squared
+/// [`super::DEGENERATE_RELATIVE_AREA`] times the sum of its squared
 /// edge lengths (the test of `geom`'s triangle areas, for any polygon).
 pub(super) fn polygon_area(p: &[Vec3], face: &[u32]) -> (f64, bool) {
     let n = face.len();
@@ -127,10 +127,7 @@ pub(super) fn polygon_area(p: &[Vec3], face: &[u32]) -> (f64, bool) {
         scale += (b - a).length_squared();
     }
     let a2 = s.length();
-    (
-        0.5 * a2,
-        !(a2 > crate::geom::DEGENERATE_RELATIVE_AREA * scale),
-    )
+    (0.5 * a2, !(a2 > super::DEGENERATE_RELATIVE_AREA * scale))
 }
 
 pub(super) fn find(parent: &mut [u32], mut x: u32) -> u32 {
@@ -173,10 +170,7 @@ fn inspect_mesh(soup: &Soup, mesh: &SurfaceMesh, flip: &[u8]) -> MeshInfo {
     let nv = soup.vertex_count();
     let nf = soup.face_count();
     let p = &soup.positions;
-    let mut face_sizes = BTreeMap::new();
-    for w in soup.offsets.windows(2) {
-        *face_sizes.entry((w[1] - w[0]) as usize).or_insert(0) += 1;
-    }
+    let face_sizes = face_size_histogram(soup);
     // degenerate faces and area, in fixed chunks
     let chunk_stats = |range: std::ops::Range<usize>| {
         let (mut degenerate, mut area) = (0usize, 0.0f64);
@@ -199,38 +193,39 @@ fn inspect_mesh(soup: &Soup, mesh: &SurfaceMesh, flip: &[u8]) -> MeshInfo {
     };
     let degenerate_faces = chunks.iter().map(|c| c.0).sum();
     let area = chunks.iter().map(|c| c.1).sum();
-    // per edge: boundary, orientation conflicts in the input, length
-    let edge_pass = |e: usize| {
+    // per edge: boundary, orientation conflicts in the input, length (the
+    // counts in parallel, the lengths into one array summed in order)
+    let ne = mesh.edge_count();
+    let edge_flags = |e: usize| {
         let (f, g) = (
             mesh.face(HalfedgeId(2 * e as u32)),
             mesh.face(HalfedgeId(2 * e as u32 + 1)),
         );
-        let boundary = f.is_none() || g.is_none();
-        let inconsistent = match (f, g) {
-            (Some(f), Some(g)) => flip[f.idx()] != flip[g.idx()],
-            _ => false,
-        };
+        match (f, g) {
+            (Some(f), Some(g)) => (0, usize::from(flip[f.idx()] != flip[g.idx()])),
+            _ => (1, 0),
+        }
+    };
+    let edge_length = |e: usize| {
         let (a, b) = mesh.edge_vertices(EdgeId(e as u32));
-        (
-            boundary,
-            inconsistent,
-            mesh.position(a).distance(mesh.position(b)),
-        )
+        mesh.position(a).distance(mesh.position(b))
     };
-    let ne = mesh.edge_count();
-    let lengths: Vec<f64>;
-    let (boundary_edges, inconsistent) = {
-        let passes: Vec<(bool, bool, f64)> = if ne >= PARALLEL_FACES {
-            (0..ne).into_par_iter().map(edge_pass).collect()
+    let add = |x: (usize, usize), y: (usize, usize)| (x.0 + y.0, x.1 + y.1);
+    let ((boundary_edges, inconsistent), lengths): ((usize, usize), Vec<f64>) =
+        if ne >= PARALLEL_FACES {
+            (
+                (0..ne)
+                    .into_par_iter()
+                    .map(edge_flags)
+                    .reduce(|| (0, 0), add),
+                (0..ne).into_par_iter().map(edge_length).collect(),
+            )
         } else {
-            (0..ne).map(edge_pass).collect()
+            (
+                (0..ne).map(edge_flags).fold((0, 0), add),
+                (0..ne).map(edge_length).collect(),
+            )
         };
-        let counts = passes.iter().fold((0, 0), |(b, i), x| {
-            (b + usize::from(x.0), i + usize::from(x.1))
-        });
-        lengths = passes.into_iter().map(|x| x.2).collect();
-        counts
-    };
     let summary = topology_summary(mesh);
     let original = mesh.original_vertex_count();
     let isolated = (0..original as u32)
@@ -263,6 +258,27 @@ fn inspect_mesh(soup: &Soup, mesh: &SurfaceMesh, flip: &[u8]) -> MeshInfo {
         edge_length: Stats::of(lengths),
         area,
     }
+}
+
+/// Number of faces of each size: counted in an array for the usual small
+/// sizes (a map lookup per face costs more than the rest of the pass).
+fn face_size_histogram(soup: &Soup) -> BTreeMap<usize, usize> {
+    const SMALL: usize = 64;
+    let mut small = [0usize; SMALL];
+    let mut sizes = BTreeMap::new();
+    for w in soup.offsets.windows(2) {
+        let n = (w[1] - w[0]) as usize;
+        match small.get_mut(n) {
+            Some(count) => *count += 1,
+            None => *sizes.entry(n).or_insert(0) += 1,
+        }
+    }
+    for (n, &count) in small.iter().enumerate() {
+        if count > 0 {
+            sizes.insert(n, count);
+        }
+    }
+    sizes
 }
 
 /// Faces with the same vertex set as an earlier face, in a mesh that built.

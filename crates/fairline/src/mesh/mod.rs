@@ -22,6 +22,13 @@ pub use topology::{
 
 use thiserror::Error;
 
+/// Relative threshold below which a face counts as degenerate: its double
+/// area is at most `DEGENERATE_RELATIVE_AREA` times the sum of its squared
+/// edge lengths. Defined here, with the meshes, because their inspection
+/// counts degenerate faces; `geom`'s areas and normals use the same value
+/// (re-exported as `geom::DEGENERATE_RELATIVE_AREA`).
+pub const DEGENERATE_RELATIVE_AREA: f64 = 1e-14;
+
 macro_rules! id_type {
     ($(#[$doc:meta])* $name:ident) => {
         $(#[$doc])*

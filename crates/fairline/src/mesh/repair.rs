@@ -29,7 +29,7 @@ pub enum RemovalReason {
     /// other than consecutively.
     RepeatedVertex,
     /// Its area is zero relative to its edge lengths
-    /// ([`crate::geom::DEGENERATE_RELATIVE_AREA`]).
+    /// ([`super::DEGENERATE_RELATIVE_AREA`]).
     ZeroArea,
     /// It has the same vertex set as an earlier face.
     Duplicate,
@@ -166,6 +166,43 @@ pub fn repair(soup: &Soup) -> Result<Repaired, MeshError> {
         ..RepairReport::default()
     };
     // Steps 1 and 2: a clean list of candidate faces (input index, vertices).
+    let mut faces = clean_faces(soup, &mut report);
+
+    // Steps 3 to 5, again after removing faces an edge cannot hold.
+    let (out_faces, copies) = loop {
+        let attempt = cut_orient_split(nv, &faces);
+        if attempt.excess.is_empty() {
+            report.split_edges = attempt.split_edges;
+            report.flipped_faces = attempt.flipped;
+            report.orientation_conflicts = attempt.conflicts;
+            break (attempt.faces, attempt.copies);
+        }
+        let excess: std::collections::HashSet<usize> = attempt.excess.iter().copied().collect();
+        faces.retain(|(f, _)| !excess.contains(f));
+        for f in attempt.excess {
+            report.removed_faces.push(RemovedFace {
+                face: f,
+                reason: RemovalReason::NonManifoldEdge,
+                duplicate_of: None,
+            });
+        }
+    };
+    report.removed_faces.sort_by_key(|r| r.face);
+
+    // Step 6: drop unreferenced input vertices; copies follow the kept ones.
+    let out = compact_vertices(soup, &out_faces, &copies, &mut report);
+    match SurfaceMesh::from_soup(&out) {
+        Ok(_) => report.manifold = true,
+        Err(e) => report.remaining_problem = Some(e.to_string()),
+    }
+    Ok(Repaired { soup: out, report })
+}
+
+/// Steps 1 and 2 of [`repair`]: the candidate faces (input index, vertices)
+/// after removing invalid, collapsed-to-nothing, zero-area and duplicate
+/// faces (recorded in `report`) and collapsing repeated corners.
+fn clean_faces(soup: &Soup, report: &mut RepairReport) -> Vec<(usize, Vec<u32>)> {
+    let nv = soup.vertex_count();
     let mut faces: Vec<(usize, Vec<u32>)> = Vec::with_capacity(soup.face_count());
     for (f, face) in soup.faces().enumerate() {
         let remove = |report: &mut RepairReport, reason| {
@@ -176,11 +213,11 @@ pub fn repair(soup: &Soup) -> Result<Repaired, MeshError> {
             })
         };
         if face.iter().any(|&i| i as usize >= nv) {
-            remove(&mut report, RemovalReason::InvalidIndex);
+            remove(report, RemovalReason::InvalidIndex);
             continue;
         }
         if face.len() < 3 {
-            remove(&mut report, RemovalReason::TooFewVertices);
+            remove(report, RemovalReason::TooFewVertices);
             continue;
         }
         let mut poly: Vec<u32> = Vec::with_capacity(face.len());
@@ -194,11 +231,11 @@ pub fn repair(soup: &Soup) -> Result<Repaired, MeshError> {
         }
         let distinct = poly.iter().enumerate().all(|(k, a)| !poly[..k].contains(a));
         if poly.len() < 3 || !distinct {
-            remove(&mut report, RemovalReason::RepeatedVertex);
+            remove(report, RemovalReason::RepeatedVertex);
             continue;
         }
         if polygon_area(&soup.positions, &poly).1 {
-            remove(&mut report, RemovalReason::ZeroArea);
+            remove(report, RemovalReason::ZeroArea);
             continue;
         }
         if poly.len() != face.len() {
@@ -225,33 +262,23 @@ pub fn repair(soup: &Soup) -> Result<Repaired, MeshError> {
             }
         }
     });
-    drop(first_with);
+    faces
+}
 
-    // Steps 3 to 5, again after removing faces an edge cannot hold.
-    let (out_faces, copies) = loop {
-        let attempt = cut_orient_split(nv, &faces);
-        if attempt.excess.is_empty() {
-            report.split_edges = attempt.split_edges;
-            report.flipped_faces = attempt.flipped;
-            report.orientation_conflicts = attempt.conflicts;
-            break (attempt.faces, attempt.copies);
-        }
-        let excess: std::collections::HashSet<usize> = attempt.excess.iter().copied().collect();
-        faces.retain(|(f, _)| !excess.contains(f));
-        for f in attempt.excess {
-            report.removed_faces.push(RemovedFace {
-                face: f,
-                reason: RemovalReason::NonManifoldEdge,
-                duplicate_of: None,
-            });
-        }
-    };
-    report.removed_faces.sort_by_key(|r| r.face);
-
-    // Step 6: drop unreferenced input vertices; copies follow the kept ones.
+/// Step 6 of [`repair`]: the output soup without unreferenced input
+/// vertices, the copies of split vertices after the kept ones; records the
+/// removed vertices, the split vertices, the sizes and the vertex sources
+/// in `report`.
+fn compact_vertices(
+    soup: &Soup,
+    out_faces: &[(usize, Vec<u32>)],
+    copies: &[u32],
+    report: &mut RepairReport,
+) -> Soup {
+    let nv = soup.vertex_count();
     let total = nv + copies.len();
     let mut used = vec![false; total];
-    for (_, poly) in &out_faces {
+    for (_, poly) in out_faces {
         for &v in poly {
             used[v as usize] = true;
         }
@@ -289,7 +316,7 @@ pub fn repair(soup: &Soup) -> Result<Repaired, MeshError> {
         indices: Vec::with_capacity(soup.indices.len()),
     };
     out.offsets.push(0);
-    for (_, poly) in &out_faces {
+    for (_, poly) in out_faces {
         out.indices
             .extend(poly.iter().map(|&v| new_index[v as usize]));
         out.offsets.push(out.indices.len() as u32);
@@ -299,11 +326,7 @@ pub fn repair(soup: &Soup) -> Result<Repaired, MeshError> {
     if source.len() != nv || report.removed_vertices.len() + copies.len() > 0 {
         report.vertex_source = source;
     }
-    match SurfaceMesh::from_soup(&out) {
-        Ok(_) => report.manifold = true,
-        Err(e) => report.remaining_problem = Some(e.to_string()),
-    }
-    Ok(Repaired { soup: out, report })
+    out
 }
 
 /// What one pass of steps 3 to 5 produced.
@@ -404,34 +427,7 @@ fn cut_orient_split(nv: usize, faces: &[(usize, Vec<u32>)]) -> Pass {
     }
     // Step 4: orientation by breadth-first search over joined edges.
     let nf = faces.len();
-    let mut flip: Vec<u8> = vec![2; nf];
-    let mut conflict = vec![false; nf];
-    let mut queue = Vec::new();
-    for seed in 0..nf {
-        if flip[seed] != 2 {
-            continue;
-        }
-        flip[seed] = 0;
-        queue.push(seed as u32);
-        while let Some(f) = queue.pop() {
-            let f = f as usize;
-            for c in corners.start[f]..corners.start[f + 1] {
-                let d = mate[c as usize];
-                if d == NONE {
-                    continue;
-                }
-                let g = corners.face[d as usize] as usize;
-                let same_direction = corners.vertex[c as usize] == corners.vertex[d as usize];
-                let want = if same_direction { 1 - flip[f] } else { flip[f] };
-                if flip[g] == 2 {
-                    flip[g] = want;
-                    queue.push(g as u32);
-                } else if flip[g] != want {
-                    conflict[g] = true;
-                }
-            }
-        }
-    }
+    let (flip, conflict) = orient_by_mates(&corners, &mate, nf);
     // Step 5: fans of corners around each vertex, joined across mates.
     let mut parent: Vec<u32> = (0..nc as u32).collect();
     for c in 0..nc as u32 {
@@ -517,6 +513,42 @@ fn cut_orient_split(nv: usize, faces: &[(usize, Vec<u32>)]) -> Pass {
         conflicts,
         excess,
     }
+}
+
+/// Step 4 of [`repair`]: which of the `nf` faces to reverse (1) so that
+/// joined corners (`mate`) traverse their edge in opposite directions,
+/// breadth-first from the first face of each component, and the faces
+/// where that conflicts with an earlier choice (non-orientable parts).
+fn orient_by_mates(corners: &Corners, mate: &[u32], nf: usize) -> (Vec<u8>, Vec<bool>) {
+    let mut flip: Vec<u8> = vec![2; nf];
+    let mut conflict = vec![false; nf];
+    let mut queue = Vec::new();
+    for seed in 0..nf {
+        if flip[seed] != 2 {
+            continue;
+        }
+        flip[seed] = 0;
+        queue.push(seed as u32);
+        while let Some(f) = queue.pop() {
+            let f = f as usize;
+            for c in corners.start[f]..corners.start[f + 1] {
+                let d = mate[c as usize];
+                if d == NONE {
+                    continue;
+                }
+                let g = corners.face[d as usize] as usize;
+                let same_direction = corners.vertex[c as usize] == corners.vertex[d as usize];
+                let want = if same_direction { 1 - flip[f] } else { flip[f] };
+                if flip[g] == 2 {
+                    flip[g] = want;
+                    queue.push(g as u32);
+                } else if flip[g] != want {
+                    conflict[g] = true;
+                }
+            }
+        }
+    }
+    (flip, conflict)
 }
 
 #[cfg(test)]

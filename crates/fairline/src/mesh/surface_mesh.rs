@@ -67,8 +67,7 @@ pub struct BuildNotes {
 impl SurfaceMesh {
     /// Builds a mesh from positions and polygons (triangles, quads, n-gons).
     pub fn new<F: AsRef<[u32]>>(positions: Vec<Vec3>, faces: &[F]) -> Result<Self, MeshError> {
-        let soup = Soup::from_polygons(positions, faces);
-        Self::from_soup(&soup)
+        Self::from_owned_soup(Soup::from_polygons(positions, faces))
     }
 
     /// Builds a mesh from a soup (see [`super::build`] for the steps).
@@ -87,6 +86,13 @@ impl SurfaceMesh {
     /// copies back and write the input's vertex list bit-identical.
     pub fn from_soup(soup: &Soup) -> Result<Self, MeshError> {
         super::build::build(soup)
+    }
+
+    /// [`SurfaceMesh::from_soup`] of a soup the caller no longer needs: its
+    /// positions become the mesh's without a copy (what the mesh readers
+    /// do). The same mesh, bit for bit.
+    pub fn from_owned_soup(soup: Soup) -> Result<Self, MeshError> {
+        super::build::build_owned(soup)
     }
 
     /// Assembles a mesh from the builder's arrays.
