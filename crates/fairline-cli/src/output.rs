@@ -549,7 +549,7 @@ mod tests {
             e.to_string()
                 .ends_with("-o must name a .json or .obj file; nothing written")
         );
-        let e = require_extension("-o", Path::new("x.svg"), &["png", "svg", "pdf"]).unwrap_err();
+        let e = require_extension("-o", Path::new("x.gif"), &["png", "svg", "pdf"]).unwrap_err();
         assert!(e.to_string().contains("a .png, .svg or .pdf file"), "{e}");
     }
 
