@@ -12,7 +12,8 @@ use crate::commands::{LightOptions, bad_choice, highlight_error, vec3};
 use crate::report::Report;
 use crate::{Failure, Res};
 use fairline::Vec3;
-use fairline::bspline::{BSplineSurface, parse_surfaces_json, surfaces_to_json};
+use fairline::bspline::BSplineSurface;
+use fairline::io::{parse_surfaces_json, surfaces_to_json};
 use fairline::highlight::{
     CircularLight, CircularLights, SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceLight,
     linear_lights, surface_highlight_lines as library_surface_lines,

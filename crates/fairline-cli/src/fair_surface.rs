@@ -6,7 +6,7 @@ use crate::surface_highlight::{
     PALETTE, check_ext, palette_srgb, plot_lines, polylines, surface_picture, uv_picture, uv_plot,
 };
 use anyhow::Result;
-use fairline::bspline::{BSplineSurface, write_surfaces_json};
+use fairline::bspline::BSplineSurface;
 use fairline::fair::{
     BoundaryControl, Endpoints, SurfaceFairError, SurfaceFairMethod, SurfaceFairOptions,
     fair_surface,
@@ -14,6 +14,7 @@ use fairline::fair::{
 use fairline::highlight::{
     CircularLight, CircularLights, SurfaceHighlightOptions, SurfaceLight, surface_highlight_lines,
 };
+use fairline::io::write_surfaces_json;
 use fairline::render::{RenderOptions, side_by_side};
 use serde_json::json;
 use std::path::PathBuf;

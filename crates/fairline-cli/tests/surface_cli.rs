@@ -7,11 +7,10 @@ mod common;
 use common::*;
 
 use fairline::Vec3;
-use fairline::bspline::{
-    BSplineSurface, clamped_uniform_knots, read_surfaces_json, write_surfaces_json,
-};
+use fairline::bspline::{BSplineSurface, clamped_uniform_knots};
 use fairline::fair::endpoints_around;
 use fairline::highlight::{CircularLight, SurfaceLight, surface_signed_distance};
+use fairline::io::{read_surfaces_json, write_surfaces_json};
 
 /// Dome-like bicubic 15 × 15 surface (Nishiyama et al. Fig. 5), with
 /// control point (11, 7) raised when `bump`.

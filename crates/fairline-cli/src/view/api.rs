@@ -1114,7 +1114,7 @@ fn current_bytes(d: &Doc, ext: &str) -> Result<Vec<u8>, String> {
         let Some(s) = &d.current().surfaces else {
             return Err("JSON is for surfaces; meshes download as obj, ply, off or stl".into());
         };
-        return Ok(fairline::bspline::surfaces_to_json(s).into_bytes());
+        return Ok(fairline::io::surfaces_to_json(s).into_bytes());
     }
     if !matches!(ext, "obj" | "ply" | "off" | "stl") {
         return Err(format!("unknown format `{ext}` (obj, ply, off, stl, json)"));
