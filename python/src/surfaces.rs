@@ -12,11 +12,12 @@ use crate::commands::{LightOptions, bad_choice, highlight_error, vec3};
 use crate::report::Report;
 use crate::{Failure, Res};
 use fairline::Vec3;
-use fairline::bspline::{BSplineSurface, parse_surfaces_json, surfaces_to_json};
+use fairline::bspline::BSplineSurface;
 use fairline::highlight::{
     CircularLight, CircularLights, SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceLight,
     linear_lights, surface_highlight_lines as library_surface_lines,
 };
+use fairline::io::{parse_surfaces_json, surfaces_to_json};
 use pyo3::prelude::*;
 use serde_json::{Value, json};
 use std::path::PathBuf;
@@ -333,30 +334,30 @@ fn fair_surface(
     let d = SurfaceFairOptions::default();
     let truncation = truncation.unwrap_or(d.truncation);
     let min_truncation = min_truncation.unwrap_or(d.min_truncation);
-    let opts = SurfaceFairOptions {
-        grid: grid.unwrap_or(d.grid),
-        sample_spacing: sample_spacing.unwrap_or(d.sample_spacing),
-        truncation,
+    let opts = SurfaceFairOptions::default()
+        .lights(lights)
+        .endpoints(ends.endpoints)
+        .grid(grid.unwrap_or(d.grid))
+        .sample_spacing(sample_spacing.unwrap_or(d.sample_spacing))
+        .truncation(truncation)
         // as the CLI: a larger floor is taken as `truncation`; NaN is left
         // for the library's option check to refuse
-        min_truncation: if min_truncation > truncation {
+        .min_truncation(if min_truncation > truncation {
             truncation
         } else {
             min_truncation
-        },
-        epsilon: epsilon.unwrap_or(d.epsilon),
-        max_iterations: max_iterations.unwrap_or(d.max_iterations),
-        method,
-        boundary,
-        keep_weight: keep_weight.unwrap_or(d.keep_weight),
-        fairness_weight: fairness_weight.unwrap_or(d.fairness_weight),
-        ..d
-    };
+        })
+        .epsilon(epsilon.unwrap_or(d.epsilon))
+        .max_iterations(max_iterations.unwrap_or(d.max_iterations))
+        .method(method)
+        .boundary(boundary)
+        .keep_weight(keep_weight.unwrap_or(d.keep_weight))
+        .fairness_weight(fairness_weight.unwrap_or(d.fairness_weight));
     let out = crate::compute(py, move || -> Res<_> {
         let input = all[surface].clone();
         let mut report = Report::new("fair-surface");
-        let (faired, rep) = report
-            .time(|| library_fair_surface(&input, &lights, &ends.endpoints, &opts))
+        let out = report
+            .time(|| library_fair_surface(&input, &opts))
             .map_err(|e| match e {
                 SurfaceFairError::Svd | SurfaceFairError::Surface(_) => {
                     Failure::computation(e.to_string())
@@ -366,70 +367,24 @@ fn fair_surface(
                 }
                 other => Failure::bad(other.to_string()),
             })?;
-        report.set("method", rep.method);
-        report.set("boundary", opts.boundary);
-        report.set(
-            "held_boundary_points",
-            rep.held_boundary_points
-                .iter()
-                .map(|&(i, j)| [i, j])
-                .collect::<Vec<_>>(),
-        );
-        report.set("keep_samples", rep.keep_samples);
-        report.set(
-            "snap_distances",
-            rep.targets
-                .iter()
-                .map(|t| t.snap_distance)
-                .collect::<Vec<_>>(),
-        );
-        report.set("iterations", rep.iterations.len());
-        report.set("converged", rep.converged);
-        report.set("stop", rep.stop);
-        report.set("modified_control_points", rep.modified_control_points.len());
-        report.set(
-            "modified_indices",
-            rep.modified_control_points
-                .iter()
-                .map(|&(i, j)| [i, j])
-                .collect::<Vec<_>>(),
-        );
-        report.set(
-            "residual_before",
-            json!({"max": rep.residual_before.0, "mean": rep.residual_before.1}),
-        );
-        report.set(
-            "residual_after",
-            json!({"max": rep.residual_after.0, "mean": rep.residual_after.1}),
-        );
-        report.set("history", &rep.iterations);
-        let samples: usize = rep.targets.iter().map(|t| t.samples.len()).sum();
-        report.set(
-            "jacobian",
-            json!({"rows": samples.saturating_sub(rep.undefined_samples), "cols": 3 * rep.modified_control_points.len()}),
-        );
-        report.set("undefined_samples", rep.undefined_samples);
-        report.set("knot_box", rep.knot_box);
-        report.set("max_displacement", rep.max_displacement);
-        report.set(
-            "targets",
-            rep.targets
-                .iter()
-                .map(|t| json!({"radius": t.radius, "start": t.start, "end": t.end, "tangent_start": t.tangent_start, "tangent_end": t.tangent_end, "samples": t.samples.len()}))
-                .collect::<Vec<_>>(),
-        );
+        let (faired, rep) = (out.surfaces, out.report);
+        // the library's report carries the command's keys (as the CLI)
+        if let Ok(serde_json::Value::Object(fields)) = serde_json::to_value(&rep) {
+            for (key, value) in fields {
+                report.set(&key, value);
+            }
+        }
         all[surface] = faired;
         if !rep.converged {
             report.warn(format!(
                 "fairing did not converge ({:?} after {} iteration(s)); try --max-iterations or other endpoints",
-                rep.stop,
-                rep.iterations.len()
+                rep.stop, rep.iterations
             ));
         }
-        if rep.residual_after.0 > rep.residual_before.0 {
+        if rep.residual_after.max > rep.residual_before.max {
             report.warn(format!(
                 "the largest highlight residual got worse: {:.4e} before, {:.4e} after",
-                rep.residual_before.0, rep.residual_after.0
+                rep.residual_before.max, rep.residual_after.max
             ));
         }
         Ok((surfaces_to_json(&all), report.to_json()))

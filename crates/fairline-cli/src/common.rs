@@ -38,8 +38,8 @@ pub fn exit_code(err: &anyhow::Error) -> i32 {
             || cause.is::<fairline::MeshError>()
             || cause.is::<serde_json::Error>()
             || cause.is::<fairline::bspline::BSplineError>()
-            || cause.is::<fairline::bspline::SurfaceJsonError>()
-            || cause.is::<fairline::bspline::IgesError>()
+            || cause.is::<fairline::io::SurfaceJsonError>()
+            || cause.is::<fairline::io::IgesError>()
             || cause.is::<fairline::io::step::StepError>()
             || cause.is::<fairline::io::surface_file::SurfaceFileError>()
         {

@@ -6,7 +6,7 @@ use crate::surface_highlight::{
     PALETTE, palette_srgb, plot_lines, polylines, surface_picture, uv_picture, uv_plot,
 };
 use anyhow::Result;
-use fairline::bspline::{BSplineSurface, write_surfaces_json};
+use fairline::bspline::BSplineSurface;
 use fairline::fair::{
     BoundaryControl, Endpoints, SurfaceFairError, SurfaceFairMethod, SurfaceFairOptions,
     fair_surface,
@@ -14,6 +14,7 @@ use fairline::fair::{
 use fairline::highlight::{
     CircularLight, CircularLights, SurfaceHighlightOptions, SurfaceLight, surface_highlight_lines,
 };
+use fairline::io::write_surfaces_json;
 use fairline::render::{RenderOptions, side_by_side};
 use serde_json::json;
 use std::path::PathBuf;
@@ -162,39 +163,40 @@ pub fn run(args: Args) -> Result<()> {
         .lights()
         .map_err(|e| bad_input(format!("{}: {e}", args.lights.display())))?;
     let ends: Endpoints = read_json(&args.endpoints)?;
-    let opts = SurfaceFairOptions {
-        grid: args.grid,
-        sample_spacing: args.sample_spacing,
-        truncation: args.truncation,
+    let opts = SurfaceFairOptions::default()
+        .lights(lights.clone())
+        .endpoints(ends.endpoints.clone())
+        .grid(args.grid)
+        .sample_spacing(args.sample_spacing)
+        .truncation(args.truncation)
         // a larger floor is taken as --truncation; NaN is left for the
         // library's option check to refuse (f64::min would hide it)
-        min_truncation: if args.min_truncation > args.truncation {
+        .min_truncation(if args.min_truncation > args.truncation {
             args.truncation
         } else {
             args.min_truncation
-        },
-        epsilon: args.epsilon,
-        max_iterations: args.max_iterations,
-        method: match args.method {
+        })
+        .epsilon(args.epsilon)
+        .max_iterations(args.max_iterations)
+        .method(match args.method {
             MethodArg::Regularised => SurfaceFairMethod::Regularised,
             MethodArg::Paper => SurfaceFairMethod::Paper,
-        },
-        boundary: match args.boundary {
+        })
+        .boundary(match args.boundary {
             BoundaryArg::Fixed => BoundaryControl::Fixed,
             BoundaryArg::Tangent => BoundaryControl::FixedWithTangents,
             BoundaryArg::Free => BoundaryControl::Free,
-        },
-        keep_weight: args.keep_weight,
-        fairness_weight: args.fairness_weight,
-        ..Default::default()
-    };
+        })
+        .keep_weight(args.keep_weight)
+        .fairness_weight(args.fairness_weight);
     let input = surfaces[args.surface].clone();
     let mut report = Report::new("fair-surface");
     let bar = crate::common::spinner("fairing");
-    let (faired, rep) = report
-        .time(|| fair_surface(&input, &lights, &ends.endpoints, &opts))
+    let out = report
+        .time(|| fair_surface(&input, &opts))
         .map_err(to_cli)?;
     bar.finish_and_clear();
+    let (faired, rep) = (out.surfaces, out.report);
     // Endpoints that snapped far from where they were given (more than 2 %
     // of the parameter domain's diagonal) were probably read off the wrong
     // line.
@@ -224,75 +226,29 @@ pub fn run(args: Args) -> Result<()> {
     eprintln!(
         "fair-surface: {} stretches, {} control points moved, {} held on the patch boundary ({}); {} iterations, {} ({:?}); mean |d_s| {:.3e} -> {:.3e}",
         rep.targets.len(),
-        rep.modified_control_points.len(),
+        rep.modified_control_points,
         rep.held_boundary_points.len(),
         match opts.boundary {
             BoundaryControl::Free => "boundary free",
             BoundaryControl::Fixed => "boundary rows fixed: seams stay closed",
             BoundaryControl::FixedWithTangents => "two boundary rows fixed: seams keep G1",
         },
-        rep.iterations.len(),
+        rep.iterations,
         if rep.converged {
             "converged"
         } else {
             "NOT converged"
         },
         rep.stop,
-        rep.residual_before.1,
-        rep.residual_after.1
+        rep.residual_before.mean,
+        rep.residual_after.mean
     );
-    report.set("method", rep.method);
-    report.set("boundary", opts.boundary);
-    report.set(
-        "held_boundary_points",
-        rep.held_boundary_points
-            .iter()
-            .map(|&(i, j)| [i, j])
-            .collect::<Vec<_>>(),
-    );
-    report.set("keep_samples", rep.keep_samples);
-    report.set(
-        "snap_distances",
-        rep.targets
-            .iter()
-            .map(|t| t.snap_distance)
-            .collect::<Vec<_>>(),
-    );
-    report.set("iterations", rep.iterations.len());
-    report.set("converged", rep.converged);
-    report.set("stop", rep.stop);
-    report.set("modified_control_points", rep.modified_control_points.len());
-    report.set(
-        "modified_indices",
-        rep.modified_control_points
-            .iter()
-            .map(|&(i, j)| [i, j])
-            .collect::<Vec<_>>(),
-    );
-    report.set(
-        "residual_before",
-        json!({"max": rep.residual_before.0, "mean": rep.residual_before.1}),
-    );
-    report.set(
-        "residual_after",
-        json!({"max": rep.residual_after.0, "mean": rep.residual_after.1}),
-    );
-    report.set("history", &rep.iterations);
-    let samples: usize = rep.targets.iter().map(|t| t.samples.len()).sum();
-    report.set(
-        "jacobian",
-        json!({"rows": samples - rep.undefined_samples, "cols": 3 * rep.modified_control_points.len()}),
-    );
-    report.set("undefined_samples", rep.undefined_samples);
-    report.set("knot_box", rep.knot_box);
-    report.set("max_displacement", rep.max_displacement);
-    report.set(
-        "targets",
-        rep.targets
-            .iter()
-            .map(|t| json!({"radius": t.radius, "start": t.start, "end": t.end, "tangent_start": t.tangent_start, "tangent_end": t.tangent_end, "samples": t.samples.len()}))
-            .collect::<Vec<_>>(),
-    );
+    // The library's report carries the command's keys.
+    if let serde_json::Value::Object(fields) = serde_json::to_value(&rep)? {
+        for (key, value) in fields {
+            report.set(&key, value);
+        }
+    }
     // Pictures before the output file, so a failure leaves no output.
     let slights: Vec<SurfaceLight> = lights.iter().map(|l| SurfaceLight::Circular(*l)).collect();
     let hopts = SurfaceHighlightOptions::default().grid(args.grid);
@@ -357,27 +313,27 @@ pub fn run(args: Args) -> Result<()> {
         report.warn(format!(
             "fairing did not converge ({:?} after {} iteration(s)); try --max-iterations or other endpoints",
             rep.stop,
-            rep.iterations.len()
+            rep.iterations
         ));
     }
-    if rep.residual_after.0 > rep.residual_before.0 {
+    if rep.residual_after.max > rep.residual_before.max {
         report.warn(format!(
             "the largest highlight residual got worse: {:.4e} before, {:.4e} after",
-            rep.residual_before.0, rep.residual_after.0
+            rep.residual_before.max, rep.residual_after.max
         ));
     }
     report.write(args.report.as_deref())?;
     job.finish(format_args!(
         "{} iteration(s), {}, {} control point(s) moved, largest residual {:.3e} → {:.3e}",
-        rep.iterations.len(),
+        rep.iterations,
         if rep.converged {
             "converged"
         } else {
             "not converged"
         },
-        rep.modified_control_points.len(),
-        rep.residual_before.0,
-        rep.residual_after.0
+        rep.modified_control_points,
+        rep.residual_before.max,
+        rep.residual_after.max
     ));
     Ok(())
 }
@@ -431,7 +387,9 @@ pub fn demo_section(demo: &crate::demo::Demo) -> Result<crate::demo::Section> {
         .collect::<Result<_, _>>()?;
     let opts = SurfaceFairOptions::default();
     let endpoints = endpoints_around(&dented, &lights, centre, 0.2, opts.grid);
-    let (faired, rep) = fair_surface(&dented, &lights, &endpoints, &opts)?;
+    let opts = opts.lights(lights.clone()).endpoints(endpoints.clone());
+    let out = fair_surface(&dented, &opts)?;
+    let (faired, rep) = (out.surfaces, out.report);
     let slights: Vec<SurfaceLight> = lights.iter().map(|l| SurfaceLight::Circular(*l)).collect();
     let hopts = SurfaceHighlightOptions::default().grid(opts.grid);
     let before = surface_highlight_lines(&dented, &slights, &hopts);
@@ -514,14 +472,14 @@ pub fn demo_section(demo: &crate::demo::Demo) -> Result<crate::demo::Section> {
         ],
         values: json!({
             "stretches": rep.targets.len(),
-            "modified_control_points": rep.modified_control_points.len(),
-            "iterations": rep.iterations.len(),
+            "modified_control_points": rep.modified_control_points,
+            "iterations": rep.iterations,
             "converged": rep.converged,
             "stop": rep.stop,
-            "residual_before_mean": rep.residual_before.1,
-            "residual_after_mean": rep.residual_after.1,
-            "residual_before_max": rep.residual_before.0,
-            "residual_after_max": rep.residual_after.0,
+            "residual_before_mean": rep.residual_before.mean,
+            "residual_after_mean": rep.residual_after.mean,
+            "residual_before_max": rep.residual_before.max,
+            "residual_after_max": rep.residual_after.max,
         }),
     })
 }

@@ -8,7 +8,8 @@ mod common;
 
 use common::{json, ok, run, s, tmp};
 use fairline::Vec3;
-use fairline::bspline::{BSplineSurface, TrimCurve, TrimLoop, read_surfaces_json};
+use fairline::bspline::{BSplineSurface, TrimCurve, TrimLoop};
+use fairline::io::read_surfaces_json;
 use fairline::io::surface_file::read_surface_file;
 
 /// A rational trimmed patch and an untrimmed bicubic one.
@@ -51,7 +52,7 @@ fn part() -> Vec<BSplineSurface> {
 fn convert_between_json_iges_and_step_keeps_every_number() {
     let d = tmp("cad-convert");
     let src = d.join("part.json");
-    fairline::bspline::write_surfaces_json(&src, &part()).unwrap();
+    fairline::io::write_surfaces_json(&src, &part()).unwrap();
     let (igs, stp, back) = (d.join("part.igs"), d.join("part.step"), d.join("back.json"));
     let rep = d.join("rep.json");
     let o = run(&["convert", s(&src), s(&igs), "--report", s(&rep)]);

@@ -5,7 +5,8 @@ mod common;
 use common::*;
 
 use fairline::Vec3;
-use fairline::bspline::{BSplineSurface, write_surfaces_json};
+use fairline::bspline::BSplineSurface;
+use fairline::io::write_surfaces_json;
 
 /// A plane z = 0 Bézier patch over [x0, x0 + 1] × [0, 1] whose row next to
 /// u = 0 is lifted by `lift` (a kink of atan(3 lift) at that side).

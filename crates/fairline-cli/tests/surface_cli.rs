@@ -7,11 +7,10 @@ mod common;
 use common::*;
 
 use fairline::Vec3;
-use fairline::bspline::{
-    BSplineSurface, clamped_uniform_knots, read_surfaces_json, write_surfaces_json,
-};
+use fairline::bspline::{BSplineSurface, clamped_uniform_knots};
 use fairline::fair::endpoints_around;
 use fairline::highlight::{CircularLight, SurfaceLight, surface_signed_distance};
+use fairline::io::{read_surfaces_json, write_surfaces_json};
 
 /// Dome-like bicubic 15 × 15 surface (Nishiyama et al. Fig. 5), with
 /// control point (11, 7) raised when `bump`.
@@ -383,7 +382,8 @@ fn real_surfaces_teapot_and_impeller() {
     let o = run(&["convert", s(&ip), s(&js)]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let surfaces = read_surfaces_json(&js).unwrap();
-    assert_eq!(surfaces.len(), 247);
+    // 247 B-spline surfaces (128) and 30 surfaces of revolution (120)
+    assert_eq!(surfaces.len(), 277);
     // Linear light array (defaults from the bounding box) on the impeller.
     let out = d.join("impeller-lines.json");
     let o = run(&[

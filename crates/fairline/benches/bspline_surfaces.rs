@@ -83,18 +83,16 @@ fn main() {
             CircularLight::new(Vec3::new(0.0, 0.0, 3.0), Vec3::Z, r).unwrap()
         })
         .collect();
-    let fopts = SurfaceFairOptions {
-        max_iterations: 4,
-        ..Default::default()
-    };
+    let fopts = SurfaceFairOptions::default().max_iterations(4);
     let ends = endpoints_around(&dome, &lights, centre, 0.2, fopts.grid);
+    let fopts = fopts.lights(lights.clone()).endpoints(ends);
     let mut per_iter = Vec::new();
     let mut size = (0, 0, 0);
     let t_total = common::median_secs(runs, || {
-        let (_, rep) = fair_surface(&dome, &lights, &ends, &fopts).unwrap();
-        for it in &rep.iterations {
+        let rep = fair_surface(&dome, &fopts).unwrap().report;
+        for it in &rep.history {
             per_iter.push(it.time_s);
-            size = (it.rows, it.cols, rep.iterations.len());
+            size = (it.rows, it.cols, rep.iterations);
         }
     });
     per_iter.sort_by(f64::total_cmp);

@@ -15,11 +15,11 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use fairline::bspline::{
-    BSplineSurface, parse_iges, parse_surfaces_json, read_iges, read_surfaces_json,
-    surfaces_to_json,
-};
+use fairline::bspline::BSplineSurface;
 use fairline::io::{MeshFormat, read_soup_bytes, write_soup};
+use fairline::io::{
+    parse_iges, parse_surfaces_json, read_iges, read_surfaces_json, surfaces_to_json,
+};
 use fairline::mesh::triangulate;
 use fairline::{Soup, SurfaceMesh, Vec3};
 

@@ -243,7 +243,8 @@ fn surface_json(weight: &str) -> String {
 
 #[test]
 fn tiny_weights_are_refused_at_read_time_naming_the_weight_and_file() {
-    use fairline::bspline::{BSplineError, parse_surfaces_json, read_surfaces_json};
+    use fairline::bspline::BSplineError;
+    use fairline::io::{parse_surfaces_json, read_surfaces_json};
     let dir = tmp("weights");
     // sound weights (ratio 1e-6) are read and evaluate finitely
     let ok = parse_surfaces_json(&surface_json("1e-6")).unwrap();
@@ -262,7 +263,7 @@ fn tiny_weights_are_refused_at_read_time_naming_the_weight_and_file() {
         assert!(
             matches!(
                 inner,
-                fairline::bspline::SurfaceJsonError::Surface {
+                fairline::io::SurfaceJsonError::Surface {
                     source: BSplineError::WeightRange { i: 1, j: 0, .. },
                     ..
                 }
@@ -279,7 +280,7 @@ fn tiny_weights_are_refused_at_read_time_naming_the_weight_and_file() {
 
 #[test]
 fn surface_json_over_the_size_limit_is_refused_before_reading() {
-    use fairline::bspline::{MAX_SURFACE_JSON_BYTES, read_surfaces_json};
+    use fairline::io::{MAX_SURFACE_JSON_BYTES, read_surfaces_json};
     let dir = tmp("json-size");
     let path = dir.join("huge.json");
     let f = std::fs::File::create(&path).unwrap();
@@ -291,7 +292,7 @@ fn surface_json_over_the_size_limit_is_refused_before_reading() {
 
 #[test]
 fn surface_json_and_iges_content_errors_name_the_file() {
-    use fairline::bspline::{read_iges, read_surfaces_json};
+    use fairline::io::{read_iges, read_surfaces_json};
     let dir = tmp("named");
     let cases: [(&str, &str); 4] = [
         ("syntax.json", "{\"degree_u\": 3,"),

@@ -1114,7 +1114,7 @@ fn current_bytes(d: &Doc, ext: &str) -> Result<Vec<u8>, String> {
         let Some(s) = &d.current().surfaces else {
             return Err("JSON is for surfaces; meshes download as obj, ply, off or stl".into());
         };
-        return Ok(fairline::bspline::surfaces_to_json(s).into_bytes());
+        return Ok(fairline::io::surfaces_to_json(s).into_bytes());
     }
     if !matches!(ext, "obj" | "ply" | "off" | "stl") {
         return Err(format!("unknown format `{ext}` (obj, ply, off, stl, json)"));
@@ -1370,16 +1370,18 @@ fn run_fair_surface(
         serde_json::from_value(json!({"endpoints": req.endpoints.clone().unwrap_or(Value::Null)}))
             .map_err(|e| format!("endpoints: {e}"))?;
     let input = surfaces.get(req.patch).ok_or("no such patch")?;
-    let mut opts = SurfaceFairOptions::default();
+    let mut opts = SurfaceFairOptions::default()
+        .lights(lights)
+        .endpoints(ends.endpoints);
     if let Some(n) = req.options.max_iterations {
-        opts.max_iterations = n;
+        opts = opts.max_iterations(n);
     }
     if let Some(e) = req.options.epsilon {
-        opts.epsilon = e;
+        opts = opts.epsilon(e);
     }
     let t = Instant::now();
-    let (faired, rep) =
-        fair_surface(input, &lights, &ends.endpoints, &opts).map_err(|e| e.to_string())?;
+    let faired = fair_surface(input, &opts).map_err(|e| e.to_string())?;
+    let (faired, rep) = (faired.surfaces, faired.report);
     let mut all = surfaces.as_ref().clone();
     all[req.patch] = faired;
     let (mesh, _) = super::doc::tessellate_all(&all, grid).map_err(|e| e.to_string())?;
@@ -1388,11 +1390,11 @@ fn run_fair_surface(
         surfaces: Some(Arc::new(all)),
         report: json!({
             "command": "fair-surface",
-            "iterations": rep.iterations.len(),
+            "iterations": rep.iterations,
             "converged": rep.converged,
-            "modified_control_points": rep.modified_control_points.len(),
-            "residual_before": {"max": rep.residual_before.0, "mean": rep.residual_before.1},
-            "residual_after": {"max": rep.residual_after.0, "mean": rep.residual_after.1},
+            "modified_control_points": rep.modified_control_points,
+            "residual_before": rep.residual_before,
+            "residual_after": rep.residual_after,
             "max_displacement": rep.max_displacement,
             "time_s": t.elapsed().as_secs_f64(),
         }),

@@ -1,5 +1,7 @@
 //! B-spline surfaces: evaluation, derivatives, normals, curvature,
-//! tessellation, and the JSON and IGES (entity 128) readers.
+//! trimming loops and tessellation. Their files (surface JSON, IGES, STEP)
+//! are read and written in [`crate::io`]; this module imports nothing from
+//! it.
 //!
 //! The surfaces are the tensor-product (rational) B-spline surfaces of
 //! Nishiyama et al. §2, Eq. (2.2): `r(u, v) = Σ_i Σ_j N_{i,p}(u) N_{j,q}(v) P_ij`,
@@ -14,7 +16,6 @@
 //! - normals and curvature from the first and second fundamental forms;
 //! - local support (Piegl & Tiller Eq. 2.4, property P2.1):
 //!   [`BSplineSurface::basis_support`], [`BSplineSurface::control_points_in_box`];
-//! - readers and writers: JSON (DESIGN.md §5) and IGES entity 128.
 //!
 //! Evaluation never allocates: the basis functions live in stack buffers
 //! sized for [`MAX_DEGREE`].
@@ -31,22 +32,15 @@
 
 pub mod basis;
 pub mod continuity;
-mod iges;
-mod json;
 mod surface;
 mod tessellate;
 #[cfg(test)]
 pub(crate) mod tests;
 mod trim;
 #[cfg(test)]
-mod trim_tests;
+pub(crate) mod trim_tests;
 
 pub use basis::{MAX_DEGREE, MAX_ORDER, clamped_uniform_knots, find_span};
-pub use iges::{IgesError, IgesImport, IgesSurface, parse_iges, read_iges};
-pub use json::{
-    MAX_SURFACE_JSON_BYTES, SurfaceJsonError, parse_surfaces_json, read_surfaces_json,
-    surface_to_json, surfaces_to_json, write_surface_json, write_surfaces_json,
-};
 pub use surface::{
     BSplineSurface, BasisSupport, Curvature, MIN_WEIGHT_RATIO, SurfaceBasis, SurfaceDerivatives,
     unit_normal,

@@ -17,13 +17,13 @@
 //! non-degenerate normal along the target curves; samples where d_s is
 //! undefined are left out and counted.
 
-use crate::Vec3;
 use crate::bspline::{BSplineError, BSplineSurface};
 use crate::curves::CubicHermite;
 use crate::highlight::CircularLight;
 use crate::highlight::surface::{
     SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceLight, contour_field, distance_field,
 };
+use crate::{Cancelled, Control, SurfaceOutput, Vec3};
 use faer::Mat;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -53,10 +53,18 @@ pub struct Endpoints {
     pub endpoints: Vec<EndpointPair>,
 }
 
-/// Options of [`fair_surface`]. Lengths of the paper that assume its units
+/// Options of [`fair_surface`]: the lights and the stretches to fair, and
+/// the solver's settings. Lengths of the paper that assume its units
 /// (s = 50, Δw = 1e-4) are expressed relative to the surface (DESIGN.md §3).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Build with [`SurfaceFairOptions::default`] and the builder setters.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct SurfaceFairOptions {
+    /// The circular lights (Nishiyama et al. Eq. (2.1)); each endpoint pair
+    /// names one by its radius.
+    pub lights: Vec<CircularLight>,
+    /// The irregular stretches to fair, one endpoint pair each.
+    pub endpoints: Vec<EndpointPair>,
     /// Grid points per direction for the pre-images the endpoints snap to.
     pub grid: usize,
     /// Sample spacing s of Eq. (3.5) as a fraction of the parameter domain's
@@ -100,6 +108,86 @@ pub struct SurfaceFairOptions {
     /// second-difference matrix (so it does not depend on the surface's
     /// scale). [`SurfaceFairMethod::Regularised`] only.
     pub fairness_weight: f64,
+    /// Progress (one step per iteration) and cancellation.
+    pub control: Control,
+}
+
+impl SurfaceFairOptions {
+    /// Sets [`Self::lights`].
+    pub fn lights(mut self, v: Vec<CircularLight>) -> Self {
+        self.lights = v;
+        self
+    }
+    /// Sets [`Self::endpoints`].
+    pub fn endpoints(mut self, v: Vec<EndpointPair>) -> Self {
+        self.endpoints = v;
+        self
+    }
+    /// Sets [`Self::grid`].
+    pub fn grid(mut self, v: usize) -> Self {
+        self.grid = v;
+        self
+    }
+    /// Sets [`Self::sample_spacing`].
+    pub fn sample_spacing(mut self, v: f64) -> Self {
+        self.sample_spacing = v;
+        self
+    }
+    /// Sets [`Self::fd_step`].
+    pub fn fd_step(mut self, v: f64) -> Self {
+        self.fd_step = v;
+        self
+    }
+    /// Sets [`Self::truncation`].
+    pub fn truncation(mut self, v: f64) -> Self {
+        self.truncation = v;
+        self
+    }
+    /// Sets [`Self::min_truncation`].
+    pub fn min_truncation(mut self, v: f64) -> Self {
+        self.min_truncation = v;
+        self
+    }
+    /// Sets [`Self::damped_step`].
+    pub fn damped_step(mut self, v: f64) -> Self {
+        self.damped_step = v;
+        self
+    }
+    /// Sets [`Self::epsilon`].
+    pub fn epsilon(mut self, v: f64) -> Self {
+        self.epsilon = v;
+        self
+    }
+    /// Sets [`Self::max_iterations`].
+    pub fn max_iterations(mut self, v: usize) -> Self {
+        self.max_iterations = v;
+        self
+    }
+    /// Sets [`Self::method`].
+    pub fn method(mut self, v: SurfaceFairMethod) -> Self {
+        self.method = v;
+        self
+    }
+    /// Sets [`Self::boundary`].
+    pub fn boundary(mut self, v: BoundaryControl) -> Self {
+        self.boundary = v;
+        self
+    }
+    /// Sets [`Self::keep_weight`].
+    pub fn keep_weight(mut self, v: f64) -> Self {
+        self.keep_weight = v;
+        self
+    }
+    /// Sets [`Self::fairness_weight`].
+    pub fn fairness_weight(mut self, v: f64) -> Self {
+        self.fairness_weight = v;
+        self
+    }
+    /// Sets [`Self::control`].
+    pub fn control(mut self, v: Control) -> Self {
+        self.control = v;
+        self
+    }
 }
 
 /// The solver of [`fair_surface`].
@@ -136,6 +224,8 @@ pub enum BoundaryControl {
 impl Default for SurfaceFairOptions {
     fn default() -> Self {
         SurfaceFairOptions {
+            lights: Vec::new(),
+            endpoints: Vec::new(),
             grid: 200,
             sample_spacing: 0.005,
             fd_step: 1e-7,
@@ -148,6 +238,7 @@ impl Default for SurfaceFairOptions {
             boundary: BoundaryControl::Fixed,
             keep_weight: 0.01,
             fairness_weight: 3e-3,
+            control: Control::default(),
         }
     }
 }
@@ -189,14 +280,20 @@ pub enum SurfaceFairError {
     /// Writing a control point failed (non-finite update).
     #[error(transparent)]
     Surface(#[from] BSplineError),
+    /// Stopped through [`SurfaceFairOptions::control`].
+    #[error("cancelled")]
+    Cancelled(#[from] Cancelled),
 }
 
-/// The smooth target of one stretch (Nishiyama et al. §3.2–3.3).
-#[derive(Clone, Debug, PartialEq)]
+/// The smooth target of one stretch (Nishiyama et al. §3.2–3.3). In the
+/// JSON report: radius, endpoints, tangents and the number of samples.
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct TargetCurve {
     /// Position of the stretch in the endpoints list.
+    #[serde(skip)]
     pub index: usize,
-    /// Position of its light in the lights slice.
+    /// Position of its light in [`SurfaceFairOptions::lights`].
+    #[serde(skip)]
     pub light: usize,
     /// Radius of that light.
     pub radius: f64,
@@ -208,16 +305,51 @@ pub struct TargetCurve {
     pub tangent_start: [f64; 2],
     /// Tangent t² of Eq. (3.1).
     pub tangent_end: [f64; 2],
-    /// The sample parameters h_i(t_j) of Eq. (3.4), n(i) of Eq. (3.5).
+    /// The sample parameters h_i(t_j) of Eq. (3.4), n(i) of Eq. (3.5)
+    /// (their number in the JSON report).
+    #[serde(serialize_with = "serialize_count")]
     pub samples: Vec<[f64; 2]>,
     /// The pre-image polyline the endpoints were snapped to (u, v).
+    #[serde(skip)]
     pub pre_image: Vec<[f64; 2]>,
     /// The stretch of that polyline between e¹ and e² (the part the target
     /// replaces), from e¹ to e².
+    #[serde(skip)]
     pub stretch: Vec<[f64; 2]>,
     /// How far (in u, v) each given endpoint was from where it snapped:
-    /// a large value means the point was not on a line of that radius.
+    /// a large value means the point was not on a line of that radius
+    /// (all of them: [`SurfaceFairReport::snap_distances`]).
+    #[serde(skip)]
     pub snap_distance: [f64; 2],
+}
+
+/// Serialises a list as its length.
+fn serialize_count<S: serde::Serializer, T>(v: &[T], s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_u64(v.len() as u64)
+}
+
+/// Largest and mean |d_s| over the target samples.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Residual {
+    /// max |d_s|.
+    pub max: f64,
+    /// mean |d_s|.
+    pub mean: f64,
+}
+
+impl From<(f64, f64)> for Residual {
+    fn from((max, mean): (f64, f64)) -> Self {
+        Residual { max, mean }
+    }
+}
+
+/// Size of the targets' Jacobian (Eq. (3.10)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct JacobianSize {
+    /// Target samples with a defined d_s.
+    pub rows: usize,
+    /// Unknowns: three per moved control point.
+    pub cols: usize,
 }
 
 /// One Gauss–Newton iteration of [`fair_surface`].
@@ -268,31 +400,43 @@ pub enum FairStop {
     NonFiniteStep,
 }
 
-/// What [`fair_surface`] did.
-#[derive(Clone, Debug, PartialEq)]
+/// What [`fair_surface`] did; its fields are the keys of the JSON report
+/// of `fairline fair-surface`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SurfaceFairReport {
     /// The targets.
     pub targets: Vec<TargetCurve>,
     /// The solver used.
     pub method: SurfaceFairMethod,
+    /// The boundary rule used ([`SurfaceFairOptions::boundary`]).
+    pub boundary: BoundaryControl,
+    /// How many control points moved (`modified_indices.len()`).
+    pub modified_control_points: usize,
     /// Control points moved, `(i, j)`, row-major.
-    pub modified_control_points: Vec<(usize, usize)>,
+    pub modified_indices: Vec<(usize, usize)>,
     /// Control points over the knot box that stayed fixed because they lie
     /// on the patch boundary ([`SurfaceFairOptions::boundary`]), row-major.
     pub held_boundary_points: Vec<(usize, usize)>,
     /// Weak-target samples on the other lines
     /// ([`SurfaceFairMethod::Regularised`]; 0 otherwise).
     pub keep_samples: usize,
+    /// How far (in u, v) each given endpoint was from where it snapped
+    /// (start, end), per stretch ([`TargetCurve::snap_distance`]).
+    pub snap_distances: Vec<[f64; 2]>,
     /// Knot-span bounding box `[u0, u1, v0, v1]` of the endpoints.
     pub knot_box: [f64; 4],
+    /// Size of the targets' Jacobian.
+    pub jacobian: JacobianSize,
     /// Samples left out because d_s is undefined there.
     pub undefined_samples: usize,
-    /// (max, mean) |d_s| at the samples before fairing.
-    pub residual_before: (f64, f64),
-    /// (max, mean) |d_s| at the samples after fairing.
-    pub residual_after: (f64, f64),
+    /// |d_s| at the samples before fairing.
+    pub residual_before: Residual,
+    /// |d_s| at the samples after fairing.
+    pub residual_after: Residual,
+    /// How many iterations ran (`history.len()`).
+    pub iterations: usize,
     /// Per-iteration record.
-    pub iterations: Vec<FairIteration>,
+    pub history: Vec<FairIteration>,
     /// Whether the stop test held: Eq. (3.14) (the objective's relative
     /// decrease below ε with [`SurfaceFairMethod::Regularised`]) or a
     /// vanishing residual. False when stalled or out of iterations.
@@ -459,11 +603,10 @@ fn outward_direction(q: [[f64; 2]; 4]) -> Option<[f64; 2]> {
 /// relative to Eq. (3.1); [`CubicHermite`] uses the standard assignment.)
 pub fn target_curves(
     surface: &BSplineSurface,
-    lights: &[CircularLight],
-    endpoints: &[EndpointPair],
     opts: &SurfaceFairOptions,
 ) -> Result<Vec<TargetCurve>, SurfaceFairError> {
     check_options(opts)?;
+    let (lights, endpoints) = (&opts.lights[..], &opts.endpoints[..]);
     let (du, dv) = (surface.domain_u(), surface.domain_v());
     let diag = (du[1] - du[0]).hypot(dv[1] - dv[0]);
     let s = opts.sample_spacing * diag;
@@ -920,18 +1063,20 @@ struct Solved {
 ///   crossing the moved region + thin-plate energy of the displacement),
 ///   stopping when its relative decrease falls below ε.
 ///
-/// Returns the faired surface (control points outside the selection
-/// bit-identical) and the report.
+/// The lights and stretches are `opts.lights` and `opts.endpoints`; each
+/// iteration is one step of `opts.control` (stage `"iterations"`), which
+/// can stop the run with [`SurfaceFairError::Cancelled`]. Returns the
+/// faired surface (control points outside the selection bit-identical; the
+/// input is not modified) and the report.
 pub fn fair_surface(
     surface: &BSplineSurface,
-    lights: &[CircularLight],
-    endpoints: &[EndpointPair],
     opts: &SurfaceFairOptions,
-) -> Result<(BSplineSurface, SurfaceFairReport), SurfaceFairError> {
-    if endpoints.is_empty() {
+) -> Result<SurfaceOutput<BSplineSurface, SurfaceFairReport>, SurfaceFairError> {
+    if opts.endpoints.is_empty() {
         return Err(SurfaceFairError::Invalid("no endpoints given".into()));
     }
-    let targets = target_curves(surface, lights, endpoints, opts)?;
+    let lights = &opts.lights[..];
+    let targets = target_curves(surface, opts)?;
     let ends: Vec<[f64; 2]> = targets.iter().flat_map(|t| [t.start, t.end]).collect();
     let kb = knot_box(surface, &ends);
     type ControlIndices = Vec<(usize, usize)>;
@@ -999,24 +1144,33 @@ pub fn fair_surface(
         .iter()
         .map(|&(i, j)| (current.control_point(i, j) - surface.control_point(i, j)).length())
         .fold(0.0, f64::max);
-    Ok((
-        current,
-        SurfaceFairReport {
+    let snap_distances = targets.iter().map(|t| t.snap_distance).collect();
+    Ok(SurfaceOutput {
+        surfaces: current,
+        report: SurfaceFairReport {
             targets,
             method: opts.method,
-            modified_control_points: selected,
+            boundary: opts.boundary,
+            modified_control_points: selected.len(),
+            jacobian: JacobianSize {
+                rows: samples.len(),
+                cols: 3 * selected.len(),
+            },
+            modified_indices: selected,
             held_boundary_points: held,
             keep_samples: solved.keep_samples,
+            snap_distances,
             knot_box: kb,
             undefined_samples,
-            residual_before: before,
-            residual_after: solved.after,
-            iterations: solved.iterations,
+            residual_before: before.into(),
+            residual_after: solved.after.into(),
+            iterations: solved.iterations.len(),
+            history: solved.iterations,
             converged: solved.converged,
             stop: solved.stop,
             max_displacement,
         },
-    ))
+    })
 }
 
 /// The paper's solver (Nishiyama et al. §3.3), see [`fair_surface`].
@@ -1042,6 +1196,11 @@ fn solve_paper(
     };
     let mut trunc = opts.truncation;
     while !converged && iterations.len() < opts.max_iterations && cols > 0 {
+        opts.control.step(
+            "iterations",
+            iterations.len() as u64,
+            opts.max_iterations as u64,
+        )?;
         let t0 = Instant::now();
         let base: Vec<Vec3> = selected
             .iter()

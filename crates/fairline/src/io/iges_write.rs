@@ -20,7 +20,7 @@
 //!
 //! Reals are written in Rust's shortest round-trip form (`{:?}`, with the
 //! exponent as `E` and a decimal point always present), so that reading the
-//! file back with [`crate::bspline::read_iges`] gives every control point,
+//! file back with [`crate::io::read_iges`] gives every control point,
 //! knot and weight bit-identical, and the same trimming curves.
 
 use std::io::Write;
@@ -405,8 +405,9 @@ pub fn write_iges(
 pub(crate) mod tests {
     use super::*;
     use crate::Vec3;
+    use crate::bspline::TrimLoop;
     use crate::bspline::tests::{Rng, full_circle, torus};
-    use crate::bspline::{TrimLoop, parse_iges, read_iges, read_surfaces_json};
+    use crate::io::{parse_iges, read_iges, read_surfaces_json};
 
     fn options() -> IgesWriteOptions {
         IgesWriteOptions {

@@ -1,5 +1,6 @@
 //! Mesh files: OBJ, PLY (ascii and binary), OFF and STL; CAD surface files:
-//! IGES writing ([`iges_write`]), STEP reading and writing ([`step`]) and
+//! fairline's surface JSON ([`surface_json`]), IGES reading ([`iges_read`])
+//! and writing ([`iges_write`]), STEP reading and writing ([`step`]) and
 //! the choice of surface format by extension ([`surface_file`]).
 //!
 //! Every reader produces a [`Soup`] (positions plus polygons, no
@@ -17,6 +18,7 @@
 //!
 //! The format is chosen by the file extension ([`MeshFormat::from_path`]).
 
+pub mod iges_read;
 pub mod iges_write;
 mod obj;
 mod off;
@@ -24,6 +26,7 @@ mod ply;
 pub mod step;
 mod stl;
 pub mod surface_file;
+pub mod surface_json;
 pub mod units;
 
 use std::fmt;
@@ -33,6 +36,12 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use thiserror::Error;
+
+pub use iges_read::{IgesError, IgesImport, IgesSurface, parse_iges, read_iges};
+pub use surface_json::{
+    MAX_SURFACE_JSON_BYTES, SurfaceJsonError, parse_surfaces_json, read_surfaces_json,
+    surface_to_json, surfaces_to_json, write_surface_json, write_surfaces_json,
+};
 
 use crate::mesh::{MeshError, Soup, SurfaceMesh};
 

@@ -11,12 +11,12 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 use super::IoError;
+use super::iges_read::{IgesError, read_iges};
 use super::iges_write::{IgesWriteOptions, write_iges};
 use super::step::{StepError, StepWriteOptions, read_step, write_step};
+use super::surface_json::{SurfaceJsonError, read_surfaces_json, write_surfaces_json};
 use super::units::LengthUnit;
-use crate::bspline::{
-    BSplineSurface, IgesError, SurfaceJsonError, read_iges, read_surfaces_json, write_surfaces_json,
-};
+use crate::bspline::BSplineSurface;
 
 /// A surface file format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -331,6 +331,11 @@ pub(super) fn solve(p: &Problem, opts: &SurfaceFairOptions) -> Result<Solved, Su
         FairStop::MaxIterations
     };
     while !converged && iterations.len() < opts.max_iterations {
+        opts.control.step(
+            "iterations",
+            iterations.len() as u64,
+            opts.max_iterations as u64,
+        )?;
         let t0 = Instant::now();
         let ft: Vec<Option<f64>> = eval.ft.clone();
         // The finite differences start from d_s itself, not from the

@@ -5,9 +5,10 @@
 //! surfaces (teapot JSON, impeller IGES).
 
 use super::*;
+use crate::bspline::BSplineSurface;
 use crate::bspline::tests::sphere_octant;
-use crate::bspline::{BSplineSurface, read_iges, read_surfaces_json};
 use crate::highlight::{CircularLight, LightArray};
+use crate::io::{read_iges, read_surfaces_json};
 
 /// The plane z = 0 over [-2, 2]² as a bicubic Bézier patch (non-uniform
 /// inner control points so the parametrisation is not linear).

@@ -10,7 +10,7 @@
 //! - `nurbs`: exact NURBS forms of conics and swept surfaces;
 //! - `write`: B-spline surfaces and faces with p-curves.
 
-mod nurbs;
+pub(crate) mod nurbs;
 pub mod p21;
 mod read;
 mod write;
@@ -20,6 +20,7 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 pub use read::{StepImport, StepSurface};
+pub(crate) use read::{invert_point, polyline};
 pub use write::{StepWriteOptions, surfaces_to_step, write_step};
 
 #[cfg(test)]

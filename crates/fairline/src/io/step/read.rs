@@ -1390,7 +1390,7 @@ impl<'a> Reader<'a> {
 }
 
 /// A degree-1 trim curve through `pts` (chord-length-free uniform knots).
-fn polyline(pts: &[[f64; 2]]) -> Result<TrimCurve, String> {
+pub(crate) fn polyline(pts: &[[f64; 2]]) -> Result<TrimCurve, String> {
     let mut p: Vec<[f64; 2]> = Vec::with_capacity(pts.len());
     for q in pts {
         if p.last() != Some(q) {

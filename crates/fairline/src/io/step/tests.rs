@@ -6,8 +6,9 @@ use std::f64::consts::PI;
 
 use super::*;
 use crate::Vec3;
-use crate::bspline::{BSplineSurface, read_iges, read_surfaces_json, trimmed_area};
+use crate::bspline::{BSplineSurface, trimmed_area};
 use crate::io::units::LengthUnit;
+use crate::io::{read_iges, read_surfaces_json};
 
 /// Builds the DATA section of a hand-written STEP file.
 #[derive(Default)]

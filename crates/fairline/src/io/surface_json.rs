@@ -17,8 +17,8 @@ use std::path::{Path, PathBuf};
 use serde_json::{Map, Value};
 use thiserror::Error;
 
-use super::{BSplineError, BSplineSurface, TrimCurve, TrimLoop};
 use crate::Vec3;
+use crate::bspline::{BSplineError, BSplineSurface, TrimCurve, TrimLoop};
 
 /// Why a surface JSON file could not be read or written.
 #[derive(Debug, Error)]
@@ -36,8 +36,8 @@ pub enum SurfaceJsonError {
     Write {
         /// The file.
         path: PathBuf,
-        /// The error of [`crate::io::atomic_write`].
-        source: crate::io::IoError,
+        /// The error of [`super::atomic_write`].
+        source: super::IoError,
     },
     /// The text is not JSON (the message carries line and column).
     #[error("invalid JSON: {0}")]
@@ -424,10 +424,10 @@ pub fn write_surfaces_json(
     write_atomic(path.as_ref(), surfaces_to_json(surfaces).as_bytes())
 }
 
-/// Writes `bytes` through [`crate::io::atomic_write`] (temporary file in the
+/// Writes `bytes` through [`super::atomic_write`] (temporary file in the
 /// same directory, synced, then renamed; nothing is left behind on failure).
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SurfaceJsonError> {
-    crate::io::atomic_write(path, |w| w.write_all(bytes)).map_err(|e| SurfaceJsonError::Write {
+    super::atomic_write(path, |w| w.write_all(bytes)).map_err(|e| SurfaceJsonError::Write {
         path: path.to_path_buf(),
         source: e,
     })
@@ -436,7 +436,9 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SurfaceJsonError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bspline::tests::Rng;
+    use crate::bspline::TrimLoop;
+    use crate::bspline::tests::{Rng, torus};
+    use crate::bspline::trim_tests::circle_curve;
 
     fn random_surface(rng: &mut Rng, rational: bool) -> BSplineSurface {
         let (nu, nv) = (5, 4);
@@ -588,5 +590,32 @@ mod tests {
         // Round trip of a real file is bit-exact.
         let again = parse_surfaces_json(&surfaces_to_json(&surfaces)).unwrap();
         assert_eq!(again, surfaces);
+    }
+
+    /// Trims survive the JSON round trip bit for bit; untrimmed surfaces write
+    /// no `"trims"` key; malformed trims are errors naming the field.
+    #[test]
+    fn surface_json_trims_round_trip_and_errors() {
+        let s = torus(3.0, 1.0)
+            .with_trims(vec![
+                TrimLoop::polygon(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]).unwrap(),
+                TrimLoop {
+                    curves: vec![circle_curve([0.3, 0.6], 0.1 + 1e-17, false)],
+                },
+            ])
+            .unwrap();
+        let text = surface_to_json(&s);
+        let back = parse_surfaces_json(&text).unwrap();
+        assert_eq!(back.len(), 1);
+        assert_eq!(back[0], s);
+        assert_eq!(surface_to_json(&back[0]), text);
+        let plain = torus(3.0, 1.0);
+        assert!(!surface_to_json(&plain).contains("trims"));
+        let bad = text.replacen("\"degree\":2", "\"degree\":0", 1);
+        let e = parse_surfaces_json(&bad).unwrap_err().to_string();
+        assert!(e.contains("trims[1][0]") && e.contains("degree"), "{e}");
+        let empty = text.replacen("\"trims\":[", "\"trims\":[[],", 1);
+        let e = parse_surfaces_json(&empty).unwrap_err().to_string();
+        assert!(e.contains("trim loop 0"), "{e}");
     }
 }
