@@ -1004,3 +1004,212 @@ fn spring_defaults_keep_the_legs_and_horns_of_spot() {
     );
     assert!(rb.max_displacement > 2.0 * r.max_displacement, "{rb:?}");
 }
+
+/// FNV-1a over the bits of the positions and of the report.
+fn fingerprint(p: &[Vec3], r: &SmoothReport) -> u64 {
+    let mut h: u64 = 0xcbf29ce484222325;
+    let mut eat = |x: u64| {
+        for b in x.to_le_bytes() {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x100000001b3);
+        }
+    };
+    for q in p {
+        eat(q.x.to_bits());
+        eat(q.y.to_bits());
+        eat(q.z.to_bits());
+    }
+    eat(r.iterations as u64);
+    eat(r.volume_before.to_bits());
+    eat(r.volume_after.to_bits());
+    eat(r.max_displacement.to_bits());
+    eat(r.converged as u64);
+    eat(r.residual.map_or(u64::MAX, f64::to_bits));
+    h
+}
+
+/// The cases whose results were recorded before the smoothing family moved
+/// to the one algorithm shape (issue #17 item 1): (name, positions, report).
+fn recorded_cases() -> Vec<(&'static str, Vec<Vec3>, SmoothReport)> {
+    let sphere = noisy_sphere(1.0, 3, 0.02);
+    let caps = noisy_caps();
+    let cap = caps[1].2.clone();
+    let cap11 = caps[0].2.clone();
+    let every = |k: usize, n: usize| -> Vec<VertexId> {
+        (0..n as u32).step_by(k).map(VertexId).collect()
+    };
+    let mut out = Vec::new();
+    let mut run = |name: &'static str,
+                   mesh: &SurfaceMesh,
+                   f: &dyn Fn(&mut SurfaceMesh) -> SmoothReport| {
+        let mut m = mesh.clone();
+        let r = f(&mut m);
+        out.push((name, m.positions().to_vec(), r));
+    };
+    let ns = sphere.vertex_count();
+    run("laplace default", &sphere, &|m| {
+        laplace_smooth(m, &LaplaceOptions::default()).unwrap()
+    });
+    run("laplace cotangent volume", &sphere, &|m| {
+        let o = LaplaceOptions {
+            weights: LaplaceWeights::Cotangent,
+            lambda: 0.3,
+            iterations: 5,
+            constraints: Constraints {
+                preserve_volume: true,
+                fixed: every(29, ns),
+                ..Default::default()
+            },
+        };
+        laplace_smooth(m, &o).unwrap()
+    });
+    run("laplace edge-length hierarchical", &cap, &|m| {
+        let o = LaplaceOptions {
+            weights: LaplaceWeights::EdgeLength { exponent: -1.0 },
+            constraints: Constraints {
+                hierarchical_boundary: true,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        laplace_smooth(m, &o).unwrap()
+    });
+    run("taubin default", &sphere, &|m| {
+        taubin_smooth(m, &TaubinOptions::default()).unwrap().0
+    });
+    run("taubin fixed tangential", &sphere, &|m| {
+        let o = TaubinOptions {
+            weights: LaplaceWeights::EdgeLength { exponent: -1.0 },
+            lambda: Some(0.5),
+            iterations: 7,
+            constraints: Constraints {
+                fixed: every(13, ns),
+                tangential_only: true,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        taubin_smooth(m, &o).unwrap().0
+    });
+    run("taubin fix boundary", &cap, &|m| {
+        let o = TaubinOptions {
+            constraints: Constraints {
+                fix_boundary: true,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        taubin_smooth(m, &o).unwrap().0
+    });
+    run("implicit default", &sphere, &|m| {
+        implicit_smooth(m, &ImplicitOptions::default()).unwrap()
+    });
+    run("implicit hierarchical", &cap, &|m| {
+        let o = ImplicitOptions {
+            time_step: 2.0,
+            iterations: 3,
+            constraints: Constraints {
+                hierarchical_boundary: true,
+                ..Default::default()
+            },
+        };
+        implicit_smooth(m, &o).unwrap()
+    });
+    run("implicit fixed volume tangential", &sphere, &|m| {
+        let o = ImplicitOptions {
+            time_step: 0.5,
+            iterations: 2,
+            constraints: Constraints {
+                fixed: every(11, ns),
+                preserve_volume: true,
+                tangential_only: true,
+                ..Default::default()
+            },
+        };
+        implicit_smooth(m, &o).unwrap()
+    });
+    run("implicit fix boundary", &cap, &|m| {
+        let o = ImplicitOptions {
+            iterations: 2,
+            constraints: Constraints {
+                fix_boundary: true,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        implicit_smooth(m, &o).unwrap()
+    });
+    run("spring default", &cap, &|m| {
+        spring_smooth(m, &SpringOptions::default()).unwrap()
+    });
+    run("spring fixed normals", &sphere, &|m| {
+        let o = SpringOptions {
+            max_iterations: 5,
+            stall_ratio: None,
+            constraints: Constraints {
+                fixed: every(7, ns),
+                ..Default::default()
+            },
+            normals: vec![(VertexId(3), Vec3::new(0.0, 0.0, 2.0))],
+            ..Default::default()
+        };
+        spring_smooth(m, &o).unwrap()
+    });
+    run("schneider-kobbelt cap 11", &cap11, &|m| {
+        schneider_kobbelt(m, &SchneiderKobbeltOptions::default()).unwrap()
+    });
+    run("schneider-kobbelt sphere fixed", &sphere, &|m| {
+        let o = SchneiderKobbeltOptions {
+            max_iterations: 3,
+            constraints: Constraints {
+                fixed: every(17, ns),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        schneider_kobbelt(m, &o).unwrap()
+    });
+    run("schneider-kobbelt cap 21 rings 3", &cap, &|m| {
+        let o = SchneiderKobbeltOptions {
+            max_iterations: 4,
+            normal_fit_rings: Some(3),
+            ..Default::default()
+        };
+        schneider_kobbelt(m, &o).unwrap()
+    });
+    out
+}
+
+/// Results of [`recorded_cases`] before the change to the one shape:
+/// (name, fingerprint, Σx, Σy, Σz of the positions).
+const RECORDED: &[(&str, u64, f64, f64, f64)] = &[
+    ("laplace default", 0xf497c36cfdc92918, 6.161992773436875e-2, 3.9784356115752706e-2, 2.775938521387151e-1),
+    ("laplace cotangent volume", 0xc01048502125ddc7, 1.2939650847757733e-1, 3.222634200234065e-2, 2.4684654743148082e-1),
+    ("laplace edge-length hierarchical", 0x7b27d4b3df2c013e, 1.6031009831016962e-2, 1.3868624283080055e-2, 3.944740477220371e2),
+    ("taubin default", 0xdb2a5cc0604cadc1, 6.1328264877688055e-2, 4.005075379637102e-2, 2.7794609976447254e-1),
+    ("taubin fixed tangential", 0x829f255f4bf676d8, 3.85232052999932e-2, 4.742102842810142e-2, 2.6123724080893607e-1),
+    ("taubin fix boundary", 0xb715aa8e288abee2, 9.859280775780799e-3, 1.5833317688935367e-2, 3.9770274973917964e2),
+    ("implicit default", 0x4f81e0973976a8c6, 5.818842817073433e-2, 2.3259363588908732e-2, 3.1492906870199e-1),
+    ("implicit hierarchical", 0x4d9aeb9e17da4374, 2.2078608862427462e-2, 1.3792953581844847e-3, 3.86379568633023e2),
+    ("implicit fixed volume tangential", 0x9fa6f6463abaf50f, 6.785489949311596e-2, 3.301508753441329e-2, 3.0994836360006073e-1),
+    ("implicit fix boundary", 0x27f253c5e88a9ad4, 2.133298207316947e-2, 1.2421555141390428e-2, 3.935906048463014e2),
+    ("spring default", 0x1eb5604503719de1, -5.333224532519165e-2, -3.7077299905176275e-2, 3.969563189487948e2),
+    ("spring fixed normals", 0xd8ede9bab61d3e25, 1.4120173730826402e-1, 3.777003021944939e-1, 7.701638237186252e-1),
+    ("schneider-kobbelt cap 11", 0xc553bcbab393d4fe, 2.6052747395093445e-2, -7.42985948850361e-4, 1.0804106176822317e2),
+    ("schneider-kobbelt sphere fixed", 0x0c12b9ca1bb8ede0, -7.963944507579e-1, -7.238064340196545e-1, 4.796306681286556e-1),
+    ("schneider-kobbelt cap 21 rings 3", 0x967ce7d2f50d526c, -1.1552737848647276e-1, -6.756546989547019e-2, 3.976475822079271e2),
+];
+
+#[test]
+fn results_equal_those_recorded_before_the_one_shape() {
+    for (name, p, r) in recorded_cases() {
+        let s = p.iter().copied().sum::<Vec3>();
+        eprintln!(
+            "    ({name:?}, {:#018x}, {:e}, {:e}, {:e}),",
+            fingerprint(&p, &r),
+            s.x,
+            s.y,
+            s.z
+        );
+    }
+}
