@@ -228,88 +228,77 @@ fn smooth<'py>(
     let soup = soup_from(&v, &indices, &offsets)?;
     let method = method.to_string();
     let (p, report) = crate::compute(py, move || -> Res<_> {
-        let mut mesh = mesh_from(&soup)?;
+        let mesh = mesh_from(&soup)?;
         let fixed = fixed_vertices(fixed.as_deref().unwrap_or(&[]), mesh.vertex_count())?;
-        let constraints = Constraints {
-            fixed,
-            fix_boundary,
-            hierarchical_boundary,
-            preserve_volume,
-            tangential_only: tangential,
-        };
         // Δ_B H = 0 on a closed mesh with nothing fixed has no boundary data
-        let unanchored =
-            method == "schneider-kobbelt" && mesh.is_closed() && constraints.fixed.is_empty();
+        let unanchored = method == "schneider-kobbelt" && mesh.is_closed() && fixed.is_empty();
         let mut report = Report::new("smooth");
         let result = report.time(|| match method.as_str() {
             "laplace" => {
-                let o = LaplaceOptions {
-                    weights,
-                    lambda: lambda_.unwrap_or(0.5),
-                    iterations: iterations.unwrap_or(10),
-                    constraints,
-                };
-                laplace_smooth(&mut mesh, &o).map(|r| (r, None))
+                let o = LaplaceOptions::default()
+                    .weights(weights)
+                    .lambda(lambda_.unwrap_or(0.5))
+                    .iterations(iterations.unwrap_or(10))
+                    .fixed(fixed)
+                    .fix_boundary(fix_boundary)
+                    .hierarchical_boundary(hierarchical_boundary)
+                    .preserve_volume(preserve_volume)
+                    .tangential_only(tangential);
+                laplace_smooth(&mesh, &o)
             }
             "taubin" => {
-                let o = TaubinOptions {
-                    weights,
-                    lambda: lambda_,
-                    mu,
-                    pass_band,
-                    iterations: iterations.unwrap_or(10),
-                    constraints,
-                };
-                taubin_smooth(&mut mesh, &o).map(|(r, p)| (r, Some(p)))
+                let o = TaubinOptions::default()
+                    .weights(weights)
+                    .lambda(lambda_)
+                    .mu(mu)
+                    .pass_band(pass_band)
+                    .iterations(iterations.unwrap_or(10))
+                    .fixed(fixed)
+                    .fix_boundary(fix_boundary)
+                    .hierarchical_boundary(hierarchical_boundary)
+                    .preserve_volume(preserve_volume)
+                    .tangential_only(tangential);
+                taubin_smooth(&mesh, &o)
             }
             "implicit" => {
-                let o = ImplicitOptions {
-                    time_step,
-                    iterations: iterations.unwrap_or(1),
-                    constraints,
-                };
-                implicit_smooth(&mut mesh, &o).map(|r| (r, None))
+                let o = ImplicitOptions::default()
+                    .time_step(time_step)
+                    .iterations(iterations.unwrap_or(1))
+                    .fixed(fixed)
+                    .fix_boundary(fix_boundary)
+                    .hierarchical_boundary(hierarchical_boundary)
+                    .preserve_volume(preserve_volume)
+                    .tangential_only(tangential);
+                implicit_smooth(&mesh, &o)
             }
             "spring" => {
                 let d = SpringOptions::default();
-                let o = SpringOptions {
-                    epsilon: epsilon.unwrap_or(d.epsilon),
-                    max_iterations: iterations.unwrap_or(d.max_iterations),
-                    constraints,
-                    ..d
-                };
-                spring_smooth(&mut mesh, &o).map(|r| (r, None))
+                let o = SpringOptions::default()
+                    .epsilon(epsilon.unwrap_or(d.epsilon))
+                    .max_iterations(iterations.unwrap_or(d.max_iterations))
+                    .fixed(fixed);
+                spring_smooth(&mesh, &o)
             }
             _ => {
                 let d = SchneiderKobbeltOptions::default();
-                let o = SchneiderKobbeltOptions {
-                    epsilon: epsilon.unwrap_or(d.epsilon),
-                    max_iterations: iterations.unwrap_or(d.max_iterations),
-                    constraints,
-                    ..d
-                };
-                schneider_kobbelt(&mut mesh, &o).map(|r| (r, None))
+                let o = SchneiderKobbeltOptions::default()
+                    .epsilon(epsilon.unwrap_or(d.epsilon))
+                    .max_iterations(iterations.unwrap_or(d.max_iterations))
+                    .fixed(fixed);
+                schneider_kobbelt(&mesh, &o)
             }
         });
-        let (r, params) = result.map_err(|e| match e {
+        let out = result.map_err(|e| match e {
             SmoothError::Solve(_) => Failure::computation(e.to_string()),
             other => Failure::bad(other.to_string()),
         })?;
+        let r = &out.report;
         report.set("method", &method);
         report.set("vertices", mesh.vertex_count());
-        report.set("iterations", r.iterations);
-        report.set("converged", r.converged);
-        report.set("volume_before", r.volume_before);
-        report.set("volume_after", r.volume_after);
-        report.set("max_displacement", r.max_displacement);
-        if let Some(res) = r.residual {
-            report.set("residual", res);
-        }
-        if let Some(p) = params {
-            report.set("lambda", p.lambda);
-            report.set("mu", p.mu);
-            report.set("pass_band", p.pass_band);
-            report.set("transfer", p.transfer_samples());
+        if let Ok(serde_json::Value::Object(keys)) = serde_json::to_value(r) {
+            for (key, value) in keys {
+                report.set(&key, value);
+            }
         }
         if !r.converged {
             report.warn(format!(
@@ -324,7 +313,10 @@ fn smooth<'py>(
                  features such as ears or legs; fix the vertices that must stay (--fixed) to keep them",
             );
         }
-        Ok((output_positions(&mesh), report.to_json()))
+        Ok((
+            mesh.original_values(&out.positions).to_vec(),
+            report.to_json(),
+        ))
     })?;
     Ok((positions_array(py, &p), report))
 }

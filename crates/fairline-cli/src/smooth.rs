@@ -9,9 +9,9 @@ use fairline::mesh::{SurfaceMesh, VertexId};
 use fairline::picture::{Picture, mesh_picture};
 use fairline::render::{RenderOptions, side_by_side};
 use fairline::smooth::{
-    Constraints, ImplicitOptions, LaplaceOptions, SchneiderKobbeltOptions, SmoothError,
-    SmoothReport, SpringOptions, TaubinOptions, implicit_smooth, laplace_smooth, schneider_kobbelt,
-    spring_smooth, taubin_smooth,
+    ImplicitOptions, LaplaceOptions, SchneiderKobbeltOptions, SmoothError, SpringOptions,
+    TaubinOptions, implicit_smooth, laplace_smooth, schneider_kobbelt, spring_smooth,
+    taubin_smooth,
 };
 use std::path::{Path, PathBuf};
 
@@ -195,13 +195,6 @@ pub fn run(args: Args) -> Result<()> {
         Some(p) => read_fixed(p, mesh.vertex_count())?,
         None => Vec::new(),
     };
-    let constraints = Constraints {
-        fixed,
-        fix_boundary: args.fix_boundary,
-        hierarchical_boundary: args.hierarchical_boundary,
-        preserve_volume: args.preserve_volume,
-        tangential_only: args.tangential,
-    };
     let weights = match args.weights {
         Weights::Uniform => LaplaceWeights::Uniform,
         Weights::Edge => LaplaceWeights::EdgeLength {
@@ -211,84 +204,80 @@ pub fn run(args: Args) -> Result<()> {
     };
     // Δ_B H = 0 on a closed mesh with nothing fixed has no boundary data:
     // its solutions are the surfaces of constant mean curvature
-    let unanchored = matches!(args.method, Method::SchneiderKobbelt)
-        && mesh.is_closed()
-        && constraints.fixed.is_empty();
-    // the input is kept only for the before/after picture
-    let input = args.png.is_some().then(|| mesh.clone());
+    let unanchored =
+        matches!(args.method, Method::SchneiderKobbelt) && mesh.is_closed() && fixed.is_empty();
     let mut report = Report::new("smooth");
     let bar = spinner("smoothing");
     let method = args.method;
-    let result: Result<(SmoothReport, Option<fairline::smooth::TaubinParameters>), SmoothError> =
-        report.time(|| match method {
-            Method::Laplace => {
-                let o = LaplaceOptions {
-                    weights,
-                    lambda: args.lambda.unwrap_or(0.5),
-                    iterations: args.iterations.unwrap_or(10),
-                    constraints,
-                };
-                laplace_smooth(&mut mesh, &o).map(|r| (r, None))
-            }
-            Method::Taubin => {
-                let o = TaubinOptions {
-                    weights,
-                    lambda: args.lambda,
-                    mu: args.mu,
-                    pass_band: args.pass_band,
-                    iterations: args.iterations.unwrap_or(10),
-                    constraints,
-                };
-                taubin_smooth(&mut mesh, &o).map(|(r, p)| (r, Some(p)))
-            }
-            Method::Implicit => {
-                let o = ImplicitOptions {
-                    time_step: args.time_step,
-                    iterations: args.iterations.unwrap_or(1),
-                    constraints,
-                };
-                implicit_smooth(&mut mesh, &o).map(|r| (r, None))
-            }
-            Method::Spring => {
-                let d = SpringOptions::default();
-                let o = SpringOptions {
-                    epsilon: args.epsilon.unwrap_or(d.epsilon),
-                    max_iterations: args.iterations.unwrap_or(d.max_iterations),
-                    constraints,
-                    ..d
-                };
-                spring_smooth(&mut mesh, &o).map(|r| (r, None))
-            }
-            Method::SchneiderKobbelt => {
-                let d = SchneiderKobbeltOptions::default();
-                let o = SchneiderKobbeltOptions {
-                    epsilon: args.epsilon.unwrap_or(d.epsilon),
-                    max_iterations: args.iterations.unwrap_or(d.max_iterations),
-                    constraints,
-                    ..d
-                };
-                schneider_kobbelt(&mut mesh, &o).map(|r| (r, None))
-            }
-        });
+    let result = report.time(|| match method {
+        Method::Laplace => {
+            let o = LaplaceOptions::default()
+                .weights(weights)
+                .lambda(args.lambda.unwrap_or(0.5))
+                .iterations(args.iterations.unwrap_or(10))
+                .fixed(fixed)
+                .fix_boundary(args.fix_boundary)
+                .hierarchical_boundary(args.hierarchical_boundary)
+                .preserve_volume(args.preserve_volume)
+                .tangential_only(args.tangential);
+            laplace_smooth(&mesh, &o)
+        }
+        Method::Taubin => {
+            let o = TaubinOptions::default()
+                .weights(weights)
+                .lambda(args.lambda)
+                .mu(args.mu)
+                .pass_band(args.pass_band)
+                .iterations(args.iterations.unwrap_or(10))
+                .fixed(fixed)
+                .fix_boundary(args.fix_boundary)
+                .hierarchical_boundary(args.hierarchical_boundary)
+                .preserve_volume(args.preserve_volume)
+                .tangential_only(args.tangential);
+            taubin_smooth(&mesh, &o)
+        }
+        Method::Implicit => {
+            let o = ImplicitOptions::default()
+                .time_step(args.time_step)
+                .iterations(args.iterations.unwrap_or(1))
+                .fixed(fixed)
+                .fix_boundary(args.fix_boundary)
+                .hierarchical_boundary(args.hierarchical_boundary)
+                .preserve_volume(args.preserve_volume)
+                .tangential_only(args.tangential);
+            implicit_smooth(&mesh, &o)
+        }
+        Method::Spring => {
+            let d = SpringOptions::default();
+            let o = SpringOptions::default()
+                .epsilon(args.epsilon.unwrap_or(d.epsilon))
+                .max_iterations(args.iterations.unwrap_or(d.max_iterations))
+                .fixed(fixed);
+            spring_smooth(&mesh, &o)
+        }
+        Method::SchneiderKobbelt => {
+            let d = SchneiderKobbeltOptions::default();
+            let o = SchneiderKobbeltOptions::default()
+                .epsilon(args.epsilon.unwrap_or(d.epsilon))
+                .max_iterations(args.iterations.unwrap_or(d.max_iterations))
+                .fixed(fixed);
+            schneider_kobbelt(&mesh, &o)
+        }
+    });
     bar.finish_and_clear();
-    let (r, params) = result.map_err(smooth_error)?;
+    let out = result.map_err(smooth_error)?;
+    let r = &out.report;
     let name = crate::output::option_value(&args.method);
     report.set("method", &name);
     report.set("vertices", mesh.vertex_count());
-    report.set("iterations", r.iterations);
-    report.set("converged", r.converged);
-    report.set("volume_before", r.volume_before);
-    report.set("volume_after", r.volume_after);
-    report.set("max_displacement", r.max_displacement);
-    if let Some(res) = r.residual {
-        report.set("residual", res);
+    if let Ok(serde_json::Value::Object(keys)) = serde_json::to_value(r) {
+        for (key, value) in keys {
+            report.set(&key, value);
+        }
     }
-    if let Some(p) = params {
-        report.set("lambda", p.lambda);
-        report.set("mu", p.mu);
-        report.set("pass_band", p.pass_band);
-        report.set("transfer", p.transfer_samples());
-    }
+    // the input is kept only for the before/after picture
+    let input = args.png.is_some().then(|| mesh.clone());
+    mesh.set_positions(out.positions)?;
     fairline::io::write_mesh(&args.output, &mesh)?;
     if let (Some(png), Some(input)) = (&args.png, &input) {
         before_after(input, &mesh, ["input", name.as_str()], false, png)?;
@@ -475,9 +464,9 @@ pub fn demo_section(demo: &crate::demo::Demo) -> Result<crate::demo::Section> {
     use fairline::fair::structure_energy;
     let (truth, zz) = zigzag_freeform();
     let mut lap = zz.clone();
-    laplace_smooth(&mut lap, &LaplaceOptions::default())?;
+    lap.set_positions(laplace_smooth(&zz, &LaplaceOptions::default())?.positions)?;
     let mut tau = zz.clone();
-    taubin_smooth(&mut tau, &TaubinOptions::default())?;
+    tau.set_positions(taubin_smooth(&zz, &TaubinOptions::default())?.positions)?;
     let mut ours = zz.clone();
     fair_structure_lines(&mut ours, &QuadFairOptions::default())?;
     let dist = |m: &SurfaceMesh| {

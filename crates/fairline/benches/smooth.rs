@@ -14,6 +14,67 @@ use fairline::Vec3;
 use fairline::fair::{QuadFairOptions, fair_structure_lines};
 use fairline::smooth::{ImplicitOptions, TaubinOptions, implicit_smooth, taubin_smooth};
 
+/// One default implicit step (nothing fixed) as `smooth::implicit_smooth`
+/// assembled it before the one constrained solve (session 18): the lower
+/// pattern straight from the one-rings, values filled per column,
+/// nested-dissection ordering from the positions, sequential LLᵀ. Kept here
+/// only to compare the two in one process (task `implicit-ab`).
+fn former_implicit_step(mesh: &fairline::SurfaceMesh) -> Vec<Vec3> {
+    use fairline::geom::{self, LaplaceWeights};
+    use fairline::solve::{CholeskyOptions, CholeskyOrdering, CholeskySolver, nested_dissection};
+    use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+    let n = mesh.vertex_count();
+    let p = mesh.positions();
+    let e = geom::mean_edge_length(mesh);
+    let t = e * e;
+    let mut col_ptr = vec![0usize];
+    let mut row_idx = Vec::new();
+    for v in mesh.vertices() {
+        row_idx.push(v.idx());
+        let start = row_idx.len();
+        row_idx.extend(
+            mesh.outgoing(v)
+                .map(|h| mesh.to_vertex(h).idx())
+                .filter(|&r| r > v.idx()),
+        );
+        row_idx[start..].sort_unstable();
+        col_ptr.push(row_idx.len());
+    }
+    let pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+    let order = nested_dissection(pattern.as_ref(), p).expect("ordering");
+    let opts = CholeskyOptions {
+        ordering: CholeskyOrdering::Custom(order),
+        parallel: false,
+    };
+    let mut solver = CholeskySolver::analyse(pattern.as_ref(), &opts).expect("analyse");
+    let hw = geom::halfedge_weights(mesh, LaplaceWeights::Cotangent);
+    let mass = geom::mixed_vertex_areas(mesh);
+    let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
+    let mut values = vec![0.0; ri.len()];
+    let mut rhs = Vec::with_capacity(n);
+    for v in mesh.vertices() {
+        let c = v.idx();
+        let mut diag = mass[c];
+        for h in mesh.outgoing(v) {
+            let w = hw[h.idx()];
+            diag += t * w;
+            let r = mesh.to_vertex(h).idx();
+            if r > c
+                && let Ok(k) = ri[cp[c] + 1..cp[c + 1]].binary_search(&r)
+            {
+                values[cp[c] + 1 + k] -= t * w;
+            }
+        }
+        values[cp[c]] = diag;
+        rhs.push(mass[c] * p[c]);
+    }
+    solver
+        .refactor(SparseColMatRef::new(pattern.as_ref(), &values))
+        .expect("factor");
+    solver.solve_points(&mut rhs).expect("solve");
+    rhs
+}
+
 /// Whether `task` is selected by `FAIRLINE_BENCH_TASKS` (all by default).
 fn wanted(task: &str) -> bool {
     std::env::var("FAIRLINE_BENCH_TASKS")
@@ -28,8 +89,7 @@ fn main() {
         let mesh = common::test_surface(n);
         if wanted("taubin") {
             let t = common::median_secs(runs, || {
-                let mut m = mesh.clone();
-                taubin_smooth(&mut m, &TaubinOptions::default()).expect("taubin")
+                taubin_smooth(&mesh, &TaubinOptions::default()).expect("taubin")
             });
             println!(
                 "{:>10} {:>28} {:>10.3}",
@@ -38,12 +98,40 @@ fn main() {
                 t
             );
         }
+        if wanted("implicit-ab") {
+            // the one constrained solve against the former assembly, runs
+            // interleaved so that both see the same load
+            let o = ImplicitOptions::default();
+            let (mut new, mut old) = (Vec::new(), Vec::new());
+            let mut diff = 0.0f64;
+            for _ in 0..runs {
+                let t = std::time::Instant::now();
+                let a = implicit_smooth(&mesh, &o).expect("implicit");
+                new.push(t.elapsed().as_secs_f64());
+                let t = std::time::Instant::now();
+                let b = former_implicit_step(&mesh);
+                old.push(t.elapsed().as_secs_f64());
+                for (p, q) in a.positions.iter().zip(&b) {
+                    diff = diff.max(p.distance(*q));
+                }
+            }
+            new.sort_by(|a, b| a.total_cmp(b));
+            old.sort_by(|a, b| a.total_cmp(b));
+            println!(
+                "{:>10} {:>28} {:>10.3}   (former assembly {:.3} s, max difference {:.2e} = {:.2e} mean edges)",
+                mesh.vertex_count(),
+                "implicit 1 step (one solve)",
+                new[new.len() / 2],
+                old[old.len() / 2],
+                diff,
+                diff / fairline::geom::mean_edge_length(&mesh)
+            );
+        }
         if wanted("implicit") {
             let mut cpu = Vec::new();
             let t = common::median_secs(runs, || {
-                let mut m = mesh.clone();
                 let c0 = common::cpu_ns();
-                let r = implicit_smooth(&mut m, &ImplicitOptions::default()).expect("implicit");
+                let r = implicit_smooth(&mesh, &ImplicitOptions::default()).expect("implicit");
                 cpu.push((common::cpu_ns() - c0) as f64 * 1e-9);
                 r
             });

@@ -9,6 +9,66 @@
 //! and an options struct and returns a result plus a report. Data flows one
 //! way: [`io`] → [`mesh`] → [`geom`] → algorithms → [`io`] / [`render`].
 //!
+//! ## The one shape of every algorithm
+//!
+//! An algorithm is a function of the mesh (by reference: the input is never
+//! modified) and an options struct, returning `Result<`[`Output`]`<Report>,
+//! Error>`: the new vertex positions and a report that derives
+//! `serde::Serialize` (its keys are those of the CLI's `--report` JSON).
+//! Options structs implement `Default`, have a builder setter for every
+//! field and are `#[non_exhaustive]`, so build them with
+//! `Options::default().field(value)`. Fixed vertices are always
+//! `fixed: Vec<VertexId>`, regions `region: Vec<FaceId>`. A [`Control`] in
+//! the options receives [`Progress`] once per iteration and stops the run
+//! with the error type's `Cancelled` variant once its cancel flag is raised
+//! (see [`control`]).
+//!
+//! ```
+//! use fairline::smooth::{SmoothError, TaubinOptions, taubin_smooth};
+//! use fairline::{Control, VertexId, shapes};
+//! use std::sync::Arc;
+//! use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+//!
+//! // a noisy sphere, built in code
+//! let mut mesh = shapes::icosphere(1.0, 3);
+//! for (i, p) in mesh.positions_mut().iter_mut().enumerate() {
+//!     *p *= 1.0 + 0.01 * ((i * 7919 % 13) as f64 / 6.0 - 1.0);
+//! }
+//!
+//! // Taubin λ|μ smoothing, 20 iterations, vertex 0 held where it is
+//! let options = TaubinOptions::default()
+//!     .iterations(20)
+//!     .fixed(vec![VertexId(0)]);
+//! let out = taubin_smooth(&mesh, &options)?;
+//! assert_eq!(out.positions.len(), mesh.vertex_count());
+//! assert_eq!(out.positions[0], mesh.positions()[0]);
+//! assert_eq!(out.report.iterations, 20);
+//! let shrink = out.report.volume_after / out.report.volume_before;
+//! assert!((shrink - 1.0).abs() < 0.01, "Taubin barely shrinks: {shrink}");
+//! // the report is the JSON of `fairline smooth --report`
+//! let json = serde_json::to_value(&out.report).unwrap();
+//! assert_eq!(json["iterations"], 20);
+//! mesh.set_positions(out.positions)?; // keep the result, if wanted
+//!
+//! // watch the run, and stop it from another thread through the flag
+//! let steps = Arc::new(AtomicU64::new(0));
+//! let seen = Arc::clone(&steps);
+//! let stop = Arc::new(AtomicBool::new(false));
+//! let flag = Arc::clone(&stop);
+//! let control = Control::new()
+//!     .cancel_flag(Arc::clone(&stop))
+//!     .on_progress(move |p| {
+//!         seen.store(p.done, Ordering::Relaxed);
+//!         if p.done == 5 {
+//!             flag.store(true, Ordering::Relaxed); // e.g. the user pressed Stop
+//!         }
+//!     });
+//! let result = taubin_smooth(&mesh, &options.control(control));
+//! assert!(matches!(result, Err(SmoothError::Cancelled(_))));
+//! assert_eq!(steps.load(Ordering::Relaxed), 5);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
 //! Conventions: f64 everywhere; faces are oriented counter-clockwise seen
 //! from outside, so normals point outward and a sphere of radius r has
 //! principal curvatures k1 = k2 = +1/r and mean curvature H = +1/r.

@@ -922,15 +922,11 @@ fn run_method(
         }
         "smooth" => {
             use fairline::smooth::{
-                Constraints, ImplicitOptions, LaplaceOptions, SchneiderKobbeltOptions,
-                SpringOptions, TaubinOptions, implicit_smooth, laplace_smooth, schneider_kobbelt,
-                spring_smooth, taubin_smooth,
+                ImplicitOptions, LaplaceOptions, SchneiderKobbeltOptions, SpringOptions,
+                TaubinOptions, implicit_smooth, laplace_smooth, schneider_kobbelt, spring_smooth,
+                taubin_smooth,
             };
-            let mut m = mesh.clone();
-            let constraints = Constraints {
-                fixed: fixed_outside(mesh),
-                ..Constraints::default()
-            };
+            let fixed = fixed_outside(mesh);
             let (weights, wname) = match o.weights.as_deref().unwrap_or("cotan") {
                 "uniform" => (LaplaceWeights::Uniform, "uniform"),
                 "cotan" => (LaplaceWeights::Cotangent, "cotan"),
@@ -938,59 +934,42 @@ fn run_method(
             };
             let method = o.method.as_deref().unwrap_or("taubin").to_string();
             let iterations = o.iterations;
-            let r = match method.as_str() {
+            let smoothed = match method.as_str() {
                 "laplace" => laplace_smooth(
-                    &mut m,
-                    &LaplaceOptions {
-                        weights,
-                        lambda: o.lambda.unwrap_or(0.5),
-                        iterations: iterations.unwrap_or(10),
-                        constraints,
-                    },
+                    mesh,
+                    &LaplaceOptions::default()
+                        .weights(weights)
+                        .lambda(o.lambda.unwrap_or(0.5))
+                        .iterations(iterations.unwrap_or(10))
+                        .fixed(fixed),
                 ),
                 "taubin" => taubin_smooth(
-                    &mut m,
-                    &TaubinOptions {
-                        weights,
-                        iterations: iterations.unwrap_or(10),
-                        constraints,
-                        ..TaubinOptions::default()
-                    },
-                )
-                .map(|(r, _)| r),
+                    mesh,
+                    &TaubinOptions::default()
+                        .weights(weights)
+                        .iterations(iterations.unwrap_or(10))
+                        .fixed(fixed),
+                ),
                 "implicit" => implicit_smooth(
-                    &mut m,
-                    &ImplicitOptions {
-                        iterations: iterations.unwrap_or(1),
-                        constraints,
-                        ..ImplicitOptions::default()
-                    },
+                    mesh,
+                    &ImplicitOptions::default()
+                        .iterations(iterations.unwrap_or(1))
+                        .fixed(fixed),
                 ),
                 "spring" => {
                     let d = SpringOptions::default();
-                    spring_smooth(
-                        &mut m,
-                        &SpringOptions {
-                            max_iterations: iterations.unwrap_or(d.max_iterations),
-                            constraints,
-                            ..d
-                        },
-                    )
+                    let n = iterations.unwrap_or(d.max_iterations);
+                    spring_smooth(mesh, &d.max_iterations(n).fixed(fixed))
                 }
                 "schneider-kobbelt" => {
                     let d = SchneiderKobbeltOptions::default();
-                    schneider_kobbelt(
-                        &mut m,
-                        &SchneiderKobbeltOptions {
-                            max_iterations: iterations.unwrap_or(d.max_iterations),
-                            constraints,
-                            ..d
-                        },
-                    )
+                    let n = iterations.unwrap_or(d.max_iterations);
+                    schneider_kobbelt(mesh, &d.max_iterations(n).fixed(fixed))
                 }
                 other => return Err(format!("unknown smoothing method `{other}`")),
             }
             .map_err(|e| e.to_string())?;
+            let r = &smoothed.report;
             let mut cmd = format!("fairline smooth {file} --method {method}");
             if matches!(method.as_str(), "laplace" | "taubin") {
                 cmd.push_str(&format!(" --weights {wname}"));
@@ -1006,7 +985,7 @@ fn run_method(
             cmd.push_str(&format!("{fixed_arg} -o {out}"));
             Ok(Outcome {
                 surfaces: None,
-                positions: m.positions().to_vec(),
+                positions: smoothed.positions,
                 report: json!({
                     "command": "smooth",
                     "method": method,

@@ -1,6 +1,6 @@
 //! Face areas and vertex areas (barycentric and mixed Voronoi).
 
-use super::normals::face_area_vector;
+use super::normals::{face_area_vector, face_area_vector_at};
 use crate::Vec3;
 use crate::mesh::{FaceId, HalfedgeId, SurfaceMesh, VertexId};
 use rayon::prelude::*;
@@ -39,15 +39,14 @@ pub fn barycentric_vertex_areas(mesh: &SurfaceMesh) -> Vec<f64> {
 /// triangle. Polygons that are not triangles give 1/n of their area per
 /// corner; boundary halfedges and degenerate triangles give 0.
 #[inline]
-fn mixed_corner_area(mesh: &SurfaceMesh, h: HalfedgeId) -> f64 {
+fn mixed_corner_area(mesh: &SurfaceMesh, p: &[Vec3], h: HalfedgeId) -> f64 {
     let Some(f) = mesh.face(h) else { return 0.0 };
     let h1 = mesh.next(h);
     let h2 = mesh.next(h1);
     if mesh.next(h2) != h {
         let n = mesh.face_size(f) as f64;
-        return face_area_vector(mesh, f).length() / n;
+        return face_area_vector_at(mesh, p, f).length() / n;
     }
-    let p = mesh.positions();
     let pp = p[mesh.from_vertex(h).idx()];
     let q = p[mesh.to_vertex(h).idx()];
     let r = p[mesh.to_vertex(h1).idx()];
@@ -81,7 +80,11 @@ pub(crate) fn corner_area(p: Vec3, q: Vec3, r: Vec3) -> f64 {
 /// corners at `triangle(f)[0..3]` (for polygons, 1/n of the area at each of
 /// the first three corners — use [`mixed_corner_areas`] for polygons).
 pub(crate) fn triangle_corner_areas(mesh: &SurfaceMesh) -> Vec<[f64; 3]> {
-    let p = mesh.positions();
+    triangle_corner_areas_at(mesh, mesh.positions())
+}
+
+/// [`triangle_corner_areas`] with the vertices at `p`.
+fn triangle_corner_areas_at(mesh: &SurfaceMesh, p: &[Vec3]) -> Vec<[f64; 3]> {
     (0..mesh.face_count() as u32)
         .into_par_iter()
         .map(|f| {
@@ -101,7 +104,7 @@ pub(crate) fn triangle_corner_areas(mesh: &SurfaceMesh) -> Vec<[f64; 3]> {
 pub fn mixed_corner_areas(mesh: &SurfaceMesh) -> Vec<f64> {
     (0..mesh.halfedge_count() as u32)
         .into_par_iter()
-        .map(|h| mixed_corner_area(mesh, HalfedgeId(h)))
+        .map(|h| mixed_corner_area(mesh, mesh.positions(), HalfedgeId(h)))
         .collect()
 }
 
@@ -110,17 +113,24 @@ pub fn mixed_corner_areas(mesh: &SurfaceMesh) -> Vec<f64> {
 /// never negative. Triangle corners are computed per face in parallel and
 /// summed per vertex in face order (deterministic).
 pub fn mixed_vertex_areas(mesh: &SurfaceMesh) -> Vec<f64> {
+    mixed_vertex_areas_at(mesh, mesh.positions())
+}
+
+/// [`mixed_vertex_areas`] with the vertices at `positions` (one per vertex;
+/// a geometry view over the mesh's connectivity, so a trial shape needs no
+/// copy of the mesh).
+pub fn mixed_vertex_areas_at(mesh: &SurfaceMesh, positions: &[Vec3]) -> Vec<f64> {
     if !mesh.is_triangle_mesh() {
         return (0..mesh.vertex_count() as u32)
             .into_par_iter()
             .map(|v| {
                 mesh.outgoing(VertexId(v))
-                    .map(|h| mixed_corner_area(mesh, h))
+                    .map(|h| mixed_corner_area(mesh, positions, h))
                     .sum()
             })
             .collect();
     }
-    let corners = triangle_corner_areas(mesh);
+    let corners = triangle_corner_areas_at(mesh, positions);
     let mut out = vec![0.0; mesh.vertex_count()];
     for (f, ca) in corners.iter().enumerate() {
         let t = mesh.triangle(FaceId(f as u32));

@@ -7,6 +7,7 @@
 //! Laplace–Beltrami operator.
 
 use super::COTANGENT_LIMIT;
+use crate::Vec3;
 use crate::mesh::{HalfedgeId, SurfaceMesh, VertexId};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use rayon::prelude::*;
@@ -32,7 +33,14 @@ pub enum LaplaceWeights {
 /// non-triangle faces and degenerate triangles give 0; magnitudes are clamped
 /// to [`COTANGENT_LIMIT`]. Computed as cot θ = (a·b) / |a × b|.
 pub fn cotangents(mesh: &SurfaceMesh) -> Vec<f64> {
-    let p = mesh.positions();
+    cotangents_at(mesh, mesh.positions())
+}
+
+/// [`cotangents`] with the vertices at `positions` (one per vertex) instead
+/// of the mesh's own: a geometry view over the mesh's connectivity, so a
+/// trial shape needs no copy of the mesh.
+pub fn cotangents_at(mesh: &SurfaceMesh, positions: &[Vec3]) -> Vec<f64> {
+    let p = positions;
     (0..mesh.halfedge_count() as u32)
         .into_par_iter()
         .map(|h| {
@@ -68,10 +76,20 @@ pub(crate) fn cotangent(u: glam::DVec3, v: glam::DVec3) -> f64 {
 /// i = from_vertex(h), j = to_vertex(h). Both halfedges of an edge carry the
 /// same weight, so the Laplacian is symmetric.
 pub fn halfedge_weights(mesh: &SurfaceMesh, weights: LaplaceWeights) -> Vec<f64> {
+    halfedge_weights_at(mesh, mesh.positions(), weights)
+}
+
+/// [`halfedge_weights`] with the vertices at `positions` (one per vertex;
+/// a geometry view, see [`cotangents_at`]).
+pub fn halfedge_weights_at(
+    mesh: &SurfaceMesh,
+    positions: &[Vec3],
+    weights: LaplaceWeights,
+) -> Vec<f64> {
     match weights {
         LaplaceWeights::Uniform => vec![1.0; mesh.halfedge_count()],
         LaplaceWeights::EdgeLength { exponent } => {
-            let p = mesh.positions();
+            let p = positions;
             (0..mesh.halfedge_count() as u32)
                 .into_par_iter()
                 .map(|h| {
@@ -87,7 +105,7 @@ pub fn halfedge_weights(mesh: &SurfaceMesh, weights: LaplaceWeights) -> Vec<f64>
                 .collect()
         }
         LaplaceWeights::Cotangent => {
-            let cot = cotangents(mesh);
+            let cot = cotangents_at(mesh, positions);
             (0..mesh.halfedge_count())
                 .into_par_iter()
                 .map(|h| 0.5 * (cot[h] + cot[h ^ 1]))

@@ -151,8 +151,15 @@ pub fn surface_area(mesh: &SurfaceMesh) -> f64 {
 /// outward orientation. For an open mesh this is the volume of the cone
 /// from the centroid and has no intrinsic meaning.
 pub fn volume(mesh: &SurfaceMesh) -> f64 {
-    let p = mesh.positions();
-    if p.is_empty() {
+    volume_at(mesh, mesh.positions())
+}
+
+/// [`volume`] of the mesh's faces with the vertices at `positions` (one per
+/// vertex; a geometry view, so a trial shape needs no copy of the mesh).
+/// 0 when the count does not match the mesh.
+pub fn volume_at(mesh: &SurfaceMesh, positions: &[Vec3]) -> f64 {
+    let p = positions;
+    if p.is_empty() || p.len() != mesh.vertex_count() {
         return 0.0;
     }
     let c = p.iter().copied().sum::<Vec3>() / p.len() as f64;

@@ -22,7 +22,11 @@ pub fn triangle_normal_area(a: Vec3, b: Vec3, c: Vec3) -> (Vec3, f64) {
 /// normal for planar polygons (the cross product for triangles).
 #[inline]
 pub(crate) fn face_area_vector(mesh: &SurfaceMesh, f: FaceId) -> Vec3 {
-    let p = mesh.positions();
+    face_area_vector_at(mesh, mesh.positions(), f)
+}
+
+/// [`face_area_vector`] with the vertices at `p` (one per vertex).
+pub(crate) fn face_area_vector_at(mesh: &SurfaceMesh, p: &[Vec3], f: FaceId) -> Vec3 {
     let h0 = mesh.face_halfedge(f);
     let h1 = mesh.next(h0);
     let h2 = mesh.next(h1);

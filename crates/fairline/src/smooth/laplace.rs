@@ -8,17 +8,18 @@
 
 use super::{
     Constraints, Neighbourhoods, Role, SmoothError, SmoothReport, max_distance, restore_volume,
-    roles,
+    roles, setters,
 };
-use crate::Vec3;
 use crate::geom::{self, LaplaceWeights};
-use crate::mesh::SurfaceMesh;
-use crate::solve::{CholeskyOptions, CholeskyOrdering, CholeskySolver, nested_dissection};
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use crate::mesh::{SurfaceMesh, VertexId};
+use crate::{Control, Output, Vec3};
+use crate::solve::{ConstrainedOptions, ConstrainedSolver, sparse_from_triplets};
+use faer::sparse::SparseColMat;
 use rayon::prelude::*;
 
 /// Options of [`laplace_smooth`].
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct LaplaceOptions {
     /// Edge weights: uniform, edge length to a power (exponent −1 by
     /// default, §3.2.5) or cotangent (Desbrun; triangle meshes only).
@@ -28,8 +29,26 @@ pub struct LaplaceOptions {
     pub lambda: f64,
     /// Number of steps.
     pub iterations: usize,
-    /// Constraints (§3.2.4).
-    pub constraints: Constraints,
+    /// Vertices that never move (empty neighbourhoods, Taubin's
+    /// interpolatory constraint, Grüner §3.2.4); bit-identical in the output.
+    pub fixed: Vec<VertexId>,
+    /// Keep every boundary vertex fixed.
+    pub fix_boundary: bool,
+    /// Hierarchical labels: boundary vertices get the higher label, so the
+    /// boundary is smoothed as a set of curves (each boundary vertex sees
+    /// only its two neighbours along the boundary polyline) and the interior
+    /// follows. Ignored when `fix_boundary` is set.
+    pub hierarchical_boundary: bool,
+    /// Rescale about the centroid after every step so the enclosed volume
+    /// equals the input volume (Desbrun et al., β = (V0/Vn)^(1/3)); closed
+    /// meshes only. With fixed vertices only the free vertices are scaled
+    /// (the scale is then found by a secant iteration). Relative error ≤ 1e-9.
+    pub preserve_volume: bool,
+    /// Move vertices only within the tangent plane of their input normal
+    /// (the normal component of every displacement is removed).
+    pub tangential_only: bool,
+    /// Progress callback and cancel flag (one step per iteration).
+    pub control: Control,
 }
 
 impl Default for LaplaceOptions {
@@ -38,13 +57,44 @@ impl Default for LaplaceOptions {
             weights: LaplaceWeights::Uniform,
             lambda: 0.5,
             iterations: 10,
-            constraints: Constraints::default(),
+            fixed: Vec::new(),
+            fix_boundary: false,
+            hierarchical_boundary: false,
+            preserve_volume: false,
+            tangential_only: false,
+            control: Control::default(),
+        }
+    }
+}
+
+setters!(LaplaceOptions {
+    weights: LaplaceWeights,
+    lambda: f64,
+    iterations: usize,
+        fixed: Vec<VertexId>,
+        fix_boundary: bool,
+        hierarchical_boundary: bool,
+        preserve_volume: bool,
+        tangential_only: bool,
+        control: Control,
+});
+
+impl LaplaceOptions {
+    /// The constraints of §3.2.4 as the methods use them.
+    fn constraints(&self) -> Constraints {
+        Constraints {
+            fixed: self.fixed.clone(),
+            fix_boundary: self.fix_boundary,
+            hierarchical_boundary: self.hierarchical_boundary,
+            preserve_volume: self.preserve_volume,
+            tangential_only: self.tangential_only,
         }
     }
 }
 
 /// Options of [`taubin_smooth`].
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct TaubinOptions {
     /// Edge weights (see [`LaplaceOptions::weights`]).
     pub weights: LaplaceWeights,
@@ -58,8 +108,26 @@ pub struct TaubinOptions {
     pub pass_band: f64,
     /// Iterations; each is one λ step followed by one μ step.
     pub iterations: usize,
-    /// Constraints (§3.2.4).
-    pub constraints: Constraints,
+    /// Vertices that never move (empty neighbourhoods, Taubin's
+    /// interpolatory constraint, Grüner §3.2.4); bit-identical in the output.
+    pub fixed: Vec<VertexId>,
+    /// Keep every boundary vertex fixed.
+    pub fix_boundary: bool,
+    /// Hierarchical labels: boundary vertices get the higher label, so the
+    /// boundary is smoothed as a set of curves (each boundary vertex sees
+    /// only its two neighbours along the boundary polyline) and the interior
+    /// follows. Ignored when `fix_boundary` is set.
+    pub hierarchical_boundary: bool,
+    /// Rescale about the centroid after every step so the enclosed volume
+    /// equals the input volume (Desbrun et al., β = (V0/Vn)^(1/3)); closed
+    /// meshes only. With fixed vertices only the free vertices are scaled
+    /// (the scale is then found by a secant iteration). Relative error ≤ 1e-9.
+    pub preserve_volume: bool,
+    /// Move vertices only within the tangent plane of their input normal
+    /// (the normal component of every displacement is removed).
+    pub tangential_only: bool,
+    /// Progress callback and cancel flag (one step per iteration).
+    pub control: Control,
 }
 
 impl Default for TaubinOptions {
@@ -70,13 +138,46 @@ impl Default for TaubinOptions {
             mu: None,
             pass_band: 0.1,
             iterations: 10,
-            constraints: Constraints::default(),
+            fixed: Vec::new(),
+            fix_boundary: false,
+            hierarchical_boundary: false,
+            preserve_volume: false,
+            tangential_only: false,
+            control: Control::default(),
+        }
+    }
+}
+
+setters!(TaubinOptions {
+    weights: LaplaceWeights,
+    lambda: Option<f64>,
+    mu: Option<f64>,
+    pass_band: f64,
+    iterations: usize,
+        fixed: Vec<VertexId>,
+        fix_boundary: bool,
+        hierarchical_boundary: bool,
+        preserve_volume: bool,
+        tangential_only: bool,
+        control: Control,
+});
+
+impl TaubinOptions {
+    /// The constraints of §3.2.4 as the methods use them.
+    fn constraints(&self) -> Constraints {
+        Constraints {
+            fixed: self.fixed.clone(),
+            fix_boundary: self.fix_boundary,
+            hierarchical_boundary: self.hierarchical_boundary,
+            preserve_volume: self.preserve_volume,
+            tangential_only: self.tangential_only,
         }
     }
 }
 
 /// The scale factors of a Taubin filter and its transfer function
-/// f(k) = (1 − λk)(1 − μk) (Grüner §3.2.3).
+/// f(k) = (1 − λk)(1 − μk) (Grüner §3.2.3). Serialises as `lambda`, `mu`,
+/// `pass_band` and `transfer` ([`TaubinParameters::transfer_samples`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TaubinParameters {
     /// Positive scale factor.
@@ -85,6 +186,18 @@ pub struct TaubinParameters {
     pub mu: f64,
     /// Pass-band frequency 1/λ + 1/μ (Eq. (19)).
     pub pass_band: f64,
+}
+
+impl serde::Serialize for TaubinParameters {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut s = serializer.serialize_struct("TaubinParameters", 4)?;
+        s.serialize_field("lambda", &self.lambda)?;
+        s.serialize_field("mu", &self.mu)?;
+        s.serialize_field("pass_band", &self.pass_band)?;
+        s.serialize_field("transfer", &self.transfer_samples())?;
+        s.end()
+    }
 }
 
 impl TaubinParameters {
@@ -163,14 +276,33 @@ pub fn taubin_lambda_for_pass_band(k_pb: f64) -> Result<(f64, f64), SmoothError>
 
 /// Options of [`implicit_smooth`].
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct ImplicitOptions {
     /// Time step in units of the squared mean edge length of the input, so
     /// the result does not depend on the scale of the mesh (default 1).
     pub time_step: f64,
     /// Number of backward-Euler steps.
     pub iterations: usize,
-    /// Constraints (§3.2.4).
-    pub constraints: Constraints,
+    /// Vertices that never move (empty neighbourhoods, Taubin's
+    /// interpolatory constraint, Grüner §3.2.4); bit-identical in the output.
+    pub fixed: Vec<VertexId>,
+    /// Keep every boundary vertex fixed.
+    pub fix_boundary: bool,
+    /// Hierarchical labels: boundary vertices get the higher label, so the
+    /// boundary is smoothed as a set of curves (each boundary vertex sees
+    /// only its two neighbours along the boundary polyline) and the interior
+    /// follows. Ignored when `fix_boundary` is set.
+    pub hierarchical_boundary: bool,
+    /// Rescale about the centroid after every step so the enclosed volume
+    /// equals the input volume (Desbrun et al., β = (V0/Vn)^(1/3)); closed
+    /// meshes only. With fixed vertices only the free vertices are scaled
+    /// (the scale is then found by a secant iteration). Relative error ≤ 1e-9.
+    pub preserve_volume: bool,
+    /// Move vertices only within the tangent plane of their input normal
+    /// (the normal component of every displacement is removed).
+    pub tangential_only: bool,
+    /// Progress callback and cancel flag (one step per iteration).
+    pub control: Control,
 }
 
 impl Default for ImplicitOptions {
@@ -178,7 +310,36 @@ impl Default for ImplicitOptions {
         ImplicitOptions {
             time_step: 1.0,
             iterations: 1,
-            constraints: Constraints::default(),
+            fixed: Vec::new(),
+            fix_boundary: false,
+            hierarchical_boundary: false,
+            preserve_volume: false,
+            tangential_only: false,
+            control: Control::default(),
+        }
+    }
+}
+
+setters!(ImplicitOptions {
+    time_step: f64,
+    iterations: usize,
+        fixed: Vec<VertexId>,
+        fix_boundary: bool,
+        hierarchical_boundary: bool,
+        preserve_volume: bool,
+        tangential_only: bool,
+        control: Control,
+});
+
+impl ImplicitOptions {
+    /// The constraints of §3.2.4 as the methods use them.
+    fn constraints(&self) -> Constraints {
+        Constraints {
+            fixed: self.fixed.clone(),
+            fix_boundary: self.fix_boundary,
+            hierarchical_boundary: self.hierarchical_boundary,
+            preserve_volume: self.preserve_volume,
+            tangential_only: self.tangential_only,
         }
     }
 }
@@ -186,13 +347,14 @@ impl Default for ImplicitOptions {
 /// Normalised weights per neighbourhood entry (Eq. (17)); `None` for uniform.
 fn normalised_weights(
     mesh: &SurfaceMesh,
+    positions: &[Vec3],
     nb: &Neighbourhoods,
     weights: LaplaceWeights,
 ) -> Option<Vec<f64>> {
     if weights == LaplaceWeights::Uniform {
         return None;
     }
-    let hw = geom::halfedge_weights(mesh, weights);
+    let hw = geom::halfedge_weights_at(mesh, positions, weights);
     let n = nb.off.len() - 1;
     let per_vertex: Vec<Vec<f64>> = (0..n)
         .into_par_iter()
@@ -259,65 +421,63 @@ fn check_weights(mesh: &SurfaceMesh, w: LaplaceWeights) -> Result<(), SmoothErro
 
 /// Runs explicit steps with the given scale factors in turn.
 fn run_explicit(
-    mesh: &mut SurfaceMesh,
+    mesh: &SurfaceMesh,
     weights: LaplaceWeights,
     scales: &[f64],
     iterations: usize,
     c: &Constraints,
-) -> Result<SmoothReport, SmoothError> {
+    control: &Control,
+) -> Result<Output<SmoothReport>, SmoothError> {
     check_weights(mesh, weights)?;
     let roles = roles(mesh, c)?;
     let nb = Neighbourhoods::new(mesh, &roles);
     let normals = c.tangential_only.then(|| geom::vertex_normals(mesh));
     let input = mesh.positions().to_vec();
     let v0 = geom::volume(mesh);
-    let needs_sync = weights != LaplaceWeights::Uniform || c.preserve_volume;
-    // a copy of the mesh is only needed to recompute weights or volumes
-    let mut work = needs_sync.then(|| mesh.clone());
     let mut cur = input.clone();
     let mut next = input.clone();
-    for _ in 0..iterations {
+    for iteration in 0..iterations {
+        control.step("iterations", iteration as u64, iterations as u64)?;
         for &s in scales {
-            let w = match work.as_mut() {
-                Some(wm) => {
-                    wm.positions_mut().copy_from_slice(&cur);
-                    normalised_weights(wm, &nb, weights)
-                }
-                None => None,
-            };
+            // geometry-dependent weights at the current positions
+            let w = normalised_weights(mesh, &cur, &nb, weights);
             explicit_step(&cur, &mut next, &nb, w.as_deref(), s, normals.as_deref());
             std::mem::swap(&mut cur, &mut next);
-            if let (true, Some(wm)) = (c.preserve_volume, work.as_mut()) {
-                wm.positions_mut().copy_from_slice(&cur);
-                restore_volume(wm, &roles, v0)?;
-                cur.copy_from_slice(wm.positions());
+            if c.preserve_volume {
+                restore_volume(mesh, &mut cur, &roles, v0)?;
             }
         }
     }
     finish(mesh, cur, &input, v0, iterations)
 }
 
+/// The output of an explicit or implicit run: the report of the new
+/// positions `cur` of `mesh` (an error when they are not finite).
 fn finish(
-    mesh: &mut SurfaceMesh,
+    mesh: &SurfaceMesh,
     cur: Vec<Vec3>,
     input: &[Vec3],
     v0: f64,
     iterations: usize,
-) -> Result<SmoothReport, SmoothError> {
+) -> Result<Output<SmoothReport>, SmoothError> {
     if cur.iter().any(|p| !p.is_finite()) {
         return Err(SmoothError::InvalidOption(
             "smoothing diverged (non-finite positions); reduce the scale factors".into(),
         ));
     }
     let max_displacement = max_distance(&cur, input);
-    mesh.set_positions(cur)?;
-    Ok(SmoothReport {
+    let report = SmoothReport {
         iterations,
         volume_before: v0,
-        volume_after: geom::volume(mesh),
+        volume_after: geom::volume_at(mesh, &cur),
         max_displacement,
         converged: true,
         residual: None,
+        taubin: None,
+    };
+    Ok(Output {
+        positions: cur,
+        report,
     })
 }
 
@@ -326,9 +486,9 @@ fn finish(
 /// Works on triangle, quad and polygon meshes (the one-ring of the polygon
 /// mesh); cotangent weights need triangles ([`crate::MeshError::NotTriangle`]).
 pub fn laplace_smooth(
-    mesh: &mut SurfaceMesh,
+    mesh: &SurfaceMesh,
     opts: &LaplaceOptions,
-) -> Result<SmoothReport, SmoothError> {
+) -> Result<Output<SmoothReport>, SmoothError> {
     if !opts.lambda.is_finite() {
         return Err(SmoothError::InvalidOption("λ must be finite".into()));
     }
@@ -337,223 +497,142 @@ pub fn laplace_smooth(
         opts.weights,
         &[opts.lambda],
         opts.iterations,
-        &opts.constraints,
+        &opts.constraints(),
+        &opts.control,
     )
 }
 
 /// Taubin λ|μ smoothing (Grüner §3.2.3): each iteration is a Laplace step
 /// with λ > 0 followed by one with μ < −λ; transfer function
-/// f(k) = (1 − λk)(1 − μk) per iteration. Returns the report and the
-/// parameters used.
+/// f(k) = (1 − λk)(1 − μk) per iteration. The parameters used are in the
+/// report's `taubin` field.
 pub fn taubin_smooth(
-    mesh: &mut SurfaceMesh,
+    mesh: &SurfaceMesh,
     opts: &TaubinOptions,
-) -> Result<(SmoothReport, TaubinParameters), SmoothError> {
+) -> Result<Output<SmoothReport>, SmoothError> {
     let p = TaubinParameters::from_options(opts)?;
-    let r = run_explicit(
+    let mut out = run_explicit(
         mesh,
         opts.weights,
         &[p.lambda, p.mu],
         opts.iterations,
-        &opts.constraints,
+        &opts.constraints(),
+        &opts.control,
     )?;
-    Ok((r, p))
+    out.report.taubin = Some(p);
+    Ok(out)
 }
 
-/// One backward-Euler system over the `unknown` vertices: rows
-/// (m_i + t Σ_j w_ij) x'_i − t Σ_{j unknown} w_ij x'_j = m_i x_i + t Σ_{j known} w_ij x_j.
-///
-/// The lower-triangular pattern is built once from the one-ring adjacency
-/// (column c holds row c, then the unknown neighbours r > c in ascending
-/// order); each step only refills the values, in parallel per column block,
-/// and refactors with the symbolic analysis (nested-dissection ordering,
-/// computed from the positions at the first step) kept.
-struct Stage {
-    index: Vec<usize>,
-    unknowns: Vec<usize>,
-    pattern: SymbolicSparseColMat<usize>,
-    solver: Option<CholeskySolver>,
-}
-
-/// Columns per parallel task when filling matrix values.
-const COLUMN_BLOCK: usize = 4096;
-
-impl Stage {
-    fn new(
-        is_unknown: impl Fn(usize) -> bool,
-        n: usize,
-        nb: &Neighbourhoods,
-    ) -> Result<Self, SmoothError> {
-        let mut index = vec![usize::MAX; n];
-        let mut unknowns = Vec::new();
-        for i in 0..n {
-            if is_unknown(i) {
-                index[i] = unknowns.len();
-                unknowns.push(i);
-            }
+/// The backward-Euler matrix M − tL of Desbrun et al. on the pattern of the
+/// Laplacian `l` of [`geom::laplacian_from_weights`] (both triangles and the
+/// diagonal stored): entries −t L_ij, diagonal m_i − t L_ii = m_i + t Σ_j w_ij.
+fn backward_euler_matrix(
+    mut l: SparseColMat<usize, f64>,
+    mass: &[f64],
+    t: f64,
+) -> SparseColMat<usize, f64> {
+    let diagonal: Vec<Option<usize>> = {
+        let (col_ptr, row_idx) = (l.symbolic().col_ptr(), l.symbolic().row_idx());
+        (0..mass.len())
+            .map(|j| (col_ptr[j]..col_ptr[j + 1]).find(|&k| row_idx[k] == j))
+            .collect()
+    };
+    let values = l.val_mut();
+    values.par_iter_mut().for_each(|v| *v *= -t);
+    for (k, m) in diagonal.iter().zip(mass) {
+        if let Some(k) = k {
+            values[*k] += m;
         }
-        let m = unknowns.len();
-        let mut col_ptr = Vec::with_capacity(m + 1);
-        let mut row_idx = Vec::with_capacity(m + nb.nbr.len() / 2);
-        col_ptr.push(0usize);
-        for (c, &i) in unknowns.iter().enumerate() {
-            row_idx.push(c);
-            let start = row_idx.len();
-            for &j in &nb.nbr[nb.off[i] as usize..nb.off[i + 1] as usize] {
-                let r = index[j as usize];
-                if r != usize::MAX && r > c {
-                    row_idx.push(r);
-                }
-            }
-            row_idx[start..].sort_unstable();
-            // a neighbour listed twice gets one entry (values are summed)
-            let mut w = start;
-            for k in start..row_idx.len() {
-                if w == start || row_idx[w - 1] != row_idx[k] {
-                    row_idx[w] = row_idx[k];
-                    w += 1;
-                }
-            }
-            row_idx.truncate(w);
-            col_ptr.push(row_idx.len());
-        }
-        let pattern = SymbolicSparseColMat::new_checked(m, m, col_ptr, None, row_idx);
-        Ok(Stage {
-            index,
-            unknowns,
-            pattern,
-            solver: None,
-        })
     }
+    l
+}
 
-    /// Symbolic analysis of the pattern: nested-dissection ordering from the
-    /// positions `cur` of the unknowns, then faer's symbolic Cholesky. Needs
-    /// no matrix values, so it can run while they are computed.
-    fn analyse(&mut self, cur: &[Vec3]) -> Result<(), SmoothError> {
-        if self.unknowns.is_empty() {
-            return Ok(());
+/// The 1D backward-Euler system of the boundary curves (hierarchical
+/// labels): for every vertex with role `BoundaryCurve`, weights ē/l to its
+/// boundary neighbours and mass ē(l₋ + l₊)/2, at the positions `p`; the
+/// other columns hold their diagonal only (those vertices are fixed in this
+/// solve).
+fn curve_matrix(
+    p: &[Vec3],
+    roles: &[Role],
+    nb: &Neighbourhoods,
+    ebar: f64,
+    t: f64,
+) -> Result<(SparseColMat<usize, f64>, Vec<f64>), SmoothError> {
+    let n = p.len();
+    let mut triplets = Vec::new();
+    let mut mass = vec![0.0; n];
+    for i in 0..n {
+        if roles[i] != Role::BoundaryCurve {
+            triplets.push((i, i, 1.0));
+            continue;
         }
-        let points: Vec<Vec3> = self.unknowns.iter().map(|&i| cur[i]).collect();
-        let order = nested_dissection(self.pattern.as_ref(), &points)?;
-        let opts = CholeskyOptions {
-            ordering: CholeskyOrdering::Custom(order),
-            // faer's rayon-parallel supernodal kernels made the 450k step
-            // slower on 2 cores (1.6 s vs 1.2 s wall, BENCHMARKS.md)
+        let mut diag = 0.0;
+        let mut length = 0.0;
+        for k in nb.off[i] as usize..nb.off[i + 1] as usize {
+            let j = nb.nbr[k] as usize;
+            let l = p[i].distance(p[j]);
+            length += l;
+            let w = if l > 0.0 { ebar / l } else { 0.0 };
+            diag += t * w;
+            triplets.push((j, i, -t * w));
+        }
+        mass[i] = 0.5 * ebar * length;
+        triplets.push((i, i, mass[i] + diag));
+    }
+    Ok((sparse_from_triplets(n, n, &triplets)?, mass))
+}
+
+/// Solves one backward-Euler system `a` x' = M x for the free vertices of
+/// `solver` (the others keep their positions in `cur`), re-analysing once
+/// with an ordering from the current positions when the factorisation
+/// fails (with large steps and obtuse triangles M − tL can be near
+/// indefinite and the pivots depend on the order, as for a fresh solver).
+fn backward_euler_step(
+    solver: &mut ConstrainedSolver,
+    a: &SparseColMat<usize, f64>,
+    mass: &[f64],
+    fixed: &[bool],
+    cur: &mut [Vec3],
+) -> Result<(), SmoothError> {
+    if let Err(e) = solver.factor(a.as_ref()) {
+        let opts = ConstrainedOptions {
+            points: Some(cur.to_vec()),
             parallel: false,
         };
-        self.solver = Some(CholeskySolver::analyse(self.pattern.as_ref(), &opts)?);
-        Ok(())
+        let mut fresh = ConstrainedSolver::analyse(a.symbolic(), fixed, &opts)?;
+        if fresh.factor(a.as_ref()).is_err() {
+            return Err(e.into());
+        }
+        *solver = fresh;
     }
-
-    /// `weight(i, k)` is w_ij for unknown vertex i and its neighbourhood
-    /// entry k (j = `nb.nbr[k]`); `mass[i]` the diagonal.
-    fn solve(
-        &mut self,
-        cur: &mut [Vec3],
-        mass: &[f64],
-        t: f64,
-        nb: &Neighbourhoods,
-        weight: &(dyn Fn(usize, usize) -> f64 + Sync),
-    ) -> Result<(), SmoothError> {
-        let m = self.unknowns.len();
-        if m == 0 {
-            return Ok(());
-        }
-        if self.solver.is_none() {
-            self.analyse(cur)?;
-        }
-        let col_ptr = self.pattern.col_ptr();
-        let row_idx = self.pattern.row_idx();
-        let mut values = vec![0.0; row_idx.len()];
-        // split the values into blocks of whole columns
-        let mut blocks: Vec<(usize, &mut [f64])> = Vec::with_capacity(m / COLUMN_BLOCK + 1);
-        let mut rest = values.as_mut_slice();
-        for c0 in (0..m).step_by(COLUMN_BLOCK) {
-            let c1 = (c0 + COLUMN_BLOCK).min(m);
-            let (head, tail) = rest.split_at_mut(col_ptr[c1] - col_ptr[c0]);
-            blocks.push((c0, head));
-            rest = tail;
-        }
-        let (index, unknowns) = (&self.index, &self.unknowns);
-        let src: &[Vec3] = cur;
-        let rhs_blocks: Vec<Vec<Vec3>> = blocks
-            .into_par_iter()
-            .map(|(c0, vals)| {
-                let c1 = (c0 + COLUMN_BLOCK).min(m);
-                let base = col_ptr[c0];
-                let mut rhs = Vec::with_capacity(c1 - c0);
-                for c in c0..c1 {
-                    let i = unknowns[c];
-                    let (a, b) = (col_ptr[c] - base, col_ptr[c + 1] - base);
-                    let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
-                    let mut diag = mass[i];
-                    let mut bi = mass[i] * src[i];
-                    for k in nb.off[i] as usize..nb.off[i + 1] as usize {
-                        let j = nb.nbr[k] as usize;
-                        let w = weight(i, k);
-                        diag += t * w;
-                        let r = index[j];
-                        if r == usize::MAX {
-                            bi += t * w * src[j];
-                        } else if r > c {
-                            // rows[0] is the diagonal; the rest is sorted
-                            if let Ok(p) = rows[1..].binary_search(&r) {
-                                vals[a + 1 + p] -= t * w;
-                            }
-                        }
-                    }
-                    vals[a] = diag;
-                    debug_assert!(b > a);
-                    rhs.push(bi);
-                }
-                rhs
-            })
-            .collect();
-        let mut rhs = rhs_blocks.concat();
-        let a = SparseColMatRef::new(self.pattern.as_ref(), &values);
-        let solver = self.solver.as_mut().expect("analysed above");
-        if let Err(e) = solver.refactor(a) {
-            // With large steps and obtuse triangles M − tL can be near
-            // indefinite and the pivots depend on the order: retry once with
-            // an ordering from the current positions (as a fresh solver would)
-            let points: Vec<Vec3> = self.unknowns.iter().map(|&i| src[i]).collect();
-            let order = nested_dissection(self.pattern.as_ref(), &points)?;
-            let opts = CholeskyOptions {
-                ordering: CholeskyOrdering::Custom(order),
-                parallel: false,
-            };
-            match CholeskySolver::with_options(a, &opts) {
-                Ok(fresh) => *solver = fresh,
-                Err(_) => return Err(e.into()),
-            }
-        }
-        solver.solve_points(&mut rhs)?;
-        for (r, &i) in self.unknowns.iter().enumerate() {
-            cur[i] = rhs[r];
-        }
-        Ok(())
-    }
+    let rhs: Vec<Vec3> = mass.par_iter().zip(cur.par_iter()).map(|(m, p)| *m * *p).collect();
+    solver.solve_points(&rhs, cur)?;
+    Ok(())
 }
 
 /// Implicit smoothing (Desbrun et al. 1999): per step solve
-/// (M − tL) x' = M x with the cotangent Laplacian L (weights
-/// ½(cot α + cot β), recomputed per step) and the mixed Voronoi mass M, by a
-/// sparse Cholesky factorisation (nested-dissection ordering) whose symbolic
-/// analysis is reused across steps. t = `time_step` · ē² (ē the input mean edge length). Fixed vertices
-/// are Dirichlet values; with hierarchical labels the boundary is first
-/// smoothed as curves by the 1D analogue (weights ē/l, mass ē(l₋ + l₊)/2).
-/// Triangle meshes.
+/// (M − tL) x' = M x with the cotangent Laplacian L of
+/// [`geom::laplacian_from_weights`] (weights ½(cot α + cot β), recomputed per
+/// step at the current positions, [`geom::halfedge_weights_at`]) and the
+/// mixed Voronoi mass M ([`geom::mixed_vertex_areas_at`]), by the one
+/// constrained solve of [`crate::solve::ConstrainedSolver`]: fixed vertices
+/// are Dirichlet values moved to the right-hand side, the free block is
+/// ordered by nested dissection and its symbolic analysis is reused across
+/// steps. t = `time_step` · ē² (ē the input mean edge length). With
+/// hierarchical labels the boundary is first smoothed as curves by the 1D
+/// analogue (weights ē/l, mass ē(l₋ + l₊)/2). Triangle meshes.
 pub fn implicit_smooth(
-    mesh: &mut SurfaceMesh,
+    mesh: &SurfaceMesh,
     opts: &ImplicitOptions,
-) -> Result<SmoothReport, SmoothError> {
+) -> Result<Output<SmoothReport>, SmoothError> {
     mesh.require_triangles()?;
     if !(opts.time_step > 0.0) || !opts.time_step.is_finite() {
         return Err(SmoothError::InvalidOption(
             "time step must be positive".into(),
         ));
     }
-    let c = &opts.constraints;
+    let c = &opts.constraints();
     let roles = roles(mesh, c)?;
     let nb = Neighbourhoods::new(mesh, &roles);
     let normals = c.tangential_only.then(|| geom::vertex_normals(mesh));
@@ -565,83 +644,73 @@ pub fn implicit_smooth(
     }
     let t = opts.time_step * ebar * ebar;
     let n = mesh.vertex_count();
-    let mut curve = Stage::new(|i| roles[i] == Role::BoundaryCurve, n, &nb)?;
-    let mut inner = Stage::new(|i| roles[i] == Role::Free, n, &nb)?;
-    // the mesh itself carries the positions of each step (weights, areas,
-    // volume); on failure its input positions are restored
-    // the symbolic analysis of the free vertices' system needs only its
-    // pattern and the input positions: run it alongside the first step's
-    // cotangent weights and mixed areas (the mesh still holds the input)
-    let (analysed, wm) = {
-        let m: &SurfaceMesh = mesh;
-        rayon::join(
-            || inner.analyse(&input),
-            || {
-                rayon::join(
-                    || geom::halfedge_weights(m, LaplaceWeights::Cotangent),
-                    || geom::mixed_vertex_areas(m),
-                )
-            },
-        )
-    };
-    analysed?;
-    let mut first = Some(wm);
-    let mut run = |mesh: &mut SurfaceMesh| -> Result<Vec<Vec3>, SmoothError> {
-        let mut cur = input.clone();
-        for step in 0..opts.iterations {
-            let before = cur.clone();
-            if step > 0 {
-                mesh.positions_mut().copy_from_slice(&before);
-            }
-            if !curve.unknowns.is_empty() {
-                let p = &before;
-                let length = |i: usize, k: usize| p[i].distance(p[nb.nbr[k] as usize]);
-                let weight = |i: usize, k: usize| {
-                    let l = length(i, k);
-                    if l > 0.0 { ebar / l } else { 0.0 }
-                };
-                let mass: Vec<f64> = (0..n)
-                    .into_par_iter()
-                    .map(|i| {
-                        let s: f64 = (nb.off[i] as usize..nb.off[i + 1] as usize)
-                            .map(|k| length(i, k))
-                            .sum();
-                        0.5 * ebar * s
-                    })
-                    .collect();
-                curve.solve(&mut cur, &mass, t, &nb, &weight)?;
-            }
-            let (hw, mass) = match first.take() {
-                Some(wm) => wm,
-                None => rayon::join(
-                    || geom::halfedge_weights(mesh, LaplaceWeights::Cotangent),
-                    || geom::mixed_vertex_areas(mesh),
-                ),
+    let inner_fixed: Vec<bool> = roles.iter().map(|r| *r != Role::Free).collect();
+    let curve_fixed: Vec<bool> = roles.iter().map(|r| *r != Role::BoundaryCurve).collect();
+    let has_curve = curve_fixed.iter().any(|f| !f);
+    // the symbolic analysis of the free vertices' system needs only the
+    // Laplacian's pattern and the input positions: run it alongside the
+    // first step's cotangent weights and mixed areas
+    let (analysed, first) = rayon::join(
+        || {
+            let pattern = geom::uniform_laplacian(mesh);
+            let opts = ConstrainedOptions {
+                points: Some(input.clone()),
+                // faer's rayon-parallel supernodal kernels made the 450k
+                // step slower on 2 cores (1.6 s vs 1.2 s wall, BENCHMARKS.md)
+                parallel: false,
             };
-            let weight = |_: usize, k: usize| hw[nb.he[k] as usize];
-            inner.solve(&mut cur, &mass, t, &nb, &weight)?;
-            if let Some(nrm) = &normals {
-                for i in 0..n {
-                    let d = cur[i] - before[i];
-                    if d != Vec3::ZERO {
-                        cur[i] = before[i] + (d - d.dot(nrm[i]) * nrm[i]);
-                    }
+            ConstrainedSolver::analyse(pattern.symbolic(), &inner_fixed, &opts)
+        },
+        || {
+            rayon::join(
+                || geom::halfedge_weights(mesh, LaplaceWeights::Cotangent),
+                || geom::mixed_vertex_areas(mesh),
+            )
+        },
+    );
+    let mut inner = analysed?;
+    let mut first = Some(first);
+    let mut curve: Option<ConstrainedSolver> = None;
+    let mut cur = input.clone();
+    for step in 0..opts.iterations {
+        opts.control
+            .step("iterations", step as u64, opts.iterations as u64)?;
+        let before = cur.clone();
+        if has_curve {
+            let (a, mass) = curve_matrix(&before, &roles, &nb, ebar, t)?;
+            let solver = match curve.as_mut() {
+                Some(s) => s,
+                None => curve.insert(ConstrainedSolver::analyse(
+                    a.symbolic(),
+                    &curve_fixed,
+                    &ConstrainedOptions {
+                        points: Some(before.clone()),
+                        parallel: false,
+                    },
+                )?),
+            };
+            backward_euler_step(solver, &a, &mass, &curve_fixed, &mut cur)?;
+        }
+        let (hw, mass) = match first.take() {
+            Some(wm) => wm,
+            None => rayon::join(
+                || geom::halfedge_weights_at(mesh, &before, LaplaceWeights::Cotangent),
+                || geom::mixed_vertex_areas_at(mesh, &before),
+            ),
+        };
+        let a = backward_euler_matrix(geom::laplacian_from_weights(mesh, &hw), &mass, t);
+        backward_euler_step(&mut inner, &a, &mass, &inner_fixed, &mut cur)?;
+        if let Some(nrm) = &normals {
+            for i in 0..n {
+                let d = cur[i] - before[i];
+                if d != Vec3::ZERO {
+                    cur[i] = before[i] + (d - d.dot(nrm[i]) * nrm[i]);
                 }
             }
-            if c.preserve_volume {
-                mesh.positions_mut().copy_from_slice(&cur);
-                restore_volume(mesh, &roles, v0)?;
-                cur.copy_from_slice(mesh.positions());
-            }
         }
-        Ok(cur)
-    };
-    let cur = match run(mesh) {
-        Ok(cur) => cur,
-        Err(e) => {
-            mesh.positions_mut().copy_from_slice(&input);
-            return Err(e);
+        if c.preserve_volume {
+            restore_volume(mesh, &mut cur, &roles, v0)?;
         }
-    };
+    }
     finish(mesh, cur, &input, v0, opts.iterations)
 }

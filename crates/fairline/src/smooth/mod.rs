@@ -6,9 +6,16 @@
 //! of Yamada et al. (§3.3) and the Δ_B H = 0 construction of Schneider and
 //! Kobbelt (§3.4).
 //!
-//! Every function works on a copy of the positions and writes them back into
-//! the mesh only when it succeeds; vertices that are constrained keep their
-//! exact (bit-identical) coordinates.
+//! Every function has the crate's one shape ([`crate::control`]): it takes
+//! the mesh by reference and an options struct (`Default`, a builder setter
+//! per field, `#[non_exhaustive]`) and returns
+//! `Result<Output<SmoothReport>, SmoothError>` with the new positions; the
+//! input is never modified. Vertices that are constrained keep their exact
+//! (bit-identical) coordinates. Fixed vertices are `fixed: Vec<VertexId>`
+//! in every options struct; the other constraints of §3.2.4 are boolean
+//! fields of the methods they apply to. Every iteration calls
+//! `control.step("iterations", k, total)`, so a run can be watched and
+//! cancelled ([`SmoothError::Cancelled`]).
 
 mod laplace;
 mod schneider_kobbelt;
@@ -24,7 +31,25 @@ pub use spring::{SpringOptions, spring_smooth};
 use crate::Vec3;
 use crate::mesh::{MeshError, SurfaceMesh, VertexId};
 use crate::solve::SolveError;
+use serde::Serialize;
 use thiserror::Error;
+
+/// Builder setters `pub fn field(mut self, v: T) -> Self`, one per listed
+/// field, for the options structs of this module.
+macro_rules! setters {
+    ($ty:ident { $($field:ident: $t:ty),* $(,)? }) => {
+        impl $ty {
+            $(
+                #[doc = concat!("Sets [`", stringify!($ty), "::", stringify!($field), "`].")]
+                pub fn $field(mut self, v: $t) -> Self {
+                    self.$field = v;
+                    self
+                }
+            )*
+        }
+    };
+}
+pub(crate) use setters;
 
 /// Why a smoothing run failed.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -49,11 +74,16 @@ pub enum SmoothError {
     /// Volume preservation was asked for an open mesh.
     #[error("volume preservation needs a closed mesh")]
     NotClosed,
+    /// The caller raised the cancel flag of the options' [`crate::Control`].
+    #[error("cancelled")]
+    Cancelled(#[from] crate::Cancelled),
 }
 
-/// Constraints of Grüner thesis §3.2.4, shared by every smoothing method.
+/// Constraints of Grüner thesis §3.2.4, shared by every smoothing method;
+/// the options structs carry them as their own fields (`fixed`,
+/// `fix_boundary`, …) and hand them to the methods in this form.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Constraints {
+pub(crate) struct Constraints {
     /// Vertices that never move (empty neighbourhoods, Taubin's interpolatory
     /// constraint). Their coordinates stay bit-identical.
     pub fixed: Vec<VertexId>,
@@ -74,23 +104,31 @@ pub struct Constraints {
     pub tangential_only: bool,
 }
 
-/// What a smoothing run did.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// What a smoothing run did. Serialises to the keys of the JSON report of
+/// `fairline smooth --report` (`residual` only when there is one; Taubin's
+/// `lambda`, `mu`, `pass_band` and `transfer` only for Taubin).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct SmoothReport {
     /// Iterations performed (a Taubin iteration is a λ step and a μ step).
     pub iterations: usize,
+    /// Whether an iterative method met its stopping criterion.
+    pub converged: bool,
     /// Enclosed volume before (meaningful for closed meshes only).
     pub volume_before: f64,
     /// Enclosed volume after.
     pub volume_after: f64,
     /// Largest distance a vertex moved from its input position.
     pub max_displacement: f64,
-    /// Whether an iterative method met its stopping criterion.
-    pub converged: bool,
     /// Final residual of an iterative method that has one (Schneider–Kobbelt:
     /// max |H_i − H̃_i| · ē over the free vertices, dimensionless); `None`
     /// for the others.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub residual: Option<f64>,
+    /// The scale factors Taubin smoothing used (`None` for the other
+    /// methods); serialised flat as `lambda`, `mu`, `pass_band` and the
+    /// `transfer` samples.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub taubin: Option<TaubinParameters>,
 }
 
 /// Per-vertex role derived from [`Constraints`].
@@ -182,21 +220,23 @@ pub(crate) fn max_distance(a: &[Vec3], b: &[Vec3]) -> f64 {
 
 /// Restores the volume `v0` by scaling the non-fixed vertices about the
 /// centroid of all vertices (Desbrun et al. 1999; Grüner §3.2.3). `work`
-/// holds the current positions. Exact cube root when nothing is fixed; a
-/// safeguarded secant iteration on the scale otherwise.
+/// holds the current positions of the vertices of `mesh`. Exact cube root
+/// when nothing is fixed; a safeguarded secant iteration on the scale
+/// otherwise.
 pub(crate) fn restore_volume(
-    work: &mut SurfaceMesh,
+    mesh: &SurfaceMesh,
+    work: &mut [Vec3],
     roles: &[Role],
     v0: f64,
 ) -> Result<(), SmoothError> {
-    let vol = crate::geom::volume(work);
+    let vol = crate::geom::volume_at(mesh, work);
     if !(vol.abs() > 0.0) || !(v0.abs() > 0.0) || !vol.is_finite() {
         return Ok(());
     }
-    let base: Vec<Vec3> = work.positions().to_vec();
+    let base: Vec<Vec3> = work.to_vec();
     let c = base.iter().copied().sum::<Vec3>() / base.len().max(1) as f64;
-    let apply = |work: &mut SurfaceMesh, s: f64| {
-        for (i, p) in work.positions_mut().iter_mut().enumerate() {
+    let apply = |work: &mut [Vec3], s: f64| {
+        for (i, p) in work.iter_mut().enumerate() {
             if roles[i] != Role::Fixed {
                 *p = c + s * (base[i] - c);
             }
@@ -214,7 +254,7 @@ pub(crate) fn restore_volume(
     // secant on g(s) = V(s) - v0, starting from s = 1 and the cube-root guess
     let mut s0 = 1.0;
     let mut g0 = vol - v0;
-    let mut g1 = crate::geom::volume(work) - v0;
+    let mut g1 = crate::geom::volume_at(mesh, work) - v0;
     for _ in 0..60 {
         if (g1 / v0).abs() <= 1e-12 {
             return Ok(());
@@ -231,7 +271,7 @@ pub(crate) fn restore_volume(
         g0 = g1;
         s1 = s2;
         apply(work, s1);
-        g1 = crate::geom::volume(work) - v0;
+        g1 = crate::geom::volume_at(mesh, work) - v0;
     }
     if (g1 / v0).abs() > 1e-9 {
         return Err(SmoothError::InvalidOption(

@@ -1,23 +1,25 @@
 //! Fair surfaces with G¹ boundary conditions by Δ_B H = 0 (Schneider and
 //! Kobbelt; Grüner thesis §3.4, Eq. (25)–(29)).
 
-use super::{Constraints, Role, SmoothError, SmoothReport, max_distance, roles};
-use crate::Vec3;
+use super::{Constraints, Role, SmoothError, SmoothReport, max_distance, roles, setters};
 use crate::geom::{self, LaplaceWeights};
 use crate::mesh::{SurfaceMesh, VertexId};
-use crate::solve::{CholeskySolver, least_squares, sparse_from_triplets};
+use crate::{Control, Output, Vec3};
+use crate::solve::{ConstrainedOptions, ConstrainedSolver, least_squares, sparse_from_triplets};
 
 /// Options of [`schneider_kobbelt`].
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct SchneiderKobbeltOptions {
     /// Upper bound on the outer iterations M_k → M_{k+1}.
     pub max_iterations: usize,
     /// Stop when the largest normal move divided by the mean edge length is
     /// below ε.
     pub epsilon: f64,
-    /// Further fixed vertices. The boundary vertices and their normals are
-    /// always fixed (the G¹ boundary condition).
-    pub constraints: Constraints,
+    /// Further fixed vertices (bit-identical in the output). The boundary
+    /// vertices and their normals are always fixed (the G¹ boundary
+    /// condition).
+    pub fixed: Vec<VertexId>,
     /// G¹ normals of constrained vertices (normalised). Constrained
     /// boundary vertices not listed get the normal of a quadric fit over
     /// their input `normal_fit_rings`-ring ([`geom::quadric_fit_rings`]),
@@ -34,6 +36,8 @@ pub struct SchneiderKobbeltOptions {
     /// Where the true normals are known, pass them in `normals`: with exact
     /// normals the method is exact on a sphere cap.
     pub normal_fit_rings: Option<usize>,
+    /// Progress callback and cancel flag (one step per outer iteration).
+    pub control: Control,
 }
 
 impl Default for SchneiderKobbeltOptions {
@@ -41,12 +45,22 @@ impl Default for SchneiderKobbeltOptions {
         SchneiderKobbeltOptions {
             max_iterations: 50,
             epsilon: 1e-5,
-            constraints: Constraints::default(),
+            fixed: Vec::new(),
             normals: Vec::new(),
             normal_fit_rings: None,
+            control: Control::default(),
         }
     }
 }
+
+setters!(SchneiderKobbeltOptions {
+    max_iterations: usize,
+    epsilon: f64,
+    fixed: Vec<VertexId>,
+    normals: Vec<(VertexId, Vec3)>,
+    normal_fit_rings: Option<usize>,
+    control: Control,
+});
 
 /// Moreton–Séquin mean curvature at `x` with normal `n` and neighbours `q`
 /// (Eq. (28) and the least-squares fit of Euler's formula): H = Σ g_j κ̃_j,
@@ -145,13 +159,15 @@ struct Eval {
 /// when no step length down to 1/64 does, the iteration stops unconverged
 /// instead of drifting.
 pub fn schneider_kobbelt(
-    mesh: &mut SurfaceMesh,
+    mesh: &SurfaceMesh,
     opts: &SchneiderKobbeltOptions,
-) -> Result<SmoothReport, SmoothError> {
+) -> Result<Output<SmoothReport>, SmoothError> {
     mesh.require_triangles()?;
-    let mut c = opts.constraints.clone();
-    c.fix_boundary = true;
-    c.preserve_volume = false;
+    let c = Constraints {
+        fixed: opts.fixed.clone(),
+        fix_boundary: true,
+        ..Constraints::default()
+    };
     let roles = roles(mesh, &c)?;
     let n = mesh.vertex_count();
     let input = mesh.positions().to_vec();
@@ -240,7 +256,12 @@ pub fn schneider_kobbelt(
     }
     let any_floating = floating.iter().any(|f| *f);
     let mut work = mesh.clone();
-    let mut solver: Option<CholeskySolver> = None;
+    // the harmonic field's unknowns: free vertices of components that touch
+    // a constrained vertex
+    let field_fixed: Vec<bool> = (0..n)
+        .map(|i| index[i] == usize::MAX || floating[component[index[i]]])
+        .collect();
+    let mut solver: Option<ConstrainedSolver> = None;
     let mut iterations = 0;
     let mut converged = m == 0 || !(ebar > 0.0);
     let mut residual = 0.0;
@@ -333,14 +354,17 @@ pub fn schneider_kobbelt(
     }
     let mut ev = evaluate(&work);
     while !converged {
+        opts.control
+            .step("iterations", iterations as u64, opts.max_iterations as u64)?;
         let p = work.positions().to_vec();
         let Eval {
             normals, fits, hw, ..
         } = &ev;
         let h_of = |i: usize| fits[i].unwrap_or(0.0);
-        // (1) harmonic H̃ with Dirichlet values at the constrained vertices
-        let mut trip = Vec::new();
-        let mut htilde = vec![0.0; m];
+        // (1) harmonic H̃: Σ_j w_ij (H̃_i − H̃_j) = 0 at the free vertices
+        // (−L of geom's cotangent Laplacian, by the one constrained solve),
+        // Dirichlet values H at the constrained vertices; a floating
+        // component takes the area-weighted mean of its H as given value
         let mut float_mean = vec![(0.0, 0.0); floating.len()];
         if any_floating {
             let area = geom::barycentric_vertex_areas(&work);
@@ -352,40 +376,42 @@ pub fn schneider_kobbelt(
                 }
             }
         }
-        for (r, &i) in unknown.iter().enumerate() {
-            if floating[component[r]] {
-                let (sum, total) = float_mean[component[r]];
-                htilde[r] = if total > 0.0 { sum / total } else { 0.0 };
-                trip.push((r, r, 1.0));
-                continue;
-            }
-            let mut diag = 0.0;
-            for h in work.outgoing(VertexId(i as u32)) {
-                let j = work.to_vertex(h).idx();
-                let w = 2.0 * hw[h.idx()];
-                diag += w;
-                let cidx = index[j];
-                if cidx == usize::MAX {
-                    htilde[r] += w * h_of(j);
-                } else if cidx > r {
-                    trip.push((cidx, r, -w));
+        let mut htilde: Vec<f64> = (0..n)
+            .map(|i| match index[i] {
+                usize::MAX => h_of(i),
+                r if floating[component[r]] => {
+                    let (sum, total) = float_mean[component[r]];
+                    if total > 0.0 { sum / total } else { 0.0 }
                 }
-            }
-            trip.push((r, r, diag.max(1e-300)));
-        }
-        let a = sparse_from_triplets(m, m, &trip)?;
-        let ok = solver
-            .as_mut()
-            .is_some_and(|s| s.refactor(a.as_ref()).is_ok());
-        if !ok {
-            solver = Some(CholeskySolver::new(a.as_ref())?);
-        }
-        solver.as_ref().expect("set").solve_in_place(&mut htilde)?;
-        let res: Vec<f64> = unknown
-            .iter()
-            .enumerate()
-            .map(|(r, &i)| htilde[r] - h_of(i))
+                _ => 0.0,
+            })
             .collect();
+        let mut a = geom::laplacian_from_weights(&work, hw);
+        let diagonal: Vec<Option<usize>> = {
+            let (col_ptr, row_idx) = (a.symbolic().col_ptr(), a.symbolic().row_idx());
+            (0..n)
+                .map(|j| (col_ptr[j]..col_ptr[j + 1]).find(|&k| row_idx[k] == j))
+                .collect()
+        };
+        let values = a.val_mut();
+        for v in values.iter_mut() {
+            *v *= -2.0;
+        }
+        // an isolated free vertex (all weights 0) keeps a solvable row
+        for k in diagonal.into_iter().flatten() {
+            values[k] = values[k].max(1e-300);
+        }
+        let harmonic = match solver.as_mut() {
+            Some(s) => s,
+            None => solver.insert(ConstrainedSolver::analyse(
+                a.symbolic(),
+                &field_fixed,
+                &ConstrainedOptions::default(),
+            )?),
+        };
+        harmonic.factor(a.as_ref())?;
+        harmonic.solve(&vec![0.0; n], &mut htilde)?;
+        let res: Vec<f64> = unknown.iter().map(|&i| htilde[i] - h_of(i)).collect();
         residual = res.iter().fold(0.0f64, |a, r| a.max(r.abs())) * ebar;
         if last_step < opts.epsilon {
             converged = true;
@@ -555,13 +581,17 @@ pub fn schneider_kobbelt(
     }
     let cur = work.positions().to_vec();
     let max_displacement = max_distance(&cur, &input);
-    mesh.set_positions(cur)?;
-    Ok(SmoothReport {
+    let report = SmoothReport {
         iterations,
         volume_before: v0,
-        volume_after: geom::volume(mesh),
+        volume_after: geom::volume_at(mesh, &cur),
         max_displacement,
         converged,
         residual: Some(residual),
+        taubin: None,
+    };
+    Ok(Output {
+        positions: cur,
+        report,
     })
 }

@@ -1,21 +1,23 @@
 //! Spring model of Yamada et al. (Grüner thesis §3.3, Eq. (20)–(24)).
 
-use super::{Constraints, Role, SmoothError, SmoothReport, max_distance, roles};
-use crate::Vec3;
+use super::{Constraints, Role, SmoothError, SmoothReport, max_distance, roles, setters};
 use crate::geom;
 use crate::mesh::{SurfaceMesh, VertexId};
+use crate::{Control, Output, Vec3};
 
 /// Options of [`spring_smooth`].
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct SpringOptions {
     /// Stop when the largest displacement of a sweep divided by the mean
     /// length of that vertex's edges is below ε.
     pub epsilon: f64,
     /// Upper bound on the number of Gauss–Seidel sweeps.
     pub max_iterations: usize,
-    /// Positional constraints. Boundary vertices are always fixed, as
-    /// Yamada et al. require positional constraints on the boundary nodes.
-    pub constraints: Constraints,
+    /// Positional constraints: vertices that never move (bit-identical in
+    /// the output). Boundary vertices are always fixed, as Yamada et al.
+    /// require positional constraints on the boundary nodes.
+    pub fixed: Vec<VertexId>,
     /// Normal constraints (Grüner §3.3): these vertices use the given
     /// normal (normalised) instead of the estimated one. Boundary vertices
     /// not listed get a normal from a quadric fit over the input two-ring.
@@ -29,6 +31,8 @@ pub struct SpringOptions {
     /// fast, the noise is gone and further sweeps only erode features.
     /// `None` keeps only the absolute rule `epsilon`.
     pub stall_ratio: Option<f64>,
+    /// Progress callback and cancel flag (one step per sweep).
+    pub control: Control,
 }
 
 /// Default of [`SpringOptions::stall_ratio`].
@@ -39,12 +43,22 @@ impl Default for SpringOptions {
         SpringOptions {
             epsilon: 1e-4,
             max_iterations: 200,
-            constraints: Constraints::default(),
+            fixed: Vec::new(),
             normals: Vec::new(),
             stall_ratio: Some(STALL_RATIO),
+            control: Control::default(),
         }
     }
 }
+
+setters!(SpringOptions {
+    epsilon: f64,
+    max_iterations: usize,
+    fixed: Vec<VertexId>,
+    normals: Vec<(VertexId, Vec3)>,
+    stall_ratio: Option<f64>,
+    control: Control,
+});
 
 /// Spring-model fairing: each free node moves by the inverse-length
 /// weighted average (Eq. (24)) of the spring displacements
@@ -62,12 +76,14 @@ impl Default for SpringOptions {
 /// lengths and the volume within 0.2 %. `converged` is true when either
 /// rule stopped the iteration.
 pub fn spring_smooth(
-    mesh: &mut SurfaceMesh,
+    mesh: &SurfaceMesh,
     opts: &SpringOptions,
-) -> Result<SmoothReport, SmoothError> {
-    let mut c = opts.constraints.clone();
-    c.fix_boundary = true;
-    c.preserve_volume = false;
+) -> Result<Output<SmoothReport>, SmoothError> {
+    let c = Constraints {
+        fixed: opts.fixed.clone(),
+        fix_boundary: true,
+        ..Constraints::default()
+    };
     let roles = roles(mesh, &c)?;
     let input = mesh.positions().to_vec();
     let v0 = geom::volume(mesh);
@@ -119,6 +135,8 @@ pub fn spring_smooth(
     }
     let mut previous_rms = f64::INFINITY;
     while iterations < opts.max_iterations {
+        opts.control
+            .step("iterations", iterations as u64, opts.max_iterations as u64)?;
         iterations += 1;
         let mut normals = geom::vertex_normals_max(&work);
         for &(i, nrm) in &boundary_normals {
@@ -189,13 +207,17 @@ pub fn spring_smooth(
     }
     let cur = work.positions().to_vec();
     let max_displacement = max_distance(&cur, &input);
-    mesh.set_positions(cur)?;
-    Ok(SmoothReport {
+    let report = SmoothReport {
         iterations,
         volume_before: v0,
-        volume_after: geom::volume(mesh),
+        volume_after: geom::volume_at(mesh, &cur),
         max_displacement,
         converged,
         residual: None,
+        taubin: None,
+    };
+    Ok(Output {
+        positions: cur,
+        report,
     })
 }

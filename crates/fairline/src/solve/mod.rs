@@ -3,7 +3,9 @@
 //! normal equations of sparse least-squares problems (by Cholesky or by
 //! matrix-free preconditioned conjugate gradients), preconditioned conjugate
 //! gradients for any symmetric positive definite operator, triplet assembly,
-//! and an exact bound-constrained QP solver.
+//! the one constrained quadratic solve (fixed unknowns eliminated, symbolic
+//! factorisation reused: [`ConstrainedSolver`]), and an exact
+//! bound-constrained QP solver.
 //!
 //! All matrices are faer `SparseColMat<usize, f64>`.
 
@@ -11,6 +13,7 @@ mod amg;
 mod box_qp;
 mod cg;
 mod cholesky;
+mod constrained;
 mod ordering;
 mod small;
 mod vector_amg;
@@ -25,6 +28,7 @@ pub use cholesky::{
     CholeskyOptions, CholeskyOrdering, CholeskySolver, least_squares, normal_matrix,
     sparse_from_triplets,
 };
+pub use constrained::{ConstrainedOptions, ConstrainedSolver};
 pub use ordering::nested_dissection;
 pub use small::{function_of_eigen3, solve_spd, symmetric_eigen3, symmetric_function3};
 pub use vector_amg::{SymmetricBlock, VectorAmg, VectorAmgOptions, VectorOperator};

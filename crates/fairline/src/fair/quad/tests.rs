@@ -67,23 +67,11 @@ fn zigzag_structure_lines_are_straightened_closer_to_the_truth_than_laplace_and_
         let mut ours = zz.clone();
         let r = fair_structure_lines(&mut ours, &QuadFairOptions::default()).unwrap();
         let mut lap = zz.clone();
-        laplace_smooth(
-            &mut lap,
-            &LaplaceOptions {
-                iterations: 10,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let out = laplace_smooth(&lap, &LaplaceOptions::default().iterations(10)).unwrap();
+        lap.set_positions(out.positions).unwrap();
         let mut tau = zz.clone();
-        taubin_smooth(
-            &mut tau,
-            &TaubinOptions {
-                iterations: 10,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let out = taubin_smooth(&tau, &TaubinOptions::default().iterations(10)).unwrap();
+        tau.set_positions(out.positions).unwrap();
         let (e_l, e_t) = (structure_energy(&lap), structure_energy(&tau));
         let (d_ours, d_lap, d_tau) = (
             mean_dist(&ours, &truth),
@@ -495,18 +483,11 @@ fn zigzag_structure_lines_straighten_on_the_true_surface_better_than_taubin_50()
     for (name, truth, zz, f) in structure_line_cases() {
         let taubin = |fix_boundary: bool| {
             let mut m = zz.clone();
-            taubin_smooth(
-                &mut m,
-                &TaubinOptions {
-                    iterations: 50,
-                    constraints: crate::smooth::Constraints {
-                        fix_boundary,
-                        ..Default::default()
-                    },
-                    ..Default::default()
-                },
-            )
-            .unwrap();
+            let o = TaubinOptions::default()
+                .iterations(50)
+                .fix_boundary(fix_boundary);
+            let out = taubin_smooth(&m, &o).unwrap();
+            m.set_positions(out.positions).unwrap();
             m
         };
         let (tau, tau_fixed) = (taubin(false), taubin(true));
