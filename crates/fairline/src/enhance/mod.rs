@@ -138,6 +138,10 @@
 
 #[cfg(test)]
 mod accuracy_tests;
+#[cfg(test)]
+mod bitwise_tests;
+#[cfg(test)]
+pub(crate) use bitwise_tests::checksum as bitwise_checksum;
 mod precondition;
 mod repair;
 mod surface;

@@ -426,4 +426,6 @@ pub(crate) fn fair_structure_lines_with(
 }
 
 #[cfg(test)]
+mod bitwise_tests;
+#[cfg(test)]
 mod tests;
