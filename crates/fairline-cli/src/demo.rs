@@ -768,7 +768,11 @@ fn structure_line_section(demo: &Demo) -> Result<Section> {
     )?;
     let mut faired = zigzag.clone();
     faired.set_positions(fair_structure_lines(&zigzag, &QuadFairOptions::default())?.positions)?;
-    let meshes = [("input", &zigzag), ("taubin_50", &taubin), ("fairline", &faired)];
+    let meshes = [
+        ("input", &zigzag),
+        ("taubin_50", &taubin),
+        ("fairline", &faired),
+    ];
     let distances: Vec<Vec<f64>> = meshes
         .iter()
         .map(|(_, m)| graph_distance(m, &bump))
@@ -785,7 +789,7 @@ fn structure_line_section(demo: &Demo) -> Result<Section> {
         .map(|((_, m), d)| {
             let picture = Picture {
                 scalar: Some(ScalarField {
-                    name: "distance to the true surface".into(),
+                    name: "distance to truth".into(),
                     values: d,
                     colormap: Colormap::Viridis,
                     range: Some((0.0, largest)),

@@ -1031,11 +1031,11 @@ fn run_method(
                 .weight(o.weight.unwrap_or(d.weight))
                 .iterations(o.iterations.unwrap_or(d.iterations))
                 .fixed(fixed_outside(mesh));
-            let out = fair_structure_lines(mesh, &opts).map_err(|e| e.to_string())?;
-            let r = &out.report;
+            let faired = fair_structure_lines(mesh, &opts).map_err(|e| e.to_string())?;
+            let r = &faired.report;
             Ok(Outcome {
                 surfaces: None,
-                positions: out.positions.clone(),
+                positions: faired.positions.clone(),
                 report: library_report("fair-quad", r, t.elapsed().as_secs_f64()),
                 command: format!(
                     "fairline fair-quad {file} --weight {} --iterations {}{fixed_arg} -o {out}",

@@ -50,7 +50,11 @@ fn cases() -> Vec<(&'static str, SurfaceMesh, EnhanceOptions)> {
                 .solver(EnhanceSolver::Amg)
                 .lambda(0.5),
         ),
-        ("rounded cube default", cube.clone(), EnhanceOptions::default()),
+        (
+            "rounded cube default",
+            cube.clone(),
+            EnhanceOptions::default(),
+        ),
         (
             "rounded cube direct",
             cube.clone(),
@@ -93,7 +97,10 @@ const RECORDED: &[(&str, u64)] = &[
     ("torus amg λ 0.5", 0x2185c7c5d7e2146c),
     ("rounded cube default", 0x6727861957321d66),
     ("rounded cube direct", 0x8e544a577b8de37b),
-    ("rounded cube 3 iterations, mesh projection", 0xc600aa685e91d1aa),
+    (
+        "rounded cube 3 iterations, mesh projection",
+        0xc600aa685e91d1aa,
+    ),
     ("rounded cube paper, fixed, μ 0", 0x2c5bb8bbc5828e77),
     ("open cylinder default", 0x47f4c528f6e5c573),
     ("open cylinder 2 iterations direct", 0x5967732d48a1f0ac),

@@ -153,12 +153,12 @@ use crate::geom::{
     PrincipalCurvatures, mean_edge_length, principal_curvatures_rusinkiewicz, triangle_qualities,
 };
 use crate::mesh::{MeshError, SurfaceMesh, VertexId};
+pub use crate::solve::NormalSolver as EnhanceSolver;
+pub use crate::solve::{AUTO_DIRECT_LIMIT, AUTO_JACOBI_BUDGET, AUTO_JACOBI_CHECK};
 use crate::solve::{
     BlockJacobi, MultigridBuilder, Preconditioner, SolveError, StagedOptions, StagedSolver,
 };
 use crate::{Control, Output, Vec3};
-pub use crate::solve::NormalSolver as EnhanceSolver;
-pub use crate::solve::{AUTO_DIRECT_LIMIT, AUTO_JACOBI_BUDGET, AUTO_JACOBI_CHECK};
 pub use repair::QUALITY_FLOOR;
 use serde::Serialize;
 use std::time::Instant;
@@ -472,7 +472,9 @@ pub fn enhance_features(
     let mut flow = Flow::new(&problem);
     let total = options.iterations as u64;
     for iteration in 0..options.iterations {
-        options.control.step("iterations", iteration as u64, total)?;
+        options
+            .control
+            .step("iterations", iteration as u64, total)?;
         flow.iterate(&problem, &input_surface, iteration, &mut timings)?;
     }
     options.control.progress("iterations", total, total);
@@ -711,8 +713,12 @@ impl Flow {
             target[v as usize] = Vec3::new(x[3 * f], x[3 * f + 1], x[3 * f + 2]);
         }
         input_surface.project(&layout.free, &mut target, options.projection);
-        let outcome =
-            repair::repair_flips(problem.mesh, &problem.input_faces, &self.current, &mut target);
+        let outcome = repair::repair_flips(
+            problem.mesh,
+            &problem.input_faces,
+            &self.current,
+            &mut target,
+        );
         self.flipped_triangles += outcome.flipped;
         self.degraded_triangles += outcome.degraded;
         for v in outcome.backtracked {

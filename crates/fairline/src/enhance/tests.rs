@@ -593,9 +593,15 @@ fn vertex_flow_reports_progress_and_stops_when_cancelled() {
             v.push(p.done);
         }
     });
-    let out = enhance_features(&m, &EnhanceOptions::default().iterations(2).control(control))
-        .unwrap();
-    assert_eq!(count.lock().map(|v| v.clone()).unwrap_or_default(), vec![0, 1, 2]);
+    let out = enhance_features(
+        &m,
+        &EnhanceOptions::default().iterations(2).control(control),
+    )
+    .unwrap();
+    assert_eq!(
+        count.lock().map(|v| v.clone()).unwrap_or_default(),
+        vec![0, 1, 2]
+    );
     assert_eq!(out.report.iterations, 2);
     assert_eq!((out.report.lambda, out.report.mu), (1.0, 0.5));
     assert_eq!(m.positions(), &before[..]);

@@ -68,13 +68,10 @@ impl BandedBlocks {
             slices.push(head);
             rest = tail;
         }
-        let ok = slices
-            .into_par_iter()
-            .enumerate()
-            .all(|(b, band)| {
-                fill(b, band);
-                banded_cholesky(band)
-            });
+        let ok = slices.into_par_iter().enumerate().all(|(b, band)| {
+            fill(b, band);
+            banded_cholesky(band)
+        });
         if !ok {
             return None;
         }
@@ -287,7 +284,11 @@ mod tests {
         let x: Vec<f64> = (0..120).map(|k| ((k * 37) % 11) as f64 - 5.0).collect();
         let mut y = band_times(&band, &x);
         banded_solve(&factor, &mut y);
-        let err = x.iter().zip(&y).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let err = x
+            .iter()
+            .zip(&y)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
         assert!(err < 1e-8, "{err}");
         let mut bad = run_band(10, -1.0);
         assert!(!banded_cholesky(&mut bad));
@@ -330,7 +331,11 @@ mod tests {
                 .flat_map(|&u| (0..3).map(move |c| rr[3 * u as usize + c]))
                 .collect();
             let mz = band_times(&band, &zg);
-            let err = mz.iter().zip(&rg).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            let err = mz
+                .iter()
+                .zip(&rg)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
             assert!(err < 1e-10, "block {b}: {err}");
         }
         // inconsistent layouts are refused

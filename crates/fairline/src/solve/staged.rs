@@ -158,8 +158,8 @@ impl StagedSolver {
         let mut x = None;
         // block-Jacobi CG: alone (Cg, or Amg without a model) or as the
         // cheap first attempt (Auto)
-        let jacobi_only = solver == NormalSolver::Cg
-            || (solver == NormalSolver::Amg && multigrid.is_none());
+        let jacobi_only =
+            solver == NormalSolver::Cg || (solver == NormalSolver::Amg && multigrid.is_none());
         let jacobi_budget = match solver {
             _ if jacobi_only => options.max_iterations,
             NormalSolver::Auto if multigrid.is_some() && options.skip_jacobi => 0,

@@ -23,7 +23,12 @@ fn cases() -> Vec<Case> {
         .map(VertexId)
         .collect();
     vec![
-        ("saddle default", small.clone(), QuadFairOptions::default(), Method::Auto),
+        (
+            "saddle default",
+            small.clone(),
+            QuadFairOptions::default(),
+            Method::Auto,
+        ),
         (
             "saddle thesis",
             small.clone(),
@@ -45,12 +50,42 @@ fn cases() -> Vec<Case> {
             },
             Method::Auto,
         ),
-        ("saddle iterative", small, QuadFairOptions::default(), Method::Iterative),
-        ("roof default", roof_grid.clone(), QuadFairOptions::default(), Method::Auto),
-        ("roof iterative", roof_grid, QuadFairOptions::default(), Method::Iterative),
-        ("staircase default", stair, QuadFairOptions::default(), Method::Auto),
-        ("large default", large.clone(), QuadFairOptions::default(), Method::Auto),
-        ("large direct", large, QuadFairOptions::default(), Method::Direct),
+        (
+            "saddle iterative",
+            small,
+            QuadFairOptions::default(),
+            Method::Iterative,
+        ),
+        (
+            "roof default",
+            roof_grid.clone(),
+            QuadFairOptions::default(),
+            Method::Auto,
+        ),
+        (
+            "roof iterative",
+            roof_grid,
+            QuadFairOptions::default(),
+            Method::Iterative,
+        ),
+        (
+            "staircase default",
+            stair,
+            QuadFairOptions::default(),
+            Method::Auto,
+        ),
+        (
+            "large default",
+            large.clone(),
+            QuadFairOptions::default(),
+            Method::Auto,
+        ),
+        (
+            "large direct",
+            large,
+            QuadFairOptions::default(),
+            Method::Direct,
+        ),
     ]
 }
 
@@ -73,7 +108,10 @@ fn results_are_bit_identical_to_those_recorded_before_the_refactor() {
     for (name, mesh, options, method) in cases() {
         let out = fair_structure_lines_with(&mesh, &options, method).unwrap();
         let r = &out.report;
-        let mut sum = checksum(&out.positions, &[r.structure_lines, r.free_vertices, r.iterations]);
+        let mut sum = checksum(
+            &out.positions,
+            &[r.structure_lines, r.free_vertices, r.iterations],
+        );
         for x in [
             r.structure_energy_before,
             r.structure_energy_after,

@@ -35,9 +35,9 @@ pub(crate) use solver::DIRECT_LIMIT;
 use solver::{Lines, System, line_families};
 
 use crate::geom;
-use crate::{Control, Output, Vec3};
 use crate::mesh::{MeshError, StructureLine, SurfaceMesh, VertexId, structure_lines};
 use crate::solve::{CholeskySolver, SolveError};
+use crate::{Control, Output, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 use thiserror::Error;

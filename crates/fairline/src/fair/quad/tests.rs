@@ -581,7 +581,8 @@ fn zigzag_structure_lines_straighten_on_the_true_surface_better_than_taubin_50()
         let mut ours = zz.clone();
         let r = fair_in_place(&mut ours, &QuadFairOptions::default()).unwrap();
         let mut thesis = zz.clone();
-        fair_in_place(&mut thesis,
+        fair_in_place(
+            &mut thesis,
             &QuadFairOptions {
                 on_surface: false,
                 ..Default::default()
