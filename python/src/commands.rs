@@ -363,29 +363,24 @@ fn fair_quad<'py>(
             ));
         }
         let fixed = fixed_vertices(fixed.as_deref().unwrap_or(&[]), mesh.vertex_count())?;
-        let opts = QuadFairOptions {
-            weight,
-            deviation,
-            deviation_factor,
-            iterations,
-            fix_boundary,
-            fixed,
-            on_surface: !off_surface,
-        };
+        let opts = QuadFairOptions::default()
+            .weight(weight)
+            .deviation(deviation)
+            .deviation_factor(deviation_factor)
+            .iterations(iterations)
+            .fix_boundary(fix_boundary)
+            .fixed(fixed)
+            .on_surface(!off_surface);
         let mut report = Report::new("fair-quad");
-        let r = report
-            .time(|| fair_structure_lines(&mut mesh, &opts))
+        let out = report
+            .time(|| fair_structure_lines(&mesh, &opts))
             .map_err(|e| match e {
                 QuadFairError::Solve(_) => Failure::computation(e.to_string()),
                 other => Failure::bad(other.to_string()),
             })?;
-        report.set("vertices", mesh.vertex_count());
-        report.set("structure_lines", r.structure_lines);
-        report.set("free_vertices", r.free_vertices);
-        report.set("structure_energy_before", r.structure_energy_before);
-        report.set("structure_energy_after", r.structure_energy_after);
-        report.set("max_displacement", r.max_displacement);
-        report.set("iterations", r.iterations);
+        mesh.set_positions(out.positions)?;
+        let r = out.report;
+        report.set_fields(&r);
         if r.structure_energy_after > r.structure_energy_before {
             report.warn(format!(
                 "the structure-line energy got worse: {:.4e} before, {:.4e} after; try a larger --weight",
@@ -474,29 +469,9 @@ fn enhance<'py>(
         let mut out = mesh.clone();
         out.set_positions(result.positions)?;
         let r = &result.report;
-        report.set("vertices", r.vertices);
-        report.set("free_vertices", r.free_vertices);
-        report.set("iterations", r.iterations);
-        report.set("lambda", lambda_);
-        report.set("mu", mu);
-        report.set("flipped_triangles", r.flipped_triangles);
-        report.set("degraded_triangles", r.degraded_triangles);
-        report.set("backtracked_vertices", r.backtracked_vertices);
-        report.set("quality_before", &r.quality_before);
-        report.set("quality_after", &r.quality_after);
+        report.set_fields(r);
         report.set("histogram_before", &r.quality_before.histogram);
         report.set("histogram_after", &r.quality_after.histogram);
-        report.set("max_displacement", r.max_displacement);
-        report.set("mean_displacement", r.mean_displacement);
-        report.set("max_distance_to_input", r.max_distance_to_input);
-        report.set("mean_distance_to_input", r.mean_distance_to_input);
-        report.set("edge_length", r.edge_length);
-        report.set("solver", r.solver);
-        report.set("projection", r.projection);
-        report.set("cg_iterations", r.cg_iterations);
-        report.set("cg_relative_residual", r.cg_relative_residual);
-        report.set("direct_fallbacks", r.direct_fallbacks);
-        report.set("timings", &r.timings);
         if r.flipped_triangles > 0 {
             report.warn(format!(
                 "{} triangle(s) flipped their orientation; try a smaller --lambda or fewer --iterations",

@@ -51,6 +51,19 @@ impl Report {
         }
     }
 
+    /// Sets every field of `fields` (a library report) as a key.
+    pub fn set_fields(&mut self, fields: impl serde::Serialize) {
+        match serde_json::to_value(fields) {
+            Ok(Value::Object(map)) => {
+                for (key, value) in map {
+                    self.set(&key, value);
+                }
+            }
+            Ok(other) => self.set("value", other),
+            Err(e) => self.warn(format!("report could not be written ({e})")),
+        }
+    }
+
     /// Records a warning (listed under `"warnings"`).
     pub fn warn(&mut self, msg: impl Into<String>) {
         self.warnings.push(msg.into());

@@ -159,6 +159,20 @@ impl Report {
             ));
         }
     }
+
+    /// Sets every field of `fields` (a struct that serialises to an object,
+    /// e.g. a library report) as a key, like [`Report::set`].
+    pub fn set_fields(&mut self, fields: impl serde::Serialize) {
+        match serde_json::to_value(fields) {
+            Ok(Value::Object(map)) => {
+                for (key, value) in map {
+                    self.set(&key, value);
+                }
+            }
+            Ok(other) => self.set("value", other),
+            Err(e) => self.warn(format!("report could not be written ({e})")),
+        }
+    }
     /// Prints `warning: MSG` on standard error and records it under
     /// `"warnings"` in the report.
     pub fn warn(&mut self, msg: impl Into<String>) {

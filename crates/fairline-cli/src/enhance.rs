@@ -180,29 +180,9 @@ pub fn run(args: Args) -> Result<()> {
             .with_context(|| format!("writing {}", png.display()))?;
     }
     let r = &result.report;
-    report.set("vertices", r.vertices);
-    report.set("free_vertices", r.free_vertices);
-    report.set("iterations", r.iterations);
-    report.set("lambda", args.lambda);
-    report.set("mu", args.mu);
-    report.set("flipped_triangles", r.flipped_triangles);
-    report.set("degraded_triangles", r.degraded_triangles);
-    report.set("backtracked_vertices", r.backtracked_vertices);
-    report.set("quality_before", &r.quality_before);
-    report.set("quality_after", &r.quality_after);
+    report.set_fields(r);
     report.set("histogram_before", &r.quality_before.histogram);
     report.set("histogram_after", &r.quality_after.histogram);
-    report.set("max_displacement", r.max_displacement);
-    report.set("mean_displacement", r.mean_displacement);
-    report.set("max_distance_to_input", r.max_distance_to_input);
-    report.set("mean_distance_to_input", r.mean_distance_to_input);
-    report.set("edge_length", r.edge_length);
-    report.set("solver", r.solver);
-    report.set("projection", r.projection);
-    report.set("cg_iterations", r.cg_iterations);
-    report.set("cg_relative_residual", r.cg_relative_residual);
-    report.set("direct_fallbacks", r.direct_fallbacks);
-    report.set("timings", &r.timings);
     if r.flipped_triangles > 0 {
         report.warn(format!(
             "{} triangle(s) flipped their orientation; try a smaller --lambda or fewer --iterations",

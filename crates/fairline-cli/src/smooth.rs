@@ -387,30 +387,25 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
         None => Vec::new(),
     };
     let input = mesh.clone();
-    let opts = QuadFairOptions {
-        weight: args.weight,
-        deviation: args.deviation,
-        deviation_factor: args.deviation_factor,
-        iterations: args.iterations,
-        fix_boundary: args.fix_boundary,
-        fixed,
-        on_surface: !args.off_surface,
-    };
+    let opts = QuadFairOptions::default()
+        .weight(args.weight)
+        .deviation(args.deviation)
+        .deviation_factor(args.deviation_factor)
+        .iterations(args.iterations)
+        .fix_boundary(args.fix_boundary)
+        .fixed(fixed)
+        .on_surface(!args.off_surface);
     let mut report = Report::new("fair-quad");
     let bar = spinner("fairing structure lines");
-    let r = report.time(|| fair_structure_lines(&mut mesh, &opts));
+    let out = report.time(|| fair_structure_lines(&mesh, &opts));
     bar.finish_and_clear();
-    let r = r.map_err(|e| match e {
+    let out = out.map_err(|e| match e {
         fairline::fair::QuadFairError::Solve(_) => anyhow::Error::new(e),
         other => bad_input(other.to_string()),
     })?;
-    report.set("vertices", mesh.vertex_count());
-    report.set("structure_lines", r.structure_lines);
-    report.set("free_vertices", r.free_vertices);
-    report.set("structure_energy_before", r.structure_energy_before);
-    report.set("structure_energy_after", r.structure_energy_after);
-    report.set("max_displacement", r.max_displacement);
-    report.set("iterations", r.iterations);
+    mesh.set_positions(out.positions)?;
+    let r = out.report;
+    report.set_fields(&r);
     fairline::io::write_mesh(&args.output, &mesh)?;
     if let Some(png) = &args.png {
         before_after(
@@ -468,7 +463,7 @@ pub fn demo_section(demo: &crate::demo::Demo) -> Result<crate::demo::Section> {
     let mut tau = zz.clone();
     tau.set_positions(taubin_smooth(&zz, &TaubinOptions::default())?.positions)?;
     let mut ours = zz.clone();
-    fair_structure_lines(&mut ours, &QuadFairOptions::default())?;
+    ours.set_positions(fair_structure_lines(&zz, &QuadFairOptions::default())?.positions)?;
     let dist = |m: &SurfaceMesh| {
         m.positions()
             .iter()

@@ -164,18 +164,15 @@ fn main() {
     // the default (points on the input surface, deviation factor 0.1) and
     // the options that were the default before session 17 (the thesis'
     // penalty alone, deviation halved)
-    let before = QuadFairOptions {
-        on_surface: false,
-        deviation_factor: 0.5,
-        ..Default::default()
-    };
+    let before = QuadFairOptions::default()
+        .on_surface(false)
+        .deviation_factor(0.5);
     for (label, opts) in [
         ("structure-line fairing", QuadFairOptions::default()),
         ("  (off surface, factor 0.5)", before),
     ] {
         let t = common::median_secs(runs.min(2), || {
-            let mut m = quads.clone();
-            fair_structure_lines(&mut m, &opts).expect("fair")
+            fair_structure_lines(&quads, &opts).expect("fair")
         });
         println!("{:>10} {:>28} {:>10.3}", quads.vertex_count(), label, t);
     }

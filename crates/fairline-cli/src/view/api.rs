@@ -1005,28 +1005,17 @@ fn run_method(
             if !mesh.faces().any(|f| mesh.face_size(f) == 4) {
                 return Err("fair-quad needs a quad mesh (no quadrilateral found)".into());
             }
-            let mut m = mesh.clone();
             let d = QuadFairOptions::default();
-            let opts = QuadFairOptions {
-                weight: o.weight.unwrap_or(d.weight),
-                iterations: o.iterations.unwrap_or(d.iterations),
-                fixed: fixed_outside(mesh),
-                ..d
-            };
-            let r = fair_structure_lines(&mut m, &opts).map_err(|e| e.to_string())?;
+            let opts = QuadFairOptions::default()
+                .weight(o.weight.unwrap_or(d.weight))
+                .iterations(o.iterations.unwrap_or(d.iterations))
+                .fixed(fixed_outside(mesh));
+            let faired = fair_structure_lines(mesh, &opts).map_err(|e| e.to_string())?;
+            let r = &faired.report;
             Ok(Outcome {
                 surfaces: None,
-                positions: m.positions().to_vec(),
-                report: json!({
-                    "command": "fair-quad",
-                    "structure_lines": r.structure_lines,
-                    "free_vertices": r.free_vertices,
-                    "structure_energy_before": r.structure_energy_before,
-                    "structure_energy_after": r.structure_energy_after,
-                    "max_displacement": r.max_displacement,
-                    "iterations": r.iterations,
-                    "time_s": t.elapsed().as_secs_f64(),
-                }),
+                positions: faired.positions.clone(),
+                report: library_report("fair-quad", r, t.elapsed().as_secs_f64()),
                 command: format!(
                     "fairline fair-quad {file} --weight {} --iterations {}{fixed_arg} -o {out}",
                     opts.weight, opts.iterations
@@ -1048,14 +1037,7 @@ fn run_method(
             let r = enhance_features(tri, &opts).map_err(|e| e.to_string())?;
             Ok(Outcome {
                 surfaces: None,
-                report: json!({
-                    "command": "enhance",
-                    "flipped_triangles": r.report.flipped_triangles,
-                    "quality_before": r.report.quality_before,
-                    "quality_after": r.report.quality_after,
-                    "max_displacement": r.report.max_displacement,
-                    "time_s": t.elapsed().as_secs_f64(),
-                }),
+                report: library_report("enhance", &r.report, t.elapsed().as_secs_f64()),
                 positions: r.positions,
                 command: format!(
                     "fairline enhance {file} --lambda {lambda} --mu {mu} --iterations {iterations}{fixed_arg} -o {out}"
@@ -1383,4 +1365,15 @@ fn run_fair_surface(
         ),
         label: format!("fair-surface (patch {})", req.patch),
     })
+}
+
+/// The JSON of a library report (its fields are the CLI's report keys)
+/// with the command and the wall time added.
+fn library_report(command: &str, report: &impl serde::Serialize, time_s: f64) -> Value {
+    let mut value = serde_json::to_value(report).unwrap_or_else(|_| json!({}));
+    if let Value::Object(map) = &mut value {
+        map.insert("command".into(), json!(command));
+        map.insert("time_s".into(), json!(time_s));
+    }
+    value
 }

@@ -138,6 +138,10 @@
 
 #[cfg(test)]
 mod accuracy_tests;
+#[cfg(test)]
+mod bitwise_tests;
+#[cfg(test)]
+pub(crate) use bitwise_tests::checksum as bitwise_checksum;
 mod precondition;
 mod repair;
 mod surface;
@@ -145,12 +149,16 @@ mod system;
 #[cfg(test)]
 mod tests;
 
-use crate::Vec3;
-use crate::geom::{mean_edge_length, principal_curvatures_rusinkiewicz, triangle_qualities};
-use crate::mesh::{MeshError, SurfaceMesh, VertexId};
-use crate::solve::{
-    BlockJacobi, CgOptions, CgReport, CholeskySolver, Preconditioner, SolveError, pcg_with,
+use crate::geom::{
+    PrincipalCurvatures, mean_edge_length, principal_curvatures_rusinkiewicz, triangle_qualities,
 };
+use crate::mesh::{MeshError, SurfaceMesh, VertexId};
+pub use crate::solve::NormalSolver as EnhanceSolver;
+pub use crate::solve::{AUTO_DIRECT_LIMIT, AUTO_JACOBI_BUDGET, AUTO_JACOBI_CHECK};
+use crate::solve::{
+    BlockJacobi, MultigridBuilder, Preconditioner, SolveError, StagedOptions, StagedSolver,
+};
+use crate::{Control, Output, Vec3};
 pub use repair::QUALITY_FLOOR;
 use serde::Serialize;
 use std::time::Instant;
@@ -164,14 +172,6 @@ pub const REPAIR_HALVINGS: usize = 8;
 /// Default relative residual at which conjugate gradients stop.
 pub const CG_TOLERANCE: f64 = 1e-12;
 
-/// Iterations of block-Jacobi conjugate gradients under
-/// [`EnhanceSolver::Auto`] before they switch to the multigrid-preconditioned
-/// ones: where the curvature holds every tangential direction (tori of 10k
-/// to 1M vertices) block Jacobi converges in about 25 iterations, each
-/// cheaper than a preconditioned one and without a setup; where it does not
-/// (flat or cylindrical parts) it would need hundreds to thousands.
-pub const AUTO_JACOBI_BUDGET: usize = 40;
-
 /// Under [`EnhanceSolver::Auto`], block Jacobi is skipped when more than
 /// this share of the free vertices have a tangential direction that the
 /// distance term F_sd holds by less than [`SOFT_COEFFICIENT`] of its normal
@@ -183,18 +183,6 @@ pub const AUTO_SOFT_SHARE: f64 = 0.1;
 /// a tangential direction counts as free for [`AUTO_SOFT_SHARE`].
 pub const SOFT_COEFFICIENT: f64 = 0.01;
 
-/// Under [`EnhanceSolver::Auto`], block-Jacobi conjugate gradients give up
-/// early when, every this many iterations, their mean rate over the last
-/// ones predicts more than [`AUTO_JACOBI_BUDGET`] iterations
-/// ([`CgOptions::hopeless_after`]).
-pub const AUTO_JACOBI_CHECK: usize = 4;
-
-/// Largest number of free vertices for which [`EnhanceSolver::Auto`] falls
-/// back to the direct solver when conjugate gradients fail: the Cholesky
-/// factor of 300k vertices takes about 6 GB; beyond, it does not fit a
-/// typical machine.
-pub const AUTO_DIRECT_LIMIT: usize = 300_000;
-
 /// Default iteration limit of conjugate gradients.
 pub const CG_MAX_ITERATIONS: usize = 5000;
 
@@ -202,8 +190,10 @@ pub const CG_MAX_ITERATIONS: usize = 5000;
 const REGULARISATION: f64 = 1e-10;
 
 /// Options of [`enhance_features`]; `Default` gives the paper's λ = 1,
-/// μ = 0.5 and one iteration.
+/// μ = 0.5 and one iteration. Build with `EnhanceOptions::default()` and
+/// the setters (`.lambda(0.5).iterations(2)`).
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct EnhanceOptions {
     /// λ, weight of the squared-distance term F_sd (Eq. (1)). Smaller values
     /// allow more deviation from the input and give stronger features. > 0.
@@ -229,35 +219,8 @@ pub struct EnhanceOptions {
     /// of the input surface (the default), onto the input mesh, or nowhere
     /// (the paper's method).
     pub projection: Projection,
-}
-
-/// Solver of the least-squares system of Eq. (20); both compute the same
-/// least-squares solution (to the tolerance of conjugate gradients).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum EnhanceSolver {
-    /// [`EnhanceSolver::Amg`] on meshes with large flat or cylindrical
-    /// parts ([`AUTO_SOFT_SHARE`]); elsewhere block-Jacobi conjugate
-    /// gradients for at most [`AUTO_JACOBI_BUDGET`] iterations (fewer when
-    /// their progress predicts far more), then, from where they stopped,
-    /// conjugate gradients preconditioned as [`EnhanceSolver::Amg`] up to
-    /// [`EnhanceOptions::cg_max_iterations`], then (should they fail, and
-    /// for n ≤ [`AUTO_DIRECT_LIMIT`] free vertices) the direct solver.
-    Auto,
-    /// Sparse Cholesky factorisation of the normal matrix AᵀA + εI.
-    Direct,
-    /// Block-Jacobi preconditioned conjugate gradients on the normal
-    /// equations, matrix-free, warm-started at the current positions.
-    Cg,
-    /// Conjugate gradients preconditioned by block Jacobi plus the factored
-    /// bi-Laplacian model H Q̂ H of the smoothness and edge-metric rows,
-    /// with smoothed-aggregation multigrid cycles for H (module
-    /// documentation), warm-started at the current positions, up to
-    /// [`EnhanceOptions::cg_max_iterations`]; an error if they do not
-    /// converge. The iteration count hardly grows with the mesh, also on
-    /// flat and cylindrical parts. Needs μ > 0 (with μ = 0 it is block
-    /// Jacobi).
-    Amg,
+    /// Progress (one step per iteration) and cancellation.
+    pub control: Control,
 }
 
 impl Default for EnhanceOptions {
@@ -272,6 +235,7 @@ impl Default for EnhanceOptions {
             cg_tolerance: CG_TOLERANCE,
             cg_max_iterations: CG_MAX_ITERATIONS,
             projection: Projection::Smooth,
+            control: Control::default(),
         }
     }
 }
@@ -312,6 +276,21 @@ impl EnhanceOptions {
         self.histogram_bins = bins;
         self
     }
+    /// Sets the relative residual at which conjugate gradients stop.
+    pub fn cg_tolerance(mut self, tolerance: f64) -> Self {
+        self.cg_tolerance = tolerance;
+        self
+    }
+    /// Sets the iteration limit of conjugate gradients.
+    pub fn cg_max_iterations(mut self, iterations: usize) -> Self {
+        self.cg_max_iterations = iterations;
+        self
+    }
+    /// Sets the progress callback and cancel flag.
+    pub fn control(mut self, control: Control) -> Self {
+        self.control = control;
+        self
+    }
 }
 
 /// Why [`enhance_features`] failed.
@@ -334,6 +313,9 @@ pub enum EnhanceError {
     /// The linear solve failed.
     #[error("vertex-flow solve failed: {0}")]
     Solve(#[from] SolveError),
+    /// The caller cancelled the run ([`EnhanceOptions::control`]).
+    #[error("cancelled")]
+    Cancelled(#[from] crate::Cancelled),
 }
 
 /// Statistics of the triangle quality 2r/R (1 equilateral, 0 degenerate;
@@ -391,7 +373,9 @@ pub struct EnhanceTimings {
     pub total_s: f64,
 }
 
-/// What [`enhance_features`] did.
+/// What [`enhance_features`] did; serialises to the JSON report of
+/// `fairline enhance` (the CLI adds `histogram_before`/`histogram_after`
+/// and its own timing keys).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct EnhanceReport {
     /// Number of vertices.
@@ -400,6 +384,10 @@ pub struct EnhanceReport {
     pub free_vertices: usize,
     /// Solves performed.
     pub iterations: usize,
+    /// λ of the run ([`EnhanceOptions::lambda`]).
+    pub lambda: f64,
+    /// μ of the run ([`EnhanceOptions::mu`]).
+    pub mu: f64,
     /// Triangles found flipped (normal against the input's, or collapsed)
     /// after a solve and repaired; summed over the iterations.
     pub flipped_triangles: usize,
@@ -444,49 +432,85 @@ pub struct EnhanceReport {
     pub timings: EnhanceTimings,
 }
 
-/// Output of [`enhance_features`].
-#[derive(Clone, Debug)]
-pub struct Enhanced {
-    /// New vertex positions (fixed vertices bit-identical to the input).
-    pub positions: Vec<Vec3>,
-    /// Report.
-    pub report: EnhanceReport,
-}
-
 /// Feature enhancement by vertex flow, Ji et al. 2011 Eq. (1)–(20): moves
 /// the free vertices of a triangle mesh toward high-curvature regions by
 /// minimising F_em + λ F_sd + μ F_smo in normalised coordinates (see the
 /// module documentation for the normalisation, constraints and repair).
-/// Returns the new positions (the connectivity is unchanged) and a report.
+/// Returns the new positions (the connectivity is unchanged, the input is
+/// not modified) and a report. Reports one progress step per iteration
+/// through [`EnhanceOptions::control`] and stops there when cancelled.
 ///
 /// Errors: non-triangle faces, λ ≤ 0, μ < 0, non-finite options, zero
 /// iterations or bins, fixed vertices out of range, a failed factorisation,
 /// conjugate gradients that did not converge ([`EnhanceSolver::Cg`],
 /// [`EnhanceSolver::Amg`], or
-/// [`EnhanceSolver::Auto`] above [`AUTO_DIRECT_LIMIT`] free vertices).
+/// [`EnhanceSolver::Auto`] above [`AUTO_DIRECT_LIMIT`] free vertices),
+/// [`EnhanceError::Cancelled`].
 pub fn enhance_features(
     mesh: &SurfaceMesh,
     options: &EnhanceOptions,
-) -> Result<Enhanced, EnhanceError> {
+) -> Result<Output<EnhanceReport>, EnhanceError> {
     let start = Instant::now();
     validate(mesh, options)?;
-    let n = mesh.vertex_count();
-    let input = mesh.positions();
-    let bins = options.histogram_bins;
-    let quality_before = QualityStats::of_mesh(mesh, bins);
-    let edge_length = mean_edge_length(mesh);
     let mut timings = EnhanceTimings::default();
-    let unchanged = |timings: EnhanceTimings, free: usize| Enhanced {
-        positions: input.to_vec(),
+    let edge_length = mean_edge_length(mesh);
+    let quality_before = QualityStats::of_mesh(mesh, options.histogram_bins);
+    let unchanged = |mut timings: EnhanceTimings| {
+        timings.total_s = start.elapsed().as_secs_f64();
+        unchanged_output(mesh, options, quality_before.clone(), edge_length, timings)
+    };
+    if mesh.face_count() == 0 || !(edge_length > 0.0) || !edge_length.is_finite() {
+        return Ok(unchanged(timings));
+    }
+    let problem = FlowProblem::new(mesh, options, edge_length, &mut timings)?;
+    if problem.layout.free.is_empty() {
+        return Ok(unchanged(timings));
+    }
+    let t = Instant::now();
+    let input_surface = surface::InputSurface::new(mesh, &problem.reference);
+    timings.repair_s += t.elapsed().as_secs_f64();
+    let mut flow = Flow::new(&problem);
+    let total = options.iterations as u64;
+    for iteration in 0..options.iterations {
+        options
+            .control
+            .step("iterations", iteration as u64, total)?;
+        flow.iterate(&problem, &input_surface, iteration, &mut timings)?;
+    }
+    options.control.progress("iterations", total, total);
+    let positions = problem.to_input_units(&flow.current);
+    let mut output = flow.report(&problem, positions, quality_before)?;
+    let solver = &flow.solver.stats;
+    timings.assembly_s += solver.assembly_s;
+    timings.factorisation_s += solver.factorisation_s;
+    timings.solve_s += solver.solve_s;
+    timings.total_s = start.elapsed().as_secs_f64();
+    output.report.timings = timings;
+    Ok(output)
+}
+
+/// The output of a run that moves nothing: the input positions and a
+/// report of zero motion.
+fn unchanged_output(
+    mesh: &SurfaceMesh,
+    options: &EnhanceOptions,
+    quality_before: QualityStats,
+    edge_length: f64,
+    timings: EnhanceTimings,
+) -> Output<EnhanceReport> {
+    Output {
+        positions: mesh.positions().to_vec(),
         report: EnhanceReport {
-            vertices: n,
-            free_vertices: free,
+            vertices: mesh.vertex_count(),
+            free_vertices: 0,
             iterations: 0,
+            lambda: options.lambda,
+            mu: options.mu,
             flipped_triangles: 0,
             degraded_triangles: 0,
             backtracked_vertices: 0,
-            quality_before: quality_before.clone(),
             quality_after: quality_before.clone(),
+            quality_before,
             max_displacement: 0.0,
             mean_displacement: 0.0,
             max_distance_to_input: 0.0,
@@ -503,272 +527,257 @@ pub fn enhance_features(
             direct_fallbacks: 0,
             timings,
         },
-    };
-    if mesh.face_count() == 0 || !(edge_length > 0.0) || !edge_length.is_finite() {
-        return Ok(unchanged(timings, 0));
+    }
+}
+
+/// What stays fixed over the iterations of the vertex flow: the mesh in
+/// normalised coordinates x' = (x − c) / ē, its input curvature, the
+/// unknowns, the distance model F_sd and the input faces of the repair.
+struct FlowProblem<'a> {
+    mesh: &'a SurfaceMesh,
+    options: &'a EnhanceOptions,
+    /// c of the normalisation.
+    centroid: Vec3,
+    /// ē of the normalisation.
+    edge_length: f64,
+    /// Input positions, normalised.
+    reference: Vec<Vec3>,
+    /// The mesh at the normalised positions (curvature of later iterations
+    /// is computed on a copy of it).
+    normalised: SurfaceMesh,
+    input_curvature: PrincipalCurvatures,
+    layout: system::Layout,
+    distance: system::DistanceModel,
+    /// Share of the free vertices with a tangential direction F_sd leaves
+    /// free ([`AUTO_SOFT_SHARE`]).
+    soft_share: f64,
+    input_faces: repair::InputFaces,
+}
+
+impl<'a> FlowProblem<'a> {
+    /// Normalises the input, computes its curvature and finds the unknowns
+    /// (free vertices: not on the boundary, not pinned, not listed in
+    /// [`EnhanceOptions::fixed`], with a normal and principal directions).
+    fn new(
+        mesh: &'a SurfaceMesh,
+        options: &'a EnhanceOptions,
+        edge_length: f64,
+        timings: &mut EnhanceTimings,
+    ) -> Result<FlowProblem<'a>, EnhanceError> {
+        let input = mesh.positions();
+        let n = mesh.vertex_count();
+        let centroid = input.iter().copied().sum::<Vec3>() / n as f64;
+        let reference: Vec<Vec3> = input
+            .iter()
+            .map(|&x| (x - centroid) / edge_length)
+            .collect();
+        let mut normalised = mesh.clone();
+        normalised.set_positions(reference.clone())?;
+        let t = Instant::now();
+        let input_curvature = principal_curvatures_rusinkiewicz(&normalised);
+        timings.curvature_s += t.elapsed().as_secs_f64();
+        let mut is_fixed = vec![false; n];
+        for v in mesh.vertices() {
+            let i = v.idx();
+            is_fixed[i] = mesh.is_boundary_vertex(v)
+                || mesh.is_pinned(v)
+                || input_curvature.normals[i] == Vec3::ZERO
+                || input_curvature.d1[i] == Vec3::ZERO;
+        }
+        for v in &options.fixed {
+            is_fixed[v.idx()] = true;
+        }
+        let layout = system::Layout::new(mesh, &is_fixed);
+        let distance = system::DistanceModel::new(&input_curvature, &layout, options.lambda);
+        let soft_share = distance.soft_share(options.lambda);
+        let input_faces = repair::InputFaces::of(&normalised);
+        Ok(FlowProblem {
+            mesh,
+            options,
+            centroid,
+            edge_length,
+            reference,
+            normalised,
+            input_curvature,
+            layout,
+            distance,
+            soft_share,
+            input_faces,
+        })
     }
 
-    // Normalised copy of the mesh: x' = (x − c) / ē.
-    let centroid = input.iter().copied().sum::<Vec3>() / n as f64;
-    let reference: Vec<Vec3> = input
-        .iter()
-        .map(|&x| (x - centroid) / edge_length)
-        .collect();
-    let mut work = mesh.clone();
-    work.set_positions(reference.clone())?;
-
-    let t = Instant::now();
-    let input_curvature = principal_curvatures_rusinkiewicz(&work);
-    timings.curvature_s += t.elapsed().as_secs_f64();
-
-    let mut is_fixed = vec![false; n];
-    for v in mesh.vertices() {
-        let i = v.idx();
-        is_fixed[i] = mesh.is_boundary_vertex(v)
-            || mesh.is_pinned(v)
-            || input_curvature.normals[i] == Vec3::ZERO
-            || input_curvature.d1[i] == Vec3::ZERO;
+    /// Normalised positions back in input units; fixed vertices keep their
+    /// input bits (so does a free vertex whose result is not finite).
+    fn to_input_units(&self, current: &[Vec3]) -> Vec<Vec3> {
+        let mut positions = self.mesh.positions().to_vec();
+        for &v in &self.layout.free {
+            let v = v as usize;
+            let x = self.centroid + current[v] * self.edge_length;
+            if x.is_finite() {
+                positions[v] = x;
+            }
+        }
+        positions
     }
-    for v in &options.fixed {
-        is_fixed[v.idx()] = true;
-    }
-    let layout = system::Layout::new(mesh, &is_fixed);
-    if layout.free.is_empty() {
-        timings.total_s = start.elapsed().as_secs_f64();
-        return Ok(unchanged(timings, 0));
-    }
-    let distance = system::DistanceModel::new(&input_curvature, &layout, options.lambda);
-    let soft_share = distance.soft_share(options.lambda);
-    let input_faces = repair::InputFaces::of(&work);
-    let t = Instant::now();
-    let input_surface = surface::InputSurface::new(mesh, &reference);
-    timings.repair_s += t.elapsed().as_secs_f64();
+}
 
-    let mut current = reference.clone();
-    let mut solver: Option<CholeskySolver> = None;
-    let mut flipped_triangles = 0;
-    let mut degraded_triangles = 0;
-    let (mut cg_iterations, mut cg_residual) = (0usize, 0.0f64);
-    let mut direct_fallbacks = 0;
-    let mut backtracked = vec![false; n];
-    for iteration in 0..options.iterations {
+/// The state of the vertex flow between iterations.
+struct Flow {
+    /// Normalised positions.
+    current: Vec<Vec3>,
+    solver: StagedSolver,
+    flipped_triangles: usize,
+    degraded_triangles: usize,
+    backtracked: Vec<bool>,
+}
+
+impl Flow {
+    fn new(problem: &FlowProblem<'_>) -> Flow {
+        Flow {
+            current: problem.reference.clone(),
+            solver: StagedSolver::new(),
+            flipped_triangles: 0,
+            degraded_triangles: 0,
+            backtracked: vec![false; problem.reference.len()],
+        }
+    }
+
+    /// One iteration: curvature of the current mesh (the input's in the
+    /// first), the system of Eq. (20), its least-squares solution
+    /// ([`crate::solve::StagedSolver`]), the projection onto the input
+    /// surface and the repair of flipped or degraded triangles.
+    fn iterate(
+        &mut self,
+        problem: &FlowProblem<'_>,
+        input_surface: &surface::InputSurface<'_>,
+        iteration: usize,
+        timings: &mut EnhanceTimings,
+    ) -> Result<(), EnhanceError> {
+        let options = problem.options;
+        let layout = &problem.layout;
+        let recomputed;
         let curvature = if iteration == 0 {
-            input_curvature.clone()
+            &problem.input_curvature
         } else {
             let t = Instant::now();
-            work.set_positions(current.clone())?;
-            let c = principal_curvatures_rusinkiewicz(&work);
+            let mut work = problem.normalised.clone();
+            work.set_positions(self.current.clone())?;
+            recomputed = principal_curvatures_rusinkiewicz(&work);
             timings.curvature_s += t.elapsed().as_secs_f64();
-            c
+            &recomputed
         };
         let t = Instant::now();
         let system = system::assemble(
-            &layout,
-            &curvature,
-            &distance,
-            &current,
-            &reference,
+            layout,
+            curvature,
+            &problem.distance,
+            &self.current,
+            &problem.reference,
             options.mu,
             REGULARISATION,
         )?;
         timings.assembly_s += t.elapsed().as_secs_f64();
-
-        let nf = layout.free.len();
-        let mut guess: Vec<f64> = layout
+        let guess: Vec<f64> = layout
             .free
             .iter()
-            .flat_map(|&v| current[v as usize].to_array())
+            .flat_map(|&v| self.current[v as usize].to_array())
             .collect();
-        let cg = |max_iterations: usize, hopeless_after: usize| CgOptions {
-            tolerance: options.cg_tolerance,
-            max_iterations,
-            block: 3,
-            hopeless_after,
-        };
-        let not_converged = |r: &CgReport| {
-            EnhanceError::Solve(SolveError::Backend(format!(
-                "conjugate gradients did not reach the relative residual {:e} in {} iterations ({:e}); \
-                 try the direct solver",
-                options.cg_tolerance, r.iterations, r.relative_residual
-            )))
-        };
-        let mut x = None;
-        // block-Jacobi CG: alone (Cg) or as the cheap first attempt (Auto)
-        // (μ = 0 leaves no smoothness model for the multigrid preconditioner)
-        let jacobi_only = options.solver == EnhanceSolver::Cg
-            || (options.solver == EnhanceSolver::Amg && options.mu == 0.0);
-        let jacobi_budget = match options.solver {
-            _ if jacobi_only => options.cg_max_iterations,
-            // many vertices with a free tangential direction: block Jacobi
-            // would only lose time before the multigrid takes over
-            EnhanceSolver::Auto if options.mu > 0.0 && soft_share > AUTO_SOFT_SHARE => 0,
-            EnhanceSolver::Auto => AUTO_JACOBI_BUDGET.min(options.cg_max_iterations),
-            _ => 0,
-        };
-        // one CG run from `guess`: block Jacobi (`None`) or the given
-        // preconditioner; counts its iterations, time and residual
-        let mut cg_seconds = 0.0;
-        let jacobi = BlockJacobi::from_blocks(system.diagonal_blocks(), 3);
-        let mut scratch = vec![0.0; 8 * nf];
-        let mut run_cg = |guess: &mut [f64],
-                          budget: usize,
-                          hopeless_after: usize,
-                          preconditioner: &dyn Preconditioner|
-         -> Result<CgReport, EnhanceError> {
-            let t = Instant::now();
-            let r = pcg_with(
-                |v: &[f64], out: &mut [f64]| system.normal_product(v, out, &mut scratch),
-                |r: &[f64], z: &mut [f64]| preconditioner.apply(r, z),
-                &system.rhs,
-                guess,
-                &cg(budget, hopeless_after),
-            )?;
-            cg_iterations += r.iterations;
-            cg_seconds += t.elapsed().as_secs_f64();
-            if r.converged {
-                cg_residual = cg_residual.max(r.relative_residual);
-            }
-            Ok(r)
-        };
-        if jacobi_budget > 0 {
-            let hopeless_after = if jacobi_only { 0 } else { AUTO_JACOBI_CHECK };
-            let r = run_cg(&mut guess, jacobi_budget, hopeless_after, &jacobi)?;
-            if r.converged {
-                x = Some(guess.clone());
-            } else if jacobi_only {
-                return Err(not_converged(&r));
-            }
-        }
-        // CG preconditioned by the factored bi-Laplacian model, warm-started
-        // where block Jacobi stopped
-        let multigrid = matches!(options.solver, EnhanceSolver::Amg | EnhanceSolver::Auto);
-        if x.is_none() && multigrid && options.mu > 0.0 {
-            let t = Instant::now();
-            let built = precondition::FactoredPreconditioner::new(
-                &layout,
-                &curvature,
-                &distance,
-                jacobi.clone(),
+        // the factored bi-Laplacian preconditioner (needs μ > 0: with μ = 0
+        // there is no smoothness model)
+        let epsilon = system.epsilon;
+        let build = |jacobi: BlockJacobi| -> Result<Box<dyn Preconditioner + '_>, SolveError> {
+            Ok(Box::new(precondition::FactoredPreconditioner::new(
+                layout,
+                curvature,
+                &problem.distance,
+                jacobi,
                 options.mu,
-                system.epsilon,
-            );
-            timings.factorisation_s += t.elapsed().as_secs_f64();
-            match built {
-                Ok(preconditioner) => {
-                    let r = run_cg(&mut guess, options.cg_max_iterations, 0, &preconditioner)?;
-                    if r.converged {
-                        x = Some(guess.clone());
-                    } else if options.solver == EnhanceSolver::Amg || nf > AUTO_DIRECT_LIMIT {
-                        return Err(not_converged(&r));
-                    }
-                }
-                // auto: a degenerate model (e.g. a multigrid level that is
-                // not positive definite) leaves the direct solve
-                Err(e) if options.solver == EnhanceSolver::Amg || nf > AUTO_DIRECT_LIMIT => {
-                    return Err(e.into());
-                }
-                Err(_) => {}
-            }
-        }
-        if x.is_none() && options.solver == EnhanceSolver::Auto && nf > AUTO_DIRECT_LIMIT {
-            // μ = 0: no smoothness model to precondition with; block-Jacobi
-            // CG continues (the direct factor does not fit)
-            let r = run_cg(&mut guess, options.cg_max_iterations, 0, &jacobi)?;
-            if !r.converged {
-                return Err(not_converged(&r));
-            }
-            x = Some(guess.clone());
-        }
-        timings.solve_s += cg_seconds;
-        let attempted_cg = jacobi_budget > 0 || multigrid;
-        let x = match x {
-            Some(x) => x,
-            None => {
-                if attempted_cg {
-                    direct_fallbacks += 1;
-                }
-                let t = Instant::now();
-                let matrix = system.normal_matrix()?;
-                timings.assembly_s += t.elapsed().as_secs_f64();
-                let t = Instant::now();
-                let refactored = match solver.as_mut() {
-                    Some(s) => s.refactor(matrix.as_ref()).is_ok(),
-                    None => false,
-                };
-                if !refactored {
-                    solver = Some(CholeskySolver::new(matrix.as_ref())?);
-                }
-                timings.factorisation_s += t.elapsed().as_secs_f64();
-                let t = Instant::now();
-                let mut x = system.rhs;
-                if let Some(s) = solver.as_ref() {
-                    s.solve_in_place(&mut x)?;
-                }
-                timings.solve_s += t.elapsed().as_secs_f64();
-                x
-            }
+                epsilon,
+            )?))
         };
-
+        let multigrid: Option<&MultigridBuilder<'_>> = (options.mu > 0.0).then_some(&build);
+        let x = self.solver.solve(
+            &system,
+            multigrid,
+            guess,
+            &StagedOptions {
+                solver: options.solver,
+                skip_jacobi: problem.soft_share > AUTO_SOFT_SHARE,
+                tolerance: options.cg_tolerance,
+                max_iterations: options.cg_max_iterations,
+            },
+        )?;
         let t = Instant::now();
-        let mut target = current.clone();
+        let mut target = self.current.clone();
         for (f, &v) in layout.free.iter().enumerate() {
             target[v as usize] = Vec3::new(x[3 * f], x[3 * f + 1], x[3 * f + 2]);
         }
         input_surface.project(&layout.free, &mut target, options.projection);
-        let outcome = repair::repair_flips(mesh, &input_faces, &current, &mut target);
-        flipped_triangles += outcome.flipped;
-        degraded_triangles += outcome.degraded;
+        let outcome = repair::repair_flips(
+            problem.mesh,
+            &problem.input_faces,
+            &self.current,
+            &mut target,
+        );
+        self.flipped_triangles += outcome.flipped;
+        self.degraded_triangles += outcome.degraded;
         for v in outcome.backtracked {
-            backtracked[v] = true;
+            self.backtracked[v] = true;
         }
-        current = target;
+        self.current = target;
         timings.repair_s += t.elapsed().as_secs_f64();
+        Ok(())
     }
 
-    // Back to input units; fixed vertices keep their input bits.
-    let mut positions = input.to_vec();
-    for &v in &layout.free {
-        let v = v as usize;
-        let x = centroid + current[v] * edge_length;
-        if x.is_finite() {
-            positions[v] = x;
+    /// The output: `positions` (input units) and the report of the run
+    /// (timings are filled in by the caller).
+    fn report(
+        &self,
+        problem: &FlowProblem<'_>,
+        positions: Vec<Vec3>,
+        quality_before: QualityStats,
+    ) -> Result<Output<EnhanceReport>, EnhanceError> {
+        let (mesh, options) = (problem.mesh, problem.options);
+        let input = mesh.positions();
+        let n = mesh.vertex_count();
+        let (mut max_d, mut sum_d) = (0.0f64, 0.0);
+        for (a, b) in positions.iter().zip(input) {
+            let d = a.distance(*b);
+            max_d = max_d.max(d);
+            sum_d += d;
         }
+        let (max_distance_to_input, mean_distance_to_input) =
+            distance_to_input(mesh, &positions, &problem.layout.free);
+        let mut out_mesh = mesh.clone();
+        out_mesh.set_positions(positions.clone())?;
+        let stats = &self.solver.stats;
+        Ok(Output {
+            report: EnhanceReport {
+                vertices: n,
+                free_vertices: problem.layout.free.len(),
+                iterations: options.iterations,
+                lambda: options.lambda,
+                mu: options.mu,
+                flipped_triangles: self.flipped_triangles,
+                degraded_triangles: self.degraded_triangles,
+                backtracked_vertices: self.backtracked.iter().filter(|b| **b).count(),
+                quality_before,
+                quality_after: QualityStats::of_mesh(&out_mesh, options.histogram_bins),
+                max_displacement: max_d,
+                mean_displacement: sum_d / n as f64,
+                max_distance_to_input,
+                mean_distance_to_input,
+                edge_length: problem.edge_length,
+                solver: options.solver,
+                projection: options.projection,
+                cg_iterations: stats.cg_iterations,
+                cg_relative_residual: stats.cg_relative_residual,
+                direct_fallbacks: stats.direct_fallbacks,
+                timings: EnhanceTimings::default(),
+            },
+            positions,
+        })
     }
-    let (mut max_d, mut sum_d) = (0.0f64, 0.0);
-    for (a, b) in positions.iter().zip(input) {
-        let d = a.distance(*b);
-        max_d = max_d.max(d);
-        sum_d += d;
-    }
-    let (max_distance_to_input, mean_distance_to_input) =
-        distance_to_input(mesh, &positions, &layout.free);
-    let mut out_mesh = mesh.clone();
-    out_mesh.set_positions(positions.clone())?;
-    timings.total_s = start.elapsed().as_secs_f64();
-    Ok(Enhanced {
-        positions,
-        report: EnhanceReport {
-            vertices: n,
-            free_vertices: layout.free.len(),
-            iterations: options.iterations,
-            flipped_triangles,
-            degraded_triangles,
-            backtracked_vertices: backtracked.iter().filter(|b| **b).count(),
-            quality_before,
-            quality_after: QualityStats::of_mesh(&out_mesh, bins),
-            max_displacement: max_d,
-            mean_displacement: sum_d / n as f64,
-            max_distance_to_input,
-            mean_distance_to_input,
-            edge_length,
-            solver: options.solver,
-            projection: options.projection,
-            cg_iterations,
-            cg_relative_residual: cg_residual,
-            direct_fallbacks,
-            timings,
-        },
-    })
 }
 
 /// Largest and mean distance of the `free` vertices at `positions` to the

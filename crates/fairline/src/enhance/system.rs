@@ -11,7 +11,7 @@ use super::EnhanceError;
 use crate::Vec3;
 use crate::geom::PrincipalCurvatures;
 use crate::mesh::SurfaceMesh;
-use crate::solve::{SolveError, normal_matrix};
+use crate::solve::{NormalEquations, SolveError, normal_matrix};
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use glam::DMat3;
 use rayon::prelude::*;
@@ -253,7 +253,7 @@ impl LeastSquares {
     /// The sparse A (8n × 3n) compressed by column; every structural entry
     /// is stored even when zero, so the pattern depends only on the
     /// connectivity.
-    fn sparse(&self) -> Result<SparseColMat<usize, f64>, EnhanceError> {
+    fn sparse(&self) -> Result<SparseColMat<usize, f64>, SolveError> {
         let nf = self.sd.len();
         let mut col_ptr = Vec::with_capacity(8 * nf + 1);
         col_ptr.push(0usize);
@@ -288,11 +288,11 @@ impl LeastSquares {
             .as_ref()
             .transpose()
             .to_col_major()
-            .map_err(|e| SolveError::Backend(format!("{e:?}")).into())
+            .map_err(|e| SolveError::Backend(format!("{e:?}")))
     }
 
     /// The regularised normal matrix AᵀA + εI (both triangles).
-    pub fn normal_matrix(&self) -> Result<SparseColMat<usize, f64>, EnhanceError> {
+    pub fn normal_matrix(&self) -> Result<SparseColMat<usize, f64>, SolveError> {
         let mut matrix = normal_matrix(self.sparse()?.as_ref())?;
         let (symbolic, values) = matrix.parts_mut();
         for u in 0..symbolic.ncols() {
@@ -331,6 +331,26 @@ fn edge_metrics(curvature: &PrincipalCurvatures) -> Vec<DMat3> {
 /// Rows of Eq. (20) of one free vertex: its entries (column, F_em
 /// coefficients, F_smo coefficient) and its eight right-hand sides.
 type VertexRows = (Vec<(u32, [Vec3; 2], f64)>, [f64; 8]);
+
+/// The normal equations of Eq. (20) as the staged solver of
+/// [`crate::solve`] sees them.
+impl NormalEquations for LeastSquares {
+    fn rhs(&self) -> &[f64] {
+        &self.rhs
+    }
+    fn apply(&self, v: &[f64], out: &mut [f64], scratch: &mut [f64]) {
+        self.normal_product(v, out, scratch);
+    }
+    fn scratch_len(&self) -> usize {
+        8 * self.sd.len()
+    }
+    fn diagonal_blocks(&self) -> Vec<f64> {
+        LeastSquares::diagonal_blocks(self)
+    }
+    fn normal_matrix(&self) -> Result<SparseColMat<usize, f64>, SolveError> {
+        LeastSquares::normal_matrix(self)
+    }
+}
 
 /// Assembles the system of Eq. (20) for the current curvature (F_em,
 /// F_smo) and the fixed distance model (F_sd), with the right-hand side of

@@ -545,3 +545,64 @@ fn every_triangle_keeps_a_quarter_of_its_input_quality() {
         "the bound was never needed: the test proves nothing"
     );
 }
+
+/// The one algorithm shape (#17 item 1): the input is untouched, progress
+/// comes once per iteration and at the end, and raising the cancel flag
+/// stops the run at the next iteration with the Cancelled error.
+#[test]
+fn vertex_flow_reports_progress_and_stops_when_cancelled() {
+    use crate::{Cancelled, Control};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::{Arc, Mutex};
+    let m = shapes::torus(2.0, 0.6, 40, 16);
+    let before = m.positions().to_vec();
+    let flag = Arc::new(AtomicBool::new(false));
+    let raise = Arc::clone(&flag);
+    let steps = Arc::new(Mutex::new(Vec::new()));
+    let seen = Arc::clone(&steps);
+    let control = Control::new()
+        .cancel_flag(Arc::clone(&flag))
+        .on_progress(move |p| {
+            if let Ok(mut v) = seen.lock() {
+                v.push((p.stage, p.done, p.total));
+            }
+            if p.done >= 1 {
+                raise.store(true, Ordering::Relaxed);
+            }
+        });
+    let options = EnhanceOptions::default().iterations(3).control(control);
+    assert_eq!(
+        enhance_features(&m, &options).map(|_| ()),
+        Err(EnhanceError::Cancelled(Cancelled))
+    );
+    assert_eq!(m.positions(), &before[..]);
+    let steps = steps.lock().map(|v| v.clone()).unwrap_or_default();
+    assert_eq!(steps, vec![("iterations", 0, 3), ("iterations", 1, 3)]);
+    // a flag raised before the run stops it before any work
+    let flag = Arc::new(AtomicBool::new(true));
+    let options = EnhanceOptions::default().control(Control::new().cancel_flag(flag));
+    assert!(matches!(
+        enhance_features(&m, &options),
+        Err(EnhanceError::Cancelled(_))
+    ));
+    // not cancelled: one step per iteration and the end
+    let count = Arc::new(Mutex::new(Vec::new()));
+    let sink = Arc::clone(&count);
+    let control = Control::new().on_progress(move |p| {
+        if let Ok(mut v) = sink.lock() {
+            v.push(p.done);
+        }
+    });
+    let out = enhance_features(
+        &m,
+        &EnhanceOptions::default().iterations(2).control(control),
+    )
+    .unwrap();
+    assert_eq!(
+        count.lock().map(|v| v.clone()).unwrap_or_default(),
+        vec![0, 1, 2]
+    );
+    assert_eq!(out.report.iterations, 2);
+    assert_eq!((out.report.lambda, out.report.mu), (1.0, 0.5));
+    assert_eq!(m.positions(), &before[..]);
+}

@@ -10,15 +10,18 @@
 //! All matrices are faer `SparseColMat<usize, f64>`.
 
 mod amg;
+mod banded;
 mod box_qp;
 mod cg;
 mod cholesky;
 mod constrained;
 mod ordering;
 mod small;
+mod staged;
 mod vector_amg;
 
 pub use amg::CsrMatrix;
+pub use banded::{BandedBlocks, banded_cholesky, banded_solve, sandwich_pcg};
 pub use box_qp::{BoxQpOptions, BoxQpSolution, box_qp};
 pub use cg::{
     BlockJacobi, CgOptions, CgReport, Preconditioner, normal_diagonal_blocks, normal_equations_cg,
@@ -31,6 +34,10 @@ pub use cholesky::{
 pub use constrained::{ConstrainedOptions, ConstrainedSolver};
 pub use ordering::nested_dissection;
 pub use small::{function_of_eigen3, solve_spd, symmetric_eigen3, symmetric_function3};
+pub use staged::{
+    AUTO_DIRECT_LIMIT, AUTO_JACOBI_BUDGET, AUTO_JACOBI_CHECK, MultigridBuilder, NormalEquations,
+    NormalSolver, StagedOptions, StagedSolver, StagedStats,
+};
 pub use vector_amg::{SymmetricBlock, VectorAmg, VectorAmgOptions, VectorOperator};
 
 use thiserror::Error;

@@ -34,11 +34,12 @@ use reference::ReferenceSurface;
 pub(crate) use solver::DIRECT_LIMIT;
 use solver::{Lines, System, line_families};
 
-use crate::Vec3;
 use crate::geom;
 use crate::mesh::{MeshError, StructureLine, SurfaceMesh, VertexId, structure_lines};
 use crate::solve::{CholeskySolver, SolveError};
+use crate::{Control, Output, Vec3};
 use rayon::prelude::*;
+use serde::Serialize;
 use thiserror::Error;
 
 /// Why structure-line fairing failed.
@@ -61,10 +62,16 @@ pub enum QuadFairError {
         /// Number of vertices.
         count: usize,
     },
+    /// The caller cancelled the run ([`QuadFairOptions::control`]).
+    #[error("cancelled")]
+    Cancelled(#[from] crate::Cancelled),
 }
 
-/// Options of [`fair_structure_lines`].
+/// Options of [`fair_structure_lines`]; build with
+/// `QuadFairOptions::default()` and the setters
+/// (`.weight(0.1).fix_boundary(true)`).
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct QuadFairOptions {
     /// Penalty weight ω of Eq. (34), scale-invariant: the penalty actually
     /// used is (ω / ē²)‖p − p⁰‖² with ē the mean edge length of the input,
@@ -99,6 +106,8 @@ pub struct QuadFairOptions {
     /// thesis' method as printed: the points may leave the surface (lines
     /// straighten by cutting across it).
     pub on_surface: bool,
+    /// Progress (one step per iteration) and cancellation.
+    pub control: Control,
 }
 
 impl Default for QuadFairOptions {
@@ -111,13 +120,60 @@ impl Default for QuadFairOptions {
             fix_boundary: false,
             fixed: Vec::new(),
             on_surface: true,
+            control: Control::default(),
         }
     }
 }
 
-/// What [`fair_structure_lines`] did.
-#[derive(Clone, Debug, Default, PartialEq)]
+impl QuadFairOptions {
+    /// Sets the penalty weight ω.
+    pub fn weight(mut self, weight: f64) -> Self {
+        self.weight = weight;
+        self
+    }
+    /// Sets the deviation parameter.
+    pub fn deviation(mut self, deviation: f64) -> Self {
+        self.deviation = deviation;
+        self
+    }
+    /// Sets the factor the deviation is multiplied by after each iteration.
+    pub fn deviation_factor(mut self, factor: f64) -> Self {
+        self.deviation_factor = factor;
+        self
+    }
+    /// Sets the number of iterations.
+    pub fn iterations(mut self, iterations: usize) -> Self {
+        self.iterations = iterations;
+        self
+    }
+    /// Sets whether the whole boundary stays fixed.
+    pub fn fix_boundary(mut self, fix_boundary: bool) -> Self {
+        self.fix_boundary = fix_boundary;
+        self
+    }
+    /// Sets the vertices that never move.
+    pub fn fixed(mut self, fixed: Vec<VertexId>) -> Self {
+        self.fixed = fixed;
+        self
+    }
+    /// Sets whether the points stay on the input surface.
+    pub fn on_surface(mut self, on_surface: bool) -> Self {
+        self.on_surface = on_surface;
+        self
+    }
+    /// Sets the progress callback and cancel flag.
+    pub fn control(mut self, control: Control) -> Self {
+        self.control = control;
+        self
+    }
+}
+
+/// What [`fair_structure_lines`] did; serialises to the JSON report of
+/// `fairline fair-quad` (the CLI adds its timing keys).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct QuadFairReport {
+    /// Number of vertices.
+    pub vertices: usize,
     /// Number of structure lines traced.
     pub structure_lines: usize,
     /// Vertices that were free in at least one iteration.
@@ -184,20 +240,23 @@ fn energy_of(p: &[Vec3], runs: &[[u32; 4]]) -> f64 {
 /// linear residual of Eq. (32) with the lengths l of the current polygon
 /// (coefficients −1/(2l₀), 1/(2l₀) + 1/l₁, −1/l₁ − 1/(2l₂), 1/(2l₂)),
 /// minimise Σ‖A_i x + b_i‖² + (ω/ē²) Σ‖p − p⁰‖² over the free points
-/// (Eq. (34)) by a sparse Cholesky factorisation of the normal equations,
-/// move the free points onto the input surface (unless
-/// [`QuadFairOptions::on_surface`] is off), then shrink the deviation by
-/// `deviation_factor`. A boundary point is freed only by a run above the
-/// initial deviation (a zigzag of the boundary line itself), never by the
-/// shrunken one, which would eventually flag the natural turning of a
-/// curved boundary. Fixed points keep
-/// bit-identical coordinates. Works on any mesh whose structure lines are
-/// traced by [`structure_lines`] (quad meshes in practice).
+/// (Eq. (34)) by a sparse Cholesky factorisation of the normal equations
+/// (above [`DIRECT_LIMIT`] free points by line-block conjugate gradients,
+/// [`crate::solve::sandwich_pcg`]), move the free points onto the input
+/// surface (unless [`QuadFairOptions::on_surface`] is off), then shrink the
+/// deviation by `deviation_factor`. A boundary point is freed only by a run
+/// above the initial deviation (a zigzag of the boundary line itself), never
+/// by the shrunken one, which would eventually flag the natural turning of a
+/// curved boundary. Fixed points keep bit-identical coordinates. Works on
+/// any mesh whose structure lines are traced by [`structure_lines`] (quad
+/// meshes in practice). The input is not modified; one progress step per
+/// iteration goes to [`QuadFairOptions::control`], which can cancel the run
+/// ([`QuadFairError::Cancelled`]).
 pub fn fair_structure_lines(
-    mesh: &mut SurfaceMesh,
-    opts: &QuadFairOptions,
-) -> Result<QuadFairReport, QuadFairError> {
-    fair_structure_lines_with(mesh, opts, Method::Auto)
+    mesh: &SurfaceMesh,
+    options: &QuadFairOptions,
+) -> Result<Output<QuadFairReport>, QuadFairError> {
+    fair_structure_lines_with(mesh, options, Method::Auto)
 }
 
 /// How the normal equations (ωI + AᵀA) x = c of one iteration are solved.
@@ -215,27 +274,82 @@ pub(crate) enum Method {
     Iterative,
 }
 
-/// [`fair_structure_lines`] with a chosen linear solver (tests compare them).
-pub(crate) fn fair_structure_lines_with(
-    mesh: &mut SurfaceMesh,
+/// The runs of four points of all structure lines and their incidences.
+struct RunIndex {
+    /// Runs in the order of their middle points.
+    runs: Vec<[u32; 4]>,
+    /// vertex → (run, slot) incidence, CSR: `inc[off[v]..off[v + 1]]`.
+    off: Vec<u32>,
+    inc: Vec<(u32, u8)>,
+    /// Runs of line l: `line_runs[run_start[l]..run_start[l + 1]]`.
+    run_start: Vec<usize>,
+    line_runs: Vec<u32>,
+}
+
+impl RunIndex {
+    fn new(lines: &[StructureLine], n: usize) -> RunIndex {
+        let (runs, line_of) = {
+            let (runs, line_of) = runs(lines);
+            // runs in the order of their middle points, so that the runs
+            // through a vertex sit close together in memory whichever line
+            // they belong to (the iterative solve streams over them)
+            let mut perm: Vec<u32> = (0..runs.len() as u32).collect();
+            perm.par_sort_unstable_by_key(|&i| (runs[i as usize][1], runs[i as usize][2], i));
+            (
+                perm.iter().map(|&i| runs[i as usize]).collect::<Vec<_>>(),
+                perm.iter()
+                    .map(|&i| line_of[i as usize])
+                    .collect::<Vec<_>>(),
+            )
+        };
+        let mut off = vec![0u32; n + 1];
+        for r in &runs {
+            for &v in r {
+                off[v as usize + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            off[i + 1] += off[i];
+        }
+        let mut inc = vec![(0u32, 0u8); off[n] as usize];
+        let mut fill = off.clone();
+        for (ri, r) in runs.iter().enumerate() {
+            for (s, &v) in r.iter().enumerate() {
+                inc[fill[v as usize] as usize] = (ri as u32, s as u8);
+                fill[v as usize] += 1;
+            }
+        }
+        let mut run_start = vec![0usize; lines.len() + 1];
+        for &l in &line_of {
+            run_start[l as usize + 1] += 1;
+        }
+        for l in 0..lines.len() {
+            run_start[l + 1] += run_start[l];
+        }
+        let mut line_runs = vec![0u32; runs.len()];
+        let mut fill = run_start.clone();
+        for (ri, &l) in line_of.iter().enumerate() {
+            line_runs[fill[l as usize]] = ri as u32;
+            fill[l as usize] += 1;
+        }
+        RunIndex {
+            runs,
+            off,
+            inc,
+            run_start,
+            line_runs,
+        }
+    }
+}
+
+/// Vertices that never move: pinned ones, corners (boundary vertices of
+/// valence ≤ 2), the whole boundary with [`QuadFairOptions::fix_boundary`],
+/// and [`QuadFairOptions::fixed`].
+fn hard_fixed_vertices(
+    mesh: &SurfaceMesh,
     opts: &QuadFairOptions,
-    method: Method,
-) -> Result<QuadFairReport, QuadFairError> {
-    if !(opts.weight > 0.0) || !opts.weight.is_finite() {
-        return Err(QuadFairError::InvalidOption(
-            "weight must be positive".into(),
-        ));
-    }
-    if !(opts.deviation >= 0.0) || !(opts.deviation_factor > 0.0) {
-        return Err(QuadFairError::InvalidOption(
-            "deviation must be ≥ 0 and its factor > 0".into(),
-        ));
-    }
+) -> Result<Vec<bool>, QuadFairError> {
     let n = mesh.vertex_count();
-    let boundary: Vec<bool> = mesh
-        .vertices()
-        .map(|v| mesh.is_boundary_vertex(v))
-        .collect();
     let mut hard_fixed = vec![false; n];
     for v in mesh.vertices() {
         let b = mesh.is_boundary_vertex(v);
@@ -252,70 +366,99 @@ pub(crate) fn fair_structure_lines_with(
         }
         hard_fixed[v.idx()] = true;
     }
+    Ok(hard_fixed)
+}
+
+/// The points a run above `deviation` frees (its two middle points; a
+/// boundary point only when the run is above the initial deviation, a real
+/// zigzag of the boundary line, because the shrinking deviation eventually
+/// flags the natural turning of any curved boundary, and boundaries are
+/// meant to stay).
+fn classify(
+    runs: &[[u32; 4]],
+    cur: &[Vec3],
+    deviation: f64,
+    initial_deviation: f64,
+    boundary: &[bool],
+) -> Vec<bool> {
+    let deviations: Vec<f64> = runs
+        .par_iter()
+        .with_min_len(4096)
+        .map(|r| run_deviation(cur, r).length())
+        .collect();
+    let mut free = vec![false; cur.len()];
+    for (r, &d) in runs.iter().zip(&deviations) {
+        if d > deviation {
+            for &v in &r[1..3] {
+                if d > initial_deviation || !boundary[v as usize] {
+                    free[v as usize] = true;
+                }
+            }
+        }
+    }
+    free
+}
+
+/// Eq. (32) coefficients of every run from the current polygon.
+fn run_coefficients(runs: &[[u32; 4]], cur: &[Vec3]) -> Vec<[f64; 4]> {
+    runs.par_iter()
+        .with_min_len(4096)
+        .map(|r| {
+            let l = |a: u32, b: u32| cur[a as usize].distance(cur[b as usize]);
+            let inv = |x: f64| if x > 0.0 { 1.0 / x } else { 0.0 };
+            let (a0, a1, a2) = (inv(l(r[0], r[1])), inv(l(r[1], r[2])), inv(l(r[2], r[3])));
+            [-0.5 * a0, 0.5 * a0 + a1, -a1 - 0.5 * a2, 0.5 * a2]
+        })
+        .collect()
+}
+
+/// [`fair_structure_lines`] with a chosen linear solver (tests compare them).
+pub(crate) fn fair_structure_lines_with(
+    mesh: &SurfaceMesh,
+    opts: &QuadFairOptions,
+    method: Method,
+) -> Result<Output<QuadFairReport>, QuadFairError> {
+    if !(opts.weight > 0.0) || !opts.weight.is_finite() {
+        return Err(QuadFairError::InvalidOption(
+            "weight must be positive".into(),
+        ));
+    }
+    if !(opts.deviation >= 0.0) || !(opts.deviation_factor > 0.0) {
+        return Err(QuadFairError::InvalidOption(
+            "deviation must be ≥ 0 and its factor > 0".into(),
+        ));
+    }
+    let n = mesh.vertex_count();
+    let boundary: Vec<bool> = mesh
+        .vertices()
+        .map(|v| mesh.is_boundary_vertex(v))
+        .collect();
+    let hard_fixed = hard_fixed_vertices(mesh, opts)?;
     let lines = structure_lines(mesh);
-    let (runs, line_of) = {
-        let (runs, line_of) = runs(&lines);
-        // runs in the order of their middle points, so that the runs through
-        // a vertex sit close together in memory whichever line they belong
-        // to (the iterative solve streams over them)
-        let mut perm: Vec<u32> = (0..runs.len() as u32).collect();
-        perm.par_sort_unstable_by_key(|&i| (runs[i as usize][1], runs[i as usize][2], i));
-        (
-            perm.iter().map(|&i| runs[i as usize]).collect::<Vec<_>>(),
-            perm.iter()
-                .map(|&i| line_of[i as usize])
-                .collect::<Vec<_>>(),
-        )
-    };
-    // vertex → (run, slot) incidence in CSR form
-    let mut off = vec![0u32; n + 1];
-    for r in &runs {
-        for &v in r {
-            off[v as usize + 1] += 1;
-        }
-    }
-    for i in 0..n {
-        off[i + 1] += off[i];
-    }
-    let mut inc = vec![(0u32, 0u8); off[n] as usize];
-    let mut fill = off.clone();
-    for (ri, r) in runs.iter().enumerate() {
-        for (s, &v) in r.iter().enumerate() {
-            inc[fill[v as usize] as usize] = (ri as u32, s as u8);
-            fill[v as usize] += 1;
-        }
-    }
+    let index_of_runs = RunIndex::new(&lines, n);
+    let runs = &index_of_runs.runs;
     let p0 = mesh.positions().to_vec();
     let ebar = geom::mean_edge_length(mesh);
-    let e_before = energy_of(&p0, &runs);
+    let e_before = energy_of(&p0, runs);
     let mut report = QuadFairReport {
+        vertices: n,
         structure_lines: lines.len(),
         structure_energy_before: e_before,
         structure_energy_after: e_before,
         ..Default::default()
     };
     if !(ebar > 0.0) || runs.is_empty() {
-        return Ok(report);
+        return Ok(Output {
+            positions: p0,
+            report,
+        });
     }
     let omega = opts.weight / (ebar * ebar);
     let line_family = line_families(&lines, n);
-    let mut run_start = vec![0usize; lines.len() + 1];
-    for &l in &line_of {
-        run_start[l as usize + 1] += 1;
-    }
-    for l in 0..lines.len() {
-        run_start[l + 1] += run_start[l];
-    }
-    let mut line_runs = vec![0u32; runs.len()];
-    let mut fill = run_start.clone();
-    for (ri, &l) in line_of.iter().enumerate() {
-        line_runs[fill[l as usize]] = ri as u32;
-        fill[l as usize] += 1;
-    }
     let line_set = Lines {
         lines: &lines,
-        run_start: &run_start,
-        line_runs: &line_runs,
+        run_start: &index_of_runs.run_start,
+        line_runs: &index_of_runs.line_runs,
         family: &line_family,
     };
     let reference = opts.on_surface.then(|| ReferenceSurface::new(mesh));
@@ -323,28 +466,11 @@ pub(crate) fn fair_structure_lines_with(
     let mut ever_free = vec![false; n];
     let mut deviation = opts.deviation;
     let mut solver: Option<(Vec<usize>, CholeskySolver)> = None;
-    for _ in 0..opts.iterations {
+    let total = opts.iterations as u64;
+    for iteration in 0..opts.iterations {
+        opts.control.step("iterations", iteration as u64, total)?;
         report.iterations += 1;
-        // classification: a run above the deviation frees its two middle
-        // points; a boundary point only when the run is above the initial
-        // deviation (a real zigzag of the boundary line), because the
-        // shrinking deviation eventually flags the natural turning of any
-        // curved boundary, and boundaries are meant to stay
-        let deviations: Vec<f64> = runs
-            .par_iter()
-            .with_min_len(4096)
-            .map(|r| run_deviation(&cur, r).length())
-            .collect();
-        let mut free = vec![false; n];
-        for (r, &d) in runs.iter().zip(&deviations) {
-            if d > deviation {
-                for &v in &r[1..3] {
-                    if d > opts.deviation || !boundary[v as usize] {
-                        free[v as usize] = true;
-                    }
-                }
-            }
-        }
+        let free = classify(runs, &cur, deviation, opts.deviation, &boundary);
         let mut index = vec![u32::MAX; n];
         let mut unknowns = Vec::new();
         for i in 0..n {
@@ -358,22 +484,12 @@ pub(crate) fn fair_structure_lines_with(
         if unknowns.is_empty() {
             continue;
         }
-        // Eq. (32) coefficients from the current polygon
-        let coef: Vec<[f64; 4]> = runs
-            .par_iter()
-            .with_min_len(4096)
-            .map(|r| {
-                let l = |a: u32, b: u32| cur[a as usize].distance(cur[b as usize]);
-                let inv = |x: f64| if x > 0.0 { 1.0 / x } else { 0.0 };
-                let (a0, a1, a2) = (inv(l(r[0], r[1])), inv(l(r[1], r[2])), inv(l(r[2], r[3])));
-                [-0.5 * a0, 0.5 * a0 + a1, -a1 - 0.5 * a2, 0.5 * a2]
-            })
-            .collect();
+        let coef = run_coefficients(runs, &cur);
         let system = System {
-            runs: &runs,
+            runs,
             coef: &coef,
-            off: &off,
-            inc: &inc,
+            off: &index_of_runs.off,
+            inc: &index_of_runs.inc,
             index: &index,
             unknowns: &unknowns,
             omega,
@@ -414,16 +530,21 @@ pub(crate) fn fair_structure_lines_with(
             }
         }
     }
+    opts.control.progress("iterations", total, total);
     report.free_vertices = ever_free.iter().filter(|&&b| b).count();
-    report.structure_energy_after = energy_of(&cur, &runs);
+    report.structure_energy_after = energy_of(&cur, runs);
     report.max_displacement = cur
         .iter()
         .zip(&p0)
         .map(|(a, b)| a.distance(*b))
         .fold(0.0, f64::max);
-    mesh.set_positions(cur)?;
-    Ok(report)
+    Ok(Output {
+        positions: cur,
+        report,
+    })
 }
 
+#[cfg(test)]
+mod bitwise_tests;
 #[cfg(test)]
 mod tests;

@@ -5,7 +5,7 @@
 use super::QuadFairError;
 use crate::Vec3;
 use crate::mesh::StructureLine;
-use crate::solve::{CholeskySolver, SolveError, pcg};
+use crate::solve::{BandedBlocks, CholeskySolver, SolveError, sandwich_pcg};
 use rayon::prelude::*;
 
 /// Largest number of free vertices solved by sparse Cholesky. The normal
@@ -137,7 +137,7 @@ impl System<'_> {
     /// different families where the mesh allows, see [`line_families`]),
     /// N = ωI + K₁ + K₂ with K_f the Eq. (32) terms of the runs of family f.
     /// Along one line K_f is banded (a run spans four consecutive points),
-    /// so P_f = c_f I + K_f is factored line by line ([`LineBlocks`]). The
+    /// so P_f = c_f I + K_f is factored line by line ([`line_blocks`], [`BandedBlocks`]). The
     /// alternating-direction product P₁P₂ ≈ N (Peaceman–Rachford) is not
     /// symmetric when K₁ and K₂ do not commute (short lines around fixed
     /// points, scattered free sets), and its symmetrised inverse need not be
@@ -201,8 +201,8 @@ impl System<'_> {
             .sum();
         let scale = (2.0 * omega * gersh / m as f64 / 4.0).sqrt().max(omega);
         let (Some(p1), Some(p2)) = (
-            LineBlocks::new(self, lines, 0, OUTER_SHIFT * scale),
-            LineBlocks::new(self, lines, 1, INNER_SHIFT * scale),
+            line_blocks(self, lines, 0, OUTER_SHIFT * scale),
+            line_blocks(self, lines, 1, INNER_SHIFT * scale),
         ) else {
             return Ok(None);
         };
@@ -252,13 +252,6 @@ impl System<'_> {
                     o[2] = omega * v[2] + g.z;
                 });
         };
-        // z = M⁻¹ r = P₁⁻¹P₂⁻¹P₁⁻¹ r, P_f = c_f I + K_f
-        let (mut a, mut b, mut y) = (vec![0.0; 3 * m], vec![0.0; 3 * m], Vec::new());
-        let precondition = |r: &[f64], z: &mut [f64]| {
-            p1.solve(r, &mut a, 1.0, false, &mut y);
-            p2.solve(&a, &mut b, 1.0, false, &mut y);
-            p1.solve(&b, z, 1.0, false, &mut y);
-        };
         // stop at ‖c − N d‖ ≤ ω·ε·ē·√(3m): since N ⪰ ωI, the error of d then
         // has a root mean square of at most ε·ē per coordinate
         let norm_c = rhs.iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -268,9 +261,11 @@ impl System<'_> {
             0.0
         };
         let mut d = vec![0.0; 3 * m];
-        let report = match pcg(
+        // z = M⁻¹ r = P₁⁻¹P₂⁻¹P₁⁻¹ r, P_f = c_f I + K_f
+        let report = match sandwich_pcg(
             apply,
-            precondition,
+            &p1,
+            &p2,
             &rhs,
             &mut d,
             tolerance,
@@ -303,239 +298,93 @@ pub(super) struct Lines<'a> {
     pub(super) family: &'a [u8],
 }
 
-/// c_f I + K_f of one family f, factored line by line: every unknown belongs
-/// to the block of the first line of family f through it (or to a block of
-/// its own), and the block of a line holds the Eq. (32) terms of the runs
-/// of that line among the unknowns it owns, in line order. A run spans four
-/// consecutive points, so a block is a banded matrix of bandwidth 3
-/// (dropping points keeps neighbours within 3 places); a run that would
-/// break the band (wrapping around a closed line, or meeting a point owned
-/// by another line twice) is left out whole. Every block is then a shifted
-/// sum of positive semi-definite run terms, hence positive definite, and its
-/// banded Cholesky factor costs O(length).
-struct LineBlocks {
-    /// unknowns in block order
-    order: Vec<u32>,
-    /// position of every unknown in `order`
-    place: Vec<u32>,
-    /// banded Cholesky factor: row i holds L(i, i), L(i, i−1), L(i, i−2),
-    /// L(i, i−3)
-    factor: Vec<[f64; 4]>,
-    /// block boundaries in `order`
-    block_start: Vec<usize>,
-    /// groups of consecutive blocks of similar total length (parallel work)
-    group_start: Vec<usize>,
-}
-
-impl LineBlocks {
-    /// `None` if a block is not numerically positive definite.
-    fn new(sys: &System<'_>, lines: &Lines<'_>, f: u8, shift: f64) -> Option<LineBlocks> {
-        let (index, m) = (sys.index, sys.unknowns.len());
-        let mut place = vec![u32::MAX; m];
-        let mut order: Vec<u32> = Vec::with_capacity(m);
-        let mut block_start = vec![0usize];
-        let mut block_line = Vec::new();
-        for (li, l) in lines.lines.iter().enumerate() {
-            if lines.family[li] != f {
-                continue;
-            }
-            for v in &l.vertices {
-                let u = index[v.idx()];
-                if u != u32::MAX && place[u as usize] == u32::MAX {
-                    place[u as usize] = order.len() as u32;
-                    order.push(u);
-                }
-            }
-            if order.len() > *block_start.last().unwrap_or(&0) {
-                block_start.push(order.len());
-                block_line.push(li as u32);
+/// c_f I + K_f of one family f, factored line by line
+/// ([`BandedBlocks`]): every unknown belongs to the block of the first line
+/// of family f through it (or to a block of its own), and the block of a
+/// line holds the Eq. (32) terms of the runs of that line among the
+/// unknowns it owns, in line order. A run spans four consecutive points, so
+/// a block is a banded matrix of bandwidth 3 (dropping points keeps
+/// neighbours within 3 places); a run that would break the band (wrapping
+/// around a closed line, or meeting a point owned by another line twice) is
+/// left out whole. Every block is then a shifted sum of positive
+/// semi-definite run terms, hence positive definite. `None` if a block is
+/// not numerically positive definite.
+fn line_blocks(sys: &System<'_>, lines: &Lines<'_>, f: u8, shift: f64) -> Option<BandedBlocks> {
+    let (index, m) = (sys.index, sys.unknowns.len());
+    let mut placed = vec![false; m];
+    let mut order: Vec<u32> = Vec::with_capacity(m);
+    let mut block_start = vec![0usize];
+    let mut block_line = Vec::new();
+    for (li, l) in lines.lines.iter().enumerate() {
+        if lines.family[li] != f {
+            continue;
+        }
+        for v in &l.vertices {
+            let u = index[v.idx()];
+            if u != u32::MAX && !placed[u as usize] {
+                placed[u as usize] = true;
+                order.push(u);
             }
         }
-        for u in 0..m {
-            if place[u] == u32::MAX {
-                place[u] = order.len() as u32;
-                order.push(u as u32);
-                block_start.push(order.len());
-                block_line.push(u32::MAX);
-            }
+        if order.len() > *block_start.last().unwrap_or(&0) {
+            block_start.push(order.len());
+            block_line.push(li as u32);
         }
-        // band of c_f I + K_f, then its factor, block by block in parallel
-        let mut factor = vec![[shift, 0.0, 0.0, 0.0]; m];
-        let mut slices: Vec<&mut [[f64; 4]]> = Vec::with_capacity(block_line.len());
-        let mut rest: &mut [[f64; 4]] = &mut factor;
-        for b in 0..block_line.len() {
-            let (head, tail) = rest.split_at_mut(block_start[b + 1] - block_start[b]);
-            slices.push(head);
-            rest = tail;
+    }
+    for u in 0..m {
+        if !placed[u] {
+            placed[u] = true;
+            order.push(u as u32);
+            block_start.push(order.len());
+            block_line.push(u32::MAX);
         }
-        let ok = slices
-            .into_par_iter()
-            .zip(block_line.par_iter())
-            .zip(block_start.par_iter())
-            .all(|((band, &li), &start)| {
-                if li != u32::MAX {
-                    let li = li as usize;
-                    for &ri in &lines.line_runs[lines.run_start[li]..lines.run_start[li + 1]] {
-                        let ri = ri as usize;
-                        let (r, c) = (&sys.runs[ri], &sys.coef[ri]);
-                        // local positions of the run's points in this block
-                        let mut at = [usize::MAX; 4];
-                        let mut fits = true;
-                        for t in 0..4 {
-                            let u = index[r[t] as usize];
-                            if u != u32::MAX {
-                                let p = place[u as usize] as usize;
-                                if p >= start && p < start + band.len() {
-                                    at[t] = p - start;
-                                }
-                            }
-                        }
-                        for t in 0..4 {
-                            for w in 0..4 {
-                                if at[t] != usize::MAX
-                                    && at[w] != usize::MAX
-                                    && at[t].abs_diff(at[w]) > 3
-                                {
-                                    fits = false;
-                                }
-                            }
-                        }
-                        if !fits {
-                            continue;
-                        }
-                        for t in 0..4 {
-                            for w in 0..4 {
-                                if at[t] != usize::MAX && at[w] != usize::MAX && at[t] >= at[w] {
-                                    band[at[t]][at[t] - at[w]] += c[t] * c[w];
-                                }
-                            }
-                        }
+    }
+    // position of every unknown in `order`
+    let mut place = vec![u32::MAX; m];
+    for (i, &u) in order.iter().enumerate() {
+        place[u as usize] = i as u32;
+    }
+    let starts = block_start.clone();
+    BandedBlocks::new(order, block_start, shift, |b, band| {
+        let (li, start) = (block_line[b], starts[b]);
+        if li == u32::MAX {
+            return;
+        }
+        let li = li as usize;
+        for &ri in &lines.line_runs[lines.run_start[li]..lines.run_start[li + 1]] {
+            let ri = ri as usize;
+            let (r, c) = (&sys.runs[ri], &sys.coef[ri]);
+            // local positions of the run's points in this block
+            let mut at = [usize::MAX; 4];
+            let mut fits = true;
+            for t in 0..4 {
+                let u = index[r[t] as usize];
+                if u != u32::MAX {
+                    let p = place[u as usize] as usize;
+                    if p >= start && p < start + band.len() {
+                        at[t] = p - start;
                     }
                 }
-                banded_cholesky(band)
-            });
-        if !ok {
-            return None;
-        }
-        // groups of about 4096 unknowns
-        let mut group_start = vec![0usize];
-        for &s in &block_start[1..] {
-            if s - group_start.last().copied().unwrap_or(0) >= 4096 || s == m {
-                group_start.push(s);
             }
-        }
-        group_start.dedup();
-        Some(LineBlocks {
-            order,
-            place,
-            factor,
-            block_start,
-            group_start,
-        })
-    }
-
-    /// z = scale · (c_f I + K_f)⁻¹ r on interleaved x, y, z, or
-    /// z += scale · (c_f I + K_f)⁻¹ r when `add`.
-    /// `y` is scratch space.
-    fn solve(&self, r: &[f64], z: &mut [f64], scale: f64, add: bool, y: &mut Vec<f64>) {
-        // gather into block order, solve the blocks, scatter back
-        y.resize(r.len(), 0.0);
-        y.par_chunks_mut(3)
-            .zip(self.order.par_iter())
-            .with_min_len(4096)
-            .for_each(|(y, &u)| {
-                let u = 3 * u as usize;
-                y.copy_from_slice(&r[u..u + 3]);
-            });
-        let mut chunks: Vec<(&mut [f64], usize)> = Vec::with_capacity(self.group_start.len());
-        let mut rest: &mut [f64] = y;
-        for g in self.group_start.windows(2) {
-            let (head, tail) = rest.split_at_mut(3 * (g[1] - g[0]));
-            chunks.push((head, g[0]));
-            rest = tail;
-        }
-        chunks.into_par_iter().for_each(|(y, start)| {
-            let first = self.block_start.partition_point(|&s| s < start);
-            let mut b = first;
-            while b + 1 < self.block_start.len() && self.block_start[b] < start + y.len() / 3 {
-                let (s0, s1) = (self.block_start[b], self.block_start[b + 1]);
-                banded_solve(
-                    &self.factor[s0..s1],
-                    &mut y[3 * (s0 - start)..3 * (s1 - start)],
-                );
-                b += 1;
-            }
-        });
-        z.par_chunks_mut(3)
-            .zip(self.place.par_iter())
-            .with_min_len(4096)
-            .for_each(|(z, &p)| {
-                let p = 3 * p as usize;
-                if add {
-                    z[0] += scale * y[p];
-                    z[1] += scale * y[p + 1];
-                    z[2] += scale * y[p + 2];
-                } else {
-                    z[0] = scale * y[p];
-                    z[1] = scale * y[p + 1];
-                    z[2] = scale * y[p + 2];
+            for t in 0..4 {
+                for w in 0..4 {
+                    if at[t] != usize::MAX && at[w] != usize::MAX && at[t].abs_diff(at[w]) > 3 {
+                        fits = false;
+                    }
                 }
-            });
-    }
-}
-
-/// In-place Cholesky factor of a symmetric banded matrix of bandwidth 3
-/// (row i: M(i, i), M(i, i−1), M(i, i−2), M(i, i−3)); false if a pivot is
-/// not positive.
-fn banded_cholesky(band: &mut [[f64; 4]]) -> bool {
-    for i in 0..band.len() {
-        for d in (1..=3.min(i)).rev() {
-            let j = i - d;
-            // L(i, j) = (M(i, j) − Σ_{k<j} L(i, k) L(j, k)) / L(j, j)
-            let mut s = band[i][d];
-            for k in (i.saturating_sub(3))..j {
-                s -= band[i][i - k] * band[j][j - k];
             }
-            band[i][d] = s * band[j][0];
+            if !fits {
+                continue;
+            }
+            for t in 0..4 {
+                for w in 0..4 {
+                    if at[t] != usize::MAX && at[w] != usize::MAX && at[t] >= at[w] {
+                        band[at[t]][at[t] - at[w]] += c[t] * c[w];
+                    }
+                }
+            }
         }
-        let mut s = band[i][0];
-        for d in 1..=3.min(i) {
-            s -= band[i][d] * band[i][d];
-        }
-        if !(s > 0.0) || !s.is_finite() {
-            return false;
-        }
-        band[i][0] = 1.0 / s.sqrt();
-    }
-    true
-}
-
-/// Solves L Lᵀ y = b in place for three interleaved right-hand sides; `l`
-/// is the factor of [`banded_cholesky`] (reciprocal diagonal; the entries of
-/// the first rows that reach before row 0 are zero).
-fn banded_solve(l: &[[f64; 4]], y: &mut [f64]) {
-    // forward: L w = b, keeping w_{i−1}, w_{i−2}, w_{i−3}
-    let (mut w1, mut w2, mut w3) = ([0.0f64; 3], [0.0f64; 3], [0.0f64; 3]);
-    for (li, yi) in l.iter().zip(y.chunks_exact_mut(3)) {
-        let mut s = [0.0; 3];
-        for c in 0..3 {
-            s[c] = (yi[c] - li[1] * w1[c] - li[2] * w2[c] - li[3] * w3[c]) * li[0];
-        }
-        yi.copy_from_slice(&s);
-        (w3, w2, w1) = (w2, w1, s);
-    }
-    // backward: Lᵀ y = w, keeping y_{i+1..i+3} and the rows L(i+d, ·)
-    let (mut y1, mut y2, mut y3) = ([0.0f64; 3], [0.0f64; 3], [0.0f64; 3]);
-    let (mut r1, mut r2, mut r3) = ([0.0f64; 4], [0.0f64; 4], [0.0f64; 4]);
-    for (li, yi) in l.iter().zip(y.chunks_exact_mut(3)).rev() {
-        let mut s = [0.0; 3];
-        for c in 0..3 {
-            s[c] = (yi[c] - r1[1] * y1[c] - r2[2] * y2[c] - r3[3] * y3[c]) * li[0];
-        }
-        yi.copy_from_slice(&s);
-        (y3, y2, y1) = (y2, y1, s);
-        (r3, r2, r1) = (r2, r1, *li);
-    }
+    })
 }
 
 /// Splits the structure lines into two families: breadth-first over the

@@ -3,6 +3,74 @@
 use super::*;
 use crate::shapes;
 use crate::smooth::{LaplaceOptions, TaubinOptions, laplace_smooth, taubin_smooth};
+use crate::{Cancelled, Control};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Fairs `mesh` in place with the chosen solver (the tests compare meshes).
+fn fair_in_place_with(
+    mesh: &mut SurfaceMesh,
+    options: &QuadFairOptions,
+    method: Method,
+) -> Result<QuadFairReport, QuadFairError> {
+    let out = fair_structure_lines_with(mesh, options, method)?;
+    mesh.set_positions(out.positions)?;
+    Ok(out.report)
+}
+
+/// [`fair_in_place_with`] with the default solver choice.
+fn fair_in_place(
+    mesh: &mut SurfaceMesh,
+    options: &QuadFairOptions,
+) -> Result<QuadFairReport, QuadFairError> {
+    let out = fair_structure_lines(mesh, options)?;
+    mesh.set_positions(out.positions)?;
+    Ok(out.report)
+}
+
+/// The one algorithm shape (#17 item 1): the input is untouched, progress
+/// comes once per iteration, and raising the cancel flag stops the run
+/// with the Cancelled error (here after the first iteration).
+#[test]
+fn fairing_reports_progress_and_stops_when_cancelled() {
+    let (_, zz) = zigzag_grid(16, 16, 0.2, |x, y| 0.3 * (x * x - y * y));
+    let before = zz.positions().to_vec();
+    let flag = Arc::new(AtomicBool::new(false));
+    let raise = Arc::clone(&flag);
+    let steps = Arc::new(std::sync::Mutex::new(Vec::new()));
+    let seen = Arc::clone(&steps);
+    let control = Control::new()
+        .cancel_flag(Arc::clone(&flag))
+        .on_progress(move |p| {
+            if let Ok(mut v) = seen.lock() {
+                v.push((p.stage, p.done, p.total));
+            }
+            if p.done >= 1 {
+                raise.store(true, Ordering::Relaxed);
+            }
+        });
+    let options = QuadFairOptions::default().iterations(3).control(control);
+    assert_eq!(
+        fair_structure_lines(&zz, &options),
+        Err(QuadFairError::Cancelled(Cancelled))
+    );
+    assert_eq!(zz.positions(), &before[..]);
+    let steps = steps.lock().map(|v| v.clone()).unwrap_or_default();
+    assert_eq!(steps, vec![("iterations", 0, 3), ("iterations", 1, 3)]);
+    // without cancelling: every iteration reports, then the end
+    let all = Arc::new(std::sync::Mutex::new(0u64));
+    let count = Arc::clone(&all);
+    let control = Control::new().on_progress(move |_| {
+        if let Ok(mut c) = count.lock() {
+            *c += 1;
+        }
+    });
+    let out = fair_structure_lines(&zz, &QuadFairOptions::default().control(control)).unwrap();
+    assert_eq!(all.lock().map(|c| *c).unwrap_or(0), 4);
+    assert_eq!(out.report.iterations, 3);
+    assert_eq!(out.report.vertices, zz.vertex_count());
+    assert_eq!(zz.positions(), &before[..]);
+}
 
 /// Quad grid of `truth` over [−1, 1]² with a planted zigzag: interior
 /// vertices shifted alternately ±δ·h across the lines of constant i
@@ -65,7 +133,7 @@ fn zigzag_structure_lines_are_straightened_closer_to_the_truth_than_laplace_and_
     for (nx, ny, f) in cases {
         let (truth, zz) = zigzag_grid(nx, ny, 0.2, &f);
         let mut ours = zz.clone();
-        let r = fair_structure_lines(&mut ours, &QuadFairOptions::default()).unwrap();
+        let r = fair_in_place(&mut ours, &QuadFairOptions::default()).unwrap();
         let mut lap = zz.clone();
         let out = laplace_smooth(&lap, &LaplaceOptions::default().iterations(10)).unwrap();
         lap.set_positions(out.positions).unwrap();
@@ -128,9 +196,9 @@ fn iterative_and_cholesky_solves_give_the_same_fairing() {
         ..Default::default()
     };
     let mut direct = zz.clone();
-    let rd = fair_structure_lines_with(&mut direct, &o, Method::Direct).unwrap();
+    let rd = fair_in_place_with(&mut direct, &o, Method::Direct).unwrap();
     let mut it = zz.clone();
-    let ri = fair_structure_lines_with(&mut it, &o, Method::Iterative).unwrap();
+    let ri = fair_in_place_with(&mut it, &o, Method::Iterative).unwrap();
     let worst = max_distance(&direct, &it);
     assert!(
         worst <= 1e-6 * ebar,
@@ -148,14 +216,14 @@ fn iterative_and_cholesky_solves_give_the_same_fairing() {
         assert_eq!(it.position(v), zz.position(v));
     }
     let mut again = zz.clone();
-    fair_structure_lines_with(&mut again, &o, Method::Iterative).unwrap();
+    fair_in_place_with(&mut again, &o, Method::Iterative).unwrap();
     assert_eq!(again.positions(), it.positions(), "deterministic");
     let shift = Vec3::new(1e4, -2e4, 3e4);
     let mut far = zz.clone();
     for p in far.positions_mut() {
         *p += shift;
     }
-    fair_structure_lines_with(&mut far, &o, Method::Iterative).unwrap();
+    fair_in_place_with(&mut far, &o, Method::Iterative).unwrap();
     for (p, q) in far.positions().iter().zip(it.positions()) {
         assert!((*p - shift).distance(*q) <= 1e-6 * ebar);
     }
@@ -201,9 +269,9 @@ fn iterative_solve_agrees_with_cholesky_around_an_irregular_vertex() {
     let ebar = crate::geom::mean_edge_length(&mesh);
     let o = QuadFairOptions::default();
     let mut direct = mesh.clone();
-    let rd = fair_structure_lines_with(&mut direct, &o, Method::Direct).unwrap();
+    let rd = fair_in_place_with(&mut direct, &o, Method::Direct).unwrap();
     let mut it = mesh.clone();
-    fair_structure_lines_with(&mut it, &o, Method::Iterative).unwrap();
+    fair_in_place_with(&mut it, &o, Method::Iterative).unwrap();
     assert!(rd.free_vertices > 100, "{rd:?}");
     let worst = max_distance(&direct, &it);
     assert!(
@@ -229,7 +297,7 @@ fn corners_and_fixed_vertices_stay_bit_identical_and_the_weight_is_scale_invaria
         ..Default::default()
     };
     let mut a = zz.clone();
-    fair_structure_lines(&mut a, &o).unwrap();
+    fair_in_place(&mut a, &o).unwrap();
     for v in fixed.iter().copied().chain([0, 11, 132, 143].map(VertexId)) {
         assert_eq!(a.position(v), zz.position(v));
     }
@@ -244,7 +312,7 @@ fn corners_and_fixed_vertices_stay_bit_identical_and_the_weight_is_scale_invaria
     for p in big.positions_mut() {
         *p *= 1000.0;
     }
-    fair_structure_lines(&mut big, &o).unwrap();
+    fair_in_place(&mut big, &o).unwrap();
     for (p, q) in big.positions().iter().zip(a.positions()) {
         assert!((*p / 1000.0 - *q).length() < 1e-9, "{p} vs {q}");
     }
@@ -254,14 +322,14 @@ fn corners_and_fixed_vertices_stay_bit_identical_and_the_weight_is_scale_invaria
         ..Default::default()
     };
     assert!(matches!(
-        fair_structure_lines(&mut a, &bad),
+        fair_in_place(&mut a, &bad),
         Err(QuadFairError::FixedVertexOutOfRange { .. })
     ));
     let bad = QuadFairOptions {
         weight: f64::NAN,
         ..Default::default()
     };
-    assert!(fair_structure_lines(&mut a, &bad).is_err());
+    assert!(fair_in_place(&mut a, &bad).is_err());
 }
 
 #[test]
@@ -492,9 +560,9 @@ fn zigzag_structure_lines_straighten_on_the_true_surface_better_than_taubin_50()
         };
         let (tau, tau_fixed) = (taubin(false), taubin(true));
         let mut ours = zz.clone();
-        let r = fair_structure_lines(&mut ours, &QuadFairOptions::default()).unwrap();
+        let r = fair_in_place(&mut ours, &QuadFairOptions::default()).unwrap();
         let mut thesis = zz.clone();
-        fair_structure_lines(
+        fair_in_place(
             &mut thesis,
             &QuadFairOptions {
                 on_surface: false,
