@@ -759,12 +759,8 @@ fn structure_line_section(demo: &Demo) -> Result<Section> {
     let bump = |x: f64, y: f64| 0.4 * (-1.5 * (x * x + y * y)).exp();
     let (truth, zigzag) = zigzag_quad_grid(25, bump);
     let mut taubin = zigzag.clone();
-    taubin_smooth(
-        &mut taubin,
-        &TaubinOptions {
-            iterations: 50,
-            ..Default::default()
-        },
+    taubin.set_positions(
+        taubin_smooth(&zigzag, &TaubinOptions::default().iterations(50))?.positions,
     )?;
     let mut faired = zigzag.clone();
     faired.set_positions(fair_structure_lines(&zigzag, &QuadFairOptions::default())?.positions)?;
