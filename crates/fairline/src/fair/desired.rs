@@ -16,14 +16,29 @@
 //! (its documented [`crate::curves::OghKind::Straight`] case; the
 //! `Constrained` case covers a failed tangent-preserving condition).
 //!
+//! Refitted desired lines (beyond the paper): once the defect is gone, the
+//! line inside R carries the shape of the surface there, which the two end
+//! conditions of Eq. (5) cannot know. [`fitted_magnitudes`] keeps Q0, Q1
+//! and the tangent directions T0, T1 (the G1 conditions from the untouched
+//! surface) and replaces the OGH magnitudes a0, a1 (chosen by Eq. (5) for
+//! the curve's own strain energy) by those of the geometric Hermite cubic
+//! closest, in least squares, to the current inside nodes;
+//! [`desired_lines_with`] then builds the desired lines with them.
+//!
 //! A run of inside nodes that reaches the end of an open line (the line
 //! stops inside R) has no second delimiting node and gets no desired curve;
 //! neither does a closed line lying entirely inside R. They are counted in
 //! [`DesiredLines::skipped`].
 
 use crate::Vec3;
-use crate::curves::{ArcLengthTable, OghCurve, chord_parameters, ogh_curve};
+use crate::curves::{ArcLengthTable, CubicHermite, OghCurve, OghKind, chord_parameters, ogh_curve};
 use crate::highlight::{HighlightLines, NodeId};
+use std::collections::BTreeMap;
+
+/// Tangent magnitudes (a0, a1) of refitted desired lines, by the delimiting
+/// nodes (Q0, Q1) of their run (outside R, so they do not change while R is
+/// faired).
+pub type Magnitudes = BTreeMap<(NodeId, NodeId), (f64, f64)>;
 
 /// Samples of the arc-length table of an OGH curve.
 const ARC_SAMPLES: usize = 256;
@@ -142,6 +157,17 @@ fn outside_part(
 /// returns true; see the module documentation for tangents and skipped
 /// runs. Node positions are those stored in `lines`.
 pub fn desired_lines(lines: &HighlightLines, inside: impl Fn(NodeId) -> bool) -> DesiredLines {
+    desired_lines_with(lines, inside, &Magnitudes::new())
+}
+
+/// [`desired_lines`] with the tangent magnitudes of `magnitudes` (from
+/// [`fitted_magnitudes`]) for the runs it lists; the other runs get the
+/// OGH curve of Eq. (5).
+pub fn desired_lines_with(
+    lines: &HighlightLines,
+    inside: impl Fn(NodeId) -> bool,
+    magnitudes: &Magnitudes,
+) -> DesiredLines {
     let mut out = DesiredLines::default();
     for line in &lines.lines {
         let n = line.nodes.len().min(line.points.len());
@@ -195,7 +221,11 @@ pub fn desired_lines(lines: &HighlightLines, inside: impl Fn(NodeId) -> bool) ->
             let (p1, s1) = outside_part(&seq, &ins, b, 1, reach, 3);
             let t0 = fitted_tangent(q0.1, &p0, &s0);
             let t1 = fitted_tangent(q1.1, &p1, &s1);
-            let curve = ogh_curve(q0.1, t0, q1.1, t1);
+            let curve = match magnitudes.get(&(q0.0, q1.0)) {
+                Some(&(a0, a1)) => fitted_curve(q0.1, t0, q1.1, t1, a0, a1)
+                    .unwrap_or_else(|| ogh_curve(q0.1, t0, q1.1, t1)),
+                None => ogh_curve(q0.1, t0, q1.1, t1),
+            };
             let table = ArcLengthTable::new(|t| curve.hermite.point(t), ARC_SAMPLES);
             let run_pts: Vec<Vec3> = seq[a - 1..=b].iter().map(|x| x.1).collect();
             let c = chord_parameters(&run_pts);
@@ -223,6 +253,102 @@ pub fn desired_lines(lines: &HighlightLines, inside: impl Fn(NodeId) -> bool) ->
                 lengths,
                 samples,
             });
+        }
+    }
+    out
+}
+
+/// The geometric Hermite cubic from `q0` to `q1` with tangent directions
+/// `t0`, `t1` and magnitudes `a0`, `a1`; `None` when a tangent is zero or a
+/// magnitude not positive.
+fn fitted_curve(q0: Vec3, t0: Vec3, q1: Vec3, t1: Vec3, a0: f64, a1: f64) -> Option<OghCurve> {
+    let (t0, t1) = (t0.normalize_or_zero(), t1.normalize_or_zero());
+    if t0 == Vec3::ZERO || t1 == Vec3::ZERO || !(a0 > 0.0) || !(a1 > 0.0) {
+        return None;
+    }
+    if !a0.is_finite() || !a1.is_finite() || !q0.is_finite() || !q1.is_finite() {
+        return None;
+    }
+    Some(OghCurve {
+        hermite: CubicHermite {
+            p0: q0,
+            p1: q1,
+            v0: a0 * t0,
+            v1: a1 * t1,
+        },
+        magnitudes: (a0, a1),
+        kind: OghKind::Fitted,
+    })
+}
+
+/// Rounds of parameter correction in [`fitted_magnitudes`].
+const FIT_ROUNDS: usize = 3;
+/// Fitted magnitudes are kept within these multiples of the chord ‖Q1 − Q0‖
+/// (the OGH magnitudes are about one chord; far larger ones make loops).
+const FIT_RANGE: (f64, f64) = (0.1, 3.0);
+
+/// Refits the tangent magnitudes of every desired line of `desired` to its
+/// current inside nodes (the module documentation): with the nodes' curve
+/// parameters t_i fixed, H(t_i) is linear in (a0, a1), so the least-squares
+/// magnitudes solve a 2 × 2 system; the t_i are then re-read as the nearest
+/// points of the new curve, [`FIT_ROUNDS`] times. A line keeps its OGH curve
+/// (is left out) when it has fewer than two inside nodes, a zero tangent, a
+/// singular system or a fit outside a0, a1 ∈ [0.1, 3] ‖Q1 − Q0‖.
+pub fn fitted_magnitudes(desired: &DesiredLines) -> Magnitudes {
+    let mut out = Magnitudes::new();
+    for d in &desired.lines {
+        let (q0, q1) = d.end_points;
+        let (t0, t1) = (d.tangents.0.normalize_or_zero(), d.tangents.1.normalize_or_zero());
+        let chord = (q1 - q0).length();
+        if d.points.len() < 2 || t0 == Vec3::ZERO || t1 == Vec3::ZERO || !(chord > 0.0) {
+            continue;
+        }
+        let (lo, hi) = (FIT_RANGE.0 * chord, FIT_RANGE.1 * chord);
+        let mut curve = d.curve.hermite;
+        let mut fitted = None;
+        for _ in 0..FIT_ROUNDS {
+            let samples: Vec<Vec3> = (0..=ARC_SAMPLES)
+                .map(|k| curve.point(k as f64 / ARC_SAMPLES as f64))
+                .collect();
+            let (mut m00, mut m01, mut m11, mut b0, mut b1) = (0.0, 0.0, 0.0, 0.0, 0.0);
+            let c01 = t0.dot(t1);
+            for p in &d.points {
+                let k = samples
+                    .iter()
+                    .enumerate()
+                    .map(|(k, s)| (k, (*s - *p).length_squared()))
+                    .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
+                    .0;
+                let t = k as f64 / ARC_SAMPLES as f64;
+                let s = t - 1.0;
+                let (h10, h11) = (s * s * t, s * t * t);
+                let base = (2.0 * t + 1.0) * s * s * q0 + (-2.0 * t + 3.0) * t * t * q1;
+                let r = *p - base;
+                m00 += h10 * h10;
+                m01 += h10 * h11 * c01;
+                m11 += h11 * h11;
+                b0 += h10 * t0.dot(r);
+                b1 += h11 * t1.dot(r);
+            }
+            let det = m00 * m11 - m01 * m01;
+            if !(det > 1e-12 * m00 * m11) || !det.is_finite() {
+                break;
+            }
+            let a0 = (b0 * m11 - b1 * m01) / det;
+            let a1 = (m00 * b1 - m01 * b0) / det;
+            if !(a0 >= lo && a0 <= hi && a1 >= lo && a1 <= hi) {
+                break;
+            }
+            curve = CubicHermite {
+                p0: q0,
+                p1: q1,
+                v0: a0 * t0,
+                v1: a1 * t1,
+            };
+            fitted = Some((a0, a1));
+        }
+        if let Some(a) = fitted {
+            out.insert(d.ends, a);
         }
     }
     out

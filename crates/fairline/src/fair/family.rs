@@ -7,7 +7,8 @@
 //! result's highlight lines to the truth's lines under the same lights.
 
 use super::desired::distance_to_polyline;
-use super::{FairResult, RegionSpec};
+use super::FairReport;
+use crate::io::RegionSpec;
 use crate::Vec3;
 use crate::highlight::{HighlightLines, HighlightModel, HighlightOptions, LightArray};
 use crate::mesh::{FaceId, SurfaceMesh};
@@ -168,7 +169,7 @@ impl MaxRms {
 }
 
 /// Surface distance to the truth over the inside vertices of the region.
-pub(crate) fn surface_error(case: &Case, r: &FairResult, mesh: &SurfaceMesh) -> MaxRms {
+pub(crate) fn surface_error(case: &Case, r: &FairReport, mesh: &SurfaceMesh) -> MaxRms {
     let d: Vec<f64> = r
         .region
         .inside_vertices
@@ -184,7 +185,7 @@ pub(crate) fn surface_error(case: &Case, r: &FairResult, mesh: &SurfaceMesh) -> 
 /// both directions. A line that exists in one model only counts with its
 /// distance to nothing: infinity.
 pub(crate) fn line_error(
-    r: &FairResult,
+    r: &FairReport,
     mesh: &SurfaceMesh,
     truth: &SurfaceMesh,
     truth_lines: &HighlightLines,
@@ -231,7 +232,8 @@ pub(crate) fn truth_lines(truth: &SurfaceMesh, light: &LightArray) -> HighlightL
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fair::{FairMethod, FairOptions, fair_highlight_lines};
+    use crate::fair::tests::fair;
+    use crate::fair::{FairMethod, FairOptions};
 
     /// Surface max, surface RMS, line max, line RMS of one run.
     type Measures = [f64; 4];
@@ -250,21 +252,21 @@ mod tests {
                 let tl = truth_lines(&truth, &light);
                 let faces = case.region(&mesh);
                 let run = |o: &FairOptions| -> Measures {
-                    let r = fair_highlight_lines(&mesh, &light, &faces, o).unwrap();
+                    let (r, after) = fair(&mesh, &light, &faces, o).unwrap();
                     for v in mesh.vertices() {
                         if !r.region.is_movable[v.idx()] {
                             assert_eq!(
                                 mesh.position(v).to_array().map(f64::to_bits),
-                                r.mesh.position(v).to_array().map(f64::to_bits),
+                                after.position(v).to_array().map(f64::to_bits),
                                 "{}: {:?} moved vertex {v:?} outside the movable set",
                                 case.label(),
                                 o.method
                             );
                         }
                     }
-                    assert!(r.mesh.positions().iter().all(|p| p.is_finite()));
-                    let s = surface_error(case, &r, &r.mesh);
-                    let l = line_error(&r, &r.mesh, &truth, &tl, &light);
+                    assert!(after.positions().iter().all(|p| p.is_finite()));
+                    let s = surface_error(case, &r, &after);
+                    let l = line_error(&r, &after, &truth, &tl, &light);
                     [s.max, s.rms, l.max, l.rms]
                 };
                 (case.label(), run(options), run(&flow_options))
@@ -342,6 +344,64 @@ mod tests {
         assert!(mean_ratio(&rows, 0) > mean_ratio(&paper, 0));
     }
 
+    /// Temporary parameter sweep: FAIRHL_VARIANTS="w1,w2,w3,eps,maxit;..."
+    #[test]
+    #[ignore]
+    fn sweep() {
+        let spec = std::env::var("FAIRHL_VARIANTS").unwrap_or_default();
+        let flow_options = FairOptions::default().method(FairMethod::DiffusionFlow);
+        for v in spec.split(';').filter(|s| !s.is_empty()) {
+            let p: Vec<f64> = v.split(',').map(|x| x.parse().unwrap()).collect();
+            let o = FairOptions::default()
+                .weights(p[0], p[1])
+                .laplacian_weight(p[2])
+                .epsilon(p[3])
+                .max_iterations(p[4] as usize)
+                .refits(p.get(5).copied().unwrap_or(0.0) as usize);
+            let mut worst = [0.0f64; 4];
+            let mut logs = [0.0f64; 4];
+            let mut lost = Vec::new();
+            let t = std::time::Instant::now();
+            let mut its = 0;
+            for case in Case::family() {
+                let (mesh, truth, light) = (case.input_mesh(), case.truth_mesh(), case.light());
+                let tl = truth_lines(&truth, &light);
+                let faces = case.region(&mesh);
+                let meas = |o: &FairOptions, its: &mut usize| -> Measures {
+                    let (r, after) = fair(&mesh, &light, &faces, o).unwrap();
+                    *its += r.iterations;
+                    let s = surface_error(&case, &r, &after);
+                    let l = line_error(&r, &after, &truth, &tl, &light);
+                    [s.max, s.rms, l.max, l.rms]
+                };
+                let m = meas(&o, &mut its);
+                let f = meas(&flow_options, &mut 0);
+                let mut row = String::new();
+                for k in 0..4 {
+                    let q = m[k] / f[k];
+                    worst[k] = worst[k].max(q);
+                    logs[k] += q.ln();
+                    row += &format!(" {q:.2}");
+                }
+                if (0..4).any(|k| m[k] > f[k]) {
+                    lost.push(format!("{}:{row}", case.label()));
+                }
+                if std::env::var("FAIRHL_ROWS").is_ok() {
+                    println!("  {} {row} | {}", case.label(), show(&m));
+                }
+            }
+            println!(
+                "VARIANT {v}: mean {:?} worst {:?} losses {} its {} time {:.2}s\n   {}",
+                logs.map(|l| (l / 24.0).exp()),
+                worst,
+                lost.len(),
+                its,
+                t.elapsed().as_secs_f64(),
+                lost.join("\n   ")
+            );
+        }
+    }
+
     /// Prints the table of BENCHMARKS.md (run with --ignored --nocapture).
     #[test]
     #[ignore]
@@ -363,7 +423,7 @@ mod tests {
             let mut row = format!("| {} |", case.label());
             for (i, (_, opt)) in variants.iter().enumerate() {
                 let t = std::time::Instant::now();
-                let r = fair_highlight_lines(&mesh, &light, &faces, opt).unwrap();
+                let (r, after) = fair(&mesh, &light, &faces, opt).unwrap();
                 let dt = t.elapsed().as_secs_f64();
                 if i == 0 {
                     let s0 = surface_error(&case, &r, &mesh);
@@ -377,8 +437,8 @@ mod tests {
                         d.rms
                     );
                 }
-                let s = surface_error(&case, &r, &r.mesh);
-                let l = line_error(&r, &r.mesh, &truth, &tl, &light);
+                let s = surface_error(&case, &r, &after);
+                let l = line_error(&r, &after, &truth, &tl, &light);
                 row += &format!(
                     " {:.1e} / {:.1e} · {:.1e} / {:.1e} ({} it, {:.2} s) |",
                     s.max, s.rms, l.max, l.rms, r.iterations, dt

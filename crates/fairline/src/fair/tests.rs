@@ -20,12 +20,29 @@ fn light_for(mesh: &SurfaceMesh) -> LightArray {
 }
 
 fn sphere_faces(mesh: &SurfaceMesh, c: Vec3, r: f64) -> Vec<FaceId> {
-    RegionSpec::Sphere {
+    crate::io::RegionSpec::Sphere {
         center: c,
         radius: r,
     }
     .faces(mesh)
     .unwrap()
+}
+
+/// Fairs the faces `faces` of `mesh` under `light` with `options`; returns
+/// the report and the faired mesh.
+pub(crate) fn fair(
+    mesh: &SurfaceMesh,
+    light: &LightArray,
+    faces: &[FaceId],
+    options: &FairOptions,
+) -> Result<(FairReport, SurfaceMesh), FairError> {
+    let out = fair_highlight_lines(
+        mesh,
+        &options.clone().region(faces.to_vec()).light(*light),
+    )?;
+    let mut after = mesh.clone();
+    after.set_positions(out.positions)?;
+    Ok((out.report, after))
 }
 
 fn bits(p: Vec3) -> [u64; 3] {
@@ -55,8 +72,12 @@ fn outside_nodes(
 /// The properties every fairing run must have (Yong et al. §3.1): nothing
 /// but movable vertices moved; normals of every vertex outside R and every
 /// highlight node outside R are bit-identical.
-fn assert_outside_untouched(before: &SurfaceMesh, r: &FairResult, light: &LightArray) {
-    let after = &r.mesh;
+fn assert_outside_untouched(
+    before: &SurfaceMesh,
+    r: &FairReport,
+    after: &SurfaceMesh,
+    light: &LightArray,
+) {
     for v in before.vertices() {
         if !r.region.is_movable[v.idx()] {
             assert_eq!(
@@ -118,42 +139,6 @@ fn movable_vertices_follow_section_3_1() {
         movable_vertices(&mesh, &[FaceId(100_000)], &[]),
         Err(FairError::Region(_))
     ));
-}
-
-#[test]
-fn region_json_forms() {
-    let mesh = shapes::plane(9);
-    let f = RegionSpec::from_json(r#"{"faces":[0,1,2,2]}"#).unwrap();
-    assert_eq!(
-        f.faces(&mesh).unwrap(),
-        vec![FaceId(0), FaceId(1), FaceId(2)]
-    );
-    // vertices: exactly the faces all of whose vertices are listed
-    let v = RegionSpec::from_json(r#"{"vertices":[0,1,9,10]}"#).unwrap();
-    let fv = v.faces(&mesh).unwrap();
-    assert_eq!(fv.len(), 2);
-    let s = RegionSpec::from_json(r#"{"sphere":{"center":[0,0,0],"radius":0.6},"regions":[]}"#)
-        .unwrap();
-    let p = mesh.positions();
-    for f in s.faces(&mesh).unwrap() {
-        assert!(mesh.face_vertices(f).all(|w| p[w.idx()].length() <= 0.6));
-    }
-    assert_eq!(RegionSpec::from_json(&s.to_json()).unwrap(), s);
-    for bad in [
-        "{}",
-        r#"{"faces":[1],"vertices":[2]}"#,
-        r#"{"sphere":{"center":[0,0,0],"radius":-1}}"#,
-        "not json",
-    ] {
-        assert!(RegionSpec::from_json(bad).is_err(), "{bad}");
-    }
-    assert!(RegionSpec::Faces(vec![9999]).faces(&mesh).is_err());
-    assert!(RegionSpec::Vertices(vec![9999]).faces(&mesh).is_err());
-    let far = RegionSpec::Sphere {
-        center: Vec3::splat(10.0),
-        radius: 0.1,
-    };
-    assert!(far.faces(&mesh).is_err());
 }
 
 /// The analytic Jacobian of Eq. (13) (through Eq. (1) and the Eq. (3)
@@ -278,16 +263,16 @@ fn check_fairing(
     truth_distance: impl Fn(Vec3) -> f64,
     factor: f64,
 ) -> (f64, f64) {
-    let r = fair_highlight_lines(mesh, light, faces, &FairOptions::default()).unwrap();
-    let flow = fair_highlight_lines(
+    let (r, faired) = fair(mesh, light, faces, &FairOptions::default()).unwrap();
+    let (flow, flow_mesh) = fair(
         mesh,
         light,
         faces,
         &FairOptions::default().method(FairMethod::DiffusionFlow),
     )
     .unwrap();
-    assert_outside_untouched(mesh, &r, light);
-    assert_outside_untouched(mesh, &flow, light);
+    assert_outside_untouched(mesh, &r, &faired, light);
+    assert_outside_untouched(mesh, &flow, &flow_mesh, light);
     let dist = |m: &SurfaceMesh| {
         r.region
             .movable
@@ -295,7 +280,7 @@ fn check_fairing(
             .map(|v| truth_distance(m.position(*v)))
             .fold(0.0, f64::max)
     };
-    let (d0, d1) = (dist(mesh), dist(&r.mesh));
+    let (d0, d1) = (dist(mesh), dist(&faired));
     assert!(r.converged, "not converged: {:?}", r.history.last());
     assert!(d1 * factor < d0, "distance to the truth {d0} -> {d1}");
     assert!(
@@ -328,7 +313,7 @@ fn check_fairing(
             assert!(h.achieved < h.objective);
         }
     }
-    assert!(r.mesh.positions().iter().all(|p| p.is_finite()));
+    assert!(faired.positions().iter().all(|p| p.is_finite()));
     (d0, d1)
 }
 
@@ -407,4 +392,209 @@ fn bump_on_a_sphere_patch_is_removed() {
         |p| ((p - Vec3::new(0.0, 0.0, -rs)).length() - rs).abs(),
         20.0,
     );
+}
+
+/// FNV-1a over the position bits and the report's JSON text.
+fn result_checksum(positions: &[Vec3], report: &serde_json::Value) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    for p in positions {
+        for c in p.to_array() {
+            eat(&c.to_bits().to_le_bytes());
+        }
+    }
+    eat(report.to_string().as_bytes());
+    h
+}
+
+/// Issue #17 item 1: the converted function (options struct with region,
+/// lights and control; `Output` with positions and a `Serialize` report)
+/// gives the same positions and the same JSON report, bit for bit, as the
+/// code path before the conversion (module `before_17`), for every method,
+/// with and without ω3, on a family case and the bump plane; the refits
+/// (0 here) are the only new report key. The checksums printed are those
+/// recorded in `converted_fairing_matches_the_recorded_checksums`.
+#[test]
+fn converted_fairing_equals_the_code_path_before_17_bit_for_bit() {
+    let case = super::family::Case {
+        panel: super::family::Panel::Saddle,
+        sigma: 0.11,
+        amplitude: -0.022,
+    };
+    let plane = bump_plane(31, 0.03);
+    let plane_light = light_for(&plane);
+    let plane_faces = sphere_faces(&plane, Vec3::ZERO, 0.5);
+    let inputs = [
+        (case.input_mesh(), case.light(), case.region(&case.input_mesh())),
+        (plane, plane_light, plane_faces),
+    ];
+    for (mesh, light, faces) in &inputs {
+        for m in [
+            FairMethod::Highlight,
+            FairMethod::Paper,
+            FairMethod::DiffusionFlow,
+        ] {
+            for w3 in [0.0, 0.5] {
+                let old = super::before_17::fair_highlight_lines(
+                    mesh,
+                    light,
+                    faces,
+                    &super::before_17::FairOptions::default()
+                        .method(m)
+                        .laplacian_weight(w3),
+                )
+                .unwrap();
+                let out = fair_highlight_lines(
+                    mesh,
+                    &FairOptions::default()
+                        .region(faces.clone())
+                        .light(*light)
+                        .method(m)
+                        .laplacian_weight(w3),
+                )
+                .unwrap();
+                let old_bits: Vec<[u64; 3]> = old.mesh.positions().iter().map(|p| bits(*p)).collect();
+                let new_bits: Vec<[u64; 3]> = out.positions.iter().map(|p| bits(*p)).collect();
+                assert!(old_bits == new_bits, "{m:?} ω3 {w3}: positions differ");
+                let mut json = serde_json::to_value(&out.report).unwrap();
+                assert_eq!(json["refits"], serde_json::json!(0));
+                if let Some(map) = json.as_object_mut() {
+                    map.remove("refits");
+                }
+                assert_eq!(json, old.report_json(), "{m:?} ω3 {w3}: report differs");
+                println!(
+                    "CHECKSUM {m:?} {w3} {:#x}",
+                    result_checksum(&out.positions, &old.report_json())
+                );
+            }
+        }
+    }
+}
+
+/// The cancel flag of [`crate::Control`] stops the run with
+/// [`FairError::Cancelled`]: raised before the call, and raised by the
+/// progress callback after the second iteration (so the third never ends);
+/// progress arrives once per iteration, stage "iterations", total N_max.
+#[test]
+fn cancelling_returns_the_cancelled_error() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::{Arc, Mutex};
+    let mesh = bump_plane(31, 0.03);
+    let light = light_for(&mesh);
+    let options = FairOptions::default()
+        .region(sphere_faces(&mesh, Vec3::ZERO, 0.5))
+        .light(light)
+        .epsilon(1e-9);
+    let flag = Arc::new(AtomicBool::new(true));
+    let r = fair_highlight_lines(
+        &mesh,
+        &options.clone().control(crate::Control::new().cancel_flag(Arc::clone(&flag))),
+    );
+    assert!(matches!(r, Err(FairError::Cancelled(_))), "{r:?}");
+    assert_eq!(
+        r.map(|_| ()).unwrap_err().to_string(),
+        "cancelled"
+    );
+    flag.store(false, Ordering::Relaxed);
+    let seen = Arc::new(Mutex::new(Vec::new()));
+    let (sink, raise) = (Arc::clone(&seen), Arc::clone(&flag));
+    let control = crate::Control::new()
+        .cancel_flag(Arc::clone(&flag))
+        .on_progress(move |p| {
+            if let Ok(mut v) = sink.lock() {
+                v.push(p);
+            }
+            if p.done >= 2 {
+                raise.store(true, Ordering::Relaxed);
+            }
+        });
+    let r = fair_highlight_lines(&mesh, &options.clone().control(control));
+    assert!(matches!(r, Err(FairError::Cancelled(_))), "{r:?}");
+    let seen = seen.lock().unwrap().clone();
+    assert_eq!(seen.len(), 2);
+    for (k, p) in seen.iter().enumerate() {
+        assert_eq!(
+            (p.stage, p.done, p.total),
+            ("iterations", k as u64 + 1, 50)
+        );
+    }
+    // without the flag the same options run to the end
+    flag.store(false, Ordering::Relaxed);
+    assert!(fair_highlight_lines(&mesh, &options).is_ok());
+}
+
+/// An empty region is refused; so are options out of range.
+#[test]
+fn empty_regions_and_bad_options_are_refused() {
+    let mesh = bump_plane(21, 0.03);
+    let r = fair_highlight_lines(&mesh, &FairOptions::default());
+    assert!(matches!(r, Err(FairError::Region(_))), "{r:?}");
+    let faces = sphere_faces(&mesh, Vec3::ZERO, 0.5);
+    let r = fair_highlight_lines(
+        &mesh,
+        &FairOptions::default().region(faces).epsilon(f64::NAN),
+    );
+    assert!(matches!(r, Err(FairError::InvalidOption(_))), "{r:?}");
+}
+
+/// [`fitted_magnitudes`] recovers the tangent magnitudes of a geometric
+/// Hermite cubic from points on it, starting from the OGH curve of the same
+/// ends and tangents (whose magnitudes differ), and leaves a line with a
+/// single inside node alone.
+#[test]
+fn refitted_magnitudes_recover_a_known_cubic() {
+    use crate::curves::{CubicHermite, ogh_curve};
+    let (q0, q1) = (Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.2, 0.1));
+    let (t0, t1) = (
+        Vec3::new(1.0, 0.5, 0.0).normalize(),
+        Vec3::new(1.0, -0.3, 0.2).normalize(),
+    );
+    let (a0, a1) = (1.6, 0.7);
+    let truth = CubicHermite {
+        p0: q0,
+        p1: q1,
+        v0: a0 * t0,
+        v1: a1 * t1,
+    };
+    let ogh = ogh_curve(q0, t0, q1, t1);
+    assert!((ogh.magnitudes.0 - a0).abs() > 0.2);
+    let points: Vec<Vec3> = (1..12).map(|k| truth.point(k as f64 / 12.0)).collect();
+    let ends = (
+        NodeId::Vertex(crate::mesh::VertexId(0), 0),
+        NodeId::Vertex(crate::mesh::VertexId(1), 0),
+    );
+    let line = DesiredLine {
+        index: 0,
+        ends,
+        end_points: (q0, q1),
+        tangents: (t0, t1),
+        curve: ogh,
+        nodes: vec![NodeId::Vertex(crate::mesh::VertexId(2), 0); points.len()],
+        points: points.clone(),
+        targets: points.clone(),
+        lengths: vec![0.1; points.len()],
+        samples: Vec::new(),
+    };
+    let desired = DesiredLines {
+        lines: vec![line.clone()],
+        skipped: 0,
+    };
+    let fitted = fitted_magnitudes(&desired);
+    let (b0, b1) = fitted[&ends];
+    assert!(
+        (b0 - a0).abs() < 0.02 * a0 && (b1 - a1).abs() < 0.02 * a1,
+        "fitted ({b0}, {b1}) vs ({a0}, {a1})"
+    );
+    let mut single = line;
+    single.points.truncate(1);
+    let fitted = fitted_magnitudes(&DesiredLines {
+        lines: vec![single],
+        skipped: 0,
+    });
+    assert!(fitted.is_empty());
 }

@@ -21,6 +21,7 @@ pub mod iges_write;
 mod obj;
 mod off;
 mod ply;
+pub mod selection;
 pub mod step;
 mod stl;
 pub mod surface_file;
@@ -35,6 +36,10 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use thiserror::Error;
 
 use crate::mesh::{MeshError, Soup, SurfaceMesh};
+
+pub use selection::{
+    RegionError, RegionSpec, fixed_vertices_from_json, read_fixed_vertices, read_region,
+};
 
 /// Where in a file an error was found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
