@@ -16,14 +16,15 @@
 //! (its documented [`crate::curves::OghKind::Straight`] case; the
 //! `Constrained` case covers a failed tangent-preserving condition).
 //!
-//! Refitted desired lines (beyond the paper): once the defect is gone, the
-//! line inside R carries the shape of the surface there, which the two end
-//! conditions of Eq. (5) cannot know. [`fitted_magnitudes`] keeps Q0, Q1
-//! and the tangent directions T0, T1 (the G1 conditions from the untouched
-//! surface) and replaces the OGH magnitudes a0, a1 (chosen by Eq. (5) for
-//! the curve's own strain energy) by those of the geometric Hermite cubic
-//! closest, in least squares, to the current inside nodes;
-//! [`desired_lines_with`] then builds the desired lines with them.
+//! Refitted tangents (beyond the paper; Yong et al. §3.7 rebuild the
+//! target function from the current mesh in every iteration): on the input
+//! the tangents T0, T1 can only be fitted to the line's outside part, an
+//! extrapolation that is poor where that part is short or curved (wide
+//! regions). Once the defect is gone, [`across_tangents`] fits the same
+//! parabola to nodes on both sides of Q0 (resp. Q1) — the outside part and
+//! the nearest quarter chord of the faired inside line — a central estimate
+//! of the line's direction at Q0 that is still anchored outside;
+//! [`desired_lines_with`] builds the OGH curves with them.
 //!
 //! A run of inside nodes that reaches the end of an open line (the line
 //! stops inside R) has no second delimiting node and gets no desired curve;
@@ -31,14 +32,14 @@
 //! [`DesiredLines::skipped`].
 
 use crate::Vec3;
-use crate::curves::{ArcLengthTable, CubicHermite, OghCurve, OghKind, chord_parameters, ogh_curve};
+use crate::curves::{ArcLengthTable, OghCurve, chord_parameters, ogh_curve};
 use crate::highlight::{HighlightLines, NodeId};
 use std::collections::BTreeMap;
 
-/// Tangent magnitudes (a0, a1) of refitted desired lines, by the delimiting
-/// nodes (Q0, Q1) of their run (outside R, so they do not change while R is
+/// Refitted tangents (T0, T1) of desired lines, by the delimiting nodes
+/// (Q0, Q1) of their run (outside R, so they do not change while R is
 /// faired).
-pub type Magnitudes = BTreeMap<(NodeId, NodeId), (f64, f64)>;
+pub type Tangents = BTreeMap<(NodeId, NodeId), (Vec3, Vec3)>;
 
 /// Samples of the arc-length table of an OGH curve.
 const ARC_SAMPLES: usize = 256;
@@ -122,12 +123,14 @@ fn fitted_tangent(q: Vec3, pts: &[Vec3], s: &[f64]) -> Vec3 {
     Vec3::ZERO
 }
 
-/// Outside nodes walking away from position `start` of `seq` in direction
-/// `step` (±1), up to arc length `reach` (at least `min_nodes` nodes when
-/// available); returns points and signed arc lengths (negative backwards).
-fn outside_part(
+/// Nodes of one side (`inside[i] == side`) walking away from position
+/// `start` of `seq` in direction `step` (±1), up to arc length `reach` (at
+/// least `min_nodes` nodes when available); returns points and signed arc
+/// lengths (negative backwards).
+fn part(
     seq: &[(NodeId, Vec3)],
     inside: &[bool],
+    side: bool,
     start: usize,
     step: isize,
     reach: f64,
@@ -138,7 +141,7 @@ fn outside_part(
     let mut acc = 0.0;
     let mut prev = seq[start].1;
     let mut i = start as isize + step;
-    while i >= 0 && (i as usize) < seq.len() && !inside[i as usize] {
+    while i >= 0 && (i as usize) < seq.len() && inside[i as usize] == side {
         let p = seq[i as usize].1;
         acc += (p - prev).length();
         pts.push(p);
@@ -152,23 +155,25 @@ fn outside_part(
     (pts, s)
 }
 
-/// Builds the desired highlight lines (Yong et al. §3.2, §3.5) of the lines
-/// `lines` for the region whose inside nodes are those for which `inside`
-/// returns true; see the module documentation for tangents and skipped
-/// runs. Node positions are those stored in `lines`.
-pub fn desired_lines(lines: &HighlightLines, inside: impl Fn(NodeId) -> bool) -> DesiredLines {
-    desired_lines_with(lines, inside, &Magnitudes::new())
+/// One run of inside nodes of a line with its delimiting outside nodes:
+/// the line's node sequence (closed lines opened at an outside node),
+/// the inside flags, and the run `a..b` (Q0 at a − 1, Q1 at b).
+struct Run<'a> {
+    index: i64,
+    seq: &'a [(NodeId, Vec3)],
+    ins: &'a [bool],
+    a: usize,
+    b: usize,
 }
 
-/// [`desired_lines`] with the tangent magnitudes of `magnitudes` (from
-/// [`fitted_magnitudes`]) for the runs it lists; the other runs get the
-/// OGH curve of Eq. (5).
-pub fn desired_lines_with(
+/// Calls `f` for every run of inside nodes with two delimiting outside
+/// nodes (§3.2); returns the runs without them (skipped).
+fn for_each_run(
     lines: &HighlightLines,
     inside: impl Fn(NodeId) -> bool,
-    magnitudes: &Magnitudes,
-) -> DesiredLines {
-    let mut out = DesiredLines::default();
+    mut f: impl FnMut(&Run<'_>),
+) -> usize {
+    let mut skipped = 0;
     for line in &lines.lines {
         let n = line.nodes.len().min(line.points.len());
         if n == 0 {
@@ -184,7 +189,7 @@ pub fn desired_lines_with(
         let mut ins: Vec<bool> = Vec::with_capacity(n + 1);
         if line.closed {
             let Some(first) = flags.iter().position(|&f| !f) else {
-                out.skipped += 1;
+                skipped += 1;
                 continue;
             };
             for k in 0..=n {
@@ -211,146 +216,114 @@ pub fn desired_lines_with(
             }
             let b = i; // one past the run
             if a == 0 || b >= len {
-                out.skipped += 1;
+                skipped += 1;
                 continue;
             }
-            let (q0, q1) = (seq[a - 1], seq[b]);
-            let chord = (q1.1 - q0.1).length();
-            let reach = 0.5 * chord;
-            let (p0, s0) = outside_part(&seq, &ins, a - 1, -1, reach, 3);
-            let (p1, s1) = outside_part(&seq, &ins, b, 1, reach, 3);
-            let t0 = fitted_tangent(q0.1, &p0, &s0);
-            let t1 = fitted_tangent(q1.1, &p1, &s1);
-            let curve = match magnitudes.get(&(q0.0, q1.0)) {
-                Some(&(a0, a1)) => fitted_curve(q0.1, t0, q1.1, t1, a0, a1)
-                    .unwrap_or_else(|| ogh_curve(q0.1, t0, q1.1, t1)),
-                None => ogh_curve(q0.1, t0, q1.1, t1),
-            };
-            let table = ArcLengthTable::new(|t| curve.hermite.point(t), ARC_SAMPLES);
-            let run_pts: Vec<Vec3> = seq[a - 1..=b].iter().map(|x| x.1).collect();
-            let c = chord_parameters(&run_pts);
-            let nodes: Vec<NodeId> = seq[a..b].iter().map(|x| x.0).collect();
-            let points: Vec<Vec3> = run_pts[1..run_pts.len() - 1].to_vec();
-            let targets: Vec<Vec3> = c[1..c.len() - 1].iter().map(|&s| table.point(s)).collect();
-            let lengths: Vec<f64> = (1..run_pts.len() - 1)
-                .map(|k| {
-                    0.5 * ((run_pts[k] - run_pts[k - 1]).length()
-                        + (run_pts[k] - run_pts[k + 1]).length())
-                })
-                .collect();
-            let samples: Vec<Vec3> = (0..=ARC_SAMPLES)
-                .map(|k| curve.hermite.point(k as f64 / ARC_SAMPLES as f64))
-                .collect();
-            out.lines.push(DesiredLine {
+            f(&Run {
                 index: line.index,
-                ends: (q0.0, q1.0),
-                end_points: (q0.1, q1.1),
-                tangents: (t0, t1),
-                curve,
-                nodes,
-                points,
-                targets,
-                lengths,
-                samples,
+                seq: &seq,
+                ins: &ins,
+                a,
+                b,
             });
         }
     }
+    skipped
+}
+
+/// Builds the desired highlight lines (Yong et al. §3.2, §3.5) of the lines
+/// `lines` for the region whose inside nodes are those for which `inside`
+/// returns true; see the module documentation for tangents and skipped
+/// runs. Node positions are those stored in `lines`.
+pub fn desired_lines(lines: &HighlightLines, inside: impl Fn(NodeId) -> bool) -> DesiredLines {
+    desired_lines_with(lines, inside, &Tangents::new())
+}
+
+/// [`desired_lines`] with the tangents of `tangents` (from
+/// [`across_tangents`]) for the runs it lists; the other runs get tangents
+/// fitted to the outside part.
+pub fn desired_lines_with(
+    lines: &HighlightLines,
+    inside: impl Fn(NodeId) -> bool,
+    tangents: &Tangents,
+) -> DesiredLines {
+    let mut out = DesiredLines::default();
+    out.skipped = for_each_run(lines, inside, |run| {
+        let Run {
+            index, seq, ins, a, b,
+        } = *run;
+        let (q0, q1) = (seq[a - 1], seq[b]);
+        let (t0, t1) = match tangents.get(&(q0.0, q1.0)) {
+            Some(&t) => t,
+            None => {
+                let reach = 0.5 * (q1.1 - q0.1).length();
+                let (p0, s0) = part(seq, ins, false, a - 1, -1, reach, 3);
+                let (p1, s1) = part(seq, ins, false, b, 1, reach, 3);
+                (
+                    fitted_tangent(q0.1, &p0, &s0),
+                    fitted_tangent(q1.1, &p1, &s1),
+                )
+            }
+        };
+        let curve = ogh_curve(q0.1, t0, q1.1, t1);
+        let table = ArcLengthTable::new(|t| curve.hermite.point(t), ARC_SAMPLES);
+        let run_pts: Vec<Vec3> = seq[a - 1..=b].iter().map(|x| x.1).collect();
+        let c = chord_parameters(&run_pts);
+        let nodes: Vec<NodeId> = seq[a..b].iter().map(|x| x.0).collect();
+        let points: Vec<Vec3> = run_pts[1..run_pts.len() - 1].to_vec();
+        let targets: Vec<Vec3> = c[1..c.len() - 1].iter().map(|&s| table.point(s)).collect();
+        let lengths: Vec<f64> = (1..run_pts.len() - 1)
+            .map(|k| {
+                0.5 * ((run_pts[k] - run_pts[k - 1]).length()
+                    + (run_pts[k] - run_pts[k + 1]).length())
+            })
+            .collect();
+        let samples: Vec<Vec3> = (0..=ARC_SAMPLES)
+            .map(|k| curve.hermite.point(k as f64 / ARC_SAMPLES as f64))
+            .collect();
+        out.lines.push(DesiredLine {
+            index,
+            ends: (q0.0, q1.0),
+            end_points: (q0.1, q1.1),
+            tangents: (t0, t1),
+            curve,
+            nodes,
+            points,
+            targets,
+            lengths,
+            samples,
+        });
+    });
     out
 }
 
-/// The geometric Hermite cubic from `q0` to `q1` with tangent directions
-/// `t0`, `t1` and magnitudes `a0`, `a1`; `None` when a tangent is zero or a
-/// magnitude not positive.
-fn fitted_curve(q0: Vec3, t0: Vec3, q1: Vec3, t1: Vec3, a0: f64, a1: f64) -> Option<OghCurve> {
-    let (t0, t1) = (t0.normalize_or_zero(), t1.normalize_or_zero());
-    if t0 == Vec3::ZERO || t1 == Vec3::ZERO || !(a0 > 0.0) || !(a1 > 0.0) {
-        return None;
-    }
-    if !a0.is_finite() || !a1.is_finite() || !q0.is_finite() || !q1.is_finite() {
-        return None;
-    }
-    Some(OghCurve {
-        hermite: CubicHermite {
-            p0: q0,
-            p1: q1,
-            v0: a0 * t0,
-            v1: a1 * t1,
-        },
-        magnitudes: (a0, a1),
-        kind: OghKind::Fitted,
-    })
-}
+/// Share of the chord |Q1 − Q0| of the inside line that
+/// [`across_tangents`] adds to the outside part.
+const ACROSS_REACH: f64 = 0.25;
 
-/// Rounds of parameter correction in [`fitted_magnitudes`].
-const FIT_ROUNDS: usize = 3;
-/// Fitted magnitudes are kept within these multiples of the chord ‖Q1 − Q0‖
-/// (the OGH magnitudes are about one chord; far larger ones make loops).
-const FIT_RANGE: (f64, f64) = (0.1, 3.0);
-
-/// Refits the tangent magnitudes of every desired line of `desired` to its
-/// current inside nodes (the module documentation): with the nodes' curve
-/// parameters t_i fixed, H(t_i) is linear in (a0, a1), so the least-squares
-/// magnitudes solve a 2 × 2 system; the t_i are then re-read as the nearest
-/// points of the new curve, [`FIT_ROUNDS`] times. A line keeps its OGH curve
-/// (is left out) when it has fewer than two inside nodes, a zero tangent, a
-/// singular system or a fit outside a0, a1 ∈ [0.1, 3] ‖Q1 − Q0‖.
-pub fn fitted_magnitudes(desired: &DesiredLines) -> Magnitudes {
-    let mut out = Magnitudes::new();
-    for d in &desired.lines {
-        let (q0, q1) = d.end_points;
-        let (t0, t1) = (d.tangents.0.normalize_or_zero(), d.tangents.1.normalize_or_zero());
-        let chord = (q1 - q0).length();
-        if d.points.len() < 2 || t0 == Vec3::ZERO || t1 == Vec3::ZERO || !(chord > 0.0) {
-            continue;
+/// Tangents T0, T1 of every run fitted across its delimiting nodes (module
+/// documentation): the parabola of [`desired_lines`] through Q0 fitted to
+/// the outside nodes beyond Q0 (up to half the chord) and the inside nodes
+/// after it (up to a quarter of the chord, at least two), likewise at Q1.
+/// Meant for a mesh whose region has already been faired.
+pub fn across_tangents(lines: &HighlightLines, inside: impl Fn(NodeId) -> bool) -> Tangents {
+    let mut out = Tangents::new();
+    for_each_run(lines, inside, |run| {
+        let Run { seq, ins, a, b, .. } = *run;
+        let (q0, q1) = (seq[a - 1], seq[b]);
+        let chord = (q1.1 - q0.1).length();
+        let across = |q: usize, outward: isize| {
+            let (mut p, mut s) = part(seq, ins, false, q, outward, 0.5 * chord, 3);
+            let (pi, si) = part(seq, ins, true, q, -outward, ACROSS_REACH * chord, 2);
+            p.extend(pi);
+            s.extend(si);
+            fitted_tangent(seq[q].1, &p, &s)
+        };
+        let (t0, t1) = (across(a - 1, -1), across(b, 1));
+        if t0.is_finite() && t1.is_finite() && t0 != Vec3::ZERO && t1 != Vec3::ZERO {
+            out.insert((q0.0, q1.0), (t0, t1));
         }
-        let (lo, hi) = (FIT_RANGE.0 * chord, FIT_RANGE.1 * chord);
-        let mut curve = d.curve.hermite;
-        let mut fitted = None;
-        for _ in 0..FIT_ROUNDS {
-            let samples: Vec<Vec3> = (0..=ARC_SAMPLES)
-                .map(|k| curve.point(k as f64 / ARC_SAMPLES as f64))
-                .collect();
-            let (mut m00, mut m01, mut m11, mut b0, mut b1) = (0.0, 0.0, 0.0, 0.0, 0.0);
-            let c01 = t0.dot(t1);
-            for p in &d.points {
-                let k = samples
-                    .iter()
-                    .enumerate()
-                    .map(|(k, s)| (k, (*s - *p).length_squared()))
-                    .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
-                    .0;
-                let t = k as f64 / ARC_SAMPLES as f64;
-                let s = t - 1.0;
-                let (h10, h11) = (s * s * t, s * t * t);
-                let base = (2.0 * t + 1.0) * s * s * q0 + (-2.0 * t + 3.0) * t * t * q1;
-                let r = *p - base;
-                m00 += h10 * h10;
-                m01 += h10 * h11 * c01;
-                m11 += h11 * h11;
-                b0 += h10 * t0.dot(r);
-                b1 += h11 * t1.dot(r);
-            }
-            let det = m00 * m11 - m01 * m01;
-            if !(det > 1e-12 * m00 * m11) || !det.is_finite() {
-                break;
-            }
-            let a0 = (b0 * m11 - b1 * m01) / det;
-            let a1 = (m00 * b1 - m01 * b0) / det;
-            if !(a0 >= lo && a0 <= hi && a1 >= lo && a1 <= hi) {
-                break;
-            }
-            curve = CubicHermite {
-                p0: q0,
-                p1: q1,
-                v0: a0 * t0,
-                v1: a1 * t1,
-            };
-            fitted = Some((a0, a1));
-        }
-        if let Some(a) = fitted {
-            out.insert(d.ends, a);
-        }
-    }
+    });
     out
 }
 

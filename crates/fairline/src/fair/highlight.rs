@@ -50,8 +50,8 @@
 
 use super::FairError;
 use super::desired::{
-    DesiredLines, HighlightDeviation, Magnitudes, desired_lines, desired_lines_with,
-    fitted_magnitudes,
+    DesiredLines, HighlightDeviation, Tangents, across_tangents, desired_lines,
+    desired_lines_with,
 };
 use super::region::{MovableSet, movable_vertices};
 use super::system::{
@@ -112,10 +112,10 @@ pub struct FairOptions {
     /// ε of Eq. (17) (default 1e-3).
     pub epsilon: f64,
     /// Refits of the desired lines ([`FairMethod::Highlight`] only): each
-    /// time Eq. (17) is met, the tangent magnitudes of the desired lines
-    /// are refitted to the current highlight lines
-    /// ([`super::desired::fitted_magnitudes`]) and the iteration goes on,
-    /// this many times; 0 keeps the OGH curves of Eq. (5) throughout.
+    /// time Eq. (17) is met, the tangents T0, T1 of the desired lines are
+    /// refitted across their end nodes to the faired lines
+    /// ([`super::desired::across_tangents`]) and the iteration goes on,
+    /// this many times; 0 keeps the tangents of the input's outside parts.
     pub refits: usize,
     /// Options of the highlight line model.
     pub highlight: HighlightOptions,
@@ -510,10 +510,10 @@ pub fn fair_highlight_lines(
     let linearise = |mesh: &SurfaceMesh,
                      model: &HighlightModel,
                      lines: &HighlightLines,
-                     magnitudes: &Magnitudes| {
+                     tangents: &Tangents| {
         let frozen = Frozen::new(mesh);
         let normals = model.normals();
-        let desired = desired_lines_with(lines, |n| set.node_inside(mesh, n), magnitudes);
+        let desired = desired_lines_with(lines, |n| set.node_inside(mesh, n), tangents);
         let fair = willmore_residual(mesh, &frozen, normals, &col, &set.inside_vertices);
         let lap = (w3 > 0.0 && options.method != FairMethod::DiffusionFlow)
             .then(|| diffusion_residual(mesh, &frozen, normals, &col, &set.movable));
@@ -546,13 +546,13 @@ pub fn fair_highlight_lines(
     let mut history = Vec::new();
     let mut converged = false;
     let mut lines = lines_before.clone();
-    let mut magnitudes = Magnitudes::new();
+    let mut tangents = Tangents::new();
     let mut refits_left = match options.method {
         FairMethod::Highlight => options.refits,
         FairMethod::Paper | FairMethod::DiffusionFlow => 0,
     };
     let mut refits = 0;
-    let mut current = linearise(&mesh, &model, &lines, &magnitudes);
+    let mut current = linearise(&mesh, &model, &lines, &tangents);
     let mut damping = 0.0;
     options.control.checkpoint()?;
     for it in 1..=options.max_iterations {
@@ -617,7 +617,7 @@ pub fn fair_highlight_lines(
             .step("iterations", it as u64, options.max_iterations as u64)?;
         if accepted {
             lines = model.lines(&mesh);
-            current = linearise(&mesh, &model, &lines, &magnitudes);
+            current = linearise(&mesh, &model, &lines, &tangents);
             if rho > 0.75 {
                 damping *= 0.1;
                 if damping < MIN_DAMPING {
@@ -640,8 +640,8 @@ pub fn fair_highlight_lines(
                 // `desired`), then on with the same stopping rule
                 refits_left -= 1;
                 refits += 1;
-                magnitudes = fitted_magnitudes(&current.desired);
-                current = linearise(&mesh, &model, &lines, &magnitudes);
+                tangents = across_tangents(&lines, |n| set.node_inside(&mesh, n));
+                current = linearise(&mesh, &model, &lines, &tangents);
                 damping = 0.0;
                 continue;
             }

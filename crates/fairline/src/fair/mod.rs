@@ -16,8 +16,8 @@ pub mod surface;
 mod system;
 
 pub use desired::{
-    DesiredLine, DesiredLines, HighlightDeviation, Magnitudes, desired_lines, desired_lines_with,
-    fitted_magnitudes,
+    DesiredLine, DesiredLines, HighlightDeviation, Tangents, across_tangents, desired_lines,
+    desired_lines_with,
 };
 pub use error::FairError;
 pub use highlight::{

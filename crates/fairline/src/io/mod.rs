@@ -1,6 +1,8 @@
 //! Mesh files: OBJ, PLY (ascii and binary), OFF and STL; CAD surface files:
 //! IGES writing ([`iges_write`]), STEP reading and writing ([`step`]) and
-//! the choice of surface format by extension ([`surface_file`]).
+//! the choice of surface format by extension ([`surface_file`]); the JSON
+//! files that select parts of a mesh, regions and fixed vertices
+//! ([`selection`]).
 //!
 //! Every reader produces a [`Soup`] (positions plus polygons, no
 //! connectivity); [`read_mesh`] then builds a [`SurfaceMesh`]. Readers never
