@@ -622,8 +622,8 @@ fn enhance_section(demo: &Demo) -> Result<Section> {
 /// faired panel beside the diffusion-flow baseline.
 fn fair_section(demo: &Demo) -> Result<Section> {
     use fairline::fair::{FairMethod, FairOptions, fair_highlight_lines, grow_region};
-    use fairline::picture::fairing_picture;
     use fairline::highlight::{DetectOptions, HighlightModel, LightArray, detect_irregularities};
+    use fairline::picture::fairing_picture;
     let roof = |x: f64, y: f64| 0.25 * (1.0 - 0.4 * x * x) * (1.0 - 0.3 * y * y);
     let mesh = shapes::height_field(61, 61, (-1.0, 1.0), (-1.0, 1.0), move |x, y| {
         let (dx, dy) = (x - 0.15, y + 0.1);

@@ -5,16 +5,18 @@
 use crate::common::{Report, bad_input, progress};
 use crate::highlight::{LightArgs, to_input_error};
 use anyhow::Result;
-use fairline::fair::{FairError, FairMethod, FairOptions, FairReport, fair_highlight_lines, grow_region};
-use fairline::picture::{
-    FAIRING_DESIRED_COLOR, FAIRING_LINE_COLOR, FAIRING_OUTLINE_COLOR, fairing_picture,
+use fairline::fair::{
+    FairError, FairMethod, FairOptions, FairReport, fair_highlight_lines, grow_region,
 };
-use fairline::{Control, SurfaceMesh};
 use fairline::highlight::{
     DetectOptions, HighlightModel, detect_irregularities, region_detection_score,
 };
 use fairline::mesh::FaceId;
+use fairline::picture::{
+    FAIRING_DESIRED_COLOR, FAIRING_LINE_COLOR, FAIRING_OUTLINE_COLOR, fairing_picture,
+};
 use fairline::render::RenderOptions;
+use fairline::{Control, SurfaceMesh};
 use serde_json::{Value, json};
 use std::path::PathBuf;
 
@@ -227,8 +229,7 @@ pub fn run(args: Args) -> Result<()> {
     for (k, faces) in regions.iter().enumerate() {
         let start = bar.position();
         let shown = bar.clone();
-        let control =
-            Control::new().on_progress(move |p| shown.set_position(start + p.done));
+        let control = Control::new().on_progress(move |p| shown.set_position(start + p.done));
         let region_options = options.clone().region(faces.clone()).control(control);
         let outcome = report.time(|| fair_highlight_lines(&current, &region_options));
         match outcome {

@@ -8,8 +8,8 @@
 
 use fairline::Vec3;
 use fairline::fair::{FairOptions, fair_highlight_lines};
-use fairline::io::RegionSpec;
 use fairline::highlight::LightArray;
+use fairline::io::RegionSpec;
 use fairline::shapes;
 use std::time::Instant;
 
@@ -45,9 +45,7 @@ fn main() {
         let mut iters = 0;
         for _ in 0..runs {
             let t = Instant::now();
-            let options = FairOptions::default()
-                .region(faces.clone())
-                .light(light);
+            let options = FairOptions::default().region(faces.clone()).light(light);
             let r = fair_highlight_lines(&mesh, &options.clone().max_iterations(1))
                 .unwrap()
                 .report;

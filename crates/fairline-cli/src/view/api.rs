@@ -5,12 +5,12 @@ use super::doc::{Doc, Step, shell_word};
 use super::frame::{frame, vec3_bytes};
 use super::http::{HttpRequest, HttpResponse};
 use fairline::fair::{FairMethod, FairOptions, fair_highlight_lines, grow_region};
-use fairline::io::RegionSpec;
 use fairline::geom::{CurvatureMethod, LaplaceWeights, principal_curvatures, vertex_normals};
 use fairline::highlight::{
     CircularLight, CircularLights, DetectOptions, HighlightLines, HighlightModel, HighlightOptions,
     LightArray, circular_highlight_bands, circular_highlight_lines, detect_irregularities,
 };
+use fairline::io::RegionSpec;
 use fairline::mesh::{FaceId, VertexId};
 use fairline::{SurfaceMesh, Vec3};
 use serde::Deserialize;

@@ -6,8 +6,8 @@
 #![allow(dead_code)]
 
 use super::FairError;
-use super::highlight::{FairMethod, IterationReport};
 use super::desired::{DesiredLines, HighlightDeviation, desired_lines};
+use super::highlight::{FairMethod, IterationReport};
 use super::region::{MovableSet, movable_vertices};
 use super::system::{
     DiffNode, Frozen, NOT_MOVABLE, Residual, difference_energy_after, difference_residual,

@@ -250,7 +250,11 @@ pub fn desired_lines_with(
     let mut out = DesiredLines::default();
     out.skipped = for_each_run(lines, inside, |run| {
         let Run {
-            index, seq, ins, a, b,
+            index,
+            seq,
+            ins,
+            a,
+            b,
         } = *run;
         let (q0, q1) = (seq[a - 1], seq[b]);
         let (t0, t1) = match tangents.get(&(q0.0, q1.0)) {

@@ -6,11 +6,11 @@
 //! surface distance to the truth inside the region and distance of the
 //! result's highlight lines to the truth's lines under the same lights.
 
-use super::desired::distance_to_polyline;
 use super::FairReport;
-use crate::io::RegionSpec;
+use super::desired::distance_to_polyline;
 use crate::Vec3;
 use crate::highlight::{HighlightLines, HighlightModel, HighlightOptions, LightArray};
+use crate::io::RegionSpec;
 use crate::mesh::{FaceId, SurfaceMesh};
 use crate::shapes;
 
@@ -344,62 +344,38 @@ mod tests {
         assert!(mean_ratio(&rows, 0) > mean_ratio(&paper, 0));
     }
 
-    /// Temporary parameter sweep: FAIRHL_VARIANTS="w1,w2,w3,eps,maxit;..."
+    /// Refitting the desired lines' tangents across their end nodes once
+    /// the defect is gone ([`FairOptions::refits`], four refits): the
+    /// result's highlight lines end closer to the truth's lines than
+    /// diffusion flow's (max and RMS) on every case, and the surface closer
+    /// on all but the widest cubic bump and saddle dent, by at most 1.25×
+    /// there (1.67× without refits); the average surface gain shrinks
+    /// (wavy panels keep less of theirs), the trade-off recorded in
+    /// BENCHMARKS.md (Session 18).
     #[test]
-    #[ignore]
-    fn sweep() {
-        let spec = std::env::var("FAIRHL_VARIANTS").unwrap_or_default();
-        let flow_options = FairOptions::default().method(FairMethod::DiffusionFlow);
-        for v in spec.split(';').filter(|s| !s.is_empty()) {
-            let p: Vec<f64> = v.split(',').map(|x| x.parse().unwrap()).collect();
-            let o = FairOptions::default()
-                .weights(p[0], p[1])
-                .laplacian_weight(p[2])
-                .epsilon(p[3])
-                .max_iterations(p[4] as usize)
-                .refits(p.get(5).copied().unwrap_or(0.0) as usize);
-            let mut worst = [0.0f64; 4];
-            let mut logs = [0.0f64; 4];
-            let mut lost = Vec::new();
-            let t = std::time::Instant::now();
-            let mut its = 0;
-            for case in Case::family() {
-                let (mesh, truth, light) = (case.input_mesh(), case.truth_mesh(), case.light());
-                let tl = truth_lines(&truth, &light);
-                let faces = case.region(&mesh);
-                let meas = |o: &FairOptions, its: &mut usize| -> Measures {
-                    let (r, after) = fair(&mesh, &light, &faces, o).unwrap();
-                    *its += r.iterations;
-                    let s = surface_error(&case, &r, &after);
-                    let l = line_error(&r, &after, &truth, &tl, &light);
-                    [s.max, s.rms, l.max, l.rms]
-                };
-                let m = meas(&o, &mut its);
-                let f = meas(&flow_options, &mut 0);
-                let mut row = String::new();
-                for k in 0..4 {
-                    let q = m[k] / f[k];
-                    worst[k] = worst[k].max(q);
-                    logs[k] += q.ln();
-                    row += &format!(" {q:.2}");
-                }
-                if (0..4).any(|k| m[k] > f[k]) {
-                    lost.push(format!("{}:{row}", case.label()));
-                }
-                if std::env::var("FAIRHL_ROWS").is_ok() {
-                    println!("  {} {row} | {}", case.label(), show(&m));
-                }
-            }
-            println!(
-                "VARIANT {v}: mean {:?} worst {:?} losses {} its {} time {:.2}s\n   {}",
-                logs.map(|l| (l / 24.0).exp()),
-                worst,
-                lost.len(),
-                its,
-                t.elapsed().as_secs_f64(),
-                lost.join("\n   ")
+    fn refitted_tangents_bring_every_case_near_or_past_diffusion_flow() {
+        let rows = against_flow(&FairOptions::default().refits(4));
+        let lost = losses(&rows);
+        assert!(lost.len() <= 2, "loses to flow on:\n{}", lost.join("\n"));
+        for l in &lost {
+            assert!(
+                l.starts_with("cubic bump σ=0.15") || l.starts_with("saddle dent σ=0.15"),
+                "unexpected loss: {l}"
             );
         }
+        for (c, m, f) in &rows {
+            assert!(
+                m[2] <= f[2] && m[3] <= f[3],
+                "{c}: {} vs flow {}",
+                show(m),
+                show(f)
+            );
+            for k in 0..2 {
+                assert!(m[k] < 1.25 * f[k], "{c}: {} vs flow {}", show(m), show(f));
+            }
+        }
+        assert!(mean_ratio(&rows, 0) < 0.55, "{}", mean_ratio(&rows, 0));
+        assert!(mean_ratio(&rows, 3) < 0.45, "{}", mean_ratio(&rows, 3));
     }
 
     /// Prints the table of BENCHMARKS.md (run with --ignored --nocapture).
@@ -413,8 +389,8 @@ mod tests {
                 "flow",
                 FairOptions::default().method(FairMethod::DiffusionFlow),
             ),
-            ("ω3=0.1", with_lap(0.1)),
             ("ω3=1", with_lap(1.0)),
+            ("refits=4", FairOptions::default().refits(4)),
         ];
         for case in Case::family() {
             let (mesh, truth, light) = (case.input_mesh(), case.truth_mesh(), case.light());

@@ -33,14 +33,23 @@
 //! [`FairMethod::Highlight`] (the default) adds ω3 f_lap, f_lap = D⁴
 //! ∫(Δ_B H)² dA over the movable vertices (D the region's bounding-box
 //! diagonal, so that ω3 does not depend on scale), the energy whose zero is
-//! the diffusion-flow state. With the default ω3 = 0 both are the same.
-//! Measured on generated panels with a known truth (BENCHMARKS.md, Session
-//! 17): the paper's energy ends 2.6× closer to the truth than diffusion
-//! flow on average and loses (by up to 1.6×) only on the widest regions and
-//! a saddle dent, where the OGH desired curves are themselves about as far
-//! from the truth's lines as flow's lines are; ω3 > 0 trades the average
-//! gain for a smaller worst case (ω3 = 1: within 10 % of flow everywhere,
-//! tested; 5 % measured; 5 % better on average).
+//! the diffusion-flow state, and may refit the desired lines' tangents
+//! across their end nodes once Eq. (17) is met ([`FairOptions::refits`],
+//! module `desired`). With the defaults (ω3 = 0, no refit) both are the
+//! same. Measured on generated panels with a known truth (BENCHMARKS.md,
+//! Sessions 17 and 18): the paper's energy ends 2.6× closer to the truth
+//! than diffusion flow on average and loses (by up to 1.67× in surface
+//! max) on the widest quadratic and cubic bumps and two saddle dents; four
+//! refits make the lines closer than flow's on every case and leave two
+//! surface losses of at most 1.19×, at the price of a smaller average gain
+//! (2.0×; wavy panels keep less of theirs); ω3 = 1 stays within 10 % of
+//! flow everywhere with a 5 % average gain.
+//!
+//! Shape (issue #17): [`fair_highlight_lines`] takes the mesh and
+//! [`FairOptions`] (region, lights, weights, stopping rule, refits and the
+//! [`crate::Control`] that reports each iteration and can cancel) and
+//! returns [`Output`]: the new positions and the serialisable
+//! [`FairReport`] (the CLI's JSON report).
 //!
 //! The baseline (`FairMethod::DiffusionFlow`) replaces F by ‖Δ_B H‖² over
 //! the movable vertices (area-weighted), linearised the same way: each step
@@ -50,8 +59,7 @@
 
 use super::FairError;
 use super::desired::{
-    DesiredLines, HighlightDeviation, Tangents, across_tangents, desired_lines,
-    desired_lines_with,
+    DesiredLines, HighlightDeviation, Tangents, across_tangents, desired_lines, desired_lines_with,
 };
 use super::region::{MovableSet, movable_vertices};
 use super::system::{

@@ -36,10 +36,7 @@ pub(crate) fn fair(
     faces: &[FaceId],
     options: &FairOptions,
 ) -> Result<(FairReport, SurfaceMesh), FairError> {
-    let out = fair_highlight_lines(
-        mesh,
-        &options.clone().region(faces.to_vec()).light(*light),
-    )?;
+    let out = fair_highlight_lines(mesh, &options.clone().region(faces.to_vec()).light(*light))?;
     let mut after = mesh.clone();
     after.set_positions(out.positions)?;
     Ok((out.report, after))
@@ -394,31 +391,14 @@ fn bump_on_a_sphere_patch_is_removed() {
     );
 }
 
-/// FNV-1a over the position bits and the report's JSON text.
-fn result_checksum(positions: &[Vec3], report: &serde_json::Value) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    let mut eat = |bytes: &[u8]| {
-        for &b in bytes {
-            h ^= u64::from(b);
-            h = h.wrapping_mul(0x0100_0000_01b3);
-        }
-    };
-    for p in positions {
-        for c in p.to_array() {
-            eat(&c.to_bits().to_le_bytes());
-        }
-    }
-    eat(report.to_string().as_bytes());
-    h
-}
-
 /// Issue #17 item 1: the converted function (options struct with region,
 /// lights and control; `Output` with positions and a `Serialize` report)
 /// gives the same positions and the same JSON report, bit for bit, as the
 /// code path before the conversion (module `before_17`), for every method,
 /// with and without ω3, on a family case and the bump plane; the refits
-/// (0 here) are the only new report key. The checksums printed are those
-/// recorded in `converted_fairing_matches_the_recorded_checksums`.
+/// (0 here) are the only new report key. (A comparison on the same machine:
+/// faer's kernels pick their SIMD width at run time, so recorded checksums
+/// would not carry across CPUs.)
 #[test]
 fn converted_fairing_equals_the_code_path_before_17_bit_for_bit() {
     let case = super::family::Case {
@@ -430,7 +410,11 @@ fn converted_fairing_equals_the_code_path_before_17_bit_for_bit() {
     let plane_light = light_for(&plane);
     let plane_faces = sphere_faces(&plane, Vec3::ZERO, 0.5);
     let inputs = [
-        (case.input_mesh(), case.light(), case.region(&case.input_mesh())),
+        (
+            case.input_mesh(),
+            case.light(),
+            case.region(&case.input_mesh()),
+        ),
         (plane, plane_light, plane_faces),
     ];
     for (mesh, light, faces) in &inputs {
@@ -458,7 +442,8 @@ fn converted_fairing_equals_the_code_path_before_17_bit_for_bit() {
                         .laplacian_weight(w3),
                 )
                 .unwrap();
-                let old_bits: Vec<[u64; 3]> = old.mesh.positions().iter().map(|p| bits(*p)).collect();
+                let old_bits: Vec<[u64; 3]> =
+                    old.mesh.positions().iter().map(|p| bits(*p)).collect();
                 let new_bits: Vec<[u64; 3]> = out.positions.iter().map(|p| bits(*p)).collect();
                 assert!(old_bits == new_bits, "{m:?} ω3 {w3}: positions differ");
                 let mut json = serde_json::to_value(&out.report).unwrap();
@@ -467,10 +452,6 @@ fn converted_fairing_equals_the_code_path_before_17_bit_for_bit() {
                     map.remove("refits");
                 }
                 assert_eq!(json, old.report_json(), "{m:?} ω3 {w3}: report differs");
-                println!(
-                    "CHECKSUM {m:?} {w3} {:#x}",
-                    result_checksum(&out.positions, &old.report_json())
-                );
             }
         }
     }
@@ -493,13 +474,12 @@ fn cancelling_returns_the_cancelled_error() {
     let flag = Arc::new(AtomicBool::new(true));
     let r = fair_highlight_lines(
         &mesh,
-        &options.clone().control(crate::Control::new().cancel_flag(Arc::clone(&flag))),
+        &options
+            .clone()
+            .control(crate::Control::new().cancel_flag(Arc::clone(&flag))),
     );
     assert!(matches!(r, Err(FairError::Cancelled(_))), "{r:?}");
-    assert_eq!(
-        r.map(|_| ()).unwrap_err().to_string(),
-        "cancelled"
-    );
+    assert_eq!(r.map(|_| ()).unwrap_err().to_string(), "cancelled");
     flag.store(false, Ordering::Relaxed);
     let seen = Arc::new(Mutex::new(Vec::new()));
     let (sink, raise) = (Arc::clone(&seen), Arc::clone(&flag));
@@ -518,10 +498,7 @@ fn cancelling_returns_the_cancelled_error() {
     let seen = seen.lock().unwrap().clone();
     assert_eq!(seen.len(), 2);
     for (k, p) in seen.iter().enumerate() {
-        assert_eq!(
-            (p.stage, p.done, p.total),
-            ("iterations", k as u64 + 1, 50)
-        );
+        assert_eq!((p.stage, p.done, p.total), ("iterations", k as u64 + 1, 50));
     }
     // without the flag the same options run to the end
     flag.store(false, Ordering::Relaxed);
@@ -543,43 +520,53 @@ fn empty_regions_and_bad_options_are_refused() {
 }
 
 /// [`across_tangents`] fits the tangents at Q0 and Q1 across the end
-/// nodes: on a line along a unit circle (the inside run between two
-/// outside parts of three nodes each) both tangents are the circle's to
-/// 1e-3 rad, also when the inside line beyond a quarter chord from the ends
-/// carries a large defect (it is not used); the desired curves built with
-/// them keep Q0 and Q1.
+/// nodes: on a line along a unit circle (the inside run between outside
+/// parts of three nodes) both tangents are the circle's to 0.03 rad (the
+/// parabola's bias over the fitted arc), and a defect of the inside line
+/// farther than a quarter chord from the ends changes them not at all; the
+/// desired curves built with them keep Q0 and Q1.
 #[test]
 fn across_tangents_follow_the_line_through_the_end_nodes() {
     use crate::highlight::{HighlightLine, HighlightLines};
     use crate::mesh::VertexId;
     let n = 40;
     let angle = |k: usize| 0.05 * k as f64;
-    let mut points: Vec<Vec3> = (0..n)
-        .map(|k| Vec3::new(angle(k).cos(), angle(k).sin(), 0.0))
+    let nodes: Vec<NodeId> = (0..n)
+        .map(|k| NodeId::Vertex(VertexId(k as u32), 0))
         .collect();
-    // outside: 0..3 and 37..40; inside 3..37; Q0 = node 2, Q1 = node 37
-    for (k, p) in points.iter_mut().enumerate().take(30).skip(12) {
-        *p += Vec3::new(0.0, 0.0, 0.05 * ((k - 12) as f64 * 0.3).sin());
-    }
-    let nodes: Vec<NodeId> = (0..n).map(|k| NodeId::Vertex(VertexId(k as u32), 0)).collect();
-    let lines = HighlightLines {
-        lines: vec![HighlightLine {
-            index: 0,
-            closed: false,
-            points,
-            nodes: nodes.clone(),
-        }],
+    let line = |defect: f64| {
+        let points: Vec<Vec3> = (0..n)
+            .map(|k| {
+                let z = if (14..24).contains(&k) {
+                    defect * ((k - 14) as f64 * 0.3).sin()
+                } else {
+                    0.0
+                };
+                Vec3::new(angle(k).cos(), angle(k).sin(), z)
+            })
+            .collect();
+        HighlightLines {
+            lines: vec![HighlightLine {
+                index: 0,
+                closed: false,
+                points,
+                nodes: nodes.clone(),
+            }],
+        }
     };
+    // outside: 0..3 and 37..40; inside 3..37; Q0 = node 2, Q1 = node 37
     let inside = |nd: NodeId| matches!(nd, NodeId::Vertex(v, _) if (3..37).contains(&v.0));
-    let tangents = across_tangents(&lines, inside);
-    assert_eq!(tangents.len(), 1);
-    let (t0, t1) = tangents[&(nodes[2], nodes[37])];
+    let clean = across_tangents(&line(0.0), inside);
+    let dented = across_tangents(&line(0.05), inside);
+    assert_eq!(clean.len(), 1);
+    assert_eq!(clean, dented, "the far defect changed the tangents");
+    let (t0, t1) = clean[&(nodes[2], nodes[37])];
     let circle = |k: usize| Vec3::new(-angle(k).sin(), angle(k).cos(), 0.0);
     for (t, k) in [(t0, 2), (t1, 37)] {
         let err = t.normalize().angle_between(circle(k));
-        assert!(err < 1e-3, "node {k}: tangent {t} off by {err} rad");
+        assert!(err < 0.03, "node {k}: tangent {t} off by {err} rad");
     }
-    let desired = desired_lines_with(&lines, inside, &tangents);
+    let desired = desired_lines_with(&line(0.05), inside, &clean);
     assert_eq!(desired.lines.len(), 1);
     let d = &desired.lines[0];
     assert_eq!(d.tangents, (t0, t1));

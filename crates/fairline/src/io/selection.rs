@@ -232,9 +232,8 @@ mod tests {
         let v = RegionSpec::from_json(r#"{"vertices":[0,1,9,10]}"#).unwrap();
         let fv = v.faces(&mesh).unwrap();
         assert_eq!(fv.len(), 2);
-        let s =
-            RegionSpec::from_json(r#"{"sphere":{"center":[0,0,0],"radius":0.6},"regions":[]}"#)
-                .unwrap();
+        let s = RegionSpec::from_json(r#"{"sphere":{"center":[0,0,0],"radius":0.6},"regions":[]}"#)
+            .unwrap();
         let p = mesh.positions();
         for f in s.faces(&mesh).unwrap() {
             assert!(mesh.face_vertices(f).all(|w| p[w.idx()].length() <= 0.6));
