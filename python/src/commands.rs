@@ -1041,10 +1041,8 @@ fn fair<'py>(
     diff_weight: Option<f64>,
     laplacian_weight: Option<f64>,
 ) -> PyResult<PositionsOut<'py>> {
-    use fairline::fair::{
-        FairError, FairMethod, FairOptions, FairResult, RegionSpec, fair_highlight_lines_with,
-        grow_region,
-    };
+    use fairline::fair::{FairError, FairMethod, FairOptions, fair_highlight_lines, grow_region};
+    use fairline::io::RegionSpec;
     let fair_method = match method {
         "highlight" => FairMethod::Highlight,
         "paper" => FairMethod::Paper,
@@ -1084,15 +1082,15 @@ fn fair<'py>(
         }
         let array = light.light_array(&mesh)?;
         let d = FairOptions::default();
-        let options = FairOptions {
-            method: fair_method,
-            fair_weight: fair_weight.unwrap_or(d.fair_weight),
-            diff_weight: diff_weight.unwrap_or(d.diff_weight),
-            laplacian_weight: laplacian_weight.unwrap_or(d.laplacian_weight),
-            max_iterations: max_iterations.unwrap_or(d.max_iterations),
-            epsilon: epsilon.unwrap_or(d.epsilon),
-            highlight: light.options(),
-        };
+        let options = FairOptions::default()
+            .light(array)
+            .method(fair_method)
+            .fair_weight(fair_weight.unwrap_or(d.fair_weight))
+            .diff_weight(diff_weight.unwrap_or(d.diff_weight))
+            .laplacian_weight(laplacian_weight.unwrap_or(d.laplacian_weight))
+            .max_iterations(max_iterations.unwrap_or(d.max_iterations))
+            .epsilon(epsilon.unwrap_or(d.epsilon))
+            .highlight(light.options());
         let to_error = |e: FairError| -> Failure {
             let f = match e {
                 FairError::NoMovableVertex(msg) => Failure::bad(format!(
@@ -1149,18 +1147,19 @@ fn fair<'py>(
         let (score_before, threshold) = region_score(&mesh, &array, &light, &region_faces)?;
         let mut current: SurfaceMesh = mesh.clone();
         let mut results: Vec<Value> = Vec::new();
-        let mut first: Option<FairResult> = None;
         let mut skipped: Vec<Value> = Vec::new();
         for (k, faces) in regions.iter().enumerate() {
-            let outcome = report
-                .time(|| fair_highlight_lines_with(&current, &array, faces, &options, &mut |_| {}));
+            let region_options = options.clone().region(faces.clone());
+            let outcome = report.time(|| fair_highlight_lines(&current, &region_options));
             match outcome {
-                Ok(r) => {
-                    results.push(r.report_json());
-                    current = r.mesh.clone();
-                    if first.is_none() {
-                        first = Some(r);
-                    }
+                Ok(out) => {
+                    results.push(
+                        serde_json::to_value(&out.report)
+                            .map_err(|e| Failure::computation(e.to_string()))?,
+                    );
+                    current
+                        .set_positions(out.positions)
+                        .map_err(|e| Failure::computation(e.to_string()))?;
                 }
                 Err(FairError::NoMovableVertex(msg)) if auto => {
                     skipped.push(json!({"region": k, "reason": msg}));
@@ -1183,7 +1182,7 @@ fn fair<'py>(
                 "a defect remains inside the region (detection score {score_before:.2} -> {score_after:.2}, threshold {threshold:.2}); try --grow 2 or more iterations"
             ));
         }
-        if first.is_none() {
+        if results.is_empty() {
             report
                 .warn("no region was faired (nothing detected): the output is the input unchanged");
         }

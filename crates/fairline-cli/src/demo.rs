@@ -622,10 +622,9 @@ fn enhance_section(demo: &Demo) -> Result<Section> {
 /// planted dent, the region `detect` suggests, the desired lines, and the
 /// faired panel beside the diffusion-flow baseline.
 fn fair_section(demo: &Demo) -> Result<Section> {
-    use fairline::fair::{
-        FairMethod, FairOptions, fair_highlight_lines, fairing_picture, grow_region,
-    };
+    use fairline::fair::{FairMethod, FairOptions, fair_highlight_lines, grow_region};
     use fairline::highlight::{DetectOptions, HighlightModel, LightArray, detect_irregularities};
+    use fairline::picture::fairing_picture;
     let roof = |x: f64, y: f64| 0.25 * (1.0 - 0.4 * x * x) * (1.0 - 0.3 * y * y);
     let mesh = shapes::height_field(61, 61, (-1.0, 1.0), (-1.0, 1.0), move |x, y| {
         let (dx, dy) = (x - 0.15, y + 0.1);
@@ -645,20 +644,26 @@ fn fair_section(demo: &Demo) -> Result<Section> {
         .first()
         .ok_or_else(|| anyhow::anyhow!("detect found no irregular region on the dented panel"))?;
     let faces = grow_region(&mesh, &best.faces, 4);
-    let r = fair_highlight_lines(&mesh, &light, &faces, &FairOptions::default())?;
-    let flow = fair_highlight_lines(
-        &mesh,
-        &light,
-        &faces,
-        &FairOptions::default().method(FairMethod::DiffusionFlow),
-    )?;
+    let options = FairOptions::default().region(faces).light(light);
+    let with_positions = |positions: Vec<Vec3>| -> Result<SurfaceMesh> {
+        let mut m = mesh.clone();
+        m.set_positions(positions)?;
+        Ok(m)
+    };
+    let out = fair_highlight_lines(&mesh, &options)?;
+    let (r, faired) = (out.report, with_positions(out.positions)?);
+    let out = fair_highlight_lines(&mesh, &options.method(FairMethod::DiffusionFlow))?;
+    let (flow, flow_mesh) = (out.report, with_positions(out.positions)?);
     let mut opts = demo.opts.clone();
     opts.view_dir = crate::highlight_png::default_view(light.plane_normal(), light.across());
     opts.up = light.across();
-    let img = demo.save("fair-before-after.png", &fairing_picture(&mesh, &r, &opts)?)?;
+    let img = demo.save(
+        "fair-before-after.png",
+        &fairing_picture(&mesh, &faired, &r, &opts)?,
+    )?;
     let img_flow = demo.save(
         "fair-diffusion-flow.png",
-        &fairing_picture(&mesh, &flow, &opts)?,
+        &fairing_picture(&mesh, &flow_mesh, &flow, &opts)?,
     )?;
     let truth = |m: &SurfaceMesh| {
         r.region
@@ -668,7 +673,7 @@ fn fair_section(demo: &Demo) -> Result<Section> {
             .fold(0.0, f64::max)
     };
     fairline::io::write_mesh(demo.out.join("dented-roof.obj"), &mesh)?;
-    fairline::io::write_mesh(demo.out.join("dented-roof-faired.obj"), &r.mesh)?;
+    fairline::io::write_mesh(demo.out.join("dented-roof-faired.obj"), &faired)?;
     Ok(Section {
         title: "Highlight-line fairing".into(),
         text: "A roof-like panel z = 0.25 (1 - 0.4 x²)(1 - 0.3 y²) with a planted dent of depth 0.02. `detect` finds the wobbling highlight lines; its region, grown by four rings of faces, is faired (Yong et al. Algorithm 2): the blue desired lines are optimized geometric Hermite curves between the nodes just outside the red region. Only vertices whose motion changes nothing outside the region move. Second picture: the surface-diffusion-flow baseline on the same region.".into(),
@@ -688,8 +693,8 @@ fn fair_section(demo: &Demo) -> Result<Section> {
             "highlight_deviation_after": r.deviation_after.rms,
             "diffusion_flow_highlight_deviation_after": flow.deviation_after.rms,
             "distance_to_panel_before": truth(&mesh),
-            "distance_to_panel_after": truth(&r.mesh),
-            "diffusion_flow_distance_to_panel_after": truth(&flow.mesh),
+            "distance_to_panel_after": truth(&faired),
+            "diffusion_flow_distance_to_panel_after": truth(&flow_mesh),
         }),
     })
 }

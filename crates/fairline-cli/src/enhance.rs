@@ -1,8 +1,7 @@
 //! `fairline enhance`: feature enhancement by vertex flow (Ji et al. 2011).
 
-use crate::common::{Report, bad_input, read_json, spinner};
+use crate::common::{Report, bad_input, spinner};
 use anyhow::{Context, Result};
-use fairline::VertexId;
 use fairline::enhance::{
     EnhanceError, EnhanceOptions, EnhanceSolver, Projection as SurfaceProjection, enhance_features,
 };
@@ -98,12 +97,6 @@ pub enum Projection {
     None,
 }
 
-#[derive(serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct FixedFile {
-    vertices: Vec<u32>,
-}
-
 pub fn run(args: Args) -> Result<()> {
     // every check that can refuse the input runs before anything is written
     let job = crate::output::Job::new("enhance")
@@ -125,11 +118,8 @@ pub fn run(args: Args) -> Result<()> {
         )));
     }
     let fixed = match &args.fixed {
-        Some(p) => read_json::<FixedFile>(p)?
-            .vertices
-            .into_iter()
-            .map(VertexId)
-            .collect(),
+        Some(p) => fairline::io::read_fixed_vertices(p, mesh.vertex_count())
+            .map_err(|e| bad_input(e.to_string()))?,
         None => Vec::new(),
     };
     let options = EnhanceOptions::default()

@@ -5,16 +5,18 @@
 use crate::common::{Report, bad_input, progress};
 use crate::highlight::{LightArgs, to_input_error};
 use anyhow::Result;
-use fairline::SurfaceMesh;
 use fairline::fair::{
-    FairError, FairMethod, FairOptions, FairResult, RegionSpec, fair_highlight_lines_with,
-    fairing_picture, grow_region,
+    FairError, FairMethod, FairOptions, FairReport, fair_highlight_lines, grow_region,
 };
 use fairline::highlight::{
     DetectOptions, HighlightModel, detect_irregularities, region_detection_score,
 };
 use fairline::mesh::FaceId;
+use fairline::picture::{
+    FAIRING_DESIRED_COLOR, FAIRING_LINE_COLOR, FAIRING_OUTLINE_COLOR, fairing_picture,
+};
 use fairline::render::RenderOptions;
+use fairline::{Control, SurfaceMesh};
 use serde_json::{Value, json};
 use std::path::PathBuf;
 
@@ -119,7 +121,7 @@ fn to_error(e: FairError) -> anyhow::Error {
         | FairError::InvalidOption(_)
         | FairError::Mesh(_)
         | FairError::Highlight(_) => bad_input(e.to_string()),
-        FairError::Solve(_) => anyhow::Error::new(e),
+        FairError::Solve(_) | FairError::Cancelled(_) => anyhow::Error::new(e),
     }
 }
 
@@ -141,26 +143,23 @@ pub fn run(args: Args) -> Result<()> {
         )));
     }
     let light = args.light.light_array(&mesh)?;
-    let options = FairOptions {
-        method: match args.method {
+    let options = FairOptions::default()
+        .light(light)
+        .method(match args.method {
             Method::Highlight => FairMethod::Highlight,
             Method::Paper => FairMethod::Paper,
             Method::DiffusionFlow => FairMethod::DiffusionFlow,
-        },
-        fair_weight: args.fair_weight,
-        diff_weight: args.diff_weight,
-        laplacian_weight: args.laplacian_weight,
-        max_iterations: args.max_iterations,
-        epsilon: args.epsilon,
-        highlight: args.light.options(),
-    };
+        })
+        .fair_weight(args.fair_weight)
+        .diff_weight(args.diff_weight)
+        .laplacian_weight(args.laplacian_weight)
+        .max_iterations(args.max_iterations)
+        .epsilon(args.epsilon)
+        .highlight(args.light.options());
     let mut report = Report::new("fair");
     // the regions to fair, in turn
     let regions: Vec<Vec<FaceId>> = if let Some(path) = &args.region {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
-        let spec = RegionSpec::from_json(&text)
-            .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+        let spec = fairline::io::read_region(path).map_err(|e| bad_input(e.to_string()))?;
         vec![
             spec.faces(&mesh)
                 .map_err(|e| bad_input(format!("{}: {e}", path.display())))?,
@@ -223,19 +222,22 @@ pub fn run(args: Args) -> Result<()> {
     let (score_before, threshold) = region_score(&mesh, &light, &args.light, &region_faces)?;
     let mut current: SurfaceMesh = mesh.clone();
     let mut results: Vec<Value> = Vec::new();
-    let mut first: Option<FairResult> = None;
+    // the first region's report and faired mesh, for the picture
+    let mut first: Option<(FairReport, SurfaceMesh)> = None;
     let mut skipped: Vec<Value> = Vec::new();
     let bar = progress((regions.len() * options.max_iterations) as u64, "fairing");
     for (k, faces) in regions.iter().enumerate() {
-        let outcome = report.time(|| {
-            fair_highlight_lines_with(&current, &light, faces, &options, &mut |_| bar.inc(1))
-        });
+        let start = bar.position();
+        let shown = bar.clone();
+        let control = Control::new().on_progress(move |p| shown.set_position(start + p.done));
+        let region_options = options.clone().region(faces.clone()).control(control);
+        let outcome = report.time(|| fair_highlight_lines(&current, &region_options));
         match outcome {
-            Ok(r) => {
-                results.push(r.report_json());
-                current = r.mesh.clone();
+            Ok(out) => {
+                results.push(serde_json::to_value(&out.report)?);
+                current.set_positions(out.positions)?;
                 if first.is_none() {
-                    first = Some(r);
+                    first = Some((out.report, current.clone()));
                 }
             }
             Err(FairError::NoMovableVertex(msg)) if args.auto => {
@@ -272,7 +274,7 @@ pub fn run(args: Args) -> Result<()> {
             job.skip(png);
         }
     }
-    if let (Some(png), Some(r)) = (&args.png, &first) {
+    if let (Some(png), Some((r, faired))) = (&args.png, &first) {
         let mut opts = RenderOptions::with_size(900, 700);
         (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
         // on round parts the picture draws every k-th line (and its desired
@@ -281,7 +283,7 @@ pub fn run(args: Args) -> Result<()> {
         let shown_light = args.light.readable(&mesh, light)?;
         let k = (shown_light.spacing() / light.spacing()).round().max(1.0) as i64;
         let thinned;
-        let drawn: &FairResult = if k > 1 {
+        let drawn: &FairReport = if k > 1 {
             let mut c = r.clone();
             c.lines_before.lines.retain(|l| l.index.rem_euclid(k) == 0);
             c.lines_after.lines.retain(|l| l.index.rem_euclid(k) == 0);
@@ -293,20 +295,19 @@ pub fn run(args: Args) -> Result<()> {
         } else {
             r
         };
-        let mut img = fairing_picture(&mesh, drawn, &opts)?;
-        // the colours of fairline::fair::fairing_picture
+        let mut img = fairing_picture(&mesh, faired, drawn, &opts)?;
         crate::highlight_png::draw_key(
             &mut img,
             &[
                 (
-                    [0.02, 0.02, 0.02],
+                    FAIRING_LINE_COLOR,
                     format!(
                         "highlight lines, light spacing {}",
                         crate::highlight_png::fmt_len(shown_light.spacing())
                     ),
                 ),
-                ([0.85, 0.05, 0.05], "region outline".into()),
-                ([0.05, 0.25, 0.95], "desired lines (before)".into()),
+                (FAIRING_OUTLINE_COLOR, "region outline".into()),
+                (FAIRING_DESIRED_COLOR, "desired lines (before)".into()),
             ],
         );
         img.write_png(png)?;

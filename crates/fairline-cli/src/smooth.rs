@@ -1,7 +1,7 @@
 //! `fairline smooth` (the classic smoothing family, Grüner thesis ch. 3) and
 //! `fairline fair-quad` (structure-line fairing of quad meshes, ch. 4).
 
-use crate::common::{Report, bad_input, read_json, spinner};
+use crate::common::{Report, bad_input, spinner};
 use anyhow::Result;
 use fairline::fair::{QuadFairOptions, fair_structure_lines};
 use fairline::geom::LaplaceWeights;
@@ -108,29 +108,10 @@ pub struct Args {
     pub report: Option<PathBuf>,
 }
 
-#[derive(serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct FixedFile {
-    vertices: Vec<i64>,
-}
-
-/// Reads `{"vertices":[...]}` and checks every index against `count`.
+/// Reads the fixed-vertices file `{"vertices":[...]}` (the one reader,
+/// [`fairline::io::read_fixed_vertices`]); errors name the file and exit 2.
 pub fn read_fixed(path: &Path, count: usize) -> Result<Vec<VertexId>> {
-    let f: FixedFile = read_json(path)?;
-    f.vertices
-        .iter()
-        .enumerate()
-        .map(|(k, &v)| {
-            if v < 0 || v as u64 >= count as u64 {
-                Err(bad_input(format!(
-                    "{}: vertices[{k}] = {v} is not a vertex (the mesh has {count})",
-                    path.display()
-                )))
-            } else {
-                Ok(VertexId(v as u32))
-            }
-        })
-        .collect()
+    fairline::io::read_fixed_vertices(path, count).map_err(|e| bad_input(e.to_string()))
 }
 
 fn finite(name: &str, v: Option<f64>) -> Result<()> {

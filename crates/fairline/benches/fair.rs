@@ -7,8 +7,9 @@
 //! Run: `cargo bench -p fairline --bench fair`
 
 use fairline::Vec3;
-use fairline::fair::{FairOptions, RegionSpec, fair_highlight_lines};
+use fairline::fair::{FairOptions, fair_highlight_lines};
 use fairline::highlight::LightArray;
+use fairline::io::RegionSpec;
 use fairline::shapes;
 use std::time::Instant;
 
@@ -44,23 +45,16 @@ fn main() {
         let mut iters = 0;
         for _ in 0..runs {
             let t = Instant::now();
-            let r = fair_highlight_lines(
-                &mesh,
-                &light,
-                &faces,
-                &FairOptions::default().max_iterations(1),
-            )
-            .unwrap();
+            let options = FairOptions::default().region(faces.clone()).light(light);
+            let r = fair_highlight_lines(&mesh, &options.clone().max_iterations(1))
+                .unwrap()
+                .report;
             t1.push(t.elapsed().as_secs_f64() * 1e3);
-            movable = r.region.movable.len();
+            movable = r.movable_vertices;
             let t = Instant::now();
-            let r = fair_highlight_lines(
-                &mesh,
-                &light,
-                &faces,
-                &FairOptions::default().max_iterations(3),
-            )
-            .unwrap();
+            let r = fair_highlight_lines(&mesh, &options.max_iterations(3))
+                .unwrap()
+                .report;
             t3.push(t.elapsed().as_secs_f64() * 1e3);
             iters = r.iterations;
         }

@@ -130,3 +130,84 @@ pub fn mesh_picture(
     };
     render(&scene, opts)
 }
+
+/// Colour of the highlight lines in [`fairing_picture`] (near black).
+pub const FAIRING_LINE_COLOR: [f32; 3] = [0.02, 0.02, 0.02];
+/// Colour of the region outline in [`fairing_picture`] (red).
+pub const FAIRING_OUTLINE_COLOR: [f32; 3] = [0.85, 0.05, 0.05];
+/// Colour of the desired OGH curves in [`fairing_picture`] (blue).
+pub const FAIRING_DESIRED_COLOR: [f32; 3] = [0.05, 0.25, 0.95];
+
+/// Before/after picture of a highlight-line fairing run (Yong et al.
+/// Fig. 7): on the left `before` with its highlight lines (dark), the region
+/// outline (red) and the desired OGH curves (blue) of the report; on the
+/// right `after` (the input with the output's positions) with its highlight
+/// lines and the outline.
+pub fn fairing_picture(
+    before: &SurfaceMesh,
+    after: &SurfaceMesh,
+    report: &crate::fair::FairReport,
+    opts: &RenderOptions,
+) -> Result<Image, RenderError> {
+    use crate::fair::FairMethod;
+    use crate::highlight::HighlightLines;
+    use crate::render::side_by_side;
+    let lines = |ls: &HighlightLines| -> Vec<PolylineLayer> {
+        ls.lines
+            .iter()
+            .map(|l| PolylineLayer {
+                points: l.points.clone(),
+                closed: l.closed,
+                color: FAIRING_LINE_COLOR,
+                width_px: 1.6,
+            })
+            .collect()
+    };
+    let outline: Vec<PolylineLayer> = report
+        .region
+        .outline(before)
+        .into_iter()
+        .map(|(a, b)| PolylineLayer {
+            points: vec![a, b],
+            closed: false,
+            color: FAIRING_OUTLINE_COLOR,
+            width_px: 2.2,
+        })
+        .collect();
+    let mut left = lines(&report.lines_before);
+    left.extend(report.desired_before.lines.iter().map(|d| PolylineLayer {
+        points: d.samples.clone(),
+        closed: false,
+        color: FAIRING_DESIRED_COLOR,
+        width_px: 2.4,
+    }));
+    left.extend(outline.iter().cloned());
+    let mut right = lines(&report.lines_after);
+    right.extend(outline);
+    let a = mesh_picture(
+        before,
+        &Picture {
+            polylines: left,
+            title: Some("before: highlight lines, region, desired lines".into()),
+            ..Default::default()
+        },
+        opts,
+    )?;
+    let b = mesh_picture(
+        after,
+        &Picture {
+            polylines: right,
+            title: Some(
+                match report.method {
+                    FairMethod::Highlight => "after highlight-line fairing",
+                    FairMethod::Paper => "after highlight-line fairing (Yong et al.)",
+                    FairMethod::DiffusionFlow => "after surface diffusion flow (baseline)",
+                }
+                .into(),
+            ),
+            ..Default::default()
+        },
+        opts,
+    )?;
+    Ok(side_by_side(&[a, b], &["before", "after"]))
+}

@@ -4,12 +4,13 @@ use super::auth::{Guard, query_param};
 use super::doc::{Doc, Step, shell_word};
 use super::frame::{frame, vec3_bytes};
 use super::http::{HttpRequest, HttpResponse};
-use fairline::fair::{FairMethod, FairOptions, RegionSpec, fair_highlight_lines_with, grow_region};
+use fairline::fair::{FairMethod, FairOptions, fair_highlight_lines, grow_region};
 use fairline::geom::{CurvatureMethod, LaplaceWeights, principal_curvatures, vertex_normals};
 use fairline::highlight::{
     CircularLight, CircularLights, DetectOptions, HighlightLines, HighlightModel, HighlightOptions,
     LightArray, circular_highlight_bands, circular_highlight_lines, detect_irregularities,
 };
+use fairline::io::RegionSpec;
 use fairline::mesh::{FaceId, VertexId};
 use fairline::{SurfaceMesh, Vec3};
 use serde::Deserialize;
@@ -775,11 +776,12 @@ fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
     let shared = Arc::clone(shared);
     std::thread::spawn(move || {
         let progress = Arc::clone(&ctx.progress);
+        let cancel = Arc::clone(&ctx.cancel);
         let (tx, rx) = std::sync::mpsc::channel();
         let worker = std::thread::spawn(move || {
             let r = match surface_input {
                 Some((surfaces, grid)) => run_fair_surface(&req, &surfaces, grid, &file, &out),
-                None => run_method(&req, &tri, &mesh, &file, &out, &progress),
+                None => run_method(&req, &tri, &mesh, &file, &out, &progress, &cancel),
             };
             let _ = tx.send(());
             r
@@ -858,6 +860,7 @@ fn run_method(
     file: &str,
     out: &str,
     progress: &Progress,
+    cancel: &Arc<AtomicBool>,
 ) -> Result<Outcome, String> {
     let o = &req.options;
     let faces = req.faces.as_ref().map(|f| to_faces(tri, f));
@@ -889,27 +892,30 @@ fn run_method(
                 "diffusion-flow" => FairMethod::DiffusionFlow,
                 m => return Err(format!("unknown fairing method `{m}`")),
             };
+            let sink = Arc::clone(progress);
+            let control = fairline::Control::new()
+                .cancel_flag(Arc::clone(cancel))
+                .on_progress(move |p| {
+                    let total = p.total.max(1) as f64;
+                    *sink.lock().unwrap_or_else(|e| e.into_inner()) =
+                        (p.done as f64 / total).min(1.0);
+                });
             let defaults = FairOptions::default();
-            let options = FairOptions {
-                method,
-                max_iterations: o.max_iterations.unwrap_or(defaults.max_iterations),
-                epsilon: o.epsilon.unwrap_or(defaults.epsilon),
-                ..defaults
-            };
-            let total = options.max_iterations.max(1) as f64;
-            let mut done = 0.0;
-            let r = fair_highlight_lines_with(tri, &light, faces, &options, &mut |_| {
-                done += 1.0;
-                *progress.lock().unwrap_or_else(|e| e.into_inner()) = (done / total).min(1.0);
-            })
-            .map_err(|e| e.to_string())?;
-            let mut report = r.report_json();
+            let options = FairOptions::default()
+                .region(faces.clone())
+                .light(light)
+                .method(method)
+                .max_iterations(o.max_iterations.unwrap_or(defaults.max_iterations))
+                .epsilon(o.epsilon.unwrap_or(defaults.epsilon))
+                .control(control);
+            let r = fair_highlight_lines(tri, &options).map_err(|e| e.to_string())?;
+            let mut report = serde_json::to_value(&r.report).map_err(|e| e.to_string())?;
             report["command"] = json!("fair");
             report["time_s"] = json!(t.elapsed().as_secs_f64());
             let m = o.method.as_deref().unwrap_or("highlight");
             Ok(Outcome {
                 surfaces: None,
-                positions: r.mesh.positions().to_vec(),
+                positions: r.positions,
                 report,
                 command: format!(
                     "fairline fair {file} --region region.json {} --method {m} --max-iterations {} --epsilon {} -o {out}",

@@ -61,6 +61,10 @@ pub enum OghKind {
     /// A tangent was zero or not finite (the Eq. (5) denominator
     /// 4T0²T1² − (T0·T1)² vanishes): the straight segment Q0→Q1 is used.
     Straight,
+    /// The magnitudes a0, a1 > 0 were fitted to points the curve should
+    /// pass near (the refitted desired lines of highlight-line fairing),
+    /// not taken from Eq. (5).
+    Fitted,
 }
 
 /// An optimized geometric Hermite curve (Yong et al. Eq. (5)): the cubic

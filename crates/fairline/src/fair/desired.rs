@@ -16,6 +16,16 @@
 //! (its documented [`crate::curves::OghKind::Straight`] case; the
 //! `Constrained` case covers a failed tangent-preserving condition).
 //!
+//! Refitted tangents (beyond the paper; Yong et al. §3.7 rebuild the
+//! target function from the current mesh in every iteration): on the input
+//! the tangents T0, T1 can only be fitted to the line's outside part, an
+//! extrapolation that is poor where that part is short or curved (wide
+//! regions). Once the defect is gone, [`across_tangents`] fits the same
+//! parabola to nodes on both sides of Q0 (resp. Q1) — the outside part and
+//! the nearest quarter chord of the faired inside line — a central estimate
+//! of the line's direction at Q0 that is still anchored outside;
+//! [`desired_lines_with`] builds the OGH curves with them.
+//!
 //! A run of inside nodes that reaches the end of an open line (the line
 //! stops inside R) has no second delimiting node and gets no desired curve;
 //! neither does a closed line lying entirely inside R. They are counted in
@@ -24,6 +34,12 @@
 use crate::Vec3;
 use crate::curves::{ArcLengthTable, OghCurve, chord_parameters, ogh_curve};
 use crate::highlight::{HighlightLines, NodeId};
+use std::collections::BTreeMap;
+
+/// Refitted tangents (T0, T1) of desired lines, by the delimiting nodes
+/// (Q0, Q1) of their run (outside R, so they do not change while R is
+/// faired).
+pub type Tangents = BTreeMap<(NodeId, NodeId), (Vec3, Vec3)>;
 
 /// Samples of the arc-length table of an OGH curve.
 const ARC_SAMPLES: usize = 256;
@@ -107,12 +123,14 @@ fn fitted_tangent(q: Vec3, pts: &[Vec3], s: &[f64]) -> Vec3 {
     Vec3::ZERO
 }
 
-/// Outside nodes walking away from position `start` of `seq` in direction
-/// `step` (±1), up to arc length `reach` (at least `min_nodes` nodes when
-/// available); returns points and signed arc lengths (negative backwards).
-fn outside_part(
+/// Nodes of one side (`inside[i] == side`) walking away from position
+/// `start` of `seq` in direction `step` (±1), up to arc length `reach` (at
+/// least `min_nodes` nodes when available); returns points and signed arc
+/// lengths (negative backwards).
+fn part(
     seq: &[(NodeId, Vec3)],
     inside: &[bool],
+    side: bool,
     start: usize,
     step: isize,
     reach: f64,
@@ -123,7 +141,7 @@ fn outside_part(
     let mut acc = 0.0;
     let mut prev = seq[start].1;
     let mut i = start as isize + step;
-    while i >= 0 && (i as usize) < seq.len() && !inside[i as usize] {
+    while i >= 0 && (i as usize) < seq.len() && inside[i as usize] == side {
         let p = seq[i as usize].1;
         acc += (p - prev).length();
         pts.push(p);
@@ -137,12 +155,25 @@ fn outside_part(
     (pts, s)
 }
 
-/// Builds the desired highlight lines (Yong et al. §3.2, §3.5) of the lines
-/// `lines` for the region whose inside nodes are those for which `inside`
-/// returns true; see the module documentation for tangents and skipped
-/// runs. Node positions are those stored in `lines`.
-pub fn desired_lines(lines: &HighlightLines, inside: impl Fn(NodeId) -> bool) -> DesiredLines {
-    let mut out = DesiredLines::default();
+/// One run of inside nodes of a line with its delimiting outside nodes:
+/// the line's node sequence (closed lines opened at an outside node),
+/// the inside flags, and the run `a..b` (Q0 at a − 1, Q1 at b).
+struct Run<'a> {
+    index: i64,
+    seq: &'a [(NodeId, Vec3)],
+    ins: &'a [bool],
+    a: usize,
+    b: usize,
+}
+
+/// Calls `f` for every run of inside nodes with two delimiting outside
+/// nodes (§3.2); returns the runs without them (skipped).
+fn for_each_run(
+    lines: &HighlightLines,
+    inside: impl Fn(NodeId) -> bool,
+    mut f: impl FnMut(&Run<'_>),
+) -> usize {
+    let mut skipped = 0;
     for line in &lines.lines {
         let n = line.nodes.len().min(line.points.len());
         if n == 0 {
@@ -158,7 +189,7 @@ pub fn desired_lines(lines: &HighlightLines, inside: impl Fn(NodeId) -> bool) ->
         let mut ins: Vec<bool> = Vec::with_capacity(n + 1);
         if line.closed {
             let Some(first) = flags.iter().position(|&f| !f) else {
-                out.skipped += 1;
+                skipped += 1;
                 continue;
             };
             for k in 0..=n {
@@ -185,46 +216,118 @@ pub fn desired_lines(lines: &HighlightLines, inside: impl Fn(NodeId) -> bool) ->
             }
             let b = i; // one past the run
             if a == 0 || b >= len {
-                out.skipped += 1;
+                skipped += 1;
                 continue;
             }
-            let (q0, q1) = (seq[a - 1], seq[b]);
-            let chord = (q1.1 - q0.1).length();
-            let reach = 0.5 * chord;
-            let (p0, s0) = outside_part(&seq, &ins, a - 1, -1, reach, 3);
-            let (p1, s1) = outside_part(&seq, &ins, b, 1, reach, 3);
-            let t0 = fitted_tangent(q0.1, &p0, &s0);
-            let t1 = fitted_tangent(q1.1, &p1, &s1);
-            let curve = ogh_curve(q0.1, t0, q1.1, t1);
-            let table = ArcLengthTable::new(|t| curve.hermite.point(t), ARC_SAMPLES);
-            let run_pts: Vec<Vec3> = seq[a - 1..=b].iter().map(|x| x.1).collect();
-            let c = chord_parameters(&run_pts);
-            let nodes: Vec<NodeId> = seq[a..b].iter().map(|x| x.0).collect();
-            let points: Vec<Vec3> = run_pts[1..run_pts.len() - 1].to_vec();
-            let targets: Vec<Vec3> = c[1..c.len() - 1].iter().map(|&s| table.point(s)).collect();
-            let lengths: Vec<f64> = (1..run_pts.len() - 1)
-                .map(|k| {
-                    0.5 * ((run_pts[k] - run_pts[k - 1]).length()
-                        + (run_pts[k] - run_pts[k + 1]).length())
-                })
-                .collect();
-            let samples: Vec<Vec3> = (0..=ARC_SAMPLES)
-                .map(|k| curve.hermite.point(k as f64 / ARC_SAMPLES as f64))
-                .collect();
-            out.lines.push(DesiredLine {
+            f(&Run {
                 index: line.index,
-                ends: (q0.0, q1.0),
-                end_points: (q0.1, q1.1),
-                tangents: (t0, t1),
-                curve,
-                nodes,
-                points,
-                targets,
-                lengths,
-                samples,
+                seq: &seq,
+                ins: &ins,
+                a,
+                b,
             });
         }
     }
+    skipped
+}
+
+/// Builds the desired highlight lines (Yong et al. §3.2, §3.5) of the lines
+/// `lines` for the region whose inside nodes are those for which `inside`
+/// returns true; see the module documentation for tangents and skipped
+/// runs. Node positions are those stored in `lines`.
+pub fn desired_lines(lines: &HighlightLines, inside: impl Fn(NodeId) -> bool) -> DesiredLines {
+    desired_lines_with(lines, inside, &Tangents::new())
+}
+
+/// [`desired_lines`] with the tangents of `tangents` (from
+/// [`across_tangents`]) for the runs it lists; the other runs get tangents
+/// fitted to the outside part.
+pub fn desired_lines_with(
+    lines: &HighlightLines,
+    inside: impl Fn(NodeId) -> bool,
+    tangents: &Tangents,
+) -> DesiredLines {
+    let mut out = DesiredLines::default();
+    out.skipped = for_each_run(lines, inside, |run| {
+        let Run {
+            index,
+            seq,
+            ins,
+            a,
+            b,
+        } = *run;
+        let (q0, q1) = (seq[a - 1], seq[b]);
+        let (t0, t1) = match tangents.get(&(q0.0, q1.0)) {
+            Some(&t) => t,
+            None => {
+                let reach = 0.5 * (q1.1 - q0.1).length();
+                let (p0, s0) = part(seq, ins, false, a - 1, -1, reach, 3);
+                let (p1, s1) = part(seq, ins, false, b, 1, reach, 3);
+                (
+                    fitted_tangent(q0.1, &p0, &s0),
+                    fitted_tangent(q1.1, &p1, &s1),
+                )
+            }
+        };
+        let curve = ogh_curve(q0.1, t0, q1.1, t1);
+        let table = ArcLengthTable::new(|t| curve.hermite.point(t), ARC_SAMPLES);
+        let run_pts: Vec<Vec3> = seq[a - 1..=b].iter().map(|x| x.1).collect();
+        let c = chord_parameters(&run_pts);
+        let nodes: Vec<NodeId> = seq[a..b].iter().map(|x| x.0).collect();
+        let points: Vec<Vec3> = run_pts[1..run_pts.len() - 1].to_vec();
+        let targets: Vec<Vec3> = c[1..c.len() - 1].iter().map(|&s| table.point(s)).collect();
+        let lengths: Vec<f64> = (1..run_pts.len() - 1)
+            .map(|k| {
+                0.5 * ((run_pts[k] - run_pts[k - 1]).length()
+                    + (run_pts[k] - run_pts[k + 1]).length())
+            })
+            .collect();
+        let samples: Vec<Vec3> = (0..=ARC_SAMPLES)
+            .map(|k| curve.hermite.point(k as f64 / ARC_SAMPLES as f64))
+            .collect();
+        out.lines.push(DesiredLine {
+            index,
+            ends: (q0.0, q1.0),
+            end_points: (q0.1, q1.1),
+            tangents: (t0, t1),
+            curve,
+            nodes,
+            points,
+            targets,
+            lengths,
+            samples,
+        });
+    });
+    out
+}
+
+/// Share of the chord |Q1 − Q0| of the inside line that
+/// [`across_tangents`] adds to the outside part.
+const ACROSS_REACH: f64 = 0.25;
+
+/// Tangents T0, T1 of every run fitted across its delimiting nodes (module
+/// documentation): the parabola of [`desired_lines`] through Q0 fitted to
+/// the outside nodes beyond Q0 (up to half the chord) and the inside nodes
+/// after it (up to a quarter of the chord, at least two), likewise at Q1.
+/// Meant for a mesh whose region has already been faired.
+pub fn across_tangents(lines: &HighlightLines, inside: impl Fn(NodeId) -> bool) -> Tangents {
+    let mut out = Tangents::new();
+    for_each_run(lines, inside, |run| {
+        let Run { seq, ins, a, b, .. } = *run;
+        let (q0, q1) = (seq[a - 1], seq[b]);
+        let chord = (q1.1 - q0.1).length();
+        let across = |q: usize, outward: isize| {
+            let (mut p, mut s) = part(seq, ins, false, q, outward, 0.5 * chord, 3);
+            let (pi, si) = part(seq, ins, true, q, -outward, ACROSS_REACH * chord, 2);
+            p.extend(pi);
+            s.extend(si);
+            fitted_tangent(seq[q].1, &p, &s)
+        };
+        let (t0, t1) = (across(a - 1, -1), across(b, 1));
+        if t0.is_finite() && t1.is_finite() && t0 != Vec3::ZERO && t1 != Vec3::ZERO {
+            out.insert((q0.0, q1.0), (t0, t1));
+        }
+    });
     out
 }
 

@@ -27,4 +27,13 @@ pub enum FairError {
     /// An option is out of range.
     #[error("invalid option: {0}")]
     InvalidOption(String),
+    /// The caller stopped the run through [`crate::Control`].
+    #[error("cancelled")]
+    Cancelled(#[from] crate::Cancelled),
+}
+
+impl From<crate::io::RegionError> for FairError {
+    fn from(e: crate::io::RegionError) -> Self {
+        FairError::Region(e.0)
+    }
 }

@@ -6,10 +6,11 @@
 //! surface distance to the truth inside the region and distance of the
 //! result's highlight lines to the truth's lines under the same lights.
 
+use super::FairReport;
 use super::desired::distance_to_polyline;
-use super::{FairResult, RegionSpec};
 use crate::Vec3;
 use crate::highlight::{HighlightLines, HighlightModel, HighlightOptions, LightArray};
+use crate::io::RegionSpec;
 use crate::mesh::{FaceId, SurfaceMesh};
 use crate::shapes;
 
@@ -168,7 +169,7 @@ impl MaxRms {
 }
 
 /// Surface distance to the truth over the inside vertices of the region.
-pub(crate) fn surface_error(case: &Case, r: &FairResult, mesh: &SurfaceMesh) -> MaxRms {
+pub(crate) fn surface_error(case: &Case, r: &FairReport, mesh: &SurfaceMesh) -> MaxRms {
     let d: Vec<f64> = r
         .region
         .inside_vertices
@@ -184,7 +185,7 @@ pub(crate) fn surface_error(case: &Case, r: &FairResult, mesh: &SurfaceMesh) -> 
 /// both directions. A line that exists in one model only counts with its
 /// distance to nothing: infinity.
 pub(crate) fn line_error(
-    r: &FairResult,
+    r: &FairReport,
     mesh: &SurfaceMesh,
     truth: &SurfaceMesh,
     truth_lines: &HighlightLines,
@@ -231,7 +232,8 @@ pub(crate) fn truth_lines(truth: &SurfaceMesh, light: &LightArray) -> HighlightL
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fair::{FairMethod, FairOptions, fair_highlight_lines};
+    use crate::fair::tests::fair;
+    use crate::fair::{FairMethod, FairOptions};
 
     /// Surface max, surface RMS, line max, line RMS of one run.
     type Measures = [f64; 4];
@@ -250,21 +252,21 @@ mod tests {
                 let tl = truth_lines(&truth, &light);
                 let faces = case.region(&mesh);
                 let run = |o: &FairOptions| -> Measures {
-                    let r = fair_highlight_lines(&mesh, &light, &faces, o).unwrap();
+                    let (r, after) = fair(&mesh, &light, &faces, o).unwrap();
                     for v in mesh.vertices() {
                         if !r.region.is_movable[v.idx()] {
                             assert_eq!(
                                 mesh.position(v).to_array().map(f64::to_bits),
-                                r.mesh.position(v).to_array().map(f64::to_bits),
+                                after.position(v).to_array().map(f64::to_bits),
                                 "{}: {:?} moved vertex {v:?} outside the movable set",
                                 case.label(),
                                 o.method
                             );
                         }
                     }
-                    assert!(r.mesh.positions().iter().all(|p| p.is_finite()));
-                    let s = surface_error(case, &r, &r.mesh);
-                    let l = line_error(&r, &r.mesh, &truth, &tl, &light);
+                    assert!(after.positions().iter().all(|p| p.is_finite()));
+                    let s = surface_error(case, &r, &after);
+                    let l = line_error(&r, &after, &truth, &tl, &light);
                     [s.max, s.rms, l.max, l.rms]
                 };
                 (case.label(), run(options), run(&flow_options))
@@ -342,6 +344,40 @@ mod tests {
         assert!(mean_ratio(&rows, 0) > mean_ratio(&paper, 0));
     }
 
+    /// Refitting the desired lines' tangents across their end nodes once
+    /// the defect is gone ([`FairOptions::refits`], four refits): the
+    /// result's highlight lines end closer to the truth's lines than
+    /// diffusion flow's (max and RMS) on every case, and the surface closer
+    /// on all but the widest cubic bump and saddle dent, by at most 1.25×
+    /// there (1.67× without refits); the average surface gain shrinks
+    /// (wavy panels keep less of theirs), the trade-off recorded in
+    /// BENCHMARKS.md (Session 18).
+    #[test]
+    fn refitted_tangents_bring_every_case_near_or_past_diffusion_flow() {
+        let rows = against_flow(&FairOptions::default().refits(4));
+        let lost = losses(&rows);
+        assert!(lost.len() <= 2, "loses to flow on:\n{}", lost.join("\n"));
+        for l in &lost {
+            assert!(
+                l.starts_with("cubic bump σ=0.15") || l.starts_with("saddle dent σ=0.15"),
+                "unexpected loss: {l}"
+            );
+        }
+        for (c, m, f) in &rows {
+            assert!(
+                m[2] <= f[2] && m[3] <= f[3],
+                "{c}: {} vs flow {}",
+                show(m),
+                show(f)
+            );
+            for k in 0..2 {
+                assert!(m[k] < 1.25 * f[k], "{c}: {} vs flow {}", show(m), show(f));
+            }
+        }
+        assert!(mean_ratio(&rows, 0) < 0.55, "{}", mean_ratio(&rows, 0));
+        assert!(mean_ratio(&rows, 3) < 0.45, "{}", mean_ratio(&rows, 3));
+    }
+
     /// Prints the table of BENCHMARKS.md (run with --ignored --nocapture).
     #[test]
     #[ignore]
@@ -353,8 +389,8 @@ mod tests {
                 "flow",
                 FairOptions::default().method(FairMethod::DiffusionFlow),
             ),
-            ("ω3=0.1", with_lap(0.1)),
             ("ω3=1", with_lap(1.0)),
+            ("refits=4", FairOptions::default().refits(4)),
         ];
         for case in Case::family() {
             let (mesh, truth, light) = (case.input_mesh(), case.truth_mesh(), case.light());
@@ -363,7 +399,7 @@ mod tests {
             let mut row = format!("| {} |", case.label());
             for (i, (_, opt)) in variants.iter().enumerate() {
                 let t = std::time::Instant::now();
-                let r = fair_highlight_lines(&mesh, &light, &faces, opt).unwrap();
+                let (r, after) = fair(&mesh, &light, &faces, opt).unwrap();
                 let dt = t.elapsed().as_secs_f64();
                 if i == 0 {
                     let s0 = surface_error(&case, &r, &mesh);
@@ -377,8 +413,8 @@ mod tests {
                         d.rms
                     );
                 }
-                let s = surface_error(&case, &r, &r.mesh);
-                let l = line_error(&r, &r.mesh, &truth, &tl, &light);
+                let s = surface_error(&case, &r, &after);
+                let l = line_error(&r, &after, &truth, &tl, &light);
                 row += &format!(
                     " {:.1e} / {:.1e} · {:.1e} / {:.1e} ({} it, {:.2} s) |",
                     s.max, s.rms, l.max, l.rms, r.iterations, dt

@@ -33,14 +33,23 @@
 //! [`FairMethod::Highlight`] (the default) adds ω3 f_lap, f_lap = D⁴
 //! ∫(Δ_B H)² dA over the movable vertices (D the region's bounding-box
 //! diagonal, so that ω3 does not depend on scale), the energy whose zero is
-//! the diffusion-flow state. With the default ω3 = 0 both are the same.
-//! Measured on generated panels with a known truth (BENCHMARKS.md, Session
-//! 17): the paper's energy ends 2.6× closer to the truth than diffusion
-//! flow on average and loses (by up to 1.6×) only on the widest regions and
-//! a saddle dent, where the OGH desired curves are themselves about as far
-//! from the truth's lines as flow's lines are; ω3 > 0 trades the average
-//! gain for a smaller worst case (ω3 = 1: within 10 % of flow everywhere,
-//! tested; 5 % measured; 5 % better on average).
+//! the diffusion-flow state, and may refit the desired lines' tangents
+//! across their end nodes once Eq. (17) is met ([`FairOptions::refits`],
+//! module `desired`). With the defaults (ω3 = 0, no refit) both are the
+//! same. Measured on generated panels with a known truth (BENCHMARKS.md,
+//! Sessions 17 and 18): the paper's energy ends 2.6× closer to the truth
+//! than diffusion flow on average and loses (by up to 1.67× in surface
+//! max) on the widest quadratic and cubic bumps and two saddle dents; four
+//! refits make the lines closer than flow's on every case and leave two
+//! surface losses of at most 1.19×, at the price of a smaller average gain
+//! (2.0×; wavy panels keep less of theirs); ω3 = 1 stays within 10 % of
+//! flow everywhere with a 5 % average gain.
+//!
+//! Shape (issue #17): [`fair_highlight_lines`] takes the mesh and
+//! [`FairOptions`] (region, lights, weights, stopping rule, refits and the
+//! [`crate::Control`] that reports each iteration and can cancel) and
+//! returns [`Output`]: the new positions and the serialisable
+//! [`FairReport`] (the CLI's JSON report).
 //!
 //! The baseline (`FairMethod::DiffusionFlow`) replaces F by ‖Δ_B H‖² over
 //! the movable vertices (area-weighted), linearised the same way: each step
@@ -49,16 +58,21 @@
 //! Eq. (16) box. Both methods move the same vertices along the same normals.
 
 use super::FairError;
-use super::desired::{DesiredLines, HighlightDeviation, desired_lines};
+use super::desired::{
+    DesiredLines, HighlightDeviation, Tangents, across_tangents, desired_lines, desired_lines_with,
+};
 use super::region::{MovableSet, movable_vertices};
 use super::system::{
     DiffNode, Frozen, NOT_MOVABLE, Residual, difference_energy_after, difference_residual,
     diffusion_residual, region_willmore, willmore_residual,
 };
-use crate::Vec3;
-use crate::highlight::{HighlightLines, HighlightModel, HighlightOptions, LightArray, NodeId};
+use crate::highlight::{
+    HighlightLines, HighlightModel, HighlightOptions, LightArray, NodeId, UpAxis,
+};
 use crate::mesh::{FaceId, SurfaceMesh, VertexId};
 use crate::solve::{BoxQpOptions, box_qp, normal_matrix, sparse_from_triplets};
+use crate::{Control, Output, Vec3};
+use serde::Serialize;
 
 /// Which energy the fairing minimises.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -75,9 +89,19 @@ pub enum FairMethod {
     DiffusionFlow,
 }
 
-/// Options of [`fair_highlight_lines`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Options of [`fair_highlight_lines`]: the region, the lights, the energy
+/// and the stopping rule of Yong et al. Algorithm 2.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct FairOptions {
+    /// The region R to fair, as its faces (Yong et al. §3.1); must not be
+    /// empty. Read a region file with [`crate::io::read_region`] and
+    /// [`crate::io::RegionSpec::faces`].
+    pub region: Vec<FaceId>,
+    /// The linear light array whose highlight lines are faired; `None`: the
+    /// default lights of `fairline highlight` for the mesh
+    /// ([`LightArray::default_for_mesh`], up axis found from the part).
+    pub light: Option<LightArray>,
     /// The energy to minimise (default [`FairMethod::Highlight`]).
     pub method: FairMethod,
     /// ω1, weight of f_fair (default 1, as in Yong et al. §4).
@@ -95,25 +119,47 @@ pub struct FairOptions {
     pub max_iterations: usize,
     /// ε of Eq. (17) (default 1e-3).
     pub epsilon: f64,
+    /// Refits of the desired lines ([`FairMethod::Highlight`] only): each
+    /// time Eq. (17) is met, the tangents T0, T1 of the desired lines are
+    /// refitted across their end nodes to the faired lines
+    /// ([`super::desired::across_tangents`]) and the iteration goes on,
+    /// this many times; 0 keeps the tangents of the input's outside parts.
+    pub refits: usize,
     /// Options of the highlight line model.
     pub highlight: HighlightOptions,
+    /// Progress (stage "iterations", once per iteration) and cancellation.
+    pub control: Control,
 }
 
 impl Default for FairOptions {
     fn default() -> Self {
         FairOptions {
+            region: Vec::new(),
+            light: None,
             method: FairMethod::Highlight,
             fair_weight: 1.0,
             diff_weight: 1.0,
             laplacian_weight: 0.0,
             max_iterations: 50,
             epsilon: 1e-3,
+            refits: 0,
             highlight: HighlightOptions::default(),
+            control: Control::default(),
         }
     }
 }
 
 impl FairOptions {
+    /// Sets [`FairOptions::region`].
+    pub fn region(mut self, faces: Vec<FaceId>) -> Self {
+        self.region = faces;
+        self
+    }
+    /// Sets [`FairOptions::light`].
+    pub fn light(mut self, light: LightArray) -> Self {
+        self.light = Some(light);
+        self
+    }
     /// Sets [`FairOptions::method`].
     pub fn method(mut self, m: FairMethod) -> Self {
         self.method = m;
@@ -123,6 +169,16 @@ impl FairOptions {
     pub fn weights(mut self, fair: f64, diff: f64) -> Self {
         self.fair_weight = fair;
         self.diff_weight = diff;
+        self
+    }
+    /// Sets [`FairOptions::fair_weight`] (ω1).
+    pub fn fair_weight(mut self, w1: f64) -> Self {
+        self.fair_weight = w1;
+        self
+    }
+    /// Sets [`FairOptions::diff_weight`] (ω2).
+    pub fn diff_weight(mut self, w2: f64) -> Self {
+        self.diff_weight = w2;
         self
     }
     /// Sets [`FairOptions::laplacian_weight`] (ω3).
@@ -140,9 +196,19 @@ impl FairOptions {
         self.epsilon = e;
         self
     }
+    /// Sets [`FairOptions::refits`].
+    pub fn refits(mut self, n: usize) -> Self {
+        self.refits = n;
+        self
+    }
     /// Sets [`FairOptions::highlight`].
     pub fn highlight(mut self, h: HighlightOptions) -> Self {
         self.highlight = h;
+        self
+    }
+    /// Sets [`FairOptions::control`].
+    pub fn control(mut self, c: Control) -> Self {
+        self.control = c;
         self
     }
     fn check(&self) -> Result<(), FairError> {
@@ -173,8 +239,8 @@ impl FairOptions {
 }
 
 /// What one iteration of Algorithm 2 did; energies at the start of the
-/// iteration (x = 0).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// iteration (x = 0). Serialises to one entry of the report's `history`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct IterationReport {
     /// Iteration number, from 1.
     pub iteration: usize,
@@ -192,6 +258,7 @@ pub struct IterationReport {
     /// Whether the step lowered the energy and was kept.
     pub accepted: bool,
     /// Levenberg–Marquardt damping used (relative to max diag JᵀJ).
+    #[serde(skip)]
     pub damping: f64,
     /// max |x_i| (mesh units).
     pub max_step: f64,
@@ -200,47 +267,82 @@ pub struct IterationReport {
     /// Displacements at their Eq. (16) bound.
     pub active_bounds: usize,
     /// Projected-Newton iterations of the QP.
+    #[serde(skip)]
     pub qp_iterations: usize,
     /// Inside highlight nodes with a target.
     pub target_nodes: usize,
     /// Runs of inside nodes without a desired line (§3.2).
+    #[serde(skip)]
     pub skipped_runs: usize,
 }
 
-/// Result of [`fair_highlight_lines`].
-#[derive(Clone, Debug)]
-pub struct FairResult {
-    /// The method that produced it.
-    pub method: FairMethod,
-    /// The faired mesh (same connectivity; only movable vertices moved).
-    pub mesh: SurfaceMesh,
-    /// Region, inside and movable vertices (§3.1).
-    pub region: MovableSet,
+/// Report of [`fair_highlight_lines`]. Serialises to the JSON report of
+/// `fairline fair --report` (and of the workbench and the Python package):
+/// iterations, convergence, region sizes, the Willmore energy and the
+/// highlight-line deviation (RMS and max) before and after, the largest
+/// displacement and the per-iteration history. The fields marked "not in
+/// the JSON" carry what pictures and checks need.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FairReport {
     /// Iterations run.
     pub iterations: usize,
     /// True when Eq. (17) stopped the iteration.
     pub converged: bool,
-    /// Willmore energy of the region before and after.
+    /// Number of movable vertices (§3.1).
+    pub movable_vertices: usize,
+    /// Number of inside vertices I_R (§3.1).
+    pub inside_vertices: usize,
+    /// Number of faces in R.
+    pub region_faces: usize,
+    /// Willmore energy of the region before.
     pub willmore_before: f64,
-    /// See `willmore_before`.
-    pub willmore_after: f64,
-    /// Distance of the inside highlight nodes from the desired curves,
-    /// before.
-    pub deviation_before: HighlightDeviation,
     /// The same after fairing.
-    pub deviation_after: HighlightDeviation,
+    pub willmore_after: f64,
+    /// Length-weighted RMS distance of the inside highlight nodes from the
+    /// desired curves, before (mesh units; [`HighlightDeviation::rms`]).
+    pub highlight_deviation_before: f64,
+    /// The same after fairing.
+    pub highlight_deviation_after: f64,
+    /// Largest distance of an inside highlight node from its desired curve,
+    /// before.
+    pub highlight_deviation_max_before: f64,
+    /// The same after fairing.
+    pub highlight_deviation_max_after: f64,
+    /// Desired lines of the input (§3.2).
+    pub desired_lines: usize,
     /// Largest total displacement of a vertex (mesh units).
     pub max_displacement: f64,
     /// Mean edge length ē inside R.
     pub mean_edge_length: f64,
-    /// Desired lines of the input (for pictures).
-    pub desired_before: DesiredLines,
-    /// Highlight lines before and after.
-    pub lines_before: HighlightLines,
-    /// See `lines_before`.
-    pub lines_after: HighlightLines,
+    /// Refits of the desired lines carried out ([`FairOptions::refits`]).
+    pub refits: usize,
     /// Per-iteration energies.
     pub history: Vec<IterationReport>,
+    /// The method that produced it (not in the JSON).
+    #[serde(skip)]
+    pub method: FairMethod,
+    /// The lights the lines were computed with (not in the JSON).
+    #[serde(skip)]
+    pub light: LightArray,
+    /// Deviation of the inside nodes from the desired curves, before, with
+    /// the node count (not in the JSON).
+    #[serde(skip)]
+    pub deviation_before: HighlightDeviation,
+    /// The same after fairing (not in the JSON).
+    #[serde(skip)]
+    pub deviation_after: HighlightDeviation,
+    /// Region, inside and movable vertices (§3.1; not in the JSON).
+    #[serde(skip)]
+    pub region: MovableSet,
+    /// Desired lines of the input, for pictures (not in the JSON).
+    #[serde(skip)]
+    pub desired_before: DesiredLines,
+    /// Highlight lines before (not in the JSON).
+    #[serde(skip)]
+    pub lines_before: HighlightLines,
+    /// Highlight lines after (not in the JSON).
+    #[serde(skip)]
+    pub lines_after: HighlightLines,
 }
 
 /// The linearised energy of one mesh state.
@@ -344,35 +446,34 @@ fn solve_box(
     Ok((sol.x, predicted, sol.active, sol.iterations))
 }
 
-/// Fairs the face region `faces` of a triangle mesh with the highlight
-/// lines of `light` (Yong et al. Algorithm 2; see the module
-/// documentation). Only the movable vertices of §3.1 move, along their
-/// normals; every other vertex, every normal outside R and every highlight
-/// node outside R stay bit-identical. Errors on non-triangle meshes,
-/// invalid options or regions, and with [`FairError::NoMovableVertex`]
-/// (advice included) when the region is too small.
+/// Fairs the region [`FairOptions::region`] of a triangle mesh with the
+/// highlight lines of [`FairOptions::light`] (Yong et al. §3, Algorithm 2,
+/// Eqs. (6)–(17); see the module documentation) and returns the new
+/// positions with the [`FairReport`]. Only the movable vertices of §3.1
+/// move, along their normals; every other vertex, every normal outside R and
+/// every highlight node outside R stay bit-identical. Errors on non-triangle
+/// meshes, invalid options or regions, with [`FairError::NoMovableVertex`]
+/// (advice included) when the region is too small, and with
+/// [`FairError::Cancelled`] when [`FairOptions::control`] asks to stop
+/// (checked once per iteration).
 pub fn fair_highlight_lines(
     mesh: &SurfaceMesh,
-    light: &LightArray,
-    faces: &[FaceId],
     options: &FairOptions,
-) -> Result<FairResult, FairError> {
-    fair_highlight_lines_with(mesh, light, faces, options, &mut |_| {})
-}
-
-/// [`fair_highlight_lines`] calling `on_iteration` after every iteration
-/// (for progress display).
-pub fn fair_highlight_lines_with(
-    mesh: &SurfaceMesh,
-    light: &LightArray,
-    faces: &[FaceId],
-    options: &FairOptions,
-    on_iteration: &mut dyn FnMut(&IterationReport),
-) -> Result<FairResult, FairError> {
+) -> Result<Output<FairReport>, FairError> {
     options.check()?;
     mesh.require_triangles()?;
+    if options.region.is_empty() {
+        return Err(FairError::Region("the region has no face".into()));
+    }
+    let light = match options.light {
+        Some(l) => l,
+        None => LightArray::default_for_mesh(mesh, UpAxis::Auto).ok_or_else(|| {
+            FairError::InvalidOption("the mesh has no finite vertex to place lights by".into())
+        })?,
+    };
+    let faces = options.region.as_slice();
     let mut mesh = mesh.clone();
-    let mut model = HighlightModel::new(&mesh, *light, options.highlight)?;
+    let mut model = HighlightModel::new(&mesh, light, options.highlight)?;
     let lines_before = model.lines(&mesh);
     let nodes: Vec<NodeId> = lines_before
         .lines
@@ -414,10 +515,13 @@ pub fn fair_highlight_lines_with(
     let willmore_before = region_willmore(&mesh, &Frozen::new(&mesh), &set.inside_vertices);
     let (w1, w2) = (options.fair_weight, options.diff_weight);
     // the linearised energy of the current mesh (steps 4 of Algorithm 2)
-    let linearise = |mesh: &SurfaceMesh, model: &HighlightModel, lines: &HighlightLines| {
+    let linearise = |mesh: &SurfaceMesh,
+                     model: &HighlightModel,
+                     lines: &HighlightLines,
+                     tangents: &Tangents| {
         let frozen = Frozen::new(mesh);
         let normals = model.normals();
-        let desired = desired_lines(lines, |n| set.node_inside(mesh, n));
+        let desired = desired_lines_with(lines, |n| set.node_inside(mesh, n), tangents);
         let fair = willmore_residual(mesh, &frozen, normals, &col, &set.inside_vertices);
         let lap = (w3 > 0.0 && options.method != FairMethod::DiffusionFlow)
             .then(|| diffusion_residual(mesh, &frozen, normals, &col, &set.movable));
@@ -450,8 +554,15 @@ pub fn fair_highlight_lines_with(
     let mut history = Vec::new();
     let mut converged = false;
     let mut lines = lines_before.clone();
-    let mut current = linearise(&mesh, &model, &lines);
+    let mut tangents = Tangents::new();
+    let mut refits_left = match options.method {
+        FairMethod::Highlight => options.refits,
+        FairMethod::Paper | FairMethod::DiffusionFlow => 0,
+    };
+    let mut refits = 0;
+    let mut current = linearise(&mesh, &model, &lines, &tangents);
     let mut damping = 0.0;
+    options.control.checkpoint()?;
     for it in 1..=options.max_iterations {
         let normals = model.normals().to_vec();
         let bounds = step_bounds(&mesh, &set.movable);
@@ -508,11 +619,13 @@ pub fn fair_highlight_lines_with(
             target_nodes: current.desired.lines.iter().map(|l| l.nodes.len()).sum(),
             skipped_runs: current.desired.skipped,
         };
-        on_iteration(&report);
         history.push(report);
+        options
+            .control
+            .step("iterations", it as u64, options.max_iterations as u64)?;
         if accepted {
             lines = model.lines(&mesh);
-            current = linearise(&mesh, &model, &lines);
+            current = linearise(&mesh, &model, &lines, &tangents);
             if rho > 0.75 {
                 damping *= 0.1;
                 if damping < MIN_DAMPING {
@@ -530,6 +643,16 @@ pub fn fair_highlight_lines_with(
             damping = (damping * 10.0).max(MIN_DAMPING);
         }
         if max_step / ebar < options.epsilon {
+            if refits_left > 0 {
+                // the desired lines refitted to the faired lines (module
+                // `desired`), then on with the same stopping rule
+                refits_left -= 1;
+                refits += 1;
+                tangents = across_tangents(&lines, |n| set.node_inside(&mesh, n));
+                current = linearise(&mesh, &model, &lines, &tangents);
+                damping = 0.0;
+                continue;
+            }
             converged = true;
             break;
         }
@@ -542,22 +665,36 @@ pub fn fair_highlight_lines_with(
         .zip(&start)
         .map(|(a, b)| (*a - *b).length())
         .fold(0.0, f64::max);
-    Ok(FairResult {
-        method: options.method,
+    let deviation_after = desired_after.deviation();
+    let report = FairReport {
         iterations: history.len(),
         converged,
+        movable_vertices: set.movable.len(),
+        inside_vertices: set.inside_vertices.len(),
+        region_faces: set.in_region.iter().filter(|&&b| b).count(),
         willmore_before,
         willmore_after,
-        deviation_before,
-        deviation_after: desired_after.deviation(),
+        highlight_deviation_before: deviation_before.rms,
+        highlight_deviation_after: deviation_after.rms,
+        highlight_deviation_max_before: deviation_before.max,
+        highlight_deviation_max_after: deviation_after.max,
+        desired_lines: desired_before.lines.len(),
         max_displacement,
         mean_edge_length: ebar,
+        refits,
+        history,
+        method: options.method,
+        light,
+        deviation_before,
+        deviation_after,
+        region: set,
         desired_before,
         lines_before,
         lines_after: lines,
-        history,
-        region: set,
-        mesh,
+    };
+    Ok(Output {
+        positions: mesh.positions().to_vec(),
+        report,
     })
 }
 
@@ -600,115 +737,4 @@ pub fn grow_region(mesh: &SurfaceMesh, faces: &[FaceId], rings: usize) -> Vec<Fa
         }
     }
     mesh.faces().filter(|f| inr[f.idx()]).collect()
-}
-
-impl FairResult {
-    /// The report of one fairing run as JSON, the keys of `fairline fair
-    /// --report` (and of the workbench's and the Python package's reports):
-    /// iterations, convergence, region sizes, the Willmore energy and the
-    /// highlight-line deviation (RMS and max) before and after, the largest
-    /// displacement and the per-iteration history (Yong et al. Algorithm 2).
-    pub fn report_json(&self) -> serde_json::Value {
-        let r = self;
-        serde_json::json!({
-            "iterations": r.iterations,
-            "converged": r.converged,
-            "movable_vertices": r.region.movable.len(),
-            "inside_vertices": r.region.inside_vertices.len(),
-            "region_faces": r.region.in_region.iter().filter(|&&b| b).count(),
-            "willmore_before": r.willmore_before,
-            "willmore_after": r.willmore_after,
-            "highlight_deviation_before": r.deviation_before.rms,
-            "highlight_deviation_after": r.deviation_after.rms,
-            "highlight_deviation_max_before": r.deviation_before.max,
-            "highlight_deviation_max_after": r.deviation_after.max,
-            "desired_lines": r.desired_before.lines.len(),
-            "max_displacement": r.max_displacement,
-            "mean_edge_length": r.mean_edge_length,
-            "history": r.history.iter().map(|h| serde_json::json!({
-                "iteration": h.iteration,
-                "f_fair": h.f_fair,
-                "f_diff": h.f_diff,
-                "objective": h.objective,
-                "predicted": h.predicted,
-                "achieved": h.achieved,
-                "accepted": h.accepted,
-                "max_step": h.max_step,
-                "step_ratio": h.step_ratio,
-                "active_bounds": h.active_bounds,
-                "target_nodes": h.target_nodes,
-            })).collect::<Vec<_>>(),
-        })
-    }
-}
-
-/// Before/after picture of a fairing run (Yong et al. Fig. 7): on the
-/// left the input with its highlight lines (dark), the region outline (red)
-/// and the desired OGH curves (blue); on the right the faired mesh with
-/// its highlight lines and the outline.
-pub fn fairing_picture(
-    before: &SurfaceMesh,
-    result: &FairResult,
-    opts: &crate::render::RenderOptions,
-) -> Result<crate::render::Image, crate::render::RenderError> {
-    use crate::picture::{Picture, mesh_picture};
-    use crate::render::{PolylineLayer, side_by_side};
-    let lines = |ls: &HighlightLines| -> Vec<PolylineLayer> {
-        ls.lines
-            .iter()
-            .map(|l| PolylineLayer {
-                points: l.points.clone(),
-                closed: l.closed,
-                color: [0.02, 0.02, 0.02],
-                width_px: 1.6,
-            })
-            .collect()
-    };
-    let outline: Vec<PolylineLayer> = result
-        .region
-        .outline(before)
-        .into_iter()
-        .map(|(a, b)| PolylineLayer {
-            points: vec![a, b],
-            closed: false,
-            color: [0.85, 0.05, 0.05],
-            width_px: 2.2,
-        })
-        .collect();
-    let mut left = lines(&result.lines_before);
-    left.extend(result.desired_before.lines.iter().map(|d| PolylineLayer {
-        points: d.samples.clone(),
-        closed: false,
-        color: [0.05, 0.25, 0.95],
-        width_px: 2.4,
-    }));
-    left.extend(outline.iter().cloned());
-    let mut right = lines(&result.lines_after);
-    right.extend(outline);
-    let a = mesh_picture(
-        before,
-        &Picture {
-            polylines: left,
-            title: Some("before: highlight lines, region, desired lines".into()),
-            ..Default::default()
-        },
-        opts,
-    )?;
-    let b = mesh_picture(
-        &result.mesh,
-        &Picture {
-            polylines: right,
-            title: Some(
-                match result.method {
-                    FairMethod::Highlight => "after highlight-line fairing",
-                    FairMethod::Paper => "after highlight-line fairing (Yong et al.)",
-                    FairMethod::DiffusionFlow => "after surface diffusion flow (baseline)",
-                }
-                .into(),
-            ),
-            ..Default::default()
-        },
-        opts,
-    )?;
-    Ok(side_by_side(&[a, b], &["before", "after"]))
 }

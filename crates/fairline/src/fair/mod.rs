@@ -15,17 +15,19 @@ pub mod region;
 pub mod surface;
 mod system;
 
-pub use desired::{DesiredLine, DesiredLines, HighlightDeviation, desired_lines};
+pub use desired::{
+    DesiredLine, DesiredLines, HighlightDeviation, Tangents, across_tangents, desired_lines,
+    desired_lines_with,
+};
 pub use error::FairError;
 pub use highlight::{
-    FairMethod, FairOptions, FairResult, IterationReport, fair_highlight_lines,
-    fair_highlight_lines_with, fairing_picture, grow_region,
+    FairMethod, FairOptions, FairReport, IterationReport, fair_highlight_lines, grow_region,
 };
 pub use quad::{
     PolylineNetworkOptions, PolylineNetworkReport, QuadFairError, QuadFairOptions, QuadFairReport,
     fair_polyline_network, fair_structure_lines, structure_energy,
 };
-pub use region::{MovableSet, RegionSpec, movable_vertices};
+pub use region::{MovableSet, movable_vertices};
 pub use surface::{
     BoundaryControl, EndpointPair, Endpoints, FairIteration, FairStop, SurfaceFairError,
     SurfaceFairMethod, SurfaceFairOptions, SurfaceFairReport, TargetCurve, Waviness,
@@ -33,4 +35,6 @@ pub use surface::{
 };
 
 #[cfg(test)]
-mod tests;
+mod before_17;
+#[cfg(test)]
+pub(crate) mod tests;

@@ -20,12 +20,26 @@ fn light_for(mesh: &SurfaceMesh) -> LightArray {
 }
 
 fn sphere_faces(mesh: &SurfaceMesh, c: Vec3, r: f64) -> Vec<FaceId> {
-    RegionSpec::Sphere {
+    crate::io::RegionSpec::Sphere {
         center: c,
         radius: r,
     }
     .faces(mesh)
     .unwrap()
+}
+
+/// Fairs the faces `faces` of `mesh` under `light` with `options`; returns
+/// the report and the faired mesh.
+pub(crate) fn fair(
+    mesh: &SurfaceMesh,
+    light: &LightArray,
+    faces: &[FaceId],
+    options: &FairOptions,
+) -> Result<(FairReport, SurfaceMesh), FairError> {
+    let out = fair_highlight_lines(mesh, &options.clone().region(faces.to_vec()).light(*light))?;
+    let mut after = mesh.clone();
+    after.set_positions(out.positions)?;
+    Ok((out.report, after))
 }
 
 fn bits(p: Vec3) -> [u64; 3] {
@@ -55,8 +69,12 @@ fn outside_nodes(
 /// The properties every fairing run must have (Yong et al. §3.1): nothing
 /// but movable vertices moved; normals of every vertex outside R and every
 /// highlight node outside R are bit-identical.
-fn assert_outside_untouched(before: &SurfaceMesh, r: &FairResult, light: &LightArray) {
-    let after = &r.mesh;
+fn assert_outside_untouched(
+    before: &SurfaceMesh,
+    r: &FairReport,
+    after: &SurfaceMesh,
+    light: &LightArray,
+) {
     for v in before.vertices() {
         if !r.region.is_movable[v.idx()] {
             assert_eq!(
@@ -118,42 +136,6 @@ fn movable_vertices_follow_section_3_1() {
         movable_vertices(&mesh, &[FaceId(100_000)], &[]),
         Err(FairError::Region(_))
     ));
-}
-
-#[test]
-fn region_json_forms() {
-    let mesh = shapes::plane(9);
-    let f = RegionSpec::from_json(r#"{"faces":[0,1,2,2]}"#).unwrap();
-    assert_eq!(
-        f.faces(&mesh).unwrap(),
-        vec![FaceId(0), FaceId(1), FaceId(2)]
-    );
-    // vertices: exactly the faces all of whose vertices are listed
-    let v = RegionSpec::from_json(r#"{"vertices":[0,1,9,10]}"#).unwrap();
-    let fv = v.faces(&mesh).unwrap();
-    assert_eq!(fv.len(), 2);
-    let s = RegionSpec::from_json(r#"{"sphere":{"center":[0,0,0],"radius":0.6},"regions":[]}"#)
-        .unwrap();
-    let p = mesh.positions();
-    for f in s.faces(&mesh).unwrap() {
-        assert!(mesh.face_vertices(f).all(|w| p[w.idx()].length() <= 0.6));
-    }
-    assert_eq!(RegionSpec::from_json(&s.to_json()).unwrap(), s);
-    for bad in [
-        "{}",
-        r#"{"faces":[1],"vertices":[2]}"#,
-        r#"{"sphere":{"center":[0,0,0],"radius":-1}}"#,
-        "not json",
-    ] {
-        assert!(RegionSpec::from_json(bad).is_err(), "{bad}");
-    }
-    assert!(RegionSpec::Faces(vec![9999]).faces(&mesh).is_err());
-    assert!(RegionSpec::Vertices(vec![9999]).faces(&mesh).is_err());
-    let far = RegionSpec::Sphere {
-        center: Vec3::splat(10.0),
-        radius: 0.1,
-    };
-    assert!(far.faces(&mesh).is_err());
 }
 
 /// The analytic Jacobian of Eq. (13) (through Eq. (1) and the Eq. (3)
@@ -278,16 +260,16 @@ fn check_fairing(
     truth_distance: impl Fn(Vec3) -> f64,
     factor: f64,
 ) -> (f64, f64) {
-    let r = fair_highlight_lines(mesh, light, faces, &FairOptions::default()).unwrap();
-    let flow = fair_highlight_lines(
+    let (r, faired) = fair(mesh, light, faces, &FairOptions::default()).unwrap();
+    let (flow, flow_mesh) = fair(
         mesh,
         light,
         faces,
         &FairOptions::default().method(FairMethod::DiffusionFlow),
     )
     .unwrap();
-    assert_outside_untouched(mesh, &r, light);
-    assert_outside_untouched(mesh, &flow, light);
+    assert_outside_untouched(mesh, &r, &faired, light);
+    assert_outside_untouched(mesh, &flow, &flow_mesh, light);
     let dist = |m: &SurfaceMesh| {
         r.region
             .movable
@@ -295,7 +277,7 @@ fn check_fairing(
             .map(|v| truth_distance(m.position(*v)))
             .fold(0.0, f64::max)
     };
-    let (d0, d1) = (dist(mesh), dist(&r.mesh));
+    let (d0, d1) = (dist(mesh), dist(&faired));
     assert!(r.converged, "not converged: {:?}", r.history.last());
     assert!(d1 * factor < d0, "distance to the truth {d0} -> {d1}");
     assert!(
@@ -328,7 +310,7 @@ fn check_fairing(
             assert!(h.achieved < h.objective);
         }
     }
-    assert!(r.mesh.positions().iter().all(|p| p.is_finite()));
+    assert!(faired.positions().iter().all(|p| p.is_finite()));
     (d0, d1)
 }
 
@@ -407,4 +389,187 @@ fn bump_on_a_sphere_patch_is_removed() {
         |p| ((p - Vec3::new(0.0, 0.0, -rs)).length() - rs).abs(),
         20.0,
     );
+}
+
+/// Issue #17 item 1: the converted function (options struct with region,
+/// lights and control; `Output` with positions and a `Serialize` report)
+/// gives the same positions and the same JSON report, bit for bit, as the
+/// code path before the conversion (module `before_17`), for every method,
+/// with and without ω3, on a family case and the bump plane; the refits
+/// (0 here) are the only new report key. (A comparison on the same machine:
+/// faer's kernels pick their SIMD width at run time, so recorded checksums
+/// would not carry across CPUs.)
+#[test]
+fn converted_fairing_equals_the_code_path_before_17_bit_for_bit() {
+    let case = super::family::Case {
+        panel: super::family::Panel::Saddle,
+        sigma: 0.11,
+        amplitude: -0.022,
+    };
+    let plane = bump_plane(31, 0.03);
+    let plane_light = light_for(&plane);
+    let plane_faces = sphere_faces(&plane, Vec3::ZERO, 0.5);
+    let inputs = [
+        (
+            case.input_mesh(),
+            case.light(),
+            case.region(&case.input_mesh()),
+        ),
+        (plane, plane_light, plane_faces),
+    ];
+    for (mesh, light, faces) in &inputs {
+        for m in [
+            FairMethod::Highlight,
+            FairMethod::Paper,
+            FairMethod::DiffusionFlow,
+        ] {
+            for w3 in [0.0, 0.5] {
+                let old = super::before_17::fair_highlight_lines(
+                    mesh,
+                    light,
+                    faces,
+                    &super::before_17::FairOptions::default()
+                        .method(m)
+                        .laplacian_weight(w3),
+                )
+                .unwrap();
+                let out = fair_highlight_lines(
+                    mesh,
+                    &FairOptions::default()
+                        .region(faces.clone())
+                        .light(*light)
+                        .method(m)
+                        .laplacian_weight(w3),
+                )
+                .unwrap();
+                let old_bits: Vec<[u64; 3]> =
+                    old.mesh.positions().iter().map(|p| bits(*p)).collect();
+                let new_bits: Vec<[u64; 3]> = out.positions.iter().map(|p| bits(*p)).collect();
+                assert!(old_bits == new_bits, "{m:?} ω3 {w3}: positions differ");
+                let mut json = serde_json::to_value(&out.report).unwrap();
+                assert_eq!(json["refits"], serde_json::json!(0));
+                if let Some(map) = json.as_object_mut() {
+                    map.remove("refits");
+                }
+                assert_eq!(json, old.report_json(), "{m:?} ω3 {w3}: report differs");
+            }
+        }
+    }
+}
+
+/// The cancel flag of [`crate::Control`] stops the run with
+/// [`FairError::Cancelled`]: raised before the call, and raised by the
+/// progress callback after the second iteration (so the third never ends);
+/// progress arrives once per iteration, stage "iterations", total N_max.
+#[test]
+fn cancelling_returns_the_cancelled_error() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::{Arc, Mutex};
+    let mesh = bump_plane(31, 0.03);
+    let light = light_for(&mesh);
+    let options = FairOptions::default()
+        .region(sphere_faces(&mesh, Vec3::ZERO, 0.5))
+        .light(light)
+        .epsilon(1e-9);
+    let flag = Arc::new(AtomicBool::new(true));
+    let r = fair_highlight_lines(
+        &mesh,
+        &options
+            .clone()
+            .control(crate::Control::new().cancel_flag(Arc::clone(&flag))),
+    );
+    assert!(matches!(r, Err(FairError::Cancelled(_))), "{r:?}");
+    assert_eq!(r.map(|_| ()).unwrap_err().to_string(), "cancelled");
+    flag.store(false, Ordering::Relaxed);
+    let seen = Arc::new(Mutex::new(Vec::new()));
+    let (sink, raise) = (Arc::clone(&seen), Arc::clone(&flag));
+    let control = crate::Control::new()
+        .cancel_flag(Arc::clone(&flag))
+        .on_progress(move |p| {
+            if let Ok(mut v) = sink.lock() {
+                v.push(p);
+            }
+            if p.done >= 2 {
+                raise.store(true, Ordering::Relaxed);
+            }
+        });
+    let r = fair_highlight_lines(&mesh, &options.clone().control(control));
+    assert!(matches!(r, Err(FairError::Cancelled(_))), "{r:?}");
+    let seen = seen.lock().unwrap().clone();
+    assert_eq!(seen.len(), 2);
+    for (k, p) in seen.iter().enumerate() {
+        assert_eq!((p.stage, p.done, p.total), ("iterations", k as u64 + 1, 50));
+    }
+    // without the flag the same options run to the end
+    flag.store(false, Ordering::Relaxed);
+    assert!(fair_highlight_lines(&mesh, &options).is_ok());
+}
+
+/// An empty region is refused; so are options out of range.
+#[test]
+fn empty_regions_and_bad_options_are_refused() {
+    let mesh = bump_plane(21, 0.03);
+    let r = fair_highlight_lines(&mesh, &FairOptions::default());
+    assert!(matches!(r, Err(FairError::Region(_))), "{r:?}");
+    let faces = sphere_faces(&mesh, Vec3::ZERO, 0.5);
+    let r = fair_highlight_lines(
+        &mesh,
+        &FairOptions::default().region(faces).epsilon(f64::NAN),
+    );
+    assert!(matches!(r, Err(FairError::InvalidOption(_))), "{r:?}");
+}
+
+/// [`across_tangents`] fits the tangents at Q0 and Q1 across the end
+/// nodes: on a line along a unit circle (the inside run between outside
+/// parts of three nodes) both tangents are the circle's to 0.03 rad (the
+/// parabola's bias over the fitted arc), and a defect of the inside line
+/// farther than a quarter chord from the ends changes them not at all; the
+/// desired curves built with them keep Q0 and Q1.
+#[test]
+fn across_tangents_follow_the_line_through_the_end_nodes() {
+    use crate::highlight::{HighlightLine, HighlightLines};
+    use crate::mesh::VertexId;
+    let n = 40;
+    let angle = |k: usize| 0.05 * k as f64;
+    let nodes: Vec<NodeId> = (0..n)
+        .map(|k| NodeId::Vertex(VertexId(k as u32), 0))
+        .collect();
+    let line = |defect: f64| {
+        let points: Vec<Vec3> = (0..n)
+            .map(|k| {
+                let z = if (14..24).contains(&k) {
+                    defect * ((k - 14) as f64 * 0.3).sin()
+                } else {
+                    0.0
+                };
+                Vec3::new(angle(k).cos(), angle(k).sin(), z)
+            })
+            .collect();
+        HighlightLines {
+            lines: vec![HighlightLine {
+                index: 0,
+                closed: false,
+                points,
+                nodes: nodes.clone(),
+            }],
+        }
+    };
+    // outside: 0..3 and 37..40; inside 3..37; Q0 = node 2, Q1 = node 37
+    let inside = |nd: NodeId| matches!(nd, NodeId::Vertex(v, _) if (3..37).contains(&v.0));
+    let clean = across_tangents(&line(0.0), inside);
+    let dented = across_tangents(&line(0.05), inside);
+    assert_eq!(clean.len(), 1);
+    assert_eq!(clean, dented, "the far defect changed the tangents");
+    let (t0, t1) = clean[&(nodes[2], nodes[37])];
+    let circle = |k: usize| Vec3::new(-angle(k).sin(), angle(k).cos(), 0.0);
+    for (t, k) in [(t0, 2), (t1, 37)] {
+        let err = t.normalize().angle_between(circle(k));
+        assert!(err < 0.03, "node {k}: tangent {t} off by {err} rad");
+    }
+    let desired = desired_lines_with(&line(0.05), inside, &clean);
+    assert_eq!(desired.lines.len(), 1);
+    let d = &desired.lines[0];
+    assert_eq!(d.tangents, (t0, t1));
+    assert!((d.curve.hermite.point(0.0) - d.end_points.0).length() < 1e-12);
+    assert!((d.curve.hermite.point(1.0) - d.end_points.1).length() < 1e-12);
 }

@@ -1,7 +1,9 @@
 //! Mesh files: OBJ, PLY (ascii and binary), OFF and STL; CAD surface files:
 //! fairline's surface JSON ([`surface_json`]), IGES reading ([`iges_read`])
 //! and writing ([`iges_write`]), STEP reading and writing ([`step`]) and
-//! the choice of surface format by extension ([`surface_file`]).
+//! the choice of surface format by extension ([`surface_file`]); the JSON
+//! files that select parts of a mesh, regions and fixed vertices
+//! ([`selection`]).
 //!
 //! Every reader produces a [`Soup`] (positions plus polygons, no
 //! connectivity); [`read_mesh`] then builds a [`SurfaceMesh`]. Readers never
@@ -23,6 +25,7 @@ pub mod iges_write;
 mod obj;
 mod off;
 mod ply;
+pub mod selection;
 pub mod step;
 mod stl;
 pub mod surface_file;
@@ -44,6 +47,10 @@ pub use surface_json::{
 };
 
 use crate::mesh::{MeshError, Soup, SurfaceMesh};
+
+pub use selection::{
+    RegionError, RegionSpec, fixed_vertices_from_json, read_fixed_vertices, read_region,
+};
 
 /// Where in a file an error was found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
