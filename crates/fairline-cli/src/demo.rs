@@ -319,7 +319,7 @@ fn dented_height(x: f64, y: f64) -> f64 {
 }
 
 fn highlight_section(demo: &Demo) -> Result<Section> {
-    use crate::highlight_png::{Overlay, default_view, image};
+    use crate::highlight_png::{Overlay, image};
     use fairline::highlight::{DetectOptions, HighlightModel, LightArray, detect_irregularities};
     let n = 201;
     let build = |f: fn(f64, f64) -> f64| shapes::height_field(n, n, (-2.0, 2.0), (-2.0, 2.0), f);
@@ -340,10 +340,7 @@ fn highlight_section(demo: &Demo) -> Result<Section> {
         .flat_map(|l| l.stretches.iter().cloned())
         .collect();
     let faces = det.all_faces();
-    let view = (
-        default_view(light.plane_normal(), light.across()),
-        light.across(),
-    );
+    let view = crate::highlight_png::default_camera(&light);
     let size = (demo.opts.width, demo.opts.height);
     let img_lines = demo.save(
         "highlight-dent-lines.png",
@@ -652,8 +649,7 @@ fn fair_section(demo: &Demo) -> Result<Section> {
         &FairOptions::default().method(FairMethod::DiffusionFlow),
     )?;
     let mut opts = demo.opts.clone();
-    opts.view_dir = crate::highlight_png::default_view(light.plane_normal(), light.across());
-    opts.up = light.across();
+    (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
     let img = demo.save("fair-before-after.png", &fairing_picture(&mesh, &r, &opts)?)?;
     let img_flow = demo.save(
         "fair-diffusion-flow.png",

@@ -211,10 +211,8 @@ pub fn run(args: Args) -> Result<()> {
     report.set("regions", regions);
     if let Some(png) = &args.png {
         let stretches = crate::highlight_png::stretches(&det);
-        let view = args.view.unwrap_or(crate::highlight_png::default_view(
-            light.plane_normal(),
-            light.across(),
-        ));
+        let (default_view, up) = crate::highlight_png::default_camera(&light);
+        let view = args.view.unwrap_or(default_view);
         let title = format!(
             "{}: {} region(s){}",
             args.mesh
@@ -238,7 +236,7 @@ pub fn run(args: Args) -> Result<()> {
                 bands: None,
                 flagged: &stretches,
                 region: Some(&faces),
-                view: (view, light.across()),
+                view: (view, up),
                 title,
                 spacing: Some(shown_light.spacing()),
             },

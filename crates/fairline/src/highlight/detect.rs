@@ -101,9 +101,9 @@
 
 use super::{HighlightError, HighlightLines, LightArray, NodeId};
 use crate::geom;
-use crate::{Control, Vec3};
 use crate::mesh::{FaceId, SurfaceMesh, VertexId};
 use crate::solve::solve_spd;
+use crate::{Control, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;

@@ -290,9 +290,11 @@ fn planted_defects_are_found_ranked_first_with_a_tight_region() {
 /// control that is never raised changes nothing.
 #[test]
 fn detection_reports_progress_and_stops_when_cancelled() {
-    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
     use std::sync::Arc;
-    let mesh = field(71, |x, y| panel(x, y) + 0.003 * (-(x * x + y * y) / 0.01).exp());
+    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+    let mesh = field(71, |x, y| {
+        panel(x, y) + 0.003 * (-(x * x + y * y) / 0.01).exp()
+    });
     let light = LightArray::default_for_mesh(&mesh, UpAxis::Auto).unwrap();
     let lines = highlight_lines(&mesh, &light, &HighlightOptions::default()).unwrap();
     let plain = detect_irregularities(&mesh, &light, &lines, &DetectOptions::default()).unwrap();
@@ -315,5 +317,9 @@ fn detection_reports_progress_and_stops_when_cancelled() {
         detect_irregularities(&mesh, &light, &lines, &watched),
         Err(HighlightError::Cancelled(_))
     ));
-    assert_eq!(steps.load(Ordering::Relaxed), 1, "stopped after the first stage");
+    assert_eq!(
+        steps.load(Ordering::Relaxed),
+        1,
+        "stopped after the first stage"
+    );
 }
