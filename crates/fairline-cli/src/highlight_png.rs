@@ -44,26 +44,28 @@ pub fn default_camera(light: &LightArray) -> (Vec3, Vec3) {
 }
 
 /// Viewing direction (from the eye toward the part) and screen-up vector
-/// for lights with plane normal Z and across direction Z × H:
+/// for lights with plane normal Z and across direction Z × H. The screen
+/// shows +y up (the up axis of figures and scans, and the plan view of a
+/// z-up panel) unless the plane faces along y (Z within 45° of the y axis:
+/// a part seen from the top with `--up y`), where the across direction is
+/// up. Looking down −Z, tilted a little so the relief shows:
 ///
-/// - the plane faces up or down (Z within 45° of the y or z axis: a panel,
-///   or a part seen from the top with `--up`): looking down −Z with the
-///   across direction up on the screen, tilted a little toward it so the
-///   relief shows (the near edge at the bottom);
-/// - the plane faces sideways (a figure, whose thinnest direction is
-///   horizontal): the part stands upright with +y up on the screen (the
-///   up axis of figures and scans; a z-up part's plane faces up), seen
-///   from the side and a little from above.
+/// - the plane faces sideways (Z more than 45° from both the y and the z
+///   axis: a figure whose thinnest direction is horizontal): from a little
+///   above, the part upright;
+/// - otherwise (a panel, or a figure facing the viewer): toward the screen
+///   up direction, the near edge of a panel at the bottom.
 pub fn camera(z: Vec3, across: Vec3) -> (Vec3, Vec3) {
-    let sideways = z.dot(Vec3::Y).abs() < std::f64::consts::FRAC_1_SQRT_2
-        && z.dot(Vec3::Z).abs() < std::f64::consts::FRAC_1_SQRT_2;
-    if sideways {
-        let up = (Vec3::Y - Vec3::Y.dot(z) * z).normalize_or_zero();
-        if up != Vec3::ZERO {
-            return (-z - 0.35 * up, up);
-        }
+    let half = std::f64::consts::FRAC_1_SQRT_2;
+    let up = (Vec3::Y - Vec3::Y.dot(z) * z).normalize_or_zero();
+    if z.dot(Vec3::Y).abs() >= half || up == Vec3::ZERO {
+        return (-z + 0.35 * across, across);
     }
-    (-z + 0.35 * across, across)
+    if z.dot(Vec3::Z).abs() < half {
+        (-z - 0.35 * up, up)
+    } else {
+        (-z + 0.35 * up, up)
+    }
 }
 
 /// Report entry for the drawn lines: pieces, lights, pieces per light,
