@@ -986,19 +986,16 @@ fn detect<'py>(
         report.set("spacing", array.spacing());
         report.set("drawn_spacing", shown_light.spacing());
         report.set("drawn", drawn_json(&mesh, &shown_light, &shown));
-        report.set("shape_sites", det.shape_sites);
+        // the library's numbers of the measure, under its own names (as
+        // the CLI writes them)
+        if let Ok(serde_json::Value::Object(numbers)) = serde_json::to_value(&det) {
+            for (key, value) in numbers {
+                report.set(&key, value);
+            }
+        }
         report.set("light", array);
         report.set("region_faces", all.len());
         report.set("regions", regions);
-        report.set("threshold", det.threshold);
-        report.set("median_score", det.median_score);
-        report.set("noise_level", det.noise_level);
-        report.set("sites", det.sites.len());
-        report.set("judged_sites", det.judged_sites);
-        report.set("flagged_sites", det.flagged_sites);
-        report.set("flagged_area_fraction", det.flagged_area_fraction);
-        report.set("smooth_radius", det.smooth_radius);
-        report.set("fine_radius", det.fine_radius);
         if lines.lines.is_empty() {
             report.warn("no highlight line crosses the mesh, so nothing could be detected; try other light options (--plane-normal, --direction, --spacing)");
         }

@@ -320,7 +320,7 @@ fn dented_height(x: f64, y: f64) -> f64 {
 }
 
 fn highlight_section(demo: &Demo) -> Result<Section> {
-    use crate::highlight_png::{Overlay, default_view, image};
+    use crate::highlight_png::{Overlay, image};
     use fairline::highlight::{DetectOptions, HighlightModel, LightArray, detect_irregularities};
     let n = 201;
     let build = |f: fn(f64, f64) -> f64| shapes::height_field(n, n, (-2.0, 2.0), (-2.0, 2.0), f);
@@ -341,10 +341,7 @@ fn highlight_section(demo: &Demo) -> Result<Section> {
         .flat_map(|l| l.stretches.iter().cloned())
         .collect();
     let faces = det.all_faces();
-    let view = (
-        default_view(light.plane_normal(), light.across()),
-        light.across(),
-    );
+    let view = crate::highlight_png::default_camera(&light);
     let size = (demo.opts.width, demo.opts.height);
     let img_lines = demo.save(
         "highlight-dent-lines.png",
@@ -655,8 +652,7 @@ fn fair_section(demo: &Demo) -> Result<Section> {
     let out = fair_highlight_lines(&mesh, &options.method(FairMethod::DiffusionFlow))?;
     let (flow, flow_mesh) = (out.report, with_positions(out.positions)?);
     let mut opts = demo.opts.clone();
-    opts.view_dir = crate::highlight_png::default_view(light.plane_normal(), light.across());
-    opts.up = light.across();
+    (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
     let img = demo.save(
         "fair-before-after.png",
         &fairing_picture(&mesh, &faired, &r, &opts)?,

@@ -137,6 +137,16 @@ pub fn run(args: Args) -> Result<()> {
             det.threshold
         );
     }
+    if det.discretisation_sites > 0 {
+        eprintln!(
+            "note: {}: {} site(s) score above {:.2} but within what the mesh's own facets explain (facets turn the normal by {:.1}° per edge there and more; discretisation level {:.2}); not flagged: shape modelled with few edges, not a defect at this resolution",
+            args.mesh.display(),
+            det.discretisation_sites,
+            det.threshold,
+            det.facet_angle.to_degrees(),
+            det.discretisation_level
+        );
+    }
     if let Some(n) = args.max_regions {
         det.regions.truncate(n);
     }
@@ -180,25 +190,19 @@ pub fn run(args: Args) -> Result<()> {
         "drawn",
         crate::highlight_png::stats_json(&mesh, &shown_light, &shown),
     );
-    report.set("shape_sites", det.shape_sites);
+    // the library's numbers of the measure, under its own names
+    if let Ok(serde_json::Value::Object(numbers)) = serde_json::to_value(&det) {
+        for (key, value) in numbers {
+            report.set(&key, value);
+        }
+    }
     report.set("light", light);
     report.set("region_faces", all.len());
     report.set("regions", regions);
-    report.set("threshold", det.threshold);
-    report.set("median_score", det.median_score);
-    report.set("noise_level", det.noise_level);
-    report.set("sites", det.sites.len());
-    report.set("judged_sites", det.judged_sites);
-    report.set("flagged_sites", det.flagged_sites);
-    report.set("flagged_area_fraction", det.flagged_area_fraction);
-    report.set("smooth_radius", det.smooth_radius);
-    report.set("fine_radius", det.fine_radius);
     if let Some(png) = &args.png {
         let stretches = crate::highlight_png::stretches(&det);
-        let view = args.view.unwrap_or(crate::highlight_png::default_view(
-            light.plane_normal(),
-            light.across(),
-        ));
+        let (default_view, up) = crate::highlight_png::default_camera(&light);
+        let view = args.view.unwrap_or(default_view);
         let title = format!(
             "{}: {} region(s){}",
             args.mesh
@@ -222,7 +226,7 @@ pub fn run(args: Args) -> Result<()> {
                 bands: None,
                 flagged: &stretches,
                 region: Some(&faces),
-                view: (view, light.across()),
+                view: (view, up),
                 title,
                 spacing: Some(shown_light.spacing()),
             },

@@ -20,20 +20,35 @@ const BAND: [f32; 3] = [0.1, 0.25, 0.75];
 /// Tint of faces in a suggested region (linear light).
 const REGION: [f32; 3] = [0.85, 0.55, 0.25];
 
-/// The default view for lights with plane normal Z: looking down −Z,
-/// tilted a little so the relief shows.
-pub fn default_view(z: Vec3, across: Vec3) -> Vec3 {
-    -z + 0.35 * across
+/// The one camera of a part's pictures (render, highlight, detect, fair):
+/// [`camera`] of the part's light array.
+pub fn default_camera(light: &LightArray) -> (Vec3, Vec3) {
+    camera(light.plane_normal(), light.across())
 }
 
-/// The one camera of a part's pictures (render, highlight, detect, fair):
-/// viewing direction [`default_view`] and up vector Z × H of the part's
-/// light array.
-pub fn default_camera(light: &LightArray) -> (Vec3, Vec3) {
-    (
-        default_view(light.plane_normal(), light.across()),
-        light.across(),
-    )
+/// Viewing direction (from the eye toward the part) and screen-up vector
+/// for lights with plane normal Z and across direction Z × H. The screen
+/// shows +y up (the up axis of figures and scans, and the plan view of a
+/// z-up panel) unless the plane faces along y (Z within 45° of the y axis:
+/// a part seen from the top with `--up y`), where the across direction is
+/// up. Looking down −Z, tilted a little so the relief shows:
+///
+/// - the plane faces sideways (Z more than 45° from both the y and the z
+///   axis: a figure whose thinnest direction is horizontal): from a little
+///   above, the part upright;
+/// - otherwise (a panel, or a figure facing the viewer): toward the screen
+///   up direction, the near edge of a panel at the bottom.
+pub fn camera(z: Vec3, across: Vec3) -> (Vec3, Vec3) {
+    let half = std::f64::consts::FRAC_1_SQRT_2;
+    let up = (Vec3::Y - Vec3::Y.dot(z) * z).normalize_or_zero();
+    if z.dot(Vec3::Y).abs() >= half || up == Vec3::ZERO {
+        return (-z + 0.35 * across, across);
+    }
+    if z.dot(Vec3::Z).abs() < half {
+        (-z - 0.35 * up, up)
+    } else {
+        (-z + 0.35 * up, up)
+    }
 }
 
 /// Report entry for the drawn lines: pieces, lights, pieces per light,
@@ -121,8 +136,11 @@ pub fn key_entries(overlay: &Overlay<'_>) -> Vec<([f32; 3], String)> {
     key
 }
 
-/// Draws a key (a swatch and a label per entry) in the bottom-left corner
-/// of `img` (away from the titles), on a light panel.
+/// Draws a key (a swatch and a label per entry) on a light panel in the
+/// corner of `img` where it covers the least of the picture: of the four
+/// corners (the top ones below the title line), the one with the fewest
+/// pixels that differ from the background (the colour most of the image's
+/// corner pixels have), bottom-left on a tie.
 pub fn draw_key(img: &mut Image, entries: &[([f32; 3], String)]) {
     if entries.is_empty() {
         return;
@@ -137,14 +155,9 @@ pub fn draw_key(img: &mut Image, entries: &[([f32; 3], String)]) {
         .unwrap_or(0) as i64;
     let pad = (4 * scale) as i64;
     let panel_h = 2 * pad + row * entries.len() as i64;
-    let (x0, y0) = (8i64, img.height as i64 - panel_h - 8);
-    img.fill_rect(
-        x0,
-        y0,
-        (2 * pad + swatch + 2 * pad + text_w) as u32,
-        panel_h as u32,
-        [250, 250, 250, 255],
-    );
+    let panel_w = 2 * pad + swatch + 2 * pad + text_w;
+    let (x0, y0) = key_corner(img, panel_w, panel_h, scale);
+    img.fill_rect(x0, y0, panel_w as u32, panel_h as u32, [250, 250, 250, 255]);
     for (i, (colour, label)) in entries.iter().enumerate() {
         let y = y0 + pad + i as i64 * row;
         let c = linear_to_srgb8(*colour);
@@ -163,6 +176,53 @@ pub fn draw_key(img: &mut Image, entries: &[([f32; 3], String)]) {
             scale,
         );
     }
+}
+
+/// Top-left corner of a `w`×`h` key panel: the image corner (8 px in,
+/// the top ones below the title) whose rectangle holds the fewest pixels
+/// other than the background; bottom-left first on a tie.
+fn key_corner(img: &Image, w: i64, h: i64, scale: u32) -> (i64, i64) {
+    let (iw, ih) = (img.width as i64, img.height as i64);
+    let corners = [(0, 0), (iw - 1, 0), (0, ih - 1), (iw - 1, ih - 1)];
+    let colours: Vec<[u8; 4]> = corners
+        .iter()
+        .filter_map(|&(x, y)| img.get(x.max(0) as u32, y.max(0) as u32))
+        .collect();
+    let background = colours
+        .iter()
+        .max_by_key(|c| colours.iter().filter(|d| d == c).count())
+        .copied()
+        .unwrap_or([255, 255, 255, 255]);
+    let top = 8 + Image::text_height(scale) as i64 + 8;
+    let candidates = [
+        (8, ih - h - 8),
+        (iw - w - 8, ih - h - 8),
+        (8, top),
+        (iw - w - 8, top),
+    ];
+    let covered = |(x0, y0): (i64, i64)| -> usize {
+        let mut n = 0;
+        for y in y0.max(0)..(y0 + h).min(ih) {
+            for x in x0.max(0)..(x0 + w).min(iw) {
+                if img
+                    .get(x as u32, y as u32)
+                    .is_some_and(|c| c.iter().zip(&background).any(|(a, b)| a.abs_diff(*b) > 8))
+                {
+                    n += 1;
+                }
+            }
+        }
+        n
+    };
+    let mut best = candidates[0];
+    let mut least = covered(best);
+    for &c in &candidates[1..] {
+        let n = covered(c);
+        if n < least {
+            (best, least) = (c, n);
+        }
+    }
+    best
 }
 
 /// A length for a key or a message: 3 significant digits.

@@ -133,23 +133,100 @@ fn detection_on_real_meshes_is_stable_and_leaves_small_features_as_shape() {
                 r.score, r.center, r.area
             );
         }
+        println!(
+            "  facet angle {:.2}°, discretisation level {:.3}, {} sites within their discretisation floor",
+            d.facet_angle.to_degrees(),
+            d.discretisation_level,
+            d.discretisation_sites
+        );
         // explainable: every site is judged, counted as shape finer than
         // the measure's scale, or on a boundary / without a fit; on the
         // coarse figures (250–623 vertices: bob, bunny_res4, elephant) the
         // smooth radius (at least five mean edge lengths) spans their legs,
-        // ears and trunks, so everything is shape and nothing is flagged;
-        // on the finer ones at most a fifth of the area is flagged, above
-        // the noise-raised threshold (see README, Detection on real meshes)
+        // ears and trunks, so everything is shape; on spot and bunny_npm
+        // the junctions modelled with few edges (head and body, leg and
+        // belly) score above the noise-raised threshold but within their
+        // discretisation floor (module documentation of `detect`, step 7)
+        // and are counted as such. None of these meshes has a defect that
+        // stands out: no region on any of them (README, Detection on real
+        // meshes).
         assert!(d.judged_sites + d.shape_sites <= d.sites.len(), "{rel}");
-        if d.judged_sites == 0 {
-            assert!(d.regions.is_empty(), "{rel}");
-        }
-        assert!(d.flagged_area_fraction <= 0.2, "{rel}");
-        for r in &d.regions {
-            assert!(r.score > d.threshold, "{rel}");
+        assert!(d.regions.is_empty(), "{rel}: {} regions", d.regions.len());
+        assert_eq!(d.flagged_area_fraction, 0.0, "{rel}");
+        if rel.ends_with("spot.ply") || rel.ends_with("bunny_npm.obj") {
+            assert!(d.discretisation_sites > 0, "{rel}: explained");
+            assert!(d.discretisation_level > 0.0, "{rel}");
         }
         // stable: the same input gives the same result
         let again = detect_irregularities(&mesh, &light, &lines, &opts).unwrap();
         assert_eq!(d, again, "{rel}");
+    }
+}
+
+/// A checksum of every site's score and denoised position, in site order.
+fn site_checksum(d: &fairline::highlight::Detection) -> u64 {
+    let mut h: u64 = 0;
+    for (i, s) in d.sites.iter().enumerate() {
+        let b = s.score.map_or(7u64, f64::to_bits);
+        h = h.rotate_left(7) ^ b.wrapping_mul(i as u64 + 1) ^ s.position.x.to_bits();
+    }
+    h
+}
+
+/// Splitting `detect_irregularities` into named steps and adding the
+/// discretisation floor left the measure itself unchanged: the site scores
+/// and positions, and with the noise floors off (both factors 0) the
+/// regions, equal bit for bit what the code before the change gave (the
+/// checksums and scores below were recorded with it, same lights).
+#[test]
+fn detection_scores_equal_the_recorded_ones_from_before_the_split() {
+    type Recorded = (&'static str, u64, &'static [f64]);
+    let recorded: [Recorded; 3] = [
+        (
+            "meshes/spot.ply",
+            7160788985567650308,
+            &[
+                34.64891592583728,
+                29.557044101557654,
+                28.683151199758438,
+                22.76946366511347,
+                18.60313334171655,
+                7.3046645590286845,
+                6.303346719429928,
+                2.6000245767270806,
+                1.7470585201271076,
+                1.389483589161965,
+            ],
+        ),
+        (
+            "meshes/bunny_npm.obj",
+            2465209405891117502,
+            &[
+                117.79797013972217,
+                100.72730825502985,
+                73.66661349204333,
+                68.97250915775572,
+                67.69711273813208,
+                20.675296829263093,
+            ],
+        ),
+        ("meshes/lego_open.ply", 10212499764174956624, &[]),
+    ];
+    for (rel, checksum, scores) in recorded {
+        let Some(mesh) = load(rel) else { return };
+        let light = LightArray::default_for_mesh(&mesh, UpAxis::Auto).unwrap();
+        let lines = HighlightModel::new(&mesh, light, HighlightOptions::default())
+            .unwrap()
+            .lines(&mesh);
+        let opts = DetectOptions::default()
+            .noise_factor(0.0)
+            .discretisation_factor(0.0);
+        let d = detect_irregularities(&mesh, &light, &lines, &opts).unwrap();
+        assert_eq!(site_checksum(&d), checksum, "{rel}");
+        let got: Vec<f64> = d.regions.iter().map(|r| r.score).collect();
+        assert_eq!(got, scores, "{rel}");
+        // the default floors change what is flagged, never the scores
+        let d = detect_irregularities(&mesh, &light, &lines, &DetectOptions::default()).unwrap();
+        assert_eq!(site_checksum(&d), checksum, "{rel}");
     }
 }

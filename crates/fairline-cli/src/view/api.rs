@@ -503,7 +503,7 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     let d = &st.docs[k];
     let (mesh, center, file) = (&d.now, d.center, d.current_file());
     let defaults = DetectOptions::default();
-    let opts = defaults
+    let opts = DetectOptions::default()
         .threshold(req.threshold.unwrap_or(defaults.threshold))
         .region_margin(req.region_radius.unwrap_or(defaults.region_margin));
     let t = Instant::now();

@@ -65,6 +65,29 @@
 //!    defects at this scale: they are not judged and are counted apart
 //!    ([`Detection::shape_sites`]). A denser array (smaller spacing) judges
 //!    them at their own scale.
+//! 7. **Discretisation.** A coarse mesh is a faceted surface: its normal
+//!    turns by the facet angle δ ≈ κ·h from one face to the next (κ the
+//!    curvature, h the edge length), and where the artist modelled strong
+//!    but smooth shape with few edges — the junctions of head and body, of
+//!    leg and belly — the surface between the vertices is not known to
+//!    better than a fraction of δ. The fits turn part of that into normal
+//!    error: θ grows with δ over the whole mesh. The measure estimates that
+//!    part per mesh, as it estimates a scan's noise: the *discretisation
+//!    level* α = median over the judged sites of θ/δ (δ the mean facet
+//!    angle within the fine radius, [`Site::facet_angle`]), and raises the
+//!    threshold at each site to `discretisation_factor`·α·δ/θ₀ (default
+//!    factor 10, in score units): a site is flagged only where its normal
+//!    error stands far above what its own facets explain. The factor is
+//!    larger than the noise factor of a scan because this error is not
+//!    spread evenly: it gathers where curvature changes within a few
+//!    edges. Measured on the artist meshes of ../shared/data (spot,
+//!    bunny_npm; and the bunny scan), θ/δ reaches 4.6–7.4 times its median
+//!    at those junctions, while a planted 0.1 %-of-diagonal defect on a
+//!    mesh that resolves it stands 10⁴ times above its mesh's median (its
+//!    own facets turn by a small fraction of a degree): on such meshes the
+//!    floor stays far below the threshold and changes nothing. Sites above
+//!    the mesh's threshold but below their discretisation floor are
+//!    counted ([`Detection::discretisation_sites`]).
 //!
 //! # Regions
 //!
@@ -77,11 +100,12 @@
 //! not judged and counted in the result.
 
 use super::{HighlightError, HighlightLines, LightArray, NodeId};
-use crate::Vec3;
 use crate::geom;
 use crate::mesh::{FaceId, SurfaceMesh, VertexId};
 use crate::solve::solve_spd;
+use crate::{Control, Vec3};
 use rayon::prelude::*;
+use serde::Serialize;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
@@ -153,7 +177,8 @@ impl Grid {
 }
 
 /// Options of [`detect_irregularities`]; lengths in light spacings s.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Build them with `DetectOptions::default()` and the setters.
+#[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct DetectOptions {
     /// Flag sites whose score (highlight displacement in tenths of a
@@ -171,9 +196,14 @@ pub struct DetectOptions {
     /// Faces within this distance of a flagged site go into a region, in
     /// spacings (default 1).
     pub region_margin: f64,
-    /// The threshold is raised to this many times the median site score
-    /// (the score noise) on noisy meshes (default 4).
+    /// The threshold is raised to this many times the median site score,
+    /// the score noise of a scan (default 4; 0 turns it off).
     pub noise_factor: f64,
+    /// The threshold at each site is raised to this many times the normal
+    /// error that the site's own facets explain on this mesh (default 10;
+    /// 0 turns it off): the discretisation floor of the module
+    /// documentation, step 7.
+    pub discretisation_factor: f64,
     /// Largest angle (radians, default 1) by which the surface normals
     /// within the smooth radius R may turn away from a site's normal for
     /// the site to be judged. Where they turn by more (κ·R ≳ 1: ears, horns,
@@ -184,6 +214,9 @@ pub struct DetectOptions {
     /// normal by a few degrees at most (a 0.1 %-of-diagonal bump a spacing
     /// wide: about 1°).
     pub max_turn: f64,
+    /// Progress (stage "detect", one step per stage of the measure) and
+    /// cancellation.
+    pub control: Control,
 }
 
 impl Default for DetectOptions {
@@ -195,7 +228,9 @@ impl Default for DetectOptions {
             site_spacing: 0.25,
             region_margin: 1.0,
             noise_factor: 4.0,
+            discretisation_factor: 10.0,
             max_turn: 1.0,
+            control: Control::default(),
         }
     }
 }
@@ -211,16 +246,71 @@ impl DetectOptions {
         self.smooth_radius = r;
         self
     }
-    /// Sets the largest normal turn within the smooth radius at which a
-    /// site is judged (radians).
-    pub fn max_turn(mut self, a: f64) -> Self {
-        self.max_turn = a;
+    /// Sets the fine-fit radius (spacings).
+    pub fn fine_radius(mut self, r: f64) -> Self {
+        self.fine_radius = r;
+        self
+    }
+    /// Sets the distance between sites (spacings).
+    pub fn site_spacing(mut self, d: f64) -> Self {
+        self.site_spacing = d;
         self
     }
     /// Sets the region margin (spacings).
     pub fn region_margin(mut self, r: f64) -> Self {
         self.region_margin = r;
         self
+    }
+    /// Sets the noise factor (0: no noise floor).
+    pub fn noise_factor(mut self, k: f64) -> Self {
+        self.noise_factor = k;
+        self
+    }
+    /// Sets the discretisation factor (0: no discretisation floor).
+    pub fn discretisation_factor(mut self, k: f64) -> Self {
+        self.discretisation_factor = k;
+        self
+    }
+    /// Sets the largest normal turn within the smooth radius at which a
+    /// site is judged (radians).
+    pub fn max_turn(mut self, a: f64) -> Self {
+        self.max_turn = a;
+        self
+    }
+    /// Sets the progress callback and cancel flag.
+    pub fn control(mut self, control: Control) -> Self {
+        self.control = control;
+        self
+    }
+
+    /// Every length and factor must be positive and finite (the noise
+    /// factor may be 0).
+    fn validate(&self) -> Result<(), HighlightError> {
+        for (name, v) in [
+            ("threshold", self.threshold),
+            ("smooth_radius", self.smooth_radius),
+            ("fine_radius", self.fine_radius),
+            ("site_spacing", self.site_spacing),
+            ("region_margin", self.region_margin),
+            ("max_turn", self.max_turn),
+        ] {
+            if !(v > 0.0) || !v.is_finite() {
+                return Err(HighlightError::InvalidOption(format!(
+                    "{name} must be positive, got {v}"
+                )));
+            }
+        }
+        for (name, v) in [
+            ("noise_factor", self.noise_factor),
+            ("discretisation_factor", self.discretisation_factor),
+        ] {
+            if !(v >= 0.0) || !v.is_finite() {
+                return Err(HighlightError::InvalidOption(format!(
+                    "{name} must be non-negative, got {v}"
+                )));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -233,6 +323,14 @@ pub struct Site {
     pub position: Vec3,
     /// Score θ·L/(0.1·s) (dimensionless); `None` when not judged.
     pub score: Option<f64>,
+    /// Facet angle δ at the site: the mean angle between the normals of
+    /// neighbouring faces within the fine radius (radians), the turn of
+    /// the normal that the mesh resolves per edge.
+    pub facet_angle: f64,
+    /// The threshold applied at this site: the largest of the threshold,
+    /// the scan-noise floor and the discretisation floor (see the module
+    /// documentation).
+    pub threshold: f64,
 }
 
 /// Highlight lines crossing the suggested regions (for pictures and
@@ -269,14 +367,21 @@ pub struct IrregularRegion {
     pub lines: Vec<usize>,
 }
 
-/// Result of [`detect_irregularities`].
-#[derive(Clone, Debug, PartialEq)]
+/// Result of [`detect_irregularities`]: the regions, the lines crossing
+/// them and the sites, and the numbers of the measure. It serialises to
+/// the report of `fairline detect` (the numbers; `sites` as their count;
+/// regions and lines are written by the front end, which maps faces to
+/// its input).
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Detection {
     /// Regions by decreasing score.
+    #[serde(skip)]
     pub regions: Vec<IrregularRegion>,
     /// Lines crossing regions (only those), in line order.
+    #[serde(skip)]
     pub lines: Vec<LineFairness>,
     /// Every site, judged or not.
+    #[serde(serialize_with = "serialize_count")]
     pub sites: Vec<Site>,
     /// Number of judged sites.
     pub judged_sites: usize,
@@ -286,19 +391,35 @@ pub struct Detection {
     pub shape_sites: usize,
     /// Number of flagged sites.
     pub flagged_sites: usize,
-    /// The threshold applied: max(threshold, noise_factor × median score).
+    /// The threshold applied to the whole mesh: max(threshold,
+    /// noise_factor × median score); sites with large facet angles may
+    /// have a higher one ([`Site::threshold`]).
     pub threshold: f64,
     /// Median site score (the score noise; dimensionless).
     pub median_score: f64,
     /// Median weighted RMS residual of the fine fits (mesh units): the
     /// sampling noise of the surface.
     pub noise_level: f64,
+    /// Median facet angle of the judged sites (radians): how far the
+    /// mesh's normals turn from one face to the next.
+    pub facet_angle: f64,
+    /// Discretisation level: the median, over the judged sites, of the
+    /// normal error θ over the facet angle δ (dimensionless): the part of
+    /// the faceting that the fits leave as normal error on this mesh.
+    pub discretisation_level: f64,
+    /// Number of sites above the threshold whose normal error the mesh's
+    /// facets explain (below the discretisation floor), not flagged.
+    pub discretisation_sites: usize,
     /// Area of all regions over the mesh area (0–1).
     pub flagged_area_fraction: f64,
     /// Fine-fit radius used (mesh units).
     pub fine_radius: f64,
     /// Smooth-fit radius used (mesh units).
     pub smooth_radius: f64,
+}
+
+fn serialize_count<S: serde::Serializer, T>(v: &[T], s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_u64(v.len() as u64)
 }
 
 impl Detection {
@@ -555,11 +676,12 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// The detection score of a region: the largest score (default
 /// [`DetectOptions`]) at the sites on the vertices of `faces`, 0 when none
-/// is judged, together with the threshold the detection applied to the
-/// whole mesh (raised above the noise of a scan). This is what `fair`
-/// reports before and after fairing, so that its numbers agree with what
-/// `detect` shows under the same lights. Faces out of range are ignored;
-/// an empty region scores 0 against the default threshold.
+/// is judged, together with the threshold the detection applied at that
+/// site (raised above the noise of a scan and the faceting of a coarse
+/// mesh). This is what `fair` reports before and after fairing, so that
+/// its numbers agree with what `detect` shows under the same lights.
+/// Faces out of range are ignored; an empty region scores 0 against the
+/// default threshold.
 pub fn region_detection_score(
     mesh: &SurfaceMesh,
     light: &LightArray,
@@ -581,20 +703,24 @@ pub fn region_detection_score(
             }
         }
     }
-    let score = det
+    let best = det
         .sites
         .iter()
         .filter(|s| inside[s.vertex.idx()])
-        .filter_map(|s| s.score)
-        .fold(0.0, f64::max);
-    Ok((score, det.threshold))
+        .filter_map(|s| s.score.map(|sc| (sc, s.threshold)))
+        .fold((0.0, det.threshold), |a, b| if b.0 > a.0 { b } else { a });
+    Ok(best)
 }
 
 /// Finds surface defects that displace the highlight lines of `light` and
 /// turns them into suggested fairing regions (see the module documentation
-/// for the measure, its score and defaults). `lines` are the highlight
-/// lines of `light` on `mesh` (used only to report which lines cross each
-/// region). Errors on non-triangle meshes and invalid options.
+/// for the measure, its score, its noise floors and defaults). `lines` are
+/// the highlight lines of `light` on `mesh` (used only to report which
+/// lines cross each region). The mesh is not changed and no positions are
+/// returned: detection only reads the surface and the lines given.
+/// Errors on non-triangle meshes, invalid options, and
+/// [`HighlightError::Cancelled`] when `options.control` asks to stop
+/// (checked between the stages: sites, fine fits, smooth fits, regions).
 pub fn detect_irregularities(
     mesh: &SurfaceMesh,
     light: &LightArray,
@@ -602,38 +728,112 @@ pub fn detect_irregularities(
     options: &DetectOptions,
 ) -> Result<Detection, HighlightError> {
     mesh.require_triangles()?;
-    let o = options;
-    for (name, v) in [
-        ("threshold", o.threshold),
-        ("smooth_radius", o.smooth_radius),
-        ("fine_radius", o.fine_radius),
-        ("site_spacing", o.site_spacing),
-        ("region_margin", o.region_margin),
-        ("max_turn", o.max_turn),
-    ] {
-        if !(v > 0.0) || !v.is_finite() {
-            return Err(HighlightError::InvalidOption(format!(
-                "{name} must be positive, got {v}"
-            )));
+    options.validate()?;
+    let control = &options.control;
+    const STAGES: u64 = 4;
+    let scale = Scale::new(mesh, light, options);
+    let normals = geom::vertex_normals(mesh);
+    let site_vertices = site_vertices(mesh.positions(), &normals, scale.site_cell);
+    control.step("detect", 1, STAGES)?;
+    let facets = vertex_facet_angles(mesh);
+    let fine = fine_fits(mesh.positions(), &normals, &facets, &site_vertices, &scale);
+    control.step("detect", 2, STAGES)?;
+    let judgements = judge_sites(mesh, light, &site_vertices, &fine, &scale, options);
+    control.step("detect", 3, STAGES)?;
+    let shape_sites = judgements.iter().filter(|j| j.shape).count();
+    let floors = NoiseFloors::estimate(&judgements, &fine, options);
+    let sites: Vec<Site> = site_vertices
+        .iter()
+        .zip(&fine)
+        .zip(&judgements)
+        .map(|((&v, f), j)| Site {
+            vertex: VertexId(v),
+            position: f.map_or(mesh.positions()[v as usize], |f| f.position),
+            score: j.score,
+            facet_angle: f.map_or(0.0, |f| f.facet_angle),
+            threshold: floors.at(j, f.as_ref()),
+        })
+        .collect();
+    let flagged: Vec<usize> = (0..sites.len())
+        .filter(|&i| sites[i].score.is_some_and(|sc| sc > sites[i].threshold))
+        .collect();
+    let discretisation_sites = sites
+        .iter()
+        .filter(|s| {
+            s.score
+                .is_some_and(|sc| sc > floors.threshold && sc <= s.threshold)
+        })
+        .count();
+    let margin = (options.region_margin * scale.spacing).max(scale.site_cell);
+    let mut in_region = faces_near_sites(mesh, &sites, &flagged, margin);
+    fill_holes(mesh, &mut in_region);
+    let areas = geom::face_areas(mesh);
+    let total_area: f64 = areas.iter().sum();
+    let (mut regions, component) = connected_regions(mesh, &in_region, &areas);
+    score_regions(mesh, &sites, &flagged, &component, &mut regions);
+    let line_out = lines_crossing_regions(mesh, lines, &in_region, &component, &mut regions);
+    control.step("detect", 4, STAGES)?;
+    regions.retain(|r| r.score > 0.0);
+    for r in &mut regions {
+        r.lines.sort_unstable();
+    }
+    regions.sort_by(|a, b| b.score.total_cmp(&a.score).then(a.faces.cmp(&b.faces)));
+    // a fold from +0.0 (an empty `sum` of f64 is −0.0, which reports print)
+    let region_area: f64 = regions.iter().map(|r| r.area).fold(0.0, |a, b| a + b);
+    let flagged_area_fraction = if total_area > 0.0 {
+        (region_area / total_area).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    Ok(Detection {
+        regions,
+        lines: line_out,
+        flagged_sites: flagged.len(),
+        sites,
+        judged_sites: floors.judged_sites,
+        shape_sites,
+        threshold: floors.threshold,
+        median_score: floors.median_score,
+        noise_level: floors.noise_level,
+        facet_angle: floors.facet_angle,
+        discretisation_level: floors.discretisation_level,
+        discretisation_sites,
+        flagged_area_fraction,
+        fine_radius: scale.fine_radius,
+        smooth_radius: scale.smooth_radius,
+    })
+}
+
+/// The lengths of the measure on one mesh (mesh units).
+struct Scale {
+    /// Light spacing s.
+    spacing: f64,
+    /// Fine-fit radius r_f = max(fine_radius·s, 2.5 h).
+    fine_radius: f64,
+    /// Smooth-fit radius R = max(smooth_radius·s, 2 r_f).
+    smooth_radius: f64,
+    /// Side of the cubes that hold one site each.
+    site_cell: f64,
+}
+
+impl Scale {
+    fn new(mesh: &SurfaceMesh, light: &LightArray, o: &DetectOptions) -> Self {
+        let s = light.spacing();
+        let h = geom::mean_edge_length(mesh);
+        let h = if h > 0.0 && h.is_finite() { h } else { s };
+        let fine_radius = (o.fine_radius * s).max(2.5 * h);
+        Scale {
+            spacing: s,
+            fine_radius,
+            smooth_radius: (o.smooth_radius * s).max(2.0 * fine_radius),
+            site_cell: o.site_spacing * s,
         }
     }
-    if !(o.noise_factor >= 0.0) || !o.noise_factor.is_finite() {
-        return Err(HighlightError::InvalidOption(format!(
-            "noise_factor must be non-negative, got {}",
-            o.noise_factor
-        )));
-    }
-    let s = light.spacing();
-    let z = light.plane_normal();
-    let a0 = light.plane_point();
-    let p = mesh.positions();
-    let normals = geom::vertex_normals(mesh);
-    let h = geom::mean_edge_length(mesh);
-    let h = if h > 0.0 && h.is_finite() { h } else { s };
-    let fine_r = (o.fine_radius * s).max(2.5 * h);
-    let smooth_r = (o.smooth_radius * s).max(2.0 * fine_r);
-    let cell = o.site_spacing * s;
-    // sites: the lowest-index vertex of each cube of side `cell`
+}
+
+/// Sites: the lowest-index vertex (with a normal) of each cube of side
+/// `cell`, ascending.
+fn site_vertices(p: &[Vec3], normals: &[Vec3], cell: f64) -> Vec<u32> {
     let mut site_of_cell: HashMap<Cell, u32, BuildHasherDefault<CellHasher>> = HashMap::default();
     for (i, &q) in p.iter().enumerate() {
         if normals[i] == Vec3::ZERO || !q.is_finite() {
@@ -643,24 +843,91 @@ pub fn detect_irregularities(
     }
     let mut site_vertices: Vec<u32> = site_of_cell.into_values().collect();
     site_vertices.sort_unstable();
+    site_vertices
+}
+
+/// Per vertex, the mean angle between the normals of the two faces of
+/// each interior edge around it (radians; 0 where there is none): how far
+/// the piecewise-flat mesh turns its normal from one face to the next
+/// (about κ·h on a smooth surface of curvature κ sampled at edge length h).
+fn vertex_facet_angles(mesh: &SurfaceMesh) -> Vec<f64> {
+    let face_normals = geom::face_normals(mesh);
+    let mut sum = vec![0.0f64; mesh.vertex_count()];
+    let mut count = vec![0u32; mesh.vertex_count()];
+    for e in mesh.edges() {
+        let (Some(f), Some(g)) = (
+            mesh.face(mesh.edge_halfedge(e, 0)),
+            mesh.face(mesh.edge_halfedge(e, 1)),
+        ) else {
+            continue;
+        };
+        let (nf, ng) = (face_normals[f.idx()], face_normals[g.idx()]);
+        if nf == Vec3::ZERO || ng == Vec3::ZERO {
+            continue;
+        }
+        let angle = nf.dot(ng).clamp(-1.0, 1.0).acos();
+        let (a, b) = mesh.edge_vertices(e);
+        for v in [a, b] {
+            sum[v.idx()] += angle;
+            count[v.idx()] += 1;
+        }
+    }
+    sum.iter()
+        .zip(&count)
+        .map(|(s, &c)| if c > 0 { s / c as f64 } else { 0.0 })
+        .collect()
+}
+
+/// What the fine fit says at a site.
+#[derive(Clone, Copy, Debug)]
+struct FineFit {
+    /// Denoised position p̂.
+    position: Vec3,
+    /// Its unit normal n̂.
+    normal: Vec3,
+    /// Weighted RMS residual (mesh units; NaN when no fit was possible).
+    residual: f64,
+    /// Mean facet angle of the vertices within the fine radius (radians).
+    facet_angle: f64,
+}
+
+/// Fine fits at every site (step 2 of the module documentation): a cubic
+/// over r_f, over a radius grown to hold 20 vertices where there are too
+/// few (boundaries, corners), else a quadric; `None` where no finite fit
+/// exists.
+fn fine_fits(
+    p: &[Vec3],
+    normals: &[Vec3],
+    facets: &[f64],
+    site_vertices: &[u32],
+    scale: &Scale,
+) -> Vec<Option<FineFit>> {
+    let fine_r = scale.fine_radius;
     let fine_cell = 1.6 * fine_r;
     let vgrid = Grid::new(fine_cell, p.iter().enumerate().map(|(i, &q)| (i as u32, q)));
-    // fine fits
-    let fine: Vec<Option<(Vec3, Vec3, f64)>> = site_vertices
+    site_vertices
         .par_iter()
         .map(|&v| {
             let (p0, n0) = (p[v as usize], normals[v as usize]);
             // candidates within 1.6 r_f (the grid cell is 1.6 r_f)
             let mut near: Vec<(f64, Vec3)> = Vec::new();
+            let (mut facet_sum, mut facet_count) = (0.0, 0usize);
             vgrid.around(p0, |u| {
                 let q = p[u as usize];
                 let d2 = (q - p0).length_squared();
                 if d2 < fine_cell * fine_cell && normals[u as usize].dot(n0) > 0.5 {
                     near.push((d2, q));
+                    if d2 < fine_r * fine_r {
+                        facet_sum += facets[u as usize];
+                        facet_count += 1;
+                    }
                 }
             });
-            // a cubic over r_f; where too few points (boundaries, corners),
-            // over a radius grown to hold 20 of them; else a quadric
+            let facet_angle = if facet_count > 0 {
+                facet_sum / facet_count as f64
+            } else {
+                facets[v as usize]
+            };
             let within = |r: f64| -> Vec<Vec3> {
                 near.iter()
                     .filter(|(d2, _)| *d2 < r * r)
@@ -682,85 +949,185 @@ pub fn detect_irregularities(
             fit.or_else(|| fine_fit::<6>(p0, n0, &pts, fine_r))
                 .or(Some((p0, n0, f64::NAN)))
                 .filter(|(q, n, _)| q.is_finite() && n.is_finite())
+                .map(|(position, normal, residual)| FineFit {
+                    position,
+                    normal,
+                    residual,
+                    facet_angle,
+                })
         })
-        .collect();
-    let noise_level = median(
-        fine.iter()
-            .flatten()
-            .map(|f| f.2)
-            .filter(|r| r.is_finite())
-            .collect(),
-    );
+        .collect()
+}
+
+/// The judgement of one site.
+#[derive(Clone, Copy, Debug)]
+struct Judgement {
+    /// Score θ/θ₀ (`None`: not judged).
+    score: Option<f64>,
+    /// θ₀ = 0.1·s/L: the normal error of score 1 at this site (radians).
+    unit_angle: f64,
+    /// Not judged because the surface turns by more than `max_turn`
+    /// within R (shape finer than the measure).
+    shape: bool,
+}
+
+/// Coarse fits and scores (steps 3, 4 and 6 of the module documentation).
+fn judge_sites(
+    mesh: &SurfaceMesh,
+    light: &LightArray,
+    site_vertices: &[u32],
+    fine: &[Option<FineFit>],
+    scale: &Scale,
+    o: &DetectOptions,
+) -> Vec<Judgement> {
+    let s = scale.spacing;
+    let smooth_r = scale.smooth_radius;
+    let z = light.plane_normal();
+    let a0 = light.plane_point();
     let sgrid = Grid::new(
         smooth_r,
         fine.iter()
             .enumerate()
-            .filter_map(|(i, f)| f.map(|(q, _, _)| (i as u32, q))),
+            .filter_map(|(i, f)| f.map(|f| (i as u32, f.position))),
     );
-    // coarse fits and scores; sites where the surface turns by more than
-    // `max_turn` within R are shape finer than the measure (second field)
     let min_turn_cos = o.max_turn.min(std::f64::consts::PI).cos();
-    let judgements: Vec<(Option<f64>, bool)> = (0..site_vertices.len())
+    (0..site_vertices.len())
         .into_par_iter()
         .map(|i| {
+            let not_judged = Judgement {
+                score: None,
+                unit_angle: 0.0,
+                shape: false,
+            };
             if mesh.is_boundary_vertex(VertexId(site_vertices[i])) {
-                return (None, false);
+                return not_judged;
             }
-            let Some((pi, ni, _)) = fine[i] else {
-                return (None, false);
+            let Some(FineFit {
+                position: pi,
+                normal: ni,
+                ..
+            }) = fine[i]
+            else {
+                return not_judged;
             };
             let dist = (a0 - pi).dot(z).abs().max(s);
             let theta0 = 0.1 * s / dist;
             let mut nb = Vec::new();
             let mut least_cos = 1.0f64;
             sgrid.around(pi, |j| {
-                if let Some((q, nq, _)) = fine[j as usize]
-                    && (q - pi).length_squared() < smooth_r * smooth_r
+                if let Some(f) = fine[j as usize]
+                    && (f.position - pi).length_squared() < smooth_r * smooth_r
                 {
-                    let c = nq.dot(ni);
+                    let c = f.normal.dot(ni);
                     least_cos = least_cos.min(c);
                     if c > 0.3 {
-                        nb.push((q, nq));
+                        nb.push((f.position, f.normal));
                     }
                 }
             });
             if least_cos < min_turn_cos {
-                return (None, true);
+                return Judgement {
+                    shape: true,
+                    ..not_judged
+                };
             }
             let score = smooth_normal(pi, ni, &nb, smooth_r, 0.5 * theta0).and_then(|ns| {
                 let theta = ni.dot(ns).clamp(-1.0, 1.0).acos();
                 let score = theta / theta0;
                 score.is_finite().then_some(score)
             });
-            (score, false)
+            Judgement {
+                score,
+                unit_angle: theta0,
+                shape: false,
+            }
         })
-        .collect();
-    let shape_sites = judgements.iter().filter(|j| j.1).count();
-    let scores: Vec<Option<f64>> = judgements.into_iter().map(|j| j.0).collect();
-    let judged: Vec<f64> = scores.iter().flatten().copied().collect();
-    let judged_sites = judged.len();
-    let median_score = median(judged);
-    let threshold = o.threshold.max(o.noise_factor * median_score);
-    let sites: Vec<Site> = site_vertices
-        .iter()
-        .zip(&fine)
-        .zip(&scores)
-        .map(|((&v, f), &score)| Site {
-            vertex: VertexId(v),
-            position: f.map_or(p[v as usize], |f| f.0),
-            score,
-        })
-        .collect();
-    let flagged: Vec<usize> = (0..sites.len())
-        .filter(|&i| sites[i].score.is_some_and(|sc| sc > threshold))
-        .collect();
-    // faces near flagged sites
-    let margin = (o.region_margin * s).max(cell);
+        .collect()
+}
+
+/// The noise floors of the measure (steps 5 and 7 of the module
+/// documentation).
+struct NoiseFloors {
+    /// max(threshold, noise_factor × median score).
+    threshold: f64,
+    /// `discretisation_factor` × discretisation level.
+    facet_factor: f64,
+    judged_sites: usize,
+    median_score: f64,
+    noise_level: f64,
+    facet_angle: f64,
+    discretisation_level: f64,
+}
+
+impl NoiseFloors {
+    fn estimate(judgements: &[Judgement], fine: &[Option<FineFit>], o: &DetectOptions) -> Self {
+        let judged: Vec<f64> = judgements.iter().filter_map(|j| j.score).collect();
+        let judged_sites = judged.len();
+        let median_score = median(judged);
+        let noise_level = median(
+            fine.iter()
+                .flatten()
+                .map(|f| f.residual)
+                .filter(|r| r.is_finite())
+                .collect(),
+        );
+        // normal error over facet angle at the judged sites with facets
+        let mut ratios = Vec::new();
+        let mut facets = Vec::new();
+        for (j, f) in judgements.iter().zip(fine) {
+            if let (Some(score), Some(f)) = (j.score, f) {
+                facets.push(f.facet_angle);
+                if f.facet_angle > 0.0 {
+                    let ratio = score * j.unit_angle / f.facet_angle;
+                    if ratio.is_finite() {
+                        ratios.push(ratio);
+                    }
+                }
+            }
+        }
+        let discretisation_level = median(ratios);
+        NoiseFloors {
+            threshold: o.threshold.max(o.noise_factor * median_score),
+            facet_factor: o.discretisation_factor * discretisation_level,
+            judged_sites,
+            median_score,
+            noise_level,
+            facet_angle: median(facets),
+            discretisation_level,
+        }
+    }
+
+    /// The threshold at one site: the mesh's, raised to the normal error
+    /// the site's facets explain (in score units, δ·factor/θ₀).
+    fn at(&self, j: &Judgement, f: Option<&FineFit>) -> f64 {
+        match (j.score, f) {
+            (Some(_), Some(f)) if j.unit_angle > 0.0 => {
+                let facet = self.facet_factor * f.facet_angle / j.unit_angle;
+                if facet.is_finite() {
+                    self.threshold.max(facet)
+                } else {
+                    self.threshold
+                }
+            }
+            _ => self.threshold,
+        }
+    }
+}
+
+/// Faces whose centroid lies within `margin` of a flagged site, and the
+/// faces around the flagged sites' vertices.
+fn faces_near_sites(
+    mesh: &SurfaceMesh,
+    sites: &[Site],
+    flagged: &[usize],
+    margin: f64,
+) -> Vec<bool> {
+    let p = mesh.positions();
+    let nf = mesh.face_count();
     let fgrid = Grid::new(
         margin,
         flagged.iter().map(|&i| (i as u32, sites[i].position)),
     );
-    let nf = mesh.face_count();
     let centroid = |f: FaceId| {
         let [a, b, c] = mesh.triangle(f);
         (p[a.idx()] + p[b.idx()] + p[c.idx()]) / 3.0
@@ -780,15 +1147,22 @@ pub fn detect_irregularities(
             })
             .collect()
     };
-    for &i in &flagged {
+    for &i in flagged {
         for f in mesh.vertex_faces(sites[i].vertex) {
             in_region[f.idx()] = true;
         }
     }
-    fill_holes(mesh, &mut in_region);
-    // connected components
-    let areas = geom::face_areas(mesh);
-    let total_area: f64 = areas.iter().sum();
+    in_region
+}
+
+/// The connected components of the region faces (as unscored regions) and
+/// each face's component (`u32::MAX` outside).
+fn connected_regions(
+    mesh: &SurfaceMesh,
+    in_region: &[bool],
+    areas: &[f64],
+) -> (Vec<IrregularRegion>, Vec<u32>) {
+    let nf = mesh.face_count();
     let mut comp = vec![u32::MAX; nf];
     let mut regions: Vec<IrregularRegion> = Vec::new();
     for f0 in 0..nf {
@@ -822,12 +1196,24 @@ pub fn detect_irregularities(
             lines: Vec::new(),
         });
     }
+    (regions, comp)
+}
+
+/// Each region's score (largest flagged score inside), score-weighted
+/// centre and number of flagged sites.
+fn score_regions(
+    mesh: &SurfaceMesh,
+    sites: &[Site],
+    flagged: &[usize],
+    component: &[u32],
+    regions: &mut [IrregularRegion],
+) {
     let mut weight = vec![0.0; regions.len()];
-    for &i in &flagged {
+    for &i in flagged {
         let Some(f) = mesh.vertex_faces(sites[i].vertex).next() else {
             continue;
         };
-        let r = comp[f.idx()];
+        let r = component[f.idx()];
         if r == u32::MAX {
             continue;
         }
@@ -843,7 +1229,17 @@ pub fn detect_irregularities(
             r.center /= *w;
         }
     }
-    // lines crossing the regions
+}
+
+/// The stretches of the highlight lines inside the regions; records in
+/// each region the lines crossing it.
+fn lines_crossing_regions(
+    mesh: &SurfaceMesh,
+    lines: &HighlightLines,
+    in_region: &[bool],
+    component: &[u32],
+    regions: &mut [IrregularRegion],
+) -> Vec<LineFairness> {
     let node_region = |nd: NodeId| -> Option<u32> {
         let f = match nd {
             NodeId::Edge(e, _) => [0, 1].iter().find_map(|&k| {
@@ -852,14 +1248,14 @@ pub fn detect_irregularities(
             }),
             NodeId::Vertex(v, _) => mesh.vertex_faces(v).find(|f| in_region[f.idx()]),
         }?;
-        Some(comp[f.idx()])
+        Some(component[f.idx()])
     };
     let mut line_out: Vec<LineFairness> = Vec::new();
     for (li, line) in lines.lines.iter().enumerate() {
         let mut stretches: Vec<Vec<Vec3>> = Vec::new();
         let mut current: Vec<Vec3> = Vec::new();
         let mut score: f64 = 0.0;
-        for (k, (&nd, &q)) in line.nodes.iter().zip(&line.points).enumerate() {
+        for (&nd, &q) in line.nodes.iter().zip(&line.points) {
             match node_region(nd) {
                 Some(r) if (r as usize) < regions.len() => {
                     current.push(q);
@@ -875,7 +1271,6 @@ pub fn detect_irregularities(
                     current.clear();
                 }
             }
-            let _ = k;
         }
         if current.len() > 1 {
             stretches.push(current);
@@ -891,32 +1286,7 @@ pub fn detect_irregularities(
             });
         }
     }
-    regions.retain(|r| r.score > 0.0);
-    for r in &mut regions {
-        r.lines.sort_unstable();
-    }
-    regions.sort_by(|a, b| b.score.total_cmp(&a.score).then(a.faces.cmp(&b.faces)));
-    // a fold from +0.0 (an empty `sum` of f64 is −0.0, which reports print)
-    let region_area: f64 = regions.iter().map(|r| r.area).fold(0.0, |a, b| a + b);
-    let flagged_area_fraction = if total_area > 0.0 {
-        (region_area / total_area).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    Ok(Detection {
-        regions,
-        lines: line_out,
-        flagged_sites: flagged.len(),
-        sites,
-        judged_sites,
-        shape_sites,
-        threshold,
-        median_score,
-        noise_level,
-        flagged_area_fraction,
-        fine_radius: fine_r,
-        smooth_radius: smooth_r,
-    })
+    line_out
 }
 
 /// Fills the holes of a face set: complement components that touch no mesh

@@ -284,3 +284,42 @@ fn planted_defects_are_found_ranked_first_with_a_tight_region() {
         }
     }
 }
+
+/// Cancelling through the control's flag stops detection with the
+/// `Cancelled` error; progress reaches the callback stage by stage, and a
+/// control that is never raised changes nothing.
+#[test]
+fn detection_reports_progress_and_stops_when_cancelled() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+    let mesh = field(71, |x, y| {
+        panel(x, y) + 0.003 * (-(x * x + y * y) / 0.01).exp()
+    });
+    let light = LightArray::default_for_mesh(&mesh, UpAxis::Auto).unwrap();
+    let lines = highlight_lines(&mesh, &light, &HighlightOptions::default()).unwrap();
+    let plain = detect_irregularities(&mesh, &light, &lines, &DetectOptions::default()).unwrap();
+    let steps = Arc::new(AtomicU64::new(0));
+    let seen = Arc::clone(&steps);
+    let flag = Arc::new(AtomicBool::new(false));
+    let watched = DetectOptions::default().control(
+        crate::Control::new()
+            .on_progress(move |p| {
+                assert_eq!(p.stage, "detect");
+                seen.store(p.done, Ordering::Relaxed);
+            })
+            .cancel_flag(Arc::clone(&flag)),
+    );
+    let d = detect_irregularities(&mesh, &light, &lines, &watched).unwrap();
+    assert_eq!(d, plain, "a control never raised changes nothing");
+    assert_eq!(steps.load(Ordering::Relaxed), 4);
+    flag.store(true, Ordering::Relaxed);
+    assert!(matches!(
+        detect_irregularities(&mesh, &light, &lines, &watched),
+        Err(HighlightError::Cancelled(_))
+    ));
+    assert_eq!(
+        steps.load(Ordering::Relaxed),
+        1,
+        "stopped after the first stage"
+    );
+}

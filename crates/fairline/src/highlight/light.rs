@@ -310,9 +310,17 @@ impl LightArray {
     /// normal's angle to Z (ĝ of 15–30 on the figures in ../shared/data),
     /// and without thinning the lines would lie w/300–w/600 apart, below
     /// what a picture resolves, and break into hatching.
+    ///
+    /// ĝ is estimated on at most 32 768 triangles spread over the part
+    /// (every k-th in face order; all of them on smaller meshes).
     pub fn readable_multiple(&self, mesh: &SurfaceMesh) -> u32 {
-        let (d, branch) = vertex_distances(mesh, self);
-        match super::readable::median_distance_gradient(mesh, &d, &branch) {
+        self.readable_multiple_sampled(mesh, super::readable::GRADIENT_SAMPLE_FACES)
+    }
+
+    /// [`Self::readable_multiple`] with ĝ estimated on at most `budget`
+    /// triangles.
+    pub(crate) fn readable_multiple_sampled(&self, mesh: &SurfaceMesh, budget: usize) -> u32 {
+        match super::readable::sampled_median_distance_gradient(mesh, self, budget) {
             Some(g) if g.is_finite() && g > 0.0 => (g / 3.0).round().clamp(1.0, 1000.0) as u32,
             _ => 1,
         }
@@ -381,6 +389,7 @@ impl LightArray {
 /// Highlight distance d_P (Eq. (1)) and branch (sign of Z·N, 0 where
 /// |Z·N| is below the default `min_normal_cos`) of every vertex, with the
 /// area-weighted vertex normals of Yong et al. Eq. (3).
+#[cfg(test)]
 pub(crate) fn vertex_distances(mesh: &SurfaceMesh, light: &LightArray) -> (Vec<f64>, Vec<i8>) {
     let min_cos = super::HighlightOptions::default().min_normal_cos;
     crate::geom::vertex_normals(mesh)

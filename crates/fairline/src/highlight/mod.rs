@@ -51,6 +51,9 @@ pub enum HighlightError {
     /// An option is out of range.
     #[error("invalid option: {0}")]
     InvalidOption(String),
+    /// The caller's [`crate::Control`] asked to stop.
+    #[error("cancelled")]
+    Cancelled(#[from] crate::Cancelled),
 }
 
 /// Highlight bands of lights with a tube radius ρ (Nishiyama et al. §2, last
