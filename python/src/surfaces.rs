@@ -14,8 +14,8 @@ use crate::{Failure, Res};
 use fairline::Vec3;
 use fairline::bspline::{BSplineSurface, parse_surfaces_json, surfaces_to_json};
 use fairline::highlight::{
-    CircularLight, CircularLights, SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceLight,
-    PartLights, part_highlight_lines,
+    CircularLight, CircularLights, PartLights, SurfaceHighlightLine, SurfaceHighlightOptions,
+    SurfaceLight, part_highlight_lines,
 };
 use pyo3::prelude::*;
 use serde_json::{Value, json};
@@ -233,8 +233,7 @@ fn surface_highlight_lines(
             (None, None) => PartLights::Circular(Vec::new()),
         };
         let surfaces: Vec<_> = chosen.iter().map(|(_, s)| s.clone()).collect();
-        let patches =
-            report.time(|| part_highlight_lines(&surfaces, &part_lights, &opts, &|| {}));
+        let patches = report.time(|| part_highlight_lines(&surfaces, &part_lights, &opts, &|| {}));
         let results: Vec<(usize, Vec<SurfaceLight>, _)> = chosen
             .iter()
             .zip(patches)
