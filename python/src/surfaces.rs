@@ -14,8 +14,8 @@ use crate::{Failure, Res};
 use fairline::Vec3;
 use fairline::bspline::BSplineSurface;
 use fairline::highlight::{
-    CircularLight, CircularLights, SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceLight,
-    linear_lights, surface_highlight_lines as library_surface_lines,
+    CircularLight, CircularLights, PartLights, SurfaceHighlightLine, SurfaceHighlightOptions,
+    SurfaceLight, part_highlight_lines,
 };
 use fairline::io::{parse_surfaces_json, surfaces_to_json};
 use pyo3::prelude::*;
@@ -224,20 +224,22 @@ fn surface_highlight_lines(
             }
         };
         let min_cos = light.min_normal_cos();
-        let results: Vec<(usize, Vec<SurfaceLight>, _)> = report.time(|| {
-            chosen
-                .iter()
-                .map(|(k, s)| {
-                    let lights: Vec<SurfaceLight> = match (&circular, array) {
-                        (Some(c), _) => c.iter().map(|l| SurfaceLight::Circular(*l)).collect(),
-                        (None, Some(a)) => linear_lights(s, a, min_cos, grid.min(400), 100),
-                        (None, None) => Vec::new(),
-                    };
-                    let h = library_surface_lines(s, &lights, &opts);
-                    (*k, lights, h)
-                })
-                .collect()
-        });
+        let part_lights = match (circular, array) {
+            (Some(c), _) => PartLights::Circular(c),
+            (None, Some(array)) => PartLights::Linear {
+                array,
+                min_cos,
+                max_lights: fairline::highlight::surface::DEFAULT_MAX_LIGHTS,
+            },
+            (None, None) => PartLights::Circular(Vec::new()),
+        };
+        let surfaces: Vec<_> = chosen.iter().map(|(_, s)| s.clone()).collect();
+        let patches = report.time(|| part_highlight_lines(&surfaces, &part_lights, &opts, &|| {}));
+        let results: Vec<(usize, Vec<SurfaceLight>, _)> = chosen
+            .iter()
+            .zip(patches)
+            .map(|((k, _), p)| (*k, p.lights, p.highlights))
+            .collect();
         let multi = chosen.len() > 1;
         let tag = |k: usize| multi.then_some(k);
         let mut lines = Vec::new();

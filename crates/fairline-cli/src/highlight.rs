@@ -235,7 +235,9 @@ pub struct Args {
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
     pub view: Option<Vec3>,
     /// B-spline surfaces: grid points per parameter direction on which d_s
-    /// is sampled before contouring.
+    /// is sampled before contouring (one surface); for a file of several
+    /// patches, grid points along the part's diagonal, each patch sampled
+    /// in proportion to its size (at least 12 per direction).
     #[arg(long, default_value_t = 200, value_name = "N")]
     pub grid: usize,
     /// B-spline surfaces: SVG of the (u, v) pre-images (of surface

@@ -10,6 +10,10 @@ use fairline::picture::{Picture, ScalarField, mesh_picture};
 use fairline::render::{Colormap, RenderOptions};
 use std::path::PathBuf;
 
+/// Tessellation samples along the diagonal of a multi-patch part
+/// ([`crate::surface::tessellated_part`]); one surface gets 64 × 64.
+const PART_SAMPLES: usize = 200;
+
 /// Per-vertex scalar to colour the surface with.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Scalar {
@@ -102,7 +106,18 @@ pub fn run(args: Args) -> Result<()> {
         ));
     }
     let mesh = if crate::surface::is_surface_path(&args.input) {
-        crate::surface::load_tessellated(&args.input, args.surface, 64)?
+        match args.surface {
+            Some(_) => crate::surface::load_tessellated(&args.input, args.surface, 64)?,
+            None => {
+                let surfaces = crate::surface::load_surfaces(&args.input)?;
+                let n = if surfaces.len() == 1 {
+                    64
+                } else {
+                    PART_SAMPLES
+                };
+                crate::surface::tessellated_part(&surfaces, n)?
+            }
+        }
     } else {
         fairline::io::read_mesh(&args.input)?
     };

@@ -56,10 +56,49 @@ pub fn load_tessellated(path: &Path, index: Option<usize>, n: usize) -> Result<S
 
 /// Tessellates surfaces into one triangle mesh, `n` × `n` samples each.
 pub fn tessellated_mesh(surfaces: &[BSplineSurface], n: usize) -> Result<SurfaceMesh> {
+    tessellated_with(surfaces, |_| [n, n])
+}
+
+/// Tessellates a part for a picture: one surface `n` × `n`; several, each on
+/// its [`fairline::highlight::patch_grid`] (about `n` samples along the
+/// part's diagonal, small faces get few), so that a part of hundreds of
+/// faces renders as fast as one surface of its size (issue #20 item 4).
+pub fn tessellated_part(surfaces: &[BSplineSurface], n: usize) -> Result<SurfaceMesh> {
+    if surfaces.len() <= 1 {
+        return tessellated_mesh(surfaces, n);
+    }
+    let (mut lo, mut hi) = (
+        fairline::Vec3::splat(f64::INFINITY),
+        fairline::Vec3::splat(f64::NEG_INFINITY),
+    );
+    for s in surfaces {
+        let (a, b) = s.control_bounding_box();
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    let diagonal = (hi - lo).length();
+    tessellated_with(surfaces, |s| {
+        fairline::highlight::patch_grid(s, diagonal, n)
+    })
+}
+
+/// Tessellates every surface on the grid `grid(s)` (in parallel, merged in
+/// input order) into one triangle mesh.
+fn tessellated_with(
+    surfaces: &[BSplineSurface],
+    grid: impl Fn(&BSplineSurface) -> [usize; 2] + Sync,
+) -> Result<SurfaceMesh> {
+    use rayon::prelude::*;
+    let pieces: Vec<_> = surfaces
+        .par_iter()
+        .map(|s| {
+            let [nu, nv] = grid(s);
+            tessellate(s, nu, nv)
+        })
+        .collect();
     let mut positions = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
-    for s in surfaces {
-        let t = tessellate(s, n, n);
+    for t in pieces {
         let base = positions.len() as u32;
         positions.extend(t.positions);
         triangles.extend(t.triangles.iter().map(|tri| tri.map(|i| i + base)));

@@ -10,8 +10,8 @@ use anyhow::Result;
 use fairline::Vec3;
 use fairline::bspline::BSplineSurface;
 use fairline::highlight::{
-    CircularLights, SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight,
-    linear_lights, surface_highlight_lines,
+    CircularLights, PartLights, SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceHighlights,
+    SurfaceLight, part_highlight_lines,
 };
 use fairline::picture::{Picture, mesh_picture};
 use fairline::render::{PolylineLayer, RenderOptions, SvgPlot};
@@ -77,7 +77,7 @@ pub fn surface_picture(
     title: &str,
     opts: &RenderOptions,
 ) -> Result<fairline::render::Image> {
-    let mesh = crate::surface::tessellated_mesh(surfaces, 96)?;
+    let mesh = crate::surface::tessellated_part(surfaces, 96)?;
     let picture = Picture {
         polylines,
         title: Some(title.to_string()),
@@ -216,23 +216,23 @@ pub fn run(args: Args) -> Result<()> {
         }
     };
     let bar = crate::common::progress(chosen.len() as u64, "highlight lines");
-    let results: Vec<(usize, Vec<SurfaceLight>, SurfaceHighlights)> = report.time(|| {
-        chosen
-            .iter()
-            .map(|(k, s)| {
-                let lights: Vec<SurfaceLight> = match (&circular, array) {
-                    (Some(c), _) => c.iter().map(|l| SurfaceLight::Circular(*l)).collect(),
-                    (None, Some(a)) => {
-                        linear_lights(s, a, args.light.min_normal_cos, args.grid.min(400), 100)
-                    }
-                    (None, None) => Vec::new(),
-                };
-                let h = surface_highlight_lines(s, &lights, &opts);
-                bar.inc(1);
-                (*k, lights, h)
-            })
-            .collect()
-    });
+    let part_lights = match (circular, array) {
+        (Some(c), _) => PartLights::Circular(c),
+        (None, Some(array)) => PartLights::Linear {
+            array,
+            min_cos: args.light.min_normal_cos,
+            max_lights: fairline::highlight::surface::DEFAULT_MAX_LIGHTS,
+        },
+        (None, None) => PartLights::Circular(Vec::new()),
+    };
+    let surfaces: Vec<BSplineSurface> = chosen.iter().map(|(_, s)| s.clone()).collect();
+    let patches =
+        report.time(|| part_highlight_lines(&surfaces, &part_lights, &opts, &|| bar.inc(1)));
+    let results: Vec<(usize, Vec<SurfaceLight>, SurfaceHighlights)> = chosen
+        .iter()
+        .zip(patches)
+        .map(|((k, _), p)| (*k, p.lights, p.highlights))
+        .collect();
     bar.finish_and_clear();
     let multi = chosen.len() > 1;
     let tag = |k: usize| multi.then_some(k);
@@ -250,7 +250,6 @@ pub fn run(args: Args) -> Result<()> {
     }
     // Pictures first (they can fail on bad options); the lines file last.
     if let Some(p) = &args.png {
-        let surfaces: Vec<BSplineSurface> = chosen.iter().map(|(_, s)| s.clone()).collect();
         let all_lines: Vec<&SurfaceHighlightLine> = results
             .iter()
             .flat_map(|(_, _, h)| h.lines.iter().chain(&h.band_lower).chain(&h.band_upper))

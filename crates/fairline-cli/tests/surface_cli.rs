@@ -399,3 +399,50 @@ fn real_surfaces_teapot_and_impeller() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(!json(&out)["lines"].as_array().unwrap().is_empty());
 }
+
+/// Issue #20 item 4: the default highlight output of a whole multi-patch
+/// part stays proportionate. The impeller (247 trimmed faces) with default
+/// lights and grid writes at most 50 MB and at most 100 kB per patch (it was
+/// 404 MB: every face got the full 200 × 200 grid and up to 100 lights); the
+/// lines still cover most faces and carry their patch index.
+#[test]
+fn whole_part_default_highlight_output_is_proportionate() {
+    let Some(ip) = data("surfaces/impeller.igs") else {
+        return;
+    };
+    let d = tmp("proportionate");
+    let out = d.join("impeller-lines.json");
+    let report = d.join("report.json");
+    ok(&run(&[
+        "highlight",
+        s(&ip),
+        "-o",
+        s(&out),
+        "--report",
+        s(&report),
+    ]));
+    let bytes = std::fs::metadata(&out).unwrap().len();
+    let patches = 247;
+    eprintln!(
+        "impeller default highlight: {bytes} bytes, {} per patch",
+        bytes / patches
+    );
+    assert!(bytes <= 50_000_000, "{bytes} bytes");
+    assert!(
+        bytes / patches <= 100_000,
+        "{} bytes per patch",
+        bytes / patches
+    );
+    let v = json(&out);
+    let lines = v["lines"].as_array().unwrap();
+    let mut faces: Vec<u64> = lines.iter().filter_map(|l| l["surface"].as_u64()).collect();
+    assert_eq!(faces.len(), lines.len(), "every line names its patch");
+    faces.sort_unstable();
+    faces.dedup();
+    eprintln!("lines on {} of {patches} faces", faces.len());
+    assert!(
+        faces.len() * 2 > patches as usize,
+        "lines on {} faces",
+        faces.len()
+    );
+}

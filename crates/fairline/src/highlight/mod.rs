@@ -30,8 +30,9 @@ pub use linear::{HighlightModel, HighlightOptions, highlight_lines};
 pub use quartic::{Roots, quartic_roots};
 pub use readable::{LineStats, Readability};
 pub use surface::{
-    SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight, linear_lights,
-    surface_highlight_lines, surface_signed_distance,
+    PartLights, PatchHighlights, SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceHighlights,
+    SurfaceLight, linear_lights, part_highlight_lines, patch_grid, surface_highlight_lines,
+    surface_signed_distance,
 };
 
 use crate::mesh::MeshError;

@@ -155,10 +155,16 @@ pub fn distance_field(
 }
 
 /// The lights m of a linear light array whose highlight lines can appear
-/// on the surface: every m between the smallest and largest highlight
-/// distance d_P / s sampled on an `n × n` grid (Yong et al. Eq. (1)–(2)),
-/// at most `max_lights` of them (the middle ones). Empty when no grid point
-/// sees the lights (|Z·N| < `min_cos` everywhere).
+/// on the surface (Yong et al. Eq. (1)–(2)): d_P is sampled on an `n × n`
+/// grid and light m is kept when its level m·s crosses at least one grid
+/// cell that [`contour_field`] contours — all four corners defined (|Z·N| ≥
+/// `min_cos`), on one side of the light plane, and spanning at most
+/// [`SurfaceHighlightOptions::max_lines_per_cell`] (default) spacings, so
+/// that cells near silhouettes, where d_P runs off to infinity, do not
+/// decide which lights are drawn (as on meshes). When more than
+/// `max_lights` lights qualify, the `max_lights` consecutive ones crossing
+/// the most cells are kept (the lights of the bulk of the surface, not the
+/// middle of a range stretched by outliers). Empty when no cell qualifies.
 pub fn linear_lights(
     surface: &BSplineSurface,
     array: LightArray,
@@ -172,26 +178,70 @@ pub fn linear_lights(
         min_cos,
     };
     let field = distance_field(surface, &probe, n, n);
-    let (lo, hi) = field
-        .samples
-        .iter()
-        .flatten()
-        .map(|s| s.value / array.spacing())
-        .filter(|x| x.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
-            (a.min(x), b.max(x))
-        });
-    if !(lo <= hi) || max_lights == 0 {
+    let spacing = array.spacing();
+    let max_span =
+        f64::from(SurfaceHighlightOptions::default().max_lines_per_cell.max(1)) * spacing;
+    let (nu, nv) = (field.us.len(), field.vs.len());
+    let at = |a: usize, b: usize| field.samples[a * nv + b];
+    // Cells crossed per light m, counted in one pass over the cells.
+    let mut crossed: std::collections::BTreeMap<i64, usize> = std::collections::BTreeMap::new();
+    for a in 0..nu.saturating_sub(1) {
+        for b in 0..nv.saturating_sub(1) {
+            let [Some(c0), Some(c1), Some(c2), Some(c3)] =
+                [at(a, b), at(a + 1, b), at(a + 1, b + 1), at(a, b + 1)]
+            else {
+                continue;
+            };
+            let c = [c0, c1, c2, c3];
+            if c.iter().any(|x| x.branch != c0.branch) {
+                continue;
+            }
+            let (lo, hi) = c
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), s| {
+                    (l.min(s.value), h.max(s.value))
+                });
+            if !(hi - lo <= max_span) || spacing <= 0.0 {
+                continue;
+            }
+            // Levels m·s with lo < m·s ≤ hi (a value equal to the level
+            // counts as above, as in contour_field).
+            let (m0, m1) = (
+                (lo / spacing).floor() as i64 + 1,
+                (hi / spacing).floor() as i64,
+            );
+            for m in m0..=m1 {
+                *crossed.entry(m).or_insert(0) += 1;
+            }
+        }
+    }
+    if crossed.is_empty() || max_lights == 0 {
         return Vec::new();
     }
-    let (mut m0, mut m1) = (lo.ceil() as i64, hi.floor() as i64);
-    let count = (m1 - m0 + 1).max(0) as usize;
-    if count > max_lights {
-        let mid = (m0 + m1) / 2;
-        m0 = mid - (max_lights as i64) / 2;
-        m1 = m0 + max_lights as i64 - 1;
+    let (first, last) = match (crossed.keys().next(), crossed.keys().next_back()) {
+        (Some(&f), Some(&l)) => (f, l),
+        _ => return Vec::new(),
+    };
+    let (mut m0, mut m1) = (first, last);
+    if (last - first + 1) as usize > max_lights {
+        // The window of max_lights consecutive lights crossing most cells
+        // (the first such window: deterministic).
+        let count = |m: i64| crossed.get(&m).copied().unwrap_or(0);
+        let w = max_lights as i64;
+        let mut sum: usize = (first..first + w).map(count).sum();
+        let (mut best, mut best_start) = (sum, first);
+        for start in first + 1..=last - w + 1 {
+            sum = sum + count(start + w - 1) - count(start - 1);
+            if sum > best {
+                best = sum;
+                best_start = start;
+            }
+        }
+        m0 = best_start;
+        m1 = best_start + w - 1;
     }
     (m0..=m1)
+        .filter(|m| crossed.contains_key(m))
         .map(|index| SurfaceLight::Linear {
             array,
             index,
@@ -214,6 +264,11 @@ pub struct SurfaceHighlightOptions {
     pub tolerance: f64,
     /// Most refinement steps per contour point.
     pub max_refine_steps: usize,
+    /// Linear lights: most lines (light spacings) one grid cell may be
+    /// crossed by (default 4, as `HighlightOptions::max_lines_per_face` on
+    /// meshes); a cell crossed by more is skipped, its lines being finer
+    /// than the grid (this happens only near silhouettes). 0: no limit.
+    pub max_lines_per_cell: u32,
 }
 
 impl Default for SurfaceHighlightOptions {
@@ -224,6 +279,7 @@ impl Default for SurfaceHighlightOptions {
             band: None,
             tolerance: 1e-11,
             max_refine_steps: 80,
+            max_lines_per_cell: 4,
         }
     }
 }
@@ -238,6 +294,11 @@ impl SurfaceHighlightOptions {
     /// Sets the band radius ρ.
     pub fn band(mut self, rho: Option<f64>) -> Self {
         self.band = rho;
+        self
+    }
+    /// Sets [`SurfaceHighlightOptions::max_lines_per_cell`].
+    pub fn max_lines_per_cell(mut self, n: u32) -> Self {
+        self.max_lines_per_cell = n;
         self
     }
 }
@@ -329,6 +390,139 @@ pub fn surface_highlight_lines(
     out
 }
 
+/// The lights of a whole part (a file of many patches), Nishiyama et al.
+/// §2 (circular) or Yong et al. Eq. (1)–(2) (linear).
+#[derive(Clone, Debug, PartialEq)]
+pub enum PartLights {
+    /// The same circular lights on every patch.
+    Circular(Vec<CircularLight>),
+    /// One linear light array; each patch draws the lights of
+    /// [`linear_lights`] (at most `max_lights`).
+    Linear {
+        /// The array.
+        array: LightArray,
+        /// Smallest |Z·N| at which the distance is defined.
+        min_cos: f64,
+        /// Most lights per patch.
+        max_lights: usize,
+    },
+}
+
+/// The highlight lines of one patch of a part.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PatchHighlights {
+    /// The lights drawn on this patch (`SurfaceHighlightLine::light`
+    /// indexes this list).
+    pub lights: Vec<SurfaceLight>,
+    /// The grid (u, v) the field was sampled on.
+    pub grid: [usize; 2],
+    /// The lines.
+    pub highlights: SurfaceHighlights,
+}
+
+/// Most linear lights drawn per patch by default (a bound against
+/// pathological inputs; the lights drawn are those whose lines the grid
+/// resolves, see [`linear_lights`]).
+pub const DEFAULT_MAX_LIGHTS: usize = 1000;
+
+/// Fewest grid points per direction a patch of a part gets.
+pub const MIN_PATCH_GRID: usize = 12;
+
+/// The (u, v) grid of one patch of a part whose bounding-box diagonal is
+/// `part_diagonal`, for a part grid of `grid` points per diagonal: each
+/// direction gets points in proportion to the length of the control polygon
+/// along it (the longest row or column, an upper bound of the iso-curves'
+/// length), so that grid points lie about `part_diagonal / grid` apart in
+/// space on every patch, between [`MIN_PATCH_GRID`] and `grid`. A part of
+/// many small faces then costs about as much as one surface of its size,
+/// not `grid²` samples per face (issue #20 item 4).
+pub fn patch_grid(surface: &BSplineSurface, part_diagonal: f64, grid: usize) -> [usize; 2] {
+    let (nu, nv) = (surface.count_u(), surface.count_v());
+    let p = |i: usize, j: usize| surface.control_point(i, j);
+    let len_u = (0..nv)
+        .map(|j| {
+            (1..nu)
+                .map(|i| (p(i, j) - p(i - 1, j)).length())
+                .sum::<f64>()
+        })
+        .fold(0.0, f64::max);
+    let len_v = (0..nu)
+        .map(|i| {
+            (1..nv)
+                .map(|j| (p(i, j) - p(i, j - 1)).length())
+                .sum::<f64>()
+        })
+        .fold(0.0, f64::max);
+    let lo = MIN_PATCH_GRID.min(grid);
+    let count = |len: f64| {
+        if part_diagonal > 0.0 && len.is_finite() {
+            ((grid as f64 * len / part_diagonal).ceil() as usize).clamp(lo, grid)
+        } else {
+            grid
+        }
+    };
+    [count(len_u), count(len_v)]
+}
+
+/// Highlight lines of every patch of a part, in one run (issue #20 item 4):
+/// for a single surface exactly [`surface_highlight_lines`] with `opts`;
+/// for several, each patch on its own [`patch_grid`] (the part's diagonal
+/// from the control points of all patches, `opts.grid_u` points along it),
+/// parallel over patches, results in input order (deterministic).
+/// `on_patch` is called once per finished patch (progress).
+pub fn part_highlight_lines(
+    surfaces: &[BSplineSurface],
+    lights: &PartLights,
+    opts: &SurfaceHighlightOptions,
+    on_patch: &(dyn Fn() + Sync),
+) -> Vec<PatchHighlights> {
+    let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+    for s in surfaces {
+        let (a, b) = s.control_bounding_box();
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    let diagonal = (hi - lo).length();
+    let single = surfaces.len() == 1;
+    surfaces
+        .par_iter()
+        .map(|s| {
+            let grid = if single {
+                [opts.grid_u, opts.grid_v]
+            } else {
+                patch_grid(s, diagonal, opts.grid_u.max(opts.grid_v))
+            };
+            let patch_opts = SurfaceHighlightOptions {
+                grid_u: grid[0],
+                grid_v: grid[1],
+                ..*opts
+            };
+            let patch_lights: Vec<SurfaceLight> = match lights {
+                PartLights::Circular(c) => c.iter().map(|l| SurfaceLight::Circular(*l)).collect(),
+                PartLights::Linear {
+                    array,
+                    min_cos,
+                    max_lights,
+                } => {
+                    let n = if single {
+                        opts.grid_u.min(400)
+                    } else {
+                        grid[0].max(grid[1]).min(400)
+                    };
+                    linear_lights(s, *array, *min_cos, n, *max_lights)
+                }
+            };
+            let highlights = surface_highlight_lines(s, &patch_lights, &patch_opts);
+            on_patch();
+            PatchHighlights {
+                lights: patch_lights,
+                grid,
+                highlights,
+            }
+        })
+        .collect()
+}
+
 /// A grid edge: horizontal (along u) from `(a, b)` to `(a + 1, b)`, or
 /// vertical (along v) from `(a, b)` to `(a, b + 1)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -370,6 +564,16 @@ pub fn contour_field(
     let at = |a: usize, b: usize| field.samples[a * nv + b];
     let above = |s: FieldSample| s.value >= level;
     let same_branch = |x: FieldSample, y: FieldSample| (x.branch - y.branch).cos() > 0.0;
+    // Linear lights: a cell whose field spans more than
+    // `max_lines_per_cell` spacings holds lines finer than the grid (near
+    // silhouettes, where d_P runs off as Z·N → 0); it is skipped, as the
+    // mesh model skips such triangles (`HighlightOptions::max_lines_per_face`).
+    let max_cell_span = match light {
+        SurfaceLight::Linear { array, .. } if opts.max_lines_per_cell > 0 => {
+            Some(f64::from(opts.max_lines_per_cell) * array.spacing())
+        }
+        _ => None,
+    };
     // Edge ids: U(a, b) -> a * nv + b; V(a, b) -> n_u_edges + a * (nv - 1) + b.
     let n_u_edges = (nu - 1) * nv;
     let edge_id = |e: GridEdge| match e {
@@ -394,11 +598,27 @@ pub fn contour_field(
         .flat_map_iter(|a| {
             let mut segs = Vec::new();
             for b in 0..nv - 1 {
-                let c = [at(a, b), at(a + 1, b), at(a + 1, b + 1), at(a, b + 1)];
-                if c.iter().any(Option::is_none) {
+                let [Some(c0), Some(c1), Some(c2), Some(c3)] =
+                    [at(a, b), at(a + 1, b), at(a + 1, b + 1), at(a, b + 1)]
+                else {
+                    continue;
+                };
+                let c = [c0, c1, c2, c3];
+                // Cheap tests first: most cells are not crossed by the level.
+                let side = c.map(above);
+                if side.iter().all(|&x| x == side[0]) {
                     continue;
                 }
-                let c = c.map(Option::unwrap);
+                if let Some(most) = max_cell_span {
+                    let (lo, hi) = c
+                        .iter()
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), s| {
+                            (l.min(s.value), h.max(s.value))
+                        });
+                    if hi - lo > most {
+                        continue;
+                    }
+                }
                 if !(same_branch(c[0], c[1])
                     && same_branch(c[1], c[2])
                     && same_branch(c[2], c[3])
@@ -413,7 +633,6 @@ pub fn contour_field(
                     GridEdge::U(a, b + 1),
                     GridEdge::V(a, b),
                 ];
-                let side = c.map(above);
                 let cut: Vec<usize> = (0..4).filter(|&k| side[k] != side[(k + 1) % 4]).collect();
                 match cut.len() {
                     2 => segs.push([edge_id(edges[cut[0]]), edge_id(edges[cut[1]])]),
