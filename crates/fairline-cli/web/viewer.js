@@ -20,8 +20,9 @@ function compile(gl, type, src, name) {
 
 async function program(gl, vert, frag) {
   const p = gl.createProgram();
-  gl.attachShader(p, compile(gl, gl.VERTEX_SHADER, await shaderText(vert), vert));
-  gl.attachShader(p, compile(gl, gl.FRAGMENT_SHADER, await shaderText(frag), frag));
+  const [vs, fs] = await Promise.all([shaderText(vert), shaderText(frag)]);
+  gl.attachShader(p, compile(gl, gl.VERTEX_SHADER, vs, vert));
+  gl.attachShader(p, compile(gl, gl.FRAGMENT_SHADER, fs, frag));
   gl.bindAttribLocation(p, 0, 'aPosition');
   gl.bindAttribLocation(p, 1, 'aNormal');
   gl.bindAttribLocation(p, 2, 'aScalar');
@@ -53,6 +54,9 @@ function setUniforms(gl, prog, values) {
 }
 
 // Segments (pairs of points) of polylines from a frame header + data.
+// Overlays drawn after all others (the hovered line, picked endpoints).
+const ON_TOP = new Set(['hover', 'ends']);
+
 export function segments(lines, data) {
   let n = 0;
   for (const l of lines) n += 2 * (l.count - 1 + (l.closed ? 1 : 0));
@@ -85,9 +89,11 @@ export class Viewer {
 
   async init() {
     const gl = this.gl;
-    this.surface = await program(gl, 'surface.vert', 'surface.frag');
-    this.line = await program(gl, 'line.vert', 'line.frag');
-    this.pick = await program(gl, 'pick.vert', 'pick.frag');
+    [this.surface, this.line, this.pick] = await Promise.all([
+      program(gl, 'surface.vert', 'surface.frag'),
+      program(gl, 'line.vert', 'line.frag'),
+      program(gl, 'pick.vert', 'pick.frag'),
+    ]);
     this.colormap = colormapTexture(gl);
     const loop = () => {
       if (this.dirty) { this.dirty = false; this.draw(); }
@@ -268,11 +274,17 @@ export class Viewer {
         gl.bindVertexArray(w.vao);
         gl.drawElements(gl.LINES, w.count, gl.UNSIGNED_INT, 0);
       }
-      for (const o of Object.values(d.overlays)) {
+      // LEQUAL: a highlighted copy of a line (hover) drawn over the line
+      // itself passes the depth test; the highlights are drawn last
+      gl.depthFunc(gl.LEQUAL);
+      const names = Object.keys(d.overlays).sort((a, b) => ON_TOP.has(a) - ON_TOP.has(b));
+      for (const name of names) {
+        const o = d.overlays[name];
         setUniforms(gl, this.line, { uColor: o.color });
         gl.bindVertexArray(o.vao);
         gl.drawArrays(gl.LINES, 0, o.count);
       }
+      gl.depthFunc(gl.LESS);
       gl.bindVertexArray(null);
     });
     gl.disable(gl.SCISSOR_TEST);

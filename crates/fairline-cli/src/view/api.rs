@@ -5,24 +5,59 @@ use super::doc::{Doc, Step, shell_word};
 use super::frame::{frame, vec3_bytes};
 use super::http::{HttpRequest, HttpResponse};
 use fairline::fair::{FairMethod, FairOptions, RegionSpec, fair_highlight_lines_with, grow_region};
-use fairline::geom::{CurvatureMethod, LaplaceWeights, principal_curvatures, vertex_normals};
+use fairline::geom::{CurvatureMethod, LaplaceWeights, principal_curvatures};
 use fairline::highlight::{
     CircularLight, CircularLights, DetectOptions, HighlightLines, HighlightModel, HighlightOptions,
     LightArray, circular_highlight_bands, circular_highlight_lines, detect_irregularities,
 };
 use fairline::mesh::{FaceId, VertexId};
-use fairline::{SurfaceMesh, Vec3};
+use fairline::{Control, SurfaceMesh, Vec3};
 use serde::Deserialize;
 use serde_json::{Value, json};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 use std::time::Instant;
 
 /// State shared by the worker threads.
 pub struct Shared {
     pub state: Mutex<State>,
     pub guard: Guard,
+    /// True once the documents are read: the server answers the page's
+    /// files at once (so the browser loads the page while a large mesh is
+    /// read) and holds API calls until then.
+    loaded: Mutex<bool>,
+    loaded_signal: Condvar,
+}
+
+impl Shared {
+    /// The shared state of a server whose documents are still being read.
+    pub fn new(save_dir: PathBuf, guard: Guard) -> Shared {
+        Shared {
+            state: Mutex::new(State::new(Vec::new(), save_dir)),
+            guard,
+            loaded: Mutex::new(false),
+            loaded_signal: Condvar::new(),
+        }
+    }
+
+    /// Hands over the documents read and lets the waiting API calls go.
+    pub fn set_docs(&self, docs: Vec<Doc>) {
+        lock(self).docs = docs;
+        *self.loaded.lock().unwrap_or_else(|e| e.into_inner()) = true;
+        self.loaded_signal.notify_all();
+    }
+
+    /// Waits until the documents are read.
+    fn wait_loaded(&self) {
+        let mut loaded = self.loaded.lock().unwrap_or_else(|e| e.into_inner());
+        while !*loaded {
+            loaded = self
+                .loaded_signal
+                .wait(loaded)
+                .unwrap_or_else(|e| e.into_inner());
+        }
+    }
 }
 
 /// Documents, the save folder and the current job.
@@ -38,8 +73,12 @@ struct Job {
     id: u64,
     doc: usize,
     label: String,
+    /// running | cancelling (the flag is raised, the algorithm has not
+    /// stopped yet) | done | failed | cancelled
     state: &'static str,
     progress: f64,
+    /// The stage the library last reported ("iterations", "lights" …).
+    stage: &'static str,
     message: String,
     report: Value,
     command: String,
@@ -144,6 +183,7 @@ fn route(shared: &Arc<Shared>, req: &HttpRequest, body: &[u8]) -> Answer {
             None => error(404, format!("no such page: {path}")),
         };
     }
+    shared.wait_loaded();
     let parts: Vec<&str> = path.trim_start_matches("/api/").split('/').collect();
     match (get, post, parts.as_slice()) {
         (true, _, ["session"]) => json_answer(&session(&lock(shared))),
@@ -153,9 +193,11 @@ fn route(shared: &Arc<Shared>, req: &HttpRequest, body: &[u8]) -> Answer {
             if let Some(j) = st.job.as_mut()
                 && j.state == "running"
             {
+                // the library stops at its next checkpoint (Control); the
+                // job turns `cancelled` when its thread has ended
                 j.cancel.store(true, Ordering::SeqCst);
-                j.state = "cancelled";
-                j.message = "cancelled; the result will be discarded".into();
+                j.state = "cancelling";
+                j.message = "stopping; the result will be discarded".into();
             }
             json_answer(&job_json(&st))
         }
@@ -174,27 +216,10 @@ fn route(shared: &Arc<Shared>, req: &HttpRequest, body: &[u8]) -> Answer {
                     binary(vec3_bytes(&d.step(step).positions, d.center))
                 }
                 (true, _, ["normals"]) => {
-                    let normals = {
-                        let st = lock(shared);
-                        let d = &st.docs[k];
-                        match step {
-                            None => vertex_normals(&d.now),
-                            Some(_) => vertex_normals(&d.tri_at(step)),
-                        }
-                    };
-                    binary(vec3_bytes(&normals, Vec3::ZERO))
-                }
-                (true, _, ["indices"]) => {
                     let st = lock(shared);
-                    let tri = &st.docs[k].tri;
-                    let mut out = Vec::with_capacity(tri.face_count() * 12);
-                    for f in tri.faces() {
-                        for v in tri.triangle(f) {
-                            out.extend_from_slice(&v.0.to_le_bytes());
-                        }
-                    }
-                    binary(out)
+                    binary(st.docs[k].normal_bytes(step).to_vec())
                 }
+                (true, _, ["indices"]) => binary(lock(shared).docs[k].index_bytes.clone()),
                 (true, _, ["patches"]) => {
                     let st = lock(shared);
                     binary(
@@ -295,6 +320,7 @@ fn session(st: &State) -> Value {
                 "patches": d.history[0].surfaces.as_ref().map(|s| s.len()).unwrap_or(0),
                 "light": light,
                 "min_normal_cos": HighlightOptions::default().min_normal_cos,
+                "load_s": d.load_s,
                 "history": {
                     "cursor": d.cursor,
                     "steps": d.history.iter().map(|s| json!({"label": s.label, "command": s.command, "report": s.report})).collect::<Vec<_>>(),
@@ -314,6 +340,7 @@ fn job_json(st: &State) -> Value {
             "label": j.label,
             "state": j.state,
             "progress": j.progress,
+            "stage": j.stage,
             "message": j.message,
             "report": j.report,
             "command": j.command,
@@ -725,17 +752,18 @@ struct Outcome {
     label: String,
 }
 
-/// Fraction of a job done, written by the job, read by its watcher.
-type Progress = Arc<Mutex<f64>>;
-
 fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
     let req: RunRequest = match parse(body) {
         Ok(r) => r,
         Err(a) => return a,
     };
     let mut st = lock(shared);
-    if st.job.as_ref().is_some_and(|j| j.state == "running") {
-        return error(409, "a job is already running; wait for it or cancel it");
+    if st
+        .job
+        .as_ref()
+        .is_some_and(|j| matches!(j.state, "running" | "cancelling"))
+    {
+        return error(409, "a job is still running; wait for it or cancel it");
     }
     let d = &st.docs[k];
     if d.is_surface() != (req.method == "fair-surface") {
@@ -759,6 +787,7 @@ fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
         label: req.method.clone(),
         state: "running",
         progress: 0.0,
+        stage: "",
         message: format!("{} running", req.method),
         report: Value::Null,
         command: String::new(),
@@ -770,16 +799,18 @@ fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
         id,
         doc: k,
         cancel,
-        progress: Arc::new(Mutex::new(0.0)),
+        progress: Arc::new(Mutex::new(JobProgress::default())),
     };
     let shared = Arc::clone(shared);
     std::thread::spawn(move || {
-        let progress = Arc::clone(&ctx.progress);
+        let control = job_control(&ctx);
         let (tx, rx) = std::sync::mpsc::channel();
         let worker = std::thread::spawn(move || {
             let r = match surface_input {
-                Some((surfaces, grid)) => run_fair_surface(&req, &surfaces, grid, &file, &out),
-                None => run_method(&req, &tri, &mesh, &file, &out, &progress),
+                Some((surfaces, grid)) => {
+                    run_fair_surface(&req, &surfaces, grid, &file, &out, &control)
+                }
+                None => run_method(&req, &tri, &mesh, &file, &out, &control),
             };
             let _ = tx.send(());
             r
@@ -796,7 +827,8 @@ fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
                 && j.id == ctx.id
                 && j.state == "running"
             {
-                j.progress = p;
+                j.progress = p.fraction;
+                j.stage = p.stage;
             }
         }
         let result = worker
@@ -807,27 +839,72 @@ fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
     json_answer(&json!({"job": id}))
 }
 
+/// What the library last reported of a running job.
+#[derive(Clone, Copy, Default)]
+struct JobProgress {
+    /// Fraction done, 0..1.
+    fraction: f64,
+    /// The stage ("iterations" …).
+    stage: &'static str,
+}
+
 struct JobContext {
     id: u64,
     doc: usize,
     cancel: Arc<AtomicBool>,
-    progress: Progress,
+    progress: Arc<Mutex<JobProgress>>,
+}
+
+/// The [`fairline::Control`] of a job: the job's cancel flag (raised by
+/// `POST /api/job/cancel`, the library stops at its next
+/// `control.step(..)`) and a progress callback writing the fraction done
+/// into the job. Every job's options get it through their builder
+/// `.control(..)` where the library's options have one.
+fn job_control(ctx: &JobContext) -> Control {
+    let progress = Arc::clone(&ctx.progress);
+    Control::new()
+        .cancel_flag(Arc::clone(&ctx.cancel))
+        .on_progress(move |p| {
+            let mut slot = progress.lock().unwrap_or_else(|e| e.into_inner());
+            slot.stage = p.stage;
+            if p.total > 0 {
+                slot.fraction = (p.done as f64 / p.total as f64).clamp(0.0, 1.0);
+            }
+        })
 }
 
 fn finish_job(shared: &Shared, ctx: &JobContext, result: Result<Outcome, String>) {
     let mut st = lock(shared);
     let cancelled = ctx.cancel.load(Ordering::SeqCst);
+    if cancelled {
+        // stopped by the library (its Cancelled error) or finished after
+        // the flag was raised: the result is thrown away either way
+        if let Some(j) = st.job.as_mut()
+            && j.id == ctx.id
+        {
+            j.state = "cancelled";
+            j.message = match &result {
+                Err(e) if e == "cancelled" => format!(
+                    "{} cancelled after {:.2} s",
+                    j.label,
+                    j.started.elapsed().as_secs_f64()
+                ),
+                _ => format!("{} cancelled; its result was discarded", j.label),
+            };
+        }
+        return;
+    }
     match result {
-        Ok(o) if !cancelled => {
+        Ok(o) => {
             let d = &mut st.docs[ctx.doc];
             let surfaces = o.surfaces.or_else(|| d.current().surfaces.clone());
-            d.push(Step {
-                label: o.label.clone(),
-                command: o.command.clone(),
-                report: o.report.clone(),
-                positions: Arc::new(o.positions),
+            d.push(Step::new(
+                o.label.clone(),
+                o.command.clone(),
+                o.report.clone(),
+                Arc::new(o.positions),
                 surfaces,
-            });
+            ));
             if let Some(j) = st.job.as_mut()
                 && j.id == ctx.id
             {
@@ -838,11 +915,9 @@ fn finish_job(shared: &Shared, ctx: &JobContext, result: Result<Outcome, String>
                 j.command = o.command;
             }
         }
-        Ok(_) => {}
         Err(e) => {
             if let Some(j) = st.job.as_mut()
                 && j.id == ctx.id
-                && !cancelled
             {
                 j.state = "failed";
                 j.message = e;
@@ -851,13 +926,18 @@ fn finish_job(shared: &Shared, ctx: &JobContext, result: Result<Outcome, String>
     }
 }
 
+/// Runs a mesh job. `control` (see [`job_control`]) goes into every options
+/// struct through its `.control(..)` builder where the library has one
+/// (#17 item 1: FairOptions, the smoothing options, QuadFairOptions and
+/// EnhanceOptions get it this session); highlight fairing reports its
+/// iterations to it already.
 fn run_method(
     req: &RunRequest,
     tri: &SurfaceMesh,
     mesh: &SurfaceMesh,
     file: &str,
     out: &str,
-    progress: &Progress,
+    control: &Control,
 ) -> Result<Outcome, String> {
     let o = &req.options;
     let faces = req.faces.as_ref().map(|f| to_faces(tri, f));
@@ -896,11 +976,11 @@ fn run_method(
                 epsilon: o.epsilon.unwrap_or(defaults.epsilon),
                 ..defaults
             };
-            let total = options.max_iterations.max(1) as f64;
-            let mut done = 0.0;
+            let total = options.max_iterations.max(1) as u64;
+            let mut done = 0;
             let r = fair_highlight_lines_with(tri, &light, faces, &options, &mut |_| {
-                done += 1.0;
-                *progress.lock().unwrap_or_else(|e| e.into_inner()) = (done / total).min(1.0);
+                done += 1;
+                control.progress("iterations", done, total);
             })
             .map_err(|e| e.to_string())?;
             let mut report = r.report_json();
@@ -1359,6 +1439,7 @@ fn run_fair_surface(
     grid: usize,
     file: &str,
     out: &str,
+    control: &Control,
 ) -> Result<Outcome, String> {
     use fairline::fair::{Endpoints, SurfaceFairOptions, fair_surface};
     let circular = req
@@ -1377,9 +1458,14 @@ fn run_fair_surface(
     if let Some(e) = req.options.epsilon {
         opts.epsilon = e;
     }
+    // .control(control.clone()) goes into the options once
+    // SurfaceFairOptions has it (#17 item 1); until then the job stops at
+    // the checkpoints around the library call
+    control.checkpoint().map_err(|e| e.to_string())?;
     let t = Instant::now();
     let (faired, rep) =
         fair_surface(input, &lights, &ends.endpoints, &opts).map_err(|e| e.to_string())?;
+    control.checkpoint().map_err(|e| e.to_string())?;
     let mut all = surfaces.as_ref().clone();
     all[req.patch] = faired;
     let (mesh, _) = super::doc::tessellate_all(&all, grid).map_err(|e| e.to_string())?;

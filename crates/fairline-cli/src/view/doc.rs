@@ -8,7 +8,8 @@ use fairline::mesh::FaceId;
 use fairline::{SurfaceMesh, Vec3};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
+use std::time::Instant;
 
 /// One state of a document: its positions (and surfaces) after an action.
 pub struct Step {
@@ -22,6 +23,30 @@ pub struct Step {
     pub positions: Arc<Vec<Vec3>>,
     /// The surfaces (surface documents only).
     pub surfaces: Option<Arc<Vec<BSplineSurface>>>,
+    /// The vertex normals of these positions as the page gets them (f32
+    /// triples), computed once, on first request (the open step: while the
+    /// file is loaded).
+    pub normal_bytes: OnceLock<Vec<u8>>,
+}
+
+impl Step {
+    /// A step with its normals not computed yet.
+    pub fn new(
+        label: String,
+        command: String,
+        report: Value,
+        positions: Arc<Vec<Vec3>>,
+        surfaces: Option<Arc<Vec<BSplineSurface>>>,
+    ) -> Step {
+        Step {
+            label,
+            command,
+            report,
+            positions,
+            surfaces,
+            normal_bytes: OnceLock::new(),
+        }
+    }
 }
 
 /// A mesh or surface file opened in the workbench.
@@ -56,6 +81,12 @@ pub struct Doc {
     /// `tri` with the current step's positions (kept in step with `cursor`,
     /// so requests on the current state need no copy of the mesh).
     pub now: SurfaceMesh,
+    /// The triangles of `tri` as the page gets them (u32 triples).
+    pub index_bytes: Vec<u8>,
+    /// Where opening the file took its time (seconds): `read` (reading and
+    /// building the mesh, or reading and tessellating the surfaces),
+    /// `prepare` (triangulation, normals and the binary buffers), `total`.
+    pub load_s: Value,
 }
 
 /// The triangle mesh of surfaces tessellated `n` × `n` per patch, and the
@@ -83,6 +114,7 @@ pub fn tessellate_all(surfaces: &[BSplineSurface], n: usize) -> Result<(SurfaceM
 impl Doc {
     /// Reads a mesh or surface file.
     pub fn open(path: &Path, grid: usize) -> Result<Doc> {
+        let t0 = Instant::now();
         let name = path
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -116,6 +148,7 @@ impl Doc {
                 };
                 (mesh, None, Vec::new(), scalars)
             };
+        let read_s = t0.elapsed().as_secs_f64();
         let (lo, hi) = fairline::mesh::bounding_box(mesh.positions())
             .ok_or_else(|| bad_input(format!("{}: no vertices", path.display())))?;
         if mesh.face_count() == 0 {
@@ -129,7 +162,14 @@ impl Doc {
             (t.mesh, Some(t.source_face))
         };
         let positions = Arc::new(mesh.positions().to_vec());
-        let tri_now = tri.clone();
+        // the first frame needs the normals and the triangles: computed
+        // here, beside the copy of the mesh kept for the current state
+        let ((tri_now, index_bytes), normals) = rayon::join(
+            || (tri.clone(), triangle_bytes(&tri)),
+            || super::frame::vec3_bytes(&fairline::geom::vertex_normals(&tri), Vec3::ZERO),
+        );
+        let normal_bytes = OnceLock::new();
+        let _ = normal_bytes.set(normals);
         let center = 0.5 * (lo + hi);
         let radius = (0.5 * (hi - lo).length()).max(f64::MIN_POSITIVE);
         let kind = if surfaces.is_some() {
@@ -155,9 +195,16 @@ impl Doc {
                 report: json!({"command": "open", "kind": kind}),
                 positions,
                 surfaces,
+                normal_bytes,
             }],
             cursor: 0,
             now: tri_now,
+            index_bytes,
+            load_s: json!({
+                "read": read_s,
+                "prepare": t0.elapsed().as_secs_f64() - read_s,
+                "total": t0.elapsed().as_secs_f64(),
+            }),
         })
     }
 
@@ -174,6 +221,21 @@ impl Doc {
     /// The step `n` (clamped to the history).
     pub fn step(&self, n: Option<usize>) -> &Step {
         &self.history[n.unwrap_or(self.cursor).min(self.history.len() - 1)]
+    }
+
+    /// The vertex normals of step `n` (default the current one) as f32
+    /// triples: the library's area-weighted vertex normals (Yong et al.
+    /// Eq. (3)), computed once per step.
+    pub fn normal_bytes(&self, n: Option<usize>) -> &[u8] {
+        let current = n.is_none_or(|n| n.min(self.history.len() - 1) == self.cursor);
+        self.step(n).normal_bytes.get_or_init(|| {
+            let normals = if current {
+                fairline::geom::vertex_normals(&self.now)
+            } else {
+                fairline::geom::vertex_normals(&self.tri_at(n))
+            };
+            super::frame::vec3_bytes(&normals, Vec3::ZERO)
+        })
     }
 
     /// The drawn triangle mesh at step `n`.
@@ -259,6 +321,17 @@ impl Doc {
         out.dedup();
         out
     }
+}
+
+/// The triangles of a triangle mesh as u32 little-endian triples.
+fn triangle_bytes(tri: &SurfaceMesh) -> Vec<u8> {
+    let mut out = Vec::with_capacity(tri.face_count() * 12);
+    for f in tri.faces() {
+        for v in tri.triangle(f) {
+            out.extend_from_slice(&v.0.to_le_bytes());
+        }
+    }
+    out
 }
 
 /// `s` quoted for a POSIX shell when it holds anything but plain characters.
