@@ -465,8 +465,10 @@ async function start() {
   // the session and the shaders
   const early = [api.positions(0), api.normals(0), api.indices(0)];
   early.forEach((r) => r.catch(() => {}));
-  const [, session] = await Promise.all([viewer.init(), api.session()]);
-  mark('session');
+  const [, session] = await Promise.all([
+    viewer.init(),
+    api.session().then((r) => { mark('session'); return r; }),
+  ]);
   state.session = session;
   const docs = state.session.docs;
   $('docnames').textContent = docs.map((d) => `${d.name} (${d.kind}, ${d.vertices} vertices, ${d.triangles} triangles)`).join('  |  ');
@@ -483,6 +485,8 @@ async function start() {
   state.surfaceDoc = docs.findIndex((d) => d.kind === 'surface');
   await Promise.all(docs.map((d, k) => (d.kind === 'surface' ? loadOutlines(k) : null)));
   viewer.camera.fit(Math.max(...docs.map((d) => d.radius)));
+  await viewer.ready();
+  mark('shaders');
   showSession();
   readLightControls();
   wire();

@@ -10,24 +10,36 @@ async function shaderText(name) {
   return r.text();
 }
 
-function compile(gl, type, src, name) {
+function compile(gl, type, src) {
   const s = gl.createShader(type);
   gl.shaderSource(s, src);
   gl.compileShader(s);
-  if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) throw new Error(`${name}: ${gl.getShaderInfoLog(s)}`);
   return s;
 }
 
-async function program(gl, vert, frag) {
+// Compiling and linking is started here and not waited for (no status is
+// asked): the GL compiles while the page fetches the geometry;
+// `finishProgram` waits for it (KHR_parallel_shader_compile when offered).
+async function startProgram(gl, vert, frag) {
   const p = gl.createProgram();
   const [vs, fs] = await Promise.all([shaderText(vert), shaderText(frag)]);
-  gl.attachShader(p, compile(gl, gl.VERTEX_SHADER, vs, vert));
-  gl.attachShader(p, compile(gl, gl.FRAGMENT_SHADER, fs, frag));
+  const shaders = [compile(gl, gl.VERTEX_SHADER, vs), compile(gl, gl.FRAGMENT_SHADER, fs)];
+  for (const sh of shaders) gl.attachShader(p, sh);
   gl.bindAttribLocation(p, 0, 'aPosition');
   gl.bindAttribLocation(p, 1, 'aNormal');
   gl.bindAttribLocation(p, 2, 'aScalar');
   gl.linkProgram(p);
-  if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(`${vert}+${frag}: ${gl.getProgramInfoLog(p)}`);
+  return { p, shaders, names: [vert, frag] };
+}
+
+async function finishProgram(gl, parallel, { p, shaders, names }) {
+  if (parallel) {
+    while (!gl.getProgramParameter(p, parallel.COMPLETION_STATUS_KHR)) await new Promise((r) => setTimeout(r, 5));
+  }
+  shaders.forEach((sh, i) => {
+    if (!gl.getShaderParameter(sh, gl.COMPILE_STATUS)) throw new Error(`${names[i]}: ${gl.getShaderInfoLog(sh)}`);
+  });
+  if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(`${names.join('+')}: ${gl.getProgramInfoLog(p)}`);
   const uniforms = {};
   const n = gl.getProgramParameter(p, gl.ACTIVE_UNIFORMS);
   for (let i = 0; i < n; i++) {
@@ -54,6 +66,10 @@ function setUniforms(gl, prog, values) {
 }
 
 // Segments (pairs of points) of polylines from a frame header + data.
+// Samples of θ per circular light in surface.frag (a uniform there, so that
+// the GLSL compiler keeps the loop instead of unrolling it).
+const THETA_SAMPLES = 48;
+
 // Overlays drawn after all others (the hovered line, picked endpoints).
 const ON_TOP = new Set(['hover', 'ends']);
 
@@ -87,13 +103,21 @@ export class Viewer {
     this.frames = 0;
   }
 
+  // Fetches the shaders and starts compiling them (see `ready`).
   async init() {
     const gl = this.gl;
-    [this.surface, this.line, this.pick] = await Promise.all([
-      program(gl, 'surface.vert', 'surface.frag'),
-      program(gl, 'line.vert', 'line.frag'),
-      program(gl, 'pick.vert', 'pick.frag'),
+    this.parallel = gl.getExtension('KHR_parallel_shader_compile');
+    this.started = await Promise.all([
+      startProgram(gl, 'surface.vert', 'surface.frag'),
+      startProgram(gl, 'line.vert', 'line.frag'),
+      startProgram(gl, 'pick.vert', 'pick.frag'),
     ]);
+  }
+
+  // Waits for the shaders started by `init` and starts drawing.
+  async ready() {
+    const gl = this.gl;
+    [this.surface, this.line, this.pick] = await Promise.all(this.started.map((s) => finishProgram(gl, this.parallel, s)));
     this.colormap = colormapTexture(gl);
     const loop = () => {
       if (this.dirty) { this.dirty = false; this.draw(); }
@@ -244,6 +268,7 @@ export class Viewer {
         uViewProj: vpm,
         uEye: this.camera.eye(),
         uMinCos: d.meta.min_normal_cos,
+        uThetaSamples: THETA_SAMPLES,
         uRadiusCount: this.lightUniforms ? Math.min(16, (this.lightUniforms(k).uRadii || []).length) : 0,
         uScalarOn: d.scalarOn ? 1 : 0,
         uScalarLo: d.scalarRange ? d.scalarRange.lo : 0,

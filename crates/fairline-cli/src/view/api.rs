@@ -310,8 +310,8 @@ fn session(st: &State) -> Value {
                 "kind": if d.is_surface() { "surface" } else { "mesh" },
                 "vertices": d.tri.vertex_count(),
                 "triangles": d.tri.face_count(),
-                "faces": d.mesh.face_count(),
-                "quads": d.mesh.faces().filter(|&f| d.mesh.face_size(f) == 4).count(),
+                "faces": d.input_mesh().face_count(),
+                "quads": d.input_mesh().faces().filter(|&f| d.input_mesh().face_size(f) == 4).count(),
                 "center": d.center.to_array(),
                 "radius": d.radius,
                 "bbox": [d.bbox.0.to_array(), d.bbox.1.to_array()],
@@ -423,7 +423,7 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     let (center, file) = (d.center, d.current_file());
     let stepped;
     let mesh = match req.step {
-        None => &d.now,
+        None => d.now(),
         Some(_) => {
             stepped = d.tri_at(req.step);
             &stepped
@@ -435,6 +435,7 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         return bad("band must be a positive number");
     }
     let t = Instant::now();
+    let mut stages: Vec<(&str, f64)> = Vec::new();
     let mut meta = Vec::new();
     let mut band_meta = Vec::new();
     let mut floats = Vec::new();
@@ -487,8 +488,11 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             Ok(m) => m,
             Err(e) => return bad(e),
         };
+        stages.push(("model", t.elapsed().as_secs_f64()));
         let lines = model.lines(mesh);
+        stages.push(("chain", t.elapsed().as_secs_f64()));
         push_lines(&lines, center, None, &mut meta, &mut floats);
+        stages.push(("encode", t.elapsed().as_secs_f64()));
         if let Some(rho) = req.band {
             match model.bands(mesh, rho) {
                 Ok(b) => {
@@ -504,10 +508,19 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             req.band.map(|b| format!(" --band {b}")).unwrap_or_default()
         );
     }
+    // seconds of each stage (linear lights): the model (normals, distances,
+    // segments), chaining the segments into polylines, the f32 encoding
+    let mut split = serde_json::Map::new();
+    let mut last = 0.0;
+    for (name, at) in stages {
+        split.insert(name.into(), json!(at - last));
+        last = at;
+    }
     let header = json!({
         "lines": meta,
         "bands": band_meta,
         "time_s": t.elapsed().as_secs_f64(),
+        "stages_s": split,
         "command": command,
     });
     binary(frame(&header, &floats))
@@ -527,7 +540,7 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     };
     let st = lock(shared);
     let d = &st.docs[k];
-    let (mesh, center, file) = (&d.now, d.center, d.current_file());
+    let (mesh, center, file) = (d.now(), d.center, d.current_file());
     let defaults = DetectOptions::default();
     let opts = defaults
         .threshold(req.threshold.unwrap_or(defaults.threshold))

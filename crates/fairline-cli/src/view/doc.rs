@@ -55,10 +55,11 @@ pub struct Doc {
     pub name: String,
     /// The path given on the command line.
     pub path: PathBuf,
-    /// The mesh as read (polygons kept); for surfaces, the tessellation.
-    pub mesh: SurfaceMesh,
-    /// The triangle mesh drawn and given to triangle algorithms; the same
-    /// vertices as `mesh`.
+    /// The mesh as read when it has polygons (else `tri` is the mesh as
+    /// read; see [`Doc::input_mesh`]).
+    pub polygons: Option<SurfaceMesh>,
+    /// The triangle mesh drawn and given to triangle algorithms (for
+    /// surfaces, the tessellation); the same vertices as the input mesh.
     pub tri: SurfaceMesh,
     /// Input face of each triangle when `mesh` has polygons.
     pub tri_source: Option<Vec<FaceId>>,
@@ -78,9 +79,10 @@ pub struct Doc {
     pub history: Vec<Step>,
     /// Index of the current step.
     pub cursor: usize,
-    /// `tri` with the current step's positions (kept in step with `cursor`,
-    /// so requests on the current state need no copy of the mesh).
-    pub now: SurfaceMesh,
+    /// `tri` with the current step's positions when that is not step 0
+    /// (kept in step with `cursor`, so requests on the current state need no
+    /// copy of the mesh; see [`Doc::now`]).
+    now_moved: Option<SurfaceMesh>,
     /// The triangles of `tri` as the page gets them (u32 triples).
     pub index_bytes: Vec<u8>,
     /// Where opening the file took its time (seconds): `read` (reading and
@@ -154,18 +156,19 @@ impl Doc {
         if mesh.face_count() == 0 {
             return Err(bad_input(format!("{}: no faces", path.display())));
         }
-        let (tri, tri_source) = if mesh.is_triangle_mesh() {
-            (mesh.clone(), None)
+        // a triangle mesh is kept once (no copy for drawing, none for the
+        // current state until a step moves it)
+        let (tri, tri_source, polygons) = if mesh.is_triangle_mesh() {
+            (mesh, None, None)
         } else {
             let t = fairline::mesh::triangulate(&mesh)
                 .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
-            (t.mesh, Some(t.source_face))
+            (t.mesh, Some(t.source_face), Some(mesh))
         };
-        let positions = Arc::new(mesh.positions().to_vec());
         // the first frame needs the normals and the triangles: computed
-        // here, beside the copy of the mesh kept for the current state
-        let ((tri_now, index_bytes), normals) = rayon::join(
-            || (tri.clone(), triangle_bytes(&tri)),
+        // here, in parallel
+        let ((positions, index_bytes), normals) = rayon::join(
+            || (Arc::new(tri.positions().to_vec()), triangle_bytes(&tri)),
             || super::frame::vec3_bytes(&fairline::geom::vertex_normals(&tri), Vec3::ZERO),
         );
         let normal_bytes = OnceLock::new();
@@ -180,7 +183,7 @@ impl Doc {
         Ok(Doc {
             name: name.clone(),
             path: path.to_path_buf(),
-            mesh,
+            polygons,
             tri,
             tri_source,
             patch_of_triangle,
@@ -198,7 +201,7 @@ impl Doc {
                 normal_bytes,
             }],
             cursor: 0,
-            now: tri_now,
+            now_moved: None,
             index_bytes,
             load_s: json!({
                 "read": read_s,
@@ -230,7 +233,7 @@ impl Doc {
         let current = n.is_none_or(|n| n.min(self.history.len() - 1) == self.cursor);
         self.step(n).normal_bytes.get_or_init(|| {
             let normals = if current {
-                fairline::geom::vertex_normals(&self.now)
+                fairline::geom::vertex_normals(self.now())
             } else {
                 fairline::geom::vertex_normals(&self.tri_at(n))
             };
@@ -246,9 +249,19 @@ impl Doc {
         m
     }
 
+    /// The mesh as read (polygons kept; for surfaces the tessellation).
+    pub fn input_mesh(&self) -> &SurfaceMesh {
+        self.polygons.as_ref().unwrap_or(&self.tri)
+    }
+
+    /// The drawn triangle mesh with the current step's positions.
+    pub fn now(&self) -> &SurfaceMesh {
+        self.now_moved.as_ref().unwrap_or(&self.tri)
+    }
+
     /// The input mesh (polygons kept) at the current step.
     pub fn mesh_now(&self) -> SurfaceMesh {
-        let mut m = self.mesh.clone();
+        let mut m = self.input_mesh().clone();
         let _ = m.set_positions(self.current().positions.to_vec());
         m
     }
@@ -263,10 +276,22 @@ impl Doc {
     /// Makes step `n` the current one.
     pub fn set_cursor(&mut self, n: usize) {
         self.cursor = n.min(self.history.len() - 1);
-        // same vertex count by construction
-        let _ = self
-            .now
-            .set_positions(self.history[self.cursor].positions.to_vec());
+        if self.cursor == 0 {
+            self.now_moved = None;
+            return;
+        }
+        let positions = self.history[self.cursor].positions.to_vec();
+        match &mut self.now_moved {
+            // same vertex count by construction
+            Some(m) => {
+                let _ = m.set_positions(positions);
+            }
+            None => {
+                let mut m = self.tri.clone();
+                let _ = m.set_positions(positions);
+                self.now_moved = Some(m);
+            }
+        }
     }
 
     /// The file name the current state would have as a command's output.
