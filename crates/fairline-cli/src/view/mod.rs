@@ -34,7 +34,8 @@
 //! - `GET /api/doc/K/positions[?step=N]`, `.../normals[?step=N]`:
 //!   little-endian f32 triples per vertex (positions minus `center`;
 //!   normals = the library's area-weighted vertex normals, Yong et al.
-//!   Eq. (3)); `step` selects a history step (default the current one).
+//!   Eq. (3), computed once per step, for the opening step while the file
+//!   is read); `step` selects a history step (default the current one).
 //! - `GET /api/doc/K/indices`: u32 triples per triangle.
 //! - `GET /api/doc/K/patches`: u32 patch index per triangle (surfaces).
 //! - `GET /api/doc/K/scalar/NAME`: f32 per vertex (`k1 k2 mean gauss` by
@@ -44,7 +45,8 @@
 //!   library's exact highlight polylines. Binary frame: u32 length of a JSON
 //!   header, the header, padding to 4 bytes, then f32 points (minus
 //!   `center`); the header lists `lines` (`index`, `closed`, `start`,
-//!   `count` into the points), `bands`, `time_s` and `command`.
+//!   `count` into the points), `bands`, `time_s`, `stages_s` (linear
+//!   lights: seconds of `model`, `chain`, `encode`) and `command`.
 //! - `POST /api/doc/K/detect` `{"light":LIGHT, "threshold"?, "region_radius"?}`:
 //!   the same frame; the header adds `stretches` (irregular stretches,
 //!   `start`, `count`, `score`) and the ranked `regions` (`score`, `center`,
