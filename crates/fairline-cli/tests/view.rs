@@ -147,7 +147,7 @@ impl Server {
         let t = Instant::now();
         loop {
             let j = self.json("/api/job", None);
-            if j["state"] != "running" {
+            if j["state"] != "running" && j["state"] != "cancelling" {
                 return j;
             }
             assert!(t.elapsed() < Duration::from_secs(300), "job did not finish");
@@ -216,6 +216,118 @@ fn shared(rel: &str) -> Option<PathBuf> {
         p.display()
     );
     None
+}
+
+/// Starts highlight-line fairing of the dent of the panel with `options`.
+fn start_fair_job(srv: &Server, options: Value) -> u64 {
+    let region = srv.json(
+        "/api/doc/0/region",
+        Some(&json!({"op": "sphere", "center": [0.5, -0.4, 0.0], "radius": 0.5})),
+    );
+    let light: Value = serde_json::from_str(LIGHT).unwrap();
+    let started = srv.json(
+        "/api/doc/0/run",
+        Some(&json!({"method": "fair", "faces": region["faces"], "light": light, "options": options})),
+    );
+    started["job"].as_u64().unwrap()
+}
+
+/// The page's cancel button: the answer comes at once with the job
+/// `cancelling` (its cancel flag raised), the job ends `cancelled`, its
+/// result never enters the history, no second job starts while it is
+/// stopping, and the next job runs.
+#[test]
+fn cancelling_a_job_discards_its_result_and_frees_the_server() {
+    let dir = tmp("view-cancel");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 81);
+    let srv = start(&[&mesh], &dir);
+    let id = start_fair_job(
+        &srv,
+        json!({"method": "highlight", "max_iterations": 200, "epsilon": 0.0}),
+    );
+    let cancel = srv.json("/api/job/cancel", Some(&json!({})));
+    assert_eq!(cancel["id"].as_u64(), Some(id));
+    if cancel["state"] == "cancelling" {
+        // a second job waits until this one has stopped
+        let (st, _) = srv.post(
+            "/api/doc/0/run",
+            &json!({"method": "smooth", "options": {"method": "laplace", "iterations": 1}}),
+        );
+        assert_eq!(st, 409, "a second job started while one was stopping");
+        let end = srv.wait_job();
+        assert_eq!(end["state"], "cancelled", "{end}");
+        assert_eq!(end["report"], Value::Null, "{end}");
+        let session = srv.json("/api/session", None);
+        assert_eq!(session["docs"][0]["history"]["cursor"], 0);
+        assert_eq!(
+            session["docs"][0]["history"]["steps"]
+                .as_array()
+                .unwrap()
+                .len(),
+            1,
+            "the cancelled result entered the history"
+        );
+    } else {
+        // the machine finished 200 iterations before the cancel arrived
+        assert_eq!(cancel["state"], "done", "{cancel}");
+    }
+    let before = srv.json("/api/session", None)["docs"][0]["history"]["cursor"]
+        .as_u64()
+        .unwrap();
+    srv.json(
+        "/api/doc/0/run",
+        Some(&json!({"method": "smooth", "options": {"method": "laplace", "iterations": 1}})),
+    );
+    let done = srv.wait_job();
+    assert_eq!(done["state"], "done", "{done}");
+    assert_eq!(
+        srv.json("/api/session", None)["docs"][0]["history"]["cursor"]
+            .as_u64()
+            .unwrap(),
+        before + 1
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Cancel stops the running algorithm itself (through `fairline::Control`
+/// in its options), not only the page's wait: a fairing job of 100 000
+/// iterations that cannot converge ends `cancelled` within seconds of the
+/// cancel, with progress reported on the way.
+#[test]
+#[ignore = "needs FairOptions::control (#17 item 1, another branch this session): enable at the merge"]
+fn cancel_stops_a_long_fairing_job_within_seconds() {
+    let dir = tmp("view-cancel-long");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 81);
+    let srv = start(&[&mesh], &dir);
+    start_fair_job(
+        &srv,
+        json!({"method": "highlight", "max_iterations": 100000, "epsilon": 0.0}),
+    );
+    // progress arrives from the library's Control
+    let t = Instant::now();
+    loop {
+        let j = srv.json("/api/job", None);
+        assert_eq!(j["state"], "running", "{j}");
+        if j["progress"].as_f64().unwrap() > 0.0 {
+            assert_eq!(j["stage"], "iterations");
+            break;
+        }
+        assert!(t.elapsed() < Duration::from_secs(60), "no progress: {j}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let t = Instant::now();
+    let cancel = srv.json("/api/job/cancel", Some(&json!({})));
+    assert_eq!(cancel["state"], "cancelling");
+    let end = srv.wait_job();
+    let stopped_s = t.elapsed().as_secs_f64();
+    assert_eq!(end["state"], "cancelled", "{end}");
+    assert!(
+        stopped_s < 5.0,
+        "the algorithm went on for {stopped_s:.1} s after the cancel"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -986,6 +1098,26 @@ fn click_uv(b: &mut cdp::Browser, line: usize, k: usize) {
     }
 }
 
+/// Moves the mouse over point `k` of pre-image `line` in the 3-D view, and
+/// clicks there when `click`.
+fn move_to_line_3d(b: &mut cdp::Browser, line: usize, k: usize, click: bool) {
+    let xy = b.eval(&format!("window.fairline.linePointOnPage({line}, {k})"));
+    assert!(xy.is_array(), "point {k} of line {line} is in the 3-D view");
+    let (x, y) = (xy[0].as_f64().unwrap(), xy[1].as_f64().unwrap());
+    let kinds: &[&str] = if click {
+        &["mouseMoved", "mousePressed", "mouseReleased"]
+    } else {
+        &["mouseMoved"]
+    };
+    for t in kinds {
+        let button = if *t == "mouseMoved" { "none" } else { "left" };
+        b.call(
+            "Input.dispatchMouseEvent",
+            json!({"type": t, "x": x, "y": y, "button": button, "clickCount": 1}),
+        );
+    }
+}
+
 #[test]
 fn page_shows_bspline_patches_and_fairs_a_surface_from_uv_endpoints() {
     let Some(exe) = cdp::chromium() else {
@@ -1034,6 +1166,12 @@ fn page_shows_bspline_patches_and_fairs_a_surface_from_uv_endpoints() {
     ));
     b.eval("document.getElementById('uvlines').click()");
     b.wait_for("window.fairline.uvPanel.lines.length > 0", 60);
+    // fly to the patch, as a user would to work on it
+    b.eval(&format!(
+        "(() => {{ const v = window.fairline.viewer; v.camera.target = {}; v.camera.zoom(0.12); v.dirty = true; }})()",
+        labels[patch]
+    ));
+    std::thread::sleep(Duration::from_millis(500));
     // hovering a pre-image lights it up in the 3-D view
     let n = b.eval("window.fairline.uvPanel.lines.map((l) => l.count)");
     let counts: Vec<usize> = serde_json::from_value(n).unwrap();
@@ -1042,9 +1180,108 @@ fn page_shows_bspline_patches_and_fairs_a_surface_from_uv_endpoints() {
     b.wait_for("window.fairline.viewer.docs[0].overlays.hover", 10);
     click_uv(&mut b, line, 2 * counts[line] / 3);
     b.wait_for("window.fairline.uvPanel.endpoints.length === 1", 10);
+    // the other way: hovering the pre-image in the 3-D view lights it up in
+    // the (u, v) panel (and in 3-D)
+    let (k1, k2) = (counts[line] / 3, 2 * counts[line] / 3);
+    b.eval("window.fairline.uvPanel.setHover(-1)");
+    b.wait_for("!window.fairline.viewer.docs[0].overlays.hover", 10);
+    move_to_line_3d(&mut b, line, counts[line] / 2, false);
+    b.wait_for(&format!("window.fairline.uvPanel.hover === {line}"), 10);
+    b.wait_for("window.fairline.viewer.docs[0].overlays.hover", 10);
+    // the hovered line is drawn thicker in the panel: more lit pixels in
+    // its colour than with no hover
+    let lit = "(() => { const p = window.fairline.uvPanel; const g = p.canvas.getContext('2d'); const d = g.getImageData(0, 0, p.canvas.width, p.canvas.height).data; let n = 0; for (let i = 0; i < d.length; i += 4) if (d[i] + d[i + 1] + d[i + 2] > 120) n++; return n; })()";
+    let lit_hover = b.eval(lit).as_u64().unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let shot = b.screenshot();
+    save_screenshot("workbench-surface-hover3d.png", &shot.3);
+    b.eval("window.fairline.uvPanel.setHover(-1)");
+    let lit_plain = b.eval(lit).as_u64().unwrap();
+    // and in the 3-D view: the line turns yellow (drawn over its colour)
+    std::thread::sleep(Duration::from_millis(300));
+    let plain = b.screenshot();
+    let rect = canvas_rect(&mut b);
+    let yellow = |img: &(u32, u32, Vec<u8>, Vec<u8>)| {
+        let mut n = 0;
+        for y in rect.1..rect.1 + rect.3 {
+            for x in rect.0..rect.0 + rect.2 {
+                let i = 4 * (y * img.0 + x) as usize;
+                let (r, g, bl) = (img.2[i], img.2[i + 1], img.2[i + 2]);
+                if r > 200 && g > 200 && bl < 110 {
+                    n += 1;
+                }
+            }
+        }
+        n
+    };
+    let (y_hover, y_plain) = (yellow(&shot), yellow(&plain));
+    assert!(
+        y_hover > y_plain + 20,
+        "hovered line yellow in the 3-D view: {y_hover} vs {y_plain} yellow pixels"
+    );
+    assert!(
+        lit_hover > lit_plain + 20,
+        "hovered line drawn thicker in the (u, v) panel: {lit_hover} vs {lit_plain} lit pixels"
+    );
+    // endpoints picked by clicking the line in the 3-D view: points of that
+    // line (its radius, its (u, v) points), the ones under the clicks (line
+    // points lie closer than a pixel on the screen: within 1.5 px)
+    b.eval("document.getElementById('clear-ends').click()");
+    b.eval("document.getElementById('tool').value = 'endpoints'");
+    move_to_line_3d(&mut b, line, k1, true);
+    b.wait_for("window.fairline.uvPanel.pending", 10);
+    move_to_line_3d(&mut b, line, k2, true);
+    b.wait_for("window.fairline.uvPanel.endpoints.length === 1", 10);
+    let picked = b.eval(&format!(
+        "(() => {{ const f = window.fairline; const l = f.uvPanel.lines[{line}]; const e = f.uvPanel.endpoints[0]; \
+         const find = (uv) => {{ for (let k = 0; k < l.count; k++) if (l.uv[2 * k] === uv[0] && l.uv[2 * k + 1] === uv[1]) return k; return -1; }}; \
+         const px = (a, b) => {{ if (a < 0) return 1e9; const A = f.linePointOnPage({line}, a), B = f.linePointOnPage({line}, b); return Math.hypot(A[0] - B[0], A[1] - B[1]); }}; \
+         const ks = [find(e.start), find(e.end)]; return [e.radius === l.radius, ks[0], ks[1], px(ks[0], {k1}), px(ks[1], {k2})]; }})()"
+    ));
+    assert_eq!(
+        picked[0], true,
+        "endpoints on the clicked line's radius: {picked}"
+    );
+    assert!(
+        picked[1].as_i64().unwrap() >= 0 && picked[2].as_i64().unwrap() >= 0,
+        "endpoints are points of the clicked line: {picked}"
+    );
+    assert!(
+        picked[3].as_f64().unwrap() <= 1.5 && picked[4].as_f64().unwrap() <= 1.5,
+        "endpoints under the clicks: {picked}"
+    );
+    b.wait_for("window.fairline.viewer.docs[0].overlays.ends", 10);
+    b.eval("document.getElementById('tool').value = 'orbit'");
     std::thread::sleep(Duration::from_millis(300));
     let shot = b.screenshot();
     save_screenshot("workbench-surface.png", &shot.3);
+    // circular lights shaded per fragment (Nishiyama Eq. (2.18)): near-black
+    // line pixels on the part, none with plain shading
+    let black = |img: &(u32, u32, Vec<u8>, Vec<u8>)| {
+        let mut n = 0;
+        for y in rect.1..rect.1 + rect.3 {
+            for x in rect.0..rect.0 + rect.2 {
+                if lum(img, x, y) < 16.0 {
+                    n += 1;
+                }
+            }
+        }
+        n
+    };
+    let mode = |b: &mut cdp::Browser, m: &str| {
+        b.eval(&format!("(() => {{ const m = document.getElementById('mode'); m.value = '{m}'; m.dispatchEvent(new Event('input')); }})()"));
+        std::thread::sleep(Duration::from_millis(800));
+        b.screenshot()
+    };
+    let plain = mode(&mut b, "0");
+    let circular = mode(&mut b, "4");
+    save_screenshot("workbench-circular.png", &circular.3);
+    let (k_plain, k_circ) = (black(&plain), black(&circular));
+    assert!(
+        k_circ > k_plain + 500,
+        "circular highlight lines shaded: {k_circ} vs {k_plain} near-black pixels"
+    );
+    mode(&mut b, "1");
     b.eval("document.getElementById('fair-surface').click()");
     b.wait_for("document.body.dataset.lastJob", 300);
     let job = srv.json("/api/job", None);
@@ -1127,6 +1364,7 @@ fn workbench_timings() {
     )
     .unwrap();
     let (mut server_s, mut trip_s) = (Vec::new(), Vec::new());
+    let mut stage_s: [Vec<f64>; 3] = Default::default();
     let mut nlines = 0;
     for _ in 0..7 {
         let t = Instant::now();
@@ -1135,11 +1373,18 @@ fn workbench_timings() {
         assert_eq!(st, 200);
         let (h, _) = parse_frame(&b);
         server_s.push(h["time_s"].as_f64().unwrap());
+        for (k, name) in ["model", "chain", "encode"].iter().enumerate() {
+            stage_s[k].push(h["stages_s"][name].as_f64().unwrap());
+        }
         nlines = h["lines"].as_array().unwrap().len();
     }
+    let [model_s, chain_s, encode_s] = stage_s;
     eprintln!(
-        "BENCH exact lines, 450,241 vertices, {nlines} lines: server {:.1} ms, round trip {:.1} ms (medians of 7)",
+        "BENCH exact lines, 450,241 vertices, {nlines} lines: server {:.1} ms (model {:.1}, chaining {:.1}, encoding {:.1}), round trip {:.1} ms (medians of 7)",
         1e3 * median(server_s),
+        1e3 * median(model_s),
+        1e3 * median(chain_s),
+        1e3 * median(encode_s),
         1e3 * median(trip_s)
     );
     drop(srv);
@@ -1147,26 +1392,53 @@ fn workbench_timings() {
         eprintln!("no chromium: no page timings");
         return;
     };
+    // run 0 starts the browser just before the command (cold: its own
+    // start-up is counted); runs 1..=3 reuse it, as when the page opens in
+    // a browser that is already running
     for (n, label) in [(101usize, "20k triangles"), (708, "1.0M triangles")] {
         let mesh = dir.join(format!("p{n}.ply"));
         panel_ply(&mesh, n);
         let mut b = cdp::Browser::launch(&exe, 1280, 800);
-        let t0 = Instant::now();
-        let srv = start(&[&mesh], &dir);
-        let url_s = t0.elapsed().as_secs_f64();
-        b.call("Page.navigate", json!({"url": srv.url}));
-        b.wait_for("document.body && document.body.dataset.ready === '1'", 600);
-        let ready_s = t0.elapsed().as_secs_f64();
-        let slow = b.eval("performance.getEntriesByType('resource').concat(performance.getEntriesByType('navigation')).map((e) => [e.name.replace(/token=[0-9a-f]+/, 'token=…'), Math.round(e.startTime), Math.round(e.duration)]).sort((a, b) => b[2] - a[2]).slice(0, 4)");
-        eprintln!("BENCH {label}: slowest requests [url, start ms, duration ms]: {slow}");
-        let times: Vec<f64> =
-            serde_json::from_value(b.eval("window.fairline.timeFrames(10)")).unwrap();
-        let size =
-            b.eval("[window.fairline.viewer.canvas.width, window.fairline.viewer.canvas.height]");
-        eprintln!(
-            "BENCH {label}: URL printed after {url_s:.2} s, first shaded frame {ready_s:.2} s after the command; frame with a light change (SwiftShader, canvas {size}): median {:.0} ms of 10",
-            median(times)
-        );
+        let mut warm = Vec::new();
+        for run in 0..4 {
+            if run > 0 {
+                b.call("Page.navigate", json!({"url": "about:blank"}));
+                std::thread::sleep(Duration::from_millis(500));
+            }
+            let t0 = Instant::now();
+            let srv = start(&[&mesh], &dir);
+            let url_s = t0.elapsed().as_secs_f64();
+            b.call("Page.navigate", json!({"url": srv.url}));
+            b.wait_for("document.body && document.body.dataset.ready === '1'", 600);
+            let ready_s = t0.elapsed().as_secs_f64();
+            let timeline = b.eval("window.fairline.timeline");
+            let load = srv.json("/api/session", None)["docs"][0]["load_s"].clone();
+            let kind = if run == 0 {
+                "cold browser"
+            } else {
+                "warm browser"
+            };
+            eprintln!(
+                "BENCH {label} run {run} ({kind}): URL printed after {url_s:.2} s, first shaded frame {ready_s:.2} s after the command; server read {load}; page timeline (ms since navigation) {timeline}"
+            );
+            if run > 0 {
+                warm.push(ready_s);
+            }
+            if run == 3 {
+                let slow = b.eval("performance.getEntriesByType('resource').concat(performance.getEntriesByType('navigation')).map((e) => [e.name.replace(/token=[0-9a-f]+/, 'token=…'), Math.round(e.startTime), Math.round(e.duration)]).sort((a, b) => b[2] - a[2]).slice(0, 4)");
+                eprintln!("BENCH {label}: slowest requests [url, start ms, duration ms]: {slow}");
+                let times: Vec<f64> =
+                    serde_json::from_value(b.eval("window.fairline.timeFrames(10)")).unwrap();
+                let size = b.eval(
+                    "[window.fairline.viewer.canvas.width, window.fairline.viewer.canvas.height]",
+                );
+                eprintln!(
+                    "BENCH {label}: first shaded frame, warm browser: median {:.2} s of 3; frame with a light change (SwiftShader, canvas {size}): median {:.0} ms of 10",
+                    median(warm.clone()),
+                    median(times)
+                );
+            }
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

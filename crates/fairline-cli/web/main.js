@@ -16,15 +16,32 @@ let lights = [];
 
 function activeDoc() { return state.session.docs[state.active]; }
 
-async function loadGeometry(k, step) {
+// Positions, normals (and the first time the triangles) of document k, all
+// requested at once; `early` holds requests already under way.
+async function loadGeometry(k, step, early) {
   const d = state.session.docs[k];
-  const [p, n] = await Promise.all([api.positions(k, step), api.normals(k, step)]);
-  const idx = viewer.docs[k] ? viewer.docs[k].indices : await api.indices(k);
+  const [p, n, idx] = await Promise.all(early || [
+    api.positions(k, step),
+    api.normals(k, step),
+    viewer.docs[k] ? viewer.docs[k].indices : api.indices(k),
+  ]);
+  mark('geometry');
   viewer.setGeometry(k, d, p, n, idx);
+  mark('upload');
 }
+
+// Milliseconds since the navigation started at each stage of the first
+// frame (window.fairline.timeline; the benchmark prints it).
+const timeline = {};
+function mark(name) { if (!(name in timeline)) timeline[name] = Math.round(performance.now()); }
 
 async function refreshSession() {
   state.session = await api.session();
+  showSession();
+}
+
+// History, report, command and save folder of the active document.
+function showSession() {
   const d = activeDoc();
   showHistory(d.history, () => {});
   const step = d.history.steps[d.history.cursor];
@@ -131,6 +148,13 @@ let pickBusy = false;
 async function onPick(e, phase) {
   const tool = $('tool').value;
   if (tool === 'orbit') return false;
+  if (tool === 'endpoints') {
+    // a click on a pre-image picks an endpoint, as in the (u, v) panel
+    if (phase !== 'down' || !uvPanel || !uvPanel.lines.length) return true;
+    const n = nearestLinePoint(...local($('gl'), e));
+    if (n.dist < 8) uvPanel.pick(n.line, n.k);
+    return true;
+  }
   if (pickBusy) return true;
   const [x, y] = local($('gl'), e);
   const hit = viewer.pickAt(x, y);
@@ -182,7 +206,8 @@ async function runJob(k, body) {
     await new Promise((r) => setTimeout(r, 150));
     const j = await api.json('/api/job');
     $('progress').value = j.progress;
-    if (j.state === 'running') continue;
+    if (j.state === 'running') { if (j.stage) status(`${method} running: ${j.stage} ${Math.round(100 * j.progress)} %`); continue; }
+    if (j.state === 'cancelling') { status(`${method}: ${j.message}`); continue; }
     $('cancel').disabled = true;
     $('run').disabled = false;
     if (j.state === 'done') {
@@ -251,31 +276,95 @@ async function loadOutlines(k, step) {
 
 function segmentsOf(lines, data) { return segments(lines, data); }
 
+// The projection of document k's view: point p (relative to the document's
+// centre) → CSS pixel in the canvas, or null when it is behind the camera,
+// outside the view or not given.
+function projector(k) {
+  const vp = viewer.viewport(k);
+  const dpr = window.devicePixelRatio || 1;
+  const m = viewer.camera.viewProj(vp[2] / vp[3]);
+  const cw = viewer.canvas.clientWidth, ch = viewer.canvas.clientHeight;
+  return (p) => {
+    if (!p) return null;
+    const x = m[0] * p[0] + m[4] * p[1] + m[8] * p[2] + m[12];
+    const y = m[1] * p[0] + m[5] * p[1] + m[9] * p[2] + m[13];
+    const w = m[3] * p[0] + m[7] * p[1] + m[11] * p[2] + m[15];
+    if (w <= 0) return null;
+    const sx = (vp[0] + (x / w * 0.5 + 0.5) * vp[2]) / dpr;
+    const sy = ch - (vp[1] + (y / w * 0.5 + 0.5) * vp[3]) / dpr;
+    if (sx < 0 || sy < 0 || sx > cw || sy > ch) return null;
+    return [sx, sy];
+  };
+}
+
 function placeLabels() {
   const box = $('labels');
   const spans = [];
-  const cw = viewer.canvas.clientWidth, ch = viewer.canvas.clientHeight;
   state.labels.forEach((pts, k) => {
     if (!pts) return;
-    const vp = viewer.viewport(k);
-    const dpr = window.devicePixelRatio || 1;
-    const m = viewer.camera.viewProj(vp[2] / vp[3]);
+    const screenOf = projector(k);
     pts.forEach((p, i) => {
-      const x = m[0] * p[0] + m[4] * p[1] + m[8] * p[2] + m[12];
-      const y = m[1] * p[0] + m[5] * p[1] + m[9] * p[2] + m[13];
-      const w = m[3] * p[0] + m[7] * p[1] + m[11] * p[2] + m[15];
-      if (w <= 0) return;
-      const sx = (vp[0] + (x / w * 0.5 + 0.5) * vp[2]) / dpr;
-      const sy = ch - (vp[1] + (y / w * 0.5 + 0.5) * vp[3]) / dpr;
-      if (sx < 0 || sy < 0 || sx > cw || sy > ch) return;
-      const s = document.createElement('span');
-      s.textContent = String(i);
-      s.style.left = `${sx}px`;
-      s.style.top = `${sy}px`;
-      spans.push(s);
+      const s = screenOf(p);
+      if (!s) return;
+      const span = document.createElement('span');
+      span.textContent = String(i);
+      span.style.left = `${s[0]}px`;
+      span.style.top = `${s[1]}px`;
+      spans.push(span);
     });
   });
   box.replaceChildren(...spans);
+}
+
+// ---- the (u, v) pre-images in the 3-D view (linked with the panel) ----
+
+// 3-D point k of pre-image i of the (u, v) panel (same index in both views).
+function linePoint(i, k) {
+  const l = uvPanel && uvPanel.lines[i];
+  if (!l || !state.uvData || k < 0 || k >= l.count) return null;
+  const a = 3 * (l.start + k);
+  return [state.uvData[a], state.uvData[a + 1], state.uvData[a + 2]];
+}
+
+// The pre-image point nearest to CSS pixel (x, y) of the 3-D view:
+// {line, k, dist} (dist in CSS pixels).
+function nearestLinePoint(x, y) {
+  const best = { line: -1, k: -1, dist: Infinity };
+  if (!uvPanel) return best;
+  const screenOf = projector(state.surfaceDoc);
+  uvPanel.lines.forEach((l, i) => {
+    for (let k = 0; k < l.count; k++) {
+      const s = screenOf(linePoint(i, k));
+      if (!s) continue;
+      const d = Math.hypot(s[0] - x, s[1] - y);
+      if (d < best.dist) { best.line = i; best.k = k; best.dist = d; }
+    }
+  });
+  return best;
+}
+
+// Hovering a pre-image in the 3-D view lights it up in both views.
+function hover3d(e) {
+  if (!uvPanel || !uvPanel.lines.length || e.buttons) return;
+  const n = nearestLinePoint(...local($('gl'), e));
+  uvPanel.setHover(n.dist < 8 ? n.line : -1);
+}
+
+// Small crosses at the picked endpoints in the 3-D view.
+function showEndpointMarks() {
+  const k = state.surfaceDoc;
+  const marks = uvPanel.marks.filter((p) => p);
+  if (!marks.length) { viewer.setOverlay(k, 'ends', null); return; }
+  const r = 0.015 * state.session.docs[k].radius;
+  const segs = new Float32Array(marks.length * 18);
+  marks.forEach((p, i) => {
+    for (let a = 0; a < 3; a++) {
+      const o = 18 * i + 6 * a;
+      segs.set(p, o); segs.set(p, o + 3);
+      segs[o + a] -= r; segs[o + 3 + a] += r;
+    }
+  });
+  viewer.setOverlay(k, 'ends', segs, [1, 1, 0, 1]);
 }
 
 let uvPanel = null;
@@ -299,7 +388,8 @@ async function uvLines() {
 }
 
 function showEndpoints(list) {
-  $('endpoints').textContent = list.length ? list.map((e) => `R=${Number(e.radius).toPrecision(3)}: (${e.start.map((x) => x.toFixed(3))}) → (${e.end.map((x) => x.toFixed(3))})`).join('; ') : 'click a line twice in the (u, v) panel to pick the endpoints of a stretch';
+  $('endpoints').textContent = list.length ? list.map((e) => `R=${Number(e.radius).toPrecision(3)}: (${e.start.map((x) => x.toFixed(3))}) → (${e.end.map((x) => x.toFixed(3))})`).join('; ') : 'click a line twice in the (u, v) panel, or in the 3-D view with the tool "endpoints", to pick the endpoints of a stretch';
+  if (uvPanel) showEndpointMarks();
 }
 
 async function fairSurface() {
@@ -353,7 +443,9 @@ function wire() {
       const k = state.surfaceDoc;
       viewer.setOverlay(k, 'hover', line ? segments([line], state.uvData) : null, [1, 1, 0.2, 1]);
     }, showEndpoints);
+    uvPanel.point3 = linePoint;
     showEndpoints([]);
+    $('gl').addEventListener('pointermove', hover3d);
     $('uvlines').addEventListener('click', guard(uvLines));
     $('clear-ends').addEventListener('click', () => uvPanel.clearEndpoints());
     $('fair-surface').addEventListener('click', guard(fairSurface));
@@ -368,8 +460,16 @@ function wire() {
 }
 
 async function start() {
-  await viewer.init();
-  state.session = await api.session();
+  mark('modules');
+  // every session has document 0: its geometry is asked for at once, beside
+  // the session and the shaders
+  const early = [api.positions(0), api.normals(0), api.indices(0)];
+  early.forEach((r) => r.catch(() => {}));
+  const [, session] = await Promise.all([
+    viewer.init(),
+    api.session().then((r) => { mark('session'); return r; }),
+  ]);
+  state.session = session;
   const docs = state.session.docs;
   $('docnames').textContent = docs.map((d) => `${d.name} (${d.kind}, ${d.vertices} vertices, ${d.triangles} triangles)`).join('  |  ');
   const names = new Set();
@@ -381,20 +481,30 @@ async function start() {
   const ext = docs[0].bbox;
   const span = [0, 1, 2].map((i) => ext[1][i] - ext[0][i]);
   if (span[1] > 1.05 * Math.max(span[0], span[2])) { viewer.camera.up = 'y'; $('up').value = 'y'; }
-  await Promise.all(docs.map((_, k) => loadGeometry(k)));
+  await Promise.all(docs.map((_, k) => loadGeometry(k, undefined, k === 0 ? early : undefined)));
   state.surfaceDoc = docs.findIndex((d) => d.kind === 'surface');
   await Promise.all(docs.map((d, k) => (d.kind === 'surface' ? loadOutlines(k) : null)));
   viewer.camera.fit(Math.max(...docs.map((d) => d.radius)));
-  await refreshSession();
+  await viewer.ready();
+  mark('shaders');
+  showSession();
   readLightControls();
   wire();
   viewer.onFrame = () => {
     placeLabels();
-    if (!document.body.dataset.ready) document.body.dataset.ready = '1';
+    if (!document.body.dataset.ready) { mark('frame'); document.body.dataset.ready = '1'; }
   };
   viewer.dirty = true;
   status('ready');
   window.fairline.viewer = viewer;
+  window.fairline.timeline = timeline;
+  // for tests and scripting: CSS pixel (page) of point k of pre-image i
+  window.fairline.linePointOnPage = (i, k) => {
+    const s = projector(state.surfaceDoc)(linePoint(i, k));
+    if (!s) return null;
+    const r = viewer.canvas.getBoundingClientRect();
+    return [r.left + s[0], r.top + s[1]];
+  };
   window.fairline.lights = lights;
   window.fairline.timeFrames = (n) => viewer.timeFrames(n, (i) => {
     for (const l of lights) l.sweep = (i % 50) / 50;

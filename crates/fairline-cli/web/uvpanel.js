@@ -1,8 +1,10 @@
 // The (u, v) panel of a B-spline patch: the pre-images of the circular
 // highlight lines computed by the library, coloured by radius with a
-// legend; hovering a line lights it up here and in the 3-D view; two
-// clicks on a line pick the endpoints of a stretch to fair (DESIGN.md §5
-// endpoints, snapped by the library to the pre-image).
+// legend. Linked both ways with the 3-D view: hovering a line in either view
+// lights it up in both (`setHover`); two clicks on a line in either view
+// (`pick`: line and point index, the same in both views) pick the endpoints
+// of a stretch to fair (DESIGN.md §5 endpoints, snapped by the library to
+// the pre-image).
 export const PALETTE = ['#e6194b', '#3cb44b', '#4363d8', '#f58231', '#911eb4', '#46f0f0', '#f032e6', '#bcf60c', '#fabebe', '#008080', '#e6beff', '#9a6324', '#fffac8', '#800000', '#aaffc3', '#808000'];
 
 export function rgba(hex) {
@@ -18,6 +20,8 @@ export class UvPanel {
     this.hover = -1;
     this.pending = null;      // first endpoint {radius, uv}
     this.endpoints = [];      // [{radius, start, end}]
+    this.marks = [];          // 3-D points of the picks (pending last)
+    this.point3 = () => null; // (line, k) → 3-D point, set by the page
     this.onHover = onHover;
     this.onEndpoints = onEndpoints;
     canvas.addEventListener('mousemove', (e) => this.move(e));
@@ -61,7 +65,11 @@ export class UvPanel {
 
   move(e) {
     const n = this.nearest(...this.pos(e));
-    const h = n.dist < 8 ? n.line : -1;
+    this.setHover(n.dist < 8 ? n.line : -1);
+  }
+
+  // Lights up line h (-1: none) here and, through onHover, in the 3-D view.
+  setHover(h) {
     if (h !== this.hover) {
       this.hover = h;
       this.draw();
@@ -72,20 +80,30 @@ export class UvPanel {
   click(e) {
     const n = this.nearest(...this.pos(e));
     if (n.dist > 8) return;
-    const l = this.lines[n.line];
-    const uv = [l.uv[2 * n.k], l.uv[2 * n.k + 1]];
+    this.pick(n.line, n.k);
+  }
+
+  // Picks point k of line i as an endpoint: the first pick of a radius is
+  // pending, the second one closes the stretch.
+  pick(i, k) {
+    const l = this.lines[i];
+    if (!l || k < 0 || k >= l.count) return;
+    const uv = [l.uv[2 * k], l.uv[2 * k + 1]];
     if (!this.pending || this.pending.radius !== l.radius) {
+      if (this.pending) this.marks.pop();
       this.pending = { radius: l.radius, uv };
     } else {
       this.endpoints.push({ radius: l.radius, start: this.pending.uv, end: uv });
       this.pending = null;
     }
+    this.marks.push(this.point3(i, k));
     this.draw();
     this.onEndpoints(this.endpoints);
   }
 
   clearEndpoints() {
     this.endpoints = [];
+    this.marks = [];
     this.pending = null;
     this.draw();
     this.onEndpoints(this.endpoints);

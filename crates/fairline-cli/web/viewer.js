@@ -10,23 +10,36 @@ async function shaderText(name) {
   return r.text();
 }
 
-function compile(gl, type, src, name) {
+function compile(gl, type, src) {
   const s = gl.createShader(type);
   gl.shaderSource(s, src);
   gl.compileShader(s);
-  if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) throw new Error(`${name}: ${gl.getShaderInfoLog(s)}`);
   return s;
 }
 
-async function program(gl, vert, frag) {
+// Compiling and linking is started here and not waited for (no status is
+// asked): the GL compiles while the page fetches the geometry;
+// `finishProgram` waits for it (KHR_parallel_shader_compile when offered).
+async function startProgram(gl, vert, frag) {
   const p = gl.createProgram();
-  gl.attachShader(p, compile(gl, gl.VERTEX_SHADER, await shaderText(vert), vert));
-  gl.attachShader(p, compile(gl, gl.FRAGMENT_SHADER, await shaderText(frag), frag));
+  const [vs, fs] = await Promise.all([shaderText(vert), shaderText(frag)]);
+  const shaders = [compile(gl, gl.VERTEX_SHADER, vs), compile(gl, gl.FRAGMENT_SHADER, fs)];
+  for (const sh of shaders) gl.attachShader(p, sh);
   gl.bindAttribLocation(p, 0, 'aPosition');
   gl.bindAttribLocation(p, 1, 'aNormal');
   gl.bindAttribLocation(p, 2, 'aScalar');
   gl.linkProgram(p);
-  if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(`${vert}+${frag}: ${gl.getProgramInfoLog(p)}`);
+  return { p, shaders, names: [vert, frag] };
+}
+
+async function finishProgram(gl, parallel, { p, shaders, names }) {
+  if (parallel) {
+    while (!gl.getProgramParameter(p, parallel.COMPLETION_STATUS_KHR)) await new Promise((r) => setTimeout(r, 5));
+  }
+  shaders.forEach((sh, i) => {
+    if (!gl.getShaderParameter(sh, gl.COMPILE_STATUS)) throw new Error(`${names[i]}: ${gl.getShaderInfoLog(sh)}`);
+  });
+  if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(`${names.join('+')}: ${gl.getProgramInfoLog(p)}`);
   const uniforms = {};
   const n = gl.getProgramParameter(p, gl.ACTIVE_UNIFORMS);
   for (let i = 0; i < n; i++) {
@@ -53,6 +66,13 @@ function setUniforms(gl, prog, values) {
 }
 
 // Segments (pairs of points) of polylines from a frame header + data.
+// Samples of θ per circular light in surface.frag (a uniform there, so that
+// the GLSL compiler keeps the loop instead of unrolling it).
+const THETA_SAMPLES = 48;
+
+// Overlays drawn after all others (the hovered line, picked endpoints).
+const ON_TOP = new Set(['hover', 'ends']);
+
 export function segments(lines, data) {
   let n = 0;
   for (const l of lines) n += 2 * (l.count - 1 + (l.closed ? 1 : 0));
@@ -83,11 +103,21 @@ export class Viewer {
     this.frames = 0;
   }
 
+  // Fetches the shaders and starts compiling them (see `ready`).
   async init() {
     const gl = this.gl;
-    this.surface = await program(gl, 'surface.vert', 'surface.frag');
-    this.line = await program(gl, 'line.vert', 'line.frag');
-    this.pick = await program(gl, 'pick.vert', 'pick.frag');
+    this.parallel = gl.getExtension('KHR_parallel_shader_compile');
+    this.started = await Promise.all([
+      startProgram(gl, 'surface.vert', 'surface.frag'),
+      startProgram(gl, 'line.vert', 'line.frag'),
+      startProgram(gl, 'pick.vert', 'pick.frag'),
+    ]);
+  }
+
+  // Waits for the shaders started by `init` and starts drawing.
+  async ready() {
+    const gl = this.gl;
+    [this.surface, this.line, this.pick] = await Promise.all(this.started.map((s) => finishProgram(gl, this.parallel, s)));
     this.colormap = colormapTexture(gl);
     const loop = () => {
       if (this.dirty) { this.dirty = false; this.draw(); }
@@ -238,6 +268,7 @@ export class Viewer {
         uViewProj: vpm,
         uEye: this.camera.eye(),
         uMinCos: d.meta.min_normal_cos,
+        uThetaSamples: THETA_SAMPLES,
         uRadiusCount: this.lightUniforms ? Math.min(16, (this.lightUniforms(k).uRadii || []).length) : 0,
         uScalarOn: d.scalarOn ? 1 : 0,
         uScalarLo: d.scalarRange ? d.scalarRange.lo : 0,
@@ -268,11 +299,17 @@ export class Viewer {
         gl.bindVertexArray(w.vao);
         gl.drawElements(gl.LINES, w.count, gl.UNSIGNED_INT, 0);
       }
-      for (const o of Object.values(d.overlays)) {
+      // LEQUAL: a highlighted copy of a line (hover) drawn over the line
+      // itself passes the depth test; the highlights are drawn last
+      gl.depthFunc(gl.LEQUAL);
+      const names = Object.keys(d.overlays).sort((a, b) => ON_TOP.has(a) - ON_TOP.has(b));
+      for (const name of names) {
+        const o = d.overlays[name];
         setUniforms(gl, this.line, { uColor: o.color });
         gl.bindVertexArray(o.vao);
         gl.drawArrays(gl.LINES, 0, o.count);
       }
+      gl.depthFunc(gl.LESS);
       gl.bindVertexArray(null);
     });
     gl.disable(gl.SCISSOR_TEST);

@@ -5,25 +5,60 @@ use super::doc::{Doc, Step, shell_word};
 use super::frame::{frame, vec3_bytes};
 use super::http::{HttpRequest, HttpResponse};
 use fairline::fair::{FairMethod, FairOptions, fair_highlight_lines, grow_region};
-use fairline::geom::{CurvatureMethod, LaplaceWeights, principal_curvatures, vertex_normals};
+use fairline::geom::{CurvatureMethod, LaplaceWeights, principal_curvatures};
 use fairline::highlight::{
     CircularLight, CircularLights, DetectOptions, HighlightLines, HighlightModel, HighlightOptions,
     LightArray, circular_highlight_bands, circular_highlight_lines, detect_irregularities,
 };
 use fairline::io::RegionSpec;
 use fairline::mesh::{FaceId, VertexId};
-use fairline::{SurfaceMesh, Vec3};
+use fairline::{Control, SurfaceMesh, Vec3};
 use serde::Deserialize;
 use serde_json::{Value, json};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 use std::time::Instant;
 
 /// State shared by the worker threads.
 pub struct Shared {
     pub state: Mutex<State>,
     pub guard: Guard,
+    /// True once the documents are read: the server answers the page's
+    /// files at once (so the browser loads the page while a large mesh is
+    /// read) and holds API calls until then.
+    loaded: Mutex<bool>,
+    loaded_signal: Condvar,
+}
+
+impl Shared {
+    /// The shared state of a server whose documents are still being read.
+    pub fn new(save_dir: PathBuf, guard: Guard) -> Shared {
+        Shared {
+            state: Mutex::new(State::new(Vec::new(), save_dir)),
+            guard,
+            loaded: Mutex::new(false),
+            loaded_signal: Condvar::new(),
+        }
+    }
+
+    /// Hands over the documents read and lets the waiting API calls go.
+    pub fn set_docs(&self, docs: Vec<Doc>) {
+        lock(self).docs = docs;
+        *self.loaded.lock().unwrap_or_else(|e| e.into_inner()) = true;
+        self.loaded_signal.notify_all();
+    }
+
+    /// Waits until the documents are read.
+    fn wait_loaded(&self) {
+        let mut loaded = self.loaded.lock().unwrap_or_else(|e| e.into_inner());
+        while !*loaded {
+            loaded = self
+                .loaded_signal
+                .wait(loaded)
+                .unwrap_or_else(|e| e.into_inner());
+        }
+    }
 }
 
 /// Documents, the save folder and the current job.
@@ -39,8 +74,12 @@ struct Job {
     id: u64,
     doc: usize,
     label: String,
+    /// running | cancelling (the flag is raised, the algorithm has not
+    /// stopped yet) | done | failed | cancelled
     state: &'static str,
     progress: f64,
+    /// The stage the library last reported ("iterations", "lights" …).
+    stage: &'static str,
     message: String,
     report: Value,
     command: String,
@@ -145,6 +184,7 @@ fn route(shared: &Arc<Shared>, req: &HttpRequest, body: &[u8]) -> Answer {
             None => error(404, format!("no such page: {path}")),
         };
     }
+    shared.wait_loaded();
     let parts: Vec<&str> = path.trim_start_matches("/api/").split('/').collect();
     match (get, post, parts.as_slice()) {
         (true, _, ["session"]) => json_answer(&session(&lock(shared))),
@@ -154,9 +194,11 @@ fn route(shared: &Arc<Shared>, req: &HttpRequest, body: &[u8]) -> Answer {
             if let Some(j) = st.job.as_mut()
                 && j.state == "running"
             {
+                // the library stops at its next checkpoint (Control); the
+                // job turns `cancelled` when its thread has ended
                 j.cancel.store(true, Ordering::SeqCst);
-                j.state = "cancelled";
-                j.message = "cancelled; the result will be discarded".into();
+                j.state = "cancelling";
+                j.message = "stopping; the result will be discarded".into();
             }
             json_answer(&job_json(&st))
         }
@@ -175,27 +217,10 @@ fn route(shared: &Arc<Shared>, req: &HttpRequest, body: &[u8]) -> Answer {
                     binary(vec3_bytes(&d.step(step).positions, d.center))
                 }
                 (true, _, ["normals"]) => {
-                    let normals = {
-                        let st = lock(shared);
-                        let d = &st.docs[k];
-                        match step {
-                            None => vertex_normals(&d.now),
-                            Some(_) => vertex_normals(&d.tri_at(step)),
-                        }
-                    };
-                    binary(vec3_bytes(&normals, Vec3::ZERO))
-                }
-                (true, _, ["indices"]) => {
                     let st = lock(shared);
-                    let tri = &st.docs[k].tri;
-                    let mut out = Vec::with_capacity(tri.face_count() * 12);
-                    for f in tri.faces() {
-                        for v in tri.triangle(f) {
-                            out.extend_from_slice(&v.0.to_le_bytes());
-                        }
-                    }
-                    binary(out)
+                    binary(st.docs[k].normal_bytes(step).to_vec())
                 }
+                (true, _, ["indices"]) => binary(lock(shared).docs[k].index_bytes.clone()),
                 (true, _, ["patches"]) => {
                     let st = lock(shared);
                     binary(
@@ -286,8 +311,8 @@ fn session(st: &State) -> Value {
                 "kind": if d.is_surface() { "surface" } else { "mesh" },
                 "vertices": d.tri.vertex_count(),
                 "triangles": d.tri.face_count(),
-                "faces": d.mesh.face_count(),
-                "quads": d.mesh.faces().filter(|&f| d.mesh.face_size(f) == 4).count(),
+                "faces": d.input_mesh().face_count(),
+                "quads": d.input_mesh().faces().filter(|&f| d.input_mesh().face_size(f) == 4).count(),
                 "center": d.center.to_array(),
                 "radius": d.radius,
                 "bbox": [d.bbox.0.to_array(), d.bbox.1.to_array()],
@@ -296,6 +321,7 @@ fn session(st: &State) -> Value {
                 "patches": d.history[0].surfaces.as_ref().map(|s| s.len()).unwrap_or(0),
                 "light": light,
                 "min_normal_cos": HighlightOptions::default().min_normal_cos,
+                "load_s": d.load_s,
                 "history": {
                     "cursor": d.cursor,
                     "steps": d.history.iter().map(|s| json!({"label": s.label, "command": s.command, "report": s.report})).collect::<Vec<_>>(),
@@ -315,6 +341,7 @@ fn job_json(st: &State) -> Value {
             "label": j.label,
             "state": j.state,
             "progress": j.progress,
+            "stage": j.stage,
             "message": j.message,
             "report": j.report,
             "command": j.command,
@@ -397,7 +424,7 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     let (center, file) = (d.center, d.current_file());
     let stepped;
     let mesh = match req.step {
-        None => &d.now,
+        None => d.now(),
         Some(_) => {
             stepped = d.tri_at(req.step);
             &stepped
@@ -409,6 +436,7 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         return bad("band must be a positive number");
     }
     let t = Instant::now();
+    let mut stages: Vec<(&str, f64)> = Vec::new();
     let mut meta = Vec::new();
     let mut band_meta = Vec::new();
     let mut floats = Vec::new();
@@ -461,8 +489,11 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             Ok(m) => m,
             Err(e) => return bad(e),
         };
+        stages.push(("model", t.elapsed().as_secs_f64()));
         let lines = model.lines(mesh);
+        stages.push(("chain", t.elapsed().as_secs_f64()));
         push_lines(&lines, center, None, &mut meta, &mut floats);
+        stages.push(("encode", t.elapsed().as_secs_f64()));
         if let Some(rho) = req.band {
             match model.bands(mesh, rho) {
                 Ok(b) => {
@@ -478,10 +509,19 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             req.band.map(|b| format!(" --band {b}")).unwrap_or_default()
         );
     }
+    // seconds of each stage (linear lights): the model (normals, distances,
+    // segments), chaining the segments into polylines, the f32 encoding
+    let mut split = serde_json::Map::new();
+    let mut last = 0.0;
+    for (name, at) in stages {
+        split.insert(name.into(), json!(at - last));
+        last = at;
+    }
     let header = json!({
         "lines": meta,
         "bands": band_meta,
         "time_s": t.elapsed().as_secs_f64(),
+        "stages_s": split,
         "command": command,
     });
     binary(frame(&header, &floats))
@@ -501,7 +541,7 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     };
     let st = lock(shared);
     let d = &st.docs[k];
-    let (mesh, center, file) = (&d.now, d.center, d.current_file());
+    let (mesh, center, file) = (d.now(), d.center, d.current_file());
     let defaults = DetectOptions::default();
     let opts = DetectOptions::default()
         .threshold(req.threshold.unwrap_or(defaults.threshold))
@@ -726,17 +766,18 @@ struct Outcome {
     label: String,
 }
 
-/// Fraction of a job done, written by the job, read by its watcher.
-type Progress = Arc<Mutex<f64>>;
-
 fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
     let req: RunRequest = match parse(body) {
         Ok(r) => r,
         Err(a) => return a,
     };
     let mut st = lock(shared);
-    if st.job.as_ref().is_some_and(|j| j.state == "running") {
-        return error(409, "a job is already running; wait for it or cancel it");
+    if st
+        .job
+        .as_ref()
+        .is_some_and(|j| matches!(j.state, "running" | "cancelling"))
+    {
+        return error(409, "a job is still running; wait for it or cancel it");
     }
     let d = &st.docs[k];
     if d.is_surface() != (req.method == "fair-surface") {
@@ -760,6 +801,7 @@ fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
         label: req.method.clone(),
         state: "running",
         progress: 0.0,
+        stage: "",
         message: format!("{} running", req.method),
         report: Value::Null,
         command: String::new(),
@@ -771,17 +813,18 @@ fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
         id,
         doc: k,
         cancel,
-        progress: Arc::new(Mutex::new(0.0)),
+        progress: Arc::new(Mutex::new(JobProgress::default())),
     };
     let shared = Arc::clone(shared);
     std::thread::spawn(move || {
-        let progress = Arc::clone(&ctx.progress);
-        let cancel = Arc::clone(&ctx.cancel);
+        let control = job_control(&ctx);
         let (tx, rx) = std::sync::mpsc::channel();
         let worker = std::thread::spawn(move || {
             let r = match surface_input {
-                Some((surfaces, grid)) => run_fair_surface(&req, &surfaces, grid, &file, &out),
-                None => run_method(&req, &tri, &mesh, &file, &out, &progress, &cancel),
+                Some((surfaces, grid)) => {
+                    run_fair_surface(&req, &surfaces, grid, &file, &out, &control)
+                }
+                None => run_method(&req, &tri, &mesh, &file, &out, &control),
             };
             let _ = tx.send(());
             r
@@ -798,7 +841,8 @@ fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
                 && j.id == ctx.id
                 && j.state == "running"
             {
-                j.progress = p;
+                j.progress = p.fraction;
+                j.stage = p.stage;
             }
         }
         let result = worker
@@ -809,27 +853,72 @@ fn start_job(shared: &Arc<Shared>, k: usize, body: &[u8]) -> Answer {
     json_answer(&json!({"job": id}))
 }
 
+/// What the library last reported of a running job.
+#[derive(Clone, Copy, Default)]
+struct JobProgress {
+    /// Fraction done, 0..1.
+    fraction: f64,
+    /// The stage ("iterations" …).
+    stage: &'static str,
+}
+
 struct JobContext {
     id: u64,
     doc: usize,
     cancel: Arc<AtomicBool>,
-    progress: Progress,
+    progress: Arc<Mutex<JobProgress>>,
+}
+
+/// The [`fairline::Control`] of a job: the job's cancel flag (raised by
+/// `POST /api/job/cancel`, the library stops at its next
+/// `control.step(..)`) and a progress callback writing the fraction done
+/// into the job. Every job's options get it through their builder
+/// `.control(..)` where the library's options have one.
+fn job_control(ctx: &JobContext) -> Control {
+    let progress = Arc::clone(&ctx.progress);
+    Control::new()
+        .cancel_flag(Arc::clone(&ctx.cancel))
+        .on_progress(move |p| {
+            let mut slot = progress.lock().unwrap_or_else(|e| e.into_inner());
+            slot.stage = p.stage;
+            if p.total > 0 {
+                slot.fraction = (p.done as f64 / p.total as f64).clamp(0.0, 1.0);
+            }
+        })
 }
 
 fn finish_job(shared: &Shared, ctx: &JobContext, result: Result<Outcome, String>) {
     let mut st = lock(shared);
     let cancelled = ctx.cancel.load(Ordering::SeqCst);
+    if cancelled {
+        // stopped by the library (its Cancelled error) or finished after
+        // the flag was raised: the result is thrown away either way
+        if let Some(j) = st.job.as_mut()
+            && j.id == ctx.id
+        {
+            j.state = "cancelled";
+            j.message = match &result {
+                Err(e) if e == "cancelled" => format!(
+                    "{} cancelled after {:.2} s",
+                    j.label,
+                    j.started.elapsed().as_secs_f64()
+                ),
+                _ => format!("{} cancelled; its result was discarded", j.label),
+            };
+        }
+        return;
+    }
     match result {
-        Ok(o) if !cancelled => {
+        Ok(o) => {
             let d = &mut st.docs[ctx.doc];
             let surfaces = o.surfaces.or_else(|| d.current().surfaces.clone());
-            d.push(Step {
-                label: o.label.clone(),
-                command: o.command.clone(),
-                report: o.report.clone(),
-                positions: Arc::new(o.positions),
+            d.push(Step::new(
+                o.label.clone(),
+                o.command.clone(),
+                o.report.clone(),
+                Arc::new(o.positions),
                 surfaces,
-            });
+            ));
             if let Some(j) = st.job.as_mut()
                 && j.id == ctx.id
             {
@@ -840,11 +929,9 @@ fn finish_job(shared: &Shared, ctx: &JobContext, result: Result<Outcome, String>
                 j.command = o.command;
             }
         }
-        Ok(_) => {}
         Err(e) => {
             if let Some(j) = st.job.as_mut()
                 && j.id == ctx.id
-                && !cancelled
             {
                 j.state = "failed";
                 j.message = e;
@@ -853,14 +940,18 @@ fn finish_job(shared: &Shared, ctx: &JobContext, result: Result<Outcome, String>
     }
 }
 
+/// Runs a mesh job. `control` (see [`job_control`]) goes into every options
+/// struct through its `.control(..)` builder where the library has one
+/// (#17 item 1: FairOptions, the smoothing options, QuadFairOptions and
+/// EnhanceOptions get it this session); highlight fairing reports its
+/// iterations to it already.
 fn run_method(
     req: &RunRequest,
     tri: &SurfaceMesh,
     mesh: &SurfaceMesh,
     file: &str,
     out: &str,
-    progress: &Progress,
-    cancel: &Arc<AtomicBool>,
+    control: &Control,
 ) -> Result<Outcome, String> {
     let o = &req.options;
     let faces = req.faces.as_ref().map(|f| to_faces(tri, f));
@@ -892,14 +983,6 @@ fn run_method(
                 "diffusion-flow" => FairMethod::DiffusionFlow,
                 m => return Err(format!("unknown fairing method `{m}`")),
             };
-            let sink = Arc::clone(progress);
-            let control = fairline::Control::new()
-                .cancel_flag(Arc::clone(cancel))
-                .on_progress(move |p| {
-                    let total = p.total.max(1) as f64;
-                    *sink.lock().unwrap_or_else(|e| e.into_inner()) =
-                        (p.done as f64 / total).min(1.0);
-                });
             let defaults = FairOptions::default();
             let options = FairOptions::default()
                 .region(faces.clone())
@@ -907,7 +990,7 @@ fn run_method(
                 .method(method)
                 .max_iterations(o.max_iterations.unwrap_or(defaults.max_iterations))
                 .epsilon(o.epsilon.unwrap_or(defaults.epsilon))
-                .control(control);
+                .control(control.clone());
             let r = fair_highlight_lines(tri, &options).map_err(|e| e.to_string())?;
             let mut report = serde_json::to_value(&r.report).map_err(|e| e.to_string())?;
             report["command"] = json!("fair");
@@ -947,30 +1030,39 @@ fn run_method(
                         .weights(weights)
                         .lambda(o.lambda.unwrap_or(0.5))
                         .iterations(iterations.unwrap_or(10))
-                        .fixed(fixed),
+                        .fixed(fixed)
+                        .control(control.clone()),
                 ),
                 "taubin" => taubin_smooth(
                     mesh,
                     &TaubinOptions::default()
                         .weights(weights)
                         .iterations(iterations.unwrap_or(10))
-                        .fixed(fixed),
+                        .fixed(fixed)
+                        .control(control.clone()),
                 ),
                 "implicit" => implicit_smooth(
                     mesh,
                     &ImplicitOptions::default()
                         .iterations(iterations.unwrap_or(1))
-                        .fixed(fixed),
+                        .fixed(fixed)
+                        .control(control.clone()),
                 ),
                 "spring" => {
                     let d = SpringOptions::default();
                     let n = iterations.unwrap_or(d.max_iterations);
-                    spring_smooth(mesh, &d.max_iterations(n).fixed(fixed))
+                    spring_smooth(
+                        mesh,
+                        &d.max_iterations(n).fixed(fixed).control(control.clone()),
+                    )
                 }
                 "schneider-kobbelt" => {
                     let d = SchneiderKobbeltOptions::default();
                     let n = iterations.unwrap_or(d.max_iterations);
-                    schneider_kobbelt(mesh, &d.max_iterations(n).fixed(fixed))
+                    schneider_kobbelt(
+                        mesh,
+                        &d.max_iterations(n).fixed(fixed).control(control.clone()),
+                    )
                 }
                 other => return Err(format!("unknown smoothing method `{other}`")),
             }
@@ -1015,7 +1107,8 @@ fn run_method(
             let opts = QuadFairOptions::default()
                 .weight(o.weight.unwrap_or(d.weight))
                 .iterations(o.iterations.unwrap_or(d.iterations))
-                .fixed(fixed_outside(mesh));
+                .fixed(fixed_outside(mesh))
+                .control(control.clone());
             let faired = fair_structure_lines(mesh, &opts).map_err(|e| e.to_string())?;
             let r = &faired.report;
             Ok(Outcome {
@@ -1039,7 +1132,8 @@ fn run_method(
                 .lambda(lambda)
                 .mu(mu)
                 .iterations(iterations)
-                .fixed(fixed_outside(tri));
+                .fixed(fixed_outside(tri))
+                .control(control.clone());
             let r = enhance_features(tri, &opts).map_err(|e| e.to_string())?;
             Ok(Outcome {
                 surfaces: None,
@@ -1326,6 +1420,7 @@ fn run_fair_surface(
     grid: usize,
     file: &str,
     out: &str,
+    control: &Control,
 ) -> Result<Outcome, String> {
     use fairline::fair::{Endpoints, SurfaceFairOptions, fair_surface};
     let circular = req
@@ -1346,6 +1441,7 @@ fn run_fair_surface(
     if let Some(e) = req.options.epsilon {
         opts = opts.epsilon(e);
     }
+    opts = opts.control(control.clone());
     let t = Instant::now();
     let faired = fair_surface(input, &opts).map_err(|e| e.to_string())?;
     let (faired, rep) = (faired.surfaces, faired.report);

@@ -8,7 +8,8 @@ use fairline::mesh::FaceId;
 use fairline::{SurfaceMesh, Vec3};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
+use std::time::Instant;
 
 /// One state of a document: its positions (and surfaces) after an action.
 pub struct Step {
@@ -22,6 +23,30 @@ pub struct Step {
     pub positions: Arc<Vec<Vec3>>,
     /// The surfaces (surface documents only).
     pub surfaces: Option<Arc<Vec<BSplineSurface>>>,
+    /// The vertex normals of these positions as the page gets them (f32
+    /// triples), computed once, on first request (the open step: while the
+    /// file is loaded).
+    pub normal_bytes: OnceLock<Vec<u8>>,
+}
+
+impl Step {
+    /// A step with its normals not computed yet.
+    pub fn new(
+        label: String,
+        command: String,
+        report: Value,
+        positions: Arc<Vec<Vec3>>,
+        surfaces: Option<Arc<Vec<BSplineSurface>>>,
+    ) -> Step {
+        Step {
+            label,
+            command,
+            report,
+            positions,
+            surfaces,
+            normal_bytes: OnceLock::new(),
+        }
+    }
 }
 
 /// A mesh or surface file opened in the workbench.
@@ -30,10 +55,11 @@ pub struct Doc {
     pub name: String,
     /// The path given on the command line.
     pub path: PathBuf,
-    /// The mesh as read (polygons kept); for surfaces, the tessellation.
-    pub mesh: SurfaceMesh,
-    /// The triangle mesh drawn and given to triangle algorithms; the same
-    /// vertices as `mesh`.
+    /// The mesh as read when it has polygons (else `tri` is the mesh as
+    /// read; see [`Doc::input_mesh`]).
+    pub polygons: Option<SurfaceMesh>,
+    /// The triangle mesh drawn and given to triangle algorithms (for
+    /// surfaces, the tessellation); the same vertices as the input mesh.
     pub tri: SurfaceMesh,
     /// Input face of each triangle when `mesh` has polygons.
     pub tri_source: Option<Vec<FaceId>>,
@@ -53,9 +79,16 @@ pub struct Doc {
     pub history: Vec<Step>,
     /// Index of the current step.
     pub cursor: usize,
-    /// `tri` with the current step's positions (kept in step with `cursor`,
-    /// so requests on the current state need no copy of the mesh).
-    pub now: SurfaceMesh,
+    /// `tri` with the current step's positions when that is not step 0
+    /// (kept in step with `cursor`, so requests on the current state need no
+    /// copy of the mesh; see [`Doc::now`]).
+    now_moved: Option<SurfaceMesh>,
+    /// The triangles of `tri` as the page gets them (u32 triples).
+    pub index_bytes: Vec<u8>,
+    /// Where opening the file took its time (seconds): `read` (reading and
+    /// building the mesh, or reading and tessellating the surfaces),
+    /// `prepare` (triangulation, normals and the binary buffers), `total`.
+    pub load_s: Value,
 }
 
 /// The triangle mesh of surfaces tessellated `n` × `n` per patch, and the
@@ -83,6 +116,7 @@ pub fn tessellate_all(surfaces: &[BSplineSurface], n: usize) -> Result<(SurfaceM
 impl Doc {
     /// Reads a mesh or surface file.
     pub fn open(path: &Path, grid: usize) -> Result<Doc> {
+        let t0 = Instant::now();
         let name = path
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -116,20 +150,29 @@ impl Doc {
                 };
                 (mesh, None, Vec::new(), scalars)
             };
+        let read_s = t0.elapsed().as_secs_f64();
         let (lo, hi) = fairline::mesh::bounding_box(mesh.positions())
             .ok_or_else(|| bad_input(format!("{}: no vertices", path.display())))?;
         if mesh.face_count() == 0 {
             return Err(bad_input(format!("{}: no faces", path.display())));
         }
-        let (tri, tri_source) = if mesh.is_triangle_mesh() {
-            (mesh.clone(), None)
+        // a triangle mesh is kept once (no copy for drawing, none for the
+        // current state until a step moves it)
+        let (tri, tri_source, polygons) = if mesh.is_triangle_mesh() {
+            (mesh, None, None)
         } else {
             let t = fairline::mesh::triangulate(&mesh)
                 .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
-            (t.mesh, Some(t.source_face))
+            (t.mesh, Some(t.source_face), Some(mesh))
         };
-        let positions = Arc::new(mesh.positions().to_vec());
-        let tri_now = tri.clone();
+        // the first frame needs the normals and the triangles: computed
+        // here, in parallel
+        let ((positions, index_bytes), normals) = rayon::join(
+            || (Arc::new(tri.positions().to_vec()), triangle_bytes(&tri)),
+            || super::frame::vec3_bytes(&fairline::geom::vertex_normals(&tri), Vec3::ZERO),
+        );
+        let normal_bytes = OnceLock::new();
+        let _ = normal_bytes.set(normals);
         let center = 0.5 * (lo + hi);
         let radius = (0.5 * (hi - lo).length()).max(f64::MIN_POSITIVE);
         let kind = if surfaces.is_some() {
@@ -140,7 +183,7 @@ impl Doc {
         Ok(Doc {
             name: name.clone(),
             path: path.to_path_buf(),
-            mesh,
+            polygons,
             tri,
             tri_source,
             patch_of_triangle,
@@ -155,9 +198,16 @@ impl Doc {
                 report: json!({"command": "open", "kind": kind}),
                 positions,
                 surfaces,
+                normal_bytes,
             }],
             cursor: 0,
-            now: tri_now,
+            now_moved: None,
+            index_bytes,
+            load_s: json!({
+                "read": read_s,
+                "prepare": t0.elapsed().as_secs_f64() - read_s,
+                "total": t0.elapsed().as_secs_f64(),
+            }),
         })
     }
 
@@ -176,6 +226,21 @@ impl Doc {
         &self.history[n.unwrap_or(self.cursor).min(self.history.len() - 1)]
     }
 
+    /// The vertex normals of step `n` (default the current one) as f32
+    /// triples: the library's area-weighted vertex normals (Yong et al.
+    /// Eq. (3)), computed once per step.
+    pub fn normal_bytes(&self, n: Option<usize>) -> &[u8] {
+        let current = n.is_none_or(|n| n.min(self.history.len() - 1) == self.cursor);
+        self.step(n).normal_bytes.get_or_init(|| {
+            let normals = if current {
+                fairline::geom::vertex_normals(self.now())
+            } else {
+                fairline::geom::vertex_normals(&self.tri_at(n))
+            };
+            super::frame::vec3_bytes(&normals, Vec3::ZERO)
+        })
+    }
+
     /// The drawn triangle mesh at step `n`.
     pub fn tri_at(&self, n: Option<usize>) -> SurfaceMesh {
         let mut m = self.tri.clone();
@@ -184,9 +249,19 @@ impl Doc {
         m
     }
 
+    /// The mesh as read (polygons kept; for surfaces the tessellation).
+    pub fn input_mesh(&self) -> &SurfaceMesh {
+        self.polygons.as_ref().unwrap_or(&self.tri)
+    }
+
+    /// The drawn triangle mesh with the current step's positions.
+    pub fn now(&self) -> &SurfaceMesh {
+        self.now_moved.as_ref().unwrap_or(&self.tri)
+    }
+
     /// The input mesh (polygons kept) at the current step.
     pub fn mesh_now(&self) -> SurfaceMesh {
-        let mut m = self.mesh.clone();
+        let mut m = self.input_mesh().clone();
         let _ = m.set_positions(self.current().positions.to_vec());
         m
     }
@@ -201,10 +276,22 @@ impl Doc {
     /// Makes step `n` the current one.
     pub fn set_cursor(&mut self, n: usize) {
         self.cursor = n.min(self.history.len() - 1);
-        // same vertex count by construction
-        let _ = self
-            .now
-            .set_positions(self.history[self.cursor].positions.to_vec());
+        if self.cursor == 0 {
+            self.now_moved = None;
+            return;
+        }
+        let positions = self.history[self.cursor].positions.to_vec();
+        match &mut self.now_moved {
+            // same vertex count by construction
+            Some(m) => {
+                let _ = m.set_positions(positions);
+            }
+            None => {
+                let mut m = self.tri.clone();
+                let _ = m.set_positions(positions);
+                self.now_moved = Some(m);
+            }
+        }
     }
 
     /// The file name the current state would have as a command's output.
@@ -259,6 +346,17 @@ impl Doc {
         out.dedup();
         out
     }
+}
+
+/// The triangles of a triangle mesh as u32 little-endian triples.
+fn triangle_bytes(tri: &SurfaceMesh) -> Vec<u8> {
+    let mut out = Vec::with_capacity(tri.face_count() * 12);
+    for f in tri.faces() {
+        for v in tri.triangle(f) {
+            out.extend_from_slice(&v.0.to_le_bytes());
+        }
+    }
+    out
 }
 
 /// `s` quoted for a POSIX shell when it holds anything but plain characters.

@@ -34,7 +34,8 @@
 //! - `GET /api/doc/K/positions[?step=N]`, `.../normals[?step=N]`:
 //!   little-endian f32 triples per vertex (positions minus `center`;
 //!   normals = the library's area-weighted vertex normals, Yong et al.
-//!   Eq. (3)); `step` selects a history step (default the current one).
+//!   Eq. (3), computed once per step, for the opening step while the file
+//!   is read); `step` selects a history step (default the current one).
 //! - `GET /api/doc/K/indices`: u32 triples per triangle.
 //! - `GET /api/doc/K/patches`: u32 patch index per triangle (surfaces).
 //! - `GET /api/doc/K/scalar/NAME`: f32 per vertex (`k1 k2 mean gauss` by
@@ -44,7 +45,8 @@
 //!   library's exact highlight polylines. Binary frame: u32 length of a JSON
 //!   header, the header, padding to 4 bytes, then f32 points (minus
 //!   `center`); the header lists `lines` (`index`, `closed`, `start`,
-//!   `count` into the points), `bands`, `time_s` and `command`.
+//!   `count` into the points), `bands`, `time_s`, `stages_s` (linear
+//!   lights: seconds of `model`, `chain`, `encode`) and `command`.
 //! - `POST /api/doc/K/detect` `{"light":LIGHT, "threshold"?, "region_radius"?}`:
 //!   the same frame; the header adds `stretches` (irregular stretches,
 //!   `start`, `count`, `score`) and the ranked `regions` (`score`, `center`,
@@ -60,11 +62,18 @@
 //!   `lambda`, `weights`), `fair-quad` (`weight`, `iterations`), `enhance`
 //!   (`lambda`, `mu`, `iterations`): starts a job on a thread; answers
 //!   `{"job":id}`. With `faces`, only the vertices inside the region move.
-//! - `GET /api/job`: `{"id","state":"running"|"done"|"failed"|"cancelled",
-//!   "progress":0..1,"message","report","command"}`. `POST /api/job/cancel`.
-//!   The library has no cancel hook: a cancelled job runs to its end on its
-//!   thread and its result is thrown away; progress is per iteration where
-//!   the library reports iterations (highlight fairing), else coarse.
+//! - `GET /api/job`: `{"id","state":"running"|"cancelling"|"done"|"failed"|"cancelled",
+//!   "progress":0..1,"stage","message","report","command"}`.
+//!   `POST /api/job/cancel` raises the job's cancel flag: the job's
+//!   [`fairline::Control`] (in the options of every library call that takes
+//!   one) stops the algorithm at its next checkpoint; the job is
+//!   `cancelling` until its thread has ended, then `cancelled`, and its
+//!   result is thrown away. Progress comes from the same `Control`
+//!   (`stage`, done/total).
+//! - The server answers the page's files as soon as the URL is printed;
+//!   API calls wait until the files named on the command line are read
+//!   (`GET /api/session` gives `load_s` per document: `read`, `prepare`,
+//!   `total` seconds).
 //! - `POST /api/doc/K/undo`, `POST /api/doc/K/redo`: move in the history.
 //! - `GET /api/doc/K/download?format=obj|ply|off|stl|json`: the current mesh
 //!   (or surfaces as JSON) as a file.
@@ -82,7 +91,7 @@ use crate::common::bad_input;
 use anyhow::{Context, Result};
 use std::io::Write;
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 /// Opens meshes (.obj .ply .off .stl) or B-spline surfaces (.json .igs
 /// .iges .step .stp) in the browser: exact highlight shading on the GPU, the
@@ -149,22 +158,30 @@ pub fn run(args: Args) -> Result<()> {
     if !args.no_open {
         open_browser(&url);
     }
+    // serve at once: the page and its modules load (and WebGL starts) while
+    // the files are read; API calls wait until they are
+    let shared = Arc::new(api::Shared::new(
+        save_dir.clone(),
+        auth::Guard::new(token, port),
+    ));
+    let state = Arc::clone(&shared);
+    let handler: http::Handler = Arc::new(move |req| api::handle(&state, req));
+    let server = std::thread::spawn(move || http::serve(listener, handler));
     let mut docs = Vec::new();
     for f in &files {
         docs.push(doc::Doc::open(f, args.grid)?);
     }
     let names: Vec<String> = docs.iter().map(|d| d.name.clone()).collect();
+    let load_s: f64 = docs.iter().filter_map(|d| d.load_s["total"].as_f64()).sum();
+    shared.set_docs(docs);
     eprintln!(
-        "fairline view: serving {} on 127.0.0.1:{port} (saves go to {}); Ctrl-C to stop",
+        "fairline view: serving {} on 127.0.0.1:{port} (read in {load_s:.2} s; saves go to {}); Ctrl-C to stop",
         names.join(" and "),
         save_dir.display()
     );
-    let state = Arc::new(api::Shared {
-        state: Mutex::new(api::State::new(docs, save_dir)),
-        guard: auth::Guard::new(token, port),
-    });
-    let handler: http::Handler = Arc::new(move |req| api::handle(&state, req));
-    http::serve(listener, handler);
+    server
+        .join()
+        .map_err(|_| anyhow::anyhow!("the HTTP server stopped"))?;
     Ok(())
 }
 

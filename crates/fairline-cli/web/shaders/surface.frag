@@ -14,7 +14,8 @@
 // L(θ) = C + R(cos θ n + sin θ b). The closest approach is a stationary
 // point of g(θ) = |(L(θ) − P) − ((L(θ) − P)·N)N|², whose stationary points
 // are exactly the real roots of the quartic Eq. (2.15)–(2.16); it is found
-// here as the global minimum of g over 48 samples of θ, polished by the
+// here as the global minimum of g over uThetaSamples (48) samples of θ,
+// polished by the
 // Newton steps of the library (g is a trigonometric polynomial of degree 2,
 // at most 4 stationary points, so the samples bracket the global minimum).
 // d_s = d·(N × L̇)/|N × L̇|, L̇ of Eq. (2.17).
@@ -37,6 +38,10 @@ uniform vec3 uCircleN;
 uniform vec3 uCircleB;
 uniform float uRadii[16];
 uniform int uRadiusCount;
+// 48 (viewer.js). Loop bounds are uniforms, not constants, so that the
+// compiler keeps the loops: unrolled (16 radii × 48 samples) the shader took
+// seconds to compile in software GL, the largest part of the first frame.
+uniform int uThetaSamples;
 uniform vec3 uEye;            // eye position, model space
 uniform int uScalarOn;
 uniform float uScalarLo;
@@ -52,8 +57,9 @@ const float PI = 3.14159265358979;
 float circleDistance(vec3 p, vec3 n, float r, out bool valid) {
   float best = 1e30;
   float bc = 1.0, bs = 0.0;
-  for (int k = 0; k < 48; k++) {
-    float th = float(k) * (2.0 * PI / 48.0);
+  float dth = 2.0 * PI / float(max(uThetaSamples, 1));
+  for (int k = 0; k < uThetaSamples; k++) {
+    float th = float(k) * dth;
     float c = cos(th), s = sin(th);
     vec3 q = uCircleCenter + r * (c * uCircleN + s * uCircleB) - p;
     vec3 perp = q - dot(q, n) * n;
@@ -125,8 +131,7 @@ void main() {
     color = mix(color, vec3(0.02), a);
   } else if (uMode == 4 || uMode == 5) {
     float a = 0.0;
-    for (int i = 0; i < 16; i++) {
-      if (i >= uRadiusCount) break;
+    for (int i = 0; i < min(uRadiusCount, 16); i++) {
       bool ok;
       float ds = circleDistance(vPos, nn, uRadii[i], ok);
       if (!ok) continue;
