@@ -244,7 +244,7 @@ fn cancelling_a_job_discards_its_result_and_frees_the_server() {
     let srv = start(&[&mesh], &dir);
     let id = start_fair_job(
         &srv,
-        json!({"method": "highlight", "max_iterations": 200, "epsilon": 0.0}),
+        json!({"method": "highlight", "max_iterations": 200, "epsilon": 1e-12}),
     );
     let cancel = srv.json("/api/job/cancel", Some(&json!({})));
     assert_eq!(cancel["id"].as_u64(), Some(id));
@@ -303,7 +303,7 @@ fn cancel_stops_a_long_fairing_job_within_seconds() {
     let srv = start(&[&mesh], &dir);
     start_fair_job(
         &srv,
-        json!({"method": "highlight", "max_iterations": 100000, "epsilon": 0.0}),
+        json!({"method": "highlight", "max_iterations": 100000, "epsilon": 1e-12}),
     );
     // progress arrives from the library's Control
     let t = Instant::now();
