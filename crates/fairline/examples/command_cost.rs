@@ -10,7 +10,6 @@
 //! Compare with the whole command (`scripts/command-cost`).
 
 #[path = "../benches/common.rs"]
-#[allow(dead_code)]
 mod common;
 
 use std::time::Instant;
