@@ -295,7 +295,6 @@ fn cancelling_a_job_discards_its_result_and_frees_the_server() {
 /// iterations that cannot converge ends `cancelled` within seconds of the
 /// cancel, with progress reported on the way.
 #[test]
-#[ignore = "needs FairOptions::control (#17 item 1, another branch this session): enable at the merge"]
 fn cancel_stops_a_long_fairing_job_within_seconds() {
     let dir = tmp("view-cancel-long");
     let mesh = dir.join("panel.obj");
