@@ -301,9 +301,9 @@ impl LeastSquares {
             match rows.binary_search(&u) {
                 Ok(k) => values[range.start + k] += self.epsilon,
                 Err(_) => {
-                    return Err(
-                        SolveError::Backend("normal matrix lacks a diagonal entry".into()).into(),
-                    );
+                    return Err(SolveError::Backend(
+                        "normal matrix lacks a diagonal entry".into(),
+                    ));
                 }
             }
         }
