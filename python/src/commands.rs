@@ -192,9 +192,9 @@ fn smooth<'py>(
 ) -> PyResult<PositionsOut<'py>> {
     use fairline::geom::LaplaceWeights;
     use fairline::smooth::{
-        Constraints, ImplicitOptions, LaplaceOptions, SchneiderKobbeltOptions, SmoothError,
-        SpringOptions, TaubinOptions, implicit_smooth, laplace_smooth, schneider_kobbelt,
-        spring_smooth, taubin_smooth,
+        ImplicitOptions, LaplaceOptions, SchneiderKobbeltOptions, SmoothError, SpringOptions,
+        TaubinOptions, implicit_smooth, laplace_smooth, schneider_kobbelt, spring_smooth,
+        taubin_smooth,
     };
     const METHODS: [&str; 5] = [
         "laplace",
