@@ -20,9 +20,9 @@ use fairline::smooth::{ImplicitOptions, TaubinOptions, implicit_smooth, taubin_s
 /// nested-dissection ordering from the positions, sequential LLᵀ. Kept here
 /// only to compare the two in one process (task `implicit-ab`).
 fn former_implicit_step(mesh: &fairline::SurfaceMesh) -> Vec<Vec3> {
+    use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
     use fairline::geom::{self, LaplaceWeights};
     use fairline::solve::{CholeskyOptions, CholeskyOrdering, CholeskySolver, nested_dissection};
-    use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
     let n = mesh.vertex_count();
     let p = mesh.positions();
     let e = geom::mean_edge_length(mesh);

@@ -12,8 +12,8 @@ use super::{
 };
 use crate::geom::{self, LaplaceWeights};
 use crate::mesh::{SurfaceMesh, VertexId};
-use crate::{Control, Output, Vec3};
 use crate::solve::{ConstrainedOptions, ConstrainedSolver, sparse_from_triplets};
+use crate::{Control, Output, Vec3};
 use faer::sparse::SparseColMat;
 use rayon::prelude::*;
 
@@ -606,7 +606,11 @@ fn backward_euler_step(
         }
         *solver = fresh;
     }
-    let rhs: Vec<Vec3> = mass.par_iter().zip(cur.par_iter()).map(|(m, p)| *m * *p).collect();
+    let rhs: Vec<Vec3> = mass
+        .par_iter()
+        .zip(cur.par_iter())
+        .map(|(m, p)| *m * *p)
+        .collect();
     solver.solve_points(&rhs, cur)?;
     Ok(())
 }

@@ -4,8 +4,8 @@
 use super::{Constraints, Role, SmoothError, SmoothReport, max_distance, roles, setters};
 use crate::geom::{self, LaplaceWeights};
 use crate::mesh::{SurfaceMesh, VertexId};
-use crate::{Control, Output, Vec3};
 use crate::solve::{ConstrainedOptions, ConstrainedSolver, least_squares, sparse_from_triplets};
+use crate::{Control, Output, Vec3};
 
 /// Options of [`schneider_kobbelt`].
 #[derive(Clone, Debug, PartialEq)]

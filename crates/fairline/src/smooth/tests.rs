@@ -29,7 +29,10 @@ fn taubin_smooth(
 ) -> Result<(SmoothReport, TaubinParameters), SmoothError> {
     let out = super::taubin_smooth(m, o)?;
     m.set_positions(out.positions)?;
-    let p = out.report.taubin.ok_or(SmoothError::InvalidOption("no parameters".into()))?;
+    let p = out
+        .report
+        .taubin
+        .ok_or(SmoothError::InvalidOption("no parameters".into()))?;
     Ok((out.report, p))
 }
 
@@ -1045,17 +1048,15 @@ fn recorded_cases() -> Vec<(&'static str, Vec<Vec3>, SmoothReport)> {
     let caps = noisy_caps();
     let cap = caps[1].2.clone();
     let cap11 = caps[0].2.clone();
-    let every = |k: usize, n: usize| -> Vec<VertexId> {
-        (0..n as u32).step_by(k).map(VertexId).collect()
-    };
+    let every =
+        |k: usize, n: usize| -> Vec<VertexId> { (0..n as u32).step_by(k).map(VertexId).collect() };
     let mut out = Vec::new();
-    let mut run = |name: &'static str,
-                   mesh: &SurfaceMesh,
-                   f: &dyn Fn(&mut SurfaceMesh) -> SmoothReport| {
-        let mut m = mesh.clone();
-        let r = f(&mut m);
-        out.push((name, m.positions().to_vec(), r));
-    };
+    let mut run =
+        |name: &'static str, mesh: &SurfaceMesh, f: &dyn Fn(&mut SurfaceMesh) -> SmoothReport| {
+            let mut m = mesh.clone();
+            let r = f(&mut m);
+            out.push((name, m.positions().to_vec(), r));
+        };
     let ns = sphere.vertex_count();
     run("laplace default", &sphere, &|m| {
         laplace_smooth(m, &LaplaceOptions::default()).unwrap()
@@ -1169,21 +1170,111 @@ fn recorded_cases() -> Vec<(&'static str, Vec<Vec3>, SmoothReport)> {
 /// Results of [`recorded_cases`] before the change to the one shape:
 /// (name, fingerprint, Σx, Σy, Σz of the positions).
 const RECORDED: &[(&str, u64, f64, f64, f64)] = &[
-    ("laplace default", 0xf497c36cfdc92918, 6.161992773436875e-2, 3.9784356115752706e-2, 2.775938521387151e-1),
-    ("laplace cotangent volume", 0xc01048502125ddc7, 1.2939650847757733e-1, 3.222634200234065e-2, 2.4684654743148082e-1),
-    ("laplace edge-length hierarchical", 0x7b27d4b3df2c013e, 1.6031009831016962e-2, 1.3868624283080055e-2, 3.944740477220371e2),
-    ("taubin default", 0xdb2a5cc0604cadc1, 6.1328264877688055e-2, 4.005075379637102e-2, 2.7794609976447254e-1),
-    ("taubin fixed tangential", 0x829f255f4bf676d8, 3.85232052999932e-2, 4.742102842810142e-2, 2.6123724080893607e-1),
-    ("taubin fix boundary", 0xb715aa8e288abee2, 9.859280775780799e-3, 1.5833317688935367e-2, 3.9770274973917964e2),
-    ("implicit default", 0x4f81e0973976a8c6, 5.818842817073433e-2, 2.3259363588908732e-2, 3.1492906870199e-1),
-    ("implicit hierarchical", 0x4d9aeb9e17da4374, 2.2078608862427462e-2, 1.3792953581844847e-3, 3.86379568633023e2),
-    ("implicit fixed volume tangential", 0x9fa6f6463abaf50f, 6.785489949311596e-2, 3.301508753441329e-2, 3.0994836360006073e-1),
-    ("implicit fix boundary", 0x27f253c5e88a9ad4, 2.133298207316947e-2, 1.2421555141390428e-2, 3.935906048463014e2),
-    ("spring default", 0x1eb5604503719de1, -5.333224532519165e-2, -3.7077299905176275e-2, 3.969563189487948e2),
-    ("spring fixed normals", 0xd8ede9bab61d3e25, 1.4120173730826402e-1, 3.777003021944939e-1, 7.701638237186252e-1),
-    ("schneider-kobbelt cap 11", 0xc553bcbab393d4fe, 2.6052747395093445e-2, -7.42985948850361e-4, 1.0804106176822317e2),
-    ("schneider-kobbelt sphere fixed", 0x0c12b9ca1bb8ede0, -7.963944507579e-1, -7.238064340196545e-1, 4.796306681286556e-1),
-    ("schneider-kobbelt cap 21 rings 3", 0x967ce7d2f50d526c, -1.1552737848647276e-1, -6.756546989547019e-2, 3.976475822079271e2),
+    (
+        "laplace default",
+        0xf497c36cfdc92918,
+        6.161992773436875e-2,
+        3.9784356115752706e-2,
+        2.775938521387151e-1,
+    ),
+    (
+        "laplace cotangent volume",
+        0xc01048502125ddc7,
+        1.2939650847757733e-1,
+        3.222634200234065e-2,
+        2.4684654743148082e-1,
+    ),
+    (
+        "laplace edge-length hierarchical",
+        0x7b27d4b3df2c013e,
+        1.6031009831016962e-2,
+        1.3868624283080055e-2,
+        3.944740477220371e2,
+    ),
+    (
+        "taubin default",
+        0xdb2a5cc0604cadc1,
+        6.1328264877688055e-2,
+        4.005075379637102e-2,
+        2.7794609976447254e-1,
+    ),
+    (
+        "taubin fixed tangential",
+        0x829f255f4bf676d8,
+        3.85232052999932e-2,
+        4.742102842810142e-2,
+        2.6123724080893607e-1,
+    ),
+    (
+        "taubin fix boundary",
+        0xb715aa8e288abee2,
+        9.859280775780799e-3,
+        1.5833317688935367e-2,
+        3.9770274973917964e2,
+    ),
+    (
+        "implicit default",
+        0x4f81e0973976a8c6,
+        5.818842817073433e-2,
+        2.3259363588908732e-2,
+        3.1492906870199e-1,
+    ),
+    (
+        "implicit hierarchical",
+        0x4d9aeb9e17da4374,
+        2.2078608862427462e-2,
+        1.3792953581844847e-3,
+        3.86379568633023e2,
+    ),
+    (
+        "implicit fixed volume tangential",
+        0x9fa6f6463abaf50f,
+        6.785489949311596e-2,
+        3.301508753441329e-2,
+        3.0994836360006073e-1,
+    ),
+    (
+        "implicit fix boundary",
+        0x27f253c5e88a9ad4,
+        2.133298207316947e-2,
+        1.2421555141390428e-2,
+        3.935906048463014e2,
+    ),
+    (
+        "spring default",
+        0x1eb5604503719de1,
+        -5.333224532519165e-2,
+        -3.7077299905176275e-2,
+        3.969563189487948e2,
+    ),
+    (
+        "spring fixed normals",
+        0xd8ede9bab61d3e25,
+        1.4120173730826402e-1,
+        3.777003021944939e-1,
+        7.701638237186252e-1,
+    ),
+    (
+        "schneider-kobbelt cap 11",
+        0xc553bcbab393d4fe,
+        2.6052747395093445e-2,
+        -7.42985948850361e-4,
+        1.0804106176822317e2,
+    ),
+    (
+        "schneider-kobbelt sphere fixed",
+        0x0c12b9ca1bb8ede0,
+        -7.963944507579e-1,
+        -7.238064340196545e-1,
+        4.796306681286556e-1,
+    ),
+    (
+        "schneider-kobbelt cap 21 rings 3",
+        0x967ce7d2f50d526c,
+        -1.1552737848647276e-1,
+        -6.756546989547019e-2,
+        3.976475822079271e2,
+    ),
 ];
 
 /// Issue #17 item 1: moving the five methods to the one shape (input by
@@ -1210,8 +1301,14 @@ fn results_equal_those_recorded_before_the_one_shape() {
         let solved = name.starts_with("implicit") || name.starts_with("schneider-kobbelt");
         if solved {
             let d = (s - Vec3::new(sx, sy, sz)).abs().max_element();
-            eprintln!("{name}: coordinate sums differ by {d:.2e} (bits equal: {})", got == want);
-            assert!(d < 1e-10, "{name}: Σ = {s}, recorded ({sx:e}, {sy:e}, {sz:e})");
+            eprintln!(
+                "{name}: coordinate sums differ by {d:.2e} (bits equal: {})",
+                got == want
+            );
+            assert!(
+                d < 1e-10,
+                "{name}: Σ = {s}, recorded ({sx:e}, {sy:e}, {sz:e})"
+            );
             continue;
         }
         assert_eq!(
@@ -1227,8 +1324,8 @@ fn results_equal_those_recorded_before_the_one_shape() {
 /// is not.
 #[test]
 fn every_method_can_be_cancelled_and_reports_progress() {
-    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
     use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
     let sphere = noisy_sphere(1.0, 2, 0.02);
     let cap = noisy_caps()[0].2.clone();
     type Run = Box<dyn Fn(Control) -> Result<Output<SmoothReport>, SmoothError>>;
@@ -1287,18 +1384,20 @@ fn every_method_can_be_cancelled_and_reports_progress() {
         flag.store(false, Ordering::Relaxed);
         let steps = Arc::new(AtomicUsize::new(0));
         let seen = Arc::clone(&steps);
-        let out = run(
-            Control::new()
-                .cancel_flag(flag)
-                .on_progress(move |p| {
-                    assert_eq!(p.stage, "iterations");
-                    seen.fetch_add(1, Ordering::Relaxed);
-                }),
-        )
+        let out = run(Control::new().cancel_flag(flag).on_progress(move |p| {
+            assert_eq!(p.stage, "iterations");
+            seen.fetch_add(1, Ordering::Relaxed);
+        }))
         .unwrap();
         let n = steps.load(Ordering::Relaxed);
-        assert!(n >= 1 && n >= out.report.iterations.min(2), "{name}: {n} steps");
-        assert_eq!(SmoothError::Cancelled(crate::Cancelled).to_string(), "cancelled");
+        assert!(
+            n >= 1 && n >= out.report.iterations.min(2),
+            "{name}: {n} steps"
+        );
+        assert_eq!(
+            SmoothError::Cancelled(crate::Cancelled).to_string(),
+            "cancelled"
+        );
     }
 }
 
@@ -1332,6 +1431,9 @@ fn the_report_serialises_to_the_cli_keys() {
     let cap = noisy_caps()[0].2.clone();
     let out = super::schneider_kobbelt(&cap, &SchneiderKobbeltOptions::default()).unwrap();
     let v = serde_json::to_value(&out.report).unwrap();
-    assert_eq!(v["residual"], serde_json::json!(out.report.residual.unwrap()));
+    assert_eq!(
+        v["residual"],
+        serde_json::json!(out.report.residual.unwrap())
+    );
     assert!(v.get("lambda").is_none());
 }

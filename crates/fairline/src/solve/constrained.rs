@@ -333,7 +333,11 @@ mod tests {
         nd.factor(build(0.5).as_ref()).unwrap();
         let mut w = x.clone();
         nd.solve(&b, &mut w).unwrap();
-        let d = w.iter().zip(&y).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max);
+        let d = w
+            .iter()
+            .zip(&y)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0, f64::max);
         assert!(d < 1e-12, "{d}");
         // nothing free: the given values come back untouched
         let mut all = ConstrainedSolver::analyse(
@@ -347,9 +351,12 @@ mod tests {
         all.solve(&vec![0.0; n], &mut v).unwrap();
         assert_eq!(v, b);
         // without fixed unknowns the singular Laplacian is refused
-        let mut none =
-            ConstrainedSolver::analyse(a.symbolic(), &vec![false; n], &ConstrainedOptions::default())
-                .unwrap();
+        let mut none = ConstrainedSolver::analyse(
+            a.symbolic(),
+            &vec![false; n],
+            &ConstrainedOptions::default(),
+        )
+        .unwrap();
         assert_eq!(
             none.factor(a.as_ref()).unwrap_err(),
             SolveError::NotPositiveDefinite
