@@ -1,0 +1,96 @@
+//! Continuity across the patch boundaries of the real parts in
+//! ../shared/data/surfaces (issue #20 item 5), with the defaults of
+//! `fairline continuity` (position tolerance 1e-4 × the control points'
+//! bounding-box diagonal, 0.5°, 5 % curvature). The numbers are those of
+//! the README's "Continuity across patches" table, stated as bounds.
+//!
+//! Shared edges are found between the patches' (untrimmed) sides; on the
+//! impeller, whose faces of revolution make full turns, many of them are
+//! sides that meet along trims rather than seams of the trimmed faces.
+
+#[path = "support/shared_data.rs"]
+mod shared_data;
+
+use fairline::bspline::BSplineSurface;
+use fairline::bspline::continuity::{ContinuityOptions, ContinuityReport, SeamClass, continuity};
+use fairline::io::{read_iges, read_surfaces_json};
+
+/// Edges per class (gap, G0, G1, G2) and the worst angle (degrees) and
+/// relative curvature mismatch over the edges of each class.
+fn summary(r: &ContinuityReport) -> ([usize; 4], [f64; 4], [f64; 4]) {
+    let (mut n, mut angle, mut curvature) = ([0; 4], [0.0f64; 4], [0.0f64; 4]);
+    for s in &r.seams {
+        let c = match s.class {
+            SeamClass::Gap => 0,
+            SeamClass::G0 => 1,
+            SeamClass::G1 => 2,
+            SeamClass::G2 => 3,
+        };
+        n[c] += 1;
+        angle[c] = angle[c].max(s.g1_max_deg);
+        curvature[c] = curvature[c].max(s.g2_max_relative);
+    }
+    (n, angle, curvature)
+}
+
+/// The Utah teapot's 32 bicubic Bézier patches: 76 shared edges; the
+/// seams inside the body, lid, handle and spout are exact G1 or G2 joins
+/// (angles and curvature mismatches at rounding level), the rim is a crease
+/// (G0), and the handle and spout meet the body without shared edges
+/// (gaps).
+#[test]
+fn continuity_of_the_teapot() {
+    let Some(path) = shared_data::shared_data("surfaces/teapot.json") else {
+        return;
+    };
+    let surfaces = read_surfaces_json(&path).unwrap();
+    assert_eq!(surfaces.len(), 32);
+    let r = continuity(&surfaces, &ContinuityOptions::default()).unwrap();
+    let (n, angle, curvature) = summary(&r);
+    eprintln!(
+        "teapot: {} edges, gap/G0/G1/G2 {n:?}, worst angle {angle:?}, worst curvature {curvature:?}",
+        r.seams.len()
+    );
+    assert_eq!(r.seams.len(), 76);
+    assert_eq!(r.degenerate_sides, 4);
+    assert!(n[3] >= 30 && n[2] + n[3] >= 46, "{n:?}");
+    assert!(n[1] <= 6 && n[0] <= 26, "{n:?}");
+    // the G1 and G2 seams are exact joins
+    assert!(angle[2] < 1e-9 && angle[3] < 1e-9, "{angle:?}");
+    assert!(curvature[3] < 1e-9, "{curvature:?}");
+    // the rim crease
+    assert!(angle[1] > 100.0, "{angle:?}");
+}
+
+/// The impeller's 277 faces (247 B-spline, 30 of revolution): more than
+/// 2000 shared sides, a hundred G1 and about as many G2 edges whose worst
+/// angles stay well inside the 0.5° tolerance.
+#[test]
+fn continuity_of_the_impeller() {
+    let Some(path) = shared_data::shared_data("surfaces/impeller.igs") else {
+        return;
+    };
+    let surfaces: Vec<BSplineSurface> = read_iges(&path)
+        .unwrap()
+        .surfaces
+        .into_iter()
+        .map(|s| s.surface)
+        .collect();
+    assert_eq!(surfaces.len(), 277);
+    let r = continuity(&surfaces, &ContinuityOptions::default()).unwrap();
+    let (n, angle, curvature) = summary(&r);
+    eprintln!(
+        "impeller: {} edges, gap/G0/G1/G2 {n:?}, worst angle {angle:?}, worst curvature {curvature:?}",
+        r.seams.len()
+    );
+    assert!(r.seams.len() >= 2000, "{}", r.seams.len());
+    assert!(n[2] >= 100 && n[3] >= 90, "{n:?}");
+    assert!(angle[2] < 0.1 && angle[3] < 0.03, "{angle:?}");
+    assert!(curvature[3] < 0.05, "{curvature:?}");
+    // every G0-or-better edge closes within the tolerance
+    for s in &r.seams {
+        if s.class != SeamClass::Gap {
+            assert!(s.g0_max <= r.tolerance * (1.0 + 1e-9), "{}", s.g0_max);
+        }
+    }
+}
