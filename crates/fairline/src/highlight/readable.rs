@@ -55,7 +55,7 @@ pub fn face_distance_gradients(mesh: &SurfaceMesh, d: &[f64], branch: &[i8]) -> 
 }
 
 /// Most triangles [`sampled_median_distance_gradient`] evaluates by
-/// default: a larger mesh is sampled (every k-th triangle in face order),
+/// default: a larger mesh is sampled (see [`sample_faces`]),
 /// which keeps choosing the readable lights of a 450k-vertex part to a few
 /// milliseconds; the median of |∇d| over tens of thousands of triangles
 /// spread over the whole part is the median of all of them to far better
@@ -63,8 +63,8 @@ pub fn face_distance_gradients(mesh: &SurfaceMesh, d: &[f64], branch: &[i8]) -> 
 pub(crate) const GRADIENT_SAMPLE_FACES: usize = 32_768;
 
 /// The area-weighted median ĝ of |∇d| (see [`face_distance_gradients`])
-/// under `light`, estimated on at most `budget` triangles: every
-/// ⌈F/budget⌉-th triangle in face order (all of them when F ≤ budget),
+/// under `light`, estimated on at most `budget` triangles picked by
+/// [`sample_faces`] (all of them when F ≤ budget),
 /// with d_P evaluated only at their vertices (normals of Yong et al.
 /// Eq. (3), bit-identical to [`crate::geom::vertex_normals`]). `None` when
 /// no sampled triangle has a gradient.
@@ -73,11 +73,9 @@ pub(crate) fn sampled_median_distance_gradient(
     light: &LightArray,
     budget: usize,
 ) -> Option<f64> {
-    let nf = mesh.face_count();
-    let stride = nf.div_ceil(budget.max(1)).max(1);
     let min_cos = super::HighlightOptions::default().min_normal_cos;
     let p = mesh.positions();
-    let faces: Vec<u32> = (0..nf as u32).step_by(stride).collect();
+    let faces = sample_faces(mesh.face_count(), budget);
     let v: Vec<(f64, f64)> = faces
         .par_iter()
         .filter_map(|&f| {
@@ -102,6 +100,29 @@ pub(crate) fn sampled_median_distance_gradient(
         })
         .collect();
     weighted_median(v)
+}
+
+/// At most `budget` face indices out of `nf`, sorted: all of them when
+/// `nf ≤ budget`, otherwise the Weyl sequence ⌊frac((k + ½)/φ) · nf⌋,
+/// k = 0 … budget − 1 (φ the golden ratio). A regular stride aliases with
+/// the rows and columns of structured meshes (a cylinder's every k-th
+/// triangle can fall on one side of every quad); the golden-ratio sequence
+/// spreads the sample evenly over any face order. Deterministic.
+pub(crate) fn sample_faces(nf: usize, budget: usize) -> Vec<u32> {
+    let budget = budget.max(1);
+    if nf <= budget {
+        return (0..nf as u32).collect();
+    }
+    let step = (5f64.sqrt() - 1.0) / 2.0; // 1/φ
+    let mut faces: Vec<u32> = (0..budget)
+        .map(|k| {
+            let x = ((k as f64 + 0.5) * step).fract();
+            ((x * nf as f64) as usize).min(nf - 1) as u32
+        })
+        .collect();
+    faces.sort_unstable();
+    faces.dedup();
+    faces
 }
 
 /// The area-weighted median of |∇d| over the triangles that have one

@@ -964,7 +964,7 @@ fn circular_distance_at_near_tangent_configurations_matches_brute_force() {
 /// with a budget above the face count the estimate is the full median
 /// itself, bit for bit.
 #[test]
-fn readable_multiple_on_a_sample_equals_the_full_choice() {
+fn readable_multiple_on_a_sample_agrees_with_the_full_choice() {
     let mut meshes: Vec<(String, SurfaceMesh)> = vec![
         ("sphere".into(), shapes::uv_sphere(1.0, 160, 80)),
         ("torus".into(), shapes::torus(1.0, 0.4, 300, 120)),
@@ -993,13 +993,57 @@ fn readable_multiple_on_a_sample_equals_the_full_choice() {
                 Some(g) if g.is_finite() && g > 0.0 => (g / 3.0).round().clamp(1.0, 1000.0) as u32,
                 _ => 1,
             };
+            // a sample of 2 000 triangles
             let k_small = light.readable_multiple_sampled(mesh, 2_000);
+            let small = super::readable::sampled_median_distance_gradient(mesh, &light, 2_000);
             println!(
-                "{name} {up:?}: ĝ full {full:?}, all sampled {all:?}, k {k_full} (2 000 triangles: {k_small}), faces {}",
+                "{name} {up:?}: ĝ full {full:?}, all sampled {all:?}, 2 000 triangles {small:?}, k {k_full} (2 000 triangles: {k_small}), faces {}",
                 mesh.face_count()
             );
-            assert_eq!(light.readable_multiple(mesh), k_full, "{name} {up:?}");
-            assert_eq!(k_small, k_full, "{name} {up:?}");
+            // a sample's median lies between the 45th and 55th area-weighted
+            // percentiles of all triangles' |∇d|; k = round(ĝ/3) then agrees
+            // wherever k is the same over that band (a mesh of identical
+            // columns, like the cylinder, has a step of the distribution
+            // right at its median, where any estimate may take either side)
+            let g = super::readable::face_distance_gradients(mesh, &d, &branch);
+            let areas = crate::geom::face_areas(mesh);
+            let mut v: Vec<(f64, f64)> = g
+                .iter()
+                .zip(&areas)
+                .filter_map(|(g, &a)| g.filter(|_| a > 0.0).map(|g| (g, a)))
+                .collect();
+            v.sort_by(|x, y| x.0.total_cmp(&y.0));
+            let total: f64 = v.iter().map(|x| x.1).sum();
+            let quantile = |q: f64| {
+                let mut acc = 0.0;
+                v.iter()
+                    .find(|x| {
+                        acc += x.1;
+                        acc >= q * total
+                    })
+                    .map_or(f64::NAN, |x| x.0)
+            };
+            let (lo, hi) = (quantile(0.45), quantile(0.55));
+            if let Some(b) = small {
+                assert!(
+                    lo <= b && b <= hi,
+                    "{name} {up:?}: ĝ {b} outside [{lo}, {hi}]"
+                );
+            }
+            let k_of = |g: f64| (g / 3.0).round().clamp(1.0, 1000.0) as u32;
+            if k_of(lo) == k_of(hi) {
+                assert_eq!(k_small, k_full, "{name} {up:?}");
+            }
+            // the production budget (32 768 triangles) chooses what all
+            // triangles choose unless ĝ/3 sits on a rounding edge within the
+            // 49th–51st percentile band (bunny_zipper: ĝ/3 = 10.506)
+            let (lo, hi) = (quantile(0.49), quantile(0.51));
+            if k_of(lo) == k_of(hi) {
+                assert_eq!(light.readable_multiple(mesh), k_full, "{name} {up:?}");
+            } else {
+                let k = light.readable_multiple(mesh);
+                assert!(k == k_of(lo) || k == k_of(hi), "{name} {up:?}: k {k}");
+            }
             match (full, all) {
                 (Some(a), Some(b)) => {
                     assert!((a - b).abs() <= 1e-9 * a.abs(), "{name} {up:?}: {a} vs {b}")
