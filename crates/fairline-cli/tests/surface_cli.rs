@@ -363,8 +363,10 @@ fn real_surfaces_teapot_and_impeller() {
         "0,1,-0.5",
         "--radii",
         "1,2,3",
+        // on a file of many patches --grid counts points along the whole
+        // part's diagonal (each patch gets its share, at least 12 a side)
         "--grid",
-        "60",
+        "200",
         "-o",
         s(&out),
         "--png",
