@@ -46,6 +46,9 @@ pub use surface::{
     unit_normal,
 };
 pub use tessellate::{Tessellation, tessellate, trimmed_area};
+#[cfg(test)]
+pub(crate) use tessellate::trimmed_area_by_triangles;
+pub(crate) use trim::inside_by_crossings;
 pub use trim::{
     TRIM_FLATNESS, TrimCurve, TrimError, TrimLoop, TrimmedDomain, polygon_signed_area2,
     winding_number,

@@ -132,6 +132,18 @@ fn bspline_trim_plane_with_circular_hole_has_exact_area() {
         let q = trimmed_area(&s, n, n);
         assert!(rel(q, exact) < 1e-5, "grid {n}: quadrature {q} vs {exact}");
     }
+    // The grid rule (Gauss–Legendre in whole cells) equals the former
+    // triangle rule to 1e-6 (issue #20 item 4).
+    let (fast, slow) = (
+        trimmed_area(&s, 64, 64),
+        super::trimmed_area_by_triangles(&s, 64, 64),
+    );
+    eprintln!(
+        "grid rule {fast} (error {:.2e}), triangle rule {slow} (error {:.2e})",
+        rel(fast, exact),
+        rel(slow, exact)
+    );
+    assert!(rel(fast, slow) < 1e-6, "{fast} vs {slow}");
     // Point classification against the exact circle (away from the edge).
     let mut rng = tests::Rng::new(7);
     for _ in 0..2000 {
@@ -236,6 +248,18 @@ fn bspline_trim_cylinder_with_hole_has_exact_area() {
         let q = trimmed_area(&s, n, n);
         assert!(rel(q, exact) < 1e-4, "grid {n}: quadrature {q} vs {exact}");
     }
+    // The grid rule (Gauss–Legendre in whole cells) equals the former
+    // triangle rule to 1e-6 (issue #20 item 4).
+    let (fast, slow) = (
+        trimmed_area(&s, 64, 64),
+        super::trimmed_area_by_triangles(&s, 64, 64),
+    );
+    eprintln!(
+        "grid rule {fast} (error {:.2e}), triangle rule {slow} (error {:.2e})",
+        rel(fast, exact),
+        rel(slow, exact)
+    );
+    assert!(rel(fast, slow) < 1e-6, "{fast} vs {slow}");
     let t = tessellate(&s, 200, 40);
     assert_inside(&s, &t);
     let a = mesh_area(&t);
@@ -281,6 +305,18 @@ fn bspline_trim_torus_cut_by_a_curve_has_exact_area() {
         let q = trimmed_area(&s, n, n);
         assert!(rel(q, exact) < 1e-4, "grid {n}: quadrature {q} vs {exact}");
     }
+    // The grid rule (Gauss–Legendre in whole cells) equals the former
+    // triangle rule to 1e-6 (issue #20 item 4).
+    let (fast, slow) = (
+        trimmed_area(&s, 64, 64),
+        super::trimmed_area_by_triangles(&s, 64, 64),
+    );
+    eprintln!(
+        "grid rule {fast} (error {:.2e}), triangle rule {slow} (error {:.2e})",
+        rel(fast, exact),
+        rel(slow, exact)
+    );
+    assert!(rel(fast, slow) < 1e-6, "{fast} vs {slow}");
     let t = tessellate(&s, 129, 129);
     assert_inside(&s, &t);
     let a = mesh_area(&t);
