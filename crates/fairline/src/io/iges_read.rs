@@ -1978,18 +1978,27 @@ mod tests {
         // by entity: the 247 B-spline faces (all the reader read before the
         // surfaces of revolution) and the 30 faces of revolution
         let mut by_entity = [0.0, 0.0];
-        let mut worst_rule: f64 = 0.0;
+        let mut changed = 0;
         for s in &imp.surfaces {
             let a = trimmed_area(&s.surface, 64, 64);
-            // the grid rule equals the former triangle rule (issue #20 item 4)
+            // Issue #20 item 4: the grid rule (whole cells split at the
+            // knots) equals the former triangle rule to 1e-6, except on
+            // faces whose cells cross knots, where it is the nearer of the
+            // two to a 1000 × 1000 midpoint rule (the former rule put a
+            // Gauss rule across the knots' jumps of the integrand).
             let by_triangles = crate::bspline::trimmed_area_by_triangles(&s.surface, 64, 64);
-            if rel(a, by_triangles) > worst_rule {
-                worst_rule = rel(a, by_triangles);
+            if rel(a, by_triangles) > 1e-6 {
+                let fine = midpoint_area(&s.surface, 1000);
                 eprintln!(
-                    "face {}: grid rule {a}, triangle rule {by_triangles}, midpoint {}",
-                    s.directory_entry,
-                    midpoint_area(&s.surface, 1000)
+                    "face {}: grid rule {a}, triangle rule {by_triangles}, midpoint {fine}",
+                    s.directory_entry
                 );
+                assert!(
+                    (a - fine).abs() < (by_triangles - fine).abs(),
+                    "face {}: grid rule {a}, triangle rule {by_triangles}, midpoint {fine}",
+                    s.directory_entry
+                );
+                changed += 1;
             }
             by_entity[usize::from(s.entity_type == 120)] += a;
             let b = midpoint_area(&s.surface, 400);
@@ -2006,7 +2015,7 @@ mod tests {
         );
         // the faces of revolution (hub and shroud bands) add 4.4 % of area
         // (27 413.5 mm² on the faces 128, 1 203.5 mm² on the faces 120)
-        assert!(worst_rule < 1e-6, "grid rule vs triangle rule: {worst_rule}");
+        assert!(changed <= imp.surfaces.len() / 10, "{changed} faces changed");
         let share = by_entity[1] / by_entity[0];
         assert!(share > 0.03 && share < 0.06, "{by_entity:?}");
         assert!(rel(midpoint, trimmed) < 1e-3, "{trimmed} vs {midpoint}");
