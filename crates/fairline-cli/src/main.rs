@@ -27,9 +27,6 @@ mod view;
 
 use clap::{Parser, Subcommand};
 
-#[global_allocator]
-static ALLOCATOR: fairline_alloc::HugePageAdvice = fairline_alloc::HugePageAdvice;
-
 /// Shows and repairs the shape quality of surfaces: highlight lines,
 /// highlight-line fairing, smoothing, structure-line fairing of quad meshes
 /// and feature enhancement by vertex flow.
