@@ -3,8 +3,9 @@
 //! with their (u, v) pre-images and 3D points; PNG of the shaded surface
 //! with the lines, SVG of the pre-images.
 
-use crate::common::{Report, bad_input, write_json};
-use crate::highlight::{Args, Radii, to_input_error};
+use crate::args::{HighlightArgs, Radii, to_input_error};
+use crate::common::{Report, write_json};
+use crate::error::bad_input;
 use crate::output::require_extension;
 use anyhow::Result;
 use fairline::Vec3;
@@ -181,7 +182,7 @@ pub fn legend_entries(
         .collect()
 }
 
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: HighlightArgs) -> Result<()> {
     require_extension("-o", &args.output, &["json"])?;
     if let Some(p) = &args.png {
         require_extension("--png", p, &["png"])?;
@@ -236,10 +237,10 @@ pub fn run(args: Args) -> Result<()> {
             radii,
         })
     } else if let Some(path) = &args.light.lights {
-        crate::highlight::circular_file(path)?
+        crate::args::circular_file(path)?
     } else if args.circular {
         derived = true;
-        Some(crate::highlight::derived_circular_lights(
+        Some(crate::args::derived_circular_lights(
             fairline::highlight::default_circular_lights(
                 &all,
                 args.light.up.vector(),
@@ -292,7 +293,7 @@ pub fn run(args: Args) -> Result<()> {
             Some(a)
         }
     };
-    let bar = crate::common::progress(chosen.len() as u64, "highlight lines");
+    let bar = crate::output::progress(chosen.len() as u64, "highlight lines");
     let part_lights = match (circular, array) {
         (Some(c), _) => PartLights::Circular(c),
         (None, Some(array)) => PartLights::Linear {
