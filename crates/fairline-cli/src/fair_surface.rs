@@ -7,8 +7,8 @@ use crate::surface_highlight::{palette_srgb, plot_lines, polylines, surface_pict
 use anyhow::Result;
 use fairline::bspline::BSplineSurface;
 use fairline::fair::{
-    BoundaryControl, EndpointPair, Endpoints, SurfaceFairError, SurfaceFairMethod, SurfaceFairOptions,
-    fair_surface,
+    BoundaryControl, EndpointPair, Endpoints, SurfaceFairError, SurfaceFairMethod,
+    SurfaceFairOptions, fair_surface,
 };
 use fairline::highlight::{
     CircularLight, CircularLights, SurfaceHighlightOptions, SurfaceLight, surface_highlight_lines,
@@ -239,15 +239,12 @@ fn point_on_line(
             here()
         )));
     }
-    let radius = line
-        .get("radius")
-        .and_then(|x| x.as_f64())
-        .ok_or_else(|| {
-            bad_input(format!(
-                "{} has no radius: fair-surface fairs circular highlight lines",
-                here()
-            ))
-        })?;
+    let radius = line.get("radius").and_then(|x| x.as_f64()).ok_or_else(|| {
+        bad_input(format!(
+            "{} has no radius: fair-surface fairs circular highlight lines",
+            here()
+        ))
+    })?;
     let pairs = |key: &str| -> Option<Vec<Vec<f64>>> {
         serde_json::from_value(line.get(key)?.clone()).ok()
     };
@@ -256,7 +253,9 @@ fn point_on_line(
     };
     let ok = uv.len() == points.len()
         && !uv.is_empty()
-        && uv.iter().all(|p| p.len() == 2 && p.iter().all(|x| x.is_finite()))
+        && uv
+            .iter()
+            .all(|p| p.len() == 2 && p.iter().all(|x| x.is_finite()))
         && points
             .iter()
             .all(|p| p.len() == 3 && p.iter().all(|x| x.is_finite()));
@@ -281,7 +280,11 @@ fn point_on_line(
     let mut left = t * total;
     for (k, &len) in lengths.iter().enumerate() {
         if left <= len || k + 1 == segments {
-            let f = if len > 0.0 { (left / len).clamp(0.0, 1.0) } else { 0.0 };
+            let f = if len > 0.0 {
+                (left / len).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
             let (a, b) = (&uv[k], &uv[(k + 1) % n]);
             return Ok((radius, [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]));
         }
@@ -393,13 +396,11 @@ pub fn run(args: Args) -> Result<()> {
     let (spec, derived): (CircularLights, bool) = match &args.lights {
         Some(path) => (read_json(path)?, false),
         None => (
-            crate::args::derived_circular_lights(
-                fairline::highlight::default_circular_lights(
-                    &surfaces,
-                    None,
-                    fairline::highlight::DEFAULT_CIRCULAR_RADII,
-                ),
-            )?,
+            crate::args::derived_circular_lights(fairline::highlight::default_circular_lights(
+                &surfaces,
+                None,
+                fairline::highlight::DEFAULT_CIRCULAR_RADII,
+            ))?,
             true,
         ),
     };

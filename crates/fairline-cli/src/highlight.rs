@@ -2,9 +2,7 @@
 //! al. §2) or of concentric circular lights (Nishiyama et al. §2) on a
 //! triangle mesh, written as JSON or OBJ polylines.
 
-use crate::args::{
-    HighlightArgs, Radii, circular_file, derived_circular_lights, to_input_error,
-};
+use crate::args::{HighlightArgs, Radii, circular_file, derived_circular_lights, to_input_error};
 use crate::common::Report;
 use crate::error::bad_input;
 use crate::input::read_triangles;

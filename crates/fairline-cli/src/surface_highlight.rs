@@ -356,10 +356,7 @@ pub fn run(args: HighlightArgs) -> Result<()> {
             .iter()
             .find(|(k, _)| *k == want)
             .unwrap_or(&chosen[0]);
-        let at = results
-            .iter()
-            .position(|(k, _, _)| *k == want)
-            .unwrap_or(0);
+        let at = results.iter().position(|(k, _, _)| *k == want).unwrap_or(0);
         let (k, lights, h) = &results[at];
         // ids of this surface's lines: after those of the surfaces before it
         let first_id: usize = results[..at].iter().map(|r| r.2.lines.len()).sum();

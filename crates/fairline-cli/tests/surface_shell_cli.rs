@@ -76,8 +76,14 @@ fn circular_defaults_are_derived_from_the_part_printed_and_reusable() {
     let axis: Vec<f64> = serde_json::from_value(printed["axis"].clone()).unwrap();
     let centre: Vec<f64> = serde_json::from_value(printed["center"].clone()).unwrap();
     assert!(axis[2] > 0.999, "axis {axis:?}");
-    assert!(centre[0].abs() < 0.01 && centre[1].abs() < 0.01, "{centre:?}");
-    assert!(centre[2] > 0.83, "centre {centre:?} above the top of the dome");
+    assert!(
+        centre[0].abs() < 0.01 && centre[1].abs() < 0.01,
+        "{centre:?}"
+    );
+    assert!(
+        centre[2] > 0.83,
+        "centre {centre:?} above the top of the dome"
+    );
     let radii: Vec<f64> = serde_json::from_value(printed["radii"].clone()).unwrap();
     assert_eq!(radii.len(), 10);
     assert!(radii.windows(2).all(|w| w[1] > w[0]));
@@ -97,11 +103,15 @@ fn circular_defaults_are_derived_from_the_part_printed_and_reusable() {
     let lf = d.join("lights.json");
     std::fs::write(&lf, serde_json::to_string(&printed).unwrap()).unwrap();
     let again = d.join("again.json");
-    ok(&run(&["highlight", s(&f), "--lights", s(&lf), "-o", s(&again)]));
-    assert_eq!(
-        std::fs::read(&out).unwrap(),
-        std::fs::read(&again).unwrap()
-    );
+    ok(&run(&[
+        "highlight",
+        s(&f),
+        "--lights",
+        s(&lf),
+        "-o",
+        s(&again),
+    ]));
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&again).unwrap());
     // --circular and explicit lights exclude each other.
     let o = run(&[
         "highlight",
@@ -145,7 +155,10 @@ fn lines_carry_ids_and_the_svg_has_a_legend_of_radii_and_the_ids() {
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.contains(r#"class="legend""#));
     for r in radii {
-        assert!(text.contains(&format!(">R = {r}<")), "legend entry of R = {r}");
+        assert!(
+            text.contains(&format!(">R = {r}<")),
+            "legend entry of R = {r}"
+        );
     }
     for k in 0..lines.len() {
         assert!(text.contains(&format!(">#{k}<")), "id #{k} in the SVG");
@@ -164,7 +177,10 @@ fn lines_carry_ids_and_the_svg_has_a_legend_of_radii_and_the_ids() {
     let lin = json(&d.join("lin.json"));
     let text = std::fs::read_to_string(&svg2).unwrap();
     let first = lin["lines"][0]["index"].as_i64().unwrap();
-    assert!(text.contains(&format!(">light {first}<")), "legend of light {first}");
+    assert!(
+        text.contains(&format!(">light {first}<")),
+        "legend of light {first}"
+    );
 }
 
 /// (u, v) at fraction `t` of the length in space of a JSON line: computed
@@ -334,7 +350,11 @@ fn fair_surface_line_endpoints_refuse_bad_ids_and_mixed_lines() {
     let f = d.join("dome.json");
     write_surfaces_json(&f, &[dome()]).unwrap();
     let lf = d.join("lights.json");
-    std::fs::write(&lf, r#"{"center":[0,0,3],"axis":[0,0,1],"radii":[2.2,2.4]}"#).unwrap();
+    std::fs::write(
+        &lf,
+        r#"{"center":[0,0,3],"axis":[0,0,1],"radii":[2.2,2.4]}"#,
+    )
+    .unwrap();
     let lines_file = d.join("lines.json");
     ok(&run(&[
         "highlight",
@@ -356,15 +376,36 @@ fn fair_surface_line_endpoints_refuse_bad_ids_and_mixed_lines() {
     let bad_id_to = format!("{n}:0.4");
     for (extra, says) in [
         (
-            vec!["--lines", s(&lines_file), "--from", &bad_id, "--to", &bad_id_to],
+            vec![
+                "--lines",
+                s(&lines_file),
+                "--from",
+                &bad_id,
+                "--to",
+                &bad_id_to,
+            ],
             "no line has id",
         ),
         (
-            vec!["--lines", s(&lines_file), "--from", "0:0.2", "--to", "1:0.4"],
+            vec![
+                "--lines",
+                s(&lines_file),
+                "--from",
+                "0:0.2",
+                "--to",
+                "1:0.4",
+            ],
             "different lines",
         ),
         (
-            vec!["--lines", s(&lines_file), "--from", "0:1.5", "--to", "0:0.4"],
+            vec![
+                "--lines",
+                s(&lines_file),
+                "--from",
+                "0:1.5",
+                "--to",
+                "0:0.4",
+            ],
             "0..1",
         ),
         (vec!["--from", "0:0.2", "--to", "0:0.4"], "--lines"),
@@ -469,7 +510,11 @@ fn fair_surface_warns_when_a_uv_endpoint_snaps_far() {
         "{err}"
     );
     let warnings = rep["warnings"].as_array().expect("warnings in the report");
-    assert!(warnings.iter().any(|w| w.as_str().unwrap().contains("endpoint 0 start")));
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("endpoint 0 start"))
+    );
     let snaps: Vec<[f64; 2]> = serde_json::from_value(rep["snap_distances"].clone()).unwrap();
     assert!(snaps[0][0] > tolerance, "{snaps:?}");
 }

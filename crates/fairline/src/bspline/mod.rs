@@ -45,9 +45,9 @@ pub use surface::{
     BSplineSurface, BasisSupport, Curvature, MIN_WEIGHT_RATIO, SurfaceBasis, SurfaceDerivatives,
     unit_normal,
 };
-pub use tessellate::{Tessellation, tessellate, trimmed_area};
 #[cfg(test)]
 pub(crate) use tessellate::trimmed_area_by_triangles;
+pub use tessellate::{Tessellation, tessellate, trimmed_area};
 pub(crate) use trim::inside_by_crossings;
 pub use trim::{
     TRIM_FLATNESS, TrimCurve, TrimError, TrimLoop, TrimmedDomain, polygon_signed_area2,

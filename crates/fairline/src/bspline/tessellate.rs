@@ -721,10 +721,9 @@ pub fn trimmed_area(surface: &BSplineSurface, nu: usize, nv: usize) -> f64 {
             .cells
             .par_iter()
             .map(|cover| match cover {
-                CellCover::Cut(tris) => tris
-                    .iter()
-                    .map(|t| dunavant_area(surface, t.map(at)))
-                    .sum(),
+                CellCover::Cut(tris) => {
+                    tris.iter().map(|t| dunavant_area(surface, t.map(at))).sum()
+                }
                 _ => 0.0,
             })
             .collect();

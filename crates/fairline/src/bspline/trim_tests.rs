@@ -146,7 +146,10 @@ fn bspline_trim_plane_with_circular_hole_has_exact_area() {
         rel(slow, exact)
     );
     assert!(rel(fast, exact) < 1e-6, "{fast} vs {exact}");
-    assert!(rel(fast, exact) <= rel(slow, exact) + 1e-12, "{fast} vs {slow}");
+    assert!(
+        rel(fast, exact) <= rel(slow, exact) + 1e-12,
+        "{fast} vs {slow}"
+    );
     // Point classification against the exact circle (away from the edge).
     let mut rng = tests::Rng::new(7);
     for _ in 0..2000 {
@@ -265,7 +268,10 @@ fn bspline_trim_cylinder_with_hole_has_exact_area() {
         rel(slow, exact)
     );
     assert!(rel(fast, exact) < 1e-6, "{fast} vs {exact}");
-    assert!(rel(fast, exact) <= rel(slow, exact) + 1e-12, "{fast} vs {slow}");
+    assert!(
+        rel(fast, exact) <= rel(slow, exact) + 1e-12,
+        "{fast} vs {slow}"
+    );
     let t = tessellate(&s, 200, 40);
     assert_inside(&s, &t);
     let a = mesh_area(&t);
@@ -325,7 +331,10 @@ fn bspline_trim_torus_cut_by_a_curve_has_exact_area() {
         rel(slow, exact)
     );
     assert!(rel(fast, exact) < 1e-6, "{fast} vs {exact}");
-    assert!(rel(fast, exact) <= rel(slow, exact) + 1e-12, "{fast} vs {slow}");
+    assert!(
+        rel(fast, exact) <= rel(slow, exact) + 1e-12,
+        "{fast} vs {slow}"
+    );
     let t = tessellate(&s, 129, 129);
     assert_inside(&s, &t);
     let a = mesh_area(&t);

@@ -32,8 +32,8 @@ pub use readable::{LineStats, Readability};
 pub use surface::{
     DEFAULT_CIRCULAR_RADII, PartLights, PatchHighlights, SurfaceHighlightLine,
     SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight, default_circular_lights,
-    default_circular_lights_for_mesh, linear_lights, part_highlight_lines, patch_grid, surface_highlight_lines,
-    surface_signed_distance,
+    default_circular_lights_for_mesh, linear_lights, part_highlight_lines, patch_grid,
+    surface_highlight_lines, surface_signed_distance,
 };
 
 use crate::mesh::MeshError;

@@ -158,10 +158,12 @@ pub fn distance_field(
 /// on the surface (Yong et al. Eq. (1)–(2)): d_P is sampled on an `n × n`
 /// grid and light m is kept when its level m·s crosses at least one grid
 /// cell that [`contour_field`] contours — all four corners defined (|Z·N| ≥
-/// `min_cos`), on one side of the light plane, and spanning at most
-/// [`SurfaceHighlightOptions::max_lines_per_cell`] (default) spacings, so
-/// that cells near silhouettes, where d_P runs off to infinity, do not
-/// decide which lights are drawn (as on meshes). When more than
+/// `min_cos`), on one side of the light plane, and crossed by at most
+/// [`SurfaceHighlightOptions::max_lines_per_cell`] (default) levels counted
+/// by the mesh model's rule (`contour::too_many_levels`), so that cells
+/// near silhouettes, where d_P runs off to infinity, do not decide which
+/// lights are drawn, and the same lights are drawn as on the tessellated
+/// surface. When more than
 /// `max_lights` lights qualify, the `max_lights` consecutive ones crossing
 /// the most cells are kept (the lights of the bulk of the surface, not the
 /// middle of a range stretched by outliers). Empty when no cell qualifies.
@@ -179,8 +181,7 @@ pub fn linear_lights(
     };
     let field = distance_field(surface, &probe, n, n);
     let spacing = array.spacing();
-    let max_span =
-        f64::from(SurfaceHighlightOptions::default().max_lines_per_cell.max(1)) * spacing;
+    let max_levels = i64::from(SurfaceHighlightOptions::default().max_lines_per_cell.max(1));
     let (nu, nv) = (field.us.len(), field.vs.len());
     let at = |a: usize, b: usize| field.samples[a * nv + b];
     // Cells crossed per light m, counted in one pass over the cells.
@@ -201,7 +202,7 @@ pub fn linear_lights(
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), s| {
                     (l.min(s.value), h.max(s.value))
                 });
-            if !(hi - lo <= max_span) || spacing <= 0.0 {
+            if spacing <= 0.0 || super::contour::too_many_levels(lo, hi, spacing, 0.0, max_levels) {
                 continue;
             }
             // Levels m·s with lo < m·s ≤ hi (a value equal to the level
@@ -264,10 +265,11 @@ pub struct SurfaceHighlightOptions {
     pub tolerance: f64,
     /// Most refinement steps per contour point.
     pub max_refine_steps: usize,
-    /// Linear lights: most lines (light spacings) one grid cell may be
-    /// crossed by (default 4, as `HighlightOptions::max_lines_per_face` on
-    /// meshes); a cell crossed by more is skipped, its lines being finer
-    /// than the grid (this happens only near silhouettes). 0: no limit.
+    /// Linear lights: most lines one grid cell may be crossed by (default
+    /// 4, counted as `HighlightOptions::max_lines_per_face` on mesh
+    /// triangles: `ceil(hi/s) − floor(lo/s) ≤ 4 + 2`); a cell crossed by
+    /// more is skipped, its lines being finer than the grid (this happens
+    /// only near silhouettes). 0: no limit.
     pub max_lines_per_cell: u32,
 }
 
@@ -743,13 +745,13 @@ pub fn contour_field(
     let at = |a: usize, b: usize| field.samples[a * nv + b];
     let above = |s: FieldSample| s.value >= level;
     let same_branch = |x: FieldSample, y: FieldSample| (x.branch - y.branch).cos() > 0.0;
-    // Linear lights: a cell whose field spans more than
-    // `max_lines_per_cell` spacings holds lines finer than the grid (near
-    // silhouettes, where d_P runs off as Z·N → 0); it is skipped, as the
-    // mesh model skips such triangles (`HighlightOptions::max_lines_per_face`).
-    let max_cell_span = match light {
+    // Linear lights: a cell crossed by more than `max_lines_per_cell`
+    // levels holds lines finer than the grid (near silhouettes, where d_P
+    // runs off as Z·N → 0); it is skipped by the rule the mesh model skips
+    // triangles with (`HighlightOptions::max_lines_per_face`).
+    let max_cell_levels = match light {
         SurfaceLight::Linear { array, .. } if opts.max_lines_per_cell > 0 => {
-            Some(f64::from(opts.max_lines_per_cell) * array.spacing())
+            Some((array.spacing(), i64::from(opts.max_lines_per_cell)))
         }
         _ => None,
     };
@@ -788,13 +790,21 @@ pub fn contour_field(
                 if side.iter().all(|&x| x == side[0]) {
                     continue;
                 }
-                if let Some(most) = max_cell_span {
+                if let Some((spacing, most)) = max_cell_levels {
                     let (lo, hi) = c
                         .iter()
                         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), s| {
                             (l.min(s.value), h.max(s.value))
                         });
-                    if hi - lo > most {
+                    // the levels of this field are m·s − shift: count them
+                    // as the mesh does (`contour::too_many_levels`)
+                    if super::contour::too_many_levels(
+                        lo,
+                        hi,
+                        spacing,
+                        level.rem_euclid(spacing),
+                        most,
+                    ) {
                         continue;
                     }
                 }

@@ -1855,10 +1855,13 @@ mod tests {
             }
             sides.push(side);
         }
-        assert!(sides[0] * sides[1] < 0.0 && sides[0] * sides[2] > 0.0, "{sides:?}");
+        assert!(
+            sides[0] * sides[1] < 0.0 && sides[0] * sides[2] > 0.0,
+            "{sides:?}"
+        );
         let z = Vec3::new(0.3, 0.2, 1.0).normalize();
-        let array = LightArray::new(Vec3::new(0.4, -0.3, 6.0), z, Vec3::new(1.0, 0.5, 0.0), 0.45)
-            .unwrap();
+        let array =
+            LightArray::new(Vec3::new(0.4, -0.3, 6.0), z, Vec3::new(1.0, 0.5, 0.0), 0.45).unwrap();
         let lights = PartLights::Linear {
             array,
             min_cos: 0.1,
@@ -1890,7 +1893,11 @@ mod tests {
             let dir = (b - a).normalize();
             for (k, p) in pts {
                 let off = (*p - a) - dir * (*p - a).dot(dir);
-                assert!(off.length() < 1e-9, "light {m}, patch {k}: {} off the line", off.length());
+                assert!(
+                    off.length() < 1e-9,
+                    "light {m}, patch {k}: {} off the line",
+                    off.length()
+                );
             }
             let mut patches_hit: Vec<usize> = pts.iter().map(|p| p.0).collect();
             patches_hit.dedup();
@@ -2015,7 +2022,10 @@ mod tests {
         );
         // the faces of revolution (hub and shroud bands) add 4.4 % of area
         // (27 413.5 mm² on the faces 128, 1 203.5 mm² on the faces 120)
-        assert!(changed <= imp.surfaces.len() / 10, "{changed} faces changed");
+        assert!(
+            changed <= imp.surfaces.len() / 10,
+            "{changed} faces changed"
+        );
         let share = by_entity[1] / by_entity[0];
         assert!(share > 0.03 && share < 0.06, "{by_entity:?}");
         assert!(rel(midpoint, trimmed) < 1e-3, "{trimmed} vs {midpoint}");

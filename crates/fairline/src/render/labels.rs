@@ -118,11 +118,7 @@ pub(super) fn place_and_draw(
         .map(|&t| {
             let t = t as usize;
             if t < first_mesh_triangles {
-                labels
-                    .triangle_region
-                    .get(t)
-                    .copied()
-                    .unwrap_or(u32::MAX)
+                labels.triangle_region.get(t).copied().unwrap_or(u32::MAX)
             } else {
                 u32::MAX
             }

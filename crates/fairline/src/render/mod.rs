@@ -381,8 +381,7 @@ fn render_impl(
             }
         };
         let diag = (hi - lo).length();
-        let (view, ids) =
-            raster::render_view(scene, opts, &camera, rw, rh, diag, labels.is_some());
+        let (view, ids) = raster::render_view(scene, opts, &camera, rw, rh, diag, labels.is_some());
         img.blit(&view, 0, title_h as i64);
         if let (Some(labels), Some(ids)) = (labels, ids) {
             placed = labels::place_and_draw(

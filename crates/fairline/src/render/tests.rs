@@ -428,8 +428,14 @@ fn region_labels_sit_at_the_visible_centres_and_hidden_regions_get_none() {
     let mid = plain.width as f64 / 2.0;
     let at = |r: u32| placed.iter().find(|l| l.region == r).unwrap().anchor;
     let (a0, a1) = (at(0), at(1));
-    assert!((a0[0] as f64) < mid && (a1[0] as f64) > mid, "{a0:?} {a1:?}");
-    assert!(((a0[0] + a1[0]) as f64 / 2.0 - mid).abs() <= 1.5, "{a0:?} {a1:?}");
+    assert!(
+        (a0[0] as f64) < mid && (a1[0] as f64) > mid,
+        "{a0:?} {a1:?}"
+    );
+    assert!(
+        ((a0[0] + a1[0]) as f64 / 2.0 - mid).abs() <= 1.5,
+        "{a0:?} {a1:?}"
+    );
     assert!(a0[1].abs_diff(a1[1]) <= 1, "{a0:?} {a1:?}");
     assert!(((a0[1] as f64) - plain.height as f64 / 2.0).abs() <= 2.0);
     for l in &placed {
@@ -447,7 +453,10 @@ fn region_labels_sit_at_the_visible_centres_and_hidden_regions_get_none() {
         .filter(|&(x, y)| {
             !placed.iter().any(|l| {
                 let [left, top, w, h] = l.bounds;
-                (x as i64) >= left && (x as i64) < left + w && (y as i64) >= top && (y as i64) < top + h
+                (x as i64) >= left
+                    && (x as i64) < left + w
+                    && (y as i64) >= top
+                    && (y as i64) < top + h
             })
         })
         .filter(|&(x, y)| img.get(x, y) != plain.get(x, y))
@@ -455,7 +464,9 @@ fn region_labels_sit_at_the_visible_centres_and_hidden_regions_get_none() {
     assert_eq!(outside_changed, 0);
     // Both label boxes are disjoint.
     let [a, b] = [&placed[0].bounds, &placed[1].bounds];
-    assert!(a[0] + a[2] <= b[0] || b[0] + b[2] <= a[0] || a[1] + a[3] <= b[1] || b[1] + b[3] <= a[1]);
+    assert!(
+        a[0] + a[2] <= b[0] || b[0] + b[2] <= a[0] || a[1] + a[3] <= b[1] || b[1] + b[3] <= a[1]
+    );
 }
 
 #[test]
@@ -494,12 +505,19 @@ fn region_labels_that_would_overlap_are_left_out() {
         ..Default::default()
     };
     let (_, placed) = render_labelled(&scene, &opts, &labels).unwrap();
-    assert!(!placed.is_empty() && placed.len() < 50, "{} labels", placed.len());
+    assert!(
+        !placed.is_empty() && placed.len() < 50,
+        "{} labels",
+        placed.len()
+    );
     for (i, a) in placed.iter().enumerate() {
         for b in &placed[i + 1..] {
             let (a, b) = (a.bounds, b.bounds);
             assert!(
-                a[0] + a[2] <= b[0] || b[0] + b[2] <= a[0] || a[1] + a[3] <= b[1] || b[1] + b[3] <= a[1],
+                a[0] + a[2] <= b[0]
+                    || b[0] + b[2] <= a[0]
+                    || a[1] + a[3] <= b[1]
+                    || b[1] + b[3] <= a[1],
                 "{a:?} overlaps {b:?}"
             );
         }
