@@ -16,8 +16,8 @@ pub(crate) use normals::{face_area_vectors, vertex_normal_from_area_vectors};
 mod quadric;
 
 pub use areas::{
-    barycentric_vertex_areas, face_areas, mixed_corner_areas, mixed_vertex_areas,
-    mixed_vertex_areas_at,
+    barycentric_vertex_areas, barycentric_vertex_areas_at, face_areas, face_areas_at,
+    mixed_corner_areas, mixed_vertex_areas, mixed_vertex_areas_at,
 };
 pub use curvature::{
     CurvatureMethod, PrincipalCurvatures, gaussian_curvature, mean_curvature,
@@ -33,7 +33,8 @@ pub use measures::{
     triangle_qualities, triangle_quality, volume, volume_at, willmore_energy,
 };
 pub use normals::{
-    face_normals, triangle_normal_area, vertex_normal, vertex_normals, vertex_normals_max,
+    face_normals, triangle_normal_area, vertex_normal, vertex_normals, vertex_normals_at,
+    vertex_normals_max, vertex_normals_max_at,
 };
 pub use quadric::{QuadricFit, QuadricPatch, quadric_fit, quadric_fit_rings, quadric_patch_rings};
 
