@@ -798,11 +798,7 @@ fn red_blood_cell(subdivisions: u32) -> SurfaceMesh {
                 * (1.0 - rho * rho).max(0.0).sqrt()
                 * (0.81 + 7.83 * rho * rho - 4.39 * rho.powi(4))
                 / 3.91;
-            Vec3::new(
-                rho * azimuth.cos(),
-                rho * azimuth.sin(),
-                half.copysign(p.z),
-            )
+            Vec3::new(rho * azimuth.cos(), rho * azimuth.sin(), half.copysign(p.z))
         })
         .collect();
     mesh.set_positions(positions).unwrap();

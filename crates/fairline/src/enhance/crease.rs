@@ -129,7 +129,8 @@ pub(super) fn chord_faces(
             strip[patch[f] as usize] = false;
         }
     }
-    let is_side = |g: FaceId| face_normals[g.idx()].0 != Vec3::ZERO && !strip[patch[g.idx()] as usize];
+    let is_side =
+        |g: FaceId| face_normals[g.idx()].0 != Vec3::ZERO && !strip[patch[g.idx()] as usize];
     (0..nf)
         .map(|f| {
             if face_normals[f].0 == Vec3::ZERO || !strip[patch[f] as usize] {

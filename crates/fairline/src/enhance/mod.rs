@@ -165,10 +165,10 @@ use crate::solve::{
     BlockJacobi, MultigridBuilder, Preconditioner, SolveError, StagedOptions, StagedSolver,
 };
 use crate::{Control, Output, Vec3};
+pub use crease::{FEATURE_ANGLE_DEG, FLAT_SIDE_DEG, SNAP_DISTANCE};
 pub use repair::QUALITY_FLOOR;
 use serde::Serialize;
 use std::time::Instant;
-pub use crease::{FEATURE_ANGLE_DEG, FLAT_SIDE_DEG, SNAP_DISTANCE};
 pub use surface::{CREASE_ANGLE_DEG, PHONG_ALPHA, Projection};
 use thiserror::Error;
 

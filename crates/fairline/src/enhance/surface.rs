@@ -37,9 +37,9 @@
 //! of a face whose neighbours are coplanar is its own normal, and the lift
 //! vanishes), and the corners of a crease keep the planes of their sides.
 
+use super::crease::{SidePlanes, chord_faces, crease_point};
 use crate::Vec3;
 use crate::geom::{closest_point_on_triangle, triangle_normal_area};
-use super::crease::{SidePlanes, chord_faces, crease_point};
 use crate::mesh::{FaceId, SurfaceMesh, VertexId, union_find_join, union_find_root};
 use rayon::prelude::*;
 use serde::Serialize;
