@@ -1481,7 +1481,7 @@ fn workbench_timings() {
             srv.post("/api/doc/0/lines", &json!({"light": light(100)}));
         }
         let (mut server_s, mut trip_s) = (Vec::new(), Vec::new());
-        let mut stage_s: [Vec<f64>; 3] = Default::default();
+        let mut stage_s: [Vec<f64>; 4] = Default::default();
         let mut nlines = 0;
         for run in 0..7 {
             let body = if cached {
@@ -1496,14 +1496,14 @@ fn workbench_timings() {
             let (h, _) = parse_frame(&b);
             assert_eq!(h["model_cached"], cached, "{h}");
             server_s.push(h["time_s"].as_f64().unwrap());
-            for (k, name) in ["model", "chain", "encode"].iter().enumerate() {
-                stage_s[k].push(h["stages_s"][name].as_f64().unwrap());
+            for (k, name) in ["model", "chain", "encode", "bands"].iter().enumerate() {
+                stage_s[k].push(h["stages_s"][name].as_f64().unwrap_or(0.0));
             }
             nlines = h["lines"].as_array().unwrap().len();
         }
-        let [model_s, chain_s, encode_s] = stage_s;
+        let [model_s, chain_s, encode_s, bands_s] = stage_s;
         eprintln!(
-            "BENCH exact lines, 450,241 vertices, {nlines} lines, {}: server {:.1} ms (model {:.1}, chaining {:.1}, encoding {:.1}), round trip {:.1} ms (medians of 7)",
+            "BENCH exact lines, 450,241 vertices, {nlines} lines, {}: server {:.1} ms (model {:.1}, chaining {:.1}, encoding {:.1}, bands {:.1}), round trip {:.1} ms (medians of 7)",
             if cached {
                 "same lights, band changed (model cached)"
             } else {
@@ -1513,6 +1513,7 @@ fn workbench_timings() {
             1e3 * median(model_s),
             1e3 * median(chain_s),
             1e3 * median(encode_s),
+            1e3 * median(bands_s),
             1e3 * median(trip_s)
         );
         if cached {

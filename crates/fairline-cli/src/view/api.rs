@@ -555,6 +555,7 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
                 }
                 Err(e) => return bad(e),
             }
+            stages.push(("bands", t.elapsed().as_secs_f64()));
         }
         command = format!(
             "fairline highlight {file} {}{} -o lines.json",
@@ -563,7 +564,8 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         );
     }
     // seconds of each stage (linear lights): the model (normals, distances,
-    // segments), chaining the segments into polylines, the f32 encoding
+    // segments; 0 when cached), chaining the segments into polylines, the
+    // f32 encoding, the band boundaries (two more contours, when asked)
     let mut split = serde_json::Map::new();
     let mut last = 0.0;
     for (name, at) in stages {
