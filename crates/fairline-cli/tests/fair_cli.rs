@@ -308,7 +308,10 @@ fn fair_picture_on_a_round_part_draws_the_readable_lines() {
         s(&rep_a),
     ]));
     let rep = json(&rep_a);
-    assert!(rep["regions"].as_u64().unwrap() >= 1, "the dent is faired: {rep}");
+    assert!(
+        rep["regions"].as_u64().unwrap() >= 1,
+        "the dent is faired: {rep}"
+    );
     let spacing = rep["light"]["spacing"].as_f64().unwrap();
     let (out_b, png_b) = (d.join("b.ply"), d.join("b.png"));
     ok(&run(&[

@@ -1519,14 +1519,23 @@ fn workbench_timings() {
         if cached {
             // the cached model must not change the answer
             let fresh = {
-                let (_, b) = srv.post("/api/doc/0/lines", &json!({"light": light(200), "band": 0.04}));
+                let (_, b) = srv.post(
+                    "/api/doc/0/lines",
+                    &json!({"light": light(200), "band": 0.04}),
+                );
                 parse_frame(&b).1
             };
-            let (_, b) = srv.post("/api/doc/0/lines", &json!({"light": light(200), "band": 0.04}));
+            let (_, b) = srv.post(
+                "/api/doc/0/lines",
+                &json!({"light": light(200), "band": 0.04}),
+            );
             let (h, again) = parse_frame(&b);
             assert_eq!(h["model_cached"], true);
             assert!(
-                fresh.iter().zip(&again).all(|(a, b)| a.to_bits() == b.to_bits())
+                fresh
+                    .iter()
+                    .zip(&again)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
                     && fresh.len() == again.len()
             );
         }

@@ -771,8 +771,8 @@ pub fn detect_irregularities(
                 .is_some_and(|sc| sc > floors.threshold && sc <= s.threshold)
         })
         .count();
-    let margin = (options.region_margin * scale.spacing * scale.coarsening(options))
-        .max(scale.site_cell);
+    let margin =
+        (options.region_margin * scale.spacing * scale.coarsening(options)).max(scale.site_cell);
     let mut in_region = faces_near_sites(mesh, &sites, &flagged, margin);
     fill_holes(mesh, &mut in_region);
     let areas = geom::face_areas(mesh);
