@@ -1,117 +1,11 @@
-//! Shared command-line plumbing: exit codes, input errors, reports,
-//! progress bars, parsing of vectors and sizes.
+//! JSON files of the commands: the `--report` of every command and the
+//! reading and writing of JSON inputs and outputs.
 
+use crate::error::bad_input;
 use anyhow::{Context, Result};
-use fairline::Vec3;
 use serde_json::{Map, Value, json};
 use std::path::Path;
 use std::time::Instant;
-
-/// Exit status for bad input or usage (DESIGN.md §4).
-pub const EXIT_BAD_INPUT: i32 = 2;
-/// Exit status for a failure of the computation.
-pub const EXIT_FAILURE: i32 = 1;
-
-/// Marks an error as the user's input being wrong (exit status 2).
-#[derive(Debug)]
-pub struct BadInput(pub String);
-
-impl std::fmt::Display for BadInput {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-impl std::error::Error for BadInput {}
-
-/// An error that exits with status 2.
-pub fn bad_input(msg: impl Into<String>) -> anyhow::Error {
-    anyhow::Error::new(BadInput(msg.into()))
-}
-
-/// Exit status for an error: 2 when any cause is bad input (our marker, a
-/// file-format error, an invalid mesh, malformed JSON, a missing file), 1
-/// otherwise.
-pub fn exit_code(err: &anyhow::Error) -> i32 {
-    for cause in err.chain() {
-        if cause.is::<BadInput>()
-            || cause.is::<fairline::io::IoError>()
-            || cause.is::<fairline::MeshError>()
-            || cause.is::<serde_json::Error>()
-            || cause.is::<fairline::bspline::BSplineError>()
-            || cause.is::<fairline::io::SurfaceJsonError>()
-            || cause.is::<fairline::io::IgesError>()
-            || cause.is::<fairline::io::step::StepError>()
-            || cause.is::<fairline::io::surface_file::SurfaceFileError>()
-        {
-            return EXIT_BAD_INPUT;
-        }
-        if let Some(e) = cause.downcast_ref::<std::io::Error>()
-            && matches!(
-                e.kind(),
-                std::io::ErrorKind::NotFound | std::io::ErrorKind::PermissionDenied
-            )
-        {
-            return EXIT_BAD_INPUT;
-        }
-    }
-    EXIT_FAILURE
-}
-
-/// Parses `X,Y,Z` into a vector.
-pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
-    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-    if parts.len() != 3 {
-        return Err(format!("expected X,Y,Z, got `{s}`"));
-    }
-    let mut v = [0.0; 3];
-    for (k, p) in parts.iter().enumerate() {
-        v[k] = p
-            .parse::<f64>()
-            .map_err(|_| format!("`{p}` is not a number in `{s}`"))?;
-        if !v[k].is_finite() {
-            return Err(format!("`{p}` is not finite in `{s}`"));
-        }
-    }
-    Ok(Vec3::from_array(v))
-}
-
-/// Parses a comma-separated list of numbers.
-pub fn parse_list(s: &str) -> Result<Vec<f64>, String> {
-    s.split(',')
-        .map(|p| {
-            let v = p
-                .trim()
-                .parse::<f64>()
-                .map_err(|_| format!("`{p}` is not a number"))?;
-            if v.is_finite() {
-                Ok(v)
-            } else {
-                Err(format!("`{p}` is not finite"))
-            }
-        })
-        .collect()
-}
-
-/// Parses `WxH`.
-pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("expected WxH, got `{s}`"))?;
-    let w: u32 = w
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad width in `{s}`"))?;
-    let h: u32 = h
-        .trim()
-        .parse()
-        .map_err(|_| format!("bad height in `{s}`"))?;
-    if w == 0 || h == 0 || w > 16384 || h > 16384 {
-        return Err(format!(
-            "image size `{s}` must be between 1 and 16384 pixels"
-        ));
-    }
-    Ok((w, h))
-}
 
 /// A JSON report: `"command"`, `"time_s"` (computation only), the keys
 /// each command adds, and `"warnings"` when a command warned.
@@ -253,18 +147,3 @@ pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
         std::fs::read_to_string(path).map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
     serde_json::from_str(&text).map_err(|e| bad_input(format!("{}: {e}", path.display())))
 }
-
-/// Refuses to write `output` over `input`: the policy of
-/// [`crate::output::Job`] for a command with one input and one output
-/// (prefer declaring every input and output on a `Job`). Kept for commands
-/// written against the older helper.
-#[allow(dead_code)]
-pub fn check_output(input: &Path, output: &Path) -> Result<()> {
-    crate::output::Job::new("fairline")
-        .input(input)
-        .output("output", output)
-        .check()?;
-    Ok(())
-}
-
-pub use crate::output::{progress, spinner};

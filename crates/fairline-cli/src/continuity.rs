@@ -1,7 +1,8 @@
 //! `fairline continuity`: G0 / G1 / G2 across the shared boundaries of a
 //! set of B-spline patches (issue #20 item 5).
 
-use crate::common::{Report, bad_input};
+use crate::common::Report;
+use crate::error::bad_input;
 use crate::output::{Job, say};
 use crate::surface_highlight::surface_picture;
 use anyhow::Result;

@@ -1,6 +1,7 @@
 //! `fairline curvature`: per-vertex principal curvatures written as PLY.
 
-use crate::common::{Report, spinner};
+use crate::common::Report;
+use crate::output::spinner;
 use anyhow::{Context, Result};
 use fairline::geom::{CurvatureMethod, principal_curvatures};
 use fairline::mesh::Stats;
@@ -44,7 +45,7 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--report", args.report.as_deref())
         .check()?;
     let mesh = fairline::io::read_mesh(&args.mesh)?;
-    crate::repair::note_split_vertices(&args.mesh, &mesh);
+    crate::input::note_split_vertices(&args.mesh, &mesh);
     let mut report = Report::new("curvature");
     let method = match args.method {
         Method::Rusinkiewicz => CurvatureMethod::Rusinkiewicz,

@@ -1,8 +1,11 @@
 //! `fairline detect`: irregular stretches of highlight lines turned into
 //! suggested fairing regions.
 
-use crate::common::{Report, bad_input, spinner, write_json};
-use crate::highlight::{LightArgs, read_triangles, to_input_error};
+use crate::args::{LightArgs, parse_size, parse_vec3, to_input_error};
+use crate::common::{Report, write_json};
+use crate::error::bad_input;
+use crate::input::read_triangles;
+use crate::output::spinner;
 use anyhow::Result;
 use fairline::highlight::DetectOptions;
 use fairline::mesh::FaceId;
@@ -60,10 +63,10 @@ pub struct Args {
     pub png: Option<PathBuf>,
     /// Viewing direction of the picture X,Y,Z (from the eye towards the
     /// object; default: down the light-plane normal, slightly tilted).
-    #[arg(long, value_parser = crate::common::parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
     pub view: Option<fairline::Vec3>,
     /// Size of the --png picture, WxH.
-    #[arg(long, value_parser = crate::common::parse_size, default_value = "1200x900", requires = "png")]
+    #[arg(long, value_parser = parse_size, default_value = "1200x900", requires = "png")]
     pub size: (u32, u32),
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]

@@ -1,6 +1,8 @@
 //! `fairline enhance`: feature enhancement by vertex flow (Ji et al. 2011).
 
-use crate::common::{Report, bad_input, spinner};
+use crate::common::Report;
+use crate::error::bad_input;
+use crate::output::spinner;
 use anyhow::{Context, Result};
 use fairline::enhance::{
     EnhanceError, EnhanceOptions, EnhanceSolver, Projection as SurfaceProjection, enhance_features,
@@ -110,7 +112,7 @@ pub fn run(args: Args) -> Result<()> {
         crate::output::require_extension("--png", png, &["png"])?;
     }
     let mesh = fairline::io::read_mesh(&args.mesh)?;
-    crate::repair::note_split_vertices(&args.mesh, &mesh);
+    crate::input::note_split_vertices(&args.mesh, &mesh);
     if !mesh.is_triangle_mesh() {
         return Err(bad_input(format!(
             "{}: enhance needs a triangle mesh (triangulate it first, e.g. with `fairline convert`)",

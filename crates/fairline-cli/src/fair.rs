@@ -2,8 +2,10 @@
 //! §3, Algorithm 2) inside a region, with the surface-diffusion-flow
 //! baseline for comparison.
 
-use crate::common::{Report, bad_input, progress};
-use crate::highlight::{LightArgs, to_input_error};
+use crate::args::{LightArgs, to_input_error};
+use crate::common::Report;
+use crate::error::bad_input;
+use crate::output::progress;
 use anyhow::Result;
 use fairline::fair::{
     FairError, FairMethod, FairOptions, FairReport, fair_highlight_lines, grow_region,
@@ -138,7 +140,7 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--report", args.report.as_deref())
         .check()?;
     let mesh = fairline::io::read_mesh(&args.mesh)?;
-    crate::repair::note_split_vertices(&args.mesh, &mesh);
+    crate::input::note_split_vertices(&args.mesh, &mesh);
     if !mesh.is_triangle_mesh() {
         return Err(bad_input(format!(
             "{}: highlight-line fairing needs a triangle mesh (this one has polygons; triangulate it first, e.g. with `fairline convert`)",
@@ -404,7 +406,7 @@ const AUTO_RINGS: usize = 4;
 fn region_score(
     mesh: &SurfaceMesh,
     light: &fairline::highlight::LightArray,
-    args: &crate::highlight::LightArgs,
+    args: &LightArgs,
     faces: &[FaceId],
 ) -> Result<(f64, f64)> {
     region_detection_score(mesh, light, args.options(), faces).map_err(to_input_error)

@@ -5,6 +5,7 @@
 
 #![forbid(unsafe_code)]
 
+mod args;
 mod common;
 mod continuity;
 mod convert;
@@ -12,11 +13,13 @@ mod curvature;
 mod demo;
 mod detect;
 mod enhance;
+mod error;
 mod fair;
 mod fair_surface;
 mod highlight;
 mod highlight_png;
 mod info;
+mod input;
 mod output;
 mod render;
 mod repair;
@@ -47,7 +50,7 @@ enum Command {
     Info(info::Args),
     Convert(convert::Args),
     Curvature(curvature::Args),
-    Highlight(highlight::Args),
+    Highlight(args::HighlightArgs),
     Detect(detect::Args),
     FairSurface(fair_surface::Args),
     Continuity(continuity::Args),
@@ -104,7 +107,7 @@ fn main() {
         Ok(c) => c,
         Err(e) => {
             let code = if e.use_stderr() {
-                common::EXIT_BAD_INPUT
+                error::EXIT_BAD_INPUT
             } else {
                 0
             };
@@ -123,6 +126,6 @@ fn main() {
         if let Some(hint) = repair::hint(&e) {
             output::say(&format!("hint: {hint}"));
         }
-        std::process::exit(common::exit_code(&e));
+        std::process::exit(error::exit_code(&e));
     }
 }

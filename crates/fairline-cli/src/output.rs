@@ -49,7 +49,7 @@
 //! (`fairline info x.obj | head -1`) the command stops quietly with exit
 //! status 0 ([`print_stdout`]), as ripgrep does.
 
-use crate::common::bad_input;
+use crate::error::bad_input;
 use anyhow::Result;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -543,7 +543,7 @@ mod tests {
             e.to_string(),
             "b.jpg: --png must name a .png file; nothing written"
         );
-        assert_eq!(crate::common::exit_code(&e), crate::common::EXIT_BAD_INPUT);
+        assert_eq!(crate::error::exit_code(&e), crate::error::EXIT_BAD_INPUT);
         let e = require_extension("-o", Path::new("noext"), &["json", "obj"]).unwrap_err();
         assert!(
             e.to_string()

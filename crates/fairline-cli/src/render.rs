@@ -1,7 +1,8 @@
 //! `fairline render`: pictures of meshes and surfaces.
 
-use crate::common::{Report, bad_input, parse_size, parse_vec3};
-use crate::highlight::{LightArgs, to_input_error};
+use crate::args::{LightArgs, parse_size, parse_vec3, to_input_error};
+use crate::common::Report;
+use crate::error::bad_input;
 use anyhow::{Context, Result};
 use fairline::Vec3;
 use fairline::geom::{CurvatureMethod, principal_curvatures};
@@ -141,7 +142,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut key = Vec::new();
     let mut report = Report::new("render");
     let mut summary = None;
-    let bar = crate::common::spinner("rendering");
+    let bar = crate::output::spinner("rendering");
     let image = report.time(|| -> Result<_> {
         let values;
         let mut picture = Picture {

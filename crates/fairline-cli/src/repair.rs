@@ -142,16 +142,3 @@ fn repaired_name(path: &Path) -> PathBuf {
     let ext = path.extension().and_then(|s| s.to_str()).unwrap_or("ply");
     PathBuf::from(format!("{stem}-repaired.{ext}"))
 }
-
-/// Says on stderr how many non-manifold vertices of `path` were split into
-/// separate fans (kept fixed, merged back on output); nothing when none.
-pub fn note_split_vertices(path: &Path, mesh: &fairline::SurfaceMesh) {
-    let n = mesh.split_vertex_count();
-    if n > 0 {
-        eprintln!(
-            "note: {}: {n} non-manifold vertices split into {} fans; they stay fixed and are merged back on output",
-            path.display(),
-            n + mesh.vertex_count() - mesh.original_vertex_count()
-        );
-    }
-}

@@ -1,7 +1,9 @@
 //! `fairline smooth` (the classic smoothing family, Grüner thesis ch. 3) and
 //! `fairline fair-quad` (structure-line fairing of quad meshes, ch. 4).
 
-use crate::common::{Report, bad_input, spinner};
+use crate::common::Report;
+use crate::error::bad_input;
+use crate::output::spinner;
 use anyhow::Result;
 use fairline::fair::{QuadFairOptions, fair_structure_lines};
 use fairline::geom::LaplaceWeights;
@@ -171,7 +173,7 @@ pub fn run(args: Args) -> Result<()> {
         return Err(bad_input("--iterations must be at least 1"));
     }
     let mut mesh = fairline::io::read_mesh(&args.mesh)?;
-    crate::repair::note_split_vertices(&args.mesh, &mesh);
+    crate::input::note_split_vertices(&args.mesh, &mesh);
     let fixed = match &args.fixed {
         Some(p) => read_fixed(p, mesh.vertex_count())?,
         None => Vec::new(),
@@ -356,7 +358,7 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
         return Err(bad_input("--deviation-factor must be positive"));
     }
     let mut mesh = fairline::io::read_mesh(&args.mesh)?;
-    crate::repair::note_split_vertices(&args.mesh, &mesh);
+    crate::input::note_split_vertices(&args.mesh, &mesh);
     if !mesh.faces().any(|f| mesh.face_size(f) == 4) {
         return Err(bad_input(format!(
             "{}: fair-quad needs a quad mesh (no quadrilateral found)",
@@ -413,78 +415,4 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
         r.structure_energy_after
     ));
     Ok(())
-}
-
-/// 13 × 13 quad grid of a free-form surface with zigzag structure lines:
-/// (truth, zigzag).
-pub fn zigzag_freeform() -> (SurfaceMesh, SurfaceMesh) {
-    let f = |x: f64, y: f64| 0.3 * (1.5 * x).sin() * (1.0 + 0.5 * y * y) + 0.2 * x * y;
-    let n = 13u32;
-    let truth = fairline::shapes::quad_grid(n, n, (-1.0, 1.0), (-1.0, 1.0), f);
-    let mut zz = truth.clone();
-    let h = 2.0 / (n - 1) as f64;
-    for (k, p) in zz.positions_mut().iter_mut().enumerate() {
-        let (i, j) = (k as u32 % n, k as u32 / n);
-        if i > 0 && j > 0 && i < n - 1 && j < n - 1 {
-            let x = p.x + if j % 2 == 0 { 0.2 * h } else { -0.2 * h };
-            let y = p.y + if i % 2 == 0 { 0.1 * h } else { -0.1 * h };
-            *p = fairline::Vec3::new(x, y, f(x, y));
-        }
-    }
-    (truth, zz)
-}
-
-/// Demo section: the thesis comparison — Laplace and Taubin against
-/// structure-line fairing on a zigzag free-form quad grid.
-pub fn demo_section(demo: &crate::demo::Demo) -> Result<crate::demo::Section> {
-    use fairline::fair::structure_energy;
-    let (truth, zz) = zigzag_freeform();
-    let mut lap = zz.clone();
-    lap.set_positions(laplace_smooth(&zz, &LaplaceOptions::default())?.positions)?;
-    let mut tau = zz.clone();
-    tau.set_positions(taubin_smooth(&zz, &TaubinOptions::default())?.positions)?;
-    let mut ours = zz.clone();
-    ours.set_positions(fair_structure_lines(&zz, &QuadFairOptions::default())?.positions)?;
-    let dist = |m: &SurfaceMesh| {
-        m.positions()
-            .iter()
-            .zip(truth.positions())
-            .map(|(a, b)| a.distance(*b))
-            .sum::<f64>()
-            / m.vertex_count() as f64
-    };
-    let opts = demo.opts.clone();
-    let pic = Picture {
-        wireframe: true,
-        ..Default::default()
-    };
-    let meshes = [&zz, &lap, &tau, &ours];
-    let labels = [
-        "zigzag input",
-        "Laplace 10",
-        "Taubin 10",
-        "structure-line fairing",
-    ];
-    let images = meshes
-        .iter()
-        .map(|m| mesh_picture(m, &pic, &opts))
-        .collect::<Result<Vec<_>, _>>()?;
-    let img = demo.save("smooth-comparison.png", &side_by_side(&images, &labels))?;
-    let values = serde_json::json!({
-        "structure_energy": {
-            "truth": structure_energy(&truth), "input": structure_energy(&zz),
-            "laplace": structure_energy(&lap), "taubin": structure_energy(&tau),
-            "structure_line_fairing": structure_energy(&ours),
-        },
-        "mean_distance_to_truth": {
-            "input": dist(&zz), "laplace": dist(&lap), "taubin": dist(&tau),
-            "structure_line_fairing": dist(&ours),
-        },
-    });
-    Ok(crate::demo::Section {
-        title: "Smoothing and structure-line fairing".into(),
-        text: "A 13 × 13 free-form quad grid with zigzag structure lines (Grüner thesis ch. 5): Laplace shrinks it and pulls the boundary in, Taubin keeps the size but leaves waviness, structure-line fairing straightens the lines and stays closest to the smooth truth.".into(),
-        images: vec![(img, "input, Laplace, Taubin, structure-line fairing".into())],
-        values,
-    })
 }

@@ -2,7 +2,7 @@
 //! .step/.stp, by extension through `fairline::io::surface_file`) and
 //! turning them into meshes for drawing.
 
-use crate::common::bad_input;
+use crate::error::bad_input;
 use anyhow::Result;
 use fairline::SurfaceMesh;
 use fairline::bspline::{BSplineSurface, tessellate};

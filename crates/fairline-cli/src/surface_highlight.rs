@@ -3,8 +3,9 @@
 //! with their (u, v) pre-images and 3D points; PNG of the shaded surface
 //! with the lines, SVG of the pre-images.
 
-use crate::common::{Report, bad_input, write_json};
-use crate::highlight::{Args, Radii, to_input_error};
+use crate::args::{HighlightArgs, Radii, to_input_error};
+use crate::common::{Report, write_json};
+use crate::error::bad_input;
 use crate::output::require_extension;
 use anyhow::Result;
 use fairline::Vec3;
@@ -141,7 +142,7 @@ pub fn plot_lines(plot: &mut SvgPlot, lines: &[&SurfaceHighlightLine], width: f6
     }
 }
 
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: HighlightArgs) -> Result<()> {
     require_extension("-o", &args.output, &["json"])?;
     if let Some(p) = &args.png {
         require_extension("--png", p, &["png"])?;
@@ -215,7 +216,7 @@ pub fn run(args: Args) -> Result<()> {
             Some(a)
         }
     };
-    let bar = crate::common::progress(chosen.len() as u64, "highlight lines");
+    let bar = crate::output::progress(chosen.len() as u64, "highlight lines");
     let part_lights = match (circular, array) {
         (Some(c), _) => PartLights::Circular(c),
         (None, Some(array)) => PartLights::Linear {

@@ -1,7 +1,7 @@
 //! An open document of the workbench: a mesh or a set of B-spline surfaces,
 //! the triangle mesh drawn for it, and its history of steps (undo/redo).
 
-use crate::common::bad_input;
+use crate::error::bad_input;
 use anyhow::Result;
 use fairline::bspline::{BSplineSurface, tessellate};
 use fairline::mesh::FaceId;

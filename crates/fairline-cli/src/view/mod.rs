@@ -87,7 +87,7 @@ mod doc;
 mod frame;
 mod http;
 
-use crate::common::bad_input;
+use crate::error::bad_input;
 use anyhow::{Context, Result};
 use std::io::Write;
 use std::path::PathBuf;

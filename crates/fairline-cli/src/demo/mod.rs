@@ -1,7 +1,12 @@
 //! `fairline demo`: built-in surfaces through every pipeline, with
 //! pictures, `report.json` and `index.html`.
 
-use crate::common::{Report, progress, write_json};
+mod fair_surface;
+mod smooth;
+
+use crate::args::parse_size;
+use crate::common::{Report, write_json};
+use crate::output::progress;
 use anyhow::{Context, Result};
 use fairline::Vec3;
 use fairline::geom::{CurvatureMethod, principal_curvatures};
@@ -24,7 +29,7 @@ pub struct Args {
     #[arg(long, default_value = "fairline-demo")]
     pub out: PathBuf,
     /// Size of each picture, WxH.
-    #[arg(long, value_parser = crate::common::parse_size, default_value = "900x700")]
+    #[arg(long, value_parser = parse_size, default_value = "900x700")]
     pub size: (u32, u32),
 }
 
@@ -74,8 +79,8 @@ pub fn run(args: Args) -> Result<()> {
         ("highlight lines", highlight_section),
         ("detection on curved shape", detect_section),
         ("highlight-line fairing", fair_section),
-        ("B-spline fairing", crate::fair_surface::demo_section),
-        ("smoothing", crate::smooth::demo_section),
+        ("B-spline fairing", fair_surface::section),
+        ("smoothing", smooth::section),
         ("structure lines vs Taubin", structure_line_section),
     ];
     let bar = progress(steps.len() as u64, "demo");

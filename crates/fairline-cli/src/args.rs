@@ -1,0 +1,297 @@
+//! The command-line arguments that more than one command shares: vectors,
+//! lists and sizes, the lights of highlight lines (`LightArgs`), and the
+//! arguments of `fairline highlight`, whose mesh and B-spline surface
+//! paths are two modules (`highlight`, `surface_highlight`).
+
+use crate::common::read_json;
+use crate::error::bad_input;
+use anyhow::Result;
+use fairline::highlight::{CircularLights, HighlightError, HighlightOptions, LightArray, UpAxis};
+use fairline::{SurfaceMesh, Vec3};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+/// Parses `X,Y,Z` into a vector.
+pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 3 {
+        return Err(format!("expected X,Y,Z, got `{s}`"));
+    }
+    let mut v = [0.0; 3];
+    for (k, p) in parts.iter().enumerate() {
+        v[k] = p
+            .parse::<f64>()
+            .map_err(|_| format!("`{p}` is not a number in `{s}`"))?;
+        if !v[k].is_finite() {
+            return Err(format!("`{p}` is not finite in `{s}`"));
+        }
+    }
+    Ok(Vec3::from_array(v))
+}
+
+/// Parses a comma-separated list of numbers.
+pub fn parse_list(s: &str) -> Result<Vec<f64>, String> {
+    s.split(',')
+        .map(|p| {
+            let v = p
+                .trim()
+                .parse::<f64>()
+                .map_err(|_| format!("`{p}` is not a number"))?;
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(format!("`{p}` is not finite"))
+            }
+        })
+        .collect()
+}
+
+/// Parses `WxH`.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WxH, got `{s}`"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad width in `{s}`"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad height in `{s}`"))?;
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        return Err(format!(
+            "image size `{s}` must be between 1 and 16384 pixels"
+        ));
+    }
+    Ok((w, h))
+}
+
+/// The `--up` choice of the default lights.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Up {
+    /// From the part's principal axes.
+    Auto,
+    /// +x.
+    X,
+    /// +y.
+    Y,
+    /// +z.
+    Z,
+}
+
+impl Up {
+    /// The library's axis choice.
+    pub fn axis(self) -> UpAxis {
+        match self {
+            Up::Auto => UpAxis::Auto,
+            Up::X => UpAxis::X,
+            Up::Y => UpAxis::Y,
+            Up::Z => UpAxis::Z,
+        }
+    }
+    /// The axis vector, `None` for auto.
+    pub fn vector(self) -> Option<Vec3> {
+        match self {
+            Up::Auto => None,
+            Up::X => Some(Vec3::X),
+            Up::Y => Some(Vec3::Y),
+            Up::Z => Some(Vec3::Z),
+        }
+    }
+}
+
+/// Options describing the linear light array (shared with `detect`).
+#[derive(clap::Args, Debug, Clone)]
+pub struct LightArgs {
+    /// Light direction H (made orthogonal to the plane normal).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    pub direction: Option<Vec3>,
+    /// Normal Z of the light plane (default: from --up).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    pub plane_normal: Option<Vec3>,
+    /// Which side the lights are on when --plane-normal is not given: auto
+    /// (the part's principal axis of least extent, turned to the side most
+    /// of the surface faces; lights run along its longest axis), or +x, +y,
+    /// +z (e.g. --up y for y-up models).
+    #[arg(long, value_enum, default_value_t = Up::Auto)]
+    pub up: Up,
+    /// Point A0 on light 0 (default: one bounding-box diagonal above the
+    /// centre along the plane normal).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    pub plane_point: Option<Vec3>,
+    /// Spacing s between lights (default: about 20 lights across a panel;
+    /// for drawing, wider on round parts so the lines stay readable).
+    #[arg(long)]
+    pub spacing: Option<f64>,
+    /// Lights from JSON (DESIGN.md §5): a linear array
+    /// {"plane_point","plane_normal","direction","spacing"}, or (for
+    /// `highlight` only) circular lights {"center","axis","radii"}.
+    #[arg(long, value_name = "FILE.json", conflicts_with_all = ["direction", "plane_normal", "plane_point", "spacing"])]
+    pub lights: Option<PathBuf>,
+    /// Smallest |Z·N| at which a vertex gets a highlight distance.
+    #[arg(long, default_value_t = HighlightOptions::default().min_normal_cos)]
+    pub min_normal_cos: f64,
+}
+
+impl LightArgs {
+    /// The light array: from the file, or the bounding-box defaults with
+    /// the given fields overridden.
+    pub fn light_array(&self, mesh: &SurfaceMesh) -> Result<LightArray> {
+        if let Some(path) = &self.lights {
+            if circular_file(path)?.is_some() {
+                return Err(bad_input(format!(
+                    "{}: circular lights are drawn by `fairline highlight` only; this command needs a linear light array {{\"plane_point\",\"plane_normal\",\"direction\",\"spacing\"}}",
+                    path.display()
+                )));
+            }
+            return read_json::<LightArray>(path);
+        }
+        let (lo, hi) = fairline::mesh::bounding_box(mesh.positions())
+            .ok_or_else(|| bad_input("the mesh has no vertices"))?;
+        if self.plane_normal.is_some() {
+            return self.light_array_in_box(lo, hi);
+        }
+        let base = LightArray::default_for_mesh(mesh, self.up.axis())
+            .ok_or_else(|| bad_input("the mesh has no finite vertices"))?;
+        LightArray::new(
+            self.plane_point.unwrap_or(base.plane_point()),
+            base.plane_normal(),
+            self.direction.unwrap_or(base.direction()),
+            self.spacing.unwrap_or(base.spacing()),
+        )
+        .map_err(to_input_error)
+    }
+
+    /// The light array: from the file, or the defaults for the bounding box
+    /// `lo`–`hi` with the given fields overridden.
+    pub fn light_array_in_box(&self, lo: Vec3, hi: Vec3) -> Result<LightArray> {
+        if let Some(path) = &self.lights {
+            return read_json::<LightArray>(path);
+        }
+        let base = LightArray::default_for(lo, hi, self.plane_normal.or(self.up.vector()));
+        LightArray::new(
+            self.plane_point.unwrap_or(base.plane_point()),
+            self.plane_normal.unwrap_or(base.plane_normal()),
+            self.direction.unwrap_or(base.direction()),
+            self.spacing.unwrap_or(base.spacing()),
+        )
+        .map_err(to_input_error)
+    }
+
+    /// The lights to draw and read lines with: `light` itself when the
+    /// spacing was given (--spacing or --lights), else `light` with its
+    /// spacing multiplied by [`LightArray::readable_multiple`] (round parts
+    /// get fewer, readable lines; panels keep about 20 across).
+    pub fn readable(&self, mesh: &SurfaceMesh, light: LightArray) -> Result<LightArray> {
+        if self.spacing.is_some() || self.lights.is_some() {
+            return Ok(light);
+        }
+        let k = light.readable_multiple(mesh);
+        light
+            .with_spacing(light.spacing() * f64::from(k))
+            .map_err(to_input_error)
+    }
+
+    /// Model options.
+    pub fn options(&self) -> HighlightOptions {
+        HighlightOptions::default().min_normal_cos(self.min_normal_cos)
+    }
+}
+
+/// The circular lights of a `--lights` file when it holds the circular form
+/// {"center","axis","radii"} of DESIGN.md §5 (recognised by its "center"
+/// key); `None` for any other JSON object (read as a linear array).
+pub fn circular_file(path: &Path) -> Result<Option<CircularLights>> {
+    let v: Value = read_json(path)?;
+    if v.get("center").is_some() {
+        let c: CircularLights =
+            serde_json::from_value(v).map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+        Ok(Some(c))
+    } else {
+        Ok(None)
+    }
+}
+
+/// Maps library errors about the input (bad light, bad option, bad mesh)
+/// to exit status 2.
+pub fn to_input_error(e: HighlightError) -> anyhow::Error {
+    bad_input(e.to_string())
+}
+
+/// Highlight lines of a triangle mesh (polygons are triangulated first)
+/// under a linear light array (Yong et al. Algorithm 1, Eq. (1) and (4) as
+/// corrected in DESIGN.md §3), or, with --circle-center/--circle-axis/--radii,
+/// under concentric circular lights (Nishiyama et al. Eq. (2.18), zero level
+/// per radius). Lights default to a plane one bounding-box diagonal above the
+/// part, facing its thinnest principal direction (--up), about 20 lights
+/// across a panel; on round parts the spacing grows so the lines stay
+/// readable (every k-th line, k from the median highlight-distance
+/// gradient), and the picture leaves out lines crowded toward silhouettes
+/// and tiny pieces (the output keeps all lines). --band ρ adds the band
+/// boundaries at ±ρ. Output JSON {"lines":[{"index":m,"closed":b,"points":[[x,y,z],..]}]}
+/// (circular lines also carry "radius"; bands under "bands"), or OBJ `l`
+/// polylines (groups lines, band_lower, band_upper).
+///
+/// B-spline surfaces (.json, .igs/.iges, .step/.stp) are handled as in Nishiyama et al.
+/// §2: d_s sampled on a --grid × --grid (u, v) grid, contoured by marching
+/// squares, refined onto the true zero; JSON lines carry "uv" and "points".
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline highlight fairline-demo/sphere.ply -o sphere-lines.json --png sphere-lines.png\n  fairline highlight fairline-demo/dented-panel.obj --direction 0,1,0 --plane-normal 0,0,1 --plane-point 0,0,5 --spacing 0.1 -o lines.obj\n  fairline highlight fairline-demo/dented-panel.obj --circle-center 0,0,5 --circle-axis 0,0,1 --radii 1,2,3 --band 0.05 -o circles.json\n  fairline highlight fairline-demo/bspline-panel-dented.json --circle-center 2,1.5,2.5 --circle-axis 0,0,1 --radii 2.4,2.6,2.8,3.0 --grid 300 -o surface-lines.json --png surface-lines.png --svg uv.svg"
+)]
+pub struct HighlightArgs {
+    /// Input triangle (or polygon) mesh.
+    pub mesh: PathBuf,
+    #[command(flatten)]
+    pub light: LightArgs,
+    /// Centre of the circular lights.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z", requires_all = ["circle_axis", "radii"], conflicts_with = "lights")]
+    pub circle_center: Option<Vec3>,
+    /// Axis of the circular lights.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z", requires_all = ["circle_center", "radii"])]
+    pub circle_axis: Option<Vec3>,
+    /// Radii of the circular lights, comma separated.
+    #[arg(long, value_parser = parse_radii, allow_hyphen_values = true, value_name = "R1,R2,..", requires_all = ["circle_center", "circle_axis"])]
+    pub radii: Option<Radii>,
+    /// Also compute highlight bands of this radius (mesh units).
+    #[arg(long, value_name = "RHO")]
+    pub band: Option<f64>,
+    /// Output polylines (.json or .obj).
+    #[arg(short, long, value_name = "LINES.json|.obj")]
+    pub output: PathBuf,
+    /// Picture of the lines on the shaded mesh (or surface).
+    #[arg(long, value_name = "IMG.png")]
+    pub png: Option<PathBuf>,
+    /// Viewing direction of the picture X,Y,Z (from the eye towards the
+    /// object; default: down the light-plane normal, slightly tilted).
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    pub view: Option<Vec3>,
+    /// B-spline surfaces: grid points per parameter direction on which d_s
+    /// is sampled before contouring (one surface); for a file of several
+    /// patches, grid points along the part's diagonal, each patch sampled
+    /// in proportion to its size (at least 12 per direction).
+    #[arg(long, default_value_t = 200, value_name = "N")]
+    pub grid: usize,
+    /// B-spline surfaces: SVG of the (u, v) pre-images (of surface
+    /// --surface, default 0).
+    #[arg(long, value_name = "UV.svg")]
+    pub svg: Option<PathBuf>,
+    /// B-spline surfaces: use only this surface of the file (default: all).
+    #[arg(long, value_name = "K")]
+    pub surface: Option<usize>,
+    /// Size of the --png picture, WxH.
+    #[arg(long, value_parser = parse_size, default_value = "1200x900", requires = "png")]
+    pub size: (u32, u32),
+    /// Write a JSON report.
+    #[arg(long, value_name = "FILE.json")]
+    pub report: Option<PathBuf>,
+}
+
+/// A comma-separated list of radii.
+#[derive(Clone, Debug)]
+pub struct Radii(pub Vec<f64>);
+
+fn parse_radii(s: &str) -> Result<Radii, String> {
+    parse_list(s).map(Radii)
+}

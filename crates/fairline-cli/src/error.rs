@@ -1,0 +1,52 @@
+//! How a command fails: the exit status (DESIGN.md §4) and the marker of
+//! errors that are the user's input being wrong.
+
+/// Exit status for bad input or usage (DESIGN.md §4).
+pub const EXIT_BAD_INPUT: i32 = 2;
+/// Exit status for a failure of the computation.
+pub const EXIT_FAILURE: i32 = 1;
+
+/// Marks an error as the user's input being wrong (exit status 2).
+#[derive(Debug)]
+pub struct BadInput(pub String);
+
+impl std::fmt::Display for BadInput {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+impl std::error::Error for BadInput {}
+
+/// An error that exits with status 2.
+pub fn bad_input(msg: impl Into<String>) -> anyhow::Error {
+    anyhow::Error::new(BadInput(msg.into()))
+}
+
+/// Exit status for an error: 2 when any cause is bad input (our marker, a
+/// file-format error, an invalid mesh, malformed JSON, a missing file), 1
+/// otherwise.
+pub fn exit_code(err: &anyhow::Error) -> i32 {
+    for cause in err.chain() {
+        if cause.is::<BadInput>()
+            || cause.is::<fairline::io::IoError>()
+            || cause.is::<fairline::MeshError>()
+            || cause.is::<serde_json::Error>()
+            || cause.is::<fairline::bspline::BSplineError>()
+            || cause.is::<fairline::io::SurfaceJsonError>()
+            || cause.is::<fairline::io::IgesError>()
+            || cause.is::<fairline::io::step::StepError>()
+            || cause.is::<fairline::io::surface_file::SurfaceFileError>()
+        {
+            return EXIT_BAD_INPUT;
+        }
+        if let Some(e) = cause.downcast_ref::<std::io::Error>()
+            && matches!(
+                e.kind(),
+                std::io::ErrorKind::NotFound | std::io::ErrorKind::PermissionDenied
+            )
+        {
+            return EXIT_BAD_INPUT;
+        }
+    }
+    EXIT_FAILURE
+}

@@ -1,0 +1,41 @@
+//! Reading a command's input mesh: the note on non-manifold vertices that
+//! were split, and triangulation for the commands that need triangles.
+
+use crate::error::bad_input;
+use anyhow::{Context, Result};
+use fairline::SurfaceMesh;
+use fairline::mesh::FaceId;
+use std::path::Path;
+
+/// Says on stderr how many non-manifold vertices of `path` were split into
+/// separate fans (kept fixed, merged back on output); nothing when none.
+pub fn note_split_vertices(path: &Path, mesh: &fairline::SurfaceMesh) {
+    let n = mesh.split_vertex_count();
+    if n > 0 {
+        eprintln!(
+            "note: {}: {n} non-manifold vertices split into {} fans; they stay fixed and are merged back on output",
+            path.display(),
+            n + mesh.vertex_count() - mesh.original_vertex_count()
+        );
+    }
+}
+
+/// Reads a mesh and triangulates polygons; also returns, for each
+/// triangle, the input face it came from (None when nothing changed).
+pub fn read_triangles(path: &Path) -> Result<(SurfaceMesh, Option<Vec<FaceId>>)> {
+    if crate::surface::is_surface_path(path) {
+        return Err(bad_input(format!(
+            "{}: B-spline surfaces are not handled by this command yet; give a mesh (.obj .ply .off .stl)",
+            path.display()
+        )));
+    }
+    let mesh = fairline::io::read_mesh(path)?;
+    note_split_vertices(path, &mesh);
+    if mesh.is_triangle_mesh() {
+        Ok((mesh, None))
+    } else {
+        let t = fairline::mesh::triangulate(&mesh)
+            .with_context(|| format!("{}: triangulating its polygons", path.display()))?;
+        Ok((t.mesh, Some(t.source_face)))
+    }
+}

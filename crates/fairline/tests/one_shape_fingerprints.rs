@@ -1,0 +1,236 @@
+//! Fingerprints of results recorded before the last algorithms were put
+//! into the one shape of the crate (issue #17: highlight lines, curvature,
+//! polyline networks) and before the implicit smoothing step fused its
+//! assembly into the constrained solve: the same inputs must give the same
+//! bits. A fingerprint is the FNV-1a hash of the bits of every coordinate
+//! (and every count) of a result, so any change of any value shows.
+
+use fairline::Vec3;
+use fairline::geom::CurvatureMethod;
+use fairline::highlight::{CircularLight, HighlightLines, HighlightOptions, LightArray};
+use fairline::mesh::{SurfaceMesh, VertexId};
+use fairline::shapes;
+use fairline::smooth::{ImplicitOptions, implicit_smooth};
+
+/// FNV-1a over 64-bit words.
+#[derive(Clone, Copy)]
+struct Fnv(u64);
+
+impl Fnv {
+    fn new() -> Self {
+        Fnv(0xcbf29ce484222325)
+    }
+    fn word(mut self, w: u64) -> Self {
+        for b in w.to_le_bytes() {
+            self.0 ^= u64::from(b);
+            self.0 = self.0.wrapping_mul(0x100000001b3);
+        }
+        self
+    }
+    fn f(self, x: f64) -> Self {
+        self.word(x.to_bits())
+    }
+    fn v(self, p: Vec3) -> Self {
+        self.f(p.x).f(p.y).f(p.z)
+    }
+    fn all_f(self, xs: &[f64]) -> Self {
+        xs.iter().fold(self.word(xs.len() as u64), |h, &x| h.f(x))
+    }
+    fn all_v(self, ps: &[Vec3]) -> Self {
+        ps.iter().fold(self.word(ps.len() as u64), |h, &p| h.v(p))
+    }
+    fn lines(self, l: &HighlightLines) -> Self {
+        l.lines
+            .iter()
+            .fold(self.word(l.lines.len() as u64), |h, l| {
+                h.word(l.index as u64)
+                    .word(u64::from(l.closed))
+                    .all_v(&l.points)
+            })
+    }
+}
+
+/// Deterministic value in [−1, 1] for index i.
+fn noise(i: usize) -> f64 {
+    let mut x = (i as u64).wrapping_mul(0x9e3779b97f4a7c15);
+    x ^= x >> 31;
+    x = x.wrapping_mul(0x94d049bb133111eb);
+    x ^= x >> 29;
+    (x >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+}
+
+/// A noisy sphere (closed) and a wavy height field (with a boundary).
+fn meshes() -> (SurfaceMesh, SurfaceMesh) {
+    let mut sphere = shapes::icosphere(1.0, 3);
+    for (i, p) in sphere.positions_mut().iter_mut().enumerate() {
+        *p *= 1.0 + 0.01 * noise(i);
+    }
+    let mut field = shapes::height_field(31, 27, (-1.0, 1.0), (-0.8, 0.9), |x, y| {
+        0.2 * (2.0 * x).sin() * (1.5 * y).cos() + 0.05 * x * y
+    });
+    for (i, p) in field.positions_mut().iter_mut().enumerate() {
+        p.z += 0.002 * noise(i + 7);
+    }
+    (sphere, field)
+}
+
+fn hex(h: Fnv) -> String {
+    format!("{:016x}", h.0)
+}
+
+/// (name, fingerprint) of every recorded case.
+fn cases() -> Vec<(&'static str, String)> {
+    let (sphere, field) = meshes();
+    let mut out = Vec::new();
+    // highlight lines: linear array, bands, circular lights and bands
+    let light = LightArray::new(
+        Vec3::new(0.0, 0.0, 3.0),
+        Vec3::new(0.1, 0.2, 1.0),
+        Vec3::new(1.0, 0.3, 0.0),
+        0.11,
+    )
+    .unwrap();
+    for (name, mesh) in [("sphere", &sphere), ("field", &field)] {
+        let opts = HighlightOptions::default();
+        let lines = fairline::highlight::highlight_lines(mesh, &light, &opts).unwrap();
+        let model = fairline::highlight::HighlightModel::new(mesh, light, opts).unwrap();
+        let bands = model.bands(mesh, 0.02).unwrap();
+        out.push((
+            if name == "sphere" {
+                "linear lines sphere"
+            } else {
+                "linear lines field"
+            },
+            hex(Fnv::new()
+                .lines(&lines)
+                .lines(&bands.lower)
+                .lines(&bands.upper)),
+        ));
+    }
+    let circles: Vec<CircularLight> = [0.6, 0.9, 1.3]
+        .iter()
+        .map(|&r| {
+            CircularLight::new(Vec3::new(0.1, -0.2, 2.5), Vec3::new(0.0, 0.1, 1.0), r).unwrap()
+        })
+        .collect();
+    for (name, mesh) in [("circular sphere", &sphere), ("circular field", &field)] {
+        let lines = fairline::highlight::circular_highlight_lines(mesh, &circles).unwrap();
+        let bands = fairline::highlight::circular_highlight_bands(mesh, &circles, 0.05).unwrap();
+        out.push((
+            name,
+            hex(Fnv::new()
+                .lines(&lines)
+                .lines(&bands.lower)
+                .lines(&bands.upper)),
+        ));
+    }
+    // curvature, both estimators
+    for (name, method) in [
+        ("curvature rusinkiewicz", CurvatureMethod::Rusinkiewicz),
+        ("curvature meyer", CurvatureMethod::Meyer),
+    ] {
+        let mut h = Fnv::new();
+        for mesh in [&sphere, &field] {
+            let c = fairline::geom::principal_curvatures(mesh, method);
+            h = h
+                .all_f(&c.k1)
+                .all_f(&c.k2)
+                .all_v(&c.d1)
+                .all_v(&c.d2)
+                .all_v(&c.normals)
+                .all_f(&c.mean())
+                .all_f(&c.gauss());
+        }
+        out.push((name, hex(h)));
+    }
+    // polyline network with tolerance cylinders on a wavy quad grid
+    {
+        let mut grid = shapes::quad_grid(15, 13, (-1.0, 1.0), (-1.0, 1.0), |x, y| 0.1 * x * y);
+        for (i, p) in grid.positions_mut().iter_mut().enumerate() {
+            p.z += 0.03 * noise(i + 3);
+        }
+        let r = fairline::fair::fair_polyline_network(&mut grid, &Default::default()).unwrap();
+        let h = Fnv::new()
+            .all_v(grid.positions())
+            .f(r.energy_before)
+            .f(r.energy_after)
+            .word(r.at_bound as u64)
+            .word(r.iterations as u64);
+        out.push(("polyline network", hex(h)));
+    }
+    // implicit smoothing: closed, fixed vertices with volume, a boundary
+    // smoothed as curves, several steps
+    let implicit = |mesh: &SurfaceMesh, o: &ImplicitOptions| {
+        let r = implicit_smooth(mesh, o).unwrap();
+        hex(Fnv::new()
+            .all_v(&r.positions)
+            .f(r.report.volume_after)
+            .f(r.report.max_displacement))
+    };
+    out.push((
+        "implicit sphere",
+        implicit(&sphere, &ImplicitOptions::default().iterations(3)),
+    ));
+    out.push((
+        "implicit sphere fixed volume",
+        implicit(
+            &sphere,
+            &ImplicitOptions::default()
+                .time_step(2.0)
+                .iterations(2)
+                .preserve_volume(true)
+                .fixed(
+                    (0..sphere.vertex_count() as u32)
+                        .step_by(17)
+                        .map(VertexId)
+                        .collect(),
+                ),
+        ),
+    ));
+    out.push((
+        "implicit field hierarchical",
+        implicit(
+            &field,
+            &ImplicitOptions::default()
+                .iterations(2)
+                .hierarchical_boundary(true),
+        ),
+    ));
+    out.push((
+        "implicit field fixed boundary tangential",
+        implicit(
+            &field,
+            &ImplicitOptions::default()
+                .time_step(0.5)
+                .iterations(4)
+                .fix_boundary(true)
+                .tangential_only(true),
+        ),
+    ));
+    out
+}
+
+/// Recorded from the code before the changes (see the module doc).
+const RECORDED: &[(&str, &str)] = &[
+    ("linear lines sphere", "4fd5d9c2b074a01f"),
+    ("linear lines field", "78c4fe83d52bdcab"),
+    ("circular sphere", "e204a1fc4027126c"),
+    ("circular field", "a5fadcb986f4a584"),
+    ("curvature rusinkiewicz", "74a48e914499e1c1"),
+    ("curvature meyer", "5501b06bfdeff3ee"),
+    ("polyline network", "9793a987758b777e"),
+    ("implicit sphere", "c82c0c245a43e45e"),
+    ("implicit sphere fixed volume", "1850a1a9462de3b9"),
+    ("implicit field hierarchical", "312714f80a6fcdbf"),
+    ("implicit field fixed boundary tangential", "bd5a13c5c0b25839"),
+];
+
+#[test]
+fn results_equal_those_recorded_before_the_one_shape() {
+    let got = cases();
+    assert_eq!(got.len(), RECORDED.len(), "cases and records");
+    for ((name, h), (want_name, want)) in got.iter().zip(RECORDED) {
+        assert_eq!(name, want_name);
+        assert_eq!(h, want, "{name}");
+    }
+}
