@@ -19,7 +19,7 @@ use crate::mesh::{FaceId, SurfaceMesh, VertexId};
 use crate::solve::{BoxQpOptions, box_qp, normal_matrix, sparse_from_triplets};
 
 /// Options of [`fair_highlight_lines`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct FairOptions {
     /// The energy to minimise (default [`FairMethod::Highlight`]).
     pub method: FairMethod,
@@ -280,7 +280,7 @@ pub fn fair_highlight_lines_with(
     options.check()?;
     mesh.require_triangles()?;
     let mut mesh = mesh.clone();
-    let mut model = HighlightModel::new(&mesh, *light, options.highlight)?;
+    let mut model = HighlightModel::new(&mesh, *light, options.highlight.clone())?;
     let lines_before = model.lines(&mesh);
     let nodes: Vec<NodeId> = lines_before
         .lines
