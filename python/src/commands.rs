@@ -9,14 +9,14 @@
 
 #![allow(clippy::too_many_arguments)]
 
-use fairline::io::JsonReport as Report;
 use crate::{Failure, Res, SoupArrays, mesh_from, positions_array, soup_arrays, soup_from};
 use fairline::highlight::{
     CircularLight, CircularLights, DetectOptions, HighlightError, HighlightLines, HighlightModel,
     HighlightOptions, LightArray, LightChoice, LineStats, Readability, UpAxis,
     circular_highlight_bands, circular_highlight_lines, detect_irregularities,
 };
-use fairline::mesh::{FaceId, Stats, VertexId};
+use fairline::io::JsonReport as Report;
+use fairline::mesh::{FaceId, VertexId};
 use fairline::{SurfaceMesh, Vec3};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -644,9 +644,7 @@ impl LightOptions {
         if self.lights.is_some() {
             return Ok(light);
         }
-        self.choice()
-            .readable(mesh, light)
-            .map_err(highlight_error)
+        self.choice().readable(mesh, light).map_err(highlight_error)
     }
 
     /// Model options (the CLI's `LightArgs::options`).
@@ -806,8 +804,7 @@ fn highlight_lines(
             report.set("drawn", drawn_json(&mesh, &array, &shown));
             (lines, bands, None)
         };
-        let document =
-            fairline::io::highlight_lines_json(&lines, bands.as_ref(), radii.as_deref());
+        let document = fairline::io::highlight_lines_json(&lines, bands.as_ref(), radii.as_deref());
         let counts = lines.counts();
         report.set("summary", counts);
         report.set_fields(counts);

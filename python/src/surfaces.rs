@@ -9,7 +9,6 @@
 #![allow(clippy::too_many_arguments)]
 
 use crate::commands::{LightOptions, bad_choice, highlight_error, vec3};
-use fairline::io::JsonReport as Report;
 use crate::{Failure, Res};
 use fairline::Vec3;
 use fairline::bspline::BSplineSurface;
@@ -17,6 +16,7 @@ use fairline::highlight::{
     CircularLight, CircularLights, PartLights, SurfaceHighlightLine, SurfaceHighlightOptions,
     SurfaceLight, part_highlight_lines,
 };
+use fairline::io::JsonReport as Report;
 use fairline::io::{parse_surfaces_json, surfaces_to_json};
 use pyo3::prelude::*;
 use serde_json::{Value, json};
