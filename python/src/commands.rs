@@ -585,7 +585,7 @@ impl LightOptions {
 
     /// The circular lights of the `lights` dictionary when it has the
     /// circular form (recognised by its "center" key).
-    fn circular(&self) -> Res<Option<CircularLights>> {
+    pub(crate) fn circular(&self) -> Res<Option<CircularLights>> {
         match &self.lights {
             Some(v) if v.get("center").is_some() => serde_json::from_value(v.clone())
                 .map(Some)
@@ -629,6 +629,11 @@ impl LightOptions {
         self.choice()
             .light_array_in_box(lo, hi)
             .map_err(highlight_error)
+    }
+
+    /// The `up` axis as a vector (`None` for auto).
+    pub(crate) fn up_vector(&self) -> Option<Vec3> {
+        self.up_vector
     }
 
     /// `min_normal_cos`, or the library's default as the CLI's.

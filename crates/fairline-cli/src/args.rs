@@ -195,6 +195,20 @@ pub fn circular_file(path: &Path) -> Result<Option<CircularLights>> {
     }
 }
 
+/// The circular lights `--circular` derived from the part, printed on
+/// stderr as one line in the LIGHTS.json form; an input error when the part
+/// has no area to derive them from.
+pub fn derived_circular_lights(spec: Option<CircularLights>) -> Result<CircularLights> {
+    let spec = spec.ok_or_else(|| {
+        bad_input("cannot derive circular lights: the part has no area with a defined normal")
+    })?;
+    eprintln!(
+        "default circular lights (save as LIGHTS.json to reuse): {}",
+        serde_json::to_string(&spec)?
+    );
+    Ok(spec)
+}
+
 /// Maps library errors about the input (bad light, bad option, bad mesh)
 /// to exit status 2.
 pub fn to_input_error(e: HighlightError) -> anyhow::Error {
@@ -236,6 +250,13 @@ pub struct HighlightArgs {
     /// Radii of the circular lights, comma separated.
     #[arg(long, value_parser = parse_radii, allow_hyphen_values = true, value_name = "R1,R2,..", requires_all = ["circle_center", "circle_axis"])]
     pub radii: Option<Radii>,
+    /// Circular lights derived from the part instead of given: axis along
+    /// the part's area-weighted mean normal (+z for a closed body; --up x|y|z
+    /// sets it), centre on that axis above the part, 10 radii whose lines
+    /// span the part. They are printed on stderr in the LIGHTS.json form
+    /// {"center","axis","radii"}, ready for --lights.
+    #[arg(long, conflicts_with_all = ["circle_center", "lights"])]
+    pub circular: bool,
     /// Also compute highlight bands of this radius (mesh units).
     #[arg(long, value_name = "RHO")]
     pub band: Option<f64>,

@@ -2,7 +2,7 @@
 //! al. §2) or of concentric circular lights (Nishiyama et al. §2) on a
 //! triangle mesh, written as JSON or OBJ polylines.
 
-use crate::args::{HighlightArgs, Radii, circular_file, to_input_error};
+use crate::args::{HighlightArgs, Radii, circular_file, derived_circular_lights, to_input_error};
 use crate::common::Report;
 use crate::error::bad_input;
 use crate::input::read_triangles;
@@ -105,6 +105,13 @@ pub fn run(args: HighlightArgs) -> Result<()> {
         }),
         _ => match &args.light.lights {
             Some(path) => circular_file(path)?,
+            None if args.circular => Some(derived_circular_lights(
+                fairline::highlight::default_circular_lights_for_mesh(
+                    &mesh,
+                    args.light.up.vector(),
+                    fairline::highlight::DEFAULT_CIRCULAR_RADII,
+                ),
+            )?),
             None => None,
         },
     };
@@ -136,7 +143,11 @@ pub fn run(args: HighlightArgs) -> Result<()> {
             -axis + 0.35 * axis.any_orthonormal_vector(),
             axis.any_orthonormal_vector(),
         );
-        report.set("light", json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii}));
+        let mut light = json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii});
+        if args.circular {
+            light["derived"] = json!(true);
+        }
+        report.set("light", light);
         (lines, bands, Some(radii))
     } else {
         let light = args.light.light_array(&mesh)?;

@@ -32,9 +32,10 @@ pub use linear::{HighlightModel, HighlightOptions, highlight_lines};
 pub use quartic::{Roots, quartic_roots};
 pub use readable::{LineStats, Readability};
 pub use surface::{
-    PartLights, PatchHighlights, SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceHighlights,
-    SurfaceLight, linear_lights, part_highlight_lines, patch_grid, surface_highlight_lines,
-    surface_signed_distance,
+    DEFAULT_CIRCULAR_RADII, PartLights, PatchHighlights, SurfaceHighlightLine,
+    SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight, default_circular_lights,
+    default_circular_lights_for_mesh, linear_lights, part_highlight_lines, patch_grid,
+    surface_highlight_lines, surface_signed_distance,
 };
 
 use crate::mesh::MeshError;
