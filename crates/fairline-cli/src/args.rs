@@ -92,6 +92,16 @@ impl Up {
             Up::Z => UpAxis::Z,
         }
     }
+
+    /// The axis vector, `None` for auto.
+    pub fn vector(self) -> Option<Vec3> {
+        match self {
+            Up::Auto => None,
+            Up::X => Some(Vec3::X),
+            Up::Y => Some(Vec3::Y),
+            Up::Z => Some(Vec3::Z),
+        }
+    }
 }
 
 /// Options describing the linear light array (shared with `detect`).
