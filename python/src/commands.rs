@@ -633,12 +633,7 @@ impl LightOptions {
 
     /// The `up` axis as a vector (`None` for auto).
     pub(crate) fn up_vector(&self) -> Option<Vec3> {
-        match self.up {
-            UpAxis::Auto => None,
-            UpAxis::X => Some(Vec3::X),
-            UpAxis::Y => Some(Vec3::Y),
-            UpAxis::Z => Some(Vec3::Z),
-        }
+        self.up.vector()
     }
 
     /// `min_normal_cos`, or the library's default as the CLI's.

@@ -95,12 +95,7 @@ impl Up {
 
     /// The axis vector, `None` for auto.
     pub fn vector(self) -> Option<Vec3> {
-        match self {
-            Up::Auto => None,
-            Up::X => Some(Vec3::X),
-            Up::Y => Some(Vec3::Y),
-            Up::Z => Some(Vec3::Z),
-        }
+        self.axis().vector()
     }
 }
 
