@@ -20,13 +20,14 @@ pub use areas::{
     mixed_corner_areas, mixed_vertex_areas, mixed_vertex_areas_at,
 };
 pub use curvature::{
-    CurvatureMethod, PrincipalCurvatures, gaussian_curvature, mean_curvature,
-    mean_curvature_normals, principal_curvatures, principal_curvatures_meyer,
-    principal_curvatures_rusinkiewicz,
+    CurvatureError, CurvatureMethod, CurvatureOptions, CurvatureOutput, CurvatureReport,
+    PrincipalCurvatures, curvature, gaussian_curvature, mean_curvature, mean_curvature_normals,
+    principal_curvatures, principal_curvatures_meyer, principal_curvatures_rusinkiewicz,
 };
 pub use laplace::{
-    LaplaceWeights, cotangent_laplacian, cotangents, cotangents_at, edge_length_laplacian,
-    halfedge_weights, halfedge_weights_at, laplacian, laplacian_from_weights, uniform_laplacian,
+    LaplaceWeights, LaplacianPattern, cotangent_laplacian, cotangents, cotangents_at,
+    edge_length_laplacian, halfedge_weights, halfedge_weights_at, laplacian,
+    laplacian_from_weights, uniform_laplacian,
 };
 pub use measures::{
     closest_point_on_triangle, corner_angles, edge_lengths, mean_edge_length, surface_area,
