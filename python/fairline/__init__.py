@@ -552,9 +552,12 @@ def fair(
     """Highlight-line fairing inside a region (``fairline fair``, Yong et
     al. §3, Algorithm 2): moves only vertices whose motion changes nothing
     outside the region until the highlight lines inside follow smooth
-    desired curves. ``method``: ``"highlight"``, ``"paper"`` (Yong et
-    al.'s energy exactly) or ``"diffusion-flow"`` (baseline);
-    ``laplacian_weight`` adds a surface-diffusion term to ``"highlight"``.
+    desired curves. ``method``: ``"highlight"`` (default: the paper's
+    energy with the desired curves' end tangents refitted 4 times, then
+    ¾ of that result + ¼ of the diffusion-flow result on the same region),
+    ``"paper"`` (Yong et al.'s Algorithm 2 exactly) or
+    ``"diffusion-flow"`` (baseline); ``laplacian_weight`` adds a
+    surface-diffusion term to ``"highlight"``.
 
     ``region``: face indices (e.g. :func:`detect`'s result), or the CLI's
     region JSON as a dict (``{"faces"}``, ``{"vertices"}``,

@@ -9,7 +9,6 @@
 #![allow(clippy::too_many_arguments)]
 
 use crate::commands::{LightOptions, bad_choice, highlight_error, vec3};
-use crate::report::Report;
 use crate::{Failure, Res};
 use fairline::Vec3;
 use fairline::bspline::BSplineSurface;
@@ -17,6 +16,7 @@ use fairline::highlight::{
     CircularLight, CircularLights, PartLights, SurfaceHighlightLine, SurfaceHighlightOptions,
     SurfaceLight, part_highlight_lines,
 };
+use fairline::io::JsonReport as Report;
 use fairline::io::{parse_surfaces_json, surfaces_to_json};
 use pyo3::prelude::*;
 use serde_json::{Value, json};
@@ -304,7 +304,7 @@ fn surface_highlight_lines(
         if line_count == 0 {
             report.warn("no highlight line pre-image was found on the surface; try other radii, --circle-center or --circle-axis");
         }
-        Ok((doc.to_string(), report.to_json()))
+        Ok((doc.to_string(), report.to_json().to_string()))
     })?;
     Ok(out)
 }
@@ -421,7 +421,7 @@ fn fair_surface(
                 rep.residual_before.max, rep.residual_after.max
             ));
         }
-        Ok((surfaces_to_json(&all), report.to_json()))
+        Ok((surfaces_to_json(&all), report.to_json().to_string()))
     })?;
     Ok(out)
 }
