@@ -222,7 +222,10 @@ const RECORDED: &[(&str, &str)] = &[
     ("implicit sphere", "c82c0c245a43e45e"),
     ("implicit sphere fixed volume", "1850a1a9462de3b9"),
     ("implicit field hierarchical", "312714f80a6fcdbf"),
-    ("implicit field fixed boundary tangential", "bd5a13c5c0b25839"),
+    (
+        "implicit field fixed boundary tangential",
+        "bd5a13c5c0b25839",
+    ),
 ];
 
 #[test]
