@@ -472,6 +472,21 @@ fn api_lines_detect_and_fairing_equal_the_cli() {
             .unwrap()
             .starts_with("fairline highlight")
     );
+    // the same lights again (the page changing only the band): the model
+    // comes from the server's cache and the lines are bit-identical
+    assert_eq!(header["model_cached"], false, "{header}");
+    let (_, b) = srv.post("/api/doc/0/lines", &json!({"light": light}));
+    let (again, again_data) = parse_frame(&b);
+    assert_eq!(again["model_cached"], true, "{again}");
+    assert_eq!(again["lines"], header["lines"]);
+    assert!(
+        again_data.len() == data.len()
+            && again_data
+                .iter()
+                .zip(&data)
+                .all(|(a, b)| a.to_bits() == b.to_bits()),
+        "cached model, same lines"
+    );
 
     // detection: the same regions as `fairline detect`
     let (st, b) = srv.post("/api/doc/0/detect", &json!({"light": light}));
@@ -568,6 +583,12 @@ fn api_lines_detect_and_fairing_equal_the_cli() {
     assert!(srv.get("/api/doc/0/download?format=obj").1 == cli_bytes);
     let session = srv.json("/api/session", None);
     assert_eq!(session["docs"][0]["history"]["cursor"], 1);
+    // the faired geometry is a new key: its model is built afresh, and its
+    // lines differ from the input's
+    let (_, b) = srv.post("/api/doc/0/lines", &json!({"light": light}));
+    let (faired_lines, faired_data) = parse_frame(&b);
+    assert_eq!(faired_lines["model_cached"], false, "{faired_lines}");
+    assert_ne!(faired_data, data, "the faired mesh has other lines");
 
     // saving: plain names inside the save folder only, never over an input
     for bad_name in [
@@ -1308,8 +1329,97 @@ fn page_shows_bspline_patches_and_fairs_a_surface_from_uv_endpoints() {
     for k in (0..patches as usize).filter(|&k| k != patch) {
         assert_eq!(cp(&after, k), cp(&before, k), "patch {k} untouched");
     }
+    // occlusion (issue #19): hover and endpoint picks in the 3-D view take
+    // only points in front. The camera turns about the patch until a point
+    // of a pre-image lies behind the part — by a ray cast on the CPU against
+    // the drawn triangles, independent of the page's depth-buffer test — with
+    // no unoccluded line point within the 8 px a pick reaches; a click there
+    // (where the old nearest-projection pick took the hidden point) picks
+    // nothing, and hovering there lights up no line
+    let hidden = b.eval(HIDDEN_LINE_POINT);
+    assert!(
+        hidden.is_object(),
+        "no view with a pre-image point behind the part: {hidden}"
+    );
+    eprintln!("hidden pre-image point: {hidden}");
+    b.eval("window.fairline.viewer.dirty = true");
+    std::thread::sleep(Duration::from_millis(500));
+    let (hx, hy) = (hidden["x"].as_f64().unwrap(), hidden["y"].as_f64().unwrap());
+    b.eval("document.getElementById('clear-ends').click()");
+    b.eval("document.getElementById('tool').value = 'endpoints'");
+    for t in ["mouseMoved", "mousePressed", "mouseReleased"] {
+        let button = if t == "mouseMoved" { "none" } else { "left" };
+        b.call(
+            "Input.dispatchMouseEvent",
+            json!({"type": t, "x": hx, "y": hy, "button": button, "clickCount": 1}),
+        );
+    }
+    std::thread::sleep(Duration::from_millis(500));
+    let picked = b.eval(
+        "[window.fairline.uvPanel.pending, window.fairline.uvPanel.endpoints.length, window.fairline.uvPanel.hover]",
+    );
+    assert!(
+        picked[0].is_null() && picked[1] == 0,
+        "a click on a hidden pre-image point picks nothing: {picked}"
+    );
+    assert_eq!(
+        picked[2], -1,
+        "hovering a hidden pre-image point lights up no line: {picked}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Page script: a ray cast on the CPU against the drawn triangles of
+/// document 0 (Möller–Trumbore over every triangle) as
+/// `window.fairline.rayHit(line, k)`: the smallest t in (0, 1) at which the
+/// segment from the eye to point k of pre-image `line` meets a triangle (1:
+/// nothing in front); then the camera turned about its target until a
+/// point lies clearly behind the part (t < 0.9) with no point within 8 px
+/// that is not clearly hidden (t ≥ 0.97). Returns {line, k, x, y, t} (page
+/// pixels) or null.
+const HIDDEN_LINE_POINT: &str = r#"(() => {
+  const f = window.fairline, v = f.viewer, c = v.camera, d = v.docs[0];
+  const P = d.positions, T = d.indices;
+  const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+  const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+  const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  const vert = (i) => [P[3 * i], P[3 * i + 1], P[3 * i + 2]];
+  f.rayHit = (i, k) => {
+    const p = f.linePoint(i, k), e = c.eye(), dir = sub(p, e);
+    let best = 1;
+    for (let t = 0; t < T.length; t += 3) {
+      const a = vert(T[t]), e1 = sub(vert(T[t + 1]), a), e2 = sub(vert(T[t + 2]), a);
+      const h = cross(dir, e2), det = dot(e1, h);
+      if (Math.abs(det) < 1e-14) continue;
+      const s = sub(e, a), u = dot(s, h) / det;
+      if (u < 0 || u > 1) continue;
+      const q = cross(s, e1), w = dot(dir, q) / det;
+      if (w < 0 || u + w > 1) continue;
+      const tt = dot(e2, q) / det;
+      if (tt > 0 && tt < best) best = tt;
+    }
+    return best;
+  };
+  const lines = f.uvPanel.lines;
+  const yaw0 = c.yaw;
+  for (const pitch of [0.5, 0.2, 0.8]) {
+    for (let a = 0; a < 24; a++) {
+      c.yaw = yaw0 + a * Math.PI / 12;
+      c.pitch = pitch;
+      const pts = [];
+      lines.forEach((l, i) => { for (let k = 0; k < l.count; k++) { const s = f.linePointOnPage(i, k); if (s) pts.push({ line: i, k, x: s[0], y: s[1] }); } });
+      for (let j = 0; j < pts.length; j += 7) {
+        const h = pts[j];
+        const t = f.rayHit(h.line, h.k);
+        if (!(t < 0.9)) continue;
+        const seen = pts.some((q) => Math.hypot(q.x - h.x, q.y - h.y) < 9 && f.rayHit(q.line, q.k) >= 0.97);
+        if (!seen) return Object.assign(h, { t, yaw: c.yaw, pitch });
+      }
+    }
+  }
+  c.yaw = yaw0;
+  return null;
+})()"#;
 
 /// A height field z = 0.15 sin(1.3x) cos(0.9y) on n × n vertices over
 /// [−2, 2]², as binary little-endian PLY (fast to write and read).
@@ -1359,34 +1469,77 @@ fn workbench_timings() {
     let m450 = dir.join("p450k.ply");
     panel_ply(&m450, 671);
     let srv = start(&[&m450], &dir);
-    let light: Value = serde_json::from_str(
-        r#"{"plane_point":[0,0,6],"plane_normal":[0,0,1],"direction":[1,0,0],"spacing":0.2}"#,
-    )
-    .unwrap();
-    let (mut server_s, mut trip_s) = (Vec::new(), Vec::new());
-    let mut stage_s: [Vec<f64>; 3] = Default::default();
-    let mut nlines = 0;
-    for _ in 0..7 {
-        let t = Instant::now();
-        let (st, b) = srv.post("/api/doc/0/lines", &json!({"light": light}));
-        trip_s.push(t.elapsed().as_secs_f64());
-        assert_eq!(st, 200);
-        let (h, _) = parse_frame(&b);
-        server_s.push(h["time_s"].as_f64().unwrap());
-        for (k, name) in ["model", "chain", "encode"].iter().enumerate() {
-            stage_s[k].push(h["stages_s"][name].as_f64().unwrap());
+    // new lights on every request (the plane moved by 0.01: a sweep), so
+    // each builds its model; then the same lights again with a band (what
+    // the page asks when only the band changes): the model comes from the
+    // server's cache
+    let light = |k: usize| -> Value {
+        json!({"plane_point": [0.0, 0.0, 6.0 + 0.01 * k as f64], "plane_normal": [0, 0, 1], "direction": [1, 0, 0], "spacing": 0.2})
+    };
+    for cached in [false, true] {
+        if cached {
+            srv.post("/api/doc/0/lines", &json!({"light": light(100)}));
         }
-        nlines = h["lines"].as_array().unwrap().len();
+        let (mut server_s, mut trip_s) = (Vec::new(), Vec::new());
+        let mut stage_s: [Vec<f64>; 4] = Default::default();
+        let mut nlines = 0;
+        for run in 0..7 {
+            let body = if cached {
+                json!({"light": light(100), "band": 0.02 * (1 + run) as f64})
+            } else {
+                json!({"light": light(run)})
+            };
+            let t = Instant::now();
+            let (st, b) = srv.post("/api/doc/0/lines", &body);
+            trip_s.push(t.elapsed().as_secs_f64());
+            assert_eq!(st, 200);
+            let (h, _) = parse_frame(&b);
+            assert_eq!(h["model_cached"], cached, "{h}");
+            server_s.push(h["time_s"].as_f64().unwrap());
+            for (k, name) in ["model", "chain", "encode", "bands"].iter().enumerate() {
+                stage_s[k].push(h["stages_s"][name].as_f64().unwrap_or(0.0));
+            }
+            nlines = h["lines"].as_array().unwrap().len();
+        }
+        let [model_s, chain_s, encode_s, bands_s] = stage_s;
+        eprintln!(
+            "BENCH exact lines, 450,241 vertices, {nlines} lines, {}: server {:.1} ms (model {:.1}, chaining {:.1}, encoding {:.1}, bands {:.1}), round trip {:.1} ms (medians of 7)",
+            if cached {
+                "same lights, band changed (model cached)"
+            } else {
+                "new lights every request"
+            },
+            1e3 * median(server_s),
+            1e3 * median(model_s),
+            1e3 * median(chain_s),
+            1e3 * median(encode_s),
+            1e3 * median(bands_s),
+            1e3 * median(trip_s)
+        );
+        if cached {
+            // the cached model must not change the answer
+            let fresh = {
+                let (_, b) = srv.post(
+                    "/api/doc/0/lines",
+                    &json!({"light": light(200), "band": 0.04}),
+                );
+                parse_frame(&b).1
+            };
+            let (_, b) = srv.post(
+                "/api/doc/0/lines",
+                &json!({"light": light(200), "band": 0.04}),
+            );
+            let (h, again) = parse_frame(&b);
+            assert_eq!(h["model_cached"], true);
+            assert!(
+                fresh
+                    .iter()
+                    .zip(&again)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+                    && fresh.len() == again.len()
+            );
+        }
     }
-    let [model_s, chain_s, encode_s] = stage_s;
-    eprintln!(
-        "BENCH exact lines, 450,241 vertices, {nlines} lines: server {:.1} ms (model {:.1}, chaining {:.1}, encoding {:.1}), round trip {:.1} ms (medians of 7)",
-        1e3 * median(server_s),
-        1e3 * median(model_s),
-        1e3 * median(chain_s),
-        1e3 * median(encode_s),
-        1e3 * median(trip_s)
-    );
     drop(srv);
     let Some(exe) = cdp::chromium() else {
         eprintln!("no chromium: no page timings");

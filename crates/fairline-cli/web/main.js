@@ -326,20 +326,37 @@ function linePoint(i, k) {
   return [state.uvData[a], state.uvData[a + 1], state.uvData[a + 2]];
 }
 
-// The pre-image point nearest to CSS pixel (x, y) of the 3-D view:
-// {line, k, dist} (dist in CSS pixels).
-function nearestLinePoint(x, y) {
+// The visible pre-image point nearest to CSS pixel (x, y) of the 3-D view
+// within `reach` CSS pixels: {line, k, dist} (dist in CSS pixels; line −1
+// when none). Points on the far side of the part, which project onto it,
+// are not candidates: the depth-tested pick pass decides
+// (`Viewer.isVisible`), with a tolerance of three pixels at the point's
+// depth or 0.5 % of the part's radius, whichever is larger (the pre-images
+// lie on the exact surface, the tessellation within its chord error).
+function nearestLinePoint(x, y, reach = 8) {
   const best = { line: -1, k: -1, dist: Infinity };
   if (!uvPanel) return best;
-  const screenOf = projector(state.surfaceDoc);
+  const k0 = state.surfaceDoc;
+  const screenOf = projector(k0);
+  const near = [];
   uvPanel.lines.forEach((l, i) => {
     for (let k = 0; k < l.count; k++) {
       const s = screenOf(linePoint(i, k));
       if (!s) continue;
       const d = Math.hypot(s[0] - x, s[1] - y);
-      if (d < best.dist) { best.line = i; best.k = k; best.dist = d; }
+      if (d < reach) near.push({ line: i, k, dist: d });
     }
   });
+  near.sort((a, b) => a.dist - b.dist || a.line - b.line || a.k - b.k);
+  const vp = viewer.viewport(k0);
+  const eye = viewer.camera.eye();
+  const pixel = 2 * Math.tan(0.3) / vp[3];
+  const radius = state.session.docs[k0].radius;
+  for (const n of near) {
+    const p = linePoint(n.line, n.k);
+    const depth = Math.hypot(p[0] - eye[0], p[1] - eye[1], p[2] - eye[2]);
+    if (viewer.isVisible(k0, p, Math.max(3 * pixel * depth, 0.005 * radius))) return n;
+  }
   return best;
 }
 
@@ -505,6 +522,8 @@ async function start() {
     const r = viewer.canvas.getBoundingClientRect();
     return [r.left + s[0], r.top + s[1]];
   };
+  // 3-D point k of pre-image i (document coordinates), for tests
+  window.fairline.linePoint = linePoint;
   window.fairline.lights = lights;
   window.fairline.timeFrames = (n) => viewer.timeFrames(n, (i) => {
     for (const l of lights) l.sweep = (i % 50) / 50;

@@ -155,6 +155,7 @@ export class Viewer {
     gl.bindVertexArray(null);
     d.positions = positions;
     d.pickMesh = null;
+    d.ids = null;
     d.wire = null;
     this.dirty = true;
   }
@@ -332,15 +333,17 @@ export class Viewer {
     return times;
   }
 
-  // Triangle index under canvas pixel (x, y) (CSS pixels) and the document
-  // it belongs to, or null.
-  pickAt(x, y) {
+  // The pick pass of document k: every triangle drawn with its index + 1 as
+  // colour (0: background) into an offscreen buffer, depth-tested, so each
+  // pixel holds the nearest triangle; read back once per camera state and
+  // geometry (`d.ids`), so that picking and visibility tests read memory.
+  idsOf(k) {
     const gl = this.gl;
-    const dpr = window.devicePixelRatio || 1;
-    const px = Math.round(x * dpr), py = this.canvas.height - 1 - Math.round(y * dpr);
-    const k = this.docs.findIndex((_, i) => { const v = this.viewport(i); return px >= v[0] && px < v[0] + v[2]; });
-    if (k < 0) return null;
     const d = this.docs[k];
+    const vp = this.viewport(k);
+    const vpm = this.camera.viewProj(vp[2] / vp[3]);
+    const key = vpm.concat(vp).join(',');
+    if (d.ids && d.ids.key === key) return d.ids;
     if (!d.pickMesh) {
       const t = d.indices, p = d.positions;
       const e = new Float32Array(t.length * 3);
@@ -369,26 +372,84 @@ export class Viewer {
       this.pickFbo = { fb, w, h };
     }
     gl.bindFramebuffer(gl.FRAMEBUFFER, this.pickFbo.fb);
-    const vp = this.viewport(k);
     gl.viewport(...vp);
     gl.disable(gl.SCISSOR_TEST);
     gl.clearColor(0, 0, 0, 0);
     gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
     gl.enable(gl.DEPTH_TEST);
     gl.useProgram(this.pick.p);
-    setUniforms(gl, this.pick, { uViewProj: this.camera.viewProj(vp[2] / vp[3]) });
+    setUniforms(gl, this.pick, { uViewProj: vpm });
     gl.bindVertexArray(d.pickMesh.vao);
     gl.drawArrays(gl.TRIANGLES, 0, d.pickMesh.count);
     gl.bindVertexArray(null);
-    const out = new Uint8Array(4);
-    gl.readPixels(px, py, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, out);
+    const data = new Uint8Array(vp[2] * vp[3] * 4);
+    gl.readPixels(vp[0], vp[1], vp[2], vp[3], gl.RGBA, gl.UNSIGNED_BYTE, data);
     gl.bindFramebuffer(gl.FRAMEBUFFER, null);
-    const id = out[0] + out[1] * 256 + out[2] * 65536 + out[3] * 16777216;
-    if (id === 0) return null;
-    const f = id - 1;
+    d.ids = { key, vp, vpm, data };
+    return d.ids;
+  }
+
+  // Triangle of document k nearest to the eye at device pixel (px, py)
+  // (y from the bottom), or -1.
+  faceAt(k, px, py) {
+    const { vp, data } = this.idsOf(k);
+    const x = px - vp[0], y = py - vp[1];
+    if (x < 0 || y < 0 || x >= vp[2] || y >= vp[3]) return -1;
+    const i = 4 * (y * vp[2] + x);
+    const id = data[i] + data[i + 1] * 256 + data[i + 2] * 65536 + data[i + 3] * 16777216;
+    return id - 1;
+  }
+
+  // Triangle index under canvas pixel (x, y) (CSS pixels) and the document
+  // it belongs to, or null.
+  pickAt(x, y) {
+    const dpr = window.devicePixelRatio || 1;
+    const px = Math.round(x * dpr), py = this.canvas.height - 1 - Math.round(y * dpr);
+    const k = this.docs.findIndex((_, i) => { const v = this.viewport(i); return px >= v[0] && px < v[0] + v[2]; });
+    if (k < 0) return null;
+    const f = this.faceAt(k, px, py);
+    if (f < 0) return null;
+    const d = this.docs[k];
     const t = d.indices, p = d.positions;
     const c = [0, 0, 0];
     for (let j = 0; j < 3; j++) for (let i = 0; i < 3; i++) c[i] += p[3 * t[3 * f + j] + i] / 3;
     return { doc: k, face: f, point: c };
+  }
+
+  // Whether point p of document k (its coordinates; a point on or near the
+  // surface, such as a point of a highlight line) is seen from the eye: the
+  // nearest triangle under p's pixel (depth-tested pick pass) must not meet
+  // the eye ray through p more than `tol` (model units) before p. A point
+  // on the far side of the part projects onto the part's near side and is
+  // not visible; a point outside the view is not visible; a point where no
+  // triangle is drawn (its silhouette pixel) is.
+  isVisible(k, p, tol) {
+    const vp = this.viewport(k);
+    const { vpm } = this.idsOf(k);
+    const m = vpm;
+    const x = m[0] * p[0] + m[4] * p[1] + m[8] * p[2] + m[12];
+    const y = m[1] * p[0] + m[5] * p[1] + m[9] * p[2] + m[13];
+    const w = m[3] * p[0] + m[7] * p[1] + m[11] * p[2] + m[15];
+    if (!(w > 0)) return false;
+    const px = Math.floor(vp[0] + (x / w * 0.5 + 0.5) * vp[2]);
+    const py = Math.floor(vp[1] + (y / w * 0.5 + 0.5) * vp[3]);
+    if (px < vp[0] || py < vp[1] || px >= vp[0] + vp[2] || py >= vp[1] + vp[3]) return false;
+    const f = this.faceAt(k, px, py);
+    if (f < 0) return true;
+    const t = this.docs[k].indices, q = this.docs[k].positions;
+    const v = (j) => [q[3 * t[3 * f + j]], q[3 * t[3 * f + j] + 1], q[3 * t[3 * f + j] + 2]];
+    const [a, b, c] = [v(0), v(1), v(2)];
+    const e = this.camera.eye();
+    const sub = (u, z) => [u[0] - z[0], u[1] - z[1], u[2] - z[2]];
+    const dot = (u, z) => u[0] * z[0] + u[1] * z[1] + u[2] * z[2];
+    const ab = sub(b, a), ac = sub(c, a);
+    const n = [ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0]];
+    const ray = sub(p, e);
+    const den = dot(n, ray);
+    const len = Math.hypot(...ray);
+    if (!(Math.abs(den) > 1e-12 * Math.hypot(...n) * len)) return true;
+    // the ray e + t·(p − e) meets the triangle's plane at t; p is at t = 1
+    const hit = dot(n, sub(a, e)) / den;
+    return (1 - hit) * len <= tol;
   }
 }

@@ -67,6 +67,52 @@ pub struct State {
     save_dir: PathBuf,
     job: Option<Job>,
     next_job: u64,
+    model_cache: Option<ModelCache>,
+}
+
+/// The last linear-light highlight model built (Yong et al. Algorithm 1):
+/// the page asks for exact lines again with the same lights when only the
+/// band changes, and for detection under the lights it just drew; at 450k
+/// vertices the model is most of such a request. Keyed by the document,
+/// its geometry (the step's positions, held so the pointer cannot be
+/// reused) and the lights; the options are always the defaults.
+struct ModelCache {
+    doc: usize,
+    positions: Arc<Vec<Vec3>>,
+    light: LightArray,
+    model: Arc<HighlightModel>,
+}
+
+/// The highlight model of document `doc` whose geometry is `mesh` (the
+/// positions of one of its steps, `positions`) under `light` with default
+/// options: the cached one when the key matches, else built and cached.
+/// Returns the model and whether it came from the cache.
+fn cached_model(
+    cache: &mut Option<ModelCache>,
+    doc: usize,
+    positions: &Arc<Vec<Vec3>>,
+    mesh: &SurfaceMesh,
+    light: LightArray,
+) -> Result<(Arc<HighlightModel>, bool), fairline::highlight::HighlightError> {
+    if let Some(c) = cache
+        && c.doc == doc
+        && Arc::ptr_eq(&c.positions, positions)
+        && c.light == light
+    {
+        return Ok((Arc::clone(&c.model), true));
+    }
+    let model = Arc::new(HighlightModel::new(
+        mesh,
+        light,
+        HighlightOptions::default(),
+    )?);
+    *cache = Some(ModelCache {
+        doc,
+        positions: Arc::clone(positions),
+        light,
+        model: Arc::clone(&model),
+    });
+    Ok((model, false))
 }
 
 /// A long computation running on its own thread.
@@ -94,6 +140,7 @@ impl State {
             save_dir,
             job: None,
             next_job: 1,
+            model_cache: None,
         }
     }
 }
@@ -419,9 +466,11 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         Ok(r) => r,
         Err(a) => return a,
     };
-    let st = lock(shared);
+    let mut guard = lock(shared);
+    let st = &mut *guard;
     let d = &st.docs[k];
     let (center, file) = (d.center, d.current_file());
+    let positions = Arc::clone(&d.step(req.step).positions);
     let stepped;
     let mesh = match req.step {
         None => d.now(),
@@ -440,6 +489,7 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     let mut meta = Vec::new();
     let mut band_meta = Vec::new();
     let mut floats = Vec::new();
+    let mut model_cached = false;
     let command;
     if let Some(c) = req.circular {
         let lights: Vec<CircularLight> = match c.lights() {
@@ -447,13 +497,13 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             Ok(_) => return bad("circular lights need at least one radius"),
             Err(e) => return bad(e),
         };
-        let lines = match circular_highlight_lines(mesh, &lights) {
+        let lines = match circular_highlight_lines(mesh, &lights, &HighlightOptions::default()) {
             Ok(l) => l,
             Err(e) => return bad(e),
         };
         push_lines(&lines, center, Some(&c.radii), &mut meta, &mut floats);
         if let Some(rho) = req.band {
-            match circular_highlight_bands(mesh, &lights, rho) {
+            match circular_highlight_bands(mesh, &lights, rho, &HighlightOptions::default()) {
                 Ok(b) => {
                     push_lines(
                         &b.lower,
@@ -485,8 +535,11 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         let Some(light) = req.light else {
             return bad("give \"light\" or \"circular\"");
         };
-        let model = match HighlightModel::new(mesh, light, HighlightOptions::default()) {
-            Ok(m) => m,
+        let model = match cached_model(&mut st.model_cache, k, &positions, mesh, light) {
+            Ok((m, hit)) => {
+                model_cached = hit;
+                m
+            }
             Err(e) => return bad(e),
         };
         stages.push(("model", t.elapsed().as_secs_f64()));
@@ -502,6 +555,7 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
                 }
                 Err(e) => return bad(e),
             }
+            stages.push(("bands", t.elapsed().as_secs_f64()));
         }
         command = format!(
             "fairline highlight {file} {}{} -o lines.json",
@@ -510,7 +564,8 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         );
     }
     // seconds of each stage (linear lights): the model (normals, distances,
-    // segments), chaining the segments into polylines, the f32 encoding
+    // segments; 0 when cached), chaining the segments into polylines, the
+    // f32 encoding, the band boundaries (two more contours, when asked)
     let mut split = serde_json::Map::new();
     let mut last = 0.0;
     for (name, at) in stages {
@@ -522,6 +577,7 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         "bands": band_meta,
         "time_s": t.elapsed().as_secs_f64(),
         "stages_s": split,
+        "model_cached": model_cached,
         "command": command,
     });
     binary(frame(&header, &floats))
@@ -539,16 +595,18 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         Ok(r) => r,
         Err(a) => return a,
     };
-    let st = lock(shared);
+    let mut guard = lock(shared);
+    let st = &mut *guard;
     let d = &st.docs[k];
     let (mesh, center, file) = (d.now(), d.center, d.current_file());
+    let positions = Arc::clone(&d.current().positions);
     let defaults = DetectOptions::default();
     let opts = DetectOptions::default()
         .threshold(req.threshold.unwrap_or(defaults.threshold))
         .region_margin(req.region_radius.unwrap_or(defaults.region_margin));
     let t = Instant::now();
-    let model = match HighlightModel::new(mesh, req.light, HighlightOptions::default()) {
-        Ok(m) => m,
+    let model = match cached_model(&mut st.model_cache, k, &positions, mesh, req.light) {
+        Ok((m, _)) => m,
         Err(e) => return bad(e),
     };
     let lines = model.lines(mesh);

@@ -46,7 +46,10 @@
 //!   header, the header, padding to 4 bytes, then f32 points (minus
 //!   `center`); the header lists `lines` (`index`, `closed`, `start`,
 //!   `count` into the points), `bands`, `time_s`, `stages_s` (linear
-//!   lights: seconds of `model`, `chain`, `encode`) and `command`.
+//!   lights: seconds of `model`, `chain`, `encode`, and `bands` when a band
+//!   was asked for), `model_cached` (linear lights: the highlight model
+//!   of the last request was reused — same document state and lights — so
+//!   `model` is about 0) and `command`. Detection reuses that model too.
 //! - `POST /api/doc/K/detect` `{"light":LIGHT, "threshold"?, "region_radius"?}`:
 //!   the same frame; the header adds `stretches` (irregular stretches,
 //!   `start`, `count`, `score`) and the ranked `regions` (`score`, `center`,

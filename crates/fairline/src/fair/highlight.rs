@@ -539,7 +539,7 @@ pub fn fair_highlight_lines(
         None
     };
     let mut mesh = mesh.clone();
-    let mut model = HighlightModel::new(&mesh, light, options.highlight)?;
+    let mut model = HighlightModel::new(&mesh, light, options.highlight.clone())?;
     let lines_before = model.lines(&mesh);
     let nodes: Vec<NodeId> = lines_before
         .lines

@@ -92,7 +92,13 @@
 //! # Regions
 //!
 //! The faces whose centroid lies within `region_margin`·s (default 1 s)
-//! of a flagged site are united; each connected component, with the holes
+//! of a flagged site are united — the margin scaled by R/(`smooth_radius`·s)
+//! where the mesh is too coarse for the spacing and R was raised to 2 r_f
+//! (step 2): the defects found are then up to about that larger R across,
+//! and a margin of one spacing would leave most of a defect's footprint
+//! outside its region (on Spot, R is 3.8 times 1.5 s; the margin of a
+//! 0.3-wide dent on its flank goes from 0.063 to 0.159). Each connected
+//! component, with the holes
 //! it encloses filled (a bump's summit has the smooth normal, its flanks
 //! do not), is a suggested region. Its score is the largest site score
 //! inside; regions are ranked by it. Sites where no fit is possible (fewer
@@ -194,7 +200,8 @@ pub struct DetectOptions {
     /// Distance between sites, in spacings (default 0.25).
     pub site_spacing: f64,
     /// Faces within this distance of a flagged site go into a region, in
-    /// spacings (default 1).
+    /// spacings (default 1); scaled up with R on meshes too coarse for the
+    /// spacing (module documentation, Regions).
     pub region_margin: f64,
     /// The threshold is raised to this many times the median site score,
     /// the score noise of a scan (default 4; 0 turns it off).
@@ -764,7 +771,8 @@ pub fn detect_irregularities(
                 .is_some_and(|sc| sc > floors.threshold && sc <= s.threshold)
         })
         .count();
-    let margin = (options.region_margin * scale.spacing).max(scale.site_cell);
+    let margin =
+        (options.region_margin * scale.spacing * scale.coarsening(options)).max(scale.site_cell);
     let mut in_region = faces_near_sites(mesh, &sites, &flagged, margin);
     fill_holes(mesh, &mut in_region);
     let areas = geom::face_areas(mesh);
@@ -817,6 +825,17 @@ struct Scale {
 }
 
 impl Scale {
+    /// How many times R exceeds `smooth_radius`·s (1 unless the mesh is
+    /// coarse against the spacing and R was raised to 2 r_f).
+    fn coarsening(&self, o: &DetectOptions) -> f64 {
+        let nominal = o.smooth_radius * self.spacing;
+        if nominal > 0.0 && self.smooth_radius.is_finite() {
+            (self.smooth_radius / nominal).max(1.0)
+        } else {
+            1.0
+        }
+    }
+
     fn new(mesh: &SurfaceMesh, light: &LightArray, o: &DetectOptions) -> Self {
         let s = light.spacing();
         let h = geom::mean_edge_length(mesh);

@@ -225,12 +225,15 @@ impl LightArray {
             UpAxis::Z => Vec3::Z,
             UpAxis::Auto => {
                 let z = least.try_normalize().unwrap_or(Vec3::Z);
+                // face areas once (they were computed twice: a whole pass
+                // over the faces at 450k vertices); same sums, same bits
+                let areas = crate::geom::face_areas(mesh);
                 let area_normal: Vec3 = crate::geom::face_normals(mesh)
                     .iter()
-                    .zip(crate::geom::face_areas(mesh))
-                    .map(|(n, a)| *n * a)
+                    .zip(&areas)
+                    .map(|(n, a)| *n * *a)
                     .sum();
-                let total: f64 = crate::geom::face_areas(mesh).iter().sum();
+                let total: f64 = areas.iter().sum();
                 let facing = area_normal.dot(z);
                 let sign = if total > 0.0 && facing.abs() > 1e-3 * total {
                     facing.signum()
