@@ -552,9 +552,12 @@ def fair(
     """Highlight-line fairing inside a region (``fairline fair``, Yong et
     al. §3, Algorithm 2): moves only vertices whose motion changes nothing
     outside the region until the highlight lines inside follow smooth
-    desired curves. ``method``: ``"highlight"``, ``"paper"`` (Yong et
-    al.'s energy exactly) or ``"diffusion-flow"`` (baseline);
-    ``laplacian_weight`` adds a surface-diffusion term to ``"highlight"``.
+    desired curves. ``method``: ``"highlight"`` (default: the paper's
+    energy with the desired curves' end tangents refitted 4 times, then
+    ¾ of that result + ¼ of the diffusion-flow result on the same region),
+    ``"paper"`` (Yong et al.'s Algorithm 2 exactly) or
+    ``"diffusion-flow"`` (baseline); ``laplacian_weight`` adds a
+    surface-diffusion term to ``"highlight"``.
 
     ``region``: face indices (e.g. :func:`detect`'s result), or the CLI's
     region JSON as a dict (``{"faces"}``, ``{"vertices"}``,
@@ -652,16 +655,20 @@ def surface_highlight_lines(
     spacing: Optional[float] = None,
     lights: Any = None,
     min_normal_cos: float = 0.1,
+    circular: bool = False,
 ) -> Tuple[Dict[str, Any], Dict[str, Any]]:
     """Highlight lines of B-spline surfaces (``fairline highlight
     SURFACE.json``, Nishiyama et al. §2): d_s sampled on a ``grid`` ×
     ``grid`` (u, v) grid, contoured, refined onto the true zero. Circular
-    lights with ``circle_center``/``circle_axis``/``radii``, else linear
-    lights (options as :func:`highlight_lines`). ``surface``: only this one.
+    lights with ``circle_center``/``circle_axis``/``radii`` or a circular
+    ``lights`` dictionary ``{"center","axis","radii"}``, or derived from the
+    whole part with ``circular=True`` (the report's ``light`` says which);
+    else linear lights (options as :func:`highlight_lines`). ``surface``:
+    only this one.
 
-    Returns ``(lines, report)``: lines carry ``uv`` (k, 2) and ``points``
-    (k, 3) arrays, ``light``, ``level``, ``closed`` and ``radius`` or
-    ``index``.
+    Returns ``(lines, report)``: lines carry ``id`` (their position),
+    ``uv`` (k, 2) and ``points`` (k, 3) arrays, ``light``, ``level``,
+    ``closed`` and ``radius`` or ``index``.
     """
     doc, report = _native.surface_highlight_lines(
         _surfaces_text(surfaces),
@@ -671,6 +678,7 @@ def surface_highlight_lines(
         band=None if band is None else float(band),
         grid=int(grid),
         surface=surface,
+        circular=bool(circular),
         **_light_kwargs(direction, plane_normal, up, plane_point, spacing, lights, min_normal_cos),
     )
     return _lines(json.loads(doc)), _report(report)

@@ -131,6 +131,7 @@ def surface_highlight_lines(
     spacing: Optional[float] = None,
     lights: Optional[str] = None,
     min_normal_cos: Optional[float] = None,
+    circular: bool = False,
 ) -> Tuple[str, str]: ...
 def fair_surface(
     surfaces: str,

@@ -9,14 +9,14 @@
 
 #![allow(clippy::too_many_arguments)]
 
-use crate::report::Report;
 use crate::{Failure, Res, SoupArrays, mesh_from, positions_array, soup_arrays, soup_from};
 use fairline::highlight::{
-    CircularLight, CircularLights, DetectOptions, HighlightBands, HighlightError, HighlightLine,
-    HighlightLines, HighlightModel, HighlightOptions, LightArray, LineStats, Readability, UpAxis,
+    CircularLight, CircularLights, DetectOptions, HighlightError, HighlightLines, HighlightModel,
+    HighlightOptions, LightArray, LightChoice, LineStats, Readability, UpAxis,
     circular_highlight_bands, circular_highlight_lines, detect_irregularities,
 };
-use fairline::mesh::{FaceId, Stats, VertexId};
+use fairline::io::JsonReport as Report;
+use fairline::mesh::{FaceId, VertexId};
 use fairline::{SurfaceMesh, Vec3};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -80,47 +80,35 @@ fn curvature<'py>(
     offsets: Idx<'py>,
     method: &str,
 ) -> PyResult<CurvatureOut<'py>> {
-    use fairline::geom::{CurvatureMethod, principal_curvatures};
+    use fairline::geom::{CurvatureMethod, CurvatureOptions};
     let m = match method {
         "rusinkiewicz" => CurvatureMethod::Rusinkiewicz,
         "meyer" => CurvatureMethod::Meyer,
         other => return Err(bad_choice("method", other, &["rusinkiewicz", "meyer"]).into()),
     };
     let soup = soup_from(&v, &indices, &offsets)?;
-    let (c, mean, gauss, n, report) = crate::compute(py, || -> Res<_> {
+    let (out, n, report) = crate::compute(py, || -> Res<_> {
         let mesh = mesh_from(&soup)?;
         let mut report = Report::new("curvature");
-        let (c, triangulated) = report.time(|| -> Res<_> {
-            Ok(if mesh.is_triangle_mesh() {
-                (principal_curvatures(&mesh, m), false)
-            } else {
-                let t = fairline::mesh::triangulate(&mesh)
-                    .map_err(|e| Failure::bad(format!("triangulating its polygons: {e}")))?;
-                (principal_curvatures(&t.mesh, m), true)
-            })
-        })?;
-        let mean = c.mean();
-        let gauss = c.gauss();
-        report.set("method", method);
-        report.set("vertices", mesh.original_vertex_count());
-        report.set("triangulated", triangulated);
-        report.set("k1", Stats::of(c.k1.iter().copied()));
-        report.set("k2", Stats::of(c.k2.iter().copied()));
-        report.set("mean", Stats::of(mean.iter().copied()));
-        report.set("gauss", Stats::of(gauss.iter().copied()));
+        let options = CurvatureOptions::default().method(m);
+        let out = report
+            .time(|| fairline::geom::curvature(&mesh, &options))
+            .map_err(|e| Failure::bad(e.to_string()))?;
+        report.set_fields(&out.report);
         // one row per input vertex, as the CLI writes them (a split
         // non-manifold vertex takes the values of the fan that kept its index)
         let n = mesh.original_vertex_count();
-        Ok((c, mean, gauss, n, report.to_json()))
+        Ok((out, n, report.to_json().to_string()))
     })?;
+    let (c, mean, gauss) = (&out.fields, &out.mean, &out.gauss);
     let rows = |v: &[Vec3]| positions_array(py, &v[..n.min(v.len())]).into_any();
     let col = |v: &[f64]| PyArray1::from_slice(py, &v[..n.min(v.len())]).into_any();
     let values = vec![
         ("normals", rows(&c.normals)),
         ("k1", col(&c.k1)),
         ("k2", col(&c.k2)),
-        ("mean", col(&mean)),
-        ("gauss", col(&gauss)),
+        ("mean", col(mean)),
+        ("gauss", col(gauss)),
         ("d1", rows(&c.d1)),
         ("d2", rows(&c.d2)),
     ];
@@ -315,7 +303,7 @@ fn smooth<'py>(
         }
         Ok((
             mesh.original_values(&out.positions).to_vec(),
-            report.to_json(),
+            report.to_json().to_string(),
         ))
     })?;
     Ok((positions_array(py, &p), report))
@@ -387,7 +375,7 @@ fn fair_quad<'py>(
                 r.structure_energy_before, r.structure_energy_after
             ));
         }
-        Ok((output_positions(&mesh), report.to_json()))
+        Ok((output_positions(&mesh), report.to_json().to_string()))
     })?;
     Ok((positions_array(py, &p), report))
 }
@@ -478,7 +466,7 @@ fn enhance<'py>(
                 r.flipped_triangles
             ));
         }
-        Ok((output_positions(&out), report.to_json()))
+        Ok((output_positions(&out), report.to_json().to_string()))
     })?;
     Ok((positions_array(py, &p), report))
 }
@@ -520,7 +508,7 @@ fn repair<'py>(
         if let Some(problem) = &r.remaining_problem {
             report.warn(format!("the output is still not a manifold: {problem}"));
         }
-        Ok((repaired.soup, report.to_json()))
+        Ok((repaired.soup, report.to_json().to_string()))
     })?;
     Ok((soup_arrays(py, &out), report))
 }
@@ -528,12 +516,11 @@ fn repair<'py>(
 // ---- highlight lines -------------------------------------------------
 
 /// The light options shared by `highlight_lines`, `detect` and `fair`
-/// (the CLI's `LightArgs`, crates/fairline-cli/src/highlight.rs).
+/// (the CLI's `LightArgs`, crates/fairline-cli/src/args.rs).
 pub(crate) struct LightOptions {
     direction: Option<Vec3>,
     plane_normal: Option<Vec3>,
     up: UpAxis,
-    up_vector: Option<Vec3>,
     plane_point: Option<Vec3>,
     spacing: Option<f64>,
     /// The `lights` dictionary as JSON text.
@@ -561,11 +548,11 @@ impl LightOptions {
         lights: Option<String>,
         min_normal_cos: Option<f64>,
     ) -> Res<Self> {
-        let (up, up_vector) = match up {
-            "auto" => (UpAxis::Auto, None),
-            "x" => (UpAxis::X, Some(Vec3::X)),
-            "y" => (UpAxis::Y, Some(Vec3::Y)),
-            "z" => (UpAxis::Z, Some(Vec3::Z)),
+        let up = match up {
+            "auto" => UpAxis::Auto,
+            "x" => UpAxis::X,
+            "y" => UpAxis::Y,
+            "z" => UpAxis::Z,
             other => return Err(bad_choice("up", other, &["auto", "x", "y", "z"])),
         };
         let lights = match lights {
@@ -589,7 +576,6 @@ impl LightOptions {
             direction: vec3("direction", direction)?,
             plane_normal: vec3("plane_normal", plane_normal)?,
             up,
-            up_vector,
             plane_point: vec3("plane_point", plane_point)?,
             spacing,
             lights,
@@ -599,13 +585,24 @@ impl LightOptions {
 
     /// The circular lights of the `lights` dictionary when it has the
     /// circular form (recognised by its "center" key).
-    fn circular(&self) -> Res<Option<CircularLights>> {
+    pub(crate) fn circular(&self) -> Res<Option<CircularLights>> {
         match &self.lights {
             Some(v) if v.get("center").is_some() => serde_json::from_value(v.clone())
                 .map(Some)
                 .map_err(|e| Failure::bad(format!("lights: {e}"))),
             _ => Ok(None),
         }
+    }
+
+    /// What the caller said about a linear light array, for the library's
+    /// defaults (the CLI's `LightArgs` makes the same).
+    fn choice(&self) -> LightChoice {
+        LightChoice::default()
+            .direction(self.direction)
+            .plane_normal(self.plane_normal)
+            .up(self.up)
+            .plane_point(self.plane_point)
+            .spacing(self.spacing)
     }
 
     /// The linear light array (the CLI's `LightArgs::light_array`).
@@ -619,20 +616,7 @@ impl LightOptions {
             return serde_json::from_value(v.clone())
                 .map_err(|e| Failure::bad(format!("lights: {e}")));
         }
-        let (lo, hi) = fairline::mesh::bounding_box(mesh.positions())
-            .ok_or_else(|| Failure::bad("the mesh has no vertices"))?;
-        if self.plane_normal.is_some() {
-            return self.light_array_in_box(lo, hi);
-        }
-        let base = LightArray::default_for_mesh(mesh, self.up)
-            .ok_or_else(|| Failure::bad("the mesh has no finite vertices"))?;
-        LightArray::new(
-            self.plane_point.unwrap_or(base.plane_point()),
-            base.plane_normal(),
-            self.direction.unwrap_or(base.direction()),
-            self.spacing.unwrap_or(base.spacing()),
-        )
-        .map_err(highlight_error)
+        self.choice().light_array(mesh).map_err(highlight_error)
     }
 
     /// The light array from the dictionary, or the defaults for the box
@@ -642,14 +626,14 @@ impl LightOptions {
             return serde_json::from_value(v.clone())
                 .map_err(|e| Failure::bad(format!("lights: {e}")));
         }
-        let base = LightArray::default_for(lo, hi, self.plane_normal.or(self.up_vector));
-        LightArray::new(
-            self.plane_point.unwrap_or(base.plane_point()),
-            self.plane_normal.unwrap_or(base.plane_normal()),
-            self.direction.unwrap_or(base.direction()),
-            self.spacing.unwrap_or(base.spacing()),
-        )
-        .map_err(highlight_error)
+        self.choice()
+            .light_array_in_box(lo, hi)
+            .map_err(highlight_error)
+    }
+
+    /// The `up` axis as a vector (`None` for auto).
+    pub(crate) fn up_vector(&self) -> Option<Vec3> {
+        self.up.vector()
     }
 
     /// `min_normal_cos`, or the library's default as the CLI's.
@@ -659,17 +643,13 @@ impl LightOptions {
     }
 
     /// The lights to draw and read lines with (the CLI's
-    /// `LightArgs::readable`): `light` itself when the spacing was given
-    /// (`spacing` or `lights`), else `light` with its spacing multiplied by
-    /// [`LightArray::readable_multiple`].
+    /// `LightArgs::readable`): `light` itself when it came from `lights`,
+    /// else [`LightChoice::readable`].
     fn readable(&self, mesh: &SurfaceMesh, light: LightArray) -> Res<LightArray> {
-        if self.spacing.is_some() || self.lights.is_some() {
+        if self.lights.is_some() {
             return Ok(light);
         }
-        let k = light.readable_multiple(mesh);
-        light
-            .with_spacing(light.spacing() * f64::from(k))
-            .map_err(highlight_error)
+        self.choice().readable(mesh, light).map_err(highlight_error)
     }
 
     /// Model options (the CLI's `LightArgs::options`).
@@ -712,36 +692,6 @@ fn triangles(soup: &fairline::Soup) -> Res<(SurfaceMesh, Option<Vec<FaceId>>)> {
             .map_err(|e| Failure::bad(format!("triangulating its polygons: {e}")))?;
         Ok((t.mesh, Some(t.source_face)))
     }
-}
-
-fn line_json(l: &HighlightLine, radii: Option<&[f64]>) -> Value {
-    let pts: Vec<[f64; 3]> = l.points.iter().map(|p| p.to_array()).collect();
-    let mut v = json!({"index": l.index, "closed": l.closed, "points": pts});
-    if let Some(r) = radii.and_then(|r| r.get(l.index as usize)) {
-        v["radius"] = json!(r);
-    }
-    v
-}
-
-fn lines_json(lines: &HighlightLines, radii: Option<&[f64]>) -> Vec<Value> {
-    lines.lines.iter().map(|l| line_json(l, radii)).collect()
-}
-
-/// The CLI's lines JSON: `{"lines":[..]}` (+ `"bands"`).
-fn lines_document(
-    lines: &HighlightLines,
-    bands: Option<&HighlightBands>,
-    radii: Option<&[f64]>,
-) -> Value {
-    let mut v = json!({"lines": lines_json(lines, radii)});
-    if let Some(b) = bands {
-        v["bands"] = json!({
-            "radius": b.radius,
-            "lower": lines_json(&b.lower, radii),
-            "upper": lines_json(&b.upper, radii),
-        });
-    }
-    v
 }
 
 /// `fairline highlight` on a mesh (crates/fairline-cli/src/highlight.rs):
@@ -824,9 +774,10 @@ fn highlight_lines(
             }
             let (lines, bands) = report
                 .time(|| -> Result<_, HighlightError> {
-                    let lines = circular_highlight_lines(&mesh, &lights)?;
+                    let opts = HighlightOptions::default();
+                    let lines = circular_highlight_lines(&mesh, &lights, &opts)?;
                     let bands = match band {
-                        Some(rho) => Some(circular_highlight_bands(&mesh, &lights, rho)?),
+                        Some(rho) => Some(circular_highlight_bands(&mesh, &lights, rho, &opts)?),
                         None => None,
                     };
                     Ok((lines, bands))
@@ -858,21 +809,10 @@ fn highlight_lines(
             report.set("drawn", drawn_json(&mesh, &array, &shown));
             (lines, bands, None)
         };
-        let document = lines_document(&lines, bands.as_ref(), radii.as_deref());
-        report.set(
-            "summary",
-            json!({
-                "lines": lines.lines.len(),
-                "closed_lines": lines.lines.iter().filter(|l| l.closed).count(),
-                "nodes": lines.node_count(),
-            }),
-        );
-        report.set("lines", lines.lines.len());
-        report.set(
-            "closed_lines",
-            lines.lines.iter().filter(|l| l.closed).count(),
-        );
-        report.set("nodes", lines.node_count());
+        let document = fairline::io::highlight_lines_json(&lines, bands.as_ref(), radii.as_deref());
+        let counts = lines.counts();
+        report.set("summary", counts);
+        report.set_fields(counts);
         if let Some(b) = &bands {
             report.set(
                 "band",
@@ -882,7 +822,7 @@ fn highlight_lines(
         if lines.lines.is_empty() {
             report.warn("no highlight line crosses the mesh; try other light options (--plane-normal, --direction, --spacing)");
         }
-        Ok((document.to_string(), report.to_json()))
+        Ok((document.to_string(), report.to_json().to_string()))
     })?;
     Ok(out)
 }
@@ -999,7 +939,7 @@ fn detect<'py>(
         if lines.lines.is_empty() {
             report.warn("no highlight line crosses the mesh, so nothing could be detected; try other light options (--plane-normal, --direction, --spacing)");
         }
-        Ok((all, report.to_json()))
+        Ok((all, report.to_json().to_string()))
     })?;
     Ok((PyArray1::from_vec(py, faces), report))
 }
@@ -1252,7 +1192,7 @@ fn fair<'py>(
                 "the highlight-line deviation (distance of the lines inside the region from their own smoothed curves) got worse: {before:.4e} before, {after:.4e} after; the detection score (as `detect` measures it, same lights) went {score_before:.2} -> {score_after:.2}"
             ));
         }
-        Ok((output_positions(&current), report.to_json()))
+        Ok((output_positions(&current), report.to_json().to_string()))
     })?;
     Ok((positions_array(py, &out.0), out.1))
 }

@@ -14,7 +14,6 @@
 #![forbid(unsafe_code)]
 
 mod commands;
-mod report;
 mod surfaces;
 
 use fairline::{Soup, SurfaceMesh, Vec3};

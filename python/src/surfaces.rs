@@ -9,7 +9,6 @@
 #![allow(clippy::too_many_arguments)]
 
 use crate::commands::{LightOptions, bad_choice, highlight_error, vec3};
-use crate::report::Report;
 use crate::{Failure, Res};
 use fairline::Vec3;
 use fairline::bspline::BSplineSurface;
@@ -17,6 +16,7 @@ use fairline::highlight::{
     CircularLight, CircularLights, PartLights, SurfaceHighlightLine, SurfaceHighlightOptions,
     SurfaceLight, part_highlight_lines,
 };
+use fairline::io::JsonReport as Report;
 use fairline::io::{parse_surfaces_json, surfaces_to_json};
 use pyo3::prelude::*;
 use serde_json::{Value, json};
@@ -124,7 +124,7 @@ fn line_json(l: &SurfaceHighlightLine, lights: &[SurfaceLight], surface: Option<
 #[pyfunction]
 #[pyo3(signature = (surfaces, circle_center = None, circle_axis = None, radii = None, band = None,
     grid = 200, surface = None, direction = None, plane_normal = None, up = "auto",
-    plane_point = None, spacing = None, lights = None, min_normal_cos = None))]
+    plane_point = None, spacing = None, lights = None, min_normal_cos = None, circular = false))]
 fn surface_highlight_lines(
     py: Python<'_>,
     surfaces: String,
@@ -141,6 +141,7 @@ fn surface_highlight_lines(
     spacing: Option<f64>,
     lights: Option<String>,
     min_normal_cos: Option<f64>,
+    circular: bool,
 ) -> PyResult<(String, String)> {
     if !(2..=4000).contains(&grid) {
         return Err(Failure::bad(format!("grid must be between 2 and 4000, got {grid}")).into());
@@ -177,6 +178,7 @@ fn surface_highlight_lines(
         if all.is_empty() {
             return Err(Failure::bad("surfaces: no B-spline surface given"));
         }
+        let all_surfaces = all.clone();
         let chosen: Vec<(usize, BSplineSurface)> = match surface {
             Some(k) => {
                 let s = all.get(k).cloned().ok_or_else(|| {
@@ -199,18 +201,44 @@ fn surface_highlight_lines(
         report.set("surfaces", chosen.len());
         report.set("grid", grid);
         let opts = SurfaceHighlightOptions::default().grid(grid).band(band);
-        let circular = if let (Some(c), Some(t), Some(radii)) = (circle_center, circle_axis, radii)
-        {
-            let spec = CircularLights {
-                center: c.to_array(),
-                axis: t.to_array(),
-                radii,
-            };
+        // as the CLI: given, from a circular `lights` dictionary, or derived
+        // from the whole part (`circular`)
+        let spec = if let (Some(c), Some(t), Some(radii)) = (circle_center, circle_axis, radii) {
+            Some((
+                CircularLights {
+                    center: c.to_array(),
+                    axis: t.to_array(),
+                    radii,
+                },
+                false,
+            ))
+        } else if let Some(spec) = light.circular()? {
+            Some((spec, false))
+        } else if circular {
+            let spec = fairline::highlight::default_circular_lights(
+                &all_surfaces,
+                light.up_vector(),
+                fairline::highlight::DEFAULT_CIRCULAR_RADII,
+            )
+            .ok_or_else(|| {
+                Failure::bad(
+                    "cannot derive circular lights: the part has no area with a defined normal",
+                )
+            })?;
+            Some((spec, true))
+        } else {
+            None
+        };
+        let circular = if let Some((spec, derived)) = spec {
             let lights = spec.lights().map_err(highlight_error)?;
-            report.set(
-                "light",
-                json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii}),
-            );
+            if lights.is_empty() {
+                return Err(Failure::bad("circular lights need at least one radius"));
+            }
+            let mut l = json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii});
+            if derived {
+                l["derived"] = json!(true);
+            }
+            report.set("light", l);
             Some(lights)
         } else {
             None
@@ -249,6 +277,10 @@ fn surface_highlight_lines(
             lower.extend(h.band_lower.iter().map(|l| line_json(l, lights, tag(*k))));
             upper.extend(h.band_upper.iter().map(|l| line_json(l, lights, tag(*k))));
         }
+        // line ids, as the CLI: the position in "lines"
+        for (id, l) in lines.iter_mut().enumerate() {
+            l["id"] = json!(id);
+        }
         let line_count = lines.len();
         let mut doc = json!({"lines": lines});
         if let Some(rho) = band {
@@ -272,7 +304,7 @@ fn surface_highlight_lines(
         if line_count == 0 {
             report.warn("no highlight line pre-image was found on the surface; try other radii, --circle-center or --circle-axis");
         }
-        Ok((doc.to_string(), report.to_json()))
+        Ok((doc.to_string(), report.to_json().to_string()))
     })?;
     Ok(out)
 }
@@ -389,7 +421,7 @@ fn fair_surface(
                 rep.residual_before.max, rep.residual_after.max
             ));
         }
-        Ok((surfaces_to_json(&all), report.to_json()))
+        Ok((surfaces_to_json(&all), report.to_json().to_string()))
     })?;
     Ok(out)
 }

@@ -6,7 +6,9 @@
 use crate::common::read_json;
 use crate::error::bad_input;
 use anyhow::Result;
-use fairline::highlight::{CircularLights, HighlightError, HighlightOptions, LightArray, UpAxis};
+use fairline::highlight::{
+    CircularLights, HighlightError, HighlightOptions, LightArray, LightChoice, UpAxis,
+};
 use fairline::{SurfaceMesh, Vec3};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -90,14 +92,10 @@ impl Up {
             Up::Z => UpAxis::Z,
         }
     }
+
     /// The axis vector, `None` for auto.
     pub fn vector(self) -> Option<Vec3> {
-        match self {
-            Up::Auto => None,
-            Up::X => Some(Vec3::X),
-            Up::Y => Some(Vec3::Y),
-            Up::Z => Some(Vec3::Z),
-        }
+        self.axis().vector()
     }
 }
 
@@ -135,8 +133,18 @@ pub struct LightArgs {
 }
 
 impl LightArgs {
-    /// The light array: from the file, or the bounding-box defaults with
-    /// the given fields overridden.
+    /// What the user said about the lights, for the library's defaults.
+    fn choice(&self) -> LightChoice {
+        LightChoice::default()
+            .direction(self.direction)
+            .plane_normal(self.plane_normal)
+            .up(self.up.axis())
+            .plane_point(self.plane_point)
+            .spacing(self.spacing)
+    }
+
+    /// The light array: from the file, or the part's default lights with
+    /// the given fields overridden ([`LightChoice::light_array`]).
     pub fn light_array(&self, mesh: &SurfaceMesh) -> Result<LightArray> {
         if let Some(path) = &self.lights {
             if circular_file(path)?.is_some() {
@@ -147,50 +155,29 @@ impl LightArgs {
             }
             return read_json::<LightArray>(path);
         }
-        let (lo, hi) = fairline::mesh::bounding_box(mesh.positions())
-            .ok_or_else(|| bad_input("the mesh has no vertices"))?;
-        if self.plane_normal.is_some() {
-            return self.light_array_in_box(lo, hi);
-        }
-        let base = LightArray::default_for_mesh(mesh, self.up.axis())
-            .ok_or_else(|| bad_input("the mesh has no finite vertices"))?;
-        LightArray::new(
-            self.plane_point.unwrap_or(base.plane_point()),
-            base.plane_normal(),
-            self.direction.unwrap_or(base.direction()),
-            self.spacing.unwrap_or(base.spacing()),
-        )
-        .map_err(to_input_error)
+        self.choice().light_array(mesh).map_err(to_input_error)
     }
 
     /// The light array: from the file, or the defaults for the bounding box
-    /// `lo`–`hi` with the given fields overridden.
+    /// `lo`–`hi` with the given fields overridden
+    /// ([`LightChoice::light_array_in_box`]).
     pub fn light_array_in_box(&self, lo: Vec3, hi: Vec3) -> Result<LightArray> {
         if let Some(path) = &self.lights {
             return read_json::<LightArray>(path);
         }
-        let base = LightArray::default_for(lo, hi, self.plane_normal.or(self.up.vector()));
-        LightArray::new(
-            self.plane_point.unwrap_or(base.plane_point()),
-            self.plane_normal.unwrap_or(base.plane_normal()),
-            self.direction.unwrap_or(base.direction()),
-            self.spacing.unwrap_or(base.spacing()),
-        )
-        .map_err(to_input_error)
+        self.choice()
+            .light_array_in_box(lo, hi)
+            .map_err(to_input_error)
     }
 
     /// The lights to draw and read lines with: `light` itself when the
-    /// spacing was given (--spacing or --lights), else `light` with its
-    /// spacing multiplied by [`LightArray::readable_multiple`] (round parts
-    /// get fewer, readable lines; panels keep about 20 across).
+    /// lights came from a file, else [`LightChoice::readable`] (the
+    /// spacing given, or a readable multiple of the default's).
     pub fn readable(&self, mesh: &SurfaceMesh, light: LightArray) -> Result<LightArray> {
-        if self.spacing.is_some() || self.lights.is_some() {
+        if self.lights.is_some() {
             return Ok(light);
         }
-        let k = light.readable_multiple(mesh);
-        light
-            .with_spacing(light.spacing() * f64::from(k))
-            .map_err(to_input_error)
+        self.choice().readable(mesh, light).map_err(to_input_error)
     }
 
     /// Model options.
@@ -211,6 +198,20 @@ pub fn circular_file(path: &Path) -> Result<Option<CircularLights>> {
     } else {
         Ok(None)
     }
+}
+
+/// The circular lights `--circular` derived from the part, printed on
+/// stderr as one line in the LIGHTS.json form; an input error when the part
+/// has no area to derive them from.
+pub fn derived_circular_lights(spec: Option<CircularLights>) -> Result<CircularLights> {
+    let spec = spec.ok_or_else(|| {
+        bad_input("cannot derive circular lights: the part has no area with a defined normal")
+    })?;
+    eprintln!(
+        "default circular lights (save as LIGHTS.json to reuse): {}",
+        serde_json::to_string(&spec)?
+    );
+    Ok(spec)
 }
 
 /// Maps library errors about the input (bad light, bad option, bad mesh)
@@ -254,6 +255,13 @@ pub struct HighlightArgs {
     /// Radii of the circular lights, comma separated.
     #[arg(long, value_parser = parse_radii, allow_hyphen_values = true, value_name = "R1,R2,..", requires_all = ["circle_center", "circle_axis"])]
     pub radii: Option<Radii>,
+    /// Circular lights derived from the part instead of given: axis along
+    /// the part's area-weighted mean normal (+z for a closed body; --up x|y|z
+    /// sets it), centre on that axis above the part, 10 radii whose lines
+    /// span the part. They are printed on stderr in the LIGHTS.json form
+    /// {"center","axis","radii"}, ready for --lights.
+    #[arg(long, conflicts_with_all = ["circle_center", "lights"])]
+    pub circular: bool,
     /// Also compute highlight bands of this radius (mesh units).
     #[arg(long, value_name = "RHO")]
     pub band: Option<f64>,

@@ -3,8 +3,7 @@
 use crate::common::Report;
 use crate::output::spinner;
 use anyhow::{Context, Result};
-use fairline::geom::{CurvatureMethod, principal_curvatures};
-use fairline::mesh::Stats;
+use fairline::geom::{CurvatureMethod, CurvatureOptions, curvature};
 use std::path::PathBuf;
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -47,23 +46,17 @@ pub fn run(args: Args) -> Result<()> {
     let mesh = fairline::io::read_mesh(&args.mesh)?;
     crate::input::note_split_vertices(&args.mesh, &mesh);
     let mut report = Report::new("curvature");
-    let method = match args.method {
+    let options = CurvatureOptions::default().method(match args.method {
         Method::Rusinkiewicz => CurvatureMethod::Rusinkiewicz,
         Method::Meyer => CurvatureMethod::Meyer,
-    };
+    });
     let bar = spinner("curvature");
-    let (c, triangulated) = report.time(|| -> Result<_> {
-        Ok(if mesh.is_triangle_mesh() {
-            (principal_curvatures(&mesh, method), false)
-        } else {
-            let t = fairline::mesh::triangulate(&mesh)
-                .with_context(|| format!("{}: triangulating its polygons", args.mesh.display()))?;
-            (principal_curvatures(&t.mesh, method), true)
-        })
-    })?;
+    let out = report
+        .time(|| curvature(&mesh, &options))
+        .with_context(|| args.mesh.display().to_string())?;
     bar.finish_and_clear();
-    let mean = c.mean();
-    let gauss = c.gauss();
+    let (c, mean, gauss) = (&out.fields, &out.mean, &out.gauss);
+    let triangulated = out.report.triangulated;
     let comp =
         |f: fn(&fairline::Vec3) -> f64, v: &[fairline::Vec3]| v.iter().map(f).collect::<Vec<f64>>();
     let n = [
@@ -87,8 +80,8 @@ pub fn run(args: Args) -> Result<()> {
         ("nz", &n[2]),
         ("k1", &c.k1),
         ("k2", &c.k2),
-        ("mean", &mean),
-        ("gauss", &gauss),
+        ("mean", mean),
+        ("gauss", gauss),
         ("d1x", &d1[0]),
         ("d1y", &d1[1]),
         ("d1z", &d1[2]),
@@ -103,13 +96,7 @@ pub fn run(args: Args) -> Result<()> {
         .map(|&(name, v)| (name, mesh.original_values(v)))
         .collect();
     fairline::io::write_ply_with_vertex_properties(&args.output, &mesh.to_soup(), &props)?;
-    report.set("method", crate::output::option_value(&args.method));
-    report.set("vertices", mesh.original_vertex_count());
-    report.set("triangulated", triangulated);
-    report.set("k1", Stats::of(c.k1.iter().copied()));
-    report.set("k2", Stats::of(c.k2.iter().copied()));
-    report.set("mean", Stats::of(mean.iter().copied()));
-    report.set("gauss", Stats::of(gauss.iter().copied()));
+    report.set_fields(&out.report);
     report.write(args.report.as_deref())?;
     job.finish(format_args!(
         "{} curvature of {} vertices{}",

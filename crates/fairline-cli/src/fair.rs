@@ -25,12 +25,15 @@ use std::path::PathBuf;
 /// The energy to minimise.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
-    /// Willmore energy + curvature-Laplacian fairness term (the energy of
-    /// surface diffusion flow, weight --laplacian-weight) + distance of
-    /// the highlight lines to their desired curves.
+    /// Yong et al.'s energy with the desired curves' end tangents refitted
+    /// to the faired lines 4 times, then ¾ of that result + ¼ of the
+    /// diffusion-flow result on the same region (closer to the defect-free
+    /// surface than either on generated panels; BENCHMARKS.md Session 19);
+    /// --laplacian-weight adds a curvature-Laplacian term.
     Highlight,
-    /// Yong et al. exactly: Willmore energy + distance of the highlight
-    /// lines to their desired curves (no curvature-Laplacian term).
+    /// Yong et al. exactly (Algorithm 2): Willmore energy + distance of the
+    /// highlight lines to their desired curves, desired curves from the
+    /// input's outside parts, no refits, no diffusion-flow share.
     Paper,
     /// Baseline: surface diffusion flow ∂V/∂t = N Δ_B H (Xu et al.).
     DiffusionFlow,

@@ -7,13 +7,14 @@ use crate::surface_highlight::{palette_srgb, plot_lines, polylines, surface_pict
 use anyhow::Result;
 use fairline::bspline::BSplineSurface;
 use fairline::fair::{
-    BoundaryControl, Endpoints, SurfaceFairError, SurfaceFairMethod, SurfaceFairOptions,
-    fair_surface,
+    BoundaryControl, EndpointPair, Endpoints, SurfaceFairError, SurfaceFairMethod,
+    SurfaceFairOptions, fair_surface,
 };
 use fairline::highlight::{
     CircularLight, CircularLights, SurfaceHighlightOptions, SurfaceLight, surface_highlight_lines,
 };
 use fairline::render::{RenderOptions, side_by_side};
+use serde_json::json;
 use std::path::PathBuf;
 
 /// Fairs a B-spline surface so that chosen stretches of its circular
@@ -31,21 +32,48 @@ use std::path::PathBuf;
 /// IGES (.igs/.iges) or STEP (.step/.stp) by the extension of -o; IGES and
 /// STEP keep the input's length unit.
 ///
-/// LIGHTS.json: {"center":[x,y,z],"axis":[x,y,z],"radii":[r1,...]};
-/// ENDPOINTS.json: {"endpoints":[{"radius":r,"start":[u,v],"end":[u,v]},...]}.
+/// LIGHTS.json: {"center":[x,y,z],"axis":[x,y,z],"radii":[r1,...]}; without
+/// --lights, the circular lights of `fairline highlight FILE --circular`
+/// (derived from all surfaces of the file) are used and printed.
+///
+/// The stretches to fair are given in one of two ways (both may be mixed):
+///
+/// - by (u, v) read off a picture, ENDPOINTS.json
+///   {"endpoints":[{"radius":r,"start":[u,v],"end":[u,v]},...]}: each point
+///   is snapped to the nearest point of that radius' pre-image; a point that
+///   lies more than 2 % of the parameter domain's diagonal from it gets a
+///   warning (it was probably read off another line);
+/// - by line id and a parameter along the line: `--lines LINES.json` (the
+///   output of `fairline highlight` on the same file and lights; its SVG
+///   writes each line's id as #ID) with `--from ID:T --to ID:T` (repeat the
+///   pair for more stretches), or the entry {"line":ID,"from":T,"to":T} in
+///   ENDPOINTS.json. T is the fraction of the line's length from its first
+///   point (0 = first point, 1 = last point, or back at the first one for a
+///   closed line).
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline fair-surface fairline-demo/bspline-panel-dented.json --lights fairline-demo/bspline-panel-lights.json --endpoints fairline-demo/bspline-panel-endpoints.json -o panel-faired.json --report fair.json --png fair.png --svg uv.svg"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline fair-surface fairline-demo/bspline-panel-dented.json --lights fairline-demo/bspline-panel-lights.json --endpoints fairline-demo/bspline-panel-endpoints.json -o panel-faired.json --report fair.json --png fair.png --svg uv.svg\n  fairline highlight fairline-demo/bspline-panel-dented.json --lights fairline-demo/bspline-panel-lights.json -o panel-lines.json --svg panel-lines.svg\n  fairline fair-surface fairline-demo/bspline-panel-dented.json --lights fairline-demo/bspline-panel-lights.json --lines panel-lines.json --from 5:0.35 --to 5:0.65 -o panel-faired.json"
 )]
 pub struct Args {
     /// Input surface (.json, .igs/.iges or .step/.stp).
     pub surface_file: PathBuf,
-    /// Circular lights JSON.
+    /// Circular lights JSON (default: derived from the part and printed).
     #[arg(long, value_name = "LIGHTS.json")]
-    pub lights: PathBuf,
-    /// Endpoints JSON.
-    #[arg(long, value_name = "ENDPOINTS.json")]
-    pub endpoints: PathBuf,
+    pub lights: Option<PathBuf>,
+    /// Endpoints JSON: (u, v) pairs per radius, or line id + parameters.
+    #[arg(long, value_name = "ENDPOINTS.json", required_unless_present = "from")]
+    pub endpoints: Option<PathBuf>,
+    /// Highlight lines JSON (`fairline highlight -o`) whose line ids --from,
+    /// --to and {"line":ID,...} endpoints name.
+    #[arg(long, value_name = "LINES.json")]
+    pub lines: Option<PathBuf>,
+    /// Start of a stretch: line id (the "id" in LINES.json, #ID in its SVG)
+    /// and the fraction T (0..1) of the line's length from its first point.
+    #[arg(long, value_name = "ID:T", value_parser = parse_line_point, requires_all = ["to", "lines"])]
+    pub from: Vec<LinePoint>,
+    /// End of the stretch (same line as the --from of the same position).
+    #[arg(long, value_name = "ID:T", value_parser = parse_line_point, requires = "from")]
+    pub to: Vec<LinePoint>,
     /// Output surfaces: .json, .igs/.iges or .step/.stp.
     #[arg(short, long, value_name = "OUT.json|igs|step")]
     pub output: PathBuf,
@@ -114,6 +142,215 @@ pub enum BoundaryArg {
     Free,
 }
 
+/// Most distance, as a fraction of the parameter domain's diagonal, at
+/// which an endpoint given as (u, v) may lie from the line it snaps to
+/// without a warning.
+pub const SNAP_WARNING_FRACTION: f64 = 0.02;
+
+/// A point named by a line id and the fraction of the line's length.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinePoint {
+    /// The line's "id" in LINES.json.
+    pub line: usize,
+    /// Fraction 0..1 of the line's length from its first point.
+    pub t: f64,
+}
+
+fn parse_line_point(s: &str) -> Result<LinePoint, String> {
+    let (a, b) = s.split_once(':').ok_or_else(|| {
+        format!("expected ID:T (a line id and a fraction 0..1 of its length), got {s:?}")
+    })?;
+    let line = a
+        .trim()
+        .parse::<usize>()
+        .map_err(|_| format!("the line id {a:?} is not a non-negative integer"))?;
+    let t = b
+        .trim()
+        .parse::<f64>()
+        .map_err(|_| format!("the parameter {b:?} is not a number"))?;
+    if !(0.0..=1.0).contains(&t) {
+        return Err(format!(
+            "the parameter must lie in 0..1 (a fraction of the line's length), got {t}"
+        ));
+    }
+    Ok(LinePoint { line, t })
+}
+
+/// One entry of ENDPOINTS.json: (u, v) endpoints of DESIGN.md §5, or a line
+/// id with the parameters of both ends.
+#[derive(serde::Deserialize)]
+#[serde(untagged)]
+enum EndpointSpec {
+    Uv(EndpointPair),
+    Line(LineStretch),
+}
+
+/// `{"line":ID,"from":T,"to":T}`.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LineStretch {
+    line: usize,
+    from: f64,
+    to: f64,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EndpointsFile {
+    endpoints: Vec<EndpointSpec>,
+}
+
+/// The (u, v) at fraction `t` of the length (in space) of line `id` of a
+/// highlight lines document, and the line's radius. Input errors name the
+/// file and the line.
+fn point_on_line(
+    doc: &serde_json::Value,
+    path: &std::path::Path,
+    surface: usize,
+    id: usize,
+    t: f64,
+) -> Result<(f64, [f64; 2])> {
+    let here = || format!("{}: line #{id}", path.display());
+    if !(0.0..=1.0).contains(&t) {
+        return Err(bad_input(format!(
+            "{}: the parameter must lie in 0..1, got {t}",
+            here()
+        )));
+    }
+    let lines = doc
+        .get("lines")
+        .and_then(|l| l.as_array())
+        .ok_or_else(|| bad_input(format!("{}: no \"lines\" list", path.display())))?;
+    let line = lines
+        .iter()
+        .find(|l| l.get("id").and_then(|x| x.as_u64()) == Some(id as u64))
+        .ok_or_else(|| {
+            bad_input(format!(
+                "{}: no line has id {id} (the file holds {} lines)",
+                path.display(),
+                lines.len()
+            ))
+        })?;
+    if let Some(s) = line.get("surface").and_then(|x| x.as_u64())
+        && s != surface as u64
+    {
+        return Err(bad_input(format!(
+            "{} lies on surface {s}; give --surface {s}",
+            here()
+        )));
+    }
+    let radius = line.get("radius").and_then(|x| x.as_f64()).ok_or_else(|| {
+        bad_input(format!(
+            "{} has no radius: fair-surface fairs circular highlight lines",
+            here()
+        ))
+    })?;
+    let pairs = |key: &str| -> Option<Vec<Vec<f64>>> {
+        serde_json::from_value(line.get(key)?.clone()).ok()
+    };
+    let (Some(uv), Some(points)) = (pairs("uv"), pairs("points")) else {
+        return Err(bad_input(format!("{} needs \"uv\" and \"points\"", here())));
+    };
+    let ok = uv.len() == points.len()
+        && !uv.is_empty()
+        && uv
+            .iter()
+            .all(|p| p.len() == 2 && p.iter().all(|x| x.is_finite()))
+        && points
+            .iter()
+            .all(|p| p.len() == 3 && p.iter().all(|x| x.is_finite()));
+    if !ok {
+        return Err(bad_input(format!(
+            "{}: \"uv\" and \"points\" must be equally long lists of finite [u,v] and [x,y,z]",
+            here()
+        )));
+    }
+    let closed = line.get("closed").and_then(|x| x.as_bool()) == Some(true);
+    let n = points.len();
+    let segments = if closed { n } else { n - 1 };
+    let p3 = |k: usize| fairline::Vec3::new(points[k][0], points[k][1], points[k][2]);
+    let lengths: Vec<f64> = (0..segments)
+        .map(|k| (p3((k + 1) % n) - p3(k)).length())
+        .collect();
+    let total: f64 = lengths.iter().sum();
+    let first = [uv[0][0], uv[0][1]];
+    if !(total > 0.0) {
+        return Ok((radius, first));
+    }
+    let mut left = t * total;
+    for (k, &len) in lengths.iter().enumerate() {
+        if left <= len || k + 1 == segments {
+            let f = if len > 0.0 {
+                (left / len).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let (a, b) = (&uv[k], &uv[(k + 1) % n]);
+            return Ok((radius, [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]));
+        }
+        left -= len;
+    }
+    Ok((radius, first))
+}
+
+/// The endpoint pairs of the run: those of ENDPOINTS.json (line entries
+/// resolved on LINES.json) followed by the --from/--to pairs.
+fn endpoint_pairs(args: &Args) -> Result<Vec<EndpointPair>> {
+    let lines_doc: Option<serde_json::Value> = match &args.lines {
+        Some(p) => Some(read_json(p)?),
+        None => None,
+    };
+    let on_line = |id: usize, t: f64| -> Result<(f64, [f64; 2])> {
+        match (&lines_doc, &args.lines) {
+            (Some(doc), Some(path)) => point_on_line(doc, path, args.surface, id, t),
+            _ => Err(bad_input(
+                "endpoints given by line id need --lines LINES.json (the output of `fairline highlight`)",
+            )),
+        }
+    };
+    let stretch = |id: usize, from: f64, to: f64| -> Result<EndpointPair> {
+        let (radius, start) = on_line(id, from)?;
+        let (_, end) = on_line(id, to)?;
+        Ok(EndpointPair { radius, start, end })
+    };
+    let mut pairs = Vec::new();
+    if let Some(path) = &args.endpoints {
+        let file: EndpointsFile = read_json(path).map_err(|e| {
+            bad_input(format!(
+                "{e:#} (each endpoint is {{\"radius\":r,\"start\":[u,v],\"end\":[u,v]}} or {{\"line\":ID,\"from\":T,\"to\":T}})"
+            ))
+        })?;
+        for e in file.endpoints {
+            pairs.push(match e {
+                EndpointSpec::Uv(p) => p,
+                EndpointSpec::Line(l) => stretch(l.line, l.from, l.to)?,
+            });
+        }
+    }
+    if args.from.len() != args.to.len() {
+        return Err(bad_input(format!(
+            "--from and --to come in pairs: {} --from, {} --to",
+            args.from.len(),
+            args.to.len()
+        )));
+    }
+    for (a, b) in args.from.iter().zip(&args.to) {
+        if a.line != b.line {
+            return Err(bad_input(format!(
+                "--from {}:{} and --to {}:{} name different lines; a stretch lies on one line",
+                a.line, a.t, b.line, b.t
+            )));
+        }
+        pairs.push(stretch(a.line, a.t, b.t)?);
+    }
+    if pairs.is_empty() {
+        return Err(bad_input(
+            "no stretch to fair: give --endpoints ENDPOINTS.json or --from ID:T --to ID:T",
+        ));
+    }
+    Ok(pairs)
+}
+
 fn to_cli(e: SurfaceFairError) -> anyhow::Error {
     match e {
         SurfaceFairError::Svd | SurfaceFairError::Surface(_) => anyhow::Error::new(e),
@@ -137,8 +374,9 @@ pub fn run(args: Args) -> Result<()> {
     }
     let job = crate::output::Job::new("fair-surface")
         .input(&args.surface_file)
-        .input(&args.lights)
-        .input(&args.endpoints)
+        .input_opt(args.lights.as_deref())
+        .input_opt(args.endpoints.as_deref())
+        .input_opt(args.lines.as_deref())
         .output("-o", &args.output)
         .output_opt("--png", args.png.as_deref())
         .output_opt("--svg", args.svg.as_deref())
@@ -155,11 +393,24 @@ pub fn run(args: Args) -> Result<()> {
             surfaces.len()
         )));
     }
-    let spec: CircularLights = read_json(&args.lights)?;
-    let lights: Vec<CircularLight> = spec
-        .lights()
-        .map_err(|e| bad_input(format!("{}: {e}", args.lights.display())))?;
-    let ends: Endpoints = read_json(&args.endpoints)?;
+    let (spec, derived): (CircularLights, bool) = match &args.lights {
+        Some(path) => (read_json(path)?, false),
+        None => (
+            crate::args::derived_circular_lights(fairline::highlight::default_circular_lights(
+                &surfaces,
+                None,
+                fairline::highlight::DEFAULT_CIRCULAR_RADII,
+            ))?,
+            true,
+        ),
+    };
+    let lights: Vec<CircularLight> = spec.lights().map_err(|e| match &args.lights {
+        Some(path) => bad_input(format!("{}: {e}", path.display())),
+        None => bad_input(e.to_string()),
+    })?;
+    let ends = Endpoints {
+        endpoints: endpoint_pairs(&args)?,
+    };
     let opts = SurfaceFairOptions::default()
         .lights(lights.clone())
         .endpoints(ends.endpoints.clone())
@@ -194,29 +445,37 @@ pub fn run(args: Args) -> Result<()> {
         .map_err(to_cli)?;
     bar.finish_and_clear();
     let (faired, rep) = (out.surfaces, out.report);
-    // Endpoints that snapped far from where they were given (more than 2 %
-    // of the parameter domain's diagonal) were probably read off the wrong
-    // line.
+    if derived {
+        report.set(
+            "light",
+            json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii, "derived": true}),
+        );
+    }
+    // Endpoints that snapped far from where they were given (more than
+    // SNAP_WARNING_FRACTION of the parameter domain's diagonal) were
+    // probably read off the wrong line.
     let (du, dv) = (input.domain_u(), input.domain_v());
     let diag = (du[1] - du[0]).hypot(dv[1] - dv[0]);
+    let mut snap_warnings = Vec::new();
     for t in &rep.targets {
         for (k, d) in t.snap_distance.iter().enumerate() {
-            if *d > 0.02 * diag {
+            if *d > SNAP_WARNING_FRACTION * diag {
                 let given = ends.endpoints[t.index];
                 let p = if k == 0 { given.start } else { given.end };
                 let q = if k == 0 { t.start } else { t.end };
-                eprintln!(
-                    "warning: {}: endpoint {} {}: ({:.4}, {:.4}) is {:.4} away from the nearest line of radius {} and was moved to ({:.4}, {:.4})",
-                    args.endpoints.display(),
+                snap_warnings.push(format!(
+                    "endpoint {} {}: ({:.4}, {:.4}) lies {:.4} from the nearest line of radius {} (more than {} % of the domain diagonal {:.4}) and was snapped to ({:.4}, {:.4}); was it read off another line?",
                     t.index,
                     if k == 0 { "start" } else { "end" },
                     p[0],
                     p[1],
                     d,
                     t.radius,
+                    100.0 * SNAP_WARNING_FRACTION,
+                    diag,
                     q[0],
                     q[1]
-                );
+                ));
             }
         }
     }
@@ -245,6 +504,9 @@ pub fn run(args: Args) -> Result<()> {
         for (key, value) in fields {
             report.set(&key, value);
         }
+    }
+    for w in snap_warnings {
+        report.warn(w);
     }
     // Pictures before the output file, so a failure leaves no output.
     let slights: Vec<SurfaceLight> = lights.iter().map(|l| SurfaceLight::Circular(*l)).collect();

@@ -2,7 +2,7 @@
 //! al. §2) or of concentric circular lights (Nishiyama et al. §2) on a
 //! triangle mesh, written as JSON or OBJ polylines.
 
-use crate::args::{HighlightArgs, Radii, circular_file, to_input_error};
+use crate::args::{HighlightArgs, Radii, circular_file, derived_circular_lights, to_input_error};
 use crate::common::Report;
 use crate::error::bad_input;
 use crate::input::read_triangles;
@@ -10,10 +10,10 @@ use crate::output::spinner;
 use anyhow::Result;
 use fairline::Vec3;
 use fairline::highlight::{
-    CircularLight, CircularLights, HighlightBands, HighlightError, HighlightLine, HighlightLines,
-    HighlightModel, Readability, circular_highlight_bands, circular_highlight_lines,
+    CircularLight, CircularLights, HighlightBands, HighlightError, HighlightLines, HighlightModel,
+    HighlightOptions, Readability, circular_highlight_bands, circular_highlight_lines,
 };
-use serde_json::{Value, json};
+use serde_json::json;
 use std::path::Path;
 
 /// Output format of polylines.
@@ -38,20 +38,9 @@ pub fn lines_format(path: &Path) -> Result<LinesFormat> {
     })
 }
 
-fn line_json(l: &HighlightLine, radii: Option<&[f64]>) -> Value {
-    let pts: Vec<[f64; 3]> = l.points.iter().map(|p| p.to_array()).collect();
-    let mut v = json!({"index": l.index, "closed": l.closed, "points": pts});
-    if let Some(r) = radii.and_then(|r| r.get(l.index as usize)) {
-        v["radius"] = json!(r);
-    }
-    v
-}
-
-fn lines_json(lines: &HighlightLines, radii: Option<&[f64]>) -> Vec<Value> {
-    lines.lines.iter().map(|l| line_json(l, radii)).collect()
-}
-
-/// Writes lines (and bands) as JSON or OBJ, atomically.
+/// Writes lines (and bands) atomically in the format of `path`'s
+/// extension ([`fairline::io::highlight_lines_json`],
+/// [`fairline::io::highlight_lines_obj`]).
 pub fn write_lines(
     path: &Path,
     lines: &HighlightLines,
@@ -59,43 +48,12 @@ pub fn write_lines(
     radii: Option<&[f64]>,
 ) -> Result<()> {
     match lines_format(path)? {
-        LinesFormat::Json => {
-            let mut v = json!({"lines": lines_json(lines, radii)});
-            if let Some(b) = bands {
-                v["bands"] = json!({
-                    "radius": b.radius,
-                    "lower": lines_json(&b.lower, radii),
-                    "upper": lines_json(&b.upper, radii),
-                });
-            }
-            crate::common::write_json(path, &v)
-        }
+        LinesFormat::Json => crate::common::write_json(
+            path,
+            &fairline::io::highlight_lines_json(lines, bands, radii),
+        ),
         LinesFormat::Obj => {
-            let mut groups: Vec<(&str, &HighlightLines)> = vec![("lines", lines)];
-            if let Some(b) = bands {
-                groups.push(("band_lower", &b.lower));
-                groups.push(("band_upper", &b.upper));
-            }
-            let mut text = String::from("# fairline highlight lines\n");
-            let mut next = 1usize;
-            for (name, ls) in groups {
-                text.push_str(&format!("g {name}\n"));
-                for l in &ls.lines {
-                    let first = next;
-                    for p in &l.points {
-                        text.push_str(&format!("v {} {} {}\n", p.x, p.y, p.z));
-                    }
-                    text.push('l');
-                    for k in 0..l.points.len() {
-                        text.push_str(&format!(" {}", first + k));
-                    }
-                    if l.closed {
-                        text.push_str(&format!(" {first}"));
-                    }
-                    text.push('\n');
-                    next += l.points.len();
-                }
-            }
+            let text = fairline::io::highlight_lines_obj(lines, bands);
             fairline::io::atomic_write(path, |w| {
                 use std::io::Write;
                 w.write_all(text.as_bytes())
@@ -103,15 +61,6 @@ pub fn write_lines(
             Ok(())
         }
     }
-}
-
-/// Summary statistics of a line set for reports.
-pub fn line_summary(lines: &HighlightLines) -> Value {
-    json!({
-        "lines": lines.lines.len(),
-        "closed_lines": lines.lines.iter().filter(|l| l.closed).count(),
-        "nodes": lines.node_count(),
-    })
 }
 
 pub fn run(args: HighlightArgs) -> Result<()> {
@@ -156,6 +105,13 @@ pub fn run(args: HighlightArgs) -> Result<()> {
         }),
         _ => match &args.light.lights {
             Some(path) => circular_file(path)?,
+            None if args.circular => Some(derived_circular_lights(
+                fairline::highlight::default_circular_lights_for_mesh(
+                    &mesh,
+                    args.light.up.vector(),
+                    fairline::highlight::DEFAULT_CIRCULAR_RADII,
+                ),
+            )?),
             None => None,
         },
     };
@@ -173,9 +129,10 @@ pub fn run(args: HighlightArgs) -> Result<()> {
         }
         let (lines, bands) = report
             .time(|| -> Result<_, HighlightError> {
-                let lines = circular_highlight_lines(&mesh, &lights)?;
+                let opts = HighlightOptions::default();
+                let lines = circular_highlight_lines(&mesh, &lights, &opts)?;
                 let bands = match args.band {
-                    Some(rho) => Some(circular_highlight_bands(&mesh, &lights, rho)?),
+                    Some(rho) => Some(circular_highlight_bands(&mesh, &lights, rho, &opts)?),
                     None => None,
                 };
                 Ok((lines, bands))
@@ -186,7 +143,11 @@ pub fn run(args: HighlightArgs) -> Result<()> {
             -axis + 0.35 * axis.any_orthonormal_vector(),
             axis.any_orthonormal_vector(),
         );
-        report.set("light", json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii}));
+        let mut light = json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii});
+        if args.circular {
+            light["derived"] = json!(true);
+        }
+        report.set("light", light);
         (lines, bands, Some(radii))
     } else {
         let light = args.light.light_array(&mesh)?;
@@ -226,13 +187,9 @@ pub fn run(args: HighlightArgs) -> Result<()> {
     };
     bar.finish_and_clear();
     write_lines(&args.output, &lines, bands.as_ref(), radii.as_deref())?;
-    report.set("summary", line_summary(&lines));
-    report.set("lines", lines.lines.len());
-    report.set(
-        "closed_lines",
-        lines.lines.iter().filter(|l| l.closed).count(),
-    );
-    report.set("nodes", lines.node_count());
+    let counts = lines.counts();
+    report.set("summary", counts);
+    report.set_fields(counts);
     if let Some(b) = &bands {
         report.set("band", json!({"radius": b.radius, "lower_lines": b.lower.lines.len(), "upper_lines": b.upper.lines.len()}));
     }
@@ -277,9 +234,9 @@ pub fn run(args: HighlightArgs) -> Result<()> {
     report.write(args.report.as_deref())?;
     job.finish(format_args!(
         "{} highlight line(s) ({} closed, {} nodes) on {} vertices",
-        lines.lines.len(),
-        lines.lines.iter().filter(|l| l.closed).count(),
-        lines.node_count(),
+        counts.lines,
+        counts.closed_lines,
+        counts.nodes,
         mesh.vertex_count()
     ));
     Ok(())

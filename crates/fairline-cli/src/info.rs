@@ -25,8 +25,9 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// Surface files: also compute the total trimmed area (Gauss quadrature
-    /// over a 64 × 64 trimmed tessellation per surface; about 10 s for the
-    /// 247 faces of the impeller on a loaded 2-core machine).
+    /// on a 64 × 64 grid per surface: 3 × 3 Gauss–Legendre in the cells
+    /// inside the face, the 6-point triangle rule in the cells the trims
+    /// cut; faces in parallel).
     #[arg(long)]
     pub area: bool,
     /// Also write the JSON to this file.
@@ -55,7 +56,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     // the same values without non-finite numbers (report.set warned)
-    let value = crate::common::finite_only("", value, &mut Vec::new()).unwrap_or_default();
+    let value = fairline::io::finite_only("", value, &mut Vec::new()).unwrap_or_default();
     report.write(args.report.as_deref())?;
     let summary = format!(
         "{}: {} vertices, {} faces, {}",
@@ -163,10 +164,13 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
     let mut report = Report::new("info");
     let area: Option<f64> = report.time(|| {
         args.area.then(|| {
-            surfaces
-                .iter()
+            use rayon::prelude::*;
+            // in parallel over the faces, summed in file order
+            let areas: Vec<f64> = surfaces
+                .par_iter()
                 .map(|s| fairline::bspline::trimmed_area(s, 64, 64))
-                .sum()
+                .collect();
+            areas.iter().sum()
         })
     });
     let (mut lo, mut hi) = (

@@ -106,17 +106,24 @@ pub fn run(args: Args) -> Result<()> {
             "light options (--direction, --plane-normal, --plane-point, --spacing, --lights, --min-normal-cos) need --highlight",
         ));
     }
+    // a part of several patches: each patch's index at its visible centre
+    let mut patch_labels: Option<fairline::render::RegionLabels> = None;
     let mesh = if crate::surface::is_surface_path(&args.input) {
         match args.surface {
             Some(_) => crate::surface::load_tessellated(&args.input, args.surface, 64)?,
             None => {
                 let surfaces = crate::surface::load_surfaces(&args.input)?;
-                let n = if surfaces.len() == 1 {
-                    64
+                if surfaces.len() == 1 {
+                    crate::surface::tessellated_part(&surfaces, 64)?
                 } else {
-                    PART_SAMPLES
-                };
-                crate::surface::tessellated_part(&surfaces, n)?
+                    let (mesh, patch) =
+                        crate::surface::tessellated_part_with_patches(&surfaces, PART_SAMPLES)?;
+                    patch_labels = Some(fairline::render::RegionLabels {
+                        triangle_region: patch,
+                        texts: (0..surfaces.len()).map(|k| k.to_string()).collect(),
+                    });
+                    mesh
+                }
             }
         }
     } else {
@@ -214,7 +221,12 @@ pub fn run(args: Args) -> Result<()> {
                 range: None,
             });
         }
-        let mut img = mesh_picture(&mesh, &picture, &opts)?;
+        let mut img = match &patch_labels {
+            Some(l) if l.triangle_region.len() == mesh.face_count() => {
+                fairline::picture::labelled_mesh_picture(&mesh, &picture, l, &opts)?.0
+            }
+            _ => mesh_picture(&mesh, &picture, &opts)?,
+        };
         crate::highlight_png::draw_key(&mut img, &key);
         Ok(img)
     })?;

@@ -56,7 +56,7 @@ pub fn load_tessellated(path: &Path, index: Option<usize>, n: usize) -> Result<S
 
 /// Tessellates surfaces into one triangle mesh, `n` × `n` samples each.
 pub fn tessellated_mesh(surfaces: &[BSplineSurface], n: usize) -> Result<SurfaceMesh> {
-    tessellated_with(surfaces, |_| [n, n])
+    Ok(tessellated_with(surfaces, |_| [n, n])?.0)
 }
 
 /// Tessellates a part for a picture: one surface `n` × `n`; several, each on
@@ -64,8 +64,16 @@ pub fn tessellated_mesh(surfaces: &[BSplineSurface], n: usize) -> Result<Surface
 /// part's diagonal, small faces get few), so that a part of hundreds of
 /// faces renders as fast as one surface of its size (issue #20 item 4).
 pub fn tessellated_part(surfaces: &[BSplineSurface], n: usize) -> Result<SurfaceMesh> {
+    Ok(tessellated_part_with_patches(surfaces, n)?.0)
+}
+
+/// [`tessellated_part`] and the patch (index into `surfaces`) of every face.
+pub fn tessellated_part_with_patches(
+    surfaces: &[BSplineSurface],
+    n: usize,
+) -> Result<(SurfaceMesh, Vec<u32>)> {
     if surfaces.len() <= 1 {
-        return tessellated_mesh(surfaces, n);
+        return tessellated_with(surfaces, |_| [n, n]);
     }
     let (mut lo, mut hi) = (
         fairline::Vec3::splat(f64::INFINITY),
@@ -83,11 +91,11 @@ pub fn tessellated_part(surfaces: &[BSplineSurface], n: usize) -> Result<Surface
 }
 
 /// Tessellates every surface on the grid `grid(s)` (in parallel, merged in
-/// input order) into one triangle mesh.
+/// input order) into one triangle mesh; also the surface of every face.
 fn tessellated_with(
     surfaces: &[BSplineSurface],
     grid: impl Fn(&BSplineSurface) -> [usize; 2] + Sync,
-) -> Result<SurfaceMesh> {
+) -> Result<(SurfaceMesh, Vec<u32>)> {
     use rayon::prelude::*;
     let pieces: Vec<_> = surfaces
         .par_iter()
@@ -98,21 +106,27 @@ fn tessellated_with(
         .collect();
     let mut positions = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
-    for t in pieces {
+    let mut patch: Vec<u32> = Vec::new();
+    for (k, t) in pieces.into_iter().enumerate() {
         let base = positions.len() as u32;
         positions.extend(t.positions);
         triangles.extend(t.triangles.iter().map(|tri| tri.map(|i| i + base)));
+        patch.resize(triangles.len(), k as u32);
     }
     // Degenerate points (poles of a patch) can make a tessellation
     // non-manifold; keep only the triangles a manifold mesh accepts.
     match SurfaceMesh::new(positions.clone(), &triangles) {
-        Ok(m) => Ok(m),
+        Ok(m) => Ok((m, patch)),
         Err(_) => {
-            let kept: Vec<[u32; 3]> = triangles
-                .into_iter()
-                .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+            let keep = |t: &[u32; 3]| t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
+            let kept_patch: Vec<u32> = triangles
+                .iter()
+                .zip(&patch)
+                .filter(|(t, _)| keep(t))
+                .map(|(_, &p)| p)
                 .collect();
-            Ok(SurfaceMesh::new(positions, &kept)?)
+            let kept: Vec<[u32; 3]> = triangles.into_iter().filter(keep).collect();
+            Ok((SurfaceMesh::new(positions, &kept)?, kept_patch))
         }
     }
 }

@@ -14,8 +14,8 @@ use fairline::highlight::{
     CircularLights, PartLights, SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceHighlights,
     SurfaceLight, part_highlight_lines,
 };
-use fairline::picture::{Picture, mesh_picture};
-use fairline::render::{PolylineLayer, RenderOptions, SvgPlot};
+use fairline::picture::{Picture, labelled_mesh_picture, mesh_picture};
+use fairline::render::{PolylineLayer, RegionLabels, RenderOptions, SvgPlot};
 use serde_json::{Value, json};
 
 /// Colours of successive lights (linear light, sRGB-ish) for pictures.
@@ -71,19 +71,28 @@ pub fn polylines(lines: &[&SurfaceHighlightLine], width: f32) -> Vec<PolylineLay
         .collect()
 }
 
-/// A picture of tessellated surfaces with polylines over them.
+/// A picture of tessellated surfaces with polylines over them; a part of
+/// several patches gets each patch's index (its position in `surfaces`)
+/// written at the patch's visible centre (issue #20 item 7).
 pub fn surface_picture(
     surfaces: &[BSplineSurface],
     polylines: Vec<PolylineLayer>,
     title: &str,
     opts: &RenderOptions,
 ) -> Result<fairline::render::Image> {
-    let mesh = crate::surface::tessellated_part(surfaces, 96)?;
+    let (mesh, patch) = crate::surface::tessellated_part_with_patches(surfaces, 96)?;
     let picture = Picture {
         polylines,
         title: Some(title.to_string()),
         ..Default::default()
     };
+    if surfaces.len() > 1 && patch.len() == mesh.face_count() {
+        let labels = RegionLabels {
+            triangle_region: patch,
+            texts: (0..surfaces.len()).map(|k| k.to_string()).collect(),
+        };
+        return Ok(labelled_mesh_picture(&mesh, &picture, &labels, opts)?.0);
+    }
     Ok(mesh_picture(&mesh, &picture, opts)?)
 }
 
@@ -142,6 +151,37 @@ pub fn plot_lines(plot: &mut SvgPlot, lines: &[&SurfaceHighlightLine], width: f6
     }
 }
 
+/// Writes each line's id (`#id`, the `"id"` of the lines JSON, counted from
+/// `first_id`) beside the line's middle point, in the line's colour, so
+/// that a stretch can be named as `--from ID:T` in `fair-surface`.
+pub fn plot_line_ids(plot: &mut SvgPlot, lines: &[SurfaceHighlightLine], first_id: usize) {
+    for (k, l) in lines.iter().enumerate() {
+        if let Some(&p) = l.uv.get(l.uv.len() / 2) {
+            plot.text(p, palette_srgb(l.light), &format!("#{}", first_id + k));
+        }
+    }
+}
+
+/// The SVG legend of the lights drawn: one entry per light that has a
+/// line, "R = r" for circular lights, "light m" for linear ones.
+pub fn legend_entries(
+    lights: &[SurfaceLight],
+    lines: &[SurfaceHighlightLine],
+) -> Vec<([u8; 3], String)> {
+    let mut used: Vec<usize> = lines.iter().map(|l| l.light).collect();
+    used.sort_unstable();
+    used.dedup();
+    used.into_iter()
+        .filter_map(|k| {
+            let text = match lights.get(k)? {
+                SurfaceLight::Circular(c) => format!("R = {}", c.radius()),
+                SurfaceLight::Linear { index, .. } => format!("light {index}"),
+            };
+            Some((palette_srgb(k), text))
+        })
+        .collect()
+}
+
 pub fn run(args: HighlightArgs) -> Result<()> {
     require_extension("-o", &args.output, &["json"])?;
     if let Some(p) = &args.png {
@@ -175,8 +215,43 @@ pub fn run(args: HighlightArgs) -> Result<()> {
         )));
     }
     let all = crate::surface::load_surfaces(&args.mesh)?;
+    if let Some(k) = args.surface
+        && k >= all.len()
+    {
+        return Err(bad_input(format!(
+            "{}: --surface {k} is out of range (the file holds {} surfaces)",
+            args.mesh.display(),
+            all.len()
+        )));
+    }
+    // Circular lights: given, from a --lights file in the circular form, or
+    // (--circular) derived from the whole part, so that `fair-surface` on
+    // the same file derives the same ones.
+    let mut derived = false;
+    let circular_spec: Option<CircularLights> = if let (Some(c), Some(t), Some(Radii(radii))) =
+        (args.circle_center, args.circle_axis, args.radii.clone())
+    {
+        Some(CircularLights {
+            center: c.to_array(),
+            axis: t.to_array(),
+            radii,
+        })
+    } else if let Some(path) = &args.light.lights {
+        crate::args::circular_file(path)?
+    } else if args.circular {
+        derived = true;
+        Some(crate::args::derived_circular_lights(
+            fairline::highlight::default_circular_lights(
+                &all,
+                args.light.up.vector(),
+                fairline::highlight::DEFAULT_CIRCULAR_RADII,
+            ),
+        )?)
+    } else {
+        None
+    };
     let chosen: Vec<(usize, BSplineSurface)> = match args.surface {
-        Some(k) => vec![(k, crate::surface::load_surface(&args.mesh, k)?)],
+        Some(k) => vec![(k, all[k].clone())],
         None => all.into_iter().enumerate().collect(),
     };
     let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
@@ -191,19 +266,21 @@ pub fn run(args: HighlightArgs) -> Result<()> {
     let opts = SurfaceHighlightOptions::default()
         .grid(args.grid)
         .band(args.band);
-    let circular = if let (Some(c), Some(t), Some(Radii(radii))) =
-        (args.circle_center, args.circle_axis, args.radii.clone())
-    {
-        let spec = CircularLights {
-            center: c.to_array(),
-            axis: t.to_array(),
-            radii,
-        };
-        let lights = spec.lights().map_err(to_input_error)?;
-        report.set(
-            "light",
-            json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii}),
-        );
+    let circular = if let Some(spec) = circular_spec {
+        let lights = spec.lights().map_err(|e| match &args.light.lights {
+            Some(path) if args.circle_center.is_none() => {
+                crate::output::name_file(path, to_input_error(e))
+            }
+            _ => to_input_error(e),
+        })?;
+        if lights.is_empty() {
+            return Err(bad_input("circular lights need at least one radius"));
+        }
+        let mut light = json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii});
+        if derived {
+            light["derived"] = json!(true);
+        }
+        report.set("light", light);
         Some(lights)
     } else {
         None
@@ -244,6 +321,10 @@ pub fn run(args: HighlightArgs) -> Result<()> {
         lower.extend(h.band_lower.iter().map(|l| line_json(l, lights, tag(*k))));
         upper.extend(h.band_upper.iter().map(|l| line_json(l, lights, tag(*k))));
     }
+    // Line ids: the position in "lines" (named by `fair-surface --from ID:T`).
+    for (id, l) in lines.iter_mut().enumerate() {
+        l["id"] = json!(id);
+    }
     let line_count = lines.len();
     let mut out = json!({"lines": lines});
     if let Some(rho) = args.band {
@@ -275,18 +356,31 @@ pub fn run(args: HighlightArgs) -> Result<()> {
             .iter()
             .find(|(k, _)| *k == want)
             .unwrap_or(&chosen[0]);
-        let h = &results
-            .iter()
-            .find(|(k, _, _)| *k == want)
-            .unwrap_or(&results[0])
-            .2;
-        let mut plot = uv_plot(s, "highlight line pre-images (u, v)");
+        let at = results.iter().position(|(k, _, _)| *k == want).unwrap_or(0);
+        let (k, lights, h) = &results[at];
+        // ids of this surface's lines: after those of the surfaces before it
+        let first_id: usize = results[..at].iter().map(|r| r.2.lines.len()).sum();
+        let title = if multi {
+            format!("surface {k}: highlight line pre-images (u, v), #line ids")
+        } else {
+            "highlight line pre-images (u, v), #line ids".to_string()
+        };
+        let mut plot = uv_plot(s, &title);
         plot_lines(&mut plot, &h.lines.iter().collect::<Vec<_>>(), 1.5);
         plot_lines(
             &mut plot,
             &h.band_lower.iter().chain(&h.band_upper).collect::<Vec<_>>(),
             0.6,
         );
+        plot_line_ids(&mut plot, &h.lines, first_id);
+        let mut legend = legend_entries(lights, &h.lines);
+        if !h.lines.is_empty() {
+            legend.push((
+                [60, 60, 60],
+                format!("lines #{first_id}..#{}", first_id + h.lines.len() - 1),
+            ));
+        }
+        plot.legend(&legend);
         plot.write(p)?;
     }
     write_json(&args.output, &out)?;

@@ -104,14 +104,14 @@ fn default_lights_table(runs: usize, opts: HighlightOptions) {
         let t_choose = timed(runs, || LightArray::readable_for_mesh(mesh, UpAxis::Auto));
         let light = LightArray::readable_for_mesh(mesh, UpAxis::Auto).expect("vertices");
         let t_model = timed(runs, || {
-            HighlightModel::new(mesh, light, opts).expect("tri")
+            HighlightModel::new(mesh, light, opts.clone()).expect("tri")
         });
         let t_total = timed(runs, || {
-            HighlightModel::new(mesh, light, opts)
+            HighlightModel::new(mesh, light, opts.clone())
                 .expect("tri")
                 .lines(mesh)
         });
-        let model = HighlightModel::new(mesh, light, opts).expect("tri");
+        let model = HighlightModel::new(mesh, light, opts.clone()).expect("tri");
         let lines = model.lines(mesh);
         let r = Readability::for_part(mesh, &light);
         let t_draw = timed(runs, || model.readable_lines(mesh, &lines, &r));
@@ -158,13 +158,13 @@ fn main() {
         let light = light_for(mesh);
         let t_norm = timed(runs, || geom::vertex_normals(mesh));
         let t_model = timed(runs, || {
-            HighlightModel::new(mesh, light, opts).expect("tri")
+            HighlightModel::new(mesh, light, opts.clone()).expect("tri")
         });
-        let model = HighlightModel::new(mesh, light, opts).expect("tri");
+        let model = HighlightModel::new(mesh, light, opts.clone()).expect("tri");
         let t_lines = timed(runs, || model.lines(mesh));
         let c0 = cpu_ns();
         let w_total = median_secs(runs, || {
-            HighlightModel::new(mesh, light, opts)
+            HighlightModel::new(mesh, light, opts.clone())
                 .expect("tri")
                 .lines(mesh)
         });
@@ -215,7 +215,7 @@ fn main() {
         for &v in &moved {
             moved_mesh.positions_mut()[v.idx()] += 1e-3 * normals[v.idx()];
         }
-        let base = HighlightModel::new(mesh, light, opts).expect("tri");
+        let base = HighlightModel::new(mesh, light, opts.clone()).expect("tri");
         let mut recomputed = 0;
         let mut only = Vec::new();
         let mut both = Vec::new();
@@ -230,7 +230,7 @@ fn main() {
         only.sort_by(f64::total_cmp);
         both.sort_by(f64::total_cmp);
         let t_full = timed(runs, || {
-            HighlightModel::new(&moved_mesh, light, opts)
+            HighlightModel::new(&moved_mesh, light, opts.clone())
                 .expect("tri")
                 .lines(&moved_mesh)
         });
@@ -263,13 +263,13 @@ fn main() {
             .collect();
         let heavy = runs.min(3);
         let t_circ = timed(heavy, || {
-            circular_highlight_lines(mesh, &circles).expect("tri")
+            circular_highlight_lines(mesh, &circles, &HighlightOptions::default()).expect("tri")
         });
-        let model = HighlightModel::new(mesh, light, opts).expect("tri");
+        let model = HighlightModel::new(mesh, light, opts.clone()).expect("tri");
         let t_band = timed(runs, || model.bands(mesh, 0.1 * light.spacing()));
         let det_opts = DetectOptions::default();
         let t_det = timed(heavy, || {
-            let m = HighlightModel::new(mesh, light, opts).expect("tri");
+            let m = HighlightModel::new(mesh, light, opts.clone()).expect("tri");
             let lines = m.lines(mesh);
             detect_irregularities(mesh, &light, &lines, &det_opts).expect("detect")
         });

@@ -74,6 +74,32 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
+//! ### Where an algorithm returns something else than new positions
+//!
+//! A few functions measure or draw rather than move vertices; they keep the
+//! shape (input by reference, an options struct with `Default`, builders,
+//! `#[non_exhaustive]` and a [`Control`], `Result` with a `Cancelled`
+//! variant) and return what they compute:
+//!
+//! - [`geom::curvature`] returns per-vertex fields, one value per vertex in
+//!   vertex order ([`geom::CurvatureOutput`]: principal curvatures and
+//!   directions, mean and Gaussian curvature) and a `Serialize` report;
+//! - [`highlight::highlight_lines`], [`highlight::circular_highlight_lines`]
+//!   and [`highlight::circular_highlight_bands`] return polylines
+//!   ([`highlight::HighlightLines`]; their counts for reports come from
+//!   [`highlight::HighlightLines::counts`]) and take the lights as a
+//!   separate argument: the lights are what the mesh is looked at with, as
+//!   the mesh is what is looked at. [`highlight::HighlightModel`] is the
+//!   model behind them, kept by the fairing loop to update incrementally;
+//! - [`mesh::repair`] takes a face list that may be broken ([`Soup`], not a
+//!   mesh: a mesh cannot hold what it repairs) and returns a new face list
+//!   with its `Serialize` report ([`mesh::Repaired`]): vertices may be
+//!   removed or split, so there are no "new positions" of the input's
+//!   vertices. It is one linear pass with no options and no long loop.
+//!
+//! A front end writes a report with [`io::JsonReport`], the one definition
+//! of the `--report` JSON (no `null`, `"time_s"`, `"warnings"`).
+//!
 //! Conventions: f64 everywhere; faces are oriented counter-clockwise seen
 //! from outside, so normals point outward and a sphere of radius r has
 //! principal curvatures k1 = k2 = +1/r and mean curvature H = +1/r.

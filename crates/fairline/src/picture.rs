@@ -7,8 +7,8 @@ use crate::Vec3;
 use crate::geom::vertex_normals;
 use crate::mesh::{SurfaceMesh, triangle_list};
 use crate::render::{
-    Colormap, Image, Legend, MeshLayer, PolylineLayer, RenderError, RenderOptions, Scene, render,
-    scalar_colors,
+    Colormap, Image, Legend, MeshLayer, PlacedLabel, PolylineLayer, RegionLabels, RenderError,
+    RenderOptions, Scene, render, render_labelled, scalar_colors,
 };
 
 /// A mesh prepared for drawing: triangles and smooth vertex normals.
@@ -101,6 +101,30 @@ pub fn mesh_picture(
     picture: &Picture<'_>,
     opts: &RenderOptions,
 ) -> Result<Image, RenderError> {
+    mesh_picture_impl(mesh, picture, None, opts).map(|(img, _)| img)
+}
+
+/// [`mesh_picture`] with text labels on regions of faces (e.g. the patch
+/// index of every face of a tessellated part of many patches):
+/// `labels.triangle_region[f]` is the region of face `f` of a triangle mesh
+/// (polygon meshes: of the triangles of [`MeshView::new`], in order); each
+/// visible region is labelled at its visible centre
+/// ([`crate::render::render_labelled`]). Returns the labels drawn too.
+pub fn labelled_mesh_picture(
+    mesh: &SurfaceMesh,
+    picture: &Picture<'_>,
+    labels: &RegionLabels,
+    opts: &RenderOptions,
+) -> Result<(Image, Vec<PlacedLabel>), RenderError> {
+    mesh_picture_impl(mesh, picture, Some(labels), opts)
+}
+
+fn mesh_picture_impl(
+    mesh: &SurfaceMesh,
+    picture: &Picture<'_>,
+    labels: Option<&RegionLabels>,
+    opts: &RenderOptions,
+) -> Result<(Image, Vec<PlacedLabel>), RenderError> {
     let view = MeshView::new(mesh);
     let mut legend = None;
     let colors;
@@ -128,7 +152,10 @@ pub fn mesh_picture(
         legend,
         title: picture.title.clone(),
     };
-    render(&scene, opts)
+    match labels {
+        Some(l) => render_labelled(&scene, opts, l),
+        None => render(&scene, opts).map(|img| (img, Vec::new())),
+    }
 }
 
 /// Colour of the highlight lines in [`fairing_picture`] (near black).

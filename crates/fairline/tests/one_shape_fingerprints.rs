@@ -11,6 +11,8 @@ use fairline::highlight::{CircularLight, HighlightLines, HighlightOptions, Light
 use fairline::mesh::{SurfaceMesh, VertexId};
 use fairline::shapes;
 use fairline::smooth::{ImplicitOptions, implicit_smooth};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 /// FNV-1a over 64-bit words.
 #[derive(Clone, Copy)]
@@ -93,7 +95,7 @@ fn cases() -> Vec<(&'static str, String)> {
     for (name, mesh) in [("sphere", &sphere), ("field", &field)] {
         let opts = HighlightOptions::default();
         let lines = fairline::highlight::highlight_lines(mesh, &light, &opts).unwrap();
-        let model = fairline::highlight::HighlightModel::new(mesh, light, opts).unwrap();
+        let model = fairline::highlight::HighlightModel::new(mesh, light, opts.clone()).unwrap();
         let bands = model.bands(mesh, 0.02).unwrap();
         out.push((
             if name == "sphere" {
@@ -114,8 +116,19 @@ fn cases() -> Vec<(&'static str, String)> {
         })
         .collect();
     for (name, mesh) in [("circular sphere", &sphere), ("circular field", &field)] {
-        let lines = fairline::highlight::circular_highlight_lines(mesh, &circles).unwrap();
-        let bands = fairline::highlight::circular_highlight_bands(mesh, &circles, 0.05).unwrap();
+        let lines = fairline::highlight::circular_highlight_lines(
+            mesh,
+            &circles,
+            &HighlightOptions::default(),
+        )
+        .unwrap();
+        let bands = fairline::highlight::circular_highlight_bands(
+            mesh,
+            &circles,
+            0.05,
+            &HighlightOptions::default(),
+        )
+        .unwrap();
         out.push((
             name,
             hex(Fnv::new()
@@ -149,9 +162,10 @@ fn cases() -> Vec<(&'static str, String)> {
         for (i, p) in grid.positions_mut().iter_mut().enumerate() {
             p.z += 0.03 * noise(i + 3);
         }
-        let r = fairline::fair::fair_polyline_network(&mut grid, &Default::default()).unwrap();
+        let network = fairline::fair::fair_polyline_network(&grid, &Default::default()).unwrap();
+        let r = network.report;
         let h = Fnv::new()
-            .all_v(grid.positions())
+            .all_v(&network.positions)
             .f(r.energy_before)
             .f(r.energy_after)
             .word(r.at_bound as u64)
@@ -236,4 +250,133 @@ fn results_equal_those_recorded_before_the_one_shape() {
         assert_eq!(name, want_name);
         assert_eq!(h, want, "{name}");
     }
+}
+
+/// A control whose flag is raised once `after` progress steps were seen;
+/// also counts the steps.
+fn stopping_control(after: usize) -> (fairline::Control, Arc<AtomicUsize>) {
+    let steps = Arc::new(AtomicUsize::new(0));
+    let seen = Arc::clone(&steps);
+    let flag = Arc::new(AtomicBool::new(false));
+    let raise = Arc::clone(&flag);
+    let control = fairline::Control::new()
+        .cancel_flag(flag)
+        .on_progress(move |_| {
+            if seen.fetch_add(1, Ordering::Relaxed) + 1 >= after {
+                raise.store(true, Ordering::Relaxed);
+            }
+        });
+    (control, steps)
+}
+
+/// Every entry point put into the one shape stops with its `Cancelled`
+/// error once the caller's flag is up, reports progress on the way (one
+/// step per light for circular lights), and returns the same result with a
+/// control that never stops as without one.
+#[test]
+fn the_entry_points_report_progress_and_can_be_cancelled() {
+    use fairline::fair::{PolylineNetworkOptions, QuadFairError, fair_polyline_network};
+    use fairline::geom::{CurvatureError, CurvatureOptions, curvature};
+    use fairline::highlight::{
+        HighlightError, circular_highlight_bands, circular_highlight_lines, highlight_lines,
+    };
+    let (sphere, field) = meshes();
+    let light = LightArray::new(Vec3::new(0.0, 0.0, 3.0), Vec3::Z, Vec3::X, 0.1).unwrap();
+    let circles: Vec<CircularLight> = [0.5, 0.8, 1.1, 1.4]
+        .iter()
+        .map(|&r| CircularLight::new(Vec3::new(0.0, 0.0, 2.0), Vec3::Z, r).unwrap())
+        .collect();
+    let plain = HighlightOptions::default();
+
+    // linear lights: three phases; stopped after the first
+    let (c, steps) = stopping_control(usize::MAX);
+    let watched = highlight_lines(&field, &light, &plain.clone().control(c)).unwrap();
+    assert_eq!(watched, highlight_lines(&field, &light, &plain).unwrap());
+    assert_eq!(steps.load(Ordering::Relaxed), 4, "3 phases + done");
+    let (c, _) = stopping_control(1);
+    assert!(matches!(
+        highlight_lines(&field, &light, &plain.clone().control(c)),
+        Err(HighlightError::Cancelled(_))
+    ));
+
+    // circular lights: one step per light, bands two per light
+    let (c, steps) = stopping_control(usize::MAX);
+    let watched = circular_highlight_lines(&sphere, &circles, &plain.clone().control(c)).unwrap();
+    assert_eq!(
+        watched,
+        circular_highlight_lines(&sphere, &circles, &plain).unwrap()
+    );
+    assert_eq!(steps.load(Ordering::Relaxed), circles.len() + 1);
+    let (c, steps) = stopping_control(2);
+    assert!(matches!(
+        circular_highlight_lines(&sphere, &circles, &plain.clone().control(c)),
+        Err(HighlightError::Cancelled(_))
+    ));
+    assert_eq!(
+        steps.load(Ordering::Relaxed),
+        2,
+        "stopped at the second light"
+    );
+    let (c, steps) = stopping_control(usize::MAX);
+    circular_highlight_bands(&sphere, &circles, 0.02, &plain.clone().control(c)).unwrap();
+    assert_eq!(steps.load(Ordering::Relaxed), 2 * circles.len() + 2);
+    let (c, _) = stopping_control(circles.len() + 1);
+    assert!(matches!(
+        circular_highlight_bands(&sphere, &circles, 0.02, &plain.clone().control(c)),
+        Err(HighlightError::Cancelled(_))
+    ));
+
+    // curvature: on the (clean) unit sphere k1, k2, H and K are about 1
+    let unit = shapes::icosphere(1.0, 3);
+    let (c, steps) = stopping_control(usize::MAX);
+    let out = curvature(&unit, &CurvatureOptions::default().control(c)).unwrap();
+    assert_eq!(steps.load(Ordering::Relaxed), 2);
+    assert_eq!(out.fields.k1.len(), unit.vertex_count());
+    assert_eq!(out.mean, out.fields.mean());
+    assert_eq!(out.gauss, out.fields.gauss());
+    assert_eq!(out.report.vertices, unit.vertex_count());
+    assert!(!out.report.triangulated);
+    for s in [
+        out.report.k1,
+        out.report.k2,
+        out.report.mean,
+        out.report.gauss,
+    ] {
+        assert!(
+            s.min > 0.85 && s.max < 1.15 && s.min <= s.mean && s.mean <= s.max,
+            "{s:?}"
+        );
+    }
+    let json = serde_json::to_value(&out.report).unwrap();
+    assert_eq!(json["method"], "rusinkiewicz");
+    let (c, _) = stopping_control(1);
+    assert!(matches!(
+        curvature(&sphere, &CurvatureOptions::default().control(c)),
+        Err(CurvatureError::Cancelled(_))
+    ));
+    // polygons are triangulated, one value per input vertex
+    let quads = shapes::quad_grid(6, 5, (-1.0, 1.0), (-1.0, 1.0), |x, y| {
+        0.3 * x * x - 0.2 * y * y
+    });
+    let q = curvature(&quads, &CurvatureOptions::default()).unwrap();
+    assert!(q.report.triangulated);
+    assert_eq!(q.fields.k1.len(), quads.vertex_count());
+
+    // polyline network
+    let grid = shapes::quad_grid(9, 8, (-1.0, 1.0), (-1.0, 1.0), |x, y| {
+        0.05 * noise((x * 100.0 + y * 7.0) as usize)
+    });
+    let (c, steps) = stopping_control(usize::MAX);
+    let out = fair_polyline_network(&grid, &PolylineNetworkOptions::default().control(c)).unwrap();
+    assert_eq!(steps.load(Ordering::Relaxed), 2);
+    assert!(out.report.energy_after <= out.report.energy_before);
+    assert_eq!(
+        out,
+        fair_polyline_network(&grid, &PolylineNetworkOptions::default()).unwrap()
+    );
+    let (c, _) = stopping_control(1);
+    assert!(matches!(
+        fair_polyline_network(&grid, &PolylineNetworkOptions::default().control(c)),
+        Err(QuadFairError::Cancelled(_))
+    ));
 }

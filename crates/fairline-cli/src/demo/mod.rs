@@ -677,7 +677,7 @@ fn fair_section(demo: &Demo) -> Result<Section> {
     fairline::io::write_mesh(demo.out.join("dented-roof-faired.obj"), &faired)?;
     Ok(Section {
         title: "Highlight-line fairing".into(),
-        text: "A roof-like panel z = 0.25 (1 - 0.4 x²)(1 - 0.3 y²) with a planted dent of depth 0.02. `detect` finds the wobbling highlight lines; its region, grown by four rings of faces, is faired (Yong et al. Algorithm 2): the blue desired lines are optimized geometric Hermite curves between the nodes just outside the red region. Only vertices whose motion changes nothing outside the region move. Second picture: the surface-diffusion-flow baseline on the same region.".into(),
+        text: "A roof-like panel z = 0.25 (1 - 0.4 x²)(1 - 0.3 y²) with a planted dent of depth 0.02. `detect` finds the wobbling highlight lines; its region, grown by four rings of faces, is faired with the default method (Yong et al. Algorithm 2 with the desired curves' end tangents refitted to the faired lines, then a quarter of the diffusion-flow state mixed in): the blue desired lines are optimized geometric Hermite curves between the nodes just outside the red region. Only vertices whose motion changes nothing outside the region move. Second picture: the surface-diffusion-flow baseline on the same region; the values compare both with the defect-free panel.".into(),
         images: vec![
             (img, "highlight-line fairing: before (with region and desired lines) and after".into()),
             (img_flow, "baseline: surface diffusion flow on the same region".into()),

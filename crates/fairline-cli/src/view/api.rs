@@ -497,13 +497,13 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             Ok(_) => return bad("circular lights need at least one radius"),
             Err(e) => return bad(e),
         };
-        let lines = match circular_highlight_lines(mesh, &lights) {
+        let lines = match circular_highlight_lines(mesh, &lights, &HighlightOptions::default()) {
             Ok(l) => l,
             Err(e) => return bad(e),
         };
         push_lines(&lines, center, Some(&c.radii), &mut meta, &mut floats);
         if let Some(rho) = req.band {
-            match circular_highlight_bands(mesh, &lights, rho) {
+            match circular_highlight_bands(mesh, &lights, rho, &HighlightOptions::default()) {
                 Ok(b) => {
                     push_lines(
                         &b.lower,

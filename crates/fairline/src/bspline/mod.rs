@@ -45,7 +45,10 @@ pub use surface::{
     BSplineSurface, BasisSupport, Curvature, MIN_WEIGHT_RATIO, SurfaceBasis, SurfaceDerivatives,
     unit_normal,
 };
+#[cfg(test)]
+pub(crate) use tessellate::trimmed_area_by_triangles;
 pub use tessellate::{Tessellation, tessellate, trimmed_area};
+pub(crate) use trim::inside_by_crossings;
 pub use trim::{
     TRIM_FLATNESS, TrimCurve, TrimError, TrimLoop, TrimmedDomain, polygon_signed_area2,
     winding_number,

@@ -132,6 +132,24 @@ fn bspline_trim_plane_with_circular_hole_has_exact_area() {
         let q = trimmed_area(&s, n, n);
         assert!(rel(q, exact) < 1e-5, "grid {n}: quadrature {q} vs {exact}");
     }
+    // Issue #20 item 4: the grid rule (Gauss–Legendre in whole cells split
+    // at the knots) is within 1e-6 of the closed form on the 64 × 64 grid of
+    // `info --area`, and no further from it than the former triangle rule
+    // (every triangle by the 6-point rule, cells across knots).
+    let (fast, slow) = (
+        trimmed_area(&s, 64, 64),
+        super::trimmed_area_by_triangles(&s, 64, 64),
+    );
+    eprintln!(
+        "grid rule {fast} (error {:.2e}), triangle rule {slow} (error {:.2e})",
+        rel(fast, exact),
+        rel(slow, exact)
+    );
+    assert!(rel(fast, exact) < 1e-6, "{fast} vs {exact}");
+    assert!(
+        rel(fast, exact) <= rel(slow, exact) + 1e-12,
+        "{fast} vs {slow}"
+    );
     // Point classification against the exact circle (away from the edge).
     let mut rng = tests::Rng::new(7);
     for _ in 0..2000 {
@@ -236,6 +254,24 @@ fn bspline_trim_cylinder_with_hole_has_exact_area() {
         let q = trimmed_area(&s, n, n);
         assert!(rel(q, exact) < 1e-4, "grid {n}: quadrature {q} vs {exact}");
     }
+    // Issue #20 item 4: the grid rule (Gauss–Legendre in whole cells split
+    // at the knots) is within 1e-6 of the closed form on the 64 × 64 grid of
+    // `info --area`, and no further from it than the former triangle rule
+    // (every triangle by the 6-point rule, cells across knots).
+    let (fast, slow) = (
+        trimmed_area(&s, 64, 64),
+        super::trimmed_area_by_triangles(&s, 64, 64),
+    );
+    eprintln!(
+        "grid rule {fast} (error {:.2e}), triangle rule {slow} (error {:.2e})",
+        rel(fast, exact),
+        rel(slow, exact)
+    );
+    assert!(rel(fast, exact) < 1e-6, "{fast} vs {exact}");
+    assert!(
+        rel(fast, exact) <= rel(slow, exact) + 1e-12,
+        "{fast} vs {slow}"
+    );
     let t = tessellate(&s, 200, 40);
     assert_inside(&s, &t);
     let a = mesh_area(&t);
@@ -281,6 +317,24 @@ fn bspline_trim_torus_cut_by_a_curve_has_exact_area() {
         let q = trimmed_area(&s, n, n);
         assert!(rel(q, exact) < 1e-4, "grid {n}: quadrature {q} vs {exact}");
     }
+    // Issue #20 item 4: the grid rule (Gauss–Legendre in whole cells split
+    // at the knots) is within 1e-6 of the closed form on the 64 × 64 grid of
+    // `info --area`, and no further from it than the former triangle rule
+    // (every triangle by the 6-point rule, cells across knots).
+    let (fast, slow) = (
+        trimmed_area(&s, 64, 64),
+        super::trimmed_area_by_triangles(&s, 64, 64),
+    );
+    eprintln!(
+        "grid rule {fast} (error {:.2e}), triangle rule {slow} (error {:.2e})",
+        rel(fast, exact),
+        rel(slow, exact)
+    );
+    assert!(rel(fast, exact) < 1e-6, "{fast} vs {exact}");
+    assert!(
+        rel(fast, exact) <= rel(slow, exact) + 1e-12,
+        "{fast} vs {slow}"
+    );
     let t = tessellate(&s, 129, 129);
     assert_inside(&s, &t);
     let a = mesh_area(&t);

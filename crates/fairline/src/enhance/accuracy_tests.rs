@@ -752,11 +752,17 @@ fn vertex_flow_approximates_known_surfaces_better_than_its_input() {
                 assert!(out.normal_error_deg < input.normal_error_deg, "{name}");
             }
             "sharp cube" => {
-                assert!(h < 0.95 && rms < 0.95, "{name}: {h:.3} {rms:.3}");
-                assert!(out.normal_error_deg < input.normal_error_deg, "{name}");
+                // the crease rebuilt from the sides (module `crease`)
+                assert!(h <= 0.9 && rms <= 0.8, "{name}: {h:.3} {rms:.3}");
+                assert!(
+                    out.normal_error_deg < 0.7 * input.normal_error_deg,
+                    "{name}"
+                );
             }
             _ => {
-                assert!(h <= 1.1 && rms <= 1.05, "{name}: {h:.3} {rms:.3}");
+                // NOT the issue's claim: the Hausdorff distance stays above
+                // the input's (BENCHMARKS.md, session 19)
+                assert!(h <= 1.1 && rms < 1.0, "{name}: {h:.3} {rms:.3}");
             }
         }
         // the paper's method leaves the surface; the default does not
@@ -771,5 +777,95 @@ fn vertex_flow_approximates_known_surfaces_better_than_its_input() {
         assert!(out.normal_error_deg < paper.normal_error_deg, "{name}");
         assert!(out.quality >= 0.8, "{name}: quality {}", out.quality);
         assert_eq!(result.report.flipped_triangles, 0, "{name}");
+    }
+}
+
+/// An Evans–Fung biconcave disc ("red blood cell", radius 1): the icosphere
+/// (`subdivisions`) mapped so that the radius ρ in the xy-plane grows
+/// linearly with the polar angle up to the rim ρ = 1 at the equator, and
+/// z = ± ½ √(1 − ρ²) (0.81 + 7.83 ρ² − 4.39 ρ⁴) / 3.91 (Evans and Fung
+/// 1972, coefficients in μm over the radius 3.91 μm).
+fn red_blood_cell(subdivisions: u32) -> SurfaceMesh {
+    let mut mesh = crate::shapes::icosphere(1.0, subdivisions);
+    let positions: Vec<Vec3> = mesh
+        .positions()
+        .iter()
+        .map(|&p| {
+            let polar = p.z.clamp(-1.0, 1.0).acos();
+            let rho = 1.0 - (2.0 * polar / std::f64::consts::PI - 1.0).abs();
+            let azimuth = p.y.atan2(p.x);
+            let half = 0.5
+                * (1.0 - rho * rho).max(0.0).sqrt()
+                * (0.81 + 7.83 * rho * rho - 4.39 * rho.powi(4))
+                / 3.91;
+            Vec3::new(rho * azimuth.cos(), rho * azimuth.sin(), half.copysign(p.z))
+        })
+        .collect();
+    mesh.set_positions(positions).unwrap();
+    mesh
+}
+
+/// The red blood cell moves toward its rim (issue #21 item 2; the paper's
+/// Fig. 1 shows a blood cell): with the defaults the share of vertices
+/// within 10 % of the radius from the rim grows, no triangle flips and the
+/// mean quality stays at least 0.8.
+#[test]
+fn red_blood_cell_vertices_move_toward_the_rim() {
+    let cell = red_blood_cell(4);
+    let near_rim = |p: &[Vec3]| {
+        p.iter()
+            .filter(|q| (q.x * q.x + q.y * q.y).sqrt() > 0.9)
+            .count() as f64
+            / p.len() as f64
+    };
+    let out = enhance_features(&cell, &EnhanceOptions::default()).unwrap();
+    let (before, after) = (near_rim(cell.positions()), near_rim(&out.positions));
+    println!(
+        "red blood cell ({} vertices): share within 10 % of the rim {before:.3} -> {after:.3}, mean quality {:.3} -> {:.3}",
+        cell.vertex_count(),
+        out.report.quality_before.mean,
+        out.report.quality_after.mean
+    );
+    assert!(after > before + 0.005, "{before} -> {after}");
+    assert_eq!(out.report.flipped_triangles, 0);
+    assert!(out.report.quality_after.mean >= 0.8);
+}
+
+/// The chord faces of under-sampled sharp creases (module `crease`) are
+/// found where the shapes have sharp creases cut by chords (sharp cube,
+/// fandisk-like part) and nowhere on the cylinder with filleted rims, whose
+/// features are rounded and sampled by several strips.
+#[test]
+fn chord_faces_are_found_on_sharp_creases_only() {
+    for truth in truths() {
+        let m = &truth.mesh;
+        let normals: Vec<(Vec3, f64)> = (0..m.face_count() as u32)
+            .map(|f| {
+                let [a, b, c] = m.triangle(FaceId(f)).map(|v| m.positions()[v.idx()]);
+                triangle_normal_area(a, b, c)
+            })
+            .collect();
+        let chords = super::crease::chord_faces(m, &normals);
+        let found: Vec<usize> = (0..chords.len()).filter(|&f| chords[f].is_some()).collect();
+        let near = found
+            .iter()
+            .filter(|&&f| {
+                let [a, b, c] = m.triangle(FaceId(f as u32)).map(|v| m.positions()[v.idx()]);
+                (truth.near_feature)((a + b + c) / 3.0)
+            })
+            .count();
+        println!(
+            "{}: {} chord faces of {}, {near} of them near a feature",
+            truth.name,
+            found.len(),
+            m.face_count()
+        );
+        match truth.name {
+            "sharp cube" | "fandisk-like part" => {
+                assert!(!found.is_empty() && near == found.len(), "{}", truth.name)
+            }
+            "filleted cylinder" => assert!(found.is_empty()),
+            _ => {}
+        }
     }
 }

@@ -37,9 +37,10 @@
 //! of a face whose neighbours are coplanar is its own normal, and the lift
 //! vanishes), and the corners of a crease keep the planes of their sides.
 
+use super::crease::{SidePlanes, chord_faces, crease_point};
 use crate::Vec3;
 use crate::geom::{closest_point_on_triangle, triangle_normal_area};
-use crate::mesh::{FaceId, SurfaceMesh, VertexId};
+use crate::mesh::{FaceId, SurfaceMesh, VertexId, union_find_join, union_find_root};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -56,7 +57,9 @@ pub enum Projection {
     /// Onto the Phong tessellation (α = ½) of the input triangle met along
     /// the vertex's input normal, with crease-aware corner normals: between
     /// the input's vertices the point lands on a smooth fit of the surface
-    /// instead of on the chord (module documentation).
+    /// instead of on the chord (module documentation); on the chord faces
+    /// of an under-sampled sharp crease, onto the crease rebuilt from the
+    /// planes of its sides (module `crease`).
     #[default]
     Smooth,
 }
@@ -218,16 +221,15 @@ fn line_triangle(x: Vec3, d: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Option<(f64, [f
 /// meet along their common edge unless it is a crease (a point whose
 /// nearest input point lies on an edge gets the same lift from either
 /// face); without creases the corner normal is the area-weighted vertex
-/// normal. Degenerate faces get zero normals (no lift).
-fn corner_normals(mesh: &SurfaceMesh, face_normals: &[(Vec3, f64)]) -> Vec<[Vec3; 3]> {
-    fn root(parent: &mut [u32], mut i: u32) -> u32 {
-        while parent[i as usize] != i {
-            let up = parent[parent[i as usize] as usize];
-            parent[i as usize] = up;
-            i = up;
-        }
-        i
-    }
+/// normal. Faces marked in `separate` (the chord faces of under-sampled
+/// creases, module `crease`) are not joined to faces that are not, so the
+/// sides of a crease keep their own normals up to it. Degenerate faces get
+/// zero normals (no lift).
+fn corner_normals(
+    mesh: &SurfaceMesh,
+    face_normals: &[(Vec3, f64)],
+    separate: &[bool],
+) -> Vec<[Vec3; 3]> {
     let cos_crease = CREASE_ANGLE_DEG.to_radians().cos();
     let nf = mesh.face_count();
     let triangles: Vec<[VertexId; 3]> = (0..nf as u32).map(|f| mesh.triangle(FaceId(f))).collect();
@@ -246,19 +248,22 @@ fn corner_normals(mesh: &SurfaceMesh, face_normals: &[(Vec3, f64)]) -> Vec<[Vec3
             continue;
         };
         let (n1, n2) = (face_normals[f1.idx()].0, face_normals[f2.idx()].0);
-        if n1 == Vec3::ZERO || n2 == Vec3::ZERO || n1.dot(n2) < cos_crease {
+        if n1 == Vec3::ZERO
+            || n2 == Vec3::ZERO
+            || n1.dot(n2) < cos_crease
+            || separate[f1.idx()] != separate[f2.idx()]
+        {
             continue;
         }
         for v in [mesh.from_vertex(h), mesh.to_vertex(h)] {
             if let (Some(a), Some(b)) = (corner(f1, v), corner(f2, v)) {
-                let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
-                if ra != rb {
-                    parent[ra.max(rb) as usize] = ra.min(rb);
-                }
+                union_find_join(&mut parent, a, b);
             }
         }
     }
-    let roots: Vec<u32> = (0..3 * nf as u32).map(|c| root(&mut parent, c)).collect();
+    let roots: Vec<u32> = (0..3 * nf as u32)
+        .map(|c| union_find_root(&mut parent, c))
+        .collect();
     let mut sums = vec![Vec3::ZERO; 3 * nf];
     for (c, &r) in roots.iter().enumerate() {
         let (n, area) = face_normals[c / 3];
@@ -287,6 +292,9 @@ pub(super) struct InputSurface<'a> {
     corner_normals: Vec<[Vec3; 3]>,
     /// Area-weighted unit normal of each vertex (zero where undefined).
     vertex_normals: Vec<Vec3>,
+    /// The side planes of the chord faces of under-sampled sharp creases
+    /// (module `crease`); `None` for every other face.
+    chords: Vec<Option<SidePlanes>>,
 }
 
 impl<'a> InputSurface<'a> {
@@ -299,7 +307,9 @@ impl<'a> InputSurface<'a> {
                 triangle_normal_area(a, b, c)
             })
             .collect();
-        let corner_normals = corner_normals(mesh, &face_normals);
+        let chords = chord_faces(mesh, &face_normals);
+        let separate: Vec<bool> = chords.iter().map(Option::is_some).collect();
+        let corner_normals = corner_normals(mesh, &face_normals, &separate);
         let vertex_normals = (0..mesh.vertex_count() as u32)
             .into_par_iter()
             .map(|v| {
@@ -314,17 +324,26 @@ impl<'a> InputSurface<'a> {
             positions,
             corner_normals,
             vertex_normals,
+            chords,
         }
     }
 
     /// The point of face `face` at barycentric coordinates `w` on the flat
-    /// triangle ([`Projection::Mesh`]) or on its Phong patch
-    /// ([`Projection::Smooth`], module documentation).
+    /// triangle ([`Projection::Mesh`]), or for [`Projection::Smooth`] on the
+    /// crease rebuilt from its sides where the face is a chord of an
+    /// under-sampled sharp crease (module `crease`), else on its Phong patch
+    /// (module documentation).
     pub fn point(&self, face: FaceId, w: [f64; 3], projection: Projection) -> Vec3 {
         let t = self.mesh.triangle(face).map(|u| self.positions[u.idx()]);
         let p = w[0] * t[0] + w[1] * t[1] + w[2] * t[2];
         if projection != Projection::Smooth {
             return p;
+        }
+        if let Some(q) = self.chords[face.idx()]
+            .as_ref()
+            .and_then(|planes| crease_point(t, planes, w))
+        {
+            return q;
         }
         let n = self.corner_normals[face.idx()];
         let mut lift = Vec3::ZERO;

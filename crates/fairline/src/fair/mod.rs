@@ -35,6 +35,4 @@ pub use surface::{
 };
 
 #[cfg(test)]
-mod before_17;
-#[cfg(test)]
 pub(crate) mod tests;

@@ -1,15 +1,21 @@
 //! Face areas and vertex areas (barycentric and mixed Voronoi).
 
-use super::normals::{face_area_vector, face_area_vector_at};
+use super::normals::face_area_vector_at;
 use crate::Vec3;
 use crate::mesh::{FaceId, HalfedgeId, SurfaceMesh, VertexId};
 use rayon::prelude::*;
 
 /// Face areas (the magnitude of the Newell area vector for polygons).
 pub fn face_areas(mesh: &SurfaceMesh) -> Vec<f64> {
+    face_areas_at(mesh, mesh.positions())
+}
+
+/// [`face_areas`] with the vertices at `positions` (one per vertex; a
+/// geometry view).
+pub fn face_areas_at(mesh: &SurfaceMesh, positions: &[Vec3]) -> Vec<f64> {
     (0..mesh.face_count() as u32)
         .into_par_iter()
-        .map(|f| face_area_vector(mesh, FaceId(f)).length())
+        .map(|f| face_area_vector_at(mesh, positions, FaceId(f)).length())
         .collect()
 }
 
@@ -17,7 +23,13 @@ pub fn face_areas(mesh: &SurfaceMesh) -> Vec<f64> {
 /// triangles around vertex i (a polygon with n corners gives 1/n of its area
 /// to each). They sum to the surface area.
 pub fn barycentric_vertex_areas(mesh: &SurfaceMesh) -> Vec<f64> {
-    let fa = face_areas(mesh);
+    barycentric_vertex_areas_at(mesh, mesh.positions())
+}
+
+/// [`barycentric_vertex_areas`] with the vertices at `positions` (one per
+/// vertex; a geometry view).
+pub fn barycentric_vertex_areas_at(mesh: &SurfaceMesh, positions: &[Vec3]) -> Vec<f64> {
+    let fa = face_areas_at(mesh, positions);
     let sizes: Vec<f64> = (0..mesh.face_count() as u32)
         .into_par_iter()
         .map(|f| mesh.face_size(FaceId(f)) as f64)

@@ -165,6 +165,66 @@ pub fn laplacian_from_weights(mesh: &SurfaceMesh, w: &[f64]) -> SparseColMat<usi
     SparseColMat::new(symbolic, values)
 }
 
+/// The pattern of the Laplacian of [`laplacian_from_weights`] (vertex
+/// adjacency plus the diagonal, rows sorted within each column) and, for
+/// every stored entry, where its value comes from: so a method whose weights
+/// change every step (implicit smoothing) computes the entries it needs
+/// straight from the halfedge weights, without assembling the matrix.
+#[derive(Clone, Debug)]
+pub struct LaplacianPattern {
+    /// The n × n pattern (both triangles and the diagonal).
+    pub symbolic: SymbolicSparseColMat<usize>,
+    /// Per entry: the halfedge from the column's vertex to the row's vertex,
+    /// or [`LaplacianPattern::DIAGONAL`].
+    pub source: Vec<u32>,
+}
+
+impl LaplacianPattern {
+    /// The source of a diagonal entry.
+    pub const DIAGONAL: u32 = u32::MAX;
+
+    /// The pattern of `mesh`'s Laplacian.
+    pub fn new(mesh: &SurfaceMesh) -> Self {
+        let n = mesh.vertex_count();
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        col_ptr.push(0usize);
+        let mut row_idx = Vec::with_capacity(mesh.halfedge_count() + n);
+        let mut source = Vec::with_capacity(mesh.halfedge_count() + n);
+        let mut column: Vec<(usize, u32)> = Vec::new();
+        for v in mesh.vertices() {
+            column.clear();
+            column.extend(mesh.outgoing(v).map(|h| (mesh.to_vertex(h).idx(), h.0)));
+            column.push((v.idx(), Self::DIAGONAL));
+            column.sort_unstable_by_key(|e| e.0);
+            row_idx.extend(column.iter().map(|e| e.0));
+            source.extend(column.iter().map(|e| e.1));
+            col_ptr.push(row_idx.len());
+        }
+        LaplacianPattern {
+            symbolic: SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx),
+            source,
+        }
+    }
+
+    /// Entry k (in the column of vertex j) of the Laplacian for the
+    /// halfedge weights `w`: w_ij off the diagonal, −Σ_j w_ij (summed in the
+    /// order of [`SurfaceMesh::outgoing`], as [`laplacian_from_weights`]
+    /// does) on it.
+    #[inline]
+    pub fn entry(&self, mesh: &SurfaceMesh, w: &[f64], j: usize, k: usize) -> f64 {
+        match self.source[k] {
+            Self::DIAGONAL => {
+                let mut diag = 0.0;
+                for h in mesh.outgoing(VertexId(j as u32)) {
+                    diag -= w[h.idx()];
+                }
+                diag
+            }
+            h => w[h as usize],
+        }
+    }
+}
+
 /// Laplacian with the given weights.
 pub fn laplacian(mesh: &SurfaceMesh, weights: LaplaceWeights) -> SparseColMat<usize, f64> {
     laplacian_from_weights(mesh, &halfedge_weights(mesh, weights))

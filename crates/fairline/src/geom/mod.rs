@@ -16,24 +16,26 @@ pub(crate) use normals::{face_area_vectors, vertex_normal_from_area_vectors};
 mod quadric;
 
 pub use areas::{
-    barycentric_vertex_areas, face_areas, mixed_corner_areas, mixed_vertex_areas,
-    mixed_vertex_areas_at,
+    barycentric_vertex_areas, barycentric_vertex_areas_at, face_areas, face_areas_at,
+    mixed_corner_areas, mixed_vertex_areas, mixed_vertex_areas_at,
 };
 pub use curvature::{
-    CurvatureMethod, PrincipalCurvatures, gaussian_curvature, mean_curvature,
-    mean_curvature_normals, principal_curvatures, principal_curvatures_meyer,
-    principal_curvatures_rusinkiewicz,
+    CurvatureError, CurvatureMethod, CurvatureOptions, CurvatureOutput, CurvatureReport,
+    PrincipalCurvatures, curvature, gaussian_curvature, mean_curvature, mean_curvature_normals,
+    principal_curvatures, principal_curvatures_meyer, principal_curvatures_rusinkiewicz,
 };
 pub use laplace::{
-    LaplaceWeights, cotangent_laplacian, cotangents, cotangents_at, edge_length_laplacian,
-    halfedge_weights, halfedge_weights_at, laplacian, laplacian_from_weights, uniform_laplacian,
+    LaplaceWeights, LaplacianPattern, cotangent_laplacian, cotangents, cotangents_at,
+    edge_length_laplacian, halfedge_weights, halfedge_weights_at, laplacian,
+    laplacian_from_weights, uniform_laplacian,
 };
 pub use measures::{
     closest_point_on_triangle, corner_angles, edge_lengths, mean_edge_length, surface_area,
     triangle_qualities, triangle_quality, volume, volume_at, willmore_energy,
 };
 pub use normals::{
-    face_normals, triangle_normal_area, vertex_normal, vertex_normals, vertex_normals_max,
+    face_normals, triangle_normal_area, vertex_normal, vertex_normals, vertex_normals_at,
+    vertex_normals_max, vertex_normals_max_at,
 };
 pub use quadric::{QuadricFit, QuadricPatch, quadric_fit, quadric_fit_rings, quadric_patch_rings};
 

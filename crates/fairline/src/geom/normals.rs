@@ -66,7 +66,16 @@ pub fn face_normals(mesh: &SurfaceMesh) -> Vec<Vec3> {
 /// faces) the unweighted sum of unit face normals is tried; if that vanishes
 /// too, the normal is the zero vector. Isolated vertices get zero.
 pub fn vertex_normals(mesh: &SurfaceMesh) -> Vec<Vec3> {
-    let area_vectors = face_area_vectors(mesh);
+    vertex_normals_at(mesh, mesh.positions())
+}
+
+/// [`vertex_normals`] with the vertices at `positions` (one per vertex; a
+/// geometry view: trial positions are evaluated without a copy of the mesh).
+pub fn vertex_normals_at(mesh: &SurfaceMesh, positions: &[Vec3]) -> Vec<Vec3> {
+    let area_vectors: Vec<Vec3> = (0..mesh.face_count() as u32)
+        .into_par_iter()
+        .map(|f| face_area_vector_at(mesh, positions, FaceId(f)))
+        .collect();
     (0..mesh.vertex_count() as u32)
         .into_par_iter()
         .map(|v| vertex_normal_from_area_vectors(mesh, VertexId(v), &area_vectors))
@@ -131,7 +140,13 @@ fn normal_from_area_vectors(
 /// estimators (as trimesh2 does). Falls back to [`vertex_normals`] where the
 /// sum vanishes. Polygon corners are treated like triangle corners.
 pub fn vertex_normals_max(mesh: &SurfaceMesh) -> Vec<Vec3> {
-    let p = mesh.positions();
+    vertex_normals_max_at(mesh, mesh.positions())
+}
+
+/// [`vertex_normals_max`] with the vertices at `positions` (one per vertex;
+/// a geometry view).
+pub fn vertex_normals_max_at(mesh: &SurfaceMesh, positions: &[Vec3]) -> Vec<Vec3> {
+    let p = positions;
     let fallback = std::sync::OnceLock::new();
     let out: Vec<Vec3> = (0..mesh.vertex_count() as u32)
         .into_par_iter()
@@ -159,7 +174,7 @@ pub fn vertex_normals_max(mesh: &SurfaceMesh) -> Vec<Vec3> {
             if *n != Vec3::ZERO || mesh.is_isolated(VertexId(i as u32)) {
                 *n
             } else {
-                fallback.get_or_init(|| vertex_normals(mesh))[i]
+                fallback.get_or_init(|| vertex_normals_at(mesh, p))[i]
             }
         })
         .collect()

@@ -5,7 +5,7 @@
 use super::contour::{self, Levels};
 use super::light::{CircleApproach, CircularLight};
 use super::quartic::quartic_roots;
-use super::{HighlightBands, HighlightError, HighlightLines};
+use super::{HighlightBands, HighlightError, HighlightLines, HighlightOptions};
 use crate::Vec3;
 use crate::geom;
 use crate::mesh::SurfaceMesh;
@@ -209,15 +209,22 @@ fn vertex_approaches(
 }
 
 /// Contours of d_s = `level` for each light; line index k = light number.
+/// `done` counts the lights contoured before (bands contour each light
+/// twice) and `total` all of them, for the progress of `options.control`.
 fn circular_levels(
     mesh: &SurfaceMesh,
     lights: &[CircularLight],
     level: f64,
+    options: &HighlightOptions,
+    (done, total): (usize, usize),
 ) -> Result<HighlightLines, HighlightError> {
     mesh.require_triangles()?;
     let normals = geom::vertex_normals(mesh);
     let mut all = HighlightLines::default();
     for (k, light) in lights.iter().enumerate() {
+        options
+            .control
+            .step("lights", (done + k) as u64, total as u64)?;
         let (values, branch, theta) = vertex_approaches(mesh, &normals, light);
         // d_s is discontinuous where the nearest circle point jumps (its sign
         // flips with the direction N × L̇): an edge whose two nearest circle
@@ -236,6 +243,9 @@ fn circular_levels(
         );
         all.lines.extend(lines.lines);
     }
+    options
+        .control
+        .progress("lights", (done + lights.len()) as u64, total as u64);
     Ok(all)
 }
 
@@ -245,20 +255,26 @@ fn circular_levels(
 /// like the linear model (Yong et al. §2.3–2.4). Line index k is the
 /// position of the light in `lights`. Edges across which the nearest circle
 /// point jumps by more than 90° carry no nodes (d_s is discontinuous there).
+/// Of `options` only `control` applies (one step per light); errors with
+/// [`HighlightError::Cancelled`] when it asks to stop.
 pub fn circular_highlight_lines(
     mesh: &SurfaceMesh,
     lights: &[CircularLight],
+    options: &HighlightOptions,
 ) -> Result<HighlightLines, HighlightError> {
-    circular_levels(mesh, lights, 0.0)
+    circular_levels(mesh, lights, 0.0, options, (0, lights.len()))
 }
 
 /// Circular highlight bands (Nishiyama et al. §2, last paragraph): the
 /// level sets d_s = −ρ (`lower`) and d_s = +ρ (`upper`) of each light, a
 /// torus-shaped light of tube radius ρ > 0. Line index k = light number.
+///
+/// Of `options` only `control` applies (one step per light and band side).
 pub fn circular_highlight_bands(
     mesh: &SurfaceMesh,
     lights: &[CircularLight],
     rho: f64,
+    options: &HighlightOptions,
 ) -> Result<HighlightBands, HighlightError> {
     if !(rho > 0.0) || !rho.is_finite() {
         return Err(HighlightError::InvalidOption(format!(
@@ -267,7 +283,7 @@ pub fn circular_highlight_bands(
     }
     Ok(HighlightBands {
         radius: rho,
-        lower: circular_levels(mesh, lights, -rho)?,
-        upper: circular_levels(mesh, lights, rho)?,
+        lower: circular_levels(mesh, lights, -rho, options, (0, 2 * lights.len()))?,
+        upper: circular_levels(mesh, lights, rho, options, (lights.len(), 2 * lights.len()))?,
     })
 }

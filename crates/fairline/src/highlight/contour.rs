@@ -169,12 +169,13 @@ pub(crate) fn face_segments(
             (index, index)
         }
         Levels::Periodic { spacing, offset } => {
-            let a = floor((lo - offset) / spacing);
-            let b = ceil((hi - offset) / spacing);
-            if !(b - a <= max_levels as f64 + 2.0) {
+            if too_many_levels(lo, hi, spacing, offset, max_levels) {
                 return;
             }
-            (a as i64, b as i64)
+            (
+                floor((lo - offset) / spacing) as i64,
+                ceil((hi - offset) / spacing) as i64,
+            )
         }
     };
     let mut es = [0u32; 3];
@@ -224,6 +225,27 @@ pub(crate) fn face_segments(
             _ => {}
         }
     }
+}
+
+/// Whether an element whose field values span `lo..=hi` is crossed by more
+/// levels `offset + m·spacing` than `max_levels` allows, counted as
+/// `ceil((hi − offset)/spacing) − floor((lo − offset)/spacing) > max_levels
+/// + 2`: such an element (near a silhouette, where the lines are finer than
+/// the elements) carries no segment. The one rule of mesh triangles
+/// ([`face_segments`]) and B-spline grid cells
+/// (`highlight::surface::contour_field`, `linear_lights`), so that both
+/// draw the same lights (issue #20 item 7).
+#[inline]
+pub(crate) fn too_many_levels(
+    lo: f64,
+    hi: f64,
+    spacing: f64,
+    offset: f64,
+    max_levels: i64,
+) -> bool {
+    let a = floor((lo - offset) / spacing);
+    let b = ceil((hi - offset) / spacing);
+    !(b - a <= max_levels as f64 + 2.0)
 }
 
 /// `x.floor()` without a call into libm (the x86-64 baseline has no

@@ -6,24 +6,33 @@ use super::contour::{self, Levels, NodeId, Segment};
 use super::light::LightArray;
 use super::readable::Readability;
 use super::{HighlightBands, HighlightLines};
-use crate::Vec3;
 use crate::geom;
 use crate::mesh::{FaceId, SurfaceMesh, VertexId};
+use crate::{Control, Vec3};
 use rayon::prelude::*;
 
-/// Options of the highlight line model.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Options of the highlight line model and of the highlight-line entry
+/// points ([`highlight_lines`], [`super::circular_highlight_lines`],
+/// [`super::circular_highlight_bands`]).
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct HighlightOptions {
     /// Smallest |Z·N| for which a vertex gets a highlight distance (default
     /// 0.1, normals within about 84° of the light plane). Below it the
     /// normal line meets the light plane too far away and d_P runs off to
     /// infinity; edges at such vertices, and edges where Z·N changes sign,
-    /// carry no nodes (DESIGN.md §3).
+    /// carry no nodes (DESIGN.md §3). Linear lights only.
     pub min_normal_cos: f64,
     /// Most levels (lights) one triangle may be crossed by (default 4);
     /// a triangle crossed by more is skipped: those lines are below the
-    /// mesh resolution (this happens only near silhouettes).
+    /// mesh resolution (this happens only near silhouettes). Linear lights
+    /// only (a circular light has one level).
     pub max_lines_per_face: u32,
+    /// Progress callback and cancel flag: circular lights take one step per
+    /// light (stage `"lights"`); a linear array, whose lights are all
+    /// contoured in one pass over the faces, one step per phase (stage
+    /// `"highlight model"`: vertex distances, segments, chaining).
+    pub control: Control,
 }
 
 impl Default for HighlightOptions {
@@ -31,6 +40,7 @@ impl Default for HighlightOptions {
         HighlightOptions {
             min_normal_cos: 0.1,
             max_lines_per_face: 4,
+            control: Control::default(),
         }
     }
 }
@@ -44,6 +54,11 @@ impl HighlightOptions {
     /// Sets [`HighlightOptions::max_lines_per_face`].
     pub fn max_lines_per_face(mut self, n: u32) -> Self {
         self.max_lines_per_face = n;
+        self
+    }
+    /// Sets [`HighlightOptions::control`].
+    pub fn control(mut self, control: Control) -> Self {
+        self.control = control;
         self
     }
     fn check(&self) -> Result<(), HighlightError> {
@@ -76,6 +91,11 @@ pub struct HighlightModel {
     segments: Vec<Segment>,
 }
 
+/// The progress stage of a linear light array and its phases: vertex
+/// distances, segments, chaining ([`highlight_lines`]).
+const MODEL_STAGE: &str = "highlight model";
+const MODEL_PHASES: u64 = 3;
+
 /// Distance value and branch of one vertex.
 #[inline]
 pub(crate) fn vertex_distance(light: &LightArray, p: Vec3, n: Vec3, min_cos: f64) -> (f64, i8) {
@@ -104,6 +124,7 @@ impl HighlightModel {
     ) -> Result<Self, HighlightError> {
         options.check()?;
         mesh.require_triangles()?;
+        options.control.step(MODEL_STAGE, 0, MODEL_PHASES)?;
         // one pass per vertex: the Eq. (3) normal (bit-identical to
         // geom::vertex_normals) and the Eq. (1) distance
         let area_vectors = geom::face_area_vectors(mesh);
@@ -131,6 +152,7 @@ impl HighlightModel {
                 }
             });
         drop(area_vectors);
+        options.control.step(MODEL_STAGE, 1, MODEL_PHASES)?;
         let segments = contour::all_segments(
             mesh,
             &distances,
@@ -350,11 +372,18 @@ impl HighlightModel {
 
 /// The highlight lines of a triangle mesh under a linear light array
 /// (Yong et al. Algorithm 1 with Eq. (1), (3), (4) as corrected in
-/// DESIGN.md §3). Errors on non-triangle meshes.
+/// DESIGN.md §3). Errors on non-triangle meshes, and with
+/// [`HighlightError::Cancelled`] when `options.control` asks to stop.
 pub fn highlight_lines(
     mesh: &SurfaceMesh,
     light: &LightArray,
     options: &HighlightOptions,
 ) -> Result<HighlightLines, HighlightError> {
-    Ok(HighlightModel::new(mesh, *light, *options)?.lines(mesh))
+    let model = HighlightModel::new(mesh, *light, options.clone())?;
+    options.control.step(MODEL_STAGE, 2, MODEL_PHASES)?;
+    let lines = model.lines(mesh);
+    options
+        .control
+        .progress(MODEL_STAGE, MODEL_PHASES, MODEL_PHASES);
+    Ok(lines)
 }

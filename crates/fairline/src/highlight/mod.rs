@@ -12,6 +12,7 @@ mod circular;
 mod contour;
 pub mod detect;
 mod light;
+mod light_choice;
 mod linear;
 pub mod quartic;
 pub mod readable;
@@ -24,20 +25,46 @@ pub use detect::{
     region_detection_score,
 };
 pub use light::{CircleApproach, CircularLight, CircularLights, LightArray, UpAxis};
+pub use light_choice::LightChoice;
 pub use linear::{HighlightModel, HighlightOptions, highlight_lines};
 /// The one quartic solver (Nishiyama et al. Eq. (2.15)–(2.16)), shared by
 /// circular lights on meshes and on B-spline surfaces.
 pub use quartic::{Roots, quartic_roots};
 pub use readable::{LineStats, Readability};
 pub use surface::{
-    PartLights, PatchHighlights, SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceHighlights,
-    SurfaceLight, linear_lights, part_highlight_lines, patch_grid, surface_highlight_lines,
-    surface_signed_distance,
+    DEFAULT_CIRCULAR_RADII, PartLights, PatchHighlights, SurfaceHighlightLine,
+    SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight, default_circular_lights,
+    default_circular_lights_for_mesh, linear_lights, part_highlight_lines, patch_grid,
+    surface_highlight_lines, surface_signed_distance,
 };
 
 use crate::mesh::MeshError;
 
+use serde::Serialize;
 use thiserror::Error;
+
+/// Counts of a set of highlight lines: the `"summary"` (and the top-level
+/// `"lines"`, `"closed_lines"`, `"nodes"`) of `fairline highlight --report`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct LineCounts {
+    /// Polylines.
+    pub lines: usize,
+    /// Closed polylines among them.
+    pub closed_lines: usize,
+    /// Nodes (points) of all polylines.
+    pub nodes: usize,
+}
+
+impl HighlightLines {
+    /// The counts of these lines for reports.
+    pub fn counts(&self) -> LineCounts {
+        LineCounts {
+            lines: self.lines.len(),
+            closed_lines: self.lines.iter().filter(|l| l.closed).count(),
+            nodes: self.node_count(),
+        }
+    }
+}
 
 /// Why a highlight computation could not run.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -52,6 +79,9 @@ pub enum HighlightError {
     /// An option is out of range.
     #[error("invalid option: {0}")]
     InvalidOption(String),
+    /// Default lights were asked for a mesh without a finite vertex.
+    #[error("the mesh has no finite vertices")]
+    NoFiniteVertices,
     /// The caller's [`crate::Control`] asked to stop.
     #[error("cancelled")]
     Cancelled(#[from] crate::Cancelled),

@@ -158,10 +158,12 @@ pub fn distance_field(
 /// on the surface (Yong et al. Eq. (1)–(2)): d_P is sampled on an `n × n`
 /// grid and light m is kept when its level m·s crosses at least one grid
 /// cell that [`contour_field`] contours — all four corners defined (|Z·N| ≥
-/// `min_cos`), on one side of the light plane, and spanning at most
-/// [`SurfaceHighlightOptions::max_lines_per_cell`] (default) spacings, so
-/// that cells near silhouettes, where d_P runs off to infinity, do not
-/// decide which lights are drawn (as on meshes). When more than
+/// `min_cos`), on one side of the light plane, and crossed by at most
+/// [`SurfaceHighlightOptions::max_lines_per_cell`] (default) levels counted
+/// by the mesh model's rule (`contour::too_many_levels`), so that cells
+/// near silhouettes, where d_P runs off to infinity, do not decide which
+/// lights are drawn, and the same lights are drawn as on the tessellated
+/// surface. When more than
 /// `max_lights` lights qualify, the `max_lights` consecutive ones crossing
 /// the most cells are kept (the lights of the bulk of the surface, not the
 /// middle of a range stretched by outliers). Empty when no cell qualifies.
@@ -179,8 +181,7 @@ pub fn linear_lights(
     };
     let field = distance_field(surface, &probe, n, n);
     let spacing = array.spacing();
-    let max_span =
-        f64::from(SurfaceHighlightOptions::default().max_lines_per_cell.max(1)) * spacing;
+    let max_levels = i64::from(SurfaceHighlightOptions::default().max_lines_per_cell.max(1));
     let (nu, nv) = (field.us.len(), field.vs.len());
     let at = |a: usize, b: usize| field.samples[a * nv + b];
     // Cells crossed per light m, counted in one pass over the cells.
@@ -201,7 +202,7 @@ pub fn linear_lights(
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), s| {
                     (l.min(s.value), h.max(s.value))
                 });
-            if !(hi - lo <= max_span) || spacing <= 0.0 {
+            if spacing <= 0.0 || super::contour::too_many_levels(lo, hi, spacing, 0.0, max_levels) {
                 continue;
             }
             // Levels m·s with lo < m·s ≤ hi (a value equal to the level
@@ -264,10 +265,11 @@ pub struct SurfaceHighlightOptions {
     pub tolerance: f64,
     /// Most refinement steps per contour point.
     pub max_refine_steps: usize,
-    /// Linear lights: most lines (light spacings) one grid cell may be
-    /// crossed by (default 4, as `HighlightOptions::max_lines_per_face` on
-    /// meshes); a cell crossed by more is skipped, its lines being finer
-    /// than the grid (this happens only near silhouettes). 0: no limit.
+    /// Linear lights: most lines one grid cell may be crossed by (default
+    /// 4, counted as `HighlightOptions::max_lines_per_face` on mesh
+    /// triangles: `ceil(hi/s) − floor(lo/s) ≤ 4 + 2`); a cell crossed by
+    /// more is skipped, its lines being finer than the grid (this happens
+    /// only near silhouettes). 0: no limit.
     pub max_lines_per_cell: u32,
 }
 
@@ -388,6 +390,185 @@ pub fn surface_highlight_lines(
         }
     }
     out
+}
+
+/// Radii of [`default_circular_lights`] unless told otherwise.
+pub const DEFAULT_CIRCULAR_RADII: usize = 10;
+
+/// Circular lights derived from a part (issue #20 item 7), for a user who
+/// has none: the axis t is `axis` when given, else the area-weighted mean
+/// normal `Σ N dA / Σ dA` of the part when its length is at least 0.2 (an
+/// open panel or a shell facing one way), else +z (a closed body, whose
+/// mean normal vanishes); the centre A lies on the axis through the
+/// area-weighted centroid c, half a bounding-box diagonal above the part's
+/// highest point along t. A circle of radius R lights the points whose
+/// normal line meets the circle's plane at distance R from A (Nishiyama et
+/// al. Eq. (2.8)–(2.10) with d_s = 0), so the `count` radii are spread
+/// evenly between the 5 % and 95 % area quantiles of that distance over the
+/// part (points with |N·t| < 0.1 left out): the lines span the part.
+///
+/// The part is sampled at the midpoints of a grid of at most 32 × 32 cells
+/// per patch ([`patch_grid`] with 32 points along the part's diagonal),
+/// dA = |S_u × S_v| Δu Δv (Nishiyama et al. Eq. (2.4)), cells outside the
+/// trims left out. `None` when the part has no area or no usable normal.
+pub fn default_circular_lights(
+    surfaces: &[BSplineSurface],
+    axis: Option<Vec3>,
+    count: usize,
+) -> Option<super::light::CircularLights> {
+    let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+    for s in surfaces {
+        let (a, b) = s.control_bounding_box();
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    let diagonal = (hi - lo).length();
+    if !(diagonal > 0.0 && diagonal.is_finite()) || count == 0 {
+        return None;
+    }
+    // (point, unit normal, area) at the cell midpoints of every patch.
+    let samples: Vec<(Vec3, Vec3, f64)> = surfaces
+        .par_iter()
+        .flat_map_iter(|s| {
+            let [nu, nv] = patch_grid(s, diagonal, 32).map(|n| n.saturating_sub(1).max(1));
+            let ([u0, u1], [v0, v1]) = (s.domain_u(), s.domain_v());
+            let (du, dv) = ((u1 - u0) / nu as f64, (v1 - v0) / nv as f64);
+            let us: Vec<f64> = (0..nu).map(|a| u0 + (a as f64 + 0.5) * du).collect();
+            let vs: Vec<f64> = (0..nv).map(|b| v0 + (b as f64 + 0.5) * dv).collect();
+            let inside: Vec<bool> = match s.trim() {
+                Some(t) => vs
+                    .iter()
+                    .flat_map(|&v| {
+                        let xs = t.row_crossings(v);
+                        us.iter()
+                            .map(|&u| crate::bspline::inside_by_crossings(&xs, u))
+                            .collect::<Vec<_>>()
+                    })
+                    .collect(),
+                None => vec![true; nu * nv],
+            };
+            let cell = (du * dv).abs();
+            let grid = s.map_grid_first(&us, &vs, |p, su, sv| {
+                let n = su.cross(sv);
+                let area = n.length() * cell;
+                unit_normal(su, sv).map(|unit| (p, unit, area))
+            });
+            // grid is row-major over (u, v); `inside` is v-major.
+            grid.into_iter()
+                .enumerate()
+                .filter_map(move |(k, x)| {
+                    let (a, b) = (k / nv, k % nv);
+                    if inside[b * nu + a] { x } else { None }
+                })
+                .filter(|(p, n, w)| p.is_finite() && n.is_finite() && w.is_finite() && *w > 0.0)
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    circular_lights_over(&samples, diagonal, axis, count)
+}
+
+/// Default circular lights for a triangle mesh: as
+/// [`default_circular_lights`], sampled at the triangle centroids with the
+/// triangle normals and areas (polygons are not sampled).
+pub fn default_circular_lights_for_mesh(
+    mesh: &crate::SurfaceMesh,
+    axis: Option<Vec3>,
+    count: usize,
+) -> Option<super::light::CircularLights> {
+    let (lo, hi) = crate::mesh::bounding_box(mesh.positions())?;
+    let samples: Vec<(Vec3, Vec3, f64)> = mesh
+        .faces()
+        .filter(|&f| mesh.face_size(f) == 3)
+        .filter_map(|f| {
+            let [a, b, c] = mesh.triangle(f).map(|v| mesh.position(v));
+            let n = (b - a).cross(c - a);
+            let area = 0.5 * n.length();
+            let unit = n.try_normalize()?;
+            Some(((a + b + c) / 3.0, unit, area))
+        })
+        .collect();
+    circular_lights_over(&samples, (hi - lo).length(), axis, count)
+}
+
+/// The lights of [`default_circular_lights`] from area samples
+/// (point, unit normal, area) of a part whose bounding-box diagonal is
+/// `diagonal`.
+fn circular_lights_over(
+    samples: &[(Vec3, Vec3, f64)],
+    diagonal: f64,
+    axis: Option<Vec3>,
+    count: usize,
+) -> Option<super::light::CircularLights> {
+    if !(diagonal > 0.0 && diagonal.is_finite()) || count == 0 {
+        return None;
+    }
+    let total: f64 = samples.iter().map(|s| s.2).sum();
+    if !(total > 0.0 && total.is_finite()) {
+        return None;
+    }
+    let mean_normal = samples.iter().fold(Vec3::ZERO, |acc, s| acc + s.2 * s.1) / total;
+    let centroid = samples.iter().fold(Vec3::ZERO, |acc, s| acc + s.2 * s.0) / total;
+    let t = match axis.and_then(|a| a.try_normalize()) {
+        Some(a) => a,
+        None if mean_normal.length() >= 0.2 => mean_normal.try_normalize()?,
+        None => Vec3::Z,
+    };
+    let top = samples
+        .iter()
+        .map(|s| (s.0 - centroid).dot(t))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let centre = centroid + (top + 0.5 * diagonal) * t;
+    // Where each normal line meets the plane through A perpendicular to t.
+    let mut dist: Vec<(f64, f64)> = samples
+        .iter()
+        .filter_map(|&(q, n, w)| {
+            let nt = n.dot(t);
+            if nt.abs() < 0.1 {
+                return None;
+            }
+            let x = q + ((centre - q).dot(t) / nt) * n;
+            let r = (x - centre).length();
+            r.is_finite().then_some((r, w))
+        })
+        .collect();
+    if dist.is_empty() {
+        return None;
+    }
+    dist.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let weight: f64 = dist.iter().map(|d| d.1).sum();
+    let quantile = |f: f64| {
+        let mut acc = 0.0;
+        for &(r, w) in &dist {
+            acc += w;
+            if acc >= f * weight {
+                return r;
+            }
+        }
+        dist[dist.len() - 1].0
+    };
+    let (r0, r1) = (quantile(0.05), quantile(0.95));
+    let (r0, r1) = if r1 - r0 > 1e-6 * diagonal {
+        (r0, r1)
+    } else {
+        // One radius for the whole part (a sphere seen from its centre):
+        // rings around it.
+        (0.5 * r0.max(0.05 * diagonal), 1.5 * r0.max(0.05 * diagonal))
+    };
+    let radii: Vec<f64> = (0..count)
+        .map(|k| {
+            if count == 1 {
+                0.5 * (r0 + r1)
+            } else {
+                r0 + (r1 - r0) * k as f64 / (count - 1) as f64
+            }
+        })
+        .map(|r| r.max(1e-9 * diagonal))
+        .collect();
+    Some(super::light::CircularLights {
+        center: centre.to_array(),
+        axis: t.to_array(),
+        radii,
+    })
 }
 
 /// The lights of a whole part (a file of many patches), Nishiyama et al.
@@ -564,13 +745,13 @@ pub fn contour_field(
     let at = |a: usize, b: usize| field.samples[a * nv + b];
     let above = |s: FieldSample| s.value >= level;
     let same_branch = |x: FieldSample, y: FieldSample| (x.branch - y.branch).cos() > 0.0;
-    // Linear lights: a cell whose field spans more than
-    // `max_lines_per_cell` spacings holds lines finer than the grid (near
-    // silhouettes, where d_P runs off as Z·N → 0); it is skipped, as the
-    // mesh model skips such triangles (`HighlightOptions::max_lines_per_face`).
-    let max_cell_span = match light {
+    // Linear lights: a cell crossed by more than `max_lines_per_cell`
+    // levels holds lines finer than the grid (near silhouettes, where d_P
+    // runs off as Z·N → 0); it is skipped by the rule the mesh model skips
+    // triangles with (`HighlightOptions::max_lines_per_face`).
+    let max_cell_levels = match light {
         SurfaceLight::Linear { array, .. } if opts.max_lines_per_cell > 0 => {
-            Some(f64::from(opts.max_lines_per_cell) * array.spacing())
+            Some((array.spacing(), i64::from(opts.max_lines_per_cell)))
         }
         _ => None,
     };
@@ -609,13 +790,21 @@ pub fn contour_field(
                 if side.iter().all(|&x| x == side[0]) {
                     continue;
                 }
-                if let Some(most) = max_cell_span {
+                if let Some((spacing, most)) = max_cell_levels {
                     let (lo, hi) = c
                         .iter()
                         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), s| {
                             (l.min(s.value), h.max(s.value))
                         });
-                    if hi - lo > most {
+                    // the levels of this field are m·s − shift: count them
+                    // as the mesh does (`contour::too_many_levels`)
+                    if super::contour::too_many_levels(
+                        lo,
+                        hi,
+                        spacing,
+                        level.rem_euclid(spacing),
+                        most,
+                    ) {
                         continue;
                     }
                 }

@@ -292,7 +292,7 @@ fn incremental_update_equals_full_recompute() {
     )
     .unwrap();
     let opts = HighlightOptions::default();
-    let mut model = HighlightModel::new(&mesh, light, opts).unwrap();
+    let mut model = HighlightModel::new(&mesh, light, opts.clone()).unwrap();
     let mut rng = Rng(777);
     for round in 0..4 {
         let moved: Vec<VertexId> = (0..20)
@@ -308,7 +308,7 @@ fn incremental_update_equals_full_recompute() {
             (20..400).contains(&n),
             "round {round}: {n} vertices recomputed"
         );
-        let full = HighlightModel::new(&mesh, light, opts).unwrap();
+        let full = HighlightModel::new(&mesh, light, opts.clone()).unwrap();
         assert_eq!(model.lines(&mesh), full.lines(&mesh), "round {round}");
         assert_eq!(model.lines(&mesh), model.lines_reference(&mesh));
         assert_eq!(model.distances(), full.distances());
@@ -349,7 +349,7 @@ fn bad_input_is_reported_not_panicked() {
         highlight_lines(&quads, &light, &HighlightOptions::default()),
         Err(HighlightError::Mesh(_))
     ));
-    assert!(circular_highlight_lines(&quads, &[]).is_err());
+    assert!(circular_highlight_lines(&quads, &[], &HighlightOptions::default()).is_err());
     assert!(
         HighlightModel::new(
             &shapes::plane(3),
@@ -528,7 +528,7 @@ fn circular_lines_on_a_plane_are_circles() {
     }
     .lights()
     .unwrap();
-    let lines = circular_highlight_lines(&mesh, &lights).unwrap();
+    let lines = circular_highlight_lines(&mesh, &lights, &HighlightOptions::default()).unwrap();
     for (k, &r) in radii.iter().enumerate() {
         let ls: Vec<_> = lines.lines.iter().filter(|l| l.index == k as i64).collect();
         assert_eq!(ls.len(), 1, "radius {r}");
@@ -537,13 +537,14 @@ fn circular_lines_on_a_plane_are_circles() {
             assert!((p.truncate().length() - r).abs() < 2e-3, "radius {r}: {p}");
         }
     }
-    let bands = circular_highlight_bands(&mesh, &lights, 0.05).unwrap();
+    let bands =
+        circular_highlight_bands(&mesh, &lights, 0.05, &HighlightOptions::default()).unwrap();
     for l in bands.lower.lines.iter().chain(&bands.upper.lines) {
         let r = radii[l.index as usize];
         let rr = l.points[0].truncate().length();
         assert!(((rr - r).abs() - 0.05).abs() < 2e-3, "band of {r} at {rr}");
     }
-    assert!(circular_highlight_bands(&mesh, &lights, -1.0).is_err());
+    assert!(circular_highlight_bands(&mesh, &lights, -1.0, &HighlightOptions::default()).is_err());
 }
 
 /// A sphere under a concentric circle on the z axis: by symmetry the lines
@@ -558,7 +559,7 @@ fn circular_lines_on_a_sphere_are_latitude_circles() {
     }
     .lights()
     .unwrap();
-    let lines = circular_highlight_lines(&mesh, &lights).unwrap();
+    let lines = circular_highlight_lines(&mesh, &lights, &HighlightOptions::default()).unwrap();
     for (k, r) in [1.0f64, 2.0].iter().enumerate() {
         // normal line from (sin a, 0, cos a) hits (r, 0, 3) when
         // r = sin a + t sin a, 3 = cos a + t cos a  =>  tan a = r / 3
@@ -640,9 +641,12 @@ fn real_meshes_run_through_highlight_and_detect() {
         }
         .lights()
         .unwrap();
-        let a = circular_highlight_lines(&mesh, &lights).unwrap();
+        let a = circular_highlight_lines(&mesh, &lights, &HighlightOptions::default()).unwrap();
         assert!(!a.lines.is_empty(), "{name}");
-        assert_eq!(a, circular_highlight_lines(&mesh, &lights).unwrap());
+        assert_eq!(
+            a,
+            circular_highlight_lines(&mesh, &lights, &HighlightOptions::default()).unwrap()
+        );
         assert!(
             a.lines
                 .iter()
@@ -715,7 +719,7 @@ fn chaining_without_node_numbering_matches_the_sort_based_reference() {
     for (mesh, view) in &shapes_and_views {
         let (lo, hi) = crate::mesh::bounding_box(mesh.positions()).unwrap();
         let light = LightArray::default_for(lo, hi, Some(*view));
-        let model = HighlightModel::new(mesh, light, opts).unwrap();
+        let model = HighlightModel::new(mesh, light, opts.clone()).unwrap();
         let lines = model.lines(mesh);
         assert_eq!(lines, model.lines_reference(mesh));
         loops += lines.lines.iter().filter(|l| l.closed).count();
@@ -816,7 +820,7 @@ fn chaining_without_node_numbering_matches_the_sort_based_reference() {
         for view in [Vec3::Z, Vec3::new(1.0, 0.5, 0.2)] {
             let light = LightArray::default_for(lo, hi, Some(view));
             let light = light.with_spacing(light.spacing() / 3.0).unwrap();
-            let model = HighlightModel::new(&mesh, light, opts).unwrap();
+            let model = HighlightModel::new(&mesh, light, opts.clone()).unwrap();
             let lines = model.lines(&mesh);
             count += lines.lines.len();
             assert_eq!(lines, model.lines_reference(&mesh), "{name}");

@@ -22,9 +22,11 @@
 
 pub mod iges_read;
 pub mod iges_write;
+mod lines;
 mod obj;
 mod off;
 mod ply;
+mod report;
 pub mod selection;
 pub mod step;
 mod stl;
@@ -41,6 +43,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use thiserror::Error;
 
 pub use iges_read::{IgesError, IgesImport, IgesSurface, parse_iges, read_iges};
+pub use lines::{highlight_lines_json, highlight_lines_obj};
+pub use report::{JsonReport, finite_only};
 pub use surface_json::{
     MAX_SURFACE_JSON_BYTES, SurfaceJsonError, parse_surfaces_json, read_surfaces_json,
     surface_to_json, surfaces_to_json, write_surface_json, write_surfaces_json,

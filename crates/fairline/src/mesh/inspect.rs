@@ -130,7 +130,8 @@ pub(super) fn polygon_area(p: &[Vec3], face: &[u32]) -> (f64, bool) {
     (0.5 * a2, !(a2 > super::DEGENERATE_RELATIVE_AREA * scale))
 }
 
-pub(super) fn find(parent: &mut [u32], mut x: u32) -> u32 {
+/// Root of `x` in the union–find forest `parent` (path halving).
+pub(crate) fn find(parent: &mut [u32], mut x: u32) -> u32 {
     while parent[x as usize] != x {
         parent[x as usize] = parent[parent[x as usize] as usize];
         x = parent[x as usize];
@@ -138,7 +139,10 @@ pub(super) fn find(parent: &mut [u32], mut x: u32) -> u32 {
     x
 }
 
-pub(super) fn union(parent: &mut [u32], a: u32, b: u32) {
+/// Joins the sets of `a` and `b` in `parent` (the smaller index becomes
+/// the root, so the forest does not depend on the order of the joins'
+/// roots).
+pub(crate) fn union(parent: &mut [u32], a: u32, b: u32) {
     let (ra, rb) = (find(parent, a), find(parent, b));
     if ra != rb {
         parent[ra.max(rb) as usize] = ra.min(rb);

@@ -10,6 +10,7 @@ mod surface_mesh;
 mod topology;
 
 pub use inspect::{BoundingBox, MeshInfo, Stats, inspect};
+pub(crate) use inspect::{find as union_find_root, union as union_find_join};
 pub use repair::{
     RemovalReason, RemovedFace, RepairReport, Repaired, SplitEdge, SplitVertex, repair,
 };

@@ -26,12 +26,14 @@ mod camera;
 mod colormap;
 mod font;
 mod image;
+mod labels;
 mod raster;
 pub mod svg;
 
 pub use camera::{Camera, DEFAULT_FOV_Y_DEG, Projection, view_frame};
 pub use colormap::{Colormap, Legend, NAN_COLOR, scalar_colors};
 pub use image::{Image, linear_to_srgb8, side_by_side};
+pub use labels::{PlacedLabel, RegionLabels};
 pub use svg::SvgPlot;
 
 use crate::Vec3;
@@ -309,6 +311,29 @@ pub fn scene_bounds(scene: &Scene) -> Option<(Vec3, Vec3)> {
 /// Errors: [`RenderError::InvalidSize`] for a zero side or a side above
 /// [`MAX_IMAGE_SIDE`]; [`RenderError::InvalidSupersample`].
 pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Image, RenderError> {
+    render_impl(scene, opts, None).map(|(img, _)| img)
+}
+
+/// [`render`] with text labels on regions of the first mesh (e.g. the
+/// patch indices of a part of many patches, issue #20 item 7): each label is
+/// drawn at its region's *visible centre* — the visible pixel of the region
+/// farthest from the region's visible outline (chamfer distance transform of
+/// the per-pixel triangle ids) — on a light box, largest visible regions
+/// first; a label whose box would overlap one already drawn, or whose region
+/// is not visible, is left out. Returns the picture and the labels drawn.
+pub fn render_labelled(
+    scene: &Scene,
+    opts: &RenderOptions,
+    labels: &RegionLabels,
+) -> Result<(Image, Vec<PlacedLabel>), RenderError> {
+    render_impl(scene, opts, Some(labels))
+}
+
+fn render_impl(
+    scene: &Scene,
+    opts: &RenderOptions,
+    labels: Option<&RegionLabels>,
+) -> Result<(Image, Vec<PlacedLabel>), RenderError> {
     let (w, h) = (opts.width, opts.height);
     if w == 0 || h == 0 || w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
         return Err(RenderError::InvalidSize {
@@ -321,6 +346,7 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Image, RenderError>
     }
     let bg = linear_to_srgb8(opts.background);
     let mut img = Image::new(w, h, bg);
+    let mut placed = Vec::new();
     let scale = text_scale(w, h);
     let pad = 4 * scale;
     let text_colour = contrasting_text(opts.background);
@@ -355,8 +381,19 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Image, RenderError>
             }
         };
         let diag = (hi - lo).length();
-        let view = raster::render_view(scene, opts, &camera, rw, rh, diag);
+        let (view, ids) = raster::render_view(scene, opts, &camera, rw, rh, diag, labels.is_some());
         img.blit(&view, 0, title_h as i64);
+        if let (Some(labels), Some(ids)) = (labels, ids) {
+            placed = labels::place_and_draw(
+                &mut img,
+                &ids,
+                (rw, rh),
+                title_h,
+                labels,
+                scale,
+                scene.meshes.first().map_or(0, |m| m.triangles.len()),
+            );
+        }
     }
 
     if title_h > 0 {
@@ -382,7 +419,7 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Image, RenderError>
             text_colour,
         );
     }
-    Ok(img)
+    Ok((img, placed))
 }
 
 /// Font scale for an image size: 1 below 600 px, 2 up to 1000 px, 3 for 1200 px, ...

@@ -176,7 +176,10 @@ fn owns_edge(ax: i64, ay: i64, bx: i64, by: i64) -> bool {
     dy < 0 || (dy == 0 && dx > 0)
 }
 
-/// Renders the 3D view of `scene` into a `w` × `h` sRGB image.
+/// Renders the 3D view of `scene` into a `w` × `h` sRGB image; with
+/// `want_ids`, also the global triangle id (meshes in scene order, their
+/// triangles in order) visible at the centre sample of every output pixel,
+/// row-major, `u32::MAX` where no triangle is.
 pub(crate) fn render_view(
     scene: &Scene,
     opts: &RenderOptions,
@@ -184,7 +187,8 @@ pub(crate) fn render_view(
     w: u32,
     h: u32,
     diag: f64,
-) -> Image {
+    want_ids: bool,
+) -> (Image, Option<Vec<u32>>) {
     let s = opts.supersample.max(1) as usize;
     let (w, h) = (w as usize, h as usize);
     let (sw, sh) = (w * s, h * s);
@@ -381,15 +385,39 @@ pub(crate) fn render_view(
 
     // 3. Bands.
     let mut pixels = vec![[0u8; 4]; w * h];
-    pixels
-        .par_chunks_mut(band_rows * w)
-        .enumerate()
-        .for_each(|(band, out)| ctx.render_band(band, tri_bins.get(band), seg_bins.get(band), out));
-    Image {
+    let mut ids = if want_ids {
+        vec![u32::MAX; w * h]
+    } else {
+        Vec::new()
+    };
+    if want_ids {
+        pixels
+            .par_chunks_mut(band_rows * w)
+            .zip(ids.par_chunks_mut(band_rows * w))
+            .enumerate()
+            .for_each(|(band, (out, id_out))| {
+                ctx.render_band(
+                    band,
+                    tri_bins.get(band),
+                    seg_bins.get(band),
+                    out,
+                    Some(id_out),
+                )
+            });
+    } else {
+        pixels
+            .par_chunks_mut(band_rows * w)
+            .enumerate()
+            .for_each(|(band, out)| {
+                ctx.render_band(band, tri_bins.get(band), seg_bins.get(band), out, None)
+            });
+    }
+    let image = Image {
         width: w as u32,
         height: h as u32,
         pixels,
-    }
+    };
+    (image, want_ids.then_some(ids))
 }
 
 /// Per-triangle data cached while shading consecutive samples of one triangle.
@@ -435,7 +463,14 @@ impl<'s, 'a> Ctx<'s, 'a> {
         if self.perspective { -1.0 / key } else { key }
     }
 
-    fn render_band(&self, band: usize, tris: &[u32], segs: &[u32], out: &mut [[u8; 4]]) {
+    fn render_band(
+        &self,
+        band: usize,
+        tris: &[u32],
+        segs: &[u32],
+        out: &mut [[u8; 4]],
+        id_out: Option<&mut [u32]>,
+    ) {
         let s = self.s;
         let sw = self.sw;
         let oy0 = band * self.band_rows;
@@ -471,6 +506,16 @@ impl<'s, 'a> Ctx<'s, 'a> {
         }
 
         self.draw_segments(segs, &depth, ey0, ey1, y0, y1, &mut color);
+
+        if let Some(id_out) = id_out {
+            // The triangle at the centre sample of each output pixel.
+            for oy in oy0..oy1 {
+                let row = (oy * s + s / 2 - ey0) * sw;
+                for ox in 0..self.w {
+                    id_out[(oy - oy0) * self.w + ox] = ids[row + ox * s + s / 2];
+                }
+            }
+        }
 
         // Box filter down and encode.
         let inv = 1.0 / (s * s) as f32;

@@ -20,7 +20,11 @@ pub struct SvgPlot {
     margin: f64,
     title: Option<String>,
     body: String,
+    legend: Vec<([u8; 3], String)>,
 }
+
+/// Most entries a legend shows (the rest are summarised in one line).
+pub const MAX_LEGEND_ENTRIES: usize = 24;
 
 fn clean_range(r: (f64, f64)) -> (f64, f64) {
     let (a, b) = r;
@@ -76,6 +80,7 @@ impl SvgPlot {
             margin: 48.0_f64.min(0.2 * width.min(height) as f64),
             title: None,
             body: String::new(),
+            legend: Vec::new(),
         }
     }
 
@@ -143,6 +148,82 @@ impl SvgPlot {
             );
         }
         self
+    }
+
+    /// Adds `text` (small, in `colour`) beside the data point `point`, e.g.
+    /// the id of the line through it.
+    pub fn text(&mut self, point: [f64; 2], colour: [u8; 3], text: &str) -> &mut Self {
+        if !(point[0].is_finite() && point[1].is_finite()) || text.is_empty() {
+            return self;
+        }
+        let (x, y) = self.map(point);
+        let _ = writeln!(
+            self.body,
+            r#"<text x="{:.2}" y="{:.2}" font-family="sans-serif" font-size="10" fill="{}" stroke="white" stroke-width="2.5" paint-order="stroke">{}</text>"#,
+            x + 3.0,
+            y - 3.0,
+            hex(colour),
+            escape(text)
+        );
+        self
+    }
+
+    /// Sets the legend: one row per entry (a colour swatch and its text),
+    /// drawn over the top-right corner of the plot on a white box; at most
+    /// [`MAX_LEGEND_ENTRIES`] rows, the rest counted in a last row.
+    pub fn legend(&mut self, entries: &[([u8; 3], String)]) -> &mut Self {
+        self.legend = entries.to_vec();
+        self
+    }
+
+    /// The legend as SVG elements.
+    fn legend_svg(&self) -> String {
+        let mut rows: Vec<(Option<[u8; 3]>, String)> = self
+            .legend
+            .iter()
+            .take(MAX_LEGEND_ENTRIES)
+            .map(|(c, t)| (Some(*c), t.clone()))
+            .collect();
+        if self.legend.len() > MAX_LEGEND_ENTRIES {
+            rows.push((
+                None,
+                format!("... {} more", self.legend.len() - MAX_LEGEND_ENTRIES),
+            ));
+        }
+        if rows.is_empty() {
+            return String::new();
+        }
+        let row_h = 14.0;
+        let longest = rows.iter().map(|r| r.1.chars().count()).max().unwrap_or(0) as f64;
+        let (w, h) = (26.0 + 6.5 * longest, 6.0 + row_h * rows.len() as f64);
+        let x0 = self.width - self.margin - w - 4.0;
+        let y0 = self.margin + 4.0;
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            r##"<g class="legend"><rect x="{x0:.2}" y="{y0:.2}" width="{w:.2}" height="{h:.2}" fill="white" fill-opacity="0.85" stroke="#888" stroke-width="0.5"/>"##
+        );
+        for (k, (colour, text)) in rows.iter().enumerate() {
+            let y = y0 + 4.0 + row_h * (k as f64 + 0.5);
+            if let Some(c) = colour {
+                let _ = writeln!(
+                    s,
+                    r#"<line x1="{:.2}" y1="{y:.2}" x2="{:.2}" y2="{y:.2}" stroke="{}" stroke-width="2.5"/>"#,
+                    x0 + 5.0,
+                    x0 + 19.0,
+                    hex(*c)
+                );
+            }
+            let _ = writeln!(
+                s,
+                r#"<text x="{:.2}" y="{:.2}" font-family="sans-serif" font-size="11">{}</text>"#,
+                x0 + 23.0,
+                y + 4.0,
+                escape(text)
+            );
+        }
+        s.push_str("</g>\n");
+        s
     }
 
     /// Draws the plot frame, ticks with values at "nice" steps, and the axis labels.
@@ -229,6 +310,7 @@ impl fmt::Display for SvgPlot {
             )?;
         }
         f.write_str(&self.body)?;
+        f.write_str(&self.legend_svg())?;
         writeln!(f, "</svg>")
     }
 }

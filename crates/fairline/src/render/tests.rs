@@ -372,3 +372,154 @@ fn closed_mesh_has_no_cracks() {
     }
     assert_eq!(holes, 0);
 }
+
+/// Two unit squares side by side in the plane z = 0 (regions 0 and 1) and a
+/// small square under the first one (region 2, hidden), seen from above.
+fn labelled_squares() -> (Vec<Vec3>, Vec<[u32; 3]>, RegionLabels) {
+    let mut p = Vec::new();
+    let mut t = Vec::new();
+    let mut region = Vec::new();
+    let mut square = |x0: f64, y0: f64, size: f64, z: f64, r: u32| {
+        let b = p.len() as u32;
+        p.extend([
+            Vec3::new(x0, y0, z),
+            Vec3::new(x0 + size, y0, z),
+            Vec3::new(x0 + size, y0 + size, z),
+            Vec3::new(x0, y0 + size, z),
+        ]);
+        t.push([b, b + 1, b + 2]);
+        t.push([b, b + 2, b + 3]);
+        region.extend([r, r]);
+    };
+    square(0.0, 0.0, 1.0, 0.0, 0);
+    square(1.0, 0.0, 1.0, 0.0, 1);
+    square(0.3, 0.3, 0.4, -0.5, 2);
+    let labels = RegionLabels {
+        triangle_region: region,
+        texts: vec!["0".into(), "1".into(), "2".into()],
+    };
+    (p, t, labels)
+}
+
+#[test]
+fn region_labels_sit_at_the_visible_centres_and_hidden_regions_get_none() {
+    let (p, t, labels) = labelled_squares();
+    let scene = Scene {
+        meshes: vec![MeshLayer::new(&p, &t)],
+        ..Default::default()
+    };
+    let opts = RenderOptions {
+        width: 400,
+        height: 240,
+        view_dir: Vec3::new(0.0, 0.0, -1.0),
+        up: Vec3::Y,
+        orthographic: true,
+        ..Default::default()
+    };
+    let plain = render(&scene, &opts).unwrap();
+    let (img, placed) = render_labelled(&scene, &opts, &labels).unwrap();
+    // Regions 0 and 1 are labelled, the hidden region 2 is not.
+    let mut regions: Vec<u32> = placed.iter().map(|l| l.region).collect();
+    regions.sort_unstable();
+    assert_eq!(regions, vec![0, 1]);
+    // Each anchor is the centre of its square's image (the point farthest
+    // from the square's outline): the squares' images meet at the centre
+    // column, so the anchors lie symmetrically about it, on one row.
+    let mid = plain.width as f64 / 2.0;
+    let at = |r: u32| placed.iter().find(|l| l.region == r).unwrap().anchor;
+    let (a0, a1) = (at(0), at(1));
+    assert!(
+        (a0[0] as f64) < mid && (a1[0] as f64) > mid,
+        "{a0:?} {a1:?}"
+    );
+    assert!(
+        ((a0[0] + a1[0]) as f64 / 2.0 - mid).abs() <= 1.5,
+        "{a0:?} {a1:?}"
+    );
+    assert!(a0[1].abs_diff(a1[1]) <= 1, "{a0:?} {a1:?}");
+    assert!(((a0[1] as f64) - plain.height as f64 / 2.0).abs() <= 2.0);
+    for l in &placed {
+        assert!(l.depth_px > 20.0);
+        // The label changed the picture where it was drawn, nowhere else.
+        let [left, top, w, h] = l.bounds;
+        let changed = (top..top + h)
+            .flat_map(|y| (left..left + w).map(move |x| (x, y)))
+            .filter(|&(x, y)| img.get(x as u32, y as u32) != plain.get(x as u32, y as u32))
+            .count();
+        assert!(changed as i64 > w * h / 2, "label box drawn");
+    }
+    let outside_changed = (0..img.height)
+        .flat_map(|y| (0..img.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            !placed.iter().any(|l| {
+                let [left, top, w, h] = l.bounds;
+                (x as i64) >= left
+                    && (x as i64) < left + w
+                    && (y as i64) >= top
+                    && (y as i64) < top + h
+            })
+        })
+        .filter(|&(x, y)| img.get(x, y) != plain.get(x, y))
+        .count();
+    assert_eq!(outside_changed, 0);
+    // Both label boxes are disjoint.
+    let [a, b] = [&placed[0].bounds, &placed[1].bounds];
+    assert!(
+        a[0] + a[2] <= b[0] || b[0] + b[2] <= a[0] || a[1] + a[3] <= b[1] || b[1] + b[3] <= a[1]
+    );
+}
+
+#[test]
+fn region_labels_that_would_overlap_are_left_out() {
+    // Fifty thin strips side by side: far too narrow for a label each.
+    let mut p = Vec::new();
+    let mut t = Vec::new();
+    let mut region = Vec::new();
+    for k in 0..50u32 {
+        let x0 = k as f64 * 0.02;
+        let b = p.len() as u32;
+        p.extend([
+            Vec3::new(x0, 0.0, 0.0),
+            Vec3::new(x0 + 0.02, 0.0, 0.0),
+            Vec3::new(x0 + 0.02, 1.0, 0.0),
+            Vec3::new(x0, 1.0, 0.0),
+        ]);
+        t.push([b, b + 1, b + 2]);
+        t.push([b, b + 2, b + 3]);
+        region.extend([k, k]);
+    }
+    let labels = RegionLabels {
+        triangle_region: region,
+        texts: (0..50).map(|k| format!("{k}")).collect(),
+    };
+    let scene = Scene {
+        meshes: vec![MeshLayer::new(&p, &t)],
+        ..Default::default()
+    };
+    let opts = RenderOptions {
+        width: 300,
+        height: 300,
+        view_dir: Vec3::new(0.0, 0.0, -1.0),
+        up: Vec3::Y,
+        orthographic: true,
+        ..Default::default()
+    };
+    let (_, placed) = render_labelled(&scene, &opts, &labels).unwrap();
+    assert!(
+        !placed.is_empty() && placed.len() < 50,
+        "{} labels",
+        placed.len()
+    );
+    for (i, a) in placed.iter().enumerate() {
+        for b in &placed[i + 1..] {
+            let (a, b) = (a.bounds, b.bounds);
+            assert!(
+                a[0] + a[2] <= b[0]
+                    || b[0] + b[2] <= a[0]
+                    || a[1] + a[3] <= b[1]
+                    || b[1] + b[3] <= a[1],
+                "{a:?} overlaps {b:?}"
+            );
+        }
+    }
+}

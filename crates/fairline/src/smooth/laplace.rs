@@ -14,7 +14,7 @@ use crate::geom::{self, LaplaceWeights};
 use crate::mesh::{SurfaceMesh, VertexId};
 use crate::solve::{ConstrainedOptions, ConstrainedSolver, sparse_from_triplets};
 use crate::{Control, Output, Vec3};
-use faer::sparse::SparseColMat;
+use faer::sparse::{SparseColMat, SymbolicSparseColMatRef};
 use rayon::prelude::*;
 
 /// Options of [`laplace_smooth`].
@@ -523,28 +523,27 @@ pub fn taubin_smooth(
     Ok(out)
 }
 
-/// The backward-Euler matrix M − tL of Desbrun et al. on the pattern of the
-/// Laplacian `l` of [`geom::laplacian_from_weights`] (both triangles and the
-/// diagonal stored): entries −t L_ij, diagonal m_i − t L_ii = m_i + t Σ_j w_ij.
-fn backward_euler_matrix(
-    mut l: SparseColMat<usize, f64>,
+/// Entry k (in column j) of the backward-Euler matrix M − tL of Desbrun
+/// et al. on the pattern of `lap` ([`geom::LaplacianPattern`]): −t L_ij off
+/// the diagonal, m_j − t L_jj = m_j + t Σ w on it (as (L_jj · −t) + m_j, the
+/// order of operations of the former assembled matrix, so results are
+/// bit-identical to it).
+#[inline]
+fn backward_euler_entry(
+    mesh: &SurfaceMesh,
+    lap: &geom::LaplacianPattern,
+    w: &[f64],
     mass: &[f64],
     t: f64,
-) -> SparseColMat<usize, f64> {
-    let diagonal: Vec<Option<usize>> = {
-        let (col_ptr, row_idx) = (l.symbolic().col_ptr(), l.symbolic().row_idx());
-        (0..mass.len())
-            .map(|j| (col_ptr[j]..col_ptr[j + 1]).find(|&k| row_idx[k] == j))
-            .collect()
-    };
-    let values = l.val_mut();
-    values.par_iter_mut().for_each(|v| *v *= -t);
-    for (k, m) in diagonal.iter().zip(mass) {
-        if let Some(k) = k {
-            values[*k] += m;
-        }
+    j: usize,
+    k: usize,
+) -> f64 {
+    let l = lap.entry(mesh, w, j, k) * -t;
+    if lap.source[k] == geom::LaplacianPattern::DIAGONAL {
+        l + mass[j]
+    } else {
+        l
     }
-    l
 }
 
 /// The 1D backward-Euler system of the boundary curves (hierarchical
@@ -583,25 +582,29 @@ fn curve_matrix(
     Ok((sparse_from_triplets(n, n, &triplets)?, mass))
 }
 
-/// Solves one backward-Euler system `a` x' = M x for the free vertices of
-/// `solver` (the others keep their positions in `cur`), re-analysing once
-/// with an ordering from the current positions when the factorisation
-/// fails (with large steps and obtuse triangles M − tL can be near
-/// indefinite and the pivots depend on the order, as for a fresh solver).
+/// Solves one backward-Euler system A x' = M x for the free vertices of
+/// `solver` (the others keep their positions in `cur`), A given entry by
+/// entry (`value(j, k)`, entry k of the pattern `pattern`, in column j; one
+/// pass assembles and eliminates, [`ConstrainedSolver::factor_with`]).
+/// Re-analyses once with an ordering from the current positions when the
+/// factorisation fails (with large steps and obtuse triangles M − tL can be
+/// near indefinite and the pivots depend on the order, as for a fresh
+/// solver).
 fn backward_euler_step(
     solver: &mut ConstrainedSolver,
-    a: &SparseColMat<usize, f64>,
+    pattern: SymbolicSparseColMatRef<'_, usize>,
+    value: impl Fn(usize, usize) -> f64 + Sync,
     mass: &[f64],
     fixed: &[bool],
     cur: &mut [Vec3],
 ) -> Result<(), SmoothError> {
-    if let Err(e) = solver.factor(a.as_ref()) {
+    if let Err(e) = solver.factor_with(&value) {
         let opts = ConstrainedOptions {
             points: Some(cur.to_vec()),
             parallel: false,
         };
-        let mut fresh = ConstrainedSolver::analyse(a.symbolic(), fixed, &opts)?;
-        if fresh.factor(a.as_ref()).is_err() {
+        let mut fresh = ConstrainedSolver::analyse(pattern, fixed, &opts)?;
+        if fresh.factor_with(&value).is_err() {
             return Err(e.into());
         }
         *solver = fresh;
@@ -656,14 +659,15 @@ pub fn implicit_smooth(
     // first step's cotangent weights and mixed areas
     let (analysed, first) = rayon::join(
         || {
-            let pattern = geom::uniform_laplacian(mesh);
+            let lap = geom::LaplacianPattern::new(mesh);
             let opts = ConstrainedOptions {
                 points: Some(input.clone()),
                 // faer's rayon-parallel supernodal kernels made the 450k
                 // step slower on 2 cores (1.6 s vs 1.2 s wall, BENCHMARKS.md)
                 parallel: false,
             };
-            ConstrainedSolver::analyse(pattern.symbolic(), &inner_fixed, &opts)
+            ConstrainedSolver::analyse(lap.symbolic.as_ref(), &inner_fixed, &opts)
+                .map(|solver| (solver, lap))
         },
         || {
             rayon::join(
@@ -672,7 +676,7 @@ pub fn implicit_smooth(
             )
         },
     );
-    let mut inner = analysed?;
+    let (mut inner, lap) = analysed?;
     let mut first = Some(first);
     let mut curve: Option<ConstrainedSolver> = None;
     let mut cur = input.clone();
@@ -693,7 +697,15 @@ pub fn implicit_smooth(
                     },
                 )?),
             };
-            backward_euler_step(solver, &a, &mass, &curve_fixed, &mut cur)?;
+            let values = a.val();
+            backward_euler_step(
+                solver,
+                a.symbolic(),
+                |_, k| values[k],
+                &mass,
+                &curve_fixed,
+                &mut cur,
+            )?;
         }
         let (hw, mass) = match first.take() {
             Some(wm) => wm,
@@ -702,8 +714,14 @@ pub fn implicit_smooth(
                 || geom::mixed_vertex_areas_at(mesh, &before),
             ),
         };
-        let a = backward_euler_matrix(geom::laplacian_from_weights(mesh, &hw), &mass, t);
-        backward_euler_step(&mut inner, &a, &mass, &inner_fixed, &mut cur)?;
+        backward_euler_step(
+            &mut inner,
+            lap.symbolic.as_ref(),
+            |j, k| backward_euler_entry(mesh, &lap, &hw, &mass, t, j, k),
+            &mass,
+            &inner_fixed,
+            &mut cur,
+        )?;
         if let Some(nrm) = &normals {
             for i in 0..n {
                 let d = cur[i] - before[i];

@@ -255,7 +255,9 @@ pub fn schneider_kobbelt(
         floating.push(!touches);
     }
     let any_floating = floating.iter().any(|f| *f);
-    let mut work = mesh.clone();
+    // current positions (the connectivity is the input's: every geometry
+    // quantity is evaluated through geom's `*_at(positions)` views)
+    let mut work: Vec<Vec3> = input.clone();
     // the harmonic field's unknowns: free vertices of components that touch
     // a constrained vertex
     let field_fixed: Vec<bool> = (0..n)
@@ -266,9 +268,8 @@ pub fn schneider_kobbelt(
     let mut converged = m == 0 || !(ebar > 0.0);
     let mut residual = 0.0;
     let mut last_step = f64::INFINITY;
-    let evaluate = |work: &SurfaceMesh| -> Eval {
-        let p = work.positions();
-        let mut normals = geom::vertex_normals_max(work);
+    let evaluate = |p: &[Vec3]| -> Eval {
+        let mut normals = geom::vertex_normals_max_at(mesh, p);
         for i in 0..n {
             if roles[i] != Role::Free {
                 normals[i] = normals0[i];
@@ -283,14 +284,14 @@ pub fn schneider_kobbelt(
                 Some(moreton_sequin(p[i], normals[i], &q))
             })
             .collect();
-        let hw = geom::halfedge_weights(work, LaplaceWeights::Cotangent);
+        let hw = geom::halfedge_weights_at(mesh, p, LaplaceWeights::Cotangent);
         // merit: Σ_i (Σ_j w_ij (H_i − H_j))² over the free vertices
         let h_of = |i: usize| fits[i].unwrap_or(0.0);
         let f: Vec<f64> = unknown
             .iter()
             .map(|&i| {
-                work.outgoing(VertexId(i as u32))
-                    .map(|h| 2.0 * hw[h.idx()] * (h_of(i) - h_of(work.to_vertex(h).idx())))
+                mesh.outgoing(VertexId(i as u32))
+                    .map(|h| 2.0 * hw[h.idx()] * (h_of(i) - h_of(mesh.to_vertex(h).idx())))
                     .sum()
             })
             .collect();
@@ -356,7 +357,7 @@ pub fn schneider_kobbelt(
     while !converged {
         opts.control
             .step("iterations", iterations as u64, opts.max_iterations as u64)?;
-        let p = work.positions().to_vec();
+        let p = work.clone();
         let Eval {
             normals, fits, hw, ..
         } = &ev;
@@ -367,7 +368,7 @@ pub fn schneider_kobbelt(
         // component takes the area-weighted mean of its H as given value
         let mut float_mean = vec![(0.0, 0.0); floating.len()];
         if any_floating {
-            let area = geom::barycentric_vertex_areas(&work);
+            let area = geom::barycentric_vertex_areas_at(mesh, &work);
             for (r, &i) in unknown.iter().enumerate() {
                 if floating[component[r]] {
                     let e = &mut float_mean[component[r]];
@@ -386,7 +387,7 @@ pub fn schneider_kobbelt(
                 _ => 0.0,
             })
             .collect();
-        let mut a = geom::laplacian_from_weights(&work, hw);
+        let mut a = geom::laplacian_from_weights(mesh, hw);
         let diagonal: Vec<Option<usize>> = {
             let (col_ptr, row_idx) = (a.symbolic().col_ptr(), a.symbolic().row_idx());
             (0..n)
@@ -433,7 +434,7 @@ pub fn schneider_kobbelt(
         for group in &groups {
             for &c in group {
                 let i = unknown[c];
-                probe.positions_mut()[i] = p[i] + step * normals[i];
+                probe[i] = p[i] + step * normals[i];
             }
             let e = evaluate(&probe);
             for &c in group {
@@ -444,7 +445,7 @@ pub fn schneider_kobbelt(
                     }
                 }
                 let i = unknown[c];
-                probe.positions_mut()[i] = p[i];
+                probe[i] = p[i];
             }
         }
         // Levenberg–Marquardt damping δ = 1e-12 · max_c ‖J e_c‖² (1e-10
@@ -483,7 +484,7 @@ pub fn schneider_kobbelt(
                 .ok()
                 .and_then(|mut t| t.pop())
         };
-        let mut accepted: Option<(SurfaceMesh, Eval, f64)> = None;
+        let mut accepted: Option<(Vec<Vec3>, Eval, f64)> = None;
         let mut below_epsilon = false;
         // Attempts, in order: the lightly damped step, the undamped one,
         // then Levenberg–Marquardt steps with ever stronger damping. Far from
@@ -542,7 +543,7 @@ pub fn schneider_kobbelt(
             let mut trial = work.clone();
             let found = loop {
                 for (r, &i) in unknown.iter().enumerate() {
-                    trial.positions_mut()[i] = p[i] + alpha * t[r] * normals[i];
+                    trial[i] = p[i] + alpha * t[r] * normals[i];
                 }
                 let e = evaluate(&trial);
                 if e.merit < ev.merit {
@@ -579,7 +580,7 @@ pub fn schneider_kobbelt(
             None => break,
         }
     }
-    let cur = work.positions().to_vec();
+    let cur = work;
     let max_displacement = max_distance(&cur, &input);
     let report = SmoothReport {
         iterations,

@@ -85,7 +85,7 @@ impl CholeskySolver {
         opts: &CholeskyOptions,
     ) -> Result<Self, SolveError> {
         let mut s = Self::analyse(a.symbolic(), opts)?;
-        s.factor(a)?;
+        s.factor_same_pattern(a)?;
         Ok(s)
     }
 
@@ -140,11 +140,18 @@ impl CholeskySolver {
         })
     }
 
-    /// Numeric factorisation with the stored symbolic analysis.
-    fn factor(&mut self, a: SparseColMatRef<'_, usize, f64>) -> Result<(), SolveError> {
+    /// Numeric factorisation with the stored symbolic analysis, for a
+    /// matrix of the analysed pattern (the caller guarantees it; see
+    /// [`CholeskySolver::refactor`] for the checked form). The factor's
+    /// buffer is kept from the previous factorisation.
+    pub(super) fn factor_same_pattern(
+        &mut self,
+        a: SparseColMatRef<'_, usize, f64>,
+    ) -> Result<(), SolveError> {
         self.factored = false;
         let len = self.symbolic.len_val();
-        let mut values = Vec::new();
+        let mut values = std::mem::take(&mut self.values);
+        values.clear();
         values
             .try_reserve_exact(len)
             .map_err(|_| SolveError::Backend("out of memory for the Cholesky factor".into()))?;
@@ -154,7 +161,8 @@ impl CholeskySolver {
             .factorize_numeric_llt_scratch::<f64>(self.par, Default::default());
         let mut buf = MemBuffer::try_new(req)
             .map_err(|_| SolveError::Backend("out of memory for the Cholesky workspace".into()))?;
-        self.symbolic
+        let result = self
+            .symbolic
             .factorize_numeric_llt(
                 &mut values,
                 a,
@@ -164,11 +172,12 @@ impl CholeskySolver {
                 MemStack::new(&mut buf),
                 Default::default(),
             )
+            .map(|_| ())
             // faer's numeric LLᵀ fails only on a non-positive pivot
-            .map_err(|_| SolveError::NotPositiveDefinite)?;
+            .map_err(|_| SolveError::NotPositiveDefinite);
         self.values = values;
-        self.factored = true;
-        Ok(())
+        self.factored = result.is_ok();
+        result
     }
 
     /// Refactors a matrix with the same sparsity pattern as the one given to
@@ -181,7 +190,7 @@ impl CholeskySolver {
                 "refactor needs the same sparsity pattern".into(),
             ));
         }
-        self.factor(a)
+        self.factor_same_pattern(a)
     }
 
     /// Order of the matrix.

@@ -50,6 +50,8 @@ pub struct ConstrainedSolver {
     coupling: Vec<(usize, usize)>,
     /// Their values at the last factorisation (`None`: not factored).
     coupling_values: Option<Vec<f64>>,
+    /// Values of the lower A_ff, kept between factorisations (a buffer).
+    free_values: Vec<f64>,
     /// Lower triangle of A_ff.
     pattern: SymbolicSparseColMat<usize>,
     /// Entry k of A goes to entry `to_free[k]` of the lower A_ff
@@ -148,6 +150,7 @@ impl ConstrainedSolver {
             coupling_ptr,
             coupling,
             coupling_values: None,
+            free_values: Vec::new(),
             pattern,
             to_free,
             solver,
@@ -164,17 +167,67 @@ impl ConstrainedSolver {
             ));
         }
         let values = a.val();
-        let mut free_values = vec![0.0; self.pattern.row_idx().len()];
-        for (k, &t) in self.to_free.iter().enumerate() {
-            if t != usize::MAX {
-                free_values[t] += values[k];
-            }
-        }
+        self.factor_with(|_, k| values[k])
+    }
+
+    /// Numeric factorisation of A_ff with the values of A given entry by
+    /// entry: `value(j, k)` is entry k of the pattern given to
+    /// [`ConstrainedSolver::analyse`], which lies in column j. Only the
+    /// entries the solve needs are asked for, each once: the lower triangle
+    /// of A_ff and the coupling A_kf of the free columns. So a method whose
+    /// matrix changes every step (implicit smoothing) assembles and
+    /// eliminates in one parallel pass over its entries, without building
+    /// A; the buffers of the values are kept between factorisations.
+    pub fn factor_with(
+        &mut self,
+        value: impl Fn(usize, usize) -> f64 + Sync,
+    ) -> Result<(), SolveError> {
         self.coupling_values = None;
-        if let Some(solver) = self.solver.as_mut() {
-            solver.refactor(SparseColMatRef::new(self.pattern.as_ref(), &free_values))?;
+        let nnz = self.pattern.row_idx().len();
+        let mut free_values = std::mem::take(&mut self.free_values);
+        free_values.clear();
+        free_values.resize(nnz, 0.0);
+        let mut coupling_values = vec![0.0; self.coupling.len()];
+        {
+            // blocks of free columns: disjoint ranges of both value arrays
+            const BLOCK: usize = 2048;
+            let col_ptr = self.pattern.col_ptr();
+            let m = self.free.len();
+            let mut blocks = Vec::with_capacity(m / BLOCK + 1);
+            let (mut fv, mut cv) = (&mut free_values[..], &mut coupling_values[..]);
+            let mut c0 = 0;
+            while c0 < m {
+                let c1 = (c0 + BLOCK).min(m);
+                let (a, rest) = fv.split_at_mut(col_ptr[c1] - col_ptr[c0]);
+                let (b, rest_c) = cv.split_at_mut(self.coupling_ptr[c1] - self.coupling_ptr[c0]);
+                blocks.push((c0, c1, a, b));
+                (fv, cv) = (rest, rest_c);
+                c0 = c1;
+            }
+            blocks.into_par_iter().for_each(|(c0, c1, fv, cv)| {
+                let (f0, k0) = (col_ptr[c0], self.coupling_ptr[c0]);
+                for c in c0..c1 {
+                    let j = self.free[c];
+                    for k in self.a_col_ptr[j]..self.a_col_ptr[j + 1] {
+                        let t = self.to_free[k];
+                        if t != usize::MAX {
+                            fv[t - f0] += value(j, k);
+                        }
+                    }
+                    for t in self.coupling_ptr[c]..self.coupling_ptr[c + 1] {
+                        cv[t - k0] = value(j, self.coupling[t].0);
+                    }
+                }
+            });
         }
-        self.coupling_values = Some(self.coupling.iter().map(|&(k, _)| values[k]).collect());
+        let result = match self.solver.as_mut() {
+            Some(solver) => solver
+                .factor_same_pattern(SparseColMatRef::new(self.pattern.as_ref(), &free_values)),
+            None => Ok(()),
+        };
+        self.free_values = free_values;
+        result?;
+        self.coupling_values = Some(coupling_values);
         Ok(())
     }
 

@@ -5,9 +5,12 @@ use super::QuadFairError;
 use crate::geom;
 use crate::mesh::{SurfaceMesh, structure_lines};
 use crate::solve::{BoxQpOptions, box_qp, sparse_from_triplets};
+use crate::{Control, Output};
+use serde::Serialize;
 
 /// Options of [`fair_polyline_network`].
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct PolylineNetworkOptions {
     /// Half height h of every tolerance cylinder, in units of the mean edge
     /// length (so |z − z⁰| ≤ h·ē). Default 0.1.
@@ -15,6 +18,9 @@ pub struct PolylineNetworkOptions {
     /// Optional per-vertex half heights (absolute, overriding `tolerance`);
     /// 0 fixes a vertex.
     pub per_vertex: Option<Vec<f64>>,
+    /// Progress callback and cancel flag (stage `"network"`: one step
+    /// before assembling the QP and one before solving it).
+    pub control: Control,
 }
 
 impl Default for PolylineNetworkOptions {
@@ -22,12 +28,31 @@ impl Default for PolylineNetworkOptions {
         PolylineNetworkOptions {
             tolerance: 0.1,
             per_vertex: None,
+            control: Control::default(),
         }
     }
 }
 
+impl PolylineNetworkOptions {
+    /// Sets [`PolylineNetworkOptions::tolerance`].
+    pub fn tolerance(mut self, tolerance: f64) -> Self {
+        self.tolerance = tolerance;
+        self
+    }
+    /// Sets [`PolylineNetworkOptions::per_vertex`].
+    pub fn per_vertex(mut self, per_vertex: Option<Vec<f64>>) -> Self {
+        self.per_vertex = per_vertex;
+        self
+    }
+    /// Sets [`PolylineNetworkOptions::control`].
+    pub fn control(mut self, control: Control) -> Self {
+        self.control = control;
+        self
+    }
+}
+
 /// What [`fair_polyline_network`] did.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct PolylineNetworkReport {
     /// Height-only bending energy Σ (z_{k−1} − 2z_k + z_{k+1})² before.
     pub energy_before: f64,
@@ -51,10 +76,14 @@ pub struct PolylineNetworkReport {
 /// added: it makes the problem strictly convex and picks, among the
 /// minimisers of E, the one closest to the input; its effect on E is of
 /// relative order 1e-9.
+///
+/// Returns the new positions (only z changes) and the report; the input is
+/// untouched.
 pub fn fair_polyline_network(
-    mesh: &mut SurfaceMesh,
+    mesh: &SurfaceMesh,
     opts: &PolylineNetworkOptions,
-) -> Result<PolylineNetworkReport, QuadFairError> {
+) -> Result<Output<PolylineNetworkReport>, QuadFairError> {
+    opts.control.step("network", 0, 2)?;
     let n = mesh.vertex_count();
     let ebar = geom::mean_edge_length(mesh);
     if !(opts.tolerance >= 0.0) || !opts.tolerance.is_finite() {
@@ -103,10 +132,13 @@ pub fn fair_polyline_network(
     };
     let e0 = energy(&z0);
     if triples.is_empty() || n == 0 {
-        return Ok(PolylineNetworkReport {
-            energy_before: e0,
-            energy_after: e0,
-            ..Default::default()
+        return Ok(Output {
+            positions: mesh.positions().to_vec(),
+            report: PolylineNetworkReport {
+                energy_before: e0,
+                energy_after: e0,
+                ..Default::default()
+            },
         });
     }
     // Q of E(z) = ½ zᵀQz (both triangles), plus the proximal diagonal
@@ -130,6 +162,7 @@ pub fn fair_polyline_network(
         c[t[2]] += r;
     }
     let lo: Vec<f64> = h.iter().map(|x| -x).collect();
+    opts.control.step("network", 1, 2)?;
     let sol = box_qp(q.as_ref(), &c, &lo, &h, &BoxQpOptions::default())?;
     let z: Vec<f64> = (0..n)
         .map(|i| {
@@ -145,8 +178,11 @@ pub fn fair_polyline_network(
             .count(),
         iterations: sol.iterations,
     };
-    for (p, zi) in mesh.positions_mut().iter_mut().zip(&z) {
-        p.z = *zi;
-    }
-    Ok(report)
+    let positions = mesh
+        .positions()
+        .iter()
+        .zip(&z)
+        .map(|(p, zi)| crate::Vec3::new(p.x, p.y, *zi))
+        .collect();
+    Ok(Output { positions, report })
 }

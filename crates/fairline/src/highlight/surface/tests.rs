@@ -472,9 +472,13 @@ fn quantile(xs: &[f64], q: f64) -> f64 {
 /// are on lights the surface draws too, 95 % of those lie within
 /// 0.1 spacing of the surface line of the same light and 95 % of the
 /// surface-line points within 0.1 spacing of the mesh line (the rest is
-/// near silhouettes, where the two drop different cells).
+/// near silhouettes, where the two drop different cells). The spout patch
+/// that once reached only 89.3 % coverage: its grid cells near the
+/// silhouette span 6–10 spacings, and the surface dropped cells spanning
+/// more than 4 spacings while the mesh counts ceil(hi/s) − floor(lo/s) ≤
+/// 4 + 2 levels per triangle; both now use the one rule
+/// (`contour::too_many_levels`).
 #[test]
-#[ignore = "known gap (session 18): the bump and four teapot lid patches pass (coverage 98.4-100 %, 95 % of distances <= 0.002 spacing), one lid patch has 89.3 % coverage (< 90 %): the mesh draws lights there that the (u, v) grid drops; cause not found yet"]
 fn linear_surface_lines_agree_with_the_tessellated_surface() {
     // A generated bicubic bump: z = exp(-(x² + y²)) sampled into a 9 × 9 net.
     let n = 9;
@@ -558,4 +562,258 @@ fn linear_surface_lines_agree_with_the_tessellated_surface() {
             "{name}: surface lines away from mesh lines: 95% {b95}"
         );
     }
+}
+
+/// The dome z = 0.8 − 0.4 (x² + y²) over [-1, 1]² as a bicubic B-spline.
+fn dome() -> BSplineSurface {
+    let n = 9;
+    let net = (0..n)
+        .map(|i| {
+            (0..n)
+                .map(|j| {
+                    let x = -1.0 + 2.0 * i as f64 / (n - 1) as f64;
+                    let y = -1.0 + 2.0 * j as f64 / (n - 1) as f64;
+                    Vec3::new(x, y, 0.8 - 0.4 * (x * x + y * y))
+                })
+                .collect()
+        })
+        .collect();
+    let k = crate::bspline::clamped_uniform_knots(n, 3);
+    BSplineSurface::new(3, 3, k.clone(), k, net, None).unwrap()
+}
+
+#[test]
+fn default_circular_lights_face_the_part_and_their_lines_span_it() {
+    // A flat square: the axis is its normal, the centre above its centre,
+    // and (normal lines perpendicular to the circle's plane) the radius at
+    // a point is its distance from the centre: the radii lie between the
+    // 5 % and 95 % area quantiles of that distance over the square [-2, 2]²
+    // (closed forms: the disc of radius r covers π r² / 16 of it up to
+    // r = 2).
+    let s = plane();
+    let c = default_circular_lights(std::slice::from_ref(&s), None, 10).unwrap();
+    let axis = Vec3::from(c.axis);
+    assert!((axis - Vec3::Z).length() < 1e-12, "axis {axis}");
+    let centre = Vec3::from(c.center);
+    // (the centroid of the midpoint samples: within 1e-3 of the square's)
+    assert!(centre.x.abs() < 1e-3 && centre.y.abs() < 1e-3, "{centre}");
+    assert!(centre.z > 1.0, "above the part: {centre}");
+    assert_eq!(c.radii.len(), 10);
+    assert!(c.radii.windows(2).all(|w| w[1] > w[0]));
+    // (sampled at cell midpoints about 0.18 apart: half a cell of slack)
+    let r05 = (0.05f64 * 16.0 / std::f64::consts::PI).sqrt();
+    assert!((c.radii[0] - r05).abs() < 0.1, "{} vs {r05}", c.radii[0]);
+    assert!(
+        c.radii[9] < 2.0 * 2f64.sqrt() && c.radii[9] > 2.0,
+        "{}",
+        c.radii[9]
+    );
+    // Every light draws a line on the square.
+    let lights: Vec<SurfaceLight> = c
+        .lights()
+        .unwrap()
+        .into_iter()
+        .map(SurfaceLight::Circular)
+        .collect();
+    let h = surface_highlight_lines(&s, &lights, &SurfaceHighlightOptions::default().grid(100));
+    for k in 0..lights.len() {
+        assert!(
+            h.lines.iter().any(|l| l.light == k),
+            "light {k} draws nothing"
+        );
+    }
+    // Turned upside down (normals −z), the lights come from below.
+    let flipped = {
+        let net: Vec<Vec<Vec3>> = (0..4)
+            .map(|i| (0..4).map(|j| s.control_point(3 - i, j)).collect())
+            .collect();
+        BSplineSurface::bezier(net, None).unwrap()
+    };
+    let c2 = default_circular_lights(&[flipped], None, 10).unwrap();
+    assert!((Vec3::from(c2.axis) + Vec3::Z).length() < 1e-12);
+    assert!(c2.center[2] < -1.0);
+    // A given axis wins (normalised) ...
+    let tilted = Vec3::new(1.0, 0.0, 1.0);
+    let c3 = default_circular_lights(std::slice::from_ref(&s), Some(tilted), 4).unwrap();
+    assert!((Vec3::from(c3.axis) - tilted.normalize()).length() < 1e-15);
+    assert_eq!(c3.radii.len(), 4);
+    // ... but one parallel to the face gives no lights: no normal line of a
+    // flat face meets the plane of such circles.
+    assert!(default_circular_lights(std::slice::from_ref(&s), Some(Vec3::X), 4).is_none());
+}
+
+#[test]
+fn default_circular_lights_over_a_dome_draw_nested_rings() {
+    let s = dome();
+    let c = default_circular_lights(std::slice::from_ref(&s), None, 8).unwrap();
+    // Symmetric about the z axis: the mean normal is +z.
+    let axis = Vec3::from(c.axis);
+    assert!(axis.z > 1.0 - 1e-9, "axis {axis}");
+    assert!(c.center[0].abs() < 1e-9 && c.center[1].abs() < 1e-9);
+    assert!(c.center[2] > 0.8);
+    let lights: Vec<SurfaceLight> = c
+        .lights()
+        .unwrap()
+        .into_iter()
+        .map(SurfaceLight::Circular)
+        .collect();
+    let h = surface_highlight_lines(&s, &lights, &SurfaceHighlightOptions::default().grid(120));
+    // Each light lights a ring around the top, and the rings are nested:
+    // every point of ring k is nearer the axis than every point of ring
+    // k + 1 (the dome is nearly a surface of revolution).
+    let mut last = 0.0;
+    for k in 0..lights.len() {
+        let ring: Vec<f64> = h
+            .lines
+            .iter()
+            .filter(|l| l.light == k)
+            .flat_map(|l| l.points.iter().map(|p| p.x.hypot(p.y)))
+            .collect();
+        assert!(!ring.is_empty(), "light {k} draws nothing");
+        let (lo, hi) = ring
+            .iter()
+            .fold((f64::INFINITY, 0f64), |(a, b), &r| (a.min(r), b.max(r)));
+        assert!(
+            lo > last,
+            "light {k}: ring {lo}..{hi} inside the previous one"
+        );
+        last = hi;
+    }
+    // The same lights for a triangle mesh of the dome.
+    let t = crate::bspline::tessellate(&s, 60, 60);
+    let mesh = crate::SurfaceMesh::new(t.positions, &t.triangles).unwrap();
+    let m = default_circular_lights_for_mesh(&mesh, None, 8).unwrap();
+    assert!(Vec3::from(m.axis).z > 1.0 - 1e-9);
+    for (a, b) in m.radii.iter().zip(&c.radii) {
+        // (triangle centroids of a 60 × 60 tessellation against cell
+        // midpoints: the quantiles agree to a few per cent)
+        assert!((a - b).abs() < 0.05 * b, "mesh {a} vs surface {b}");
+    }
+    assert!(default_circular_lights(&[], None, 8).is_none());
+}
+
+/// Issue #20 item 2, the impeller's "flat shroud disc": its only flat faces
+/// are the two planes (faces 74 and 76, control points at one z), and their
+/// linear highlight lines are straight. What looks like a flat disc from
+/// above is a dish of revolution (rational bicubic faces, z from −2.37 at
+/// r = 29.44 to −0.93 at r = 41.12, normals tilted 5–9° towards the axis):
+/// its lines are curves (the normal lines of the circle r ≈ 30 all meet the
+/// light plane at light 0's centre, so the lines crowd and turn there), and
+/// they run on smoothly across the seams between dish faces (turning less
+/// than 1° where two dish faces' pieces of one light meet). The kinks seen
+/// on it are where the dish meets the blade-root faces (G1 seams with a
+/// jump of curvature) — what highlight lines are for.
+#[test]
+fn impeller_flat_faces_give_straight_lines_and_the_dish_lines_run_on_across_its_seams() {
+    let Some(path) = data("impeller.igs") else {
+        return; // fails under CI; said loudly otherwise (shared_data.rs)
+    };
+    let parts: Vec<BSplineSurface> = read_iges(&path)
+        .unwrap()
+        .surfaces
+        .into_iter()
+        .map(|s| s.surface)
+        .collect();
+    let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+    for s in &parts {
+        let (a, b) = s.control_bounding_box();
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    let size = (hi - lo).length();
+    let array = LightArray::default_for(lo, hi, None);
+    let lights = PartLights::Linear {
+        array,
+        min_cos: 0.1,
+        max_lights: DEFAULT_MAX_LIGHTS,
+    };
+    let opts = SurfaceHighlightOptions::default().grid(200);
+    let patches = part_highlight_lines(&parts, &lights, &opts, &|| {});
+    let index = |k: usize, l: &SurfaceHighlightLine| match patches[k].lights[l.light] {
+        SurfaceLight::Linear { index, .. } => index,
+        SurfaceLight::Circular(_) => unreachable!(),
+    };
+    // 1. The flat faces: every piece of every light is straight.
+    let flat: Vec<usize> = (0..parts.len())
+        .filter(|&k| {
+            let (a, b) = parts[k].control_bounding_box();
+            b.z - a.z < 1e-12 * size
+        })
+        .collect();
+    assert_eq!(flat, vec![74, 76]);
+    let mut straight = 0;
+    for &k in &flat {
+        for l in &patches[k].highlights.lines {
+            let (a, b) = (l.points[0], l.points[l.points.len() - 1]);
+            if (b - a).length() < 1e-6 * size {
+                continue;
+            }
+            let dir = (b - a).normalize();
+            for p in &l.points {
+                let off = (*p - a) - dir * (*p - a).dot(dir);
+                assert!(off.length() < 1e-9 * size, "face {k}: {}", off.length());
+            }
+            straight += 1;
+        }
+    }
+    assert!(straight >= 3, "{straight} lines on the flat faces");
+    // 2. The dish: faces of revolution about z between r = 29.4 and 41.2,
+    //    tilted 5–9°, not flat.
+    let dish: Vec<usize> = (0..parts.len())
+        .filter(|&k| {
+            let s = &parts[k];
+            let (a, b) = s.control_bounding_box();
+            let r_min = s
+                .control_points()
+                .iter()
+                .map(|p| p.x.hypot(p.y))
+                .fold(f64::INFINITY, f64::min);
+            a.z > -2.4
+                && b.z < -0.9
+                && r_min > 29.0
+                && s.is_rational()
+                && (s.count_u(), s.count_v()) == (4, 4)
+        })
+        .collect();
+    assert!(dish.len() >= 10, "{dish:?}");
+    for &k in &dish {
+        let n = parts[k].normal(0.5, 0.5).unwrap();
+        let tilt = n.z.abs().acos().to_degrees();
+        assert!((4.0..10.0).contains(&tilt), "face {k}: tilt {tilt}°");
+    }
+    // Where pieces of one light on two dish faces meet, the line runs on.
+    let mut junctions = 0;
+    for (i, &a) in dish.iter().enumerate() {
+        for &b in &dish[i + 1..] {
+            for la in &patches[a].highlights.lines {
+                for lb in &patches[b].highlights.lines {
+                    if index(a, la) != index(b, lb) || la.points.len() < 2 || lb.points.len() < 2 {
+                        continue;
+                    }
+                    let ends = |l: &SurfaceHighlightLine| {
+                        let n = l.points.len();
+                        [
+                            (l.points[0], l.points[1] - l.points[0]),
+                            (l.points[n - 1], l.points[n - 2] - l.points[n - 1]),
+                        ]
+                    };
+                    for (pa, da) in ends(la) {
+                        for (pb, db) in ends(lb) {
+                            if (pa - pb).length() < 1e-4 * size {
+                                // outward directions are opposite on a smooth line
+                                let turn = (-da.normalize()).angle_between(db.normalize());
+                                assert!(
+                                    turn.to_degrees() < 1.0,
+                                    "faces {a}/{b}: the line turns {}°",
+                                    turn.to_degrees()
+                                );
+                                junctions += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(junctions >= 2, "{junctions} junctions");
 }

@@ -1,0 +1,335 @@
+//! Sharp creases that the input under-samples, and the surface the vertex
+//! flow puts its vertices on there (issue #21 item 2).
+//!
+//! A coarse mesh sampled without regard to a sharp crease cuts it by a
+//! strip of *chord* faces: their vertices lie on the two sides, the faces
+//! themselves on neither, and the crease lies outside (convex) or inside
+//! (concave) the strip. A smooth fit through the strip (the Phong patch of
+//! [`super::surface`]) rounds the crease, so a vertex that flows toward it
+//! cannot reach it. Here the crease is rebuilt from the sides instead:
+//!
+//! 1. **Feature edges**: interior input edges whose two faces' normals
+//!    differ by more than [`FEATURE_ANGLE_DEG`]; a vertex on one is a
+//!    *feature vertex*.
+//! 2. **Patches**: the faces joined across the other edges (union–find).
+//!    A patch every vertex of which is a feature vertex — it has no vertex
+//!    inside it, a strip at most one face wide — is a *chord strip*; every
+//!    other patch is a *side*.
+//! 3. **Chord faces**: a face of a chord strip each of whose corners
+//!    touches a side. At each corner, each side touching it gives a plane
+//!    through the corner, normal to the area-weighted mean normal of that
+//!    side's faces at the corner — the tangent plane of that side there —
+//!    provided the side is flat near the corner: its faces within two rings
+//!    turn by less than [`FLAT_SIDE_DEG`] from that normal. Where a corner
+//!    touches no side, or a side that bends (a rounded feature sampled by
+//!    two or more strips: the neighbouring strips are strips too, or the
+//!    flank of the fillet bends away from the plane), the face is no chord
+//!    face and keeps the smooth fit: the rounding there is real.
+//! 4. **The crease surface over a chord face**: a point p of the face moves
+//!    along the interpolated side normal d onto the nearest of the corner
+//!    planes (the smallest |t| with p + t d on a plane). At a convex crease
+//!    the chord lies inside every side's half-space and the first plane met
+//!    going outward is the surface; at a concave one it lies outside all of
+//!    them and the first plane met going inward is the surface; on the edge
+//!    a chord face shares with a side, t = 0, so the crease surface meets
+//!    the side without a gap. Where the planes disagree about the side the
+//!    point is on (t of both signs: a crease that is neither convex nor
+//!    concave across the face), where the line runs nearly parallel to a
+//!    plane, or where the move would exceed the face's longest edge, the
+//!    face's smooth fit is used.
+//! 5. **On the crease**: a point that lands within [`SNAP_DISTANCE`] of the
+//!    face's longest edge from the line where its plane meets the plane of
+//!    another side (the intersection of the side fits) is put onto that
+//!    line, so the vertices that the flow gathers at a crease sit on it and
+//!    the mesh's edges between them follow it.
+//!
+//! The feature threshold, 10°, lies below the turn of a crease that a
+//! chord cuts in two (a 45° crease turns by about 22.5° on either side of
+//! the chord, unevenly where the crease lies nearer one row; a 90° edge of
+//! a cube by about 45°) and above the turn per edge of the smooth parts of
+//! a mesh that resolves them (a cylinder of radius r with edges of length
+//! ℓ turns by ℓ/r, 9° at 40 edges around, about half that across an edge
+//! of the triangulation). A rounded feature that one strip spans (a fillet
+//! of radius ≤ the edge length, between flat sides) is rebuilt as a crease:
+//! the error is then the fillet's own sag, which the input's chord has too.
+//! Faces next to a chord face do not average their corner normals with it
+//! ([`super::surface`]), so the sides stay flat up to the crease. On the
+//! shapes of `accuracy_tests`: 104 chord faces on the sharp cube and 25 on
+//! the fandisk-like part (all near a crease), none on the rounded cube and
+//! the filleted cylinder, whose results are unchanged bit for bit.
+
+use crate::Vec3;
+use crate::mesh::{FaceId, SurfaceMesh, VertexId, union_find_join, union_find_root};
+
+/// Interior edges whose faces' normals differ by more than this angle (in
+/// degrees) are feature edges (module documentation, step 1).
+pub const FEATURE_ANGLE_DEG: f64 = 10.0;
+
+/// A side is used as a plane at a corner only where its faces within two
+/// rings of the corner turn by less than this angle (in degrees) from its
+/// mean normal there (module documentation, step 3).
+pub const FLAT_SIDE_DEG: f64 = 5.0;
+
+/// The line p + t d is used against a corner plane only where it meets the
+/// plane at an angle whose cosine |d · n| is at least this.
+const MIN_INCIDENCE: f64 = 0.2;
+
+/// A point of the crease surface closer to the crease line than this share
+/// of its face's longest edge is put onto the line (module documentation,
+/// step 5).
+pub const SNAP_DISTANCE: f64 = 0.25;
+
+/// The tangent planes of the sides at the corners of a chord face: for
+/// each corner, the unit normals of the sides touching it (the planes pass
+/// through the corner).
+#[derive(Clone, Debug, Default)]
+pub(super) struct SidePlanes(pub [Vec<Vec3>; 3]);
+
+/// For each face of `mesh` with unit normals and areas `face_normals`, the
+/// side planes at its corners if it is a chord face of an under-sampled
+/// crease (module documentation, steps 1–3), else `None`.
+pub(super) fn chord_faces(
+    mesh: &SurfaceMesh,
+    face_normals: &[(Vec3, f64)],
+) -> Vec<Option<SidePlanes>> {
+    let nf = mesh.face_count();
+    let cos_feature = FEATURE_ANGLE_DEG.to_radians().cos();
+    let mut parent: Vec<u32> = (0..nf as u32).collect();
+    let mut feature_vertex = vec![false; mesh.vertex_count()];
+    for h in mesh.halfedges() {
+        let o = mesh.opposite(h);
+        // each interior edge once
+        if h.0 > o.0 {
+            continue;
+        }
+        let (Some(f1), Some(f2)) = (mesh.face(h), mesh.face(o)) else {
+            continue;
+        };
+        let (n1, n2) = (face_normals[f1.idx()].0, face_normals[f2.idx()].0);
+        if n1 == Vec3::ZERO || n2 == Vec3::ZERO {
+            continue;
+        }
+        if n1.dot(n2) < cos_feature {
+            feature_vertex[mesh.from_vertex(h).idx()] = true;
+            feature_vertex[mesh.to_vertex(h).idx()] = true;
+        } else {
+            union_find_join(&mut parent, f1.0, f2.0);
+        }
+    }
+    let patch: Vec<u32> = (0..nf as u32)
+        .map(|f| union_find_root(&mut parent, f))
+        .collect();
+    let triangles: Vec<[VertexId; 3]> = (0..nf as u32).map(|f| mesh.triangle(FaceId(f))).collect();
+    // a patch is a chord strip when none of its vertices is inside it;
+    // degenerate faces belong to no side
+    let mut strip = vec![true; nf];
+    for f in 0..nf {
+        if face_normals[f].0 == Vec3::ZERO || triangles[f].iter().any(|v| !feature_vertex[v.idx()])
+        {
+            strip[patch[f] as usize] = false;
+        }
+    }
+    let is_side =
+        |g: FaceId| face_normals[g.idx()].0 != Vec3::ZERO && !strip[patch[g.idx()] as usize];
+    (0..nf)
+        .map(|f| {
+            if face_normals[f].0 == Vec3::ZERO || !strip[patch[f] as usize] {
+                return None;
+            }
+            let mut planes = SidePlanes::default();
+            for (k, &v) in triangles[f].iter().enumerate() {
+                // area-weighted normal sums of the sides around v, by patch
+                let mut sides: Vec<(u32, Vec3)> = Vec::new();
+                for g in mesh.vertex_faces(v).filter(|&g| is_side(g)) {
+                    let (n, area) = face_normals[g.idx()];
+                    let id = patch[g.idx()];
+                    match sides.iter_mut().find(|s| s.0 == id) {
+                        Some(s) => s.1 += area * n,
+                        None => sides.push((id, area * n)),
+                    }
+                }
+                for (id, sum) in sides {
+                    let n = sum.normalize_or_zero();
+                    if n == Vec3::ZERO || !flat_near(mesh, face_normals, &patch, id, v, n) {
+                        return None;
+                    }
+                    planes.0[k].push(n);
+                }
+                if planes.0[k].is_empty() {
+                    return None;
+                }
+            }
+            Some(planes)
+        })
+        .collect()
+}
+
+/// Whether the faces of patch `id` around the one-ring of `v` (its faces
+/// within two rings) all turn by less than [`FLAT_SIDE_DEG`] from `n`.
+fn flat_near(
+    mesh: &SurfaceMesh,
+    face_normals: &[(Vec3, f64)],
+    patch: &[u32],
+    id: u32,
+    v: VertexId,
+    n: Vec3,
+) -> bool {
+    let cos_flat = FLAT_SIDE_DEG.to_radians().cos();
+    std::iter::once(v).chain(mesh.one_ring(v)).all(|u| {
+        mesh.vertex_faces(u)
+            .filter(|g| patch[g.idx()] == id)
+            .all(|g| face_normals[g.idx()].0.dot(n) >= cos_flat)
+    })
+}
+
+/// The point of the crease surface over the chord face with corners `t`
+/// and side planes `planes` at barycentric coordinates `w` (module
+/// documentation, step 4); `None` where the face's smooth fit is to be used.
+pub(super) fn crease_point(t: [Vec3; 3], planes: &SidePlanes, w: [f64; 3]) -> Option<Vec3> {
+    let p = w[0] * t[0] + w[1] * t[1] + w[2] * t[2];
+    let mut d = Vec3::ZERO;
+    for k in 0..3 {
+        let corner: Vec3 = planes.0[k].iter().copied().sum();
+        d += w[k] * corner.normalize_or_zero();
+    }
+    let d = d.normalize_or_zero();
+    if d == Vec3::ZERO {
+        return None;
+    }
+    let reach = (0..3)
+        .map(|k| t[k].distance(t[(k + 1) % 3]))
+        .fold(0.0, f64::max);
+    let (mut nearest, mut below, mut above) = (f64::INFINITY, false, false);
+    let mut plane = (Vec3::ZERO, Vec3::ZERO);
+    for k in 0..3 {
+        for &n in &planes.0[k] {
+            let incidence = d.dot(n);
+            if incidence.abs() < MIN_INCIDENCE {
+                continue;
+            }
+            let s = (t[k] - p).dot(n) / incidence;
+            // a point on the plane (to rounding) is on both of its sides
+            let tiny = 1e-12 * reach;
+            below |= s > tiny;
+            above |= s < -tiny;
+            if s.abs() < nearest.abs() {
+                nearest = s;
+                plane = (t[k], n);
+            }
+        }
+    }
+    if (below && above) || !(nearest.abs() <= reach) {
+        return None;
+    }
+    let q = p + nearest * d;
+    let q = snap_to_crease(q, plane, t, planes, SNAP_DISTANCE * reach);
+    q.is_finite().then_some(q)
+}
+
+/// `q` (on the plane `on` = (point, unit normal)) moved onto the line where
+/// that plane meets the nearest other corner plane of a different side
+/// (their normals apart by more than [`FEATURE_ANGLE_DEG`]), when that line
+/// is within `radius` of `q`; else `q`.
+fn snap_to_crease(
+    q: Vec3,
+    on: (Vec3, Vec3),
+    t: [Vec3; 3],
+    planes: &SidePlanes,
+    radius: f64,
+) -> Vec3 {
+    let cos_feature = FEATURE_ANGLE_DEG.to_radians().cos();
+    let n_a = on.1;
+    let mut best: Option<(f64, Vec3)> = None;
+    for k in 0..3 {
+        for &n_b in &planes.0[k] {
+            let c = n_a.dot(n_b);
+            if c >= cos_feature {
+                continue;
+            }
+            // the point of the line {x·n_a = q·n_a, (x − t_k)·n_b = 0}
+            // nearest to q: q − β (n_b − c n_a) / (1 − c²) with β the
+            // distance of q from the plane b (q is on plane a)
+            let beta = (q - t[k]).dot(n_b);
+            let sine2 = 1.0 - c * c;
+            if !(sine2 > 1e-12) {
+                continue;
+            }
+            let shift = -beta * (n_b - c * n_a) / sine2;
+            let distance = shift.length();
+            if distance <= radius && best.is_none_or(|b| distance < b.0) {
+                best = Some((distance, q + shift));
+            }
+        }
+    }
+    best.map_or(q, |b| b.1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A roof y = −|x| (convex, 90°) and a valley y = |x| (concave) cut by a
+    /// chord: the crease point of every point of the chord lies on the true
+    /// surface, the chord's ends stay where they are.
+    #[test]
+    fn crease_points_of_a_chord_lie_on_the_crease_surface() {
+        for convex in [true, false] {
+            let s = if convex { -1.0 } else { 1.0 };
+            // corners: two on the left side (x < 0), one on the right
+            let t = [
+                Vec3::new(-0.3, s * 0.3, 0.0),
+                Vec3::new(-0.3, s * 0.3, 1.0),
+                Vec3::new(0.5, s * 0.5, 0.5),
+            ];
+            // outward normals of the two sides (the solid below the roof /
+            // below the valley)
+            let left = Vec3::new(s, 1.0, 0.0).normalize();
+            let right = Vec3::new(-s, 1.0, 0.0).normalize();
+            let planes = SidePlanes([vec![left], vec![left], vec![right]]);
+            for (a, b) in [(0.5, 0.2), (0.1, 0.1), (0.3, 0.6), (0.0, 0.0), (0.5, 0.5)] {
+                let w = [1.0 - a - b, a, b];
+                let q = crease_point(t, &planes, w).unwrap();
+                let on = s * q.x.abs();
+                assert!((q.y - on).abs() < 1e-12, "{convex} {w:?}: {q}");
+            }
+            // a corner stays where it is
+            let q = crease_point(t, &planes, [1.0, 0.0, 0.0]).unwrap();
+            assert!(q.distance(t[0]) < 1e-12);
+        }
+    }
+
+    /// A chord across a crease of a generated mesh is found, the flat faces
+    /// are not: a folded strip of faces (two flat sides of 2 × 4 faces at
+    /// 90°, joined by one strip of chord faces).
+    #[test]
+    fn the_chord_strip_of_a_folded_sheet_is_found() {
+        // rows of 3 vertices along z at x positions on the roof y = −|x|
+        let xs = [-1.5, -1.0, -0.5, 0.3, 0.8, 1.3];
+        let mut pos = Vec::new();
+        for &x in &xs {
+            for z in 0..3 {
+                pos.push(Vec3::new(x, -f64::abs(x), z as f64));
+            }
+        }
+        let mut faces = Vec::new();
+        for i in 0..xs.len() as u32 - 1 {
+            for j in 0..2 {
+                let (a, b) = (3 * i + j, 3 * (i + 1) + j);
+                faces.push([a, a + 1, b]);
+                faces.push([a + 1, b + 1, b]);
+            }
+        }
+        let mesh = SurfaceMesh::new(pos, &faces).unwrap();
+        let normals: Vec<(Vec3, f64)> = (0..mesh.face_count() as u32)
+            .map(|f| {
+                let [a, b, c] = mesh.triangle(FaceId(f)).map(|v| mesh.positions()[v.idx()]);
+                crate::geom::triangle_normal_area(a, b, c)
+            })
+            .collect();
+        let chords = chord_faces(&mesh, &normals);
+        for (f, c) in chords.iter().enumerate() {
+            // faces 8..12 join the rows at x = −0.5 and x = 0.3
+            assert_eq!(c.is_some(), (8..12).contains(&f), "face {f}");
+        }
+    }
+}

@@ -1,0 +1,168 @@
+//! The JSON report of a command: the `--report` file of the CLI and the
+//! report dictionary of the Python package, one definition for both (README
+//! "Outputs and safety").
+//!
+//! A report holds `"command"`, `"time_s"` (computation only), the keys the
+//! command adds (often every field of an algorithm's `Serialize` report,
+//! [`JsonReport::set_fields`]) and `"warnings"` when the command warned. It
+//! never holds `null`: a value that does not serialise to a finite number
+//! (serde_json turns NaN and ±inf into `null`) is left out of its object,
+//! or written as the string `"not finite"` inside an array, with a warning
+//! naming the key. The library never prints: a front end shows the
+//! warnings ([`JsonReport::warnings`]) its own way.
+
+use serde_json::{Map, Value, json};
+use std::time::{Duration, Instant};
+
+/// A command's JSON report under construction; see the module documentation.
+#[derive(Clone, Debug)]
+pub struct JsonReport {
+    map: Map<String, Value>,
+    compute: Duration,
+    warnings: Vec<String>,
+}
+
+impl JsonReport {
+    /// A report for `command`.
+    pub fn new(command: &str) -> Self {
+        let mut map = Map::new();
+        map.insert("command".into(), json!(command));
+        JsonReport {
+            map,
+            compute: Duration::ZERO,
+            warnings: Vec::new(),
+        }
+    }
+
+    /// Sets a key (non-finite numbers are left out with a warning).
+    pub fn set(&mut self, key: &str, value: impl serde::Serialize) {
+        let value = match serde_json::to_value(value) {
+            Ok(v) => v,
+            Err(e) => {
+                self.warn(format!(
+                    "report value `{key}` could not be written ({e}); left out"
+                ));
+                return;
+            }
+        };
+        let mut dropped = Vec::new();
+        if let Some(v) = finite_only(key, value, &mut dropped) {
+            self.map.insert(key.into(), v);
+        }
+        for path in dropped {
+            self.warn(format!(
+                "report value `{path}` is not a finite number; left out of the report"
+            ));
+        }
+    }
+
+    /// Sets every field of `fields` (a struct that serialises to an object,
+    /// e.g. a library report) as a key, like [`JsonReport::set`].
+    pub fn set_fields(&mut self, fields: impl serde::Serialize) {
+        match serde_json::to_value(fields) {
+            Ok(Value::Object(map)) => {
+                for (key, value) in map {
+                    self.set(&key, value);
+                }
+            }
+            Ok(other) => self.set("value", other),
+            Err(e) => self.warn(format!("report could not be written ({e})")),
+        }
+    }
+
+    /// Records a warning (listed under `"warnings"`).
+    pub fn warn(&mut self, msg: impl Into<String>) {
+        self.warnings.push(msg.into());
+    }
+
+    /// The warnings so far, oldest first.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// Runs `f`, adding its wall time to the computation time.
+    pub fn time<T>(&mut self, f: impl FnOnce() -> T) -> T {
+        let t = Instant::now();
+        let out = f();
+        self.compute += t.elapsed();
+        out
+    }
+
+    /// The report as JSON.
+    pub fn to_json(&self) -> Value {
+        let mut m = self.map.clone();
+        m.insert("time_s".into(), json!(self.compute.as_secs_f64()));
+        if !self.warnings.is_empty() {
+            m.insert("warnings".into(), json!(self.warnings));
+        }
+        Value::Object(m)
+    }
+}
+
+/// `value` without its `null`s: dropped from objects, replaced by the
+/// string `"not finite"` in arrays; the path of each (`key.sub[3]`) is
+/// pushed to `dropped`. `None` when `value` itself is `null`.
+pub fn finite_only(path: &str, value: Value, dropped: &mut Vec<String>) -> Option<Value> {
+    match value {
+        Value::Null => {
+            dropped.push(path.to_string());
+            None
+        }
+        Value::Object(m) => Some(Value::Object(
+            m.into_iter()
+                .filter_map(|(k, v)| {
+                    let sub = format!("{path}.{k}");
+                    finite_only(&sub, v, dropped).map(|v| (k, v))
+                })
+                .collect(),
+        )),
+        Value::Array(a) => Some(Value::Array(
+            a.into_iter()
+                .enumerate()
+                .map(|(i, v)| {
+                    let sub = format!("{path}[{i}]");
+                    finite_only(&sub, v, dropped).unwrap_or_else(|| json!("not finite"))
+                })
+                .collect(),
+        )),
+        other => Some(other),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn non_finite_values_are_left_out_with_a_warning_naming_them() {
+        let mut r = JsonReport::new("smooth");
+        r.set("iterations", 3);
+        r.set("bad", f64::NAN);
+        r.set("nested", json!({"a": 1.0, "b": null, "c": [1.0, null]}));
+        #[derive(serde::Serialize)]
+        struct Fields {
+            energy: f64,
+            inf: f64,
+        }
+        r.set_fields(Fields {
+            energy: 0.5,
+            inf: f64::INFINITY,
+        });
+        let j = r.to_json();
+        assert_eq!(j["command"], "smooth");
+        assert_eq!(j["iterations"], 3);
+        assert!(j.get("bad").is_none());
+        assert_eq!(j["nested"], json!({"a": 1.0, "c": [1.0, "not finite"]}));
+        assert_eq!(j["energy"], 0.5);
+        assert!(j.get("inf").is_none());
+        assert!(j["time_s"].as_f64().is_some_and(|t| t >= 0.0));
+        let w = r.warnings();
+        assert_eq!(w.len(), 4, "{w:?}");
+        assert!(w[0].contains("`bad`"));
+        assert!(w[1].contains("`nested.b`"));
+        assert!(w[2].contains("`nested.c[1]`"));
+        assert!(w[3].contains("`inf`"));
+        assert_eq!(j["warnings"].as_array().map(Vec::len), Some(4));
+        assert!(!j.to_string().contains("null"));
+    }
+}
