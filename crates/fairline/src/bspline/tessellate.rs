@@ -233,7 +233,7 @@ fn clip_grid(trim: &TrimmedDomain, us: &[f64], vs: &[f64]) -> ClippedGrid {
                     continue;
                 }
                 // Snap a cut next to a grid corner onto it.
-                let (iu, iv) = (cell_of(&us, p[0]), cell_of(&vs, p[1]));
+                let (iu, iv) = (cell_of(us, p[0]), cell_of(vs, p[1]));
                 for &x in &us[iu..(iu + 2).min(nu)] {
                     if (p[0] - x).abs() <= 1e-12 * cell_w {
                         p[0] = x;
@@ -285,7 +285,7 @@ fn clip_grid(trim: &TrimmedDomain, us: &[f64], vs: &[f64]) -> ClippedGrid {
                 };
                 let mx = 0.5 * (a[0] + b[0]) + nudge * nx;
                 let my = 0.5 * (a[1] + b[1]) + nudge * ny;
-                cell_of(&us, mx) * cells_v + cell_of(&vs, my)
+                cell_of(us, mx) * cells_v + cell_of(vs, my)
             })
             .collect();
         let Some(start) = (0..m).find(|&k| cell[k] != cell[(k + m - 1) % m]) else {

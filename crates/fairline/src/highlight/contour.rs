@@ -229,8 +229,8 @@ pub(crate) fn face_segments(
 
 /// Whether an element whose field values span `lo..=hi` is crossed by more
 /// levels `offset + m·spacing` than `max_levels` allows, counted as
-/// `ceil((hi − offset)/spacing) − floor((lo − offset)/spacing) > max_levels
-/// + 2`: such an element (near a silhouette, where the lines are finer than
+/// `ceil((hi − offset)/spacing) − floor((lo − offset)/spacing) >
+/// max_levels + 2`: such an element (near a silhouette, where the lines are finer than
 /// the elements) carries no segment. The one rule of mesh triangles
 /// ([`face_segments`]) and B-spline grid cells
 /// (`highlight::surface::contour_field`, `linear_lights`), so that both
