@@ -274,7 +274,7 @@ fn point_on_line(
         .collect();
     let total: f64 = lengths.iter().sum();
     let first = [uv[0][0], uv[0][1]];
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return Ok((radius, first));
     }
     let mut left = t * total;
