@@ -182,6 +182,57 @@ pub fn legend_entries(
         .collect()
 }
 
+/// Most radii a picture key lists one by one; the rest are counted.
+const KEY_RADII: usize = 10;
+
+/// The key of the PNG picture: for circular lights one entry per radius
+/// that has a line, in its colour (the SVG's legend); for linear lights one
+/// entry with the light spacing (the colours cycle through the lights, as
+/// in the SVG, so they are not listed one by one).
+fn picture_key(
+    results: &[(usize, Vec<SurfaceLight>, SurfaceHighlights)],
+) -> Vec<([f32; 3], String)> {
+    let mut radii: Vec<(usize, f64)> = Vec::new();
+    let mut spacing = None;
+    for (_, lights, h) in results {
+        for l in h.lines.iter().chain(&h.band_lower).chain(&h.band_upper) {
+            match lights.get(l.light) {
+                Some(SurfaceLight::Circular(c)) => radii.push((l.light, c.radius())),
+                Some(SurfaceLight::Linear { array, .. }) => spacing = Some(array.spacing()),
+                None => {}
+            }
+        }
+    }
+    radii.sort_by(|a, b| a.0.cmp(&b.0));
+    radii.dedup_by_key(|r| r.0);
+    let mut key: Vec<([f32; 3], String)> = radii
+        .iter()
+        .take(KEY_RADII)
+        .map(|&(k, r)| {
+            (
+                PALETTE[k % PALETTE.len()],
+                format!("circular light R = {}", crate::highlight_png::fmt_len(r)),
+            )
+        })
+        .collect();
+    if radii.len() > KEY_RADII {
+        key.push((
+            PALETTE[radii[KEY_RADII].0 % PALETTE.len()],
+            format!("… {} more radii", radii.len() - KEY_RADII),
+        ));
+    }
+    if let Some(s) = spacing {
+        key.push((
+            PALETTE[0],
+            format!(
+                "highlight lines (colour per light), light spacing {}",
+                crate::highlight_png::fmt_len(s)
+            ),
+        ));
+    }
+    key
+}
+
 pub fn run(args: HighlightArgs) -> Result<()> {
     require_extension("-o", &args.output, &["json"])?;
     if let Some(p) = &args.png {
@@ -347,7 +398,8 @@ pub fn run(args: HighlightArgs) -> Result<()> {
         if let Some(v) = args.view {
             ropts.view_dir = v;
         }
-        let img = surface_picture(&surfaces, polylines(&all_lines, 2.0), &title, &ropts)?;
+        let mut img = surface_picture(&surfaces, polylines(&all_lines, 2.0), &title, &ropts)?;
+        crate::highlight_png::draw_key(&mut img, &picture_key(&results));
         img.write_png(p)?;
     }
     if let Some(p) = &args.svg {

@@ -518,3 +518,59 @@ fn fair_surface_warns_when_a_uv_endpoint_snaps_far() {
     let snaps: Vec<[f64; 2]> = serde_json::from_value(rep["snap_distances"].clone()).unwrap();
     assert!(snaps[0][0] > tolerance, "{snaps:?}");
 }
+
+/// RGBA pixels and width of a PNG file.
+fn read_png(path: &std::path::Path) -> (Vec<u8>, usize) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgba, "{}", path.display());
+    buf.truncate(info.buffer_size());
+    (buf, info.width as usize)
+}
+
+/// The PNG of a part's circular highlight lines has a key like the mesh
+/// pictures: a light panel in a corner holding one swatch per radius drawn,
+/// in that light's colour; the same picture without lines has no panel.
+#[test]
+fn the_surface_highlight_picture_has_a_key_of_the_radii() {
+    let d = tmp("png-key");
+    let f = d.join("dome.json");
+    write_surfaces_json(&f, &[dome()]).unwrap();
+    let picture = |radii: &str, name: &str| {
+        let png = d.join(name);
+        ok(&run(&[
+            "highlight",
+            s(&f),
+            "--circle-center",
+            "0,0,3",
+            "--circle-axis",
+            "0,0,1",
+            "--radii",
+            radii,
+            "-o",
+            s(&d.join("lines.json")),
+            "--png",
+            s(&png),
+        ]));
+        let n = json(&d.join("lines.json"))["lines"]
+            .as_array()
+            .unwrap()
+            .len();
+        (read_png(&png), n)
+    };
+    // pixels of the key panel's background (250, 250, 250)
+    let panel = |(px, _): &(Vec<u8>, usize)| {
+        px.chunks(4)
+            .filter(|p| p[0] == 250 && p[1] == 250 && p[2] == 250)
+            .count()
+    };
+    let (with, n) = picture("2,2.2,2.4", "with.png");
+    assert!(n >= 3, "{n} lines");
+    assert!(panel(&with) > 2000, "key panel: {} pixels", panel(&with));
+    // far outside the dome: no line, no key
+    let (without, n0) = picture("900", "without.png");
+    assert_eq!(n0, 0);
+    assert_eq!(panel(&without), 0);
+}
