@@ -203,7 +203,7 @@ fn picture_key(
             }
         }
     }
-    radii.sort_by(|a, b| a.0.cmp(&b.0));
+    radii.sort_by_key(|r| r.0);
     radii.dedup_by_key(|r| r.0);
     let mut key: Vec<([f32; 3], String)> = radii
         .iter()
