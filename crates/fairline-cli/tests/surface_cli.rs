@@ -7,33 +7,12 @@ mod common;
 use common::*;
 
 use fairline::Vec3;
-use fairline::bspline::{BSplineSurface, clamped_uniform_knots};
+use fairline::bspline::BSplineSurface;
 use fairline::fair::endpoints_around;
 use fairline::highlight::{CircularLight, SurfaceLight, surface_signed_distance};
 use fairline::io::{read_surfaces_json, write_surfaces_json};
 
-/// Dome-like bicubic 15 × 15 surface (Nishiyama et al. Fig. 5), with
-/// control point (11, 7) raised when `bump`.
-fn dome_surface(bump: bool) -> BSplineSurface {
-    let n = 15;
-    let net = (0..n)
-        .map(|i| {
-            (0..n)
-                .map(|j| {
-                    let x = -1.0 + 2.0 * i as f64 / (n - 1) as f64;
-                    let y = -1.0 + 2.0 * j as f64 / (n - 1) as f64;
-                    let dz = if bump && (i, j) == (11, 7) { 0.03 } else { 0.0 };
-                    Vec3::new(x, y, 0.8 - 0.4 * (x * x + y * y) + dz)
-                })
-                .collect()
-        })
-        .collect();
-    let k = clamped_uniform_knots(n, 3);
-    BSplineSurface::new(3, 3, k.clone(), k, net, None).unwrap()
-}
-
-/// Centre (Greville abscissae) of control point (11, 7).
-const CENTRE: [f64; 2] = [(9.0 + 10.0 + 11.0) / 36.0, (5.0 + 6.0 + 7.0) / 36.0];
+const CENTRE: [f64; 2] = DOME_BUMP_UV;
 
 /// The bumped dome and the radii of nine concentric lights (centre
 /// (0, 0, 3), axis z) whose lines cross the bump: ±20 % around the radius

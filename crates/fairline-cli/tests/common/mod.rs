@@ -89,3 +89,29 @@ pub fn dented_spot(mesh: &Path, dir: &Path) -> (PathBuf, fairline::Vec3) {
     fairline::io::write_mesh(&out, &m).unwrap();
     (out, c)
 }
+
+/// Dome-like bicubic 15 × 15 surface (Nishiyama et al. Fig. 5), with
+/// control point (11, 7) raised by 0.03 when `bump`.
+pub fn dome_surface(bump: bool) -> fairline::bspline::BSplineSurface {
+    use fairline::Vec3;
+    use fairline::bspline::{BSplineSurface, clamped_uniform_knots};
+    let n = 15;
+    let net = (0..n)
+        .map(|i| {
+            (0..n)
+                .map(|j| {
+                    let x = -1.0 + 2.0 * i as f64 / (n - 1) as f64;
+                    let y = -1.0 + 2.0 * j as f64 / (n - 1) as f64;
+                    let dz = if bump && (i, j) == (11, 7) { 0.03 } else { 0.0 };
+                    Vec3::new(x, y, 0.8 - 0.4 * (x * x + y * y) + dz)
+                })
+                .collect()
+        })
+        .collect();
+    let k = clamped_uniform_knots(n, 3);
+    BSplineSurface::new(3, 3, k.clone(), k, net, None).unwrap()
+}
+
+/// (u, v) of the dome's bump: the Greville abscissae of control point
+/// (11, 7).
+pub const DOME_BUMP_UV: [f64; 2] = [(9.0 + 10.0 + 11.0) / 36.0, (5.0 + 6.0 + 7.0) / 36.0];
