@@ -7,9 +7,9 @@ use crate::error::bad_input;
 use crate::input::read_triangles;
 use crate::output::spinner;
 use anyhow::Result;
-use fairline::highlight::DetectOptions;
+use fairline::highlight::{DetectOptions, Detection};
 use fairline::mesh::FaceId;
-use serde_json::json;
+use serde_json::{Value, json};
 use std::path::PathBuf;
 
 /// Finds surface defects that disturb the highlight lines — bumps, dents,
@@ -121,6 +121,57 @@ pub fn run(args: Args) -> Result<()> {
     ) {
         eprintln!("{w}");
     }
+    print_measure_notes(&args, &det);
+    if let Some(n) = args.max_regions {
+        det.regions.truncate(n);
+    }
+    let to_input = |faces: &[FaceId]| input_faces(source.as_deref(), faces);
+    // the written region holds two more rings of faces: the support that
+    // fairing needs to move every vertex of the suggested region
+    let all = to_input(&fairline::fair::grow_region(
+        &mesh,
+        &det.all_faces(),
+        SUPPORT_RINGS,
+    ));
+    write_json(&args.output, &json!({"faces": all}))?;
+    report.set("vertices", mesh.vertex_count());
+    report.set("lines", lines.lines.len());
+    report.set("spacing", light.spacing());
+    report.set("drawn_spacing", shown_light.spacing());
+    report.set(
+        "drawn",
+        crate::highlight_png::stats_json(&mesh, &shown_light, &shown),
+    );
+    // the library's numbers of the measure, under its own names
+    if let Ok(serde_json::Value::Object(numbers)) = serde_json::to_value(&det) {
+        for (key, value) in numbers {
+            report.set(&key, value);
+        }
+    }
+    report.set("light", light);
+    report.set("region_faces", all.len());
+    report.set("regions", regions_json(&det, &to_input));
+    if let Some(png) = &args.png {
+        write_picture(&args, png, &mesh, &light, &shown_light, &shown, &det)?;
+    }
+    if lines.lines.is_empty() {
+        report.warn("no highlight line crosses the mesh, so nothing could be detected; try other light options (--plane-normal, --direction, --spacing)");
+    }
+    report.write(args.report.as_deref())?;
+    job.finish(format_args!(
+        "{} region(s) flagged ({} faces) from {} highlight line(s) on {} vertices",
+        det.regions.len(),
+        all.len(),
+        lines.lines.len(),
+        mesh.vertex_count()
+    ));
+    Ok(())
+}
+
+/// The terminal notes on what the measure did not judge or flag: shape
+/// finer than its scale, a noisy surface, sites within their
+/// discretisation floor.
+fn print_measure_notes(args: &Args, det: &Detection) {
     if det.shape_sites > 0 {
         eprintln!(
             "note: {}: {} of {} sites are shape finer than the measure's scale (the surface turns by more than {:.0}° within {:.3} of them: ears, horns, creases, tight fillets) and were not judged",
@@ -150,29 +201,24 @@ pub fn run(args: Args) -> Result<()> {
             det.discretisation_level
         );
     }
-    if let Some(n) = args.max_regions {
-        det.regions.truncate(n);
-    }
-    // faces of the input mesh (triangulated polygons map back to their polygon)
-    let to_input = |faces: &[FaceId]| -> Vec<u32> {
-        let mut out: Vec<u32> = match &source {
-            Some(src) => faces.iter().map(|f| src[f.idx()].0).collect(),
-            None => faces.iter().map(|f| f.0).collect(),
-        };
-        out.sort_unstable();
-        out.dedup();
-        out
+}
+
+/// Faces of the input mesh, ascending (triangulated polygons map back to
+/// their polygon through `source`).
+fn input_faces(source: Option<&[FaceId]>, faces: &[FaceId]) -> Vec<u32> {
+    let mut out: Vec<u32> = match source {
+        Some(src) => faces.iter().map(|f| src[f.idx()].0).collect(),
+        None => faces.iter().map(|f| f.0).collect(),
     };
-    // the written region holds two more rings of faces: the support that
-    // fairing needs to move every vertex of the suggested region
-    let all = to_input(&fairline::fair::grow_region(
-        &mesh,
-        &det.all_faces(),
-        SUPPORT_RINGS,
-    ));
-    write_json(&args.output, &json!({"faces": all}))?;
-    let regions: Vec<_> = det
-        .regions
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// The report's list of regions: score, faces (of the input), area,
+/// centre, flagged sites and the lines crossing each.
+fn regions_json(det: &Detection, to_input: &impl Fn(&[FaceId]) -> Vec<u32>) -> Vec<Value> {
+    det.regions
         .iter()
         .map(|r| {
             json!({
@@ -184,69 +230,51 @@ pub fn run(args: Args) -> Result<()> {
                 "lines": r.lines,
             })
         })
-        .collect();
-    report.set("vertices", mesh.vertex_count());
-    report.set("lines", lines.lines.len());
-    report.set("spacing", light.spacing());
-    report.set("drawn_spacing", shown_light.spacing());
-    report.set(
-        "drawn",
-        crate::highlight_png::stats_json(&mesh, &shown_light, &shown),
-    );
-    // the library's numbers of the measure, under its own names
-    if let Ok(serde_json::Value::Object(numbers)) = serde_json::to_value(&det) {
-        for (key, value) in numbers {
-            report.set(&key, value);
-        }
-    }
-    report.set("light", light);
-    report.set("region_faces", all.len());
-    report.set("regions", regions);
-    if let Some(png) = &args.png {
-        let stretches = crate::highlight_png::stretches(&det);
-        let (default_view, up) = crate::highlight_png::default_camera(&light);
-        let view = args.view.unwrap_or(default_view);
-        let title = format!(
-            "{}: {} region(s){}",
-            args.mesh
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default(),
-            det.regions.len(),
-            if det.regions.is_empty() {
-                String::new()
-            } else {
-                format!(", best score {:.1}", det.max_score())
-            }
-        );
-        let faces = det.all_faces();
-        crate::highlight_png::write(
-            args.size,
-            png,
-            &mesh,
-            crate::highlight_png::Overlay {
-                lines: &shown,
-                bands: None,
-                flagged: &stretches,
-                region: Some(&faces),
-                view: (view, up),
-                title,
-                spacing: Some(shown_light.spacing()),
-            },
-        )?;
-    }
-    if lines.lines.is_empty() {
-        report.warn("no highlight line crosses the mesh, so nothing could be detected; try other light options (--plane-normal, --direction, --spacing)");
-    }
-    report.write(args.report.as_deref())?;
-    job.finish(format_args!(
-        "{} region(s) flagged ({} faces) from {} highlight line(s) on {} vertices",
+        .collect()
+}
+
+/// The --png picture: the readable lines, the flagged stretches and the
+/// regions, titled with the number of regions and the best score.
+fn write_picture(
+    args: &Args,
+    png: &std::path::Path,
+    mesh: &fairline::SurfaceMesh,
+    light: &fairline::highlight::LightArray,
+    shown_light: &fairline::highlight::LightArray,
+    shown: &fairline::highlight::HighlightLines,
+    det: &Detection,
+) -> Result<()> {
+    let stretches = crate::highlight_png::stretches(det);
+    let (default_view, up) = crate::highlight_png::default_camera(light);
+    let view = args.view.unwrap_or(default_view);
+    let title = format!(
+        "{}: {} region(s){}",
+        args.mesh
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
         det.regions.len(),
-        all.len(),
-        lines.lines.len(),
-        mesh.vertex_count()
-    ));
-    Ok(())
+        if det.regions.is_empty() {
+            String::new()
+        } else {
+            format!(", best score {:.1}", det.max_score())
+        }
+    );
+    let faces = det.all_faces();
+    crate::highlight_png::write(
+        args.size,
+        png,
+        mesh,
+        crate::highlight_png::Overlay {
+            lines: shown,
+            bands: None,
+            flagged: &stretches,
+            region: Some(&faces),
+            view: (view, up),
+            title,
+            spacing: Some(shown_light.spacing()),
+        },
+    )
 }
 
 /// Rings of faces added around the suggested regions in the written region

@@ -148,75 +148,10 @@ pub fn run(args: Args) -> Result<()> {
         )));
     }
     let light = args.light.light_array(&mesh)?;
-    let options = FairOptions::default()
-        .light(light)
-        .method(match args.method {
-            Method::Highlight => FairMethod::Highlight,
-            Method::Paper => FairMethod::Paper,
-            Method::DiffusionFlow => FairMethod::DiffusionFlow,
-        })
-        .fair_weight(args.fair_weight)
-        .diff_weight(args.diff_weight)
-        .laplacian_weight(args.laplacian_weight)
-        .max_iterations(args.max_iterations)
-        .epsilon(args.epsilon)
-        .highlight(args.light.options());
+    let options = fair_options(&args, light);
     let mut report = Report::new("fair");
-    // the regions to fair, in turn
-    let regions: Vec<Vec<FaceId>> = if let Some(path) = &args.region {
-        let spec = fairline::io::read_region(path).map_err(|e| bad_input(e.to_string()))?;
-        vec![
-            spec.faces(&mesh)
-                .map_err(|e| bad_input(format!("{}: {e}", path.display())))?,
-        ]
-    } else {
-        let det = report
-            .time(|| -> Result<_, fairline::highlight::HighlightError> {
-                let model = HighlightModel::new(&mesh, light, args.light.options())?;
-                let lines = model.lines(&mesh);
-                detect_irregularities(&mesh, &light, &lines, &DetectOptions::default())
-            })
-            .map_err(to_input_error)?;
-        report.set("detected_regions", det.regions.len());
-        if det.regions.is_empty() {
-            eprintln!(
-                "note: {}: --auto found no defect above the detection threshold; nothing to fair",
-                args.mesh.display()
-            );
-        }
-        det.regions
-            .iter()
-            .enumerate()
-            .map(|(k, r)| {
-                let grown = grow_region(&mesh, &r.faces, AUTO_RINGS);
-                eprintln!(
-                    "note: --auto: region {} (score {:.1}) grown by {AUTO_RINGS} rings of faces: {} -> {} faces",
-                    k + 1,
-                    r.score,
-                    r.faces.len(),
-                    grown.len()
-                );
-                grown
-            })
-            .collect()
-    };
-    let regions: Vec<Vec<FaceId>> = if args.grow > 0 {
-        regions
-            .iter()
-            .map(|f| {
-                let grown = grow_region(&mesh, f, args.grow);
-                eprintln!(
-                    "note: region grown by {} rings of faces: {} -> {} faces",
-                    args.grow,
-                    f.len(),
-                    grown.len()
-                );
-                grown
-            })
-            .collect()
-    } else {
-        regions
-    };
+    let regions = regions_to_fair(&args, &mesh, light, &mut report)?;
+    let regions = grow_regions(&mesh, regions, args.grow);
     // the detection score inside the regions, before (same lights as after)
     let region_faces: Vec<FaceId> = {
         let mut all: Vec<FaceId> = regions.iter().flatten().copied().collect();
@@ -225,39 +160,13 @@ pub fn run(args: Args) -> Result<()> {
         all
     };
     let (score_before, threshold) = region_score(&mesh, &light, &args.light, &region_faces)?;
-    let mut current: SurfaceMesh = mesh.clone();
-    let mut results: Vec<Value> = Vec::new();
-    // the first region's report and faired mesh, for the picture
-    let mut first: Option<(FairReport, SurfaceMesh)> = None;
-    let mut skipped: Vec<Value> = Vec::new();
-    let bar = progress((regions.len() * options.max_iterations) as u64, "fairing");
-    for (k, faces) in regions.iter().enumerate() {
-        let start = bar.position();
-        let shown = bar.clone();
-        let control = Control::new().on_progress(move |p| shown.set_position(start + p.done));
-        let region_options = options.clone().region(faces.clone()).control(control);
-        let outcome = report.time(|| fair_highlight_lines(&current, &region_options));
-        match outcome {
-            Ok(out) => {
-                results.push(serde_json::to_value(&out.report)?);
-                current.set_positions(out.positions)?;
-                if first.is_none() {
-                    first = Some((out.report, current.clone()));
-                }
-            }
-            Err(FairError::NoMovableVertex(msg)) if args.auto => {
-                skipped.push(json!({"region": k, "reason": msg}));
-            }
-            // a region that cannot be faired is the region file's fault: name it
-            Err(e) => return Err(name_region(to_error(e), args.region.as_deref())),
-        }
-    }
-    bar.finish_and_clear();
-    fairline::io::write_mesh(&args.output, &current)?;
+    let faired = fair_each_region(&args, &mesh, &regions, &options, &mut report)?;
+    let current = &faired.mesh;
+    fairline::io::write_mesh(&args.output, current)?;
     // the threshold `detect` applies to the input (raised above the noise
     // of a scan), so the report and `detect`'s picture agree on what a
     // defect is
-    let (score_after, _) = region_score(&current, &light, &args.light, &region_faces)?;
+    let (score_after, _) = region_score(current, &light, &args.light, &region_faces)?;
     report.set("detect_score_before", score_before);
     report.set("detect_score_after", score_after);
     report.set("detect_threshold", threshold);
@@ -272,56 +181,21 @@ pub fn run(args: Args) -> Result<()> {
             args.mesh.display(),
         ));
     }
-    if first.is_none() {
+    if let (Some(png), Some((r, faired_mesh))) = (&args.png, &faired.first) {
+        write_picture(&args, png, &mesh, light, r, faired_mesh)?;
+    }
+    if faired.first.is_none() {
         report.warn("no region was faired (nothing detected): the output is the input unchanged");
         if let Some(png) = &args.png {
             crate::output::say("note: no region was faired, so no picture was written");
             job.skip(png);
         }
     }
-    if let (Some(png), Some((r, faired))) = (&args.png, &first) {
-        let mut opts = RenderOptions::with_size(900, 700);
-        (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
-        // on round parts the picture draws every k-th line (and its desired
-        // curve), the lines `highlight` and `detect` show with the same
-        // defaults; k = 1 on panels and whenever the spacing was given
-        let shown_light = args.light.readable(&mesh, light)?;
-        let k = (shown_light.spacing() / light.spacing()).round().max(1.0) as i64;
-        let thinned;
-        let drawn: &FairReport = if k > 1 {
-            let mut c = r.clone();
-            c.lines_before.lines.retain(|l| l.index.rem_euclid(k) == 0);
-            c.lines_after.lines.retain(|l| l.index.rem_euclid(k) == 0);
-            c.desired_before
-                .lines
-                .retain(|d| d.index.rem_euclid(k) == 0);
-            thinned = c;
-            &thinned
-        } else {
-            r
-        };
-        let mut img = fairing_picture(&mesh, faired, drawn, &opts)?;
-        crate::highlight_png::draw_key(
-            &mut img,
-            &[
-                (
-                    FAIRING_LINE_COLOR,
-                    format!(
-                        "highlight lines, light spacing {}",
-                        crate::highlight_png::fmt_len(shown_light.spacing())
-                    ),
-                ),
-                (FAIRING_OUTLINE_COLOR, "region outline".into()),
-                (FAIRING_DESIRED_COLOR, "desired lines (before)".into()),
-            ],
-        );
-        img.write_png(png)?;
-    }
     report.set("method", crate::output::option_value(&args.method));
     report.set("light", light);
-    report.set("regions", results.len());
+    report.set("regions", faired.results.len());
     if args.auto {
-        report.set("skipped_regions", skipped);
+        report.set("skipped_regions", &faired.skipped);
     }
     let total_moved = current
         .positions()
@@ -329,42 +203,8 @@ pub fn run(args: Args) -> Result<()> {
         .zip(mesh.positions())
         .map(|(a, b)| (*a - *b).length())
         .fold(0.0, f64::max);
-    match results.as_slice() {
-        [one] => {
-            if let Value::Object(m) = one {
-                for (key, v) in m {
-                    report.set(key, v.clone());
-                }
-            }
-        }
-        _ => {
-            let sum = |key: &str| -> f64 { results.iter().filter_map(|r| r[key].as_f64()).sum() };
-            report.set("iterations", sum("iterations") as u64);
-            report.set(
-                "converged",
-                results.iter().all(|r| r["converged"] == json!(true)),
-            );
-            report.set("movable_vertices", sum("movable_vertices") as u64);
-            report.set("willmore_before", sum("willmore_before"));
-            report.set("willmore_after", sum("willmore_after"));
-            report.set(
-                "highlight_deviation_before",
-                results
-                    .iter()
-                    .filter_map(|r| r["highlight_deviation_before"].as_f64())
-                    .fold(0.0, f64::max),
-            );
-            report.set(
-                "highlight_deviation_after",
-                results
-                    .iter()
-                    .filter_map(|r| r["highlight_deviation_after"].as_f64())
-                    .fold(0.0, f64::max),
-            );
-            report.set("max_displacement", total_moved);
-            report.set("per_region", results.clone());
-        }
-    }
+    set_fairing_results(&mut report, &faired.results, total_moved);
+    let results = &faired.results;
     let converged = results.iter().all(|r| r["converged"] == json!(true));
     let deviation = |key: &str| {
         results
@@ -394,6 +234,233 @@ pub fn run(args: Args) -> Result<()> {
         if converged { "converged" } else { "not converged" }
     ));
     Ok(())
+}
+
+/// The library's fairing options from the command line (the region and
+/// the progress are set per region).
+fn fair_options(args: &Args, light: fairline::highlight::LightArray) -> FairOptions {
+    FairOptions::default()
+        .light(light)
+        .method(match args.method {
+            Method::Highlight => FairMethod::Highlight,
+            Method::Paper => FairMethod::Paper,
+            Method::DiffusionFlow => FairMethod::DiffusionFlow,
+        })
+        .fair_weight(args.fair_weight)
+        .diff_weight(args.diff_weight)
+        .laplacian_weight(args.laplacian_weight)
+        .max_iterations(args.max_iterations)
+        .epsilon(args.epsilon)
+        .highlight(args.light.options())
+}
+
+/// The regions to fair, in turn: the region file's one region, or with
+/// --auto every detected region grown by [`AUTO_RINGS`] (said on the
+/// terminal).
+fn regions_to_fair(
+    args: &Args,
+    mesh: &SurfaceMesh,
+    light: fairline::highlight::LightArray,
+    report: &mut Report,
+) -> Result<Vec<Vec<FaceId>>> {
+    if let Some(path) = &args.region {
+        let spec = fairline::io::read_region(path).map_err(|e| bad_input(e.to_string()))?;
+        return Ok(vec![
+            spec.faces(mesh)
+                .map_err(|e| bad_input(format!("{}: {e}", path.display())))?,
+        ]);
+    }
+    let det = report
+        .time(|| -> Result<_, fairline::highlight::HighlightError> {
+            let model = HighlightModel::new(mesh, light, args.light.options())?;
+            let lines = model.lines(mesh);
+            detect_irregularities(mesh, &light, &lines, &DetectOptions::default())
+        })
+        .map_err(to_input_error)?;
+    report.set("detected_regions", det.regions.len());
+    if det.regions.is_empty() {
+        eprintln!(
+            "note: {}: --auto found no defect above the detection threshold; nothing to fair",
+            args.mesh.display()
+        );
+    }
+    Ok(det
+        .regions
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            let grown = grow_region(mesh, &r.faces, AUTO_RINGS);
+            eprintln!(
+                "note: --auto: region {} (score {:.1}) grown by {AUTO_RINGS} rings of faces: {} -> {} faces",
+                k + 1,
+                r.score,
+                r.faces.len(),
+                grown.len()
+            );
+            grown
+        })
+        .collect())
+}
+
+/// Each region grown by `rings` rings of faces (--grow; said on the
+/// terminal), or the regions as they are.
+fn grow_regions(mesh: &SurfaceMesh, regions: Vec<Vec<FaceId>>, rings: usize) -> Vec<Vec<FaceId>> {
+    if rings == 0 {
+        return regions;
+    }
+    regions
+        .iter()
+        .map(|f| {
+            let grown = grow_region(mesh, f, rings);
+            eprintln!(
+                "note: region grown by {} rings of faces: {} -> {} faces",
+                rings,
+                f.len(),
+                grown.len()
+            );
+            grown
+        })
+        .collect()
+}
+
+/// What fairing the regions in turn gave.
+struct Faired {
+    /// The mesh after the last region.
+    mesh: SurfaceMesh,
+    /// Each faired region's report, as JSON.
+    results: Vec<Value>,
+    /// The first region's report and faired mesh, for the picture.
+    first: Option<(FairReport, SurfaceMesh)>,
+    /// Regions --auto skipped (no movable vertex), with the reason.
+    skipped: Vec<Value>,
+}
+
+/// Fairs the regions in turn, each on the result of the one before, with
+/// one progress bar over all of them.
+fn fair_each_region(
+    args: &Args,
+    mesh: &SurfaceMesh,
+    regions: &[Vec<FaceId>],
+    options: &FairOptions,
+    report: &mut Report,
+) -> Result<Faired> {
+    let mut faired = Faired {
+        mesh: mesh.clone(),
+        results: Vec::new(),
+        first: None,
+        skipped: Vec::new(),
+    };
+    let bar = progress((regions.len() * options.max_iterations) as u64, "fairing");
+    for (k, faces) in regions.iter().enumerate() {
+        let start = bar.position();
+        let shown = bar.clone();
+        let control = Control::new().on_progress(move |p| shown.set_position(start + p.done));
+        let region_options = options.clone().region(faces.clone()).control(control);
+        let outcome = report.time(|| fair_highlight_lines(&faired.mesh, &region_options));
+        match outcome {
+            Ok(out) => {
+                faired.results.push(serde_json::to_value(&out.report)?);
+                faired.mesh.set_positions(out.positions)?;
+                if faired.first.is_none() {
+                    faired.first = Some((out.report, faired.mesh.clone()));
+                }
+            }
+            Err(FairError::NoMovableVertex(msg)) if args.auto => {
+                faired.skipped.push(json!({"region": k, "reason": msg}));
+            }
+            // a region that cannot be faired is the region file's fault: name it
+            Err(e) => return Err(name_region(to_error(e), args.region.as_deref())),
+        }
+    }
+    bar.finish_and_clear();
+    Ok(faired)
+}
+
+/// The --png before/after picture of the first region: on round parts
+/// every k-th line (and its desired curve), the lines `highlight` and
+/// `detect` show with the same defaults; k = 1 on panels and whenever the
+/// spacing was given.
+fn write_picture(
+    args: &Args,
+    png: &std::path::Path,
+    mesh: &SurfaceMesh,
+    light: fairline::highlight::LightArray,
+    r: &FairReport,
+    faired: &SurfaceMesh,
+) -> Result<()> {
+    let mut opts = RenderOptions::with_size(900, 700);
+    (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
+    let shown_light = args.light.readable(mesh, light)?;
+    let k = (shown_light.spacing() / light.spacing()).round().max(1.0) as i64;
+    let thinned;
+    let drawn: &FairReport = if k > 1 {
+        let mut c = r.clone();
+        c.lines_before.lines.retain(|l| l.index.rem_euclid(k) == 0);
+        c.lines_after.lines.retain(|l| l.index.rem_euclid(k) == 0);
+        c.desired_before
+            .lines
+            .retain(|d| d.index.rem_euclid(k) == 0);
+        thinned = c;
+        &thinned
+    } else {
+        r
+    };
+    let mut img = fairing_picture(mesh, faired, drawn, &opts)?;
+    crate::highlight_png::draw_key(
+        &mut img,
+        &[
+            (
+                FAIRING_LINE_COLOR,
+                format!(
+                    "highlight lines, light spacing {}",
+                    crate::highlight_png::fmt_len(shown_light.spacing())
+                ),
+            ),
+            (FAIRING_OUTLINE_COLOR, "region outline".into()),
+            (FAIRING_DESIRED_COLOR, "desired lines (before)".into()),
+        ],
+    );
+    img.write_png(png)?;
+    Ok(())
+}
+
+/// The fairing keys of the report: one region's report as it is, or for
+/// several regions their sums, the worst deviations and each region's
+/// report under "per_region".
+fn set_fairing_results(report: &mut Report, results: &[Value], total_moved: f64) {
+    match results {
+        [one] => {
+            if let Value::Object(m) = one {
+                for (key, v) in m {
+                    report.set(key, v.clone());
+                }
+            }
+        }
+        _ => {
+            let sum = |key: &str| -> f64 { results.iter().filter_map(|r| r[key].as_f64()).sum() };
+            let max = |key: &str| -> f64 {
+                results
+                    .iter()
+                    .filter_map(|r| r[key].as_f64())
+                    .fold(0.0, f64::max)
+            };
+            report.set("iterations", sum("iterations") as u64);
+            report.set(
+                "converged",
+                results.iter().all(|r| r["converged"] == json!(true)),
+            );
+            report.set("movable_vertices", sum("movable_vertices") as u64);
+            report.set("willmore_before", sum("willmore_before"));
+            report.set("willmore_after", sum("willmore_after"));
+            report.set(
+                "highlight_deviation_before",
+                max("highlight_deviation_before"),
+            );
+            report.set("highlight_deviation_after", max("highlight_deviation_after"));
+            report.set("max_displacement", total_moved);
+            report.set("per_region", results.to_vec());
+        }
+    }
 }
 
 /// Rings of faces `--auto` adds around a detected region.

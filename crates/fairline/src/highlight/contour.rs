@@ -102,6 +102,11 @@ impl Key {
             elem: (1u64 << 32) | e as u64,
         }
     }
+    /// True for a node at a vertex.
+    #[inline]
+    fn is_vertex(self) -> bool {
+        self.elem >> 32 == 0
+    }
     #[inline]
     pub(crate) fn node(self) -> NodeId {
         let id = self.elem as u32;
@@ -382,9 +387,44 @@ pub(crate) fn chain(
         return HighlightLines::default();
     }
     debug_assert!(segments.windows(2).all(|w| w[0].face <= w[1].face));
-    let is_vertex = |k: Key| k.elem >> 32 == 0;
-    // face_first[f]..face_first[f + 1]: the segments of face f
-    let nf = mesh.face_count();
+    let face_first = face_segment_runs(mesh.face_count(), segments);
+    let used: Vec<AtomicBool> = (0..ns).map(|_| AtomicBool::new(false)).collect();
+    let ranks = SegmentRanks::new(segments, &used);
+    let mut links = edge_node_links(mesh, segments, &face_first);
+    let vends = vertex_node_ends(segments, &used, &ranks);
+    let mut starts = edge_start_ports(segments, &links);
+    link_vertex_nodes(&vends, &mut links, &mut starts);
+    starts.par_sort_unstable();
+    // segments grouped by index m (stable: by position within a group)
+    let order = group_by_index(segments);
+    let walker = Walker {
+        segments,
+        links: &links,
+        used: &used,
+    };
+    let walks = walk_all_lines(&walker, &ranks, &starts, &order);
+    let mut lines: Vec<HighlightLine> = walks
+        .into_par_iter()
+        .map(|(closed, path)| {
+            let nodes: Vec<NodeId> = path.iter().map(|&k| k.node()).collect();
+            HighlightLine {
+                index: nodes.first().map_or(0, |n| n.index()),
+                closed,
+                points: nodes.iter().map(|&nd| position(nd)).collect(),
+                nodes,
+            }
+        })
+        .collect();
+    lines.sort_by(|a, b| {
+        (a.index, a.nodes.first().copied()).cmp(&(b.index, b.nodes.first().copied()))
+    });
+    HighlightLines { lines }
+}
+
+/// `face_first[f]..face_first[f + 1]`: the positions of face f's segments
+/// in `segments` (sorted by face).
+fn face_segment_runs(nf: usize, segments: &[Segment]) -> Vec<u32> {
+    let ns = segments.len();
     let mut face_first = vec![0u32; nf + 1];
     const FCHUNK: usize = 1 << 14;
     face_first
@@ -401,44 +441,63 @@ pub(crate) fn chain(
                 *slot = i as u32;
             }
         });
-    // Highlight edges (segments joining two vertex nodes) come once from
-    // each of their triangles: keep the first of equal ones. Their rank
-    // (order among a node's segments) is after all other segments, by node
-    // pair; the rank of any other segment is its position.
-    let mut vv: Vec<(Key, Key, u32)> = segments
-        .par_iter()
-        .enumerate()
-        .filter(|(_, s)| is_vertex(s.a) && is_vertex(s.b))
-        .map(|(i, s)| (s.a, s.b, i as u32))
-        .collect();
-    vv.sort_unstable();
-    let used: Vec<AtomicBool> = (0..ns).map(|_| AtomicBool::new(false)).collect();
-    let mut vv_rank: Vec<(u32, u64)> = Vec::with_capacity(vv.len());
-    let mut pairs = 0u64;
-    for (k, &(a, b, i)) in vv.iter().enumerate() {
-        if k > 0 && vv[k - 1].0 == a && vv[k - 1].1 == b {
-            used[i as usize].store(true, Relaxed); // a repeat: never walked
-        } else {
-            vv_rank.push((i, (1u64 << 32) | pairs));
-            pairs += 1;
+    face_first
+}
+
+/// The order of the segments at a node (see [`chain`]).
+struct SegmentRanks {
+    /// (segment, rank) of the highlight edges kept, by segment.
+    highlight_edges: Vec<(u32, u64)>,
+}
+
+impl SegmentRanks {
+    /// Highlight edges (segments joining two vertex nodes) come once from
+    /// each of their triangles: the first of equal ones is kept, the
+    /// repeats are marked `used` (never walked). Their rank (order among a
+    /// node's segments) is after all other segments, by node pair; the
+    /// rank of any other segment is its position.
+    fn new(segments: &[Segment], used: &[AtomicBool]) -> Self {
+        let mut vv: Vec<(Key, Key, u32)> = segments
+            .par_iter()
+            .enumerate()
+            .filter(|(_, s)| s.a.is_vertex() && s.b.is_vertex())
+            .map(|(i, s)| (s.a, s.b, i as u32))
+            .collect();
+        vv.sort_unstable();
+        let mut highlight_edges: Vec<(u32, u64)> = Vec::with_capacity(vv.len());
+        let mut pairs = 0u64;
+        for (k, &(a, b, i)) in vv.iter().enumerate() {
+            if k > 0 && vv[k - 1].0 == a && vv[k - 1].1 == b {
+                used[i as usize].store(true, Relaxed); // a repeat: never walked
+            } else {
+                highlight_edges.push((i, (1u64 << 32) | pairs));
+                pairs += 1;
+            }
         }
+        highlight_edges.sort_unstable();
+        SegmentRanks { highlight_edges }
     }
-    vv_rank.sort_unstable();
-    let rank = |s: u32| -> u64 {
-        match vv_rank.binary_search_by_key(&s, |&(i, _)| i) {
-            Ok(k) => vv_rank[k].1,
+
+    fn rank(&self, s: u32) -> u64 {
+        match self.highlight_edges.binary_search_by_key(&s, |&(i, _)| i) {
+            Ok(k) => self.highlight_edges[k].1,
             Err(_) => s as u64,
         }
-    };
-    // links[s][side]: the other segment at end `side` (0 = a, 1 = b) of s
-    // when that node has degree 2, else NONE. Nodes on edges first.
-    let mut links: Vec<[u32; 2]> = segments
+    }
+}
+
+/// `links[s][side]`: the other segment at end `side` (0 = a, 1 = b) of s
+/// when that node lies on an edge and has degree 2, else NONE: a node on
+/// edge e lies on at most the two triangles of e, so its other segment is
+/// in the segment run of the face across e.
+fn edge_node_links(mesh: &SurfaceMesh, segments: &[Segment], face_first: &[u32]) -> Vec<[u32; 2]> {
+    segments
         .par_iter()
         .enumerate()
         .map(|(i, s)| {
             let mut l = [NONE; 2];
             for (side, key) in [s.a, s.b].into_iter().enumerate() {
-                if is_vertex(key) {
+                if key.is_vertex() {
                     continue;
                 }
                 let e = key.elem as u32;
@@ -457,35 +516,57 @@ pub(crate) fn chain(
             }
             l
         })
-        .collect();
-    // Nodes at vertices: their ends grouped by a sort, in rank order.
+        .collect()
+}
+
+/// The segment ends at vertex nodes (node, rank, segment, side), repeats
+/// left out, sorted: grouped by node, in rank order.
+fn vertex_node_ends(
+    segments: &[Segment],
+    used: &[AtomicBool],
+    ranks: &SegmentRanks,
+) -> Vec<(Key, u64, u32, u8)> {
     let mut vends: Vec<(Key, u64, u32, u8)> = segments
         .par_iter()
         .enumerate()
-        .filter(|(_, s)| is_vertex(s.a) || is_vertex(s.b))
+        .filter(|(_, s)| s.a.is_vertex() || s.b.is_vertex())
         .flat_map_iter(|(i, s)| {
             let i = i as u32;
             [(s.a, 0u8), (s.b, 1u8)]
                 .into_iter()
-                .filter(move |&(k, _)| is_vertex(k))
+                .filter(move |&(k, _)| k.is_vertex())
                 .map(move |(k, side)| (k, i, side))
         })
         .filter(|&(_, i, _)| !used[i as usize].load(Relaxed)) // repeats
-        .map(|(k, i, side)| (k, rank(i), i, side))
+        .map(|(k, i, side)| (k, ranks.rank(i), i, side))
         .collect();
     vends.sort_unstable();
-    // start ports (node, rank, segment) of nodes whose degree is not 2
-    let mut starts: Vec<(Key, u64, u32)> = links
+    vends
+}
+
+/// Start ports (node, rank, segment) at the edge nodes whose degree is
+/// not 2.
+fn edge_start_ports(segments: &[Segment], links: &[[u32; 2]]) -> Vec<(Key, u64, u32)> {
+    links
         .par_iter()
         .enumerate()
         .flat_map_iter(|(i, l)| {
             let s = &segments[i];
             [(s.a, l[0]), (s.b, l[1])]
                 .into_iter()
-                .filter(|&(k, t)| !is_vertex(k) && t == NONE)
+                .filter(|&(k, t)| !k.is_vertex() && t == NONE)
                 .map(move |(k, _)| (k, i as u64, i as u32))
         })
-        .collect();
+        .collect()
+}
+
+/// Links the two segments at each vertex node of degree 2; the ends at
+/// vertex nodes of any other degree become start ports.
+fn link_vertex_nodes(
+    vends: &[(Key, u64, u32, u8)],
+    links: &mut [[u32; 2]],
+    starts: &mut Vec<(Key, u64, u32)>,
+) {
     let mut r0 = 0;
     while r0 < vends.len() {
         let mut r1 = r0 + 1;
@@ -501,27 +582,26 @@ pub(crate) fn chain(
         }
         r0 = r1;
     }
-    starts.par_sort_unstable();
-    // segments grouped by index m (stable: by position within a group)
-    let order = group_by_index(segments);
-    let mut groups: Vec<(usize, usize)> = Vec::new();
-    let mut g0 = 0;
-    for k in 1..=order.len() {
-        if k == order.len() || segments[order[k] as usize].a.m != segments[order[g0] as usize].a.m {
-            groups.push((g0, k));
-            g0 = k;
-        }
-    }
-    // Follows segment s0 from node `start`. Returns whether the line closed,
-    // its nodes, and the segment after each node.
-    let walk = |start: Key, s0: u32| -> (bool, Vec<Key>, Vec<u32>) {
+}
+
+/// Follows segments through degree-2 nodes, marking them used.
+struct Walker<'a> {
+    segments: &'a [Segment],
+    links: &'a [[u32; 2]],
+    used: &'a [AtomicBool],
+}
+
+impl Walker<'_> {
+    /// Follows segment s0 from node `start`. Returns whether the line
+    /// closed, its nodes, and the segment after each node.
+    fn walk(&self, start: Key, s0: u32) -> (bool, Vec<Key>, Vec<u32>) {
         let mut path = vec![start];
         let mut via = Vec::new();
         let (mut from, mut s) = (start, s0);
         loop {
-            used[s as usize].store(true, Relaxed);
+            self.used[s as usize].store(true, Relaxed);
             via.push(s);
-            let seg = &segments[s as usize];
+            let seg = &self.segments[s as usize];
             let (to, side) = if seg.a == from {
                 (seg.b, 1)
             } else {
@@ -531,15 +611,37 @@ pub(crate) fn chain(
                 return (true, path, via);
             }
             path.push(to);
-            let t = links[s as usize][side];
-            if t == NONE || used[t as usize].load(Relaxed) {
+            let t = self.links[s as usize][side];
+            if t == NONE || self.used[t as usize].load(Relaxed) {
                 return (false, path, via);
             }
             from = to;
             s = t;
         }
-    };
-    let walks: Vec<(bool, Vec<Key>)> = groups
+    }
+}
+
+/// Every line, index by index in parallel (the lines of one index share
+/// no node): first the open ones from the start ports in order, then each
+/// remaining loop from its smallest node along that node's first segment.
+/// `order` holds the segments grouped by index.
+fn walk_all_lines(
+    walker: &Walker,
+    ranks: &SegmentRanks,
+    starts: &[(Key, u64, u32)],
+    order: &[u32],
+) -> Vec<(bool, Vec<Key>)> {
+    let segments = walker.segments;
+    let used = walker.used;
+    let mut groups: Vec<(usize, usize)> = Vec::new();
+    let mut g0 = 0;
+    for k in 1..=order.len() {
+        if k == order.len() || segments[order[k] as usize].a.m != segments[order[g0] as usize].a.m {
+            groups.push((g0, k));
+            g0 = k;
+        }
+    }
+    groups
         .par_iter()
         .flat_map_iter(|&(lo, hi)| {
             let m = segments[order[lo] as usize].a.m;
@@ -547,7 +649,7 @@ pub(crate) fn chain(
             let p0 = starts.partition_point(|p| p.0.m < m);
             for &(k, _, s) in starts[p0..].iter().take_while(|p| p.0.m == m) {
                 if !used[s as usize].load(Relaxed) {
-                    let (closed, path, _) = walk(k, s);
+                    let (closed, path, _) = walker.walk(k, s);
                     out.push((closed, path));
                 }
             }
@@ -556,12 +658,12 @@ pub(crate) fn chain(
                 if used[s as usize].load(Relaxed) {
                     continue;
                 }
-                let (closed, mut path, via) = walk(segments[s as usize].a, s);
+                let (closed, mut path, via) = walker.walk(segments[s as usize].a, s);
                 if closed {
                     let n = path.len();
                     let j = (0..n).min_by_key(|&j| path[j]).unwrap_or(0);
                     // via[j] leaves node j forwards, via[j - 1] backwards
-                    if rank(via[j]) <= rank(via[(j + n - 1) % n]) {
+                    if ranks.rank(via[j]) <= ranks.rank(via[(j + n - 1) % n]) {
                         path.rotate_left(j);
                     } else {
                         path.reverse();
@@ -572,23 +674,7 @@ pub(crate) fn chain(
             }
             out
         })
-        .collect();
-    let mut lines: Vec<HighlightLine> = walks
-        .into_par_iter()
-        .map(|(closed, path)| {
-            let nodes: Vec<NodeId> = path.iter().map(|&k| k.node()).collect();
-            HighlightLine {
-                index: nodes.first().map_or(0, |n| n.index()),
-                closed,
-                points: nodes.iter().map(|&nd| position(nd)).collect(),
-                nodes,
-            }
-        })
-        .collect();
-    lines.sort_by(|a, b| {
-        (a.index, a.nodes.first().copied()).cmp(&(b.index, b.nodes.first().copied()))
-    });
-    HighlightLines { lines }
+        .collect()
 }
 
 /// Positions of the segments sorted by (index m, position): a counting sort
