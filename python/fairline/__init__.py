@@ -563,12 +563,17 @@ def fair(
     region JSON as a dict (``{"faces"}``, ``{"vertices"}``,
     ``{"sphere": {"center", "radius"}}``) or a path to it; or
     ``auto=True`` to detect the regions and fair each in turn. ``grow``
-    adds rings of faces. Light options as for :func:`detect`.
+    adds rings of faces. Light options as for :func:`detect`: detection
+    scores are measured with those lights (report key ``light``), the
+    fairing works on the readable lights (``fairing_light``: every k-th
+    line on round parts, the same lights on panels or with ``spacing``).
 
     Returns ``(V_new, report)`` with the CLI's report keys
     (``iterations converged movable_vertices willmore_before
     willmore_after highlight_deviation_before highlight_deviation_after
-    max_displacement history detect_score_before detect_score_after`` …).
+    max_displacement history detect_score_before detect_score_after
+    detect_regions_after`` …); its ``warnings`` say when detection on the
+    result still flags a region (``a defect remains: …``).
     """
     v, indices, offsets = _mesh(V, F)
     if region is None:

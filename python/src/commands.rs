@@ -1017,10 +1017,13 @@ fn fair<'py>(
                 "highlight-line fairing needs a triangle mesh (this one has polygons; triangulate it first, e.g. with `fairline convert`)",
             ));
         }
+        // detection at the detail lights, fairing at the readable lights
+        // (the lines the mesh resolves), as the CLI's
         let array = light.light_array(&mesh)?;
+        let fairing_light = light.readable(&mesh, array)?;
         let d = FairOptions::default();
         let options = FairOptions::default()
-            .light(array)
+            .light(fairing_light)
             .method(fair_method)
             .fair_weight(fair_weight.unwrap_or(d.fair_weight))
             .diff_weight(diff_weight.unwrap_or(d.diff_weight))
@@ -1081,7 +1084,9 @@ fn fair<'py>(
             all.dedup();
             all
         };
-        let (score_before, threshold) = region_score(&mesh, &array, &light, &region_faces)?;
+        let detected_before =
+            fairline::highlight::detect_region(&mesh, &array, light.options(), &region_faces)
+                .map_err(highlight_error)?;
         let mut current: SurfaceMesh = mesh.clone();
         let mut results: Vec<Value> = Vec::new();
         let mut skipped: Vec<Value> = Vec::new();
@@ -1104,20 +1109,31 @@ fn fair<'py>(
                 Err(e) => return Err(to_error(e)),
             }
         }
-        // the threshold `detect` applies to the input (raised above the
-        // noise of a scan), as the CLI's
-        let (score_after, _) = region_score(&current, &array, &light, &region_faces)?;
+        // the detection score inside the region after, same lights (as the
+        // CLI's)
+        let detected_after =
+            fairline::highlight::detect_region(&current, &array, light.options(), &region_faces)
+                .map_err(highlight_error)?;
+        let (score_before, score_after) = (detected_before.score, detected_after.score);
         report.set("detect_score_before", score_before);
         report.set("detect_score_after", score_after);
-        report.set("detect_threshold", threshold);
-        if score_after > score_before && score_after > threshold {
-            report.warn(format!(
-                "the detection score inside the region got worse ({score_before:.2} -> {score_after:.2}); try a larger region (--grow 2) or --method diffusion-flow"
-            ));
-        } else if score_after > threshold {
-            report.warn(format!(
-                "a defect remains inside the region (detection score {score_before:.2} -> {score_after:.2}, threshold {threshold:.2}); try --grow 2 or more iterations"
-            ));
+        report.set("detect_threshold", detected_before.threshold);
+        // and `detect` on the output, with the lights it chooses there
+        let output_light = light.light_array(&current)?;
+        let as_detect = if output_light == array {
+            detected_after
+        } else {
+            fairline::highlight::detect_region(
+                &current,
+                &output_light,
+                light.options(),
+                &region_faces,
+            )
+            .map_err(highlight_error)?
+        };
+        report.set("detect_regions_after", as_detect.detection.regions.len());
+        if let Some(w) = as_detect.remaining_defect_warning(score_before, score_after) {
+            report.warn(w);
         }
         if results.is_empty() {
             report
@@ -1125,6 +1141,7 @@ fn fair<'py>(
         }
         report.set("method", &method);
         report.set("light", array);
+        report.set("fairing_light", fairing_light);
         report.set("regions", results.len());
         if auto {
             report.set("skipped_regions", skipped);
@@ -1195,17 +1212,4 @@ fn fair<'py>(
         Ok((output_positions(&current), report.to_json().to_string()))
     })?;
     Ok((positions_array(py, &out.0), out.1))
-}
-
-/// The largest detection score at sites inside `faces` and the threshold
-/// (`fairline::highlight::region_detection_score`, as the CLI's
-/// `fair::region_score`); 0 when none is judged.
-fn region_score(
-    mesh: &SurfaceMesh,
-    light: &LightArray,
-    opts: &LightOptions,
-    faces: &[FaceId],
-) -> Res<(f64, f64)> {
-    fairline::highlight::region_detection_score(mesh, light, opts.options(), faces)
-        .map_err(highlight_error)
 }

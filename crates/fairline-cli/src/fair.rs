@@ -10,9 +10,7 @@ use anyhow::Result;
 use fairline::fair::{
     FairError, FairMethod, FairOptions, FairReport, fair_highlight_lines, grow_region,
 };
-use fairline::highlight::{
-    DetectOptions, HighlightModel, detect_irregularities, region_detection_score,
-};
+use fairline::highlight::{DetectOptions, HighlightModel, detect_irregularities, detect_region};
 use fairline::mesh::FaceId;
 use fairline::picture::{
     FAIRING_DESIRED_COLOR, FAIRING_LINE_COLOR, FAIRING_OUTLINE_COLOR, fairing_picture,
@@ -51,8 +49,15 @@ pub enum Method {
 /// rings of faces to any region. With --auto the irregular regions are
 /// detected, grown by four rings and faired in turn. The report measures
 /// the detection score (`fairline detect`) inside the region before and
-/// after with the same lights. Use the same light options as for
-/// `highlight`/`detect`.
+/// after with the same lights, and runs detection on the result: when it
+/// still flags a region (inside or outside the faired one, each site
+/// against its own threshold, exactly as `detect` on the output would), a
+/// warning names it and says what to do. Use the same light options as for
+/// `highlight`/`detect`: the detection scores are measured with those
+/// lights (report key "light"), the fairing works on the lines `highlight`
+/// and `detect` draw ("fairing_light": every k-th line on round parts,
+/// whose detail lines lie a fraction of an edge apart; the same lights on
+/// panels and whenever --spacing or --lights is given).
 #[derive(clap::Args, Debug)]
 #[command(
     after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline fair fairline-demo/dented-panel.obj --region fairline-demo/dented-panel-region.json -o panel-faired.obj --png fair.png --report fair.json\n  fairline detect fairline-demo/dented-panel.obj -o region.json && fairline fair fairline-demo/dented-panel.obj --region region.json -o faired.obj\n  fairline fair fairline-demo/dented-panel.obj --auto -o faired-auto.obj\n  fairline fair fairline-demo/dented-panel.obj --region fairline-demo/dented-panel-region.json --method diffusion-flow -o flow.obj\n  fairline fair fairline-demo/dented-panel.obj --region fairline-demo/dented-panel-region.json --method paper -o paper.obj"
@@ -147,8 +152,14 @@ pub fn run(args: Args) -> Result<()> {
             args.mesh.display()
         )));
     }
+    // detection (the report's scores, --auto, the warning) measures at the
+    // detail lights, as `detect`; fairing works on the lines the mesh
+    // resolves: the readable lights (every k-th line on round parts, where
+    // the detail lines lie a fraction of an edge apart; the same lights on
+    // panels and whenever the spacing or a lights file is given)
     let light = args.light.light_array(&mesh)?;
-    let options = fair_options(&args, light);
+    let fairing_light = args.light.readable(&mesh, light)?;
+    let options = fair_options(&args, fairing_light);
     let mut report = Report::new("fair");
     let regions = regions_to_fair(&args, &mesh, light, &mut report)?;
     let regions = grow_regions(&mesh, regions, args.grow);
@@ -159,30 +170,34 @@ pub fn run(args: Args) -> Result<()> {
         all.dedup();
         all
     };
-    let (score_before, threshold) = region_score(&mesh, &light, &args.light, &region_faces)?;
+    let before = detect_region(&mesh, &light, args.light.options(), &region_faces)
+        .map_err(to_input_error)?;
     let faired = fair_each_region(&args, &mesh, &regions, &options, &mut report)?;
     let current = &faired.mesh;
     fairline::io::write_mesh(&args.output, current)?;
-    // the threshold `detect` applies to the input (raised above the noise
-    // of a scan), so the report and `detect`'s picture agree on what a
-    // defect is
-    let (score_after, _) = region_score(current, &light, &args.light, &region_faces)?;
+    // the detection score inside the region after fairing, with the same
+    // lights as before
+    let after = detect_region(current, &light, args.light.options(), &region_faces)
+        .map_err(to_input_error)?;
+    let (score_before, score_after, threshold) = (before.score, after.score, before.threshold);
     report.set("detect_score_before", score_before);
     report.set("detect_score_after", score_after);
     report.set("detect_threshold", threshold);
-    if score_after > score_before && score_after > threshold {
-        report.warn(format!(
-            "{}: the detection score inside the region got worse ({score_before:.2} -> {score_after:.2}); try a larger region (--grow 2) or --method diffusion-flow",
-            args.mesh.display()
-        ));
-    } else if score_after > threshold {
-        report.warn(format!(
-            "{}: a defect remains inside the region (detection score {score_before:.2} -> {score_after:.2}, threshold {threshold:.2}); try --grow 2 or more iterations",
-            args.mesh.display(),
-        ));
+    // and `detect` on the output, with the lights it chooses there (the
+    // default lights follow the part, which fairing changed a little)
+    let output_light = args.light.light_array(current)?;
+    let as_detect = if output_light == light {
+        after
+    } else {
+        detect_region(current, &output_light, args.light.options(), &region_faces)
+            .map_err(to_input_error)?
+    };
+    report.set("detect_regions_after", as_detect.detection.regions.len());
+    if let Some(w) = as_detect.remaining_defect_warning(score_before, score_after) {
+        report.warn(format!("{}: {w}", args.mesh.display()));
     }
     if let (Some(png), Some((r, faired_mesh))) = (&args.png, &faired.first) {
-        write_picture(&args, png, &mesh, light, r, faired_mesh)?;
+        write_picture(png, &mesh, fairing_light, r, faired_mesh)?;
     }
     if faired.first.is_none() {
         report.warn("no region was faired (nothing detected): the output is the input unchanged");
@@ -193,6 +208,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     report.set("method", crate::output::option_value(&args.method));
     report.set("light", light);
+    report.set("fairing_light", fairing_light);
     report.set("regions", faired.results.len());
     if args.auto {
         report.set("skipped_regions", &faired.skipped);
@@ -376,12 +392,11 @@ fn fair_each_region(
     Ok(faired)
 }
 
-/// The --png before/after picture of the first region: on round parts
-/// every k-th line (and its desired curve), the lines `highlight` and
-/// `detect` show with the same defaults; k = 1 on panels and whenever the
-/// spacing was given.
+/// The --png before/after picture of the first region with the lines of
+/// the lights it was faired with, `light` (the readable lights: the lines
+/// `highlight` and `detect` show with the same options) and their desired
+/// curves.
 fn write_picture(
-    args: &Args,
     png: &std::path::Path,
     mesh: &SurfaceMesh,
     light: fairline::highlight::LightArray,
@@ -390,22 +405,7 @@ fn write_picture(
 ) -> Result<()> {
     let mut opts = RenderOptions::with_size(900, 700);
     (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
-    let shown_light = args.light.readable(mesh, light)?;
-    let k = (shown_light.spacing() / light.spacing()).round().max(1.0) as i64;
-    let thinned;
-    let drawn: &FairReport = if k > 1 {
-        let mut c = r.clone();
-        c.lines_before.lines.retain(|l| l.index.rem_euclid(k) == 0);
-        c.lines_after.lines.retain(|l| l.index.rem_euclid(k) == 0);
-        c.desired_before
-            .lines
-            .retain(|d| d.index.rem_euclid(k) == 0);
-        thinned = c;
-        &thinned
-    } else {
-        r
-    };
-    let mut img = fairing_picture(mesh, faired, drawn, &opts)?;
+    let mut img = fairing_picture(mesh, faired, r, &opts)?;
     crate::highlight_png::draw_key(
         &mut img,
         &[
@@ -413,7 +413,7 @@ fn write_picture(
                 FAIRING_LINE_COLOR,
                 format!(
                     "highlight lines, light spacing {}",
-                    crate::highlight_png::fmt_len(shown_light.spacing())
+                    crate::highlight_png::fmt_len(light.spacing())
                 ),
             ),
             (FAIRING_OUTLINE_COLOR, "region outline".into()),
@@ -456,7 +456,10 @@ fn set_fairing_results(report: &mut Report, results: &[Value], total_moved: f64)
                 "highlight_deviation_before",
                 max("highlight_deviation_before"),
             );
-            report.set("highlight_deviation_after", max("highlight_deviation_after"));
+            report.set(
+                "highlight_deviation_after",
+                max("highlight_deviation_after"),
+            );
             report.set("max_displacement", total_moved);
             report.set("per_region", results.to_vec());
         }
@@ -465,16 +468,3 @@ fn set_fairing_results(report: &mut Report, results: &[Value], total_moved: f64)
 
 /// Rings of faces `--auto` adds around a detected region.
 const AUTO_RINGS: usize = 4;
-
-/// The largest detection score (see `fairline detect`) at sites inside the
-/// faces `faces`, with the lights `light` (0 when none is judged), and the
-/// threshold detection applies on this mesh (the default, or higher on a
-/// noisy scan).
-fn region_score(
-    mesh: &SurfaceMesh,
-    light: &fairline::highlight::LightArray,
-    args: &LightArgs,
-    faces: &[FaceId],
-) -> Result<(f64, f64)> {
-    region_detection_score(mesh, light, args.options(), faces).map_err(to_input_error)
-}

@@ -81,6 +81,10 @@ fn detect_then_fair_then_detect_removes_a_planted_dent() {
     ]));
     let r3 = json(&rep3);
     assert_eq!(r3["regions"].as_array().unwrap().len(), 0, "{r3}");
+    // detect is quiet on the result, and so is fair's warning
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("a defect remains"), "{err}");
+    assert_eq!(r2["detect_regions_after"], 0, "{r2}");
     // inside the region the surface is ≥ 20× closer to the truth; outside
     // bit-identical
     let a = fairline::io::read_mesh(&dented).unwrap();
@@ -156,4 +160,86 @@ fn clean_panel_has_no_region() {
     let r = json(&rep);
     assert_eq!(r["regions"].as_array().unwrap().len(), 0, "{r}");
     assert_eq!(json(&region)["faces"].as_array().unwrap().len(), 0);
+}
+
+/// fair's "a defect remains" warning says what `detect` on the result says,
+/// every site with its own threshold: fairing only the best region of a
+/// panel with two dents leaves the second, weaker one, which `detect` on
+/// the result flags; the warning fires, names it (outside the faired
+/// region, its score and threshold) and says what to do. Before, the
+/// warning compared only the best site inside the faired region with the
+/// threshold there, and stayed silent.
+#[test]
+fn the_remaining_defect_warning_says_what_detect_on_the_result_says() {
+    let d = tmp("detect-second");
+    // a second dent, half as deep, at (−0.45, 0.45)
+    let second =
+        |x: f64, y: f64| -0.003 * (-((x + 0.45).powi(2) + (y - 0.45).powi(2)) / 0.01).exp();
+    let dented = write(&d, "two-dents.obj", |x, y| {
+        panel(x, y) + dent(x, y) + second(x, y)
+    });
+    let (region, rep1) = (d.join("region.json"), d.join("det1.json"));
+    ok(&run(&[
+        "detect",
+        s(&dented),
+        "--max-regions",
+        "1",
+        "-o",
+        s(&region),
+        "--report",
+        s(&rep1),
+    ]));
+    let r1 = json(&rep1);
+    assert_eq!(r1["regions"].as_array().unwrap().len(), 1, "{r1}");
+    let (faired, rep2) = (d.join("faired.obj"), d.join("fair.json"));
+    let o = run(&[
+        "fair",
+        s(&dented),
+        "--region",
+        s(&region),
+        "-o",
+        s(&faired),
+        "--report",
+        s(&rep2),
+    ]);
+    ok(&o);
+    let r2 = json(&rep2);
+    // inside the faired region detection is quiet: the old rule said nothing
+    let threshold = r2["detect_threshold"].as_f64().unwrap();
+    assert!(
+        r2["detect_score_after"].as_f64().unwrap() <= threshold,
+        "{r2}"
+    );
+    // what detect says on the result
+    let rep3 = d.join("det2.json");
+    ok(&run(&[
+        "detect",
+        s(&faired),
+        "-o",
+        s(&d.join("region2.json")),
+        "--report",
+        s(&rep3),
+    ]));
+    let r3 = json(&rep3);
+    let regions = r3["regions"].as_array().unwrap();
+    assert_eq!(regions.len(), 1, "the second dent remains: {r3}");
+    let c = &regions[0]["center"];
+    let c = Vec3::new(c[0].as_f64().unwrap(), c[1].as_f64().unwrap(), 0.0);
+    assert!((c - Vec3::new(-0.45, 0.45, 0.0)).length() < 0.05, "{c}");
+    // and fair's warning says the same
+    assert_eq!(r2["detect_regions_after"], 1, "{r2}");
+    let err = String::from_utf8_lossy(&o.stderr);
+    let score = regions[0]["score"].as_f64().unwrap();
+    assert!(
+        err.contains(&format!(
+            "a defect remains: detect on the result flags 1 region(s) (0 overlapping the faired region), the best scoring {score:.2}"
+        )),
+        "{err}"
+    );
+    assert!(err.contains("outside the faired region"), "{err}");
+    let warnings: Vec<String> = serde_json::from_value(r2["warnings"].clone()).unwrap_or_default();
+    assert!(
+        warnings.iter().any(|w| w.contains("a defect remains")),
+        "{warnings:?}"
+    );
 }

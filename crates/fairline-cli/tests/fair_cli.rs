@@ -281,13 +281,16 @@ fn dark_pixels(png: &Path) -> usize {
         .count()
 }
 
-/// On a round part the before/after picture draws every k-th highlight
-/// line, as `highlight` and `detect` do with the default lights (issue #18:
-/// the picture was hatched), while the fairing itself runs at the detail
-/// spacing: the same run with that spacing given explicitly writes the same
-/// mesh bytes and a picture with all lines (many more dark pixels). The
-/// part: Spot with a dent planted on its flank, which `--auto` finds and
-/// fairs (clean Spot has nothing to fair).
+/// On a round part `fair` fairs and draws the readable lines — every k-th
+/// light of detection's array, the lines `highlight` and `detect` show
+/// with the default lights (issue #18: at the detail spacing the lines lie
+/// a fraction of an edge apart on this coarse mesh, triangles crossed by
+/// more than four of them carry none, the picture was hatched fragments
+/// and highlight-line fairing did not converge). The report keeps
+/// detection's lights under "light" and the fairing lights, k > 1 times
+/// their spacing, under "fairing_light"; fairing converges and the picture
+/// shows lines. The part: Spot with a dent planted on its flank, which
+/// `--auto` finds and fairs (clean Spot has nothing to fair).
 #[test]
 fn fair_picture_on_a_round_part_draws_the_readable_lines() {
     let Some(clean) = data("meshes/spot.ply") else {
@@ -313,30 +316,13 @@ fn fair_picture_on_a_round_part_draws_the_readable_lines() {
         "the dent is faired: {rep}"
     );
     let spacing = rep["light"]["spacing"].as_f64().unwrap();
-    let (out_b, png_b) = (d.join("b.ply"), d.join("b.png"));
-    ok(&run(&[
-        "fair",
-        s(&p),
-        "--auto",
-        "--spacing",
-        &format!("{spacing:?}"),
-        "-o",
-        s(&out_b),
-        "--png",
-        s(&png_b),
-    ]));
-    assert_eq!(
-        std::fs::read(&out_a).unwrap(),
-        std::fs::read(&out_b).unwrap(),
-        "the picture must not change the fairing"
-    );
-    let (readable, all) = (dark_pixels(&png_a), dark_pixels(&png_b));
+    let fairing = rep["fairing_light"]["spacing"].as_f64().unwrap();
+    let k = fairing / spacing;
+    assert!(k > 1.5 && (k - k.round()).abs() < 1e-9, "{rep}");
+    assert_eq!(rep["converged"], true, "{rep}");
+    let readable = dark_pixels(&png_a);
     assert!(
         readable > 500,
-        "the readable picture still shows lines: {readable}"
-    );
-    assert!(
-        2 * readable < all,
-        "readable picture {readable} dark pixels, all lines {all}"
+        "the readable picture shows lines: {readable}"
     );
 }

@@ -364,6 +364,8 @@ pub struct IrregularRegion {
     pub faces: Vec<FaceId>,
     /// Largest site score inside (for ranking).
     pub score: f64,
+    /// The threshold applied at the site of that score ([`Site::threshold`]).
+    pub threshold: f64,
     /// Score-weighted centre of the flagged sites inside (mesh units).
     pub center: Vec3,
     /// Area of the faces (mesh units²).
@@ -681,42 +683,111 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// The detection score of a region: the largest score (default
-/// [`DetectOptions`]) at the sites on the vertices of `faces`, 0 when none
-/// is judged, together with the threshold the detection applied at that
-/// site (raised above the noise of a scan and the faceting of a coarse
-/// mesh). This is what `fair` reports before and after fairing, so that
-/// its numbers agree with what `detect` shows under the same lights.
-/// Faces out of range are ignored; an empty region scores 0 against the
-/// default threshold.
-pub fn region_detection_score(
+/// What `fairline detect` says about a mesh, with the best site inside a
+/// face region: the measure of `fair`'s report before and after fairing
+/// and of its warning, so that they say what `detect` on the result would
+/// say (same lights, default [`DetectOptions`], every site with its own
+/// threshold).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RegionDetection {
+    /// The detection of the whole mesh.
+    pub detection: Detection,
+    /// Largest score at the sites on the vertices of the region's faces (0
+    /// when none is judged).
+    pub score: f64,
+    /// The threshold detection applied at that site (the mesh's threshold
+    /// when none is judged).
+    pub threshold: f64,
+    /// Per region of [`Self::detection`]: whether it shares a face with
+    /// the given face region.
+    pub overlaps: Vec<bool>,
+}
+
+impl RegionDetection {
+    /// The warning about what detection flags on a faired mesh (`self`:
+    /// the detection of the result as `fairline detect` would run it on
+    /// the output, with the lights it would choose there), worded as
+    /// `detect` would report it, with what to do; `None` when it flags
+    /// nothing (whatever the scores: `detect` would be quiet). Names the
+    /// best flagged region, its score and the threshold at its site, and
+    /// whether it overlaps the faired region; `score_before` and
+    /// `score_after` are the detection scores inside the faired region
+    /// with the same lights before and after (the report's).
+    pub fn remaining_defect_warning(&self, score_before: f64, score_after: f64) -> Option<String> {
+        let regions = &self.detection.regions;
+        let best = regions.first()?;
+        let overlapping = self.overlaps.iter().filter(|&&o| o).count();
+        let c = best.center;
+        let place = if self.overlaps.first().copied().unwrap_or(false) {
+            "inside the faired region"
+        } else {
+            "outside the faired region"
+        };
+        let advice = if overlapping == 0 {
+            "fair it too (`fairline detect` on the result writes its region, or use --auto)"
+        } else if score_after > score_before {
+            "the detection score inside the region got worse; try a larger region (--grow 2) or --method diffusion-flow"
+        } else {
+            "try --grow 2 or more iterations"
+        };
+        Some(format!(
+            "a defect remains: detect on the result flags {} region(s) ({overlapping} overlapping the faired region), the best scoring {:.2} (threshold {:.2} there) at [{:.4}, {:.4}, {:.4}], {place}; detection score inside the faired region {:.2} -> {:.2}; {advice}",
+            regions.len(),
+            best.score,
+            best.threshold,
+            c.x,
+            c.y,
+            c.z,
+            score_before,
+            score_after,
+        ))
+    }
+}
+
+/// Detection with the default [`DetectOptions`] under `light` (the
+/// highlight lines computed with `highlight`), as `fairline detect` runs
+/// it, and its best site inside the face region `faces` (see
+/// [`RegionDetection`]). Faces out of range are ignored.
+pub fn detect_region(
     mesh: &SurfaceMesh,
     light: &LightArray,
     highlight: super::HighlightOptions,
     faces: &[FaceId],
-) -> Result<(f64, f64), HighlightError> {
+) -> Result<RegionDetection, HighlightError> {
     let options = DetectOptions::default();
-    if faces.is_empty() {
-        return Ok((0.0, options.threshold));
-    }
     let model = super::HighlightModel::new(mesh, *light, highlight)?;
     let lines = model.lines(mesh);
-    let det = detect_irregularities(mesh, light, &lines, &options)?;
+    let detection = detect_irregularities(mesh, light, &lines, &options)?;
+    let mut in_faces = vec![false; mesh.face_count()];
     let mut inside = vec![false; mesh.vertex_count()];
     for f in faces {
         if f.idx() < mesh.face_count() {
+            in_faces[f.idx()] = true;
             for v in mesh.face_vertices(*f) {
                 inside[v.idx()] = true;
             }
         }
     }
-    let best = det
+    let (score, threshold) = detection
         .sites
         .iter()
         .filter(|s| inside[s.vertex.idx()])
         .filter_map(|s| s.score.map(|sc| (sc, s.threshold)))
-        .fold((0.0, det.threshold), |a, b| if b.0 > a.0 { b } else { a });
-    Ok(best)
+        .fold(
+            (0.0, detection.threshold),
+            |a, b| if b.0 > a.0 { b } else { a },
+        );
+    let overlaps = detection
+        .regions
+        .iter()
+        .map(|r| r.faces.iter().any(|f| in_faces[f.idx()]))
+        .collect();
+    Ok(RegionDetection {
+        detection,
+        score,
+        threshold,
+        overlaps,
+    })
 }
 
 /// Finds surface defects that displace the highlight lines of `light` and
@@ -1209,6 +1280,7 @@ fn connected_regions(
         regions.push(IrregularRegion {
             faces,
             score: 0.0,
+            threshold: 0.0,
             center: Vec3::ZERO,
             area,
             flagged_sites: 0,
@@ -1238,7 +1310,10 @@ fn score_regions(
         }
         let r = r as usize;
         let sc = sites[i].score.unwrap_or(0.0);
-        regions[r].score = regions[r].score.max(sc);
+        if sc > regions[r].score {
+            regions[r].score = sc;
+            regions[r].threshold = sites[i].threshold;
+        }
         regions[r].center += sc * sites[i].position;
         regions[r].flagged_sites += 1;
         weight[r] += sc;

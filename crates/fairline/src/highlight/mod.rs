@@ -21,8 +21,8 @@ pub mod surface;
 pub use circular::{circular_highlight_bands, circular_highlight_lines};
 pub use contour::{HighlightLine, HighlightLines, NodeId};
 pub use detect::{
-    DetectOptions, Detection, IrregularRegion, LineFairness, Site, detect_irregularities,
-    region_detection_score,
+    DetectOptions, Detection, IrregularRegion, LineFairness, RegionDetection, Site,
+    detect_irregularities, detect_region,
 };
 pub use light::{CircleApproach, CircularLight, CircularLights, LightArray, UpAxis};
 pub use light_choice::LightChoice;
