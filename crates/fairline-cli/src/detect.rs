@@ -3,12 +3,10 @@
 
 use crate::args::{LightArgs, parse_size, parse_vec3, to_input_error};
 use crate::common::{Report, write_json};
-use crate::error::bad_input;
 use crate::input::read_triangles;
 use crate::output::spinner;
 use anyhow::Result;
 use fairline::highlight::DetectOptions;
-use fairline::mesh::FaceId;
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -85,9 +83,7 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--png", args.png.as_deref())
         .output_opt("--report", args.report.as_deref())
         .check()?;
-    if args.view.is_some_and(|v| v.length() == 0.0) {
-        return Err(bad_input("--view must not be the zero vector"));
-    }
+    crate::args::check_view(args.view)?;
     let (mesh, source) = read_triangles(&args.mesh)?;
     let light = args.light.light_array(&mesh)?;
     let opts = DetectOptions::default()
@@ -153,45 +149,19 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(n) = args.max_regions {
         det.regions.truncate(n);
     }
-    // faces of the input mesh (triangulated polygons map back to their polygon)
-    let to_input = |faces: &[FaceId]| -> Vec<u32> {
-        let mut out: Vec<u32> = match &source {
-            Some(src) => faces.iter().map(|f| src[f.idx()].0).collect(),
-            None => faces.iter().map(|f| f.0).collect(),
-        };
-        out.sort_unstable();
-        out.dedup();
-        out
-    };
-    // the written region holds two more rings of faces: the support that
-    // fairing needs to move every vertex of the suggested region
-    let all = to_input(&fairline::fair::grow_region(
-        &mesh,
-        &det.all_faces(),
-        SUPPORT_RINGS,
-    ));
+    // faces of the input mesh (triangulated polygons map back to their
+    // polygon); the written region holds two more rings of faces: the
+    // support that fairing needs to move every vertex of the suggested region
+    let all = fairline::fair::suggested_region(&mesh, &det, source.as_deref());
     write_json(&args.output, &json!({"faces": all}))?;
-    let regions: Vec<_> = det
-        .regions
-        .iter()
-        .map(|r| {
-            json!({
-                "score": r.score,
-                "faces": to_input(&r.faces).len(),
-                "area": r.area,
-                "center": r.center.to_array(),
-                "flagged_sites": r.flagged_sites,
-                "lines": r.lines,
-            })
-        })
-        .collect();
+    let regions = fairline::fair::detected_region_entries(&det, source.as_deref());
     report.set("vertices", mesh.vertex_count());
     report.set("lines", lines.lines.len());
     report.set("spacing", light.spacing());
     report.set("drawn_spacing", shown_light.spacing());
     report.set(
         "drawn",
-        crate::highlight_png::stats_json(&mesh, &shown_light, &shown),
+        fairline::highlight::DrawnLineStats::of(&mesh, &shown_light, &shown),
     );
     // the library's numbers of the measure, under its own names
     if let Ok(serde_json::Value::Object(numbers)) = serde_json::to_value(&det) {
@@ -248,8 +218,3 @@ pub fn run(args: Args) -> Result<()> {
     ));
     Ok(())
 }
-
-/// Rings of faces added around the suggested regions in the written region
-/// JSON: a vertex moves under fairing only when all faces around it and
-/// around its neighbours are in the region (Yong et al. §3.1).
-const SUPPORT_RINGS: usize = 2;

@@ -8,11 +8,11 @@ use crate::error::bad_input;
 use crate::output::progress;
 use anyhow::Result;
 use fairline::fair::{
-    FairError, FairMethod, FairOptions, FairReport, fair_highlight_lines, grow_region,
+    AUTO_RINGS, FairError, FairMethod, FairOptions, FairReport, detect_regions_to_fair,
+    fair_highlight_lines, grow_region, regions_deviation, regions_report, regions_union,
+    regions_warnings,
 };
-use fairline::highlight::{
-    DetectOptions, HighlightModel, detect_irregularities, region_detection_score,
-};
+use fairline::highlight::region_detection_score;
 use fairline::mesh::FaceId;
 use fairline::picture::{
     FAIRING_DESIRED_COLOR, FAIRING_LINE_COLOR, FAIRING_OUTLINE_COLOR, fairing_picture,
@@ -119,13 +119,11 @@ fn name_region(e: anyhow::Error, region: Option<&std::path::Path>) -> anyhow::Er
 /// Library errors that are the user's input (region, options) exit with 2.
 fn to_error(e: FairError) -> anyhow::Error {
     match e {
-        FairError::NoMovableVertex(msg) => bad_input(format!(
-            "{msg}; a vertex can move only when every face around it and around its neighbours is in the region: enlarge the region or pass --grow 2"
-        )),
-        FairError::Region(_)
+        FairError::NoMovableVertex(_)
+        | FairError::Region(_)
         | FairError::InvalidOption(_)
         | FairError::Mesh(_)
-        | FairError::Highlight(_) => bad_input(e.to_string()),
+        | FairError::Highlight(_) => bad_input(e.user_message()),
         FairError::Solve(_) | FairError::Cancelled(_) => anyhow::Error::new(e),
     }
 }
@@ -170,12 +168,8 @@ pub fn run(args: Args) -> Result<()> {
                 .map_err(|e| bad_input(format!("{}: {e}", path.display())))?,
         ]
     } else {
-        let det = report
-            .time(|| -> Result<_, fairline::highlight::HighlightError> {
-                let model = HighlightModel::new(&mesh, light, args.light.options())?;
-                let lines = model.lines(&mesh);
-                detect_irregularities(&mesh, &light, &lines, &DetectOptions::default())
-            })
+        let (det, grown) = report
+            .time(|| detect_regions_to_fair(&mesh, light, args.light.options()))
             .map_err(to_input_error)?;
         report.set("detected_regions", det.regions.len());
         if det.regions.is_empty() {
@@ -184,21 +178,16 @@ pub fn run(args: Args) -> Result<()> {
                 args.mesh.display()
             );
         }
-        det.regions
-            .iter()
-            .enumerate()
-            .map(|(k, r)| {
-                let grown = grow_region(&mesh, &r.faces, AUTO_RINGS);
-                eprintln!(
-                    "note: --auto: region {} (score {:.1}) grown by {AUTO_RINGS} rings of faces: {} -> {} faces",
-                    k + 1,
-                    r.score,
-                    r.faces.len(),
-                    grown.len()
-                );
-                grown
-            })
-            .collect()
+        for (k, (r, g)) in det.regions.iter().zip(&grown).enumerate() {
+            eprintln!(
+                "note: --auto: region {} (score {:.1}) grown by {AUTO_RINGS} rings of faces: {} -> {} faces",
+                k + 1,
+                r.score,
+                r.faces.len(),
+                g.len()
+            );
+        }
+        grown
     };
     let regions: Vec<Vec<FaceId>> = if args.grow > 0 {
         regions
@@ -218,17 +207,12 @@ pub fn run(args: Args) -> Result<()> {
         regions
     };
     // the detection score inside the regions, before (same lights as after)
-    let region_faces: Vec<FaceId> = {
-        let mut all: Vec<FaceId> = regions.iter().flatten().copied().collect();
-        all.sort_unstable();
-        all.dedup();
-        all
-    };
+    let region_faces = regions_union(&regions);
     let (score_before, threshold) = region_score(&mesh, &light, &args.light, &region_faces)?;
     let mut current: SurfaceMesh = mesh.clone();
-    let mut results: Vec<Value> = Vec::new();
-    // the first region's report and faired mesh, for the picture
-    let mut first: Option<(FairReport, SurfaceMesh)> = None;
+    let mut results: Vec<FairReport> = Vec::new();
+    // the first region's faired mesh, for the picture
+    let mut first: Option<SurfaceMesh> = None;
     let mut skipped: Vec<Value> = Vec::new();
     let bar = progress((regions.len() * options.max_iterations) as u64, "fairing");
     for (k, faces) in regions.iter().enumerate() {
@@ -239,10 +223,10 @@ pub fn run(args: Args) -> Result<()> {
         let outcome = report.time(|| fair_highlight_lines(&current, &region_options));
         match outcome {
             Ok(out) => {
-                results.push(serde_json::to_value(&out.report)?);
+                results.push(out.report);
                 current.set_positions(out.positions)?;
                 if first.is_none() {
-                    first = Some((out.report, current.clone()));
+                    first = Some(current.clone());
                 }
             }
             Err(FairError::NoMovableVertex(msg)) if args.auto => {
@@ -272,14 +256,21 @@ pub fn run(args: Args) -> Result<()> {
             args.mesh.display(),
         ));
     }
-    if first.is_none() {
-        report.warn("no region was faired (nothing detected): the output is the input unchanged");
-        if let Some(png) = &args.png {
-            crate::output::say("note: no region was faired, so no picture was written");
-            job.skip(png);
-        }
+    let (before, after) = regions_deviation(&results);
+    for w in regions_warnings(
+        &results,
+        args.max_iterations,
+        (score_before, score_after),
+    ) {
+        report.warn(w);
     }
-    if let (Some(png), Some((r, faired))) = (&args.png, &first) {
+    if first.is_none()
+        && let Some(png) = &args.png
+    {
+        crate::output::say("note: no region was faired, so no picture was written");
+        job.skip(png);
+    }
+    if let (Some(png), Some(r), Some(faired)) = (&args.png, results.first(), &first) {
         let mut opts = RenderOptions::with_size(900, 700);
         (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
         // on round parts the picture draws every k-th line (and its desired
@@ -329,64 +320,8 @@ pub fn run(args: Args) -> Result<()> {
         .zip(mesh.positions())
         .map(|(a, b)| (*a - *b).length())
         .fold(0.0, f64::max);
-    match results.as_slice() {
-        [one] => {
-            if let Value::Object(m) = one {
-                for (key, v) in m {
-                    report.set(key, v.clone());
-                }
-            }
-        }
-        _ => {
-            let sum = |key: &str| -> f64 { results.iter().filter_map(|r| r[key].as_f64()).sum() };
-            report.set("iterations", sum("iterations") as u64);
-            report.set(
-                "converged",
-                results.iter().all(|r| r["converged"] == json!(true)),
-            );
-            report.set("movable_vertices", sum("movable_vertices") as u64);
-            report.set("willmore_before", sum("willmore_before"));
-            report.set("willmore_after", sum("willmore_after"));
-            report.set(
-                "highlight_deviation_before",
-                results
-                    .iter()
-                    .filter_map(|r| r["highlight_deviation_before"].as_f64())
-                    .fold(0.0, f64::max),
-            );
-            report.set(
-                "highlight_deviation_after",
-                results
-                    .iter()
-                    .filter_map(|r| r["highlight_deviation_after"].as_f64())
-                    .fold(0.0, f64::max),
-            );
-            report.set("max_displacement", total_moved);
-            report.set("per_region", results.clone());
-        }
-    }
-    let converged = results.iter().all(|r| r["converged"] == json!(true));
-    let deviation = |key: &str| {
-        results
-            .iter()
-            .filter_map(|r| r[key].as_f64())
-            .fold(0.0, f64::max)
-    };
-    let (before, after) = (
-        deviation("highlight_deviation_before"),
-        deviation("highlight_deviation_after"),
-    );
-    if !converged {
-        report.warn(format!(
-            "fairing did not converge within --max-iterations {}; try more iterations or a larger region (--grow, --auto)",
-            args.max_iterations
-        ));
-    }
-    if after > before {
-        report.warn(format!(
-            "the highlight-line deviation (distance of the lines inside the region from their own smoothed curves) got worse: {before:.4e} before, {after:.4e} after; the detection score (as `detect` measures it, same lights) went {score_before:.2} -> {score_after:.2}"
-        ));
-    }
+    report.set_fields(regions_report(&results, total_moved));
+    let converged = results.iter().all(|r| r.converged);
     report.write(args.report.as_deref())?;
     job.finish(format_args!(
         "{} region(s) faired, {}, detection score {score_before:.2} → {score_after:.2} (threshold {threshold:.2}), highlight deviation {before:.3e} → {after:.3e}, largest move {total_moved:.3e}",
@@ -395,9 +330,6 @@ pub fn run(args: Args) -> Result<()> {
     ));
     Ok(())
 }
-
-/// Rings of faces `--auto` adds around a detected region.
-const AUTO_RINGS: usize = 4;
 
 /// The largest detection score (see `fairline detect`) at sites inside the
 /// faces `faces`, with the lights `light` (0 when none is judged), and the

@@ -121,9 +121,7 @@ pub fn run(args: HighlightArgs) -> Result<()> {
 
 /// Refuses a zero `--view` and a `--band` that is not a positive number.
 fn check_view_and_band(args: &HighlightArgs) -> Result<()> {
-    if args.view.is_some_and(|v| v.length() == 0.0) {
-        return Err(bad_input("--view must not be the zero vector"));
-    }
+    crate::args::check_view(args.view)?;
     if let Some(b) = args.band
         && !(b > 0.0 && b.is_finite())
     {
@@ -253,7 +251,7 @@ fn linear_lines(
     report.set("light", json!({"kind": "linear", "array": light}));
     report.set(
         "drawn",
-        crate::highlight_png::stats_json(mesh, &light, &shown),
+        fairline::highlight::DrawnLineStats::of(mesh, &light, &shown),
     );
     if let Some(w) = crate::highlight_png::line_warning(
         &args.mesh,

@@ -79,10 +79,8 @@ pub struct Args {
 /// Render options with the command-line view and size.
 pub fn options(view: Option<Vec3>, size: (u32, u32)) -> Result<RenderOptions> {
     let mut opts = RenderOptions::with_size(size.0, size.1);
+    crate::args::check_view(view)?;
     if let Some(v) = view {
-        if v.length() == 0.0 {
-            return Err(bad_input("--view must not be the zero vector"));
-        }
         opts.view_dir = v;
     }
     Ok(opts)
@@ -273,7 +271,7 @@ fn highlight_overlay(
         "light": shown_light,
         "detect_light": light,
         "lines": all.lines.len(),
-        "drawn": crate::highlight_png::stats_json(tri_mesh, &shown_light, &lines),
+        "drawn": fairline::highlight::DrawnLineStats::of(tri_mesh, &shown_light, &lines),
         "nodes": lines.node_count(),
         "irregular_stretches": stretches.len(),
         "regions": det.regions.len(),

@@ -224,7 +224,7 @@ fn cases() -> Vec<(&'static str, String)> {
     // repair of a dirty soup: every kind of change the repair makes
     {
         let soup = dirty_soup();
-        let r = fairline::mesh::repair(&soup).unwrap();
+        let r = fairline::mesh::repair(&soup, &Default::default()).unwrap();
         // the fixture holds what its doc says
         use fairline::mesh::RemovalReason as Why;
         let rep = &r.report;
@@ -485,4 +485,20 @@ fn the_entry_points_report_progress_and_can_be_cancelled() {
         fair_polyline_network(&grid, &PolylineNetworkOptions::default().control(c)),
         Err(QuadFairError::Cancelled(_))
     ));
+
+    // repair: one step per stage, the same result watched or not
+    use fairline::mesh::{RepairError, RepairOptions, repair};
+    let soup = dirty_soup();
+    let (c, steps) = stopping_control(usize::MAX);
+    let watched = repair(&soup, &RepairOptions::default().control(c)).unwrap();
+    assert_eq!(steps.load(Ordering::Relaxed), 4);
+    assert_eq!(watched, repair(&soup, &RepairOptions::default()).unwrap());
+    for after in 1..4 {
+        let (c, steps) = stopping_control(after);
+        assert!(matches!(
+            repair(&soup, &RepairOptions::default().control(c)),
+            Err(RepairError::Cancelled(_))
+        ));
+        assert_eq!(steps.load(Ordering::Relaxed), after);
+    }
 }

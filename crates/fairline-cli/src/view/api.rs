@@ -1113,64 +1113,29 @@ impl MeshJob<'_> {
 
     /// One of the smoothing methods, outside the region fixed.
     fn smooth(&self) -> Result<Outcome, String> {
-        use fairline::smooth::{
-            ImplicitOptions, LaplaceOptions, SchneiderKobbeltOptions, SpringOptions,
-            TaubinOptions, implicit_smooth, laplace_smooth, schneider_kobbelt, spring_smooth,
-            taubin_smooth,
-        };
-        let (o, mesh, control) = (&self.req.options, self.mesh, self.control);
-        let fixed = self.fixed_outside();
+        use fairline::smooth::{SmoothMethod, SmoothOptions, smooth};
+        let o = &self.req.options;
         let (weights, wname) = match o.weights.as_deref().unwrap_or("cotan") {
             "uniform" => (LaplaceWeights::Uniform, "uniform"),
             "cotan" => (LaplaceWeights::Cotangent, "cotan"),
             w => return Err(format!("unknown weights `{w}` (uniform, cotan)")),
         };
         let method = o.method.as_deref().unwrap_or("taubin").to_string();
+        let Some(smooth_method) = SmoothMethod::from_name(&method) else {
+            return Err(format!("unknown smoothing method `{method}`"));
+        };
         let iterations = o.iterations;
-        let smoothed = match method.as_str() {
-            "laplace" => laplace_smooth(
-                mesh,
-                &LaplaceOptions::default()
-                    .weights(weights)
-                    .lambda(o.lambda.unwrap_or(0.5))
-                    .iterations(iterations.unwrap_or(10))
-                    .fixed(fixed)
-                    .control(control.clone()),
-            ),
-            "taubin" => taubin_smooth(
-                mesh,
-                &TaubinOptions::default()
-                    .weights(weights)
-                    .iterations(iterations.unwrap_or(10))
-                    .fixed(fixed)
-                    .control(control.clone()),
-            ),
-            "implicit" => implicit_smooth(
-                mesh,
-                &ImplicitOptions::default()
-                    .iterations(iterations.unwrap_or(1))
-                    .fixed(fixed)
-                    .control(control.clone()),
-            ),
-            "spring" => {
-                let d = SpringOptions::default();
-                let n = iterations.unwrap_or(d.max_iterations);
-                spring_smooth(
-                    mesh,
-                    &d.max_iterations(n).fixed(fixed).control(control.clone()),
-                )
-            }
-            "schneider-kobbelt" => {
-                let d = SchneiderKobbeltOptions::default();
-                let n = iterations.unwrap_or(d.max_iterations);
-                schneider_kobbelt(
-                    mesh,
-                    &d.max_iterations(n).fixed(fixed).control(control.clone()),
-                )
-            }
-            other => return Err(format!("unknown smoothing method `{other}`")),
-        }
-        .map_err(|e| e.to_string())?;
+        // λ is the workbench's for Laplace smoothing only (Taubin's comes
+        // from the pass band)
+        let lambda = o.lambda.filter(|_| smooth_method == SmoothMethod::Laplace);
+        let options = SmoothOptions::default()
+            .method(smooth_method)
+            .weights(weights)
+            .lambda(lambda)
+            .iterations(iterations)
+            .fixed(self.fixed_outside())
+            .control(self.control.clone());
+        let smoothed = smooth(self.mesh, &options).map_err(|e| e.to_string())?;
         let r = &smoothed.report;
         let mut cmd = format!("fairline smooth {} --method {method}", self.file);
         if matches!(method.as_str(), "laplace" | "taubin") {
