@@ -257,11 +257,7 @@ pub fn run(args: Args) -> Result<()> {
         ));
     }
     let (before, after) = regions_deviation(&results);
-    for w in regions_warnings(
-        &results,
-        args.max_iterations,
-        (score_before, score_after),
-    ) {
+    for w in regions_warnings(&results, args.max_iterations, (score_before, score_after)) {
         report.warn(w);
     }
     if first.is_none()

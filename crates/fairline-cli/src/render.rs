@@ -4,9 +4,9 @@ use crate::args::{LightArgs, parse_size, parse_vec3, to_input_error};
 use crate::common::Report;
 use crate::error::bad_input;
 use anyhow::{Context, Result};
+use fairline::SurfaceMesh;
 use fairline::Vec3;
 use fairline::geom::{CurvatureMethod, principal_curvatures};
-use fairline::SurfaceMesh;
 use fairline::highlight::{
     DetectOptions, HighlightModel, LightArray, Readability, detect_irregularities,
 };
@@ -242,8 +242,8 @@ fn highlight_overlay(
     opts: &RenderOptions,
 ) -> Result<HighlightOverlay> {
     let shown_light = args.light.readable(tri_mesh, light)?;
-    let model = HighlightModel::new(tri_mesh, shown_light, args.light.options())
-        .map_err(to_input_error)?;
+    let model =
+        HighlightModel::new(tri_mesh, shown_light, args.light.options()).map_err(to_input_error)?;
     let all = model.lines(tri_mesh);
     let lines = model.readable_lines(
         tri_mesh,
@@ -251,8 +251,7 @@ fn highlight_overlay(
         &Readability::for_part(tri_mesh, &shown_light),
     );
     let det_opts = DetectOptions::default().threshold(args.threshold);
-    let det =
-        detect_irregularities(tri_mesh, &light, &lines, &det_opts).map_err(to_input_error)?;
+    let det = detect_irregularities(tri_mesh, &light, &lines, &det_opts).map_err(to_input_error)?;
     let stretches: Vec<Vec<Vec3>> = det
         .lines
         .iter()

@@ -276,14 +276,16 @@ fn dirty_soup() -> fairline::Soup {
     // a fin standing on the first edge of face 0
     let (a, b) = (faces[0][0], faces[0][1]);
     let tip = positions.len() as u32;
-    positions.push((positions[a as usize] + positions[b as usize]) * 0.5 + Vec3::new(0.0, 0.0, 2.0));
+    positions
+        .push((positions[a as usize] + positions[b as usize]) * 0.5 + Vec3::new(0.0, 0.0, 2.0));
     faces.push(vec![a, b, tip]);
     // a cone of 5 faces whose apex is the sphere's vertex 0
     let apex = 0u32;
     let base = positions.len() as u32;
     for k in 0..5 {
         let t = k as f64 / 5.0 * std::f64::consts::TAU;
-        positions.push(positions[0] * 1.5 + Vec3::new(0.2 * t.cos(), 0.2 * t.sin(), 0.1 * noise(k)));
+        positions
+            .push(positions[0] * 1.5 + Vec3::new(0.2 * t.cos(), 0.2 * t.sin(), 0.1 * noise(k)));
     }
     for k in 0..5 {
         faces.push(vec![apex, base + k, base + (k + 1) % 5]);

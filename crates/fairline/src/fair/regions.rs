@@ -294,10 +294,7 @@ mod tests {
         );
         assert_eq!(
             both["highlight_deviation_after"],
-            json!(
-                a.highlight_deviation_after
-                    .max(b.highlight_deviation_after)
-            )
+            json!(a.highlight_deviation_after.max(b.highlight_deviation_after))
         );
         assert_eq!(both["converged"], json!(a.converged && b.converged));
         assert_eq!(both["max_displacement"], json!(0.25));
@@ -348,17 +345,16 @@ mod tests {
         );
         // triangles of quads (two per quad) map to their quad, sorted,
         // without repeats
-        let source: Vec<FaceId> = (0..mesh.face_count() as u32).map(|f| FaceId(f / 2)).collect();
+        let source: Vec<FaceId> = (0..mesh.face_count() as u32)
+            .map(|f| FaceId(f / 2))
+            .collect();
         let faces = [FaceId(5), FaceId(0), FaceId(3), FaceId(1)];
         assert_eq!(input_faces(&faces, Some(&source)), vec![0, 1, 2]);
         assert_eq!(input_faces(&faces, None), vec![0, 1, 3, 5]);
         let suggested = suggested_region(&mesh, &det, None);
         assert_eq!(
             suggested,
-            input_faces(
-                &grow_region(&mesh, &det.all_faces(), SUPPORT_RINGS),
-                None
-            )
+            input_faces(&grow_region(&mesh, &det.all_faces(), SUPPORT_RINGS), None)
         );
         let entries = detected_region_entries(&det, None);
         assert_eq!(entries.len(), det.regions.len());

@@ -820,7 +820,13 @@ mod tests {
             &RepairOptions::default(),
         )
         .unwrap_err();
-        assert_eq!(e, RepairError::Mesh(MeshError::NonFiniteCoordinate { vertex: 2 }));
-        assert_eq!(e.to_string(), MeshError::NonFiniteCoordinate { vertex: 2 }.to_string());
+        assert_eq!(
+            e,
+            RepairError::Mesh(MeshError::NonFiniteCoordinate { vertex: 2 })
+        );
+        assert_eq!(
+            e.to_string(),
+            MeshError::NonFiniteCoordinate { vertex: 2 }.to_string()
+        );
     }
 }

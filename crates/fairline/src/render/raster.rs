@@ -329,7 +329,8 @@ impl Projector<'_> {
                 n.saturating_sub(1)
             };
             for i in 0..nseg {
-                if let Some((pa, pb)) = self.clip_project(line.points[i], line.points[(i + 1) % n]) {
+                if let Some((pa, pb)) = self.clip_project(line.points[i], line.points[(i + 1) % n])
+                {
                     segs.push(Seg::new(pa, pb, hw, layer, line.color));
                 }
             }

@@ -282,7 +282,9 @@ mod tests {
             by(SmoothMethod::Taubin),
             taubin_smooth(&mesh, &taubin).unwrap()
         );
-        let implicit = ImplicitOptions::default().iterations(4).fixed(fixed.clone());
+        let implicit = ImplicitOptions::default()
+            .iterations(4)
+            .fixed(fixed.clone());
         assert_eq!(
             by(SmoothMethod::Implicit),
             implicit_smooth(&mesh, &implicit).unwrap()
