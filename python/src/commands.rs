@@ -12,7 +12,7 @@
 use crate::{Failure, Res, SoupArrays, mesh_from, positions_array, soup_arrays, soup_from};
 use fairline::highlight::{
     CircularLight, CircularLights, DetectOptions, HighlightError, HighlightLines, HighlightModel,
-    HighlightOptions, LightArray, LightChoice, LineStats, Readability, UpAxis,
+    HighlightOptions, LightArray, LightChoice, Readability, UpAxis,
     circular_highlight_bands, circular_highlight_lines, detect_irregularities,
 };
 use fairline::io::JsonReport as Report;
@@ -179,21 +179,11 @@ fn smooth<'py>(
     tangential: bool,
 ) -> PyResult<PositionsOut<'py>> {
     use fairline::geom::LaplaceWeights;
-    use fairline::smooth::{
-        ImplicitOptions, LaplaceOptions, SchneiderKobbeltOptions, SmoothError, SpringOptions,
-        TaubinOptions, implicit_smooth, laplace_smooth, schneider_kobbelt, spring_smooth,
-        taubin_smooth,
+    use fairline::smooth::{SmoothError, SmoothMethod, SmoothOptions, smooth_warnings};
+    let Some(method) = SmoothMethod::from_name(method) else {
+        let names = SmoothMethod::ALL.map(SmoothMethod::name);
+        return Err(bad_choice("method", method, &names).into());
     };
-    const METHODS: [&str; 5] = [
-        "laplace",
-        "taubin",
-        "implicit",
-        "spring",
-        "schneider-kobbelt",
-    ];
-    if !METHODS.contains(&method) {
-        return Err(bad_choice("method", method, &METHODS).into());
-    }
     let weights = match weights {
         "uniform" => LaplaceWeights::Uniform,
         "edge" => LaplaceWeights::EdgeLength { exponent },
@@ -214,92 +204,35 @@ fn smooth<'py>(
         return Err(Failure::bad("iterations must be at least 1").into());
     }
     let soup = soup_from(&v, &indices, &offsets)?;
-    let method = method.to_string();
     let (p, report) = crate::compute(py, move || -> Res<_> {
         let mesh = mesh_from(&soup)?;
         let fixed = fixed_vertices(fixed.as_deref().unwrap_or(&[]), mesh.vertex_count())?;
-        // Δ_B H = 0 on a closed mesh with nothing fixed has no boundary data
-        let unanchored = method == "schneider-kobbelt" && mesh.is_closed() && fixed.is_empty();
+        let options = SmoothOptions::default()
+            .method(method)
+            .weights(weights)
+            .lambda(lambda_)
+            .mu(mu)
+            .pass_band(pass_band)
+            .time_step(time_step)
+            .epsilon(epsilon)
+            .iterations(iterations)
+            .fixed(fixed)
+            .fix_boundary(fix_boundary)
+            .hierarchical_boundary(hierarchical_boundary)
+            .preserve_volume(preserve_volume)
+            .tangential_only(tangential);
         let mut report = Report::new("smooth");
-        let result = report.time(|| match method.as_str() {
-            "laplace" => {
-                let o = LaplaceOptions::default()
-                    .weights(weights)
-                    .lambda(lambda_.unwrap_or(0.5))
-                    .iterations(iterations.unwrap_or(10))
-                    .fixed(fixed)
-                    .fix_boundary(fix_boundary)
-                    .hierarchical_boundary(hierarchical_boundary)
-                    .preserve_volume(preserve_volume)
-                    .tangential_only(tangential);
-                laplace_smooth(&mesh, &o)
-            }
-            "taubin" => {
-                let o = TaubinOptions::default()
-                    .weights(weights)
-                    .lambda(lambda_)
-                    .mu(mu)
-                    .pass_band(pass_band)
-                    .iterations(iterations.unwrap_or(10))
-                    .fixed(fixed)
-                    .fix_boundary(fix_boundary)
-                    .hierarchical_boundary(hierarchical_boundary)
-                    .preserve_volume(preserve_volume)
-                    .tangential_only(tangential);
-                taubin_smooth(&mesh, &o)
-            }
-            "implicit" => {
-                let o = ImplicitOptions::default()
-                    .time_step(time_step)
-                    .iterations(iterations.unwrap_or(1))
-                    .fixed(fixed)
-                    .fix_boundary(fix_boundary)
-                    .hierarchical_boundary(hierarchical_boundary)
-                    .preserve_volume(preserve_volume)
-                    .tangential_only(tangential);
-                implicit_smooth(&mesh, &o)
-            }
-            "spring" => {
-                let d = SpringOptions::default();
-                let o = SpringOptions::default()
-                    .epsilon(epsilon.unwrap_or(d.epsilon))
-                    .max_iterations(iterations.unwrap_or(d.max_iterations))
-                    .fixed(fixed);
-                spring_smooth(&mesh, &o)
-            }
-            _ => {
-                let d = SchneiderKobbeltOptions::default();
-                let o = SchneiderKobbeltOptions::default()
-                    .epsilon(epsilon.unwrap_or(d.epsilon))
-                    .max_iterations(iterations.unwrap_or(d.max_iterations))
-                    .fixed(fixed);
-                schneider_kobbelt(&mesh, &o)
-            }
-        });
+        let result = report.time(|| fairline::smooth::smooth(&mesh, &options));
         let out = result.map_err(|e| match e {
             SmoothError::Solve(_) => Failure::computation(e.to_string()),
             other => Failure::bad(other.to_string()),
         })?;
         let r = &out.report;
-        report.set("method", &method);
+        report.set("method", method.name());
         report.set("vertices", mesh.vertex_count());
-        if let Ok(serde_json::Value::Object(keys)) = serde_json::to_value(r) {
-            for (key, value) in keys {
-                report.set(&key, value);
-            }
-        }
-        if !r.converged {
-            report.warn(format!(
-                "{method} did not converge in {} iteration(s); try more --iterations or a larger --epsilon",
-                r.iterations
-            ));
-        }
-        if unanchored {
-            report.warn(
-                "schneider-kobbelt on a closed mesh without --fixed vertices: nothing holds the shape, \
-                 and Δ_B H = 0 pulls it toward constant mean curvature (a sphere-like blob), erasing \
-                 features such as ears or legs; fix the vertices that must stay (--fixed) to keep them",
-            );
+        report.set_fields(r);
+        for w in smooth_warnings(&mesh, &options, r) {
+            report.warn(w);
         }
         Ok((
             mesh.original_values(&out.positions).to_vec(),
@@ -369,11 +302,8 @@ fn fair_quad<'py>(
         mesh.set_positions(out.positions)?;
         let r = out.report;
         report.set_fields(&r);
-        if r.structure_energy_after > r.structure_energy_before {
-            report.warn(format!(
-                "the structure-line energy got worse: {:.4e} before, {:.4e} after; try a larger --weight",
-                r.structure_energy_before, r.structure_energy_after
-            ));
+        for w in r.warnings() {
+            report.warn(w);
         }
         Ok((output_positions(&mesh), report.to_json().to_string()))
     })?;
@@ -460,11 +390,8 @@ fn enhance<'py>(
         report.set_fields(r);
         report.set("histogram_before", &r.quality_before.histogram);
         report.set("histogram_after", &r.quality_after.histogram);
-        if r.flipped_triangles > 0 {
-            report.warn(format!(
-                "{} triangle(s) flipped their orientation; try a smaller --lambda or fewer --iterations",
-                r.flipped_triangles
-            ));
+        for w in r.warnings() {
+            report.warn(w);
         }
         Ok((output_positions(&out), report.to_json().to_string()))
     })?;
@@ -483,30 +410,14 @@ fn repair<'py>(
     let soup = soup_from(&v, &indices, &offsets)?;
     let (out, report) = crate::compute(py, move || -> Res<_> {
         let mut report = Report::new("repair");
+        let options = fairline::mesh::RepairOptions::default();
         let repaired = report
-            .time(|| fairline::mesh::repair(&soup))
+            .time(|| fairline::mesh::repair(&soup, &options))
             .map_err(|e| Failure::bad(format!("cannot repair: {e}")))?;
         let r = &repaired.report;
-        match serde_json::to_value(r) {
-            Ok(Value::Object(m)) => {
-                for (k, v) in m {
-                    report.set(&k, v);
-                }
-            }
-            _ => {
-                return Err(Failure::computation(
-                    "the repair report could not be written",
-                ));
-            }
-        }
-        if !r.orientation_conflicts.is_empty() {
-            report.warn(format!(
-                "{} faces could not be oriented consistently (non-orientable surface); left as they are",
-                r.orientation_conflicts.len()
-            ));
-        }
-        if let Some(problem) = &r.remaining_problem {
-            report.warn(format!("the output is still not a manifold: {problem}"));
+        report.set_fields(r);
+        for w in r.warnings() {
+            report.warn(w);
         }
         Ok((repaired.soup, report.to_json().to_string()))
     })?;
@@ -658,24 +569,6 @@ impl LightOptions {
     }
 }
 
-/// The report entry for the drawn (readable) lines, as the CLI's
-/// `highlight_png::stats_json`: pieces, lights, pieces per light, median,
-/// N50 and total length (also relative to the part's width).
-fn drawn_json(mesh: &SurfaceMesh, light: &LightArray, lines: &HighlightLines) -> Value {
-    let st = LineStats::of(lines);
-    let width = fairline::highlight::readable::part_width(mesh.positions(), light.across());
-    json!({
-        "pieces": st.pieces,
-        "lights": st.lights,
-        "pieces_per_light": st.pieces_per_light,
-        "median_length": st.median_length,
-        "median_length_over_width": st.median_length / width,
-        "n50_length": st.n50_length,
-        "n50_length_over_width": st.n50_length / width,
-        "total_length": st.total_length,
-    })
-}
-
 /// Library errors about lights, options or the mesh are bad input.
 pub(crate) fn highlight_error(e: HighlightError) -> Failure {
     Failure::bad(e.to_string())
@@ -806,7 +699,7 @@ fn highlight_lines(
                 })
                 .map_err(highlight_error)?;
             report.set("light", json!({"kind": "linear", "array": array}));
-            report.set("drawn", drawn_json(&mesh, &array, &shown));
+            report.set("drawn", fairline::highlight::DrawnLineStats::of(&mesh, &array, &shown));
             (lines, bands, None)
         };
         let document = fairline::io::highlight_lines_json(&lines, bands.as_ref(), radii.as_deref());
@@ -826,10 +719,6 @@ fn highlight_lines(
     })?;
     Ok(out)
 }
-
-/// Rings of support faces around the suggested regions (the CLI's
-/// `detect::SUPPORT_RINGS`).
-const SUPPORT_RINGS: usize = 2;
 
 /// `fairline detect` (crates/fairline-cli/src/detect.rs): the region's
 /// faces (as the CLI's `-o` JSON `faces`) and the report.
@@ -893,39 +782,13 @@ fn detect<'py>(
         if let Some(n) = max_regions {
             det.regions.truncate(n);
         }
-        let to_input = |faces: &[FaceId]| -> Vec<u32> {
-            let mut out: Vec<u32> = match &source {
-                Some(src) => faces.iter().map(|f| src[f.idx()].0).collect(),
-                None => faces.iter().map(|f| f.0).collect(),
-            };
-            out.sort_unstable();
-            out.dedup();
-            out
-        };
-        let all = to_input(&fairline::fair::grow_region(
-            &mesh,
-            &det.all_faces(),
-            SUPPORT_RINGS,
-        ));
-        let regions: Vec<_> = det
-            .regions
-            .iter()
-            .map(|r| {
-                json!({
-                    "score": r.score,
-                    "faces": to_input(&r.faces).len(),
-                    "area": r.area,
-                    "center": r.center.to_array(),
-                    "flagged_sites": r.flagged_sites,
-                    "lines": r.lines,
-                })
-            })
-            .collect();
+        let all = fairline::fair::suggested_region(&mesh, &det, source.as_deref());
+        let regions = fairline::fair::detected_region_entries(&det, source.as_deref());
         report.set("vertices", mesh.vertex_count());
         report.set("lines", lines.lines.len());
         report.set("spacing", array.spacing());
         report.set("drawn_spacing", shown_light.spacing());
-        report.set("drawn", drawn_json(&mesh, &shown_light, &shown));
+        report.set("drawn", fairline::highlight::DrawnLineStats::of(&mesh, &shown_light, &shown));
         // the library's numbers of the measure, under its own names (as
         // the CLI writes them)
         if let Ok(serde_json::Value::Object(numbers)) = serde_json::to_value(&det) {
@@ -943,10 +806,6 @@ fn detect<'py>(
     })?;
     Ok((PyArray1::from_vec(py, faces), report))
 }
-
-/// Rings of faces `auto` adds around a detected region (the CLI's
-/// `fair::AUTO_RINGS`).
-const AUTO_RINGS: usize = 4;
 
 /// `fairline fair` (crates/fairline-cli/src/fair.rs): new positions and
 /// the report. `region` is region JSON text ({"faces"}, {"vertices"} or
@@ -978,7 +837,10 @@ fn fair<'py>(
     diff_weight: Option<f64>,
     laplacian_weight: Option<f64>,
 ) -> PyResult<PositionsOut<'py>> {
-    use fairline::fair::{FairError, FairMethod, FairOptions, fair_highlight_lines, grow_region};
+    use fairline::fair::{
+        FairError, FairMethod, FairOptions, FairReport, fair_highlight_lines, grow_region,
+        regions_report, regions_warnings,
+    };
     use fairline::io::RegionSpec;
     let fair_method = match method {
         "highlight" => FairMethod::Highlight,
@@ -1033,11 +895,8 @@ fn fair<'py>(
             .highlight(light.options());
         let to_error = |e: FairError| -> Failure {
             let f = match e {
-                FairError::NoMovableVertex(msg) => Failure::bad(format!(
-                    "{msg}; a vertex can move only when every face around it and around its neighbours is in the region: enlarge the region or pass --grow 2"
-                )),
                 FairError::Solve(_) => Failure::computation(e.to_string()),
-                other => Failure::bad(other.to_string()),
+                other => Failure::bad(other.user_message()),
             };
             if region.is_some() {
                 Failure {
@@ -1057,18 +916,11 @@ fn fair<'py>(
                     .map_err(|e| Failure::bad(format!("region: {e}")))?,
             ]
         } else {
-            let det = report
-                .time(|| -> Result<_, HighlightError> {
-                    let model = HighlightModel::new(&mesh, array, light.options())?;
-                    let lines = model.lines(&mesh);
-                    detect_irregularities(&mesh, &array, &lines, &DetectOptions::default())
-                })
+            let (det, grown) = report
+                .time(|| fairline::fair::detect_regions_to_fair(&mesh, array, light.options()))
                 .map_err(highlight_error)?;
             report.set("detected_regions", det.regions.len());
-            det.regions
-                .iter()
-                .map(|r| grow_region(&mesh, &r.faces, AUTO_RINGS))
-                .collect()
+            grown
         };
         let regions: Vec<Vec<FaceId>> = if grow > 0 {
             regions
@@ -1078,27 +930,19 @@ fn fair<'py>(
         } else {
             regions
         };
-        let region_faces: Vec<FaceId> = {
-            let mut all: Vec<FaceId> = regions.iter().flatten().copied().collect();
-            all.sort_unstable();
-            all.dedup();
-            all
-        };
+        let region_faces = fairline::fair::regions_union(&regions);
         let detected_before =
             fairline::highlight::detect_region(&mesh, &array, light.options(), &region_faces)
                 .map_err(highlight_error)?;
         let mut current: SurfaceMesh = mesh.clone();
-        let mut results: Vec<Value> = Vec::new();
+        let mut results: Vec<FairReport> = Vec::new();
         let mut skipped: Vec<Value> = Vec::new();
         for (k, faces) in regions.iter().enumerate() {
             let region_options = options.clone().region(faces.clone());
             let outcome = report.time(|| fair_highlight_lines(&current, &region_options));
             match outcome {
                 Ok(out) => {
-                    results.push(
-                        serde_json::to_value(&out.report)
-                            .map_err(|e| Failure::computation(e.to_string()))?,
-                    );
+                    results.push(out.report);
                     current
                         .set_positions(out.positions)
                         .map_err(|e| Failure::computation(e.to_string()))?;
@@ -1135,9 +979,8 @@ fn fair<'py>(
         if let Some(w) = as_detect.remaining_defect_warning(score_before, score_after) {
             report.warn(w);
         }
-        if results.is_empty() {
-            report
-                .warn("no region was faired (nothing detected): the output is the input unchanged");
+        for w in regions_warnings(&results, options.max_iterations, (score_before, score_after)) {
+            report.warn(w);
         }
         report.set("method", &method);
         report.set("light", array);
@@ -1152,63 +995,7 @@ fn fair<'py>(
             .zip(mesh.positions())
             .map(|(a, b)| (*a - *b).length())
             .fold(0.0, f64::max);
-        match results.as_slice() {
-            [Value::Object(m)] => {
-                for (key, v) in m {
-                    report.set(key, v.clone());
-                }
-            }
-            _ => {
-                let sum =
-                    |key: &str| -> f64 { results.iter().filter_map(|r| r[key].as_f64()).sum() };
-                let max = |key: &str| -> f64 {
-                    results
-                        .iter()
-                        .filter_map(|r| r[key].as_f64())
-                        .fold(0.0, f64::max)
-                };
-                report.set("iterations", sum("iterations") as u64);
-                report.set(
-                    "converged",
-                    results.iter().all(|r| r["converged"] == json!(true)),
-                );
-                report.set("movable_vertices", sum("movable_vertices") as u64);
-                report.set("willmore_before", sum("willmore_before"));
-                report.set("willmore_after", sum("willmore_after"));
-                report.set(
-                    "highlight_deviation_before",
-                    max("highlight_deviation_before"),
-                );
-                report.set(
-                    "highlight_deviation_after",
-                    max("highlight_deviation_after"),
-                );
-                report.set("max_displacement", total_moved);
-                report.set("per_region", results.clone());
-            }
-        }
-        let converged = results.iter().all(|r| r["converged"] == json!(true));
-        let deviation = |key: &str| {
-            results
-                .iter()
-                .filter_map(|r| r[key].as_f64())
-                .fold(0.0, f64::max)
-        };
-        let (before, after) = (
-            deviation("highlight_deviation_before"),
-            deviation("highlight_deviation_after"),
-        );
-        if !converged {
-            report.warn(format!(
-                "fairing did not converge within --max-iterations {}; try more iterations or a larger region (--grow, --auto)",
-                options.max_iterations
-            ));
-        }
-        if after > before {
-            report.warn(format!(
-                "the highlight-line deviation (distance of the lines inside the region from their own smoothed curves) got worse: {before:.4e} before, {after:.4e} after; the detection score (as `detect` measures it, same lights) went {score_before:.2} -> {score_after:.2}"
-            ));
-        }
+        report.set_fields(regions_report(&results, total_moved));
         Ok((output_positions(&current), report.to_json().to_string()))
     })?;
     Ok((positions_array(py, &out.0), out.1))

@@ -13,6 +13,15 @@ use fairline::{SurfaceMesh, Vec3};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
+/// Refuses a zero `--view` direction (exit 2): a picture needs a direction
+/// to look in.
+pub fn check_view(view: Option<Vec3>) -> Result<()> {
+    if view.is_some_and(|v| v.length() == 0.0) {
+        return Err(bad_input("--view must not be the zero vector"));
+    }
+    Ok(())
+}
+
 /// Parses `X,Y,Z` into a vector.
 pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();

@@ -3,13 +3,11 @@
 
 use crate::args::{LightArgs, parse_size, parse_vec3, to_input_error};
 use crate::common::{Report, write_json};
-use crate::error::bad_input;
 use crate::input::read_triangles;
 use crate::output::spinner;
 use anyhow::Result;
 use fairline::highlight::{DetectOptions, Detection};
-use fairline::mesh::FaceId;
-use serde_json::{Value, json};
+use serde_json::json;
 use std::path::PathBuf;
 
 /// Finds surface defects that disturb the highlight lines — bumps, dents,
@@ -85,9 +83,7 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--png", args.png.as_deref())
         .output_opt("--report", args.report.as_deref())
         .check()?;
-    if args.view.is_some_and(|v| v.length() == 0.0) {
-        return Err(bad_input("--view must not be the zero vector"));
-    }
+    crate::args::check_view(args.view)?;
     let (mesh, source) = read_triangles(&args.mesh)?;
     let light = args.light.light_array(&mesh)?;
     let opts = DetectOptions::default()
@@ -125,14 +121,10 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(n) = args.max_regions {
         det.regions.truncate(n);
     }
-    let to_input = |faces: &[FaceId]| input_faces(source.as_deref(), faces);
-    // the written region holds two more rings of faces: the support that
-    // fairing needs to move every vertex of the suggested region
-    let all = to_input(&fairline::fair::grow_region(
-        &mesh,
-        &det.all_faces(),
-        SUPPORT_RINGS,
-    ));
+    // faces of the input mesh (triangulated polygons map back to their
+    // polygon); the written region holds two more rings of faces: the
+    // support that fairing needs to move every vertex of the suggested region
+    let all = fairline::fair::suggested_region(&mesh, &det, source.as_deref());
     write_json(&args.output, &json!({"faces": all}))?;
     report.set("vertices", mesh.vertex_count());
     report.set("lines", lines.lines.len());
@@ -140,7 +132,7 @@ pub fn run(args: Args) -> Result<()> {
     report.set("drawn_spacing", shown_light.spacing());
     report.set(
         "drawn",
-        crate::highlight_png::stats_json(&mesh, &shown_light, &shown),
+        fairline::highlight::DrawnLineStats::of(&mesh, &shown_light, &shown),
     );
     // the library's numbers of the measure, under its own names
     if let Ok(serde_json::Value::Object(numbers)) = serde_json::to_value(&det) {
@@ -150,7 +142,10 @@ pub fn run(args: Args) -> Result<()> {
     }
     report.set("light", light);
     report.set("region_faces", all.len());
-    report.set("regions", regions_json(&det, &to_input));
+    report.set(
+        "regions",
+        fairline::fair::detected_region_entries(&det, source.as_deref()),
+    );
     if let Some(png) = &args.png {
         write_picture(&args, png, &mesh, &light, &shown_light, &shown, &det)?;
     }
@@ -203,36 +198,6 @@ fn print_measure_notes(args: &Args, det: &Detection) {
     }
 }
 
-/// Faces of the input mesh, ascending (triangulated polygons map back to
-/// their polygon through `source`).
-fn input_faces(source: Option<&[FaceId]>, faces: &[FaceId]) -> Vec<u32> {
-    let mut out: Vec<u32> = match source {
-        Some(src) => faces.iter().map(|f| src[f.idx()].0).collect(),
-        None => faces.iter().map(|f| f.0).collect(),
-    };
-    out.sort_unstable();
-    out.dedup();
-    out
-}
-
-/// The report's list of regions: score, faces (of the input), area,
-/// centre, flagged sites and the lines crossing each.
-fn regions_json(det: &Detection, to_input: &impl Fn(&[FaceId]) -> Vec<u32>) -> Vec<Value> {
-    det.regions
-        .iter()
-        .map(|r| {
-            json!({
-                "score": r.score,
-                "faces": to_input(&r.faces).len(),
-                "area": r.area,
-                "center": r.center.to_array(),
-                "flagged_sites": r.flagged_sites,
-                "lines": r.lines,
-            })
-        })
-        .collect()
-}
-
 /// The --png picture: the readable lines, the flagged stretches and the
 /// regions, titled with the number of regions and the best score.
 fn write_picture(
@@ -277,7 +242,3 @@ fn write_picture(
     )
 }
 
-/// Rings of faces added around the suggested regions in the written region
-/// JSON: a vertex moves under fairing only when all faces around it and
-/// around its neighbours are in the region (Yong et al. §3.1).
-const SUPPORT_RINGS: usize = 2;

@@ -175,11 +175,8 @@ pub fn run(args: Args) -> Result<()> {
     report.set_fields(r);
     report.set("histogram_before", &r.quality_before.histogram);
     report.set("histogram_after", &r.quality_after.histogram);
-    if r.flipped_triangles > 0 {
-        report.warn(format!(
-            "{} triangle(s) flipped their orientation; try a smaller --lambda or fewer --iterations",
-            r.flipped_triangles
-        ));
+    for w in r.warnings() {
+        report.warn(w);
     }
     report.write(args.report.as_deref())?;
     job.finish(format_args!(

@@ -8,9 +8,11 @@ use crate::error::bad_input;
 use crate::output::progress;
 use anyhow::Result;
 use fairline::fair::{
-    FairError, FairMethod, FairOptions, FairReport, fair_highlight_lines, grow_region,
+    AUTO_RINGS, FairError, FairMethod, FairOptions, FairReport, detect_regions_to_fair,
+    fair_highlight_lines, grow_region, regions_deviation, regions_report, regions_union,
+    regions_warnings,
 };
-use fairline::highlight::{DetectOptions, HighlightModel, detect_irregularities, detect_region};
+use fairline::highlight::detect_region;
 use fairline::mesh::FaceId;
 use fairline::picture::{
     FAIRING_DESIRED_COLOR, FAIRING_LINE_COLOR, FAIRING_OUTLINE_COLOR, fairing_picture,
@@ -124,13 +126,11 @@ fn name_region(e: anyhow::Error, region: Option<&std::path::Path>) -> anyhow::Er
 /// Library errors that are the user's input (region, options) exit with 2.
 fn to_error(e: FairError) -> anyhow::Error {
     match e {
-        FairError::NoMovableVertex(msg) => bad_input(format!(
-            "{msg}; a vertex can move only when every face around it and around its neighbours is in the region: enlarge the region or pass --grow 2"
-        )),
-        FairError::Region(_)
+        FairError::NoMovableVertex(_)
+        | FairError::Region(_)
         | FairError::InvalidOption(_)
         | FairError::Mesh(_)
-        | FairError::Highlight(_) => bad_input(e.to_string()),
+        | FairError::Highlight(_) => bad_input(e.user_message()),
         FairError::Solve(_) | FairError::Cancelled(_) => anyhow::Error::new(e),
     }
 }
@@ -164,12 +164,7 @@ pub fn run(args: Args) -> Result<()> {
     let regions = regions_to_fair(&args, &mesh, light, &mut report)?;
     let regions = grow_regions(&mesh, regions, args.grow);
     // the detection score inside the regions, before (same lights as after)
-    let region_faces: Vec<FaceId> = {
-        let mut all: Vec<FaceId> = regions.iter().flatten().copied().collect();
-        all.sort_unstable();
-        all.dedup();
-        all
-    };
+    let region_faces = regions_union(&regions);
     let before = detect_region(&mesh, &light, args.light.options(), &region_faces)
         .map_err(to_input_error)?;
     let faired = fair_each_region(&args, &mesh, &regions, &options, &mut report)?;
@@ -196,15 +191,16 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(w) = as_detect.remaining_defect_warning(score_before, score_after) {
         report.warn(format!("{}: {w}", args.mesh.display()));
     }
-    if let (Some(png), Some((r, faired_mesh))) = (&args.png, &faired.first) {
+    if let (Some(png), Some(r), Some(faired_mesh)) =
+        (&args.png, faired.results.first(), &faired.first)
+    {
         write_picture(png, &mesh, fairing_light, r, faired_mesh)?;
     }
-    if faired.first.is_none() {
-        report.warn("no region was faired (nothing detected): the output is the input unchanged");
-        if let Some(png) = &args.png {
-            crate::output::say("note: no region was faired, so no picture was written");
-            job.skip(png);
-        }
+    if faired.first.is_none()
+        && let Some(png) = &args.png
+    {
+        crate::output::say("note: no region was faired, so no picture was written");
+        job.skip(png);
     }
     report.set("method", crate::output::option_value(&args.method));
     report.set("light", light);
@@ -219,29 +215,12 @@ pub fn run(args: Args) -> Result<()> {
         .zip(mesh.positions())
         .map(|(a, b)| (*a - *b).length())
         .fold(0.0, f64::max);
-    set_fairing_results(&mut report, &faired.results, total_moved);
     let results = &faired.results;
-    let converged = results.iter().all(|r| r["converged"] == json!(true));
-    let deviation = |key: &str| {
-        results
-            .iter()
-            .filter_map(|r| r[key].as_f64())
-            .fold(0.0, f64::max)
-    };
-    let (before, after) = (
-        deviation("highlight_deviation_before"),
-        deviation("highlight_deviation_after"),
-    );
-    if !converged {
-        report.warn(format!(
-            "fairing did not converge within --max-iterations {}; try more iterations or a larger region (--grow, --auto)",
-            args.max_iterations
-        ));
-    }
-    if after > before {
-        report.warn(format!(
-            "the highlight-line deviation (distance of the lines inside the region from their own smoothed curves) got worse: {before:.4e} before, {after:.4e} after; the detection score (as `detect` measures it, same lights) went {score_before:.2} -> {score_after:.2}"
-        ));
+    report.set_fields(regions_report(results, total_moved));
+    let converged = results.iter().all(|r| r.converged);
+    let (before, after) = regions_deviation(results);
+    for w in regions_warnings(results, args.max_iterations, (score_before, score_after)) {
+        report.warn(w);
     }
     report.write(args.report.as_deref())?;
     job.finish(format_args!(
@@ -286,12 +265,8 @@ fn regions_to_fair(
                 .map_err(|e| bad_input(format!("{}: {e}", path.display())))?,
         ]);
     }
-    let det = report
-        .time(|| -> Result<_, fairline::highlight::HighlightError> {
-            let model = HighlightModel::new(mesh, light, args.light.options())?;
-            let lines = model.lines(mesh);
-            detect_irregularities(mesh, &light, &lines, &DetectOptions::default())
-        })
+    let (det, grown) = report
+        .time(|| detect_regions_to_fair(mesh, light, args.light.options()))
         .map_err(to_input_error)?;
     report.set("detected_regions", det.regions.len());
     if det.regions.is_empty() {
@@ -300,22 +275,16 @@ fn regions_to_fair(
             args.mesh.display()
         );
     }
-    Ok(det
-        .regions
-        .iter()
-        .enumerate()
-        .map(|(k, r)| {
-            let grown = grow_region(mesh, &r.faces, AUTO_RINGS);
-            eprintln!(
-                "note: --auto: region {} (score {:.1}) grown by {AUTO_RINGS} rings of faces: {} -> {} faces",
-                k + 1,
-                r.score,
-                r.faces.len(),
-                grown.len()
-            );
-            grown
-        })
-        .collect())
+    for (k, (r, g)) in det.regions.iter().zip(&grown).enumerate() {
+        eprintln!(
+            "note: --auto: region {} (score {:.1}) grown by {AUTO_RINGS} rings of faces: {} -> {} faces",
+            k + 1,
+            r.score,
+            r.faces.len(),
+            g.len()
+        );
+    }
+    Ok(grown)
 }
 
 /// Each region grown by `rings` rings of faces (--grow; said on the
@@ -343,10 +312,10 @@ fn grow_regions(mesh: &SurfaceMesh, regions: Vec<Vec<FaceId>>, rings: usize) -> 
 struct Faired {
     /// The mesh after the last region.
     mesh: SurfaceMesh,
-    /// Each faired region's report, as JSON.
-    results: Vec<Value>,
-    /// The first region's report and faired mesh, for the picture.
-    first: Option<(FairReport, SurfaceMesh)>,
+    /// Each faired region's report.
+    results: Vec<FairReport>,
+    /// The first region's faired mesh, for the picture.
+    first: Option<SurfaceMesh>,
     /// Regions --auto skipped (no movable vertex), with the reason.
     skipped: Vec<Value>,
 }
@@ -375,10 +344,10 @@ fn fair_each_region(
         let outcome = report.time(|| fair_highlight_lines(&faired.mesh, &region_options));
         match outcome {
             Ok(out) => {
-                faired.results.push(serde_json::to_value(&out.report)?);
+                faired.results.push(out.report);
                 faired.mesh.set_positions(out.positions)?;
                 if faired.first.is_none() {
-                    faired.first = Some((out.report, faired.mesh.clone()));
+                    faired.first = Some(faired.mesh.clone());
                 }
             }
             Err(FairError::NoMovableVertex(msg)) if args.auto => {
@@ -423,48 +392,3 @@ fn write_picture(
     img.write_png(png)?;
     Ok(())
 }
-
-/// The fairing keys of the report: one region's report as it is, or for
-/// several regions their sums, the worst deviations and each region's
-/// report under "per_region".
-fn set_fairing_results(report: &mut Report, results: &[Value], total_moved: f64) {
-    match results {
-        [one] => {
-            if let Value::Object(m) = one {
-                for (key, v) in m {
-                    report.set(key, v.clone());
-                }
-            }
-        }
-        _ => {
-            let sum = |key: &str| -> f64 { results.iter().filter_map(|r| r[key].as_f64()).sum() };
-            let max = |key: &str| -> f64 {
-                results
-                    .iter()
-                    .filter_map(|r| r[key].as_f64())
-                    .fold(0.0, f64::max)
-            };
-            report.set("iterations", sum("iterations") as u64);
-            report.set(
-                "converged",
-                results.iter().all(|r| r["converged"] == json!(true)),
-            );
-            report.set("movable_vertices", sum("movable_vertices") as u64);
-            report.set("willmore_before", sum("willmore_before"));
-            report.set("willmore_after", sum("willmore_after"));
-            report.set(
-                "highlight_deviation_before",
-                max("highlight_deviation_before"),
-            );
-            report.set(
-                "highlight_deviation_after",
-                max("highlight_deviation_after"),
-            );
-            report.set("max_displacement", total_moved);
-            report.set("per_region", results.to_vec());
-        }
-    }
-}
-
-/// Rings of faces `--auto` adds around a detected region.
-const AUTO_RINGS: usize = 4;

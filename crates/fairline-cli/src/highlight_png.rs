@@ -51,28 +51,6 @@ pub fn camera(z: Vec3, across: Vec3) -> (Vec3, Vec3) {
     }
 }
 
-/// Report entry for the drawn lines: pieces, lights, pieces per light,
-/// median and total length (also relative to the part's width across the
-/// lights).
-pub fn stats_json(
-    mesh: &SurfaceMesh,
-    light: &LightArray,
-    lines: &HighlightLines,
-) -> serde_json::Value {
-    let st = LineStats::of(lines);
-    let width = fairline::highlight::readable::part_width(mesh.positions(), light.across());
-    serde_json::json!({
-        "pieces": st.pieces,
-        "lights": st.lights,
-        "pieces_per_light": st.pieces_per_light,
-        "median_length": st.median_length,
-        "median_length_over_width": st.median_length / width,
-        "n50_length": st.n50_length,
-        "n50_length_over_width": st.n50_length / width,
-        "total_length": st.total_length,
-    })
-}
-
 /// Polyline layers for highlight lines (dark ink, 1.6 px) and irregular
 /// stretches drawn over them (warning colour, 3.5 px).
 pub fn line_layers(lines: &HighlightLines, flagged: &[Vec<Vec3>]) -> Vec<PolylineLayer> {

@@ -4,11 +4,14 @@ use crate::args::{LightArgs, parse_size, parse_vec3, to_input_error};
 use crate::common::Report;
 use crate::error::bad_input;
 use anyhow::{Context, Result};
+use fairline::SurfaceMesh;
 use fairline::Vec3;
 use fairline::geom::{CurvatureMethod, principal_curvatures};
-use fairline::highlight::{DetectOptions, HighlightModel, Readability, detect_irregularities};
+use fairline::highlight::{
+    DetectOptions, HighlightModel, LightArray, Readability, detect_irregularities,
+};
 use fairline::picture::{Picture, ScalarField, mesh_picture};
-use fairline::render::{Colormap, RenderOptions};
+use fairline::render::{Colormap, PolylineLayer, RegionLabels, RenderOptions};
 use std::path::PathBuf;
 
 /// Tessellation samples along the diagonal of a multi-patch part
@@ -76,10 +79,8 @@ pub struct Args {
 /// Render options with the command-line view and size.
 pub fn options(view: Option<Vec3>, size: (u32, u32)) -> Result<RenderOptions> {
     let mut opts = RenderOptions::with_size(size.0, size.1);
+    crate::args::check_view(view)?;
     if let Some(v) = view {
-        if v.length() == 0.0 {
-            return Err(bad_input("--view must not be the zero vector"));
-        }
         opts.view_dir = v;
     }
     Ok(opts)
@@ -93,42 +94,8 @@ pub fn run(args: Args) -> Result<()> {
         .output("--png", &args.png)
         .output_opt("--report", args.report.as_deref())
         .check()?;
-    let l = &args.light;
-    if !args.highlight
-        && (l.direction.is_some()
-            || l.plane_normal.is_some()
-            || l.plane_point.is_some()
-            || l.spacing.is_some()
-            || l.lights.is_some()
-            || l.min_normal_cos != fairline::highlight::HighlightOptions::default().min_normal_cos)
-    {
-        return Err(bad_input(
-            "light options (--direction, --plane-normal, --plane-point, --spacing, --lights, --min-normal-cos) need --highlight",
-        ));
-    }
-    // a part of several patches: each patch's index at its visible centre
-    let mut patch_labels: Option<fairline::render::RegionLabels> = None;
-    let mesh = if crate::surface::is_surface_path(&args.input) {
-        match args.surface {
-            Some(_) => crate::surface::load_tessellated(&args.input, args.surface, 64)?,
-            None => {
-                let surfaces = crate::surface::load_surfaces(&args.input)?;
-                if surfaces.len() == 1 {
-                    crate::surface::tessellated_part(&surfaces, 64)?
-                } else {
-                    let (mesh, patch) =
-                        crate::surface::tessellated_part_with_patches(&surfaces, PART_SAMPLES)?;
-                    patch_labels = Some(fairline::render::RegionLabels {
-                        triangle_region: patch,
-                        texts: (0..surfaces.len()).map(|k| k.to_string()).collect(),
-                    });
-                    mesh
-                }
-            }
-        }
-    } else {
-        fairline::io::read_mesh(&args.input)?
-    };
+    check_light_options_need_highlight(&args)?;
+    let (mesh, patch_labels) = load_mesh(&args)?;
     let mut opts = options(args.view, args.size)?;
     let tri;
     let tri_mesh = if mesh.is_triangle_mesh() {
@@ -146,7 +113,6 @@ pub fn run(args: Args) -> Result<()> {
         (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
     }
     let light = args.highlight.then_some(light);
-    let mut key = Vec::new();
     let mut report = Report::new("render");
     let mut summary = None;
     let bar = crate::output::spinner("rendering");
@@ -162,58 +128,16 @@ pub fn run(args: Args) -> Result<()> {
             ),
             ..Default::default()
         };
+        let mut key = Vec::new();
         if let Some(light) = light {
-            let shown_light = args.light.readable(tri_mesh, light)?;
-            let model = HighlightModel::new(tri_mesh, shown_light, args.light.options())
-                .map_err(to_input_error)?;
-            let all = model.lines(tri_mesh);
-            let lines = model.readable_lines(
-                tri_mesh,
-                &all,
-                &Readability::for_part(tri_mesh, &shown_light),
-            );
-            let det_opts = DetectOptions::default().threshold(args.threshold);
-            let det = detect_irregularities(tri_mesh, &light, &lines, &det_opts)
-                .map_err(to_input_error)?;
-            let stretches: Vec<Vec<Vec3>> = det
-                .lines
-                .iter()
-                .flat_map(|l| l.stretches.iter().cloned())
-                .collect();
-            picture.polylines = crate::highlight_png::line_layers(&lines, &stretches);
-            key = crate::highlight_png::key_entries(&crate::highlight_png::Overlay {
-                lines: &lines,
-                bands: None,
-                flagged: &stretches,
-                region: None,
-                view: (opts.view_dir, opts.up),
-                title: String::new(),
-                spacing: Some(shown_light.spacing()),
-            });
-            summary = Some(serde_json::json!({
-                "light": shown_light,
-                "detect_light": light,
-                "lines": all.lines.len(),
-                "drawn": crate::highlight_png::stats_json(tri_mesh, &shown_light, &lines),
-                "nodes": lines.node_count(),
-                "irregular_stretches": stretches.len(),
-                "regions": det.regions.len(),
-            }));
+            let drawn = highlight_overlay(&args, tri_mesh, light, &opts)?;
+            picture.polylines = drawn.polylines;
+            key = drawn.key;
+            summary = Some(drawn.summary);
         }
         if let Some(s) = args.scalar {
-            let c = principal_curvatures(tri_mesh, CurvatureMethod::Rusinkiewicz);
-            values = match s {
-                Scalar::K1 => c.k1.clone(),
-                Scalar::K2 => c.k2.clone(),
-                Scalar::Mean => c.mean(),
-                Scalar::Gauss => c.gauss(),
-            };
-            let name = match s {
-                Scalar::K1 => "k1",
-                Scalar::K2 => "k2",
-                Scalar::Mean => "mean curvature",
-                Scalar::Gauss => "Gaussian curvature",
-            };
+            let name;
+            (values, name) = curvature_field(tri_mesh, s);
             picture.scalar = Some(ScalarField {
                 name: name.into(),
                 values: &values,
@@ -255,4 +179,124 @@ pub fn run(args: Args) -> Result<()> {
     report.write(args.report.as_deref())?;
     job.finish(what);
     Ok(())
+}
+
+/// Light options mean nothing without `--highlight`: refused (exit 2).
+fn check_light_options_need_highlight(args: &Args) -> Result<()> {
+    let l = &args.light;
+    if !args.highlight
+        && (l.direction.is_some()
+            || l.plane_normal.is_some()
+            || l.plane_point.is_some()
+            || l.spacing.is_some()
+            || l.lights.is_some()
+            || l.min_normal_cos != fairline::highlight::HighlightOptions::default().min_normal_cos)
+    {
+        return Err(bad_input(
+            "light options (--direction, --plane-normal, --plane-point, --spacing, --lights, --min-normal-cos) need --highlight",
+        ));
+    }
+    Ok(())
+}
+
+/// The mesh to draw: a mesh file as read, or a surface file tessellated
+/// (one surface, or `--surface K`: 64 × 64 samples; a part of several
+/// patches: [`PART_SAMPLES`] along its diagonal, with each patch's index to
+/// label at its visible centre).
+fn load_mesh(args: &Args) -> Result<(SurfaceMesh, Option<RegionLabels>)> {
+    if !crate::surface::is_surface_path(&args.input) {
+        return Ok((fairline::io::read_mesh(&args.input)?, None));
+    }
+    if args.surface.is_some() {
+        let mesh = crate::surface::load_tessellated(&args.input, args.surface, 64)?;
+        return Ok((mesh, None));
+    }
+    let surfaces = crate::surface::load_surfaces(&args.input)?;
+    if surfaces.len() == 1 {
+        return Ok((crate::surface::tessellated_part(&surfaces, 64)?, None));
+    }
+    let (mesh, patch) = crate::surface::tessellated_part_with_patches(&surfaces, PART_SAMPLES)?;
+    let labels = RegionLabels {
+        triangle_region: patch,
+        texts: (0..surfaces.len()).map(|k| k.to_string()).collect(),
+    };
+    Ok((mesh, Some(labels)))
+}
+
+/// What `--highlight` adds to the picture: the readable lines with the
+/// irregular stretches `detect` finds drawn over them, the key's entries,
+/// and the report's `highlight` summary.
+struct HighlightOverlay {
+    polylines: Vec<PolylineLayer>,
+    key: Vec<([f32; 3], String)>,
+    summary: serde_json::Value,
+}
+
+/// The readable highlight lines of `light` on `tri_mesh` (triangles) and
+/// the stretches detection flags on them (`--threshold`), seen from the
+/// camera of `opts`.
+fn highlight_overlay(
+    args: &Args,
+    tri_mesh: &SurfaceMesh,
+    light: LightArray,
+    opts: &RenderOptions,
+) -> Result<HighlightOverlay> {
+    let shown_light = args.light.readable(tri_mesh, light)?;
+    let model =
+        HighlightModel::new(tri_mesh, shown_light, args.light.options()).map_err(to_input_error)?;
+    let all = model.lines(tri_mesh);
+    let lines = model.readable_lines(
+        tri_mesh,
+        &all,
+        &Readability::for_part(tri_mesh, &shown_light),
+    );
+    let det_opts = DetectOptions::default().threshold(args.threshold);
+    let det = detect_irregularities(tri_mesh, &light, &lines, &det_opts).map_err(to_input_error)?;
+    let stretches: Vec<Vec<Vec3>> = det
+        .lines
+        .iter()
+        .flat_map(|l| l.stretches.iter().cloned())
+        .collect();
+    let key = crate::highlight_png::key_entries(&crate::highlight_png::Overlay {
+        lines: &lines,
+        bands: None,
+        flagged: &stretches,
+        region: None,
+        view: (opts.view_dir, opts.up),
+        title: String::new(),
+        spacing: Some(shown_light.spacing()),
+    });
+    let summary = serde_json::json!({
+        "light": shown_light,
+        "detect_light": light,
+        "lines": all.lines.len(),
+        "drawn": fairline::highlight::DrawnLineStats::of(tri_mesh, &shown_light, &lines),
+        "nodes": lines.node_count(),
+        "irregular_stretches": stretches.len(),
+        "regions": det.regions.len(),
+    });
+    Ok(HighlightOverlay {
+        polylines: crate::highlight_png::line_layers(&lines, &stretches),
+        key,
+        summary,
+    })
+}
+
+/// The `--scalar` curvature field of `tri_mesh` (Rusinkiewicz estimate),
+/// one value per vertex, and its name for the legend.
+fn curvature_field(tri_mesh: &SurfaceMesh, s: Scalar) -> (Vec<f64>, &'static str) {
+    let c = principal_curvatures(tri_mesh, CurvatureMethod::Rusinkiewicz);
+    let values = match s {
+        Scalar::K1 => c.k1.clone(),
+        Scalar::K2 => c.k2.clone(),
+        Scalar::Mean => c.mean(),
+        Scalar::Gauss => c.gauss(),
+    };
+    let name = match s {
+        Scalar::K1 => "k1",
+        Scalar::K2 => "k2",
+        Scalar::Mean => "mean curvature",
+        Scalar::Gauss => "Gaussian curvature",
+    };
+    (values, name)
 }

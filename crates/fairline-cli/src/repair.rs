@@ -37,15 +37,11 @@ pub fn run(args: Args) -> Result<()> {
     let soup = fairline::io::read_soup(&args.input)?;
     let mut report = Report::new("repair");
     let repaired = report
-        .time(|| fairline::mesh::repair(&soup))
+        .time(|| fairline::mesh::repair(&soup, &fairline::mesh::RepairOptions::default()))
         .with_context(|| format!("{}: cannot repair", args.input.display()))?;
     fairline::io::write_soup(&args.output, &repaired.soup)?;
     let r = &repaired.report;
-    if let serde_json::Value::Object(m) = serde_json::to_value(r)? {
-        for (k, v) in m {
-            report.set(&k, v);
-        }
-    }
+    report.set_fields(r);
     report.write(args.report.as_deref())?;
     let count = |reason| {
         r.removed_faces
@@ -82,16 +78,8 @@ pub fn run(args: Args) -> Result<()> {
             say(&format!("  {n} {what}"));
         }
     }
-    if !r.orientation_conflicts.is_empty() {
-        warn(format_args!(
-            "{} faces could not be oriented consistently (non-orientable surface); left as they are",
-            r.orientation_conflicts.len()
-        ));
-    }
-    if let Some(problem) = &r.remaining_problem {
-        warn(format_args!(
-            "the output is still not a manifold: {problem}"
-        ));
+    for w in r.warnings() {
+        warn(w);
     }
     job.finish(format_args!(
         "{}: {} vertices, {} faces → {} vertices, {} faces{}",

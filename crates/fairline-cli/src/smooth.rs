@@ -10,11 +10,7 @@ use fairline::geom::LaplaceWeights;
 use fairline::mesh::{SurfaceMesh, VertexId};
 use fairline::picture::{Picture, mesh_picture};
 use fairline::render::{RenderOptions, side_by_side};
-use fairline::smooth::{
-    ImplicitOptions, LaplaceOptions, SchneiderKobbeltOptions, SmoothError, SpringOptions,
-    TaubinOptions, implicit_smooth, laplace_smooth, schneider_kobbelt, spring_smooth,
-    taubin_smooth,
-};
+use fairline::smooth::{SmoothError, SmoothMethod, SmoothOptions, smooth, smooth_warnings};
 use std::path::{Path, PathBuf};
 
 /// Smoothing method.
@@ -30,6 +26,18 @@ pub enum Method {
     Spring,
     /// Δ_B H = 0 with G¹ boundary (Schneider and Kobbelt, §3.4); triangles.
     SchneiderKobbelt,
+}
+
+impl From<Method> for SmoothMethod {
+    fn from(m: Method) -> SmoothMethod {
+        match m {
+            Method::Laplace => SmoothMethod::Laplace,
+            Method::Taubin => SmoothMethod::Taubin,
+            Method::Implicit => SmoothMethod::Implicit,
+            Method::Spring => SmoothMethod::Spring,
+            Method::SchneiderKobbelt => SmoothMethod::SchneiderKobbelt,
+        }
+    }
 }
 
 /// Laplacian edge weights.
@@ -185,98 +193,40 @@ pub fn run(args: Args) -> Result<()> {
         },
         Weights::Cotan => LaplaceWeights::Cotangent,
     };
-    // Δ_B H = 0 on a closed mesh with nothing fixed has no boundary data:
-    // its solutions are the surfaces of constant mean curvature
-    let unanchored =
-        matches!(args.method, Method::SchneiderKobbelt) && mesh.is_closed() && fixed.is_empty();
+    let options = SmoothOptions::default()
+        .method(args.method.into())
+        .weights(weights)
+        .lambda(args.lambda)
+        .mu(args.mu)
+        .pass_band(args.pass_band)
+        .time_step(args.time_step)
+        .epsilon(args.epsilon)
+        .iterations(args.iterations)
+        .fixed(fixed)
+        .fix_boundary(args.fix_boundary)
+        .hierarchical_boundary(args.hierarchical_boundary)
+        .preserve_volume(args.preserve_volume)
+        .tangential_only(args.tangential);
     let mut report = Report::new("smooth");
     let bar = spinner("smoothing");
-    let method = args.method;
-    let result = report.time(|| match method {
-        Method::Laplace => {
-            let o = LaplaceOptions::default()
-                .weights(weights)
-                .lambda(args.lambda.unwrap_or(0.5))
-                .iterations(args.iterations.unwrap_or(10))
-                .fixed(fixed)
-                .fix_boundary(args.fix_boundary)
-                .hierarchical_boundary(args.hierarchical_boundary)
-                .preserve_volume(args.preserve_volume)
-                .tangential_only(args.tangential);
-            laplace_smooth(&mesh, &o)
-        }
-        Method::Taubin => {
-            let o = TaubinOptions::default()
-                .weights(weights)
-                .lambda(args.lambda)
-                .mu(args.mu)
-                .pass_band(args.pass_band)
-                .iterations(args.iterations.unwrap_or(10))
-                .fixed(fixed)
-                .fix_boundary(args.fix_boundary)
-                .hierarchical_boundary(args.hierarchical_boundary)
-                .preserve_volume(args.preserve_volume)
-                .tangential_only(args.tangential);
-            taubin_smooth(&mesh, &o)
-        }
-        Method::Implicit => {
-            let o = ImplicitOptions::default()
-                .time_step(args.time_step)
-                .iterations(args.iterations.unwrap_or(1))
-                .fixed(fixed)
-                .fix_boundary(args.fix_boundary)
-                .hierarchical_boundary(args.hierarchical_boundary)
-                .preserve_volume(args.preserve_volume)
-                .tangential_only(args.tangential);
-            implicit_smooth(&mesh, &o)
-        }
-        Method::Spring => {
-            let d = SpringOptions::default();
-            let o = SpringOptions::default()
-                .epsilon(args.epsilon.unwrap_or(d.epsilon))
-                .max_iterations(args.iterations.unwrap_or(d.max_iterations))
-                .fixed(fixed);
-            spring_smooth(&mesh, &o)
-        }
-        Method::SchneiderKobbelt => {
-            let d = SchneiderKobbeltOptions::default();
-            let o = SchneiderKobbeltOptions::default()
-                .epsilon(args.epsilon.unwrap_or(d.epsilon))
-                .max_iterations(args.iterations.unwrap_or(d.max_iterations))
-                .fixed(fixed);
-            schneider_kobbelt(&mesh, &o)
-        }
-    });
+    let result = report.time(|| smooth(&mesh, &options));
     bar.finish_and_clear();
     let out = result.map_err(smooth_error)?;
     let r = &out.report;
-    let name = crate::output::option_value(&args.method);
-    report.set("method", &name);
+    let name = options.method.name();
+    report.set("method", name);
     report.set("vertices", mesh.vertex_count());
-    if let Ok(serde_json::Value::Object(keys)) = serde_json::to_value(r) {
-        for (key, value) in keys {
-            report.set(&key, value);
-        }
-    }
+    report.set_fields(r);
+    let warnings = smooth_warnings(&mesh, &options, r);
     // the input is kept only for the before/after picture
     let input = args.png.is_some().then(|| mesh.clone());
     mesh.set_positions(out.positions)?;
     fairline::io::write_mesh(&args.output, &mesh)?;
     if let (Some(png), Some(input)) = (&args.png, &input) {
-        before_after(input, &mesh, ["input", name.as_str()], false, png)?;
+        before_after(input, &mesh, ["input", name], false, png)?;
     }
-    if !r.converged {
-        report.warn(format!(
-            "{name} did not converge in {} iteration(s); try more --iterations or a larger --epsilon",
-            r.iterations
-        ));
-    }
-    if unanchored {
-        report.warn(
-            "schneider-kobbelt on a closed mesh without --fixed vertices: nothing holds the shape, \
-             and Δ_B H = 0 pulls it toward constant mean curvature (a sphere-like blob), erasing \
-             features such as ears or legs; fix the vertices that must stay (--fixed) to keep them",
-        );
+    for w in warnings {
+        report.warn(w);
     }
     report.write(args.report.as_deref())?;
     job.finish(format_args!(
@@ -399,11 +349,8 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
             png,
         )?;
     }
-    if r.structure_energy_after > r.structure_energy_before {
-        report.warn(format!(
-            "the structure-line energy got worse: {:.4e} before, {:.4e} after; try a larger --weight",
-            r.structure_energy_before, r.structure_energy_after
-        ));
+    for w in r.warnings() {
+        report.warn(w);
     }
     report.write(args.report.as_deref())?;
     job.finish(format_args!(

@@ -42,10 +42,9 @@ fn former_implicit_step(mesh: &fairline::SurfaceMesh) -> Vec<Vec3> {
     }
     let pattern = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
     let order = nested_dissection(pattern.as_ref(), p).expect("ordering");
-    let opts = CholeskyOptions {
-        ordering: CholeskyOrdering::Custom(order),
-        parallel: false,
-    };
+    let opts = CholeskyOptions::default()
+        .ordering(CholeskyOrdering::Custom(order))
+        .parallel(false);
     let mut solver = CholeskySolver::analyse(pattern.as_ref(), &opts).expect("analyse");
     let hw = geom::halfedge_weights(mesh, LaplaceWeights::Cotangent);
     let mass = geom::mixed_vertex_areas(mesh);

@@ -30,6 +30,24 @@ use std::fmt;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+/// Builder setters `pub fn field(mut self, v: T) -> Self`, one per listed
+/// field, for the options structs of the crate (the one shape: a builder
+/// setter per field).
+macro_rules! setters {
+    ($ty:ident { $($field:ident: $t:ty),* $(,)? }) => {
+        impl $ty {
+            $(
+                #[doc = concat!("Sets [`", stringify!($ty), "::", stringify!($field), "`].")]
+                pub fn $field(mut self, v: $t) -> Self {
+                    self.$field = v;
+                    self
+                }
+            )*
+        }
+    };
+}
+pub(crate) use setters;
+
 /// What an algorithm over a mesh returns: the new vertex positions (one per
 /// vertex, in vertex order; the input mesh is untouched) and its report.
 #[derive(Clone, Debug, PartialEq)]

@@ -92,10 +92,16 @@
 //!   the mesh is what is looked at. [`highlight::HighlightModel`] is the
 //!   model behind them, kept by the fairing loop to update incrementally;
 //! - [`mesh::repair`] takes a face list that may be broken ([`Soup`], not a
-//!   mesh: a mesh cannot hold what it repairs) and returns a new face list
-//!   with its `Serialize` report ([`mesh::Repaired`]): vertices may be
-//!   removed or split, so there are no "new positions" of the input's
-//!   vertices. It is one linear pass with no options and no long loop.
+//!   mesh: a mesh cannot hold what it repairs) and [`mesh::RepairOptions`],
+//!   and returns a new face list with its `Serialize` report
+//!   ([`mesh::Repaired`]): vertices may be removed or split, so there are
+//!   no "new positions" of the input's vertices.
+//!
+//! Every report whose run can go wrong in a way the user should hear about
+//! has a `warnings()` method (or, for the smoothing family,
+//! [`smooth::smooth_warnings`]) returning plain sentences: the CLI prints
+//! them as `warning:` lines and every front end lists them in its report,
+//! so the words are written once.
 //!
 //! A front end writes a report with [`io::JsonReport`], the one definition
 //! of the `--report` JSON (no `null`, `"time_s"`, `"warnings"`).
@@ -134,6 +140,10 @@ mod shared_data;
 
 /// A 3-vector of f64 (position, normal, direction).
 pub type Vec3 = glam::DVec3;
+
+/// A 3 × 3 matrix of f64 (per-vertex tensors, small symmetric systems;
+/// [`solve::symmetric_eigen3`]).
+pub type Mat3 = glam::DMat3;
 
 pub use control::{Cancelled, Control, Output, Progress, SurfaceOutput};
 pub use mesh::{EdgeId, FaceId, HalfedgeId, MeshError, Soup, SurfaceMesh, VertexId};

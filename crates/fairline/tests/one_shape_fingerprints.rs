@@ -221,7 +221,114 @@ fn cases() -> Vec<(&'static str, String)> {
                 .tangential_only(true),
         ),
     ));
+    // repair of a dirty soup: every kind of change the repair makes
+    {
+        let soup = dirty_soup();
+        let r = fairline::mesh::repair(&soup, &Default::default()).unwrap();
+        // the fixture holds what its doc says
+        use fairline::mesh::RemovalReason as Why;
+        let rep = &r.report;
+        for why in [
+            Why::Duplicate,
+            Why::ZeroArea,
+            Why::InvalidIndex,
+            Why::TooFewVertices,
+        ] {
+            assert!(rep.removed_faces.iter().any(|f| f.reason == why), "{why:?}");
+        }
+        assert!(!rep.flipped_faces.is_empty() && !rep.collapsed_faces.is_empty());
+        assert!(!rep.split_edges.is_empty() && !rep.split_vertices.is_empty());
+        assert!(!rep.removed_vertices.is_empty() && !rep.orientation_conflicts.is_empty());
+        assert!(!rep.manifold && rep.remaining_problem.is_some());
+        let json = serde_json::to_string(&r.report).unwrap();
+        let h = json
+            .bytes()
+            .fold(Fnv::new().all_v(&r.soup.positions), |h, b| {
+                h.word(u64::from(b))
+            });
+        let h = r.soup.indices.iter().fold(h, |h, &i| h.word(u64::from(i)));
+        let h = r.soup.offsets.iter().fold(h, |h, &o| h.word(u64::from(o)));
+        out.push(("repair", hex(h)));
+    }
     out
+}
+
+/// A dirty face list with every defect [`fairline::mesh::repair`]
+/// repairs or reports: a noisy sphere with two reversed faces, a
+/// duplicate, a fin on an edge (non-manifold edge), a cone touching the
+/// sphere at one vertex (non-manifold vertex), a zero-area face, a face
+/// with an index out of range, a face of two vertices, a face with a
+/// repeated corner, an unreferenced vertex, and a Möbius strip (cannot be
+/// oriented: the output is reported as still not a manifold).
+fn dirty_soup() -> fairline::Soup {
+    let mut sphere = shapes::icosphere(1.0, 2);
+    for (i, p) in sphere.positions_mut().iter_mut().enumerate() {
+        *p *= 1.0 + 0.01 * noise(i + 11);
+    }
+    let soup = sphere.to_soup();
+    let mut positions = soup.positions.clone();
+    let mut faces: Vec<Vec<u32>> = soup.faces().map(<[u32]>::to_vec).collect();
+    faces[5].reverse();
+    faces[17].reverse();
+    let mut dup = faces[3].clone();
+    dup.rotate_left(1);
+    faces.push(dup);
+    // a fin standing on the first edge of face 0
+    let (a, b) = (faces[0][0], faces[0][1]);
+    let tip = positions.len() as u32;
+    positions
+        .push((positions[a as usize] + positions[b as usize]) * 0.5 + Vec3::new(0.0, 0.0, 2.0));
+    faces.push(vec![a, b, tip]);
+    // a cone of 5 faces whose apex is the sphere's vertex 0
+    let apex = 0u32;
+    let base = positions.len() as u32;
+    for k in 0..5 {
+        let t = k as f64 / 5.0 * std::f64::consts::TAU;
+        positions
+            .push(positions[0] * 1.5 + Vec3::new(0.2 * t.cos(), 0.2 * t.sin(), 0.1 * noise(k)));
+    }
+    for k in 0..5 {
+        faces.push(vec![apex, base + k, base + (k + 1) % 5]);
+    }
+    // zero area: a vertex exactly between two others
+    let mid = positions.len() as u32;
+    positions.push(Vec3::new(3.0, 0.0, 0.0));
+    positions.push(Vec3::new(5.0, 0.0, 0.0));
+    positions.push(Vec3::new(4.0, 0.0, 0.0));
+    faces.push(vec![mid, mid + 1, mid + 2]);
+    faces.push(vec![1, 2, 99_999]);
+    faces.push(vec![1, 2]);
+    let (c, d, e) = (faces[8][0], faces[8][1], faces[8][2]);
+    faces.push(vec![c, c, d, e, 2]);
+    positions.push(Vec3::new(9.0, 9.0, 9.0)); // unreferenced
+    // a Möbius strip of 10 quads
+    let n = 10u32;
+    let start = positions.len() as u32;
+    for i in 0..n {
+        let t = std::f64::consts::TAU * i as f64 / n as f64;
+        for s in [-0.3, 0.3] {
+            let w = s * (t / 2.0).cos();
+            positions.push(Vec3::new(
+                4.0 + (1.0 + w) * t.cos(),
+                (1.0 + w) * t.sin(),
+                s * (t / 2.0).sin(),
+            ));
+        }
+    }
+    for i in 0..n {
+        let (c, d) = if i + 1 < n {
+            (2 * i + 2, 2 * i + 3)
+        } else {
+            (1, 0)
+        };
+        faces.push(
+            [2 * i, c, d, 2 * i + 1]
+                .iter()
+                .map(|&v| start + v)
+                .collect(),
+        );
+    }
+    fairline::Soup::from_polygons(positions, &faces)
 }
 
 /// Recorded from the code before the changes (see the module doc).
@@ -240,6 +347,7 @@ const RECORDED: &[(&str, &str)] = &[
         "implicit field fixed boundary tangential",
         "bd5a13c5c0b25839",
     ),
+    ("repair", "0f93fef538ca9717"),
 ];
 
 #[test]
@@ -379,4 +487,20 @@ fn the_entry_points_report_progress_and_can_be_cancelled() {
         fair_polyline_network(&grid, &PolylineNetworkOptions::default().control(c)),
         Err(QuadFairError::Cancelled(_))
     ));
+
+    // repair: one step per stage, the same result watched or not
+    use fairline::mesh::{RepairError, RepairOptions, repair};
+    let soup = dirty_soup();
+    let (c, steps) = stopping_control(usize::MAX);
+    let watched = repair(&soup, &RepairOptions::default().control(c)).unwrap();
+    assert_eq!(steps.load(Ordering::Relaxed), 4);
+    assert_eq!(watched, repair(&soup, &RepairOptions::default()).unwrap());
+    for after in 1..4 {
+        let (c, steps) = stopping_control(after);
+        assert!(matches!(
+            repair(&soup, &RepairOptions::default().control(c)),
+            Err(RepairError::Cancelled(_))
+        ));
+        assert_eq!(steps.load(Ordering::Relaxed), after);
+    }
 }

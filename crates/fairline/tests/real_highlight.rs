@@ -39,7 +39,7 @@ fn load(rel: &str) -> Option<SurfaceMesh> {
         return Some(mesh);
     }
     let soup = fairline::io::read_soup(&path).unwrap();
-    let repaired = fairline::mesh::repair(&soup).unwrap();
+    let repaired = fairline::mesh::repair(&soup, &Default::default()).unwrap();
     Some(SurfaceMesh::from_soup(&repaired.soup).unwrap())
 }
 

@@ -1011,201 +1011,221 @@ fn run_method(
     out: &str,
     control: &Control,
 ) -> Result<Outcome, String> {
-    let o = &req.options;
-    let faces = req.faces.as_ref().map(|f| to_faces(tri, f));
-    let fixed_outside = |m: &SurfaceMesh| -> Vec<VertexId> {
-        match &faces {
+    let job = MeshJob {
+        req,
+        tri,
+        mesh,
+        file,
+        out,
+        control,
+        faces: req.faces.as_ref().map(|f| to_faces(tri, f)),
+        started: Instant::now(),
+    };
+    match req.method.as_str() {
+        "fair" => job.fair(),
+        "smooth" => job.smooth(),
+        "fair-quad" => job.fair_quad(),
+        "enhance" => job.enhance(),
+        other => Err(format!(
+            "unknown method `{other}` (fair, smooth, fair-quad, enhance)"
+        )),
+    }
+}
+
+/// One mesh job of [`run_method`]: the request, the document's meshes
+/// (`tri` triangulated, `mesh` as loaded), the file names the equivalent
+/// command line uses, the job's control, the region's faces (of `tri`) and
+/// when the job started.
+struct MeshJob<'j> {
+    req: &'j RunRequest,
+    tri: &'j SurfaceMesh,
+    mesh: &'j SurfaceMesh,
+    file: &'j str,
+    out: &'j str,
+    control: &'j Control,
+    faces: Option<Vec<FaceId>>,
+    started: Instant,
+}
+
+impl MeshJob<'_> {
+    /// With a region: every vertex outside it is fixed (none without).
+    fn fixed_outside(&self) -> Vec<VertexId> {
+        match &self.faces {
             None => Vec::new(),
             Some(f) => {
-                let inside = inside_vertices(tri, f);
-                let _ = m;
+                let inside = inside_vertices(self.tri, f);
                 (0..inside.len() as u32)
                     .filter(|&v| !inside[v as usize])
                     .map(VertexId)
                     .collect()
             }
         }
-    };
-    let fixed_arg = if faces.is_some() {
-        " --fixed fixed.json"
-    } else {
-        ""
-    };
-    let t = Instant::now();
-    match req.method.as_str() {
-        "fair" => {
-            let faces = faces.as_ref().ok_or("fairing needs a region (faces)")?;
-            let light = req.light.ok_or("fairing needs the light array")?;
-            let method = match o.method.as_deref().unwrap_or("highlight") {
-                "highlight" => FairMethod::Highlight,
-                "diffusion-flow" => FairMethod::DiffusionFlow,
-                m => return Err(format!("unknown fairing method `{m}`")),
-            };
-            let defaults = FairOptions::default();
-            let options = FairOptions::default()
-                .region(faces.clone())
-                .light(light)
-                .method(method)
-                .max_iterations(o.max_iterations.unwrap_or(defaults.max_iterations))
-                .epsilon(o.epsilon.unwrap_or(defaults.epsilon))
-                .control(control.clone());
-            let r = fair_highlight_lines(tri, &options).map_err(|e| e.to_string())?;
-            let mut report = serde_json::to_value(&r.report).map_err(|e| e.to_string())?;
-            report["command"] = json!("fair");
-            report["time_s"] = json!(t.elapsed().as_secs_f64());
-            let m = o.method.as_deref().unwrap_or("highlight");
-            Ok(Outcome {
-                surfaces: None,
-                positions: r.positions,
-                report,
-                command: format!(
-                    "fairline fair {file} --region region.json {} --method {m} --max-iterations {} --epsilon {} -o {out}",
-                    light_args(&light),
-                    options.max_iterations,
-                    options.epsilon
-                ),
-                label: format!("fair ({m})"),
-            })
+    }
+
+    /// The `--fixed` argument of the equivalent command line.
+    fn fixed_arg(&self) -> &'static str {
+        if self.faces.is_some() {
+            " --fixed fixed.json"
+        } else {
+            ""
         }
-        "smooth" => {
-            use fairline::smooth::{
-                ImplicitOptions, LaplaceOptions, SchneiderKobbeltOptions, SpringOptions,
-                TaubinOptions, implicit_smooth, laplace_smooth, schneider_kobbelt, spring_smooth,
-                taubin_smooth,
-            };
-            let fixed = fixed_outside(mesh);
-            let (weights, wname) = match o.weights.as_deref().unwrap_or("cotan") {
-                "uniform" => (LaplaceWeights::Uniform, "uniform"),
-                "cotan" => (LaplaceWeights::Cotangent, "cotan"),
-                w => return Err(format!("unknown weights `{w}` (uniform, cotan)")),
-            };
-            let method = o.method.as_deref().unwrap_or("taubin").to_string();
-            let iterations = o.iterations;
-            let smoothed = match method.as_str() {
-                "laplace" => laplace_smooth(
-                    mesh,
-                    &LaplaceOptions::default()
-                        .weights(weights)
-                        .lambda(o.lambda.unwrap_or(0.5))
-                        .iterations(iterations.unwrap_or(10))
-                        .fixed(fixed)
-                        .control(control.clone()),
-                ),
-                "taubin" => taubin_smooth(
-                    mesh,
-                    &TaubinOptions::default()
-                        .weights(weights)
-                        .iterations(iterations.unwrap_or(10))
-                        .fixed(fixed)
-                        .control(control.clone()),
-                ),
-                "implicit" => implicit_smooth(
-                    mesh,
-                    &ImplicitOptions::default()
-                        .iterations(iterations.unwrap_or(1))
-                        .fixed(fixed)
-                        .control(control.clone()),
-                ),
-                "spring" => {
-                    let d = SpringOptions::default();
-                    let n = iterations.unwrap_or(d.max_iterations);
-                    spring_smooth(
-                        mesh,
-                        &d.max_iterations(n).fixed(fixed).control(control.clone()),
-                    )
-                }
-                "schneider-kobbelt" => {
-                    let d = SchneiderKobbeltOptions::default();
-                    let n = iterations.unwrap_or(d.max_iterations);
-                    schneider_kobbelt(
-                        mesh,
-                        &d.max_iterations(n).fixed(fixed).control(control.clone()),
-                    )
-                }
-                other => return Err(format!("unknown smoothing method `{other}`")),
-            }
-            .map_err(|e| e.to_string())?;
-            let r = &smoothed.report;
-            let mut cmd = format!("fairline smooth {file} --method {method}");
-            if matches!(method.as_str(), "laplace" | "taubin") {
-                cmd.push_str(&format!(" --weights {wname}"));
-            }
-            if let Some(i) = iterations {
-                cmd.push_str(&format!(" --iterations {i}"));
-            }
-            if method == "laplace"
-                && let Some(l) = o.lambda
-            {
-                cmd.push_str(&format!(" --lambda {l}"));
-            }
-            cmd.push_str(&format!("{fixed_arg} -o {out}"));
-            Ok(Outcome {
-                surfaces: None,
-                positions: smoothed.positions,
-                report: json!({
-                    "command": "smooth",
-                    "method": method,
-                    "iterations": r.iterations,
-                    "converged": r.converged,
-                    "volume_before": r.volume_before,
-                    "volume_after": r.volume_after,
-                    "max_displacement": r.max_displacement,
-                    "time_s": t.elapsed().as_secs_f64(),
-                }),
-                command: cmd,
-                label: format!("smooth ({method})"),
-            })
+    }
+
+    /// Highlight-line fairing of the region.
+    fn fair(&self) -> Result<Outcome, String> {
+        let (o, file, out) = (&self.req.options, self.file, self.out);
+        let faces = self
+            .faces
+            .as_ref()
+            .ok_or("fairing needs a region (faces)")?;
+        let light = self.req.light.ok_or("fairing needs the light array")?;
+        let method = match o.method.as_deref().unwrap_or("highlight") {
+            "highlight" => FairMethod::Highlight,
+            "diffusion-flow" => FairMethod::DiffusionFlow,
+            m => return Err(format!("unknown fairing method `{m}`")),
+        };
+        let defaults = FairOptions::default();
+        let options = FairOptions::default()
+            .region(faces.clone())
+            .light(light)
+            .method(method)
+            .max_iterations(o.max_iterations.unwrap_or(defaults.max_iterations))
+            .epsilon(o.epsilon.unwrap_or(defaults.epsilon))
+            .control(self.control.clone());
+        let r = fair_highlight_lines(self.tri, &options).map_err(|e| e.to_string())?;
+        let mut report = serde_json::to_value(&r.report).map_err(|e| e.to_string())?;
+        report["command"] = json!("fair");
+        report["time_s"] = json!(self.started.elapsed().as_secs_f64());
+        let m = o.method.as_deref().unwrap_or("highlight");
+        Ok(Outcome {
+            surfaces: None,
+            positions: r.positions,
+            report,
+            command: format!(
+                "fairline fair {file} --region region.json {} --method {m} --max-iterations {} --epsilon {} -o {out}",
+                light_args(&light),
+                options.max_iterations,
+                options.epsilon
+            ),
+            label: format!("fair ({m})"),
+        })
+    }
+
+    /// One of the smoothing methods, outside the region fixed.
+    fn smooth(&self) -> Result<Outcome, String> {
+        use fairline::smooth::{SmoothMethod, SmoothOptions, smooth};
+        let o = &self.req.options;
+        let (weights, wname) = match o.weights.as_deref().unwrap_or("cotan") {
+            "uniform" => (LaplaceWeights::Uniform, "uniform"),
+            "cotan" => (LaplaceWeights::Cotangent, "cotan"),
+            w => return Err(format!("unknown weights `{w}` (uniform, cotan)")),
+        };
+        let method = o.method.as_deref().unwrap_or("taubin").to_string();
+        let Some(smooth_method) = SmoothMethod::from_name(&method) else {
+            return Err(format!("unknown smoothing method `{method}`"));
+        };
+        let iterations = o.iterations;
+        // λ is the workbench's for Laplace smoothing only (Taubin's comes
+        // from the pass band)
+        let lambda = o.lambda.filter(|_| smooth_method == SmoothMethod::Laplace);
+        let options = SmoothOptions::default()
+            .method(smooth_method)
+            .weights(weights)
+            .lambda(lambda)
+            .iterations(iterations)
+            .fixed(self.fixed_outside())
+            .control(self.control.clone());
+        let smoothed = smooth(self.mesh, &options).map_err(|e| e.to_string())?;
+        let r = &smoothed.report;
+        let mut cmd = format!("fairline smooth {} --method {method}", self.file);
+        if matches!(method.as_str(), "laplace" | "taubin") {
+            cmd.push_str(&format!(" --weights {wname}"));
         }
-        "fair-quad" => {
-            use fairline::fair::{QuadFairOptions, fair_structure_lines};
-            if !mesh.faces().any(|f| mesh.face_size(f) == 4) {
-                return Err("fair-quad needs a quad mesh (no quadrilateral found)".into());
-            }
-            let d = QuadFairOptions::default();
-            let opts = QuadFairOptions::default()
-                .weight(o.weight.unwrap_or(d.weight))
-                .iterations(o.iterations.unwrap_or(d.iterations))
-                .fixed(fixed_outside(mesh))
-                .control(control.clone());
-            let faired = fair_structure_lines(mesh, &opts).map_err(|e| e.to_string())?;
-            let r = &faired.report;
-            Ok(Outcome {
-                surfaces: None,
-                positions: faired.positions.clone(),
-                report: library_report("fair-quad", r, t.elapsed().as_secs_f64()),
-                command: format!(
-                    "fairline fair-quad {file} --weight {} --iterations {}{fixed_arg} -o {out}",
-                    opts.weight, opts.iterations
-                ),
-                label: "fair-quad".into(),
-            })
+        if let Some(i) = iterations {
+            cmd.push_str(&format!(" --iterations {i}"));
         }
-        "enhance" => {
-            use fairline::enhance::{EnhanceOptions, enhance_features};
-            let d = EnhanceOptions::default();
-            let lambda = o.lambda.unwrap_or(1.0);
-            let mu = o.mu.unwrap_or(0.5);
-            let iterations = o.iterations.unwrap_or(d.iterations);
-            let opts = EnhanceOptions::default()
-                .lambda(lambda)
-                .mu(mu)
-                .iterations(iterations)
-                .fixed(fixed_outside(tri))
-                .control(control.clone());
-            let r = enhance_features(tri, &opts).map_err(|e| e.to_string())?;
-            Ok(Outcome {
-                surfaces: None,
-                report: library_report("enhance", &r.report, t.elapsed().as_secs_f64()),
-                positions: r.positions,
-                command: format!(
-                    "fairline enhance {file} --lambda {lambda} --mu {mu} --iterations {iterations}{fixed_arg} -o {out}"
-                ),
-                label: "enhance".into(),
-            })
+        if method == "laplace"
+            && let Some(l) = o.lambda
+        {
+            cmd.push_str(&format!(" --lambda {l}"));
         }
-        other => Err(format!(
-            "unknown method `{other}` (fair, smooth, fair-quad, enhance)"
-        )),
+        cmd.push_str(&format!("{} -o {}", self.fixed_arg(), self.out));
+        Ok(Outcome {
+            surfaces: None,
+            positions: smoothed.positions,
+            report: json!({
+                "command": "smooth",
+                "method": method,
+                "iterations": r.iterations,
+                "converged": r.converged,
+                "volume_before": r.volume_before,
+                "volume_after": r.volume_after,
+                "max_displacement": r.max_displacement,
+                "time_s": self.started.elapsed().as_secs_f64(),
+            }),
+            command: cmd,
+            label: format!("smooth ({method})"),
+        })
+    }
+
+    /// Structure-line fairing of a quad mesh, outside the region fixed.
+    fn fair_quad(&self) -> Result<Outcome, String> {
+        use fairline::fair::{QuadFairOptions, fair_structure_lines};
+        let (o, mesh) = (&self.req.options, self.mesh);
+        if !mesh.faces().any(|f| mesh.face_size(f) == 4) {
+            return Err("fair-quad needs a quad mesh (no quadrilateral found)".into());
+        }
+        let d = QuadFairOptions::default();
+        let opts = QuadFairOptions::default()
+            .weight(o.weight.unwrap_or(d.weight))
+            .iterations(o.iterations.unwrap_or(d.iterations))
+            .fixed(self.fixed_outside())
+            .control(self.control.clone());
+        let faired = fair_structure_lines(mesh, &opts).map_err(|e| e.to_string())?;
+        let r = &faired.report;
+        Ok(Outcome {
+            surfaces: None,
+            positions: faired.positions.clone(),
+            report: library_report("fair-quad", r, self.started.elapsed().as_secs_f64()),
+            command: format!(
+                "fairline fair-quad {} --weight {} --iterations {}{} -o {}",
+                self.file,
+                opts.weight,
+                opts.iterations,
+                self.fixed_arg(),
+                self.out
+            ),
+            label: "fair-quad".into(),
+        })
+    }
+
+    /// Feature enhancement by vertex flow, outside the region fixed.
+    fn enhance(&self) -> Result<Outcome, String> {
+        use fairline::enhance::{EnhanceOptions, enhance_features};
+        let o = &self.req.options;
+        let d = EnhanceOptions::default();
+        let lambda = o.lambda.unwrap_or(1.0);
+        let mu = o.mu.unwrap_or(0.5);
+        let iterations = o.iterations.unwrap_or(d.iterations);
+        let opts = EnhanceOptions::default()
+            .lambda(lambda)
+            .mu(mu)
+            .iterations(iterations)
+            .fixed(self.fixed_outside())
+            .control(self.control.clone());
+        let r = enhance_features(self.tri, &opts).map_err(|e| e.to_string())?;
+        Ok(Outcome {
+            surfaces: None,
+            report: library_report("enhance", &r.report, self.started.elapsed().as_secs_f64()),
+            positions: r.positions,
+            command: format!(
+                "fairline enhance {} --lambda {lambda} --mu {mu} --iterations {iterations}{} -o {}",
+                self.file,
+                self.fixed_arg(),
+                self.out
+            ),
+            label: "enhance".into(),
+        })
     }
 }
 

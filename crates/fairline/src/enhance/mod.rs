@@ -439,6 +439,22 @@ pub struct EnhanceReport {
     pub timings: EnhanceTimings,
 }
 
+impl EnhanceReport {
+    /// What a front end warns about after the run, as plain sentences (the
+    /// CLI prints them as `warning:` lines, every front end lists them in
+    /// its report): triangles flipped their orientation and were repaired.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut warnings = Vec::new();
+        if self.flipped_triangles > 0 {
+            warnings.push(format!(
+                "{} triangle(s) flipped their orientation; try a smaller --lambda or fewer --iterations",
+                self.flipped_triangles
+            ));
+        }
+        warnings
+    }
+}
+
 /// Feature enhancement by vertex flow, Ji et al. 2011 Eq. (1)–(20): moves
 /// the free vertices of a triangle mesh toward high-curvature regions by
 /// minimising F_em + λ F_sd + μ F_smo in normalised coordinates (see the

@@ -11,6 +11,7 @@
 mod circular;
 mod contour;
 pub mod detect;
+mod drawn_stats;
 mod light;
 mod light_choice;
 mod linear;
@@ -24,6 +25,7 @@ pub use detect::{
     DetectOptions, Detection, IrregularRegion, LineFairness, RegionDetection, Site,
     detect_irregularities, detect_region,
 };
+pub use drawn_stats::DrawnLineStats;
 pub use light::{CircleApproach, CircularLight, CircularLights, LightArray, UpAxis};
 pub use light_choice::LightChoice;
 pub use linear::{HighlightModel, HighlightOptions, highlight_lines};

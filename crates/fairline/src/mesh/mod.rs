@@ -12,7 +12,8 @@ mod topology;
 pub use inspect::{BoundingBox, MeshInfo, Stats, inspect};
 pub(crate) use inspect::{find as union_find_root, union as union_find_join};
 pub use repair::{
-    RemovalReason, RemovedFace, RepairReport, Repaired, SplitEdge, SplitVertex, repair,
+    RemovalReason, RemovedFace, RepairError, RepairOptions, RepairReport, Repaired, SplitEdge,
+    SplitVertex, repair,
 };
 pub use soup::{Soup, bounding_box};
 pub use surface_mesh::{BuildNotes, FaceHalfedges, Outgoing, SurfaceMesh};

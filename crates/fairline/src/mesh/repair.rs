@@ -12,8 +12,10 @@
 use super::inspect::{find, polygon_area, union};
 use super::soup::Soup;
 use super::{MeshError, SurfaceMesh};
+use crate::control::{Cancelled, Control};
 use serde::Serialize;
 use std::collections::HashMap;
+use thiserror::Error;
 
 const NONE: u32 = u32::MAX;
 
@@ -119,16 +121,63 @@ impl RepairReport {
             && self.split_vertices.is_empty()
             && self.flipped_faces.is_empty()
     }
+
+    /// What a front end warns about after the repair, as plain sentences
+    /// (the CLI prints them as `warning:` lines, every front end lists them
+    /// in its report): faces that could not be oriented consistently, and
+    /// why the output is still not a manifold.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut warnings = Vec::new();
+        if !self.orientation_conflicts.is_empty() {
+            warnings.push(format!(
+                "{} faces could not be oriented consistently (non-orientable surface); left as they are",
+                self.orientation_conflicts.len()
+            ));
+        }
+        if let Some(problem) = &self.remaining_problem {
+            warnings.push(format!("the output is still not a manifold: {problem}"));
+        }
+        warnings
+    }
 }
 
-/// A repaired face list and what was changed.
-#[derive(Clone, Debug)]
+/// What [`repair`] returns: the repaired face list (vertices may be
+/// removed or split, so it is a new [`Soup`], not new positions of the
+/// input's vertices) and what was changed.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Repaired {
     /// The repaired positions and faces.
     pub soup: Soup,
     /// What was changed.
     pub report: RepairReport,
 }
+
+/// Options of [`repair`] (the crate's one shape, [`crate::control`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+#[non_exhaustive]
+pub struct RepairOptions {
+    /// Progress callback and cancel flag: one step per stage ("steps": the
+    /// faces cleaned; edges cut, faces oriented and vertices split; the
+    /// vertices compacted; the result checked).
+    pub control: Control,
+}
+
+crate::control::setters!(RepairOptions { control: Control });
+
+/// Why [`repair`] gave no result.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum RepairError {
+    /// The face list holds what cannot be repaired without inventing
+    /// geometry: non-finite coordinates, more than 32-bit indices.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// The caller raised the cancel flag of [`RepairOptions::control`].
+    #[error("cancelled")]
+    Cancelled(#[from] Cancelled),
+}
+
+/// Stages of [`repair`] reported to [`RepairOptions::control`].
+const REPAIR_STEPS: u64 = 4;
 
 /// Repairs a face list so that [`SurfaceMesh::from_soup`] accepts it:
 ///
@@ -152,14 +201,21 @@ pub struct Repaired {
 ///
 /// Refuses only what cannot be repaired without inventing geometry:
 /// non-finite coordinates and meshes beyond 32-bit indices.
-pub fn repair(soup: &Soup) -> Result<Repaired, MeshError> {
+///
+/// The input is a [`Soup`], not a [`SurfaceMesh`]: a mesh cannot hold what
+/// this repairs. It is never modified. Reports one progress step per stage
+/// through [`RepairOptions::control`] and stops there when cancelled
+/// ([`RepairError::Cancelled`]).
+pub fn repair(soup: &Soup, options: &RepairOptions) -> Result<Repaired, RepairError> {
+    let control = &options.control;
     let nv = soup.vertex_count();
     if nv >= NONE as usize / 2 || soup.indices.len() >= NONE as usize / 2 {
-        return Err(MeshError::TooLarge);
+        return Err(MeshError::TooLarge.into());
     }
     if let Some(v) = soup.positions.iter().position(|p| !p.is_finite()) {
-        return Err(MeshError::NonFiniteCoordinate { vertex: v });
+        return Err(MeshError::NonFiniteCoordinate { vertex: v }.into());
     }
+    control.checkpoint()?;
     let mut report = RepairReport {
         vertices_before: nv,
         faces_before: soup.face_count(),
@@ -167,6 +223,7 @@ pub fn repair(soup: &Soup) -> Result<Repaired, MeshError> {
     };
     // Steps 1 and 2: a clean list of candidate faces (input index, vertices).
     let mut faces = clean_faces(soup, &mut report);
+    control.step("steps", 1, REPAIR_STEPS)?;
 
     // Steps 3 to 5, again after removing faces an edge cannot hold.
     let (out_faces, copies) = loop {
@@ -186,15 +243,19 @@ pub fn repair(soup: &Soup) -> Result<Repaired, MeshError> {
                 duplicate_of: None,
             });
         }
+        control.checkpoint()?;
     };
     report.removed_faces.sort_by_key(|r| r.face);
+    control.step("steps", 2, REPAIR_STEPS)?;
 
     // Step 6: drop unreferenced input vertices; copies follow the kept ones.
     let out = compact_vertices(soup, &out_faces, &copies, &mut report);
+    control.step("steps", 3, REPAIR_STEPS)?;
     match SurfaceMesh::from_soup(&out) {
         Ok(_) => report.manifold = true,
         Err(e) => report.remaining_problem = Some(e.to_string()),
     }
+    control.progress("steps", REPAIR_STEPS, REPAIR_STEPS);
     Ok(Repaired { soup: out, report })
 }
 
@@ -578,7 +639,7 @@ mod tests {
             shapes::quad_grid(5, 4, (0.0, 1.0), (0.0, 1.0), |x, y| x * y),
         ] {
             let soup = m.to_soup();
-            let r = repair(&soup).unwrap();
+            let r = repair(&soup, &RepairOptions::default()).unwrap();
             assert!(r.report.unchanged(), "{:?}", r.report);
             assert!(r.report.manifold);
             assert!(r.report.vertex_source.is_empty());
@@ -605,7 +666,7 @@ mod tests {
             ],
         );
         soup.push_face(&[1, 2]); // 7: too few vertices
-        let r = repair(&soup).unwrap();
+        let r = repair(&soup, &RepairOptions::default()).unwrap();
         let reasons: Vec<(usize, RemovalReason)> = r
             .report
             .removed_faces
@@ -645,7 +706,7 @@ mod tests {
             SurfaceMesh::from_soup(&soup),
             Err(MeshError::NonManifoldEdge { .. })
         ));
-        let r = repair(&soup).unwrap();
+        let r = repair(&soup, &RepairOptions::default()).unwrap();
         assert_eq!(
             r.report.split_edges,
             vec![SplitEdge {
@@ -668,7 +729,7 @@ mod tests {
     fn non_manifold_vertices_are_split_into_appended_copies() {
         let (p, faces) = super::super::tests::two_cones();
         let soup = Soup::from_polygons(p.clone(), &faces);
-        let r = repair(&soup).unwrap();
+        let r = repair(&soup, &RepairOptions::default()).unwrap();
         assert_eq!(
             r.report.split_vertices,
             vec![SplitVertex {
@@ -701,7 +762,7 @@ mod tests {
         polys[30].reverse();
         let reversed = polys.clone();
         soup = Soup::from_polygons(soup.positions, &polys);
-        let r = repair(&soup).unwrap();
+        let r = repair(&soup, &RepairOptions::default()).unwrap();
         assert_eq!(r.report.flipped_faces, vec![7, 30]);
         assert!(r.report.orientation_conflicts.is_empty());
         for (k, face) in r.soup.faces().enumerate() {
@@ -739,7 +800,7 @@ mod tests {
                 [2 * i, c, d, 2 * i + 1]
             })
             .collect();
-        let r = repair(&Soup::from_polygons(p, &faces)).unwrap();
+        let r = repair(&Soup::from_polygons(p, &faces), &RepairOptions::default()).unwrap();
         assert!(!r.report.orientation_conflicts.is_empty());
         assert!(!r.report.manifold);
         assert!(
@@ -754,7 +815,18 @@ mod tests {
     fn non_finite_coordinates_are_refused() {
         let mut p = square();
         p[2].z = f64::NAN;
-        let e = repair(&Soup::from_polygons(p, &[[0u32, 1, 2]])).unwrap_err();
-        assert_eq!(e, MeshError::NonFiniteCoordinate { vertex: 2 });
+        let e = repair(
+            &Soup::from_polygons(p, &[[0u32, 1, 2]]),
+            &RepairOptions::default(),
+        )
+        .unwrap_err();
+        assert_eq!(
+            e,
+            RepairError::Mesh(MeshError::NonFiniteCoordinate { vertex: 2 })
+        );
+        assert_eq!(
+            e.to_string(),
+            MeshError::NonFiniteCoordinate { vertex: 2 }.to_string()
+        );
     }
 }

@@ -191,23 +191,74 @@ pub(crate) fn render_view(
 ) -> (Image, Option<Vec<u32>>) {
     let s = opts.supersample.max(1) as usize;
     let (w, h) = (w as usize, h as usize);
-    let (sw, sh) = (w * s, h * s);
-    let perspective = camera.is_perspective();
+    let projector = Projector {
+        camera,
+        sw: w * s,
+        sh: h * s,
+        perspective: camera.is_perspective(),
+    };
+    // 1. vertices, lines and markers
+    let (vert_offset, tri_offset) = mesh_offsets(scene);
+    let pverts = projector.project_meshes(scene, last(&vert_offset));
+    let segs = projector.project_lines(scene, s);
+    let ctx = Ctx::new(
+        scene,
+        opts,
+        &projector,
+        (w, h, s),
+        (pverts, vert_offset, tri_offset, segs),
+        diag,
+    );
+    // 2. binning
+    let (tri_bins, seg_bins) = ctx.bin_triangles_and_segments();
+    // 3. bands
+    let (pixels, ids) = ctx.render_bands(&tri_bins, &seg_bins, want_ids);
+    let image = Image {
+        width: w as u32,
+        height: h as u32,
+        pixels,
+    };
+    (image, want_ids.then_some(ids))
+}
 
-    // 1. Vertices.
+/// The last entry of a prefix-sum list (0 when empty).
+fn last(offsets: &[usize]) -> usize {
+    offsets.last().copied().unwrap_or(0)
+}
+
+/// Prefix sums of the vertex and triangle counts of the scene's meshes:
+/// mesh `m`'s vertices (triangles) are global indices
+/// `offset[m]..offset[m + 1]`.
+fn mesh_offsets(scene: &Scene) -> (Vec<usize>, Vec<usize>) {
     let mut vert_offset = vec![0usize];
     let mut tri_offset = vec![0usize];
     for m in &scene.meshes {
-        vert_offset.push(vert_offset.last().unwrap() + m.positions.len());
-        tri_offset.push(tri_offset.last().unwrap() + m.triangles.len());
+        vert_offset.push(last(&vert_offset) + m.positions.len());
+        tri_offset.push(last(&tri_offset) + m.triangles.len());
     }
-    let project = |p: Vec3| -> PVert {
-        let Some(q) = camera.project(p) else {
+    (vert_offset, tri_offset)
+}
+
+/// Projection of world points to supersampled screen samples (step 1 of
+/// the pipeline in the module docs).
+struct Projector<'c> {
+    camera: &'c Camera,
+    /// Supersampled size.
+    sw: usize,
+    sh: usize,
+    perspective: bool,
+}
+
+impl Projector<'_> {
+    /// `p` in sample coordinates with its depth key; [`BAD`] behind the
+    /// camera, far outside the image or not finite.
+    fn project(&self, p: Vec3) -> PVert {
+        let Some(q) = self.camera.project(p) else {
             return BAD;
         };
-        let x = (q.x + 1.0) * 0.5 * sw as f64;
-        let y = (1.0 - q.y) * 0.5 * sh as f64;
-        let key = if perspective { -1.0 / q.z } else { q.z };
+        let x = (q.x + 1.0) * 0.5 * self.sw as f64;
+        let y = (1.0 - q.y) * 0.5 * self.sh as f64;
+        let key = if self.perspective { -1.0 / q.z } else { q.z };
         if !(x.abs() < GUARD && y.abs() < GUARD && key.is_finite()) {
             return BAD;
         }
@@ -220,29 +271,26 @@ pub(crate) fn render_view(
             key,
             ok: true,
         }
-    };
-    let mut pverts = Vec::with_capacity(*vert_offset.last().unwrap());
-    for m in &scene.meshes {
-        pverts.par_extend(m.positions.par_iter().map(|&p| project(p)));
     }
 
-    // Lines and markers.
-    let px_to_samples = |px: f32| {
-        let px = if px.is_finite() {
-            px.clamp(0.0, MAX_LINE_WIDTH_PX)
-        } else {
-            1.0
-        };
-        px as f64 * s as f64
-    };
-    let mut segs = Vec::new();
-    let mut layer = 0u32;
-    let clip_project = |a: Vec3, b: Vec3| -> Option<(PVert, PVert)> {
+    /// Every vertex of every mesh, meshes in scene order (parallel).
+    fn project_meshes(&self, scene: &Scene, count: usize) -> Vec<PVert> {
+        let mut pverts = Vec::with_capacity(count);
+        for m in &scene.meshes {
+            pverts.par_extend(m.positions.par_iter().map(|&p| self.project(p)));
+        }
+        pverts
+    }
+
+    /// Segment `a`–`b` clipped at the near plane (perspective) and
+    /// projected; `None` when nothing of it can be drawn.
+    fn clip_project(&self, a: Vec3, b: Vec3) -> Option<(PVert, PVert)> {
         if !(a.is_finite() && b.is_finite()) {
             return None;
         }
         let (mut a, mut b) = (a, b);
-        if perspective {
+        if self.perspective {
+            let camera = self.camera;
             let near = camera.near * (1.0 + 1e-9) + f64::MIN_POSITIVE;
             let (za, zb) = (camera.depth(a), camera.depth(b));
             if za < near && zb < near {
@@ -254,170 +302,214 @@ pub(crate) fn render_view(
                 b = b + (a - b) * ((near - zb) / (za - zb));
             }
         }
-        let (pa, pb) = (project(a), project(b));
+        let (pa, pb) = (self.project(a), self.project(b));
         (pa.ok && pb.ok).then_some((pa, pb))
-    };
-    let push_seg =
-        |segs: &mut Vec<Seg>, pa: PVert, pb: PVert, hw: f64, layer: u32, color: [f32; 3]| {
-            segs.push(Seg {
-                ax: pa.x,
-                ay: pa.y,
-                akey: pa.key,
-                bx: pb.x,
-                by: pb.y,
-                bkey: pb.key,
-                hw,
-                layer,
-                color,
-            });
+    }
+
+    /// The polylines and point markers of `scene` as projected segments
+    /// (a marker is a segment whose ends coincide); each polyline and each
+    /// marker is its own layer, in scene order. `s` is the supersampling.
+    fn project_lines(&self, scene: &Scene, s: usize) -> Vec<Seg> {
+        let px_to_samples = |px: f32| {
+            let px = if px.is_finite() {
+                px.clamp(0.0, MAX_LINE_WIDTH_PX)
+            } else {
+                1.0
+            };
+            px as f64 * s as f64
         };
-    for line in &scene.polylines {
-        let hw = 0.5 * px_to_samples(line.width_px);
-        let n = line.points.len();
-        let nseg = if line.closed && n > 2 {
-            n
-        } else {
-            n.saturating_sub(1)
-        };
-        for i in 0..nseg {
-            if let Some((pa, pb)) = clip_project(line.points[i], line.points[(i + 1) % n]) {
-                push_seg(&mut segs, pa, pb, hw, layer, line.color);
+        let mut segs = Vec::new();
+        let mut layer = 0u32;
+        for line in &scene.polylines {
+            let hw = 0.5 * px_to_samples(line.width_px);
+            let n = line.points.len();
+            let nseg = if line.closed && n > 2 {
+                n
+            } else {
+                n.saturating_sub(1)
+            };
+            for i in 0..nseg {
+                if let Some((pa, pb)) = self.clip_project(line.points[i], line.points[(i + 1) % n])
+                {
+                    segs.push(Seg::new(pa, pb, hw, layer, line.color));
+                }
             }
+            if n == 1
+                && let Some((pa, pb)) = self.clip_project(line.points[0], line.points[0])
+            {
+                segs.push(Seg::new(pa, pb, hw, layer, line.color));
+            }
+            layer += 1;
         }
-        if n == 1
-            && let Some((pa, pb)) = clip_project(line.points[0], line.points[0])
-        {
-            push_seg(&mut segs, pa, pb, hw, layer, line.color);
+        for m in &scene.points {
+            if let Some((pa, pb)) = self.clip_project(m.position, m.position) {
+                segs.push(Seg::new(pa, pb, px_to_samples(m.radius_px), layer, m.color));
+            }
+            layer += 1;
         }
-        layer += 1;
+        segs
     }
-    for m in &scene.points {
-        if let Some((pa, pb)) = clip_project(m.position, m.position) {
-            push_seg(
-                &mut segs,
-                pa,
-                pb,
-                px_to_samples(m.radius_px),
-                layer,
-                m.color,
-            );
+}
+
+impl Seg {
+    fn new(pa: PVert, pb: PVert, hw: f64, layer: u32, color: [f32; 3]) -> Seg {
+        Seg {
+            ax: pa.x,
+            ay: pa.y,
+            akey: pa.key,
+            bx: pb.x,
+            by: pb.y,
+            bkey: pb.key,
+            hw,
+            layer,
+            color,
         }
-        layer += 1;
     }
-    let max_hw = segs.iter().map(|g| g.hw).fold(0.0, f64::max);
-    let margin = (max_hw.ceil() as usize + 2).max(2);
+}
 
-    let l = &opts.lighting;
-    let to_world = |d: Vec3| {
-        (camera.right * d.x + camera.up * d.y - camera.forward * d.z)
-            .try_normalize()
-            .unwrap_or(-camera.forward)
-    };
-    let num = |v: f64, default: f64| if v.is_finite() { v } else { default };
-    let ctx = Ctx {
-        scene,
-        camera,
-        perspective,
-        sw,
-        sh,
-        w,
-        h,
-        s,
-        pverts,
-        vert_offset,
-        tri_offset,
-        segs,
-        margin,
-        band_rows: (MAX_BAND_SAMPLES / (sw * s)).clamp(1, BAND_ROWS),
-        background: opts.background,
-        light: Shading {
-            key: to_world(l.key_dir),
-            fill: to_world(l.fill_dir),
-            up: camera.up,
-            key_i: num(l.key_intensity, 0.0),
-            fill_i: num(l.fill_intensity, 0.0),
-            ambient: num(l.ambient, 0.0),
-            specular: num(l.specular, 0.0),
-            shininess: num(l.shininess, 1.0).max(1.0),
-        },
-        line_tol: num(opts.line_depth_offset, 0.0).max(0.0) * if diag > 0.0 { diag } else { 1.0 },
-        wire_hw: 0.5 * WIRE_WIDTH_PX * s as f64,
-    };
+/// What step 1 produced: projected vertices, the vertex and triangle
+/// offsets of the meshes ([`mesh_offsets`]) and the projected segments.
+type Projected = (Vec<PVert>, Vec<usize>, Vec<usize>, Vec<Seg>);
 
-    // 2. Binning.
-    let band_rows = ctx.band_rows;
-    let band_s = band_rows * s;
-    let nbands = h.div_ceil(band_rows);
-    let band_range = |y_lo: f64, y_hi: f64, extra: f64| -> (u32, u32) {
+impl<'s, 'a> Ctx<'s, 'a> {
+    /// The state of one render: sizes (`w`, `h` output pixels, `s`×
+    /// supersampling), the projected geometry, band layout and the lights
+    /// turned from camera space into world space.
+    fn new(
+        scene: &'s Scene<'a>,
+        opts: &RenderOptions,
+        projector: &Projector<'s>,
+        (w, h, s): (usize, usize, usize),
+        (pverts, vert_offset, tri_offset, segs): Projected,
+        diag: f64,
+    ) -> Self {
+        let camera = projector.camera;
+        let sw = projector.sw;
+        let max_hw = segs.iter().map(|g| g.hw).fold(0.0, f64::max);
+        let margin = (max_hw.ceil() as usize + 2).max(2);
+        let l = &opts.lighting;
+        let to_world = |d: Vec3| {
+            (camera.right * d.x + camera.up * d.y - camera.forward * d.z)
+                .try_normalize()
+                .unwrap_or(-camera.forward)
+        };
+        let num = |v: f64, default: f64| if v.is_finite() { v } else { default };
+        Ctx {
+            scene,
+            camera,
+            perspective: projector.perspective,
+            sw,
+            sh: projector.sh,
+            w,
+            h,
+            s,
+            pverts,
+            vert_offset,
+            tri_offset,
+            segs,
+            margin,
+            band_rows: (MAX_BAND_SAMPLES / (sw * s)).clamp(1, BAND_ROWS),
+            background: opts.background,
+            light: Shading {
+                key: to_world(l.key_dir),
+                fill: to_world(l.fill_dir),
+                up: camera.up,
+                key_i: num(l.key_intensity, 0.0),
+                fill_i: num(l.fill_intensity, 0.0),
+                ambient: num(l.ambient, 0.0),
+                specular: num(l.specular, 0.0),
+                shininess: num(l.shininess, 1.0).max(1.0),
+            },
+            line_tol: num(opts.line_depth_offset, 0.0).max(0.0)
+                * if diag > 0.0 { diag } else { 1.0 },
+            wire_hw: 0.5 * WIRE_WIDTH_PX * s as f64,
+        }
+    }
+
+    /// Inclusive range of bands that samples `y_lo ..= y_hi`, widened by
+    /// `extra` samples, touch (empty, `(1, 0)`, when outside the image).
+    fn band_range(&self, y_lo: f64, y_hi: f64, extra: f64) -> (u32, u32) {
+        let band_s = self.band_rows * self.s;
         let lo = ((y_lo - extra).floor().max(0.0)) as usize / band_s;
         let hi_f = (y_hi + extra).ceil();
-        if hi_f < 0.0 || y_lo - extra >= sh as f64 {
+        if hi_f < 0.0 || y_lo - extra >= self.sh as f64 {
             return (1, 0);
         }
-        let hi = (hi_f as usize).min(sh - 1) / band_s;
+        let hi = (hi_f as usize).min(self.sh - 1) / band_s;
         (lo as u32, hi as u32)
-    };
-    let mut tri_ranges: Vec<(u32, u32)> = Vec::with_capacity(*ctx.tri_offset.last().unwrap());
-    for (mi, m) in scene.meshes.iter().enumerate() {
-        let ctx = &ctx;
-        tri_ranges.par_extend(m.triangles.par_iter().map(move |t| {
-            let Some([a, b, c]) = ctx.tri_verts(mi, t) else {
-                return (1, 0);
-            };
-            let y_lo = a.y.min(b.y).min(c.y);
-            let y_hi = a.y.max(b.y).max(c.y);
-            let x_lo = a.x.min(b.x).min(c.x);
-            let x_hi = a.x.max(b.x).max(c.x);
-            if x_hi < 0.0 || x_lo > sw as f64 {
-                return (1, 0);
-            }
-            band_range(y_lo, y_hi, ctx.margin as f64 + 1.0)
-        }));
     }
-    let tri_bins = Bins::build(nbands, &tri_ranges);
-    drop(tri_ranges);
-    let seg_ranges: Vec<(u32, u32)> = ctx
-        .segs
-        .iter()
-        .map(|g| band_range(g.ay.min(g.by), g.ay.max(g.by), g.hw + 1.0))
-        .collect();
-    let seg_bins = Bins::build(nbands, &seg_ranges);
 
-    // 3. Bands.
-    let mut pixels = vec![[0u8; 4]; w * h];
-    let mut ids = if want_ids {
-        vec![u32::MAX; w * h]
-    } else {
-        Vec::new()
-    };
-    if want_ids {
-        pixels
-            .par_chunks_mut(band_rows * w)
-            .zip(ids.par_chunks_mut(band_rows * w))
-            .enumerate()
-            .for_each(|(band, (out, id_out))| {
-                ctx.render_band(
-                    band,
-                    tri_bins.get(band),
-                    seg_bins.get(band),
-                    out,
-                    Some(id_out),
-                )
-            });
-    } else {
-        pixels
-            .par_chunks_mut(band_rows * w)
-            .enumerate()
-            .for_each(|(band, out)| {
-                ctx.render_band(band, tri_bins.get(band), seg_bins.get(band), out, None)
-            });
+    /// Step 2: the triangles and the segments of every band, in index
+    /// order.
+    fn bin_triangles_and_segments(&self) -> (Bins, Bins) {
+        let nbands = self.h.div_ceil(self.band_rows);
+        let sw = self.sw;
+        let mut tri_ranges: Vec<(u32, u32)> = Vec::with_capacity(last(&self.tri_offset));
+        for (mi, m) in self.scene.meshes.iter().enumerate() {
+            tri_ranges.par_extend(m.triangles.par_iter().map(move |t| {
+                let Some([a, b, c]) = self.tri_verts(mi, t) else {
+                    return (1, 0);
+                };
+                let y_lo = a.y.min(b.y).min(c.y);
+                let y_hi = a.y.max(b.y).max(c.y);
+                let x_lo = a.x.min(b.x).min(c.x);
+                let x_hi = a.x.max(b.x).max(c.x);
+                if x_hi < 0.0 || x_lo > sw as f64 {
+                    return (1, 0);
+                }
+                self.band_range(y_lo, y_hi, self.margin as f64 + 1.0)
+            }));
+        }
+        let tri_bins = Bins::build(nbands, &tri_ranges);
+        drop(tri_ranges);
+        let seg_ranges: Vec<(u32, u32)> = self
+            .segs
+            .iter()
+            .map(|g| self.band_range(g.ay.min(g.by), g.ay.max(g.by), g.hw + 1.0))
+            .collect();
+        let seg_bins = Bins::build(nbands, &seg_ranges);
+        (tri_bins, seg_bins)
     }
-    let image = Image {
-        width: w as u32,
-        height: h as u32,
-        pixels,
-    };
-    (image, want_ids.then_some(ids))
+
+    /// Step 3: every band rendered (parallel) into the output pixels and,
+    /// with `want_ids`, the triangle ids (else an empty list).
+    fn render_bands(
+        &self,
+        tri_bins: &Bins,
+        seg_bins: &Bins,
+        want_ids: bool,
+    ) -> (Vec<[u8; 4]>, Vec<u32>) {
+        let (w, h, band_rows) = (self.w, self.h, self.band_rows);
+        let mut pixels = vec![[0u8; 4]; w * h];
+        let mut ids = if want_ids {
+            vec![u32::MAX; w * h]
+        } else {
+            Vec::new()
+        };
+        if want_ids {
+            pixels
+                .par_chunks_mut(band_rows * w)
+                .zip(ids.par_chunks_mut(band_rows * w))
+                .enumerate()
+                .for_each(|(band, (out, id_out))| {
+                    self.render_band(
+                        band,
+                        tri_bins.get(band),
+                        seg_bins.get(band),
+                        out,
+                        Some(id_out),
+                    )
+                });
+        } else {
+            pixels
+                .par_chunks_mut(band_rows * w)
+                .enumerate()
+                .for_each(|(band, out)| {
+                    self.render_band(band, tri_bins.get(band), seg_bins.get(band), out, None)
+                });
+        }
+        (pixels, ids)
+    }
 }
 
 /// Per-triangle data cached while shading consecutive samples of one triangle.

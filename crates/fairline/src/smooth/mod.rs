@@ -18,6 +18,7 @@
 //! cancelled ([`SmoothError::Cancelled`]).
 
 mod laplace;
+mod method;
 mod schneider_kobbelt;
 mod spring;
 
@@ -25,6 +26,7 @@ pub use laplace::{
     ImplicitOptions, LaplaceOptions, TaubinOptions, TaubinParameters, implicit_smooth,
     laplace_smooth, taubin_lambda_for_pass_band, taubin_smooth,
 };
+pub use method::{SmoothMethod, SmoothOptions, smooth, smooth_warnings};
 pub use schneider_kobbelt::{SchneiderKobbeltOptions, schneider_kobbelt};
 pub use spring::{SpringOptions, spring_smooth};
 
@@ -34,22 +36,8 @@ use crate::solve::SolveError;
 use serde::Serialize;
 use thiserror::Error;
 
-/// Builder setters `pub fn field(mut self, v: T) -> Self`, one per listed
-/// field, for the options structs of this module.
-macro_rules! setters {
-    ($ty:ident { $($field:ident: $t:ty),* $(,)? }) => {
-        impl $ty {
-            $(
-                #[doc = concat!("Sets [`", stringify!($ty), "::", stringify!($field), "`].")]
-                pub fn $field(mut self, v: $t) -> Self {
-                    self.$field = v;
-                    self
-                }
-            )*
-        }
-    };
-}
-pub(crate) use setters;
+/// The crate's builder-setter macro, for the options structs of this module.
+pub(crate) use crate::control::setters;
 
 /// Why a smoothing run failed.
 #[derive(Debug, Error, Clone, PartialEq)]

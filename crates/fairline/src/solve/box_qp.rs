@@ -20,6 +20,7 @@ use faer::sparse::SparseColMatRef;
 
 /// Options of [`box_qp`].
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct BoxQpOptions {
     /// Most projected Newton iterations (default 200).
     pub max_iterations: usize,

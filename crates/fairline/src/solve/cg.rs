@@ -25,7 +25,7 @@ const MAX_RESTARTS: usize = 20;
 const CHUNK: usize = 4096;
 
 /// Outcome of [`normal_equations_cg`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct CgReport {
     /// Iterations performed.
     pub iterations: usize,
@@ -39,6 +39,7 @@ pub struct CgReport {
 
 /// Stopping rule of [`normal_equations_cg`].
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct CgOptions {
     /// Stop when ‖c − (AᵀA + εI) x‖ ≤ `tolerance` ‖c‖.
     pub tolerance: f64,
@@ -54,6 +55,26 @@ pub struct CgOptions {
     /// for a cheap first attempt that a stronger preconditioner takes over.
     pub hopeless_after: usize,
 }
+
+impl Default for CgOptions {
+    /// Relative residual 1e-10, at most 1000 iterations, Jacobi (blocks of
+    /// 1), never given up early.
+    fn default() -> Self {
+        CgOptions {
+            tolerance: 1e-10,
+            max_iterations: 1000,
+            block: 1,
+            hopeless_after: 0,
+        }
+    }
+}
+
+crate::control::setters!(CgOptions {
+    tolerance: f64,
+    max_iterations: usize,
+    block: usize,
+    hopeless_after: usize,
+});
 
 /// A symmetric positive-definite approximation z = M⁻¹ r of the inverse of
 /// the system matrix, applied once per conjugate-gradient iteration.

@@ -39,6 +39,7 @@ pub enum CholeskyOrdering {
 
 /// Options of [`CholeskySolver::with_options`].
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct CholeskyOptions {
     /// Fill-reducing ordering (default AMD).
     pub ordering: CholeskyOrdering,
@@ -56,6 +57,11 @@ impl Default for CholeskyOptions {
         }
     }
 }
+
+crate::control::setters!(CholeskyOptions {
+    ordering: CholeskyOrdering,
+    parallel: bool,
+});
 
 /// Sparse Cholesky factorisation of a symmetric positive-definite matrix.
 /// The symbolic factorisation (fill-reducing ordering, elimination tree,

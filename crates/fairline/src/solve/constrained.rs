@@ -22,6 +22,7 @@ use rayon::prelude::*;
 
 /// Options of [`ConstrainedSolver::analyse`].
 #[derive(Clone, Debug, Default, PartialEq)]
+#[non_exhaustive]
 pub struct ConstrainedOptions {
     /// Positions of all n unknowns (e.g. mesh vertices): the free block is
     /// then ordered by [`nested_dissection`], which gives a cheaper factor
@@ -31,6 +32,11 @@ pub struct ConstrainedOptions {
     /// ([`CholeskyOptions::parallel`]).
     pub parallel: bool,
 }
+
+crate::control::setters!(ConstrainedOptions {
+    points: Option<Vec<Vec3>>,
+    parallel: bool,
+});
 
 /// Sparse Cholesky of the free block of a symmetric matrix with some
 /// unknowns fixed; see the module documentation.

@@ -40,6 +40,10 @@ pub use staged::{
 };
 pub use vector_amg::{SymmetricBlock, VectorAmg, VectorAmgOptions, VectorOperator};
 
+/// The sparse matrix types of the solvers' signatures (faer's, re-exported
+/// so that a caller needs no dependency of its own to name them).
+pub use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat};
+
 use thiserror::Error;
 
 /// Why a linear solve failed.

@@ -2,12 +2,13 @@
 //! rotations (Golub & Van Loan, "Matrix Computations", §8.5) and functions
 //! of a matrix through it (square roots, inverses of per-vertex tensors).
 
+use crate::{Mat3, Vec3};
 use glam::{DMat3, DVec3};
 
 /// Eigenvalues and orthonormal eigenvectors (the columns of the matrix,
 /// in the order of the values) of the symmetric part of `m`. Non-finite
 /// input gives non-finite output.
-pub fn symmetric_eigen3(m: DMat3) -> (DVec3, DMat3) {
+pub fn symmetric_eigen3(m: Mat3) -> (Vec3, Mat3) {
     let mut a = [[0.0f64; 3]; 3];
     for (i, row) in a.iter_mut().enumerate() {
         for (j, x) in row.iter_mut().enumerate() {
@@ -58,7 +59,7 @@ pub fn symmetric_eigen3(m: DMat3) -> (DVec3, DMat3) {
 }
 
 /// f(S) = V diag(f(λ)) Vᵀ for the symmetric part S of `m`.
-pub fn symmetric_function3(m: DMat3, f: impl Fn(f64) -> f64) -> DMat3 {
+pub fn symmetric_function3(m: Mat3, f: impl Fn(f64) -> f64) -> Mat3 {
     let (values, vectors) = symmetric_eigen3(m);
     function_of_eigen3(values, vectors, f)
 }
@@ -66,7 +67,7 @@ pub fn symmetric_function3(m: DMat3, f: impl Fn(f64) -> f64) -> DMat3 {
 /// f(M) = V f(Λ) Vᵀ from the eigenvalues Λ and orthonormal eigenvectors V
 /// (columns) of a symmetric M, as returned by [`symmetric_eigen3`]: several
 /// functions of one matrix for one decomposition.
-pub fn function_of_eigen3(values: DVec3, vectors: DMat3, f: impl Fn(f64) -> f64) -> DMat3 {
+pub fn function_of_eigen3(values: Vec3, vectors: Mat3, f: impl Fn(f64) -> f64) -> Mat3 {
     let scaled = DMat3::from_cols(
         vectors.x_axis * f(values.x),
         vectors.y_axis * f(values.y),

@@ -82,6 +82,7 @@ pub type MultigridBuilder<'a> =
 
 /// Options of [`StagedSolver::solve`].
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct StagedOptions {
     /// The strategy.
     pub solver: NormalSolver,
@@ -94,6 +95,26 @@ pub struct StagedOptions {
     /// Iteration limit of one conjugate-gradient stage. ≥ 1.
     pub max_iterations: usize,
 }
+
+impl Default for StagedOptions {
+    /// [`NormalSolver::Auto`] with the Jacobi stage, relative residual
+    /// 1e-10, at most 1000 iterations per stage.
+    fn default() -> Self {
+        StagedOptions {
+            solver: NormalSolver::Auto,
+            skip_jacobi: false,
+            tolerance: 1e-10,
+            max_iterations: 1000,
+        }
+    }
+}
+
+crate::control::setters!(StagedOptions {
+    solver: NormalSolver,
+    skip_jacobi: bool,
+    tolerance: f64,
+    max_iterations: usize,
+});
 
 /// What the solves of a [`StagedSolver`] did, summed over its solves.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -581,6 +581,7 @@ impl VectorOperator {
 
 /// Options of [`VectorAmg::new`].
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct VectorAmgOptions {
     /// Damped block-Jacobi steps before and after each coarse correction.
     pub smoothing_steps: usize,
@@ -603,6 +604,13 @@ impl Default for VectorAmgOptions {
         }
     }
 }
+
+crate::control::setters!(VectorAmgOptions {
+    smoothing_steps: usize,
+    max_coarse_nodes: usize,
+    max_levels: usize,
+    strength: f64,
+});
 
 struct Level {
     k: VectorOperator,

@@ -1,0 +1,375 @@
+//! Fairing the regions of one mesh in turn, as `fairline fair` (a region
+//! file, or `--auto`: the regions detection suggests) and the Python `fair`
+//! do it: the margins around detected regions, the one report of the whole
+//! run and the sentences front ends warn with, written once so that every
+//! front end says the same (issue #17: one place per concept). The
+//! fairing itself is [`super::fair_highlight_lines`] (Yong et al. §3).
+
+use super::{FairError, FairReport, grow_region};
+use crate::highlight::{
+    DetectOptions, Detection, HighlightError, HighlightModel, HighlightOptions, LightArray,
+    detect_irregularities,
+};
+use crate::mesh::{FaceId, SurfaceMesh};
+use serde::Serialize;
+use serde_json::{Map, Value, json};
+
+/// Rings of faces added around the union of the detected regions in the
+/// region `fairline detect` writes: a vertex moves under fairing only when
+/// all faces around it and around its neighbours are in the region (Yong
+/// et al. §3.1), so two rings make every vertex of a detected region
+/// movable.
+pub const SUPPORT_RINGS: usize = 2;
+
+/// Rings of faces `fairline fair --auto` adds around each detected region
+/// before fairing it.
+pub const AUTO_RINGS: usize = 4;
+
+impl FairError {
+    /// The message a front end shows for this error: a region without a
+    /// movable vertex says how to enlarge it; any other error is its own
+    /// message.
+    pub fn user_message(&self) -> String {
+        match self {
+            FairError::NoMovableVertex(msg) => format!(
+                "{msg}; a vertex can move only when every face around it and around its neighbours is in the region: enlarge the region or pass --grow 2"
+            ),
+            other => other.to_string(),
+        }
+    }
+}
+
+/// The regions `fairline fair --auto` fairs: the irregular regions that
+/// detection (default [`DetectOptions`]) finds on the highlight lines of
+/// `light`, best first, each grown by [`AUTO_RINGS`]; with the detection.
+pub fn detect_regions_to_fair(
+    mesh: &SurfaceMesh,
+    light: LightArray,
+    options: HighlightOptions,
+) -> Result<(Detection, Vec<Vec<FaceId>>), HighlightError> {
+    let model = HighlightModel::new(mesh, light, options)?;
+    let lines = model.lines(mesh);
+    let detection = detect_irregularities(mesh, &light, &lines, &DetectOptions::default())?;
+    let grown = detection
+        .regions
+        .iter()
+        .map(|r| grow_region(mesh, &r.faces, AUTO_RINGS))
+        .collect();
+    Ok((detection, grown))
+}
+
+/// Every face of the regions, sorted, without repeats.
+pub fn regions_union(regions: &[Vec<FaceId>]) -> Vec<FaceId> {
+    let mut all: Vec<FaceId> = regions.iter().flatten().copied().collect();
+    all.sort_unstable();
+    all.dedup();
+    all
+}
+
+/// Faces of `faces` as faces of the input mesh, sorted and without
+/// repeats: `source[f]` is the input face of face `f` when the mesh was
+/// triangulated from polygons (`None`: the mesh is the input).
+pub fn input_faces(faces: &[FaceId], source: Option<&[FaceId]>) -> Vec<u32> {
+    let mut out: Vec<u32> = match source {
+        Some(src) => faces.iter().map(|f| src[f.idx()].0).collect(),
+        None => faces.iter().map(|f| f.0).collect(),
+    };
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// The region a detection suggests for fairing: the union of its regions
+/// grown by [`SUPPORT_RINGS`], as input faces ([`input_faces`]).
+pub fn suggested_region(
+    mesh: &SurfaceMesh,
+    detection: &Detection,
+    source: Option<&[FaceId]>,
+) -> Vec<u32> {
+    input_faces(
+        &grow_region(mesh, &detection.all_faces(), SUPPORT_RINGS),
+        source,
+    )
+}
+
+/// One detected region as the report of `fairline detect` lists it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DetectedRegionEntry {
+    /// Largest site score inside.
+    pub score: f64,
+    /// Number of input faces of the region (without the support rings).
+    pub faces: usize,
+    /// Area of the region (mesh units²).
+    pub area: f64,
+    /// Score-weighted centre of the flagged sites inside.
+    pub center: [f64; 3],
+    /// Flagged sites inside.
+    pub flagged_sites: usize,
+    /// Lines crossing the region.
+    pub lines: Vec<usize>,
+}
+
+/// The report entries of the regions of `detection`, best first
+/// (`source` as for [`input_faces`]).
+pub fn detected_region_entries(
+    detection: &Detection,
+    source: Option<&[FaceId]>,
+) -> Vec<DetectedRegionEntry> {
+    detection
+        .regions
+        .iter()
+        .map(|r| DetectedRegionEntry {
+            score: r.score,
+            faces: input_faces(&r.faces, source).len(),
+            area: r.area,
+            center: r.center.to_array(),
+            flagged_sites: r.flagged_sites,
+            lines: r.lines.clone(),
+        })
+        .collect()
+}
+
+/// The report keys of fairing `results` (one report per faired region, in
+/// order): a single region's report as it is; otherwise the run summed up
+/// — iterations, movable vertices and Willmore energies summed, converged
+/// when every region converged, the highlight deviations their largest,
+/// `max_displacement` the largest move of a vertex over the whole run
+/// (`max_displacement`, measured by the caller) — with every region's
+/// report under `per_region`.
+pub fn regions_report(results: &[FairReport], max_displacement: f64) -> Map<String, Value> {
+    let results: Vec<Value> = results
+        .iter()
+        .map(|r| serde_json::to_value(r).unwrap_or(Value::Null))
+        .collect();
+    let mut keys = Map::new();
+    if let [Value::Object(one)] = results.as_slice() {
+        return one.clone();
+    }
+    let sum = |key: &str| -> f64 { results.iter().filter_map(|r| r[key].as_f64()).sum() };
+    keys.insert("iterations".into(), json!(sum("iterations") as u64));
+    keys.insert("converged".into(), json!(all_converged(&results)));
+    keys.insert(
+        "movable_vertices".into(),
+        json!(sum("movable_vertices") as u64),
+    );
+    keys.insert("willmore_before".into(), json!(sum("willmore_before")));
+    keys.insert("willmore_after".into(), json!(sum("willmore_after")));
+    for key in ["highlight_deviation_before", "highlight_deviation_after"] {
+        keys.insert(key.into(), json!(largest(&results, key)));
+    }
+    keys.insert("max_displacement".into(), json!(max_displacement));
+    keys.insert("per_region".into(), Value::Array(results));
+    keys
+}
+
+/// Whether every report says it converged.
+fn all_converged(results: &[Value]) -> bool {
+    results.iter().all(|r| r["converged"] == json!(true))
+}
+
+/// The largest value of `key` over the reports (0 when none has one).
+fn largest(results: &[Value], key: &str) -> f64 {
+    results
+        .iter()
+        .filter_map(|r| r[key].as_f64())
+        .fold(0.0, f64::max)
+}
+
+/// The highlight-line deviation of the faired regions, before and after
+/// (the largest over the regions; 0 when none was faired).
+pub fn regions_deviation(results: &[FairReport]) -> (f64, f64) {
+    let results: Vec<Value> = results
+        .iter()
+        .filter_map(|r| serde_json::to_value(r).ok())
+        .collect();
+    (
+        largest(&results, "highlight_deviation_before"),
+        largest(&results, "highlight_deviation_after"),
+    )
+}
+
+/// What a front end warns about after fairing `results` with at most
+/// `max_iterations` iterations per region, as plain sentences (the CLI
+/// prints them as `warning:` lines, every front end lists them in its
+/// report): no region was faired; a region did not converge; the
+/// highlight-line deviation got worse (with the detection score inside the
+/// regions before and after, `detection_scores`, as `fairline detect`
+/// measures it).
+pub fn regions_warnings(
+    results: &[FairReport],
+    max_iterations: usize,
+    detection_scores: (f64, f64),
+) -> Vec<String> {
+    let mut warnings = Vec::new();
+    if results.is_empty() {
+        warnings.push(
+            "no region was faired (nothing detected): the output is the input unchanged".into(),
+        );
+    }
+    if !results.iter().all(|r| r.converged) {
+        warnings.push(format!(
+            "fairing did not converge within --max-iterations {max_iterations}; try more iterations or a larger region (--grow, --auto)"
+        ));
+    }
+    let (before, after) = regions_deviation(results);
+    let (score_before, score_after) = detection_scores;
+    if after > before {
+        warnings.push(format!(
+            "the highlight-line deviation (distance of the lines inside the region from their own smoothed curves) got worse: {before:.4e} before, {after:.4e} after; the detection score (as `detect` measures it, same lights) went {score_before:.2} -> {score_after:.2}"
+        ));
+    }
+    warnings
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fair::{FairMethod, FairOptions, fair_highlight_lines};
+    use crate::mesh::bounding_box;
+    use crate::{Vec3, shapes};
+
+    /// Two small bumps (at x = ∓0.5) on a crowned panel, their regions,
+    /// the lights.
+    fn two_bumps() -> (SurfaceMesh, Vec<Vec<FaceId>>, LightArray) {
+        let mesh = shapes::height_field(121, 91, (-1.0, 1.0), (-0.75, 0.75), |x, y| {
+            let bump = |cx: f64| 0.003 * (-((x - cx).powi(2) + y * y) / (0.1 * 0.1)).exp();
+            0.3 * (1.0 - 0.45 * x * x - 0.25 * y * y) + bump(-0.5) + bump(0.5)
+        });
+        let region = |cx: f64| {
+            crate::io::RegionSpec::Sphere {
+                center: Vec3::new(cx, 0.0, 0.0),
+                radius: 0.35,
+            }
+            .faces(&mesh)
+            .unwrap()
+        };
+        let regions = vec![region(-0.5), region(0.5)];
+        let (lo, hi) = bounding_box(mesh.positions()).unwrap();
+        (mesh, regions, LightArray::default_for(lo, hi, None))
+    }
+
+    fn fair_in_turn(
+        mesh: &SurfaceMesh,
+        regions: &[Vec<FaceId>],
+        options: &FairOptions,
+    ) -> Vec<FairReport> {
+        let mut current = mesh.clone();
+        regions
+            .iter()
+            .map(|faces| {
+                let out =
+                    fair_highlight_lines(&current, &options.clone().region(faces.clone())).unwrap();
+                current.set_positions(out.positions).unwrap();
+                out.report
+            })
+            .collect()
+    }
+
+    #[test]
+    fn one_region_reports_itself_and_several_are_summed_up() {
+        let (mesh, regions, light) = two_bumps();
+        let options = FairOptions::default()
+            .light(light)
+            .method(FairMethod::DiffusionFlow)
+            .max_iterations(2)
+            .epsilon(1e-14);
+        let reports = fair_in_turn(&mesh, &regions, &options);
+        // one region: its own keys, exactly
+        let one = regions_report(&reports[..1], 0.5);
+        assert_eq!(
+            Value::Object(one),
+            serde_json::to_value(&reports[0]).unwrap()
+        );
+        // two: sums, maxima, the caller's displacement, each region's report
+        let both = regions_report(&reports, 0.25);
+        let (a, b) = (&reports[0], &reports[1]);
+        assert_eq!(both["iterations"], json!(a.iterations + b.iterations));
+        assert_eq!(
+            both["movable_vertices"],
+            json!(a.movable_vertices + b.movable_vertices)
+        );
+        assert_eq!(
+            both["willmore_before"],
+            json!(a.willmore_before + b.willmore_before)
+        );
+        assert_eq!(
+            both["highlight_deviation_after"],
+            json!(a.highlight_deviation_after.max(b.highlight_deviation_after))
+        );
+        assert_eq!(both["converged"], json!(a.converged && b.converged));
+        assert_eq!(both["max_displacement"], json!(0.25));
+        assert_eq!(both["per_region"].as_array().map(Vec::len), Some(2));
+        assert_eq!(
+            regions_deviation(&reports),
+            (
+                a.highlight_deviation_before
+                    .max(b.highlight_deviation_before),
+                a.highlight_deviation_after.max(b.highlight_deviation_after)
+            )
+        );
+        // 2 iterations of diffusion flow do not reach ε = 1e-14: said once
+        assert!(!a.converged);
+        let w = regions_warnings(&reports, 2, (1.0, 0.5));
+        assert_eq!(
+            w[0],
+            "fairing did not converge within --max-iterations 2; try more iterations or a larger region (--grow, --auto)"
+        );
+        assert!(w.iter().all(|s| !s.starts_with("no region was faired")));
+        // nothing faired: said, and nothing else
+        assert_eq!(
+            regions_warnings(&[], 3, (0.0, 0.0)),
+            vec!["no region was faired (nothing detected): the output is the input unchanged"]
+        );
+    }
+
+    #[test]
+    fn detected_regions_are_grown_and_mapped_to_the_input_faces() {
+        let (mesh, _, light) = two_bumps();
+        let (det, grown) =
+            detect_regions_to_fair(&mesh, light, HighlightOptions::default()).unwrap();
+        assert_eq!(det.regions.len(), grown.len());
+        assert!(!det.regions.is_empty(), "two bumps are defects");
+        for (r, g) in det.regions.iter().zip(&grown) {
+            assert_eq!(g, &grow_region(&mesh, &r.faces, AUTO_RINGS));
+            assert!(g.len() > r.faces.len());
+        }
+        let union = regions_union(&grown);
+        assert!(union.windows(2).all(|w| w[0] < w[1]));
+        assert_eq!(
+            union.len(),
+            grown
+                .iter()
+                .flatten()
+                .collect::<std::collections::BTreeSet<_>>()
+                .len()
+        );
+        // triangles of quads (two per quad) map to their quad, sorted,
+        // without repeats
+        let source: Vec<FaceId> = (0..mesh.face_count() as u32)
+            .map(|f| FaceId(f / 2))
+            .collect();
+        let faces = [FaceId(5), FaceId(0), FaceId(3), FaceId(1)];
+        assert_eq!(input_faces(&faces, Some(&source)), vec![0, 1, 2]);
+        assert_eq!(input_faces(&faces, None), vec![0, 1, 3, 5]);
+        let suggested = suggested_region(&mesh, &det, None);
+        assert_eq!(
+            suggested,
+            input_faces(&grow_region(&mesh, &det.all_faces(), SUPPORT_RINGS), None)
+        );
+        let entries = detected_region_entries(&det, None);
+        assert_eq!(entries.len(), det.regions.len());
+        assert_eq!(entries[0].faces, det.regions[0].faces.len());
+        assert_eq!(entries[0].score, det.regions[0].score);
+    }
+
+    #[test]
+    fn a_region_without_movable_vertices_says_how_to_enlarge_it() {
+        let e = FairError::NoMovableVertex("the region is too thin".into());
+        assert_eq!(
+            e.user_message(),
+            "the region is too thin; a vertex can move only when every face around it and around its neighbours is in the region: enlarge the region or pass --grow 2"
+        );
+        let other = FairError::InvalidOption("epsilon".into());
+        assert_eq!(other.user_message(), other.to_string());
+    }
+}
