@@ -11,9 +11,9 @@
 
 use crate::{Failure, Res, SoupArrays, mesh_from, positions_array, soup_arrays, soup_from};
 use fairline::highlight::{
-    CircularLight, CircularLights, DetectOptions, HighlightError, HighlightLines, HighlightModel,
-    HighlightOptions, LightArray, LightChoice, Readability, UpAxis,
-    circular_highlight_bands, circular_highlight_lines, detect_irregularities,
+    CircularLight, CircularLights, DetectOptions, HighlightError, HighlightModel, HighlightOptions,
+    LightArray, LightChoice, Readability, UpAxis, circular_highlight_bands,
+    circular_highlight_lines, detect_irregularities,
 };
 use fairline::io::JsonReport as Report;
 use fairline::mesh::{FaceId, VertexId};
@@ -699,7 +699,10 @@ fn highlight_lines(
                 })
                 .map_err(highlight_error)?;
             report.set("light", json!({"kind": "linear", "array": array}));
-            report.set("drawn", fairline::highlight::DrawnLineStats::of(&mesh, &array, &shown));
+            report.set(
+                "drawn",
+                fairline::highlight::DrawnLineStats::of(&mesh, &array, &shown),
+            );
             (lines, bands, None)
         };
         let document = fairline::io::highlight_lines_json(&lines, bands.as_ref(), radii.as_deref());
@@ -788,7 +791,10 @@ fn detect<'py>(
         report.set("lines", lines.lines.len());
         report.set("spacing", array.spacing());
         report.set("drawn_spacing", shown_light.spacing());
-        report.set("drawn", fairline::highlight::DrawnLineStats::of(&mesh, &shown_light, &shown));
+        report.set(
+            "drawn",
+            fairline::highlight::DrawnLineStats::of(&mesh, &shown_light, &shown),
+        );
         // the library's numbers of the measure, under its own names (as
         // the CLI writes them)
         if let Ok(serde_json::Value::Object(numbers)) = serde_json::to_value(&det) {
@@ -979,7 +985,11 @@ fn fair<'py>(
         if let Some(w) = as_detect.remaining_defect_warning(score_before, score_after) {
             report.warn(w);
         }
-        for w in regions_warnings(&results, options.max_iterations, (score_before, score_after)) {
+        for w in regions_warnings(
+            &results,
+            options.max_iterations,
+            (score_before, score_after),
+        ) {
             report.warn(w);
         }
         report.set("method", &method);
