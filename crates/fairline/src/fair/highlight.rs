@@ -851,14 +851,7 @@ pub fn fair_highlight_lines(
         converged,
         refits,
         mut lines,
-    } = iterate(
-        &energy,
-        &mut mesh,
-        &mut model,
-        &lines_before,
-        ebar,
-        options,
-    )?;
+    } = iterate(&energy, &mut mesh, &mut model, &lines_before, ebar, options)?;
     if let Some(flow) = &flow {
         lines = blend_flow(
             &mut mesh,
