@@ -437,7 +437,7 @@ fn rings(nbrs: &[Vec<usize>], start: usize, depth: usize) -> Vec<usize> {
 /// its normal on the one-ring, H_j of the neighbours on theirs, the
 /// cotangent weights on the one-ring), so moving vertex k changes only the
 /// rows of its two-ring: columns whose two-rings are disjoint (distance
-/// > 4) are probed by one finite difference together. Returns the rows of
+/// above 4) are probed by one finite difference together. Returns the rows of
 /// each column and the groups of columns probed together.
 fn jacobian_pattern(nbrs: &[Vec<usize>], u: &Unknowns) -> (Vec<Vec<usize>>, Vec<Vec<usize>>) {
     let index = &u.index;
