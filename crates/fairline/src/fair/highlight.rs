@@ -499,6 +499,300 @@ fn solve_box(
     Ok((sol.x, predicted, sol.active, sol.iterations))
 }
 
+/// The energy of one fairing (Eq. (15), its variants and the baseline) over
+/// the movable set: what [`fair_highlight_lines`] linearises and what a
+/// step reaches.
+struct Energy<'a> {
+    set: &'a MovableSet,
+    /// Column of each movable vertex, [`NOT_MOVABLE`] for the others.
+    col: Vec<u32>,
+    method: FairMethod,
+    w1: f64,
+    w2: f64,
+    /// ω3 (0 for the paper's method).
+    w3: f64,
+    /// f_diff unit D s² (module `system`).
+    diff_unit: f64,
+    /// The D² of f_lap's residual (D⁴ of the energy).
+    curvature_laplacian_scale: f64,
+}
+
+impl<'a> Energy<'a> {
+    /// The weights and units of `options` on the region `set` of `mesh`
+    /// (positions of the input): D the bounding-box diagonal of the inside
+    /// and movable vertices (at least ē).
+    fn new(
+        mesh: &SurfaceMesh,
+        set: &'a MovableSet,
+        light: &LightArray,
+        ebar: f64,
+        options: &FairOptions,
+    ) -> Energy<'a> {
+        let mut col = vec![NOT_MOVABLE; mesh.vertex_count()];
+        for (k, v) in set.movable.iter().enumerate() {
+            col[v.idx()] = k as u32;
+        }
+        let region_points: Vec<Vec3> = set
+            .inside_vertices
+            .iter()
+            .chain(set.movable.iter())
+            .map(|v| mesh.position(*v))
+            .collect();
+        let diameter = crate::mesh::bounding_box(&region_points)
+            .map_or(0.0, |(lo, hi)| (hi - lo).length())
+            .max(ebar);
+        Energy {
+            set,
+            col,
+            method: options.method,
+            w1: options.fair_weight,
+            w2: options.diff_weight,
+            w3: match options.method {
+                FairMethod::Paper => 0.0,
+                _ => options.laplacian_weight,
+            },
+            diff_unit: diameter * light.spacing() * light.spacing(),
+            curvature_laplacian_scale: diameter * diameter,
+        }
+    }
+
+    /// The linearised energy of the current mesh (step 4 of Algorithm 2).
+    fn linearise(
+        &self,
+        mesh: &SurfaceMesh,
+        model: &HighlightModel,
+        lines: &HighlightLines,
+        tangents: &Tangents,
+    ) -> Linearised {
+        let (set, col) = (self.set, &self.col);
+        let frozen = Frozen::new(mesh);
+        let normals = model.normals();
+        let desired = desired_lines_with(lines, |n| set.node_inside(mesh, n), tangents);
+        let fair = willmore_residual(mesh, &frozen, normals, col, &set.inside_vertices);
+        let lap = (self.w3 > 0.0 && self.method != FairMethod::DiffusionFlow)
+            .then(|| diffusion_residual(mesh, &frozen, normals, col, &set.movable));
+        let (diff, diff_nodes) =
+            difference_residual(mesh, model, normals, col, &desired, self.diff_unit);
+        let (f_fair, f_diff) = (fair.energy(), diff.energy());
+        let residual = match self.method {
+            FairMethod::Highlight | FairMethod::Paper => {
+                let mut r = Residual::default();
+                r.extend_scaled(fair, self.w1.sqrt());
+                if let Some(lap) = lap {
+                    r.extend_scaled(lap, self.w3.sqrt() * self.curvature_laplacian_scale);
+                }
+                r.extend_scaled(diff, self.w2.sqrt());
+                r
+            }
+            FairMethod::DiffusionFlow => {
+                diffusion_residual(mesh, &frozen, normals, col, &set.movable)
+            }
+        };
+        Linearised {
+            objective: residual.energy(),
+            residual,
+            desired,
+            f_fair,
+            f_diff,
+            diff_nodes,
+        }
+    }
+
+    /// The energy reached after a step, with the targets `diff_nodes` of
+    /// the iteration (fresh areas, cotangents and normals).
+    fn reached(&self, mesh: &SurfaceMesh, model: &HighlightModel, diff_nodes: &[DiffNode]) -> f64 {
+        let (set, col) = (self.set, &self.col);
+        match self.method {
+            FairMethod::Highlight | FairMethod::Paper => {
+                let frozen = Frozen::new(mesh);
+                let mut f_fair = self.w1 * region_willmore(mesh, &frozen, &set.inside_vertices);
+                if self.w3 > 0.0 {
+                    f_fair += self.w3
+                        * diffusion_residual(mesh, &frozen, model.normals(), col, &set.movable)
+                            .energy()
+                        * self.curvature_laplacian_scale.powi(2);
+                }
+                f_fair + self.w2 * difference_energy_after(mesh, model, diff_nodes)
+            }
+            FairMethod::DiffusionFlow => {
+                let frozen = Frozen::new(mesh);
+                diffusion_residual(mesh, &frozen, model.normals(), col, &set.movable).energy()
+            }
+        }
+    }
+}
+
+/// The lights of `options`, or the default lights of the mesh.
+fn lights_of(mesh: &SurfaceMesh, options: &FairOptions) -> Result<LightArray, FairError> {
+    match options.light {
+        Some(l) => Ok(l),
+        None => LightArray::default_for_mesh(mesh, UpAxis::Auto).ok_or_else(|| {
+            FairError::InvalidOption("the mesh has no finite vertex to place lights by".into())
+        }),
+    }
+}
+
+/// The state of Algorithm 2's iteration.
+struct Iterate {
+    history: Vec<IterationReport>,
+    converged: bool,
+    /// Refits of the desired lines carried out.
+    refits: usize,
+    /// The highlight lines of the current mesh.
+    lines: HighlightLines,
+}
+
+/// One Gauss–Newton step of Algorithm 2 inside the Eq. (16) box: moves the
+/// movable vertices along their normals, updates the model and returns the
+/// iteration's report, the positions before the step and ρ (reached over
+/// predicted decrease).
+fn box_step(
+    energy: &Energy,
+    mesh: &mut SurfaceMesh,
+    model: &mut HighlightModel,
+    current: &Linearised,
+    damping: f64,
+    it: usize,
+    ebar: f64,
+) -> Result<(IterationReport, Vec<Vec3>, f64), FairError> {
+    let set = energy.set;
+    let normals = model.normals().to_vec();
+    let bounds = step_bounds(mesh, &set.movable);
+    let (x, predicted, active, qp_iterations) = solve_box(&current.residual, &bounds, damping)?;
+    let max_step = x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let old: Vec<Vec3> = set.movable.iter().map(|v| mesh.position(*v)).collect();
+    let positions = mesh.positions_mut();
+    for (k, v) in set.movable.iter().enumerate() {
+        let np = old[k] + x[k] * normals[v.idx()];
+        if np.is_finite() {
+            positions[v.idx()] = np;
+        }
+    }
+    model.update(mesh, &set.movable)?;
+    // the energy reached, with the targets of this iteration
+    let achieved = energy.reached(mesh, model, &current.diff_nodes);
+    // Levenberg–Marquardt acceptance of the Gauss–Newton step
+    let gain = current.objective - predicted;
+    let rho = if gain > 0.0 {
+        (current.objective - achieved) / gain
+    } else {
+        0.0
+    };
+    let accepted = achieved < current.objective && achieved.is_finite();
+    let report = IterationReport {
+        iteration: it,
+        f_fair: current.f_fair,
+        f_diff: current.f_diff,
+        objective: current.objective,
+        predicted,
+        achieved,
+        accepted,
+        damping,
+        max_step,
+        step_ratio: max_step / ebar,
+        active_bounds: active,
+        qp_iterations,
+        target_nodes: current.desired.lines.iter().map(|l| l.nodes.len()).sum(),
+        skipped_runs: current.desired.skipped,
+    };
+    Ok((report, old, rho))
+}
+
+/// Algorithm 2's iteration with Levenberg–Marquardt step acceptance and
+/// the refits of the desired lines ([`FairOptions::refits`]), until
+/// Eq. (17) holds after the last refit or N_max iterations.
+fn iterate(
+    energy: &Energy,
+    mesh: &mut SurfaceMesh,
+    model: &mut HighlightModel,
+    lines_before: &HighlightLines,
+    ebar: f64,
+    options: &FairOptions,
+) -> Result<Iterate, FairError> {
+    let set = energy.set;
+    let mut history = Vec::new();
+    let mut converged = false;
+    let mut lines = lines_before.clone();
+    let mut tangents = Tangents::new();
+    let mut refits_left = match options.method {
+        FairMethod::Highlight => options.refits,
+        FairMethod::Paper | FairMethod::DiffusionFlow => 0,
+    };
+    let mut refits = 0;
+    let mut current = energy.linearise(mesh, model, &lines, &tangents);
+    let mut damping = 0.0;
+    options.control.checkpoint()?;
+    for it in 1..=options.max_iterations {
+        let (report, old, rho) = box_step(energy, mesh, model, &current, damping, it, ebar)?;
+        let (accepted, max_step) = (report.accepted, report.max_step);
+        history.push(report);
+        options
+            .control
+            .step("iterations", it as u64, options.max_iterations as u64)?;
+        if accepted {
+            lines = model.lines(mesh);
+            current = energy.linearise(mesh, model, &lines, &tangents);
+            if rho > 0.75 {
+                damping *= 0.1;
+                if damping < MIN_DAMPING {
+                    damping = 0.0;
+                }
+            } else if rho < 0.25 {
+                damping = (damping * 4.0).max(MIN_DAMPING);
+            }
+        } else {
+            let positions = mesh.positions_mut();
+            for (k, v) in set.movable.iter().enumerate() {
+                positions[v.idx()] = old[k];
+            }
+            model.update(mesh, &set.movable)?;
+            damping = (damping * 10.0).max(MIN_DAMPING);
+        }
+        if max_step / ebar < options.epsilon {
+            if refits_left > 0 {
+                // the desired lines refitted to the faired lines (module
+                // `desired`), then on with the same stopping rule
+                refits_left -= 1;
+                refits += 1;
+                tangents = across_tangents(&lines, |n| set.node_inside(mesh, n));
+                current = energy.linearise(mesh, model, &lines, &tangents);
+                damping = 0.0;
+                continue;
+            }
+            converged = true;
+            break;
+        }
+    }
+    Ok(Iterate {
+        history,
+        converged,
+        refits,
+        lines,
+    })
+}
+
+/// (1 − s)·highlight + s·flow on the movable vertices
+/// ([`FairOptions::flow_share`]); the others are the input in both, so they
+/// stay bit-identical. Returns the lines of the blended mesh.
+fn blend_flow(
+    mesh: &mut SurfaceMesh,
+    model: &mut HighlightModel,
+    set: &MovableSet,
+    flow: &[Vec3],
+    s: f64,
+) -> Result<HighlightLines, FairError> {
+    let positions = mesh.positions_mut();
+    for v in &set.movable {
+        let (h, f) = (positions[v.idx()], flow[v.idx()]);
+        let np = h + s * (f - h);
+        if np.is_finite() {
+            positions[v.idx()] = np;
+        }
+    }
+    model.update(mesh, &set.movable)?;
+    Ok(model.lines(mesh))
+}
+
 /// Fairs the region [`FairOptions::region`] of a triangle mesh with the
 /// highlight lines of [`FairOptions::light`] (Yong et al. §3, Algorithm 2,
 /// Eqs. (6)–(17); see the module documentation) and returns the new
@@ -518,13 +812,7 @@ pub fn fair_highlight_lines(
     if options.region.is_empty() {
         return Err(FairError::Region("the region has no face".into()));
     }
-    let light = match options.light {
-        Some(l) => l,
-        None => LightArray::default_for_mesh(mesh, UpAxis::Auto).ok_or_else(|| {
-            FairError::InvalidOption("the mesh has no finite vertex to place lights by".into())
-        })?,
-    };
-    let faces = options.region.as_slice();
+    let light = lights_of(mesh, options)?;
     // the diffusion-flow state of the same region, for the share of
     // [`FairOptions::flow_share`]
     let flow = if options.method == FairMethod::Highlight && options.flow_share > 0.0 {
@@ -546,11 +834,7 @@ pub fn fair_highlight_lines(
         .iter()
         .flat_map(|l| l.nodes.iter().copied())
         .collect();
-    let set = movable_vertices(&mesh, faces, &nodes)?;
-    let mut col = vec![NOT_MOVABLE; mesh.vertex_count()];
-    for (k, v) in set.movable.iter().enumerate() {
-        col[v.idx()] = k as u32;
-    }
+    let set = movable_vertices(&mesh, &options.region, &nodes)?;
     let ebar = region_edge_length(&mesh, &set);
     if !(ebar > 0.0) || !ebar.is_finite() {
         return Err(FairError::Region(
@@ -558,187 +842,26 @@ pub fn fair_highlight_lines(
         ));
     }
     let start = mesh.positions().to_vec();
-    // f_diff unit D s² (module `system`): D the region's bounding-box diagonal
-    let region_points: Vec<Vec3> = set
-        .inside_vertices
-        .iter()
-        .chain(set.movable.iter())
-        .map(|v| start[v.idx()])
-        .collect();
-    let diameter = crate::mesh::bounding_box(&region_points)
-        .map_or(0.0, |(lo, hi)| (hi - lo).length())
-        .max(ebar);
-    let diff_unit = diameter * light.spacing() * light.spacing();
-    let inside_node = |m: &SurfaceMesh, n: NodeId| set.node_inside(m, n);
-    let w3 = match options.method {
-        FairMethod::Paper => 0.0,
-        _ => options.laplacian_weight,
-    };
-    // the D⁴ of f_lap, as a residual scale
-    let curvature_laplacian_scale = diameter * diameter;
-    let desired_before = desired_lines(&lines_before, |n| inside_node(&mesh, n));
+    let energy = Energy::new(&mesh, &set, &light, ebar, options);
+    let desired_before = desired_lines(&lines_before, |n| set.node_inside(&mesh, n));
     let deviation_before = desired_before.deviation();
     let willmore_before = region_willmore(&mesh, &Frozen::new(&mesh), &set.inside_vertices);
-    let (w1, w2) = (options.fair_weight, options.diff_weight);
-    // the linearised energy of the current mesh (steps 4 of Algorithm 2)
-    let linearise = |mesh: &SurfaceMesh,
-                     model: &HighlightModel,
-                     lines: &HighlightLines,
-                     tangents: &Tangents| {
-        let frozen = Frozen::new(mesh);
-        let normals = model.normals();
-        let desired = desired_lines_with(lines, |n| set.node_inside(mesh, n), tangents);
-        let fair = willmore_residual(mesh, &frozen, normals, &col, &set.inside_vertices);
-        let lap = (w3 > 0.0 && options.method != FairMethod::DiffusionFlow)
-            .then(|| diffusion_residual(mesh, &frozen, normals, &col, &set.movable));
-        let (diff, diff_nodes) =
-            difference_residual(mesh, model, normals, &col, &desired, diff_unit);
-        let (f_fair, f_diff) = (fair.energy(), diff.energy());
-        let residual = match options.method {
-            FairMethod::Highlight | FairMethod::Paper => {
-                let mut r = Residual::default();
-                r.extend_scaled(fair, w1.sqrt());
-                if let Some(lap) = lap {
-                    r.extend_scaled(lap, w3.sqrt() * curvature_laplacian_scale);
-                }
-                r.extend_scaled(diff, w2.sqrt());
-                r
-            }
-            FairMethod::DiffusionFlow => {
-                diffusion_residual(mesh, &frozen, normals, &col, &set.movable)
-            }
-        };
-        Linearised {
-            objective: residual.energy(),
-            residual,
-            desired,
-            f_fair,
-            f_diff,
-            diff_nodes,
-        }
-    };
-    let mut history = Vec::new();
-    let mut converged = false;
-    let mut lines = lines_before.clone();
-    let mut tangents = Tangents::new();
-    let mut refits_left = match options.method {
-        FairMethod::Highlight => options.refits,
-        FairMethod::Paper | FairMethod::DiffusionFlow => 0,
-    };
-    let mut refits = 0;
-    let mut current = linearise(&mesh, &model, &lines, &tangents);
-    let mut damping = 0.0;
-    options.control.checkpoint()?;
-    for it in 1..=options.max_iterations {
-        let normals = model.normals().to_vec();
-        let bounds = step_bounds(&mesh, &set.movable);
-        let (x, predicted, active, qp_iterations) = solve_box(&current.residual, &bounds, damping)?;
-        let max_step = x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        let old: Vec<Vec3> = set.movable.iter().map(|v| mesh.position(*v)).collect();
-        let positions = mesh.positions_mut();
-        for (k, v) in set.movable.iter().enumerate() {
-            let np = old[k] + x[k] * normals[v.idx()];
-            if np.is_finite() {
-                positions[v.idx()] = np;
-            }
-        }
-        model.update(&mesh, &set.movable)?;
-        // the energy reached, with the targets of this iteration
-        let achieved = match options.method {
-            FairMethod::Highlight | FairMethod::Paper => {
-                let frozen = Frozen::new(&mesh);
-                let mut f_fair = w1 * region_willmore(&mesh, &frozen, &set.inside_vertices);
-                if w3 > 0.0 {
-                    f_fair += w3
-                        * diffusion_residual(&mesh, &frozen, model.normals(), &col, &set.movable)
-                            .energy()
-                        * curvature_laplacian_scale.powi(2);
-                }
-                f_fair + w2 * difference_energy_after(&mesh, &model, &current.diff_nodes)
-            }
-            FairMethod::DiffusionFlow => {
-                let frozen = Frozen::new(&mesh);
-                diffusion_residual(&mesh, &frozen, model.normals(), &col, &set.movable).energy()
-            }
-        };
-        // Levenberg–Marquardt acceptance of the Gauss–Newton step
-        let gain = current.objective - predicted;
-        let rho = if gain > 0.0 {
-            (current.objective - achieved) / gain
-        } else {
-            0.0
-        };
-        let accepted = achieved < current.objective && achieved.is_finite();
-        let report = IterationReport {
-            iteration: it,
-            f_fair: current.f_fair,
-            f_diff: current.f_diff,
-            objective: current.objective,
-            predicted,
-            achieved,
-            accepted,
-            damping,
-            max_step,
-            step_ratio: max_step / ebar,
-            active_bounds: active,
-            qp_iterations,
-            target_nodes: current.desired.lines.iter().map(|l| l.nodes.len()).sum(),
-            skipped_runs: current.desired.skipped,
-        };
-        history.push(report);
-        options
-            .control
-            .step("iterations", it as u64, options.max_iterations as u64)?;
-        if accepted {
-            lines = model.lines(&mesh);
-            current = linearise(&mesh, &model, &lines, &tangents);
-            if rho > 0.75 {
-                damping *= 0.1;
-                if damping < MIN_DAMPING {
-                    damping = 0.0;
-                }
-            } else if rho < 0.25 {
-                damping = (damping * 4.0).max(MIN_DAMPING);
-            }
-        } else {
-            let positions = mesh.positions_mut();
-            for (k, v) in set.movable.iter().enumerate() {
-                positions[v.idx()] = old[k];
-            }
-            model.update(&mesh, &set.movable)?;
-            damping = (damping * 10.0).max(MIN_DAMPING);
-        }
-        if max_step / ebar < options.epsilon {
-            if refits_left > 0 {
-                // the desired lines refitted to the faired lines (module
-                // `desired`), then on with the same stopping rule
-                refits_left -= 1;
-                refits += 1;
-                tangents = across_tangents(&lines, |n| set.node_inside(&mesh, n));
-                current = linearise(&mesh, &model, &lines, &tangents);
-                damping = 0.0;
-                continue;
-            }
-            converged = true;
-            break;
-        }
-    }
+    let Iterate {
+        history,
+        converged,
+        refits,
+        mut lines,
+    } = iterate(&energy, &mut mesh, &mut model, &lines_before, ebar, options)?;
     if let Some(flow) = &flow {
-        // (1 − s)·highlight + s·flow on the movable vertices; the others
-        // are the input in both, so they stay bit-identical
-        let s = options.flow_share;
-        let positions = mesh.positions_mut();
-        for v in &set.movable {
-            let (h, f) = (positions[v.idx()], flow.positions[v.idx()]);
-            let np = h + s * (f - h);
-            if np.is_finite() {
-                positions[v.idx()] = np;
-            }
-        }
-        model.update(&mesh, &set.movable)?;
-        lines = model.lines(&mesh);
+        lines = blend_flow(
+            &mut mesh,
+            &mut model,
+            &set,
+            &flow.positions,
+            options.flow_share,
+        )?;
     }
-    let desired_after = desired_lines(&lines, |n| inside_node(&mesh, n));
+    let desired_after = desired_lines(&lines, |n| set.node_inside(&mesh, n));
     let willmore_after = region_willmore(&mesh, &Frozen::new(&mesh), &set.inside_vertices);
     let max_displacement = mesh
         .positions()

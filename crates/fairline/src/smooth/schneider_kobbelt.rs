@@ -23,7 +23,10 @@ pub struct SchneiderKobbeltOptions {
     /// G¹ normals of constrained vertices (normalised). Constrained
     /// boundary vertices not listed get the normal of a quadric fit over
     /// their input `normal_fit_rings`-ring ([`geom::quadric_fit_rings`]),
-    /// falling back to the vertex normal.
+    /// falling back to the vertex normal, made perpendicular to the
+    /// boundary curve (its tangent, or both one-sided tangents at a
+    /// corner): a surface through the fixed boundary cannot have a normal
+    /// with a component along it. Given normals are taken as they are.
     pub normals: Vec<(VertexId, Vec3)>,
     /// Rings of the quadric fit ([`geom::quadric_fit_rings`]) that
     /// estimates the G¹ normals not given in `normals`; `None` chooses them
@@ -119,6 +122,612 @@ struct Eval {
     merit: f64,
 }
 
+/// The free vertices (the unknowns of both second-order problems) and their
+/// components, joined by free–free edges.
+struct Unknowns {
+    /// Row of each vertex among the unknowns (`usize::MAX`: constrained).
+    index: Vec<usize>,
+    /// Vertex of each unknown.
+    vertices: Vec<usize>,
+    /// Component of each unknown.
+    component: Vec<usize>,
+    /// Per component: it touches no constrained vertex (no Dirichlet data).
+    floating: Vec<bool>,
+}
+
+impl Unknowns {
+    /// Numbers the free vertices and finds their components. A component
+    /// that touches no constrained vertex — a closed mesh without fixed
+    /// vertices — has no Dirichlet data: its harmonic functions are the
+    /// constants, the Laplacian block is singular, and H̃ is the
+    /// area-weighted mean of H over the component (the harmonic function
+    /// nearest to H).
+    fn new(roles: &[Role], nbrs: &[Vec<usize>]) -> Unknowns {
+        let n = roles.len();
+        let mut index = vec![usize::MAX; n];
+        let mut vertices = Vec::new();
+        for i in 0..n {
+            if roles[i] == Role::Free {
+                index[i] = vertices.len();
+                vertices.push(i);
+            }
+        }
+        let m = vertices.len();
+        let mut component = vec![usize::MAX; m];
+        let mut floating: Vec<bool> = Vec::new();
+        for start in 0..m {
+            if component[start] != usize::MAX {
+                continue;
+            }
+            let id = floating.len();
+            let mut touches = false;
+            component[start] = id;
+            let mut stack = vec![vertices[start]];
+            while let Some(i) = stack.pop() {
+                for &j in &nbrs[i] {
+                    let r = index[j];
+                    if r == usize::MAX {
+                        touches = true;
+                    } else if component[r] == usize::MAX {
+                        component[r] = id;
+                        stack.push(j);
+                    }
+                }
+            }
+            floating.push(!touches);
+        }
+        Unknowns {
+            index,
+            vertices,
+            component,
+            floating,
+        }
+    }
+
+    fn any_floating(&self) -> bool {
+        self.floating.iter().any(|f| *f)
+    }
+
+    /// The harmonic field's fixed values: constrained vertices and the free
+    /// vertices of floating components.
+    fn field_fixed(&self) -> Vec<bool> {
+        (0..self.index.len())
+            .map(|i| self.index[i] == usize::MAX || self.floating[self.component[self.index[i]]])
+            .collect()
+    }
+}
+
+/// Evaluates the discrete Δ_B H of a position vector on the input's
+/// connectivity (every geometry quantity through geom's `*_at(positions)`
+/// views).
+struct Evaluator<'a> {
+    mesh: &'a SurfaceMesh,
+    roles: &'a [Role],
+    /// G¹ normals of the constrained vertices.
+    normals0: &'a [Vec3],
+    nbrs: &'a [Vec<usize>],
+    unknown: &'a [usize],
+}
+
+impl Evaluator<'_> {
+    fn evaluate(&self, p: &[Vec3]) -> Eval {
+        let (mesh, n) = (self.mesh, self.roles.len());
+        let mut normals = geom::vertex_normals_max_at(mesh, p);
+        for i in 0..n {
+            if self.roles[i] != Role::Free {
+                normals[i] = self.normals0[i];
+            }
+        }
+        let fits: Vec<Option<f64>> = (0..n)
+            .map(|i| {
+                if self.nbrs[i].is_empty() || normals[i] == Vec3::ZERO {
+                    return None;
+                }
+                let q: Vec<Vec3> = self.nbrs[i].iter().map(|&j| p[j]).collect();
+                Some(moreton_sequin(p[i], normals[i], &q))
+            })
+            .collect();
+        let hw = geom::halfedge_weights_at(mesh, p, LaplaceWeights::Cotangent);
+        // merit: Σ_i (Σ_j w_ij (H_i − H_j))² over the free vertices
+        let h_of = |i: usize| fits[i].unwrap_or(0.0);
+        let f: Vec<f64> = self
+            .unknown
+            .iter()
+            .map(|&i| {
+                mesh.outgoing(VertexId(i as u32))
+                    .map(|h| 2.0 * hw[h.idx()] * (h_of(i) - h_of(mesh.to_vertex(h).idx())))
+                    .sum()
+            })
+            .collect();
+        let merit = f.iter().map(|x| x * x).sum();
+        Eval {
+            normals,
+            fits,
+            hw,
+            f,
+            merit,
+        }
+    }
+}
+
+/// G¹ normals of the constrained vertices: given in `opts.normals`, else a
+/// quadric fit over the input's `normal_fit_rings` rings (a boundary vertex
+/// sees only half a fan, which tilts fan normals by O(h)), else the vertex
+/// normal; an estimated normal of a boundary vertex is then made
+/// perpendicular to the boundary curve ([`perpendicular_to_boundary`]).
+/// The fit's error along the curve is not noise the fairing can average
+/// out: with the boundary positions fixed it contradicts them, and the
+/// Moreton–Séquin estimate of H at the boundary (Eq. (28)), the Dirichlet
+/// data of H̃, then bends the first rings to honour it — on noisy sphere
+/// caps the largest error sat there, most at the patch corners
+/// (BENCHMARKS.md, Session 20). Free vertices get their vertex normal
+/// (replaced every iteration).
+fn g1_normals(
+    mesh: &SurfaceMesh,
+    roles: &[Role],
+    opts: &SchneiderKobbeltOptions,
+    ebar: f64,
+) -> Result<Vec<Vec3>, SmoothError> {
+    let n = mesh.vertex_count();
+    let fit_rings = opts.normal_fit_rings.unwrap_or_else(|| {
+        let (lo, hi) = mesh.positions().iter().fold(
+            (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let rings = 0.15 * (hi - lo).length() / ebar;
+        if rings.is_finite() {
+            (rings.ceil() as usize).clamp(2, 12)
+        } else {
+            2
+        }
+    });
+    let mut normals0 = geom::vertex_normals_max(mesh);
+    for i in 0..n {
+        let v = VertexId(i as u32);
+        if roles[i] != Role::Free
+            && mesh.is_boundary_vertex(v)
+            && let Some(f) = geom::quadric_fit_rings(mesh, v, fit_rings)
+        {
+            normals0[i] = f.normal;
+        }
+    }
+    for (i, tangents) in boundary_tangents(mesh) {
+        if roles[i] != Role::Free {
+            normals0[i] = perpendicular_to_boundary(normals0[i], tangents);
+        }
+    }
+    for &(v, nv) in &opts.normals {
+        let i = v.idx();
+        if i >= n {
+            return Err(SmoothError::InvalidOption(format!(
+                "normal given for vertex {i}, the mesh has {n}"
+            )));
+        }
+        let l = nv.length();
+        if !(l > 0.0) || !l.is_finite() {
+            return Err(SmoothError::InvalidOption(format!(
+                "normal of vertex {i} is zero or not finite"
+            )));
+        }
+        normals0[i] = nv / l;
+    }
+    Ok(normals0)
+}
+
+/// Tangents of the boundary curve at a boundary vertex.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum BoundaryTangents {
+    /// A smooth point: the tangent of the parabola through the vertex and
+    /// its two neighbours along the boundary.
+    Smooth(Vec3),
+    /// A kink (the one-sided tangents differ by more than
+    /// [`KINK_ANGLE_DEG`]): the incoming and the outgoing one-sided tangents.
+    Kink(Vec3, Vec3),
+}
+
+/// Angle between the one-sided tangents of the boundary curve above which a
+/// boundary vertex is a kink (a corner of the patch) rather than a smooth
+/// point of the curve.
+const KINK_ANGLE_DEG: f64 = 30.0;
+
+/// Derivative at `x` (chord parameter 0) of the parabola through `x`, `a`
+/// (at distance h1 along the curve) and `b` (h2 beyond `a`); second order
+/// for any spacing. `None` when two points coincide.
+fn one_sided_tangent(x: Vec3, a: Vec3, b: Vec3) -> Option<Vec3> {
+    let (h1, h2) = (x.distance(a), a.distance(b));
+    if !(h1 > 0.0 && h2 > 0.0) {
+        return None;
+    }
+    let t = -(2.0 * h1 + h2) / (h1 * (h1 + h2)) * x + (h1 + h2) / (h1 * h2) * a
+        - h1 / (h2 * (h1 + h2)) * b;
+    let t = t.normalize_or_zero();
+    (t != Vec3::ZERO && t.is_finite()).then_some(t)
+}
+
+/// The tangents of the boundary curves at their vertices (vertex index,
+/// tangents), from the boundary polylines: at a smooth point the tangent of
+/// the parabola through the previous, the vertex and the next point
+/// (chord-length parameter; second order for any spacing), at a kink both
+/// one-sided parabola tangents. Loops of fewer than five vertices and
+/// coincident points give nothing.
+fn boundary_tangents(mesh: &SurfaceMesh) -> Vec<(usize, BoundaryTangents)> {
+    let mut out = Vec::new();
+    for lp in crate::mesh::boundary_loops(mesh) {
+        let k = lp.len();
+        if k < 5 {
+            continue;
+        }
+        // the loop's vertices in order: vertex j is where half-edge j starts
+        let p: Vec<Vec3> = lp
+            .iter()
+            .map(|h| mesh.position(mesh.from_vertex(*h)))
+            .collect();
+        for j in 0..k {
+            let at = |d: isize| p[(j as isize + d).rem_euclid(k as isize) as usize];
+            let (x, prev, next) = (at(0), at(-1), at(1));
+            let (Some(back), Some(ahead)) = (
+                one_sided_tangent(x, prev, at(-2)),
+                one_sided_tangent(x, next, at(2)),
+            ) else {
+                continue;
+            };
+            // back points backwards along the curve, ahead forwards
+            let turn = (-back).angle_between(ahead);
+            let tangents = if turn.to_degrees() > KINK_ANGLE_DEG {
+                BoundaryTangents::Kink(-back, ahead)
+            } else {
+                let (h1, h2) = (x.distance(prev), x.distance(next));
+                // derivative at x of the parabola through prev, x, next
+                let t = (h2 * h2 * (x - prev) + h1 * h1 * (next - x)) / (h1 * h2 * (h1 + h2));
+                let t = t.normalize_or_zero();
+                if t == Vec3::ZERO || !t.is_finite() {
+                    continue;
+                }
+                BoundaryTangents::Smooth(t)
+            };
+            out.push((mesh.from_vertex(lp[j]).idx(), tangents));
+        }
+    }
+    out
+}
+
+/// The unit vector nearest to the estimated normal `n` that is
+/// perpendicular to the boundary curve: a surface through the boundary
+/// curve has its normal perpendicular to the curve's tangent (at a kink, to
+/// both one-sided tangents), so G¹ data with a component along the curve
+/// contradict the fixed boundary positions. `n` where the projection
+/// vanishes.
+fn perpendicular_to_boundary(n: Vec3, tangents: BoundaryTangents) -> Vec3 {
+    let m = match tangents {
+        BoundaryTangents::Smooth(t) => n - n.dot(t) * t,
+        BoundaryTangents::Kink(a, b) => {
+            let c = a.cross(b).normalize_or_zero();
+            c * c.dot(n).signum()
+        }
+    };
+    let m = m.normalize_or_zero();
+    if m == Vec3::ZERO || !m.is_finite() {
+        n
+    } else {
+        m
+    }
+}
+
+/// The vertices within `depth` rings of `start` (itself first).
+fn rings(nbrs: &[Vec<usize>], start: usize, depth: usize) -> Vec<usize> {
+    let mut seen = vec![start];
+    let mut frontier = vec![start];
+    for _ in 0..depth {
+        let mut next = Vec::new();
+        for &a in &frontier {
+            for &b in &nbrs[a] {
+                if !seen.contains(&b) {
+                    seen.push(b);
+                    next.push(b);
+                }
+            }
+        }
+        frontier = next;
+    }
+    seen
+}
+
+/// Sparsity and probe colouring of the Newton Jacobian. The residual f_i of
+/// a free vertex depends on the positions within two rings of it (H_i and
+/// its normal on the one-ring, H_j of the neighbours on theirs, the
+/// cotangent weights on the one-ring), so moving vertex k changes only the
+/// rows of its two-ring: columns whose two-rings are disjoint (distance
+/// above 4) are probed by one finite difference together. Returns the rows of
+/// each column and the groups of columns probed together.
+fn jacobian_pattern(nbrs: &[Vec<usize>], u: &Unknowns) -> (Vec<Vec<usize>>, Vec<Vec<usize>>) {
+    let index = &u.index;
+    let support: Vec<Vec<usize>> = u
+        .vertices
+        .iter()
+        .map(|&k| {
+            let mut rows: Vec<usize> = rings(nbrs, k, 2)
+                .into_iter()
+                .filter_map(|i| (index[i] != usize::MAX).then_some(index[i]))
+                .collect();
+            rows.sort_unstable();
+            rows
+        })
+        .collect();
+    let mut colour = vec![usize::MAX; u.vertices.len()];
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (c, &k) in u.vertices.iter().enumerate() {
+        let taken: Vec<usize> = rings(nbrs, k, 4)
+            .into_iter()
+            .filter(|&i| index[i] != usize::MAX)
+            .map(|i| colour[index[i]])
+            .filter(|&g| g != usize::MAX)
+            .collect();
+        let g = (0..).find(|g| !taken.contains(g)).unwrap_or(0);
+        colour[c] = g;
+        if g == groups.len() {
+            groups.push(Vec::new());
+        }
+        groups[g].push(c);
+    }
+    (support, groups)
+}
+
+/// Step (1): the harmonic H̃, Σ_j w_ij (H̃_i − H̃_j) = 0 at the free
+/// vertices (−L of geom's cotangent Laplacian, by the one constrained
+/// solve, its symbolic factorisation kept in `solver`), Dirichlet values H
+/// at the constrained vertices; a floating component takes the
+/// area-weighted mean of its H as given value.
+fn harmonic_mean_curvature(
+    mesh: &SurfaceMesh,
+    work: &[Vec3],
+    ev: &Eval,
+    u: &Unknowns,
+    field_fixed: &[bool],
+    solver: &mut Option<ConstrainedSolver>,
+) -> Result<Vec<f64>, SmoothError> {
+    let n = mesh.vertex_count();
+    let h_of = |i: usize| ev.fits[i].unwrap_or(0.0);
+    let (index, component, floating) = (&u.index, &u.component, &u.floating);
+    let mut float_mean = vec![(0.0, 0.0); floating.len()];
+    if u.any_floating() {
+        let area = geom::barycentric_vertex_areas_at(mesh, work);
+        for (r, &i) in u.vertices.iter().enumerate() {
+            if floating[component[r]] {
+                let e = &mut float_mean[component[r]];
+                e.0 += area[i] * h_of(i);
+                e.1 += area[i];
+            }
+        }
+    }
+    let mut htilde: Vec<f64> = (0..n)
+        .map(|i| match index[i] {
+            usize::MAX => h_of(i),
+            r if floating[component[r]] => {
+                let (sum, total) = float_mean[component[r]];
+                if total > 0.0 { sum / total } else { 0.0 }
+            }
+            _ => 0.0,
+        })
+        .collect();
+    let mut a = geom::laplacian_from_weights(mesh, &ev.hw);
+    let diagonal: Vec<Option<usize>> = {
+        let (col_ptr, row_idx) = (a.symbolic().col_ptr(), a.symbolic().row_idx());
+        (0..n)
+            .map(|j| (col_ptr[j]..col_ptr[j + 1]).find(|&k| row_idx[k] == j))
+            .collect()
+    };
+    let values = a.val_mut();
+    for v in values.iter_mut() {
+        *v *= -2.0;
+    }
+    // an isolated free vertex (all weights 0) keeps a solvable row
+    for k in diagonal.into_iter().flatten() {
+        values[k] = values[k].max(1e-300);
+    }
+    let harmonic = match solver.as_mut() {
+        Some(s) => s,
+        None => solver.insert(ConstrainedSolver::analyse(
+            a.symbolic(),
+            field_fixed,
+            &ConstrainedOptions::default(),
+        )?),
+    };
+    harmonic.factor(a.as_ref())?;
+    harmonic.solve(&vec![0.0; n], &mut htilde)?;
+    Ok(htilde)
+}
+
+/// Step (2)'s Jacobian of the residuals Σ_j w_ij (H_i − H_j) in the offsets
+/// t along the current normals, by coloured finite differences of the
+/// whole evaluation (so it includes what a hand linearisation of Eq. (29)
+/// freezes: the normals, the Moreton–Séquin fit weights, the cotangent
+/// weights; with frozen terms the step was no descent direction on larger
+/// patches). Triplets (row, column, value).
+fn finite_difference_jacobian(
+    evaluator: &Evaluator,
+    ev: &Eval,
+    work: &[Vec3],
+    support: &[Vec<usize>],
+    groups: &[Vec<usize>],
+    ebar: f64,
+) -> Vec<(usize, usize, f64)> {
+    let unknown = evaluator.unknown;
+    let step = 1e-6 * ebar;
+    let mut jac = Vec::new();
+    let mut probe = work.to_vec();
+    for group in groups {
+        for &c in group {
+            let i = unknown[c];
+            probe[i] = work[i] + step * ev.normals[i];
+        }
+        let e = evaluator.evaluate(&probe);
+        for &c in group {
+            for &r in &support[c] {
+                let v = (e.f[r] - ev.f[r]) / step;
+                if v != 0.0 && v.is_finite() {
+                    jac.push((r, c, v));
+                }
+            }
+            let i = unknown[c];
+            probe[i] = work[i];
+        }
+    }
+    jac
+}
+
+/// Levenberg–Marquardt step min ‖J t + f‖² + δ‖t‖² with δ = `relative` ·
+/// max_c ‖J e_c‖² (m unknowns). On a closed mesh without fixed vertices the
+/// residuals sum to zero and moving along the normals of a rigid
+/// translation or a scaling leaves Δ_B H unchanged, so J is rank deficient
+/// and its normal equations singular; the damping picks the least-norm
+/// step. On open patches the damped step also kept a 41×41 noisy cap from
+/// stalling where the undamped Gauss–Newton steps ran into a region without
+/// descent.
+fn damped_step(
+    jac: &[(usize, usize, f64)],
+    f: &[f64],
+    m: usize,
+    relative: f64,
+) -> Result<Vec<f64>, SmoothError> {
+    let mut colsq = vec![0.0f64; m];
+    for &(_, c, v) in jac {
+        colsq[c] += v * v;
+    }
+    let delta = relative * colsq.iter().fold(0.0f64, |a, b| a.max(*b));
+    let d = if delta > 0.0 { delta.sqrt() } else { 1e-300 };
+    let mut trip = jac.to_vec();
+    trip.extend((0..m).map(|c| (m + c, c, d)));
+    let mut rhs: Vec<f64> = f.iter().map(|x| -x).collect();
+    rhs.resize(2 * m, 0.0);
+    let jm = sparse_from_triplets(2 * m, m, &trip)?;
+    Ok(least_squares(jm.as_ref(), std::slice::from_ref(&rhs))?
+        .pop()
+        .unwrap_or_default())
+}
+
+/// What one Newton iteration of step (2) found.
+enum NewtonOutcome {
+    /// A step that lowers the merit: new positions, their evaluation and
+    /// the size of the Newton step (max |t| / ē).
+    Accepted(Vec<Vec3>, Eval, f64),
+    /// The Newton step is below ε and lowers nothing: converged in place.
+    BelowEpsilon,
+    /// No attempt lowered the merit.
+    NoDescent,
+}
+
+/// Step (2): every free vertex moves along its normal, all offsets at once,
+/// by a Newton step on Σ_j w_ij (H_i − H_j) = 0 (Eq. (29)), |t_i| clamped to
+/// half the mean length of its edges, kept only when it lowers the merit
+/// (backtracking down to 1/64).
+fn newton_step(
+    evaluator: &Evaluator,
+    ev: &Eval,
+    work: &[Vec3],
+    jac: &[(usize, usize, f64)],
+    any_floating: bool,
+    ebar: f64,
+    epsilon: f64,
+) -> Result<NewtonOutcome, SmoothError> {
+    let (unknown, nbrs) = (evaluator.unknown, evaluator.nbrs);
+    let m = unknown.len();
+    let p = work;
+    let normals = &ev.normals;
+    // the damped step first, the undamped one (unless the system is
+    // known to be singular) when it finds no descent
+    let undamped = if any_floating {
+        None
+    } else {
+        let rhs: Vec<f64> = ev.f.iter().map(|x| -x).collect();
+        let jm = sparse_from_triplets(m, m, jac)?;
+        least_squares(jm.as_ref(), std::slice::from_ref(&rhs))
+            .ok()
+            .and_then(|mut t| t.pop())
+    };
+    // Attempts, in order: the lightly damped step (1e-12 relative, 1e-10
+    // where a component floats), the undamped one, then
+    // Levenberg–Marquardt steps with ever stronger damping. Far from
+    // Δ_B H = 0 (the cow "Spot": ears, horns and legs) the Gauss–Newton
+    // step, clamped to half an edge, often lowers the merit for no step
+    // length down to 1/64 and the iteration used to stop after one step;
+    // a strongly damped step turns toward −Jᵀf, which lowers the merit
+    // for a small enough length whenever f is not stationary.
+    let light = if any_floating { 1e-10 } else { 1e-12 };
+    let attempts: [Option<f64>; 6] = [
+        Some(light),
+        None,
+        Some(1e-6),
+        Some(1e-3),
+        Some(1e-1),
+        Some(10.0),
+    ];
+    // size of the lightly damped (Newton) step: the convergence measure,
+    // whichever attempt is taken (a strongly damped step is short by
+    // construction and says nothing about convergence)
+    let mut newton_step = f64::INFINITY;
+    for attempt in attempts {
+        let newton = attempt.is_none_or(|relative| relative <= light);
+        let t = match (attempt, &undamped) {
+            (Some(relative), _) => damped_step(jac, &ev.f, m, relative)?,
+            (None, Some(t)) => t.clone(),
+            (None, None) => continue,
+        };
+        // clamp |t_i| to half the mean length of its edges
+        let t: Vec<f64> = unknown
+            .iter()
+            .enumerate()
+            .map(|(r, &i)| {
+                let lmean = nbrs[i].iter().map(|&j| p[j].distance(p[i])).sum::<f64>()
+                    / nbrs[i].len().max(1) as f64;
+                let ti = t.get(r).copied().unwrap_or(0.0);
+                if ti.is_finite() && normals[i] != Vec3::ZERO {
+                    ti.clamp(-0.5 * lmean, 0.5 * lmean)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let tmax = t.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        // backtracking on the merit ‖Σ_j w_ij (H_i − H_j)‖²: far from
+        // the solution the linearisation can overshoot; halve the step
+        // until the merit drops (a step that lowers it for no α ≥ 1/64
+        // is not taken). A Newton step below ε means convergence: it is
+        // taken when it lowers the merit (a merit at round-off level
+        // cannot be lowered, and the mesh then stays where it is).
+        if attempt == Some(light) {
+            newton_step = tmax / ebar;
+        }
+        let small = newton && tmax / ebar < epsilon;
+        let mut alpha = 1.0;
+        let mut trial = work.to_vec();
+        let found = loop {
+            for (r, &i) in unknown.iter().enumerate() {
+                trial[i] = p[i] + alpha * t[r] * normals[i];
+            }
+            let e = evaluator.evaluate(&trial);
+            if e.merit < ev.merit {
+                break Some(e);
+            }
+            if small || alpha < 1.0 / 64.0 {
+                break None;
+            }
+            alpha *= 0.5;
+        };
+        if let Some(e) = found {
+            let size = if newton {
+                alpha * tmax / ebar
+            } else {
+                newton_step
+            };
+            return Ok(NewtonOutcome::Accepted(trial, e, size));
+        }
+        if small {
+            return Ok(NewtonOutcome::BelowEpsilon);
+        }
+    }
+    Ok(NewtonOutcome::NoDescent)
+}
+
 /// Schneider–Kobbelt fairing of a triangle mesh with G¹ boundary (fixed
 /// boundary vertices and normals; Grüner §3.4). The fourth-order Δ_B H = 0
 /// is factorised into two nested second-order problems per outer iteration
@@ -169,7 +778,6 @@ pub fn schneider_kobbelt(
         ..Constraints::default()
     };
     let roles = roles(mesh, &c)?;
-    let n = mesh.vertex_count();
     let input = mesh.positions().to_vec();
     let v0 = geom::volume(mesh);
     let ebar = geom::mean_edge_length(mesh);
@@ -177,243 +785,39 @@ pub fn schneider_kobbelt(
         .vertices()
         .map(|v| mesh.one_ring(v).map(|u| u.idx()).collect())
         .collect();
-    // G¹ normals of the constrained vertices: given, else a quadric fit over
-    // the input two-ring (a boundary vertex sees only half a fan, which tilts
-    // fan normals by O(h)), else the vertex normal
-    let fit_rings = opts.normal_fit_rings.unwrap_or_else(|| {
-        let (lo, hi) = mesh.positions().iter().fold(
-            (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-        );
-        let rings = 0.15 * (hi - lo).length() / ebar;
-        if rings.is_finite() {
-            (rings.ceil() as usize).clamp(2, 12)
-        } else {
-            2
-        }
-    });
-    let mut normals0 = geom::vertex_normals_max(mesh);
-    for i in 0..n {
-        let v = VertexId(i as u32);
-        if roles[i] != Role::Free
-            && mesh.is_boundary_vertex(v)
-            && let Some(f) = geom::quadric_fit_rings(mesh, v, fit_rings)
-        {
-            normals0[i] = f.normal;
-        }
-    }
-    for &(v, nv) in &opts.normals {
-        let i = v.idx();
-        if i >= n {
-            return Err(SmoothError::InvalidOption(format!(
-                "normal given for vertex {i}, the mesh has {n}"
-            )));
-        }
-        let l = nv.length();
-        if !(l > 0.0) || !l.is_finite() {
-            return Err(SmoothError::InvalidOption(format!(
-                "normal of vertex {i} is zero or not finite"
-            )));
-        }
-        normals0[i] = nv / l;
-    }
-    let mut index = vec![usize::MAX; n];
-    let mut unknown = Vec::new();
-    for i in 0..n {
-        if roles[i] == Role::Free {
-            index[i] = unknown.len();
-            unknown.push(i);
-        }
-    }
-    let m = unknown.len();
-    // Components of the free vertices (joined by free–free edges). A
-    // component that touches no constrained vertex — a closed mesh without
-    // fixed vertices — has no Dirichlet data: its harmonic functions are the
-    // constants, the Laplacian block is singular, and H̃ is the area-weighted
-    // mean of H over the component (the harmonic function nearest to H).
-    let mut component = vec![usize::MAX; m];
-    let mut floating: Vec<bool> = Vec::new();
-    for start in 0..m {
-        if component[start] != usize::MAX {
-            continue;
-        }
-        let id = floating.len();
-        let mut touches = false;
-        component[start] = id;
-        let mut stack = vec![unknown[start]];
-        while let Some(i) = stack.pop() {
-            for &j in &nbrs[i] {
-                let r = index[j];
-                if r == usize::MAX {
-                    touches = true;
-                } else if component[r] == usize::MAX {
-                    component[r] = id;
-                    stack.push(j);
-                }
-            }
-        }
-        floating.push(!touches);
-    }
-    let any_floating = floating.iter().any(|f| *f);
-    // current positions (the connectivity is the input's: every geometry
-    // quantity is evaluated through geom's `*_at(positions)` views)
+    let normals0 = g1_normals(mesh, &roles, opts, ebar)?;
+    let unknowns = Unknowns::new(&roles, &nbrs);
+    let m = unknowns.vertices.len();
+    let any_floating = unknowns.any_floating();
+    let field_fixed = unknowns.field_fixed();
+    let evaluator = Evaluator {
+        mesh,
+        roles: &roles,
+        normals0: &normals0,
+        nbrs: &nbrs,
+        unknown: &unknowns.vertices,
+    };
+    let (support, groups) = jacobian_pattern(&nbrs, &unknowns);
+    // current positions (the connectivity is the input's)
     let mut work: Vec<Vec3> = input.clone();
-    // the harmonic field's unknowns: free vertices of components that touch
-    // a constrained vertex
-    let field_fixed: Vec<bool> = (0..n)
-        .map(|i| index[i] == usize::MAX || floating[component[index[i]]])
-        .collect();
     let mut solver: Option<ConstrainedSolver> = None;
     let mut iterations = 0;
     let mut converged = m == 0 || !(ebar > 0.0);
     let mut residual = 0.0;
     let mut last_step = f64::INFINITY;
-    let evaluate = |p: &[Vec3]| -> Eval {
-        let mut normals = geom::vertex_normals_max_at(mesh, p);
-        for i in 0..n {
-            if roles[i] != Role::Free {
-                normals[i] = normals0[i];
-            }
-        }
-        let fits: Vec<Option<f64>> = (0..n)
-            .map(|i| {
-                if nbrs[i].is_empty() || normals[i] == Vec3::ZERO {
-                    return None;
-                }
-                let q: Vec<Vec3> = nbrs[i].iter().map(|&j| p[j]).collect();
-                Some(moreton_sequin(p[i], normals[i], &q))
-            })
-            .collect();
-        let hw = geom::halfedge_weights_at(mesh, p, LaplaceWeights::Cotangent);
-        // merit: Σ_i (Σ_j w_ij (H_i − H_j))² over the free vertices
-        let h_of = |i: usize| fits[i].unwrap_or(0.0);
-        let f: Vec<f64> = unknown
-            .iter()
-            .map(|&i| {
-                mesh.outgoing(VertexId(i as u32))
-                    .map(|h| 2.0 * hw[h.idx()] * (h_of(i) - h_of(mesh.to_vertex(h).idx())))
-                    .sum()
-            })
-            .collect();
-        let merit = f.iter().map(|x| x * x).sum();
-        Eval {
-            normals,
-            fits,
-            hw,
-            f,
-            merit,
-        }
-    };
-    // The residual f_i of a free vertex depends on the positions within two
-    // rings of it (H_i and its normal on the one-ring, H_j of the neighbours
-    // on theirs, the cotangent weights on the one-ring), so moving vertex k
-    // changes only the rows of its two-ring: columns whose two-rings are
-    // disjoint (distance > 4) are probed by one finite difference together.
-    let rings = |start: usize, depth: usize| -> Vec<usize> {
-        let mut seen = vec![start];
-        let mut frontier = vec![start];
-        for _ in 0..depth {
-            let mut next = Vec::new();
-            for &a in &frontier {
-                for &b in &nbrs[a] {
-                    if !seen.contains(&b) {
-                        seen.push(b);
-                        next.push(b);
-                    }
-                }
-            }
-            frontier = next;
-        }
-        seen
-    };
-    let support: Vec<Vec<usize>> = unknown
-        .iter()
-        .map(|&k| {
-            let mut rows: Vec<usize> = rings(k, 2)
-                .into_iter()
-                .filter_map(|i| (index[i] != usize::MAX).then_some(index[i]))
-                .collect();
-            rows.sort_unstable();
-            rows
-        })
-        .collect();
-    let mut colour = vec![usize::MAX; m];
-    let mut groups: Vec<Vec<usize>> = Vec::new();
-    for (c, &k) in unknown.iter().enumerate() {
-        let taken: Vec<usize> = rings(k, 4)
-            .into_iter()
-            .filter(|&i| index[i] != usize::MAX)
-            .map(|i| colour[index[i]])
-            .filter(|&g| g != usize::MAX)
-            .collect();
-        let g = (0..).find(|g| !taken.contains(g)).unwrap_or(0);
-        colour[c] = g;
-        if g == groups.len() {
-            groups.push(Vec::new());
-        }
-        groups[g].push(c);
-    }
-    let mut ev = evaluate(&work);
+    let mut ev = evaluator.evaluate(&work);
     while !converged {
         opts.control
             .step("iterations", iterations as u64, opts.max_iterations as u64)?;
-        let p = work.clone();
-        let Eval {
-            normals, fits, hw, ..
-        } = &ev;
-        let h_of = |i: usize| fits[i].unwrap_or(0.0);
-        // (1) harmonic H̃: Σ_j w_ij (H̃_i − H̃_j) = 0 at the free vertices
-        // (−L of geom's cotangent Laplacian, by the one constrained solve),
-        // Dirichlet values H at the constrained vertices; a floating
-        // component takes the area-weighted mean of its H as given value
-        let mut float_mean = vec![(0.0, 0.0); floating.len()];
-        if any_floating {
-            let area = geom::barycentric_vertex_areas_at(mesh, &work);
-            for (r, &i) in unknown.iter().enumerate() {
-                if floating[component[r]] {
-                    let e = &mut float_mean[component[r]];
-                    e.0 += area[i] * h_of(i);
-                    e.1 += area[i];
-                }
-            }
-        }
-        let mut htilde: Vec<f64> = (0..n)
-            .map(|i| match index[i] {
-                usize::MAX => h_of(i),
-                r if floating[component[r]] => {
-                    let (sum, total) = float_mean[component[r]];
-                    if total > 0.0 { sum / total } else { 0.0 }
-                }
-                _ => 0.0,
-            })
-            .collect();
-        let mut a = geom::laplacian_from_weights(mesh, hw);
-        let diagonal: Vec<Option<usize>> = {
-            let (col_ptr, row_idx) = (a.symbolic().col_ptr(), a.symbolic().row_idx());
-            (0..n)
-                .map(|j| (col_ptr[j]..col_ptr[j + 1]).find(|&k| row_idx[k] == j))
-                .collect()
-        };
-        let values = a.val_mut();
-        for v in values.iter_mut() {
-            *v *= -2.0;
-        }
-        // an isolated free vertex (all weights 0) keeps a solvable row
-        for k in diagonal.into_iter().flatten() {
-            values[k] = values[k].max(1e-300);
-        }
-        let harmonic = match solver.as_mut() {
-            Some(s) => s,
-            None => solver.insert(ConstrainedSolver::analyse(
-                a.symbolic(),
-                &field_fixed,
-                &ConstrainedOptions::default(),
-            )?),
-        };
-        harmonic.factor(a.as_ref())?;
-        harmonic.solve(&vec![0.0; n], &mut htilde)?;
-        let res: Vec<f64> = unknown.iter().map(|&i| htilde[i] - h_of(i)).collect();
-        residual = res.iter().fold(0.0f64, |a, r| a.max(r.abs())) * ebar;
+        let htilde =
+            harmonic_mean_curvature(mesh, &work, &ev, &unknowns, &field_fixed, &mut solver)?;
+        let h_of = |i: usize| ev.fits[i].unwrap_or(0.0);
+        residual = unknowns
+            .vertices
+            .iter()
+            .map(|&i| htilde[i] - h_of(i))
+            .fold(0.0f64, |a, r| a.max(r.abs()))
+            * ebar;
         if last_step < opts.epsilon {
             converged = true;
             break;
@@ -421,178 +825,38 @@ pub fn schneider_kobbelt(
         if iterations >= opts.max_iterations {
             break;
         }
-        // (2) Newton step for Σ_j w_ij (H_i − H_j) = 0 at the free vertices,
-        // all offsets t along the current normals at once. The Jacobian is
-        // taken by coloured finite differences of the whole evaluation, so
-        // it includes what a hand linearisation of Eq. (29) freezes (the
-        // normals, the Moreton–Séquin fit weights, the cotangent weights);
-        // with frozen terms the step was no descent direction on larger
-        // patches.
-        let step = 1e-6 * ebar;
-        let mut jac = Vec::new();
-        let mut probe = work.clone();
-        for group in &groups {
-            for &c in group {
-                let i = unknown[c];
-                probe[i] = p[i] + step * normals[i];
-            }
-            let e = evaluate(&probe);
-            for &c in group {
-                for &r in &support[c] {
-                    let v = (e.f[r] - ev.f[r]) / step;
-                    if v != 0.0 && v.is_finite() {
-                        jac.push((r, c, v));
-                    }
-                }
-                let i = unknown[c];
-                probe[i] = p[i];
-            }
-        }
-        // Levenberg–Marquardt damping δ = 1e-12 · max_c ‖J e_c‖² (1e-10
-        // where a component floats): on a
-        // closed mesh without fixed vertices the residuals sum to zero and
-        // moving along the normals of a rigid translation or a scaling leaves
-        // Δ_B H unchanged, so J is rank deficient and its normal equations
-        // singular; the damping picks the least-norm step. On open patches
-        // the damped step also kept a 41×41 noisy cap from stalling where
-        // the undamped Gauss–Newton steps ran into a region without descent.
-        let damped_solve =
-            |jac: &[(usize, usize, f64)], relative: f64| -> Result<Vec<f64>, SmoothError> {
-                let mut colsq = vec![0.0f64; m];
-                for &(_, c, v) in jac {
-                    colsq[c] += v * v;
-                }
-                let delta = relative * colsq.iter().fold(0.0f64, |a, b| a.max(*b));
-                let d = if delta > 0.0 { delta.sqrt() } else { 1e-300 };
-                let mut trip = jac.to_vec();
-                trip.extend((0..m).map(|c| (m + c, c, d)));
-                let mut rhs: Vec<f64> = ev.f.iter().map(|x| -x).collect();
-                rhs.resize(2 * m, 0.0);
-                let jm = sparse_from_triplets(2 * m, m, &trip)?;
-                Ok(least_squares(jm.as_ref(), std::slice::from_ref(&rhs))?
-                    .pop()
-                    .unwrap_or_default())
-            };
-        // the damped step first, the undamped one (unless the system is
-        // known to be singular) when it finds no descent
-        let undamped = if any_floating {
-            None
-        } else {
-            let rhs: Vec<f64> = ev.f.iter().map(|x| -x).collect();
-            let jm = sparse_from_triplets(m, m, &jac)?;
-            least_squares(jm.as_ref(), std::slice::from_ref(&rhs))
-                .ok()
-                .and_then(|mut t| t.pop())
-        };
-        let mut accepted: Option<(Vec<Vec3>, Eval, f64)> = None;
-        let mut below_epsilon = false;
-        // Attempts, in order: the lightly damped step, the undamped one,
-        // then Levenberg–Marquardt steps with ever stronger damping. Far from
-        // Δ_B H = 0 (the cow "Spot": ears, horns and legs) the Gauss–Newton
-        // step, clamped to half an edge, often lowers the merit for no step
-        // length down to 1/64 and the iteration used to stop after one step;
-        // a strongly damped step turns toward −Jᵀf, which lowers the merit
-        // for a small enough length whenever f is not stationary.
-        let light = if any_floating { 1e-10 } else { 1e-12 };
-        let attempts: [Option<f64>; 6] = [
-            Some(light),
-            None,
-            Some(1e-6),
-            Some(1e-3),
-            Some(1e-1),
-            Some(10.0),
-        ];
-        // size of the lightly damped (Newton) step: the convergence measure,
-        // whichever attempt is taken (a strongly damped step is short by
-        // construction and says nothing about convergence)
-        let mut newton_step = f64::INFINITY;
-        for attempt in attempts {
-            let newton = attempt.is_none_or(|relative| relative <= light);
-            let t = match (attempt, &undamped) {
-                (Some(relative), _) => damped_solve(&jac, relative)?,
-                (None, Some(t)) => t.clone(),
-                (None, None) => continue,
-            };
-            // clamp |t_i| to half the mean length of its edges
-            let t: Vec<f64> = unknown
-                .iter()
-                .enumerate()
-                .map(|(r, &i)| {
-                    let lmean = nbrs[i].iter().map(|&j| p[j].distance(p[i])).sum::<f64>()
-                        / nbrs[i].len().max(1) as f64;
-                    let ti = t.get(r).copied().unwrap_or(0.0);
-                    if ti.is_finite() && normals[i] != Vec3::ZERO {
-                        ti.clamp(-0.5 * lmean, 0.5 * lmean)
-                    } else {
-                        0.0
-                    }
-                })
-                .collect();
-            let tmax = t.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-            // backtracking on the merit ‖Σ_j w_ij (H_i − H_j)‖²: far from
-            // the solution the linearisation can overshoot; halve the step
-            // until the merit drops (a step that lowers it for no α ≥ 1/64
-            // is not taken). A Newton step below ε means convergence: it is
-            // taken when it lowers the merit (a merit at round-off level
-            // cannot be lowered, and the mesh then stays where it is).
-            if attempt == Some(light) {
-                newton_step = tmax / ebar;
-            }
-            let small = newton && tmax / ebar < opts.epsilon;
-            let mut alpha = 1.0;
-            let mut trial = work.clone();
-            let found = loop {
-                for (r, &i) in unknown.iter().enumerate() {
-                    trial[i] = p[i] + alpha * t[r] * normals[i];
-                }
-                let e = evaluate(&trial);
-                if e.merit < ev.merit {
-                    break Some(e);
-                }
-                if small || alpha < 1.0 / 64.0 {
-                    break None;
-                }
-                alpha *= 0.5;
-            };
-            if let Some(e) = found {
-                let size = if newton {
-                    alpha * tmax / ebar
-                } else {
-                    newton_step
-                };
-                accepted = Some((trial, e, size));
-                break;
-            }
-            if small {
-                below_epsilon = true;
-                break;
-            }
-        }
-        match accepted {
-            Some((trial, e, worst)) => {
+        let jac = finite_difference_jacobian(&evaluator, &ev, &work, &support, &groups, ebar);
+        match newton_step(
+            &evaluator,
+            &ev,
+            &work,
+            &jac,
+            any_floating,
+            ebar,
+            opts.epsilon,
+        )? {
+            NewtonOutcome::Accepted(trial, e, worst) => {
                 iterations += 1;
                 work = trial;
                 ev = e;
                 last_step = worst;
             }
             // the loop head computes the final residual and stops
-            None if below_epsilon => last_step = 0.0,
-            None => break,
+            NewtonOutcome::BelowEpsilon => last_step = 0.0,
+            NewtonOutcome::NoDescent => break,
         }
     }
-    let cur = work;
-    let max_displacement = max_distance(&cur, &input);
     let report = SmoothReport {
         iterations,
         volume_before: v0,
-        volume_after: geom::volume_at(mesh, &cur),
-        max_displacement,
+        volume_after: geom::volume_at(mesh, &work),
+        max_displacement: max_distance(&work, &input),
         converged,
         residual: Some(residual),
         taubin: None,
     };
     Ok(Output {
-        positions: cur,
+        positions: work,
         report,
     })
 }

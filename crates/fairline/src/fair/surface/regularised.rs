@@ -249,8 +249,8 @@ fn accumulate(
     }
 }
 
-/// See the module documentation.
-pub(super) fn solve(p: &Problem, opts: &SurfaceFairOptions) -> Result<Solved, SurfaceFairError> {
+/// Checks the weights of the regularised method.
+fn check_weights(opts: &SurfaceFairOptions) -> Result<(), SurfaceFairError> {
     if !(opts.keep_weight >= 0.0 && opts.keep_weight.is_finite()) {
         return Err(SurfaceFairError::Invalid(
             "keep weight must be finite and not negative".into(),
@@ -261,34 +261,59 @@ pub(super) fn solve(p: &Problem, opts: &SurfaceFairOptions) -> Result<Solved, Su
             "fairness weight must be positive and finite".into(),
         ));
     }
-    let n = p.selected.len();
-    let cols = 3 * n;
-    let (keep, keep_f0) = keep_samples(p, opts);
-    let stencil = stencils(p);
-    // M = DᵀD over the free points (the same for each component).
-    let mut m = vec![0.0; n * n];
-    for st in &stencil {
-        for &(a, ca) in st {
-            for &(b, cb) in st {
-                m[a * n + b] += ca * cb;
+    Ok(())
+}
+
+/// The thin-plate term Σ_stencils |Δ² x|² of the free control points'
+/// displacement x from the input.
+struct ThinPlate<'a> {
+    selected: &'a [(usize, usize)],
+    stencil: Vec<Vec<(usize, f64)>>,
+    /// M = DᵀD over the free points (the same for each component), n × n
+    /// row-major.
+    m: Vec<f64>,
+    trace_m: f64,
+    /// The free control points of the input.
+    origin: Vec<Vec3>,
+}
+
+impl<'a> ThinPlate<'a> {
+    fn new(p: &Problem<'a>) -> ThinPlate<'a> {
+        let n = p.selected.len();
+        let stencil = stencils(p);
+        let mut m = vec![0.0; n * n];
+        for st in &stencil {
+            for &(a, ca) in st {
+                for &(b, cb) in st {
+                    m[a * n + b] += ca * cb;
+                }
             }
         }
-    }
-    let trace_m: f64 = (0..n).map(|a| m[a * n + a]).sum();
-    let origin: Vec<Vec3> = p
-        .selected
-        .iter()
-        .map(|&(i, j)| p.surface.control_point(i, j))
-        .collect();
-    let displacement = |s: &BSplineSurface| -> Vec<Vec3> {
-        p.selected
+        let trace_m: f64 = (0..n).map(|a| m[a * n + a]).sum();
+        let origin: Vec<Vec3> = p
+            .selected
             .iter()
-            .zip(&origin)
+            .map(|&(i, j)| p.surface.control_point(i, j))
+            .collect();
+        ThinPlate {
+            selected: p.selected,
+            stencil,
+            m,
+            trace_m,
+            origin,
+        }
+    }
+
+    fn displacement(&self, s: &BSplineSurface) -> Vec<Vec3> {
+        self.selected
+            .iter()
+            .zip(&self.origin)
             .map(|(&(i, j), o)| s.control_point(i, j) - *o)
             .collect()
-    };
-    let stencil_energy = |x: &[Vec3]| -> f64 {
-        stencil
+    }
+
+    fn energy(&self, x: &[Vec3]) -> f64 {
+        self.stencil
             .iter()
             .map(|st| {
                 let mut d = Vec3::ZERO;
@@ -298,30 +323,185 @@ pub(super) fn solve(p: &Problem, opts: &SurfaceFairOptions) -> Result<Solved, Su
                 d.length_squared()
             })
             .sum()
-    };
-    let (nt, nk) = (p.samples.len() as f64, keep.len().max(1) as f64);
-    let wt = 1.0 / nt;
-    let wk = opts.keep_weight / nk;
-    let mut lambda = 0.0;
-    let mut current = p.surface.clone();
-    let fairness_of = |lambda: f64| {
+    }
+
+    /// λ Σ |Δ² x|² of a surface (0 for λ = 0).
+    fn weighted(&self, lambda: f64) -> impl Fn(&BSplineSurface) -> f64 + '_ {
         move |s: &BSplineSurface| -> f64 {
             if lambda == 0.0 {
                 0.0
             } else {
-                lambda * stencil_energy(&displacement(s))
+                lambda * self.energy(&self.displacement(s))
             }
         }
-    };
-    let mut eval = evaluate(
-        p,
-        &current,
-        &keep,
-        &keep_f0,
-        &fairness_of(0.0),
-        opts.keep_weight,
-    )
-    .ok_or(SurfaceFairError::NoSamples)?;
+    }
+}
+
+/// The Gauss–Newton system of one iteration.
+struct GaussNewton {
+    a: Mat<f64>,
+    g: Vec<f64>,
+    /// Largest diagonal entry of A.
+    max_diag: f64,
+    /// The fairness weight λ.
+    lambda: f64,
+}
+
+/// One regularised fairing: the problem, its weak targets and thin-plate
+/// term, and the weights of Φ's parts.
+struct Regularised<'a> {
+    p: &'a Problem<'a>,
+    opts: &'a SurfaceFairOptions,
+    keep: Vec<Sample>,
+    keep_f0: Vec<f64>,
+    thin_plate: ThinPlate<'a>,
+    /// Weight of a target sample, 1/N_t.
+    wt: f64,
+    /// Weight of a weak-target sample, κ/N_k.
+    wk: f64,
+}
+
+impl<'a> Regularised<'a> {
+    fn new(p: &'a Problem<'a>, opts: &'a SurfaceFairOptions) -> Regularised<'a> {
+        let (keep, keep_f0) = keep_samples(p, opts);
+        let thin_plate = ThinPlate::new(p);
+        let (nt, nk) = (p.samples.len() as f64, keep.len().max(1) as f64);
+        Regularised {
+            p,
+            opts,
+            keep,
+            keep_f0,
+            thin_plate,
+            wt: 1.0 / nt,
+            wk: opts.keep_weight / nk,
+        }
+    }
+
+    /// Φ of `surface` with fairness weight λ.
+    fn evaluate(&self, surface: &BSplineSurface, lambda: f64) -> Option<Evaluation> {
+        evaluate(
+            self.p,
+            surface,
+            &self.keep,
+            &self.keep_f0,
+            &self.thin_plate.weighted(lambda),
+            self.opts.keep_weight,
+        )
+    }
+
+    /// The Gauss–Newton matrix A = Jᵀ W J + λ DᵀD and gradient g of Φ at
+    /// `current` (halved: Φ = Σ w r²). `lambda` `None` (first iteration)
+    /// fixes λ = φ · (mean diagonal of the target term) / (mean diagonal of
+    /// the stencil matrix).
+    fn gauss_newton(
+        &self,
+        current: &BSplineSurface,
+        eval: &Evaluation,
+        lambda: Option<f64>,
+    ) -> GaussNewton {
+        let (p, tp) = (self.p, &self.thin_plate);
+        let n = p.selected.len();
+        let cols = 3 * n;
+        let ft: Vec<Option<f64>> = eval.ft.clone();
+        // The finite differences start from d_s itself, not from the
+        // residual d_s − d_s⁰.
+        let dk: Vec<Option<f64>> = eval
+            .fk
+            .iter()
+            .zip(&self.keep_f0)
+            .map(|(&x, f0)| Some(x + f0))
+            .collect();
+        let jt = jacobian_rows(current, p.lights, p.samples, &ft, p.dw);
+        let jk = jacobian_rows(current, p.lights, &self.keep, &dk, p.dw);
+        let mut a = Mat::<f64>::zeros(cols, cols);
+        let mut g = vec![0.0; cols];
+        accumulate(&mut a, &mut g, &jt, &|k| ft[k].unwrap_or(0.0), self.wt);
+        let lambda = lambda.unwrap_or_else(|| {
+            let trace_t: f64 = (0..cols).map(|c| a[(c, c)]).sum();
+            if tp.trace_m > 0.0 && trace_t > 0.0 {
+                self.opts.fairness_weight * (trace_t / cols as f64) / (tp.trace_m / n as f64)
+            } else {
+                self.opts.fairness_weight
+            }
+        });
+        accumulate(&mut a, &mut g, &jk, &|k| eval.fk[k], self.wk);
+        let x = tp.displacement(current);
+        for r in 0..n {
+            for c in 0..n {
+                let mv = lambda * tp.m[r * n + c];
+                if mv == 0.0 {
+                    continue;
+                }
+                for ax in 0..3 {
+                    a[(3 * r + ax, 3 * c + ax)] += mv;
+                    g[3 * r + ax] += mv * x[c][ax];
+                }
+            }
+        }
+        let max_diag = (0..cols).map(|c| a[(c, c)]).fold(0.0f64, f64::max);
+        GaussNewton {
+            a,
+            g,
+            max_diag,
+            lambda,
+        }
+    }
+
+    /// Levenberg–Marquardt: (A + μ diag A) δ = −g, taken only if Φ falls
+    /// below `phi` (μ × 8 and retried up to 12 times otherwise). Returns the
+    /// new surface and its evaluation, `None` when no try lowered Φ.
+    fn damped_step(
+        &self,
+        current: &BSplineSurface,
+        normal: &GaussNewton,
+        phi: f64,
+        mu: &mut f64,
+    ) -> Result<Option<(BSplineSurface, Evaluation)>, SurfaceFairError> {
+        let p = self.p;
+        let (a, g, max_diag, lambda) = (&normal.a, &normal.g, normal.max_diag, normal.lambda);
+        let cols = g.len();
+        let base: Vec<Vec3> = p
+            .selected
+            .iter()
+            .map(|&(i, j)| current.control_point(i, j))
+            .collect();
+        for _ in 0..12 {
+            let mut damped = a.clone();
+            for c in 0..cols {
+                damped[(c, c)] += *mu * (a[(c, c)] + 1e-12 * max_diag);
+            }
+            let Ok(llt) = damped.llt(Side::Lower) else {
+                *mu *= 8.0;
+                continue;
+            };
+            let rhs = Mat::<f64>::from_fn(cols, 1, |r, _| -g[r]);
+            let sol = llt.solve(&rhs);
+            let dr: Vec<f64> = (0..cols).map(|r| sol[(r, 0)]).collect();
+            if !dr.iter().all(|v| v.is_finite()) {
+                *mu *= 8.0;
+                continue;
+            }
+            let mut trial = current.clone();
+            apply(&mut trial, &base, p.selected, &dr, 1.0)?;
+            match self.evaluate(&trial, lambda) {
+                Some(e) if e.phi < phi => return Ok(Some((trial, e))),
+                _ => *mu *= 8.0,
+            }
+        }
+        Ok(None)
+    }
+}
+
+/// See the module documentation.
+pub(super) fn solve(p: &Problem, opts: &SurfaceFairOptions) -> Result<Solved, SurfaceFairError> {
+    check_weights(opts)?;
+    let cols = 3 * p.selected.len();
+    let problem = Regularised::new(p, opts);
+    let mut lambda = None;
+    let mut current = p.surface.clone();
+    let mut eval = problem
+        .evaluate(&current, 0.0)
+        .ok_or(SurfaceFairError::NoSamples)?;
     let mut iterations = Vec::new();
     let mut mu = 1e-3;
     let mut converged = eval.phi <= p.tiny * p.tiny;
@@ -337,92 +517,18 @@ pub(super) fn solve(p: &Problem, opts: &SurfaceFairOptions) -> Result<Solved, Su
             opts.max_iterations as u64,
         )?;
         let t0 = Instant::now();
-        let ft: Vec<Option<f64>> = eval.ft.clone();
-        // The finite differences start from d_s itself, not from the
-        // residual d_s − d_s⁰.
-        let dk: Vec<Option<f64>> = eval
-            .fk
-            .iter()
-            .zip(&keep_f0)
-            .map(|(&x, f0)| Some(x + f0))
-            .collect();
-        let jt = jacobian_rows(&current, p.lights, p.samples, &ft, p.dw);
-        let jk = jacobian_rows(&current, p.lights, &keep, &dk, p.dw);
-        // Gauss–Newton matrix and gradient (halved: Φ = Σ w r²).
-        let mut a = Mat::<f64>::zeros(cols, cols);
-        let mut g = vec![0.0; cols];
-        accumulate(&mut a, &mut g, &jt, &|k| ft[k].unwrap_or(0.0), wt);
-        if iterations.is_empty() {
-            let trace_t: f64 = (0..cols).map(|c| a[(c, c)]).sum();
-            lambda = if trace_m > 0.0 && trace_t > 0.0 {
-                opts.fairness_weight * (trace_t / cols as f64) / (trace_m / n as f64)
-            } else {
-                opts.fairness_weight
-            };
-        }
-        accumulate(&mut a, &mut g, &jk, &|k| eval.fk[k], wk);
-        let x = displacement(&current);
-        for r in 0..n {
-            for c in 0..n {
-                let mv = lambda * m[r * n + c];
-                if mv == 0.0 {
-                    continue;
-                }
-                for ax in 0..3 {
-                    a[(3 * r + ax, 3 * c + ax)] += mv;
-                    g[3 * r + ax] += mv * x[c][ax];
-                }
-            }
-        }
-        let max_diag = (0..cols).map(|c| a[(c, c)]).fold(0.0f64, f64::max);
+        let normal = problem.gauss_newton(&current, &eval, lambda);
+        let max_diag = normal.max_diag;
         if !(max_diag > 0.0 && max_diag.is_finite()) {
             stop = FairStop::NonFiniteStep;
             break;
         }
-        let fairness = fairness_of(lambda);
-        let phi_now = {
-            // Φ with this λ (λ was 0 before the first iteration).
-            eval.phi
-                + if iterations.is_empty() {
-                    fairness(&current)
-                } else {
-                    0.0
-                }
-        };
-        eval.phi = phi_now;
-        let base: Vec<Vec3> = p
-            .selected
-            .iter()
-            .map(|&(i, j)| current.control_point(i, j))
-            .collect();
-        let mut accepted = None;
-        for _ in 0..12 {
-            let mut damped = a.clone();
-            for c in 0..cols {
-                damped[(c, c)] += mu * (a[(c, c)] + 1e-12 * max_diag);
-            }
-            let Ok(llt) = damped.llt(Side::Lower) else {
-                mu *= 8.0;
-                continue;
-            };
-            let rhs = Mat::<f64>::from_fn(cols, 1, |r, _| -g[r]);
-            let sol = llt.solve(&rhs);
-            let dr: Vec<f64> = (0..cols).map(|r| sol[(r, 0)]).collect();
-            if !dr.iter().all(|v| v.is_finite()) {
-                mu *= 8.0;
-                continue;
-            }
-            let mut trial = current.clone();
-            apply(&mut trial, &base, p.selected, &dr, 1.0)?;
-            match evaluate(p, &trial, &keep, &keep_f0, &fairness, opts.keep_weight) {
-                Some(e) if e.phi < eval.phi => {
-                    accepted = Some((trial, e));
-                    break;
-                }
-                _ => mu *= 8.0,
-            }
+        if lambda.is_none() {
+            // Φ with this λ (λ was 0 before the first iteration)
+            eval.phi += problem.thin_plate.weighted(normal.lambda)(&current);
         }
-        let Some((trial, e)) = accepted else {
+        lambda = Some(normal.lambda);
+        let Some((trial, e)) = problem.damped_step(&current, &normal, eval.phi, &mut mu)? else {
             stop = FairStop::Stalled;
             break;
         };
@@ -434,7 +540,7 @@ pub(super) fn solve(p: &Problem, opts: &SurfaceFairOptions) -> Result<Solved, Su
             max_abs: st.0,
             mean_abs: st.1,
             step: 1.0,
-            rows: p.samples.len() + keep.len() + stencil.len(),
+            rows: p.samples.len() + problem.keep.len() + problem.thin_plate.stencil.len(),
             cols,
             rank: cols,
             truncation: 0.0,
@@ -457,6 +563,6 @@ pub(super) fn solve(p: &Problem, opts: &SurfaceFairOptions) -> Result<Solved, Su
         iterations,
         converged,
         stop,
-        keep_samples: keep.len(),
+        keep_samples: problem.keep.len(),
     })
 }
