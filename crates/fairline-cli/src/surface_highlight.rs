@@ -234,37 +234,8 @@ fn picture_key(
 }
 
 pub fn run(args: HighlightArgs) -> Result<()> {
-    require_extension("-o", &args.output, &["json"])?;
-    if let Some(p) = &args.png {
-        require_extension("--png", p, &["png"])?;
-    }
-    if let Some(p) = &args.svg {
-        require_extension("--svg", p, &["svg"])?;
-    }
-    let job = crate::output::Job::new("highlight")
-        .input(&args.mesh)
-        .input_opt(args.light.lights.as_deref())
-        .output("-o", &args.output)
-        .output_opt("--png", args.png.as_deref())
-        .output_opt("--svg", args.svg.as_deref())
-        .output_opt("--report", args.report.as_deref())
-        .check()?;
-    if args.view.is_some_and(|v| v.length() == 0.0) {
-        return Err(bad_input("--view must not be the zero vector"));
-    }
-    if !(2..=4000).contains(&args.grid) {
-        return Err(bad_input(format!(
-            "--grid must be between 2 and 4000, got {}",
-            args.grid
-        )));
-    }
-    if let Some(b) = args.band
-        && !(b > 0.0 && b.is_finite())
-    {
-        return Err(bad_input(format!(
-            "--band must be a positive number, got {b}"
-        )));
-    }
+    let job = output_job(&args)?;
+    check_options(&args)?;
     let all = crate::surface::load_surfaces(&args.mesh)?;
     if let Some(k) = args.surface
         && k >= all.len()
@@ -275,85 +246,19 @@ pub fn run(args: HighlightArgs) -> Result<()> {
             all.len()
         )));
     }
-    // Circular lights: given, from a --lights file in the circular form, or
-    // (--circular) derived from the whole part, so that `fair-surface` on
-    // the same file derives the same ones.
-    let mut derived = false;
-    let circular_spec: Option<CircularLights> = if let (Some(c), Some(t), Some(Radii(radii))) =
-        (args.circle_center, args.circle_axis, args.radii.clone())
-    {
-        Some(CircularLights {
-            center: c.to_array(),
-            axis: t.to_array(),
-            radii,
-        })
-    } else if let Some(path) = &args.light.lights {
-        crate::args::circular_file(path)?
-    } else if args.circular {
-        derived = true;
-        Some(crate::args::derived_circular_lights(
-            fairline::highlight::default_circular_lights(
-                &all,
-                args.light.up.vector(),
-                fairline::highlight::DEFAULT_CIRCULAR_RADII,
-            ),
-        )?)
-    } else {
-        None
-    };
+    let circular_spec = circular_spec(&args, &all)?;
     let chosen: Vec<(usize, BSplineSurface)> = match args.surface {
         Some(k) => vec![(k, all[k].clone())],
         None => all.into_iter().enumerate().collect(),
     };
-    let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
-    for (_, s) in &chosen {
-        let (a, b) = s.control_bounding_box();
-        lo = lo.min(a);
-        hi = hi.max(b);
-    }
     let mut report = Report::new("highlight");
     report.set("surfaces", chosen.len());
     report.set("grid", args.grid);
     let opts = SurfaceHighlightOptions::default()
         .grid(args.grid)
         .band(args.band);
-    let circular = if let Some(spec) = circular_spec {
-        let lights = spec.lights().map_err(|e| match &args.light.lights {
-            Some(path) if args.circle_center.is_none() => {
-                crate::output::name_file(path, to_input_error(e))
-            }
-            _ => to_input_error(e),
-        })?;
-        if lights.is_empty() {
-            return Err(bad_input("circular lights need at least one radius"));
-        }
-        let mut light = json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii});
-        if derived {
-            light["derived"] = json!(true);
-        }
-        report.set("light", light);
-        Some(lights)
-    } else {
-        None
-    };
-    let array = match circular {
-        Some(_) => None,
-        None => {
-            let a = args.light.light_array_in_box(lo, hi)?;
-            report.set("light", json!({"kind": "linear", "array": a}));
-            Some(a)
-        }
-    };
+    let part_lights = part_lights(&args, circular_spec, &chosen, &mut report)?;
     let bar = crate::output::progress(chosen.len() as u64, "highlight lines");
-    let part_lights = match (circular, array) {
-        (Some(c), _) => PartLights::Circular(c),
-        (None, Some(array)) => PartLights::Linear {
-            array,
-            min_cos: args.light.min_normal_cos,
-            max_lights: fairline::highlight::surface::DEFAULT_MAX_LIGHTS,
-        },
-        (None, None) => PartLights::Circular(Vec::new()),
-    };
     let surfaces: Vec<BSplineSurface> = chosen.iter().map(|(_, s)| s.clone()).collect();
     let patches =
         report.time(|| part_highlight_lines(&surfaces, &part_lights, &opts, &|| bar.inc(1)));
@@ -363,77 +268,13 @@ pub fn run(args: HighlightArgs) -> Result<()> {
         .map(|((k, _), p)| (*k, p.lights, p.highlights))
         .collect();
     bar.finish_and_clear();
-    let multi = chosen.len() > 1;
-    let tag = |k: usize| multi.then_some(k);
-    let mut lines = Vec::new();
-    let (mut lower, mut upper) = (Vec::new(), Vec::new());
-    for (k, lights, h) in &results {
-        lines.extend(h.lines.iter().map(|l| line_json(l, lights, tag(*k))));
-        lower.extend(h.band_lower.iter().map(|l| line_json(l, lights, tag(*k))));
-        upper.extend(h.band_upper.iter().map(|l| line_json(l, lights, tag(*k))));
-    }
-    // Line ids: the position in "lines" (named by `fair-surface --from ID:T`).
-    for (id, l) in lines.iter_mut().enumerate() {
-        l["id"] = json!(id);
-    }
-    let line_count = lines.len();
-    let mut out = json!({"lines": lines});
-    if let Some(rho) = args.band {
-        out["bands"] = json!({"radius": rho, "lower": lower, "upper": upper});
-    }
+    let (out, line_count) = lines_document(&results, args.band);
     // Pictures first (they can fail on bad options); the lines file last.
     if let Some(p) = &args.png {
-        let all_lines: Vec<&SurfaceHighlightLine> = results
-            .iter()
-            .flat_map(|(_, _, h)| h.lines.iter().chain(&h.band_lower).chain(&h.band_upper))
-            .collect();
-        let title = format!(
-            "{}: highlight lines",
-            args.mesh
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default()
-        );
-        let mut ropts = RenderOptions::with_size(1200, 900);
-        if let Some(v) = args.view {
-            ropts.view_dir = v;
-        }
-        let mut img = surface_picture(&surfaces, polylines(&all_lines, 2.0), &title, &ropts)?;
-        crate::highlight_png::draw_key(&mut img, &picture_key(&results));
-        img.write_png(p)?;
+        write_picture(&args, &surfaces, &results, p)?;
     }
     if let Some(p) = &args.svg {
-        let want = args.surface.unwrap_or(0);
-        let (_, s) = chosen
-            .iter()
-            .find(|(k, _)| *k == want)
-            .unwrap_or(&chosen[0]);
-        let at = results.iter().position(|(k, _, _)| *k == want).unwrap_or(0);
-        let (k, lights, h) = &results[at];
-        // ids of this surface's lines: after those of the surfaces before it
-        let first_id: usize = results[..at].iter().map(|r| r.2.lines.len()).sum();
-        let title = if multi {
-            format!("surface {k}: highlight line pre-images (u, v), #line ids")
-        } else {
-            "highlight line pre-images (u, v), #line ids".to_string()
-        };
-        let mut plot = uv_plot(s, &title);
-        plot_lines(&mut plot, &h.lines.iter().collect::<Vec<_>>(), 1.5);
-        plot_lines(
-            &mut plot,
-            &h.band_lower.iter().chain(&h.band_upper).collect::<Vec<_>>(),
-            0.6,
-        );
-        plot_line_ids(&mut plot, &h.lines, first_id);
-        let mut legend = legend_entries(lights, &h.lines);
-        if !h.lines.is_empty() {
-            legend.push((
-                [60, 60, 60],
-                format!("lines #{first_id}..#{}", first_id + h.lines.len() - 1),
-            ));
-        }
-        plot.legend(&legend);
-        plot.write(p)?;
+        write_svg(&args, &chosen, &results, p)?;
     }
     write_json(&args.output, &out)?;
     report.set("lines", line_count);
@@ -459,5 +300,225 @@ pub fn run(args: HighlightArgs) -> Result<()> {
         "{line_count} highlight line pre-image(s) on {} surface(s)",
         results.len()
     ));
+    Ok(())
+}
+
+/// The output checks of the command (file kinds by extension, nothing
+/// written over an input) and its job.
+fn output_job(args: &HighlightArgs) -> Result<crate::output::Job> {
+    require_extension("-o", &args.output, &["json"])?;
+    if let Some(p) = &args.png {
+        require_extension("--png", p, &["png"])?;
+    }
+    if let Some(p) = &args.svg {
+        require_extension("--svg", p, &["svg"])?;
+    }
+    crate::output::Job::new("highlight")
+        .input(&args.mesh)
+        .input_opt(args.light.lights.as_deref())
+        .output("-o", &args.output)
+        .output_opt("--png", args.png.as_deref())
+        .output_opt("--svg", args.svg.as_deref())
+        .output_opt("--report", args.report.as_deref())
+        .check()
+}
+
+/// Input errors for --view, --grid and --band out of range.
+fn check_options(args: &HighlightArgs) -> Result<()> {
+    if args.view.is_some_and(|v| v.length() == 0.0) {
+        return Err(bad_input("--view must not be the zero vector"));
+    }
+    if !(2..=4000).contains(&args.grid) {
+        return Err(bad_input(format!(
+            "--grid must be between 2 and 4000, got {}",
+            args.grid
+        )));
+    }
+    if let Some(b) = args.band
+        && !(b > 0.0 && b.is_finite())
+    {
+        return Err(bad_input(format!(
+            "--band must be a positive number, got {b}"
+        )));
+    }
+    Ok(())
+}
+
+/// Circular lights: given, from a --lights file in the circular form, or
+/// (--circular) derived from the whole part `all`, so that `fair-surface`
+/// on the same file derives the same ones; with whether they were derived.
+/// `None` for linear lights.
+fn circular_spec(
+    args: &HighlightArgs,
+    all: &[BSplineSurface],
+) -> Result<Option<(CircularLights, bool)>> {
+    Ok(
+        if let (Some(c), Some(t), Some(Radii(radii))) =
+            (args.circle_center, args.circle_axis, args.radii.clone())
+        {
+            Some((
+                CircularLights {
+                    center: c.to_array(),
+                    axis: t.to_array(),
+                    radii,
+                },
+                false,
+            ))
+        } else if let Some(path) = &args.light.lights {
+            crate::args::circular_file(path)?.map(|c| (c, false))
+        } else if args.circular {
+            Some((
+                crate::args::derived_circular_lights(
+                    fairline::highlight::default_circular_lights(
+                        all,
+                        args.light.up.vector(),
+                        fairline::highlight::DEFAULT_CIRCULAR_RADII,
+                    ),
+                )?,
+                true,
+            ))
+        } else {
+            None
+        },
+    )
+}
+
+/// The lights of the run over the `chosen` surfaces (the circular ones of
+/// `circular_spec`, else the linear array of the options in the chosen
+/// surfaces' box), recorded in the report.
+fn part_lights(
+    args: &HighlightArgs,
+    circular_spec: Option<(CircularLights, bool)>,
+    chosen: &[(usize, BSplineSurface)],
+    report: &mut Report,
+) -> Result<PartLights> {
+    if let Some((spec, derived)) = circular_spec {
+        let lights = spec.lights().map_err(|e| match &args.light.lights {
+            Some(path) if args.circle_center.is_none() => {
+                crate::output::name_file(path, to_input_error(e))
+            }
+            _ => to_input_error(e),
+        })?;
+        if lights.is_empty() {
+            return Err(bad_input("circular lights need at least one radius"));
+        }
+        let mut light = json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii});
+        if derived {
+            light["derived"] = json!(true);
+        }
+        report.set("light", light);
+        return Ok(PartLights::Circular(lights));
+    }
+    let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+    for (_, s) in chosen {
+        let (a, b) = s.control_bounding_box();
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    let array = args.light.light_array_in_box(lo, hi)?;
+    report.set("light", json!({"kind": "linear", "array": array}));
+    Ok(PartLights::Linear {
+        array,
+        min_cos: args.light.min_normal_cos,
+        max_lights: fairline::highlight::surface::DEFAULT_MAX_LIGHTS,
+    })
+}
+
+/// The lines document (DESIGN.md §4) of every surface's lines, with their
+/// ids (the position in "lines", named by `fair-surface --from ID:T`) and
+/// the bands; with the number of lines.
+fn lines_document(
+    results: &[(usize, Vec<SurfaceLight>, SurfaceHighlights)],
+    band: Option<f64>,
+) -> (Value, usize) {
+    let multi = results.len() > 1;
+    let tag = |k: usize| multi.then_some(k);
+    let mut lines = Vec::new();
+    let (mut lower, mut upper) = (Vec::new(), Vec::new());
+    for (k, lights, h) in results {
+        lines.extend(h.lines.iter().map(|l| line_json(l, lights, tag(*k))));
+        lower.extend(h.band_lower.iter().map(|l| line_json(l, lights, tag(*k))));
+        upper.extend(h.band_upper.iter().map(|l| line_json(l, lights, tag(*k))));
+    }
+    for (id, l) in lines.iter_mut().enumerate() {
+        l["id"] = json!(id);
+    }
+    let line_count = lines.len();
+    let mut out = json!({"lines": lines});
+    if let Some(rho) = band {
+        out["bands"] = json!({"radius": rho, "lower": lower, "upper": upper});
+    }
+    (out, line_count)
+}
+
+/// The --png picture: the shaded part with every line, patch indices and
+/// the key.
+fn write_picture(
+    args: &HighlightArgs,
+    surfaces: &[BSplineSurface],
+    results: &[(usize, Vec<SurfaceLight>, SurfaceHighlights)],
+    path: &std::path::Path,
+) -> Result<()> {
+    let all_lines: Vec<&SurfaceHighlightLine> = results
+        .iter()
+        .flat_map(|(_, _, h)| h.lines.iter().chain(&h.band_lower).chain(&h.band_upper))
+        .collect();
+    let title = format!(
+        "{}: highlight lines",
+        args.mesh
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    );
+    let mut ropts = RenderOptions::with_size(1200, 900);
+    if let Some(v) = args.view {
+        ropts.view_dir = v;
+    }
+    let mut img = surface_picture(surfaces, polylines(&all_lines, 2.0), &title, &ropts)?;
+    crate::highlight_png::draw_key(&mut img, &picture_key(results));
+    img.write_png(path)?;
+    Ok(())
+}
+
+/// The --svg plot of one surface's pre-images (--surface, else the first)
+/// with line ids and the legend.
+fn write_svg(
+    args: &HighlightArgs,
+    chosen: &[(usize, BSplineSurface)],
+    results: &[(usize, Vec<SurfaceLight>, SurfaceHighlights)],
+    path: &std::path::Path,
+) -> Result<()> {
+    let multi = chosen.len() > 1;
+    let want = args.surface.unwrap_or(0);
+    let (_, s) = chosen
+        .iter()
+        .find(|(k, _)| *k == want)
+        .unwrap_or(&chosen[0]);
+    let at = results.iter().position(|(k, _, _)| *k == want).unwrap_or(0);
+    let (k, lights, h) = &results[at];
+    // ids of this surface's lines: after those of the surfaces before it
+    let first_id: usize = results[..at].iter().map(|r| r.2.lines.len()).sum();
+    let title = if multi {
+        format!("surface {k}: highlight line pre-images (u, v), #line ids")
+    } else {
+        "highlight line pre-images (u, v), #line ids".to_string()
+    };
+    let mut plot = uv_plot(s, &title);
+    plot_lines(&mut plot, &h.lines.iter().collect::<Vec<_>>(), 1.5);
+    plot_lines(
+        &mut plot,
+        &h.band_lower.iter().chain(&h.band_upper).collect::<Vec<_>>(),
+        0.6,
+    );
+    plot_line_ids(&mut plot, &h.lines, first_id);
+    let mut legend = legend_entries(lights, &h.lines);
+    if !h.lines.is_empty() {
+        legend.push((
+            [60, 60, 60],
+            format!("lines #{first_id}..#{}", first_id + h.lines.len() - 1),
+        ));
+    }
+    plot.legend(&legend);
+    plot.write(path)?;
     Ok(())
 }
