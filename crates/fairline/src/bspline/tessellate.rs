@@ -92,6 +92,114 @@ pub fn tessellate(surface: &BSplineSurface, nu: usize, nv: usize) -> Tessellatio
     }
 }
 
+/// Fewest grid points per direction a patch of a part gets.
+pub const MIN_PATCH_GRID: usize = 12;
+
+/// The (u, v) grid of one patch of a part whose bounding-box diagonal is
+/// `part_diagonal`, for a part grid of `grid` points per diagonal: each
+/// direction gets points in proportion to the length of the control polygon
+/// along it (the longest row or column, an upper bound of the iso-curves'
+/// length), so that grid points lie about `part_diagonal / grid` apart in
+/// space on every patch, between [`MIN_PATCH_GRID`] and `grid`. A part of
+/// many small faces then costs about as much as one surface of its size,
+/// not `grid²` samples per face (issue #20 item 4).
+pub fn patch_grid(surface: &BSplineSurface, part_diagonal: f64, grid: usize) -> [usize; 2] {
+    let (nu, nv) = (surface.count_u(), surface.count_v());
+    let p = |i: usize, j: usize| surface.control_point(i, j);
+    let len_u = (0..nv)
+        .map(|j| {
+            (1..nu)
+                .map(|i| (p(i, j) - p(i - 1, j)).length())
+                .sum::<f64>()
+        })
+        .fold(0.0, f64::max);
+    let len_v = (0..nu)
+        .map(|i| {
+            (1..nv)
+                .map(|j| (p(i, j) - p(i, j - 1)).length())
+                .sum::<f64>()
+        })
+        .fold(0.0, f64::max);
+    let lo = MIN_PATCH_GRID.min(grid);
+    let count = |len: f64| {
+        if part_diagonal > 0.0 && len.is_finite() {
+            ((grid as f64 * len / part_diagonal).ceil() as usize).clamp(lo, grid)
+        } else {
+            grid
+        }
+    };
+    [count(len_u), count(len_v)]
+}
+
+/// Every surface of a part tessellated on the grid `grid(s)` (in parallel,
+/// merged in input order) into one triangle mesh, with the patch (index
+/// into `surfaces`) of every face. Degenerate points (poles of a patch) can
+/// make a tessellation non-manifold; then the triangles with a repeated
+/// vertex are left out.
+pub fn tessellate_part_with(
+    surfaces: &[BSplineSurface],
+    grid: impl Fn(&BSplineSurface) -> [usize; 2] + Sync,
+) -> Result<(crate::SurfaceMesh, Vec<u32>), crate::MeshError> {
+    let pieces: Vec<_> = surfaces
+        .par_iter()
+        .map(|s| {
+            let [nu, nv] = grid(s);
+            tessellate(s, nu, nv)
+        })
+        .collect();
+    let mut positions = Vec::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    let mut patch: Vec<u32> = Vec::new();
+    for (k, t) in pieces.into_iter().enumerate() {
+        let base = positions.len() as u32;
+        positions.extend(t.positions);
+        triangles.extend(t.triangles.iter().map(|tri| tri.map(|i| i + base)));
+        patch.resize(triangles.len(), k as u32);
+    }
+    match crate::SurfaceMesh::new(positions.clone(), &triangles) {
+        Ok(m) => Ok((m, patch)),
+        Err(_) => {
+            let keep = |t: &[u32; 3]| t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
+            let kept_patch: Vec<u32> = triangles
+                .iter()
+                .zip(&patch)
+                .filter(|(t, _)| keep(t))
+                .map(|(_, &p)| p)
+                .collect();
+            let kept: Vec<[u32; 3]> = triangles.into_iter().filter(keep).collect();
+            Ok((crate::SurfaceMesh::new(positions, &kept)?, kept_patch))
+        }
+    }
+}
+
+/// A part tessellated for a picture (or for choosing its lights): one
+/// surface `n` × `n`; several, each on its [`patch_grid`] (about `n`
+/// samples along the part's diagonal, small faces get few), so that a part
+/// of hundreds of faces costs about as much as one surface of its size
+/// (issue #20 item 4). With the patch of every face.
+pub fn tessellate_part(
+    surfaces: &[BSplineSurface],
+    n: usize,
+) -> Result<(crate::SurfaceMesh, Vec<u32>), crate::MeshError> {
+    if surfaces.len() <= 1 {
+        return tessellate_part_with(surfaces, |_| [n, n]);
+    }
+    let diagonal = control_diagonal(surfaces);
+    tessellate_part_with(surfaces, |s| patch_grid(s, diagonal, n))
+}
+
+/// The diagonal of the bounding box of the control points of all
+/// `surfaces` (a bound of the part's size that needs no evaluation).
+pub fn control_diagonal(surfaces: &[BSplineSurface]) -> f64 {
+    let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+    for s in surfaces {
+        let (a, b) = s.control_bounding_box();
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    (hi - lo).length()
+}
+
 /// Last resort for normals: area-weighted average of adjacent triangles.
 fn fill_missing_normals(positions: &[Vec3], triangles: &[[u32; 3]], normals: &mut [Vec3]) {
     let count = positions.len();

@@ -606,44 +606,7 @@ pub struct PatchHighlights {
 /// resolves, see [`linear_lights`]).
 pub const DEFAULT_MAX_LIGHTS: usize = 1000;
 
-/// Fewest grid points per direction a patch of a part gets.
-pub const MIN_PATCH_GRID: usize = 12;
-
-/// The (u, v) grid of one patch of a part whose bounding-box diagonal is
-/// `part_diagonal`, for a part grid of `grid` points per diagonal: each
-/// direction gets points in proportion to the length of the control polygon
-/// along it (the longest row or column, an upper bound of the iso-curves'
-/// length), so that grid points lie about `part_diagonal / grid` apart in
-/// space on every patch, between [`MIN_PATCH_GRID`] and `grid`. A part of
-/// many small faces then costs about as much as one surface of its size,
-/// not `grid²` samples per face (issue #20 item 4).
-pub fn patch_grid(surface: &BSplineSurface, part_diagonal: f64, grid: usize) -> [usize; 2] {
-    let (nu, nv) = (surface.count_u(), surface.count_v());
-    let p = |i: usize, j: usize| surface.control_point(i, j);
-    let len_u = (0..nv)
-        .map(|j| {
-            (1..nu)
-                .map(|i| (p(i, j) - p(i - 1, j)).length())
-                .sum::<f64>()
-        })
-        .fold(0.0, f64::max);
-    let len_v = (0..nu)
-        .map(|i| {
-            (1..nv)
-                .map(|j| (p(i, j) - p(i, j - 1)).length())
-                .sum::<f64>()
-        })
-        .fold(0.0, f64::max);
-    let lo = MIN_PATCH_GRID.min(grid);
-    let count = |len: f64| {
-        if part_diagonal > 0.0 && len.is_finite() {
-            ((grid as f64 * len / part_diagonal).ceil() as usize).clamp(lo, grid)
-        } else {
-            grid
-        }
-    };
-    [count(len_u), count(len_v)]
-}
+pub use crate::bspline::{MIN_PATCH_GRID, patch_grid};
 
 /// Highlight lines of every patch of a part, in one run (issue #20 item 4):
 /// for a single surface exactly [`surface_highlight_lines`] with `opts`;
@@ -1143,6 +1106,11 @@ fn refine_on_edge(
     let accept = best.1 <= opts.tolerance.max(1e-6 * f0.abs().max(f1.abs()));
     accept.then(|| lerp(best.0))
 }
+
+mod part;
+pub use part::{
+    LIGHT_CHOICE_SAMPLES, linear_distance_gradient, part_light_array, readable_surface_lines,
+};
 
 #[cfg(test)]
 mod tests;
