@@ -10,7 +10,6 @@
 
 use crate::commands::{LightOptions, bad_choice, highlight_error, vec3};
 use crate::{Failure, Res};
-use fairline::Vec3;
 use fairline::bspline::BSplineSurface;
 use fairline::highlight::{
     CircularLight, CircularLights, PartLights, PatchHighlights, SurfaceHighlightOptions,
@@ -20,7 +19,7 @@ use fairline::io::JsonReport as Report;
 use fairline::io::surface_highlight_lines_json;
 use fairline::io::{parse_surfaces_json, surfaces_to_json};
 use pyo3::prelude::*;
-use serde_json::{Value, json};
+use serde_json::json;
 use std::path::PathBuf;
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
