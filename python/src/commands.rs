@@ -530,15 +530,22 @@ impl LightOptions {
         self.choice().light_array(mesh).map_err(highlight_error)
     }
 
-    /// The light array from the dictionary, or the defaults for the box
-    /// `lo`–`hi` with the given fields overridden.
-    pub(crate) fn light_array_in_box(&self, lo: Vec3, hi: Vec3) -> Res<LightArray> {
-        if let Some(v) = &self.lights {
-            return serde_json::from_value(v.clone())
-                .map_err(|e| Failure::bad(format!("lights: {e}")));
-        }
-        self.choice()
-            .light_array_in_box(lo, hi)
+    /// The linear light array of a part of B-spline surfaces (the CLI's
+    /// `LightArgs::part_light_array`): from the dictionary as it is, or the
+    /// part's readable default lights with the given fields in place.
+    pub(crate) fn part_light_array(
+        &self,
+        surfaces: &[fairline::bspline::BSplineSurface],
+    ) -> Res<LightArray> {
+        let given = match &self.lights {
+            Some(v) => Some(
+                serde_json::from_value(v.clone())
+                    .map_err(|e| Failure::bad(format!("lights: {e}")))?,
+            ),
+            None => None,
+        };
+        fairline::highlight::part_light_array(surfaces, &self.choice(), given)
+            .map(|(array, _)| array)
             .map_err(highlight_error)
     }
 

@@ -10,16 +10,16 @@
 
 use crate::commands::{LightOptions, bad_choice, highlight_error, vec3};
 use crate::{Failure, Res};
-use fairline::Vec3;
 use fairline::bspline::BSplineSurface;
 use fairline::highlight::{
-    CircularLight, CircularLights, PartLights, SurfaceHighlightLine, SurfaceHighlightOptions,
-    SurfaceLight, part_highlight_lines,
+    CircularLight, CircularLights, PartLights, PatchHighlights, SurfaceHighlightOptions,
+    part_highlight_lines,
 };
 use fairline::io::JsonReport as Report;
+use fairline::io::surface_highlight_lines_json;
 use fairline::io::{parse_surfaces_json, surfaces_to_json};
 use pyo3::prelude::*;
-use serde_json::{Value, json};
+use serde_json::json;
 use std::path::PathBuf;
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -101,24 +101,6 @@ fn write_surfaces(py: Python<'_>, path: PathBuf, surfaces: String) -> PyResult<(
     Ok(())
 }
 
-/// One line as the CLI writes it (surface_highlight.rs `line_json`).
-fn line_json(l: &SurfaceHighlightLine, lights: &[SurfaceLight], surface: Option<usize>) -> Value {
-    let uv: Vec<[f64; 2]> = l.uv.clone();
-    let pts: Vec<[f64; 3]> = l.points.iter().map(|p| p.to_array()).collect();
-    let mut v =
-        json!({"light": l.light, "level": l.level, "closed": l.closed, "uv": uv, "points": pts});
-    if let Some(r) = l.radius {
-        v["radius"] = json!(r);
-    }
-    if let Some(SurfaceLight::Linear { index, .. }) = lights.get(l.light) {
-        v["index"] = json!(index);
-    }
-    if let Some(s) = surface {
-        v["surface"] = json!(s);
-    }
-    v
-}
-
 /// `fairline highlight SURFACES.json` (crates/fairline-cli/src/
 /// surface_highlight.rs): the lines document and the report.
 #[pyfunction]
@@ -191,12 +173,7 @@ fn surface_highlight_lines(
             }
             None => all.into_iter().enumerate().collect(),
         };
-        let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
-        for (_, s) in &chosen {
-            let (a, b) = s.control_bounding_box();
-            lo = lo.min(a);
-            hi = hi.max(b);
-        }
+        let surfaces: Vec<BSplineSurface> = chosen.iter().map(|(_, s)| s.clone()).collect();
         let mut report = Report::new("highlight");
         report.set("surfaces", chosen.len());
         report.set("grid", grid);
@@ -246,7 +223,7 @@ fn surface_highlight_lines(
         let array = match circular {
             Some(_) => None,
             None => {
-                let a = light.light_array_in_box(lo, hi)?;
+                let a = light.part_light_array(&surfaces)?;
                 report.set("light", json!({"kind": "linear", "array": a}));
                 Some(a)
             }
@@ -261,46 +238,18 @@ fn surface_highlight_lines(
             },
             (None, None) => PartLights::Circular(Vec::new()),
         };
-        let surfaces: Vec<_> = chosen.iter().map(|(_, s)| s.clone()).collect();
         let patches = report.time(|| part_highlight_lines(&surfaces, &part_lights, &opts, &|| {}));
-        let results: Vec<(usize, Vec<SurfaceLight>, _)> = chosen
+        let results: Vec<(usize, &PatchHighlights)> = chosen
             .iter()
-            .zip(patches)
-            .map(|((k, _), p)| (*k, p.lights, p.highlights))
+            .zip(&patches)
+            .map(|((k, _), p)| (*k, p))
             .collect();
-        let multi = chosen.len() > 1;
-        let tag = |k: usize| multi.then_some(k);
-        let mut lines = Vec::new();
-        let (mut lower, mut upper) = (Vec::new(), Vec::new());
-        for (k, lights, h) in &results {
-            lines.extend(h.lines.iter().map(|l| line_json(l, lights, tag(*k))));
-            lower.extend(h.band_lower.iter().map(|l| line_json(l, lights, tag(*k))));
-            upper.extend(h.band_upper.iter().map(|l| line_json(l, lights, tag(*k))));
-        }
-        // line ids, as the CLI: the position in "lines"
-        for (id, l) in lines.iter_mut().enumerate() {
-            l["id"] = json!(id);
-        }
-        let line_count = lines.len();
-        let mut doc = json!({"lines": lines});
-        if let Some(rho) = band {
-            doc["bands"] = json!({"radius": rho, "lower": lower, "upper": upper});
-        }
-        report.set("lines", line_count);
-        report.set(
-            "closed_lines",
-            results
-                .iter()
-                .map(|(_, _, h)| h.lines.iter().filter(|l| l.closed).count())
-                .sum::<usize>(),
-        );
-        report.set(
-            "points",
-            results
-                .iter()
-                .map(|(_, _, h)| h.lines.iter().map(|l| l.uv.len()).sum::<usize>())
-                .sum::<usize>(),
-        );
+        // the CLI's lines document (`fairline::io::surface_highlight_lines_json`)
+        let (doc, counts) = surface_highlight_lines_json(&results, band);
+        let line_count = counts.lines;
+        report.set("lines", counts.lines);
+        report.set("closed_lines", counts.closed_lines);
+        report.set("points", counts.points);
         if line_count == 0 {
             report.warn("no highlight line pre-image was found on the surface; try other radii, --circle-center or --circle-axis");
         }

@@ -167,15 +167,19 @@ impl LightArgs {
         self.choice().light_array(mesh).map_err(to_input_error)
     }
 
-    /// The light array: from the file, or the defaults for the bounding box
-    /// `lo`–`hi` with the given fields overridden
-    /// ([`LightChoice::light_array_in_box`]).
-    pub fn light_array_in_box(&self, lo: Vec3, hi: Vec3) -> Result<LightArray> {
-        if let Some(path) = &self.lights {
-            return read_json::<LightArray>(path);
-        }
-        self.choice()
-            .light_array_in_box(lo, hi)
+    /// The light array of a part of B-spline surfaces and what its picture
+    /// can show: from the file (as it is), or the part's readable default
+    /// lights with the given fields in place
+    /// ([`fairline::highlight::part_light_array`]).
+    pub fn part_light_array(
+        &self,
+        surfaces: &[fairline::bspline::BSplineSurface],
+    ) -> Result<(LightArray, fairline::highlight::Readability)> {
+        let given = match &self.lights {
+            Some(path) => Some(read_json::<LightArray>(path)?),
+            None => None,
+        };
+        fairline::highlight::part_light_array(surfaces, &self.choice(), given)
             .map_err(to_input_error)
     }
 

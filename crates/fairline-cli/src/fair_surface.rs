@@ -8,12 +8,13 @@ use anyhow::Result;
 use fairline::bspline::BSplineSurface;
 use fairline::fair::{
     BoundaryControl, EndpointPair, Endpoints, SurfaceFairError, SurfaceFairMethod,
-    SurfaceFairOptions, fair_surface,
+    SurfaceFairOptions, SurfaceFairReport, fair_surface,
 };
 use fairline::highlight::{
-    CircularLight, CircularLights, SurfaceHighlightOptions, SurfaceLight, surface_highlight_lines,
+    CircularLight, CircularLights, SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight,
+    surface_highlight_lines,
 };
-use fairline::render::{RenderOptions, side_by_side};
+use fairline::render::{RenderOptions, SvgPlot, side_by_side};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -360,6 +361,72 @@ fn to_cli(e: SurfaceFairError) -> anyhow::Error {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let job = output_job(&args)?;
+    let input = crate::surface::load_surface_file(&args.surface_file)?;
+    let unit = input.unit;
+    let mut surfaces = input.surfaces;
+    if args.surface >= surfaces.len() {
+        return Err(bad_input(format!(
+            "{}: --surface {} is out of range (the file holds {} surfaces)",
+            args.surface_file.display(),
+            args.surface,
+            surfaces.len()
+        )));
+    }
+    let (spec, derived, lights) = circular_lights(&args, &surfaces)?;
+    let ends = Endpoints {
+        endpoints: endpoint_pairs(&args)?,
+    };
+    let opts = fair_options(&args, &lights, &ends);
+    let input = surfaces[args.surface].clone();
+    let mut report = Report::new("fair-surface");
+    let bar = crate::output::spinner("fairing");
+    let out = report
+        .time(|| fair_surface(&input, &opts))
+        .map_err(to_cli)?;
+    bar.finish_and_clear();
+    let (faired, rep) = (out.surfaces, out.report);
+    if derived {
+        report.set(
+            "light",
+            json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii, "derived": true}),
+        );
+    }
+    let snap_warnings = snap_warnings(&input, &ends, &rep);
+    print_summary(&rep, opts.boundary);
+    // The library's report carries the command's keys.
+    if let serde_json::Value::Object(fields) = serde_json::to_value(&rep)? {
+        for (key, value) in fields {
+            report.set(&key, value);
+        }
+    }
+    for w in snap_warnings {
+        report.warn(w);
+    }
+    // Pictures before the output file, so a failure leaves no output.
+    write_pictures(&args, &input, &faired, &lights, &rep)?;
+    surfaces[args.surface] = faired;
+    fairline::io::surface_file::write_surface_file(&args.output, &surfaces, unit.as_ref())?;
+    warn_about_convergence(&mut report, &rep);
+    report.write(args.report.as_deref())?;
+    job.finish(format_args!(
+        "{} iteration(s), {}, {} control point(s) moved, largest residual {:.3e} → {:.3e}",
+        rep.iterations,
+        if rep.converged {
+            "converged"
+        } else {
+            "not converged"
+        },
+        rep.modified_control_points,
+        rep.residual_before.max,
+        rep.residual_after.max
+    ));
+    Ok(())
+}
+
+/// The output checks of the command (file kinds by extension, nothing
+/// written over an input) and its job.
+fn output_job(args: &Args) -> Result<crate::output::Job> {
     if !crate::surface::is_surface_path(&args.output) {
         return Err(bad_input(format!(
             "{}: -o must name a surface file (.json, .igs/.iges or .step/.stp)",
@@ -372,7 +439,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(p) = &args.svg {
         crate::output::require_extension("--svg", p, &["svg"])?;
     }
-    let job = crate::output::Job::new("fair-surface")
+    crate::output::Job::new("fair-surface")
         .input(&args.surface_file)
         .input_opt(args.lights.as_deref())
         .input_opt(args.endpoints.as_deref())
@@ -381,23 +448,21 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--png", args.png.as_deref())
         .output_opt("--svg", args.svg.as_deref())
         .output_opt("--report", args.report.as_deref())
-        .check()?;
-    let input = crate::surface::load_surface_file(&args.surface_file)?;
-    let unit = input.unit;
-    let mut surfaces = input.surfaces;
-    if args.surface >= surfaces.len() {
-        return Err(bad_input(format!(
-            "{}: --surface {} is out of range (the file holds {} surfaces)",
-            args.surface_file.display(),
-            args.surface,
-            surfaces.len()
-        )));
-    }
+        .check()
+}
+
+/// The circular lights of the run: those of --lights, or derived from the
+/// whole part (as `fairline highlight --circular`); with whether they were
+/// derived.
+fn circular_lights(
+    args: &Args,
+    surfaces: &[BSplineSurface],
+) -> Result<(CircularLights, bool, Vec<CircularLight>)> {
     let (spec, derived): (CircularLights, bool) = match &args.lights {
         Some(path) => (read_json(path)?, false),
         None => (
             crate::args::derived_circular_lights(fairline::highlight::default_circular_lights(
-                &surfaces,
+                surfaces,
                 None,
                 fairline::highlight::DEFAULT_CIRCULAR_RADII,
             ))?,
@@ -408,11 +473,13 @@ pub fn run(args: Args) -> Result<()> {
         Some(path) => bad_input(format!("{}: {e}", path.display())),
         None => bad_input(e.to_string()),
     })?;
-    let ends = Endpoints {
-        endpoints: endpoint_pairs(&args)?,
-    };
-    let opts = SurfaceFairOptions::default()
-        .lights(lights.clone())
+    Ok((spec, derived, lights))
+}
+
+/// The library's fairing options from the command line.
+fn fair_options(args: &Args, lights: &[CircularLight], ends: &Endpoints) -> SurfaceFairOptions {
+    SurfaceFairOptions::default()
+        .lights(lights.to_vec())
         .endpoints(ends.endpoints.clone())
         .grid(args.grid)
         .sample_spacing(args.sample_spacing)
@@ -436,24 +503,13 @@ pub fn run(args: Args) -> Result<()> {
             BoundaryArg::Free => BoundaryControl::Free,
         })
         .keep_weight(args.keep_weight)
-        .fairness_weight(args.fairness_weight);
-    let input = surfaces[args.surface].clone();
-    let mut report = Report::new("fair-surface");
-    let bar = crate::output::spinner("fairing");
-    let out = report
-        .time(|| fair_surface(&input, &opts))
-        .map_err(to_cli)?;
-    bar.finish_and_clear();
-    let (faired, rep) = (out.surfaces, out.report);
-    if derived {
-        report.set(
-            "light",
-            json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii, "derived": true}),
-        );
-    }
-    // Endpoints that snapped far from where they were given (more than
-    // SNAP_WARNING_FRACTION of the parameter domain's diagonal) were
-    // probably read off the wrong line.
+        .fairness_weight(args.fairness_weight)
+}
+
+/// Warnings for the endpoints that snapped far from where they were given
+/// (more than [`SNAP_WARNING_FRACTION`] of the parameter domain's
+/// diagonal): they were probably read off the wrong line.
+fn snap_warnings(input: &BSplineSurface, ends: &Endpoints, rep: &SurfaceFairReport) -> Vec<String> {
     let (du, dv) = (input.domain_u(), input.domain_v());
     let diag = (du[1] - du[0]).hypot(dv[1] - dv[0]);
     let mut snap_warnings = Vec::new();
@@ -479,12 +535,18 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
     }
+    snap_warnings
+}
+
+/// The terminal line saying what was moved, what was held and how the
+/// iteration ended.
+fn print_summary(rep: &SurfaceFairReport, boundary: BoundaryControl) {
     eprintln!(
         "fair-surface: {} stretches, {} control points moved, {} held on the patch boundary ({}); {} iterations, {} ({:?}); mean |d_s| {:.3e} -> {:.3e}",
         rep.targets.len(),
         rep.modified_control_points,
         rep.held_boundary_points.len(),
-        match opts.boundary {
+        match boundary {
             BoundaryControl::Free => "boundary free",
             BoundaryControl::Fixed => "boundary rows fixed: seams stay closed",
             BoundaryControl::FixedWithTangents => "two boundary rows fixed: seams keep G1",
@@ -499,75 +561,98 @@ pub fn run(args: Args) -> Result<()> {
         rep.residual_before.mean,
         rep.residual_after.mean
     );
-    // The library's report carries the command's keys.
-    if let serde_json::Value::Object(fields) = serde_json::to_value(&rep)? {
-        for (key, value) in fields {
-            report.set(&key, value);
-        }
+}
+
+/// The --png (highlight lines before | after) and --svg (pre-images before
+/// and after, targets, endpoints and the knot box) pictures.
+fn write_pictures(
+    args: &Args,
+    input: &BSplineSurface,
+    faired: &BSplineSurface,
+    lights: &[CircularLight],
+    rep: &SurfaceFairReport,
+) -> Result<()> {
+    if args.png.is_none() && args.svg.is_none() {
+        return Ok(());
     }
-    for w in snap_warnings {
-        report.warn(w);
-    }
-    // Pictures before the output file, so a failure leaves no output.
     let slights: Vec<SurfaceLight> = lights.iter().map(|l| SurfaceLight::Circular(*l)).collect();
     let hopts = SurfaceHighlightOptions::default().grid(args.grid);
-    if args.png.is_some() || args.svg.is_some() {
-        let before = surface_highlight_lines(&input, &slights, &hopts);
-        let after = surface_highlight_lines(&faired, &slights, &hopts);
-        if let Some(p) = &args.png {
-            let opts = RenderOptions::with_size(900, 700);
-            let pic = |s: &BSplineSurface, h: &fairline::highlight::SurfaceHighlights, t: &str| {
-                surface_picture(
-                    std::slice::from_ref(s),
-                    polylines(&h.lines.iter().collect::<Vec<_>>(), 2.0),
-                    t,
-                    &opts,
-                )
-            };
-            let img = side_by_side(
-                &[
-                    pic(&input, &before, "input")?,
-                    pic(&faired, &after, "faired")?,
-                ],
-                &["before", "after"],
-            );
-            img.write_png(p)?;
-        }
-        if let Some(p) = &args.svg {
-            let mut plot = uv_plot(
-                &input,
-                "pre-images: before (grey), after (colour), targets (black)",
-            );
-            for l in &before.lines {
-                let mut uv = l.uv.clone();
-                if l.closed && !uv.is_empty() {
-                    uv.push(uv[0]);
-                }
-                plot.polyline(&uv, [170, 170, 170], 2.5);
-            }
-            plot_lines(&mut plot, &after.lines.iter().collect::<Vec<_>>(), 1.2);
-            for t in &rep.targets {
-                plot.polyline(&t.samples, [0, 0, 0], 0.8);
-                plot.marker(t.start, palette_srgb(t.light), "");
-                plot.marker(t.end, palette_srgb(t.light), "");
-            }
-            let kb = rep.knot_box;
-            plot.polyline(
-                &[
-                    [kb[0], kb[2]],
-                    [kb[1], kb[2]],
-                    [kb[1], kb[3]],
-                    [kb[0], kb[3]],
-                    [kb[0], kb[2]],
-                ],
-                [220, 120, 0],
-                1.0,
-            );
-            plot.write(p)?;
-        }
+    let before = surface_highlight_lines(input, &slights, &hopts);
+    let after = surface_highlight_lines(faired, &slights, &hopts);
+    if let Some(p) = &args.png {
+        before_after_png(input, faired, &before, &after)?.write_png(p)?;
     }
-    surfaces[args.surface] = faired;
-    fairline::io::surface_file::write_surface_file(&args.output, &surfaces, unit.as_ref())?;
+    if let Some(p) = &args.svg {
+        before_after_svg(input, &before, &after, rep).write(p)?;
+    }
+    Ok(())
+}
+
+/// The shaded surfaces with their highlight lines, before | after.
+fn before_after_png(
+    input: &BSplineSurface,
+    faired: &BSplineSurface,
+    before: &SurfaceHighlights,
+    after: &SurfaceHighlights,
+) -> Result<fairline::render::Image> {
+    let opts = RenderOptions::with_size(900, 700);
+    let pic = |s: &BSplineSurface, h: &SurfaceHighlights, t: &str| {
+        surface_picture(
+            std::slice::from_ref(s),
+            polylines(&h.lines.iter().collect::<Vec<_>>(), 2.0),
+            t,
+            &opts,
+        )
+    };
+    Ok(side_by_side(
+        &[pic(input, before, "input")?, pic(faired, after, "faired")?],
+        &["before", "after"],
+    ))
+}
+
+/// The pre-images before (grey) and after (colour), the targets (black),
+/// the endpoints and the knot-span box of the moved control points.
+fn before_after_svg(
+    input: &BSplineSurface,
+    before: &SurfaceHighlights,
+    after: &SurfaceHighlights,
+    rep: &SurfaceFairReport,
+) -> SvgPlot {
+    let mut plot = uv_plot(
+        input,
+        "pre-images: before (grey), after (colour), targets (black)",
+    );
+    for l in &before.lines {
+        let mut uv = l.uv.clone();
+        if l.closed && !uv.is_empty() {
+            uv.push(uv[0]);
+        }
+        plot.polyline(&uv, [170, 170, 170], 2.5);
+    }
+    plot_lines(&mut plot, &after.lines.iter().collect::<Vec<_>>(), 1.2);
+    for t in &rep.targets {
+        plot.polyline(&t.samples, [0, 0, 0], 0.8);
+        plot.marker(t.start, palette_srgb(t.light), "");
+        plot.marker(t.end, palette_srgb(t.light), "");
+    }
+    let kb = rep.knot_box;
+    plot.polyline(
+        &[
+            [kb[0], kb[2]],
+            [kb[1], kb[2]],
+            [kb[1], kb[3]],
+            [kb[0], kb[3]],
+            [kb[0], kb[2]],
+        ],
+        [220, 120, 0],
+        1.0,
+    );
+    plot
+}
+
+/// Warnings when the iteration stopped before convergence or the largest
+/// residual grew.
+fn warn_about_convergence(report: &mut Report, rep: &SurfaceFairReport) {
     if !rep.converged {
         report.warn(format!(
             "fairing did not converge ({:?} after {} iteration(s)); try --max-iterations or other endpoints",
@@ -581,18 +666,4 @@ pub fn run(args: Args) -> Result<()> {
             rep.residual_before.max, rep.residual_after.max
         ));
     }
-    report.write(args.report.as_deref())?;
-    job.finish(format_args!(
-        "{} iteration(s), {}, {} control point(s) moved, largest residual {:.3e} → {:.3e}",
-        rep.iterations,
-        if rep.converged {
-            "converged"
-        } else {
-            "not converged"
-        },
-        rep.modified_control_points,
-        rep.residual_before.max,
-        rep.residual_after.max
-    ));
-    Ok(())
 }

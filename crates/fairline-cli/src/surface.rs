@@ -5,7 +5,7 @@
 use crate::error::bad_input;
 use anyhow::Result;
 use fairline::SurfaceMesh;
-use fairline::bspline::{BSplineSurface, tessellate};
+use fairline::bspline::BSplineSurface;
 use fairline::io::surface_file::{SurfaceFile, SurfaceFormat, read_surface_file};
 use std::path::Path;
 
@@ -67,66 +67,20 @@ pub fn tessellated_part(surfaces: &[BSplineSurface], n: usize) -> Result<Surface
     Ok(tessellated_part_with_patches(surfaces, n)?.0)
 }
 
-/// [`tessellated_part`] and the patch (index into `surfaces`) of every face.
+/// [`tessellated_part`] and the patch (index into `surfaces`) of every face
+/// ([`fairline::bspline::tessellate_part`]).
 pub fn tessellated_part_with_patches(
     surfaces: &[BSplineSurface],
     n: usize,
 ) -> Result<(SurfaceMesh, Vec<u32>)> {
-    if surfaces.len() <= 1 {
-        return tessellated_with(surfaces, |_| [n, n]);
-    }
-    let (mut lo, mut hi) = (
-        fairline::Vec3::splat(f64::INFINITY),
-        fairline::Vec3::splat(f64::NEG_INFINITY),
-    );
-    for s in surfaces {
-        let (a, b) = s.control_bounding_box();
-        lo = lo.min(a);
-        hi = hi.max(b);
-    }
-    let diagonal = (hi - lo).length();
-    tessellated_with(surfaces, |s| {
-        fairline::highlight::patch_grid(s, diagonal, n)
-    })
+    Ok(fairline::bspline::tessellate_part(surfaces, n)?)
 }
 
-/// Tessellates every surface on the grid `grid(s)` (in parallel, merged in
-/// input order) into one triangle mesh; also the surface of every face.
+/// Tessellates every surface on the grid `grid(s)` into one triangle mesh;
+/// also the surface of every face ([`fairline::bspline::tessellate_part_with`]).
 fn tessellated_with(
     surfaces: &[BSplineSurface],
     grid: impl Fn(&BSplineSurface) -> [usize; 2] + Sync,
 ) -> Result<(SurfaceMesh, Vec<u32>)> {
-    use rayon::prelude::*;
-    let pieces: Vec<_> = surfaces
-        .par_iter()
-        .map(|s| {
-            let [nu, nv] = grid(s);
-            tessellate(s, nu, nv)
-        })
-        .collect();
-    let mut positions = Vec::new();
-    let mut triangles: Vec<[u32; 3]> = Vec::new();
-    let mut patch: Vec<u32> = Vec::new();
-    for (k, t) in pieces.into_iter().enumerate() {
-        let base = positions.len() as u32;
-        positions.extend(t.positions);
-        triangles.extend(t.triangles.iter().map(|tri| tri.map(|i| i + base)));
-        patch.resize(triangles.len(), k as u32);
-    }
-    // Degenerate points (poles of a patch) can make a tessellation
-    // non-manifold; keep only the triangles a manifold mesh accepts.
-    match SurfaceMesh::new(positions.clone(), &triangles) {
-        Ok(m) => Ok((m, patch)),
-        Err(_) => {
-            let keep = |t: &[u32; 3]| t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
-            let kept_patch: Vec<u32> = triangles
-                .iter()
-                .zip(&patch)
-                .filter(|(t, _)| keep(t))
-                .map(|(_, &p)| p)
-                .collect();
-            let kept: Vec<[u32; 3]> = triangles.into_iter().filter(keep).collect();
-            Ok((SurfaceMesh::new(positions, &kept)?, kept_patch))
-        }
-    }
+    Ok(fairline::bspline::tessellate_part_with(surfaces, grid)?)
 }

@@ -11,9 +11,10 @@ use anyhow::Result;
 use fairline::Vec3;
 use fairline::bspline::BSplineSurface;
 use fairline::highlight::{
-    CircularLights, PartLights, SurfaceHighlightLine, SurfaceHighlightOptions, SurfaceHighlights,
-    SurfaceLight, part_highlight_lines,
+    CircularLights, LightArray, PartLights, PatchHighlights, Readability, SurfaceHighlightLine,
+    SurfaceHighlightOptions, SurfaceLight, part_highlight_lines, readable_surface_lines,
 };
+use fairline::io::surface_highlight_lines_json;
 use fairline::picture::{Picture, labelled_mesh_picture, mesh_picture};
 use fairline::render::{PolylineLayer, RegionLabels, RenderOptions, SvgPlot};
 use serde_json::{Value, json};
@@ -33,29 +34,6 @@ pub fn palette_srgb(k: usize) -> [u8; 3] {
     let c = PALETTE[k % PALETTE.len()];
     let px = fairline::render::linear_to_srgb8(c);
     [px[0], px[1], px[2]]
-}
-
-/// One line as JSON (DESIGN.md §4): radius (circular) or index (linear),
-/// closed, uv, points; `surface` when the file holds several.
-pub fn line_json(
-    l: &SurfaceHighlightLine,
-    lights: &[SurfaceLight],
-    surface: Option<usize>,
-) -> Value {
-    let uv: Vec<[f64; 2]> = l.uv.clone();
-    let pts: Vec<[f64; 3]> = l.points.iter().map(|p| p.to_array()).collect();
-    let mut v =
-        json!({"light": l.light, "level": l.level, "closed": l.closed, "uv": uv, "points": pts});
-    if let Some(r) = l.radius {
-        v["radius"] = json!(r);
-    }
-    if let Some(SurfaceLight::Linear { index, .. }) = lights.get(l.light) {
-        v["index"] = json!(index);
-    }
-    if let Some(s) = surface {
-        v["surface"] = json!(s);
-    }
-    v
 }
 
 /// Polylines of surface highlight lines for a picture, coloured by light.
@@ -189,12 +167,11 @@ const KEY_RADII: usize = 10;
 /// that has a line, in its colour (the SVG's legend); for linear lights one
 /// entry with the light spacing (the colours cycle through the lights, as
 /// in the SVG, so they are not listed one by one).
-fn picture_key(
-    results: &[(usize, Vec<SurfaceLight>, SurfaceHighlights)],
-) -> Vec<([f32; 3], String)> {
+fn picture_key(results: &[(usize, PatchHighlights)]) -> Vec<([f32; 3], String)> {
     let mut radii: Vec<(usize, f64)> = Vec::new();
     let mut spacing = None;
-    for (_, lights, h) in results {
+    for (_, p) in results {
+        let (lights, h) = (&p.lights, &p.highlights);
         for l in h.lines.iter().chain(&h.band_lower).chain(&h.band_upper) {
             match lights.get(l.light) {
                 Some(SurfaceLight::Circular(c)) => radii.push((l.light, c.radius())),
@@ -234,6 +211,80 @@ fn picture_key(
 }
 
 pub fn run(args: HighlightArgs) -> Result<()> {
+    let job = output_job(&args)?;
+    check_options(&args)?;
+    let all = crate::surface::load_surfaces(&args.mesh)?;
+    if let Some(k) = args.surface
+        && k >= all.len()
+    {
+        return Err(bad_input(format!(
+            "{}: --surface {k} is out of range (the file holds {} surfaces)",
+            args.mesh.display(),
+            all.len()
+        )));
+    }
+    let circular_spec = circular_spec(&args, &all)?;
+    let chosen: Vec<(usize, BSplineSurface)> = match args.surface {
+        Some(k) => vec![(k, all[k].clone())],
+        None => all.into_iter().enumerate().collect(),
+    };
+    let surfaces: Vec<BSplineSurface> = chosen.iter().map(|(_, s)| s.clone()).collect();
+    let mut report = Report::new("highlight");
+    report.set("surfaces", chosen.len());
+    report.set("grid", args.grid);
+    let opts = SurfaceHighlightOptions::default()
+        .grid(args.grid)
+        .band(args.band);
+    let (part_lights, readable) = part_lights(&args, circular_spec, &surfaces, &mut report)?;
+    let bar = crate::output::progress(chosen.len() as u64, "highlight lines");
+    let patches =
+        report.time(|| part_highlight_lines(&surfaces, &part_lights, &opts, &|| bar.inc(1)));
+    let results: Vec<(usize, PatchHighlights)> = chosen
+        .iter()
+        .zip(patches)
+        .map(|((k, _), p)| (*k, p))
+        .collect();
+    bar.finish_and_clear();
+    let (out, counts) = surface_highlight_lines_json(
+        &results.iter().map(|(k, p)| (*k, p)).collect::<Vec<_>>(),
+        args.band,
+    );
+    // Pictures first (they can fail on bad options); the lines file last.
+    if let Some(p) = &args.png {
+        let drawn = drawn_lines(&surfaces, &results, readable.as_ref().map(|r| &r.1));
+        let view = match (&readable, args.view) {
+            (_, Some(v)) => Some((v, RenderOptions::default().up)),
+            (Some((array, _)), None) => Some(part_camera(array)),
+            (None, None) => None,
+        };
+        if let Some((dir, up)) = view {
+            report.set("view", json!({"dir": dir.to_array(), "up": up.to_array()}));
+        }
+        report.set("drawn", drawn_json(&drawn));
+        write_picture(&args, &surfaces, &results, &drawn, view, p)?;
+    }
+    if let Some(p) = &args.svg {
+        write_svg(&args, &surfaces, &results, p)?;
+    }
+    write_json(&args.output, &out)?;
+    report.set("lines", counts.lines);
+    report.set("closed_lines", counts.closed_lines);
+    report.set("points", counts.points);
+    if counts.lines == 0 {
+        report.warn("no highlight line pre-image was found on the surface; try other radii, --circle-center or --circle-axis");
+    }
+    report.write(args.report.as_deref())?;
+    job.finish(format_args!(
+        "{} highlight line pre-image(s) on {} surface(s)",
+        counts.lines,
+        results.len()
+    ));
+    Ok(())
+}
+
+/// The output checks of the command (file kinds by extension, nothing
+/// written over an input) and its job.
+fn output_job(args: &HighlightArgs) -> Result<crate::output::Job> {
     require_extension("-o", &args.output, &["json"])?;
     if let Some(p) = &args.png {
         require_extension("--png", p, &["png"])?;
@@ -241,14 +292,18 @@ pub fn run(args: HighlightArgs) -> Result<()> {
     if let Some(p) = &args.svg {
         require_extension("--svg", p, &["svg"])?;
     }
-    let job = crate::output::Job::new("highlight")
+    crate::output::Job::new("highlight")
         .input(&args.mesh)
         .input_opt(args.light.lights.as_deref())
         .output("-o", &args.output)
         .output_opt("--png", args.png.as_deref())
         .output_opt("--svg", args.svg.as_deref())
         .output_opt("--report", args.report.as_deref())
-        .check()?;
+        .check()
+}
+
+/// Input errors for --view, --grid and --band out of range.
+fn check_options(args: &HighlightArgs) -> Result<()> {
     if args.view.is_some_and(|v| v.length() == 0.0) {
         return Err(bad_input("--view must not be the zero vector"));
     }
@@ -265,59 +320,60 @@ pub fn run(args: HighlightArgs) -> Result<()> {
             "--band must be a positive number, got {b}"
         )));
     }
-    let all = crate::surface::load_surfaces(&args.mesh)?;
-    if let Some(k) = args.surface
-        && k >= all.len()
-    {
-        return Err(bad_input(format!(
-            "{}: --surface {k} is out of range (the file holds {} surfaces)",
-            args.mesh.display(),
-            all.len()
-        )));
-    }
-    // Circular lights: given, from a --lights file in the circular form, or
-    // (--circular) derived from the whole part, so that `fair-surface` on
-    // the same file derives the same ones.
-    let mut derived = false;
-    let circular_spec: Option<CircularLights> = if let (Some(c), Some(t), Some(Radii(radii))) =
-        (args.circle_center, args.circle_axis, args.radii.clone())
-    {
-        Some(CircularLights {
-            center: c.to_array(),
-            axis: t.to_array(),
-            radii,
-        })
-    } else if let Some(path) = &args.light.lights {
-        crate::args::circular_file(path)?
-    } else if args.circular {
-        derived = true;
-        Some(crate::args::derived_circular_lights(
-            fairline::highlight::default_circular_lights(
-                &all,
-                args.light.up.vector(),
-                fairline::highlight::DEFAULT_CIRCULAR_RADII,
-            ),
-        )?)
-    } else {
-        None
-    };
-    let chosen: Vec<(usize, BSplineSurface)> = match args.surface {
-        Some(k) => vec![(k, all[k].clone())],
-        None => all.into_iter().enumerate().collect(),
-    };
-    let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
-    for (_, s) in &chosen {
-        let (a, b) = s.control_bounding_box();
-        lo = lo.min(a);
-        hi = hi.max(b);
-    }
-    let mut report = Report::new("highlight");
-    report.set("surfaces", chosen.len());
-    report.set("grid", args.grid);
-    let opts = SurfaceHighlightOptions::default()
-        .grid(args.grid)
-        .band(args.band);
-    let circular = if let Some(spec) = circular_spec {
+    Ok(())
+}
+
+/// Circular lights: given, from a --lights file in the circular form, or
+/// (--circular) derived from the whole part `all`, so that `fair-surface`
+/// on the same file derives the same ones; with whether they were derived.
+/// `None` for linear lights.
+fn circular_spec(
+    args: &HighlightArgs,
+    all: &[BSplineSurface],
+) -> Result<Option<(CircularLights, bool)>> {
+    Ok(
+        if let (Some(c), Some(t), Some(Radii(radii))) =
+            (args.circle_center, args.circle_axis, args.radii.clone())
+        {
+            Some((
+                CircularLights {
+                    center: c.to_array(),
+                    axis: t.to_array(),
+                    radii,
+                },
+                false,
+            ))
+        } else if let Some(path) = &args.light.lights {
+            crate::args::circular_file(path)?.map(|c| (c, false))
+        } else if args.circular {
+            Some((
+                crate::args::derived_circular_lights(
+                    fairline::highlight::default_circular_lights(
+                        all,
+                        args.light.up.vector(),
+                        fairline::highlight::DEFAULT_CIRCULAR_RADII,
+                    ),
+                )?,
+                true,
+            ))
+        } else {
+            None
+        },
+    )
+}
+
+/// The lights of the run over the chosen `surfaces`: the circular ones of
+/// `circular_spec`, else the linear array of the --lights file or the
+/// part's readable default lights with the options given in place
+/// ([`fairline::highlight::part_light_array`], the mesh side's rule) with
+/// what its picture can show; recorded in the report.
+fn part_lights(
+    args: &HighlightArgs,
+    circular_spec: Option<(CircularLights, bool)>,
+    surfaces: &[BSplineSurface],
+    report: &mut Report,
+) -> Result<(PartLights, Option<(LightArray, Readability)>)> {
+    if let Some((spec, derived)) = circular_spec {
         let lights = spec.lights().map_err(|e| match &args.light.lights {
             Some(path) if args.circle_center.is_none() => {
                 crate::output::name_file(path, to_input_error(e))
@@ -332,132 +388,197 @@ pub fn run(args: HighlightArgs) -> Result<()> {
             light["derived"] = json!(true);
         }
         report.set("light", light);
-        Some(lights)
-    } else {
-        None
-    };
-    let array = match circular {
-        Some(_) => None,
-        None => {
-            let a = args.light.light_array_in_box(lo, hi)?;
-            report.set("light", json!({"kind": "linear", "array": a}));
-            Some(a)
-        }
-    };
-    let bar = crate::output::progress(chosen.len() as u64, "highlight lines");
-    let part_lights = match (circular, array) {
-        (Some(c), _) => PartLights::Circular(c),
-        (None, Some(array)) => PartLights::Linear {
+        return Ok((PartLights::Circular(lights), None));
+    }
+    let (array, readability) = args.light.part_light_array(surfaces)?;
+    report.set("light", json!({"kind": "linear", "array": array}));
+    Ok((
+        PartLights::Linear {
             array,
             min_cos: args.light.min_normal_cos,
             max_lights: fairline::highlight::surface::DEFAULT_MAX_LIGHTS,
         },
-        (None, None) => PartLights::Circular(Vec::new()),
-    };
-    let surfaces: Vec<BSplineSurface> = chosen.iter().map(|(_, s)| s.clone()).collect();
-    let patches =
-        report.time(|| part_highlight_lines(&surfaces, &part_lights, &opts, &|| bar.inc(1)));
-    let results: Vec<(usize, Vec<SurfaceLight>, SurfaceHighlights)> = chosen
+        Some((array, readability)),
+    ))
+}
+
+/// The lines the picture draws: with linear lights the readable drawing of
+/// every surface's lines ([`readable_surface_lines`]; band boundaries
+/// too), else all lines.
+fn drawn_lines(
+    surfaces: &[BSplineSurface],
+    results: &[(usize, PatchHighlights)],
+    readability: Option<&Readability>,
+) -> Vec<SurfaceHighlightLine> {
+    results
         .iter()
-        .zip(patches)
-        .map(|((k, _), p)| (*k, p.lights, p.highlights))
-        .collect();
-    bar.finish_and_clear();
-    let multi = chosen.len() > 1;
-    let tag = |k: usize| multi.then_some(k);
-    let mut lines = Vec::new();
-    let (mut lower, mut upper) = (Vec::new(), Vec::new());
-    for (k, lights, h) in &results {
-        lines.extend(h.lines.iter().map(|l| line_json(l, lights, tag(*k))));
-        lower.extend(h.band_lower.iter().map(|l| line_json(l, lights, tag(*k))));
-        upper.extend(h.band_upper.iter().map(|l| line_json(l, lights, tag(*k))));
-    }
-    // Line ids: the position in "lines" (named by `fair-surface --from ID:T`).
-    for (id, l) in lines.iter_mut().enumerate() {
-        l["id"] = json!(id);
-    }
-    let line_count = lines.len();
-    let mut out = json!({"lines": lines});
-    if let Some(rho) = args.band {
-        out["bands"] = json!({"radius": rho, "lower": lower, "upper": upper});
-    }
-    // Pictures first (they can fail on bad options); the lines file last.
-    if let Some(p) = &args.png {
-        let all_lines: Vec<&SurfaceHighlightLine> = results
-            .iter()
-            .flat_map(|(_, _, h)| h.lines.iter().chain(&h.band_lower).chain(&h.band_upper))
-            .collect();
-        let title = format!(
-            "{}: highlight lines",
-            args.mesh
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default()
-        );
-        let mut ropts = RenderOptions::with_size(1200, 900);
-        if let Some(v) = args.view {
-            ropts.view_dir = v;
-        }
-        let mut img = surface_picture(&surfaces, polylines(&all_lines, 2.0), &title, &ropts)?;
-        crate::highlight_png::draw_key(&mut img, &picture_key(&results));
-        img.write_png(p)?;
-    }
-    if let Some(p) = &args.svg {
-        let want = args.surface.unwrap_or(0);
-        let (_, s) = chosen
-            .iter()
-            .find(|(k, _)| *k == want)
-            .unwrap_or(&chosen[0]);
-        let at = results.iter().position(|(k, _, _)| *k == want).unwrap_or(0);
-        let (k, lights, h) = &results[at];
-        // ids of this surface's lines: after those of the surfaces before it
-        let first_id: usize = results[..at].iter().map(|r| r.2.lines.len()).sum();
-        let title = if multi {
-            format!("surface {k}: highlight line pre-images (u, v), #line ids")
-        } else {
-            "highlight line pre-images (u, v), #line ids".to_string()
-        };
-        let mut plot = uv_plot(s, &title);
-        plot_lines(&mut plot, &h.lines.iter().collect::<Vec<_>>(), 1.5);
-        plot_lines(
-            &mut plot,
-            &h.band_lower.iter().chain(&h.band_upper).collect::<Vec<_>>(),
-            0.6,
-        );
-        plot_line_ids(&mut plot, &h.lines, first_id);
-        let mut legend = legend_entries(lights, &h.lines);
-        if !h.lines.is_empty() {
-            legend.push((
-                [60, 60, 60],
-                format!("lines #{first_id}..#{}", first_id + h.lines.len() - 1),
-            ));
-        }
-        plot.legend(&legend);
-        plot.write(p)?;
-    }
-    write_json(&args.output, &out)?;
-    report.set("lines", line_count);
-    report.set(
-        "closed_lines",
-        results
-            .iter()
-            .map(|(_, _, h)| h.lines.iter().filter(|l| l.closed).count())
-            .sum::<usize>(),
+        .zip(surfaces)
+        .flat_map(|((_, p), s)| {
+            let h = &p.highlights;
+            let all: Vec<SurfaceHighlightLine> = h
+                .lines
+                .iter()
+                .chain(&h.band_lower)
+                .chain(&h.band_upper)
+                .cloned()
+                .collect();
+            match readability {
+                Some(r) => readable_surface_lines(s, &p.lights, &all, r),
+                None => all,
+            }
+        })
+        .collect()
+}
+
+/// Report entry of the drawn lines: pieces and points.
+fn drawn_json(drawn: &[SurfaceHighlightLine]) -> Value {
+    json!({
+        "pieces": drawn.len(),
+        "points": drawn.iter().map(|l| l.points.len()).sum::<usize>(),
+    })
+}
+
+/// The --png picture: the shaded part with the drawn lines, patch indices
+/// and the key, seen from `view` (direction, up) when given.
+fn write_picture(
+    args: &HighlightArgs,
+    surfaces: &[BSplineSurface],
+    results: &[(usize, PatchHighlights)],
+    drawn: &[SurfaceHighlightLine],
+    view: Option<(Vec3, Vec3)>,
+    path: &std::path::Path,
+) -> Result<()> {
+    let title = format!(
+        "{}: highlight lines",
+        args.mesh
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
     );
-    report.set(
-        "points",
-        results
-            .iter()
-            .map(|(_, _, h)| h.lines.iter().map(|l| l.uv.len()).sum::<usize>())
-            .sum::<usize>(),
-    );
-    if line_count == 0 {
-        report.warn("no highlight line pre-image was found on the surface; try other radii, --circle-center or --circle-axis");
+    let mut ropts = RenderOptions::with_size(1200, 900);
+    if let Some((dir, up)) = view {
+        ropts.view_dir = dir;
+        ropts.up = up;
     }
-    report.write(args.report.as_deref())?;
-    job.finish(format_args!(
-        "{line_count} highlight line pre-image(s) on {} surface(s)",
-        results.len()
-    ));
+    let drawn: Vec<&SurfaceHighlightLine> = drawn.iter().collect();
+    let mut img = surface_picture(surfaces, polylines(&drawn, 2.0), &title, &ropts)?;
+    crate::highlight_png::draw_key(&mut img, &picture_key(results));
+    img.write_png(path)?;
     Ok(())
+}
+
+/// The --svg plot of one surface's pre-images (--surface, else the first)
+/// with line ids and the legend.
+fn write_svg(
+    args: &HighlightArgs,
+    surfaces: &[BSplineSurface],
+    results: &[(usize, PatchHighlights)],
+    path: &std::path::Path,
+) -> Result<()> {
+    let multi = results.len() > 1;
+    let want = args.surface.unwrap_or(0);
+    let at = results.iter().position(|(k, _)| *k == want).unwrap_or(0);
+    let s = &surfaces[at];
+    let (k, p) = &results[at];
+    let (lights, h) = (&p.lights, &p.highlights);
+    // ids of this surface's lines: after those of the surfaces before it
+    let first_id: usize = results[..at]
+        .iter()
+        .map(|r| r.1.highlights.lines.len())
+        .sum();
+    let title = if multi {
+        format!("surface {k}: highlight line pre-images (u, v), #line ids")
+    } else {
+        "highlight line pre-images (u, v), #line ids".to_string()
+    };
+    let mut plot = uv_plot(s, &title);
+    plot_trim_loops(&mut plot, s);
+    plot_lines(&mut plot, &h.lines.iter().collect::<Vec<_>>(), 1.5);
+    plot_lines(
+        &mut plot,
+        &h.band_lower.iter().chain(&h.band_upper).collect::<Vec<_>>(),
+        0.6,
+    );
+    plot_line_ids(&mut plot, &h.lines, first_id);
+    // the patch index, as the PNG writes it on every patch of a part
+    if multi && let Some(p) = label_point(s) {
+        plot.label(p, &k.to_string());
+    }
+    let mut legend = legend_entries(lights, &h.lines);
+    if !h.lines.is_empty() {
+        legend.push((
+            [60, 60, 60],
+            format!("lines #{first_id}..#{}", first_id + h.lines.len() - 1),
+        ));
+    }
+    plot.legend(&legend);
+    plot.write(path)?;
+    Ok(())
+}
+
+/// Draws the trimming loops of a trimmed surface (grey): the face the
+/// lines lie in.
+pub fn plot_trim_loops(plot: &mut SvgPlot, surface: &BSplineSurface) {
+    if let Some(trim) = surface.trim() {
+        for poly in trim.polylines() {
+            let mut closed = poly.clone();
+            if let Some(&first) = poly.first() {
+                closed.push(first);
+            }
+            plot.polyline(&closed, [120, 120, 120], 1.0);
+        }
+    }
+}
+
+/// Where a label on the (u, v) domain of `surface` goes: of a 24 × 24 grid
+/// of points over the domain, the one inside the (trimmed) face farthest
+/// from the points outside it and from the domain's border (distances in
+/// fractions of the domain's sides), as the PNG labels sit at the deepest
+/// visible point of each patch. `None` when no grid point is inside.
+pub fn label_point(surface: &BSplineSurface) -> Option<[f64; 2]> {
+    const N: usize = 24;
+    let ([u0, u1], [v0, v1]) = (surface.domain_u(), surface.domain_v());
+    let at = |a: usize, b: usize| {
+        let (x, y) = ((a as f64 + 0.5) / N as f64, (b as f64 + 0.5) / N as f64);
+        ([x, y], [u0 + x * (u1 - u0), v0 + y * (v1 - v0)])
+    };
+    let inside: Vec<([f64; 2], [f64; 2], bool)> = (0..N)
+        .flat_map(|a| (0..N).map(move |b| (a, b)))
+        .map(|(a, b)| {
+            let (unit, uv) = at(a, b);
+            (unit, uv, surface.contains_uv(uv[0], uv[1]))
+        })
+        .collect();
+    let outside: Vec<[f64; 2]> = inside.iter().filter(|p| !p.2).map(|p| p.0).collect();
+    inside
+        .iter()
+        .filter(|p| p.2)
+        .map(|&(x, uv, _)| {
+            let border = x[0].min(1.0 - x[0]).min(x[1]).min(1.0 - x[1]);
+            let depth = outside
+                .iter()
+                .map(|o| (o[0] - x[0]).hypot(o[1] - x[1]))
+                .fold(border, f64::min);
+            (depth, uv)
+        })
+        .fold(None, |best: Option<(f64, [f64; 2])>, c| match best {
+            Some(b) if b.0 >= c.0 => Some(b),
+            _ => Some(c),
+        })
+        .map(|b| b.1)
+}
+
+/// The view (direction from the eye, screen up) of a part's picture under
+/// linear lights: along the lights, as the mesh pictures
+/// ([`crate::highlight_png::default_camera`]), but with +z up on the
+/// screen whenever the lights face sideways (their plane normal more than
+/// 45° from z), seen from a little above: CAD parts are modelled z-up.
+pub fn part_camera(light: &LightArray) -> (Vec3, Vec3) {
+    let z = light.plane_normal();
+    let up = (Vec3::Z - Vec3::Z.dot(z) * z).normalize_or_zero();
+    if z.dot(Vec3::Z).abs() < std::f64::consts::FRAC_1_SQRT_2 && up != Vec3::ZERO {
+        (-z - 0.35 * up, up)
+    } else {
+        crate::highlight_png::default_camera(light)
+    }
 }

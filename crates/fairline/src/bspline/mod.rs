@@ -47,7 +47,10 @@ pub use surface::{
 };
 #[cfg(test)]
 pub(crate) use tessellate::trimmed_area_by_triangles;
-pub use tessellate::{Tessellation, tessellate, trimmed_area};
+pub use tessellate::{
+    MIN_PATCH_GRID, Tessellation, control_diagonal, patch_grid, tessellate, tessellate_part,
+    tessellate_part_with, trimmed_area,
+};
 pub(crate) use trim::inside_by_crossings;
 pub use trim::{
     TRIM_FLATNESS, TrimCurve, TrimError, TrimLoop, TrimmedDomain, polygon_signed_area2,

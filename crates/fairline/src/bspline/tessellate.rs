@@ -92,6 +92,114 @@ pub fn tessellate(surface: &BSplineSurface, nu: usize, nv: usize) -> Tessellatio
     }
 }
 
+/// Fewest grid points per direction a patch of a part gets.
+pub const MIN_PATCH_GRID: usize = 12;
+
+/// The (u, v) grid of one patch of a part whose bounding-box diagonal is
+/// `part_diagonal`, for a part grid of `grid` points per diagonal: each
+/// direction gets points in proportion to the length of the control polygon
+/// along it (the longest row or column, an upper bound of the iso-curves'
+/// length), so that grid points lie about `part_diagonal / grid` apart in
+/// space on every patch, between [`MIN_PATCH_GRID`] and `grid`. A part of
+/// many small faces then costs about as much as one surface of its size,
+/// not `grid²` samples per face (issue #20 item 4).
+pub fn patch_grid(surface: &BSplineSurface, part_diagonal: f64, grid: usize) -> [usize; 2] {
+    let (nu, nv) = (surface.count_u(), surface.count_v());
+    let p = |i: usize, j: usize| surface.control_point(i, j);
+    let len_u = (0..nv)
+        .map(|j| {
+            (1..nu)
+                .map(|i| (p(i, j) - p(i - 1, j)).length())
+                .sum::<f64>()
+        })
+        .fold(0.0, f64::max);
+    let len_v = (0..nu)
+        .map(|i| {
+            (1..nv)
+                .map(|j| (p(i, j) - p(i, j - 1)).length())
+                .sum::<f64>()
+        })
+        .fold(0.0, f64::max);
+    let lo = MIN_PATCH_GRID.min(grid);
+    let count = |len: f64| {
+        if part_diagonal > 0.0 && len.is_finite() {
+            ((grid as f64 * len / part_diagonal).ceil() as usize).clamp(lo, grid)
+        } else {
+            grid
+        }
+    };
+    [count(len_u), count(len_v)]
+}
+
+/// Every surface of a part tessellated on the grid `grid(s)` (in parallel,
+/// merged in input order) into one triangle mesh, with the patch (index
+/// into `surfaces`) of every face. Degenerate points (poles of a patch) can
+/// make a tessellation non-manifold; then the triangles with a repeated
+/// vertex are left out.
+pub fn tessellate_part_with(
+    surfaces: &[BSplineSurface],
+    grid: impl Fn(&BSplineSurface) -> [usize; 2] + Sync,
+) -> Result<(crate::SurfaceMesh, Vec<u32>), crate::MeshError> {
+    let pieces: Vec<_> = surfaces
+        .par_iter()
+        .map(|s| {
+            let [nu, nv] = grid(s);
+            tessellate(s, nu, nv)
+        })
+        .collect();
+    let mut positions = Vec::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    let mut patch: Vec<u32> = Vec::new();
+    for (k, t) in pieces.into_iter().enumerate() {
+        let base = positions.len() as u32;
+        positions.extend(t.positions);
+        triangles.extend(t.triangles.iter().map(|tri| tri.map(|i| i + base)));
+        patch.resize(triangles.len(), k as u32);
+    }
+    match crate::SurfaceMesh::new(positions.clone(), &triangles) {
+        Ok(m) => Ok((m, patch)),
+        Err(_) => {
+            let keep = |t: &[u32; 3]| t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
+            let kept_patch: Vec<u32> = triangles
+                .iter()
+                .zip(&patch)
+                .filter(|(t, _)| keep(t))
+                .map(|(_, &p)| p)
+                .collect();
+            let kept: Vec<[u32; 3]> = triangles.into_iter().filter(keep).collect();
+            Ok((crate::SurfaceMesh::new(positions, &kept)?, kept_patch))
+        }
+    }
+}
+
+/// A part tessellated for a picture (or for choosing its lights): one
+/// surface `n` × `n`; several, each on its [`patch_grid`] (about `n`
+/// samples along the part's diagonal, small faces get few), so that a part
+/// of hundreds of faces costs about as much as one surface of its size
+/// (issue #20 item 4). With the patch of every face.
+pub fn tessellate_part(
+    surfaces: &[BSplineSurface],
+    n: usize,
+) -> Result<(crate::SurfaceMesh, Vec<u32>), crate::MeshError> {
+    if surfaces.len() <= 1 {
+        return tessellate_part_with(surfaces, |_| [n, n]);
+    }
+    let diagonal = control_diagonal(surfaces);
+    tessellate_part_with(surfaces, |s| patch_grid(s, diagonal, n))
+}
+
+/// The diagonal of the bounding box of the control points of all
+/// `surfaces` (a bound of the part's size that needs no evaluation).
+pub fn control_diagonal(surfaces: &[BSplineSurface]) -> f64 {
+    let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+    for s in surfaces {
+        let (a, b) = s.control_bounding_box();
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    (hi - lo).length()
+}
+
 /// Last resort for normals: area-weighted average of adjacent triangles.
 fn fill_missing_normals(positions: &[Vec3], triangles: &[[u32; 3]], normals: &mut [Vec3]) {
     let count = positions.len();
@@ -209,116 +317,176 @@ fn clip_grid(trim: &TrimmedDomain, us: &[f64], vs: &[f64]) -> ClippedGrid {
     let mut extra: Vec<[f64; 2]> = Vec::new();
     let mut chains: Vec<Vec<Chain>> = (0..cells_u * cells_v).map(|_| Vec::new()).collect();
     for poly in trim.polylines() {
-        let mut pts: Vec<[f64; 2]> = Vec::with_capacity(poly.len() * 2);
-        let n = poly.len();
-        for k in 0..n {
-            let (a, b) = (poly[k], poly[(k + 1) % n]);
-            pts.push(a);
-            let mut cuts: Vec<(f64, [f64; 2])> = Vec::new();
-            let (lo, hi) = (a[0].min(b[0]), a[0].max(b[0]));
-            let first = us.partition_point(|&x| x <= lo);
-            for &x in us[first..].iter().take_while(|&&x| x < hi) {
-                let t = (x - a[0]) / (b[0] - a[0]);
-                cuts.push((t, [x, a[1] + t * (b[1] - a[1])]));
-            }
-            let (lo, hi) = (a[1].min(b[1]), a[1].max(b[1]));
-            let first = vs.partition_point(|&y| y <= lo);
-            for &y in vs[first..].iter().take_while(|&&y| y < hi) {
-                let t = (y - a[1]) / (b[1] - a[1]);
-                cuts.push((t, [a[0] + t * (b[0] - a[0]), y]));
-            }
-            cuts.sort_by(|p, q| p.0.total_cmp(&q.0));
-            for (t, mut p) in cuts {
-                if !(t > 0.0 && t < 1.0) {
-                    continue;
-                }
-                // Snap a cut next to a grid corner onto it.
-                let (iu, iv) = (cell_of(us, p[0]), cell_of(vs, p[1]));
-                for &x in &us[iu..(iu + 2).min(nu)] {
-                    if (p[0] - x).abs() <= 1e-12 * cell_w {
-                        p[0] = x;
-                    }
-                }
-                for &y in &vs[iv..(iv + 2).min(nv)] {
-                    if (p[1] - y).abs() <= 1e-12 * cell_h {
-                        p[1] = y;
-                    }
-                }
-                if pts.last() != Some(&p) {
-                    pts.push(p);
-                }
-            }
-        }
-        while pts.len() > 1 && pts.first() == pts.last() {
-            pts.pop();
-        }
-        let m = pts.len();
-        if m < 3 {
+        let pts = refine_at_grid_lines(poly, us, vs, cell_w, cell_h);
+        if pts.len() < 3 {
             continue;
         }
-        // Vertex ids: a point on a grid corner is that grid vertex.
-        let ids: Vec<Vert> = pts
-            .iter()
-            .map(|&p| {
-                let a = us.binary_search_by(|x| x.total_cmp(&p[0]));
-                let b = vs.binary_search_by(|y| y.total_cmp(&p[1]));
-                match (a, b) {
-                    (Ok(a), Ok(b)) => Vert::Grid(a * nv + b),
-                    _ => {
-                        extra.push(p);
-                        Vert::Extra(extra.len() - 1)
-                    }
-                }
-            })
-            .collect();
-        // The cell of each piece k -> k+1: its midpoint nudged to its left
-        // (the trimmed region lies left of every oriented loop).
-        let cell: Vec<usize> = (0..m)
-            .map(|k| {
-                let (a, b) = (pts[k], pts[(k + 1) % m]);
-                let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-                let len = dx.hypot(dy);
-                let (nx, ny) = if len > 0.0 {
-                    (-dy / len, dx / len)
-                } else {
-                    (0.0, 0.0)
-                };
-                let mx = 0.5 * (a[0] + b[0]) + nudge * nx;
-                let my = 0.5 * (a[1] + b[1]) + nudge * ny;
-                cell_of(us, mx) * cells_v + cell_of(vs, my)
-            })
-            .collect();
-        let Some(start) = (0..m).find(|&k| cell[k] != cell[(k + m - 1) % m]) else {
-            // The whole loop lies in one cell.
-            chains[cell[0]].push(Chain {
-                points: (0..m).map(|k| (ids[k], pts[k])).collect(),
-                closed: true,
-            });
-            continue;
-        };
-        let mut k = start;
-        loop {
-            let c = cell[k];
-            let mut points = vec![(ids[k], pts[k])];
-            while cell[k] == c {
-                k = (k + 1) % m;
-                points.push((ids[k], pts[k]));
-                if k == start {
-                    break;
-                }
-            }
-            chains[c].push(Chain {
-                points,
-                closed: false,
-            });
-            if k == start {
-                break;
-            }
-        }
+        let ids = loop_vertex_ids(&pts, us, vs, &mut extra);
+        let cell = piece_cells(&pts, us, vs, nudge);
+        split_into_cell_chains(&pts, &ids, &cell, &mut chains);
     }
 
     // 2. Triangles: whole cells by the inside test of their centre, cut
     //    cells by clipping.
+    let cells = cell_covers(trim, us, vs, &chains);
+    ClippedGrid { cells, extra }
+}
+
+/// The closed polyline `poly` with a point added wherever it crosses a grid
+/// line of `us × vs` (a cut within 1e-12 of a cell size from a grid line
+/// snapped onto it), without repeated points and without the closing
+/// repetition of the first point.
+fn refine_at_grid_lines(
+    poly: &[[f64; 2]],
+    us: &[f64],
+    vs: &[f64],
+    cell_w: f64,
+    cell_h: f64,
+) -> Vec<[f64; 2]> {
+    let (nu, nv) = (us.len(), vs.len());
+    let mut pts: Vec<[f64; 2]> = Vec::with_capacity(poly.len() * 2);
+    let n = poly.len();
+    for k in 0..n {
+        let (a, b) = (poly[k], poly[(k + 1) % n]);
+        pts.push(a);
+        let mut cuts: Vec<(f64, [f64; 2])> = Vec::new();
+        let (lo, hi) = (a[0].min(b[0]), a[0].max(b[0]));
+        let first = us.partition_point(|&x| x <= lo);
+        for &x in us[first..].iter().take_while(|&&x| x < hi) {
+            let t = (x - a[0]) / (b[0] - a[0]);
+            cuts.push((t, [x, a[1] + t * (b[1] - a[1])]));
+        }
+        let (lo, hi) = (a[1].min(b[1]), a[1].max(b[1]));
+        let first = vs.partition_point(|&y| y <= lo);
+        for &y in vs[first..].iter().take_while(|&&y| y < hi) {
+            let t = (y - a[1]) / (b[1] - a[1]);
+            cuts.push((t, [a[0] + t * (b[0] - a[0]), y]));
+        }
+        cuts.sort_by(|p, q| p.0.total_cmp(&q.0));
+        for (t, mut p) in cuts {
+            if !(t > 0.0 && t < 1.0) {
+                continue;
+            }
+            // Snap a cut next to a grid corner onto it.
+            let (iu, iv) = (cell_of(us, p[0]), cell_of(vs, p[1]));
+            for &x in &us[iu..(iu + 2).min(nu)] {
+                if (p[0] - x).abs() <= 1e-12 * cell_w {
+                    p[0] = x;
+                }
+            }
+            for &y in &vs[iv..(iv + 2).min(nv)] {
+                if (p[1] - y).abs() <= 1e-12 * cell_h {
+                    p[1] = y;
+                }
+            }
+            if pts.last() != Some(&p) {
+                pts.push(p);
+            }
+        }
+    }
+    while pts.len() > 1 && pts.first() == pts.last() {
+        pts.pop();
+    }
+    pts
+}
+
+/// The vertex of each loop point: a point on a grid corner is that grid
+/// vertex, any other a new extra vertex (appended to `extra`).
+fn loop_vertex_ids(
+    pts: &[[f64; 2]],
+    us: &[f64],
+    vs: &[f64],
+    extra: &mut Vec<[f64; 2]>,
+) -> Vec<Vert> {
+    let nv = vs.len();
+    pts.iter()
+        .map(|&p| {
+            let a = us.binary_search_by(|x| x.total_cmp(&p[0]));
+            let b = vs.binary_search_by(|y| y.total_cmp(&p[1]));
+            match (a, b) {
+                (Ok(a), Ok(b)) => Vert::Grid(a * nv + b),
+                _ => {
+                    extra.push(p);
+                    Vert::Extra(extra.len() - 1)
+                }
+            }
+        })
+        .collect()
+}
+
+/// The cell (`a * (nv - 1) + b`) of each piece k → k+1 of a refined loop:
+/// the cell of its midpoint nudged by `nudge` to its left (the trimmed
+/// region lies left of every oriented loop).
+fn piece_cells(pts: &[[f64; 2]], us: &[f64], vs: &[f64], nudge: f64) -> Vec<usize> {
+    let cells_v = vs.len() - 1;
+    let m = pts.len();
+    (0..m)
+        .map(|k| {
+            let (a, b) = (pts[k], pts[(k + 1) % m]);
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let len = dx.hypot(dy);
+            let (nx, ny) = if len > 0.0 {
+                (-dy / len, dx / len)
+            } else {
+                (0.0, 0.0)
+            };
+            let mx = 0.5 * (a[0] + b[0]) + nudge * nx;
+            let my = 0.5 * (a[1] + b[1]) + nudge * ny;
+            cell_of(us, mx) * cells_v + cell_of(vs, my)
+        })
+        .collect()
+}
+
+/// Cuts a refined loop into the chains of consecutive pieces that lie in
+/// one cell and adds each to its cell's list (a loop inside one cell is one
+/// closed chain).
+fn split_into_cell_chains(
+    pts: &[[f64; 2]],
+    ids: &[Vert],
+    cell: &[usize],
+    chains: &mut [Vec<Chain>],
+) {
+    let m = pts.len();
+    let Some(start) = (0..m).find(|&k| cell[k] != cell[(k + m - 1) % m]) else {
+        // The whole loop lies in one cell.
+        chains[cell[0]].push(Chain {
+            points: (0..m).map(|k| (ids[k], pts[k])).collect(),
+            closed: true,
+        });
+        return;
+    };
+    let mut k = start;
+    loop {
+        let c = cell[k];
+        let mut points = vec![(ids[k], pts[k])];
+        while cell[k] == c {
+            k = (k + 1) % m;
+            points.push((ids[k], pts[k]));
+            if k == start {
+                break;
+            }
+        }
+        chains[c].push(Chain {
+            points,
+            closed: false,
+        });
+        if k == start {
+            break;
+        }
+    }
+}
+
+/// How the trimmed face covers each cell: a cell no loop enters is whole or
+/// outside by the inside test of its centre, a cell with chains is clipped
+/// ([`clip_cell`]).
+fn cell_covers(
+    trim: &TrimmedDomain,
+    us: &[f64],
+    vs: &[f64],
+    chains: &[Vec<Chain>],
+) -> Vec<CellCover> {
+    let (nu, nv) = (us.len(), vs.len());
+    let (cells_u, cells_v) = (nu - 1, nv - 1);
     let rows_inside: Vec<Vec<bool>> = (0..cells_v)
         .into_par_iter()
         .map(|b| {
@@ -329,7 +497,7 @@ fn clip_grid(trim: &TrimmedDomain, us: &[f64], vs: &[f64]) -> ClippedGrid {
                 .collect()
         })
         .collect();
-    let cells: Vec<CellCover> = (0..cells_u * cells_v)
+    (0..cells_u * cells_v)
         .into_par_iter()
         .map(|c| {
             let (a, b) = (c / cells_v, c % cells_v);
@@ -353,8 +521,7 @@ fn clip_grid(trim: &TrimmedDomain, us: &[f64], vs: &[f64]) -> ClippedGrid {
                 }))
             }
         })
-        .collect();
-    ClippedGrid { cells, extra }
+        .collect()
 }
 
 /// Step 3 of [`tessellate_trimmed`]: compacts the vertices of the cells'

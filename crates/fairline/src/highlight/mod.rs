@@ -36,7 +36,8 @@ pub use readable::{LineStats, Readability};
 pub use surface::{
     DEFAULT_CIRCULAR_RADII, PartLights, PatchHighlights, SurfaceHighlightLine,
     SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight, default_circular_lights,
-    default_circular_lights_for_mesh, linear_lights, part_highlight_lines, patch_grid,
+    default_circular_lights_for_mesh, linear_distance_gradient, linear_lights,
+    part_highlight_lines, part_light_array, patch_grid, readable_surface_lines,
     surface_highlight_lines, surface_signed_distance,
 };
 

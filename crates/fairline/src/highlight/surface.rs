@@ -606,44 +606,7 @@ pub struct PatchHighlights {
 /// resolves, see [`linear_lights`]).
 pub const DEFAULT_MAX_LIGHTS: usize = 1000;
 
-/// Fewest grid points per direction a patch of a part gets.
-pub const MIN_PATCH_GRID: usize = 12;
-
-/// The (u, v) grid of one patch of a part whose bounding-box diagonal is
-/// `part_diagonal`, for a part grid of `grid` points per diagonal: each
-/// direction gets points in proportion to the length of the control polygon
-/// along it (the longest row or column, an upper bound of the iso-curves'
-/// length), so that grid points lie about `part_diagonal / grid` apart in
-/// space on every patch, between [`MIN_PATCH_GRID`] and `grid`. A part of
-/// many small faces then costs about as much as one surface of its size,
-/// not `grid²` samples per face (issue #20 item 4).
-pub fn patch_grid(surface: &BSplineSurface, part_diagonal: f64, grid: usize) -> [usize; 2] {
-    let (nu, nv) = (surface.count_u(), surface.count_v());
-    let p = |i: usize, j: usize| surface.control_point(i, j);
-    let len_u = (0..nv)
-        .map(|j| {
-            (1..nu)
-                .map(|i| (p(i, j) - p(i - 1, j)).length())
-                .sum::<f64>()
-        })
-        .fold(0.0, f64::max);
-    let len_v = (0..nu)
-        .map(|i| {
-            (1..nv)
-                .map(|j| (p(i, j) - p(i, j - 1)).length())
-                .sum::<f64>()
-        })
-        .fold(0.0, f64::max);
-    let lo = MIN_PATCH_GRID.min(grid);
-    let count = |len: f64| {
-        if part_diagonal > 0.0 && len.is_finite() {
-            ((grid as f64 * len / part_diagonal).ceil() as usize).clamp(lo, grid)
-        } else {
-            grid
-        }
-    };
-    [count(len_u), count(len_v)]
-}
+pub use crate::bspline::{MIN_PATCH_GRID, patch_grid};
 
 /// Highlight lines of every patch of a part, in one run (issue #20 item 4):
 /// for a single surface exactly [`surface_highlight_lines`] with `opts`;
@@ -742,9 +705,94 @@ pub fn contour_field(
     if nu < 2 || nv < 2 || field.samples.len() != nu * nv {
         return Vec::new();
     }
+    let edges = GridEdges { nu, nv };
+    let segments = cell_segments(field, &edges, light, level, opts);
+    if segments.is_empty() {
+        return Vec::new();
+    }
+    let (nodes, chains) = chain_segments(&segments);
+    // Refine every node onto the level along its grid edge; a crossing that
+    // is a jump of the field (no zero inside the edge) is dropped.
+    let refined: Vec<Option<[f64; 2]>> = nodes
+        .par_iter()
+        .map(|&id| {
+            let ((a0, b0), (a1, b1)) = edges.ends(edges.edge(id));
+            let p0 = [field.us[a0], field.vs[b0]];
+            let p1 = [field.us[a1], field.vs[b1]];
+            let f0 = field.samples[a0 * nv + b0].map_or(0.0, |s| s.value) - level;
+            let f1 = field.samples[a1 * nv + b1].map_or(0.0, |s| s.value) - level;
+            refine_on_edge(surface, light, level, p0, p1, f0, f1, opts)
+        })
+        .collect();
+    let mut pieces = split_at_dropped_points(chains, &refined);
+    if surface.is_trimmed() {
+        pieces = clip_to_trims(surface, pieces);
+    }
+    pieces
+        .into_iter()
+        .filter(|(_, uv)| uv.len() >= 2)
+        .map(|(closed, uv)| {
+            let points = uv.iter().map(|&[u, v]| surface.eval(u, v)).collect();
+            SurfaceHighlightLine {
+                light: light_index,
+                radius: light.radius(),
+                level,
+                closed,
+                uv,
+                points,
+            }
+        })
+        .collect()
+}
+
+/// The edges of an `nu × nv` grid and their ids: `U(a, b)` → `a * nv + b`,
+/// `V(a, b)` → `(nu − 1) nv + a (nv − 1) + b`.
+#[derive(Clone, Copy, Debug)]
+struct GridEdges {
+    nu: usize,
+    nv: usize,
+}
+
+impl GridEdges {
+    /// The id of an edge.
+    fn id(&self, e: GridEdge) -> usize {
+        let n_u_edges = (self.nu - 1) * self.nv;
+        match e {
+            GridEdge::U(a, b) => a * self.nv + b,
+            GridEdge::V(a, b) => n_u_edges + a * (self.nv - 1) + b,
+        }
+    }
+    /// The edge of an id.
+    fn edge(&self, id: usize) -> GridEdge {
+        let n_u_edges = (self.nu - 1) * self.nv;
+        if id < n_u_edges {
+            GridEdge::U(id / self.nv, id % self.nv)
+        } else {
+            let k = id - n_u_edges;
+            GridEdge::V(k / (self.nv - 1), k % (self.nv - 1))
+        }
+    }
+    /// The grid points at the ends of an edge.
+    fn ends(&self, e: GridEdge) -> ((usize, usize), (usize, usize)) {
+        match e {
+            GridEdge::U(a, b) => ((a, b), (a + 1, b)),
+            GridEdge::V(a, b) => ((a, b), (a, b + 1)),
+        }
+    }
+}
+
+/// Marching squares on the level `level` of `field` (the rules of
+/// [`contour_field`]): the segments of every cell as pairs of edge ids, in
+/// cell order (parallel over cell rows, deterministic).
+fn cell_segments(
+    field: &DistanceField,
+    edges: &GridEdges,
+    light: &SurfaceLight,
+    level: f64,
+    opts: &SurfaceHighlightOptions,
+) -> Vec<[usize; 2]> {
+    let (nu, nv) = (edges.nu, edges.nv);
     let at = |a: usize, b: usize| field.samples[a * nv + b];
-    let above = |s: FieldSample| s.value >= level;
-    let same_branch = |x: FieldSample, y: FieldSample| (x.branch - y.branch).cos() > 0.0;
     // Linear lights: a cell crossed by more than `max_lines_per_cell`
     // levels holds lines finer than the grid (near silhouettes, where d_P
     // runs off as Z·N → 0); it is skipped by the rule the mesh model skips
@@ -755,26 +803,7 @@ pub fn contour_field(
         }
         _ => None,
     };
-    // Edge ids: U(a, b) -> a * nv + b; V(a, b) -> n_u_edges + a * (nv - 1) + b.
-    let n_u_edges = (nu - 1) * nv;
-    let edge_id = |e: GridEdge| match e {
-        GridEdge::U(a, b) => a * nv + b,
-        GridEdge::V(a, b) => n_u_edges + a * (nv - 1) + b,
-    };
-    let edge_of = |id: usize| {
-        if id < n_u_edges {
-            GridEdge::U(id / nv, id % nv)
-        } else {
-            let k = id - n_u_edges;
-            GridEdge::V(k / (nv - 1), k % (nv - 1))
-        }
-    };
-    let ends = |e: GridEdge| match e {
-        GridEdge::U(a, b) => ((a, b), (a + 1, b)),
-        GridEdge::V(a, b) => ((a, b), (a, b + 1)),
-    };
-    // Segments per cell (parallel over cell rows, deterministic order).
-    let segments: Vec<[usize; 2]> = (0..nu - 1)
+    (0..nu - 1)
         .into_par_iter()
         .flat_map_iter(|a| {
             let mut segs = Vec::new();
@@ -784,73 +813,91 @@ pub fn contour_field(
                 else {
                     continue;
                 };
-                let c = [c0, c1, c2, c3];
-                // Cheap tests first: most cells are not crossed by the level.
-                let side = c.map(above);
-                if side.iter().all(|&x| x == side[0]) {
-                    continue;
-                }
-                if let Some((spacing, most)) = max_cell_levels {
-                    let (lo, hi) = c
-                        .iter()
-                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), s| {
-                            (l.min(s.value), h.max(s.value))
-                        });
-                    // the levels of this field are m·s − shift: count them
-                    // as the mesh does (`contour::too_many_levels`)
-                    if super::contour::too_many_levels(
-                        lo,
-                        hi,
-                        spacing,
-                        level.rem_euclid(spacing),
-                        most,
-                    ) {
-                        continue;
-                    }
-                }
-                if !(same_branch(c[0], c[1])
-                    && same_branch(c[1], c[2])
-                    && same_branch(c[2], c[3])
-                    && same_branch(c[3], c[0]))
-                {
-                    continue;
-                }
-                // Cell edges in order: bottom (c0-c1), right (c1-c2), top (c3-c2), left (c0-c3).
-                let edges = [
-                    GridEdge::U(a, b),
-                    GridEdge::V(a + 1, b),
-                    GridEdge::U(a, b + 1),
-                    GridEdge::V(a, b),
-                ];
-                let cut: Vec<usize> = (0..4).filter(|&k| side[k] != side[(k + 1) % 4]).collect();
-                match cut.len() {
-                    2 => segs.push([edge_id(edges[cut[0]]), edge_id(edges[cut[1]])]),
-                    4 => {
-                        let centre = 0.25 * (c[0].value + c[1].value + c[2].value + c[3].value);
-                        let centre_above = centre >= level;
-                        // Corner k touches edges k-1 (previous) and k.
-                        for k in 0..4 {
-                            if side[k] != centre_above {
-                                segs.push([edge_id(edges[(k + 3) % 4]), edge_id(edges[k])]);
-                            }
-                        }
-                    }
-                    _ => {}
-                }
+                cell_segment(
+                    [c0, c1, c2, c3],
+                    [a, b],
+                    edges,
+                    level,
+                    max_cell_levels,
+                    &mut segs,
+                );
             }
             segs
         })
-        .collect();
-    if segments.is_empty() {
-        return Vec::new();
+        .collect()
+}
+
+/// The segments of cell `(a, b)` with corner samples `c` (counter-clockwise
+/// from `(a, b)`), appended to `segs`; see [`contour_field`].
+fn cell_segment(
+    c: [FieldSample; 4],
+    [a, b]: [usize; 2],
+    edges: &GridEdges,
+    level: f64,
+    max_cell_levels: Option<(f64, i64)>,
+    segs: &mut Vec<[usize; 2]>,
+) {
+    let above = |s: FieldSample| s.value >= level;
+    let same_branch = |x: FieldSample, y: FieldSample| (x.branch - y.branch).cos() > 0.0;
+    // Cheap tests first: most cells are not crossed by the level.
+    let side = c.map(above);
+    if side.iter().all(|&x| x == side[0]) {
+        return;
     }
-    // Adjacency: every edge has at most two segments.
+    if let Some((spacing, most)) = max_cell_levels {
+        let (lo, hi) = c
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), s| {
+                (l.min(s.value), h.max(s.value))
+            });
+        // the levels of this field are m·s − shift: count them
+        // as the mesh does (`contour::too_many_levels`)
+        if super::contour::too_many_levels(lo, hi, spacing, level.rem_euclid(spacing), most) {
+            return;
+        }
+    }
+    if !(same_branch(c[0], c[1])
+        && same_branch(c[1], c[2])
+        && same_branch(c[2], c[3])
+        && same_branch(c[3], c[0]))
+    {
+        return;
+    }
+    // Cell edges in order: bottom (c0-c1), right (c1-c2), top (c3-c2), left (c0-c3).
+    let cell_edges = [
+        GridEdge::U(a, b),
+        GridEdge::V(a + 1, b),
+        GridEdge::U(a, b + 1),
+        GridEdge::V(a, b),
+    ];
+    let cut: Vec<usize> = (0..4).filter(|&k| side[k] != side[(k + 1) % 4]).collect();
+    match cut.len() {
+        2 => segs.push([edges.id(cell_edges[cut[0]]), edges.id(cell_edges[cut[1]])]),
+        4 => {
+            let centre = 0.25 * (c[0].value + c[1].value + c[2].value + c[3].value);
+            let centre_above = centre >= level;
+            // Corner k touches edges k-1 (previous) and k.
+            for k in 0..4 {
+                if side[k] != centre_above {
+                    segs.push([edges.id(cell_edges[(k + 3) % 4]), edges.id(cell_edges[k])]);
+                }
+            }
+        }
+        _ => {}
+    }
+}
+
+/// Chains segments (pairs of edge ids; every edge has at most two) through
+/// their shared edges: the sorted edge ids (the nodes) and the chains as
+/// (closed, node positions), open chains first (from their ends), then the
+/// loops.
+fn chain_segments(segments: &[[usize; 2]]) -> (Vec<usize>, Vec<(bool, Vec<usize>)>) {
     let mut nodes: Vec<usize> = segments.iter().flatten().copied().collect();
     nodes.sort_unstable();
     nodes.dedup();
     let index_of = |id: usize| nodes.binary_search(&id).unwrap_or(0);
     let mut adj: Vec<[usize; 2]> = vec![[usize::MAX; 2]; nodes.len()];
-    for s in &segments {
+    for s in segments {
         let (x, y) = (index_of(s[0]), index_of(s[1]));
         for (p, q) in [(x, y), (y, x)] {
             if adj[p][0] == usize::MAX {
@@ -898,27 +945,21 @@ pub fn contour_field(
             chains.push(walk(p, &mut used));
         }
     }
-    // Refine every node onto the level along its grid edge; a crossing that
-    // is a jump of the field (no zero inside the edge) is dropped.
-    let refined: Vec<Option<[f64; 2]>> = nodes
-        .par_iter()
-        .map(|&id| {
-            let e = edge_of(id);
-            let ((a0, b0), (a1, b1)) = ends(e);
-            let p0 = [field.us[a0], field.vs[b0]];
-            let p1 = [field.us[a1], field.vs[b1]];
-            let f0 = at(a0, b0).map_or(0.0, |s| s.value) - level;
-            let f1 = at(a1, b1).map_or(0.0, |s| s.value) - level;
-            refine_on_edge(surface, light, level, p0, p1, f0, f1, opts)
-        })
-        .collect();
+    (nodes, chains)
+}
+
+/// The chains as polylines of refined points, each split where a point was
+/// dropped (`None`; a loop is opened at its first dropped point).
+fn split_at_dropped_points(
+    chains: Vec<(bool, Vec<usize>)>,
+    refined: &[Option<[f64; 2]>],
+) -> Vec<(bool, Vec<[f64; 2]>)> {
     let mut pieces: Vec<(bool, Vec<[f64; 2]>)> = Vec::new();
     for (closed, chain) in chains {
         if chain.iter().all(|&p| refined[p].is_some()) {
             pieces.push((closed, chain.iter().filter_map(|&p| refined[p]).collect()));
             continue;
         }
-        // Split at dropped nodes; a loop is opened at its first dropped node.
         let n = chain.len();
         let shift = if closed {
             chain
@@ -937,24 +978,7 @@ pub fn contour_field(
         }
         pieces.push((false, run));
     }
-    if surface.is_trimmed() {
-        pieces = clip_to_trims(surface, pieces);
-    }
     pieces
-        .into_iter()
-        .filter(|(_, uv)| uv.len() >= 2)
-        .map(|(closed, uv)| {
-            let points = uv.iter().map(|&[u, v]| surface.eval(u, v)).collect();
-            SurfaceHighlightLine {
-                light: light_index,
-                radius: light.radius(),
-                level,
-                closed,
-                uv,
-                points,
-            }
-        })
-        .collect()
 }
 
 /// Keeps the parts of `(closed, uv)` polylines that lie in the trimmed face
@@ -1082,6 +1106,11 @@ fn refine_on_edge(
     let accept = best.1 <= opts.tolerance.max(1e-6 * f0.abs().max(f1.abs()));
     accept.then(|| lerp(best.0))
 }
+
+mod part;
+pub use part::{
+    LIGHT_CHOICE_SAMPLES, linear_distance_gradient, part_light_array, readable_surface_lines,
+};
 
 #[cfg(test)]
 mod tests;

@@ -32,6 +32,7 @@ pub mod step;
 mod stl;
 pub mod surface_file;
 pub mod surface_json;
+mod surface_lines;
 pub mod units;
 
 use std::fmt;
@@ -49,6 +50,7 @@ pub use surface_json::{
     MAX_SURFACE_JSON_BYTES, SurfaceJsonError, parse_surfaces_json, read_surfaces_json,
     surface_to_json, surfaces_to_json, write_surface_json, write_surfaces_json,
 };
+pub use surface_lines::{SurfaceLineCounts, surface_highlight_lines_json, surface_line_json};
 
 use crate::mesh::{MeshError, Soup, SurfaceMesh};
 

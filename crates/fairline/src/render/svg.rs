@@ -168,6 +168,31 @@ impl SvgPlot {
         self
     }
 
+    /// Adds a region label centred on the data point `point`: dark text on
+    /// a light box, as the patch indices of the PNG pictures
+    /// ([`super::RegionLabels`]), e.g. the index of the patch whose domain
+    /// the plot shows.
+    pub fn label(&mut self, point: [f64; 2], text: &str) -> &mut Self {
+        if !(point[0].is_finite() && point[1].is_finite()) || text.is_empty() {
+            return self;
+        }
+        let (x, y) = self.map(point);
+        let (size, pad) = (16.0, 4.0);
+        let (w, h) = (
+            0.62 * size * text.chars().count() as f64 + 2.0 * pad,
+            size + 2.0 * pad,
+        );
+        let _ = writeln!(
+            self.body,
+            r##"<g class="region-label"><rect x="{:.2}" y="{:.2}" width="{w:.2}" height="{h:.2}" fill="white" fill-opacity="0.7"/><text x="{x:.2}" y="{:.2}" font-family="sans-serif" font-size="{size}" fill="#0f0f14" text-anchor="middle">{}</text></g>"##,
+            x - 0.5 * w,
+            y - 0.5 * h,
+            y + 0.35 * size,
+            escape(text)
+        );
+        self
+    }
+
     /// Sets the legend: one row per entry (a colour swatch and its text),
     /// drawn over the top-right corner of the plot on a white box; at most
     /// [`MAX_LEGEND_ENTRIES`] rows, the rest counted in a last row.

@@ -397,10 +397,17 @@ fn distance_to_lines(p: Vec3, lines: &[&[Vec3]]) -> f64 {
 /// Only points where the exact surface normal makes |Z·N| ≥ 0.3 count (the
 /// (u, v) of a mesh node interpolated from its edge's tessellation
 /// vertices): towards silhouettes d_P runs off to infinity and both models
-/// drop the lines finer than their cells, each by its own cells.
-/// Returns (mesh → surface, surface → mesh) distance lists.
+/// drop the lines finer than their cells, each by its own cells. Both
+/// models work at the same resolution: the tessellation's vertices are the
+/// points of the 200 × 200 grid the surface lines are traced on (each grid
+/// cell split into two triangles), so a cell that the grid keeps has both
+/// its triangles kept by the mesh's count rule (their value ranges lie
+/// within the cell's) and the comparison considers the same cells on both
+/// sides; mesh nodes in cells the grid does not contour (the mesh may keep
+/// one triangle of a cell whose four corners span too many levels) are not
+/// compared. Returns (mesh → surface, surface → mesh) distance lists.
 fn linear_agreement(s: &BSplineSurface, array: LightArray) -> (Vec<f64>, Vec<f64>) {
-    let t = crate::bspline::tessellate(s, 160, 160);
+    let t = crate::bspline::tessellate(s, 200, 200);
     let mesh = crate::SurfaceMesh::new(t.positions.clone(), &t.triangles).unwrap();
     let mesh_lines = crate::highlight::highlight_lines(
         &mesh,
@@ -420,6 +427,29 @@ fn linear_agreement(s: &BSplineSurface, array: LightArray) -> (Vec<f64>, Vec<f64
         s.normal(uv[0], uv[1])
             .is_none_or(|n| n.dot(array.plane_normal()).abs() < 0.3)
     };
+    // The grid cells the surface contours (corners defined, on one branch,
+    // not skipped by the line-count rule): mesh nodes elsewhere lie in
+    // cells the surface does not consider, and are not compared.
+    let probe = SurfaceLight::Linear {
+        array,
+        index: 0,
+        min_cos: 0.1,
+    };
+    let field = distance_field(s, &probe, 200, 200);
+    let (nu, nv) = (field.us.len(), field.vs.len());
+    let contoured = |uv: [f64; 2]| {
+        let a = field.us.partition_point(|&x| x <= uv[0]).clamp(1, nu - 1) - 1;
+        let b = field.vs.partition_point(|&y| y <= uv[1]).clamp(1, nv - 1) - 1;
+        let c = [(a, b), (a + 1, b), (a + 1, b + 1), (a, b + 1)]
+            .map(|(i, j)| field.samples[i * nv + j]);
+        let Some(c) = c.iter().copied().collect::<Option<Vec<_>>>() else {
+            return false;
+        };
+        let lo = c.iter().map(|x| x.value).fold(f64::INFINITY, f64::min);
+        let hi = c.iter().map(|x| x.value).fold(f64::NEG_INFINITY, f64::max);
+        c.iter().all(|x| x.branch == c[0].branch)
+            && !crate::highlight::contour::too_many_levels(lo, hi, spacing, 0.0, 4)
+    };
     for ml in &mesh_lines.lines {
         let same: Vec<&[Vec3]> = h
             .lines
@@ -436,7 +466,7 @@ fn linear_agreement(s: &BSplineSurface, array: LightArray) -> (Vec<f64>, Vec<f64
                 }
                 crate::highlight::contour::NodeId::Vertex(v, _) => t.uv[v.idx()],
             };
-            if !steep(uv) {
+            if !steep(uv) && contoured(uv) {
                 to_surface.push(distance_to_lines(p, &same) / spacing);
             }
         }
@@ -479,7 +509,7 @@ fn quantile(xs: &[f64], q: f64) -> f64 {
 /// 4 + 2 levels per triangle; both now use the one rule
 /// (`contour::too_many_levels`).
 #[test]
-#[ignore = "known gap (session 19): coverage is fixed (97.4-100 % on every teapot lid patch since the grid cells use the mesh's level-count rule, contour::too_many_levels), but on one lid patch 95 % of the surface-line points lie within 0.115 spacing of the mesh lines (> 0.1): the 200-grid now keeps cells near the silhouette that the coarser 160 tessellation's triangles drop"]
+#[ignore = "known gap (session 20): compared at the same resolution (200 grid = 200 tessellation) and on the cells the grid contours, the bump and every lid patch but one agree to 0.0001 spacing both ways; on one small lid patch (1475 surface points) more than 5 % of the surface-line points lie on a light the mesh draws no line of (distance inf) — the mesh's vertex normals near the patch's pole differ from the exact ones; not yet found"]
 fn linear_surface_lines_agree_with_the_tessellated_surface() {
     // A generated bicubic bump: z = exp(-(x² + y²)) sampled into a 9 × 9 net.
     let n = 9;
@@ -817,4 +847,152 @@ fn impeller_flat_faces_give_straight_lines_and_the_dish_lines_run_on_across_its_
         }
     }
     assert!(junctions >= 2, "{junctions} junctions");
+}
+
+/// |∇d_P| from the surface's derivatives ([`linear_distance_gradient`])
+/// against closed forms and finite differences: on a plane facing the
+/// lights d_P is the position across them, |∇d| = 1 exactly; on the dome
+/// and the bump the derivative of the exact field d_P(u, v) by central
+/// differences (step 1e-5 of the domain), turned into a surface gradient
+/// with the first fundamental form, agrees to 1e-5 relative.
+#[test]
+fn linear_distance_gradient_matches_closed_forms_and_finite_differences() {
+    let array = LightArray::new(Vec3::new(0.3, -0.2, 4.0), Vec3::Z, Vec3::X, 0.5).unwrap();
+    let s = plane();
+    for &(u, v) in &[(0.1, 0.2), (0.5, 0.5), (0.9, 0.35)] {
+        let g = linear_distance_gradient(&array, &s.derivatives(u, v), 0.05).unwrap();
+        assert!((g - 1.0).abs() < 1e-12, "plane: {g}");
+    }
+    // tilted lights over the dome: a curved field
+    let array = LightArray::new(
+        Vec3::new(0.2, -0.1, 3.0),
+        Vec3::new(0.2, -0.3, 1.0),
+        Vec3::new(1.0, 0.4, 0.0),
+        0.3,
+    )
+    .unwrap();
+    let light = SurfaceLight::Linear {
+        array,
+        index: 0,
+        min_cos: 0.05,
+    };
+    let s = dome();
+    let mut checked = 0;
+    for a in 1..10 {
+        for b in 1..10 {
+            let (u, v) = (a as f64 / 10.0, b as f64 / 10.0);
+            let d = s.derivatives(u, v);
+            let Some(g) = linear_distance_gradient(&array, &d, 0.05) else {
+                continue;
+            };
+            let h = 1e-5;
+            let f = |u: f64, v: f64| surface_signed_distance(&s, &light, u, v).unwrap();
+            let du = (f(u + h, v) - f(u - h, v)) / (2.0 * h);
+            let dv = (f(u, v + h) - f(u, v - h)) / (2.0 * h);
+            let (e, ff, gg) = (d.su.dot(d.su), d.su.dot(d.sv), d.sv.dot(d.sv));
+            let fd =
+                ((gg * du * du - 2.0 * ff * du * dv + e * dv * dv) / (e * gg - ff * ff)).sqrt();
+            assert!(
+                (g - fd).abs() <= 1e-5 * fd.max(1.0),
+                "({u}, {v}): {g} vs {fd}"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 60, "{checked} points");
+}
+
+/// The part-level light choice with defaults
+/// ([`part_light_array`]) is the mesh side's for the most readable axis:
+/// on the teapot the lights above it, the spacing a whole multiple k > 1 of
+/// the mesh default's (every k-th line, the body being round), and the readable drawing cuts lines only where they
+/// crowd — a grid cell skipped by the line-count rule
+/// (`contour::too_many_levels`) never lies where the drawing keeps lines
+/// (separation s/|∇d| ≥ min_separation at the cell's centre), so the drawn
+/// lines end where they get too dense, not along a ragged edge of skipped
+/// cells (the former picture drew every line, so the skipped cells made
+/// its ragged edge).
+#[test]
+fn readable_part_lights_on_the_teapot_leave_no_cell_to_the_line_count_rule() {
+    let Some(tp) = data("teapot.json") else {
+        return; // fails under CI; said loudly otherwise (shared_data.rs)
+    };
+    let teapot = read_surfaces_json(&tp).unwrap();
+    let choice = crate::highlight::LightChoice::default();
+    let (array, r) = part_light_array(&teapot, &choice, None).unwrap();
+    let (mesh, _) = crate::bspline::tessellate_part(&teapot, LIGHT_CHOICE_SAMPLES).unwrap();
+    // the most readable side of the teapot is above it (+z, the mesh
+    // side's default with --up z), every k-th line
+    let base = LightArray::default_for_mesh(&mesh, crate::highlight::UpAxis::Z).unwrap();
+    let k = array.spacing() / base.spacing();
+    eprintln!(
+        "teapot: spacing {} = {k} × {}",
+        array.spacing(),
+        base.spacing()
+    );
+    assert!(k >= 2.0 && (k - k.round()).abs() < 1e-9, "k = {k}");
+    assert_eq!(array.plane_normal(), base.plane_normal());
+    let opts = SurfaceHighlightOptions::default();
+    let count_skipped_where_drawn = |array: LightArray| {
+        let diagonal = crate::bspline::control_diagonal(&teapot);
+        let probe = SurfaceLight::Linear {
+            array,
+            index: 0,
+            min_cos: 0.1,
+        };
+        let (mut skipped, mut drawn_cells) = (0usize, 0usize);
+        for s in &teapot {
+            let [nu, nv] = patch_grid(s, diagonal, opts.grid_u);
+            let field = distance_field(s, &probe, nu, nv);
+            for a in 0..nu - 1 {
+                for b in 0..nv - 1 {
+                    let c = [(a, b), (a + 1, b), (a + 1, b + 1), (a, b + 1)]
+                        .map(|(i, j)| field.samples[i * nv + j]);
+                    let Some(c) = c.iter().copied().collect::<Option<Vec<_>>>() else {
+                        continue;
+                    };
+                    if c.iter().any(|x| x.branch != c[0].branch) {
+                        continue;
+                    }
+                    let (u, v) = (
+                        0.5 * (field.us[a] + field.us[a + 1]),
+                        0.5 * (field.vs[b] + field.vs[b + 1]),
+                    );
+                    let readable = linear_distance_gradient(&array, &s.derivatives(u, v), 0.1)
+                        .is_some_and(|g| array.spacing() / g >= r.min_separation);
+                    if !readable {
+                        continue;
+                    }
+                    drawn_cells += 1;
+                    let lo = c.iter().map(|x| x.value).fold(f64::INFINITY, f64::min);
+                    let hi = c.iter().map(|x| x.value).fold(f64::NEG_INFINITY, f64::max);
+                    let most = i64::from(opts.max_lines_per_cell);
+                    if crate::highlight::contour::too_many_levels(
+                        lo,
+                        hi,
+                        array.spacing(),
+                        0.0,
+                        most,
+                    ) {
+                        skipped += 1;
+                    }
+                }
+            }
+        }
+        (skipped, drawn_cells)
+    };
+    let (skipped, drawn) = count_skipped_where_drawn(array);
+    let (lo, hi) = teapot.iter().fold(
+        (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), s| {
+            let (a, b) = s.control_bounding_box();
+            (lo.min(a), hi.max(b))
+        },
+    );
+    let (old_skipped, old_drawn) = count_skipped_where_drawn(LightArray::default_for(lo, hi, None));
+    eprintln!(
+        "teapot cells skipped by the line-count rule where lines are drawn: {skipped} of {drawn} (box lights: {old_skipped} of {old_drawn})"
+    );
+    assert!(drawn > 10_000, "{drawn} cells drawn");
+    assert_eq!(skipped, 0);
 }
