@@ -824,7 +824,8 @@ fn read_entity_144(
         loops.push(outer);
     }
     for h in 0..holes {
-        let Some(hole) = g.boundary_loop(k, param(g, k, p, 5 + h, line, &INT)?, line, surface)? else {
+        let Some(hole) = g.boundary_loop(k, param(g, k, p, 5 + h, line, &INT)?, line, surface)?
+        else {
             return Ok(None);
         };
         loops.push(hole);
@@ -1188,7 +1189,10 @@ impl Iges<'_> {
             })
         };
         let (axis_k, gen_k) = (pointer(1)?, pointer(2)?);
-        let (sa, ta) = (param(self, k, &p, 3, line, &REAL)?, param(self, k, &p, 4, line, &REAL)?);
+        let (sa, ta) = (
+            param(self, k, &p, 3, line, &REAL)?,
+            param(self, k, &p, 4, line, &REAL)?,
+        );
         if !(sa.is_finite() && ta.is_finite() && ta > sa) {
             return Err(self.entity_error(
                 k,
@@ -1349,7 +1353,9 @@ fn read_entity_128(g: &Iges<'_>, k: usize, trimmed: bool) -> Result<IgesSurface,
         ));
     }
     let reals = |from: usize, n: usize| -> Result<Vec<f64>, IgesError> {
-        (from..from + n).map(|i| param(g, k, &p, i, line, &REAL)).collect()
+        (from..from + n)
+            .map(|i| param(g, k, &p, i, line, &REAL))
+            .collect()
     };
     let mut at = 10;
     let knots_u = reals(at, nk_u)?;

@@ -6,19 +6,37 @@
 //! - `B_SPLINE_SURFACE_WITH_KNOTS` (rational: the complex instance with
 //!   `RATIONAL_B_SPLINE_SURFACE`) is taken as it is. Its bounds become
 //!   trimming loops from the edges' `PCURVE`s on this surface when present
-//!   (B-spline or line p-curves; exact when an edge covers its whole
-//!   p-curve), otherwise from the edge curves sampled and projected onto the
-//!   surface by Newton point inversion (Piegl & Tiller §6.1).
+//!   (a `DEFINITIONAL_REPRESENTATION` of a `LINE`, `CIRCLE`, `ELLIPSE` or
+//!   B-spline curve in (u, v): lines and conic arcs exactly, B-spline
+//!   p-curves exactly when an edge covers the whole p-curve, else sampled
+//!   between the vertices), otherwise from the edge curves sampled and
+//!   projected onto the surface by Newton point inversion (Piegl & Tiller
+//!   §6.1).
 //! - `PLANE`, `CYLINDRICAL_SURFACE`, `CONICAL_SURFACE`, `SPHERICAL_SURFACE`,
 //!   `TOROIDAL_SURFACE`, `SURFACE_OF_REVOLUTION` and
 //!   `SURFACE_OF_LINEAR_EXTRUSION` are converted exactly to NURBS over the
 //!   part of the surface the face's edges span (rational quadratic arcs of
-//!   at most 90°, see [`super::nurbs`]). Their bounds are mapped into the
-//!   NURBS parameters in closed form (angles through [`ArcMap::param`]),
+//!   at most 90°, see [`super::nurbs`] and [`analytic`]). Their bounds are
+//!   mapped into the NURBS parameters through the surface's natural
+//!   coordinates (ISO 10303-42's (u, v): angles through [`ArcMap::param`]),
 //!   exactly as rational curves on planes and as dense polylines otherwise
 //!   (edges along parameter lines are straight in parameter space, so
-//!   exact too). The NURBS parameterisation differs from STEP's
-//!   (angle-based), so p-curves on analytic surfaces are not used.
+//!   exact too). The exact 3-D edges are used; p-curves on analytic
+//!   surfaces say nothing more. Faces bounded without a seam edge — a
+//!   cylinder between two full circles, a sphere cap or a cone bounded by
+//!   one circle — are closed along a cut (and through the pole or apex on
+//!   the face's side), and a sphere or torus face without loops is the
+//!   whole surface.
+//!
+//! Orientation (ISO 10303-42 face, face_bound, oriented_edge): an
+//! `ORIENTED_EDGE` with orientation `.F.` runs its `EDGE_CURVE` backwards,
+//! an `EDGE_CURVE` with `same_sense .F.` runs against its curve, a
+//! `FACE_BOUND` with orientation `.F.` reverses its loop; the face lies on
+//! the side `n × t` of each loop (`t` its direction, `n` the face normal:
+//! the surface normal, reversed when the face's `same_sense` is `.F.`).
+//! Where the side matters — a face bounded by one loop winding around a
+//! sphere or cone — it decides which part is the face; elsewhere loops are
+//! taken by their winding numbers, whatever their orientation.
 //!
 //! Bounded B-spline surfaces that belong to no face (items of a
 //! representation or a geometric set) are read untrimmed. Edge curves may
@@ -115,6 +133,50 @@ impl Curve {
             }
         }
     }
+}
+
+impl Curve {
+    /// The arc of a conic over the parameters `[t0, t1]` (either way
+    /// round) as an exact rational NURBS in that direction (Piegl & Tiller
+    /// A7.1); `None` for other curves.
+    fn conic_arc(&self, [t0, t1]: [f64; 2]) -> Option<Nurbs3> {
+        let Curve::Conic { c, x, y, rx, ry } = self else {
+            return None;
+        };
+        let map = ArcMap::new(t0.min(t1), t0.max(t1), 1.0);
+        let a = ellipse_arc(*c, *x, *y, *rx, *ry, &map);
+        Some(if t1 < t0 { a.reversed() } else { a })
+    }
+}
+
+/// The traversal parameters of an edge on a conic from the parameters
+/// `t0`, `t1` of its start and end (each in one turn): a whole turn from
+/// `t0` for a closed edge, else `t1` moved by whole turns so that the arc
+/// runs forward (the conic's direction) or backward from `t0`.
+fn conic_range(t0: f64, t1: f64, closed: bool, forward: bool) -> [f64; 2] {
+    let mut t1 = t1;
+    if closed {
+        t1 = if forward { t0 + TAU } else { t0 - TAU };
+    } else if forward {
+        while t1 <= t0 {
+            t1 += TAU;
+        }
+    } else {
+        while t1 >= t0 {
+            t1 -= TAU;
+        }
+    }
+    [t0, t1]
+}
+
+/// A 2-D NURBS (`z` ignored) as a trim curve in the (u, v) plane.
+fn trim_curve_of(n: Nurbs3) -> Result<TrimCurve, String> {
+    TrimCurve::new(
+        n.degree,
+        n.knots,
+        n.points.iter().map(|p| [p.x, p.y]).collect(),
+        n.weights,
+    )
 }
 
 /// The `t ∈ [a, b]` minimising `f`: the best of `samples + 1` equally spaced
@@ -513,22 +575,12 @@ impl<'a> Reader<'a> {
     fn edge_range(&self, e: &EdgeUse) -> [f64; 2] {
         match &e.curve {
             Curve::Line { .. } => [e.curve.param_of(e.start), e.curve.param_of(e.end)],
-            Curve::Conic { .. } => {
-                let t0 = e.curve.param_of(e.start);
-                let mut t1 = e.curve.param_of(e.end);
-                if e.closed {
-                    t1 = if e.forward { t0 + TAU } else { t0 - TAU };
-                } else if e.forward {
-                    while t1 <= t0 {
-                        t1 += TAU;
-                    }
-                } else {
-                    while t1 >= t0 {
-                        t1 -= TAU;
-                    }
-                }
-                [t0, t1]
-            }
+            Curve::Conic { .. } => conic_range(
+                e.curve.param_of(e.start),
+                e.curve.param_of(e.end),
+                e.closed,
+                e.forward,
+            ),
             Curve::Spline(n) => {
                 let [a, b] = n.domain();
                 if e.closed {
@@ -551,11 +603,7 @@ impl<'a> Reader<'a> {
                 0.0,
                 1.0,
             )),
-            Curve::Conic { c, x, y, rx, ry } => {
-                let map = ArcMap::new(t0.min(t1), t0.max(t1), 1.0);
-                let a = ellipse_arc(*c, *x, *y, *rx, *ry, &map);
-                Some(if t1 < t0 { a.reversed() } else { a })
-            }
+            Curve::Conic { .. } => e.curve.conic_arc([t0, t1]),
             Curve::Spline(n) => {
                 let [a, b] = n.domain();
                 let tol = 1e-9 * (b - a);
@@ -759,7 +807,7 @@ impl<'a> Reader<'a> {
                 .collect::<R<Vec<_>>>()?;
             self.attach(f, s, trims, loops.first().is_some_and(|l| l.0))?
         } else {
-            self.analytic_face(f, si, &loops)?
+            self.analytic_face(f, si, &loops, same_sense)?
         };
         Ok(StepSurface {
             surface,
@@ -884,14 +932,17 @@ impl<'a> Reader<'a> {
                     None
                 };
                 if let Some(w) = whole {
-                    let c = TrimCurve::new(
-                        w.degree,
-                        w.knots,
-                        w.points.iter().map(|p| [p.x, p.y]).collect(),
-                        w.weights,
-                    )
-                    .map_err(|m| self.err(c2, m))?;
-                    return Ok(Some(c));
+                    return Ok(Some(trim_curve_of(w).map_err(|m| self.err(c2, m))?));
+                }
+            }
+            if let Curve::Conic { .. } = &curve {
+                // An exact rational arc between the vertices' parameters,
+                // run the edge's way (the p-curve has the edge curve's
+                // sense, ISO 10303-42 surface_curve).
+                let param = |q: Vec3| nearest_param(0.0, TAU, 400, |t| on_surface(t).distance(q));
+                let range = conic_range(param(e.start), param(e.end), e.closed, e.forward);
+                if let Some(a) = curve.conic_arc(range) {
+                    return Ok(Some(trim_curve_of(a).map_err(|m| self.err(c2, m))?));
                 }
             }
             let [t0, t1] = if e.closed {
@@ -918,7 +969,6 @@ impl<'a> Reader<'a> {
         }
         Ok(None)
     }
-
 }
 
 /// A degree-1 trim curve through `pts` (chord-length-free uniform knots).

@@ -6,6 +6,8 @@
 //! coordinates (see the parent module).
 
 use super::*;
+use crate::bspline::polygon_signed_area2;
+use std::f64::consts::FRAC_PI_2;
 
 /// What an analytic surface is, in its placement frame `(o, x, y, z)`.
 #[derive(Clone, Debug)]
@@ -39,6 +41,22 @@ struct NaturalBox {
 }
 
 impl Analytic {
+    /// The natural box the NURBS of [`Reader::analytic_nurbs`] spans over
+    /// `span`: the whole profile of a swept surface in its coordinate.
+    fn nurbs_box(&self, span: NaturalBox) -> NaturalBox {
+        match self {
+            Analytic::Revolution { profile } => NaturalBox {
+                b: profile.domain(),
+                ..span
+            },
+            Analytic::Extrusion { profile, .. } => NaturalBox {
+                a: profile.domain(),
+                ..span
+            },
+            _ => span,
+        }
+    }
+
     /// See [`Periods`].
     fn periods(&self) -> Periods {
         let closed_period = |n: &Nurbs3| {
@@ -101,12 +119,6 @@ fn wrap(x: f64, near: f64, period: Option<f64>) -> f64 {
     }
 }
 
-/// Whether the ends `x`, `y` of a loop differ by more than half a period:
-/// the loop winds around the surface.
-fn winds(x: f64, y: f64, period: Option<f64>) -> bool {
-    period.is_some_and(|p| (x - y).abs() > 0.5 * p)
-}
-
 /// Points on the axis (angle undefined) take the angle of the point before
 /// them, going round the loop from the first point off the axis.
 fn take_neighbour_angles_on_axis(pts: &mut [(f64, f64, bool)]) {
@@ -150,10 +162,7 @@ fn shift_holes_next_to_outer(nat: &mut [NaturalLoop], periods: Periods) {
     let (ma, mb) = mean(outer);
     for l in nat.iter_mut().skip(1) {
         let (la, lb) = mean(l);
-        let (sa, sb) = (
-            wrap(la, ma, periods[0]) - la,
-            wrap(lb, mb, periods[1]) - lb,
-        );
+        let (sa, sb) = (wrap(la, ma, periods[0]) - la, wrap(lb, mb, periods[1]) - lb);
         for p in l.iter_mut() {
             p.0 += sa;
             p.1 += sb;
@@ -300,31 +309,47 @@ impl<'a> Reader<'a> {
     }
 
     /// An analytic face: natural coordinates of the bounds
-    /// ([`Self::natural_loops`]), the NURBS over the box they span
-    /// ([`Self::analytic_nurbs`]), and the bounds mapped into its parameters.
+    /// ([`Self::natural_loops`]), closed into one outer loop where they wind
+    /// around the surface ([`Self::close_full_turns`]), the NURBS over the
+    /// box they span ([`Self::analytic_nurbs`]), and the bounds mapped into
+    /// its parameters. A sphere or torus face without edge loops is the
+    /// whole surface.
     pub(super) fn analytic_face(
         &self,
         f: &Instance,
         si: &'a Instance,
         loops: &[(bool, Vec<EdgeUse>)],
+        same_sense: bool,
     ) -> R<BSplineSurface> {
         let (frame, kind) = self.analytic(si)?;
         if loops.is_empty() {
-            return Err(self.err(
-                f,
-                "a face on an unbounded surface needs at least one edge loop".into(),
-            ));
+            return self.whole_closed_surface(f, frame, &kind);
         }
         if let Analytic::Plane = kind {
             return self.plane_face(f, frame, loops);
         }
         let periods = kind.periods();
-        let mut nat = self.natural_loops(f, frame, &kind, loops, periods)?;
-        shift_holes_next_to_outer(&mut nat, periods);
+        let nat = self.natural_loops(frame, &kind, loops, periods);
+        let (mut nat, outer_known) =
+            match self.close_full_turns(f, &kind, periods, &nat, same_sense)? {
+                Some(closed) => (closed, true),
+                None => {
+                    let mut nat = nat;
+                    shift_holes_next_to_outer(&mut nat, periods);
+                    (nat, loops[0].0)
+                }
+            };
         let span = natural_box(&nat, periods)
             .ok_or_else(|| self.err(f, "the bounds enclose no area on the surface".into()))?;
         let span = self.shift_into_profile_domain(f, &kind, periods, &mut nat, span)?;
         let (surface, to_uv) = self.analytic_nurbs(f, frame, &kind, span)?;
+        if let [outer] = nat.as_slice()
+            && covers_box(outer, kind.nurbs_box(span))
+        {
+            // The face is the whole NURBS (a rectangle of natural
+            // coordinates, e.g. a cylinder between two full circles).
+            return Ok(surface);
+        }
         let trims = nat
             .iter()
             .map(|l| {
@@ -333,21 +358,20 @@ impl<'a> Reader<'a> {
             })
             .collect::<Result<Vec<_>, String>>()
             .map_err(|m| self.err(f, m))?;
-        self.attach(f, surface, trims, loops[0].0)
+        self.attach(f, surface, trims, outer_known)
     }
 
     /// The natural coordinates `(a, b)` of every loop (the edges' dense
     /// points, see [`Analytic::natural`]): points on the axis take the angle
-    /// of a neighbour, and angles are unwrapped along the loop. A loop that
-    /// winds around a period is refused.
+    /// of a neighbour, and angles are unwrapped along the loop, so that a
+    /// loop winding around a period ends a period from where it started.
     fn natural_loops(
         &self,
-        f: &Instance,
         frame: Frame,
         kind: &Analytic,
         loops: &[(bool, Vec<EdgeUse>)],
         periods: Periods,
-    ) -> R<Vec<NaturalLoop>> {
+    ) -> Vec<NaturalLoop> {
         let mut nat: Vec<NaturalLoop> = Vec::with_capacity(loops.len());
         for (_, edges) in loops {
             let mut pts: Vec<(f64, f64, bool)> = Vec::new();
@@ -363,18 +387,183 @@ impl<'a> Reader<'a> {
                 pts.extend(ep);
             }
             take_neighbour_angles_on_axis(&mut pts);
-            let out = unwrap_loop(&pts, periods);
-            if let (Some(f0), Some(l0)) = (out.first(), out.last())
-                && (winds(f0.0, l0.0, periods[0]) || winds(f0.1, l0.1, periods[1]))
-            {
+            nat.push(unwrap_loop(&pts, periods));
+        }
+        nat
+    }
+
+    /// Faces bounded without a seam edge (ISO 10303-42 allows a periodic
+    /// face to be bounded by loops that wind around its axis): a cylinder
+    /// between two full circles, a sphere cap bounded by one circle. The
+    /// winding bounds close into one outer loop of the face cut open along
+    /// `s = cut` (`s` the coordinate they wind in): two winding bounds join
+    /// along the cut; one is closed through the pole (sphere), the apex
+    /// (cone) or the profile's end (surface of revolution) on the face's
+    /// side. The face lies on the side of its bounds that `n × t` points to
+    /// (`t` the bound's direction, `n` the face normal: the surface normal
+    /// `S_a × S_b`, reversed when the face's `same_sense` is false). Bounds
+    /// that do not wind stay holes, and the cut passes between them.
+    /// `None` when no bound winds.
+    fn close_full_turns(
+        &self,
+        f: &Instance,
+        kind: &Analytic,
+        periods: Periods,
+        nat: &[NaturalLoop],
+        same_sense: bool,
+    ) -> R<Option<Vec<NaturalLoop>>> {
+        let windings: Vec<[i64; 2]> = nat.iter().map(|l| turns(l, periods)).collect();
+        if windings.iter().all(|w| *w == [0, 0]) {
+            return Ok(None);
+        }
+        if windings
+            .iter()
+            .any(|w| w[0].abs() > 1 || w[1].abs() > 1 || (w[0] != 0 && w[1] != 0))
+        {
+            return Err(self.err(
+                f,
+                "a bound winds around the surface more than once or in both directions (not supported)".into(),
+            ));
+        }
+        let axis = usize::from(windings.iter().all(|w| w[0] == 0));
+        let other = 1 - axis;
+        if windings.iter().any(|w| w[other] != 0) {
+            return Err(self.err(
+                f,
+                "bounds wind around the surface in both directions (not supported)".into(),
+            ));
+        }
+        let period = periods[axis].ok_or_else(|| {
+            self.err(
+                f,
+                "a bound winds around a coordinate that does not wrap".into(),
+            )
+        })?;
+        // (a, b) <-> (s, t): s is the coordinate the bounds wind in.
+        let swap = |p: (f64, f64)| if axis == 0 { p } else { (p.1, p.0) };
+        // In the (s, t) plane the face is left of its bounds when the face
+        // normal agrees with the surface's and (s, t) = (a, b), or neither.
+        let face_left = same_sense == (axis == 0);
+        let mut bands: Vec<(Vec<St>, f64)> = Vec::new();
+        let mut holes: Vec<Vec<St>> = Vec::new();
+        for (l, w) in nat.iter().zip(&windings) {
+            let mut st: Vec<St> = l.iter().map(|&p| swap(p)).collect();
+            if w[axis] == 0 {
+                holes.push(st);
+                continue;
+            }
+            let increasing = w[axis] > 0;
+            if !increasing {
+                st.reverse();
+            }
+            // Left of a bound running towards +s is +t.
+            let side = if face_left == increasing { 1.0 } else { -1.0 };
+            bands.push((st, side));
+        }
+        let first_s = bands.first().and_then(|b| b.0.first()).map_or(0.0, |p| p.0);
+        let cut = cut_between_holes(&holes, period, first_s);
+        for h in &mut holes {
+            let lo = h.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+            let shift = period * ((cut - lo) / period).ceil();
+            for p in h.iter_mut() {
+                p.0 += shift;
+            }
+        }
+        let mean_t = |l: &[St]| l.iter().map(|p| p.1).sum::<f64>() / l.len().max(1) as f64;
+        let outer: Vec<St> = match bands.as_slice() {
+            [(first, side), (second, _)] => {
+                let a = recut(first, cut, period);
+                let mut b = recut(second, cut, period);
+                if let Some(pt) = periods[other] {
+                    // The second bound on the face's side of the first.
+                    let d = mean_t(&b) - mean_t(&a);
+                    let dm = d.rem_euclid(pt);
+                    let want = if *side > 0.0 { dm } else { dm - pt };
+                    for p in &mut b {
+                        p.1 += want - d;
+                    }
+                }
+                b.reverse();
+                a.into_iter().chain(b).collect()
+            }
+            [(only, side)] => {
+                let mut a = recut(only, cut, period);
+                let pole = self.pole(f, kind, axis, *side, mean_t(&a))?;
+                a.push((cut + period, pole));
+                a.push((cut, pole));
+                a
+            }
+            _ => {
                 return Err(self.err(
                     f,
-                    "a bound winds around the surface's axis (a periodic face bounded without a seam edge is not supported)".into(),
+                    format!(
+                        "{} bounds wind around the surface (one or two are supported)",
+                        bands.len()
+                    ),
                 ));
             }
-            nat.push(out);
+        };
+        let mut out = vec![outer];
+        out.extend(holes);
+        Ok(Some(
+            out.into_iter()
+                .map(|l| l.into_iter().map(swap).collect())
+                .collect(),
+        ))
+    }
+
+    /// Where a face bounded by one winding bound closes, on the face's side
+    /// (`side`, ±1 in t) of the bound at mean `t`: the pole of a sphere, the
+    /// apex of a cone, the end of a surface of revolution's profile.
+    fn pole(&self, f: &Instance, kind: &Analytic, axis: usize, side: f64, t: f64) -> R<f64> {
+        let unbounded = || {
+            self.err(
+                f,
+                "a single bound winds around the surface and the face's side of it is unbounded"
+                    .into(),
+            )
+        };
+        if axis != 0 {
+            return Err(unbounded());
         }
-        Ok(nat)
+        match kind {
+            Analytic::Sphere { .. } => Ok(side * FRAC_PI_2),
+            Analytic::Cone { r, tan } if *tan != 0.0 => {
+                let apex = -r / tan;
+                if (apex - t) * side > 0.0 {
+                    Ok(apex)
+                } else {
+                    Err(unbounded())
+                }
+            }
+            Analytic::Revolution { profile } => {
+                let [t0, t1] = profile.domain();
+                Ok(if side > 0.0 { t1 } else { t0 })
+            }
+            _ => Err(unbounded()),
+        }
+    }
+
+    /// A face with no edge loop on a closed surface: the whole sphere or
+    /// torus, untrimmed.
+    fn whole_closed_surface(
+        &self,
+        f: &Instance,
+        frame: Frame,
+        kind: &Analytic,
+    ) -> R<BSplineSurface> {
+        let b = match kind {
+            Analytic::Sphere { .. } => [-FRAC_PI_2, FRAC_PI_2],
+            Analytic::Torus { .. } => [-PI, PI],
+            _ => {
+                return Err(self.err(
+                    f,
+                    "a face on an open surface needs at least one edge loop".into(),
+                ));
+            }
+        };
+        let span = NaturalBox { a: [-PI, PI], b };
+        Ok(self.analytic_nurbs(f, frame, kind, span)?.0)
     }
 
     /// A swept profile's parameter must stay in its domain: shifts the
@@ -489,9 +678,10 @@ impl<'a> Reader<'a> {
                     Box::new(move |a, b| [map.param(a), b]),
                 )
             }
-            Analytic::Extrusion { profile, d, .. } => {
-                (self.extruded(f, profile, *d, b0, b1)?, Box::new(|a, b| [a, b]))
-            }
+            Analytic::Extrusion { profile, d, .. } => (
+                self.extruded(f, profile, *d, b0, b1)?,
+                Box::new(|a, b| [a, b]),
+            ),
             Analytic::Plane => {
                 return Err(self.err(f, "internal: planes are handled by plane_face".into()));
             }
@@ -614,4 +804,113 @@ impl<'a> Reader<'a> {
             .collect();
         self.attach(f, s, trims, loops[0].0)
     }
+}
+
+/// Whole periods a loop winds in each natural coordinate: its last point
+/// (the end of its last edge, which closes the loop) minus its first, in
+/// periods.
+fn turns(l: &[(f64, f64)], periods: Periods) -> [i64; 2] {
+    let (Some(f), Some(e)) = (l.first(), l.last()) else {
+        return [0, 0];
+    };
+    let count = |d: f64, period: Option<f64>| match period {
+        Some(p) if p > 0.0 => (d / p).round() as i64,
+        _ => 0,
+    };
+    [count(e.0 - f.0, periods[0]), count(e.1 - f.1, periods[1])]
+}
+
+/// A point `(s, t)` of a loop in the coordinates where `s` is the one the
+/// loop winds in.
+type St = (f64, f64);
+
+/// The loop `l` (winding once in `s`, first and last points one period
+/// apart, `s` increasing overall) re-cut to run from `s = cut` to
+/// `s = cut + period`: shifted by whole periods, rotated to start at its
+/// first crossing of `cut` (the crossing point interpolated) and closed
+/// one period on.
+fn recut(l: &[St], cut: f64, period: f64) -> Vec<St> {
+    let n = l.len();
+    if n < 2 {
+        return l.to_vec();
+    }
+    let shift = period * ((cut - l[0].0) / period).floor();
+    let pts: Vec<St> = l[..n - 1].iter().map(|&(s, t)| (s + shift, t)).collect();
+    // pts[0].0 <= cut < pts[0].0 + period; the loop continues with pts[0] + period.
+    let at = |k: usize| -> St {
+        if k < pts.len() {
+            pts[k]
+        } else {
+            (pts[k - pts.len()].0 + period, pts[k - pts.len()].1)
+        }
+    };
+    let m = pts.len();
+    let k = (0..m)
+        .find(|&k| at(k).0 <= cut && cut < at(k + 1).0)
+        .unwrap_or(0);
+    let (p, q) = (at(k), at(k + 1));
+    let ds = q.0 - p.0;
+    let w = if ds > 0.0 { (cut - p.0) / ds } else { 0.0 };
+    let start = (cut, p.1 + w * (q.1 - p.1));
+    let mut out = Vec::with_capacity(m + 2);
+    out.push(start);
+    for j in k + 1..=k + m {
+        let r = at(j);
+        if r.0 > cut && r.0 < cut + period {
+            out.push(r);
+        }
+    }
+    out.push((cut + period, start.1));
+    out
+}
+
+/// An `s` at which to cut the surface open: in the middle of the widest gap
+/// between the `s` ranges of the holes (so that no hole straddles the cut),
+/// or `default` without holes.
+fn cut_between_holes(holes: &[Vec<St>], period: f64, default: f64) -> f64 {
+    let mut spans: Vec<(f64, f64)> = holes
+        .iter()
+        .filter_map(|h| {
+            let lo = h.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+            let hi = h.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+            (lo <= hi).then(|| {
+                let lo_mod = lo.rem_euclid(period);
+                (lo_mod, lo_mod + (hi - lo))
+            })
+        })
+        .collect();
+    if spans.is_empty() {
+        return default;
+    }
+    spans.sort_by(|x, y| x.0.total_cmp(&y.0));
+    // Merge overlapping spans, then take the widest gap (cyclically).
+    let mut merged: Vec<(f64, f64)> = Vec::new();
+    for (lo, hi) in spans {
+        match merged.last_mut() {
+            Some(last) if lo <= last.1 => last.1 = last.1.max(hi),
+            _ => merged.push((lo, hi)),
+        }
+    }
+    let mut best = (f64::NEG_INFINITY, default);
+    for (k, &(_, hi)) in merged.iter().enumerate() {
+        let next_lo = if k + 1 < merged.len() {
+            merged[k + 1].0
+        } else {
+            merged[0].0 + period
+        };
+        let gap = next_lo - hi;
+        if gap > best.0 {
+            best = (gap, 0.5 * (hi + next_lo));
+        }
+    }
+    best.1
+}
+
+/// Whether a loop encloses its whole natural box (its area, by the shoelace
+/// formula, is the box's to 1e-9): the face is then the untrimmed NURBS.
+fn covers_box(l: &[(f64, f64)], span: NaturalBox) -> bool {
+    let pts: Vec<[f64; 2]> = l.iter().map(|&(a, b)| [a, b]).collect();
+    let area = 0.5 * polygon_signed_area2(&pts).abs();
+    let whole = (span.a[1] - span.a[0]) * (span.b[1] - span.b[0]);
+    whole > 0.0 && area >= whole * (1.0 - 1e-9)
 }
