@@ -109,7 +109,12 @@ fn continuity_of_the_impeller() {
     assert!(n[0] <= 130, "{n:?}");
     assert!(angle[3] < 0.03, "{angle:?}");
     assert!(curvature[3] < 0.05, "{curvature:?}");
-    assert!(hub_closed >= 1, "{hub_closed}");
+    // 128 measured, 84 of them closed (G0 or better)
+    assert!(
+        hub.len() >= 120 && hub_closed >= 80,
+        "{} {hub_closed}",
+        hub.len()
+    );
     // every G0-or-better edge closes within the tolerance
     for s in &r.seams {
         if s.class != SeamClass::Gap {
