@@ -13,7 +13,8 @@ use std::path::PathBuf;
 
 /// Finds the boundary curves shared by the patches of SURFACES
 /// (geometrically, within a matching distance; also stretches shared over
-/// part of a side) and reports for each the largest position gap (G0), the
+/// part of a side; trimmed faces meet along their trimming curves) and
+/// reports for each the largest position gap (G0), the
 /// largest angle between the tangent planes (G1, degrees) and the largest
 /// normal-curvature difference across the edge (G2), classified against the
 /// tolerances as gap / G0 / G1 / G2, with the worst location.
@@ -101,7 +102,7 @@ pub fn run(args: Args) -> Result<()> {
         100.0 * args.curvature_tolerance,
         if result.degenerate_sides > 0 {
             format!(
-                "; {} collapsed sides (poles) skipped",
+                "; {} boundary pieces shorter than the matching distance (poles, slivers) skipped",
                 result.degenerate_sides
             )
         } else {
@@ -115,7 +116,7 @@ pub fn run(args: Args) -> Result<()> {
         .take(10)
     {
         say(&format!(
-            "  surfaces {} {:?} / {} {:?}: {} (gap {:.2e}, angle {:.3}°, curvature {:.1} %) worst at ({:.4}, {:.4}, {:.4})",
+            "  surfaces {} {} / {} {}: {} (gap {:.2e}, angle {:.3}°, curvature {:.1} %) worst at ({:.4}, {:.4}, {:.4})",
             s.surfaces[0],
             s.sides[0],
             s.surfaces[1],

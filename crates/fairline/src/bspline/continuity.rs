@@ -1,8 +1,11 @@
 //! Continuity across patch boundaries (issue #20 item 5): which boundary
 //! curves of a set of B-spline patches are shared — found geometrically, so
-//! patches need no topology, and a side may be shared over part of its
+//! patches need no topology, and a boundary may be shared over part of its
 //! length only (T-junctions) — and how smoothly the patches join along each
-//! shared stretch:
+//! shared stretch. The boundary of an untrimmed patch is the four sides of
+//! its parameter rectangle; that of a trimmed patch (a CAD face) is the
+//! curves of its trimming loops, mapped onto the surface ([`Boundary`]), so
+//! faces that meet along trims are found too.
 //!
 //! - **G0**: the position gap |S_A − S_B| between a point of A's side and
 //!   the closest point of B's side;
@@ -23,7 +26,7 @@
 //! GlobalEdgeContinuity / Alias surface continuity).
 
 use crate::Vec3;
-use crate::bspline::{BSplineSurface, SurfaceDerivatives};
+use crate::bspline::{BSplineSurface, SurfaceDerivatives, TrimCurve};
 use rayon::prelude::*;
 use serde::Serialize;
 use thiserror::Error;
@@ -79,6 +82,63 @@ impl PatchSide {
             PatchSide::VMin => (d.su, d.suu, d.sv),
             PatchSide::VMax => (d.su, d.suu, -d.sv),
         }
+    }
+}
+
+/// One trimming curve of a trimmed patch: curve `curve` of loop
+/// `loop_index` (0 = outer) of its [`BSplineSurface::trims`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+pub struct TrimCurveId {
+    /// The loop (0 = outer).
+    #[serde(rename = "loop")]
+    pub loop_index: usize,
+    /// The curve within the loop.
+    pub curve: usize,
+}
+
+/// A piece of a patch's boundary: a side of the parameter rectangle of an
+/// untrimmed patch, or a trimming curve of a trimmed one. In JSON a side is
+/// its name (`"u_min"`), a trimming curve `{"loop": L, "curve": C}`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[serde(untagged)]
+pub enum Boundary {
+    /// A side of the parameter rectangle.
+    Side(PatchSide),
+    /// A trimming curve.
+    Trim(TrimCurveId),
+}
+
+impl std::fmt::Display for Boundary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Boundary::Side(PatchSide::UMin) => f.write_str("u_min"),
+            Boundary::Side(PatchSide::UMax) => f.write_str("u_max"),
+            Boundary::Side(PatchSide::VMin) => f.write_str("v_min"),
+            Boundary::Side(PatchSide::VMax) => f.write_str("v_max"),
+            Boundary::Trim(t) => write!(f, "trim loop {} curve {}", t.loop_index, t.curve),
+        }
+    }
+}
+
+impl Boundary {
+    /// The boundary pieces of `s`: its trimming curves when it is trimmed,
+    /// else the four sides.
+    pub fn all(s: &BSplineSurface) -> Vec<Boundary> {
+        if !s.is_trimmed() {
+            return PatchSide::ALL.into_iter().map(Boundary::Side).collect();
+        }
+        s.trims()
+            .iter()
+            .enumerate()
+            .flat_map(|(l, lp)| {
+                (0..lp.curves.len()).map(move |c| {
+                    Boundary::Trim(TrimCurveId {
+                        loop_index: l,
+                        curve: c,
+                    })
+                })
+            })
+            .collect()
     }
 }
 
@@ -149,16 +209,17 @@ pub enum ContinuityError {
     Invalid(String),
 }
 
-/// One shared edge between side `sides[0]` of surface `surfaces[0]` and side
-/// `sides[1]` of surface `surfaces[1]` (the same surface for a closed
-/// patch), over the running-parameter range `range` of the first.
+/// One shared edge between boundary piece `sides[0]` of surface
+/// `surfaces[0]` and `sides[1]` of surface `surfaces[1]` (the same surface
+/// for a closed patch), over the running-parameter range `range` of the
+/// first (a side's u or v, a trimming curve's own parameter).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Seam {
     /// The two surfaces (indices in the input).
     pub surfaces: [usize; 2],
-    /// Their sides.
-    pub sides: [PatchSide; 2],
-    /// Running-parameter range on the first surface's side.
+    /// Their boundary pieces (sides or trimming curves).
+    pub sides: [Boundary; 2],
+    /// Running-parameter range on the first surface's boundary piece.
     pub range: [f64; 2],
     /// Length of the shared stretch (model units).
     pub length: f64,
@@ -191,15 +252,18 @@ pub struct ContinuityReport {
     pub tolerance: f64,
     /// Matching distance used.
     pub match_distance: f64,
-    /// Sides shorter than the matching distance (collapsed to a point:
-    /// poles), not analysed.
+    /// Boundary pieces shorter than the matching distance (collapsed to a
+    /// point: poles), not analysed.
     pub degenerate_sides: usize,
 }
 
-/// A sampled side.
+/// A sampled boundary piece.
 struct SideSamples {
     surface: usize,
-    side: PatchSide,
+    side: Boundary,
+    /// For a trimming curve: whether the face lies to the left of the curve
+    /// in its own direction (in the (u, v) plane).
+    inside_left: bool,
     ts: Vec<f64>,
     points: Vec<Vec3>,
     lo: Vec3,
@@ -207,38 +271,123 @@ struct SideSamples {
     length: f64,
 }
 
-fn sample_side(s: &BSplineSurface, k: usize, side: PatchSide, n: usize) -> SideSamples {
-    let r = side.range(s);
-    let ts: Vec<f64> = (0..=n)
-        .map(|m| r[0] + (r[1] - r[0]) * m as f64 / n as f64)
-        .collect();
-    let points: Vec<Vec3> = ts
-        .iter()
-        .map(|&t| {
-            let (u, v) = side.uv(s, t);
-            s.eval(u, v)
-        })
-        .collect();
-    let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
-    for p in &points {
-        lo = lo.min(*p);
-        hi = hi.max(*p);
+impl SideSamples {
+    /// The trimming curve of a [`Boundary::Trim`] piece.
+    fn trim_curve<'s>(&self, s: &'s BSplineSurface) -> Option<&'s TrimCurve> {
+        match self.side {
+            Boundary::Trim(id) => s.trims().get(id.loop_index)?.curves.get(id.curve),
+            Boundary::Side(_) => None,
+        }
     }
-    let length = points.windows(2).map(|w| (w[1] - w[0]).length()).sum();
-    SideSamples {
-        surface: k,
-        side,
-        ts,
-        points,
-        lo,
-        hi,
-        length,
+
+    /// Range of the running parameter t.
+    fn range(&self, s: &BSplineSurface) -> [f64; 2] {
+        match (self.side, self.trim_curve(s)) {
+            (Boundary::Side(side), _) => side.range(s),
+            (Boundary::Trim(_), Some(c)) => c.domain(),
+            (Boundary::Trim(_), None) => [0.0, 0.0],
+        }
+    }
+
+    /// The (u, v) of running parameter t (trimming curves clamped to the
+    /// surface's domain).
+    fn uv(&self, s: &BSplineSurface, t: f64) -> (f64, f64) {
+        match (self.side, self.trim_curve(s)) {
+            (Boundary::Side(side), _) => side.uv(s, t),
+            (Boundary::Trim(_), Some(c)) => {
+                let [u, v] = c.eval(t);
+                s.clamp_parameters(u, v)
+            }
+            (Boundary::Trim(_), None) => s.domain_center(),
+        }
+    }
+
+    /// Tangent dS/dt, its derivative (zero on trimming curves: the closest
+    /// point search is then Gauss–Newton) and a cross-boundary direction
+    /// pointing into the face, from the surface derivatives at `uv(t)`. On
+    /// a trimming curve c(t) = (u(t), v(t)) the tangent is S_u u' + S_v v'
+    /// and the inward direction S_u w_u + S_v w_v with w the (u, v) normal
+    /// of the curve on the face's side; (u', v') by central differences.
+    fn frame(&self, s: &BSplineSurface, t: f64, d: &SurfaceDerivatives) -> (Vec3, Vec3, Vec3) {
+        let c = match (self.side, self.trim_curve(s)) {
+            (Boundary::Side(side), _) => return side.frame(d),
+            (Boundary::Trim(_), Some(c)) => c,
+            (Boundary::Trim(_), None) => return (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO),
+        };
+        let [t0, t1] = c.domain();
+        let h = 1e-6 * (t1 - t0);
+        let (ta, tb) = ((t - h).max(t0), (t + h).min(t1));
+        let (pa, pb) = (c.eval(ta), c.eval(tb));
+        let dt = tb - ta;
+        let (du, dv) = if dt > 0.0 {
+            ((pb[0] - pa[0]) / dt, (pb[1] - pa[1]) / dt)
+        } else {
+            (0.0, 0.0)
+        };
+        let w = if self.inside_left {
+            (-dv, du)
+        } else {
+            (dv, -du)
+        };
+        (d.su * du + d.sv * dv, Vec3::ZERO, d.su * w.0 + d.sv * w.1)
     }
 }
 
-/// Closest point of side `b` to `p`: (running parameter, distance,
-/// whether the parameter is clamped at an end of the side). Starts from
-/// the nearest sample and refines by Newton on |C(t) − p|².
+/// Whether the face of `s` lies to the left of the curves of trimming loop
+/// `l` in their given direction: the loop as given winds counter-clockwise
+/// and is the outer one, or clockwise and a hole (the face is left of
+/// [`super::TrimmedDomain::polylines`], which are oriented that way).
+fn inside_is_left(s: &BSplineSurface, l: usize) -> bool {
+    let Some(lp) = s.trims().get(l) else {
+        return true;
+    };
+    let mut pts = Vec::new();
+    let [u0, u1] = s.domain_u();
+    let [v0, v1] = s.domain_v();
+    let tolerance = 1e-4 * (u1 - u0).hypot(v1 - v0);
+    for c in &lp.curves {
+        c.flatten_into(tolerance, &mut pts);
+    }
+    (super::polygon_signed_area2(&pts) > 0.0) == (l == 0)
+}
+
+fn sample_side(s: &BSplineSurface, k: usize, side: Boundary, n: usize) -> SideSamples {
+    let inside_left = match side {
+        Boundary::Trim(id) => inside_is_left(s, id.loop_index),
+        Boundary::Side(_) => true,
+    };
+    let mut b = SideSamples {
+        surface: k,
+        side,
+        inside_left,
+        ts: Vec::new(),
+        points: Vec::new(),
+        lo: Vec3::splat(f64::INFINITY),
+        hi: Vec3::splat(f64::NEG_INFINITY),
+        length: 0.0,
+    };
+    let r = b.range(s);
+    b.ts = (0..=n)
+        .map(|m| r[0] + (r[1] - r[0]) * m as f64 / n as f64)
+        .collect();
+    b.points =
+        b.ts.iter()
+            .map(|&t| {
+                let (u, v) = b.uv(s, t);
+                s.eval(u, v)
+            })
+            .collect();
+    for p in &b.points {
+        b.lo = b.lo.min(*p);
+        b.hi = b.hi.max(*p);
+    }
+    b.length = b.points.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+    b
+}
+
+/// Closest point of boundary piece `b` to `p`: (running parameter,
+/// distance). Starts from the nearest sample and refines by Newton on
+/// |C(t) − p|² (Gauss–Newton on trimming curves).
 fn closest_on_side(s: &BSplineSurface, b: &SideSamples, p: Vec3) -> (f64, f64) {
     let mut best = 0;
     let mut bd = f64::INFINITY;
@@ -249,12 +398,12 @@ fn closest_on_side(s: &BSplineSurface, b: &SideSamples, p: Vec3) -> (f64, f64) {
             best = k;
         }
     }
-    let r = b.side.range(s);
+    let r = b.range(s);
     let mut t = b.ts[best];
     for _ in 0..20 {
-        let (u, v) = b.side.uv(s, t);
+        let (u, v) = b.uv(s, t);
         let d = s.derivatives(u, v);
-        let (c1, c2, _) = b.side.frame(&d);
+        let (c1, c2, _) = b.frame(s, t, &d);
         let e = d.point - p;
         let g = e.dot(c1);
         let h = c1.dot(c1) + e.dot(c2);
@@ -273,9 +422,12 @@ fn closest_on_side(s: &BSplineSurface, b: &SideSamples, p: Vec3) -> (f64, f64) {
             break;
         }
     }
-    let (u, v) = b.side.uv(s, t);
+    let (u, v) = b.uv(s, t);
     let d = (s.eval(u, v) - p).length();
-    let _ = bd;
+    // Gauss–Newton on a trimming curve may stop short of a nearer sample.
+    if matches!(b.side, Boundary::Trim(_)) && bd.sqrt() < d {
+        return (b.ts[best], bd.sqrt());
+    }
     (t, d)
 }
 
@@ -301,9 +453,15 @@ fn normal_curvature(d: &SurfaceDerivatives, n: Vec3, dir: Vec3) -> Option<f64> {
 }
 
 /// The unit inward cross-boundary direction (tangent to the surface,
-/// orthogonal to the side) and the unit normal at a side point.
-fn cross_direction(side: PatchSide, d: &SurfaceDerivatives) -> Option<(Vec3, Vec3)> {
-    let (tan, _, cross) = side.frame(d);
+/// orthogonal to the boundary) and the unit normal at running parameter t
+/// of boundary piece `b`.
+fn cross_direction(
+    s: &BSplineSurface,
+    b: &SideSamples,
+    t: f64,
+    d: &SurfaceDerivatives,
+) -> Option<(Vec3, Vec3)> {
+    let (tan, _, cross) = b.frame(s, t, d);
     let n = d.normal()?;
     let tl = tan.length_squared();
     let c = if tl > 0.0 {
@@ -327,14 +485,14 @@ fn measure(
     t: f64,
     model: f64,
 ) -> (Vec3, SampleMeasure) {
-    let (u, v) = a.side.uv(sa, t);
+    let (u, v) = a.uv(sa, t);
     let da = sa.derivatives(u, v);
     let (tb, gap) = closest_on_side(sb, b, da.point);
-    let (ub, vb) = b.side.uv(sb, tb);
+    let (ub, vb) = b.uv(sb, tb);
     let db = sb.derivatives(ub, vb);
     let rest = (|| {
-        let (ca, na) = cross_direction(a.side, &da)?;
-        let (cb, nb) = cross_direction(b.side, &db)?;
+        let (ca, na) = cross_direction(sa, a, t, &da)?;
+        let (cb, nb) = cross_direction(sb, b, tb, &db)?;
         // atan2(|a × b|, a · b): accurate near 0° where acos is not
         let angle = ca.cross(-cb).length().atan2(ca.dot(-cb)).to_degrees();
         let nb_aligned = if na.dot(nb) < 0.0 { -nb } else { nb };
@@ -392,7 +550,7 @@ pub fn continuity(
         .par_iter()
         .enumerate()
         .flat_map_iter(|(k, s)| {
-            PatchSide::ALL
+            Boundary::all(s)
                 .into_iter()
                 .map(move |side| sample_side(s, k, side, opts.match_samples))
         })
@@ -406,10 +564,17 @@ pub fn continuity(
             let m = Vec3::splat(matching);
             let overlap = (x.lo - m).cmple(y.hi).all() && (y.lo - m).cmple(x.hi).all();
             // the same patch: only opposite sides (a closed patch's seam)
+            // or two trimming curves (a closed face's seam edge)
             let same_ok = x.surface != y.surface
                 || matches!(
                     (x.side, y.side),
-                    (PatchSide::UMin, PatchSide::UMax) | (PatchSide::VMin, PatchSide::VMax)
+                    (
+                        Boundary::Side(PatchSide::UMin),
+                        Boundary::Side(PatchSide::UMax)
+                    ) | (
+                        Boundary::Side(PatchSide::VMin),
+                        Boundary::Side(PatchSide::VMax)
+                    ) | (Boundary::Trim(_), Boundary::Trim(_))
                 );
             overlap && same_ok
         })
@@ -444,12 +609,12 @@ fn seams_between(
     opts: &ContinuityOptions,
 ) -> Vec<Seam> {
     let (sa, sb) = (&surfaces[a.surface], &surfaces[b.surface]);
-    let rb = b.side.range(sb);
+    let rb = b.range(sb);
     // A point of a is on the shared stretch when b passes within the
     // matching distance, and not only past b's end (then the closest point
     // is b's end point, unless it is within the tolerance).
     let on = |t: f64| -> bool {
-        let (u, v) = a.side.uv(sa, t);
+        let (u, v) = a.uv(sa, t);
         let (tb, d) = closest_on_side(sb, b, sa.eval(u, v));
         let end = (tb - rb[0]).abs() <= 1e-12 * (rb[1] - rb[0]).abs()
             || (tb - rb[1]).abs() <= 1e-12 * (rb[1] - rb[0]).abs();

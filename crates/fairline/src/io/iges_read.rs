@@ -476,7 +476,7 @@ impl<'a> Iges<'a> {
         let p = self.parameters(k)?;
         let mut r = [0.0; 12];
         for (n, v) in r.iter_mut().enumerate() {
-            *v = real(self, k, &p, n + 1, e.line)?;
+            *v = param(self, k, &p, n + 1, e.line, &REAL)?;
         }
         let m = DAffine3::from_mat3_translation(
             DMat3::from_cols(
@@ -515,43 +515,46 @@ fn line_of(p: &[(Param, usize)], n: usize, fallback: usize) -> usize {
     p.get(n).or(p.last()).map_or(fallback, |t| t.1)
 }
 
-fn real(
-    g: &Iges<'_>,
-    k: usize,
-    p: &[(Param, usize)],
-    n: usize,
-    line: usize,
-) -> Result<f64, IgesError> {
-    match p.get(n) {
-        Some((Param::Empty, _)) => Ok(0.0),
-        _ => text_of(p, n).and_then(parse_real).ok_or_else(|| {
-            g.entity_error(
-                k,
-                line_of(p, n, line),
-                format!(
-                    "parameter {n}: expected a real number, found {}",
-                    describe(p.get(n))
-                ),
-            )
-        }),
-    }
+/// How a parameter of one kind is read: parsed from its text, or `blank`
+/// when the parameter is empty (IGES 5.3 §2.2.3: defaulted parameters).
+struct ParamKind<T> {
+    /// What the parameter should be, for errors ("a real number").
+    expected: &'static str,
+    parse: fn(&str) -> Option<T>,
+    blank: T,
 }
 
-fn int(
+const REAL: ParamKind<f64> = ParamKind {
+    expected: "a real number",
+    parse: parse_real,
+    blank: 0.0,
+};
+
+const INT: ParamKind<i64> = ParamKind {
+    expected: "an integer",
+    parse: parse_int,
+    blank: 0,
+};
+
+/// Parameter `n` of entity `k` read as `kind`; the error names the entity,
+/// the line, the parameter, what was expected and what was found.
+fn param<T: Copy>(
     g: &Iges<'_>,
     k: usize,
     p: &[(Param, usize)],
     n: usize,
     line: usize,
-) -> Result<i64, IgesError> {
+    kind: &ParamKind<T>,
+) -> Result<T, IgesError> {
     match p.get(n) {
-        Some((Param::Empty, _)) => Ok(0),
-        _ => text_of(p, n).and_then(parse_int).ok_or_else(|| {
+        Some((Param::Empty, _)) => Ok(kind.blank),
+        _ => text_of(p, n).and_then(kind.parse).ok_or_else(|| {
             g.entity_error(
                 k,
                 line_of(p, n, line),
                 format!(
-                    "parameter {n}: expected an integer, found {}",
+                    "parameter {n}: expected {}, found {}",
+                    kind.expected,
                     describe(p.get(n))
                 ),
             )
@@ -568,10 +571,22 @@ fn describe(p: Option<&(Param, usize)>) -> String {
     }
 }
 
-fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
-    let mut global = Vec::new();
-    let mut dir_recs = Vec::new();
-    let mut params = Vec::new();
+/// The records of a fixed-format IGES file by section (IGES 5.3 §2.1): the
+/// global section's text (columns 1–72 joined), the directory and parameter
+/// records; start and terminate records are skipped.
+struct Sections<'a> {
+    global: Vec<u8>,
+    directory: Vec<Record<'a>>,
+    parameters: Vec<Record<'a>>,
+}
+
+/// Splits the file into its sections by the letter in column 73.
+fn sections(bytes: &[u8]) -> Result<Sections<'_>, IgesError> {
+    let mut out = Sections {
+        global: Vec::new(),
+        directory: Vec::new(),
+        parameters: Vec::new(),
+    };
     for (n, raw) in bytes.split(|&c| c == b'\n').enumerate() {
         let line = n + 1;
         let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
@@ -590,9 +605,9 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
         let rec = Record { line, bytes: raw };
         match raw[72] {
             b'S' | b'T' => {}
-            b'G' => global.extend_from_slice(&raw[..72]),
-            b'D' => dir_recs.push(rec),
-            b'P' => params.push(rec),
+            b'G' => out.global.extend_from_slice(&raw[..72]),
+            b'D' => out.directory.push(rec),
+            b'P' => out.parameters.push(rec),
             b'C' => {
                 return Err(IgesError::Format {
                     line,
@@ -610,23 +625,19 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
             }
         }
     }
-    let (pd, rd) =
-        global_delimiters(&global).map_err(|message| IgesError::Format { line: 1, message })?;
-    let units =
-        tokenize(&global, pd, rd)
-            .ok()
-            .and_then(|(t, _)| match t.get(14).map(|t| &t.param) {
-                Some(Param::Hollerith(h)) => Some(String::from_utf8_lossy(h).into_owned()),
-                _ => None,
-            });
-    if dir_recs.len() % 2 != 0 {
+    Ok(out)
+}
+
+/// The directory entries, two D records each (IGES 5.3 §2.2.4.4).
+fn directory(records: &[Record<'_>]) -> Result<Vec<DirEntry>, IgesError> {
+    if records.len() % 2 != 0 {
         return Err(IgesError::Format {
-            line: dir_recs.last().map_or(0, |r| r.line),
+            line: records.last().map_or(0, |r| r.line),
             message: "the directory section has an odd number of records".into(),
         });
     }
-    let mut dir = Vec::with_capacity(dir_recs.len() / 2);
-    for pair in dir_recs.chunks(2) {
+    let mut dir = Vec::with_capacity(records.len() / 2);
+    for pair in records.chunks(2) {
         let (a, b) = (&pair[0], &pair[1]);
         dir.push(DirEntry {
             entity_type: d_field(a, 1)?,
@@ -637,28 +648,28 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
             line: a.line,
         });
     }
+    Ok(dir)
+}
+
+fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
+    let sections = sections(bytes)?;
+    let global = &sections.global;
+    let (pd, rd) =
+        global_delimiters(global).map_err(|message| IgesError::Format { line: 1, message })?;
+    let units =
+        tokenize(global, pd, rd)
+            .ok()
+            .and_then(|(t, _)| match t.get(14).map(|t| &t.param) {
+                Some(Param::Hollerith(h)) => Some(String::from_utf8_lossy(h).into_owned()),
+                _ => None,
+            });
     let g = Iges {
-        dir,
-        params,
+        dir: directory(&sections.directory)?,
+        params: sections.parameters,
         pd,
         rd,
     };
-    // Surfaces referenced by trimmed (144) and bounded (143) surfaces.
-    let mut trimmed = vec![false; g.dir.len()];
-    for k in 0..g.dir.len() {
-        let slot = match g.dir[k].entity_type {
-            144 => 1,
-            143 => 2,
-            _ => continue,
-        };
-        let Ok(p) = g.parameters(k) else { continue };
-        if let Some(t) = text_of(&p, slot)
-            .and_then(parse_int)
-            .and_then(|de| g.entry(de))
-        {
-            trimmed[t] = true;
-        }
-    }
+    let trimmed = g.trimmed_bases();
     let mut out = IgesImport {
         units,
         ..IgesImport::default()
@@ -676,47 +687,7 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
             _ => {}
         }
     }
-    // Trimming loops of the 144s, by surface.
-    let mut loops_of: Vec<Option<(usize, Vec<TrimLoop>)>> = vec![None; g.dir.len()];
-    for k in 0..g.dir.len() {
-        if g.dir[k].entity_type != 144 {
-            continue;
-        }
-        let p = g.parameters(k)?;
-        let line = p.first().map_or(g.dir[k].line, |t| t.1);
-        let base = int(&g, k, &p, 1, line)?;
-        let Some(b) = g.entry(base) else {
-            return Err(g.entity_error(
-                k,
-                line,
-                format!("surface pointer {base} is not a directory entry"),
-            ));
-        };
-        let loops = match (&bsplines[b], &revolved[b]) {
-            (Some(s), _) => {
-                let s = &s.surface;
-                read_entity_144(&g, k, s, (s.domain_u(), s.domain_v()), &p, line)?
-            }
-            (_, Some(r)) => {
-                let domain = (r.surface.domain_u(), r.angles);
-                match read_entity_144(&g, k, &r.surface, domain, &p, line)? {
-                    Some(loops) => Some(
-                        loops
-                            .iter()
-                            .map(|l| r.map_loop(l))
-                            .collect::<Result<Vec<_>, String>>()
-                            .map_err(|m| g.entity_error(k, line, m))?,
-                    ),
-                    None => None,
-                }
-            }
-            _ => None,
-        };
-        match loops {
-            Some(loops) => loops_of[b] = Some((2 * k + 1, loops)),
-            None => out.skipped_trimmed += 1,
-        }
-    }
+    let mut loops_of = g.trimming_loops(&bsplines, &revolved, &mut out.skipped_trimmed)?;
     for (k, &is_trimmed) in trimmed.iter().enumerate() {
         let mut s = match (bsplines[k].take(), revolved[k].take()) {
             (Some(s), _) => s,
@@ -738,6 +709,85 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
     Ok(out)
 }
 
+/// The trimming loops of a base surface and the DE of their 144.
+type LoopsOf = Vec<Option<(usize, Vec<TrimLoop>)>>;
+
+impl Iges<'_> {
+    /// Which directory entries are the base surface of a trimmed (144) or
+    /// bounded (143) surface.
+    fn trimmed_bases(&self) -> Vec<bool> {
+        let mut trimmed = vec![false; self.dir.len()];
+        for k in 0..self.dir.len() {
+            let slot = match self.dir[k].entity_type {
+                144 => 1,
+                143 => 2,
+                _ => continue,
+            };
+            let Ok(p) = self.parameters(k) else { continue };
+            if let Some(t) = text_of(&p, slot)
+                .and_then(parse_int)
+                .and_then(|de| self.entry(de))
+            {
+                trimmed[t] = true;
+            }
+        }
+        trimmed
+    }
+
+    /// The trimming loops of every 144, by the directory entry of its base
+    /// surface (loops of a surface of revolution mapped into its NURBS
+    /// parameters); a 144 whose base surface was not read, or whose
+    /// boundaries give no curves, is counted in `skipped`.
+    fn trimming_loops(
+        &self,
+        bsplines: &[Option<IgesSurface>],
+        revolved: &[Option<Revolved>],
+        skipped: &mut usize,
+    ) -> Result<LoopsOf, IgesError> {
+        let mut loops_of: LoopsOf = vec![None; self.dir.len()];
+        for k in 0..self.dir.len() {
+            if self.dir[k].entity_type != 144 {
+                continue;
+            }
+            let p = self.parameters(k)?;
+            let line = p.first().map_or(self.dir[k].line, |t| t.1);
+            let base = param(self, k, &p, 1, line, &INT)?;
+            let Some(b) = self.entry(base) else {
+                return Err(self.entity_error(
+                    k,
+                    line,
+                    format!("surface pointer {base} is not a directory entry"),
+                ));
+            };
+            let loops = match (&bsplines[b], &revolved[b]) {
+                (Some(s), _) => {
+                    let s = &s.surface;
+                    read_entity_144(self, k, s, (s.domain_u(), s.domain_v()), &p, line)?
+                }
+                (_, Some(r)) => {
+                    let domain = (r.surface.domain_u(), r.angles);
+                    match read_entity_144(self, k, &r.surface, domain, &p, line)? {
+                        Some(loops) => Some(
+                            loops
+                                .iter()
+                                .map(|l| r.map_loop(l))
+                                .collect::<Result<Vec<_>, String>>()
+                                .map_err(|m| self.entity_error(k, line, m))?,
+                        ),
+                        None => None,
+                    }
+                }
+                _ => None,
+            };
+            match loops {
+                Some(loops) => loops_of[b] = Some((2 * k + 1, loops)),
+                None => *skipped += 1,
+            }
+        }
+        Ok(loops_of)
+    }
+}
+
 /// Entity 144, trimmed parametric surface (IGES 5.3 §4.34): `PTS N1 N2 PTO
 /// PTI1..PTIN2`. `N1 = 0` means the outer boundary is the boundary of the
 /// surface's domain. Each boundary is an entity 142 read by
@@ -754,8 +804,8 @@ fn read_entity_144(
     p: &[(Param, usize)],
     line: usize,
 ) -> Result<Option<Vec<TrimLoop>>, IgesError> {
-    let n1 = int(g, k, p, 2, line)?;
-    let n2 = int(g, k, p, 3, line)?;
+    let n1 = param(g, k, p, 2, line, &INT)?;
+    let n2 = param(g, k, p, 3, line, &INT)?;
     let holes = usize::try_from(n2)
         .ok()
         .filter(|&n| n < p.len())
@@ -768,13 +818,14 @@ fn read_entity_144(
                 .map_err(|m| g.entity_error(k, line, m))?,
         );
     } else {
-        let Some(outer) = g.boundary_loop(k, int(g, k, p, 4, line)?, line, surface)? else {
+        let Some(outer) = g.boundary_loop(k, param(g, k, p, 4, line, &INT)?, line, surface)? else {
             return Ok(None);
         };
         loops.push(outer);
     }
     for h in 0..holes {
-        let Some(hole) = g.boundary_loop(k, int(g, k, p, 5 + h, line)?, line, surface)? else {
+        let Some(hole) = g.boundary_loop(k, param(g, k, p, 5 + h, line, &INT)?, line, surface)?
+        else {
             return Ok(None);
         };
         loops.push(hole);
@@ -833,9 +884,9 @@ impl Iges<'_> {
         }
         let p = self.parameters(k)?;
         let l142 = p.first().map_or(self.dir[k].line, |t| t.1);
-        let bptr = int(self, k, &p, 3, l142)?;
+        let bptr = param(self, k, &p, 3, l142, &INT)?;
         if bptr == 0 {
-            let cptr = int(self, k, &p, 4, l142)?;
+            let cptr = param(self, k, &p, 4, l142, &INT)?;
             if cptr == 0 {
                 return Ok(None);
             }
@@ -878,13 +929,13 @@ impl Iges<'_> {
         let start = out.len();
         match e.entity_type {
             102 => {
-                let n = int(self, k, &p, 1, line)?;
+                let n = param(self, k, &p, 1, line, &INT)?;
                 let n = usize::try_from(n)
                     .ok()
                     .filter(|&n| n < p.len())
                     .ok_or_else(|| self.entity_error(k, line, format!("{n} member curves")))?;
                 for m in 0..n {
-                    let de = int(self, k, &p, 2 + m, line)?;
+                    let de = param(self, k, &p, 2 + m, line, &INT)?;
                     let c = self.entry(de).ok_or_else(|| {
                         self.entity_error(k, line, format!("member {de} is not a directory entry"))
                     })?;
@@ -894,7 +945,7 @@ impl Iges<'_> {
             110 => {
                 let mut r = [0.0; 6];
                 for (n, v) in r.iter_mut().enumerate() {
-                    *v = real(self, k, &p, n + 1, line)?;
+                    *v = param(self, k, &p, n + 1, line, &REAL)?;
                 }
                 out.push(Piece {
                     degree: 1,
@@ -906,7 +957,7 @@ impl Iges<'_> {
             100 => {
                 let mut r = [0.0; 7];
                 for (n, v) in r.iter_mut().enumerate() {
-                    *v = real(self, k, &p, n + 1, line)?;
+                    *v = param(self, k, &p, n + 1, line, &REAL)?;
                 }
                 let (z, c) = (r[0], [r[1], r[2]]);
                 let a0 = (r[4] - c[1]).atan2(r[3] - c[0]);
@@ -958,8 +1009,8 @@ impl Iges<'_> {
         p: &[(Param, usize)],
         line: usize,
     ) -> Result<Piece, IgesError> {
-        let kk = int(self, k, p, 1, line)?;
-        let m = int(self, k, p, 2, line)?;
+        let kk = param(self, k, p, 1, line, &INT)?;
+        let m = param(self, k, p, 2, line, &INT)?;
         let (Ok(kk), Ok(m)) = (usize::try_from(kk), usize::try_from(m)) else {
             return Err(self.entity_error(k, line, format!("K = {kk}, M = {m}")));
         };
@@ -976,10 +1027,10 @@ impl Iges<'_> {
                 format!("{} parameters, but K={kk}, M={m} need {needed}", p.len()),
             ));
         }
-        let polynomial = int(self, k, p, 5, line)? == 1;
+        let polynomial = param(self, k, p, 5, line, &INT)? == 1;
         let reals = |from: usize, n: usize| -> Result<Vec<f64>, IgesError> {
             (from..from + n)
-                .map(|i| real(self, k, p, i, line))
+                .map(|i| param(self, k, p, i, line, &REAL))
                 .collect()
         };
         let knots = reals(7, nk)?;
@@ -1132,13 +1183,16 @@ impl Iges<'_> {
         let p = self.parameters(k)?;
         let line = p.first().map_or(e.line, |t| t.1);
         let pointer = |n: usize| -> Result<usize, IgesError> {
-            let de = int(self, k, &p, n, line)?;
+            let de = param(self, k, &p, n, line, &INT)?;
             self.entry(de).ok_or_else(|| {
                 self.entity_error(k, line, format!("pointer {de} is not a directory entry"))
             })
         };
         let (axis_k, gen_k) = (pointer(1)?, pointer(2)?);
-        let (sa, ta) = (real(self, k, &p, 3, line)?, real(self, k, &p, 4, line)?);
+        let (sa, ta) = (
+            param(self, k, &p, 3, line, &REAL)?,
+            param(self, k, &p, 4, line, &REAL)?,
+        );
         if !(sa.is_finite() && ta.is_finite() && ta > sa) {
             return Err(self.entity_error(
                 k,
@@ -1266,7 +1320,7 @@ fn read_entity_128(g: &Iges<'_>, k: usize, trimmed: bool) -> Result<IgesSurface,
     let p = g.parameters(k)?;
     let line = p.first().map_or(e.line, |t| t.1);
     let nonneg = |n: usize| -> Result<usize, IgesError> {
-        let v = int(g, k, &p, n, line)?;
+        let v = param(g, k, &p, n, line, &INT)?;
         usize::try_from(v).map_err(|_| {
             g.entity_error(
                 k,
@@ -1278,7 +1332,7 @@ fn read_entity_128(g: &Iges<'_>, k: usize, trimmed: bool) -> Result<IgesSurface,
     let (k1, k2, m1, m2) = (nonneg(1)?, nonneg(2)?, nonneg(3)?, nonneg(4)?);
     let mut prop = [0i64; 5];
     for (n, v) in prop.iter_mut().enumerate() {
-        *v = int(g, k, &p, 5 + n, line)?;
+        *v = param(g, k, &p, 5 + n, line, &INT)?;
     }
     let (count_u, count_v) = (k1 + 1, k2 + 1);
     let (nk_u, nk_v) = (count_u + m1 + 1, count_v + m2 + 1);
@@ -1299,7 +1353,9 @@ fn read_entity_128(g: &Iges<'_>, k: usize, trimmed: bool) -> Result<IgesSurface,
         ));
     }
     let reals = |from: usize, n: usize| -> Result<Vec<f64>, IgesError> {
-        (from..from + n).map(|i| real(g, k, &p, i, line)).collect()
+        (from..from + n)
+            .map(|i| param(g, k, &p, i, line, &REAL))
+            .collect()
     };
     let mut at = 10;
     let knots_u = reals(at, nk_u)?;

@@ -50,7 +50,13 @@ fn continuity_classifies_constructed_seams() {
     let s = only(&r);
     assert_eq!(s.class, SeamClass::G2, "{s:?}");
     assert_eq!(s.surfaces, [0, 1]);
-    assert_eq!(s.sides, [PatchSide::UMax, PatchSide::UMin]);
+    assert_eq!(
+        s.sides,
+        [
+            Boundary::Side(PatchSide::UMax),
+            Boundary::Side(PatchSide::UMin)
+        ]
+    );
     assert!(
         s.g0_max < 1e-12 && s.g1_max_deg < 1e-6 && s.g2_max_relative < 1e-6,
         "{s:?}"
@@ -173,7 +179,13 @@ fn continuity_finds_the_seam_of_a_closed_patch() {
     let r = continuity(&[bezier(p)], &ContinuityOptions::default()).unwrap();
     let s = only(&r);
     assert_eq!(s.surfaces, [0, 0]);
-    assert_eq!(s.sides, [PatchSide::UMin, PatchSide::UMax]);
+    assert_eq!(
+        s.sides,
+        [
+            Boundary::Side(PatchSide::UMin),
+            Boundary::Side(PatchSide::UMax)
+        ]
+    );
     assert_eq!(s.class, SeamClass::G0);
 }
 

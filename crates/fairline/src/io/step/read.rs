@@ -6,19 +6,37 @@
 //! - `B_SPLINE_SURFACE_WITH_KNOTS` (rational: the complex instance with
 //!   `RATIONAL_B_SPLINE_SURFACE`) is taken as it is. Its bounds become
 //!   trimming loops from the edges' `PCURVE`s on this surface when present
-//!   (B-spline or line p-curves; exact when an edge covers its whole
-//!   p-curve), otherwise from the edge curves sampled and projected onto the
-//!   surface by Newton point inversion (Piegl & Tiller §6.1).
+//!   (a `DEFINITIONAL_REPRESENTATION` of a `LINE`, `CIRCLE`, `ELLIPSE` or
+//!   B-spline curve in (u, v): lines and conic arcs exactly, B-spline
+//!   p-curves exactly when an edge covers the whole p-curve, else sampled
+//!   between the vertices), otherwise from the edge curves sampled and
+//!   projected onto the surface by Newton point inversion (Piegl & Tiller
+//!   §6.1).
 //! - `PLANE`, `CYLINDRICAL_SURFACE`, `CONICAL_SURFACE`, `SPHERICAL_SURFACE`,
 //!   `TOROIDAL_SURFACE`, `SURFACE_OF_REVOLUTION` and
 //!   `SURFACE_OF_LINEAR_EXTRUSION` are converted exactly to NURBS over the
 //!   part of the surface the face's edges span (rational quadratic arcs of
-//!   at most 90°, see [`super::nurbs`]). Their bounds are mapped into the
-//!   NURBS parameters in closed form (angles through [`ArcMap::param`]),
+//!   at most 90°, see [`super::nurbs`] and [`analytic`]). Their bounds are
+//!   mapped into the NURBS parameters through the surface's natural
+//!   coordinates (ISO 10303-42's (u, v): angles through [`ArcMap::param`]),
 //!   exactly as rational curves on planes and as dense polylines otherwise
 //!   (edges along parameter lines are straight in parameter space, so
-//!   exact too). The NURBS parameterisation differs from STEP's
-//!   (angle-based), so p-curves on analytic surfaces are not used.
+//!   exact too). The exact 3-D edges are used; p-curves on analytic
+//!   surfaces say nothing more. Faces bounded without a seam edge — a
+//!   cylinder between two full circles, a sphere cap or a cone bounded by
+//!   one circle — are closed along a cut (and through the pole or apex on
+//!   the face's side), and a sphere or torus face without loops is the
+//!   whole surface.
+//!
+//! Orientation (ISO 10303-42 face, face_bound, oriented_edge): an
+//! `ORIENTED_EDGE` with orientation `.F.` runs its `EDGE_CURVE` backwards,
+//! an `EDGE_CURVE` with `same_sense .F.` runs against its curve, a
+//! `FACE_BOUND` with orientation `.F.` reverses its loop; the face lies on
+//! the side `n × t` of each loop (`t` its direction, `n` the face normal:
+//! the surface normal, reversed when the face's `same_sense` is `.F.`).
+//! Where the side matters — a face bounded by one loop winding around a
+//! sphere or cone — it decides which part is the face; elsewhere loops are
+//! taken by their winding numbers, whatever their orientation.
 //!
 //! Bounded B-spline surfaces that belong to no face (items of a
 //! representation or a geometric set) are read untrimmed. Edge curves may
@@ -61,6 +79,8 @@ pub struct StepImport {
     /// The length unit of the file (first `LENGTH_UNIT`), if it names one.
     pub unit: Option<LengthUnit>,
 }
+
+mod analytic;
 
 type R<T> = Result<T, StepError>;
 
@@ -113,6 +133,50 @@ impl Curve {
             }
         }
     }
+}
+
+impl Curve {
+    /// The arc of a conic over the parameters `[t0, t1]` (either way
+    /// round) as an exact rational NURBS in that direction (Piegl & Tiller
+    /// A7.1); `None` for other curves.
+    fn conic_arc(&self, [t0, t1]: [f64; 2]) -> Option<Nurbs3> {
+        let Curve::Conic { c, x, y, rx, ry } = self else {
+            return None;
+        };
+        let map = ArcMap::new(t0.min(t1), t0.max(t1), 1.0);
+        let a = ellipse_arc(*c, *x, *y, *rx, *ry, &map);
+        Some(if t1 < t0 { a.reversed() } else { a })
+    }
+}
+
+/// The traversal parameters of an edge on a conic from the parameters
+/// `t0`, `t1` of its start and end (each in one turn): a whole turn from
+/// `t0` for a closed edge, else `t1` moved by whole turns so that the arc
+/// runs forward (the conic's direction) or backward from `t0`.
+fn conic_range(t0: f64, t1: f64, closed: bool, forward: bool) -> [f64; 2] {
+    let mut t1 = t1;
+    if closed {
+        t1 = if forward { t0 + TAU } else { t0 - TAU };
+    } else if forward {
+        while t1 <= t0 {
+            t1 += TAU;
+        }
+    } else {
+        while t1 >= t0 {
+            t1 -= TAU;
+        }
+    }
+    [t0, t1]
+}
+
+/// A 2-D NURBS (`z` ignored) as a trim curve in the (u, v) plane.
+fn trim_curve_of(n: Nurbs3) -> Result<TrimCurve, String> {
+    TrimCurve::new(
+        n.degree,
+        n.knots,
+        n.points.iter().map(|p| [p.x, p.y]).collect(),
+        n.weights,
+    )
 }
 
 /// The `t ∈ [a, b]` minimising `f`: the best of `samples + 1` equally spaced
@@ -511,22 +575,12 @@ impl<'a> Reader<'a> {
     fn edge_range(&self, e: &EdgeUse) -> [f64; 2] {
         match &e.curve {
             Curve::Line { .. } => [e.curve.param_of(e.start), e.curve.param_of(e.end)],
-            Curve::Conic { .. } => {
-                let t0 = e.curve.param_of(e.start);
-                let mut t1 = e.curve.param_of(e.end);
-                if e.closed {
-                    t1 = if e.forward { t0 + TAU } else { t0 - TAU };
-                } else if e.forward {
-                    while t1 <= t0 {
-                        t1 += TAU;
-                    }
-                } else {
-                    while t1 >= t0 {
-                        t1 -= TAU;
-                    }
-                }
-                [t0, t1]
-            }
+            Curve::Conic { .. } => conic_range(
+                e.curve.param_of(e.start),
+                e.curve.param_of(e.end),
+                e.closed,
+                e.forward,
+            ),
             Curve::Spline(n) => {
                 let [a, b] = n.domain();
                 if e.closed {
@@ -549,11 +603,7 @@ impl<'a> Reader<'a> {
                 0.0,
                 1.0,
             )),
-            Curve::Conic { c, x, y, rx, ry } => {
-                let map = ArcMap::new(t0.min(t1), t0.max(t1), 1.0);
-                let a = ellipse_arc(*c, *x, *y, *rx, *ry, &map);
-                Some(if t1 < t0 { a.reversed() } else { a })
-            }
+            Curve::Conic { .. } => e.curve.conic_arc([t0, t1]),
             Curve::Spline(n) => {
                 let [a, b] = n.domain();
                 let tol = 1e-9 * (b - a);
@@ -735,18 +785,6 @@ fn unit_name(i: &Instance) -> String {
     }
 }
 
-/// What an analytic surface is, in its placement frame `(o, x, y, z)`.
-#[derive(Clone, Debug)]
-enum Analytic {
-    Plane,
-    Cylinder { r: f64 },
-    Cone { r: f64, tan: f64 },
-    Sphere { r: f64 },
-    Torus { big: f64, small: f64 },
-    Revolution { profile: Nurbs3 },
-    Extrusion { profile: Nurbs3, d: Vec3 },
-}
-
 impl<'a> Reader<'a> {
     fn face(&self, f: &'a Instance) -> R<StepSurface> {
         let p = self.params(f, &["ADVANCED_FACE", "FACE_SURFACE"])?;
@@ -769,7 +807,7 @@ impl<'a> Reader<'a> {
                 .collect::<R<Vec<_>>>()?;
             self.attach(f, s, trims, loops.first().is_some_and(|l| l.0))?
         } else {
-            self.analytic_face(f, si, &loops)?
+            self.analytic_face(f, si, &loops, same_sense)?
         };
         Ok(StepSurface {
             surface,
@@ -894,14 +932,17 @@ impl<'a> Reader<'a> {
                     None
                 };
                 if let Some(w) = whole {
-                    let c = TrimCurve::new(
-                        w.degree,
-                        w.knots,
-                        w.points.iter().map(|p| [p.x, p.y]).collect(),
-                        w.weights,
-                    )
-                    .map_err(|m| self.err(c2, m))?;
-                    return Ok(Some(c));
+                    return Ok(Some(trim_curve_of(w).map_err(|m| self.err(c2, m))?));
+                }
+            }
+            if let Curve::Conic { .. } = &curve {
+                // An exact rational arc between the vertices' parameters,
+                // run the edge's way (the p-curve has the edge curve's
+                // sense, ISO 10303-42 surface_curve).
+                let param = |q: Vec3| nearest_param(0.0, TAU, 400, |t| on_surface(t).distance(q));
+                let range = conic_range(param(e.start), param(e.end), e.closed, e.forward);
+                if let Some(a) = curve.conic_arc(range) {
+                    return Ok(Some(trim_curve_of(a).map_err(|m| self.err(c2, m))?));
                 }
             }
             let [t0, t1] = if e.closed {
@@ -927,465 +968,6 @@ impl<'a> Reader<'a> {
             return Ok(Some(polyline(&pts).map_err(|m| self.err(c2, m))?));
         }
         Ok(None)
-    }
-
-    fn analytic(&self, si: &'a Instance) -> R<((Vec3, Vec3, Vec3, Vec3), Analytic)> {
-        let t = si.type_name();
-        let p = self.params(
-            si,
-            &[
-                "PLANE",
-                "CYLINDRICAL_SURFACE",
-                "CONICAL_SURFACE",
-                "SPHERICAL_SURFACE",
-                "TOROIDAL_SURFACE",
-                "SURFACE_OF_REVOLUTION",
-                "SURFACE_OF_LINEAR_EXTRUSION",
-            ],
-        )
-        .map_err(|_| {
-            self.err(
-                si,
-                format!("surface type {t} is not supported (B_SPLINE_SURFACE_WITH_KNOTS, PLANE, CYLINDRICAL_SURFACE, CONICAL_SURFACE, SPHERICAL_SURFACE, TOROIDAL_SURFACE, SURFACE_OF_REVOLUTION, SURFACE_OF_LINEAR_EXTRUSION are)"),
-            )
-        })?;
-        let positive = |x: f64, what: &str| -> R<f64> {
-            if x > 0.0 && x.is_finite() {
-                Ok(x)
-            } else {
-                Err(self.err(si, format!("the {what} {x} is not positive")))
-            }
-        };
-        match t {
-            "SURFACE_OF_REVOLUTION" => {
-                let ci = self.refer(si, p, 1)?;
-                let curve = self.curve(ci)?;
-                let ax = self.refer(si, p, 2)?;
-                let axp = self.params(ax, &["AXIS1_PLACEMENT"])?;
-                let o = self.point(self.refer(ax, axp, 1)?)?;
-                let z = match axp.get(2) {
-                    Some(Value::Ref(_)) => self.direction(self.refer(ax, axp, 2)?)?,
-                    _ => Vec3::Z,
-                };
-                let profile = self.whole_nurbs(ci, &curve)?;
-                // The reference direction: where the profile lies.
-                let rho = profile
-                    .points
-                    .iter()
-                    .map(|q| (*q - o) - (*q - o).dot(z) * z)
-                    .find(|r| r.length() > 1e-9 * (1.0 + (*r).length()))
-                    .ok_or_else(|| self.err(si, "the profile lies on the axis".into()))?
-                    .normalize();
-                Ok(((o, rho, z.cross(rho), z), Analytic::Revolution { profile }))
-            }
-            "SURFACE_OF_LINEAR_EXTRUSION" => {
-                let ci = self.refer(si, p, 1)?;
-                let curve = self.curve(ci)?;
-                let v = self.refer(si, p, 2)?;
-                let vp = self.params(v, &["VECTOR"])?;
-                let d = self.direction(self.refer(v, vp, 1)?)?;
-                let profile = self.whole_nurbs(ci, &curve)?;
-                Ok((
-                    (Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z),
-                    Analytic::Extrusion { profile, d },
-                ))
-            }
-            _ => {
-                let frame = self.placement(self.refer(si, p, 1)?)?;
-                let kind = match t {
-                    "PLANE" => Analytic::Plane,
-                    "CYLINDRICAL_SURFACE" => Analytic::Cylinder {
-                        r: positive(self.num(si, p, 2)?, "radius")?,
-                    },
-                    "CONICAL_SURFACE" => {
-                        let a = self.num(si, p, 3)? * self.angle;
-                        if a.abs() >= 0.5 * PI - 1e-9 {
-                            return Err(self.err(si, format!("semi-angle {a} rad")));
-                        }
-                        Analytic::Cone {
-                            r: self.num(si, p, 2)?,
-                            tan: a.tan(),
-                        }
-                    }
-                    "SPHERICAL_SURFACE" => Analytic::Sphere {
-                        r: positive(self.num(si, p, 2)?, "radius")?,
-                    },
-                    _ => Analytic::Torus {
-                        big: positive(self.num(si, p, 2)?, "major radius")?,
-                        small: positive(self.num(si, p, 3)?, "minor radius")?,
-                    },
-                };
-                Ok((frame, kind))
-            }
-        }
-    }
-
-    /// A swept surface's whole basis curve as NURBS.
-    fn whole_nurbs(&self, ci: &Instance, c: &Curve) -> R<Nurbs3> {
-        match c {
-            Curve::Spline(n) => Ok(n.clone()),
-            Curve::Conic { c, x, y, rx, ry } => Ok(ellipse_arc(
-                *c,
-                *x,
-                *y,
-                *rx,
-                *ry,
-                &ArcMap::new(0.0, TAU, 1.0),
-            )),
-            Curve::Line { .. } => Err(self.err(
-                ci,
-                "an unbounded LINE cannot be swept into a bounded surface".into(),
-            )),
-        }
-    }
-
-    /// An analytic face: natural coordinates of the bounds, the NURBS over
-    /// their extent, and the bounds mapped into its parameters.
-    fn analytic_face(
-        &self,
-        f: &Instance,
-        si: &'a Instance,
-        loops: &[(bool, Vec<EdgeUse>)],
-    ) -> R<BSplineSurface> {
-        let ((o, x, y, z), kind) = self.analytic(si)?;
-        if loops.is_empty() {
-            return Err(self.err(
-                f,
-                "a face on an unbounded surface needs at least one edge loop".into(),
-            ));
-        }
-        if let Analytic::Plane = kind {
-            return self.plane_face(f, (o, x, y, z), loops);
-        }
-        // Natural coordinates (a, b): a is the angle about the axis (or the
-        // profile parameter of an extrusion), b the second coordinate.
-        // Periods of the coordinates: angles wrap by 2π, the parameter of a
-        // closed swept profile by its domain length.
-        let closed_period = |n: &Nurbs3| {
-            let [t0, t1] = n.domain();
-            (n.points.first() == n.points.last()).then_some(t1 - t0)
-        };
-        let (period_a, period_b) = match &kind {
-            Analytic::Torus { .. } => (Some(TAU), Some(TAU)),
-            Analytic::Revolution { profile } => (Some(TAU), closed_period(profile)),
-            Analytic::Extrusion { profile, .. } => (closed_period(profile), None),
-            _ => (Some(TAU), None),
-        };
-        let wrap = |x: f64, near: f64, period: Option<f64>| match period {
-            Some(p) if p > 0.0 => x + p * ((near - x) / p).round(),
-            _ => x,
-        };
-        let winds =
-            |x: f64, y: f64, period: Option<f64>| period.is_some_and(|p| (x - y).abs() > 0.5 * p);
-        let natural = |q: Vec3| -> (f64, f64, bool) {
-            let d = q - o;
-            let (lx, ly, h) = (d.dot(x), d.dot(y), d.dot(z));
-            let rho = lx.hypot(ly);
-            let on_axis = rho <= 1e-12 * (1.0 + d.length());
-            let a = ly.atan2(lx);
-            match &kind {
-                Analytic::Cylinder { .. } | Analytic::Cone { .. } => (a, h, on_axis),
-                Analytic::Sphere { .. } => (a, h.atan2(rho), on_axis),
-                Analytic::Torus { big, .. } => (a, h.atan2(rho - big), on_axis),
-                Analytic::Revolution { profile, .. } => {
-                    let [t0, t1] = profile.domain();
-                    let t = nearest_param(t0, t1, (16 * profile.points.len()).min(2000), |t| {
-                        let p = profile.eval(t) - o;
-                        let ph = p.dot(z);
-                        let pr = (p - ph * z).length();
-                        (pr - rho).hypot(ph - h)
-                    });
-                    (a, t, on_axis)
-                }
-                Analytic::Extrusion { profile, d: dir } => {
-                    let [t0, t1] = profile.domain();
-                    let perp = |v: Vec3| v - v.dot(*dir) * *dir;
-                    let t = nearest_param(t0, t1, (16 * profile.points.len()).min(2000), |t| {
-                        perp(q - profile.eval(t)).length()
-                    });
-                    (t, (q - profile.eval(t)).dot(*dir), false)
-                }
-                Analytic::Plane => (lx, ly, false),
-            }
-        };
-        let mut nat: Vec<Vec<(f64, f64)>> = Vec::with_capacity(loops.len());
-        for (_, edges) in loops {
-            let mut pts: Vec<(f64, f64, bool)> = Vec::new();
-            for e in edges {
-                let mut ep: Vec<(f64, f64, bool)> =
-                    self.edge_points(e).into_iter().map(natural).collect();
-                if !pts.is_empty() {
-                    ep.remove(0);
-                }
-                pts.extend(ep);
-            }
-            // Points on the axis take the angle of a neighbour.
-            if let Some(k) = pts.iter().position(|p| !p.2) {
-                let n = pts.len();
-                for s in 1..n {
-                    let (prev, cur) = ((k + s - 1) % n, (k + s) % n);
-                    if pts[cur].2 {
-                        pts[cur].0 = pts[prev].0;
-                    }
-                }
-            }
-            // Unwrap angles along the loop.
-            let mut out: Vec<(f64, f64)> = Vec::with_capacity(pts.len());
-            for (a, b, _) in pts {
-                let (mut a, mut b) = (a, b);
-                if let Some(&(pa, pb)) = out.last() {
-                    a = wrap(a, pa, period_a);
-                    b = wrap(b, pb, period_b);
-                }
-                out.push((a, b));
-            }
-            if let (Some(f0), Some(l0)) = (out.first(), out.last())
-                && (winds(f0.0, l0.0, period_a) || winds(f0.1, l0.1, period_b))
-            {
-                return Err(self.err(
-                    f,
-                    "a bound winds around the surface's axis (a periodic face bounded without a seam edge is not supported)".into(),
-                ));
-            }
-            nat.push(out);
-        }
-        // Holes shifted by whole turns next to the outer loop.
-        let mean = |l: &[(f64, f64)]| {
-            let n = l.len().max(1) as f64;
-            (
-                l.iter().map(|p| p.0).sum::<f64>() / n,
-                l.iter().map(|p| p.1).sum::<f64>() / n,
-            )
-        };
-        let (ma, mb) = mean(&nat[0]);
-        for l in nat.iter_mut().skip(1) {
-            let (la, lb) = mean(l);
-            let (sa, sb) = (wrap(la, ma, period_a) - la, wrap(lb, mb, period_b) - lb);
-            for p in l.iter_mut() {
-                p.0 += sa;
-                p.1 += sb;
-            }
-        }
-        let all = nat.iter().flatten();
-        let (mut a0, mut a1, mut b0, mut b1) = (
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-        );
-        for &(a, b) in all {
-            a0 = a0.min(a);
-            a1 = a1.max(a);
-            b0 = b0.min(b);
-            b1 = b1.max(b);
-        }
-        let too_wide = |lo: f64, hi: f64, period: Option<f64>| {
-            period.is_some_and(|p| hi - lo > p * (1.0 + 1e-9))
-        };
-        if a1 <= a0 || b1 <= b0 || too_wide(a0, a1, period_a) || too_wide(b0, b1, period_b) {
-            return Err(self.err(f, "the bounds enclose no area on the surface".into()));
-        }
-        let clip = |lo: f64, hi: f64, period: Option<f64>| period.map_or(hi, |p| hi.min(lo + p));
-        let (a1, b1) = (clip(a0, a1, period_a), clip(b0, b1, period_b));
-        // A swept profile's parameter must stay in its domain: shift whole
-        // periods into it, or refuse a face across the profile's seam.
-        let profile_coordinate = match &kind {
-            Analytic::Revolution { profile } => Some((1, profile.domain(), period_b)),
-            Analytic::Extrusion { profile, .. } => Some((0, profile.domain(), period_a)),
-            _ => None,
-        };
-        let (mut a0, mut a1, mut b0, mut b1) = (a0, a1, b0, b1);
-        if let Some((axis, [t0, t1], period)) = profile_coordinate {
-            let (lo, hi) = if axis == 0 { (a0, a1) } else { (b0, b1) };
-            let shift = match period {
-                Some(p) if p > 0.0 && lo < t0 - 1e-9 * p => p * ((t0 - lo) / p).ceil(),
-                Some(p) if p > 0.0 && lo >= t1 => -p * ((lo - t0) / p).floor(),
-                _ => 0.0,
-            };
-            let tol = 1e-9 * (t1 - t0);
-            if lo + shift < t0 - tol || hi + shift > t1 + tol {
-                return Err(self.err(f, "the face crosses the seam of its swept profile".into()));
-            }
-            for p in nat.iter_mut().flatten() {
-                if axis == 0 {
-                    p.0 += shift;
-                } else {
-                    p.1 += shift;
-                }
-            }
-            if axis == 0 {
-                (a0, a1) = (a0 + shift, a1 + shift);
-            } else {
-                (b0, b1) = (b0 + shift, b1 + shift);
-            }
-        }
-        // The NURBS (u along a, v along b) and the map of (a, b) to (u, v).
-        let (surface, to_uv): (BSplineSurface, ToUv) = match &kind {
-            Analytic::Cylinder { r } | Analytic::Cone { r, .. } => {
-                let tan = if let Analytic::Cone { tan, .. } = kind {
-                    tan
-                } else {
-                    0.0
-                };
-                let radius = |h: f64| r + h * tan;
-                let scale = radius(b0).abs().max(radius(b1).abs()).max(1e-300);
-                let map = ArcMap::new(a0, a1, scale);
-                let profile = Nurbs3::segment(
-                    o + radius(b0) * x + b0 * z,
-                    o + radius(b1) * x + b1 * z,
-                    b0,
-                    b1,
-                );
-                (
-                    self.revolved(f, o, z, &profile, &map)?,
-                    Box::new(move |a, b| [map.param(a), b]),
-                )
-            }
-            Analytic::Sphere { r } | Analytic::Torus { small: r, .. } => {
-                let big = if let Analytic::Torus { big, .. } = kind {
-                    big
-                } else {
-                    0.0
-                };
-                let amap = ArcMap::new(a0, a1, big + r);
-                let bmap = ArcMap::new(b0, b1, *r);
-                let profile = arc(o + big * x, x, z, *r, &bmap);
-                (
-                    self.revolved(f, o, z, &profile, &amap)?,
-                    Box::new(move |a, b| [amap.param(a), bmap.param(b)]),
-                )
-            }
-            Analytic::Revolution { profile, .. } => {
-                let scale = profile
-                    .points
-                    .iter()
-                    .map(|q| ((*q - o) - (*q - o).dot(z) * z).length())
-                    .fold(0.0, f64::max)
-                    .max(1e-300);
-                let map = ArcMap::new(a0, a1, scale);
-                (
-                    self.revolved(f, o, z, profile, &map)?,
-                    Box::new(move |a, b| [map.param(a), b]),
-                )
-            }
-            Analytic::Extrusion { profile, d, .. } => {
-                let n = profile.points.len();
-                let mut pts = Vec::with_capacity(2 * n);
-                let mut w = Vec::with_capacity(2 * n);
-                for (i, q) in profile.points.iter().enumerate() {
-                    let wi = profile.weights.as_ref().map_or(1.0, |ws| ws[i]);
-                    pts.push(*q + b0 * *d);
-                    pts.push(*q + b1 * *d);
-                    w.extend([wi, wi]);
-                }
-                let s = BSplineSurface::from_flat(
-                    profile.degree,
-                    1,
-                    profile.knots.clone(),
-                    vec![b0, b0, b1, b1],
-                    [n, 2],
-                    pts,
-                    profile.weights.is_some().then_some(w),
-                )
-                .map_err(|e| self.err(f, e.to_string()))?;
-                (s, Box::new(|a, b| [a, b]))
-            }
-            Analytic::Plane => unreachable!("planes are handled by plane_face"),
-        };
-        let trims = nat
-            .iter()
-            .map(|l| {
-                let pts: Vec<[f64; 2]> = l.iter().map(|&(a, b)| to_uv(a, b)).collect();
-                polyline(&pts).map(|c| TrimLoop { curves: vec![c] })
-            })
-            .collect::<Result<Vec<_>, String>>()
-            .map_err(|m| self.err(f, m))?;
-        self.attach(f, surface, trims, loops[0].0)
-    }
-
-    fn revolved(
-        &self,
-        f: &Instance,
-        o: Vec3,
-        z: Vec3,
-        profile: &Nurbs3,
-        map: &ArcMap,
-    ) -> R<BSplineSurface> {
-        let (ku, pts, w) = revolve(o, z, profile, map);
-        let nu = ku.len() - 3;
-        BSplineSurface::from_flat(
-            2,
-            profile.degree,
-            ku,
-            profile.knots.clone(),
-            [nu, profile.points.len()],
-            pts,
-            Some(w),
-        )
-        .map_err(|e| self.err(f, e.to_string()))
-    }
-
-    /// A planar face: a bilinear patch over the bounds' box in the plane's
-    /// frame, the bounds mapped exactly (affine map of their NURBS).
-    fn plane_face(
-        &self,
-        f: &Instance,
-        (o, x, y, _z): (Vec3, Vec3, Vec3, Vec3),
-        loops: &[(bool, Vec<EdgeUse>)],
-    ) -> R<BSplineSurface> {
-        let local = |q: Vec3| [(q - o).dot(x), (q - o).dot(y)];
-        let mut curves: Vec<Vec<TrimCurve>> = Vec::new();
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for (_, edges) in loops {
-            let mut l = Vec::new();
-            for e in edges {
-                let c = match self.edge_nurbs(e) {
-                    Some(n) => TrimCurve::new(
-                        n.degree,
-                        n.knots,
-                        n.points.iter().map(|q| local(*q)).collect(),
-                        n.weights,
-                    ),
-                    None => {
-                        let pts: Vec<[f64; 2]> =
-                            self.edge_points(e).into_iter().map(local).collect();
-                        polyline(&pts)
-                    }
-                }
-                .map_err(|m| self.err(&self.ex.instances[&e.edge], m))?;
-                for q in self.edge_points(e) {
-                    let [a, b] = local(q);
-                    lo = [lo[0].min(a), lo[1].min(b)];
-                    hi = [hi[0].max(a), hi[1].max(b)];
-                }
-                l.push(c);
-            }
-            curves.push(l);
-        }
-        if hi[0] <= lo[0] || hi[1] <= lo[1] {
-            return Err(self.err(f, "the bounds enclose no area".into()));
-        }
-        let corner = |a: f64, b: f64| o + a * x + b * y;
-        let s = BSplineSurface::from_flat(
-            1,
-            1,
-            vec![lo[0], lo[0], hi[0], hi[0]],
-            vec![lo[1], lo[1], hi[1], hi[1]],
-            [2, 2],
-            vec![
-                corner(lo[0], lo[1]),
-                corner(lo[0], hi[1]),
-                corner(hi[0], lo[1]),
-                corner(hi[0], hi[1]),
-            ],
-            None,
-        )
-        .map_err(|e| self.err(f, e.to_string()))?;
-        let trims = curves
-            .into_iter()
-            .map(|curves| TrimLoop { curves })
-            .collect();
-        self.attach(f, s, trims, loops[0].0)
     }
 }
 
