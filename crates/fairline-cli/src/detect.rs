@@ -241,4 +241,3 @@ fn write_picture(
         },
     )
 }
-

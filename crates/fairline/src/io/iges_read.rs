@@ -630,7 +630,7 @@ fn sections(bytes: &[u8]) -> Result<Sections<'_>, IgesError> {
 
 /// The directory entries, two D records each (IGES 5.3 §2.2.4.4).
 fn directory(records: &[Record<'_>]) -> Result<Vec<DirEntry>, IgesError> {
-    if records.len() % 2 != 0 {
+    if !records.len().is_multiple_of(2) {
         return Err(IgesError::Format {
             line: records.last().map_or(0, |r| r.line),
             message: "the directory section has an odd number of records".into(),
