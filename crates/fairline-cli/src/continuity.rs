@@ -8,7 +8,6 @@ use crate::surface_highlight::surface_picture;
 use anyhow::Result;
 use fairline::bspline::continuity::{ContinuityOptions, SeamClass, continuity};
 use fairline::render::{PolylineLayer, RenderOptions, linear_to_srgb8};
-use serde_json::json;
 use std::path::PathBuf;
 
 /// Finds the boundary curves shared by the patches of SURFACES
@@ -70,22 +69,16 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--report", args.report.as_deref())
         .check()?;
     let surfaces = crate::surface::load_surfaces(&args.surface_file)?;
-    let opts = ContinuityOptions {
-        tolerance: args.tolerance,
-        angle_tolerance_deg: args.angle_tolerance,
-        curvature_tolerance: args.curvature_tolerance,
-        match_distance: args.match_distance,
-        samples: args.samples,
-        ..Default::default()
-    };
+    let opts = ContinuityOptions::default()
+        .tolerance(args.tolerance)
+        .angle_tolerance_deg(args.angle_tolerance)
+        .curvature_tolerance(args.curvature_tolerance)
+        .match_distance(args.match_distance)
+        .samples(args.samples);
     let mut report = Report::new("continuity");
     let result = report
         .time(|| continuity(&surfaces, &opts))
         .map_err(|e| bad_input(format!("{}: {e}", args.surface_file.display())))?;
-    let mut counts = [0usize; 4];
-    for s in &result.seams {
-        counts[s.class as usize] += 1;
-    }
     let classes = [SeamClass::Gap, SeamClass::G0, SeamClass::G1, SeamClass::G2];
     let summary = format!(
         "{}: {} patches, {} shared edges: {}; tolerance {:.3e}, {}°, {} % curvature{}",
@@ -94,7 +87,7 @@ pub fn run(args: Args) -> Result<()> {
         result.seams.len(),
         classes
             .iter()
-            .map(|c| format!("{} {}", counts[*c as usize], c.name()))
+            .map(|c| format!("{} {}", result.classes.get(*c), c.name()))
             .collect::<Vec<_>>()
             .join(", "),
         result.tolerance,
@@ -130,38 +123,10 @@ pub fn run(args: Args) -> Result<()> {
             s.worst.z
         ));
     }
-    report.set(
-        "edges",
-        result
-            .seams
-            .iter()
-            .map(|s| {
-                json!({
-                    "surfaces": s.surfaces,
-                    "sides": s.sides,
-                    "range": s.range,
-                    "length": s.length,
-                    "g0_max": s.g0_max,
-                    "g1_max_deg": s.g1_max_deg,
-                    "g2_max": s.g2_max,
-                    "g2_max_relative": s.g2_max_relative,
-                    "class": s.class.name(),
-                    "worst": s.worst.to_array(),
-                    "degenerate_samples": s.degenerate_samples,
-                })
-            })
-            .collect::<Vec<_>>(),
-    );
-    report.set(
-        "classes",
-        json!({"gap": counts[0], "G0": counts[1], "G1": counts[2], "G2": counts[3]}),
-    );
+    report.set_fields(&result);
     report.set("surfaces", surfaces.len());
-    report.set("tolerance", result.tolerance);
     report.set("angle_tolerance_deg", args.angle_tolerance);
     report.set("curvature_tolerance", args.curvature_tolerance);
-    report.set("match_distance", result.match_distance);
-    report.set("degenerate_sides", result.degenerate_sides);
     if let Some(p) = &args.png {
         let lines: Vec<PolylineLayer> = result
             .seams
@@ -186,7 +151,7 @@ pub fn run(args: Args) -> Result<()> {
         for c in classes {
             let colour = linear_to_srgb8(class_colour(c));
             img.fill_rect(x0, y, 28, 8, colour);
-            let label = format!("{} ({})", c.name(), counts[c as usize]);
+            let label = format!("{} ({})", c.name(), result.classes.get(c));
             img.draw_text(x0 + 36, y - 4, &label, [20, 20, 20, 255], scale);
             y += 24;
         }

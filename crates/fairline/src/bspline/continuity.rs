@@ -27,8 +27,9 @@
 
 use crate::Vec3;
 use crate::bspline::{BSplineSurface, SurfaceDerivatives, TrimCurve};
+use crate::control::{Control, setters};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Serialize, Serializer};
 use thiserror::Error;
 
 /// A side of a patch's parameter rectangle.
@@ -171,7 +172,9 @@ impl SeamClass {
 
 /// Options of [`continuity`]. Lengths are in model units; `None` derives
 /// them from the diagonal D of the bounding box of all control points.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Build them with `ContinuityOptions::default()` and the setters.
+#[derive(Clone, Debug)]
+#[non_exhaustive]
 pub struct ContinuityOptions {
     /// Position tolerance for G0 (default 1e-4 D).
     pub tolerance: Option<f64>,
@@ -186,7 +189,20 @@ pub struct ContinuityOptions {
     pub match_samples: usize,
     /// Samples along each shared edge for the measures (64).
     pub samples: usize,
+    /// Progress (per phase: sampling the boundary pieces, pairing them,
+    /// measuring the shared edges) and cancellation.
+    pub control: Control,
 }
+
+setters!(ContinuityOptions {
+    tolerance: Option<f64>,
+    angle_tolerance_deg: f64,
+    curvature_tolerance: f64,
+    match_distance: Option<f64>,
+    match_samples: usize,
+    samples: usize,
+    control: Control,
+});
 
 impl Default for ContinuityOptions {
     fn default() -> Self {
@@ -197,6 +213,7 @@ impl Default for ContinuityOptions {
             match_distance: None,
             match_samples: 64,
             samples: 64,
+            control: Control::default(),
         }
     }
 }
@@ -207,13 +224,18 @@ pub enum ContinuityError {
     /// An option is out of range.
     #[error("invalid option: {0}")]
     Invalid(String),
+    /// Cancelled through [`ContinuityOptions::control`].
+    #[error(transparent)]
+    Cancelled(#[from] crate::Cancelled),
 }
 
 /// One shared edge between boundary piece `sides[0]` of surface
 /// `surfaces[0]` and `sides[1]` of surface `surfaces[1]` (the same surface
 /// for a closed patch), over the running-parameter range `range` of the
-/// first (a side's u or v, a trimming curve's own parameter).
-#[derive(Clone, Debug, PartialEq)]
+/// first (a side's u or v, a trimming curve's own parameter). It
+/// serialises to one entry of the `edges` of `fairline continuity
+/// --report` (DESIGN.md §5; without `samples` and `points`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Seam {
     /// The two surfaces (indices in the input).
     pub surfaces: [usize; 2],
@@ -234,20 +256,75 @@ pub struct Seam {
     /// The class.
     pub class: SeamClass,
     /// Where the measure that decides the class is largest.
+    #[serde(serialize_with = "serialize_point")]
     pub worst: Vec3,
     /// Samples measured.
+    #[serde(skip)]
     pub samples: usize,
     /// Samples where a normal is undefined (poles): G0 only.
     pub degenerate_samples: usize,
     /// Points of the edge on the first surface (for pictures).
+    #[serde(skip)]
     pub points: Vec<Vec3>,
 }
 
-/// What [`continuity`] found.
-#[derive(Clone, Debug, PartialEq)]
+/// A point as `[x, y, z]`.
+fn serialize_point<S: Serializer>(p: &Vec3, s: S) -> Result<S::Ok, S::Error> {
+    p.to_array().serialize(s)
+}
+
+/// Number of shared edges of each class.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct ClassCounts {
+    /// Edges with a gap above the position tolerance.
+    pub gap: usize,
+    /// Closed edges with a tangent-plane angle above the angle tolerance.
+    #[serde(rename = "G0")]
+    pub g0: usize,
+    /// Tangent-plane continuous edges whose curvature differs.
+    #[serde(rename = "G1")]
+    pub g1: usize,
+    /// Curvature-continuous edges.
+    #[serde(rename = "G2")]
+    pub g2: usize,
+}
+
+impl ClassCounts {
+    /// The counts of `seams`.
+    pub fn of(seams: &[Seam]) -> ClassCounts {
+        let mut c = ClassCounts::default();
+        for s in seams {
+            match s.class {
+                SeamClass::Gap => c.gap += 1,
+                SeamClass::G0 => c.g0 += 1,
+                SeamClass::G1 => c.g1 += 1,
+                SeamClass::G2 => c.g2 += 1,
+            }
+        }
+        c
+    }
+
+    /// The count of class `c`.
+    pub fn get(&self, c: SeamClass) -> usize {
+        match c {
+            SeamClass::Gap => self.gap,
+            SeamClass::G0 => self.g0,
+            SeamClass::G1 => self.g1,
+            SeamClass::G2 => self.g2,
+        }
+    }
+}
+
+/// What [`continuity`] found. It serialises to the keys of `fairline
+/// continuity --report`: `edges` (the seams), `classes`, `tolerance`,
+/// `match_distance`, `degenerate_sides` (DESIGN.md §5).
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ContinuityReport {
     /// The shared edges, ordered by (surfaces, sides, range).
+    #[serde(rename = "edges")]
     pub seams: Vec<Seam>,
+    /// Number of edges of each class.
+    pub classes: ClassCounts,
     /// Position tolerance used.
     pub tolerance: f64,
     /// Matching distance used.
@@ -546,6 +623,7 @@ pub fn continuity(
     if !(matching >= tol && matching.is_finite()) {
         return bad("match distance must be finite and at least the tolerance");
     }
+    opts.control.step("sampling boundaries", 0, 3)?;
     let sides: Vec<SideSamples> = surfaces
         .par_iter()
         .enumerate()
@@ -557,6 +635,7 @@ pub fn continuity(
         .collect();
     let (live, dead): (Vec<&SideSamples>, Vec<&SideSamples>) =
         sides.iter().partition(|s| s.length > matching);
+    opts.control.step("pairing boundaries", 1, 3)?;
     let pairs: Vec<(usize, usize)> = (0..live.len())
         .flat_map(|a| (a + 1..live.len()).map(move |b| (a, b)))
         .filter(|&(a, b)| {
@@ -579,6 +658,7 @@ pub fn continuity(
             overlap && same_ok
         })
         .collect();
+    opts.control.step("measuring shared edges", 2, 3)?;
     let mut seams: Vec<Seam> = pairs
         .par_iter()
         .flat_map_iter(|&(ia, ib)| {
@@ -590,7 +670,9 @@ pub fn continuity(
             .cmp(&(y.surfaces, y.sides))
             .then(x.range[0].total_cmp(&y.range[0]))
     });
+    opts.control.step("measuring shared edges", 3, 3)?;
     Ok(ContinuityReport {
+        classes: ClassCounts::of(&seams),
         seams,
         tolerance: tol,
         match_distance: matching,

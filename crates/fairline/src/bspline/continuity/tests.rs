@@ -101,7 +101,7 @@ fn continuity_classifies_constructed_seams() {
         flat(1.0, 0.0, 1.0).map(|r| r.map(|p| p + Vec3::new(0.0, 0.0, 3.0 * tol)));
     let o = ContinuityOptions {
         tolerance: Some(tol),
-        ..opts
+        ..opts.clone()
     };
     let s = continuity(&[a.clone(), bezier(b)], &o).unwrap();
     let s = only(&s);
@@ -235,4 +235,65 @@ fn split_u(p: [[Vec3; 4]; 4]) -> ([[Vec3; 4]; 4], [[Vec3; 4]; 4]) {
         }
     }
     (l, r)
+}
+
+/// The one shape (#17): progress per phase, cancellation at the next
+/// phase, the same result with a control that never stops, and the report
+/// serialises to the CLI's keys with the class counts of its seams.
+#[test]
+fn continuity_reports_progress_can_be_cancelled_and_serialises_the_cli_keys() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    let a = bezier(flat(0.0, 0.0, 1.0));
+    let b = bezier(flat(1.0, 0.0, 1.0));
+    let plain = continuity(&[a.clone(), b.clone()], &ContinuityOptions::default()).unwrap();
+    let steps = Arc::new(AtomicUsize::new(0));
+    let seen = Arc::clone(&steps);
+    let watched = continuity(
+        &[a.clone(), b.clone()],
+        &ContinuityOptions::default().control(Control::new().on_progress(move |_| {
+            seen.fetch_add(1, Ordering::Relaxed);
+        })),
+    )
+    .unwrap();
+    assert_eq!(watched, plain);
+    assert_eq!(steps.load(Ordering::Relaxed), 4, "3 phases + done");
+    let flag = Arc::new(AtomicBool::new(false));
+    let raise = Arc::clone(&flag);
+    let stopping = Control::new()
+        .cancel_flag(flag)
+        .on_progress(move |_| raise.store(true, Ordering::Relaxed));
+    assert!(matches!(
+        continuity(&[a, b], &ContinuityOptions::default().control(stopping)),
+        Err(ContinuityError::Cancelled(_))
+    ));
+    // one G2 seam between two halves of a plane
+    assert_eq!(
+        plain.classes,
+        ClassCounts {
+            g2: 1,
+            ..Default::default()
+        }
+    );
+    let json = serde_json::to_value(&plain).unwrap();
+    assert_eq!(json["classes"]["G2"], 1);
+    assert_eq!(json["classes"]["gap"], 0);
+    let edge = &json["edges"][0];
+    assert_eq!(edge["class"], "G2");
+    assert_eq!(edge["surfaces"], serde_json::json!([0, 1]));
+    assert_eq!(edge["worst"].as_array().map(Vec::len), Some(3));
+    for key in [
+        "sides",
+        "range",
+        "length",
+        "g0_max",
+        "g1_max_deg",
+        "g2_max",
+        "g2_max_relative",
+        "degenerate_samples",
+    ] {
+        assert!(edge.get(key).is_some(), "{key}");
+    }
+    assert!(edge.get("points").is_none());
+    assert!(json["tolerance"].as_f64().unwrap() > 0.0);
 }
