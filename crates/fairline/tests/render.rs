@@ -117,12 +117,7 @@ fn render_sample_pictures() {
         title: Some("sphere + torus: Gaussian curvature".into()),
         ..Default::default()
     };
-    let opts = RenderOptions {
-        width: 960,
-        height: 600,
-        view_dir: Vec3::new(0.2, 1.0, -0.6),
-        ..Default::default()
-    };
+    let opts = RenderOptions::with_size(960, 600).view_dir(Vec3::new(0.2, 1.0, -0.6));
     let curv = render(&scene, &opts).unwrap();
     curv.write_png(dir.join("sphere_torus_coolwarm.png"))
         .unwrap();
@@ -165,28 +160,22 @@ fn render_sample_pictures() {
         title: Some("panel with highlight-like lines".into()),
         ..Default::default()
     };
-    let opts = RenderOptions {
-        width: 960,
-        height: 640,
-        view_dir: Vec3::new(-0.4, 1.0, -0.7),
-        ..Default::default()
-    };
+    let opts = RenderOptions::with_size(960, 640).view_dir(Vec3::new(-0.4, 1.0, -0.7));
     let panel_img = render(&scene, &opts).unwrap();
     panel_img.write_png(dir.join("panel_lines.png")).unwrap();
     // Close-up of the same scene: line anti-aliasing, joins and depth test.
     let c0 = Vec3::new(0.0, 0.0, height(0.0, 0.0));
-    let close = RenderOptions {
-        width: 320,
-        height: 240,
-        camera: Some(Camera::framing(
+    let close = opts
+        .clone()
+        .width(320)
+        .height(240)
+        .camera(Some(Camera::framing(
             c0 - Vec3::splat(0.25),
             c0 + Vec3::splat(0.25),
             opts.view_dir,
             opts.up,
             4.0 / 3.0,
-        )),
-        ..opts.clone()
-    };
+        )));
     let closeup = render(&scene, &close).unwrap();
     closeup.write_png(dir.join("panel_closeup.png")).unwrap();
 
@@ -202,12 +191,7 @@ fn render_sample_pictures() {
         title: Some("wireframe, smooth shading".into()),
         ..Default::default()
     };
-    let opts = RenderOptions {
-        width: 800,
-        height: 600,
-        view_dir: Vec3::new(0.3, 1.0, -0.9),
-        ..Default::default()
-    };
+    let opts = RenderOptions::with_size(800, 600).view_dir(Vec3::new(0.3, 1.0, -0.9));
     let wire = render(&scene, &opts).unwrap();
     wire.write_png(dir.join("wireframe.png")).unwrap();
     let flat = Scene {
@@ -215,14 +199,7 @@ fn render_sample_pictures() {
         title: Some("flat, orthographic".into()),
         ..Default::default()
     };
-    let ortho = render(
-        &flat,
-        &RenderOptions {
-            orthographic: true,
-            ..opts.clone()
-        },
-    )
-    .unwrap();
+    let ortho = render(&flat, &opts.clone().orthographic(true)).unwrap();
 
     // 4. Side by side with labels.
     let both = side_by_side(
@@ -248,13 +225,9 @@ fn render_sample_pictures() {
     };
     let small = render(
         &scene,
-        &RenderOptions {
-            width: 400,
-            height: 300,
-            view_dir: Vec3::NEG_Z,
-            up: Vec3::Z,
-            ..Default::default()
-        },
+        &RenderOptions::with_size(400, 300)
+            .view_dir(Vec3::NEG_Z)
+            .up(Vec3::Z),
     )
     .unwrap();
     small.write_png(dir.join("small_top_view.png")).unwrap();

@@ -253,6 +253,7 @@ pub fn linear_lights(
 
 /// Options of [`surface_highlight_lines`].
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct SurfaceHighlightOptions {
     /// Grid points in u (≥ 2).
     pub grid_u: usize,
@@ -272,6 +273,13 @@ pub struct SurfaceHighlightOptions {
     /// only near silhouettes). 0: no limit.
     pub max_lines_per_cell: u32,
 }
+
+crate::control::setters!(SurfaceHighlightOptions {
+    grid_u: usize,
+    grid_v: usize,
+    tolerance: f64,
+    max_refine_steps: usize,
+});
 
 impl Default for SurfaceHighlightOptions {
     fn default() -> Self {

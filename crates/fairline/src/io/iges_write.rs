@@ -32,6 +32,7 @@ use crate::bspline::{BSplineSurface, TrimCurve};
 
 /// What the Global section of a written IGES file says.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct IgesWriteOptions {
     /// The length unit of the coordinates (Global fields 14–15).
     pub unit: LengthUnit,
@@ -40,6 +41,12 @@ pub struct IgesWriteOptions {
     /// Product name (Global fields 3 and 12).
     pub product: String,
 }
+
+crate::control::setters!(IgesWriteOptions {
+    unit: LengthUnit,
+    timestamp: String,
+    product: String,
+});
 
 impl Default for IgesWriteOptions {
     fn default() -> Self {

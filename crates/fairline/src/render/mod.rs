@@ -224,6 +224,7 @@ impl Default for Lighting {
 
 /// How to render a [`Scene`].
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct RenderOptions {
     /// Image width in pixels (1..=[`MAX_IMAGE_SIDE`]).
     pub width: u32,
@@ -251,6 +252,19 @@ pub struct RenderOptions {
     /// polyline or marker may lie behind the surface and still be drawn.
     pub line_depth_offset: f64,
 }
+
+crate::control::setters!(RenderOptions {
+    width: u32,
+    height: u32,
+    view_dir: Vec3,
+    up: Vec3,
+    supersample: u32,
+    background: [f32; 3],
+    lighting: Lighting,
+    orthographic: bool,
+    camera: Option<Camera>,
+    line_depth_offset: f64,
+});
 
 impl Default for RenderOptions {
     fn default() -> Self {

@@ -32,6 +32,7 @@ use crate::io::{IoError, atomic_write};
 
 /// What the header and unit context of a written STEP file say.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct StepWriteOptions {
     /// The length unit of the coordinates.
     pub unit: LengthUnit,
@@ -40,6 +41,12 @@ pub struct StepWriteOptions {
     /// Product name.
     pub product: String,
 }
+
+crate::control::setters!(StepWriteOptions {
+    unit: LengthUnit,
+    timestamp: String,
+    product: String,
+});
 
 impl Default for StepWriteOptions {
     fn default() -> Self {
