@@ -569,16 +569,24 @@ pub fn label_point(surface: &BSplineSurface) -> Option<[f64; 2]> {
 }
 
 /// The view (direction from the eye, screen up) of a part's picture under
-/// linear lights: along the lights, as the mesh pictures
-/// ([`crate::highlight_png::default_camera`]), but with +z up on the
-/// screen whenever the lights face sideways (their plane normal more than
-/// 45° from z), seen from a little above: CAD parts are modelled z-up.
+/// linear lights: with +z up on the screen whenever the lights face
+/// sideways (their plane normal more than 45° from z), seen from a little
+/// above (CAD parts are modelled z-up); otherwise toward the lights as the
+/// mesh pictures ([`crate::highlight_png::default_camera`]) but tilted by
+/// about 40° rather than 19°, so that what lies under a flat top (the
+/// impeller's blades under its disc) shows beside it.
 pub fn part_camera(light: &LightArray) -> (Vec3, Vec3) {
     let z = light.plane_normal();
     let up = (Vec3::Z - Vec3::Z.dot(z) * z).normalize_or_zero();
     if z.dot(Vec3::Z).abs() < std::f64::consts::FRAC_1_SQRT_2 && up != Vec3::ZERO {
         (-z - 0.35 * up, up)
     } else {
-        crate::highlight_png::default_camera(light)
+        let (dir, screen_up) = crate::highlight_png::default_camera(light);
+        let tilt = dir + z;
+        if tilt.length() > 0.0 {
+            (-z + 0.85 * tilt.normalize(), screen_up)
+        } else {
+            (dir, screen_up)
+        }
     }
 }
