@@ -403,10 +403,22 @@ pub(crate) fn chain(
         used: &used,
     };
     let walks = walk_all_lines(&walker, &ranks, &starts, &order);
+    lines_of_walks(walks, |k| k.node(), position)
+}
+
+/// The highlight lines of `walks` (closed flag, path of keys whose node is
+/// `node(key)`), positioned by `position`, sorted by (light index, first
+/// node): the last step of [`chain`] and of the per-vertex-field
+/// contouring.
+fn lines_of_walks<K: Copy + Send>(
+    walks: Vec<(bool, Vec<K>)>,
+    node: impl Fn(K) -> NodeId + Sync,
+    position: impl Fn(NodeId) -> Vec3 + Sync,
+) -> HighlightLines {
     let mut lines: Vec<HighlightLine> = walks
         .into_par_iter()
         .map(|(closed, path)| {
-            let nodes: Vec<NodeId> = path.iter().map(|&k| k.node()).collect();
+            let nodes: Vec<NodeId> = path.iter().map(|&k| node(k)).collect();
             HighlightLine {
                 index: nodes.first().map_or(0, |n| n.index()),
                 closed,
@@ -825,22 +837,7 @@ pub(crate) fn chain_reference(
             walks
         })
         .collect();
-    let mut lines: Vec<HighlightLine> = walks
-        .into_par_iter()
-        .map(|(closed, path)| {
-            let nodes: Vec<NodeId> = path.iter().map(|&i| keys[i].node()).collect();
-            HighlightLine {
-                index: nodes.first().map_or(0, |n| n.index()),
-                closed,
-                points: nodes.iter().map(|&nd| position(nd)).collect(),
-                nodes,
-            }
-        })
-        .collect();
-    lines.sort_by(|a, b| {
-        (a.index, a.nodes.first().copied()).cmp(&(b.index, b.nodes.first().copied()))
-    });
-    HighlightLines { lines }
+    lines_of_walks(walks, |i| keys[i].node(), position)
 }
 
 /// Contours `levels` of the per-vertex field (`values`, `branch`) into
