@@ -23,6 +23,9 @@ pub fn load_surface_file(path: &Path) -> Result<SurfaceFile> {
             path.display()
         )));
     }
+    for w in &file.warnings {
+        crate::output::warn(format!("{}: {w}", path.display()));
+    }
     Ok(file)
 }
 

@@ -197,3 +197,61 @@ fn real_step_parts_are_read_drawn_and_written_back() {
     assert!(count > 20, "{count} lines");
     assert!(std::fs::metadata(&png).unwrap().len() > 10_000);
 }
+
+/// A STEP file whose p-curve disagrees with its 3-D edge (issue #20: the
+/// p-curves are used when they agree, else the 3-D edge, with a warning):
+/// fairline writes `part()` with a p-curve per trim curve; the corner
+/// (0.9, 0.9) of the outer loop moved to (0.95, 0.85) in the two p-curves
+/// that end and start there makes them leave their written 3-D edges. `info` reads the file (exit 0), warns naming the
+/// edge, and the face is trimmed by the 3-D edge: its trims lie on the
+/// original loop (the untouched file reads back the original trims
+/// exactly).
+#[test]
+fn a_step_pcurve_that_disagrees_with_its_edge_is_not_used_and_warned() {
+    let d = tmp("cad-pcurve");
+    let (src, stp, bad) = (d.join("part.json"), d.join("part.step"), d.join("bad.step"));
+    fairline::io::write_surfaces_json(&src, &part()).unwrap();
+    ok(&run(&["convert", s(&src), s(&stp)]));
+    let o = run(&["info", s(&stp)]);
+    ok(&o);
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("warning"));
+    assert_eq!(read_surface_file(&stp).unwrap().surfaces, part());
+    // The 2-D point (0.9, 0.9) of the outer polygon's p-curve.
+    let text = std::fs::read_to_string(&stp).unwrap();
+    let mut moved = 0;
+    let lines: Vec<String> = text
+        .lines()
+        .map(|l| {
+            let Some(inner) = l
+                .split_once("CARTESIAN_POINT('',(")
+                .and_then(|(_, r)| r.split_once("))"))
+                .map(|(c, _)| c)
+            else {
+                return l.to_string();
+            };
+            let c: Vec<f64> = inner.split(',').filter_map(|x| x.trim().parse().ok()).collect();
+            if c == [0.9, 0.9] {
+                moved += 1;
+                l.replace(inner, "0.95,0.85")
+            } else {
+                l.to_string()
+            }
+        })
+        .collect();
+    assert_eq!(moved, 2, "the corner (0.9, 0.9) of two p-curves");
+    std::fs::write(&bad, lines.join("\n")).unwrap();
+    let o = run(&["info", s(&bad)]);
+    ok(&o);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("warning") && err.contains("bad.step") && err.contains("disagree") && err.contains("EDGE_CURVE #"),
+        "{err}"
+    );
+    // The face is trimmed by its 3-D edges: the outer loop still passes
+    // through (0.9, 0.9), not (0.95, 0.85).
+    let back = read_surface_file(&bad).unwrap();
+    assert_eq!(back.warnings.len(), 1);
+    assert!(back.warnings[0].starts_with("2 p-curve(s)"), "{}", back.warnings[0]);
+    let face = &back.surfaces[0];
+    assert!(face.contains_uv(0.85, 0.85) && !face.contains_uv(0.93, 0.87));
+}

@@ -12,16 +12,14 @@
 mod shared_data;
 
 use fairline::bspline::BSplineSurface;
-use fairline::bspline::continuity::{
-    Boundary, ContinuityOptions, ContinuityReport, SeamClass, continuity,
-};
+use fairline::bspline::continuity::{Boundary, ContinuityOptions, Seam, SeamClass, continuity};
 use fairline::io::{read_iges, read_surfaces_json};
 
 /// Edges per class (gap, G0, G1, G2) and the worst angle (degrees) and
 /// relative curvature mismatch over the edges of each class.
-fn summary(r: &ContinuityReport) -> ([usize; 4], [f64; 4], [f64; 4]) {
+fn summary<'a>(seams: impl IntoIterator<Item = &'a Seam>) -> ([usize; 4], [f64; 4], [f64; 4]) {
     let (mut n, mut angle, mut curvature) = ([0; 4], [0.0f64; 4], [0.0f64; 4]);
-    for s in &r.seams {
+    for s in seams {
         let c = match s.class {
             SeamClass::Gap => 0,
             SeamClass::G0 => 1,
@@ -48,7 +46,7 @@ fn continuity_of_the_teapot() {
     let surfaces = read_surfaces_json(&path).unwrap();
     assert_eq!(surfaces.len(), 32);
     let r = continuity(&surfaces, &ContinuityOptions::default()).unwrap();
-    let (n, angle, curvature) = summary(&r);
+    let (n, angle, curvature) = summary(&r.seams);
     eprintln!(
         "teapot: {} edges, gap/G0/G1/G2 {n:?}, worst angle {angle:?}, worst curvature {curvature:?}",
         r.seams.len()
@@ -85,14 +83,25 @@ fn continuity_of_the_impeller() {
     assert_eq!(surfaces.len(), 277);
     assert!(surfaces.iter().all(|s| s.is_trimmed()));
     let r = continuity(&surfaces, &ContinuityOptions::default()).unwrap();
-    let (n, angle, curvature) = summary(&r);
+    let (n, angle, curvature) = summary(&r.seams);
     // Seams between a face of revolution (the hub) and a B-spline face.
-    let hub: Vec<&fairline::bspline::continuity::Seam> = r
+    let hub: Vec<&Seam> = r
         .seams
         .iter()
         .filter(|s| revolved[s.surfaces[0]] != revolved[s.surfaces[1]])
         .collect();
     let hub_closed = hub.iter().filter(|s| s.class != SeamClass::Gap).count();
+    // Classes (gap, G0, G1, G2) of the dish–blade-root seams (a face of
+    // revolution against a B-spline face) and of the dish–dish seams (two
+    // faces of revolution), with the worst angle and curvature mismatch.
+    let classes = |pick: &dyn Fn(&&Seam) -> bool| summary(r.seams.iter().filter(|s| pick(s)));
+    let root = classes(&|s| revolved[s.surfaces[0]] != revolved[s.surfaces[1]]);
+    let dish = classes(&|s| revolved[s.surfaces[0]] && revolved[s.surfaces[1]]);
+    eprintln!("impeller dish–blade-root seams: gap/G0/G1/G2 {:?}, worst angle {:?}, worst curvature {:?}", root.0, root.1, root.2);
+    eprintln!("impeller dish–dish seams: gap/G0/G1/G2 {:?}, worst angle {:?}, worst curvature {:?}", dish.0, dish.1, dish.2);
+    for s in r.seams.iter().filter(|s| revolved[s.surfaces[0]] != revolved[s.surfaces[1]] && s.class == SeamClass::G1).take(6) {
+        eprintln!("  root G1 {:?}: angle {:.3}° curvature {:.1} % at {:?}", s.surfaces, s.g1_max_deg, 100.0 * s.g2_max_relative, s.worst);
+    }
     eprintln!(
         "impeller: {} edges, gap/G0/G1/G2 {n:?}, worst angle {angle:?}, worst curvature {curvature:?}; hub–B-spline seams {} ({hub_closed} closed)",
         r.seams.len(),

@@ -55,6 +55,9 @@ pub struct SurfaceFile {
     /// The length unit the file declares (none for JSON, or when the file
     /// names no unit fairline knows).
     pub unit: Option<LengthUnit>,
+    /// What the reader did not take as the file says (STEP: p-curves that
+    /// disagree with their 3-D edges); one line each.
+    pub warnings: Vec<String>,
 }
 
 /// Why a surface file could not be read or written.
@@ -89,13 +92,14 @@ pub fn read_surface_file(path: impl AsRef<Path>) -> Result<SurfaceFile, SurfaceF
     match SurfaceFormat::from_path(path) {
         Some(SurfaceFormat::Json) => Ok(SurfaceFile {
             surfaces: read_surfaces_json(path)?,
-            unit: None,
+            ..SurfaceFile::default()
         }),
         Some(SurfaceFormat::Iges) => {
             let imp = read_iges(path)?;
             Ok(SurfaceFile {
                 unit: imp.units.as_deref().and_then(LengthUnit::from_iges_name),
                 surfaces: imp.surfaces.into_iter().map(|s| s.surface).collect(),
+                warnings: Vec::new(),
             })
         }
         Some(SurfaceFormat::Step) => {
@@ -103,6 +107,7 @@ pub fn read_surface_file(path: impl AsRef<Path>) -> Result<SurfaceFile, SurfaceF
             Ok(SurfaceFile {
                 unit: imp.unit,
                 surfaces: imp.surfaces.into_iter().map(|s| s.surface).collect(),
+                warnings: imp.warnings,
             })
         }
         None => Err(SurfaceFileError::UnknownFormat {

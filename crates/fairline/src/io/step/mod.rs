@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 use thiserror::Error;
 
-pub use read::{StepImport, StepSurface};
+pub use read::{StepImport, StepSurface, TrimSources};
 pub(crate) use read::{invert_point, polyline};
 pub use write::{StepWriteOptions, surfaces_to_step, write_step};
 

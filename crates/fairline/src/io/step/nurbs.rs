@@ -62,6 +62,121 @@ impl Nurbs3 {
         }
     }
 
+    /// The piece of the curve over `[t0, t1]` (either way round: a
+    /// reversed piece when `t1 < t0`) as an exact NURBS: both ends inserted
+    /// as knots of multiplicity `degree` (Piegl & Tiller A5.1) and the
+    /// control points between them kept (Piegl & Tiller §5.3, curve
+    /// splitting). Ends within 1e-12 of the domain width of a knot are
+    /// snapped to it. `None` when the piece is empty or leaves the domain.
+    pub fn between(&self, t0: f64, t1: f64) -> Option<Nurbs3> {
+        if t1 < t0 {
+            return self.between(t1, t0).map(|c| c.reversed());
+        }
+        let [a, b] = self.domain();
+        let eps = 1e-12 * (b - a);
+        if !(t0 >= a - eps && t1 <= b + eps && t1 - t0 > eps) {
+            return None;
+        }
+        let snap = |t: f64| {
+            self.knots
+                .iter()
+                .copied()
+                .find(|k| (k - t).abs() <= eps)
+                .unwrap_or(t)
+                .clamp(a, b)
+        };
+        let (t0, t1) = (snap(t0), snap(t1));
+        let c = self.with_knot(t0)?.with_knot(t1)?;
+        let p = c.degree;
+        // C(t0) = P[last index of t0 − p], C(t1) = P[first index of t1 − 1].
+        let la = c.knots.iter().rposition(|&k| k == t0)?;
+        let fb = c.knots.iter().position(|&k| k == t1)?;
+        if la < p || fb <= la || fb > c.points.len() {
+            return None;
+        }
+        let (i0, i1) = (la - p, fb - 1);
+        let mut knots = vec![t0; p + 1];
+        knots.extend_from_slice(&c.knots[la + 1..fb]);
+        knots.extend(std::iter::repeat_n(t1, p + 1));
+        Some(Nurbs3 {
+            degree: p,
+            knots,
+            points: c.points[i0..=i1].to_vec(),
+            weights: c.weights.as_ref().map(|w| w[i0..=i1].to_vec()),
+        })
+    }
+
+    /// The same curve with the knot `t` inserted until its multiplicity is
+    /// at least the degree (Piegl & Tiller A5.1, in homogeneous
+    /// coordinates, so exact for rational curves too). `None` when `t` is
+    /// not inside the knot vector's usable range.
+    fn with_knot(&self, t: f64) -> Option<Nurbs3> {
+        let p = self.degree;
+        let n = self.points.len();
+        let s = self.knots.iter().filter(|&&k| k == t).count();
+        if s >= p {
+            return Some(self.clone());
+        }
+        let r = p - s;
+        // The span k: knots[k] <= t < knots[k + 1].
+        let k = self.knots.iter().rposition(|&x| x <= t)?;
+        if k < p || k >= n {
+            return None;
+        }
+        let w = |i: usize| self.weights.as_ref().map_or(1.0, |ws| ws[i]);
+        let pw: Vec<[f64; 4]> = (0..n)
+            .map(|i| {
+                let q = self.points[i] * w(i);
+                [q.x, q.y, q.z, w(i)]
+            })
+            .collect();
+        let lerp = |x: [f64; 4], y: [f64; 4], alpha: f64| {
+            std::array::from_fn(|c| alpha * y[c] + (1.0 - alpha) * x[c])
+        };
+        let mut knots = Vec::with_capacity(self.knots.len() + r);
+        knots.extend_from_slice(&self.knots[..=k]);
+        knots.extend(std::iter::repeat_n(t, r));
+        knots.extend_from_slice(&self.knots[k + 1..]);
+        let mut qw = vec![[0.0; 4]; n + r];
+        qw[..=k - p].copy_from_slice(&pw[..=k - p]);
+        for i in k - s..n {
+            qw[i + r] = pw[i];
+        }
+        let mut rw: Vec<[f64; 4]> = (0..=p - s).map(|i| pw[k - p + i]).collect();
+        let mut l = k - p;
+        for j in 1..=r {
+            l = k - p + j;
+            for i in 0..=p - j - s {
+                let den = self.knots[i + k + 1] - self.knots[l + i];
+                if den <= 0.0 {
+                    return None;
+                }
+                rw[i] = lerp(rw[i], rw[i + 1], (t - self.knots[l + i]) / den);
+            }
+            qw[l] = rw[0];
+            qw[k + r - j - s] = rw[p - j - s];
+        }
+        for i in l + 1..k - s {
+            qw[i] = rw[i - l];
+        }
+        let rational = self.weights.is_some();
+        let mut points = Vec::with_capacity(n + r);
+        let mut weights = Vec::with_capacity(n + r);
+        for q in &qw {
+            if !(q[3] > 0.0 && q[3].is_finite()) {
+                return None;
+            }
+            points.push(Vec3::new(q[0], q[1], q[2]) / q[3]);
+            weights.push(q[3]);
+        }
+        Some(Nurbs3 {
+            degree: p,
+            knots,
+            points,
+            weights: rational.then_some(weights),
+        })
+    }
+
     /// The straight segment from `a` to `b`, parameter `[t0, t1]`.
     pub fn segment(a: Vec3, b: Vec3, t0: f64, t1: f64) -> Nurbs3 {
         Nurbs3 {
@@ -207,6 +322,49 @@ pub fn revolve(
 mod tests {
     use super::*;
     use std::f64::consts::PI;
+
+    #[test]
+    fn a_piece_between_two_parameters_is_the_same_curve_there() {
+        // A rational cubic with interior knots (one double), split at
+        // parameters inside spans, on knots and at the ends, both ways.
+        let points: Vec<Vec3> = (0..7)
+            .map(|i| {
+                let t = i as f64;
+                Vec3::new(t, (0.7 * t).sin() * 2.0, 0.3 * t * t)
+            })
+            .collect();
+        let c = Nurbs3 {
+            degree: 3,
+            knots: vec![0.0, 0.0, 0.0, 0.0, 0.4, 1.1, 1.1, 2.0, 2.0, 2.0, 2.0],
+            points,
+            weights: Some(vec![1.0, 0.7, 1.4, 0.9, 1.2, 0.8, 1.0]),
+        };
+        for &(t0, t1) in &[
+            (0.13, 1.7),
+            (0.4, 1.1),
+            (0.0, 2.0),
+            (0.0, 0.05),
+            (1.1, 2.0),
+            (1.9, 0.2),
+            (0.7, 0.71),
+        ] {
+            let piece = c.between(t0, t1).unwrap();
+            let [a, b] = piece.domain();
+            // (reversing mirrors the knots: a + b − k, exact to rounding)
+            assert!((a - t0.min(t1)).abs() < 1e-15 && (b - t0.max(t1)).abs() < 1e-15);
+            for k in 0..=50 {
+                let s = a + (b - a) * k as f64 / 50.0;
+                // The original parameter of piece parameter s.
+                let t = if t1 < t0 { t0 + t1 - s } else { s };
+                let d = piece.eval(s).distance(c.eval(t));
+                assert!(d < 1e-12, "[{t0}, {t1}] at {s}: {d:e}");
+            }
+            assert!(piece.eval(a).distance(c.eval(t0)) < 1e-12);
+            assert!(piece.eval(b).distance(c.eval(t1)) < 1e-12);
+        }
+        assert!(c.between(0.5, 0.5).is_none());
+        assert!(c.between(-1.0, 0.5).is_none());
+    }
 
     #[test]
     fn step_arcs_are_exact_circles_and_param_inverts_the_angle() {

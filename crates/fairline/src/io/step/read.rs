@@ -7,22 +7,27 @@
 //!   `RATIONAL_B_SPLINE_SURFACE`) is taken as it is. Its bounds become
 //!   trimming loops from the edges' `PCURVE`s on this surface when present
 //!   (a `DEFINITIONAL_REPRESENTATION` of a `LINE`, `CIRCLE`, `ELLIPSE` or
-//!   B-spline curve in (u, v): lines and conic arcs exactly, B-spline
-//!   p-curves exactly when an edge covers the whole p-curve, else sampled
-//!   between the vertices), otherwise from the edge curves sampled and
-//!   projected onto the surface by Newton point inversion (Piegl & Tiller
-//!   §6.1).
+//!   B-spline curve in (u, v): lines, conic arcs and B-spline pieces
+//!   exactly, see [`pcurve`]) that agree with the 3-D edge, otherwise from
+//!   the edge curves sampled and projected onto the surface by Newton point
+//!   inversion (Piegl & Tiller §6.1).
 //! - `PLANE`, `CYLINDRICAL_SURFACE`, `CONICAL_SURFACE`, `SPHERICAL_SURFACE`,
 //!   `TOROIDAL_SURFACE`, `SURFACE_OF_REVOLUTION` and
 //!   `SURFACE_OF_LINEAR_EXTRUSION` are converted exactly to NURBS over the
 //!   part of the surface the face's edges span (rational quadratic arcs of
 //!   at most 90°, see [`super::nurbs`] and [`analytic`]). Their bounds are
 //!   mapped into the NURBS parameters through the surface's natural
-//!   coordinates (ISO 10303-42's (u, v): angles through [`ArcMap::param`]),
-//!   exactly as rational curves on planes and as dense polylines otherwise
-//!   (edges along parameter lines are straight in parameter space, so
-//!   exact too). The exact 3-D edges are used; p-curves on analytic
-//!   surfaces say nothing more. Faces bounded without a seam edge — a
+//!   coordinates (ISO 10303-42's (u, v): angles through [`ArcMap::param`]).
+//!   An edge with a p-curve on the face's surface that agrees with its 3-D
+//!   edge gets the p-curve mapped through that reparametrisation ([`pcurve`]:
+//!   exact where the map is affine in the coordinates the p-curve varies in
+//!   — any p-curve on a plane or an extrusion, lines along parameter lines
+//!   of the others — else a dense polyline); otherwise the exact 3-D edge is
+//!   used: exactly as rational curves on planes and as dense polylines
+//!   through its natural coordinates on the other surfaces. A p-curve that
+//!   disagrees with its edge is not used (counted in
+//!   [`StepImport::trim_sources`] and named in a warning). Faces bounded
+//!   without a seam edge — a
 //!   cylinder between two full circles, a sphere cap or a cone bounded by
 //!   one circle — are closed along a cut (and through the pole or apex on
 //!   the face's side), and a sphere or torus face without loops is the
@@ -78,15 +83,49 @@ pub struct StepImport {
     pub surfaces: Vec<StepSurface>,
     /// The length unit of the file (first `LENGTH_UNIT`), if it names one.
     pub unit: Option<LengthUnit>,
+    /// Where the faces' trimming curves came from, counted per edge of
+    /// every face bound.
+    pub trim_sources: TrimSources,
+    /// What the reader did not take as the file says (p-curves that
+    /// disagree with their 3-D edges); one line each.
+    pub warnings: Vec<String>,
+}
+
+/// Where the trimming curves of a file's faces came from, counted per
+/// oriented edge of the face bounds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct TrimSources {
+    /// From the edge's p-curve on the face's surface (it agrees with the
+    /// 3-D edge).
+    pub pcurve: usize,
+    /// From the 3-D edge: the edge has no p-curve on the face's surface,
+    /// or the face's bounds wind around its surface (closed along a cut),
+    /// or the face is the whole converted surface.
+    pub edge: usize,
+    /// From the 3-D edge because its p-curves disagree with it by more
+    /// than the tolerance (each named in [`StepImport::warnings`]).
+    pub pcurve_rejected: usize,
 }
 
 mod analytic;
+mod pcurve;
+
+use pcurve::{PcurveMap, PcurveUse};
 
 type R<T> = Result<T, StepError>;
 
 /// The map from natural coordinates of an analytic face to the parameters
-/// of its NURBS.
-type ToUv = Box<dyn Fn(f64, f64) -> [f64; 2]>;
+/// of its NURBS, per coordinate: through the rational arcs' parameter
+/// ([`ArcMap::param`]) or unchanged.
+#[derive(Clone, Copy, Debug)]
+struct ToUv([Option<ArcMap>; 2]);
+
+impl ToUv {
+    fn at(&self, a: f64, b: f64) -> [f64; 2] {
+        let f = |m: &Option<ArcMap>, x: f64| m.as_ref().map_or(x, |m| m.param(x));
+        [f(&self.0[0], a), f(&self.0[1], b)]
+    }
+}
 
 /// A 3-D (or 2-D, `z = 0`) curve of the file.
 #[derive(Clone, Debug)]
@@ -169,16 +208,6 @@ fn conic_range(t0: f64, t1: f64, closed: bool, forward: bool) -> [f64; 2] {
     [t0, t1]
 }
 
-/// A 2-D NURBS (`z` ignored) as a trim curve in the (u, v) plane.
-fn trim_curve_of(n: Nurbs3) -> Result<TrimCurve, String> {
-    TrimCurve::new(
-        n.degree,
-        n.knots,
-        n.points.iter().map(|p| [p.x, p.y]).collect(),
-        n.weights,
-    )
-}
-
 /// The `t ∈ [a, b]` minimising `f`: the best of `samples + 1` equally spaced
 /// samples, refined by golden-section search on its two neighbouring
 /// intervals.
@@ -224,6 +253,12 @@ struct Reader<'a> {
     ex: &'a Exchange,
     /// Radians per angle unit of the file.
     angle: f64,
+    /// The file's distance uncertainty (0 when it states none).
+    uncertainty: f64,
+    /// Counts of [`StepImport::trim_sources`].
+    sources: std::cell::Cell<TrimSources>,
+    /// P-curves not used: (EDGE_CURVE #id, distance, tolerance).
+    rejected: std::cell::RefCell<Vec<(u64, f64, f64)>>,
 }
 
 impl<'a> Reader<'a> {
@@ -620,6 +655,11 @@ impl<'a> Reader<'a> {
 
     /// Dense points along an edge in traversal order (both ends included).
     fn edge_points(&self, e: &EdgeUse) -> Vec<Vec3> {
+        self.edge_samples(e).into_iter().map(|(_, q)| q).collect()
+    }
+
+    /// [`Self::edge_points`] with their curve parameters.
+    fn edge_samples(&self, e: &EdgeUse) -> Vec<(f64, Vec3)> {
         let [t0, t1] = self.edge_range(e);
         let n = match &e.curve {
             Curve::Line { .. } => 32,
@@ -628,7 +668,10 @@ impl<'a> Reader<'a> {
         }
         .clamp(8, 4000);
         (0..=n)
-            .map(|k| e.curve.eval(t0 + (t1 - t0) * k as f64 / n as f64))
+            .map(|k| {
+                let t = t0 + (t1 - t0) * k as f64 / n as f64;
+                (t, e.curve.eval(t))
+            })
             .collect()
     }
 }
@@ -636,7 +679,13 @@ impl<'a> Reader<'a> {
 /// Reads the faces (and free bounded B-spline surfaces) of a parsed file.
 pub(super) fn read(ex: &Exchange) -> R<StepImport> {
     let (unit, angle) = units(ex);
-    let rd = Reader { ex, angle };
+    let rd = Reader {
+        ex,
+        angle,
+        uncertainty: distance_uncertainty(ex),
+        sources: Default::default(),
+        rejected: Default::default(),
+    };
     let mut out = StepImport {
         unit,
         ..StepImport::default()
@@ -673,7 +722,44 @@ pub(super) fn read(ex: &Exchange) -> R<StepImport> {
             _ => {}
         }
     }
+    out.trim_sources = rd.sources.get();
+    out.warnings = rd.rejected_warning().into_iter().collect();
     Ok(out)
+}
+
+impl Reader<'_> {
+    /// One warning naming the edges whose p-curves were not used.
+    fn rejected_warning(&self) -> Option<String> {
+        let r = self.rejected.borrow();
+        let worst = r.iter().max_by(|a, b| (a.1 / a.2).total_cmp(&(b.1 / b.2)))?;
+        let ids: Vec<String> = r.iter().take(8).map(|x| format!("#{}", x.0)).collect();
+        let largest = if worst.1.is_finite() {
+            format!("{:.3e}", worst.1)
+        } else {
+            "off the surface's range".into()
+        };
+        Some(format!(
+            "{} p-curve(s) disagree with their 3-D edges by more than the tolerance (EDGE_CURVE {}{}; largest {largest} at #{}, tolerance {:.1e}); those trims were computed from the 3-D edges",
+            r.len(),
+            ids.join(", "),
+            if r.len() > ids.len() { ", …" } else { "" },
+            worst.0,
+            worst.2
+        ))
+    }
+}
+
+/// The file's distance uncertainty (the first positive
+/// `UNCERTAINTY_MEASURE_WITH_UNIT` value, in the file's length unit), 0
+/// when it states none.
+fn distance_uncertainty(ex: &Exchange) -> f64 {
+    let mut ids: Vec<u64> = ex.order.clone();
+    ids.sort_unstable();
+    ids.iter()
+        .filter_map(|id| ex.instances[id].part("UNCERTAINTY_MEASURE_WITH_UNIT"))
+        .filter_map(|p| p.first().and_then(Value::number))
+        .find(|x| x.is_finite() && *x > 0.0)
+        .unwrap_or(0.0)
 }
 
 fn collect_refs(v: &[Value], out: &mut HashSet<u64>) {
@@ -852,7 +938,8 @@ impl<'a> Reader<'a> {
         let mut curves = Vec::with_capacity(edges.len());
         let mut guess = None;
         for e in edges {
-            if let Some(c) = self.pcurve_trim(s, sid, e)? {
+            let found = self.pcurve_trim(s, sid, e, &PcurveMap::IDENTITY, None)?;
+            if let Some(c) = self.count_trim(e, found) {
                 curves.push(c);
                 continue;
             }
@@ -870,104 +957,40 @@ impl<'a> Reader<'a> {
         Ok(TrimLoop { curves })
     }
 
-    /// The edge's p-curve on surface `sid` (from its SURFACE_CURVE's
-    /// associated geometry) as a trim curve in traversal order: exact when
-    /// the edge covers the whole p-curve, else sampled between the vertices.
-    fn pcurve_trim(&self, s: &BSplineSurface, sid: u64, e: &EdgeUse) -> R<Option<TrimCurve>> {
-        let ci = &self.ex.instances[&e.curve_entity];
-        let Some(sc) = ci.part("SURFACE_CURVE").or_else(|| ci.part("SEAM_CURVE")) else {
-            return Ok(None);
+    /// Counts where an edge's trim curve came from and returns the
+    /// p-curve's when it is used.
+    fn count_trim(&self, e: &EdgeUse, found: PcurveUse) -> Option<TrimCurve> {
+        let mut n = self.sources.get();
+        let out = match found {
+            PcurveUse::Used(c) => {
+                n.pcurve += 1;
+                Some(c)
+            }
+            PcurveUse::Absent => {
+                n.edge += 1;
+                None
+            }
+            PcurveUse::Rejected {
+                distance,
+                tolerance,
+            } => {
+                n.pcurve_rejected += 1;
+                self.rejected
+                    .borrow_mut()
+                    .push((e.edge, distance, tolerance));
+                None
+            }
         };
-        let Some(Value::List(assoc)) = sc.get(2) else {
-            return Ok(None);
-        };
-        for a in assoc {
-            let Value::Ref(pid) = a else { continue };
-            let Some(pc) = self.ex.instances.get(pid) else {
-                continue;
-            };
-            let Some(pp) = pc.part("PCURVE") else {
-                continue;
-            };
-            if !matches!(pp.get(1), Some(Value::Ref(b)) if *b == sid) {
-                continue;
-            }
-            let dr = self.refer(pc, pp, 2)?;
-            let drp = self.params(dr, &["DEFINITIONAL_REPRESENTATION"])?;
-            let items = self.refs(dr, self.list(dr, drp, 1)?)?;
-            let Some(c2) = items.first() else { continue };
-            let curve = match self.curve(c2) {
-                Ok(c) => c,
-                Err(_) => continue,
-            };
-            let on_surface = |t: f64| {
-                let q = curve.eval(t);
-                s.eval(q.x, q.y)
-            };
-            let span = match &curve {
-                Curve::Spline(n) => n.domain(),
-                Curve::Line { .. } => {
-                    // Range from the 3-D curve's parameters (same
-                    // parameterisation, ISO 10303-42 surface_curve).
-                    let [a, b] = self.edge_range(e);
-                    [a.min(b), a.max(b)]
-                }
-                Curve::Conic { .. } => [0.0, TAU],
-            };
-            // The whole p-curve when its ends map onto the edge's vertices
-            // (in the traversal direction), else the part between the
-            // vertices' nearest parameters.
-            let size = {
-                let (lo, hi) = s.control_bounding_box();
-                (hi - lo).length().max(1e-300)
-            };
-            let near = |a: Vec3, b: Vec3| a.distance(b) <= 1e-9 * size;
-            if let Curve::Spline(n) = &curve {
-                let (sa, sb) = (on_surface(span[0]), on_surface(span[1]));
-                let whole = if e.forward && near(sa, e.start) && near(sb, e.end) {
-                    Some(n.clone())
-                } else if !e.forward && near(sb, e.start) && near(sa, e.end) {
-                    Some(n.reversed())
-                } else {
-                    None
-                };
-                if let Some(w) = whole {
-                    return Ok(Some(trim_curve_of(w).map_err(|m| self.err(c2, m))?));
-                }
-            }
-            if let Curve::Conic { .. } = &curve {
-                // An exact rational arc between the vertices' parameters,
-                // run the edge's way (the p-curve has the edge curve's
-                // sense, ISO 10303-42 surface_curve).
-                let param = |q: Vec3| nearest_param(0.0, TAU, 400, |t| on_surface(t).distance(q));
-                let range = conic_range(param(e.start), param(e.end), e.closed, e.forward);
-                if let Some(a) = curve.conic_arc(range) {
-                    return Ok(Some(trim_curve_of(a).map_err(|m| self.err(c2, m))?));
-                }
-            }
-            let [t0, t1] = if e.closed {
-                if e.forward { span } else { [span[1], span[0]] }
-            } else {
-                let param =
-                    |q: Vec3| nearest_param(span[0], span[1], 400, |t| on_surface(t).distance(q));
-                [param(e.start), param(e.end)]
-            };
-            if let Curve::Line { .. } = &curve {
-                let (a, b) = (curve.eval(t0), curve.eval(t1));
-                return Ok(Some(
-                    TrimCurve::line([a.x, a.y], [b.x, b.y]).map_err(|m| self.err(c2, m))?,
-                ));
-            }
-            let n = 256;
-            let pts: Vec<[f64; 2]> = (0..=n)
-                .map(|k| {
-                    let q = curve.eval(t0 + (t1 - t0) * k as f64 / n as f64);
-                    [q.x, q.y]
-                })
-                .collect();
-            return Ok(Some(polyline(&pts).map_err(|m| self.err(c2, m))?));
-        }
-        Ok(None)
+        self.sources.set(n);
+        out
+    }
+
+    /// Counts edges whose trims come from the 3-D edges without looking
+    /// at p-curves.
+    fn count_edges(&self, edges: usize) {
+        let mut n = self.sources.get();
+        n.edge += edges;
+        self.sources.set(n);
     }
 }
 

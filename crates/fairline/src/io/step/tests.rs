@@ -374,7 +374,30 @@ fn round_trip(surfaces: &[BSplineSurface]) -> String {
         assert_eq!(a, &b.surface);
         assert_eq!(bits(a), bits(&b.surface));
     }
+    assert_trims_from_pcurves(surfaces, &back);
     text
+}
+
+/// Every trim curve of a written file is read from its p-curve (the 3-D
+/// curves the writer puts beside them are polylines through points of the
+/// curves, which the p-curves agree with within the polyline allowance).
+fn assert_trims_from_pcurves(surfaces: &[BSplineSurface], back: &StepImport) {
+    let curves: usize = surfaces
+        .iter()
+        .flat_map(|s| s.trims())
+        .map(|l| l.curves.len())
+        .sum();
+    assert_eq!(
+        back.trim_sources,
+        TrimSources {
+            pcurve: curves,
+            edge: 0,
+            pcurve_rejected: 0
+        },
+        "{:?}",
+        back.warnings
+    );
+    assert!(back.warnings.is_empty(), "{:?}", back.warnings);
 }
 
 fn bits(s: &BSplineSurface) -> Vec<u64> {
@@ -1152,5 +1175,402 @@ fn round_trip_in_unit(surfaces: &[BSplineSurface], unit: LengthUnit) {
     for (a, b) in surfaces.iter().zip(&back.surfaces) {
         assert_eq!(bits(a), bits(&b.surface));
         assert_eq!(a, &b.surface);
+    }
+    assert_trims_from_pcurves(surfaces, &back);
+}
+
+// ---------------------------------------------------------------------
+// P-curves (issue #20: ADVANCED_FACE bounds as trimming loops, using the
+// p-curves when present).
+
+impl File {
+    /// A 2-D LINE `p + t·d` (the VECTOR's magnitude is `|d|`).
+    fn line2(&mut self, p: [f64; 2], d: [f64; 2]) -> u64 {
+        let pt = self.add(&format!("CARTESIAN_POINT('',({:?},{:?}))", p[0], p[1]));
+        let len = d[0].hypot(d[1]);
+        let dir = self.add(&format!("DIRECTION('',({:?},{:?}))", d[0] / len, d[1] / len));
+        let v = self.add(&format!("VECTOR('',#{dir},{len:?})"));
+        self.add(&format!("LINE('',#{pt},#{v})"))
+    }
+    /// A 2-D CIRCLE about `c` (reference direction +u).
+    fn circle2(&mut self, c: [f64; 2], r: f64) -> u64 {
+        let pt = self.add(&format!("CARTESIAN_POINT('',({:?},{:?}))", c[0], c[1]));
+        let d = self.add("DIRECTION('',(1.,0.))");
+        let a = self.add(&format!("AXIS2_PLACEMENT_2D('',#{pt},#{d})"));
+        self.add(&format!("CIRCLE('',#{a},{r:?})"))
+    }
+    /// Gives the curve of EDGE_CURVE `edge` the p-curves `curves2` (2-D
+    /// curve ids) on `surface`: a SURFACE_CURVE (SEAM_CURVE for two) whose
+    /// 3-D curve is the edge's curve.
+    fn pcurves(&mut self, edge: u64, surface: u64, curves2: &[u64]) {
+        let ctx = self.add(
+            "(GEOMETRIC_REPRESENTATION_CONTEXT(2)PARAMETRIC_REPRESENTATION_CONTEXT()REPRESENTATION_CONTEXT('2D SPACE',''))",
+        );
+        let pcs: Vec<String> = curves2
+            .iter()
+            .map(|c| {
+                let dr = self.add(&format!("DEFINITIONAL_REPRESENTATION('',(#{c}),#{ctx})"));
+                format!("#{}", self.add(&format!("PCURVE('',#{surface},#{dr})")))
+            })
+            .collect();
+        let line = self.lines[edge as usize - 1].clone();
+        let parts: Vec<&str> = line.split(',').collect();
+        assert!(parts[0].starts_with("EDGE_CURVE"), "{line}");
+        let kind = if curves2.len() == 2 {
+            "SEAM_CURVE"
+        } else {
+            "SURFACE_CURVE"
+        };
+        let sc = self.add(&format!(
+            "{kind}('',{},({}),.CURVE_3D.)",
+            parts[3],
+            pcs.join(",")
+        ));
+        let mut parts: Vec<String> = parts.iter().map(|p| p.to_string()).collect();
+        parts[3] = format!("#{sc}");
+        self.lines[edge as usize - 1] = parts.join(",");
+    }
+}
+
+/// An L-shaped face on the cylinder r = 2 about z (angles 0..π, heights
+/// 0..5, less the corner angles 0..π/2 × heights 2.5..5), area
+/// 2·(5π − 1.25π) = 7.5π. Every edge gets its p-curve (ISO (u, v) = (angle,
+/// height), the 3-D curves' parameters) unless `skip` names it; the p-curve
+/// of the edge `distort` is moved by `offset` in (u, v). Returns the text
+/// and the EDGE_CURVE ids in loop order.
+fn cylinder_l_face(distort: Option<usize>, offset: [f64; 2], skip: Option<usize>) -> (String, Vec<u64>) {
+    let mut f = File::default();
+    let frame = f.frame([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
+    let cyl = f.add(&format!("CYLINDRICAL_SURFACE('',#{frame},2.)"));
+    let at = |a: f64, z: f64| [2.0 * a.cos(), 2.0 * a.sin(), z];
+    let h = PI / 2.0;
+    let corners = [at(0.0, 0.0), at(PI, 0.0), at(PI, 5.0), at(h, 5.0), at(h, 2.5), at(0.0, 2.5)];
+    let v: Vec<u64> = corners.iter().map(|&c| f.vertex(c)).collect();
+    let zx = ([0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
+    let e = [
+        f.circle([0.0; 3], zx.0, zx.1, 2.0, v[0], v[1], true),
+        f.line(corners[1], corners[2], v[1], v[2]),
+        f.circle([0.0, 0.0, 5.0], zx.0, zx.1, 2.0, v[3], v[2], true),
+        f.line(corners[3], corners[4], v[3], v[4]),
+        f.circle([0.0, 0.0, 2.5], zx.0, zx.1, 2.0, v[5], v[4], true),
+        f.line(corners[5], corners[0], v[5], v[0]),
+    ];
+    // P-curves in the 3-D curves' parameters: circles by their angle,
+    // lines p + t·(b − a), t ∈ [0, 1].
+    let pc = [
+        ([0.0, 0.0], [1.0, 0.0]),
+        ([PI, 0.0], [0.0, 5.0]),
+        ([0.0, 5.0], [1.0, 0.0]),
+        ([h, 5.0], [0.0, -2.5]),
+        ([0.0, 2.5], [1.0, 0.0]),
+        ([0.0, 2.5], [0.0, -2.5]),
+    ];
+    for (k, (p, d)) in pc.into_iter().enumerate() {
+        if skip == Some(k) {
+            continue;
+        }
+        let p = if distort == Some(k) {
+            [p[0] + offset[0], p[1] + offset[1]]
+        } else {
+            p
+        };
+        let l2 = f.line2(p, d);
+        f.pcurves(e[k], cyl, &[l2]);
+    }
+    let outer = f.bound(
+        &[(e[0], true), (e[1], true), (e[2], false), (e[3], true), (e[4], false), (e[5], true)],
+        true,
+    );
+    f.face(&[outer], cyl);
+    (f.text(), e.to_vec())
+}
+
+/// The 3-D distance from the surface along every trim curve (101 samples
+/// each) to the nearest of `edges` (closed forms: points on the cylinder
+/// r = 2 about z whose angle or height is that of the edge).
+fn largest_distance_from_l_face_edges(s: &BSplineSurface) -> f64 {
+    let h = PI / 2.0;
+    // (angle range, height) of the arcs; (angle, height range) of the lines.
+    let arcs = [((0.0, PI), 0.0), ((h, PI), 5.0), ((0.0, h), 2.5)];
+    let lines = [(PI, (0.0, 5.0)), (h, (2.5, 5.0)), (0.0, (0.0, 2.5))];
+    let mut worst: f64 = 0.0;
+    for l in s.trims() {
+        for c in &l.curves {
+            let [a, b] = c.domain();
+            for k in 0..=100 {
+                let [u, v] = c.eval(a + (b - a) * k as f64 / 100.0);
+                let p = s.eval(u, v);
+                let (ang, z) = (p.y.atan2(p.x), p.z);
+                let on_cyl = (p.x.hypot(p.y) - 2.0).abs();
+                let d_arc = arcs
+                    .iter()
+                    .filter(|((a0, a1), _)| ang >= a0 - 1e-9 && ang <= a1 + 1e-9)
+                    .map(|(_, hz)| (z - hz).abs())
+                    .fold(f64::INFINITY, f64::min);
+                let d_line = lines
+                    .iter()
+                    .filter(|(_, (z0, z1))| z >= z0 - 1e-9 && z <= z1 + 1e-9)
+                    .map(|(la, _)| 2.0 * (ang - la).abs())
+                    .fold(f64::INFINITY, f64::min);
+                worst = worst.max(on_cyl + d_arc.min(d_line));
+            }
+        }
+    }
+    worst
+}
+
+#[test]
+fn step_pcurves_on_a_cylinder_are_used_and_map_exactly_onto_the_edges() {
+    let (text, _) = cylinder_l_face(None, [0.0; 2], None);
+    let imp = parse_step(&text).unwrap();
+    assert_eq!(
+        imp.trim_sources,
+        TrimSources {
+            pcurve: 6,
+            edge: 0,
+            pcurve_rejected: 0
+        }
+    );
+    assert!(imp.warnings.is_empty(), "{:?}", imp.warnings);
+    let s = &imp.surfaces[0].surface;
+    let curves = &s.trims()[0].curves;
+    assert_eq!(curves.len(), 6, "one trim curve per edge");
+    // Lines along parameter lines of (angle, height) stay straight through
+    // the angle → rational-parameter map: exact two-point lines.
+    assert!(curves.iter().all(|c| c.degree() == 1 && c.control_points().len() == 2));
+    // The NURBS along every trim curve lies on its 3-D edge: the angle
+    // passed through ArcMap::param and evaluated on the rational arcs comes
+    // back to the angle exactly.
+    let worst = largest_distance_from_l_face_edges(s);
+    assert!(worst < 1e-12, "largest distance from the 3-D edges {worst:e}");
+    assert_close(area(s), 7.5 * PI, 1e-6);
+    // The same face without p-curves: the same area from the 3-D edges.
+    let (computed, _) = cylinder_l_face(Some(0), [0.0; 2], Some(0));
+    let imp2 = parse_step(&computed).unwrap();
+    assert_eq!(
+        (imp2.trim_sources.pcurve, imp2.trim_sources.edge),
+        (5, 1),
+        "edge 0 has no p-curve"
+    );
+    assert_close(area(&imp2.surfaces[0].surface), 7.5 * PI, 1e-6);
+}
+
+#[test]
+fn step_a_distorted_pcurve_is_rejected_for_its_3d_edge_with_a_warning() {
+    // The middle arc's p-curve raised by 0.2 (4 % of the height), and the
+    // inner vertical line's moved by 0.05 rad: both disagree with their
+    // 3-D edges; the face is trimmed by the 3-D edges there, with the same
+    // area.
+    for (edge, offset) in [(4, [0.0, 0.2]), (3, [0.05, 0.0])] {
+        let (text, ids) = cylinder_l_face(Some(edge), offset, None);
+        let imp = parse_step(&text).unwrap();
+        assert_eq!(
+            imp.trim_sources,
+            TrimSources {
+                pcurve: 5,
+                edge: 0,
+                pcurve_rejected: 1
+            },
+            "edge {edge}"
+        );
+        assert_eq!(imp.warnings.len(), 1);
+        let w = &imp.warnings[0];
+        assert!(
+            w.contains(&format!("#{}", ids[edge])) && w.contains("disagree"),
+            "{w}"
+        );
+        let s = &imp.surfaces[0].surface;
+        let worst = largest_distance_from_l_face_edges(s);
+        assert!(worst < 1e-9, "edge {edge}: distance from the 3-D edges {worst:e}");
+        assert_close(area(s), 7.5 * PI, 1e-6);
+    }
+}
+
+#[test]
+fn step_pcurves_on_a_sphere_octant_close_through_the_pole() {
+    // The octant of the sphere r = 3: equator 0..90°, the meridian at 90°
+    // up to the pole, the meridian at 0° down again. P-curves (u, v) =
+    // (longitude, latitude) in DEGREES (the file's plane angle unit), the
+    // meridians reaching the pole at their own longitudes: the loop in
+    // (u, v) has the pole's stretch between them, degenerate in 3-D. Area
+    // 4π·9/8 = 4.5π.
+    let mut f = File::default();
+    let deg = f.add("(CONVERSION_BASED_UNIT('DEGREE',#1000)NAMED_UNIT(*)PLANE_ANGLE_UNIT())");
+    let frame = f.frame([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
+    let sph = f.add(&format!("SPHERICAL_SURFACE('',#{frame},3.)"));
+    let (e0, e1, pole) = ([3.0, 0.0, 0.0], [0.0, 3.0, 0.0], [0.0, 0.0, 3.0]);
+    let (v0, v1, vp) = (f.vertex(e0), f.vertex(e1), f.vertex(pole));
+    let equator = f.circle([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], 3.0, v0, v1, true);
+    let m90 = f.circle([0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 3.0, v1, vp, true);
+    let m0 = f.circle([0.0; 3], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0], 3.0, v0, vp, true);
+    // The 3-D circles' parameter is in radians; p-curves in degrees run
+    // u = (180/π)·t: the LINE's direction has that length.
+    let k = 180.0 / PI;
+    let l_eq = f.line2([0.0, 0.0], [k, 0.0]);
+    let l_90 = f.line2([90.0, 0.0], [0.0, k]);
+    let l_0 = f.line2([0.0, 0.0], [0.0, k]);
+    f.pcurves(equator, sph, &[l_eq]);
+    f.pcurves(m90, sph, &[l_90]);
+    f.pcurves(m0, sph, &[l_0]);
+    let outer = f.bound(&[(equator, true), (m90, true), (m0, false)], true);
+    f.face(&[outer], sph);
+    let mut text = f.text();
+    // The unit instance refers to a measure with unit: 1° = π/180 rad.
+    let rad = "#1000=PLANE_ANGLE_MEASURE_WITH_UNIT(PLANE_ANGLE_MEASURE(0.017453292519943295),#1001);\n#1001=(NAMED_UNIT(*)PLANE_ANGLE_UNIT()SI_UNIT($,.RADIAN.));\n";
+    text = text.replace("ENDSEC;\nEND-ISO", &format!("{rad}ENDSEC;\nEND-ISO"));
+    let _ = deg;
+    let imp = parse_step(&text).unwrap();
+    assert_eq!(
+        imp.trim_sources,
+        TrimSources {
+            pcurve: 3,
+            edge: 0,
+            pcurve_rejected: 0
+        },
+        "{:?}",
+        imp.warnings
+    );
+    let s = &imp.surfaces[0].surface;
+    assert_close(area(s), 4.5 * PI, 1e-6);
+    for c in &s.trims()[0].curves {
+        let [a, b] = c.domain();
+        for j in 0..=50 {
+            let [u, v] = c.eval(a + (b - a) * j as f64 / 50.0);
+            let p = s.eval(u, v);
+            // On the sphere and on one of the three great-circle arcs.
+            assert!((p.length() - 3.0).abs() < 1e-12, "{p}");
+            assert!(p.x.abs().min(p.y.abs()).min(p.z.abs()) < 1e-12, "{p}");
+        }
+    }
+}
+
+#[test]
+fn step_pcurves_on_a_plane_replace_the_edges_and_a_wrong_radius_is_rejected() {
+    // The plane with a hole of radius 1 about (2, 1.5): the hole's circle
+    // gets a p-curve CIRCLE in the plane frame's (u, v) — radius 1 (used,
+    // exact rational arc) or 1.1 (rejected: the hole is the 3-D circle).
+    for (r2, used) in [(1.0, true), (1.1, false)] {
+        let mut f = File::default();
+        let frame = f.frame([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
+        let plane = f.add(&format!("PLANE('',#{frame})"));
+        let c = [[0.0, 0.0, 0.0], [4.0, 0.0, 0.0], [4.0, 3.0, 0.0], [0.0, 3.0, 0.0]];
+        let v: Vec<u64> = c.iter().map(|&p| f.vertex(p)).collect();
+        let e: Vec<u64> = (0..4).map(|k| f.line(c[k], c[(k + 1) % 4], v[k], v[(k + 1) % 4])).collect();
+        let outer = f.bound(&[(e[0], true), (e[1], true), (e[2], true), (e[3], true)], true);
+        let vh = f.vertex([3.0, 1.5, 0.0]);
+        let hole = f.circle([2.0, 1.5, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], 1.0, vh, vh, true);
+        let c2 = f.circle2([2.0, 1.5], r2);
+        f.pcurves(hole, plane, &[c2]);
+        let inner = f.bound(&[(hole, false)], false);
+        f.face(&[outer, inner], plane);
+        let imp = parse_step(&f.text()).unwrap();
+        let want = if used {
+            TrimSources { pcurve: 1, edge: 4, pcurve_rejected: 0 }
+        } else {
+            TrimSources { pcurve: 0, edge: 4, pcurve_rejected: 1 }
+        };
+        assert_eq!(imp.trim_sources, want, "radius {r2}");
+        assert_eq!(imp.warnings.len(), usize::from(!used));
+        let s = &imp.surfaces[0].surface;
+        assert_close(area(s), 12.0 - PI, 1e-6);
+        assert!(s.trims()[1].curves[0].weights().is_some(), "an exact arc");
+    }
+}
+
+#[test]
+fn step_partial_bspline_pcurve_is_an_exact_piece() {
+    // The bilinear patch S(u, v) = (4u, 3v, 0) and an edge along the middle
+    // part t ∈ [0.2, 0.8] of a quadratic B-spline p-curve (its 3-D curve the
+    // same B-spline mapped by S), closed by a straight edge. The trim is
+    // the exact piece (degree 2, split by knot insertion), not samples: the
+    // area agrees with the closed form of the piece's region.
+    let mut f = File::default();
+    let pts: Vec<u64> = [[0.0, 0.0], [0.0, 3.0], [4.0, 0.0], [4.0, 3.0]]
+        .iter()
+        .map(|p| f.point([p[0], p[1], 0.0]))
+        .collect();
+    let surf = f.add(&format!(
+        "B_SPLINE_SURFACE_WITH_KNOTS('',1,1,((#{},#{}),(#{},#{})),.UNSPECIFIED.,.F.,.F.,.F.,(2,2),(2,2),(0.,1.),(0.,1.),.UNSPECIFIED.)",
+        pts[0], pts[1], pts[2], pts[3]
+    ));
+    // Quadratic, knots (0,0,0,0.5,1,1,1): control points in (u, v).
+    let ctrl = [[0.1, 0.2], [0.3, 0.9], [0.7, 0.95], [0.9, 0.3]];
+    let curve = |f: &mut File, dim3: bool| {
+        let ids: Vec<String> = ctrl
+            .iter()
+            .map(|c| {
+                let id = if dim3 {
+                    f.point([4.0 * c[0], 3.0 * c[1], 0.0])
+                } else {
+                    f.add(&format!("CARTESIAN_POINT('',({:?},{:?}))", c[0], c[1]))
+                };
+                format!("#{id}")
+            })
+            .collect();
+        f.add(&format!(
+            "B_SPLINE_CURVE_WITH_KNOTS('',2,({}),.UNSPECIFIED.,.F.,.F.,(3,1,3),(0.,0.5,1.),.UNSPECIFIED.)",
+            ids.join(",")
+        ))
+    };
+    let c3 = curve(&mut f, true);
+    let c2 = curve(&mut f, false);
+    let n = crate::io::step::nurbs::Nurbs3 {
+        degree: 2,
+        knots: vec![0.0, 0.0, 0.0, 0.5, 1.0, 1.0, 1.0],
+        points: ctrl.iter().map(|c| Vec3::new(c[0], c[1], 0.0)).collect(),
+        weights: None,
+    };
+    let (a, b) = (n.eval(0.2), n.eval(0.8));
+    let to3 = |p: Vec3| [4.0 * p.x, 3.0 * p.y, 0.0];
+    let (va, vb) = (f.vertex(to3(a)), f.vertex(to3(b)));
+    let arc = f.add(&format!("EDGE_CURVE('',#{va},#{vb},#{c3},.T.)"));
+    f.pcurves(arc, surf, &[c2]);
+    let chord = f.line(to3(b), to3(a), vb, va);
+    let outer = f.bound(&[(arc, true), (chord, true)], true);
+    f.face(&[outer], surf);
+    let imp = parse_step(&f.text()).unwrap();
+    assert_eq!(
+        imp.trim_sources,
+        TrimSources { pcurve: 1, edge: 1, pcurve_rejected: 0 },
+        "{:?}",
+        imp.warnings
+    );
+    let s = &imp.surfaces[0].surface;
+    let piece = &s.trims()[0].curves[0];
+    assert_eq!(piece.degree(), 2, "the exact piece");
+    for j in 0..=40 {
+        let t = 0.2 + 0.6 * j as f64 / 40.0;
+        let [pa, pb] = piece.domain();
+        let [u, v] = piece.eval(pa + (pb - pa) * (t - 0.2) / 0.6);
+        let q = n.eval(t);
+        assert!((u - q.x).abs() < 1e-14 && (v - q.y).abs() < 1e-14, "{t}");
+    }
+    // The region between the piece and its chord, by Green's theorem on a
+    // fine polygon of the exact curve (2e5 chords: exact to ~1e-11), times
+    // the patch's Jacobian 12.
+    let m = 200_000;
+    let mut poly: Vec<[f64; 2]> = (0..=m)
+        .map(|j| {
+            let q = n.eval(0.2 + 0.6 * j as f64 / m as f64);
+            [q.x, q.y]
+        })
+        .collect();
+    poly.push([a.x, a.y]);
+    let want = 12.0 * 0.5 * crate::bspline::polygon_signed_area2(&poly).abs();
+    // (the trim is flattened to 1e-6 of the domain diagonal for the area)
+    assert_close(area(s), want, 2e-5);
+}
+
+#[test]
+fn real_step_files_have_no_pcurves_and_read_from_their_edges() {
+    // Neither real part carries p-curves (SolidWorks and the CadQuery
+    // export): every trim comes from the 3-D edges, as before; their
+    // written copies (tests above) read every trim from its p-curve.
+    for name in ["featuretype.STEP", "red_cube_blue_cylinder.step"] {
+        let imp = read_step(real_step(name)).unwrap();
+        let t = imp.trim_sources;
+        assert_eq!((t.pcurve, t.pcurve_rejected), (0, 0), "{name}");
+        assert!(t.edge > 0, "{name}");
+        assert!(imp.warnings.is_empty(), "{name}");
     }
 }

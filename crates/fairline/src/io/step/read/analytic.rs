@@ -5,6 +5,7 @@
 //! mapped into the NURBS parameters through the surface's natural
 //! coordinates (see the parent module).
 
+use super::pcurve::CoordMap;
 use super::*;
 use crate::bspline::polygon_signed_area2;
 use std::f64::consts::FRAC_PI_2;
@@ -17,8 +18,19 @@ enum Analytic {
     Cone { r: f64, tan: f64 },
     Sphere { r: f64 },
     Torus { big: f64, small: f64 },
-    Revolution { profile: Nurbs3 },
-    Extrusion { profile: Nurbs3, d: Vec3 },
+    /// `profile_angle`: a conic profile's angle → its NURBS parameter.
+    Revolution {
+        profile: Nurbs3,
+        profile_angle: Option<ArcMap>,
+    },
+    /// `d` the unit direction, `length` the extrusion vector's length
+    /// (ISO's v runs along `length · d`).
+    Extrusion {
+        profile: Nurbs3,
+        profile_angle: Option<ArcMap>,
+        d: Vec3,
+        length: f64,
+    },
 }
 
 /// A placement frame: origin and the axes x, y, z.
@@ -45,7 +57,7 @@ impl Analytic {
     /// `span`: the whole profile of a swept surface in its coordinate.
     fn nurbs_box(&self, span: NaturalBox) -> NaturalBox {
         match self {
-            Analytic::Revolution { profile } => NaturalBox {
+            Analytic::Revolution { profile, .. } => NaturalBox {
                 b: profile.domain(),
                 ..span
             },
@@ -65,7 +77,7 @@ impl Analytic {
         };
         match self {
             Analytic::Torus { .. } => [Some(TAU), Some(TAU)],
-            Analytic::Revolution { profile } => [Some(TAU), closed_period(profile)],
+            Analytic::Revolution { profile, .. } => [Some(TAU), closed_period(profile)],
             Analytic::Extrusion { profile, .. } => [closed_period(profile), None],
             _ => [Some(TAU), None],
         }
@@ -98,7 +110,7 @@ impl Analytic {
                 });
                 (a, t, on_axis)
             }
-            Analytic::Extrusion { profile, d: dir } => {
+            Analytic::Extrusion { profile, d: dir, .. } => {
                 let [t0, t1] = profile.domain();
                 let perp = |v: Vec3| v - v.dot(*dir) * *dir;
                 let t = nearest_param(t0, t1, (16 * profile.points.len()).min(2000), |t| {
@@ -245,7 +257,13 @@ impl<'a> Reader<'a> {
                     .find(|r| r.length() > 1e-9 * (1.0 + (*r).length()))
                     .ok_or_else(|| self.err(si, "the profile lies on the axis".into()))?
                     .normalize();
-                Ok(((o, rho, z.cross(rho), z), Analytic::Revolution { profile }))
+                Ok((
+                    (o, rho, z.cross(rho), z),
+                    Analytic::Revolution {
+                        profile,
+                        profile_angle: self.profile_angle(&curve),
+                    },
+                ))
             }
             "SURFACE_OF_LINEAR_EXTRUSION" => {
                 let ci = self.refer(si, p, 1)?;
@@ -253,10 +271,16 @@ impl<'a> Reader<'a> {
                 let v = self.refer(si, p, 2)?;
                 let vp = self.params(v, &["VECTOR"])?;
                 let d = self.direction(self.refer(v, vp, 1)?)?;
+                let length = self.num(v, vp, 2)?;
                 let profile = self.whole_nurbs(ci, &curve)?;
                 Ok((
                     (Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z),
-                    Analytic::Extrusion { profile, d },
+                    Analytic::Extrusion {
+                        profile,
+                        profile_angle: self.profile_angle(&curve),
+                        d,
+                        length,
+                    },
                 ))
             }
             _ => {
@@ -287,6 +311,50 @@ impl<'a> Reader<'a> {
                 Ok((frame, kind))
             }
         }
+    }
+
+    /// The map of a conic profile's angle to the parameter of its NURBS
+    /// ([`Self::whole_nurbs`]); `None` for B-spline profiles (same
+    /// parameter).
+    fn profile_angle(&self, c: &Curve) -> Option<ArcMap> {
+        matches!(c, Curve::Conic { .. }).then(|| ArcMap::new(0.0, TAU, 1.0))
+    }
+
+    /// The map of a p-curve's (u, v) on this surface (ISO 10303-42's
+    /// parameters) to the parameters of its NURBS over `span`
+    /// ([`super::pcurve`]).
+    fn pcurve_map(&self, kind: &Analytic, to_uv: ToUv, span: NaturalBox) -> PcurveMap {
+        let periods = kind.periods();
+        let (scale, profile) = match kind {
+            Analytic::Cylinder { .. } | Analytic::Cone { .. } => ([self.angle, 1.0], [None, None]),
+            Analytic::Sphere { .. } | Analytic::Torus { .. } => {
+                ([self.angle, self.angle], [None, None])
+            }
+            Analytic::Revolution { profile_angle, .. } => {
+                let b = if profile_angle.is_some() { self.angle } else { 1.0 };
+                ([self.angle, b], [None, *profile_angle])
+            }
+            Analytic::Extrusion {
+                profile_angle,
+                length,
+                ..
+            } => {
+                let a = if profile_angle.is_some() { self.angle } else { 1.0 };
+                ([a, *length], [*profile_angle, None])
+            }
+            Analytic::Plane => ([1.0, 1.0], [None, None]),
+        };
+        let centre = [
+            0.5 * (span.a[0] + span.a[1]),
+            0.5 * (span.b[0] + span.b[1]),
+        ];
+        PcurveMap([0, 1].map(|c| CoordMap {
+            scale: scale[c],
+            profile: profile[c],
+            arc: to_uv.0[c],
+            period: periods[c],
+            centre: centre[c],
+        }))
     }
 
     /// A swept surface's whole basis curve as NURBS.
@@ -326,17 +394,17 @@ impl<'a> Reader<'a> {
             return self.whole_closed_surface(f, frame, &kind);
         }
         if let Analytic::Plane = kind {
-            return self.plane_face(f, frame, loops);
+            return self.plane_face(f, si.id, frame, loops);
         }
         let periods = kind.periods();
-        let nat = self.natural_loops(frame, &kind, loops, periods);
-        let (mut nat, outer_known) =
+        let (nat, starts) = self.natural_loops(frame, &kind, loops, periods);
+        let (mut nat, outer_known, by_edge) =
             match self.close_full_turns(f, &kind, periods, &nat, same_sense)? {
-                Some(closed) => (closed, true),
+                Some(closed) => (closed, true, false),
                 None => {
                     let mut nat = nat;
                     shift_holes_next_to_outer(&mut nat, periods);
-                    (nat, loops[0].0)
+                    (nat, loops[0].0, true)
                 }
             };
         let span = natural_box(&nat, periods)
@@ -348,33 +416,101 @@ impl<'a> Reader<'a> {
         {
             // The face is the whole NURBS (a rectangle of natural
             // coordinates, e.g. a cylinder between two full circles).
+            self.count_edges(loops.iter().map(|l| l.1.len()).sum());
             return Ok(surface);
         }
-        let trims = nat
-            .iter()
-            .map(|l| {
-                let pts: Vec<[f64; 2]> = l.iter().map(|&(a, b)| to_uv(a, b)).collect();
-                polyline(&pts).map(|c| TrimLoop { curves: vec![c] })
-            })
-            .collect::<Result<Vec<_>, String>>()
-            .map_err(|m| self.err(f, m))?;
+        let trims = if by_edge {
+            let map = self.pcurve_map(&kind, to_uv, span);
+            loops
+                .iter()
+                .zip(&nat)
+                .zip(&starts)
+                .map(|(((_, edges), l), st)| {
+                    self.analytic_loop(f, &surface, si.id, &map, to_uv, edges, l, st)
+                })
+                .collect::<R<Vec<_>>>()?
+        } else {
+            self.count_edges(loops.iter().map(|l| l.1.len()).sum());
+            nat.iter()
+                .map(|l| natural_polyline(l, to_uv).map(|c| TrimLoop { curves: vec![c] }))
+                .collect::<Result<Vec<_>, String>>()
+                .map_err(|m| self.err(f, m))?
+        };
         self.attach(f, surface, trims, outer_known)
+    }
+
+    /// One loop of an analytic face: per edge, the trim curve from its
+    /// p-curve where one agrees with the 3-D edge (see [`super::pcurve`]),
+    /// else the edge's stretch `l[starts[k]..=starts[k + 1]]` of the loop
+    /// computed from the 3-D edges. Without any p-curve used, the loop is
+    /// the computed loop as one polyline.
+    #[allow(clippy::too_many_arguments)]
+    fn analytic_loop(
+        &self,
+        f: &Instance,
+        surface: &BSplineSurface,
+        sid: u64,
+        map: &PcurveMap,
+        to_uv: ToUv,
+        edges: &[EdgeUse],
+        l: &[(f64, f64)],
+        starts: &[usize],
+    ) -> R<TrimLoop> {
+        let mut from_pcurves: Vec<Option<TrimCurve>> = Vec::with_capacity(edges.len());
+        for (k, e) in edges.iter().enumerate() {
+            let seg = l.get(starts[k]..=starts[k + 1]);
+            let found = self.pcurve_trim(surface, sid, e, map, seg)?;
+            from_pcurves.push(self.count_trim(e, found));
+        }
+        if from_pcurves.iter().all(Option::is_none) {
+            let c = natural_polyline(l, to_uv).map_err(|m| self.err(f, m))?;
+            return Ok(TrimLoop { curves: vec![c] });
+        }
+        let per_edge = from_pcurves
+            .into_iter()
+            .enumerate()
+            .map(|(k, c)| match c {
+                Some(c) => Ok(c),
+                None => natural_polyline(&l[starts[k]..=starts[k + 1]], to_uv)
+                    .map_err(|m| self.err(&self.ex.instances[&edges[k].edge], m)),
+            })
+            .collect::<R<Vec<_>>>()?;
+        // Consecutive curves that do not meet — p-curves reaching a pole or
+        // apex at their own angles — are joined by a segment along it (no
+        // length in 3-D), so that the loop is closed in (u, v) too.
+        let ([u0, u1], [v0, v1]) = (surface.domain_u(), surface.domain_v());
+        let gap = 1e-9 * (u1 - u0).hypot(v1 - v0);
+        let n = per_edge.len();
+        let mut curves = Vec::with_capacity(n + 2);
+        for (k, c) in per_edge.iter().enumerate() {
+            curves.push(c.clone());
+            let next = &per_edge[(k + 1) % n];
+            let (end, start) = (c.eval(c.domain()[1]), next.eval(next.domain()[0]));
+            if (end[0] - start[0]).hypot(end[1] - start[1]) > gap {
+                curves.push(TrimCurve::line(end, start).map_err(|m| self.err(f, m))?);
+            }
+        }
+        Ok(TrimLoop { curves })
     }
 
     /// The natural coordinates `(a, b)` of every loop (the edges' dense
     /// points, see [`Analytic::natural`]): points on the axis take the angle
     /// of a neighbour, and angles are unwrapped along the loop, so that a
     /// loop winding around a period ends a period from where it started.
+    /// Also, per loop, where each edge starts in it (and, last, where the
+    /// last edge ends): edge `k` is `loop[starts[k]..=starts[k + 1]]`.
     fn natural_loops(
         &self,
         frame: Frame,
         kind: &Analytic,
         loops: &[(bool, Vec<EdgeUse>)],
         periods: Periods,
-    ) -> Vec<NaturalLoop> {
+    ) -> (Vec<NaturalLoop>, Vec<Vec<usize>>) {
         let mut nat: Vec<NaturalLoop> = Vec::with_capacity(loops.len());
+        let mut starts: Vec<Vec<usize>> = Vec::with_capacity(loops.len());
         for (_, edges) in loops {
             let mut pts: Vec<(f64, f64, bool)> = Vec::new();
+            let mut st = Vec::with_capacity(edges.len() + 1);
             for e in edges {
                 let mut ep: Vec<(f64, f64, bool)> = self
                     .edge_points(e)
@@ -384,12 +520,15 @@ impl<'a> Reader<'a> {
                 if !pts.is_empty() {
                     ep.remove(0);
                 }
+                st.push(pts.len().saturating_sub(1));
                 pts.extend(ep);
             }
+            st.push(pts.len().saturating_sub(1));
             take_neighbour_angles_on_axis(&mut pts);
             nat.push(unwrap_loop(&pts, periods));
+            starts.push(st);
         }
-        nat
+        (nat, starts)
     }
 
     /// Faces bounded without a seam edge (ISO 10303-42 allows a periodic
@@ -536,7 +675,7 @@ impl<'a> Reader<'a> {
                     Err(unbounded())
                 }
             }
-            Analytic::Revolution { profile } => {
+            Analytic::Revolution { profile, .. } => {
                 let [t0, t1] = profile.domain();
                 Ok(if side > 0.0 { t1 } else { t0 })
             }
@@ -582,7 +721,7 @@ impl<'a> Reader<'a> {
             b: [mut b0, mut b1],
         } = span;
         let profile_coordinate = match kind {
-            Analytic::Revolution { profile } => Some((1, profile.domain(), periods[1])),
+            Analytic::Revolution { profile, .. } => Some((1, profile.domain(), periods[1])),
             Analytic::Extrusion { profile, .. } => Some((0, profile.domain(), periods[0])),
             _ => None,
         };
@@ -648,7 +787,7 @@ impl<'a> Reader<'a> {
                 );
                 (
                     self.revolved(f, o, z, &profile, &map)?,
-                    Box::new(move |a, b| [map.param(a), b]),
+                    ToUv([Some(map), None]),
                 )
             }
             Analytic::Sphere { r } | Analytic::Torus { small: r, .. } => {
@@ -662,7 +801,7 @@ impl<'a> Reader<'a> {
                 let profile = arc(o + big * x, x, z, *r, &bmap);
                 (
                     self.revolved(f, o, z, &profile, &amap)?,
-                    Box::new(move |a, b| [amap.param(a), bmap.param(b)]),
+                    ToUv([Some(amap), Some(bmap)]),
                 )
             }
             Analytic::Revolution { profile, .. } => {
@@ -675,12 +814,12 @@ impl<'a> Reader<'a> {
                 let map = ArcMap::new(a0, a1, scale);
                 (
                     self.revolved(f, o, z, profile, &map)?,
-                    Box::new(move |a, b| [map.param(a), b]),
+                    ToUv([Some(map), None]),
                 )
             }
             Analytic::Extrusion { profile, d, .. } => (
                 self.extruded(f, profile, *d, b0, b1)?,
-                Box::new(|a, b| [a, b]),
+                ToUv([None, None]),
             ),
             Analytic::Plane => {
                 return Err(self.err(f, "internal: planes are handled by plane_face".into()));
@@ -743,10 +882,13 @@ impl<'a> Reader<'a> {
     }
 
     /// A planar face: a bilinear patch over the bounds' box in the plane's
-    /// frame, the bounds mapped exactly (affine map of their NURBS).
+    /// frame, the bounds mapped exactly (affine map of their NURBS); an
+    /// edge's p-curve on the plane (ISO's (u, v) are the frame's
+    /// coordinates) replaces it where it agrees with the 3-D edge.
     fn plane_face(
         &self,
         f: &Instance,
+        sid: u64,
         (o, x, y, _z): Frame,
         loops: &[(bool, Vec<EdgeUse>)],
     ) -> R<BSplineSurface> {
@@ -798,12 +940,26 @@ impl<'a> Reader<'a> {
             None,
         )
         .map_err(|e| self.err(f, e.to_string()))?;
+        for ((_, edges), l) in loops.iter().zip(curves.iter_mut()) {
+            for (e, c) in edges.iter().zip(l.iter_mut()) {
+                let found = self.pcurve_trim(&s, sid, e, &PcurveMap::IDENTITY, None)?;
+                if let Some(p) = self.count_trim(e, found) {
+                    *c = p;
+                }
+            }
+        }
         let trims = curves
             .into_iter()
             .map(|curves| TrimLoop { curves })
             .collect();
         self.attach(f, s, trims, loops[0].0)
     }
+}
+
+/// A stretch of natural coordinates as a polyline in the NURBS parameters.
+fn natural_polyline(l: &[(f64, f64)], to_uv: ToUv) -> Result<TrimCurve, String> {
+    let pts: Vec<[f64; 2]> = l.iter().map(|&(a, b)| to_uv.at(a, b)).collect();
+    polyline(&pts)
 }
 
 /// Whole periods a loop winds in each natural coordinate: its last point
