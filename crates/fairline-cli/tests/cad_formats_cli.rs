@@ -229,7 +229,10 @@ fn a_step_pcurve_that_disagrees_with_its_edge_is_not_used_and_warned() {
             else {
                 return l.to_string();
             };
-            let c: Vec<f64> = inner.split(',').filter_map(|x| x.trim().parse().ok()).collect();
+            let c: Vec<f64> = inner
+                .split(',')
+                .filter_map(|x| x.trim().parse().ok())
+                .collect();
             if c == [0.9, 0.9] {
                 moved += 1;
                 l.replace(inner, "0.95,0.85")
@@ -244,14 +247,21 @@ fn a_step_pcurve_that_disagrees_with_its_edge_is_not_used_and_warned() {
     ok(&o);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("warning") && err.contains("bad.step") && err.contains("disagree") && err.contains("EDGE_CURVE #"),
+        err.contains("warning")
+            && err.contains("bad.step")
+            && err.contains("disagree")
+            && err.contains("EDGE_CURVE #"),
         "{err}"
     );
     // The face is trimmed by its 3-D edges: the outer loop still passes
     // through (0.9, 0.9), not (0.95, 0.85).
     let back = read_surface_file(&bad).unwrap();
     assert_eq!(back.warnings.len(), 1);
-    assert!(back.warnings[0].starts_with("2 p-curve(s)"), "{}", back.warnings[0]);
+    assert!(
+        back.warnings[0].starts_with("2 p-curve(s)"),
+        "{}",
+        back.warnings[0]
+    );
     let face = &back.surfaces[0];
     assert!(face.contains_uv(0.85, 0.85) && !face.contains_uv(0.93, 0.87));
 }

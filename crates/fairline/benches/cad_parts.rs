@@ -20,11 +20,7 @@ use fairline::io::step::{StepWriteOptions, parse_step, read_step, surfaces_to_st
 use std::path::Path;
 
 fn row(task: &str, size: &str, (wall, cpu): (f64, f64)) {
-    println!(
-        "| {task} | {size} | {:.1} | {:.1} |",
-        wall * 1e3,
-        cpu * 1e3
-    );
+    println!("| {task} | {size} | {:.1} | {:.1} |", wall * 1e3, cpu * 1e3);
 }
 
 fn main() {
@@ -38,7 +34,8 @@ fn main() {
     let impeller = manifest.join("../../../shared/data/surfaces/impeller.igs");
     match read_iges(&impeller) {
         Ok(imp) => {
-            let surfaces: Vec<BSplineSurface> = imp.surfaces.into_iter().map(|s| s.surface).collect();
+            let surfaces: Vec<BSplineSurface> =
+                imp.surfaces.into_iter().map(|s| s.surface).collect();
             let n = surfaces.len();
             row(
                 "read impeller.igs",
@@ -51,7 +48,9 @@ fn main() {
             row(
                 "continuity of impeller.igs (default options)",
                 &format!("{n} faces, {edges} shared edges"),
-                common::median_wall_cpu(runs, || continuity(&surfaces, &opts).map(|r| r.seams.len())),
+                common::median_wall_cpu(runs, || {
+                    continuity(&surfaces, &opts).map(|r| r.seams.len())
+                }),
             );
         }
         Err(e) => println!("(impeller skipped: {e})"),
@@ -65,7 +64,8 @@ fn main() {
                 &format!("{} faces, {} edges", imp.surfaces.len(), t.edge),
                 common::median_wall_cpu(runs, || read_step(&featuretype).map(|i| i.surfaces.len())),
             );
-            let surfaces: Vec<BSplineSurface> = imp.surfaces.into_iter().map(|s| s.surface).collect();
+            let surfaces: Vec<BSplineSurface> =
+                imp.surfaces.into_iter().map(|s| s.surface).collect();
             let written = surfaces_to_step(&surfaces, &StepWriteOptions::default());
             if let Ok(text) = written {
                 let back = parse_step(&text).map(|i| i.trim_sources);

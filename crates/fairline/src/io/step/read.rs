@@ -731,7 +731,9 @@ impl Reader<'_> {
     /// One warning naming the edges whose p-curves were not used.
     fn rejected_warning(&self) -> Option<String> {
         let r = self.rejected.borrow();
-        let worst = r.iter().max_by(|a, b| (a.1 / a.2).total_cmp(&(b.1 / b.2)))?;
+        let worst = r
+            .iter()
+            .max_by(|a, b| (a.1 / a.2).total_cmp(&(b.1 / b.2)))?;
         let ids: Vec<String> = r.iter().take(8).map(|x| format!("#{}", x.0)).collect();
         let largest = if worst.1.is_finite() {
             format!("{:.3e}", worst.1)

@@ -1188,7 +1188,11 @@ impl File {
     fn line2(&mut self, p: [f64; 2], d: [f64; 2]) -> u64 {
         let pt = self.add(&format!("CARTESIAN_POINT('',({:?},{:?}))", p[0], p[1]));
         let len = d[0].hypot(d[1]);
-        let dir = self.add(&format!("DIRECTION('',({:?},{:?}))", d[0] / len, d[1] / len));
+        let dir = self.add(&format!(
+            "DIRECTION('',({:?},{:?}))",
+            d[0] / len,
+            d[1] / len
+        ));
         let v = self.add(&format!("VECTOR('',#{dir},{len:?})"));
         self.add(&format!("LINE('',#{pt},#{v})"))
     }
@@ -1238,13 +1242,24 @@ impl File {
 /// height), the 3-D curves' parameters) unless `skip` names it; the p-curve
 /// of the edge `distort` is moved by `offset` in (u, v). Returns the text
 /// and the EDGE_CURVE ids in loop order.
-fn cylinder_l_face(distort: Option<usize>, offset: [f64; 2], skip: Option<usize>) -> (String, Vec<u64>) {
+fn cylinder_l_face(
+    distort: Option<usize>,
+    offset: [f64; 2],
+    skip: Option<usize>,
+) -> (String, Vec<u64>) {
     let mut f = File::default();
     let frame = f.frame([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
     let cyl = f.add(&format!("CYLINDRICAL_SURFACE('',#{frame},2.)"));
     let at = |a: f64, z: f64| [2.0 * a.cos(), 2.0 * a.sin(), z];
     let h = PI / 2.0;
-    let corners = [at(0.0, 0.0), at(PI, 0.0), at(PI, 5.0), at(h, 5.0), at(h, 2.5), at(0.0, 2.5)];
+    let corners = [
+        at(0.0, 0.0),
+        at(PI, 0.0),
+        at(PI, 5.0),
+        at(h, 5.0),
+        at(h, 2.5),
+        at(0.0, 2.5),
+    ];
     let v: Vec<u64> = corners.iter().map(|&c| f.vertex(c)).collect();
     let zx = ([0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
     let e = [
@@ -1278,7 +1293,14 @@ fn cylinder_l_face(distort: Option<usize>, offset: [f64; 2], skip: Option<usize>
         f.pcurves(e[k], cyl, &[l2]);
     }
     let outer = f.bound(
-        &[(e[0], true), (e[1], true), (e[2], false), (e[3], true), (e[4], false), (e[5], true)],
+        &[
+            (e[0], true),
+            (e[1], true),
+            (e[2], false),
+            (e[3], true),
+            (e[4], false),
+            (e[5], true),
+        ],
         true,
     );
     f.face(&[outer], cyl);
@@ -1337,12 +1359,19 @@ fn step_pcurves_on_a_cylinder_are_used_and_map_exactly_onto_the_edges() {
     assert_eq!(curves.len(), 6, "one trim curve per edge");
     // Lines along parameter lines of (angle, height) stay straight through
     // the angle → rational-parameter map: exact two-point lines.
-    assert!(curves.iter().all(|c| c.degree() == 1 && c.control_points().len() == 2));
+    assert!(
+        curves
+            .iter()
+            .all(|c| c.degree() == 1 && c.control_points().len() == 2)
+    );
     // The NURBS along every trim curve lies on its 3-D edge: the angle
     // passed through ArcMap::param and evaluated on the rational arcs comes
     // back to the angle exactly.
     let worst = largest_distance_from_l_face_edges(s);
-    assert!(worst < 1e-12, "largest distance from the 3-D edges {worst:e}");
+    assert!(
+        worst < 1e-12,
+        "largest distance from the 3-D edges {worst:e}"
+    );
     assert_close(area(s), 7.5 * PI, 1e-6);
     // The same face without p-curves: the same area from the 3-D edges.
     let (computed, _) = cylinder_l_face(Some(0), [0.0; 2], Some(0));
@@ -1381,7 +1410,10 @@ fn step_a_distorted_pcurve_is_rejected_for_its_3d_edge_with_a_warning() {
         );
         let s = &imp.surfaces[0].surface;
         let worst = largest_distance_from_l_face_edges(s);
-        assert!(worst < 1e-9, "edge {edge}: distance from the 3-D edges {worst:e}");
+        assert!(
+            worst < 1e-9,
+            "edge {edge}: distance from the 3-D edges {worst:e}"
+        );
         assert_close(area(s), 7.5 * PI, 1e-6);
     }
 }
@@ -1400,9 +1432,33 @@ fn step_pcurves_on_a_sphere_octant_close_through_the_pole() {
     let sph = f.add(&format!("SPHERICAL_SURFACE('',#{frame},3.)"));
     let (e0, e1, pole) = ([3.0, 0.0, 0.0], [0.0, 3.0, 0.0], [0.0, 0.0, 3.0]);
     let (v0, v1, vp) = (f.vertex(e0), f.vertex(e1), f.vertex(pole));
-    let equator = f.circle([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], 3.0, v0, v1, true);
-    let m90 = f.circle([0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 3.0, v1, vp, true);
-    let m0 = f.circle([0.0; 3], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0], 3.0, v0, vp, true);
+    let equator = f.circle(
+        [0.0; 3],
+        [0.0, 0.0, 1.0],
+        [1.0, 0.0, 0.0],
+        3.0,
+        v0,
+        v1,
+        true,
+    );
+    let m90 = f.circle(
+        [0.0; 3],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        3.0,
+        v1,
+        vp,
+        true,
+    );
+    let m0 = f.circle(
+        [0.0; 3],
+        [0.0, -1.0, 0.0],
+        [1.0, 0.0, 0.0],
+        3.0,
+        v0,
+        vp,
+        true,
+    );
     // The 3-D circles' parameter is in radians; p-curves in degrees run
     // u = (180/π)·t: the LINE's direction has that length.
     let k = 180.0 / PI;
@@ -1453,21 +1509,47 @@ fn step_pcurves_on_a_plane_replace_the_edges_and_a_wrong_radius_is_rejected() {
         let mut f = File::default();
         let frame = f.frame([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
         let plane = f.add(&format!("PLANE('',#{frame})"));
-        let c = [[0.0, 0.0, 0.0], [4.0, 0.0, 0.0], [4.0, 3.0, 0.0], [0.0, 3.0, 0.0]];
+        let c = [
+            [0.0, 0.0, 0.0],
+            [4.0, 0.0, 0.0],
+            [4.0, 3.0, 0.0],
+            [0.0, 3.0, 0.0],
+        ];
         let v: Vec<u64> = c.iter().map(|&p| f.vertex(p)).collect();
-        let e: Vec<u64> = (0..4).map(|k| f.line(c[k], c[(k + 1) % 4], v[k], v[(k + 1) % 4])).collect();
-        let outer = f.bound(&[(e[0], true), (e[1], true), (e[2], true), (e[3], true)], true);
+        let e: Vec<u64> = (0..4)
+            .map(|k| f.line(c[k], c[(k + 1) % 4], v[k], v[(k + 1) % 4]))
+            .collect();
+        let outer = f.bound(
+            &[(e[0], true), (e[1], true), (e[2], true), (e[3], true)],
+            true,
+        );
         let vh = f.vertex([3.0, 1.5, 0.0]);
-        let hole = f.circle([2.0, 1.5, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], 1.0, vh, vh, true);
+        let hole = f.circle(
+            [2.0, 1.5, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0],
+            1.0,
+            vh,
+            vh,
+            true,
+        );
         let c2 = f.circle2([2.0, 1.5], r2);
         f.pcurves(hole, plane, &[c2]);
         let inner = f.bound(&[(hole, false)], false);
         f.face(&[outer, inner], plane);
         let imp = parse_step(&f.text()).unwrap();
         let want = if used {
-            TrimSources { pcurve: 1, edge: 4, pcurve_rejected: 0 }
+            TrimSources {
+                pcurve: 1,
+                edge: 4,
+                pcurve_rejected: 0,
+            }
         } else {
-            TrimSources { pcurve: 0, edge: 4, pcurve_rejected: 1 }
+            TrimSources {
+                pcurve: 0,
+                edge: 4,
+                pcurve_rejected: 1,
+            }
         };
         assert_eq!(imp.trim_sources, want, "radius {r2}");
         assert_eq!(imp.warnings.len(), usize::from(!used));
@@ -1531,7 +1613,11 @@ fn step_partial_bspline_pcurve_is_an_exact_piece() {
     let imp = parse_step(&f.text()).unwrap();
     assert_eq!(
         imp.trim_sources,
-        TrimSources { pcurve: 1, edge: 1, pcurve_rejected: 0 },
+        TrimSources {
+            pcurve: 1,
+            edge: 1,
+            pcurve_rejected: 0
+        },
         "{:?}",
         imp.warnings
     );

@@ -14,10 +14,20 @@ use std::f64::consts::FRAC_PI_2;
 #[derive(Clone, Debug)]
 enum Analytic {
     Plane,
-    Cylinder { r: f64 },
-    Cone { r: f64, tan: f64 },
-    Sphere { r: f64 },
-    Torus { big: f64, small: f64 },
+    Cylinder {
+        r: f64,
+    },
+    Cone {
+        r: f64,
+        tan: f64,
+    },
+    Sphere {
+        r: f64,
+    },
+    Torus {
+        big: f64,
+        small: f64,
+    },
     /// `profile_angle`: a conic profile's angle → its NURBS parameter.
     Revolution {
         profile: Nurbs3,
@@ -110,7 +120,9 @@ impl Analytic {
                 });
                 (a, t, on_axis)
             }
-            Analytic::Extrusion { profile, d: dir, .. } => {
+            Analytic::Extrusion {
+                profile, d: dir, ..
+            } => {
                 let [t0, t1] = profile.domain();
                 let perp = |v: Vec3| v - v.dot(*dir) * *dir;
                 let t = nearest_param(t0, t1, (16 * profile.points.len()).min(2000), |t| {
@@ -331,7 +343,11 @@ impl<'a> Reader<'a> {
                 ([self.angle, self.angle], [None, None])
             }
             Analytic::Revolution { profile_angle, .. } => {
-                let b = if profile_angle.is_some() { self.angle } else { 1.0 };
+                let b = if profile_angle.is_some() {
+                    self.angle
+                } else {
+                    1.0
+                };
                 ([self.angle, b], [None, *profile_angle])
             }
             Analytic::Extrusion {
@@ -339,15 +355,16 @@ impl<'a> Reader<'a> {
                 length,
                 ..
             } => {
-                let a = if profile_angle.is_some() { self.angle } else { 1.0 };
+                let a = if profile_angle.is_some() {
+                    self.angle
+                } else {
+                    1.0
+                };
                 ([a, *length], [*profile_angle, None])
             }
             Analytic::Plane => ([1.0, 1.0], [None, None]),
         };
-        let centre = [
-            0.5 * (span.a[0] + span.a[1]),
-            0.5 * (span.b[0] + span.b[1]),
-        ];
+        let centre = [0.5 * (span.a[0] + span.a[1]), 0.5 * (span.b[0] + span.b[1])];
         PcurveMap([0, 1].map(|c| CoordMap {
             scale: scale[c],
             profile: profile[c],
@@ -817,10 +834,9 @@ impl<'a> Reader<'a> {
                     ToUv([Some(map), None]),
                 )
             }
-            Analytic::Extrusion { profile, d, .. } => (
-                self.extruded(f, profile, *d, b0, b1)?,
-                ToUv([None, None]),
-            ),
+            Analytic::Extrusion { profile, d, .. } => {
+                (self.extruded(f, profile, *d, b0, b1)?, ToUv([None, None]))
+            }
             Analytic::Plane => {
                 return Err(self.err(f, "internal: planes are handled by plane_face".into()));
             }

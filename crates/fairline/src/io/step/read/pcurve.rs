@@ -71,7 +71,10 @@ impl CoordMap {
     /// instead of being clamped onto its border.
     fn to_param(&self, n: f64) -> f64 {
         self.arc.as_ref().map_or(n, |m| {
-            let (lo, hi) = (m.start.min(m.start + m.sweep), m.start.max(m.start + m.sweep));
+            let (lo, hi) = (
+                m.start.min(m.start + m.sweep),
+                m.start.max(m.start + m.sweep),
+            );
             let slack = 1e-12 * m.sweep.abs();
             if n < lo - slack || n > hi + slack {
                 m.scale * n
@@ -190,7 +193,10 @@ fn distance_to_edge(curve: &Curve, samples: &[(f64, Vec3)], q: Vec3) -> f64 {
     const STRIDE: usize = 16;
     let coarse = nearest(&mut (0..n).step_by(STRIDE).chain(std::iter::once(n - 1)));
     let k = nearest(&mut (coarse.saturating_sub(STRIDE)..=(coarse + STRIDE).min(n - 1)));
-    let (ta, tb) = (samples[k.saturating_sub(1)].0, samples[(k + 1).min(n - 1)].0);
+    let (ta, tb) = (
+        samples[k.saturating_sub(1)].0,
+        samples[(k + 1).min(n - 1)].0,
+    );
     let (lo, hi) = (ta.min(tb), ta.max(tb));
     let sampled = d2(k).sqrt();
     let exact = match curve {
@@ -320,7 +326,8 @@ impl<'a> Reader<'a> {
             let [u, v] = map.to_param(map.near_face(map.natural(xy(t))));
             s.eval(u, v)
         };
-        let param_in = |a: f64, b: f64, q: Vec3| nearest_param(a, b, 400, |t| located(t).distance(q));
+        let param_in =
+            |a: f64, b: f64, q: Vec3| nearest_param(a, b, 400, |t| located(t).distance(q));
         let [t0, t1] = match curve {
             Curve::Spline(n) => {
                 let [a, b] = n.domain();
@@ -390,8 +397,7 @@ impl<'a> Reader<'a> {
         if let Some(n) = &piece {
             if (0..2).all(|c| map.0[c].affine() || constant(n, c)) {
                 let pts = n.points.iter().map(|q| to_uv(*q)).collect();
-                return TrimCurve::new(n.degree, n.knots.clone(), pts, n.weights.clone())
-                    .map(Some);
+                return TrimCurve::new(n.degree, n.knots.clone(), pts, n.weights.clone()).map(Some);
             }
             // A segment along a parameter line stays one through the
             // monotone maps of the coordinates.
@@ -436,5 +442,8 @@ fn disagreement(s: &BSplineSurface, e: &EdgeUse, samples: &[(f64, Vec3)], c: &Tr
     let along = check_params(c)
         .into_iter()
         .map(|t| distance_to_edge(&e.curve, samples, at(t)));
-    ends.chain(along).fold(0.0, |m, d| if d.is_nan() { f64::INFINITY } else { m.max(d) })
+    ends.chain(along).fold(
+        0.0,
+        |m, d| if d.is_nan() { f64::INFINITY } else { m.max(d) },
+    )
 }
