@@ -139,9 +139,7 @@ impl Nurbs3 {
         knots.extend_from_slice(&self.knots[k + 1..]);
         let mut qw = vec![[0.0; 4]; n + r];
         qw[..=k - p].copy_from_slice(&pw[..=k - p]);
-        for i in k - s..n {
-            qw[i + r] = pw[i];
-        }
+        qw[k - s + r..n + r].copy_from_slice(&pw[k - s..n]);
         let mut rw: Vec<[f64; 4]> = (0..=p - s).map(|i| pw[k - p + i]).collect();
         let mut l = k - p;
         for j in 1..=r {
@@ -156,8 +154,8 @@ impl Nurbs3 {
             qw[l] = rw[0];
             qw[k + r - j - s] = rw[p - j - s];
         }
-        for i in l + 1..k - s {
-            qw[i] = rw[i - l];
+        if l + 1 < k - s {
+            qw[l + 1..k - s].copy_from_slice(&rw[1..k - s - l]);
         }
         let rational = self.weights.is_some();
         let mut points = Vec::with_capacity(n + r);

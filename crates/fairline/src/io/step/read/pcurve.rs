@@ -69,7 +69,7 @@ impl CoordMap {
     /// continued linearly (`scale · angle`, the value at the range's ends),
     /// so that a p-curve leaving the face's range leaves the NURBS domain
     /// instead of being clamped onto its border.
-    fn to_param(&self, n: f64) -> f64 {
+    fn param_of(&self, n: f64) -> f64 {
         self.arc.as_ref().map_or(n, |m| {
             let (lo, hi) = (
                 m.start.min(m.start + m.sweep),
@@ -105,8 +105,8 @@ impl PcurveMap {
         [self.0[0].natural(p.x), self.0[1].natural(p.y)]
     }
 
-    fn to_param(&self, n: [f64; 2]) -> [f64; 2] {
-        [self.0[0].to_param(n[0]), self.0[1].to_param(n[1])]
+    fn param_of(&self, n: [f64; 2]) -> [f64; 2] {
+        [self.0[0].param_of(n[0]), self.0[1].param_of(n[1])]
     }
 
     /// Natural coordinates moved by whole periods next to the face's range
@@ -323,7 +323,7 @@ impl<'a> Reader<'a> {
         let xy = |t: f64| curve.eval(t);
         // Surface point of a p-curve parameter, in whatever period.
         let located = |t: f64| {
-            let [u, v] = map.to_param(map.near_face(map.natural(xy(t))));
+            let [u, v] = map.param_of(map.near_face(map.natural(xy(t))));
             s.eval(u, v)
         };
         let param_in =
@@ -380,7 +380,7 @@ impl<'a> Reader<'a> {
         let shifted = |x: f64, sh: f64| if sh == 0.0 { x } else { x + sh };
         let to_uv = |q: Vec3| {
             let n = map.natural(q);
-            map.to_param([shifted(n[0], shift[0]), shifted(n[1], shift[1])])
+            map.param_of([shifted(n[0], shift[0]), shifted(n[1], shift[1])])
         };
         let piece = match curve {
             Curve::Line { .. } => Some(Nurbs3::segment(xy(t0), xy(t1), 0.0, 1.0)),
