@@ -45,13 +45,14 @@ fn list(var: &str, default: &[f64]) -> Vec<f64> {
         .unwrap_or_else(|| default.to_vec())
 }
 
-/// θ′/δ and position of every judged site for the wide fit (f·R, hole).
+/// θ′/δ at every site (`None`: not judged or no fit) for the wide fit
+/// (radius `smooth_radius`, hole).
 fn wide_ratios(
     fine: &[Option<FineFit>],
     judged: &[Judgement],
     smooth_radius: f64,
     hole: f64,
-) -> Vec<(f64, Vec3)> {
+) -> Vec<Option<f64>> {
     let grid = Grid::new(
         smooth_radius,
         fine.iter()
@@ -60,7 +61,7 @@ fn wide_ratios(
     );
     (0..fine.len())
         .into_par_iter()
-        .filter_map(|i| {
+        .map(|i| {
             let fi = fine[i]?;
             judged[i].score?;
             let mut nb = Vec::new();
@@ -76,9 +77,36 @@ fn wide_ratios(
             let ns =
                 smooth_normal_with_hole(fi.position, fi.normal, &nb, smooth_radius, floor, hole)?;
             let theta = fi.normal.dot(ns).clamp(-1.0, 1.0).acos();
-            Some((theta / fi.facet_angle.max(1e-12), fi.position))
+            Some(theta / fi.facet_angle.max(1e-12))
         })
         .collect()
+}
+
+/// Prints the largest value away from the dent (with its place) and near
+/// it (`values` per site, positions from the fine fits).
+fn print_extremes(
+    label: &str,
+    values: &[Option<f64>],
+    fine: &[Option<FineFit>],
+    centre: Option<Vec3>,
+) {
+    let (mut elsewhere, mut dent) = ((0.0f64, Vec3::ZERO), 0.0f64);
+    for (v, f) in values.iter().zip(fine) {
+        let (Some(v), Some(f)) = (*v, f) else {
+            continue;
+        };
+        match centre.map(|c| (f.position - c).length()) {
+            Some(d) if d < 0.12 => dent = dent.max(v),
+            Some(d) if d <= 0.45 => {}
+            _ if v > elsewhere.0 => elsewhere = (v, f.position),
+            _ => {}
+        }
+    }
+    let at = elsewhere.1;
+    println!(
+        "  {label}: max elsewhere {:.2} alpha' at [{:.2}, {:.2}, {:.2}]; at the dent {:.2} alpha'",
+        elsewhere.0, at.x, at.y, at.z, dent
+    );
 }
 
 #[test]
@@ -125,28 +153,31 @@ fn wide_scale_comparison_on_real_meshes() {
             judged.iter().filter(|j| j.shape).count(),
         );
         for &hole in &holes {
+            // per factor, θ′/δ in multiples of its median α′; and across
+            // the factors, the least of them at each site (a defect of one
+            // size misfits at every neighbouring scale)
+            let mut across: Vec<Option<f64>> = vec![Some(f64::INFINITY); fine.len()];
             for &f in &factors {
-                let rows = wide_ratios(&fine, &judged, f * scale.smooth_radius, hole);
-                let alpha = median(rows.iter().map(|r| r.0).collect()).max(1e-12);
-                let (mut elsewhere, mut dent) = ((0.0f64, Vec3::ZERO), 0.0f64);
-                for &(ratio, at) in &rows {
-                    match centre.map(|c| (at - c).length()) {
-                        Some(d) if d < 0.12 => dent = dent.max(ratio),
-                        Some(d) if d <= 0.45 => {}
-                        _ if ratio > elsewhere.0 => elsewhere = (ratio, at),
-                        _ => {}
-                    }
+                let ratios = wide_ratios(&fine, &judged, f * scale.smooth_radius, hole);
+                let alpha = median(ratios.iter().flatten().copied().collect()).max(1e-12);
+                let scaled: Vec<Option<f64>> =
+                    ratios.iter().map(|r| r.map(|r| r / alpha)).collect();
+                for (a, v) in across.iter_mut().zip(&scaled) {
+                    *a = a.zip(*v).map(|(a, v)| a.min(v));
                 }
-                let at = elsewhere.1;
-                println!(
-                    "  hole {hole} f {f}: alpha' {alpha:.3}; max elsewhere {:.2} alpha' at [{:.2}, {:.2}, {:.2}]; at the dent {:.2} alpha'",
-                    elsewhere.0 / alpha,
-                    at.x,
-                    at.y,
-                    at.z,
-                    dent / alpha
+                print_extremes(
+                    &format!("hole {hole} f {f} (alpha' {alpha:.3})"),
+                    &scaled,
+                    &fine,
+                    *centre,
                 );
             }
+            print_extremes(
+                &format!("hole {hole} least over f {factors:?}"),
+                &across,
+                &fine,
+                *centre,
+            );
         }
     }
 }
