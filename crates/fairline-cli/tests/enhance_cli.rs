@@ -78,7 +78,10 @@ fn enhance_writes_mesh_report_and_picture_and_keeps_constraints() {
         } else if mesh.is_boundary_vertex(v) {
             // boundary vertices slide along the boundary only
             if (p.x.abs() - 1.0).abs() < 1e-12 {
-                assert!((q.x - p.x).abs() < 1e-12 && (q.z - p.z).abs() < 1e-12, "{p} -> {q}");
+                assert!(
+                    (q.x - p.x).abs() < 1e-12 && (q.z - p.z).abs() < 1e-12,
+                    "{p} -> {q}"
+                );
             } else {
                 assert!((q.y - p.y).abs() < 1e-12, "{p} -> {q}");
             }

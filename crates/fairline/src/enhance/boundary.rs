@@ -102,10 +102,22 @@ fn nearest_on_segment(x: Vec3, a: Vec3, b: Vec3) -> (Vec3, f64) {
 impl BoundaryCurves {
     /// The boundary loops of `mesh` at the normalised input `positions`.
     pub fn new(mesh: &SurfaceMesh, positions: &[Vec3]) -> BoundaryCurves {
+        let loops = boundary_loops(mesh);
+        if loops.is_empty() {
+            // a closed mesh: nothing to store
+            return BoundaryCurves {
+                prev: Vec::new(),
+                next: Vec::new(),
+                corner: Vec::new(),
+                turn: Vec::new(),
+                chord_corner: Vec::new(),
+                positions: Vec::new(),
+            };
+        }
         let n = mesh.vertex_count();
         let (mut prev, mut next) = (vec![NONE; n], vec![NONE; n]);
         let mut corner = vec![false; n];
-        for lp in boundary_loops(mesh) {
+        for lp in loops {
             for &h in &lp {
                 let (a, b) = (mesh.from_vertex(h).idx(), mesh.to_vertex(h).idx());
                 if next[a] != NONE || prev[b] != NONE || lp.len() < 4 {
@@ -173,7 +185,8 @@ impl BoundaryCurves {
                 continue;
             }
             let p = prev[v] as usize;
-            let degenerate = positions[v] == positions[p] || positions[v] == positions[next[v] as usize];
+            let degenerate =
+                positions[v] == positions[p] || positions[v] == positions[next[v] as usize];
             let at_chord = chord_corner[v].is_some() || chord_corner[p].is_some();
             if degenerate || (turn[v] > feature && !at_chord) {
                 corner[v] = true;
@@ -191,12 +204,12 @@ impl BoundaryCurves {
 
     /// Whether `v` lies on a boundary loop.
     pub fn is_on(&self, v: usize) -> bool {
-        self.next[v] != NONE && self.prev[v] != NONE
+        self.next.get(v).is_some_and(|&w| w != NONE) && self.prev[v] != NONE
     }
 
     /// Whether the boundary vertex `v` stays (a corner of the curve).
     pub fn is_corner(&self, v: usize) -> bool {
-        self.corner[v]
+        self.corner.get(v).copied().unwrap_or(false)
     }
 
     /// The previous and next vertex of boundary vertex `v` along its loop.
@@ -324,7 +337,10 @@ impl BoundaryCurves {
 /// on the second, within two chord lengths, and the lines nearly meet
 /// (closer than a tenth of the chord).
 fn rebuilt_corner(before: Vec3, a: Vec3, b: Vec3, after: Vec3) -> Option<Vec3> {
-    let (u, w) = ((a - before).normalize_or_zero(), (after - b).normalize_or_zero());
+    let (u, w) = (
+        (a - before).normalize_or_zero(),
+        (after - b).normalize_or_zero(),
+    );
     let chord = a.distance(b);
     if u == Vec3::ZERO || w == Vec3::ZERO || !(chord > 0.0) {
         return None;

@@ -13,12 +13,8 @@
 //!    *feature vertex*.
 //! 2. **Patches**: the faces joined across the other edges (union–find).
 //!    A patch every vertex of which is a feature vertex — it has no vertex
-//!    inside it, a strip at most one face wide — and that bends the same
-//!    way (convex, or concave) at all its feature edges is a *chord strip*;
-//!    every other patch is a *side*. (A strip that is convex at one row and
-//!    concave at the other is a narrow face between two creases, such as a
-//!    slope between a concave and a convex crease sampled by one strip:
-//!    the chords on either side of it are rebuilt against its plane.)
+//!    inside it, a strip at most one face wide — is a *chord strip*; every
+//!    other patch is a *side*.
 //! 3. **Chord faces**: a face of a chord strip each of whose corners
 //!    touches a side. At each corner, each side touching it gives a plane
 //!    through the corner, normal to the area-weighted mean normal of that
@@ -100,8 +96,6 @@ pub(super) fn chord_faces(
     let cos_feature = FEATURE_ANGLE_DEG.to_radians().cos();
     let mut parent: Vec<u32> = (0..nf as u32).collect();
     let mut feature_vertex = vec![false; mesh.vertex_count()];
-    // (face, convex) of both faces of every feature edge
-    let mut feature_edges: Vec<(u32, bool)> = Vec::new();
     for h in mesh.halfedges() {
         let o = mesh.opposite(h);
         // each interior edge once
@@ -118,13 +112,6 @@ pub(super) fn chord_faces(
         if n1.dot(n2) < cos_feature {
             feature_vertex[mesh.from_vertex(h).idx()] = true;
             feature_vertex[mesh.to_vertex(h).idx()] = true;
-            // convex where the far corner of the second face lies below
-            // the first face's plane
-            let far = mesh.to_vertex(mesh.next(o));
-            let p = mesh.positions();
-            let convex = (p[far.idx()] - p[mesh.from_vertex(h).idx()]).dot(n1) < 0.0;
-            feature_edges.push((f1.0, convex));
-            feature_edges.push((f2.0, convex));
         } else {
             union_find_join(&mut parent, f1.0, f2.0);
         }
@@ -140,24 +127,6 @@ pub(super) fn chord_faces(
         if face_normals[f].0 == Vec3::ZERO || triangles[f].iter().any(|v| !feature_vertex[v.idx()])
         {
             strip[patch[f] as usize] = false;
-        }
-    }
-    // a strip that turns one way at some of its feature edges and the
-    // other way at others (a narrow face between a concave and a convex
-    // crease) is a side, not a chord: a chord bends the same way at both
-    // of its rows
-    let mut turns = vec![(false, false); nf];
-    for &(f, convex) in &feature_edges {
-        let t = &mut turns[patch[f as usize] as usize];
-        if convex {
-            t.0 = true;
-        } else {
-            t.1 = true;
-        }
-    }
-    for (p, t) in turns.iter().enumerate() {
-        if t.0 && t.1 {
-            strip[p] = false;
         }
     }
     let is_side =

@@ -297,11 +297,10 @@ mod tests {
                 *p += (rough + smooth * 3.0) * 0.3;
             }
         }
-        let system =
-            system::assemble(
-                &layout, &curvature, &boundary, &distance, &pos, &target, 0.5, 1e-10,
-            )
-            .unwrap();
+        let system = system::assemble(
+            &layout, &curvature, &boundary, &distance, &pos, &target, 0.5, 1e-10,
+        )
+        .unwrap();
         (layout, curvature, distance, system)
     }
 
