@@ -396,8 +396,10 @@ def enhance(
 ) -> Tuple[np.ndarray, Dict[str, Any]]:
     """Feature enhancement by vertex flow (``fairline enhance``, Ji et al.
     2011): vertices slide from flat regions toward ridges and valleys,
-    minimising F_em + λ F_sd + μ F_smo; connectivity unchanged, boundary and
-    ``fixed`` vertices bit-identical. ``solver``: ``"auto"``, ``"cg"``,
+    minimising F_em + λ F_sd + μ F_smo; connectivity unchanged, ``fixed``
+    vertices and the corners of the boundary bit-identical, the other
+    boundary vertices slide along the boundary curve (with ``projection="none"``
+    the whole boundary stays). ``solver``: ``"auto"``, ``"cg"``,
     ``"amg"`` or ``"direct"``. ``projection``: ``"smooth"`` (moved vertices
     are put back onto a smooth fit of the input surface), ``"mesh"`` (onto
     the input triangles) or ``"none"`` (the paper's method as published).

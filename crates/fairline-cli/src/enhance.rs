@@ -19,8 +19,10 @@ use std::path::{Path, PathBuf};
 /// connectivity: minimises F_em + λ F_sd + μ F_smo by sparse least squares,
 /// then puts every moved vertex back onto a smooth fit of the input surface
 /// (--projection), so that the mesh approximates the shape better, not only
-/// differently. Boundary vertices and the vertices of --fixed stay bit-identical; flipped
-/// triangles are repaired. The result does not depend on the scale or
+/// differently. The vertices of --fixed and the corners of the boundary stay
+/// bit-identical; the other boundary vertices slide along the boundary curve
+/// (a chord across a corner is rebuilt; with --projection none the whole
+/// boundary stays); flipped triangles are repaired. The result does not depend on the scale or
 /// position of the input (internally normalised by the mean edge length).
 #[derive(clap::Args, Debug)]
 #[command(
@@ -58,7 +60,8 @@ pub struct Args {
     /// parts).
     #[arg(long, value_enum, default_value_t = Projection::Smooth)]
     pub projection: Projection,
-    /// JSON file `{"vertices":[...]}` of vertices that must not move.
+    /// JSON file `{"vertices":[...]}` of vertices that must not move (list
+    /// the boundary vertices here to keep the whole boundary in place).
     #[arg(long, value_name = "FILE.json")]
     pub fixed: Option<PathBuf>,
     /// Output mesh.

@@ -408,7 +408,7 @@ fn profile_points(profile: &Profile, n: u32) -> Vec<DVec2> {
 }
 
 /// The fandisk-like part: [`fandisk_profile`] extruded over y ∈ [−1, 1],
-/// open (its boundary is fixed), sampled evenly by arc length with the
+/// open (its boundary slides along itself, module `boundary`), sampled evenly by arc length with the
 /// creases between the grid rows.
 fn fandisk_truth(n: u32) -> Truth {
     let (profile, features) = fandisk_profile();
@@ -572,6 +572,8 @@ impl<'a> FaceGrid<'a> {
 struct Accuracy {
     /// Two-sided Hausdorff distance.
     hausdorff: f64,
+    /// Where it is reached (on the mesh or on the surface).
+    worst: Vec3,
     /// Root of the mean of the mean squared distances mesh → surface
     /// (area-weighted) and surface → mesh.
     rms: f64,
@@ -589,19 +591,22 @@ fn accuracy(truth: &Truth, positions: &[Vec3]) -> Accuracy {
     let areas = face_areas(&m);
     const K: usize = 8;
     // mesh → surface: per face (max d, Σ a d², Σ a angle near features, Σ a near features)
-    let per_face: Vec<(f64, f64, f64, f64)> = (0..m.face_count() as u32)
+    let per_face: Vec<(f64, f64, f64, f64, Vec3)> = (0..m.face_count() as u32)
         .into_par_iter()
         .map(|f| {
             let t = m.triangle(FaceId(f)).map(|v| positions[v.idx()]);
             let (normal, _) = triangle_normal_area(t[0], t[1], t[2]);
             let a = areas[f as usize] / ((K + 1) * (K + 2) / 2) as f64;
-            let mut out = (0.0f64, 0.0, 0.0, 0.0);
+            let mut out = (0.0f64, 0.0, 0.0, 0.0, t[0]);
             for i in 0..=K {
                 for j in 0..=K - i {
                     let (u, v) = (i as f64 / K as f64, j as f64 / K as f64);
                     let x = (1.0 - u - v) * t[0] + u * t[1] + v * t[2];
                     let (d, n) = (truth.closest)(x);
-                    out.0 = out.0.max(d);
+                    if d > out.0 {
+                        out.0 = d;
+                        out.4 = x;
+                    }
                     out.1 += a * d * d;
                     if (truth.near_feature)(x) {
                         let c = normal.dot(n).abs().min(1.0);
@@ -614,7 +619,10 @@ fn accuracy(truth: &Truth, positions: &[Vec3]) -> Accuracy {
         })
         .collect();
     let area: f64 = areas.iter().sum();
-    let h_ms = per_face.iter().map(|f| f.0).fold(0.0, f64::max);
+    let (h_ms, worst_ms) = per_face
+        .iter()
+        .map(|f| (f.0, f.4))
+        .fold((0.0, Vec3::ZERO), |a, b| if b.0 > a.0 { b } else { a });
     let ms_ms = per_face.iter().map(|f| f.1).sum::<f64>() / area;
     let near = per_face.iter().map(|f| f.3).sum::<f64>();
     let normal_error_deg = per_face.iter().map(|f| f.2).sum::<f64>() / near.max(1e-300);
@@ -625,10 +633,15 @@ fn accuracy(truth: &Truth, positions: &[Vec3]) -> Accuracy {
         .par_iter()
         .map(|&x| grid.distance(x))
         .collect();
-    let h_sm = d.iter().copied().fold(0.0, f64::max);
+    let (h_sm, worst_sm) =
+        d.iter().zip(&truth.samples).fold(
+            (0.0, Vec3::ZERO),
+            |a, (&d, &x)| if d > a.0 { (d, x) } else { a },
+        );
     let ms_sm = d.iter().map(|d| d * d).sum::<f64>() / d.len() as f64;
     Accuracy {
         hausdorff: h_ms.max(h_sm),
+        worst: if h_ms >= h_sm { worst_ms } else { worst_sm },
         rms: (0.5 * (ms_ms + ms_sm)).sqrt(),
         normal_error_deg,
         quality: QualityStats::of_mesh(&m, 10).mean,
@@ -689,28 +702,25 @@ fn ground_truth_meshes_lie_on_their_surfaces() {
     }
 }
 
-/// The table of issue #21 item 2 (BENCHMARKS.md, session 17): input, the
-/// paper's method (no projection), the projection onto the input mesh and
-/// the default (smooth projection) on each shape; and the claims.
-///
-/// With the defaults (λ = 1, μ = ½, one solve):
-/// - on the shapes with rounded features (rounded cube, filleted cylinder),
-///   which the coarse input under-samples, the two-sided Hausdorff and RMS
-///   distances fall by at least 15 % (rounded cube: 40 % and 30 %), and the
-///   normal error near the features falls;
-/// - on the shapes with sharp creases, which no smooth fit reconstructs,
-///   the sharp cube still improves (both distances and the normals), and
-///   the fandisk-like part stays within 10 % (Hausdorff) and 5 % (RMS) of
-///   its input;
-/// - everywhere the default is closer to the truth than the paper's
-///   method, whose distances exceed the input's, and the mean triangle
-///   quality stays at least 0.8, without flips.
-#[test]
-fn vertex_flow_approximates_known_surfaces_better_than_its_input() {
+/// One row of the table of issue #21 item 2 per shape and mesh.
+struct Measured {
+    name: &'static str,
+    input: Accuracy,
+    paper: Accuracy,
+    mesh_projection: Accuracy,
+    default: Accuracy,
+    flipped: usize,
+}
+
+/// Runs the paper's method, the projection onto the input mesh and the
+/// defaults on every shape of [`truths`] and prints the table
+/// (BENCHMARKS.md).
+fn measure_all() -> Vec<Measured> {
     println!(
         "| shape | vertices | mesh | Hausdorff | RMS | normal error near features (°) | mean quality |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- |");
+    let mut all = Vec::new();
     for truth in truths() {
         let input = accuracy(&truth, truth.mesh.positions());
         let row = |label: &str, a: &Accuracy| {
@@ -731,52 +741,114 @@ fn vertex_flow_approximates_known_surfaces_better_than_its_input() {
         };
         let (paper, _) = run(EnhanceOptions::default().projection(Projection::None));
         row("Ji et al. (no projection)", &paper);
-        let (mesh_proj, _) = run(EnhanceOptions::default().projection(Projection::Mesh));
-        row("projected onto the input mesh", &mesh_proj);
-        let (out, result) = run(EnhanceOptions::default());
-        row("default (smooth projection)", &out);
-        let name = truth.name;
-        let ratio = |a: f64, b: f64| a / b;
-        let (h, rms) = (
-            ratio(out.hausdorff, input.hausdorff),
-            ratio(out.rms, input.rms),
+        let (mesh_projection, _) = run(EnhanceOptions::default().projection(Projection::Mesh));
+        row("projected onto the input mesh", &mesh_projection);
+        let (default, result) = run(EnhanceOptions::default());
+        row("default (smooth projection)", &default);
+        println!(
+            "{}: Hausdorff {:+.1} % (worst at {:.3} in the input, {:.3} after), RMS {:+.1} %, {} backtracked",
+            truth.name,
+            100.0 * (default.hausdorff / input.hausdorff - 1.0),
+            input.worst,
+            default.worst,
+            100.0 * (default.rms / input.rms - 1.0),
+            result.report.backtracked_vertices
         );
+        all.push(Measured {
+            name: truth.name,
+            input,
+            paper,
+            mesh_projection,
+            default,
+            flipped: result.report.flipped_triangles,
+        });
+    }
+    all
+}
+
+/// The shapes whose coarse input under-samples the features, where the
+/// issue asks for at least 20 % lower distances: features narrower than
+/// about three input edges, whose chords carry the input's largest errors
+/// (rounded cube: fillet r = 0.3 over 2.5 edges; filleted cylinder: fillet
+/// r = 0.3 over 3 edges; sharp cube: every edge and corner cut by chords
+/// of a sampling that ignores them). The fandisk-like part is sampled with
+/// its creases between two rows as well, but its flat sides and slopes
+/// carry no error and its largest error sits at a crease end on the
+/// boundary; it is held to "lower than the input".
+const UNDER_SAMPLED: [&str; 3] = ["rounded cube", "sharp cube", "filleted cylinder"];
+
+/// Issue #21 item 2 (BENCHMARKS.md, session 21), what holds with the
+/// defaults (λ = 1, μ = ½, one solve): on every shape the two-sided
+/// Hausdorff AND the RMS distance to the true surface are lower than the
+/// input's, the mean triangle quality is at least 0.8, no triangle flips,
+/// and the default is closer than the paper's method (which leaves the
+/// surface) and than the projection onto the input mesh; by at least 20 %
+/// on the under-sampled shapes in both measures except where the
+/// `#[ignore]`d test below states the claim that is not met; the normal
+/// error near the features falls on every shape but the fandisk-like part.
+#[test]
+fn vertex_flow_approximates_known_surfaces_better_than_its_input() {
+    for m in measure_all() {
+        let (name, input, out) = (m.name, &m.input, &m.default);
+        let (h, rms) = (out.hausdorff / input.hausdorff, out.rms / input.rms);
+        assert!(h < 1.0 && rms < 1.0, "{name}: {h:.3} {rms:.3}");
+        // the issue's 20 % where met, and what was measured before where
+        // it is not (no bound looser than session 19's)
         match name {
-            "rounded cube" | "filleted cylinder" => {
-                let (hmax, rmax) = if name == "rounded cube" {
-                    (0.6, 0.7)
-                } else {
-                    (0.85, 0.85)
-                };
-                assert!(h <= hmax && rms <= rmax, "{name}: {h:.3} {rms:.3}");
-                assert!(out.normal_error_deg < input.normal_error_deg, "{name}");
-            }
+            "rounded cube" => assert!(h <= 0.6 && rms <= 0.7, "{name}: {h:.3} {rms:.3}"),
+            // Hausdorff −15 %: the worst point is a cube corner (three sides)
             "sharp cube" => {
-                // the crease rebuilt from the sides (module `crease`)
                 assert!(h <= 0.9 && rms <= 0.8, "{name}: {h:.3} {rms:.3}");
-                assert!(
-                    out.normal_error_deg < 0.7 * input.normal_error_deg,
-                    "{name}"
-                );
+                assert!(out.normal_error_deg < 0.7 * input.normal_error_deg);
             }
-            _ => {
-                // NOT the issue's claim: the Hausdorff distance stays above
-                // the input's (BENCHMARKS.md, session 19)
-                assert!(h <= 1.1 && rms < 1.0, "{name}: {h:.3} {rms:.3}");
-            }
+            // RMS −19.0 %
+            "filleted cylinder" => assert!(h <= 0.8 && rms <= 0.85, "{name}: {h:.3} {rms:.3}"),
+            _ => {}
         }
+        if name != "fandisk-like part" {
+            assert!(
+                out.normal_error_deg < input.normal_error_deg,
+                "{name}: {:.2}° vs {:.2}°",
+                out.normal_error_deg,
+                input.normal_error_deg
+            );
+        }
+        assert!(out.quality >= 0.8, "{name}: quality {}", out.quality);
+        assert_eq!(m.flipped, 0, "{name}");
         // the paper's method leaves the surface; the default does not
         assert!(
-            paper.hausdorff > input.hausdorff && paper.rms > input.rms,
+            m.paper.hausdorff > input.hausdorff && m.paper.rms > input.rms,
             "{name}"
         );
         assert!(
-            out.hausdorff < paper.hausdorff && out.rms < paper.rms,
+            out.hausdorff < m.paper.hausdorff && out.rms < m.paper.rms,
             "{name}"
         );
-        assert!(out.normal_error_deg < paper.normal_error_deg, "{name}");
+        assert!(out.rms < m.mesh_projection.rms, "{name}");
+    }
+}
+
+/// Every claim of issue #21 item 2, unloosened: Hausdorff and RMS lower
+/// than the input's on every shape and by at least 20 % on the
+/// under-sampled ones, the normal error near the features lower on every
+/// shape, mean quality at least 0.8.
+#[test]
+#[ignore = "not met (BENCHMARKS.md, session 21): sharp cube Hausdorff −14.9 % (a cube corner), filleted cylinder RMS −19.0 %, fandisk-like part normal error near the features 6.76° vs the input's 6.51° (its convex crease)"]
+fn vertex_flow_meets_every_claim_of_issue_21_item_2() {
+    for m in measure_all() {
+        let (name, input, out) = (m.name, &m.input, &m.default);
+        let (h, rms) = (out.hausdorff / input.hausdorff, out.rms / input.rms);
+        assert!(h < 1.0 && rms < 1.0, "{name}: {h:.3} {rms:.3}");
+        if UNDER_SAMPLED.contains(&name) {
+            assert!(h <= 0.8 && rms <= 0.8, "{name}: {h:.3} {rms:.3}");
+        }
+        assert!(
+            out.normal_error_deg < input.normal_error_deg,
+            "{name}: {:.2}° vs {:.2}°",
+            out.normal_error_deg,
+            input.normal_error_deg
+        );
         assert!(out.quality >= 0.8, "{name}: quality {}", out.quality);
-        assert_eq!(result.report.flipped_triangles, 0, "{name}");
     }
 }
 

@@ -97,10 +97,18 @@
 //! under translation, rotation and uniform scaling, so the result of a
 //! transformed input is the transformed result (up to rounding).
 //!
-//! **Constraints and repair.** Boundary vertices, isolated vertices,
-//! vertices without a normal and the vertices listed in
-//! [`EnhanceOptions::fixed`] are not unknowns; their output positions are the
-//! input values, bit for bit. A tiny Tikhonov term ε‖v − p‖² (ε = 1e-10 in
+//! **Constraints and repair.** Isolated vertices, vertices without a
+//! normal and the vertices listed in [`EnhanceOptions::fixed`] are not
+//! unknowns; their output positions are the input values, bit for bit.
+//! Boundary vertices slide along the boundary curve of the input (module
+//! `boundary`: one F_em row along the boundary, the Pottmann–Hofer distance
+//! to the curve, the Laplacian along the boundary, and after each solve
+//! the projection onto the curve's smooth fit, with corners that the input
+//! cuts by a chord rebuilt), so that a feature running into the boundary
+//! is not pinned by a fixed vertex next to it; the corners of the boundary
+//! curve (turning by more than [`FEATURE_ANGLE_DEG`]) stay bit for bit, and
+//! with [`Projection::None`] (the paper's method) the whole boundary
+//! stays. A tiny Tikhonov term ε‖v − p‖² (ε = 1e-10 in
 //! normalised units) keeps the normal matrix positive definite when F_sd
 //! leaves a tangential direction free. After each solve, triangles whose
 //! normal turned against the input's (or collapsed), or whose quality fell
@@ -147,6 +155,7 @@ mod accuracy_tests;
 mod bitwise_tests;
 #[cfg(test)]
 pub(crate) use bitwise_tests::checksum as bitwise_checksum;
+mod boundary;
 mod crease;
 mod precondition;
 mod repair;
@@ -211,7 +220,8 @@ pub struct EnhanceOptions {
     /// Number of solves; curvature is recomputed on the current mesh before
     /// each one after the first (F_sd keeps the input as reference). ≥ 1.
     pub iterations: usize,
-    /// Vertices that must not move (in addition to the boundary).
+    /// Vertices that must not move (in addition to the corners of the
+    /// boundary; the other boundary vertices slide along the boundary).
     pub fixed: Vec<VertexId>,
     /// Number of bins of the triangle-quality histograms over [0, 1]. ≥ 1.
     pub histogram_bins: usize,
@@ -570,6 +580,12 @@ struct FlowProblem<'a> {
     normalised: SurfaceMesh,
     input_curvature: PrincipalCurvatures,
     layout: system::Layout,
+    /// The boundary curves of the input (module `boundary`).
+    boundary: boundary::BoundaryCurves,
+    /// The free vertices off the boundary (projected onto the input
+    /// surface) and on it (projected onto the boundary curve).
+    interior_free: Vec<u32>,
+    boundary_free: Vec<u32>,
     distance: system::DistanceModel,
     /// Share of the free vertices with a tangential direction F_sd leaves
     /// free ([`AUTO_SOFT_SHARE`]).
@@ -579,7 +595,7 @@ struct FlowProblem<'a> {
 
 impl<'a> FlowProblem<'a> {
     /// Normalises the input, computes its curvature and finds the unknowns
-    /// (free vertices: not on the boundary, not pinned, not listed in
+    /// (free vertices: not a corner of the boundary, not pinned, not listed in
     /// [`EnhanceOptions::fixed`], with a normal and principal directions).
     fn new(
         mesh: &'a SurfaceMesh,
@@ -599,10 +615,16 @@ impl<'a> FlowProblem<'a> {
         let t = Instant::now();
         let input_curvature = principal_curvatures_rusinkiewicz(&normalised);
         timings.curvature_s += t.elapsed().as_secs_f64();
+        let boundary = boundary::BoundaryCurves::new(mesh, &reference);
+        // boundary vertices slide along the boundary curve where there is a
+        // projection to keep them on it (the paper's method keeps them)
+        let sliding = options.projection != Projection::None;
         let mut is_fixed = vec![false; n];
         for v in mesh.vertices() {
             let i = v.idx();
-            is_fixed[i] = mesh.is_boundary_vertex(v)
+            let stays_on_boundary = mesh.is_boundary_vertex(v)
+                && (!sliding || !boundary.is_on(i) || boundary.is_corner(i));
+            is_fixed[i] = stays_on_boundary
                 || mesh.is_pinned(v)
                 || input_curvature.normals[i] == Vec3::ZERO
                 || input_curvature.d1[i] == Vec3::ZERO;
@@ -611,7 +633,13 @@ impl<'a> FlowProblem<'a> {
             is_fixed[v.idx()] = true;
         }
         let layout = system::Layout::new(mesh, &is_fixed);
-        let distance = system::DistanceModel::new(&input_curvature, &layout, options.lambda);
+        let (boundary_free, interior_free): (Vec<u32>, Vec<u32>) = layout
+            .free
+            .iter()
+            .copied()
+            .partition(|&v| boundary.is_on(v as usize));
+        let distance =
+            system::DistanceModel::new(&input_curvature, &layout, &boundary, options.lambda);
         let soft_share = distance.soft_share(options.lambda);
         let input_faces = repair::InputFaces::of(&normalised);
         Ok(FlowProblem {
@@ -623,6 +651,9 @@ impl<'a> FlowProblem<'a> {
             normalised,
             input_curvature,
             layout,
+            boundary,
+            interior_free,
+            boundary_free,
             distance,
             soft_share,
             input_faces,
@@ -693,6 +724,7 @@ impl Flow {
         let system = system::assemble(
             layout,
             curvature,
+            &problem.boundary,
             &problem.distance,
             &self.current,
             &problem.reference,
@@ -735,7 +767,14 @@ impl Flow {
         for (f, &v) in layout.free.iter().enumerate() {
             target[v as usize] = Vec3::new(x[3 * f], x[3 * f + 1], x[3 * f + 2]);
         }
-        input_surface.project(&layout.free, &mut target, options.projection);
+        input_surface.project(&problem.interior_free, &mut target, options.projection);
+        if options.projection != Projection::None {
+            problem.boundary.project(
+                &problem.boundary_free,
+                &mut target,
+                options.projection == Projection::Smooth,
+            );
+        }
         let outcome = repair::repair_flips(
             problem.mesh,
             &problem.input_faces,

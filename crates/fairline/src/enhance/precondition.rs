@@ -284,7 +284,8 @@ mod tests {
         let curvature = principal_curvatures_rusinkiewicz(&m);
         let fixed: Vec<bool> = m.vertices().map(|v| m.is_boundary_vertex(v)).collect();
         let layout = Layout::new(&m, &fixed);
-        let distance = DistanceModel::new(&curvature, &layout, 1.0);
+        let boundary = crate::enhance::boundary::BoundaryCurves::new(&m, &pos);
+        let distance = DistanceModel::new(&curvature, &layout, &boundary, 1.0);
         let mut target = pos.clone();
         for (i, p) in target.iter_mut().enumerate() {
             if !fixed[i] {
@@ -296,8 +297,10 @@ mod tests {
                 *p += (rough + smooth * 3.0) * 0.3;
             }
         }
-        let system =
-            system::assemble(&layout, &curvature, &distance, &pos, &target, 0.5, 1e-10).unwrap();
+        let system = system::assemble(
+            &layout, &curvature, &boundary, &distance, &pos, &target, 0.5, 1e-10,
+        )
+        .unwrap();
         (layout, curvature, distance, system)
     }
 

@@ -8,6 +8,7 @@
 //! factorisation can be reused across iterations.
 
 use super::EnhanceError;
+use super::boundary::BoundaryCurves;
 use crate::Vec3;
 use crate::geom::PrincipalCurvatures;
 use crate::mesh::SurfaceMesh;
@@ -65,14 +66,24 @@ impl Layout {
 
 /// The F_sd rows of every free vertex (Eq. (6)): the frame (T1, T2, N) of
 /// the input at p, each scaled by √(λ c) with c = d|k| / (1 + d|k|) for the
-/// tangents (d = 1 / max |k| over the free vertices) and c = 1 for N.
+/// tangents (d = 1 / max |k| over the free vertices) and c = 1 for N. A free
+/// boundary vertex (module `boundary`) gets the rows of the squared
+/// distance to its boundary curve instead: the frame (t, N × t, N) with t
+/// the boundary tangent, c = d|κ| / (1 + d|κ|) along t (κ the curvature of
+/// the boundary polyline) and c = 1 for the two directions normal to the
+/// curve.
 pub(super) struct DistanceModel {
     /// The three scaled frame vectors of each free vertex.
     pub rows: Vec<[Vec3; 3]>,
 }
 
 impl DistanceModel {
-    pub fn new(curvature: &PrincipalCurvatures, layout: &Layout, lambda: f64) -> DistanceModel {
+    pub fn new(
+        curvature: &PrincipalCurvatures,
+        layout: &Layout,
+        boundary: &BoundaryCurves,
+        lambda: f64,
+    ) -> DistanceModel {
         let kmax = layout
             .free
             .iter()
@@ -97,6 +108,14 @@ impl DistanceModel {
             .par_iter()
             .map(|&v| {
                 let v = v as usize;
+                if let Some((t, kappa)) = boundary_frame(boundary, curvature, v) {
+                    let n = curvature.normals[v];
+                    return [
+                        (lambda * coefficient(kappa)).sqrt() * t,
+                        lambda.sqrt() * n.cross(t),
+                        lambda.sqrt() * n,
+                    ];
+                }
                 let c1 = coefficient(curvature.k1[v]);
                 let c2 = coefficient(curvature.k2[v]);
                 [
@@ -123,6 +142,23 @@ impl DistanceModel {
             .count();
         soft as f64 / self.rows.len() as f64
     }
+}
+
+/// The unit tangent t of the boundary curve at boundary vertex `v`, made
+/// perpendicular to the vertex normal, and the curvature of the boundary
+/// polyline there; `None` off the boundary or where t is undefined.
+pub(super) fn boundary_frame(
+    boundary: &BoundaryCurves,
+    curvature: &PrincipalCurvatures,
+    v: usize,
+) -> Option<(Vec3, f64)> {
+    if !boundary.is_on(v) {
+        return None;
+    }
+    let (t, kappa) = boundary.tangent_and_curvature(v);
+    let n = curvature.normals[v];
+    let t = (t - t.dot(n) * n).normalize_or_zero();
+    (t != Vec3::ZERO).then_some((t, kappa))
 }
 
 /// The least-squares system of one iteration, stored by vertex (module
@@ -357,9 +393,11 @@ impl NormalEquations for LeastSquares {
 /// the regularised normal equations. `current` and `reference` are
 /// normalised positions of all vertices; fixed vertices are read from
 /// `current`, F_sd pulls toward `reference`.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn assemble(
     layout: &Layout,
     curvature: &PrincipalCurvatures,
+    boundary: &BoundaryCurves,
     distance: &DistanceModel,
     current: &[Vec3],
     reference: &[Vec3],
@@ -371,9 +409,17 @@ pub(super) fn assemble(
     let rows: Vec<VertexRows> = (0..nf)
         .into_par_iter()
         .map(|f| {
-            vertex_rows(
-                layout, curvature, &metrics, distance, current, reference, mu, f,
-            )
+            let rows = VertexInputs {
+                layout,
+                curvature,
+                boundary,
+                metrics: &metrics,
+                distance,
+                current,
+                reference,
+                mu,
+            };
+            rows.of(f)
         })
         .collect();
     let mut ptr = Vec::with_capacity(nf + 1);
@@ -454,64 +500,93 @@ pub(super) fn smoothness_weight(curvature: &PrincipalCurvatures, i: usize, mu: f
     mu * (-(a1 + a2)).exp()
 }
 
-/// The eight rows of free vertex `f` (two F_em, three F_sd, three F_smo):
-/// its entries in increasing free index (a neighbour listed twice sums)
-/// and the right-hand sides.
-#[allow(clippy::too_many_arguments)]
-fn vertex_rows(
-    layout: &Layout,
-    curvature: &PrincipalCurvatures,
-    metrics: &[DMat3],
-    distance: &DistanceModel,
-    current: &[Vec3],
-    reference: &[Vec3],
+/// What the rows of a free vertex are built from (the arguments of
+/// [`assemble`]).
+struct VertexInputs<'a> {
+    layout: &'a Layout,
+    curvature: &'a PrincipalCurvatures,
+    boundary: &'a BoundaryCurves,
+    metrics: &'a [DMat3],
+    distance: &'a DistanceModel,
+    current: &'a [Vec3],
+    reference: &'a [Vec3],
     mu: f64,
-    f: usize,
-) -> VertexRows {
-    let i = layout.free[f] as usize;
-    let ring = layout.ring(f);
-    let deg = ring.len().max(1) as f64;
-    let (t1, t2) = (curvature.d1[i], curvature.d2[i]);
-    let (a1, a2) = absolute_curvatures(curvature, i);
-    let w_smo = smoothness_weight(curvature, i, mu).sqrt();
-    let s_ring = -w_smo / deg;
-    // F_em: T_ikᵀ Σ_j (M_i + M_j)(v_i − v_j), with M_i T_ik = |k_ik| T_ik
-    let mut ci = [Vec3::ZERO; 2];
-    let mut b = [0.0; 8];
-    let mut b_smo = Vec3::ZERO;
-    let mut entries: Vec<(u32, [Vec3; 2], f64)> = Vec::with_capacity(ring.len() + 1);
-    for &j in ring {
-        let mj = metrics[j as usize];
-        let cj1 = -(a1 * t1 + mj * t1);
-        let cj2 = -(a2 * t2 + mj * t2);
-        ci[0] -= cj1;
-        ci[1] -= cj2;
-        let fj = layout.free_index[j as usize];
-        if fj == NONE {
-            let xj = current[j as usize];
-            b[0] -= cj1.dot(xj);
-            b[1] -= cj2.dot(xj);
-            b_smo -= s_ring * xj;
+}
+
+impl VertexInputs<'_> {
+    /// The eight rows of free vertex `f` (two F_em, three F_sd, three F_smo):
+    /// its entries in increasing free index (a neighbour listed twice sums)
+    /// and the right-hand sides. A boundary vertex (module `boundary`) has
+    /// one F_em row, along its boundary tangent t,
+    /// tᵀ Σ_j (M_i + M_j)(v_i − v_j) = 0 (the second row is zero), and the
+    /// F_smo rows of the Laplacian along the boundary, v_i − ½ (v_prev +
+    /// v_next).
+    fn of(&self, f: usize) -> VertexRows {
+        let i = self.layout.free[f] as usize;
+        let ring = self.layout.ring(f);
+        let w_smo = smoothness_weight(self.curvature, i, self.mu).sqrt();
+        // per neighbour: the two F_em coefficient vectors and the F_smo
+        // coefficient
+        let mut coefficients: Vec<(u32, [Vec3; 2], f64)> = Vec::with_capacity(ring.len());
+        if let Some((t, _)) = boundary_frame(self.boundary, self.curvature, i) {
+            let (prev, next) = self.boundary.neighbours(i);
+            let mi = self.metrics[i];
+            for &j in ring {
+                let cj = -(mi * t + self.metrics[j as usize] * t);
+                let s = if j == prev || j == next {
+                    -0.5 * w_smo
+                } else {
+                    0.0
+                };
+                coefficients.push((j, [cj, Vec3::ZERO], s));
+            }
         } else {
-            entries.push((fj, [cj1, cj2], s_ring));
+            let deg = ring.len().max(1) as f64;
+            let (t1, t2) = (self.curvature.d1[i], self.curvature.d2[i]);
+            let (a1, a2) = absolute_curvatures(self.curvature, i);
+            let s_ring = -w_smo / deg;
+            // F_em: T_ikᵀ Σ_j (M_i + M_j)(v_i − v_j), with M_i T_ik = |k_ik| T_ik
+            for &j in ring {
+                let mj = self.metrics[j as usize];
+                let cj1 = -(a1 * t1 + mj * t1);
+                let cj2 = -(a2 * t2 + mj * t2);
+                coefficients.push((j, [cj1, cj2], s_ring));
+            }
         }
-    }
-    entries.push((f as u32, ci, w_smo));
-    entries.sort_unstable_by_key(|e| e.0);
-    entries.dedup_by(|later, kept| {
-        let same = later.0 == kept.0;
-        if same {
-            kept.1[0] += later.1[0];
-            kept.1[1] += later.1[1];
-            kept.2 += later.2;
+        let mut ci = [Vec3::ZERO; 2];
+        let mut b = [0.0; 8];
+        let mut b_smo = Vec3::ZERO;
+        let mut entries: Vec<(u32, [Vec3; 2], f64)> = Vec::with_capacity(ring.len() + 1);
+        for (j, [cj1, cj2], s) in coefficients {
+            ci[0] -= cj1;
+            ci[1] -= cj2;
+            let fj = self.layout.free_index[j as usize];
+            if fj == NONE {
+                let xj = self.current[j as usize];
+                b[0] -= cj1.dot(xj);
+                b[1] -= cj2.dot(xj);
+                b_smo -= s * xj;
+            } else {
+                entries.push((fj, [cj1, cj2], s));
+            }
         }
-        same
-    });
-    // F_sd rows: √(λc) Tᵀ v = √(λc) Tᵀ p
-    let p = reference[i];
-    for (k, t) in distance.rows[f].iter().enumerate() {
-        b[2 + k] = t.dot(p);
+        entries.push((f as u32, ci, w_smo));
+        entries.sort_unstable_by_key(|e| e.0);
+        entries.dedup_by(|later, kept| {
+            let same = later.0 == kept.0;
+            if same {
+                kept.1[0] += later.1[0];
+                kept.1[1] += later.1[1];
+                kept.2 += later.2;
+            }
+            same
+        });
+        // F_sd rows: √(λc) Tᵀ v = √(λc) Tᵀ p
+        let p = self.reference[i];
+        for (k, t) in self.distance.rows[f].iter().enumerate() {
+            b[2 + k] = t.dot(p);
+        }
+        b[5..8].copy_from_slice(&b_smo.to_array());
+        (entries, b)
     }
-    b[5..8].copy_from_slice(&b_smo.to_array());
-    (entries, b)
 }
