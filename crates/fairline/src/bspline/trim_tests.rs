@@ -416,12 +416,14 @@ fn a_loop_point_one_ulp_off_a_grid_corner_gives_a_manifold_tessellation() {
         let t = tessellate(&s, n, n);
         builds_a_mesh(&t).unwrap_or_else(|e| panic!("grid {n}: {e}"));
         assert_inside(&s, &t);
-        let near_corner = t
-            .uv
-            .iter()
-            .filter(|p| (p[0] - 1.0).abs() < 1e-12 && (p[1] - 0.5).abs() < 1e-12)
-            .count();
-        assert_eq!(near_corner, 1, "grid {n}: the corner (1, 0.5) is one vertex");
+        let near_corner =
+            t.uv.iter()
+                .filter(|p| (p[0] - 1.0).abs() < 1e-12 && (p[1] - 0.5).abs() < 1e-12)
+                .count();
+        assert_eq!(
+            near_corner, 1,
+            "grid {n}: the corner (1, 0.5) is one vertex"
+        );
         let a = mesh_area(&t);
         assert!(rel(a, exact) < 1e-12, "grid {n}: area {a} vs {exact}");
     }
@@ -433,8 +435,8 @@ fn a_loop_point_one_ulp_off_a_grid_corner_gives_a_manifold_tessellation() {
 /// diagonal (before: faces 4, 17, 31 and 61 failed on 40 of those grids).
 #[test]
 fn every_face_of_featuretype_step_tessellates_into_a_mesh() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/step/featuretype.STEP");
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/step/featuretype.STEP");
     let part: Vec<BSplineSurface> = crate::io::step::read_step(&path)
         .unwrap()
         .surfaces
@@ -452,7 +454,12 @@ fn every_face_of_featuretype_step_tessellates_into_a_mesh() {
             }
         }
     }
-    assert!(failed.is_empty(), "{} failures: {:?}", failed.len(), &failed[..failed.len().min(5)]);
+    assert!(
+        failed.is_empty(),
+        "{} failures: {:?}",
+        failed.len(),
+        &failed[..failed.len().min(5)]
+    );
 }
 
 /// A part whose triangles have an edge of three faces is still made into a

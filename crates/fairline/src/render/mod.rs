@@ -425,7 +425,12 @@ fn render_impl(
 /// The camera of a picture of `scene` (bounding box `lo`–`hi`) with the
 /// drawing area's `aspect`: `opts.camera` when given, else a framing camera
 /// along `opts.view_dir` moved as close as the scene allows ([`tighten`]).
-fn frame_camera(scene: &Scene, opts: &RenderOptions, (lo, hi): (Vec3, Vec3), aspect: f64) -> Camera {
+fn frame_camera(
+    scene: &Scene,
+    opts: &RenderOptions,
+    (lo, hi): (Vec3, Vec3),
+    aspect: f64,
+) -> Camera {
     match opts.camera {
         Some(mut c) => {
             c.aspect = aspect;

@@ -118,8 +118,10 @@ pub fn best_covered_lights(
     for up in [UpAxis::Z, UpAxis::Y, UpAxis::X] {
         let above = choice.up(up).light_array(mesh)?;
         let below = LightArray::new(
-            above.plane_point() - 2.0 * (above.plane_point() - centre).dot(above.plane_normal())
-                * above.plane_normal(),
+            above.plane_point()
+                - 2.0
+                    * (above.plane_point() - centre).dot(above.plane_normal())
+                    * above.plane_normal(),
             -above.plane_normal(),
             above.direction(),
             above.spacing(),
@@ -153,7 +155,10 @@ impl<'a> CoverageInput<'a> {
         CoverageInput {
             mesh,
             patch,
-            triangles: mesh.faces().map(|f| mesh.triangle(f).map(|v| v.0)).collect(),
+            triangles: mesh
+                .faces()
+                .map(|f| mesh.triangle(f).map(|v| v.0))
+                .collect(),
             normals: crate::geom::vertex_normals(mesh),
             areas: crate::geom::face_areas(mesh),
         }
@@ -194,7 +199,10 @@ fn covered_fraction(part: &CoverageInput, light: &LightArray) -> f64 {
         .collect();
     let (dir, up) = part_view(light);
     let scene = crate::render::Scene {
-        meshes: vec![crate::render::MeshLayer::new(mesh.positions(), &part.triangles)],
+        meshes: vec![crate::render::MeshLayer::new(
+            mesh.positions(),
+            &part.triangles,
+        )],
         ..Default::default()
     };
     let opts = crate::render::RenderOptions::with_size(COVERAGE_VIEW.0, COVERAGE_VIEW.1)
