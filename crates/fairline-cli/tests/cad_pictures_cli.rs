@@ -121,7 +121,7 @@ fn neighbour_line_distances(path: &Path) -> Vec<f64> {
         for x in 0..w {
             let Some(k) = colour(x, y) else { continue };
             count += 1;
-            if count % 4 != 0 {
+            if !count.is_multiple_of(4) {
                 continue;
             }
             let mut best = 40.0f64;
