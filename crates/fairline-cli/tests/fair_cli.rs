@@ -297,7 +297,7 @@ fn fair_picture_on_a_round_part_draws_the_readable_lines() {
         return;
     };
     let d = tmp("spot-picture");
-    let (p, _) = dented_spot(&clean, &d);
+    let (p, _) = dented_spot(&clean, &d, 0.15);
     let (out_a, png_a, rep_a) = (d.join("a.ply"), d.join("a.png"), d.join("a.json"));
     ok(&run(&[
         "fair",

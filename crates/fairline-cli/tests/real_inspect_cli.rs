@@ -119,7 +119,7 @@ fn fair_report_on_a_real_mesh_measures_what_detect_shows() {
         return;
     };
     let dir = tmp("real-fair");
-    let (mesh, _) = dented_spot(&mesh, &dir);
+    let (mesh, _) = dented_spot(&mesh, &dir, 0.15);
     let det = dir.join("detect.json");
     ok(&run(&[
         "detect",
@@ -189,7 +189,7 @@ fn detect_fair_detect_closes_on_the_dented_spot() {
         return;
     };
     let dir = tmp("real-loop");
-    let (dented, centre) = dented_spot(&clean, &dir);
+    let (dented, centre) = dented_spot(&clean, &dir, 0.15);
     let (region, rep1) = (dir.join("region.json"), dir.join("det1.json"));
     ok(&run(&[
         "detect",
@@ -277,4 +277,51 @@ fn detect_fair_detect_closes_on_the_dented_spot() {
             }
         }
     }
+}
+
+/// Runs `detect` with default options on Spot with a flank dent of the
+/// given radius; returns the report and the distance of the best region's
+/// centre from the dent's.
+fn detect_flank_dent(radius: f64) -> Option<(serde_json::Value, f64)> {
+    let clean = data("meshes/spot.ply")?;
+    let dir = tmp(&format!("real-dent-{radius}"));
+    let (dented, centre) = dented_spot(&clean, &dir, radius);
+    let rep = dir.join("detect.json");
+    ok(&run(&[
+        "detect",
+        s(&dented),
+        "-o",
+        s(&dir.join("region.json")),
+        "--report",
+        s(&rep),
+    ]));
+    let r = json(&rep);
+    let off = r["regions"][0]["center"].as_array().map(|c| {
+        let c: Vec<f64> = c.iter().filter_map(|x| x.as_f64()).collect();
+        (fairline::Vec3::new(c[0], c[1], c[2]) - centre).length()
+    });
+    Some((r, off.unwrap_or(f64::INFINITY)))
+}
+
+/// A dent three edges wide (radius 0.15, 2 % of the diagonal deep) on
+/// Spot's flank is found with default options and ranked first, the best
+/// region centred on it.
+#[test]
+fn detect_finds_the_narrow_flank_dent_on_spot_ranked_first() {
+    let Some((r, off)) = detect_flank_dent(0.15) else {
+        return;
+    };
+    assert!(off < 0.15, "best region {off} from the dent: {r}");
+}
+
+/// A dent as wide as Spot's body is round (radius 0.3, 2 % of the diagonal
+/// deep) on its flank: the drawn lines show it as a closed loop, and
+/// detection with default options should find it and rank it first.
+#[test]
+#[ignore = "not found: on this 2.9k-vertex artist mesh the radius-0.3 dent is smooth at the measure's scale (R = 0.24) and no wider comparison measured so far separates it from Spot's own shape (README, Default lights on real meshes: the measured account)"]
+fn detect_finds_the_wide_flank_dent_on_spot_ranked_first() {
+    let Some((r, off)) = detect_flank_dent(0.3) else {
+        return;
+    };
+    assert!(off < 0.3, "best region {off} from the dent: {r}");
 }

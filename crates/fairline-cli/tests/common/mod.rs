@@ -57,16 +57,16 @@ pub fn s(p: &Path) -> &str {
 /// Spot (`mesh`, from ../shared/data) with a dent planted on its flank,
 /// written as OBJ into `dir`: centred at mid-length (the middle of the z
 /// range, the body's long axis) on the vertex farthest along +x, 2 % of the
-/// bounding-box diagonal deep, radius 0.15 (about three mean edges; 0.3
-/// across, less than one drawn light spacing, 0.44), profile (1 − r²/ρ²)²
-/// along the inward vertex normal. Returns the path and the dent's centre.
+/// bounding-box diagonal deep, of the given `radius` ρ, profile
+/// (1 − r²/ρ²)² along the inward vertex normal. Returns the path and the
+/// dent's centre.
 ///
-/// Not at the +x extreme of the whole mesh: that is the tip of an ear,
-/// shape finer than the measure's scale (its sites are never judged), where
-/// a "dent" only bends the ear. A dent of radius 0.3 on the flank is as
-/// wide as the body is round (radius ≈ 0.38) and is smooth at the
-/// measure's scale R = 0.24 (scores 1–10 against a threshold of 22).
-pub fn dented_spot(mesh: &Path, dir: &Path) -> (PathBuf, fairline::Vec3) {
+/// Radius 0.15 is about three mean edges (0.3 across, less than one drawn
+/// light spacing, 0.44); radius 0.3 is as wide as the body is round
+/// (radius ≈ 0.38). Not at the +x extreme of the whole mesh: that is the
+/// tip of an ear, shape finer than the measure's scale (its sites are
+/// never judged), where a "dent" only bends the ear.
+pub fn dented_spot(mesh: &Path, dir: &Path, radius: f64) -> (PathBuf, fairline::Vec3) {
     let mut m = fairline::io::read_mesh(mesh).unwrap();
     let normals = fairline::geom::vertex_normals(&m);
     let p = m.positions().to_vec();
@@ -78,14 +78,14 @@ pub fn dented_spot(mesh: &Path, dir: &Path) -> (PathBuf, fairline::Vec3) {
         .filter(|q| (q.z - mid).abs() < 0.05 * (hi.z - lo.z))
         .max_by(|a, b| a.x.total_cmp(&b.x))
         .unwrap();
-    let (depth, radius) = (0.02 * (hi - lo).length(), 0.15);
+    let depth = 0.02 * (hi - lo).length();
     for (q, n) in m.positions_mut().iter_mut().zip(&normals) {
         let r = (*q - c).length() / radius;
         if r < 1.0 {
             *q -= depth * (1.0 - r * r).powi(2) * *n;
         }
     }
-    let out = dir.join("spot-dented.obj");
+    let out = dir.join(format!("spot-dented-{radius}.obj"));
     fairline::io::write_mesh(&out, &m).unwrap();
     (out, c)
 }

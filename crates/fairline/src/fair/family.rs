@@ -300,9 +300,12 @@ mod tests {
     /// the defect-free truth than surface diffusion flow in all four
     /// measures (surface max and RMS, line max and RMS) on every case but
     /// the widest saddle dent; there its lines (max, RMS) and its surface
-    /// RMS are closer and its surface max is within 1.15× of flow's (flow's
-    /// stationary state is close to the best the fixed support rings allow
-    /// on that panel, see BENCHMARKS.md Session 19). On (geometric) average
+    /// RMS are closer and its surface max is within 1.15× of flow's: the
+    /// desired lines' end tangents are fitted to the lines' outside parts,
+    /// which carry the tail of that wide dent; with tangents fitted to the
+    /// truth's lines the paper's energy alone beats flow on every case
+    /// (BENCHMARKS.md Session 21), but no estimate from the input alone
+    /// does yet. On (geometric) average
     /// it is 1.7× closer in surface max and 2× in line RMS, at least 1.2×
     /// closer in surface max on every wavy panel (whose mean curvature is
     /// not harmonic). Nothing outside the movable set moves (checked in

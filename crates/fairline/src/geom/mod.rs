@@ -12,7 +12,7 @@ mod curvature;
 mod laplace;
 mod measures;
 mod normals;
-pub(crate) use normals::{face_area_vectors, vertex_normal_from_area_vectors};
+pub(crate) use normals::{BATCH, face_area_vectors, gather_triangles, vertex_normals_into};
 mod quadric;
 
 pub use areas::{
@@ -48,4 +48,4 @@ pub use crate::mesh::DEGENERATE_RELATIVE_AREA;
 pub const COTANGENT_LIMIT: f64 = 1e6;
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

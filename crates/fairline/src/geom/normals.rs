@@ -1,7 +1,7 @@
 //! Face and vertex normals.
 
 use crate::Vec3;
-use crate::mesh::{FaceId, SurfaceMesh, VertexId};
+use crate::mesh::{FaceId, HalfedgeId, SurfaceMesh, VertexId};
 use rayon::prelude::*;
 
 /// Unit normal and area of the triangle (a, b, c), counter-clockwise.
@@ -72,23 +72,138 @@ pub fn vertex_normals(mesh: &SurfaceMesh) -> Vec<Vec3> {
 /// [`vertex_normals`] with the vertices at `positions` (one per vertex; a
 /// geometry view: trial positions are evaluated without a copy of the mesh).
 pub fn vertex_normals_at(mesh: &SurfaceMesh, positions: &[Vec3]) -> Vec<Vec3> {
-    let area_vectors: Vec<Vec3> = (0..mesh.face_count() as u32)
-        .into_par_iter()
-        .map(|f| face_area_vector_at(mesh, positions, FaceId(f)))
-        .collect();
-    (0..mesh.vertex_count() as u32)
-        .into_par_iter()
-        .map(|v| vertex_normal_from_area_vectors(mesh, VertexId(v), &area_vectors))
-        .collect()
+    let area_vectors = face_area_vectors_at(mesh, positions);
+    let mut normals = vec![Vec3::ZERO; mesh.vertex_count()];
+    normals
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .for_each(|(c, out)| vertex_normals_into(mesh, &area_vectors, c * CHUNK, out));
+    normals
 }
+
+/// Elements per parallel task of the whole-mesh passes.
+const CHUNK: usize = 4096;
+
+/// Elements whose memory loads are issued together (see [`gather_triangles`]).
+pub(crate) const BATCH: usize = 64;
 
 /// Area vectors of all faces (parallel): the weights A_T N_T of Yong et al.
 /// Eq. (3).
 pub(crate) fn face_area_vectors(mesh: &SurfaceMesh) -> Vec<Vec3> {
-    (0..mesh.face_count() as u32)
-        .into_par_iter()
-        .map(|f| face_area_vector(mesh, FaceId(f)))
-        .collect()
+    face_area_vectors_at(mesh, mesh.positions())
+}
+
+/// [`face_area_vectors`] with the vertices at `p` (one per vertex).
+fn face_area_vectors_at(mesh: &SurfaceMesh, p: &[Vec3]) -> Vec<Vec3> {
+    if !mesh.is_triangle_mesh() {
+        return (0..mesh.face_count() as u32)
+            .into_par_iter()
+            .map(|f| face_area_vector_at(mesh, p, FaceId(f)))
+            .collect();
+    }
+    let mut out = vec![Vec3::ZERO; mesh.face_count()];
+    out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
+        for (b, block) in out.chunks_mut(BATCH).enumerate() {
+            let f0 = c * CHUNK + b * BATCH;
+            let n = block.len();
+            let mut halfedges = [[0u32; 3]; BATCH];
+            let mut tri = [[0u32; 3]; BATCH];
+            gather_triangles(mesh, f0, &mut halfedges[..n], &mut tri[..n]);
+            for (a, t) in block.iter_mut().zip(&tri) {
+                // face_area_vector_at's triangle branch: the same operands
+                let [a0, b0, c0] = t.map(|v| p[v as usize]);
+                *a = 0.5 * (b0 - a0).cross(c0 - a0);
+            }
+        }
+    });
+    out
+}
+
+/// The halfedges (the stored one first, then in order) and the vertices
+/// (as [`SurfaceMesh::triangle`] gives them: the targets of those
+/// halfedges) of triangles `f0..f0 + tri.len()`, gathered stage by stage
+/// over the batch: the loads of one stage are independent of each other,
+/// so the processor overlaps their cache misses (on a scan, neighbouring
+/// faces and their halfedges lie far apart in memory, and one face at a
+/// time waits for each of its dependent loads in turn). The mesh must be
+/// all triangles; at most [`BATCH`] faces.
+#[inline]
+pub(crate) fn gather_triangles(
+    mesh: &SurfaceMesh,
+    f0: usize,
+    halfedges: &mut [[u32; 3]],
+    tri: &mut [[u32; 3]],
+) {
+    for (i, h) in halfedges.iter_mut().enumerate() {
+        h[0] = mesh.face_halfedge(FaceId((f0 + i) as u32)).0;
+    }
+    for h in halfedges.iter_mut() {
+        h[1] = mesh.next(HalfedgeId(h[0])).0;
+    }
+    for h in halfedges.iter_mut() {
+        h[2] = mesh.next(HalfedgeId(h[1])).0;
+    }
+    for (t, h) in tri.iter_mut().zip(halfedges.iter()) {
+        *t = h.map(|h| mesh.to_vertex(HalfedgeId(h)).0);
+    }
+}
+
+/// Entries `v0..v0 + out.len()` of [`vertex_normals`] from the face area
+/// vectors of [`face_area_vectors`], bit-identical to
+/// [`vertex_normal_from_area_vectors`]: the circulations of a batch of
+/// vertices advance in lockstep, one step of every vertex after the other,
+/// so that their dependent loads (halfedge, face, area vector) overlap;
+/// each vertex still sums its faces in its own circulation order.
+pub(crate) fn vertex_normals_into(
+    mesh: &SurfaceMesh,
+    area_vectors: &[Vec3],
+    v0: usize,
+    out: &mut [Vec3],
+) {
+    for (b, block) in out.chunks_mut(BATCH).enumerate() {
+        let first = v0 + b * BATCH;
+        let mut start = [0u32; BATCH];
+        let mut current = [0u32; BATCH];
+        let mut sum = [Vec3::ZERO; BATCH];
+        let mut active = [0u8; BATCH];
+        let mut m = 0;
+        for i in 0..block.len() {
+            if let Some(h) = mesh.vertex_halfedge(VertexId((first + i) as u32)) {
+                (start[i], current[i]) = (h.0, h.0);
+                active[m] = i as u8;
+                m += 1;
+            }
+        }
+        while m > 0 {
+            let mut kept = 0;
+            for j in 0..m {
+                let i = active[j] as usize;
+                let h = HalfedgeId(current[i]);
+                if let Some(f) = mesh.face(h) {
+                    sum[i] += area_vectors[f.idx()];
+                }
+                // kept without a branch: whether the circulation goes on
+                // is known only when its load arrives, and a mispredicted
+                // branch would wait for it
+                let next = mesh.cw_rotated(h).0;
+                current[i] = next;
+                active[kept] = i as u8;
+                kept += usize::from(next != start[i]);
+            }
+            m = kept;
+        }
+        for (i, n) in block.iter_mut().enumerate() {
+            *n = sum[i].normalize_or_zero();
+            if *n == Vec3::ZERO {
+                // the rare fallbacks, one vertex at a time
+                *n = vertex_normal_from_area_vectors(
+                    mesh,
+                    VertexId((first + i) as u32),
+                    area_vectors,
+                );
+            }
+        }
+    }
 }
 
 /// Entry `v` of [`vertex_normals`] from the face area vectors of

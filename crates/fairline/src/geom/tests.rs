@@ -275,3 +275,71 @@ fn curvature_is_scale_covariant() {
         assert!((a.k1[i] - 1000.0 * b.k1[i]).abs() < 1e-9 * a.k1[i].abs().max(1.0));
     }
 }
+
+/// A copy of `mesh` (triangles or polygons) with its vertices and faces in
+/// a scrambled order, as a scan's are: neighbours far apart in memory.
+pub(crate) fn scrambled(mesh: &SurfaceMesh, seed: u64) -> SurfaceMesh {
+    let mut state = seed | 1;
+    let mut next = |n: usize| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state % n as u64) as usize
+    };
+    let nv = mesh.vertex_count();
+    let mut order: Vec<usize> = (0..nv).collect();
+    for i in (1..nv).rev() {
+        order.swap(i, next(i + 1));
+    }
+    let mut new_id = vec![0u32; nv];
+    for (k, &v) in order.iter().enumerate() {
+        new_id[v] = k as u32;
+    }
+    let positions: Vec<Vec3> = order.iter().map(|&v| mesh.positions()[v]).collect();
+    let mut faces: Vec<Vec<u32>> = mesh
+        .faces()
+        .map(|f| mesh.face_vertices(f).map(|v| new_id[v.idx()]).collect())
+        .collect();
+    for i in (1..faces.len()).rev() {
+        faces.swap(i, next(i + 1));
+    }
+    SurfaceMesh::new(positions, &faces).unwrap()
+}
+
+#[test]
+fn whole_mesh_normals_equal_the_single_vertex_normal_bit_for_bit() {
+    // vertex_normals gathers the faces of a batch and walks the vertex
+    // circulations of a batch in lockstep; vertex_normal takes one vertex
+    // at a time. Scrambled order (a scan's), a boundary (faces left out),
+    // degenerate faces (collapsed vertices), an isolated vertex, a
+    // triangle of zero area on its own (the fallbacks) and a quad mesh.
+    let torus = scrambled(&shapes::torus(2.0, 0.7, 90, 40), 7);
+    let mut positions = torus.positions().to_vec();
+    positions[5] = positions[torus.one_ring(VertexId(5)).next().unwrap().idx()];
+    let base = positions.len() as u32;
+    positions.extend([Vec3::new(9.0, 9.0, 9.0); 4]);
+    let mut faces: Vec<[u32; 3]> = torus
+        .faces()
+        .map(|f| torus.triangle(f).map(|v| v.0))
+        .filter(|t| !t.iter().any(|&v| v % 97 == 3))
+        .collect();
+    faces.push([base, base + 1, base + 2]); // zero area; base + 3 is isolated
+    let mesh = SurfaceMesh::new(positions, &faces).unwrap();
+    let quads = scrambled(
+        &shapes::quad_grid(40, 30, (-1.0, 1.0), (-1.0, 1.0), |x, y| x * x - 0.5 * y),
+        11,
+    );
+    for m in [&mesh, &quads] {
+        let all = vertex_normals(m);
+        for v in m.vertices() {
+            let one = vertex_normal(m, v);
+            assert_eq!(
+                all[v.idx()].to_array().map(f64::to_bits),
+                one.to_array().map(f64::to_bits),
+                "vertex {v:?}"
+            );
+        }
+    }
+    assert_eq!(vertex_normals(&mesh)[base as usize + 3], Vec3::ZERO);
+    assert_eq!(vertex_normals(&mesh)[base as usize], Vec3::ZERO);
+}

@@ -9,8 +9,8 @@
 //! contributes segments only when its three edges are valid, so nothing is
 //! drawn across a jump of the field through infinity.
 
-use crate::Vec3;
-use crate::mesh::{EdgeId, FaceId, SurfaceMesh, VertexId};
+use crate::mesh::{EdgeId, FaceId, HalfedgeId, SurfaceMesh, VertexId};
+use crate::{Vec3, geom};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
@@ -145,25 +145,56 @@ pub(crate) fn face_segments(
     let h0 = mesh.face_halfedge(f);
     let h1 = mesh.next(h0);
     let h2 = mesh.next(h1);
-    // vertices a -> b -> c; edge k joins vertex k and vertex k+1
-    let vs = [
-        mesh.from_vertex(h0).0,
-        mesh.to_vertex(h0).0,
-        mesh.to_vertex(h1).0,
-    ];
-    let br = branch[vs[0] as usize];
-    if br == 0 || branch[vs[1] as usize] != br || branch[vs[2] as usize] != br {
+    let corners = Corners {
+        halfedges: [h0.0, h1.0, h2.0],
+        vertices: [
+            mesh.from_vertex(h0).0,
+            mesh.to_vertex(h0).0,
+            mesh.to_vertex(h1).0,
+        ],
+    };
+    let field = corners.field(values, branch);
+    triangle_segments(f, &corners, field, levels, max_levels, edge_ok, out);
+}
+
+/// The halfedges of a triangle (the stored one first, then in order) and
+/// its vertices a → b → c (the source of the first halfedge, then the
+/// targets): edge k joins vertex k and vertex k + 1.
+#[derive(Clone, Copy, Default)]
+struct Corners {
+    halfedges: [u32; 3],
+    vertices: [u32; 3],
+}
+
+impl Corners {
+    /// The field values and branches at the three vertices.
+    #[inline]
+    fn field(&self, values: &[f64], branch: &[i8]) -> ([f64; 3], [i8; 3]) {
+        let v = self.vertices.map(|v| v as usize);
+        (v.map(|v| values[v]), v.map(|v| branch[v]))
+    }
+}
+
+/// [`face_segments`] of triangle `f` with its corners and their field
+/// values and branches already loaded.
+#[inline]
+fn triangle_segments(
+    f: FaceId,
+    corners: &Corners,
+    (d, br): ([f64; 3], [i8; 3]),
+    levels: Levels,
+    max_levels: i64,
+    edge_ok: &impl Fn(usize, usize) -> bool,
+    out: &mut Vec<Segment>,
+) {
+    let vs = corners.vertices;
+    if br[0] == 0 || br[1] != br[0] || br[2] != br[0] {
         return;
     }
     let (a, b, c) = (vs[0] as usize, vs[1] as usize, vs[2] as usize);
     if !(edge_ok(a, b) && edge_ok(b, c) && edge_ok(c, a)) {
         return;
     }
-    let d = [
-        values[vs[0] as usize],
-        values[vs[1] as usize],
-        values[vs[2] as usize],
-    ];
     let lo = d[0].min(d[1]).min(d[2]);
     let hi = d[0].max(d[1]).max(d[2]);
     let (m0, m1) = match levels {
@@ -183,8 +214,8 @@ pub(crate) fn face_segments(
             )
         }
     };
-    let mut es = [0u32; 3];
-    let mut have_edges = false;
+    // the edge of halfedge h is h / 2 (SurfaceMesh::edge)
+    let es = corners.halfedges.map(|h| h >> 1);
     for m in m0..=m1 {
         let l = levels.value(m);
         // Rounding is monotone, so all three differences share the sign of
@@ -192,10 +223,6 @@ pub(crate) fn face_segments(
         // common case, decided without the edges).
         if lo - l > 0.0 || hi - l < 0.0 {
             continue;
-        }
-        if !have_edges {
-            es = [mesh.edge(h0).0, mesh.edge(h1).0, mesh.edge(h2).0];
-            have_edges = true;
         }
         let s = [sign(d[0] - l), sign(d[1] - l), sign(d[2] - l)];
         let zeros = s.iter().filter(|&&x| x == 0).count();
@@ -295,7 +322,18 @@ fn seg(f: FaceId, a: Key, b: Key) -> Segment {
     Segment { face: f.0, a, b }
 }
 
-/// Segments of all triangles, in face order (parallel, deterministic).
+/// Segments of all triangles, in face order (parallel, deterministic): the
+/// segments of [`face_segments`] for every face.
+///
+/// Two things make this pass cheap on large meshes without changing a bit
+/// of its result. Most triangles lie between two adjacent levels and carry
+/// no segment: with periodic levels each vertex gets its level cell
+/// ([`level_cell`]) first, and a triangle whose three vertices lie well
+/// inside one cell is passed over without its field values (see
+/// [`level_cell`] for why that is exact). And each batch of faces is
+/// loaded stage by stage (halfedges, vertices, cells, field values:
+/// [`geom::gather_triangles`]), so that the cache misses of different
+/// faces overlap (a scan's faces and halfedges lie far apart in memory).
 pub(crate) fn all_segments(
     mesh: &SurfaceMesh,
     values: &[f64],
@@ -305,27 +343,103 @@ pub(crate) fn all_segments(
     edge_ok: &(impl Fn(usize, usize) -> bool + Sync),
 ) -> Vec<Segment> {
     const CHUNK: usize = 4096;
+    const BATCH: usize = geom::BATCH;
+    let cells: Vec<i32> = match levels {
+        Levels::Periodic { spacing, offset }
+            if spacing > 1e-200 && offset.abs() <= CELL_LIMIT * spacing =>
+        {
+            values
+                .par_iter()
+                .map(|&d| level_cell(d, spacing, offset))
+                .collect()
+        }
+        // every vertex "near a level": every face takes the full test
+        _ => Vec::new(),
+    };
+    let cell = |v: u32| cells.get(v as usize).copied().unwrap_or(NEAR_LEVEL);
     let nf = mesh.face_count();
     let chunks: Vec<Vec<Segment>> = (0..nf.div_ceil(CHUNK))
         .into_par_iter()
         .map(|c| {
             let mut out = Vec::new();
-            for f in c * CHUNK..((c + 1) * CHUNK).min(nf) {
-                face_segments(
-                    mesh,
-                    FaceId(f as u32),
-                    values,
-                    branch,
-                    levels,
-                    max_levels,
-                    edge_ok,
-                    &mut out,
-                );
+            let (lo, hi) = (c * CHUNK, ((c + 1) * CHUNK).min(nf));
+            for f0 in (lo..hi).step_by(BATCH) {
+                let n = BATCH.min(hi - f0);
+                let mut halfedges = [[0u32; 3]; BATCH];
+                let mut tri = [[0u32; 3]; BATCH];
+                geom::gather_triangles(mesh, f0, &mut halfedges[..n], &mut tri[..n]);
+                // the faces that may carry a segment, with their corners
+                let mut open = [(0u32, Corners::default()); BATCH];
+                let mut k = 0;
+                for i in 0..n {
+                    // a → b → c: from(h0), to(h0), to(h1)
+                    let (h, t) = (halfedges[i], tri[i]);
+                    let vertices = [mesh.from_vertex(HalfedgeId(h[0])).0, t[0], t[1]];
+                    let c0 = cell(vertices[0]);
+                    let may_cross =
+                        (c0 == NEAR_LEVEL) | (cell(vertices[1]) != c0) | (cell(vertices[2]) != c0);
+                    // kept without a branch (the cells may still be on
+                    // their way from memory; a mispredicted branch waits)
+                    let corners = Corners {
+                        halfedges: h,
+                        vertices,
+                    };
+                    open[k] = ((f0 + i) as u32, corners);
+                    k += usize::from(may_cross);
+                }
+                let mut field = [([0.0; 3], [0i8; 3]); BATCH];
+                for (fv, (_, corners)) in field.iter_mut().zip(&open[..k]) {
+                    *fv = corners.field(values, branch);
+                }
+                for ((f, corners), &fv) in open[..k].iter().zip(&field) {
+                    triangle_segments(
+                        FaceId(*f),
+                        corners,
+                        fv,
+                        levels,
+                        max_levels,
+                        edge_ok,
+                        &mut out,
+                    );
+                }
             }
             out
         })
         .collect();
     chunks.concat()
+}
+
+/// [`level_cell`] of a value within rounding distance of a level (or not
+/// finite, or too far out): its triangles take the full test.
+const NEAR_LEVEL: i32 = i32::MIN;
+
+/// Largest |cell index| (and |offset| / spacing) for which [`level_cell`]
+/// decides; beyond it every value counts as near a level.
+const CELL_LIMIT: f64 = 1_048_576.0;
+
+/// The level cell k of a field value d under the levels offset + m·spacing
+/// (offset + k·spacing < d < offset + (k + 1)·spacing), when d lies well
+/// inside it: q = (d − offset)/spacing is at least 10⁻⁶ from an integer and
+/// |q| < 2²⁰; otherwise [`NEAR_LEVEL`].
+///
+/// A triangle whose three vertices have the same cell k carries no
+/// segment in [`triangle_segments`]: its levels run from m0 = k to
+/// m1 = k + 1 (the floor and ceiling of the same q, which rounding keeps
+/// monotone), and level k lies below every value and level k + 1 above,
+/// by a margin (10⁻⁶·spacing) that the rounding of q, of the level values
+/// and of the comparisons (relative 10⁻¹⁶ of values below 2²⁰·spacing)
+/// cannot close. So skipping it changes nothing.
+#[inline]
+fn level_cell(d: f64, spacing: f64, offset: f64) -> i32 {
+    const MARGIN: f64 = 1e-6;
+    let q = (d - offset) / spacing;
+    let k = floor(q);
+    let frac = q - k;
+    if frac > MARGIN && frac < 1.0 - MARGIN && k.abs() < CELL_LIMIT {
+        k as i32
+    } else {
+        NEAR_LEVEL
+    }
 }
 
 /// Position of a node: the vertex, or the point of level m on the edge by

@@ -527,6 +527,18 @@ fn fine_fit<const N: usize>(p0: Vec3, n0: Vec3, pts: &[Vec3], r: f64) -> Option<
 /// the fit's unit normal at the origin. `floor` is the smallest robust
 /// scale of the slope residuals (radians).
 fn smooth_normal(p0: Vec3, n0: Vec3, nb: &[(Vec3, Vec3)], r: f64, floor: f64) -> Option<Vec3> {
+    smooth_normal_with_hole(p0, n0, nb, r, floor, HOLE)
+}
+
+/// [`smooth_normal`] leaving out the sites within `hole` smooth radii.
+fn smooth_normal_with_hole(
+    p0: Vec3,
+    n0: Vec3,
+    nb: &[(Vec3, Vec3)],
+    r: f64,
+    floor: f64,
+    hole: f64,
+) -> Option<Vec3> {
     let (bx, by) = frame(n0);
     struct Row {
         x: f64,
@@ -573,7 +585,7 @@ fn smooth_normal(p0: Vec3, n0: Vec3, nb: &[(Vec3, Vec3)], r: f64, floor: f64) ->
             }
         } else {
             rows = all_rows;
-            rows.retain(|r| r.x * r.x + r.y * r.y >= HOLE * HOLE);
+            rows.retain(|r| r.x * r.x + r.y * r.y >= hole * hole);
         }
     }
     if rows.len() < 12 {
@@ -1433,3 +1445,10 @@ fn fill_holes(mesh: &SurfaceMesh, in_region: &mut [bool]) {
         }
     }
 }
+
+/// The wider-scale comparisons measured for wide dents on coarse meshes
+/// (README, Default lights on real meshes; BENCHMARKS, session 21): a table
+/// printer, not a check.
+#[cfg(test)]
+#[path = "detect_wide_table.rs"]
+mod wide_table;

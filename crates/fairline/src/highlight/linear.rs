@@ -140,15 +140,11 @@ impl HighlightModel {
             .zip(branch.par_chunks_mut(CHUNK))
             .enumerate()
             .for_each(|(c, ((ns, ds), bs))| {
-                let cells = ns.iter_mut().zip(ds.iter_mut()).zip(bs.iter_mut());
-                for (k, ((n, d), b)) in cells.enumerate() {
+                geom::vertex_normals_into(mesh, &area_vectors, c * CHUNK, ns);
+                let cells = ns.iter().zip(ds.iter_mut()).zip(bs.iter_mut());
+                for (k, ((&n, d), b)) in cells.enumerate() {
                     let v = c * CHUNK + k;
-                    *n = geom::vertex_normal_from_area_vectors(
-                        mesh,
-                        VertexId(v as u32),
-                        &area_vectors,
-                    );
-                    (*d, *b) = vertex_distance(&light, p[v], *n, options.min_normal_cos);
+                    (*d, *b) = vertex_distance(&light, p[v], n, options.min_normal_cos);
                 }
             });
         drop(area_vectors);

@@ -1057,3 +1057,84 @@ fn readable_multiple_on_a_sample_agrees_with_the_full_choice() {
         }
     }
 }
+
+#[test]
+fn all_segments_equal_the_face_by_face_segments() {
+    // all_segments passes over the faces whose vertices lie well inside one
+    // level cell and loads the rest batch by batch; the segments must be
+    // those of face_segments, face by face, also where values sit on a
+    // level, a rounding error from one, or just inside the cells' margin,
+    // with offsets (bands), a single level (circular lights), undefined
+    // and mixed branches, values far out, and a scan's scrambled order.
+    let mesh = crate::geom::tests::scrambled(&shapes::torus(2.0, 0.7, 120, 50), 5);
+    let s = 0.1;
+    let mut rng = Rng(4242);
+    let mut values: Vec<f64> = mesh
+        .positions()
+        .iter()
+        .map(|p| 3.7 * p.x + (2.0 * p.y).sin() + 0.3 * p.z)
+        .collect();
+    let mut branch = vec![1i8; values.len()];
+    for (i, d) in values.iter_mut().enumerate() {
+        let level = (*d / s).round() * s;
+        match i % 11 {
+            0 => *d = level,
+            1 => *d = level + 1e-15 * rng.next(),
+            2 => *d = level + 1e-7 * s * rng.next(),
+            3 => *d = level + 1.001e-6 * s,
+            4 => *d = level - 0.999e-6 * s,
+            5 if i % 7 == 0 => *d = 1e12 * rng.next(),
+            6 if i % 5 == 0 => branch[i] = 0,
+            7 if i % 3 == 0 => branch[i] = -1,
+            _ => {}
+        }
+    }
+    let every_face = |levels: contour::Levels| {
+        let mut out = Vec::new();
+        for f in mesh.faces() {
+            contour::face_segments(
+                &mesh,
+                f,
+                &values,
+                &branch,
+                levels,
+                4,
+                &|_, _| true,
+                &mut out,
+            );
+        }
+        out
+    };
+    for levels in [
+        contour::Levels::Periodic {
+            spacing: s,
+            offset: 0.0,
+        },
+        contour::Levels::Periodic {
+            spacing: s,
+            offset: 0.03,
+        },
+        contour::Levels::Periodic {
+            spacing: s,
+            offset: -0.25 * s,
+        },
+        contour::Levels::Periodic {
+            spacing: s,
+            offset: 2e6 * s,
+        },
+        contour::Levels::Single {
+            value: 0.4,
+            index: 2,
+        },
+    ] {
+        let all = contour::all_segments(&mesh, &values, &branch, levels, 4, &|_, _| true);
+        let reference = every_face(levels);
+        assert!(!reference.is_empty(), "{levels:?}");
+        assert!(
+            all == reference,
+            "{levels:?}: {} vs {}",
+            all.len(),
+            reference.len()
+        );
+    }
+}
