@@ -254,7 +254,7 @@ pub fn run(args: HighlightArgs) -> Result<()> {
         let drawn = drawn_lines(&surfaces, &results, readable.as_ref().map(|r| &r.1));
         let view = match (&readable, args.view) {
             (_, Some(v)) => Some((v, RenderOptions::default().up)),
-            (Some((array, _)), None) => Some(part_camera(array)),
+            (Some((array, _)), None) => Some(fairline::highlight::part_view(array)),
             (None, None) => None,
         };
         if let Some((dir, up)) = view {
@@ -566,27 +566,4 @@ pub fn label_point(surface: &BSplineSurface) -> Option<[f64; 2]> {
             _ => Some(c),
         })
         .map(|b| b.1)
-}
-
-/// The view (direction from the eye, screen up) of a part's picture under
-/// linear lights: with +z up on the screen whenever the lights face
-/// sideways (their plane normal more than 45° from z), seen from a little
-/// above (CAD parts are modelled z-up); otherwise toward the lights as the
-/// mesh pictures ([`crate::highlight_png::default_camera`]) but tilted by
-/// about 40° rather than 19°, so that what lies under a flat top (the
-/// impeller's blades under its disc) shows beside it.
-pub fn part_camera(light: &LightArray) -> (Vec3, Vec3) {
-    let z = light.plane_normal();
-    let up = (Vec3::Z - Vec3::Z.dot(z) * z).normalize_or_zero();
-    if z.dot(Vec3::Z).abs() < std::f64::consts::FRAC_1_SQRT_2 && up != Vec3::ZERO {
-        (-z - 0.35 * up, up)
-    } else {
-        let (dir, screen_up) = crate::highlight_png::default_camera(light);
-        let tilt = dir + z;
-        if tilt.length() > 0.0 {
-            (-z + 0.85 * tilt.normalize(), screen_up)
-        } else {
-            (dir, screen_up)
-        }
-    }
 }

@@ -48,8 +48,8 @@ pub use surface::{
 #[cfg(test)]
 pub(crate) use tessellate::trimmed_area_by_triangles;
 pub use tessellate::{
-    MIN_PATCH_GRID, Tessellation, control_diagonal, patch_grid, tessellate, tessellate_part,
-    tessellate_part_with, trimmed_area,
+    MIN_PATCH_GRID, Tessellation, control_diagonal, part_mesh, patch_grid, tessellate,
+    tessellate_part, tessellate_part_with, trimmed_area,
 };
 pub(crate) use trim::inside_by_crossings;
 pub use trim::{

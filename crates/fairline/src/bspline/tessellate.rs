@@ -133,9 +133,10 @@ pub fn patch_grid(surface: &BSplineSurface, part_diagonal: f64, grid: usize) -> 
 
 /// Every surface of a part tessellated on the grid `grid(s)` (in parallel,
 /// merged in input order) into one triangle mesh, with the patch (index
-/// into `surfaces`) of every face. Degenerate points (poles of a patch) can
-/// make a tessellation non-manifold; then the triangles with a repeated
-/// vertex are left out.
+/// into `surfaces`) of every face. The patches are not welded to each
+/// other (each keeps its own vertices), so a mesh the builder refuses can
+/// only come from one patch's tessellation; then the triangles are made
+/// into a mesh as `fairline repair` would ([`part_mesh`]).
 pub fn tessellate_part_with(
     surfaces: &[BSplineSurface],
     grid: impl Fn(&BSplineSurface) -> [usize; 2] + Sync,
@@ -156,20 +157,48 @@ pub fn tessellate_part_with(
         triangles.extend(t.triangles.iter().map(|tri| tri.map(|i| i + base)));
         patch.resize(triangles.len(), k as u32);
     }
-    match crate::SurfaceMesh::new(positions.clone(), &triangles) {
-        Ok(m) => Ok((m, patch)),
-        Err(_) => {
-            let keep = |t: &[u32; 3]| t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
-            let kept_patch: Vec<u32> = triangles
-                .iter()
-                .zip(&patch)
-                .filter(|(t, _)| keep(t))
-                .map(|(_, &p)| p)
-                .collect();
-            let kept: Vec<[u32; 3]> = triangles.into_iter().filter(keep).collect();
-            Ok((crate::SurfaceMesh::new(positions, &kept)?, kept_patch))
+    part_mesh(positions, &triangles, patch)
+}
+
+/// The mesh of a part's triangles with the patch of every face: the
+/// triangles as they are when [`crate::SurfaceMesh::new`] takes them;
+/// otherwise (an edge of three or more faces, e.g. a sliver of a clipped
+/// cell, or faces that cannot be oriented alike) the mesh of
+/// [`crate::mesh::repair`]: such an edge is cut open (its first two faces
+/// stay joined), repeated and zero-area triangles are left out, and
+/// vertices where several fans meet are split — a picture or a light choice
+/// of the part loses nothing it could show. The patches follow the faces
+/// kept. Fails only on non-finite positions.
+pub fn part_mesh(
+    positions: Vec<Vec3>,
+    triangles: &[[u32; 3]],
+    patch: Vec<u32>,
+) -> Result<(crate::SurfaceMesh, Vec<u32>), crate::MeshError> {
+    let soup = crate::Soup::from_polygons(positions, triangles);
+    let refused = match crate::SurfaceMesh::from_soup(&soup) {
+        Ok(m) => return Ok((m, patch)),
+        Err(e) => e,
+    };
+    let repaired = match crate::mesh::repair(&soup, &crate::mesh::RepairOptions::default()) {
+        Ok(r) => r,
+        Err(crate::mesh::RepairError::Mesh(e)) => return Err(e),
+        // not raised: the default options have no cancel flag
+        Err(crate::mesh::RepairError::Cancelled(_)) => return Err(refused),
+    };
+    let mut removed = vec![false; triangles.len()];
+    for r in &repaired.report.removed_faces {
+        if let Some(x) = removed.get_mut(r.face) {
+            *x = true;
         }
     }
+    let kept: Vec<u32> = patch
+        .iter()
+        .zip(&removed)
+        .filter(|&(_, &r)| !r)
+        .map(|(&p, _)| p)
+        .collect();
+    let mesh = crate::SurfaceMesh::from_owned_soup(repaired.soup)?;
+    Ok((mesh, kept))
 }
 
 /// A part tessellated for a picture (or for choosing its lights): one
@@ -332,10 +361,34 @@ fn clip_grid(trim: &TrimmedDomain, us: &[f64], vs: &[f64]) -> ClippedGrid {
     ClippedGrid { cells, extra }
 }
 
-/// The closed polyline `poly` with a point added wherever it crosses a grid
-/// line of `us × vs` (a cut within 1e-12 of a cell size from a grid line
-/// snapped onto it), without repeated points and without the closing
-/// repetition of the first point.
+/// Distance (as a fraction of a grid cell's side) within which a trimming
+/// polyline point or a cut is moved onto a grid line. Far below the
+/// flattening tolerance and the `nudge` of [`piece_cells`] (1e-7 of a cell),
+/// far above the rounding of loops computed in floating point: a loop point
+/// one ulp off a grid corner (featuretype.STEP's plane faces, whose trims
+/// run along the domain's border) would otherwise become a second vertex
+/// beside the corner, and the clipped cell's ear clipping made a sliver on
+/// the corner's edge that a third face shared (a non-manifold edge).
+const GRID_SNAP: f64 = 1e-9;
+
+/// `p` with each coordinate within [`GRID_SNAP`] of a cell side from a
+/// grid line of `us` (resp. `vs`) moved onto it.
+fn snap_to_grid_lines(mut p: [f64; 2], us: &[f64], vs: &[f64], cell: [f64; 2]) -> [f64; 2] {
+    for (axis, ts) in [us, vs].into_iter().enumerate() {
+        let k = cell_of(ts, p[axis]);
+        for &t in &ts[k..(k + 2).min(ts.len())] {
+            if (p[axis] - t).abs() <= GRID_SNAP * cell[axis] {
+                p[axis] = t;
+            }
+        }
+    }
+    p
+}
+
+/// The closed polyline `poly` with its points snapped onto the grid lines
+/// of `us × vs` near them ([`snap_to_grid_lines`]) and a point added
+/// wherever it crosses a grid line (snapped too), without repeated points
+/// and without the closing repetition of the first point.
 fn refine_at_grid_lines(
     poly: &[[f64; 2]],
     us: &[f64],
@@ -343,12 +396,15 @@ fn refine_at_grid_lines(
     cell_w: f64,
     cell_h: f64,
 ) -> Vec<[f64; 2]> {
-    let (nu, nv) = (us.len(), vs.len());
+    let snap = |p: [f64; 2]| snap_to_grid_lines(p, us, vs, [cell_w, cell_h]);
+    let snapped: Vec<[f64; 2]> = poly.iter().map(|&p| snap(p)).collect();
     let mut pts: Vec<[f64; 2]> = Vec::with_capacity(poly.len() * 2);
-    let n = poly.len();
+    let n = snapped.len();
     for k in 0..n {
-        let (a, b) = (poly[k], poly[(k + 1) % n]);
-        pts.push(a);
+        let (a, b) = (snapped[k], snapped[(k + 1) % n]);
+        if pts.last() != Some(&a) {
+            pts.push(a);
+        }
         let mut cuts: Vec<(f64, [f64; 2])> = Vec::new();
         let (lo, hi) = (a[0].min(b[0]), a[0].max(b[0]));
         let first = us.partition_point(|&x| x <= lo);
@@ -363,23 +419,13 @@ fn refine_at_grid_lines(
             cuts.push((t, [a[0] + t * (b[0] - a[0]), y]));
         }
         cuts.sort_by(|p, q| p.0.total_cmp(&q.0));
-        for (t, mut p) in cuts {
+        for (t, p) in cuts {
             if !(t > 0.0 && t < 1.0) {
                 continue;
             }
-            // Snap a cut next to a grid corner onto it.
-            let (iu, iv) = (cell_of(us, p[0]), cell_of(vs, p[1]));
-            for &x in &us[iu..(iu + 2).min(nu)] {
-                if (p[0] - x).abs() <= 1e-12 * cell_w {
-                    p[0] = x;
-                }
-            }
-            for &y in &vs[iv..(iv + 2).min(nv)] {
-                if (p[1] - y).abs() <= 1e-12 * cell_h {
-                    p[1] = y;
-                }
-            }
-            if pts.last() != Some(&p) {
+            // A cut next to a grid corner lands on it.
+            let p = snap(p);
+            if pts.last() != Some(&p) && p != b {
                 pts.push(p);
             }
         }

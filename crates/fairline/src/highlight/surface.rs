@@ -1117,7 +1117,8 @@ fn refine_on_edge(
 
 mod part;
 pub use part::{
-    LIGHT_CHOICE_SAMPLES, linear_distance_gradient, part_light_array, readable_surface_lines,
+    LIGHT_CHOICE_SAMPLES, best_covered_lights, linear_distance_gradient, part_light_array,
+    part_view, readable_surface_lines,
 };
 
 #[cfg(test)]

@@ -379,21 +379,7 @@ fn render_impl(
     let (rw, rh) = (w - legend_w, h - title_h);
 
     if let Some((lo, hi)) = scene_bounds(scene) {
-        let aspect = rw as f64 / rh as f64;
-        let camera = match opts.camera {
-            Some(mut c) => {
-                c.aspect = aspect;
-                c
-            }
-            None => {
-                let c = if opts.orthographic {
-                    Camera::framing_orthographic(lo, hi, opts.view_dir, opts.up, aspect)
-                } else {
-                    Camera::framing(lo, hi, opts.view_dir, opts.up, aspect)
-                };
-                tighten(c, scene, 0.5 * (lo + hi))
-            }
-        };
+        let camera = frame_camera(scene, opts, (lo, hi), rw as f64 / rh as f64);
         let diag = (hi - lo).length();
         let (view, ids) = raster::render_view(scene, opts, &camera, rw, rh, diag, labels.is_some());
         img.blit(&view, 0, title_h as i64);
@@ -434,6 +420,60 @@ fn render_impl(
         );
     }
     Ok((img, placed))
+}
+
+/// The camera of a picture of `scene` (bounding box `lo`–`hi`) with the
+/// drawing area's `aspect`: `opts.camera` when given, else a framing camera
+/// along `opts.view_dir` moved as close as the scene allows ([`tighten`]).
+fn frame_camera(
+    scene: &Scene,
+    opts: &RenderOptions,
+    (lo, hi): (Vec3, Vec3),
+    aspect: f64,
+) -> Camera {
+    match opts.camera {
+        Some(mut c) => {
+            c.aspect = aspect;
+            c
+        }
+        None => {
+            let c = if opts.orthographic {
+                Camera::framing_orthographic(lo, hi, opts.view_dir, opts.up, aspect)
+            } else {
+                Camera::framing(lo, hi, opts.view_dir, opts.up, aspect)
+            };
+            tighten(c, scene, 0.5 * (lo + hi))
+        }
+    }
+}
+
+/// What a picture of `scene` shows, without the picture: the camera
+/// [`render`] frames the scene with for `opts` (over the whole `width` ×
+/// `height`: no title or legend strip) and the global triangle id (meshes in
+/// scene order, as [`render_labelled`] counts them) seen at the centre of
+/// each pixel, row-major, `u32::MAX` where none. `None` for a scene with
+/// nothing finite to frame. Used to judge from which side a part's picture
+/// shows the most of it (issue #20). Errors as [`render`].
+pub fn visible_triangles(
+    scene: &Scene,
+    opts: &RenderOptions,
+) -> Result<Option<(Camera, Vec<u32>)>, RenderError> {
+    let (w, h) = (opts.width, opts.height);
+    if w == 0 || h == 0 || w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
+        return Err(RenderError::InvalidSize {
+            width: w,
+            height: h,
+        });
+    }
+    if opts.supersample == 0 || opts.supersample > MAX_SUPERSAMPLE {
+        return Err(RenderError::InvalidSupersample(opts.supersample));
+    }
+    let Some((lo, hi)) = scene_bounds(scene) else {
+        return Ok(None);
+    };
+    let camera = frame_camera(scene, opts, (lo, hi), w as f64 / h as f64);
+    let (_, ids) = raster::render_view(scene, opts, &camera, w, h, (hi - lo).length(), true);
+    Ok(ids.map(|ids| (camera, ids)))
 }
 
 /// Font scale for an image size: 1 below 600 px, 2 up to 1000 px, 3 for 1200 px, ...

@@ -25,12 +25,14 @@ pub const LIGHT_CHOICE_SAMPLES: usize = 48;
 /// - `given` (e.g. read from a lights file) is used as it is;
 /// - otherwise the array of `choice`: with a plane normal given, the
 ///   defaults of the control points' bounding box
-///   ([`LightChoice::light_array_in_box`]); without, the mesh side's default
-///   lights of the part ([`LightChoice::light_array`]: plane normal from the
-///   principal axes and the surface's facing, light direction along the
-///   part) — both with the spacing made readable unless `choice.spacing` is
-///   given ([`LightChoice::readable`]: every k-th light, k = round(ĝ/3)
-///   with ĝ the area-weighted median of |∇d_P|).
+///   ([`LightChoice::light_array_in_box`]); with an `up` axis given, the
+///   mesh side's default lights of the part for it
+///   ([`LightChoice::light_array`]: light direction along the part); with
+///   neither, the side of the part whose picture shows the most of it with
+///   readable lines ([`best_covered_lights`]) — all with the spacing made
+///   readable unless `choice.spacing` is given ([`LightChoice::readable`]:
+///   every k-th light, k = round(ĝ/3) with ĝ the area-weighted median of
+///   |∇d_P|).
 ///
 /// The mesh functions see the part tessellated with
 /// [`LIGHT_CHOICE_SAMPLES`] samples along its diagonal
@@ -41,60 +43,229 @@ pub fn part_light_array(
     choice: &LightChoice,
     given: Option<LightArray>,
 ) -> Result<(LightArray, Readability), HighlightError> {
-    let (mesh, _) = tessellate_part(surfaces, LIGHT_CHOICE_SAMPLES)?;
+    let (mesh, patch) = tessellate_part(surfaces, LIGHT_CHOICE_SAMPLES)?;
     let array = match given {
         Some(a) => a,
-        None => {
-            let base = if choice.plane_normal.is_some() {
-                let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
-                for s in surfaces {
-                    let (a, b) = s.control_bounding_box();
-                    lo = lo.min(a);
-                    hi = hi.max(b);
-                }
-                choice.light_array_in_box(lo, hi)?
-            } else if choice.up == UpAxis::Auto {
-                most_readable_axis(&mesh, choice)?
-            } else {
-                choice.light_array(&mesh)?
-            };
-            choice.readable(&mesh, base)?
+        None if choice.plane_normal.is_some() => {
+            let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
+            for s in surfaces {
+                let (a, b) = s.control_bounding_box();
+                lo = lo.min(a);
+                hi = hi.max(b);
+            }
+            choice.readable(&mesh, choice.light_array_in_box(lo, hi)?)?
         }
+        None if choice.up == UpAxis::Auto => best_covered_lights(&mesh, &patch, choice)?.0,
+        None => choice.readable(&mesh, choice.light_array(&mesh)?)?,
     };
     let readability = Readability::for_part(&mesh, &array);
     Ok((array, readability))
 }
 
-/// The lights of `choice` (no plane normal given, `up` automatic) facing
-/// the part from the side where its lines are most readable: of the mesh
-/// side's defaults with the lights along +z, +y and +x
-/// ([`LightChoice::light_array`] with [`UpAxis::Z`], …: light direction
-/// along the part's longest extent), the one with the smallest
-/// area-weighted median ĝ of |∇d_P| (the first on ties): the lines lie
-/// farthest apart over most of the part. The mesh side's automatic axis
-/// (least extent, turned to the side the surface faces) is not used: on a
-/// part of patches the facing depends on how each patch happens to be
-/// parametrised (it put the teapot's lights below it).
-fn most_readable_axis(
+/// The view of a part's picture under the linear lights `light`: the
+/// direction from the eye and the screen's up. With +z up on the screen
+/// whenever the lights face sideways (their plane normal Z more than 45°
+/// from the z axis), seen from a little above (CAD parts are modelled
+/// z-up): `−Z − 0.35·up`. Otherwise from the lights' side, tilted about 40°
+/// toward the screen's up (+y made orthogonal to Z; Z × H when Z lies
+/// within 45° of y), so that what stands on a flat face shows beside it:
+/// `−Z + 0.85·up`. The mesh pictures look along the lights tilted by 19°.
+pub fn part_view(light: &LightArray) -> (Vec3, Vec3) {
+    let z = light.plane_normal();
+    let half = std::f64::consts::FRAC_1_SQRT_2;
+    let up_z = (Vec3::Z - Vec3::Z.dot(z) * z).normalize_or_zero();
+    if z.dot(Vec3::Z).abs() < half && up_z != Vec3::ZERO {
+        return (-z - 0.35 * up_z, up_z);
+    }
+    let up_y = (Vec3::Y - Vec3::Y.dot(z) * z).normalize_or_zero();
+    let up = if z.dot(Vec3::Y).abs() >= half || up_y == Vec3::ZERO {
+        light.across()
+    } else {
+        up_y
+    };
+    (-z + 0.85 * up, up)
+}
+
+/// Size (pixels) of the pictures [`best_covered_lights`] judges the views
+/// by: enough for the fraction of each patch that is seen, cheap next to
+/// the tracing of the lines.
+const COVERAGE_VIEW: (u32, u32) = (240, 180);
+
+/// The readable lights of `choice` (no plane normal, `up` automatic) from
+/// the side of the part whose picture shows the most of it with readable
+/// lines, with that fraction of the part's area. Candidates: the mesh
+/// side's default lights along +z, −z, +y, −y, +x and −x
+/// ([`LightChoice::light_array`] with [`UpAxis::Z`], …, and the same lights
+/// mirrored through the part's centre), each made readable
+/// ([`LightChoice::readable`]); each is judged by [`covered_fraction`] seen
+/// from [`part_view`]. The largest wins (the first on ties).
+///
+/// Before, the axis of the smallest median |∇d_P| was taken, with the
+/// lights always on the + side: on the impeller (blades on one side of a
+/// dish) the lights faced the dish's flat back, whose lines are the
+/// sparsest, and the picture from the lights' side showed the back of the
+/// dish with the blades hidden behind it.
+pub fn best_covered_lights(
     mesh: &crate::SurfaceMesh,
+    patch: &[u32],
     choice: &LightChoice,
-) -> Result<LightArray, HighlightError> {
+) -> Result<(LightArray, f64), HighlightError> {
+    let (lo, hi) =
+        crate::mesh::bounding_box(mesh.positions()).ok_or(HighlightError::NoFiniteVertices)?;
+    let centre = 0.5 * (lo + hi);
+    let part = CoverageInput::new(mesh, patch);
     let mut best: Option<(f64, LightArray)> = None;
     for up in [UpAxis::Z, UpAxis::Y, UpAxis::X] {
-        let array = choice.up(up).light_array(mesh)?;
-        let g = crate::highlight::readable::sampled_median_distance_gradient(
-            mesh,
-            &array,
-            crate::highlight::readable::GRADIENT_SAMPLE_FACES,
-        )
-        .unwrap_or(f64::INFINITY);
-        if best.as_ref().is_none_or(|b| g < b.0) {
-            best = Some((g, array));
+        let above = choice.up(up).light_array(mesh)?;
+        let below = LightArray::new(
+            above.plane_point()
+                - 2.0
+                    * (above.plane_point() - centre).dot(above.plane_normal())
+                    * above.plane_normal(),
+            -above.plane_normal(),
+            above.direction(),
+            above.spacing(),
+        )?;
+        for base in [above, below] {
+            let drawn = choice.readable(mesh, base)?;
+            let covered = covered_fraction(&part, &drawn);
+            if best.as_ref().is_none_or(|b| covered > b.0) {
+                best = Some((covered, drawn));
+            }
         }
     }
     match best {
-        Some((_, a)) => Ok(a),
-        None => choice.light_array(mesh),
+        Some((c, a)) => Ok((a, c)),
+        None => Ok((choice.readable(mesh, choice.light_array(mesh)?)?, 0.0)),
+    }
+}
+
+/// What [`covered_fraction`] needs of a part's mesh, computed once for all
+/// the candidate lights.
+struct CoverageInput<'a> {
+    mesh: &'a crate::SurfaceMesh,
+    patch: &'a [u32],
+    triangles: Vec<[u32; 3]>,
+    normals: Vec<Vec3>,
+    areas: Vec<f64>,
+}
+
+impl<'a> CoverageInput<'a> {
+    fn new(mesh: &'a crate::SurfaceMesh, patch: &'a [u32]) -> Self {
+        CoverageInput {
+            mesh,
+            patch,
+            triangles: mesh
+                .faces()
+                .map(|f| mesh.triangle(f).map(|v| v.0))
+                .collect(),
+            normals: crate::geom::vertex_normals(mesh),
+            areas: crate::geom::face_areas(mesh),
+        }
+    }
+}
+
+/// How much of the part its picture under `light` (seen from
+/// [`part_view`]) shows with readable lines: the fraction of the part's
+/// area shown times the mean fraction of each patch shown. Shown are the
+/// triangles where the lines are drawn — |∇d_P| defined and at most
+/// s/min_separation ([`Readability::for_part`], the rule of the readable
+/// drawing) — weighted, patch by patch, by the fraction of their projected
+/// area that is in front in a [`COVERAGE_VIEW`] picture
+/// ([`crate::render::visible_triangles`]: the pixels where they are seen
+/// over their projected pixel area, so hidden parts count as not shown).
+/// Both terms: the area alone prefers one large flat face (the flat
+/// underside of featuretype.STEP, none of its features), the patches alone
+/// many small faces seen at a grazing angle. 0 when nothing can be judged.
+fn covered_fraction(part: &CoverageInput, light: &LightArray) -> f64 {
+    let mesh = part.mesh;
+    let min_cos = crate::highlight::HighlightOptions::default().min_normal_cos;
+    let (d, branch): (Vec<f64>, Vec<i8>) = mesh
+        .positions()
+        .par_iter()
+        .zip(&part.normals)
+        .map(|(&p, &n)| crate::highlight::linear::vertex_distance(light, p, n, min_cos))
+        .unzip();
+    let gradient = crate::highlight::readable::face_distance_gradients(mesh, &d, &branch);
+    let r = Readability::for_part(mesh, light);
+    let max_gradient = if r.min_separation > 0.0 {
+        light.spacing() / r.min_separation
+    } else {
+        f64::INFINITY
+    };
+    let readable: Vec<bool> = gradient
+        .iter()
+        .map(|g| g.is_some_and(|g| g <= max_gradient))
+        .collect();
+    let (dir, up) = part_view(light);
+    let scene = crate::render::Scene {
+        meshes: vec![crate::render::MeshLayer::new(
+            mesh.positions(),
+            &part.triangles,
+        )],
+        ..Default::default()
+    };
+    let opts = crate::render::RenderOptions::with_size(COVERAGE_VIEW.0, COVERAGE_VIEW.1)
+        .view_dir(dir)
+        .up(up)
+        .supersample(1);
+    let Ok(Some((camera, ids))) = crate::render::visible_triangles(&scene, &opts) else {
+        return 0.0;
+    };
+    let mut seen = vec![0u32; part.triangles.len()];
+    for &id in &ids {
+        if let Some(c) = seen.get_mut(id as usize) {
+            *c += 1;
+        }
+    }
+    let (w, h) = (f64::from(COVERAGE_VIEW.0), f64::from(COVERAGE_VIEW.1));
+    let pixel = |p: Vec3| {
+        camera
+            .project(p)
+            .map(|q| [(q.x + 1.0) * 0.5 * w, (1.0 - q.y) * 0.5 * h])
+    };
+    let projected_pixels = |t: &[u32; 3]| -> f64 {
+        let p = mesh.positions();
+        match t.map(|k| pixel(p[k as usize])) {
+            [Some(a), Some(b), Some(c)] => {
+                0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).abs()
+            }
+            _ => 0.0,
+        }
+    };
+    // per patch: readable area, its projected pixels and the pixels seen
+    let patches = part.patch.iter().max().map_or(1, |&m| m as usize + 1);
+    let mut sums = vec![[0.0f64; 3]; patches];
+    for (f, t) in part.triangles.iter().enumerate() {
+        if !readable[f] {
+            continue;
+        }
+        let k = part.patch.get(f).map_or(0, |&k| k as usize);
+        let s = &mut sums[k.min(patches - 1)];
+        s[0] += part.areas[f];
+        s[1] += projected_pixels(t);
+        s[2] += f64::from(seen[f]);
+    }
+    // the part's area and each patch's
+    let mut patch_area = vec![0.0f64; patches];
+    for (f, a) in part.areas.iter().enumerate() {
+        let k = part.patch.get(f).map_or(0, |&k| k as usize);
+        patch_area[k.min(patches - 1)] += a;
+    }
+    let total: f64 = patch_area.iter().sum();
+    let (mut shown, mut patches_shown) = (0.0, 0.0);
+    for (s, &a) in sums.iter().zip(&patch_area) {
+        if s[1] > 0.0 && a > 0.0 {
+            let seen = s[0] * (s[2] / s[1]).min(1.0);
+            shown += seen;
+            patches_shown += seen / a;
+        }
+    }
+    let score = (shown / total) * (patches_shown / patches as f64);
+    if total > 0.0 && score.is_finite() {
+        score
+    } else {
+        0.0
     }
 }
 
