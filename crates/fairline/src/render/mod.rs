@@ -343,11 +343,9 @@ pub fn render_labelled(
     render_impl(scene, opts, Some(labels))
 }
 
-fn render_impl(
-    scene: &Scene,
-    opts: &RenderOptions,
-    labels: Option<&RegionLabels>,
-) -> Result<(Image, Vec<PlacedLabel>), RenderError> {
+/// The picture's width and height, refused when zero or beyond the limits
+/// (and a supersampling factor beyond its limit).
+fn check_picture_size(opts: &RenderOptions) -> Result<(u32, u32), RenderError> {
     let (w, h) = (opts.width, opts.height);
     if w == 0 || h == 0 || w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
         return Err(RenderError::InvalidSize {
@@ -358,6 +356,15 @@ fn render_impl(
     if opts.supersample == 0 || opts.supersample > MAX_SUPERSAMPLE {
         return Err(RenderError::InvalidSupersample(opts.supersample));
     }
+    Ok((w, h))
+}
+
+fn render_impl(
+    scene: &Scene,
+    opts: &RenderOptions,
+    labels: Option<&RegionLabels>,
+) -> Result<(Image, Vec<PlacedLabel>), RenderError> {
+    let (w, h) = check_picture_size(opts)?;
     let bg = linear_to_srgb8(opts.background);
     let mut img = Image::new(w, h, bg);
     let mut placed = Vec::new();
@@ -458,16 +465,7 @@ pub fn visible_triangles(
     scene: &Scene,
     opts: &RenderOptions,
 ) -> Result<Option<(Camera, Vec<u32>)>, RenderError> {
-    let (w, h) = (opts.width, opts.height);
-    if w == 0 || h == 0 || w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
-        return Err(RenderError::InvalidSize {
-            width: w,
-            height: h,
-        });
-    }
-    if opts.supersample == 0 || opts.supersample > MAX_SUPERSAMPLE {
-        return Err(RenderError::InvalidSupersample(opts.supersample));
-    }
+    let (w, h) = check_picture_size(opts)?;
     let Some((lo, hi)) = scene_bounds(scene) else {
         return Ok(None);
     };
