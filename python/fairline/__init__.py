@@ -555,8 +555,9 @@ def fair(
     al. §3, Algorithm 2): moves only vertices whose motion changes nothing
     outside the region until the highlight lines inside follow smooth
     desired curves. ``method``: ``"highlight"`` (default: the paper's
-    energy with the desired curves' end tangents refitted 4 times, then
-    ¾ of that result + ¼ of the diffusion-flow result on the same region),
+    energy with the desired curves' end tangents taken from a smooth fit
+    beyond the defect's footprint, then ¾ of that result + ¼ of the
+    diffusion-flow result on the same region),
     ``"paper"`` (Yong et al.'s Algorithm 2 exactly) or
     ``"diffusion-flow"`` (baseline); ``laplacian_weight`` adds a
     surface-diffusion term to ``"highlight"``.

@@ -25,11 +25,13 @@ use std::path::PathBuf;
 /// The energy to minimise.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
-    /// Yong et al.'s energy with the desired curves' end tangents refitted
-    /// to the faired lines 4 times, then ¾ of that result + ¼ of the
-    /// diffusion-flow result on the same region (closer to the defect-free
-    /// surface than either on generated panels; BENCHMARKS.md Session 19);
-    /// --laplacian-weight adds a curvature-Laplacian term.
+    /// Yong et al.'s energy with the desired curves' end tangents taken
+    /// from a smooth surface fitted beyond the defect's footprint (the
+    /// lines the clean surface would have), then ¾ of that result + ¼ of
+    /// the diffusion-flow result on the same region (closer to the
+    /// defect-free surface than diffusion flow on every generated panel;
+    /// BENCHMARKS.md Session 22); --laplacian-weight adds a
+    /// curvature-Laplacian term.
     Highlight,
     /// Yong et al. exactly (Algorithm 2): Willmore energy + distance of the
     /// highlight lines to their desired curves, desired curves from the

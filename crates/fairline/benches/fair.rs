@@ -3,9 +3,9 @@
 //! 100k-vertex height field. Prints the median time of the set-up (model,
 //! movable set, desired lines) and of one iteration (linearisation, box QP,
 //! incremental model update, step check). It runs the paper's method
-//! (`FairMethod::Paper`): the default method's iterations cost the same,
-//! it runs more of them (refits of the desired lines) and one
-//! diffusion-flow run besides.
+//! (`FairMethod::Paper`): the default method's iterations cost the same;
+//! it adds one smooth fit per desired-line end in the set-up (its end
+//! tangents) and one diffusion-flow run.
 //!
 //! Run: `cargo bench -p fairline --bench fair`
 

@@ -93,7 +93,7 @@ pub struct HighlightDeviation {
 
 /// Least-squares parabola through `q` fitted to `pts` at arc lengths `s`
 /// (signed); returns the derivative at `q`.
-fn fitted_tangent(q: Vec3, pts: &[Vec3], s: &[f64]) -> Vec3 {
+pub(super) fn fitted_tangent(q: Vec3, pts: &[Vec3], s: &[f64]) -> Vec3 {
     if pts.is_empty() {
         return Vec3::ZERO;
     }
@@ -127,7 +127,7 @@ fn fitted_tangent(q: Vec3, pts: &[Vec3], s: &[f64]) -> Vec3 {
 /// `start` of `seq` in direction `step` (±1), up to arc length `reach` (at
 /// least `min_nodes` nodes when available); returns points and signed arc
 /// lengths (negative backwards).
-fn part(
+pub(super) fn part(
     seq: &[(NodeId, Vec3)],
     inside: &[bool],
     side: bool,
@@ -158,17 +158,17 @@ fn part(
 /// One run of inside nodes of a line with its delimiting outside nodes:
 /// the line's node sequence (closed lines opened at an outside node),
 /// the inside flags, and the run `a..b` (Q0 at a − 1, Q1 at b).
-struct Run<'a> {
-    index: i64,
-    seq: &'a [(NodeId, Vec3)],
-    ins: &'a [bool],
-    a: usize,
-    b: usize,
+pub(super) struct Run<'a> {
+    pub(super) index: i64,
+    pub(super) seq: &'a [(NodeId, Vec3)],
+    pub(super) ins: &'a [bool],
+    pub(super) a: usize,
+    pub(super) b: usize,
 }
 
 /// Calls `f` for every run of inside nodes with two delimiting outside
 /// nodes (§3.2); returns the runs without them (skipped).
-fn for_each_run(
+pub(super) fn for_each_run(
     lines: &HighlightLines,
     inside: impl Fn(NodeId) -> bool,
     mut f: impl FnMut(&Run<'_>),

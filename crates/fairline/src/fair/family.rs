@@ -57,6 +57,8 @@ pub(crate) struct Case {
     pub panel: Panel,
     pub sigma: f64,
     pub amplitude: f64,
+    /// Where the defect sits (x, y); [`DEFECT_CENTER`] in the family.
+    pub center: (f64, f64),
 }
 
 /// Where the defect sits (x, y).
@@ -76,11 +78,67 @@ impl Case {
                         panel,
                         sigma,
                         amplitude: sign * 0.2 * sigma,
+                        center: DEFECT_CENTER,
                     });
                 }
             }
         }
         out
+    }
+
+    /// Cases held out of the tuning: the same panels with the defect at
+    /// two other places and of two other widths (σ 0.09, 0.13).
+    pub(crate) fn held_out() -> Vec<Case> {
+        let mut out = Vec::new();
+        for center in [(-0.15, 0.2), (0.25, 0.1)] {
+            for panel in Panel::ALL {
+                for sigma in [0.09, 0.13] {
+                    for sign in [1.0, -1.0] {
+                        out.push(Case {
+                            panel,
+                            sigma,
+                            amplitude: sign * 0.2 * sigma,
+                            center,
+                        });
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Unit direction of the truth's highlight line (level line of the
+    /// highlight distance of Eq. (1) on the exact panel) through the panel
+    /// point above (x, y), oriented along `reference`.
+    pub(crate) fn truth_line_direction(
+        &self,
+        light: &LightArray,
+        x: f64,
+        y: f64,
+        reference: Vec3,
+    ) -> Option<Vec3> {
+        let f = |x: f64, y: f64| self.panel.height(x, y);
+        let e = 1e-5;
+        let grad = |x: f64, y: f64| {
+            (
+                (f(x + e, y) - f(x - e, y)) / (2.0 * e),
+                (f(x, y + e) - f(x, y - e)) / (2.0 * e),
+            )
+        };
+        let d = |x: f64, y: f64| {
+            let (fx, fy) = grad(x, y);
+            let n = Vec3::new(-fx, -fy, 1.0).normalize();
+            light.highlight_distance(Vec3::new(x, y, f(x, y)), n, 0.1)
+        };
+        let h = 1e-4;
+        let dx = (d(x + h, y)? - d(x - h, y)?) / (2.0 * h);
+        let dy = (d(x, y + h)? - d(x, y - h)?) / (2.0 * h);
+        let (fx, fy) = grad(x, y);
+        let t = (-dy * Vec3::new(1.0, 0.0, fx) + dx * Vec3::new(0.0, 1.0, fy)).normalize_or_zero();
+        if t == Vec3::ZERO {
+            return None;
+        }
+        Some(if t.dot(reference) < 0.0 { -t } else { t })
     }
 
     pub(crate) fn label(&self) -> String {
@@ -93,7 +151,7 @@ impl Case {
     }
 
     fn defect(&self, x: f64, y: f64) -> f64 {
-        let (dx, dy) = (x - DEFECT_CENTER.0, y - DEFECT_CENTER.1);
+        let (dx, dy) = (x - self.center.0, y - self.center.1);
         self.amplitude * (-(dx * dx + dy * dy) / (2.0 * self.sigma * self.sigma)).exp()
     }
 
@@ -117,7 +175,7 @@ impl Case {
     /// defect (two rings of the margin are the support of §3.1).
     pub(crate) fn region(&self, mesh: &SurfaceMesh) -> Vec<FaceId> {
         let h = 2.0 / (GRID - 1) as f64;
-        let (x, y) = DEFECT_CENTER;
+        let (x, y) = self.center;
         RegionSpec::Sphere {
             center: Vec3::new(x, y, self.panel.height(x, y)),
             radius: 3.5 * self.sigma + 3.0 * h,
@@ -238,14 +296,14 @@ mod tests {
     /// Surface max, surface RMS, line max, line RMS of one run.
     type Measures = [f64; 4];
 
-    /// Runs `options` and the diffusion-flow baseline on every case of the
-    /// family; checks that every vertex that is not movable is
+    /// Runs `options` and the diffusion-flow baseline on every case of
+    /// `cases`; checks that every vertex that is not movable is
     /// bit-identical to the input for both (then so is every normal and
     /// highlight node outside the region, §3.1); returns (case, measures of
     /// `options`, measures of the baseline).
-    fn against_flow(options: &FairOptions) -> Vec<(String, Measures, Measures)> {
+    fn against_flow_on(cases: &[Case], options: &FairOptions) -> Vec<(String, Measures, Measures)> {
         let flow_options = FairOptions::default().method(FairMethod::DiffusionFlow);
-        Case::family()
+        cases
             .iter()
             .map(|case| {
                 let (mesh, truth, light) = (case.input_mesh(), case.truth_mesh(), case.light());
@@ -269,9 +327,18 @@ mod tests {
                     let l = line_error(&r, &after, &truth, &tl, &light);
                     [s.max, s.rms, l.max, l.rms]
                 };
-                (case.label(), run(options), run(&flow_options))
+                (
+                    format!("{} at {:?}", case.label(), case.center),
+                    run(options),
+                    run(&flow_options),
+                )
             })
             .collect()
+    }
+
+    /// [`against_flow_on`] the family.
+    fn against_flow(options: &FairOptions) -> Vec<(String, Measures, Measures)> {
+        against_flow_on(&Case::family(), options)
     }
 
     fn show(m: &Measures) -> String {
@@ -295,42 +362,49 @@ mod tests {
 
     /// Issue #21 item 1, measured: on the generated family (quadratic,
     /// cubic, wavy, saddle-like panels × bump/dent × σ 0.08, 0.11, 0.15)
-    /// the default method (paper energy + 4 refits of the desired lines +
-    /// ¼ of the diffusion-flow state, module `highlight`) ends closer to
-    /// the defect-free truth than surface diffusion flow in all four
-    /// measures (surface max and RMS, line max and RMS) on every case but
-    /// the widest saddle dent; there its lines (max, RMS) and its surface
-    /// RMS are closer and its surface max is within 1.15× of flow's: the
-    /// desired lines' end tangents are fitted to the lines' outside parts,
-    /// which carry the tail of that wide dent; with tangents fitted to the
-    /// truth's lines the paper's energy alone beats flow on every case
-    /// (BENCHMARKS.md Session 21), but no estimate from the input alone
-    /// does yet. On (geometric) average
-    /// it is 1.7× closer in surface max and 2× in line RMS, at least 1.2×
-    /// closer in surface max on every wavy panel (whose mean curvature is
-    /// not harmonic). Nothing outside the movable set moves (checked in
-    /// `against_flow`).
+    /// the default method (the paper's energy with the desired lines' end
+    /// tangents from a smooth fit beyond the defect's footprint, module
+    /// `end_tangents`, + ¼ of the diffusion-flow state, module `highlight`)
+    /// ends closer to the defect-free truth than surface diffusion flow in
+    /// all four measures (surface max and RMS, line max and RMS) on every
+    /// case — the widest saddle dent included (Session 21: 1.14× flow in
+    /// surface max with the input's outside tangents and 4 refits). On
+    /// (geometric) average it is 2× closer in surface max and 2.6× in line
+    /// RMS, and at least 2.5× closer in surface max on every wavy panel
+    /// (whose mean curvature is not harmonic). Nothing outside the movable
+    /// set moves (checked in `against_flow_on`).
     #[test]
     fn default_fairing_against_diffusion_flow_on_the_generated_family() {
         let rows = against_flow(&FairOptions::default());
         assert_eq!(rows.len(), 24);
         for (c, m, f) in &rows {
-            if c == "saddle dent σ=0.15" {
-                assert!(m[0] < 1.15 * f[0], "{c}: {} vs flow {}", show(m), show(f));
-                for k in 1..4 {
-                    assert!(m[k] < f[k], "{c}: {} vs flow {}", show(m), show(f));
-                }
-            } else {
-                for k in 0..4 {
-                    assert!(m[k] < f[k], "{c}: {} vs flow {}", show(m), show(f));
-                }
+            for k in 0..4 {
+                assert!(m[k] < f[k], "{c}: {} vs flow {}", show(m), show(f));
             }
             if c.starts_with("wavy") {
-                assert!(1.2 * m[0] < f[0], "{c}: {} vs flow {}", show(m), show(f));
+                assert!(2.5 * m[0] < f[0], "{c}: {} vs flow {}", show(m), show(f));
             }
         }
-        assert!(mean_ratio(&rows, 0) < 0.65, "{}", mean_ratio(&rows, 0));
-        assert!(mean_ratio(&rows, 3) < 0.55, "{}", mean_ratio(&rows, 3));
+        assert!(mean_ratio(&rows, 0) < 0.55, "{}", mean_ratio(&rows, 0));
+        assert!(mean_ratio(&rows, 3) < 0.45, "{}", mean_ratio(&rows, 3));
+    }
+
+    /// The same claim on 32 cases held out of the choice of the fit's
+    /// footprint and radius and of the flow share (the defect at (−0.15,
+    /// 0.2) and (0.25, 0.1), σ 0.09 and 0.13, every panel, bump and dent):
+    /// the default is closer to the truth than diffusion flow in all four
+    /// measures on every case (the paper's energy alone loses the four
+    /// saddle dents, up to 1.46× in surface max).
+    #[test]
+    fn default_fairing_against_diffusion_flow_on_held_out_cases() {
+        let rows = against_flow_on(&Case::held_out(), &FairOptions::default());
+        assert_eq!(rows.len(), 32);
+        for (c, m, f) in &rows {
+            for k in 0..4 {
+                assert!(m[k] < f[k], "{c}: {} vs flow {}", show(m), show(f));
+            }
+        }
+        assert!(mean_ratio(&rows, 0) < 0.6, "{}", mean_ratio(&rows, 0));
     }
 
     /// The paper's method (Yong et al. Eq. (15), [`FairMethod::Paper`]) on
@@ -386,12 +460,15 @@ mod tests {
 
     /// Refitting the desired lines' tangents across their end nodes once
     /// the defect is gone ([`FairOptions::refits`], four refits, no flow
-    /// share): the result's highlight lines end closer to the truth's
-    /// lines than diffusion flow's (max and RMS) on every case, and the
-    /// surface closer on all but the widest cubic bump and saddle dent, by
-    /// at most 1.25× there (1.67× without refits); the average surface gain
-    /// shrinks (wavy panels keep less of theirs), the trade-off recorded in
-    /// BENCHMARKS.md (Session 18).
+    /// share; the default until Session 21, now off): started from the
+    /// fitted tangents, the result's highlight lines end closer to the
+    /// truth's lines than diffusion flow's (max and RMS) on every case, and
+    /// the surface closer on all but the widest cubic bump and saddle dent,
+    /// by at most 1.25× there — where the fitted tangents without refits
+    /// win the saddle dent: the refits pull the desired lines back toward
+    /// the faired lines and throw the gain of clean tangents away
+    /// (BENCHMARKS.md Sessions 21–22), which is why the default does not
+    /// refit.
     #[test]
     fn refitted_tangents_bring_every_case_near_or_past_diffusion_flow() {
         let rows = against_flow(&highlight_only().refits(4));
@@ -484,6 +561,87 @@ mod tests {
                 worst.map(|w| format!("{w:.2}")).join(" · "),
                 its[i]
             );
+        }
+    }
+
+    /// Mean and max angle (degrees) to the truth's line directions at the
+    /// end nodes of the input's desired lines: (paper's outside estimate,
+    /// fitted-surface estimate), over the ends where both exist.
+    fn end_tangent_angles(case: &Case) -> ([f64; 2], [f64; 2]) {
+        let (mesh, light) = (case.input_mesh(), case.light());
+        let faces = case.region(&mesh);
+        let model = HighlightModel::new(&mesh, light, HighlightOptions::default()).unwrap();
+        let lines = model.lines(&mesh);
+        let nodes: Vec<_> = lines
+            .lines
+            .iter()
+            .flat_map(|l| l.nodes.iter().copied())
+            .collect();
+        let set = crate::fair::movable_vertices(&mesh, &faces, &nodes).unwrap();
+        let inside_edges: Vec<f64> = mesh
+            .edges()
+            .filter(|&e| set.edge_inside(&mesh, e))
+            .map(|e| {
+                let (a, b) = mesh.edge_vertices(e);
+                (mesh.position(a) - mesh.position(b)).length()
+            })
+            .collect();
+        let ebar = inside_edges.iter().sum::<f64>() / inside_edges.len() as f64;
+        let min_cos = HighlightOptions::default().min_normal_cos;
+        let fitted = crate::fair::fitted_surface_tangents(
+            &mesh,
+            &set,
+            model.normals(),
+            &lines,
+            &light,
+            min_cos,
+            ebar,
+        );
+        let paper = crate::fair::desired_lines(&lines, |n| set.node_inside(&mesh, n));
+        let (mut pa, mut fa) = (Vec::new(), Vec::new());
+        for l in &paper.lines {
+            let &(f0, f1) = fitted.get(&l.ends).expect("fitted tangents of every line");
+            for (q, tp, tf) in [
+                (l.end_points.0, l.tangents.0, f0),
+                (l.end_points.1, l.tangents.1, f1),
+            ] {
+                if tp == Vec3::ZERO {
+                    continue;
+                }
+                let t = case
+                    .truth_line_direction(&light, q.x, q.y, tp)
+                    .expect("truth direction");
+                pa.push(t.angle_between(tp).to_degrees());
+                fa.push(t.angle_between(tf).to_degrees());
+            }
+        }
+        assert!(pa.len() >= 30, "{}: {} ends", case.label(), pa.len());
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+        ([mean(&pa), max(&pa)], [mean(&fa), max(&fa)])
+    }
+
+    /// The end tangents from the smooth fit beyond the footprint (module
+    /// `end_tangents`) against the direction of the truth's highlight line
+    /// at each end node (level line of Eq. (1) on the exact panel): on the
+    /// polynomial panels (quadratic, cubic, saddle), where the cubic fit
+    /// represents the clean surface, they are at least 5× closer on average
+    /// than the paper's outside-part estimate and within 0.06° everywhere
+    /// (the paper's estimate: up to 0.31°, contaminated by the defect's
+    /// tail and by the curvature of the line's outside part); on the wavy
+    /// panels (a wave of wavelength ~2 that no cubic over 6 edges follows
+    /// exactly) they are within 1.7° like the paper's (≤ 1.8°).
+    #[test]
+    fn fitted_end_tangents_follow_the_truths_lines() {
+        for case in Case::family() {
+            let (paper, fitted) = end_tangent_angles(&case);
+            let what = format!("{}: paper {paper:.3?}°, fitted {fitted:.3?}°", case.label());
+            if case.panel == Panel::Wavy {
+                assert!(fitted[1] < 1.7, "{what}");
+            } else {
+                assert!(5.0 * fitted[0] < paper[0], "{what}");
+                assert!(fitted[1] < 0.06, "{what}");
+            }
         }
     }
 }

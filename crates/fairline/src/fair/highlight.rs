@@ -33,36 +33,43 @@
 //! (Yong et al. Eq. (15), Algorithm 2). [`FairMethod::Highlight`] (the
 //! default) goes beyond the paper in three ways (issue #21 item 1):
 //!
-//! 1. **Refitted desired lines** ([`FairOptions::refits`], default 4): each
-//!    time Eq. (17) is met, the tangents T0, T1 of the desired lines are
-//!    refitted across their end nodes to the faired lines (module
-//!    `desired`) and the iteration goes on. On the input the tangents can
-//!    only be extrapolated from the lines' outside parts, which still carry
-//!    the tail of the defect and are short on wide regions.
+//! 1. **Desired lines with clean end tangents** (module `end_tangents`):
+//!    the tangents T0, T1 of the OGH curves of Eq. (5) are the directions
+//!    of the highlight lines of a smooth cubic fitted to the vertices
+//!    beyond the defect's footprint (outside R grown by one ring, within
+//!    six edge lengths of Q0), continued to Q0. The paper fits them to the
+//!    lines' outside parts, which carry the tail of the defect: on flat-ish
+//!    panels (saddles) a small tilt of the normals moves a line by a lot.
+//!    Optional refits ([`FairOptions::refits`], default 0): each time
+//!    Eq. (17) is met, the tangents are refitted across the end nodes to
+//!    the faired lines (module `desired`) and the iteration goes on — the
+//!    default of Sessions 18–21, measured to throw the clean tangents'
+//!    gain away (BENCHMARKS.md Sessions 21–22).
 //! 2. **A share of the diffusion-flow state** ([`FairOptions::flow_share`],
 //!    default ¼): the movable vertices end at (1 − s)·X_H + s·X_F, X_H the
 //!    highlight result and X_F the stationary state of surface diffusion
 //!    flow (Δ_B H = 0, the baseline below) on the same region from the same
 //!    input. Both estimates leave a smooth residual of the defect, set by
 //!    the tail of the defect in the fixed support rings: the highlight
-//!    result follows desired curves built from those rings, flow the
-//!    biharmonic-like continuation of their positions and slopes; where
-//!    one over- and the other under-corrects (bumps), the combination is
-//!    closer than either, and where the truth's mean curvature is far from
-//!    harmonic (wavy panels) ¾ of the highlight result keeps most of its
-//!    gain. Fixed weights, no selection rule: nothing is chosen per input.
+//!    result follows desired curves through the end nodes in those rings,
+//!    flow the biharmonic-like continuation of their positions and slopes;
+//!    where one over- and the other under-corrects (the widest bumps), the
+//!    combination is closer than either, and where the truth's mean
+//!    curvature is far from harmonic (wavy panels) ¾ of the highlight
+//!    result keeps most of its gain. Fixed weights, no selection rule:
+//!    nothing is chosen per input.
 //! 3. The optional curvature-Laplacian term ω3 f_lap, f_lap = D⁴
 //!    ∫(Δ_B H)² dA over the movable vertices (D the region's bounding-box
 //!    diagonal, so that ω3 does not depend on scale), default 0.
 //!
 //! Measured on 24 generated panels with a known truth (module `family`,
-//! BENCHMARKS.md Session 19): the default ends closer to the truth than
-//! diffusion flow in surface max/RMS and line max/RMS on 23 of 24 cases and
-//! 1.7× closer in surface max on (geometric) average; on the widest saddle
-//! dent (σ 0.15) its lines and surface RMS are closer but its surface max
-//! is 1.14× flow's. The paper's energy alone loses 4 cases (up to 1.67×).
-//! With every option at 0 ([`FairOptions::refits`], `flow_share`,
-//! `laplacian_weight`) both methods are the same.
+//! BENCHMARKS.md Session 22): the default ends closer to the truth than
+//! diffusion flow in surface max/RMS and line max/RMS on every case, 2.1×
+//! closer in surface max and 2.6× in line RMS on (geometric) average, and
+//! on 32 held-out cases (other defect places and widths) as well; the
+//! paper's energy alone loses 4 of the 24 (up to 1.67×). With
+//! [`FairOptions::flow_share`] and `laplacian_weight` at 0 the default is
+//! the paper's energy with the fitted end tangents.
 //!
 //! Shape (issue #17): [`fair_highlight_lines`] takes the mesh and
 //! [`FairOptions`] (region, lights, weights, stopping rule, refits and the
@@ -78,8 +85,9 @@
 
 use super::FairError;
 use super::desired::{
-    DesiredLines, HighlightDeviation, Tangents, across_tangents, desired_lines, desired_lines_with,
+    DesiredLines, HighlightDeviation, Tangents, across_tangents, desired_lines_with,
 };
+use super::end_tangents::fitted_surface_tangents;
 use super::region::{MovableSet, movable_vertices};
 use super::system::{
     DiffNode, Frozen, NOT_MOVABLE, Residual, difference_energy_after, difference_residual,
@@ -96,11 +104,12 @@ use serde::Serialize;
 /// Which energy the fairing minimises.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum FairMethod {
-    /// Yong et al. Eq. (15) with refitted desired lines
-    /// ([`FairOptions::refits`]), a share of the diffusion-flow state
-    /// ([`FairOptions::flow_share`]) and the optional curvature-Laplacian
-    /// term ω3 f_lap ([`FairOptions::laplacian_weight`]); see the module
-    /// documentation.
+    /// Yong et al. Eq. (15) with desired lines whose end tangents come from
+    /// a smooth fit beyond the defect's footprint (module `end_tangents`),
+    /// a share of the diffusion-flow state ([`FairOptions::flow_share`]),
+    /// the optional refits of the desired lines ([`FairOptions::refits`])
+    /// and the optional curvature-Laplacian term ω3 f_lap
+    /// ([`FairOptions::laplacian_weight`]); see the module documentation.
     #[default]
     Highlight,
     /// Yong et al. Eq. (15) exactly: ω1 f_fair + ω2 f_diff, whatever
@@ -142,11 +151,12 @@ pub struct FairOptions {
     /// ε of Eq. (17) (default 1e-3).
     pub epsilon: f64,
     /// Refits of the desired lines ([`FairMethod::Highlight`] only,
-    /// default 4): each time Eq. (17) is met, the tangents T0, T1 of the
+    /// default 0): each time Eq. (17) is met, the tangents T0, T1 of the
     /// desired lines are refitted across their end nodes to the faired
     /// lines ([`super::desired::across_tangents`]) and the iteration goes
-    /// on, this many times; 0 keeps the tangents of the input's outside
-    /// parts.
+    /// on, this many times; 0 keeps the tangents of the smooth fit beyond
+    /// the footprint ([`super::fitted_surface_tangents`]), which are closer
+    /// to the truth's on the generated family (BENCHMARKS.md Session 22).
     pub refits: usize,
     /// Share of the surface-diffusion-flow state in the result of
     /// [`FairMethod::Highlight`] (default 0.25; 0 switches it off): the
@@ -402,10 +412,12 @@ struct Linearised {
 }
 
 /// Default [`FairOptions::refits`] (measured on the generated family,
-/// BENCHMARKS.md Session 19).
-pub const DEFAULT_REFITS: usize = 4;
+/// BENCHMARKS.md Session 22: with the fitted end tangents, refits lose
+/// the widest saddle dent and cubic bump to diffusion flow).
+pub const DEFAULT_REFITS: usize = 0;
 /// Default [`FairOptions::flow_share`] (measured on the generated family,
-/// BENCHMARKS.md Session 19).
+/// BENCHMARKS.md Sessions 19 and 22: without it the fitted end tangents
+/// lose the widest cubic bump by 4 % in surface RMS).
 pub const DEFAULT_FLOW_SHARE: f64 = 0.25;
 
 /// Smallest non-zero Levenberg–Marquardt damping, relative to the largest
@@ -708,12 +720,13 @@ fn iterate(
     lines_before: &HighlightLines,
     ebar: f64,
     options: &FairOptions,
+    initial_tangents: Tangents,
 ) -> Result<Iterate, FairError> {
     let set = energy.set;
     let mut history = Vec::new();
     let mut converged = false;
     let mut lines = lines_before.clone();
-    let mut tangents = Tangents::new();
+    let mut tangents = initial_tangents;
     let mut refits_left = match options.method {
         FairMethod::Highlight => options.refits,
         FairMethod::Paper | FairMethod::DiffusionFlow => 0,
@@ -843,7 +856,23 @@ pub fn fair_highlight_lines(
     }
     let start = mesh.positions().to_vec();
     let energy = Energy::new(&mesh, &set, &light, ebar, options);
-    let desired_before = desired_lines(&lines_before, |n| set.node_inside(&mesh, n));
+    let initial_tangents = match options.method {
+        FairMethod::Highlight => fitted_surface_tangents(
+            &mesh,
+            &set,
+            model.normals(),
+            &lines_before,
+            &light,
+            options.highlight.min_normal_cos,
+            ebar,
+        ),
+        FairMethod::Paper | FairMethod::DiffusionFlow => Tangents::new(),
+    };
+    let desired_before = desired_lines_with(
+        &lines_before,
+        |n| set.node_inside(&mesh, n),
+        &initial_tangents,
+    );
     let deviation_before = desired_before.deviation();
     let willmore_before = region_willmore(&mesh, &Frozen::new(&mesh), &set.inside_vertices);
     let Iterate {
@@ -851,7 +880,15 @@ pub fn fair_highlight_lines(
         converged,
         refits,
         mut lines,
-    } = iterate(&energy, &mut mesh, &mut model, &lines_before, ebar, options)?;
+    } = iterate(
+        &energy,
+        &mut mesh,
+        &mut model,
+        &lines_before,
+        ebar,
+        options,
+        initial_tangents.clone(),
+    )?;
     if let Some(flow) = &flow {
         lines = blend_flow(
             &mut mesh,
@@ -861,7 +898,8 @@ pub fn fair_highlight_lines(
             options.flow_share,
         )?;
     }
-    let desired_after = desired_lines(&lines, |n| set.node_inside(&mesh, n));
+    let desired_after =
+        desired_lines_with(&lines, |n| set.node_inside(&mesh, n), &initial_tangents);
     let willmore_after = region_willmore(&mesh, &Frozen::new(&mesh), &set.inside_vertices);
     let max_displacement = mesh
         .positions()

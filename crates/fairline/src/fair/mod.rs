@@ -6,6 +6,7 @@
 //! [`surface`].
 
 mod desired;
+mod end_tangents;
 mod error;
 #[cfg(test)]
 pub(crate) mod family;
@@ -20,6 +21,7 @@ pub use desired::{
     DesiredLine, DesiredLines, HighlightDeviation, Tangents, across_tangents, desired_lines,
     desired_lines_with,
 };
+pub use end_tangents::fitted_surface_tangents;
 pub use error::FairError;
 pub use highlight::{
     FairMethod, FairOptions, FairReport, IterationReport, fair_highlight_lines, grow_region,
