@@ -27,9 +27,14 @@
 //! differences of the exact polynomial). That is the direction the clean
 //! surface's line has at Q0 to within the cubic's truncation over a few
 //! edges. T is oriented like the paper's estimate (or like Q1 − Q0 when
-//! that is zero), and only its direction enters the OGH curve. Where the
-//! fit has too few points (mesh boundary, tiny mesh), is singular or the
-//! highlight distance is undefined, the paper's estimate is kept.
+//! that is zero), and only its direction enters the OGH curve. Vertices
+//! whose normal is more than 60° from the frame's are left out (no height
+//! field there). Where the fit has too few points (mesh boundary, tiny
+//! mesh), is singular, the highlight distance is undefined, or the fit
+//! turns the paper's direction by more than 20° (the tail's correction is
+//! under 2° on every generated panel; more means the cubic does not
+//! represent the surface: features, noise, coarse meshes), the paper's
+//! estimate is kept.
 //!
 //! Why the fit and not the lines: on the truth of the generated family
 //! (module `family`), the paper's energy with tangents fitted to the
@@ -61,6 +66,16 @@ use std::collections::BTreeSet;
 pub const FOOTPRINT_RINGS: usize = 1;
 /// Radius ρ of the fit around Q0, in mean edge lengths of R.
 pub const FIT_RADIUS: f64 = 6.0;
+/// Smallest cosine between a fitted vertex's normal and the frame's
+/// normal: beyond 60° the surface is no height field over the tangent
+/// plane at Q0 (a fold, a crease, the far side of a thin part).
+const MIN_FRAME_COS: f64 = 0.5;
+/// Largest angle (radians, 20°) between the fitted direction and the
+/// paper's estimate: the fit corrects the tilt of a defect's tail (under
+/// 2° on every generated panel); a larger disagreement means the cubic
+/// does not represent the surface there (features, noise, a coarse mesh),
+/// and the paper's estimate is kept.
+const MAX_CORRECTION: f64 = 0.35;
 
 /// Monomials 1, x, y, x², xy, y², x³, x²y, xy², y³.
 fn monomials(x: f64, y: f64) -> [f64; 10] {
@@ -217,26 +232,6 @@ fn node_vertices(mesh: &SurfaceMesh, node: NodeId) -> Vec<VertexId> {
     }
 }
 
-/// The vertices outside the footprint within distance `rho` of `q`,
-/// reached through the mesh from the node's vertices.
-fn fit_points(mesh: &SurfaceMesh, near: &[bool], node: NodeId, q: Vec3, rho: f64) -> Vec<Vec3> {
-    let p = mesh.positions();
-    let mut stack: Vec<VertexId> = node_vertices(mesh, node);
-    let mut seen: BTreeSet<u32> = stack.iter().map(|v| v.0).collect();
-    let mut out = Vec::new();
-    while let Some(v) = stack.pop() {
-        if !near[v.idx()] && p[v.idx()].is_finite() {
-            out.push(p[v.idx()]);
-        }
-        for u in mesh.one_ring(v) {
-            if (p[u.idx()] - q).length() <= rho && seen.insert(u.0) {
-                stack.push(u);
-            }
-        }
-    }
-    out
-}
-
 /// What the fit at one end node needs.
 struct EndFit<'a> {
     mesh: &'a SurfaceMesh,
@@ -251,9 +246,32 @@ struct EndFit<'a> {
 }
 
 impl EndFit<'_> {
+    /// The vertices outside the footprint within distance ρ of `q` whose
+    /// normals are within 60° of `n0`, reached through the mesh from the
+    /// node's vertices.
+    fn points(&self, node: NodeId, q: Vec3, n0: Vec3) -> Vec<Vec3> {
+        let (mesh, p) = (self.mesh, self.mesh.positions());
+        let mut stack: Vec<VertexId> = node_vertices(mesh, node);
+        let mut seen: BTreeSet<u32> = stack.iter().map(|v| v.0).collect();
+        let mut out = Vec::new();
+        while let Some(v) = stack.pop() {
+            let normal = self.normals.get(v.idx()).copied().unwrap_or(Vec3::ZERO);
+            if !self.near[v.idx()] && p[v.idx()].is_finite() && normal.dot(n0) >= MIN_FRAME_COS {
+                out.push(p[v.idx()]);
+            }
+            for u in mesh.one_ring(v) {
+                if (p[u.idx()] - q).length() <= self.rho && seen.insert(u.0) {
+                    stack.push(u);
+                }
+            }
+        }
+        out
+    }
+
     /// The fitted direction at the end node `node` (position `q`),
     /// oriented like the paper's estimate `paper` (or like `fallback` when
-    /// that is zero); the paper's estimate when the fit fails.
+    /// that is zero); the paper's estimate when the fit fails or turns the
+    /// direction by more than [`MAX_CORRECTION`].
     fn tangent(&self, (node, q): (NodeId, Vec3), paper: Vec3, fallback: Vec3) -> Vec3 {
         let n0 = node_vertices(self.mesh, node)
             .iter()
@@ -263,14 +281,18 @@ impl EndFit<'_> {
         if n0 == Vec3::ZERO || !q.is_finite() {
             return paper;
         }
-        let pts = fit_points(self.mesh, self.near, node, q, self.rho);
+        let pts = self.points(node, q, n0);
         let Some(t) = fit_height(q, n0, &pts, self.rho)
             .and_then(|f| f.level_direction(self.light, self.min_cos))
         else {
             return paper;
         };
         let reference = if paper != Vec3::ZERO { paper } else { fallback };
-        if t.dot(reference) < 0.0 { -t } else { t }
+        let t = if t.dot(reference) < 0.0 { -t } else { t };
+        if paper != Vec3::ZERO && t.angle_between(paper) > MAX_CORRECTION {
+            return paper;
+        }
+        t
     }
 }
 
@@ -320,4 +342,61 @@ pub fn fitted_surface_tangents(
         },
     );
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fair::{desired_lines, movable_vertices};
+    use crate::highlight::{HighlightModel, HighlightOptions};
+    use crate::io::RegionSpec;
+    use crate::shapes;
+
+    /// Where nothing lies beyond the footprint (the region is the whole
+    /// panel; its lines end on the mesh boundary) the fit has no point and every
+    /// tangent is the paper's outside estimate, bit for bit; with the
+    /// region in the middle the fit replaces them (and stays within 20°).
+    #[test]
+    fn without_points_beyond_the_footprint_the_papers_tangents_are_kept() {
+        let mesh = shapes::height_field(21, 21, (-1.0, 1.0), (-1.0, 1.0), |x, y| {
+            0.1 * x * x - 0.05 * y * y + 0.01 * (-(x * x + y * y) / 0.02).exp()
+        });
+        let light = LightArray::new(
+            Vec3::new(0.0, 0.0, 3.0),
+            Vec3::new(0.0, 0.15, 1.0),
+            Vec3::X,
+            0.05,
+        )
+        .unwrap();
+        let model = HighlightModel::new(&mesh, light, HighlightOptions::default()).unwrap();
+        let lines = model.lines(&mesh);
+        let nodes: Vec<NodeId> = lines.lines.iter().flat_map(|l| l.nodes.clone()).collect();
+        let middle = RegionSpec::Sphere {
+            center: Vec3::new(0.0, 0.0, 0.01),
+            radius: 0.5,
+        }
+        .faces(&mesh)
+        .unwrap();
+        for (faces, same) in [(mesh.faces().collect::<Vec<_>>(), true), (middle, false)] {
+            let set = movable_vertices(&mesh, &faces, &nodes).unwrap();
+            let inside = |n| set.node_inside(&mesh, n);
+            let fitted =
+                fitted_surface_tangents(&mesh, &set, model.normals(), &lines, &light, 0.1, 0.1);
+            let paper = desired_lines(&lines, inside);
+            assert!(!paper.lines.is_empty());
+            let mut changed = 0;
+            for l in &paper.lines {
+                let t = fitted[&l.ends];
+                if same {
+                    assert_eq!(t, l.tangents);
+                } else {
+                    for (a, b) in [(t.0, l.tangents.0), (t.1, l.tangents.1)] {
+                        assert!(a.is_finite() && a.angle_between(b) <= MAX_CORRECTION);
+                        changed += usize::from(a != b);
+                    }
+                }
+            }
+            assert!(same || changed > 0, "no tangent fitted");
+        }
+    }
 }
