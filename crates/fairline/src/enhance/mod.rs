@@ -775,16 +775,19 @@ impl Flow {
         let mut round = 0;
         let target = loop {
             let distance = stiffened.as_ref().unwrap_or(&problem.distance);
-            let (x, target) =
-                self.solve_and_project(problem, input_surface, curvature, distance, guess, timings)?;
+            let (x, target) = self.solve_and_project(
+                problem,
+                input_surface,
+                curvature,
+                distance,
+                guess,
+                timings,
+            )?;
             if round == QUALITY_ROUNDS || !(options.mu > 0.0) {
                 break target;
             }
             let bad = repair::bad_face_vertices(problem.mesh, &problem.input_faces, &target);
-            let bad: Vec<usize> = bad
-                .into_iter()
-                .filter_map(|v| layout.free_of(v))
-                .collect();
+            let bad: Vec<usize> = bad.into_iter().filter_map(|v| layout.free_of(v)).collect();
             if bad.is_empty() {
                 break target;
             }
@@ -855,12 +858,7 @@ impl Flow {
         let epsilon = system.epsilon;
         let build = |jacobi: BlockJacobi| -> Result<Box<dyn Preconditioner + '_>, SolveError> {
             Ok(Box::new(precondition::FactoredPreconditioner::new(
-                layout,
-                curvature,
-                distance,
-                jacobi,
-                options.mu,
-                epsilon,
+                layout, curvature, distance, jacobi, options.mu, epsilon,
             )?))
         };
         let multigrid: Option<&MultigridBuilder<'_>> = (options.mu > 0.0).then_some(&build);
