@@ -26,7 +26,7 @@ use std::path::{Path, PathBuf};
 /// position of the input (internally normalised by the mean edge length).
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline enhance fairline-demo/rounded-cube.obj --lambda 0.5 --mu 0.5 -o cube-enhanced.obj --report r.json --png cube-enhanced.png\n  fairline enhance fairline-demo/sphere.ply --solver cg -o sphere-enhanced.ply\n  fairline enhance fairline-demo/rounded-cube.obj --projection none -o cube-paper.obj\n\nReport keys: projection flipped_triangles degraded_triangles backtracked_vertices quality_before quality_after histogram_before histogram_after max_displacement max_distance_to_input solver cg_iterations cg_relative_residual direct_fallbacks timings."
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline enhance fairline-demo/rounded-cube.obj --lambda 0.5 --mu 0.5 -o cube-enhanced.obj --report r.json --png cube-enhanced.png\n  fairline enhance fairline-demo/sphere.ply --solver cg -o sphere-enhanced.ply\n  fairline enhance fairline-demo/rounded-cube.obj --projection none -o cube-paper.obj\n\nReport keys: projection flipped_triangles degraded_triangles backtracked_vertices quality_resolves quality_before quality_after histogram_before histogram_after max_displacement max_distance_to_input solver cg_iterations cg_relative_residual direct_fallbacks timings."
 )]
 pub struct Args {
     /// Input triangle mesh (.obj .ply .off .stl).

@@ -796,9 +796,10 @@ fn vertex_flow_approximates_known_surfaces_better_than_its_input() {
         // it is not (no bound looser than session 19's)
         match name {
             "rounded cube" => assert!(h <= 0.6 && rms <= 0.7, "{name}: {h:.3} {rms:.3}"),
-            // Hausdorff −15 %: the worst point is a cube corner (three sides)
+            // −59 % / −65 % (session 22: a vertex at each corner where three
+            // sides' fits meet; −15 % / −27 % before)
             "sharp cube" => {
-                assert!(h <= 0.9 && rms <= 0.8, "{name}: {h:.3} {rms:.3}");
+                assert!(h <= 0.5 && rms <= 0.5, "{name}: {h:.3} {rms:.3}");
                 assert!(out.normal_error_deg < 0.7 * input.normal_error_deg);
             }
             // RMS −19.0 %
@@ -833,7 +834,7 @@ fn vertex_flow_approximates_known_surfaces_better_than_its_input() {
 /// under-sampled ones, the normal error near the features lower on every
 /// shape, mean quality at least 0.8.
 #[test]
-#[ignore = "not met (BENCHMARKS.md, session 21): sharp cube Hausdorff −14.9 % (a cube corner), filleted cylinder RMS −19.0 %, fandisk-like part normal error near the features 6.76° vs the input's 6.51° (its convex crease)"]
+#[ignore = "not met (BENCHMARKS.md, session 22): filleted cylinder RMS −19.0 % (≥ 20 % asked), fandisk-like part normal error near the features 6.74° vs the input's 6.51° (its convex crease is now found, but the slope between it and the concave crease is a strip one face wide, which is no side to rebuild it from)"]
 fn vertex_flow_meets_every_claim_of_issue_21_item_2() {
     for m in measure_all() {
         let (name, input, out) = (m.name, &m.input, &m.default);

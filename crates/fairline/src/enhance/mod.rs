@@ -133,18 +133,36 @@
 //! sampling of the features pays off: rounded cube Hausdorff −46 %, RMS
 //! −37 %, filleted cylinder −21 % / −19 % (tests in `accuracy_tests`).
 //! Sharp creases that the input cuts by a strip of chord faces are rebuilt
-//! from their sides (module `crease`: feature edges by dihedral angle
-//! above [`FEATURE_ANGLE_DEG`], each side's tangent plane, the nearest
-//! plane along the normal, points near the intersection of two sides put
-//! onto it): sharp cube Hausdorff −15 %, RMS −27 %, normal error near the
-//! edges 20.3° → 12.1° (the Phong fit alone: −9 % / −10 %, 17.4°).
+//! from their sides (module `crease`: flat sides, chord strips between
+//! sides whose fits meet at more than [`FEATURE_ANGLE_DEG`], each side's
+//! tangent plane, the nearest plane along the normal, points near the
+//! intersection of two sides put onto it, and where three sides meet the
+//! nearest vertex put onto their common point): sharp cube Hausdorff
+//! −59 %, RMS −65 %, normal error near the edges 20.3° → 8.2° (session 21,
+//! without the corners and with a 10° threshold per edge: −15 % / −27 %,
+//! 12.1°; the Phong fit alone: −9 % / −10 %, 17.4°).
 //!
-//! **Triangle quality.** μ keeps the mean quality (the paper's Fig. 5);
-//! the repair also shortens the steps of the vertices of any triangle whose
-//! quality 2r/R falls below [`QUALITY_FLOOR`] (¼) of its input quality, so
-//! no triangle collapses to a sliver: every output triangle keeps at least
-//! a quarter of its input quality (reported as `degraded_triangles`).
-//!
+//! **Triangle quality.** μ keeps the mean quality (the paper's Fig. 5),
+//! but a single triangle can still invert or collapse where the vertices
+//! crowd (a cow's ears and horns, small triangles next to large ones in
+//! an artist mesh). The bound: no output triangle is flipped, and every
+//! one keeps at least [`QUALITY_FLOOR`] (¼) of its input quality 2r/R. It
+//! is kept in two steps. (1) The quality guard, a trust region in the
+//! paper's own distance model: F_sd holds a vertex in its tangent
+//! directions only with the weight c = d|k| / (1 + d|k|) ≤ ½ of Eq. (6)
+//! (0 on flat and cylindrical directions), so nothing bounds its
+//! tangential step there. Where the solved step would flip a triangle or
+//! drop it below the floor, the tangential coefficients of its vertices
+//! are raised to at least 1 (the weight of the normal direction), then
+//! [`QUALITY_FLOOR_GROWTH`] times more in each further round, and the
+//! system is solved again — at most [`QUALITY_ROUNDS`] times per iteration
+//! (reported as `quality_resolves`) — so the neighbours adapt to the
+//! shorter step in the same least-squares solution. With μ = 0 — the
+//! paper's model without its quality term, whose flips Fig. 5 shows — the
+//! guard is off. (2) What still flips or degrades after that is repaired
+//! by halving the steps of its vertices (below; reported as
+//! `flipped_triangles` / `degraded_triangles`).
+
 //! **Iterations.** With `iterations > 1` curvature is recomputed on the
 //! current mesh for F_em and F_smo, while F_sd keeps the input positions and
 //! input frames as its distance reference.
@@ -180,6 +198,17 @@ use serde::Serialize;
 use std::time::Instant;
 pub use surface::{CREASE_ANGLE_DEG, PHONG_ALPHA, Projection};
 use thiserror::Error;
+
+/// Solves the quality guard repeats at most per iteration, each with the
+/// tangential distance coefficients raised at the vertices of the
+/// triangles the last one would flip or drop below [`QUALITY_FLOOR`]
+/// (module documentation, "Triangle quality").
+pub const QUALITY_ROUNDS: usize = 3;
+
+/// Factor by which the quality guard raises the floor under the
+/// tangential distance coefficients of a vertex in each further round (the
+/// first round lifts it to 1, the weight of the normal direction).
+pub const QUALITY_FLOOR_GROWTH: f64 = 4.0;
 
 /// Rounds of step halving for the vertices of flipped triangles before
 /// their steps are reset to zero.
@@ -406,14 +435,21 @@ pub struct EnhanceReport {
     /// μ of the run ([`EnhanceOptions::mu`]).
     pub mu: f64,
     /// Triangles found flipped (normal against the input's, or collapsed)
-    /// after a solve and repaired; summed over the iterations.
+    /// after the last solve of an iteration (after the quality guard's
+    /// re-solves) and repaired; summed over the iterations. No output
+    /// triangle is flipped.
     pub flipped_triangles: usize,
     /// Triangles found below [`QUALITY_FLOOR`] of their input quality 2r/R
-    /// (and not flipped) after a solve and repaired like flipped ones; summed
-    /// over the iterations.
+    /// (and not flipped) after the last solve of an iteration and repaired
+    /// like flipped ones; summed over the iterations.
     pub degraded_triangles: usize,
     /// Vertices whose step was shortened or undone by the repair.
     pub backtracked_vertices: usize,
+    /// Solves repeated by the quality guard (the distance model stiffened
+    /// tangentially where the step would flip or degrade a triangle,
+    /// [`QUALITY_ROUNDS`] per iteration at most); summed over the
+    /// iterations.
+    pub quality_resolves: usize,
     /// Triangle quality of the input.
     pub quality_before: QualityStats,
     /// Triangle quality of the output.
@@ -457,7 +493,7 @@ impl EnhanceReport {
         let mut warnings = Vec::new();
         if self.flipped_triangles > 0 {
             warnings.push(format!(
-                "{} triangle(s) flipped their orientation; try a smaller --lambda or fewer --iterations",
+                "{} triangle(s) flipped their orientation in the solved step and were repaired by shortening their vertices' steps; try a smaller --lambda or fewer --iterations",
                 self.flipped_triangles
             ));
         }
@@ -542,6 +578,7 @@ fn unchanged_output(
             flipped_triangles: 0,
             degraded_triangles: 0,
             backtracked_vertices: 0,
+            quality_resolves: 0,
             quality_after: quality_before.clone(),
             quality_before,
             max_displacement: 0.0,
@@ -683,6 +720,8 @@ struct Flow {
     flipped_triangles: usize,
     degraded_triangles: usize,
     backtracked: Vec<bool>,
+    /// Solves repeated by the quality guard.
+    quality_resolves: usize,
 }
 
 impl Flow {
@@ -693,13 +732,15 @@ impl Flow {
             flipped_triangles: 0,
             degraded_triangles: 0,
             backtracked: vec![false; problem.reference.len()],
+            quality_resolves: 0,
         }
     }
 
     /// One iteration: curvature of the current mesh (the input's in the
     /// first), the system of Eq. (20), its least-squares solution
     /// ([`crate::solve::StagedSolver`]), the projection onto the input
-    /// surface and the repair of flipped or degraded triangles.
+    /// surface, the quality guard's re-solves and the repair of flipped or
+    /// degraded triangles (module documentation, "Triangle quality").
     fn iterate(
         &mut self,
         problem: &FlowProblem<'_>,
@@ -720,34 +761,104 @@ impl Flow {
             timings.curvature_s += t.elapsed().as_secs_f64();
             &recomputed
         };
+        // the quality guard: where the step would flip a triangle or drop
+        // it below the quality floor, the distance model of its vertices is
+        // stiffened tangentially and the system solved again (warm-started
+        // at the last solution)
+        let mut stiffened: Option<system::DistanceModel> = None;
+        let mut floor: Vec<f64> = Vec::new();
+        let mut guess: Vec<f64> = layout
+            .free
+            .iter()
+            .flat_map(|&v| self.current[v as usize].to_array())
+            .collect();
+        let mut round = 0;
+        let target = loop {
+            let distance = stiffened.as_ref().unwrap_or(&problem.distance);
+            let (x, target) = self.solve_and_project(
+                problem,
+                input_surface,
+                curvature,
+                distance,
+                guess,
+                timings,
+            )?;
+            if round == QUALITY_ROUNDS || !(options.mu > 0.0) {
+                break target;
+            }
+            let bad = repair::bad_face_vertices(problem.mesh, &problem.input_faces, &target);
+            let bad: Vec<usize> = bad.into_iter().filter_map(|v| layout.free_of(v)).collect();
+            if bad.is_empty() {
+                break target;
+            }
+            if floor.is_empty() {
+                floor = vec![0.0; layout.free.len()];
+            }
+            for f in bad {
+                floor[f] = (QUALITY_FLOOR_GROWTH * floor[f]).max(1.0);
+            }
+            stiffened = Some(system::DistanceModel::with_floor(
+                &problem.input_curvature,
+                layout,
+                &problem.boundary,
+                options.lambda,
+                &floor,
+            ));
+            self.quality_resolves += 1;
+            guess = x;
+            round += 1;
+        };
+        let mut target = target;
+        let t = Instant::now();
+        let outcome = repair::repair_flips(
+            problem.mesh,
+            &problem.input_faces,
+            &self.current,
+            &mut target,
+        );
+        self.flipped_triangles += outcome.flipped;
+        self.degraded_triangles += outcome.degraded;
+        for v in outcome.backtracked {
+            self.backtracked[v] = true;
+        }
+        self.current = target;
+        timings.repair_s += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// The system of Eq. (20) with the distance model `distance`,
+    /// its least-squares solution from `guess` ([`crate::solve::StagedSolver`])
+    /// and the projection of the free vertices onto the input surface (and
+    /// boundary): the solution vector and the projected positions.
+    fn solve_and_project(
+        &mut self,
+        problem: &FlowProblem<'_>,
+        input_surface: &surface::InputSurface<'_>,
+        curvature: &PrincipalCurvatures,
+        distance: &system::DistanceModel,
+        guess: Vec<f64>,
+        timings: &mut EnhanceTimings,
+    ) -> Result<(Vec<f64>, Vec<Vec3>), EnhanceError> {
+        let options = problem.options;
+        let layout = &problem.layout;
         let t = Instant::now();
         let system = system::assemble(
             layout,
             curvature,
             &problem.boundary,
-            &problem.distance,
+            distance,
             &self.current,
             &problem.reference,
             options.mu,
             REGULARISATION,
         )?;
         timings.assembly_s += t.elapsed().as_secs_f64();
-        let guess: Vec<f64> = layout
-            .free
-            .iter()
-            .flat_map(|&v| self.current[v as usize].to_array())
-            .collect();
         // the factored bi-Laplacian preconditioner (needs μ > 0: with μ = 0
         // there is no smoothness model)
         let epsilon = system.epsilon;
         let build = |jacobi: BlockJacobi| -> Result<Box<dyn Preconditioner + '_>, SolveError> {
             Ok(Box::new(precondition::FactoredPreconditioner::new(
-                layout,
-                curvature,
-                &problem.distance,
-                jacobi,
-                options.mu,
-                epsilon,
+                layout, curvature, distance, jacobi, options.mu, epsilon,
             )?))
         };
         let multigrid: Option<&MultigridBuilder<'_>> = (options.mu > 0.0).then_some(&build);
@@ -775,20 +886,8 @@ impl Flow {
                 options.projection == Projection::Smooth,
             );
         }
-        let outcome = repair::repair_flips(
-            problem.mesh,
-            &problem.input_faces,
-            &self.current,
-            &mut target,
-        );
-        self.flipped_triangles += outcome.flipped;
-        self.degraded_triangles += outcome.degraded;
-        for v in outcome.backtracked {
-            self.backtracked[v] = true;
-        }
-        self.current = target;
         timings.repair_s += t.elapsed().as_secs_f64();
-        Ok(())
+        Ok((x, target))
     }
 
     /// The output: `positions` (input units) and the report of the run
@@ -823,6 +922,7 @@ impl Flow {
                 flipped_triangles: self.flipped_triangles,
                 degraded_triangles: self.degraded_triangles,
                 backtracked_vertices: self.backtracked.iter().filter(|b| **b).count(),
+                quality_resolves: self.quality_resolves,
                 quality_before,
                 quality_after: QualityStats::of_mesh(&out_mesh, options.histogram_bins),
                 max_displacement: max_d,

@@ -83,6 +83,24 @@ fn bad_faces(mesh: &SurfaceMesh, input: &InputFaces, positions: &[Vec3]) -> (Vec
     (states.into_iter().map(|s| s.0).collect(), flipped)
 }
 
+/// The vertices (sorted, each once) of the faces flipped or below the
+/// quality floor at `positions`: where the quality guard of the flow lifts
+/// μ_i before the repair.
+pub(super) fn bad_face_vertices(
+    mesh: &SurfaceMesh,
+    input: &InputFaces,
+    positions: &[Vec3],
+) -> Vec<usize> {
+    let mut vertices: Vec<usize> = bad_faces(mesh, input, positions)
+        .0
+        .into_iter()
+        .flat_map(|f| mesh.triangle(FaceId(f)).map(|v| v.idx()))
+        .collect();
+    vertices.sort_unstable();
+    vertices.dedup();
+    vertices
+}
+
 /// What [`repair_flips`] did.
 pub(super) struct RepairOutcome {
     /// Faces flipped before the repair.

@@ -37,7 +37,9 @@
 //! of a face whose neighbours are coplanar is its own normal, and the lift
 //! vanishes), and the corners of a crease keep the planes of their sides.
 
-use super::crease::{SidePlanes, chord_faces, crease_point};
+use super::crease::{
+    CreaseCorner, SidePlanes, chord_faces, crease_corners, crease_point, snap_to_corners,
+};
 use crate::Vec3;
 use crate::geom::{closest_point_on_triangle, triangle_normal_area};
 use crate::mesh::{FaceId, SurfaceMesh, VertexId, union_find_join, union_find_root};
@@ -295,6 +297,9 @@ pub(super) struct InputSurface<'a> {
     /// The side planes of the chord faces of under-sampled sharp creases
     /// (module `crease`); `None` for every other face.
     chords: Vec<Option<SidePlanes>>,
+    /// The points where three sides of under-sampled creases meet (module
+    /// `crease`, step 6).
+    corners: Vec<CreaseCorner>,
 }
 
 impl<'a> InputSurface<'a> {
@@ -308,6 +313,7 @@ impl<'a> InputSurface<'a> {
             })
             .collect();
         let chords = chord_faces(mesh, &face_normals);
+        let corners = crease_corners(mesh, positions, &chords);
         let separate: Vec<bool> = chords.iter().map(Option::is_some).collect();
         let corner_normals = corner_normals(mesh, &face_normals, &separate);
         let vertex_normals = (0..mesh.vertex_count() as u32)
@@ -325,6 +331,7 @@ impl<'a> InputSurface<'a> {
             corner_normals,
             vertex_normals,
             chords,
+            corners,
         }
     }
 
@@ -393,6 +400,13 @@ impl<'a> InputSurface<'a> {
             if let Some(q) = q {
                 positions[v as usize] = q;
             }
+        }
+        if projection == Projection::Smooth && !self.corners.is_empty() {
+            let mut is_free = vec![false; positions.len()];
+            for &v in free {
+                is_free[v as usize] = true;
+            }
+            snap_to_corners(self.mesh, &self.corners, &is_free, positions);
         }
     }
 }

@@ -59,6 +59,12 @@ impl Layout {
         }
     }
 
+    /// The free index of vertex `v`, `None` for a fixed vertex.
+    pub fn free_of(&self, v: usize) -> Option<usize> {
+        let f = *self.free_index.get(v)?;
+        (f != NONE).then_some(f as usize)
+    }
+
     pub fn ring(&self, f: usize) -> &[u32] {
         &self.ring[self.ring_ptr[f]..self.ring_ptr[f + 1]]
     }
@@ -84,6 +90,20 @@ impl DistanceModel {
         boundary: &BoundaryCurves,
         lambda: f64,
     ) -> DistanceModel {
+        Self::with_floor(curvature, layout, boundary, lambda, &[])
+    }
+
+    /// The model with the tangential coefficients c of free vertex `f`
+    /// raised to at least `floor[f]` (an empty `floor`: none): the trust
+    /// region of the flow's quality guard (module documentation of
+    /// `enhance`, "Triangle quality").
+    pub fn with_floor(
+        curvature: &PrincipalCurvatures,
+        layout: &Layout,
+        boundary: &BoundaryCurves,
+        lambda: f64,
+        floor: &[f64],
+    ) -> DistanceModel {
         let kmax = layout
             .free
             .iter()
@@ -106,8 +126,11 @@ impl DistanceModel {
         let rows = layout
             .free
             .par_iter()
-            .map(|&v| {
+            .enumerate()
+            .map(|(f, &v)| {
                 let v = v as usize;
+                let least = floor.get(f).copied().unwrap_or(0.0);
+                let coefficient = |k: f64| coefficient(k).max(least);
                 if let Some((t, kappa)) = boundary_frame(boundary, curvature, v) {
                     let n = curvature.normals[v];
                     return [
