@@ -13,6 +13,7 @@ use fairline::bspline::BSplineSurface;
 use fairline::highlight::{
     CircularLights, LightArray, PartLights, PatchHighlights, Readability, SurfaceHighlightLine,
     SurfaceHighlightOptions, SurfaceLight, part_highlight_lines, readable_surface_lines,
+    readable_surface_lines_in_view,
 };
 use fairline::io::surface_highlight_lines_json;
 use fairline::picture::{Picture, labelled_mesh_picture, mesh_picture};
@@ -251,12 +252,17 @@ pub fn run(args: HighlightArgs) -> Result<()> {
     );
     // Pictures first (they can fail on bad options); the lines file last.
     if let Some(p) = &args.png {
-        let drawn = drawn_lines(&surfaces, &results, readable.as_ref().map(|r| &r.1));
         let view = match (&readable, args.view) {
             (_, Some(v)) => Some((v, RenderOptions::default().up)),
             (Some((array, _)), None) => Some(fairline::highlight::part_view(array)),
             (None, None) => None,
         };
+        let drawn = drawn_lines(
+            &surfaces,
+            &results,
+            readable.as_ref().map(|r| &r.1),
+            view.map(|(dir, _)| dir),
+        );
         if let Some((dir, up)) = view {
             report.set("view", json!({"dir": dir.to_array(), "up": up.to_array()}));
         }
@@ -403,12 +409,15 @@ fn part_lights(
 }
 
 /// The lines the picture draws: with linear lights the readable drawing of
-/// every surface's lines ([`readable_surface_lines`]; band boundaries
-/// too), else all lines.
+/// every surface's lines (band boundaries too) as the picture seen along
+/// `view` shows them ([`readable_surface_lines_in_view`]: lines closer on
+/// the screen than the readable gap are cut; [`readable_surface_lines`]
+/// without a view), else all lines.
 fn drawn_lines(
     surfaces: &[BSplineSurface],
     results: &[(usize, PatchHighlights)],
     readability: Option<&Readability>,
+    view: Option<Vec3>,
 ) -> Vec<SurfaceHighlightLine> {
     results
         .iter()
@@ -422,9 +431,10 @@ fn drawn_lines(
                 .chain(&h.band_upper)
                 .cloned()
                 .collect();
-            match readability {
-                Some(r) => readable_surface_lines(s, &p.lights, &all, r),
-                None => all,
+            match (readability, view) {
+                (Some(r), Some(v)) => readable_surface_lines_in_view(s, &p.lights, &all, r, v),
+                (Some(r), None) => readable_surface_lines(s, &p.lights, &all, r),
+                (None, _) => all,
             }
         })
         .collect()

@@ -37,8 +37,9 @@ pub use surface::{
     DEFAULT_CIRCULAR_RADII, PartLights, PatchHighlights, SurfaceHighlightLine,
     SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight, default_circular_lights,
     default_circular_lights_for_mesh, linear_distance_gradient, linear_lights,
-    part_highlight_lines, part_light_array, part_view, patch_grid, readable_surface_lines,
-    surface_highlight_lines, surface_signed_distance,
+    linear_separation_on_screen, part_highlight_lines, part_light_array, part_view, patch_grid,
+    readable_surface_lines, readable_surface_lines_in_view, surface_highlight_lines,
+    surface_signed_distance,
 };
 
 use crate::mesh::MeshError;

@@ -1117,8 +1117,9 @@ fn refine_on_edge(
 
 mod part;
 pub use part::{
-    LIGHT_CHOICE_SAMPLES, best_covered_lights, linear_distance_gradient, part_light_array,
-    part_view, readable_surface_lines,
+    LIGHT_CHOICE_SAMPLES, best_covered_lights, linear_distance_gradient,
+    linear_separation_on_screen, part_light_array, part_view, readable_surface_lines,
+    readable_surface_lines_in_view,
 };
 
 #[cfg(test)]

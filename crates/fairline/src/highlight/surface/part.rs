@@ -290,6 +290,30 @@ pub fn linear_distance_gradient(
     d: &SurfaceDerivatives,
     min_cos: f64,
 ) -> Option<f64> {
+    let DistanceDerivatives { du, dv, .. } = distance_derivatives(array, d, min_cos)?;
+    let (e, ff, gg) = (d.su.dot(d.su), d.su.dot(d.sv), d.sv.dot(d.sv));
+    let det = e * gg - ff * ff;
+    if !(det > 0.0 && det.is_finite()) {
+        return None;
+    }
+    let q = (gg * du * du - 2.0 * ff * du * dv + e * dv * dv) / det;
+    let grad = q.max(0.0).sqrt();
+    grad.is_finite().then_some(grad)
+}
+
+/// The partial derivatives d_u, d_v of d_P at a surface point and its unit
+/// normal (see [`linear_distance_gradient`] for the formulas).
+struct DistanceDerivatives {
+    du: f64,
+    dv: f64,
+    unit: Vec3,
+}
+
+fn distance_derivatives(
+    array: &LightArray,
+    d: &SurfaceDerivatives,
+    min_cos: f64,
+) -> Option<DistanceDerivatives> {
     let n = d.su.cross(d.sv);
     let len = n.length();
     if !(len > 0.0 && len.is_finite()) {
@@ -311,15 +335,53 @@ pub fn linear_distance_gradient(
         let g_s = z.dot(n_s);
         (f_s * g - f * g_s) / (g * g)
     };
-    let (du, dv) = (derivative(d.su, n_u), derivative(d.sv, n_v));
+    Some(DistanceDerivatives {
+        du: derivative(d.su, n_u),
+        dv: derivative(d.sv, n_v),
+        unit,
+    })
+}
+
+/// The separation of neighbouring lines of `array` at a surface point as
+/// seen on a picture looking along the unit vector `view` (parallel
+/// projection): the neighbour lies δ = s ∇d_P/|∇d_P|² away on the surface
+/// (s the spacing; ∇d_P = ((G d_u − F d_v) S_u + (E d_v − F d_u) S_v)/(EG −
+/// F²), the surface gradient of Nishiyama et al. Eq. (2.15)'s distance),
+/// and the screen distance between the two projected lines is the part of
+/// the projected δ across the projected line tangent t = N × ∇d/|∇d|:
+/// |(δ × t)·view| / |t − (t·view) view| = (s/|∇d|) |N·view| / |t −
+/// (t·view) view|. Equal to the separation on the surface s/|∇d| where
+/// the surface faces the viewer, smaller toward grazing angles (never
+/// larger: |t − (t·v) v| ≥ |N·v| for orthonormal t, N). A line seen end on
+/// (t along the view) keeps its surface separation. `None` where d_P or
+/// its gradient is undefined or zero.
+pub fn linear_separation_on_screen(
+    array: &LightArray,
+    d: &SurfaceDerivatives,
+    min_cos: f64,
+    view: Vec3,
+) -> Option<f64> {
+    let DistanceDerivatives { du, dv, unit } = distance_derivatives(array, d, min_cos)?;
     let (e, ff, gg) = (d.su.dot(d.su), d.su.dot(d.sv), d.sv.dot(d.sv));
     let det = e * gg - ff * ff;
     if !(det > 0.0 && det.is_finite()) {
         return None;
     }
-    let q = (gg * du * du - 2.0 * ff * du * dv + e * dv * dv) / det;
-    let grad = q.max(0.0).sqrt();
-    grad.is_finite().then_some(grad)
+    let gradient = ((gg * du - ff * dv) * d.su + (e * dv - ff * du) * d.sv) / det;
+    let length = gradient.length();
+    if !(length > 0.0 && length.is_finite()) {
+        return None;
+    }
+    let surface_separation = array.spacing() / length;
+    let tangent = unit.cross(gradient / length);
+    let across = (tangent - tangent.dot(view) * view).length();
+    let facing = unit.dot(view).abs();
+    let separation = if across > 1e-9 {
+        surface_separation * (facing / across).min(1.0)
+    } else {
+        surface_separation
+    };
+    separation.is_finite().then_some(separation)
 }
 
 /// The readable drawing of the linear highlight lines of one surface (the
@@ -338,6 +400,40 @@ pub fn readable_surface_lines(
     lines: &[SurfaceHighlightLine],
     r: &Readability,
 ) -> Vec<SurfaceHighlightLine> {
+    readable_pieces_by(surface, lights, lines, r, None)
+}
+
+/// [`readable_surface_lines`] for a picture looking along `view` (from the
+/// eye toward the part): a line is cut where it comes closer to its
+/// neighbour on the screen than `r.min_separation` (the picture's pixels
+/// per unit times that is the gap in pixels), the separation measured as
+/// the picture shows it ([`linear_separation_on_screen`]; parallel
+/// projection along `view`), so that faces seen at a grazing angle, where
+/// the lines crowd on the screen, are thinned too (issue #20). Equal to
+/// [`readable_surface_lines`] where the surface faces the viewer; never
+/// keeps a point that one drops. A zero or non-finite `view` gives
+/// [`readable_surface_lines`].
+pub fn readable_surface_lines_in_view(
+    surface: &BSplineSurface,
+    lights: &[SurfaceLight],
+    lines: &[SurfaceHighlightLine],
+    r: &Readability,
+    view: Vec3,
+) -> Vec<SurfaceHighlightLine> {
+    let view = view.normalize_or_zero();
+    let view = (view != Vec3::ZERO && view.is_finite()).then_some(view);
+    readable_pieces_by(surface, lights, lines, r, view)
+}
+
+/// The readable pieces of every linear line: the separation on the surface
+/// (`view` None) or on the screen decides which points are kept.
+fn readable_pieces_by(
+    surface: &BSplineSurface,
+    lights: &[SurfaceLight],
+    lines: &[SurfaceHighlightLine],
+    r: &Readability,
+    view: Option<Vec3>,
+) -> Vec<SurfaceHighlightLine> {
     lines
         .par_iter()
         .flat_map_iter(|line| {
@@ -353,8 +449,19 @@ pub fn readable_surface_lines(
                 .uv
                 .iter()
                 .map(|&[u, v]| {
-                    linear_distance_gradient(array, &surface.derivatives(u, v), *min_cos)
-                        .is_some_and(|g| g <= max_gradient)
+                    let d = surface.derivatives(u, v);
+                    match view {
+                        None => linear_distance_gradient(array, &d, *min_cos)
+                            .is_some_and(|g| g <= max_gradient),
+                        // (no screen separation where the gradient vanishes:
+                        // the neighbours are far, the surface rule decides)
+                        Some(w) => {
+                            linear_distance_gradient(array, &d, *min_cos)
+                                .is_some_and(|g| g <= max_gradient)
+                                && linear_separation_on_screen(array, &d, *min_cos, w)
+                                    .is_none_or(|sep| sep >= r.min_separation)
+                        }
+                    }
                 })
                 .collect();
             readable_pieces(line, &keep, r.min_length)

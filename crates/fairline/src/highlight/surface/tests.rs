@@ -367,10 +367,30 @@ fn surface_lines_respect_trims() {
     }
 }
 
-/// Distance from `p` to the nearest segment of the polylines `lines`.
-fn distance_to_lines(p: Vec3, lines: &[&[Vec3]]) -> f64 {
+/// Polylines with their bounding boxes, grouped by light index m.
+type LinesByLight<'a> = std::collections::HashMap<i64, Vec<(Vec3, Vec3, &'a [Vec3])>>;
+
+fn lines_by_light<'a>(lines: impl Iterator<Item = (i64, &'a [Vec3])>) -> LinesByLight<'a> {
+    let mut out = LinesByLight::new();
+    for (m, l) in lines {
+        let (lo, hi) = l.iter().fold(
+            (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &q| (lo.min(q), hi.max(q)),
+        );
+        out.entry(m).or_default().push((lo, hi, l));
+    }
+    out
+}
+
+/// Distance from `p` to the nearest segment of the polylines of light `m`
+/// (infinite when there are none; a line whose bounding box lies farther
+/// than the best so far is skipped).
+fn distance_to_lines(p: Vec3, lines: &LinesByLight, m: i64) -> f64 {
     let mut best = f64::INFINITY;
-    for l in lines {
+    for &(lo, hi, l) in lines.get(&m).map_or(&[][..], |v| v.as_slice()) {
+        if (p - p.clamp(lo, hi)).length() > best {
+            continue;
+        }
         if l.len() == 1 {
             best = best.min((p - l[0]).length());
         }
@@ -389,11 +409,72 @@ fn distance_to_lines(p: Vec3, lines: &[&[Vec3]]) -> f64 {
     best
 }
 
-/// Agreement of the linear highlight lines of `s` (traced on the (u, v)
-/// grid) with those of its tessellation (Yong et al. Algorithm 1 on the
-/// mesh) under the same light array: for every light m, the distances from
-/// each mesh-line node to the surface lines of the same m, and from each
-/// surface-line point to the mesh lines of the same m, in light spacings.
+/// The patches of a part, each tessellated on the `n × n` grid its
+/// surface lines are traced on (`bspline::tessellate`), welded into one
+/// mesh: vertices of different patches (and the copies of a collapsed
+/// row, e.g. a pole) within 1e-9 of the part's size are one vertex, and
+/// triangles left with a repeated vertex are dropped. A seam is then an
+/// inner edge of the mesh and its vertex normals (Yong et al. Eq. (3)) see
+/// both patches, as on the tessellated part; a patch tessellated alone has
+/// one-sided normals along its border.
+struct WeldedPart {
+    mesh: crate::SurfaceMesh,
+    /// Per patch: welded vertex → its (u, v) on that patch.
+    uv: Vec<std::collections::HashMap<u32, [f64; 2]>>,
+}
+
+fn welded_part(patches: &[BSplineSurface], n: usize) -> WeldedPart {
+    use std::collections::HashMap;
+    let eps = 1e-9 * crate::bspline::control_diagonal(patches);
+    let cell = |p: Vec3| (p / eps).floor().as_i64vec3().to_array();
+    let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+    let (mut positions, mut triangles, mut uv) = (Vec::<Vec3>::new(), Vec::new(), Vec::new());
+    for s in patches {
+        let t = crate::bspline::tessellate(s, n, n);
+        let mut on_patch = HashMap::new();
+        let mut ids = Vec::with_capacity(t.positions.len());
+        for (&p, &w) in t.positions.iter().zip(&t.uv) {
+            let [x, y, z] = cell(p);
+            let near = (-1..=1)
+                .flat_map(|i| {
+                    (-1..=1).flat_map(move |j| (-1..=1).map(move |k| [x + i, y + j, z + k]))
+                })
+                .filter_map(|c| grid.get(&c))
+                .flatten()
+                .copied()
+                .find(|&v| (positions[v as usize] - p).length() <= eps);
+            let id = near.unwrap_or_else(|| {
+                let v = positions.len() as u32;
+                positions.push(p);
+                grid.entry([x, y, z]).or_default().push(v);
+                v
+            });
+            on_patch.entry(id).or_insert(w);
+            ids.push(id);
+        }
+        triangles.extend(
+            t.triangles
+                .iter()
+                .map(|tri| tri.map(|k| ids[k as usize]))
+                .filter(|[a, b, c]| a != b && b != c && c != a),
+        );
+        uv.push(on_patch);
+    }
+    let mesh = crate::SurfaceMesh::new(positions, &triangles).unwrap();
+    WeldedPart { mesh, uv }
+}
+
+/// Agreement of the linear highlight lines of the patches of a part
+/// (traced on each patch's (u, v) grid) with those of the part's
+/// tessellation ([`welded_part`]; Yong et al. Algorithm 1 on the mesh)
+/// under the same light array, per patch: for every light m, the distances
+/// from each mesh-line node on the patch to the surface lines of the same m
+/// (of any patch), and from each surface-line point of the patch to the
+/// mesh lines of the same m, in light spacings. A line lying on a seam
+/// (e.g. light 0 along a seam in the lights' plane of symmetry, where d_P
+/// is 0 all along the seam) is drawn by one of the two patches — the
+/// surface counts a value equal to the level as above it — so it is
+/// compared across the seam, not per patch.
 /// Only points where the exact surface normal makes |Z·N| ≥ 0.3 count (the
 /// (u, v) of a mesh node interpolated from its edge's tessellation
 /// vertices): towards silhouettes d_P runs off to infinity and both models
@@ -405,87 +486,108 @@ fn distance_to_lines(p: Vec3, lines: &[&[Vec3]]) -> f64 {
 /// within the cell's) and the comparison considers the same cells on both
 /// sides; mesh nodes in cells the grid does not contour (the mesh may keep
 /// one triangle of a cell whose four corners span too many levels) are not
-/// compared. Returns (mesh → surface, surface → mesh) distance lists.
-fn linear_agreement(s: &BSplineSurface, array: LightArray) -> (Vec<f64>, Vec<f64>) {
-    let t = crate::bspline::tessellate(s, 200, 200);
-    let mesh = crate::SurfaceMesh::new(t.positions.clone(), &t.triangles).unwrap();
+/// compared. Returns (mesh → surface, surface → mesh) distance lists per
+/// patch.
+fn linear_agreement(patches: &[BSplineSurface], array: LightArray) -> Vec<(Vec<f64>, Vec<f64>)> {
+    let part = welded_part(patches, 200);
+    let mesh = &part.mesh;
     let mesh_lines = crate::highlight::highlight_lines(
-        &mesh,
+        mesh,
         &array,
         &crate::highlight::HighlightOptions::default(),
     )
     .unwrap();
-    let lights = linear_lights(s, array, 0.1, 200, 1000);
-    let h = surface_highlight_lines(s, &lights, &SurfaceHighlightOptions::default().grid(200));
-    let index_of = |l: &SurfaceHighlightLine| match lights[l.light] {
-        SurfaceLight::Linear { index, .. } => index,
-        SurfaceLight::Circular(_) => unreachable!(),
-    };
     let spacing = array.spacing();
-    let (mut to_surface, mut to_mesh) = (Vec::new(), Vec::new());
-    let steep = |uv: [f64; 2]| {
-        s.normal(uv[0], uv[1])
-            .is_none_or(|n| n.dot(array.plane_normal()).abs() < 0.3)
-    };
-    // The grid cells the surface contours (corners defined, on one branch,
-    // not skipped by the line-count rule): mesh nodes elsewhere lie in
-    // cells the surface does not consider, and are not compared.
-    let probe = SurfaceLight::Linear {
-        array,
-        index: 0,
-        min_cos: 0.1,
-    };
-    let field = distance_field(s, &probe, 200, 200);
-    let (nu, nv) = (field.us.len(), field.vs.len());
-    let contoured = |uv: [f64; 2]| {
-        let a = field.us.partition_point(|&x| x <= uv[0]).clamp(1, nu - 1) - 1;
-        let b = field.vs.partition_point(|&y| y <= uv[1]).clamp(1, nv - 1) - 1;
-        let c = [(a, b), (a + 1, b), (a + 1, b + 1), (a, b + 1)]
-            .map(|(i, j)| field.samples[i * nv + j]);
-        let Some(c) = c.iter().copied().collect::<Option<Vec<_>>>() else {
-            return false;
+    // every patch's surface lines as (light index m, points)
+    let surface_lines: Vec<Vec<(i64, SurfaceHighlightLine)>> = patches
+        .iter()
+        .map(|s| {
+            let lights = linear_lights(s, array, 0.1, 200, 1000);
+            surface_highlight_lines(s, &lights, &SurfaceHighlightOptions::default().grid(200))
+                .lines
+                .into_iter()
+                .map(|l| match lights[l.light] {
+                    SurfaceLight::Linear { index, .. } => (index, l),
+                    SurfaceLight::Circular(_) => unreachable!(),
+                })
+                .collect()
+        })
+        .collect();
+    let surface_by_light = lines_by_light(
+        surface_lines
+            .iter()
+            .flatten()
+            .map(|(m, l)| (*m, l.points.as_slice())),
+    );
+    let mesh_by_light = lines_by_light(
+        mesh_lines
+            .lines
+            .iter()
+            .map(|ml| (ml.index, ml.points.as_slice())),
+    );
+    let mut out = Vec::new();
+    for (k, s) in patches.iter().enumerate() {
+        let on_patch = &part.uv[k];
+        let steep = |uv: [f64; 2]| {
+            s.normal(uv[0], uv[1])
+                .is_none_or(|n| n.dot(array.plane_normal()).abs() < 0.3)
         };
-        let lo = c.iter().map(|x| x.value).fold(f64::INFINITY, f64::min);
-        let hi = c.iter().map(|x| x.value).fold(f64::NEG_INFINITY, f64::max);
-        c.iter().all(|x| x.branch == c[0].branch)
-            && !crate::highlight::contour::too_many_levels(lo, hi, spacing, 0.0, 4)
-    };
-    for ml in &mesh_lines.lines {
-        let same: Vec<&[Vec3]> = h
-            .lines
-            .iter()
-            .filter(|l| index_of(l) == ml.index)
-            .map(|l| l.points.as_slice())
-            .collect();
-        for (&p, node) in ml.points.iter().zip(&ml.nodes) {
-            let uv = match *node {
-                crate::highlight::contour::NodeId::Edge(e, _) => {
-                    let (a, b) = mesh.edge_vertices(e);
-                    let (x, y) = (t.uv[a.idx()], t.uv[b.idx()]);
-                    [0.5 * (x[0] + y[0]), 0.5 * (x[1] + y[1])]
-                }
-                crate::highlight::contour::NodeId::Vertex(v, _) => t.uv[v.idx()],
+        // The grid cells the surface contours (corners defined, on one
+        // branch, not skipped by the line-count rule): mesh nodes elsewhere
+        // lie in cells the surface does not consider, and are not compared.
+        let probe = SurfaceLight::Linear {
+            array,
+            index: 0,
+            min_cos: 0.1,
+        };
+        let field = distance_field(s, &probe, 200, 200);
+        let (nu, nv) = (field.us.len(), field.vs.len());
+        let contoured = |uv: [f64; 2]| {
+            let a = field.us.partition_point(|&x| x <= uv[0]).clamp(1, nu - 1) - 1;
+            let b = field.vs.partition_point(|&y| y <= uv[1]).clamp(1, nv - 1) - 1;
+            let c = [(a, b), (a + 1, b), (a + 1, b + 1), (a, b + 1)]
+                .map(|(i, j)| field.samples[i * nv + j]);
+            let Some(c) = c.iter().copied().collect::<Option<Vec<_>>>() else {
+                return false;
             };
-            if !steep(uv) && contoured(uv) {
-                to_surface.push(distance_to_lines(p, &same) / spacing);
+            let lo = c.iter().map(|x| x.value).fold(f64::INFINITY, f64::min);
+            let hi = c.iter().map(|x| x.value).fold(f64::NEG_INFINITY, f64::max);
+            c.iter().all(|x| x.branch == c[0].branch)
+                && !crate::highlight::contour::too_many_levels(lo, hi, spacing, 0.0, 4)
+        };
+        let (mut to_surface, mut to_mesh) = (Vec::new(), Vec::new());
+        for ml in &mesh_lines.lines {
+            for (&p, node) in ml.points.iter().zip(&ml.nodes) {
+                // the node's (u, v) on this patch, if its edge or vertex is
+                // on it
+                let uv = match *node {
+                    crate::highlight::contour::NodeId::Edge(e, _) => {
+                        let (a, b) = mesh.edge_vertices(e);
+                        match (on_patch.get(&a.0), on_patch.get(&b.0)) {
+                            (Some(x), Some(y)) => [0.5 * (x[0] + y[0]), 0.5 * (x[1] + y[1])],
+                            _ => continue,
+                        }
+                    }
+                    crate::highlight::contour::NodeId::Vertex(v, _) => match on_patch.get(&v.0) {
+                        Some(&x) => x,
+                        None => continue,
+                    },
+                };
+                if !steep(uv) && contoured(uv) {
+                    to_surface.push(distance_to_lines(p, &surface_by_light, ml.index) / spacing);
+                }
             }
         }
-    }
-    for l in &h.lines {
-        let m = index_of(l);
-        let same: Vec<&[Vec3]> = mesh_lines
-            .lines
-            .iter()
-            .filter(|ml| ml.index == m)
-            .map(|ml| ml.points.as_slice())
-            .collect();
-        for (&p, &uv) in l.points.iter().zip(&l.uv) {
-            if !steep(uv) {
-                to_mesh.push(distance_to_lines(p, &same) / spacing);
+        for (m, l) in &surface_lines[k] {
+            for (&p, &uv) in l.points.iter().zip(&l.uv) {
+                if !steep(uv) {
+                    to_mesh.push(distance_to_lines(p, &mesh_by_light, *m) / spacing);
+                }
             }
         }
+        out.push((to_surface, to_mesh));
     }
-    (to_surface, to_mesh)
+    out
 }
 
 fn quantile(xs: &[f64], q: f64) -> f64 {
@@ -508,8 +610,21 @@ fn quantile(xs: &[f64], q: f64) -> f64 {
 /// more than 4 spacings while the mesh counts ceil(hi/s) − floor(lo/s) ≤
 /// 4 + 2 levels per triangle; both now use the one rule
 /// (`contour::too_many_levels`).
+///
+/// The lid is compared with its patches tessellated together (welded at
+/// the seams), not each patch alone (session 22, measured): on teapot
+/// patch 22 (a quarter of the lid's rim) 200 of its 1475 surface-line points (13.6 %)
+/// are light 0's line along its border u = 0, a seam in the lights' plane
+/// of symmetry, where the exact d_P is 0 all along the seam; the surface
+/// draws it in that patch (a value equal to the level counts as above,
+/// the patch's inside lies below), while a tessellation of the patch alone
+/// gives its border vertices one-sided normals (area-weighted over the
+/// patch's triangles only), d_P ≈ −0.002 spacing there, the sign of the
+/// inside, so it drew light 0 only in the neighbour across the seam. The
+/// knob's pole (patches 28–31) was not the cause: its mesh normals are
+/// within 0.11° of the limit normal and every surface point of those
+/// patches on a light the mesh lacks lies on a symmetry seam too.
 #[test]
-#[ignore = "known gap (session 20): compared at the same resolution (200 grid = 200 tessellation) and on the cells the grid contours, the bump and every lid patch but one agree to 0.0001 spacing both ways; on one small lid patch (1475 surface points) more than 5 % of the surface-line points lie on a light the mesh draws no line of (distance inf) — the mesh's vertex normals near the patch's pole differ from the exact ones; not yet found"]
 fn linear_surface_lines_agree_with_the_tessellated_surface() {
     // A generated bicubic bump: z = exp(-(x² + y²)) sampled into a 9 × 9 net.
     let n = 9;
@@ -527,7 +642,7 @@ fn linear_surface_lines_agree_with_the_tessellated_surface() {
     let bump = BSplineSurface::from_flat(3, 3, knots.clone(), knots, [n, n], net, None).unwrap();
     let (lo, hi) = bump.control_bounding_box();
     let array = LightArray::default_for(lo, hi, None);
-    let mut cases = vec![("bump", bump, array)];
+    let mut cases = vec![("bump", vec![(0, bump)], array)];
     if let Some(tp) = data("teapot.json") {
         let teapot = read_surfaces_json(&tp).unwrap();
         let (mut lo, mut hi) = (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY));
@@ -539,59 +654,59 @@ fn linear_surface_lines_agree_with_the_tessellated_surface() {
         // The CLI's default lights for the whole teapot.
         let array = LightArray::default_for(lo, hi, None);
         // The lid: the patches whose control points all lie in the top
-        // fifth of the teapot (the knob and the lid's dome).
+        // fifth of the teapot (the knob and the lid's dome), tessellated
+        // together.
         let top = hi.z - 0.35 * (hi.z - lo.z);
-        let lid: Vec<&BSplineSurface> = teapot
-            .iter()
-            .filter(|s| s.control_bounding_box().0.z >= top)
+        let lid: Vec<(usize, BSplineSurface)> = teapot
+            .into_iter()
+            .enumerate()
+            .filter(|(_, s)| s.control_bounding_box().0.z >= top)
             .collect();
         assert!(!lid.is_empty(), "no lid patch found");
-        for (k, s) in lid.into_iter().enumerate() {
-            cases.push((
-                if k == 0 { "teapot lid" } else { "teapot lid+" },
-                s.clone(),
-                array,
-            ));
-        }
+        cases.push(("teapot", lid, array));
     }
-    for (name, s, array) in &cases {
-        let (to_surface, to_mesh) = linear_agreement(s, *array);
-        assert!(
-            to_surface.len() > 50 && to_mesh.len() > 50,
-            "{name}: too few points ({} mesh, {} surface)",
-            to_surface.len(),
-            to_mesh.len()
-        );
-        // Coverage: mesh-line nodes whose light the surface draws too.
-        let covered: Vec<f64> = to_surface
-            .iter()
-            .copied()
-            .filter(|d| d.is_finite())
-            .collect();
-        let coverage = covered.len() as f64 / to_surface.len() as f64;
-        eprintln!(
-            "{name}: {:.1} % of the mesh-line nodes on lights the surface draws",
-            100.0 * coverage
-        );
-        let (a95, b95) = (quantile(&covered, 0.95), quantile(&to_mesh, 0.95));
-        eprintln!(
-            "{name}: mesh→surface median {:.4} 95% {a95:.4} max {:.3}; surface→mesh median {:.4} 95% {b95:.4} max {:.3} (spacings; {} / {} points)",
-            quantile(&to_surface, 0.5),
-            quantile(&to_surface, 1.0),
-            quantile(&to_mesh, 0.5),
-            quantile(&to_mesh, 1.0),
-            to_surface.len(),
-            to_mesh.len()
-        );
-        assert!(coverage > 0.9, "{name}: coverage {coverage}");
-        assert!(
-            a95 < 0.1,
-            "{name}: mesh lines not covered by surface lines: 95% {a95}"
-        );
-        assert!(
-            b95 < 0.1,
-            "{name}: surface lines away from mesh lines: 95% {b95}"
-        );
+    for (part, patches, array) in &cases {
+        let surfaces: Vec<BSplineSurface> = patches.iter().map(|(_, s)| s.clone()).collect();
+        let agreement = linear_agreement(&surfaces, *array);
+        for ((k, _), (to_surface, to_mesh)) in patches.iter().zip(&agreement) {
+            let name = format!("{part} patch {k}");
+            assert!(
+                to_surface.len() > 50 && to_mesh.len() > 50,
+                "{name}: too few points ({} mesh, {} surface)",
+                to_surface.len(),
+                to_mesh.len()
+            );
+            // Coverage: mesh-line nodes whose light the surface draws too.
+            let covered: Vec<f64> = to_surface
+                .iter()
+                .copied()
+                .filter(|d| d.is_finite())
+                .collect();
+            let coverage = covered.len() as f64 / to_surface.len() as f64;
+            eprintln!(
+                "{name}: {:.1} % of the mesh-line nodes on lights the surface draws",
+                100.0 * coverage
+            );
+            let (a95, b95) = (quantile(&covered, 0.95), quantile(to_mesh, 0.95));
+            eprintln!(
+                "{name}: mesh→surface median {:.4} 95% {a95:.4} max {:.3}; surface→mesh median {:.4} 95% {b95:.4} max {:.3} (spacings; {} / {} points)",
+                quantile(to_surface, 0.5),
+                quantile(to_surface, 1.0),
+                quantile(to_mesh, 0.5),
+                quantile(to_mesh, 1.0),
+                to_surface.len(),
+                to_mesh.len()
+            );
+            assert!(coverage > 0.9, "{name}: coverage {coverage}");
+            assert!(
+                a95 < 0.1,
+                "{name}: mesh lines not covered by surface lines: 95% {a95}"
+            );
+            assert!(
+                b95 < 0.1,
+                "{name}: surface lines away from mesh lines: 95% {b95}"
+            );
+        }
     }
 }
 
@@ -995,4 +1110,259 @@ fn readable_part_lights_on_the_teapot_leave_no_cell_to_the_line_count_rule() {
     );
     assert!(drawn > 10_000, "{drawn} cells drawn");
     assert_eq!(skipped, 0);
+}
+
+/// Issue #20 (pictures): the separation of neighbouring lines on the
+/// screen ([`linear_separation_on_screen`]). On the plane z = 0 under
+/// lights along x (plane normal z), d_P = y: the lines are the lines
+/// y = m·s, s apart on the surface. Seen straight down the gap is s; seen
+/// tilted by a about the lines' direction (view (0, sin a, −cos a)) it is
+/// s·cos a; tilted along the lines (view (sin a, 0, −cos a)) it stays s —
+/// closed forms of the parallel projection.
+#[test]
+fn separation_on_screen_is_the_projected_gap_on_a_plane() {
+    let s = plane();
+    let spacing = 0.25;
+    let array = LightArray::new(Vec3::new(0.3, -0.2, 4.0), Vec3::Z, Vec3::X, spacing).unwrap();
+    for &(u, v) in &[(0.1, 0.2), (0.5, 0.5), (0.9, 0.35)] {
+        let d = s.derivatives(u, v);
+        let down = linear_separation_on_screen(&array, &d, 0.05, -Vec3::Z).unwrap();
+        assert!((down - spacing).abs() < 1e-12, "{down}");
+        for a in [0.3f64, 0.8, 1.2, 1.5] {
+            let across = Vec3::new(0.0, a.sin(), -a.cos());
+            let sep = linear_separation_on_screen(&array, &d, 0.05, across).unwrap();
+            assert!((sep - spacing * a.cos()).abs() < 1e-12, "{a}: {sep}");
+            let along = Vec3::new(a.sin(), 0.0, -a.cos());
+            let sep = linear_separation_on_screen(&array, &d, 0.05, along).unwrap();
+            assert!((sep - spacing).abs() < 1e-12, "{a}: {sep}");
+        }
+    }
+}
+
+/// On a curved surface (the dome under tilted lights) the screen
+/// separation agrees with the gap measured on the projection: from a point
+/// p on a line, the point q where d_P has grown by the spacing (found along
+/// the surface gradient by the secant method on the exact field), both
+/// projected along the view, and the distance of q's projection from the
+/// projected tangent line through p; spacing 0.002 (first order: 2 %).
+/// Never larger than the separation on the surface s/|∇d|, equal to it
+/// where the view looks down the normal.
+#[test]
+fn separation_on_screen_matches_the_projected_neighbour_on_a_dome() {
+    let s = dome();
+    let spacing = 0.002;
+    let array = LightArray::new(
+        Vec3::new(0.2, -0.1, 3.0),
+        Vec3::new(0.2, -0.3, 1.0),
+        Vec3::new(1.0, 0.4, 0.0),
+        spacing,
+    )
+    .unwrap();
+    let light = SurfaceLight::Linear {
+        array,
+        index: 0,
+        min_cos: 0.05,
+    };
+    let views = [
+        Vec3::new(0.0, 0.0, -1.0),
+        Vec3::new(0.0, 0.8, -0.6),
+        Vec3::new(-0.7, 0.3, -0.5).normalize(),
+    ];
+    let mut checked = 0;
+    for a in 1..8 {
+        for b in 1..8 {
+            let (u, v) = (a as f64 / 8.0, b as f64 / 8.0);
+            let d = s.derivatives(u, v);
+            let n = d.normal().unwrap();
+            let g = linear_distance_gradient(&array, &d, 0.05).unwrap();
+            let facing = linear_separation_on_screen(&array, &d, 0.05, -n).unwrap();
+            assert!(
+                (facing - spacing / g).abs() < 1e-9 * facing,
+                "{facing} vs {}",
+                spacing / g
+            );
+            // the contravariant gradient (u, v components) of d_P
+            let d0 = surface_signed_distance(&s, &light, u, v).unwrap();
+            let h = 1e-6;
+            let fu = (surface_signed_distance(&s, &light, u + h, v).unwrap()
+                - surface_signed_distance(&s, &light, u - h, v).unwrap())
+                / (2.0 * h);
+            let fv = (surface_signed_distance(&s, &light, u, v + h).unwrap()
+                - surface_signed_distance(&s, &light, u, v - h).unwrap())
+                / (2.0 * h);
+            let (e, f, gg) = (d.su.dot(d.su), d.su.dot(d.sv), d.sv.dot(d.sv));
+            let det = e * gg - f * f;
+            let (g1, g2) = ((gg * fu - f * fv) / det, (e * fv - f * fu) / det);
+            let grad = g1 * d.su + g2 * d.sv;
+            // q: d_P = d0 + spacing along (g1, g2) (secant method)
+            let at = |t: f64| {
+                surface_signed_distance(&s, &light, u + t * g1, v + t * g2).unwrap() - d0 - spacing
+            };
+            let (mut t0, mut t1) = (0.0, spacing / grad.length_squared());
+            let (mut f0, mut f1) = (at(t0), at(t1));
+            for _ in 0..30 {
+                if f1 == f0 || f1.abs() < 1e-15 {
+                    break;
+                }
+                let t2 = t1 - f1 * (t1 - t0) / (f1 - f0);
+                (t0, f0, t1) = (t1, f1, t2);
+                f1 = at(t1);
+            }
+            let q = s.eval(u + t1 * g1, v + t1 * g2);
+            let tangent = n.cross(grad).normalize();
+            for w in views {
+                let project = |x: Vec3| x - x.dot(w) * w;
+                let (pq, pt) = (project(q - d.point), project(tangent));
+                let measured = if pt.length() > 1e-9 {
+                    pq.cross(pt.normalize()).length()
+                } else {
+                    pq.length()
+                };
+                let sep = linear_separation_on_screen(&array, &d, 0.05, w).unwrap();
+                assert!(
+                    sep <= spacing / g * (1.0 + 1e-12),
+                    "{sep} > {}",
+                    spacing / g
+                );
+                assert!(
+                    (sep - measured).abs() < 0.02 * measured,
+                    "({u}, {v}) view {w}: formula {sep}, projected {measured}"
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 100, "{checked}");
+}
+
+/// The picture's thinning by screen gaps: on the plane with lines 0.25
+/// apart and a readable gap of 0.1, the view straight down draws what the
+/// surface rule draws, bit for bit; tilted 70° about the lines' direction
+/// (gap 0.25·cos 70° = 0.086 < 0.1 on the screen) nothing is drawn; tilted
+/// 70° along the lines (gap still 0.25) everything is.
+#[test]
+fn readable_lines_in_view_drop_lines_crowded_on_the_screen() {
+    let s = plane();
+    let array = LightArray::new(Vec3::new(0.3, -0.2, 4.0), Vec3::Z, Vec3::X, 0.25).unwrap();
+    let lights: Vec<SurfaceLight> = (-6..=6)
+        .map(|index| SurfaceLight::Linear {
+            array,
+            index,
+            min_cos: 0.1,
+        })
+        .collect();
+    let h = surface_highlight_lines(&s, &lights, &SurfaceHighlightOptions::default().grid(60));
+    assert!(h.lines.len() >= 12, "{} lines", h.lines.len());
+    let r = crate::highlight::Readability {
+        min_separation: 0.1,
+        min_length: 0.3,
+    };
+    let surface_rule = readable_surface_lines(&s, &lights, &h.lines, &r);
+    assert_eq!(surface_rule, h.lines, "the surface rule keeps every line");
+    let down = readable_surface_lines_in_view(&s, &lights, &h.lines, &r, -Vec3::Z);
+    assert_eq!(down, surface_rule);
+    let a = 70f64.to_radians();
+    let across = Vec3::new(0.0, a.sin(), -a.cos());
+    assert!(readable_surface_lines_in_view(&s, &lights, &h.lines, &r, across).is_empty());
+    let along = Vec3::new(a.sin(), 0.0, -a.cos());
+    assert_eq!(
+        readable_surface_lines_in_view(&s, &lights, &h.lines, &r, along),
+        h.lines
+    );
+}
+
+/// Issue #20 item 2, the "dash-dotted" line near the impeller's patch 17:
+/// with the default lights (facing the blades), lights 14–16 fall apart
+/// into pieces on face 17, the same pieces at grid 200 and 800 (CLI,
+/// measured). Face 17 is a thin trimmed strip of a surface of revolution
+/// (v = 6.16–6.28 of 0–2π) whose loop nearly touches itself (`continuity`:
+/// a 0.21 gap between its own curves 0 and 5) and whose other seams are
+/// creases or gaps (G0 to faces 123, 124, 176 and 30 at 57°, 124°, 104°
+/// and 13.5°; gaps of 0.21 to 30 and 176), so a line crosses the face's
+/// border several times and cannot run on across it. Shown here: every end
+/// of every piece on face 17 lies on the face's trimming loop or the
+/// domain's border, and between two pieces of one light the line is
+/// outside the face — the breaks are the face's trims, not the drawing.
+#[test]
+fn the_impellers_dashed_line_on_face_17_is_cut_by_its_trims() {
+    let Some(path) = data("impeller.igs") else {
+        return; // fails under CI; said loudly otherwise (shared_data.rs)
+    };
+    let parts: Vec<BSplineSurface> = read_iges(&path)
+        .unwrap()
+        .surfaces
+        .into_iter()
+        .map(|s| s.surface)
+        .collect();
+    let (array, _) =
+        part_light_array(&parts, &crate::highlight::LightChoice::default(), None).unwrap();
+    let lights = PartLights::Linear {
+        array,
+        min_cos: 0.1,
+        max_lights: DEFAULT_MAX_LIGHTS,
+    };
+    let patches = part_highlight_lines(
+        &parts,
+        &lights,
+        &SurfaceHighlightOptions::default().grid(200),
+        &|| {},
+    );
+    let (face, p) = (&parts[17], &patches[17]);
+    let trim = face.trim().expect("face 17 is trimmed");
+    let on_loop = |q: [f64; 2]| {
+        trim.polylines().iter().any(|l| {
+            l.windows(2).any(|w| {
+                let (a, b) = (w[0], w[1]);
+                let ab = [b[0] - a[0], b[1] - a[1]];
+                let len2 = ab[0] * ab[0] + ab[1] * ab[1];
+                let t = if len2 > 0.0 {
+                    (((q[0] - a[0]) * ab[0] + (q[1] - a[1]) * ab[1]) / len2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                let (x, y) = (a[0] + t * ab[0] - q[0], a[1] + t * ab[1] - q[1]);
+                x.hypot(y) <= 1e-6
+            })
+        })
+    };
+    let [u0, u1] = face.domain_u();
+    let [v0, v1] = face.domain_v();
+    let on_border = |q: [f64; 2]| {
+        (q[0] - u0).abs() < 1e-9
+            || (q[0] - u1).abs() < 1e-9
+            || (q[1] - v0).abs() < 1e-9
+            || (q[1] - v1).abs() < 1e-9
+    };
+    let mut by_light: std::collections::BTreeMap<i64, Vec<&SurfaceHighlightLine>> =
+        Default::default();
+    for l in &p.highlights.lines {
+        let SurfaceLight::Linear { index, .. } = p.lights[l.light] else {
+            unreachable!()
+        };
+        by_light.entry(index).or_default().push(l);
+        for q in [l.uv[0], l.uv[l.uv.len() - 1]] {
+            assert!(
+                on_loop(q) || on_border(q),
+                "light {index}: piece end {q:?} inside face 17"
+            );
+        }
+    }
+    let mut gaps = 0;
+    for (m, pieces) in &by_light {
+        let mut pieces = pieces.clone();
+        pieces.sort_by(|a, b| a.uv[0][0].total_cmp(&b.uv[0][0]));
+        for w in pieces.windows(2) {
+            let (a, b) = (w[0].uv[w[0].uv.len() - 1], w[1].uv[0]);
+            let mid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+            assert!(
+                !face.contains_uv(mid[0], mid[1]),
+                "light {m}: gap at {mid:?} inside the face"
+            );
+            gaps += 1;
+        }
+    }
+    assert!(
+        gaps >= 3,
+        "{gaps} breaks between pieces (measured 3: lights 14, 15, 16)"
+    );
 }
