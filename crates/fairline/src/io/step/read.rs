@@ -232,6 +232,30 @@ fn nearest_param(a: f64, b: f64, samples: usize, f: impl Fn(f64) -> f64) -> f64 
     0.5 * (lo + hi)
 }
 
+/// The parameter of an edge's vertex `q` on its B-spline curve `n`: the
+/// end of the curve's domain where `q` lies on the curve's end point (to
+/// 1e-9 of the curve's size) and the curve's two end points are apart —
+/// where writers put an edge's vertices — else the nearest point of the
+/// curve ([`Curve::param_of`], a dense search).
+fn vertex_param(n: &Nurbs3, q: Vec3) -> f64 {
+    let [a, b] = n.domain();
+    let (pa, pb) = (n.eval(a), n.eval(b));
+    let (lo, hi) = n
+        .points
+        .iter()
+        .fold((q, q), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let close = 1e-9 * (hi - lo).length();
+    if pa.distance(pb) > 2.0 * close {
+        if pa.distance(q) <= close {
+            return a;
+        }
+        if pb.distance(q) <= close {
+            return b;
+        }
+    }
+    nearest_param(a, b, 64 * n.points.len().max(4), |t| n.eval(t).distance(q))
+}
+
 /// An oriented edge of a face bound, as a piece of a curve.
 struct EdgeUse {
     /// `#id` of the EDGE_CURVE.
@@ -621,7 +645,7 @@ impl<'a> Reader<'a> {
                 if e.closed {
                     if e.forward { [a, b] } else { [b, a] }
                 } else {
-                    [e.curve.param_of(e.start), e.curve.param_of(e.end)]
+                    [vertex_param(n, e.start), vertex_param(n, e.end)]
                 }
             }
         }
