@@ -55,7 +55,9 @@ fn main() {
                 }),
             );
             if let Ok(text) = surfaces_to_step(&surfaces, &StepWriteOptions::default()) {
-                let t = parse_step(&text).map(|i| i.trim_sources).unwrap_or_default();
+                let t = parse_step(&text)
+                    .map(|i| i.trim_sources)
+                    .unwrap_or_default();
                 row(
                     "parse impeller.igs written as STEP (trims from p-curves)",
                     &format!(

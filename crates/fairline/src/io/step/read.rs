@@ -30,8 +30,11 @@
 //!   without a seam edge — a
 //!   cylinder between two full circles, a sphere cap or a cone bounded by
 //!   one circle — are closed along a cut (and through the pole or apex on
-//!   the face's side), and a sphere or torus face without loops is the
-//!   whole surface.
+//!   the face's side); their bounds come from the p-curves too when every
+//!   edge has one that agrees, the face has no hole and every winding
+//!   bound has a vertex on the cut (which then starts the NURBS's periodic
+//!   coordinate, so that no p-curve crosses it), else from the 3-D edges;
+//!   a sphere or torus face without loops is the whole surface.
 //!
 //! Orientation (ISO 10303-42 face, face_bound, oriented_edge): an
 //! `ORIENTED_EDGE` with orientation `.F.` runs its `EDGE_CURVE` backwards,
@@ -99,8 +102,10 @@ pub struct TrimSources {
     /// 3-D edge).
     pub pcurve: usize,
     /// From the 3-D edge: the edge has no p-curve on the face's surface,
-    /// or the face's bounds wind around its surface (closed along a cut),
-    /// or the face is the whole converted surface.
+    /// or the face is the whole converted surface, or the face's bounds
+    /// wind around its surface and cannot all be taken from p-curves (a
+    /// hole, a winding bound without a vertex on the cut, an edge without
+    /// an agreeing p-curve).
     pub edge: usize,
     /// From the 3-D edge because its p-curves disagree with it by more
     /// than the tolerance (each named in [`StepImport::warnings`]).

@@ -290,7 +290,9 @@ impl<'e> EdgeWalk<'e> {
                 self.at = t;
                 self.curve.eval(t).distance(q)
             }
-            Curve::Spline(c) if c.degree == 1 && c.points.len() >= 2 => self.walk_chords(&c.points, q),
+            Curve::Spline(c) if c.degree == 1 && c.points.len() >= 2 => {
+                self.walk_chords(&c.points, q)
+            }
             Curve::Spline(n) => {
                 // A window of 1/16 of the edge behind and 3/16 ahead.
                 let w = (hi - lo) / 16.0;
