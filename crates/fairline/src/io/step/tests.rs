@@ -1795,11 +1795,12 @@ fn step_pcurve_check_along_polyline_edges_accepts_within_and_rejects_beyond_the_
 
 impl File {
     /// A closed 2-D cubic B-spline p-curve `(u, v) = (θ, g(θ))` for
-    /// θ ∈ [θ0, θ0 + 2π], uniform unclamped knots (64 spans), control
+    /// θ ∈ [θ0, θ0 + 2π], uniform unclamped knots (128 spans), control
     /// points by the cubic quasi-interpolant `(−g₋ + 8g₀ − g₊)/6`
-    /// (error O(h⁴), ~1e-7 here); u is linear in θ exactly.
+    /// (error O(h⁴): about 1e-7 times the largest fourth derivative of
+    /// g); u is linear in θ exactly.
     fn closed_pcurve(&mut self, theta0: f64, g: impl Fn(f64) -> f64) -> u64 {
-        let n = 64;
+        let n = 128;
         let h = 2.0 * PI / n as f64;
         let pts: Vec<String> = (0..n + 3)
             .map(|i| {
@@ -1877,8 +1878,7 @@ fn step_winding_bounds_take_their_pcurves_with_the_closed_form_area() {
     // The trim runs along the ellipse: the surface along every trim curve
     // lies on the cylinder between z = 0 and the plane, within the reader's
     // tolerance for p-curves (1e-6 of the NURBS's control box diagonal,
-    // √(2² + 2² + 2.5²)); the written B-spline p-curve is ~1e-6 off the
-    // exact ellipse.
+    // √(2² + 2² + 2.5²)).
     let tolerance = 1e-6 * (8.0f64 + 6.25).sqrt();
     for c in &s.trims()[0].curves {
         let [a, b] = c.domain();
@@ -1907,4 +1907,73 @@ fn step_winding_bounds_take_their_pcurves_with_the_closed_form_area() {
     );
     assert!(off.warnings.is_empty(), "{:?}", off.warnings);
     assert_close(area(&off.surfaces[0].surface), 4.0 * PI, 1e-3);
+}
+
+/// The sphere R = 2 about the origin cut by a plane whose normal leans
+/// β = 20° from z, the cap of angular radius α = 50° around it (it holds
+/// the pole, so its one bound winds once round the sphere). The bound: the
+/// circle in that plane, vertex at longitude 0 (latitude 20°),
+/// counter-clockwise seen from above (the cap on its left), with its
+/// B-spline p-curve (θ, φ(θ) + offset): φ solves cos φ cos θ sin β +
+/// sin φ cos β = cos α. Returns the text, the EDGE_CURVE's id and the
+/// cap's area 2πR²(1 − cos α).
+fn tilted_sphere_cap(offset: f64) -> (String, u64, f64) {
+    let (r, alpha, beta) = (2.0f64, 50f64.to_radians(), 20f64.to_radians());
+    let lat = |t: f64| {
+        let (a, b) = (t.cos() * beta.sin(), beta.cos());
+        (alpha.cos() / a.hypot(b)).asin() - a.atan2(b)
+    };
+    let mut f = File::default();
+    let frame = f.frame([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
+    let sph = f.add(&format!("SPHERICAL_SURFACE('',#{frame},{r:?})"));
+    let n = [beta.sin(), 0.0, beta.cos()];
+    let h = r * alpha.cos();
+    let c = [h * n[0], 0.0, h * n[2]];
+    let phi0 = lat(0.0);
+    let v = [r * phi0.cos(), 0.0, r * phi0.sin()];
+    let rad = r * alpha.sin();
+    let x = [(v[0] - c[0]) / rad, 0.0, (v[2] - c[2]) / rad];
+    let vid = f.vertex(v);
+    let circle = f.circle(c, n, x, rad, vid, vid, true);
+    let pc = f.closed_pcurve(0.0, |t| lat(t) + offset);
+    f.pcurves(circle, sph, &[pc]);
+    let b = f.bound(&[(circle, true)], true);
+    f.face(&[b], sph);
+    (f.text(), circle, 2.0 * PI * r * r * (1.0 - alpha.cos()))
+}
+
+#[test]
+fn step_tilted_sphere_cap_takes_its_pcurve_and_closes_through_the_pole() {
+    let (text, _, want) = tilted_sphere_cap(0.0);
+    let imp = parse_step(&text).unwrap();
+    let t = imp.trim_sources;
+    assert_eq!(
+        (t.pcurve, t.edge, t.pcurve_rejected),
+        (1, 0, 0),
+        "{:?}",
+        imp.warnings
+    );
+    assert!(imp.warnings.is_empty(), "{:?}", imp.warnings);
+    let s = &imp.surfaces[0].surface;
+    assert_close(area(s), want, 1e-3);
+    // The pole is inside the face.
+    let ([u0, u1], [_, v1]) = (s.domain_u(), s.domain_v());
+    assert!(s.eval(0.5 * (u0 + u1), v1).z > 2.0 - 1e-12);
+}
+
+#[test]
+#[ignore = "known gap (#20), found in Session 22: this tilted cap read from its 3-D circle (no p-curve used) has area 4.619 instead of 8.978 (the same file without p-curves: 4.623 by `fairline info --area`); not yet diagnosed — the p-curve path gives the closed form (the test above)"]
+fn step_tilted_sphere_cap_with_a_raised_pcurve_is_read_from_its_circle() {
+    // The p-curve raised by 0.01 rad is rejected, the trim comes from the
+    // 3-D circle, the same area.
+    let (text, circle, want) = tilted_sphere_cap(0.01);
+    let imp = parse_step(&text).unwrap();
+    let t = imp.trim_sources;
+    assert_eq!((t.pcurve, t.edge, t.pcurve_rejected), (0, 0, 1));
+    assert!(
+        imp.warnings[0].contains(&format!("#{circle}")),
+        "{:?}",
+        imp.warnings
+    );
+    assert_close(area(&imp.surfaces[0].surface), want, 1e-3);
 }
