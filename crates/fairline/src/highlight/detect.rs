@@ -1452,3 +1452,10 @@ fn fill_holes(mesh: &SurfaceMesh, in_region: &mut [bool]) {
 #[cfg(test)]
 #[path = "detect_wide_table.rs"]
 mod wide_table;
+
+/// The loops and flat spots measured for the wide flank dent on Spot
+/// (README, Default lights on real meshes; BENCHMARKS, session 22): table
+/// printers, not checks.
+#[cfg(test)]
+#[path = "detect_loops_table.rs"]
+mod loops_table;

@@ -16,7 +16,7 @@ use crate::highlight::UpAxis;
 
 /// Spot with the flank dent of `tests/common::dented_spot` (2 % of the
 /// diagonal deep, profile (1 − r²/ρ²)²); returns the mesh and its centre.
-fn dented(clean: &SurfaceMesh, radius: f64) -> (SurfaceMesh, Vec3) {
+pub(super) fn dented(clean: &SurfaceMesh, radius: f64) -> (SurfaceMesh, Vec3) {
     let normals = geom::vertex_normals(clean);
     let p = clean.positions();
     let (lo, hi) = crate::mesh::bounding_box(p).expect("vertices");
