@@ -1,7 +1,9 @@
 //! Benchmark of reading and analysing real CAD parts (issue #20): the
 //! impeller (IGES, 277 trimmed faces of ../shared/data) read and its
 //! continuity across patch boundaries (`fairline continuity`'s
-//! computation), and STEP reading of the real part in
+//! computation), the impeller written as STEP and parsed back (every trim a
+//! p-curve on a polyline 3-D edge, each checked against its edge), and STEP
+//! reading of the real part in
 //! `tests/data/step/featuretype.STEP` (no p-curves: trims from the 3-D
 //! edges) and of the same part written back by fairline (every trim a
 //! p-curve, checked against its 3-D edge). Prints medians of the wall time
@@ -52,6 +54,19 @@ fn main() {
                     continuity(&surfaces, &opts).map(|r| r.seams.len())
                 }),
             );
+            if let Ok(text) = surfaces_to_step(&surfaces, &StepWriteOptions::default()) {
+                let t = parse_step(&text)
+                    .map(|i| i.trim_sources)
+                    .unwrap_or_default();
+                row(
+                    "parse impeller.igs written as STEP (trims from p-curves)",
+                    &format!(
+                        "{n} faces, {} p-curves, {} rejected",
+                        t.pcurve, t.pcurve_rejected
+                    ),
+                    common::median_wall_cpu(runs, || parse_step(&text).map(|i| i.surfaces.len())),
+                );
+            }
         }
         Err(e) => println!("(impeller skipped: {e})"),
     }

@@ -30,8 +30,11 @@
 //!   without a seam edge — a
 //!   cylinder between two full circles, a sphere cap or a cone bounded by
 //!   one circle — are closed along a cut (and through the pole or apex on
-//!   the face's side), and a sphere or torus face without loops is the
-//!   whole surface.
+//!   the face's side); their bounds come from the p-curves too when every
+//!   edge has one that agrees, the face has no hole and every winding
+//!   bound has a vertex on the cut (which then starts the NURBS's periodic
+//!   coordinate, so that no p-curve crosses it), else from the 3-D edges;
+//!   a sphere or torus face without loops is the whole surface.
 //!
 //! Orientation (ISO 10303-42 face, face_bound, oriented_edge): an
 //! `ORIENTED_EDGE` with orientation `.F.` runs its `EDGE_CURVE` backwards,
@@ -99,8 +102,10 @@ pub struct TrimSources {
     /// 3-D edge).
     pub pcurve: usize,
     /// From the 3-D edge: the edge has no p-curve on the face's surface,
-    /// or the face's bounds wind around its surface (closed along a cut),
-    /// or the face is the whole converted surface.
+    /// or the face is the whole converted surface, or the face's bounds
+    /// wind around its surface and cannot all be taken from p-curves (a
+    /// hole, a winding bound without a vertex on the cut, an edge without
+    /// an agreeing p-curve).
     pub edge: usize,
     /// From the 3-D edge because its p-curves disagree with it by more
     /// than the tolerance (each named in [`StepImport::warnings`]).
@@ -230,6 +235,30 @@ fn nearest_param(a: f64, b: f64, samples: usize, f: impl Fn(f64) -> f64) -> f64 
         }
     }
     0.5 * (lo + hi)
+}
+
+/// The parameter of an edge's vertex `q` on its B-spline curve `n`: the
+/// end of the curve's domain where `q` lies on the curve's end point (to
+/// 1e-9 of the curve's size) and the curve's two end points are apart —
+/// where writers put an edge's vertices — else the nearest point of the
+/// curve ([`Curve::param_of`], a dense search).
+fn vertex_param(n: &Nurbs3, q: Vec3) -> f64 {
+    let [a, b] = n.domain();
+    let (pa, pb) = (n.eval(a), n.eval(b));
+    let (lo, hi) = n
+        .points
+        .iter()
+        .fold((q, q), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let close = 1e-9 * (hi - lo).length();
+    if pa.distance(pb) > 2.0 * close {
+        if pa.distance(q) <= close {
+            return a;
+        }
+        if pb.distance(q) <= close {
+            return b;
+        }
+    }
+    nearest_param(a, b, 64 * n.points.len().max(4), |t| n.eval(t).distance(q))
 }
 
 /// An oriented edge of a face bound, as a piece of a curve.
@@ -621,7 +650,7 @@ impl<'a> Reader<'a> {
                 if e.closed {
                     if e.forward { [a, b] } else { [b, a] }
                 } else {
-                    [e.curve.param_of(e.start), e.curve.param_of(e.end)]
+                    [vertex_param(n, e.start), vertex_param(n, e.end)]
                 }
             }
         }

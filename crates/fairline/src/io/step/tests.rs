@@ -6,7 +6,7 @@ use std::f64::consts::PI;
 
 use super::*;
 use crate::Vec3;
-use crate::bspline::{BSplineSurface, trimmed_area};
+use crate::bspline::{BSplineSurface, TrimCurve, TrimLoop, trimmed_area};
 use crate::io::units::LengthUnit;
 use crate::io::{read_iges, read_surfaces_json};
 
@@ -1659,4 +1659,321 @@ fn real_step_files_have_no_pcurves_and_read_from_their_edges() {
         assert!(t.edge > 0, "{name}");
         assert!(imp.warnings.is_empty(), "{name}");
     }
+}
+
+// The p-curve check tracks the nearest edge point along the edge (issue
+// #20: cheap and still exact enough).
+
+/// A square plate [0, 10]² (bilinear) trimmed by one loop: a cubic
+/// B-spline from (1, 1) to (9, 1) through a wave, then straight back
+/// round (9, 9) and (1, 9); the B-spline's middle control point moved by
+/// `bump` in v.
+fn plate_with_a_wavy_side(bump: f64) -> BSplineSurface {
+    let corner = |u: f64, v: f64| Vec3::new(u, v, 0.0);
+    let s = BSplineSurface::from_flat(
+        1,
+        1,
+        vec![0.0, 0.0, 10.0, 10.0],
+        vec![0.0, 0.0, 10.0, 10.0],
+        [2, 2],
+        vec![
+            corner(0.0, 0.0),
+            corner(0.0, 10.0),
+            corner(10.0, 0.0),
+            corner(10.0, 10.0),
+        ],
+        None,
+    )
+    .unwrap();
+    let wave = TrimCurve::new(
+        3,
+        vec![0.0, 0.0, 0.0, 0.0, 0.5, 1.0, 1.0, 1.0, 1.0],
+        vec![
+            [1.0, 1.0],
+            [3.0, 0.5],
+            [5.0, 1.5 + bump],
+            [7.0, 0.5],
+            [9.0, 1.0],
+        ],
+        None,
+    )
+    .unwrap();
+    let curves = vec![
+        wave,
+        TrimCurve::line([9.0, 1.0], [9.0, 9.0]).unwrap(),
+        TrimCurve::line([9.0, 9.0], [1.0, 9.0]).unwrap(),
+        TrimCurve::line([1.0, 9.0], [1.0, 1.0]).unwrap(),
+    ];
+    s.with_trims(vec![TrimLoop { curves }]).unwrap()
+}
+
+/// The plate written as STEP with its 3-D edges (polylines through points
+/// of the exact curves) and, from a second writing with the wave's middle
+/// control point moved by `bump`, the p-curves: the lines holding 2-D
+/// points are taken from the second text (both writings number their
+/// instances alike).
+fn plate_with_a_bumped_pcurve(bump: f64) -> String {
+    let exact = surfaces_to_step(&[plate_with_a_wavy_side(0.0)], &options()).unwrap();
+    let moved = surfaces_to_step(&[plate_with_a_wavy_side(bump)], &options()).unwrap();
+    let two_d = |l: &str| l.contains("CARTESIAN_POINT") && l.matches(',').count() == 2;
+    let (a, b): (Vec<&str>, Vec<&str>) = (exact.lines().collect(), moved.lines().collect());
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(&b)
+        .map(|(x, y)| if two_d(x) { *y } else { *x })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn step_pcurve_check_along_polyline_edges_accepts_within_and_rejects_beyond_the_tolerance() {
+    // The tolerance here is 1e-6 of the plate's control box diagonal
+    // (1.4e-5; the writer's uncertainty is 1e-7). The middle control point
+    // of a cubic with knots 0,0,0,0,½,1,1,1,1 moves the curve by at most
+    // bump · N₂(½) = bump / 2, across the curve there (its tangent is
+    // level at t = ½ by symmetry). The 3-D edge is the writer's polyline
+    // (48 chords), whose chords are allowed L·θ/2 ≤ 0.0038 (0.0025 at
+    // t = ½; see the pcurve module docs): bumps of 1e-7 and 1e-6 are
+    // accepted, 0.1 and 0.3 (0.05, 0.15 across) rejected, with the largest
+    // distance bump/2 less at most the allowance.
+    let tolerance = 1e-6 * 200f64.sqrt();
+    for (bump, used) in [
+        (0.0, true),
+        (1e-7, true),
+        (1e-6, true),
+        (0.1, false),
+        (0.3, false),
+    ] {
+        let text = plate_with_a_bumped_pcurve(bump);
+        let imp = parse_step(&text).unwrap();
+        let want = if used {
+            TrimSources {
+                pcurve: 4,
+                edge: 0,
+                pcurve_rejected: 0,
+            }
+        } else {
+            TrimSources {
+                pcurve: 3,
+                edge: 0,
+                pcurve_rejected: 1,
+            }
+        };
+        assert_eq!(imp.trim_sources, want, "bump {bump}: {:?}", imp.warnings);
+        let s = &imp.surfaces[0].surface;
+        if used {
+            // The p-curve is the trim curve, bit for bit.
+            assert_eq!(
+                s.trims()[0].curves[0],
+                plate_with_a_wavy_side(bump).trims()[0].curves[0]
+            );
+        } else {
+            // The warning states the largest distance: half the bump (the
+            // check samples t = ½) less at most the chords' allowance.
+            let w = &imp.warnings[0];
+            let largest: f64 = w
+                .split("largest ")
+                .nth(1)
+                .and_then(|r| r.split(' ').next())
+                .and_then(|x| x.parse().ok())
+                .unwrap_or_else(|| panic!("{w}"));
+            assert!(largest > tolerance, "{w}");
+            assert!(
+                largest <= bump / 2.0 + tolerance && largest >= bump / 2.0 - 0.004,
+                "bump {bump}: {w}"
+            );
+        }
+        // Either way the face's area is the plate's (the wave changes it
+        // by less than 0.1 %): from the 3-D edge where the p-curve is
+        // rejected.
+        assert_close(area(s), area(&plate_with_a_wavy_side(0.0)), 1e-3);
+    }
+}
+
+// Faces whose bounds wind around their surface without a seam edge, with
+// p-curves (issue #20: use them there too when valid).
+
+impl File {
+    /// A closed 2-D cubic B-spline p-curve `(u, v) = (θ, g(θ))` for
+    /// θ ∈ [θ0, θ0 + 2π], uniform unclamped knots (128 spans), control
+    /// points by the cubic quasi-interpolant `(−g₋ + 8g₀ − g₊)/6`
+    /// (error O(h⁴): about 1e-7 times the largest fourth derivative of
+    /// g); u is linear in θ exactly.
+    fn closed_pcurve(&mut self, theta0: f64, g: impl Fn(f64) -> f64) -> u64 {
+        let n = 128;
+        let h = 2.0 * PI / n as f64;
+        let pts: Vec<String> = (0..n + 3)
+            .map(|i| {
+                let x = theta0 + (i as f64 - 1.0) * h;
+                let v = (-g(x - h) + 8.0 * g(x) - g(x + h)) / 6.0;
+                format!(
+                    "#{}",
+                    self.add(&format!("CARTESIAN_POINT('',({x:?},{v:?}))"))
+                )
+            })
+            .collect();
+        let knots: Vec<String> = (0..n + 7)
+            .map(|j| format!("{:?}", theta0 + (j as f64 - 3.0) * h))
+            .collect();
+        let mults = vec!["1"; n + 7].join(",");
+        self.add(&format!(
+            "B_SPLINE_CURVE_WITH_KNOTS('',3,({}),.UNSPECIFIED.,.F.,.F.,({mults}),({}),.UNSPECIFIED.)",
+            pts.join(","),
+            knots.join(",")
+        ))
+    }
+}
+
+/// The cylinder r = 1 about z between the circle z = 0 and its cut by the
+/// plane z = 2 + x/2 (an ellipse, semi-axes √1.25 and 1): the bottom circle
+/// with the p-curve LINE (θ, 0), the ellipse starting at angle `theta0`
+/// with its B-spline p-curve (θ, 2 + cos θ / 2) (unless `pcurves` is
+/// false). Area ∫(2 + cos θ / 2) dθ = 4π.
+fn cylinder_under_an_inclined_cut(theta0: f64, pcurves: bool) -> String {
+    let mut f = File::default();
+    let frame = f.frame([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
+    let cyl = f.add(&format!("CYLINDRICAL_SURFACE('',#{frame},1.)"));
+    let bottom = f.full_circle(1.0, 0.0);
+    let (c0, s0) = (theta0.cos(), theta0.sin());
+    let v = f.vertex([c0, s0, 2.0 + 0.5 * c0]);
+    let a = 1.25f64.sqrt();
+    let ef = f.frame(
+        [0.0, 0.0, 2.0],
+        [-0.5 / a, 0.0, 1.0 / a],
+        [1.0 / a, 0.0, 0.5 / a],
+    );
+    let el = f.add(&format!("ELLIPSE('',#{ef},{a:?},1.)"));
+    let top = f.add(&format!("EDGE_CURVE('',#{v},#{v},#{el},.T.)"));
+    if pcurves {
+        let l = f.line2([0.0, 0.0], [1.0, 0.0]);
+        f.pcurves(bottom, cyl, &[l]);
+        let c = f.closed_pcurve(theta0, |t| 2.0 + 0.5 * t.cos());
+        f.pcurves(top, cyl, &[c]);
+    }
+    let b0 = f.bound(&[(bottom, true)], true);
+    let b1 = f.bound(&[(top, false)], true);
+    f.face(&[b0, b1], cyl);
+    f.text()
+}
+
+#[test]
+fn step_winding_bounds_take_their_pcurves_with_the_closed_form_area() {
+    // Both bounds have a vertex at angle 0, where the surface is cut open:
+    // both trims from the p-curves (the circle's LINE p-curve a straight
+    // trim line at v = 0, the ellipse's B-spline p-curve mapped through the
+    // angle → rational-parameter map), the loop closed along the cut.
+    let imp = parse_step(&cylinder_under_an_inclined_cut(0.0, true)).unwrap();
+    assert_eq!(
+        imp.trim_sources,
+        TrimSources {
+            pcurve: 2,
+            edge: 0,
+            pcurve_rejected: 0
+        },
+        "{:?}",
+        imp.warnings
+    );
+    let s = &imp.surfaces[0].surface;
+    assert_close(area(s), 4.0 * PI, 1e-3);
+    // The trim runs along the ellipse: the surface along every trim curve
+    // lies on the cylinder between z = 0 and the plane, within the reader's
+    // tolerance for p-curves (1e-6 of the NURBS's control box diagonal,
+    // √(2² + 2² + 2.5²)).
+    let tolerance = 1e-6 * (8.0f64 + 6.25).sqrt();
+    for c in &s.trims()[0].curves {
+        let [a, b] = c.domain();
+        for k in 0..=200 {
+            let [u, v] = c.eval(a + (b - a) * k as f64 / 200.0);
+            let p = s.eval(u, v);
+            assert!((p.x.hypot(p.y) - 1.0).abs() < 1e-9, "{p:?}");
+            assert!(p.z > -1e-9 && p.z < 2.0 + 0.5 * p.x + tolerance, "{p:?}");
+        }
+    }
+    // Without p-curves the same face from the 3-D edges.
+    let from_edges = parse_step(&cylinder_under_an_inclined_cut(0.0, false)).unwrap();
+    assert_eq!(from_edges.trim_sources.edge, 2);
+    assert_close(area(&from_edges.surfaces[0].surface), 4.0 * PI, 1e-3);
+    // The ellipse's vertex a quarter turn away from the cut: its p-curve
+    // would cross the cut, so both bounds come from the 3-D edges (no
+    // warning: the p-curves are not wrong).
+    let off = parse_step(&cylinder_under_an_inclined_cut(PI / 2.0, true)).unwrap();
+    assert_eq!(
+        off.trim_sources,
+        TrimSources {
+            pcurve: 0,
+            edge: 2,
+            pcurve_rejected: 0
+        }
+    );
+    assert!(off.warnings.is_empty(), "{:?}", off.warnings);
+    assert_close(area(&off.surfaces[0].surface), 4.0 * PI, 1e-3);
+}
+
+/// The sphere R = 2 about the origin cut by a plane whose normal leans
+/// β = 20° from z, the cap of angular radius α = 50° around it (it holds
+/// the pole, so its one bound winds once round the sphere). The bound: the
+/// circle in that plane, vertex at longitude 0 (latitude 20°),
+/// counter-clockwise seen from above (the cap on its left), with its
+/// B-spline p-curve (θ, φ(θ) + offset): φ solves cos φ cos θ sin β +
+/// sin φ cos β = cos α. Returns the text, the EDGE_CURVE's id and the
+/// cap's area 2πR²(1 − cos α).
+fn tilted_sphere_cap(offset: f64) -> (String, u64, f64) {
+    let (r, alpha, beta) = (2.0f64, 50f64.to_radians(), 20f64.to_radians());
+    let lat = |t: f64| {
+        let (a, b) = (t.cos() * beta.sin(), beta.cos());
+        (alpha.cos() / a.hypot(b)).asin() - a.atan2(b)
+    };
+    let mut f = File::default();
+    let frame = f.frame([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
+    let sph = f.add(&format!("SPHERICAL_SURFACE('',#{frame},{r:?})"));
+    let n = [beta.sin(), 0.0, beta.cos()];
+    let h = r * alpha.cos();
+    let c = [h * n[0], 0.0, h * n[2]];
+    let phi0 = lat(0.0);
+    let v = [r * phi0.cos(), 0.0, r * phi0.sin()];
+    let rad = r * alpha.sin();
+    let x = [(v[0] - c[0]) / rad, 0.0, (v[2] - c[2]) / rad];
+    let vid = f.vertex(v);
+    let circle = f.circle(c, n, x, rad, vid, vid, true);
+    let pc = f.closed_pcurve(0.0, |t| lat(t) + offset);
+    f.pcurves(circle, sph, &[pc]);
+    let b = f.bound(&[(circle, true)], true);
+    f.face(&[b], sph);
+    (f.text(), circle, 2.0 * PI * r * r * (1.0 - alpha.cos()))
+}
+
+#[test]
+fn step_tilted_sphere_cap_takes_its_pcurve_and_closes_through_the_pole() {
+    let (text, _, want) = tilted_sphere_cap(0.0);
+    let imp = parse_step(&text).unwrap();
+    let t = imp.trim_sources;
+    assert_eq!(
+        (t.pcurve, t.edge, t.pcurve_rejected),
+        (1, 0, 0),
+        "{:?}",
+        imp.warnings
+    );
+    assert!(imp.warnings.is_empty(), "{:?}", imp.warnings);
+    let s = &imp.surfaces[0].surface;
+    assert_close(area(s), want, 1e-3);
+    // The pole is inside the face.
+    let ([u0, u1], [_, v1]) = (s.domain_u(), s.domain_v());
+    assert!(s.eval(0.5 * (u0 + u1), v1).z > 2.0 - 1e-12);
+}
+
+#[test]
+#[ignore = "known gap (#20), found in Session 22: this tilted cap read from its 3-D circle (no p-curve used) has area 4.619 instead of 8.978 (the same file without p-curves: 4.623 by `fairline info --area`); not yet diagnosed — the p-curve path gives the closed form (the test above)"]
+fn step_tilted_sphere_cap_with_a_raised_pcurve_is_read_from_its_circle() {
+    // The p-curve raised by 0.01 rad is rejected, the trim comes from the
+    // 3-D circle, the same area.
+    let (text, circle, want) = tilted_sphere_cap(0.01);
+    let imp = parse_step(&text).unwrap();
+    let t = imp.trim_sources;
+    assert_eq!((t.pcurve, t.edge, t.pcurve_rejected), (0, 0, 1));
+    assert!(
+        imp.warnings[0].contains(&format!("#{circle}")),
+        "{:?}",
+        imp.warnings
+    );
+    assert_close(area(&imp.surfaces[0].surface), want, 1e-3);
 }

@@ -228,6 +228,120 @@ fn distance_to_edge(curve: &Curve, samples: &[(f64, Vec3)], q: Vec3) -> f64 {
     exact.min(sampled)
 }
 
+/// The nearest point of an edge to points that run along it in traversal
+/// order, each searched near the previous one (the correspondence of a
+/// p-curve's parameter with the edge's is monotone): closed forms for
+/// lines and conics (the angle taken next to the previous one), a walk
+/// over the chords of a polyline (degree-1 B-spline) from the previous
+/// nearest chord to the nearest one after it, less the chord's allowance
+/// as in [`distance_to_edge`], and a golden-section search over a window
+/// of the parameter next to the previous point on other B-splines.
+struct EdgeWalk<'e> {
+    curve: &'e Curve,
+    /// The edge's parameter range, ascending.
+    lo: f64,
+    hi: f64,
+    /// Traversal runs towards increasing parameters.
+    increasing: bool,
+    /// The parameter of the previous nearest point.
+    at: f64,
+    /// Polylines: the chords of the edge (`s` the chord from point `s - 1`
+    /// to `s`) and the previous nearest one.
+    chords: [usize; 2],
+    chord: usize,
+}
+
+impl<'e> EdgeWalk<'e> {
+    fn new(curve: &'e Curve, [t0, t1]: [f64; 2]) -> Self {
+        let (lo, hi) = (t0.min(t1), t0.max(t1));
+        let chords = match curve {
+            Curve::Spline(c) if c.degree == 1 && c.points.len() >= 2 => {
+                let m = c.points.len();
+                [
+                    find_span(&c.knots, 1, m, lo).clamp(1, m - 1),
+                    find_span(&c.knots, 1, m, hi).clamp(1, m - 1),
+                ]
+            }
+            _ => [0, 0],
+        };
+        let increasing = t1 >= t0;
+        EdgeWalk {
+            curve,
+            lo,
+            hi,
+            increasing,
+            at: t0,
+            chords,
+            chord: if increasing { chords[0] } else { chords[1] },
+        }
+    }
+
+    /// The distance from `q` to the edge's point tracked next to the
+    /// previous one (an upper bound of the distance to the edge).
+    fn distance(&mut self, q: Vec3) -> f64 {
+        let (lo, hi) = (self.lo, self.hi);
+        match self.curve {
+            Curve::Line { .. } => {
+                let t = self.curve.param_of(q).clamp(lo, hi);
+                self.curve.eval(t).distance(q)
+            }
+            Curve::Conic { .. } => {
+                let t = wrap_near(self.curve.param_of(q), self.at, Some(TAU)).clamp(lo, hi);
+                self.at = t;
+                self.curve.eval(t).distance(q)
+            }
+            Curve::Spline(c) if c.degree == 1 && c.points.len() >= 2 => {
+                self.walk_chords(&c.points, q)
+            }
+            Curve::Spline(n) => {
+                // A window of 1/16 of the edge behind and 3/16 ahead.
+                let w = (hi - lo) / 16.0;
+                let (a, b) = if self.increasing {
+                    ((self.at - w).max(lo), (self.at + 3.0 * w).min(hi))
+                } else {
+                    ((self.at - 3.0 * w).max(lo), (self.at + w).min(hi))
+                };
+                let t = nearest_param(a, b, 8, |t| n.eval(t).distance(q));
+                self.at = t;
+                n.eval(t).distance(q)
+            }
+        }
+    }
+
+    /// Polylines: from the previous nearest chord onwards while the next
+    /// chord is no farther; the distance to the chord reached (or to a
+    /// neighbour of it) less its allowance.
+    fn walk_chords(&mut self, points: &[Vec3], q: Vec3) -> f64 {
+        let [s0, s1] = self.chords;
+        let dist = |s: usize| segment_distance(q, points[s - 1], points[s]);
+        let next = |s: usize| {
+            if self.increasing {
+                (s < s1).then_some(s + 1)
+            } else {
+                (s > s0).then_some(s - 1)
+            }
+        };
+        let mut s = self.chord;
+        let mut d = dist(s);
+        while let Some(n) = next(s) {
+            let dn = dist(n);
+            if dn > d {
+                break;
+            }
+            (s, d) = (n, dn);
+        }
+        self.chord = s;
+        (s.saturating_sub(1).max(s0)..=(s + 1).min(s1))
+            .map(|k| {
+                let allowance = points[k - 1].distance(points[k])
+                    * turning(points, k - 1).max(turning(points, k))
+                    / 2.0;
+                (dist(k) - allowance).max(0.0)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+}
+
 impl<'a> Reader<'a> {
     /// The distance tolerance for p-curves on `s`: the file's distance
     /// uncertainty or 1e-6 of the surface's control-point box diagonal,
@@ -288,7 +402,12 @@ impl<'a> Reader<'a> {
             return Ok(PcurveUse::Absent);
         }
         let tolerance = self.pcurve_tolerance(s);
-        let samples = self.edge_samples(e);
+        // The edge's dense samples, for the full search where tracking
+        // along the edge finds no point within the tolerance (rare: a
+        // p-curve that disagrees).
+        let samples = std::cell::OnceCell::new();
+        let dense = || samples.get_or_init(|| self.edge_samples(e)).as_slice();
+        let range = self.edge_range(e);
         let mut best = f64::INFINITY;
         for (_, curve) in candidates {
             // A p-curve that gives no valid trim curve disagrees with the
@@ -296,7 +415,7 @@ impl<'a> Reader<'a> {
             let Ok(Some(trim)) = self.pcurve_image(s, e, &curve, map, seg, tolerance) else {
                 continue;
             };
-            let d = disagreement(s, e, &samples, &trim);
+            let d = disagreement(s, e, range, &dense, &trim, tolerance);
             if d <= tolerance {
                 return Ok(PcurveUse::Used(trim));
             }
@@ -424,7 +543,23 @@ impl<'a> Reader<'a> {
 /// is continued linearly: the point of the clamped parameters plus the
 /// excess times the surface's first derivatives there, so that a p-curve
 /// running off the face is measured by how far off it runs.
-fn disagreement(s: &BSplineSurface, e: &EdgeUse, samples: &[(f64, Vec3)], c: &TrimCurve) -> f64 {
+///
+/// The samples run along the edge in traversal order, so the nearest edge
+/// point is tracked from one sample to the next ([`EdgeWalk`]); a sample
+/// whose tracked point lies farther than `tolerance` is measured again by
+/// the full search over the edge's dense samples (`dense`,
+/// [`distance_to_edge`]). A tracked point is a point of the edge, so its
+/// distance bounds the true distance from above: a p-curve accepted by the
+/// tracking is within the tolerance everywhere it is sampled, and one the
+/// full search accepts is accepted too.
+fn disagreement<'s>(
+    s: &BSplineSurface,
+    e: &EdgeUse,
+    range: [f64; 2],
+    dense: &dyn Fn() -> &'s [(f64, Vec3)],
+    c: &TrimCurve,
+    tolerance: f64,
+) -> f64 {
     let ([u0, u1], [v0, v1]) = (s.domain_u(), s.domain_v());
     let [a, b] = c.domain();
     let at = |t: f64| {
@@ -439,9 +574,16 @@ fn disagreement(s: &BSplineSurface, e: &EdgeUse, samples: &[(f64, Vec3)], c: &Tr
     let ends = [(a, e.start), (b, e.end)]
         .into_iter()
         .map(|(t, q)| at(t).distance(q));
-    let along = check_params(c)
-        .into_iter()
-        .map(|t| distance_to_edge(&e.curve, samples, at(t)));
+    let mut walk = EdgeWalk::new(&e.curve, range);
+    let along = check_params(c).into_iter().map(|t| {
+        let q = at(t);
+        let d = walk.distance(q);
+        if d <= tolerance {
+            d
+        } else {
+            d.min(distance_to_edge(&e.curve, dense(), q))
+        }
+    });
     ends.chain(along).fold(
         0.0,
         |m, d| if d.is_nan() { f64::INFINITY } else { m.max(d) },
