@@ -466,7 +466,19 @@ impl<'a> Reader<'a> {
                     Some(trims) => trims,
                     None => nat
                         .iter()
-                        .map(|l| natural_polyline(l, to_uv).map(|c| TrimLoop { curves: vec![c] }))
+                        .map(|l| {
+                            // The closed loops of `close_full_turns` end at
+                            // the cut, not back at their first point: one
+                            // curve must end where the loop starts (the
+                            // trim's flattening closes the loop from the last
+                            // curve's end).
+                            let closed: Vec<(f64, f64)> = l
+                                .iter()
+                                .chain(l.first().filter(|&p| l.last() != Some(p)))
+                                .copied()
+                                .collect();
+                            natural_polyline(&closed, to_uv).map(|c| TrimLoop { curves: vec![c] })
+                        })
                         .collect::<Result<Vec<_>, String>>()
                         .map_err(|m| self.err(f, m))?,
                 }
