@@ -59,7 +59,7 @@ use super::region::MovableSet;
 use crate::Vec3;
 use crate::highlight::{HighlightLines, LightArray, NodeId};
 use crate::mesh::{FaceId, SurfaceMesh, VertexId};
-use crate::solve::solve_spd;
+use crate::solve::{height_monomials, solve_spd};
 use std::collections::BTreeSet;
 
 /// Rings of faces around R that the fit leaves out (the defect's tail).
@@ -77,22 +77,6 @@ const MIN_FRAME_COS: f64 = 0.5;
 /// and the paper's estimate is kept.
 const MAX_CORRECTION: f64 = 0.35;
 
-/// Monomials 1, x, y, x², xy, y², x³, x²y, xy², y³.
-fn monomials(x: f64, y: f64) -> [f64; 10] {
-    [
-        1.0,
-        x,
-        y,
-        x * x,
-        x * y,
-        y * y,
-        x * x * x,
-        x * x * y,
-        x * y * y,
-        y * y * y,
-    ]
-}
-
 /// A height field z(x, y) = Σ c_k m_k(x, y) over the plane through
 /// `origin` spanned by `bx`, `by`, heights along `n0`, coordinates scaled
 /// by `scale`.
@@ -109,7 +93,7 @@ impl HeightFit {
     /// Point and unit normal of the graph at (x, y) (scaled coordinates).
     fn point_normal(&self, x: f64, y: f64) -> (Vec3, Vec3) {
         let c = &self.c;
-        let z = monomials(x, y)
+        let z = height_monomials::<10>(x, y)
             .iter()
             .zip(c)
             .map(|(m, k)| m * k)
@@ -162,7 +146,7 @@ fn fit_height(q: Vec3, n0: Vec3, pts: &[Vec3], rho: f64) -> Option<HeightFit> {
             let d = (p - q) / rho;
             let (x, y, z) = (d.dot(bx), d.dot(by), d.dot(n0));
             let w = (1.0 - x * x - y * y).max(0.0).powi(2);
-            (w > 0.0).then(|| (monomials(x, y), z, w))
+            (w > 0.0).then(|| (height_monomials::<10>(x, y), z, w))
         })
         .collect();
     let c = if rows.len() >= 14 {

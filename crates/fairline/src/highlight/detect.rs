@@ -108,7 +108,7 @@
 use super::{HighlightError, HighlightLines, LightArray, NodeId};
 use crate::geom;
 use crate::mesh::{FaceId, SurfaceMesh, VertexId};
-use crate::solve::solve_spd;
+use crate::solve::{height_monomials, solve_spd};
 use crate::{Control, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -455,25 +455,6 @@ fn frame(n: Vec3) -> (Vec3, Vec3) {
     (bx, n.cross(bx))
 }
 
-/// Monomials 1, x, y, x², xy, y², x³, x²y, xy², y³ (the first N).
-fn monomials<const N: usize>(x: f64, y: f64) -> [f64; N] {
-    let all = [
-        1.0,
-        x,
-        y,
-        x * x,
-        x * y,
-        y * y,
-        x * x * x,
-        x * x * y,
-        x * y * y,
-        y * y * y,
-    ];
-    let mut out = [0.0; N];
-    out.copy_from_slice(&all[..N]);
-    out
-}
-
 /// Fine fit: weighted least-squares height field (N = 10: cubic, N = 6:
 /// quadric) over the neighbours in the frame of `n0`, coordinates scaled by
 /// r, weights (1 − ρ²)². Returns the denoised position, normal and
@@ -491,7 +472,7 @@ fn fine_fit<const N: usize>(p0: Vec3, n0: Vec3, pts: &[Vec3], r: f64) -> Option<
         if w <= 0.0 {
             continue;
         }
-        let row = monomials::<N>(x, y);
+        let row = height_monomials::<N>(x, y);
         for i in 0..N {
             for j in i..N {
                 ata[i][j] += w * row[i] * row[j];

@@ -33,7 +33,9 @@ pub use cholesky::{
 };
 pub use constrained::{ConstrainedOptions, ConstrainedSolver};
 pub use ordering::nested_dissection;
-pub use small::{function_of_eigen3, solve_spd, symmetric_eigen3, symmetric_function3};
+pub use small::{
+    function_of_eigen3, height_monomials, solve_spd, symmetric_eigen3, symmetric_function3,
+};
 pub use staged::{
     AUTO_DIRECT_LIMIT, AUTO_JACOBI_BUDGET, AUTO_JACOBI_CHECK, MultigridBuilder, NormalEquations,
     NormalSolver, StagedOptions, StagedSolver, StagedStats,

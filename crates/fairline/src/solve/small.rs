@@ -76,6 +76,28 @@ pub fn function_of_eigen3(values: Vec3, vectors: Mat3, f: impl Fn(f64) -> f64) -
     scaled * vectors.transpose()
 }
 
+/// The first N of the bivariate monomials 1, x, y, x², xy, y², x³, x²y,
+/// xy², y³: the basis of the small least-squares height fits
+/// z(x, y) = Σ c_k m_k(x, y) (N = 6: quadric, N = 10: cubic) solved by
+/// [`solve_spd`]. N ≤ 10.
+pub fn height_monomials<const N: usize>(x: f64, y: f64) -> [f64; N] {
+    let all = [
+        1.0,
+        x,
+        y,
+        x * x,
+        x * y,
+        y * y,
+        x * x * x,
+        x * x * y,
+        x * y * y,
+        y * y * y,
+    ];
+    let mut out = [0.0; N];
+    out.copy_from_slice(&all[..N]);
+    out
+}
+
 /// Solves the dense symmetric positive definite system A x = b of a small
 /// least-squares fit (normal equations, N ≤ ~10) by Cholesky factorisation
 /// (Golub & Van Loan §4.2). Only the upper triangle of `a` (i ≤ j) is read.
