@@ -795,15 +795,18 @@ fn vertex_flow_approximates_known_surfaces_better_than_its_input() {
         // the issue's 20 % where met, and what was measured before where
         // it is not (no bound looser than session 19's)
         match name {
-            "rounded cube" => assert!(h <= 0.6 && rms <= 0.7, "{name}: {h:.3} {rms:.3}"),
+            // −45.0 % / −44.7 % (session 23, the junction normals; RMS
+            // −36.8 % before)
+            "rounded cube" => assert!(h <= 0.6 && rms <= 0.56, "{name}: {h:.3} {rms:.3}"),
             // −59 % / −65 % (session 22: a vertex at each corner where three
             // sides' fits meet; −15 % / −27 % before)
             "sharp cube" => {
                 assert!(h <= 0.5 && rms <= 0.5, "{name}: {h:.3} {rms:.3}");
                 assert!(out.normal_error_deg < 0.7 * input.normal_error_deg);
             }
-            // RMS −19.0 %
-            "filleted cylinder" => assert!(h <= 0.8 && rms <= 0.85, "{name}: {h:.3} {rms:.3}"),
+            // −29.4 % / −28.1 % (session 23: the junction normals of the
+            // Phong lift, module `junction`; −20.8 % / −19.0 % before)
+            "filleted cylinder" => assert!(h <= 0.72 && rms <= 0.73, "{name}: {h:.3} {rms:.3}"),
             _ => {}
         }
         if name != "fandisk-like part" {
@@ -834,7 +837,7 @@ fn vertex_flow_approximates_known_surfaces_better_than_its_input() {
 /// under-sampled ones, the normal error near the features lower on every
 /// shape, mean quality at least 0.8.
 #[test]
-#[ignore = "not met (BENCHMARKS.md, session 22): filleted cylinder RMS −19.0 % (≥ 20 % asked), fandisk-like part normal error near the features 6.74° vs the input's 6.51° (its convex crease is now found, but the slope between it and the concave crease is a strip one face wide, which is no side to rebuild it from)"]
+#[ignore = "not met (BENCHMARKS.md, session 23): fandisk-like part normal error near the features 6.66° vs the input's 6.51° (its convex crease is now found, but the slope between it and the concave crease is a strip one face wide, which is no side to rebuild it from)"]
 fn vertex_flow_meets_every_claim_of_issue_21_item_2() {
     for m in measure_all() {
         let (name, input, out) = (m.name, &m.input, &m.default);
@@ -941,4 +944,130 @@ fn chord_faces_are_found_on_sharp_creases_only() {
             _ => {}
         }
     }
+}
+
+/// The RMS distance of `positions` to `truth` and each part's share of its
+/// square (mesh → surface and surface → mesh halves), parts by `part`.
+fn rms_by_part(
+    truth: &Truth,
+    positions: &[Vec3],
+    part: &dyn Fn(Vec3) -> usize,
+    parts: usize,
+) -> (f64, Vec<f64>) {
+    let mut m = truth.mesh.clone();
+    m.set_positions(positions.to_vec()).unwrap();
+    let areas = face_areas(&m);
+    let area: f64 = areas.iter().sum();
+    const K: usize = 8;
+    let mut share = vec![0.0; parts];
+    for f in 0..m.face_count() {
+        let t = m.triangle(FaceId(f as u32)).map(|v| positions[v.idx()]);
+        let a = areas[f] / ((K + 1) * (K + 2) / 2) as f64;
+        for i in 0..=K {
+            for j in 0..=K - i {
+                let (u, v) = (i as f64 / K as f64, j as f64 / K as f64);
+                let x = (1.0 - u - v) * t[0] + u * t[1] + v * t[2];
+                let (d, _) = (truth.closest)(x);
+                share[part(x)] += 0.5 * a * d * d / area;
+            }
+        }
+    }
+    let grid = FaceGrid::new(&m, positions, 2.0 * mean_edge_length(&m));
+    for &x in &truth.samples {
+        let d = grid.distance(x);
+        share[part(x)] += 0.5 * d * d / truth.samples.len() as f64;
+    }
+    (share.iter().sum::<f64>().sqrt(), share)
+}
+
+/// Where the filleted cylinder's remaining error lies (issue #21 item 2
+/// (a)): each part's share of the squared RMS (flats, fillets, wall), the
+/// vertices on each part, for the input, the defaults, the defaults with
+/// the true normals as the Phong corner normals (everywhere, or only at the
+/// input vertices next to the flat–fillet or fillet–wall junctions) and
+/// the defaults moved onto the true surface (what the distribution of the
+/// vertices alone allows). Table printer.
+#[test]
+#[ignore = "table printer (BENCHMARKS.md, session 23 — fillet)"]
+fn filleted_cylinder_error_by_part() {
+    let truth = cylinder_truth(10);
+    let (profile, _) = cylinder_profile();
+    let planar = |p: Vec3| DVec2::new((p.x * p.x + p.y * p.y).sqrt(), p.z);
+    let piece = |p: Vec3| {
+        let q = planar(p);
+        (0..5)
+            .min_by(|&a, &b| {
+                profile.0[a]
+                    .closest(q)
+                    .0
+                    .total_cmp(&profile.0[b].closest(q).0)
+            })
+            .unwrap()
+    };
+    let part = |p: Vec3| [0, 1, 2, 1, 0][piece(p)];
+    let e = mean_edge_length(&truth.mesh);
+    let near = |p: Vec3, c: [DVec2; 2]| c.iter().any(|&c| planar(p).distance(c) < 0.5 * e);
+    let flat_fillet = [DVec2::new(0.7, -1.0), DVec2::new(0.7, 1.0)];
+    let fillet_wall = [DVec2::new(1.0, -0.7), DVec2::new(1.0, 0.7)];
+    let input = rms_by_part(&truth, truth.mesh.positions(), &part, 3).0;
+    let row = |label: &str, positions: &[Vec3]| {
+        let (rms, share) = rms_by_part(&truth, positions, &part, 3);
+        let mut count = [0; 3];
+        for &p in positions {
+            count[part(p)] += 1;
+        }
+        println!(
+            "| {label} | {rms:.5} | {:+.1} % | {:.3e} | {:.3e} | {:.3e} | {} / {} / {} |",
+            100.0 * (rms / input - 1.0),
+            share[0],
+            share[1],
+            share[2],
+            count[0],
+            count[1],
+            count[2]
+        );
+    };
+    println!(
+        "| filleted cylinder | RMS | vs input | flats | fillets | wall | vertices flats / fillets / wall |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- |");
+    row("input", truth.mesh.positions());
+    let out = enhance_features(&truth.mesh, &EnhanceOptions::default()).unwrap();
+    row("default", &out.positions);
+    let oracle = |label: &str, keep: &dyn Fn(Vec3) -> bool| {
+        let normals = truth
+            .mesh
+            .positions()
+            .iter()
+            .map(|&p| keep(p).then(|| (truth.closest)(p).1))
+            .collect();
+        super::surface::TRUE_CORNER_NORMALS.with(|o| *o.borrow_mut() = Some(normals));
+        let out = enhance_features(&truth.mesh, &EnhanceOptions::default()).unwrap();
+        super::surface::TRUE_CORNER_NORMALS.with(|o| *o.borrow_mut() = None);
+        row(label, &out.positions);
+    };
+    oracle("true corner normals everywhere", &|_| true);
+    oracle("true corner normals at flat–fillet", &|p| {
+        near(p, flat_fillet)
+    });
+    oracle("true corner normals at fillet–wall", &|p| {
+        near(p, fillet_wall)
+    });
+    oracle("true corner normals at both junctions", &|p| {
+        near(p, flat_fillet) || near(p, fillet_wall)
+    });
+    let snapped: Vec<Vec3> = out
+        .positions
+        .iter()
+        .map(|&p| {
+            let (d, n) = (truth.closest)(p);
+            let (a, b) = (p - d * n, p + d * n);
+            if (truth.closest)(a).0 <= (truth.closest)(b).0 {
+                a
+            } else {
+                b
+            }
+        })
+        .collect();
+    row("default moved onto the true surface", &snapped);
 }

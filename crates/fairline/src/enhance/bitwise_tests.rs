@@ -90,13 +90,18 @@ fn cases() -> Vec<(&'static str, SurfaceMesh, EnhanceOptions)> {
     ]
 }
 
-/// Recorded before the refactor (see the module documentation).
+/// Recorded before the refactor (see the module documentation). The five
+/// cases with the smooth projection on the torus and the rounded cube were
+/// re-recorded in session 23, when the Phong lift's corner normals took the
+/// junction fits (module `junction`: a deliberate change of the output,
+/// issue #21 item 2 (a)); the open cylinder has no vertex where the split
+/// model is preferred, the other cases do not lift.
 const RECORDED: &[(&str, u64)] = &[
-    ("torus default", 0x508bef1a7b543b59),
-    ("torus cg", 0x39c6743bf6fdf1c4),
-    ("torus amg λ 0.5", 0x2185c7c5d7e2146c),
-    ("rounded cube default", 0x6727861957321d66),
-    ("rounded cube direct", 0x8e544a577b8de37b),
+    ("torus default", 0xb1eb552ef0db9f0e),
+    ("torus cg", 0xa9eaaad33813b61b),
+    ("torus amg λ 0.5", 0xa36ad30b25f89ae7),
+    ("rounded cube default", 0xc8e4c13d6a846d6a),
+    ("rounded cube direct", 0xc36c22cebc1e178a),
     (
         "rounded cube 3 iterations, mesh projection",
         0xc600aa685e91d1aa,
@@ -125,7 +130,7 @@ fn results_are_bit_identical_to_those_recorded_before_the_refactor() {
         );
         let recorded = RECORDED.iter().find(|(n, _)| *n == name).map(|c| c.1);
         if recorded != Some(sum) {
-            mismatches.push(name);
+            mismatches.push(format!("{name}: {sum:#018x}"));
         }
     }
     assert!(mismatches.is_empty(), "changed: {mismatches:?}");

@@ -175,6 +175,7 @@ mod bitwise_tests;
 pub(crate) use bitwise_tests::checksum as bitwise_checksum;
 mod boundary;
 mod crease;
+mod junction;
 mod precondition;
 mod repair;
 mod surface;

@@ -36,6 +36,9 @@
 //! of the other side), so flat faces stay exactly flat (every corner normal
 //! of a face whose neighbours are coplanar is its own normal, and the lift
 //! vanishes), and the corners of a crease keep the planes of their sides.
+//! Where a flat or gently curved part meets a fillet tangentially, the mean
+//! tilts toward the fillet; there the vertex takes the normal of a
+//! two-sided quadric fit of its 2-ring instead (module `junction`).
 
 use super::crease::{
     CreaseCorner, SidePlanes, chord_faces, crease_corners, crease_point, snap_to_corners,
@@ -285,6 +288,15 @@ fn corner_normals(
         .collect()
 }
 
+#[cfg(test)]
+thread_local! {
+    /// Tests only: the corner normals at the vertices given here replaced
+    /// by these (the true surface's normals), to measure what better corner
+    /// normals can give (`accuracy_tests::filleted_cylinder_error_by_part`).
+    pub(super) static TRUE_CORNER_NORMALS: std::cell::RefCell<Option<Vec<Option<Vec3>>>> =
+        const { std::cell::RefCell::new(None) };
+}
+
 /// The input surface of the vertex flow: the input mesh at its (normalised)
 /// positions with the crease-aware corner normals of its faces.
 pub(super) struct InputSurface<'a> {
@@ -315,7 +327,37 @@ impl<'a> InputSurface<'a> {
         let chords = chord_faces(mesh, &face_normals);
         let corners = crease_corners(mesh, positions, &chords);
         let separate: Vec<bool> = chords.iter().map(Option::is_some).collect();
-        let corner_normals = corner_normals(mesh, &face_normals, &separate);
+        let mut corner_normals = corner_normals(mesh, &face_normals, &separate);
+        let unit: Vec<Vec3> = face_normals.iter().map(|n| n.0).collect();
+        super::junction::refine_corner_normals(
+            mesh,
+            positions,
+            &unit,
+            &mut corner_normals,
+            &separate,
+        );
+        #[cfg(test)]
+        let corner_normals = TRUE_CORNER_NORMALS.with(|o| match &*o.borrow() {
+            Some(oracle) => corner_normals
+                .iter()
+                .enumerate()
+                .map(|(f, ns)| {
+                    let own = face_normals[f].0;
+                    let t = mesh.triangle(FaceId(f as u32));
+                    std::array::from_fn(|k| match oracle[t[k].idx()] {
+                        Some(m) if own != Vec3::ZERO => {
+                            if m.dot(own) < 0.0 {
+                                -m
+                            } else {
+                                m
+                            }
+                        }
+                        _ => ns[k],
+                    })
+                })
+                .collect(),
+            None => corner_normals,
+        });
         let vertex_normals = (0..mesh.vertex_count() as u32)
             .into_par_iter()
             .map(|v| {
