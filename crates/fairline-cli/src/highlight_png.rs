@@ -115,7 +115,10 @@ pub fn key_entries(overlay: &Overlay<'_>) -> Vec<([f32; 3], String)> {
         key.push((REGION, "suggested fairing region".into()));
     }
     if overlay.unjudged.is_some_and(|r| !r.is_empty()) {
-        key.push((UNJUDGED, "not judged: shape finer than the measure's scale".into()));
+        key.push((
+            UNJUDGED,
+            "not judged: shape finer than the measure's scale".into(),
+        ));
     }
     if !overlay.flagged.is_empty() {
         key.push((WARN, "lines across a region".into()));

@@ -83,7 +83,10 @@ fn detect_on_spot_reports_small_features_as_shape() {
     let share = 100.0 * shape as f64 / r["sites"].as_f64().unwrap();
     assert!(err.contains(&format!("({share:.0} %)")), "{err}");
     // spot is coarse for the spacing: only a finer mesh judges finer shape
-    assert!(err.contains("tinted blue") && err.contains("a finer mesh"), "{err}");
+    assert!(
+        err.contains("tinted blue") && err.contains("a finer mesh"),
+        "{err}"
+    );
     // the tint: pixels clearly bluer than the grey shading (the key's
     // swatch alone is a few hundred)
     let img = fairline::render::Image::decode_png(&std::fs::read(&png).unwrap()).unwrap();

@@ -334,7 +334,10 @@ fn faces_not_judged_are_the_shape_finer_than_the_scale() {
     let ridge = field(161, |x, y| panel(x, y) + 0.25 * (-(x / 0.06).powi(2)).exp());
     let d = detect(&ridge);
     let faces = d.shape_faces(&ridge);
-    assert!(faces.windows(2).all(|w| w[0] < w[1]), "ascending, no repeats");
+    assert!(
+        faces.windows(2).all(|w| w[0] < w[1]),
+        "ascending, no repeats"
+    );
     let p = ridge.positions();
     let centroid = |f: FaceId| {
         let [a, b, c] = ridge.triangle(f);
