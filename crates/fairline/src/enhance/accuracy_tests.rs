@@ -1019,6 +1019,28 @@ fn fandisk_normal_error_by_strip() {
             b.1 / near_out
         );
     }
+    // each row's distance (x, z) to the nearer sharp crease, in the input
+    // and after (mean over the row's vertices; min, max)
+    let creases = [DVec2::new(-0.6, 0.0), DVec2::new(-0.3, 0.3)];
+    let to_crease = |p: Vec3| {
+        let q = DVec2::new(p.x, p.z);
+        q.distance(creases[0]).min(q.distance(creases[1]))
+    };
+    println!("| row | input distance to a sharp crease | after: mean / min / max |");
+    println!("| --- | --- | --- |");
+    for r in 1..6 {
+        let vs: Vec<usize> = (0..m0.vertex_count())
+            .filter(|&v| row_of(m0.positions()[v]) == r)
+            .collect();
+        let after: Vec<f64> = vs.iter().map(|&v| to_crease(out.positions[v])).collect();
+        println!(
+            "| {r} | {:.4} | {:.4} / {:.4} / {:.4} |",
+            to_crease(m0.positions()[vs[0]]),
+            after.iter().sum::<f64>() / after.len() as f64,
+            after.iter().copied().fold(f64::INFINITY, f64::min),
+            after.iter().copied().fold(0.0, f64::max)
+        );
+    }
     let total = |t: &[(f64, f64)], near: f64| t.iter().map(|s| s.1).sum::<f64>() / near;
     println!(
         "total: input {:.2}°, default {:.2}°",
