@@ -300,7 +300,11 @@ fn curvature_drops(mesh: &SurfaceMesh, det: &Detection, a1: f64, a2: f64) -> Vec
 /// Strict local extrema of `d` over `rings` rings of neighbours, every one
 /// of them lit: (vertex, is a maximum, isolation — the distance to the
 /// nearest lit vertex with a larger (maximum) / smaller (minimum) d).
-pub(super) fn extrema(mesh: &SurfaceMesh, d: &[Option<f64>], rings: usize) -> Vec<(usize, bool, f64)> {
+pub(super) fn extrema(
+    mesh: &SurfaceMesh,
+    d: &[Option<f64>],
+    rings: usize,
+) -> Vec<(usize, bool, f64)> {
     let p = mesh.positions();
     let nv = mesh.vertex_count();
     let mut out = Vec::new();

@@ -154,7 +154,12 @@ fn smoothed_extrema_table() {
                 let mut dent = (f64::NEG_INFINITY, 0.0, false);
                 for e in &ex {
                     if std::env::var("LIST").is_ok() && e.judged && e.excess > 5.0 {
-                        println!("      array {step}: judged extremum depth {:.1} excess {:.1} at {:.3?}", e.depth, e.excess, e.at.to_array());
+                        println!(
+                            "      array {step}: judged extremum depth {:.1} excess {:.1} at {:.3?}",
+                            e.depth,
+                            e.excess,
+                            e.at.to_array()
+                        );
                     }
                     match centre.map(|cc| (e.at - cc).length()) {
                         Some(dd) if dd < 0.3 => {
@@ -173,20 +178,32 @@ fn smoothed_extrema_table() {
                 }
                 per_array.push(ex);
                 if centre.is_some() {
-                    near.push(format!("{:.1}/{:.1}{}", dent.0, dent.1, if dent.2 { "" } else { "*" }));
+                    near.push(format!(
+                        "{:.1}/{:.1}{}",
+                        dent.0,
+                        dent.1,
+                        if dent.2 { "" } else { "*" }
+                    ));
                 }
             }
             far_j.sort_by(|a, b| b.total_cmp(a));
             far_all.sort_by(|a, b| b.total_cmp(a));
             let top = |v: &[f64]| -> String {
-                v.iter().take(8).map(|x| format!("{x:.1}")).collect::<Vec<_>>().join(" ")
+                v.iter()
+                    .take(8)
+                    .map(|x| format!("{x:.1}"))
+                    .collect::<Vec<_>>()
+                    .join(" ")
             };
             println!("    elsewhere, judged: {}", top(&far_j));
             println!("    elsewhere, all:    {}", top(&far_all));
             print_consistency(&det, &per_array, centre);
             print_gated_normal_scores(&mesh, &smooth, &det, &light, &per_array, centre);
             if centre.is_some() {
-                println!("    at the dent per array (excess/depth, * not judged): {}", near.join(" "));
+                println!(
+                    "    at the dent per array (excess/depth, * not judged): {}",
+                    near.join(" ")
+                );
             }
         }
     }
@@ -243,7 +260,11 @@ fn print_consistency(det: &Detection, per_array: &[Vec<Unexplained>], centre: Op
     far.sort_by(|a, b| b.1.total_cmp(&a.1));
     near.sort_by(|a, b| b.1.total_cmp(&a.1));
     let fmt = |v: &[(f64, f64, usize)]| -> String {
-        v.iter().take(5).map(|x| format!("{:.1}/{:.1}({})", x.0, x.1, x.2)).collect::<Vec<_>>().join(" ")
+        v.iter()
+            .take(5)
+            .map(|x| format!("{:.1}/{:.1}({})", x.0, x.1, x.2))
+            .collect::<Vec<_>>()
+            .join(" ")
     };
     println!(
         "    judged sites by arrays with an unexplained extremum within R: {counts:?}; with >= 5 (least/second-least excess): elsewhere {} ({} sites); at the dent {}",
@@ -340,7 +361,9 @@ fn print_gated_normal_scores(
             .iter()
             .filter(|ex| {
                 ex.iter().any(|e| {
-                    e.excess > 1.0 && e.excess > 0.5 * e.depth && (e.at - *q).length() < det.smooth_radius
+                    e.excess > 1.0
+                        && e.excess > 0.5 * e.depth
+                        && (e.at - *q).length() < det.smooth_radius
                 })
             })
             .count();
@@ -419,7 +442,12 @@ fn smoothed_curvature_drops(
         } else {
             0.0
         };
-        rows.push((rel, (best_k - k0) * det.smooth_radius, q0, best_k * det.smooth_radius));
+        rows.push((
+            rel,
+            (best_k - k0) * det.smooth_radius,
+            q0,
+            best_k * det.smooth_radius,
+        ));
     }
     rows
 }
@@ -437,27 +465,63 @@ fn smoothed_flat_spot_table() {
             all.push((format!("hills {n}"), field(n, hills), None));
             all.push((format!("panel {n}"), field(n, panel), None));
             all.push((format!("dome {n}"), field(n, dome), None));
-            all.push((format!("cylinder {n}"), crate::shapes::cylinder(1.0, 3.0, 2 * n, n / 2), None));
-            all.push((format!("torus {n}"), crate::shapes::torus(1.0, 0.4, 2 * n, n / 2), None));
+            all.push((
+                format!("cylinder {n}"),
+                crate::shapes::cylinder(1.0, 3.0, 2 * n, n / 2),
+                None,
+            ));
+            all.push((
+                format!("torus {n}"),
+                crate::shapes::torus(1.0, 0.4, 2 * n, n / 2),
+                None,
+            ));
         }
     }
     for (name, mesh, centre) in all {
         let (_, det) = default_detection(&mesh);
-        println!("{name}: R {:.4}, {} vertices", det.smooth_radius, mesh.vertex_count());
+        println!(
+            "{name}: R {:.4}, {} vertices",
+            det.smooth_radius,
+            mesh.vertex_count()
+        );
         for &c in &scales {
             let smooth = smoothed(&mesh, c * det.smooth_radius, iterations);
             let drops = smoothed_curvature_drops(&mesh, &smooth, &det);
             let mut abs_rel: Vec<f64> = drops.iter().map(|r| r.0.abs()).collect();
             abs_rel.sort_by(f64::total_cmp);
-            let q = |f: f64| abs_rel.get(((abs_rel.len() as f64 * f) as usize).min(abs_rel.len().saturating_sub(1))).copied().unwrap_or(0.0);
+            let q = |f: f64| {
+                abs_rel
+                    .get(((abs_rel.len() as f64 * f) as usize).min(abs_rel.len().saturating_sub(1)))
+                    .copied()
+                    .unwrap_or(0.0)
+            };
             let floor = (4.0 * q(0.9)).max(0.5);
+            let mut abs_drop: Vec<f64> = drops.iter().map(|r| r.1.abs()).collect();
+            abs_drop.sort_by(f64::total_cmp);
+            let p90_drop = abs_drop
+                .get(abs_drop.len() * 9 / 10)
+                .copied()
+                .unwrap_or(0.0);
+            let both = drops
+                .iter()
+                .filter(|r| r.0 > 0.5 && r.1 > 4.0 * p90_drop)
+                .count();
+            println!(
+                "  wavelength {c} R: |drop × R| p90 {p90_drop:.3}; sites with relative drop > 0.5 and drop × R > 4 p90: {both}"
+            );
             let mut top: Vec<&(f64, f64, Vec3, f64)> = drops.iter().collect();
             top.sort_by(|a, b| b.0.total_cmp(&a.0));
             println!(
                 "  wavelength {c} R: |relative drop| p50 {:.3} p90 {:.3} p99 {:.3}; floor max(0.5, 4 p90) {floor:.2}: {} sites above; top (rel, κ_s·R): {}",
-                q(0.5), q(0.9), q(0.99),
+                q(0.5),
+                q(0.9),
+                q(0.99),
                 drops.iter().filter(|r| r.0 > floor).count(),
-                top.iter().take(5).map(|r| format!("({:.2}, {:.2})", r.0, r.3)).collect::<Vec<_>>().join(" ")
+                top.iter()
+                    .take(5)
+                    .map(|r| format!("({:.2}, {:.2})", r.0, r.3))
+                    .collect::<Vec<_>>()
+                    .join(" ")
             );
             for (label, key) in [("relative drop", 0usize), ("drop × R", 1)] {
                 let mut far: Vec<f64> = Vec::new();
