@@ -117,7 +117,7 @@ pub fn run(args: Args) -> Result<()> {
     ) {
         eprintln!("{w}");
     }
-    print_measure_notes(&args, &det);
+    print_measure_notes(&args, &det, light.spacing());
     if let Some(n) = args.max_regions {
         det.regions.truncate(n);
     }
@@ -166,15 +166,32 @@ pub fn run(args: Args) -> Result<()> {
 /// The terminal notes on what the measure did not judge or flag: shape
 /// finer than its scale, a noisy surface, sites within their
 /// discretisation floor.
-fn print_measure_notes(args: &Args, det: &Detection) {
+fn print_measure_notes(args: &Args, det: &Detection, spacing: f64) {
     if det.shape_sites > 0 {
+        // R is raised above --smooth-radius spacings on meshes too coarse
+        // for the spacing (five mean edges at least): then only a finer
+        // mesh is judged at a finer scale
+        let hint = if det.smooth_radius > 1.001 * args.smooth_radius * spacing {
+            "the mesh is too coarse for a finer scale (the radius is five mean edges at least); a finer mesh is judged at its own scale".to_string()
+        } else {
+            format!(
+                "a smaller --smooth-radius (now {}) judges finer shape",
+                args.smooth_radius
+            )
+        };
         eprintln!(
-            "note: {}: {} of {} sites are shape finer than the measure's scale (the surface turns by more than {:.0}° within {:.3} of them: ears, horns, creases, tight fillets) and were not judged",
+            "note: {}: {} of {} sites ({:.0} %) are shape finer than the measure's scale (the surface turns by more than {:.0}° within {:.3} of them: ears, horns, creases, tight fillets) and were not judged{}; {hint}",
             args.mesh.display(),
             det.shape_sites,
             det.sites.len(),
+            100.0 * det.shape_sites as f64 / det.sites.len().max(1) as f64,
             DetectOptions::default().max_turn.to_degrees(),
-            det.smooth_radius
+            det.smooth_radius,
+            if args.png.is_some() {
+                " (tinted blue in the picture)"
+            } else {
+                ""
+            },
         );
     }
     if det.threshold > args.threshold {
@@ -226,6 +243,7 @@ fn write_picture(
         }
     );
     let faces = det.all_faces();
+    let unjudged = det.shape_faces(mesh);
     crate::highlight_png::write(
         args.size,
         png,
@@ -235,6 +253,7 @@ fn write_picture(
             bands: None,
             flagged: &stretches,
             region: Some(&faces),
+            unjudged: Some(&unjudged),
             view: (view, up),
             title,
             spacing: Some(shown_light.spacing()),

@@ -309,6 +309,7 @@ fn write_picture(
             bands: band_lines.as_ref(),
             flagged: &[],
             region: None,
+            unjudged: None,
             view: (view, drawn.view_up.1),
             title,
             spacing: drawn.spacing,

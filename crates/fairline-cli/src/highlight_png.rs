@@ -19,6 +19,8 @@ const WARN: [f32; 3] = [0.95, 0.12, 0.02];
 const BAND: [f32; 3] = [0.1, 0.25, 0.75];
 /// Tint of faces in a suggested region (linear light).
 const REGION: [f32; 3] = [0.85, 0.55, 0.25];
+/// Tint of faces detection did not judge (linear light).
+const UNJUDGED: [f32; 3] = [0.30, 0.42, 0.72];
 
 /// The one camera of a part's pictures (render, highlight, detect, fair):
 /// [`camera`] of the part's light array.
@@ -83,6 +85,10 @@ pub struct Overlay<'a> {
     pub flagged: &'a [Vec<Vec3>],
     /// Faces to tint.
     pub region: Option<&'a [FaceId]>,
+    /// Faces `detect` did not judge (shape finer than its scale, mesh
+    /// boundary), tinted apart so that "no region" is not read as "no
+    /// defect" there.
+    pub unjudged: Option<&'a [FaceId]>,
     /// Viewing direction (eye towards object) and up hint.
     pub view: (Vec3, Vec3),
     /// Title at the top.
@@ -107,6 +113,12 @@ pub fn key_entries(overlay: &Overlay<'_>) -> Vec<([f32; 3], String)> {
     }
     if overlay.region.is_some_and(|r| !r.is_empty()) {
         key.push((REGION, "suggested fairing region".into()));
+    }
+    if overlay.unjudged.is_some_and(|r| !r.is_empty()) {
+        key.push((
+            UNJUDGED,
+            "not judged: shape finer than the measure's scale".into(),
+        ));
     }
     if !overlay.flagged.is_empty() {
         key.push((WARN, "lines across a region".into()));
@@ -233,6 +245,7 @@ pub fn image(mesh: &SurfaceMesh, overlay: Overlay<'_>, size: (u32, u32)) -> Resu
         bands,
         flagged,
         region,
+        unjudged,
         view: (view, up),
         title,
         spacing: _,
@@ -240,10 +253,11 @@ pub fn image(mesh: &SurfaceMesh, overlay: Overlay<'_>, size: (u32, u32)) -> Resu
     let mv = MeshView::new(mesh);
     let base = [0.55f32, 0.57, 0.60];
     let mut colors = vec![base; mesh.vertex_count()];
-    if let Some(faces) = region {
-        for f in faces {
+    // the region over the unjudged tint: a region is always judged
+    for (faces, tint) in [(unjudged, UNJUDGED), (region, REGION)] {
+        for f in faces.unwrap_or_default() {
             for v in mesh.triangle(*f) {
-                colors[v.idx()] = REGION;
+                colors[v.idx()] = tint;
             }
         }
     }

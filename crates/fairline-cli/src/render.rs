@@ -262,6 +262,7 @@ fn highlight_overlay(
         bands: None,
         flagged: &stretches,
         region: None,
+        unjudged: None,
         view: (opts.view_dir, opts.up),
         title: String::new(),
         spacing: Some(shown_light.spacing()),

@@ -50,7 +50,9 @@ fn highlight_defaults_on_real_meshes_draw_readable_lines_without_warning() {
 }
 
 /// `detect` on Spot: the ears, horns and legs are counted as shape finer
-/// than the measure's scale and said so on the terminal and in the report.
+/// than the measure's scale and said so on the terminal (with their share
+/// and what would judge them), in the report, and in the picture, which
+/// tints them blue with a key entry.
 #[test]
 fn detect_on_spot_reports_small_features_as_shape() {
     let Some(mesh) = data("meshes/spot.ply") else {
@@ -58,6 +60,7 @@ fn detect_on_spot_reports_small_features_as_shape() {
     };
     let dir = tmp("real-detect");
     let rep = dir.join("detect.json");
+    let png = dir.join("detect.png");
     let o = run(&[
         "detect",
         s(&mesh),
@@ -65,6 +68,8 @@ fn detect_on_spot_reports_small_features_as_shape() {
         s(&dir.join("region.json")),
         "--report",
         s(&rep),
+        "--png",
+        s(&png),
     ]);
     ok(&o);
     let err = String::from_utf8_lossy(&o.stderr);
@@ -75,6 +80,24 @@ fn detect_on_spot_reports_small_features_as_shape() {
         err.contains("shape finer than the measure's scale"),
         "{err}"
     );
+    let share = 100.0 * shape as f64 / r["sites"].as_f64().unwrap();
+    assert!(err.contains(&format!("({share:.0} %)")), "{err}");
+    // spot is coarse for the spacing: only a finer mesh judges finer shape
+    assert!(
+        err.contains("tinted blue") && err.contains("a finer mesh"),
+        "{err}"
+    );
+    // the tint: pixels clearly bluer than the grey shading (the key's
+    // swatch alone is a few hundred)
+    let img = fairline::render::Image::decode_png(&std::fs::read(&png).unwrap()).unwrap();
+    let blue = (0..img.height)
+        .flat_map(|y| (0..img.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            img.get(x, y)
+                .is_some_and(|c| i32::from(c[2]) > i32::from(c[0]) + 30)
+        })
+        .count();
+    assert!(blue > 20_000, "{blue} tinted pixels");
     assert!(
         shape + r["judged_sites"].as_u64().unwrap() <= r["sites"].as_u64().unwrap(),
         "{r}"

@@ -529,6 +529,10 @@ fn api_lines_detect_and_fairing_equal_the_cli() {
     let regions = det["regions"].as_array().unwrap();
     assert_eq!(regions.len(), rep["regions"].as_array().unwrap().len());
     assert!(!regions.is_empty(), "the planted dent is detected");
+    // what the measure did not judge, as the CLI reports it
+    for key in ["sites", "shape_sites", "smooth_radius"] {
+        assert_eq!(det[key], rep[key], "{key}");
+    }
     // the dent at (0.5, −0.4) is the top region
     let c0 = &regions[0]["center"];
     let (x, y) = (

@@ -125,7 +125,10 @@ async function detect() {
     ol.append(li);
   });
   showCommand(header.command);
-  status(`${header.regions.length} region(s), ${header.stretches.length} irregular stretch(es)`);
+  // where the measure did not look: "no region" is no verdict there
+  const notJudged = header.sites ? Math.round(100 * header.shape_sites / header.sites) : 0;
+  const unjudged = notJudged > 0 ? `; ${notJudged} % of the sites not judged (shape finer than the smooth radius ${header.smooth_radius.toPrecision(3)})` : '';
+  status(`${header.regions.length} region(s), ${header.stretches.length} irregular stretch(es)${unjudged}`);
 }
 
 async function takeRegion(i) {

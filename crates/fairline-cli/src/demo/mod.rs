@@ -357,6 +357,7 @@ fn highlight_section(demo: &Demo) -> Result<Section> {
                 bands: None,
                 flagged: &stretches,
                 region: None,
+                unjudged: None,
                 view,
                 spacing: Some(light.spacing()),
                 title: format!(
@@ -376,6 +377,7 @@ fn highlight_section(demo: &Demo) -> Result<Section> {
                 bands: None,
                 flagged: &[],
                 region: Some(&faces),
+                unjudged: None,
                 view,
                 spacing: Some(light.spacing()),
                 title: format!("suggested fairing region: {} faces", faces.len()),
@@ -392,6 +394,7 @@ fn highlight_section(demo: &Demo) -> Result<Section> {
                 bands: None,
                 flagged: &[],
                 region: None,
+                unjudged: None,
                 view,
                 spacing: Some(light.spacing()),
                 title: format!(
@@ -485,6 +488,7 @@ fn detect_section(demo: &Demo) -> Result<Section> {
             &DetectOptions::default(),
         )?;
         let faces = det.all_faces();
+        let unjudged = det.shape_faces(mesh);
         let flagged = stretches(&det);
         let title = format!(
             "{what}: {} region(s){}",
@@ -505,6 +509,7 @@ fn detect_section(demo: &Demo) -> Result<Section> {
                         bands: None,
                         flagged: &flagged,
                         region: Some(&faces),
+                        unjudged: Some(&unjudged),
                         view: default_camera(&light),
                         title: title.clone(),
                         spacing: Some(shown_light.spacing()),

@@ -656,6 +656,9 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         "bands": [],
         "stretches": stretches,
         "regions": regions,
+        "sites": det.sites.len(),
+        "shape_sites": det.shape_sites,
+        "smooth_radius": det.smooth_radius,
         "time_s": elapsed,
         "command": command,
     });

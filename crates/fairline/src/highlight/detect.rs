@@ -425,6 +425,10 @@ pub struct Detection {
     pub fine_radius: f64,
     /// Smooth-fit radius used (mesh units).
     pub smooth_radius: f64,
+    /// Side of the cubes that hold one site each (mesh units): every
+    /// vertex with a normal has a site within √3 times this distance.
+    #[serde(skip)]
+    pub site_cell: f64,
 }
 
 fn serialize_count<S: serde::Serializer, T>(v: &[T], s: S) -> Result<S::Ok, S::Error> {
@@ -446,6 +450,49 @@ impl Detection {
     /// The largest region score (0 when nothing was flagged).
     pub fn max_score(&self) -> f64 {
         self.regions.first().map_or(0.0, |r| r.score)
+    }
+
+    /// The faces the measure did not judge as shape finer than its scale
+    /// (ascending): those whose centroid's nearest site has no score and
+    /// is not on the mesh border — [`Detection::shape_sites`], and the
+    /// rare site with no fit. A picture shows them so that "no region" is
+    /// not read as "no defect" where nothing was looked at. The border,
+    /// which the measure never judges (module documentation, step 3), is
+    /// left out, as are faces with no site within two site cells (there
+    /// are none on the mesh [`detect_irregularities`] ran on).
+    pub fn shape_faces(&self, mesh: &SurfaceMesh) -> Vec<FaceId> {
+        let shape = |s: &Site| s.score.is_none() && !mesh.is_boundary_vertex(s.vertex);
+        if !self.sites.iter().any(shape) || !(self.site_cell > 0.0) {
+            return Vec::new();
+        }
+        let reach = 2.0 * self.site_cell;
+        let grid = Grid::new(
+            reach,
+            self.sites
+                .iter()
+                .enumerate()
+                .map(|(i, s)| (i as u32, s.position)),
+        );
+        let p = mesh.positions();
+        (0..mesh.face_count())
+            .into_par_iter()
+            .filter_map(|f| {
+                let face = FaceId(f as u32);
+                let [a, b, c] = mesh.triangle(face);
+                let centroid = (p[a.idx()] + p[b.idx()] + p[c.idx()]) / 3.0;
+                let mut nearest: Option<(f64, u32)> = None;
+                grid.around(centroid, |i| {
+                    let d = (self.sites[i as usize].position - centroid).length_squared();
+                    // ties to the lower index: independent of the grid's order
+                    if nearest.is_none_or(|(e, j)| d < e || (d == e && i < j)) {
+                        nearest = Some((d, i));
+                    }
+                });
+                nearest
+                    .filter(|&(d, i)| d <= reach * reach && shape(&self.sites[i as usize]))
+                    .map(|_| face)
+            })
+            .collect()
     }
 }
 
@@ -873,6 +920,7 @@ pub fn detect_irregularities(
         flagged_area_fraction,
         fine_radius: scale.fine_radius,
         smooth_radius: scale.smooth_radius,
+        site_cell: scale.site_cell,
     })
 }
 

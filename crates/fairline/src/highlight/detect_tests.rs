@@ -5,7 +5,7 @@
 
 use super::*;
 use crate::Vec3;
-use crate::mesh::SurfaceMesh;
+use crate::mesh::{FaceId, SurfaceMesh};
 use crate::shapes;
 
 /// A deterministic pseudo-random number in [0, 1) (SplitMix64).
@@ -322,4 +322,54 @@ fn detection_reports_progress_and_stops_when_cancelled() {
         1,
         "stopped after the first stage"
     );
+}
+
+/// The faces shown as "not judged" are where the shape is finer than the
+/// measure's scale: on a panel with a narrow, steep ridge along y (its
+/// normal turns by ±74° within 0.1, finer than R = 1.5 spacings) they
+/// cover the ridge's crest and lie near the ridge only; the mesh border,
+/// never judged, is not among them; on the clean panel there are none.
+#[test]
+fn faces_not_judged_are_the_shape_finer_than_the_scale() {
+    let ridge = field(161, |x, y| panel(x, y) + 0.25 * (-(x / 0.06).powi(2)).exp());
+    let d = detect(&ridge);
+    let faces = d.shape_faces(&ridge);
+    assert!(
+        faces.windows(2).all(|w| w[0] < w[1]),
+        "ascending, no repeats"
+    );
+    let p = ridge.positions();
+    let centroid = |f: FaceId| {
+        let [a, b, c] = ridge.triangle(f);
+        (p[a.idx()] + p[b.idx()] + p[c.idx()]) / 3.0
+    };
+    let shape: std::collections::HashSet<FaceId> = faces.iter().copied().collect();
+    // every face on the crest, away from the border, is shape
+    let crest: Vec<FaceId> = (0..ridge.face_count() as u32)
+        .map(FaceId)
+        .filter(|&f| {
+            let c = centroid(f);
+            c.x.abs() < 0.02 && c.y.abs() < 0.9
+        })
+        .collect();
+    assert!(!crest.is_empty());
+    let missed = crest.iter().filter(|f| !shape.contains(f)).count();
+    assert_eq!(missed, 0, "{missed} of {} crest faces judged", crest.len());
+    // and nothing far from the ridge: a site is shape when a normal within
+    // R turns from its own by more than 57°, so (the sides being nearly
+    // flat) by more than about 28° from the vertical; the ridge is that
+    // steep for |x| < 0.11 (slope 0.53 there), so shape faces lie within
+    // R and two site cells of that band
+    let reach = 0.11 + d.smooth_radius + 2.0 * d.site_cell;
+    for &f in &faces {
+        assert!(centroid(f).x.abs() < reach, "{:?} at {}", f, centroid(f));
+    }
+    // the flat sides are judged
+    let judged_far = (0..ridge.face_count() as u32)
+        .map(FaceId)
+        .filter(|&f| centroid(f).x.abs() > 0.5 && !shape.contains(&f))
+        .count();
+    assert!(judged_far > 0);
+    let clean = field(161, panel);
+    assert!(detect(&clean).shape_faces(&clean).is_empty());
 }
