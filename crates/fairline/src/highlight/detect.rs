@@ -1488,3 +1488,9 @@ mod wide_table;
 #[cfg(test)]
 #[path = "detect_loops_table.rs"]
 mod loops_table;
+
+/// The smoothed-mesh comparison of the highlight distance's extrema for
+/// the wide flank dent on Spot (session 23): a table printer, not a check.
+#[cfg(test)]
+#[path = "detect_smoothed_table.rs"]
+mod smoothed_table;

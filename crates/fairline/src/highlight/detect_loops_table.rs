@@ -31,7 +31,7 @@ use crate::highlight::UpAxis;
 /// Spot clean and with the flank dents of radius 0.15 and 0.3 (their
 /// centres), then the meshes of `MESHES` (or `default`) from
 /// ../shared/data; empty when the data are missing.
-fn cases(default: &str) -> Vec<(String, SurfaceMesh, Option<Vec3>)> {
+pub(super) fn cases(default: &str) -> Vec<(String, SurfaceMesh, Option<Vec3>)> {
     let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/meshes");
     let Ok(spot) = crate::io::read_mesh(data.join("spot.ply")) else {
         eprintln!("SKIPPED: ../shared/data missing");
@@ -52,7 +52,7 @@ fn cases(default: &str) -> Vec<(String, SurfaceMesh, Option<Vec3>)> {
     cases
 }
 
-fn env_f64(var: &str, default: f64) -> f64 {
+pub(super) fn env_f64(var: &str, default: f64) -> f64 {
     std::env::var(var)
         .ok()
         .and_then(|s| s.parse().ok())
@@ -60,7 +60,7 @@ fn env_f64(var: &str, default: f64) -> f64 {
 }
 
 /// Detection with defaults under the default lights (no lines needed).
-fn default_detection(mesh: &SurfaceMesh) -> (LightArray, Detection) {
+pub(super) fn default_detection(mesh: &SurfaceMesh) -> (LightArray, Detection) {
     let light = LightArray::default_for_mesh(mesh, UpAxis::Auto).expect("vertices");
     let det = detect_irregularities(
         mesh,
@@ -73,7 +73,7 @@ fn default_detection(mesh: &SurfaceMesh) -> (LightArray, Detection) {
 }
 
 /// Highlight distance per vertex (`None` where unlit) and branch.
-fn distances(
+pub(super) fn distances(
     mesh: &SurfaceMesh,
     normals: &[Vec3],
     light: &LightArray,
@@ -300,7 +300,11 @@ fn curvature_drops(mesh: &SurfaceMesh, det: &Detection, a1: f64, a2: f64) -> Vec
 /// Strict local extrema of `d` over `rings` rings of neighbours, every one
 /// of them lit: (vertex, is a maximum, isolation — the distance to the
 /// nearest lit vertex with a larger (maximum) / smaller (minimum) d).
-fn extrema(mesh: &SurfaceMesh, d: &[Option<f64>], rings: usize) -> Vec<(usize, bool, f64)> {
+pub(super) fn extrema(
+    mesh: &SurfaceMesh,
+    d: &[Option<f64>],
+    rings: usize,
+) -> Vec<(usize, bool, f64)> {
     let p = mesh.positions();
     let nv = mesh.vertex_count();
     let mut out = Vec::new();
@@ -352,7 +356,7 @@ fn extrema(mesh: &SurfaceMesh, d: &[Option<f64>], rings: usize) -> Vec<(usize, b
 /// 0-dimensional persistence of the local maxima (and, negated, minima) of
 /// `d` over the mesh graph restricted to valid vertices of one branch:
 /// (vertex, is_max, persistence in d units; the global one gets its range).
-fn persistent_extrema(
+pub(super) fn persistent_extrema(
     mesh: &SurfaceMesh,
     d: &[Option<f64>],
     branch: &[i8],

@@ -21,7 +21,7 @@ fn rand01(state: &mut u64) -> f64 {
 /// Height field z = f(x, y) over [−1, 1]² on an n × n grid whose interior
 /// vertices are jittered by up to ±0.3 cells (irregular sampling: vertex
 /// normals carry their O(h) error), heights exact.
-fn field(n: u32, f: impl Fn(f64, f64) -> f64) -> SurfaceMesh {
+pub(super) fn field(n: u32, f: impl Fn(f64, f64) -> f64) -> SurfaceMesh {
     let mut state = 7u64 + n as u64;
     let h = 2.0 / (n - 1) as f64;
     let mut pos = Vec::with_capacity((n * n) as usize);
@@ -62,18 +62,18 @@ fn detect(mesh: &SurfaceMesh) -> Detection {
     detect_irregularities(mesh, &light, &lines, &DetectOptions::default()).unwrap()
 }
 
-fn saddle(x: f64, y: f64) -> f64 {
+pub(super) fn saddle(x: f64, y: f64) -> f64 {
     0.3 * (x * x - y * y)
 }
-fn hills(x: f64, y: f64) -> f64 {
+pub(super) fn hills(x: f64, y: f64) -> f64 {
     0.12 * (1.5 * std::f64::consts::PI * x).sin() * (1.5 * std::f64::consts::PI * y).sin()
 }
 /// A crowned, slightly asymmetric car-roof-like panel.
-fn panel(x: f64, y: f64) -> f64 {
+pub(super) fn panel(x: f64, y: f64) -> f64 {
     0.3 * (1.0 - 0.45 * x * x - 0.25 * y * y) + 0.05 * x * x * x - 0.03 * x * y * y
 }
 /// A dome of revolution about the z axis.
-fn dome(x: f64, y: f64) -> f64 {
+pub(super) fn dome(x: f64, y: f64) -> f64 {
     0.4 * (-1.5 * (x * x + y * y)).exp()
 }
 
