@@ -621,18 +621,7 @@ fn smooth_normal_with_hole(
     }
     let basis = |x: f64, y: f64| -> ([f64; 10], [f64; 10], [f64; 10]) {
         (
-            [
-                1.0,
-                x,
-                y,
-                x * x,
-                x * y,
-                y * y,
-                x * x * x,
-                x * x * y,
-                x * y * y,
-                y * y * y,
-            ],
+            height_monomials(x, y),
             [
                 0.0,
                 1.0,

@@ -13,7 +13,9 @@
 //! `cargo test --release -p fairline --lib smoothed_table -- --ignored --nocapture`
 //! (`MESHES`, `SCALES` (c), `ITER` override the lists).
 
-use super::loops_table::{cases, default_detection, distances, extrema, persistent_extrema};
+use super::loops_table::{
+    cases, default_detection, distances, extrema, most_curved_direction, persistent_extrema,
+};
 use super::*;
 
 fn list(var: &str, default: &[f64]) -> Vec<f64> {
@@ -426,17 +428,7 @@ fn smoothed_curvature_drops(
             continue;
         }
         let (t0, t1) = (t0 * (1.0 / w), t1 * (1.0 / w));
-        let (bx, by) = frame(n0);
-        let k = |m: &glam::DMat3, t: Vec3| t.dot(*m * t);
-        let (mut best_t, mut best_k) = (bx, 0.0f64);
-        for i in 0..36 {
-            let a = i as f64 * std::f64::consts::PI / 36.0;
-            let t = a.cos() * bx + a.sin() * by;
-            if k(&t1, t).abs() > best_k.abs() {
-                (best_t, best_k) = (t, k(&t1, t));
-            }
-        }
-        let k0 = k(&t0, best_t);
+        let (best_k, k0) = most_curved_direction(n0, &t1, &t0);
         let rel = if best_k.abs() > 1e-12 {
             (best_k - k0) / best_k
         } else {
