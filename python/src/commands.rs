@@ -975,6 +975,12 @@ fn fair<'py>(
         report.set("detect_score_before", score_before);
         report.set("detect_score_after", score_after);
         report.set("detect_threshold", detected_before.threshold);
+        report.set("detect_flat_spot_before", detected_before.flat_spot);
+        report.set("detect_flat_spot_after", detected_after.flat_spot);
+        report.set(
+            "detect_flat_spot_floor",
+            detected_before.detection.flat_spot_floor,
+        );
         // and `detect` on the output, with the lights it chooses there
         let output_light = light.light_array(&current)?;
         let as_detect = if output_light == array {

@@ -203,6 +203,16 @@ fn print_measure_notes(args: &Args, det: &Detection, spacing: f64) {
             det.threshold
         );
     }
+    if det.flat_spot_sites > 0 {
+        eprintln!(
+            "note: {}: {} site(s) flagged as a flat spot: over an area, the surface's curvature falls against the surface smoothed at the wavelength {:.3} by more than {:.2} of it (the floor; 1 = flat); wider than the normal measure's radius {:.3}",
+            args.mesh.display(),
+            det.flat_spot_sites,
+            fairline::highlight::detect::FLAT_SPOT_WAVELENGTH * det.smooth_radius,
+            det.flat_spot_floor,
+            det.smooth_radius,
+        );
+    }
     if det.discretisation_sites > 0 {
         eprintln!(
             "note: {}: {} site(s) score above {:.2} but within what the mesh's own facets explain (facets turn the normal by {:.1}° per edge there and more; discretisation level {:.2}); not flagged: shape modelled with few edges, not a defect at this resolution",
@@ -236,11 +246,9 @@ fn write_picture(
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default(),
         det.regions.len(),
-        if det.regions.is_empty() {
-            String::new()
-        } else {
-            format!(", best score {:.1}", det.max_score())
-        }
+        det.best_summary()
+            .map(|b| format!(", best {b}"))
+            .unwrap_or_default()
     );
     let faces = det.all_faces();
     let unjudged = det.shape_faces(mesh);

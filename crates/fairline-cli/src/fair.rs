@@ -180,6 +180,17 @@ pub fn run(args: Args) -> Result<()> {
     report.set("detect_score_before", score_before);
     report.set("detect_score_after", score_after);
     report.set("detect_threshold", threshold);
+    // the flat-spot measure inside the region (detect's second measure)
+    let flat_floor = before.detection.flat_spot_floor;
+    let (flat_before, flat_after) = (before.flat_spot, after.flat_spot);
+    report.set("detect_flat_spot_before", flat_before);
+    report.set("detect_flat_spot_after", flat_after);
+    report.set("detect_flat_spot_floor", flat_floor);
+    let flat_spot = if flat_floor > 0.0 && flat_before > flat_floor {
+        format!(", flat spot {flat_before:.2} → {flat_after:.2} (floor {flat_floor:.2})")
+    } else {
+        String::new()
+    };
     // and `detect` on the output, with the lights it chooses there (the
     // default lights follow the part, which fairing changed a little)
     let output_light = args.light.light_array(current)?;
@@ -226,7 +237,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     report.write(args.report.as_deref())?;
     job.finish(format_args!(
-        "{} region(s) faired, {}, detection score {score_before:.2} → {score_after:.2} (threshold {threshold:.2}), highlight deviation {before:.3e} → {after:.3e}, largest move {total_moved:.3e}",
+        "{} region(s) faired, {}, detection score {score_before:.2} → {score_after:.2} (threshold {threshold:.2}){flat_spot}, highlight deviation {before:.3e} → {after:.3e}, largest move {total_moved:.3e}",
         results.len(),
         if converged { "converged" } else { "not converged" }
     ));

@@ -208,11 +208,33 @@ fn fair_report_on_a_real_mesh_measures_what_detect_shows() {
 /// with 200 iterations), reshaping lines the mesh does not resolve.
 #[test]
 fn detect_fair_detect_closes_on_the_dented_spot() {
+    detect_fair_detect_loop(0.15, 3.0);
+}
+
+/// The same loop on the dent twice as wide (radius 0.3), which only the
+/// flat-spot measure flags (detect's module documentation, step 8): its
+/// region is faired with both methods without warning, detection on the
+/// result flags nothing, no vertex outside the region moves, and the
+/// dent's vertices come at least 2× closer to clean Spot (measured: 2.56×
+/// default, 2.66× diffusion flow within the dent's radius; the region
+/// reaches about 0.25 of the dent's 0.3, so the outer rim of the dent
+/// stays where it is and the faired surface meets it).
+#[test]
+fn detect_fair_detect_closes_on_the_wide_flank_dent() {
+    detect_fair_detect_loop(0.3, 2.0);
+}
+
+/// detect → fair → detect on Spot with a flank dent of `radius` (2 % of
+/// the diagonal deep): one region centred on the dent, fairing with the
+/// default method and with diffusion flow converges without warning,
+/// detection on the result flags nothing, no vertex outside the region
+/// moves, and the dent's vertices come `closer` times closer to clean Spot.
+fn detect_fair_detect_loop(radius: f64, closer: f64) {
     let Some(clean) = data("meshes/spot.ply") else {
         return;
     };
-    let dir = tmp("real-loop");
-    let (dented, centre) = dented_spot(&clean, &dir, 0.15);
+    let dir = tmp(&format!("real-loop-{radius}"));
+    let (dented, centre) = dented_spot(&clean, &dir, radius);
     let (region, rep1) = (dir.join("region.json"), dir.join("det1.json"));
     ok(&run(&[
         "detect",
@@ -227,7 +249,7 @@ fn detect_fair_detect_closes_on_the_dented_spot() {
     assert_eq!(regions.len(), 1, "only the dent is flagged: {r1}");
     let c: Vec<f64> = serde_json::from_value(regions[0]["center"].clone()).unwrap();
     let off = (fairline::Vec3::new(c[0], c[1], c[2]) - centre).length();
-    assert!(off < 0.15, "the region is centred on the dent: {off}");
+    assert!(off < radius, "the region is centred on the dent: {off}");
     let truth = fairline::io::read_mesh(&clean).unwrap();
     let a = fairline::io::read_mesh(&dented).unwrap();
     let faces: Vec<u32> = serde_json::from_value(json(&region)["faces"].clone()).unwrap();
@@ -240,7 +262,7 @@ fn detect_fair_detect_closes_on_the_dented_spot() {
     let err = |m: &fairline::SurfaceMesh| -> f64 {
         let (mut sum, mut n) = (0.0, 0);
         for (p, q) in m.positions().iter().zip(truth.positions()) {
-            if (*q - centre).length() < 0.15 {
+            if (*q - centre).length() < radius {
                 sum += (*p - *q).length_squared();
                 n += 1;
             }
@@ -287,7 +309,7 @@ fn detect_fair_detect_closes_on_the_dented_spot() {
         let (e0, e1) = (err(&a), err(&b));
         eprintln!("{method}: RMS distance to clean Spot within the dent: {e0:.4e} -> {e1:.4e}");
         assert!(
-            e1 * 3.0 < e0,
+            e1 * closer < e0,
             "{method}: faired closer to the truth: {e0} -> {e1}"
         );
         for (v, (p, q)) in a.positions().iter().zip(b.positions()).enumerate() {
@@ -339,12 +361,17 @@ fn detect_finds_the_narrow_flank_dent_on_spot_ranked_first() {
 
 /// A dent as wide as Spot's body is round (radius 0.3, 2 % of the diagonal
 /// deep) on its flank: the drawn lines show it as a closed loop, and
-/// detection with default options should find it and rank it first.
+/// detection with default options finds it and ranks it first. Wider than
+/// the normal measure's radius (R = 0.24 on this coarse mesh) it bends the
+/// smooth cubic with it; the flat-spot measure finds it (0.94 against the
+/// floor 0.54; clean Spot at most 0.37).
 #[test]
-#[ignore = "not found: on this 2.9k-vertex artist mesh the radius-0.3 dent is smooth at the measure's scale (R = 0.24; scores <= 13.5 against the threshold 22.8); its drawn loop is real but shallow (6.7-25.9 score units), and the mesh smoothed at 3-4 R does not explain it (it has no extremum there), but bunny_npm and the bunny scan have unexplained extrema at least as consistent over 6 rotated arrays and deeper in every measure tried; the flat-spot drop against the smoothed mesh separates it from every clean artist mesh and generated family (1.06 vs <= 0.42) but not yet from the scan's roughness (23 sites above a 4 x p90 floor) - not adopted (README, Default lights on real meshes; BENCHMARKS, sessions 21-23)"]
 fn detect_finds_the_wide_flank_dent_on_spot_ranked_first() {
     let Some((r, off)) = detect_flank_dent(0.3) else {
         return;
     };
     assert!(off < 0.3, "best region {off} from the dent: {r}");
+    let flat = r["regions"][0]["flat_spot"].as_f64().unwrap();
+    let floor = r["flat_spot_floor"].as_f64().unwrap();
+    assert!(flat > floor, "a flat spot: {flat} above {floor}");
 }

@@ -119,7 +119,9 @@ async function detect() {
   ol.replaceChildren();
   header.regions.forEach((r, i) => {
     const li = document.createElement('li');
-    li.textContent = `score ${r.score.toPrecision(3)}, ${r.faces.length} faces`;
+    // a region only the flat-spot measure flagged scores below its threshold
+    const what = r.score > r.threshold || !(r.flat_spot > 0) ? `score ${r.score.toPrecision(3)}` : `flat spot ${r.flat_spot.toPrecision(2)}`;
+    li.textContent = `${what}, ${r.faces.length} faces`;
     li.dataset.region = String(i);
     li.addEventListener('click', () => takeRegion(i));
     ol.append(li);

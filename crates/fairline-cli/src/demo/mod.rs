@@ -493,11 +493,9 @@ fn detect_section(demo: &Demo) -> Result<Section> {
         let title = format!(
             "{what}: {} region(s){}",
             det.regions.len(),
-            if det.regions.is_empty() {
-                String::new()
-            } else {
-                format!(", best score {:.1}", det.max_score())
-            }
+            det.best_summary()
+                .map(|b| format!(", best {b}"))
+                .unwrap_or_default()
         );
         images.push((
             demo.save(

@@ -635,6 +635,9 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         .map(|r| {
             json!({
                 "score": r.score,
+                "threshold": r.threshold,
+                "flat_spot": r.flat_spot,
+                "severity": r.severity,
                 "center": (r.center - center).to_array(),
                 "faces": r.faces.iter().map(|f| f.0).collect::<Vec<_>>(),
                 "lines": r.lines,

@@ -95,8 +95,17 @@ pub fn suggested_region(
 /// One detected region as the report of `fairline detect` lists it.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct DetectedRegionEntry {
-    /// Largest site score inside.
+    /// Largest score of the flagged sites inside
+    /// ([`crate::highlight::IrregularRegion::score`]).
     pub score: f64,
+    /// The threshold at the site of that score.
+    pub threshold: f64,
+    /// Largest flat-spot value of the sites the flat-spot measure flagged
+    /// inside (0 when none).
+    pub flat_spot: f64,
+    /// How many times the strongest flagged site exceeds its measure's
+    /// threshold (regions are ranked by it).
+    pub severity: f64,
     /// Number of input faces of the region (without the support rings).
     pub faces: usize,
     /// Area of the region (mesh units²).
@@ -120,6 +129,9 @@ pub fn detected_region_entries(
         .iter()
         .map(|r| DetectedRegionEntry {
             score: r.score,
+            threshold: r.threshold,
+            flat_spot: r.flat_spot,
+            severity: r.severity,
             faces: input_faces(&r.faces, source).len(),
             area: r.area,
             center: r.center.to_array(),

@@ -88,6 +88,22 @@
 //!    floor stays far below the threshold and changes nothing. Sites above
 //!    the mesh's threshold but below their discretisation floor are
 //!    counted ([`Detection::discretisation_sites`]).
+//! 8. **Flat spots wider than R.** A dent or flat spot wider than about R
+//!    bends the cubic of step 3 with it and scores low. What it does to
+//!    the surface is to take away its curvature over its area, while the
+//!    surface smoothed at a wavelength of 4 R ([`FLAT_SPOT_WAVELENGTH`])
+//!    keeps curving. The second measure ([`Site::flat_spot`]) is the
+//!    relative drop of curvature (κ_s − κ)/κ_s in the smoothed surface's
+//!    most curved direction (1: flat, above 1: curving the other way),
+//!    the median over the sites within 0.35 R, judged where the smoothed
+//!    surface's curvature stands above `flat_spot_factor` times the mesh's
+//!    curvature noise ([`Detection::curvature_noise`]) and flagged above
+//!    max(0.5, `flat_spot_factor` × its 90th percentile over the mesh)
+//!    ([`Detection::flat_spot_floor`]); details and measurements in
+//!    `detect_flat_spot.rs`. The wide dent on Spot's flank (radius 0.3,
+//!    2 % of the diagonal deep, R = 0.24) scores 0.94 against its floor
+//!    0.54; clean Spot, bunny_npm, the bunny scan and every generated
+//!    family stay below their floors.
 //!
 //! # Regions
 //!
@@ -100,8 +116,14 @@
 //! 0.3-wide dent on its flank goes from 0.063 to 0.159). Each connected
 //! component, with the holes
 //! it encloses filled (a bump's summit has the smooth normal, its flanks
-//! do not), is a suggested region. Its score is the largest site score
-//! inside; regions are ranked by it. Sites where no fit is possible (fewer
+//! do not), is a suggested region. Sites flagged by the flat-spot measure
+//! (step 8) add their faces in the same way, except where they lie in a
+//! region the normal measure's sites already make: those sites sit on a
+//! defect's flanks and outline it, and a flat spot at its centre is the
+//! same defect. A region's score is the largest score of the flagged sites
+//! inside, its flat spot the largest flat-spot value, and its severity how
+//! many times its strongest site exceeds the threshold (or floor) of the
+//! measure that flagged it; regions are ranked by severity. Sites where no fit is possible (fewer
 //! sites than coefficients inside R, normals turning by more than 72°) are
 //! not judged and counted in the result.
 
@@ -114,6 +136,10 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
+
+/// Wavelength of the smoothing the flat-spot measure compares with, in
+/// smooth radii R (module documentation, step 8).
+pub const FLAT_SPOT_WAVELENGTH: f64 = 4.0;
 
 /// A small multiplicative hasher for integer cell keys (the default SipHash
 /// dominated the neighbour queries); not for untrusted keys, which these
@@ -221,6 +247,12 @@ pub struct DetectOptions {
     /// normal by a few degrees at most (a 0.1 %-of-diagonal bump a spacing
     /// wide: about 1°).
     pub max_turn: f64,
+    /// The flat-spot measure's noise factor (default 4; 0 turns the measure
+    /// off): a site's area-median relative curvature drop is judged where
+    /// the smoothed surface's curvature exceeds this many times the mesh's
+    /// curvature noise, and flagged above max(0.5, this many times its 90th
+    /// percentile over the mesh) (module documentation, step 8).
+    pub flat_spot_factor: f64,
     /// Progress (stage "detect", one step per stage of the measure) and
     /// cancellation.
     pub control: Control,
@@ -237,6 +269,7 @@ impl Default for DetectOptions {
             noise_factor: 4.0,
             discretisation_factor: 10.0,
             max_turn: 1.0,
+            flat_spot_factor: 4.0,
             control: Control::default(),
         }
     }
@@ -284,6 +317,11 @@ impl DetectOptions {
         self.max_turn = a;
         self
     }
+    /// Sets the flat-spot measure's noise factor (0: no flat-spot measure).
+    pub fn flat_spot_factor(mut self, k: f64) -> Self {
+        self.flat_spot_factor = k;
+        self
+    }
     /// Sets the progress callback and cancel flag.
     pub fn control(mut self, control: Control) -> Self {
         self.control = control;
@@ -310,6 +348,7 @@ impl DetectOptions {
         for (name, v) in [
             ("noise_factor", self.noise_factor),
             ("discretisation_factor", self.discretisation_factor),
+            ("flat_spot_factor", self.flat_spot_factor),
         ] {
             if !(v >= 0.0) || !v.is_finite() {
                 return Err(HighlightError::InvalidOption(format!(
@@ -338,6 +377,13 @@ pub struct Site {
     /// the scan-noise floor and the discretisation floor (see the module
     /// documentation).
     pub threshold: f64,
+    /// The flat-spot measure at this site (module documentation, step 8):
+    /// the median relative curvature drop against the smoothed surface
+    /// over the sites within 0.35 R (dimensionless; 1 = flat where the
+    /// smooth surface curves), 0 where the smoothed surface's curvature is
+    /// not resolved above the mesh's curvature noise; `None` when not
+    /// judged.
+    pub flat_spot: Option<f64>,
 }
 
 /// Highlight lines crossing the suggested regions (for pictures and
@@ -362,11 +408,21 @@ pub struct LineFairness {
 pub struct IrregularRegion {
     /// Faces, ascending.
     pub faces: Vec<FaceId>,
-    /// Largest site score inside (for ranking).
+    /// Largest score of the flagged sites inside (the normal measure; below
+    /// its threshold when only the flat-spot measure flagged the region).
     pub score: f64,
     /// The threshold applied at the site of that score ([`Site::threshold`]).
     pub threshold: f64,
-    /// Score-weighted centre of the flagged sites inside (mesh units).
+    /// Largest flat-spot value of the sites inside flagged by the
+    /// flat-spot measure ([`Site::flat_spot`]; 0 when none).
+    pub flat_spot: f64,
+    /// How many times the region's strongest flagged site exceeds the
+    /// threshold of the measure that flagged it: the larger of score over
+    /// its site's threshold and flat spot over the flat-spot floor (> 1;
+    /// regions are ranked by it).
+    pub severity: f64,
+    /// Centre of the flagged sites inside (mesh units), weighted by score
+    /// (by flat-spot value where only the flat-spot measure flagged).
     pub center: Vec3,
     /// Area of the faces (mesh units²).
     pub area: f64,
@@ -383,7 +439,7 @@ pub struct IrregularRegion {
 /// its input).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Detection {
-    /// Regions by decreasing score.
+    /// Regions by decreasing severity.
     #[serde(skip)]
     pub regions: Vec<IrregularRegion>,
     /// Lines crossing regions (only those), in line order.
@@ -425,6 +481,17 @@ pub struct Detection {
     pub fine_radius: f64,
     /// Smooth-fit radius used (mesh units).
     pub smooth_radius: f64,
+    /// Number of sites flagged by the flat-spot measure (some may also be
+    /// flagged by the normal measure; [`Self::flagged_sites`] counts them
+    /// once).
+    pub flat_spot_sites: usize,
+    /// The flat-spot floor: max(0.5, flat_spot_factor × the 90th
+    /// percentile of the sites' flat-spot values); 0 when the measure is
+    /// off (module documentation, step 8).
+    pub flat_spot_floor: f64,
+    /// The curvature noise: the median over the judged sites of the
+    /// curvature change the smoothing makes, |κ_s − κ|·R (dimensionless).
+    pub curvature_noise: f64,
     /// Side of the cubes that hold one site each (mesh units): every
     /// vertex with a normal has a site within √3 times this distance.
     #[serde(skip)]
@@ -449,7 +516,22 @@ impl Detection {
     }
     /// The largest region score (0 when nothing was flagged).
     pub fn max_score(&self) -> f64 {
-        self.regions.first().map_or(0.0, |r| r.score)
+        self.regions.iter().map(|r| r.score).fold(0.0, f64::max)
+    }
+
+    /// What flagged the best region, for titles and summaries: "score S"
+    /// where the normal measure flagged it, "flat spot F (floor G)" where
+    /// only the flat-spot measure did; `None` when nothing was flagged.
+    pub fn best_summary(&self) -> Option<String> {
+        let best = self.regions.first()?;
+        Some(if best.score > best.threshold || best.flat_spot <= 0.0 {
+            format!("score {:.1}", best.score)
+        } else {
+            format!(
+                "flat spot {:.2} (floor {:.2})",
+                best.flat_spot, self.flat_spot_floor
+            )
+        })
     }
 
     /// The faces the measure did not judge as shape finer than its scale
@@ -727,6 +809,10 @@ pub struct RegionDetection {
     /// The threshold detection applied at that site (the mesh's threshold
     /// when none is judged).
     pub threshold: f64,
+    /// Largest flat-spot value ([`Site::flat_spot`]) at the sites on the
+    /// vertices of the region's faces (0 when none is judged); flagged
+    /// above [`Detection::flat_spot_floor`].
+    pub flat_spot: f64,
     /// Per region of [`Self::detection`]: whether it shares a face with
     /// the given face region.
     pub overlaps: Vec<bool>,
@@ -759,11 +845,20 @@ impl RegionDetection {
         } else {
             "try --grow 2 or more iterations"
         };
+        let what = if best.score > best.threshold || best.flat_spot <= 0.0 {
+            format!(
+                "the best scoring {:.2} (threshold {:.2} there)",
+                best.score, best.threshold
+            )
+        } else {
+            format!(
+                "the best a flat spot {:.2} (floor {:.2})",
+                best.flat_spot, self.detection.flat_spot_floor
+            )
+        };
         Some(format!(
-            "a defect remains: detect on the result flags {} region(s) ({overlapping} overlapping the faired region), the best scoring {:.2} (threshold {:.2} there) at [{:.4}, {:.4}, {:.4}], {place}; detection score inside the faired region {:.2} -> {:.2}; {advice}",
+            "a defect remains: detect on the result flags {} region(s) ({overlapping} overlapping the faired region), {what} at [{:.4}, {:.4}, {:.4}], {place}; detection score inside the faired region {:.2} -> {:.2}; {advice}",
             regions.len(),
-            best.score,
-            best.threshold,
             c.x,
             c.y,
             c.z,
@@ -806,6 +901,12 @@ pub fn detect_region(
             (0.0, detection.threshold),
             |a, b| if b.0 > a.0 { b } else { a },
         );
+    let flat_spot = detection
+        .sites
+        .iter()
+        .filter(|s| inside[s.vertex.idx()])
+        .filter_map(|s| s.flat_spot)
+        .fold(0.0, f64::max);
     let overlaps = detection
         .regions
         .iter()
@@ -815,6 +916,7 @@ pub fn detect_region(
         detection,
         score,
         threshold,
+        flat_spot,
         overlaps,
     })
 }
@@ -837,7 +939,7 @@ pub fn detect_irregularities(
     mesh.require_triangles()?;
     options.validate()?;
     let control = &options.control;
-    const STAGES: u64 = 4;
+    const STAGES: u64 = 5;
     let scale = Scale::new(mesh, light, options);
     let normals = geom::vertex_normals(mesh);
     let site_vertices = site_vertices(mesh.positions(), &normals, scale.site_cell);
@@ -849,7 +951,7 @@ pub fn detect_irregularities(
     control.step("detect", 3, STAGES)?;
     let shape_sites = judgements.iter().filter(|j| j.shape).count();
     let floors = NoiseFloors::estimate(&judgements, &fine, options);
-    let sites: Vec<Site> = site_vertices
+    let mut sites: Vec<Site> = site_vertices
         .iter()
         .zip(&fine)
         .zip(&judgements)
@@ -859,11 +961,24 @@ pub fn detect_irregularities(
             score: j.score,
             facet_angle: f.map_or(0.0, |f| f.facet_angle),
             threshold: floors.at(j, f.as_ref()),
+            flat_spot: None,
         })
         .collect();
+    let flat = flat_spot::flat_spots(
+        mesh,
+        &sites,
+        scale.smooth_radius,
+        scale.fine_radius,
+        options.flat_spot_factor,
+    );
+    for (site, v) in sites.iter_mut().zip(&flat.values) {
+        site.flat_spot = *v;
+    }
+    control.step("detect", 4, STAGES)?;
     let flagged: Vec<usize> = (0..sites.len())
-        .filter(|&i| sites[i].score.is_some_and(|sc| sc > sites[i].threshold))
+        .filter(|&i| normal_flagged(&sites[i]) || flat.flagged(i))
         .collect();
+    let flat_spot_sites = (0..sites.len()).filter(|&i| flat.flagged(i)).count();
     let discretisation_sites = sites
         .iter()
         .filter(|s| {
@@ -873,19 +988,49 @@ pub fn detect_irregularities(
         .count();
     let margin =
         (options.region_margin * scale.spacing * scale.coarsening(options)).max(scale.site_cell);
-    let mut in_region = faces_near_sites(mesh, &sites, &flagged, margin);
+    // the normal measure's flagged sites lie where the normals deviate,
+    // on a defect's flanks, and outline it; a flat spot at the centre of
+    // a defect they outline is the same defect and leaves its region as
+    // it is, while flat spots elsewhere make regions of their own
+    let by_normal: Vec<usize> = flagged
+        .iter()
+        .copied()
+        .filter(|&i| normal_flagged(&sites[i]))
+        .collect();
+    let mut in_region = faces_near_sites(mesh, &sites, &by_normal, margin);
+    let flat_elsewhere: Vec<usize> = flagged
+        .iter()
+        .copied()
+        .filter(|&i| {
+            !normal_flagged(&sites[i])
+                && !mesh
+                    .vertex_faces(sites[i].vertex)
+                    .any(|f| in_region[f.idx()])
+        })
+        .collect();
+    for (f, near) in faces_near_sites(mesh, &sites, &flat_elsewhere, margin)
+        .into_iter()
+        .enumerate()
+    {
+        in_region[f] |= near;
+    }
     fill_holes(mesh, &mut in_region);
     let areas = geom::face_areas(mesh);
     let total_area: f64 = areas.iter().sum();
     let (mut regions, component) = connected_regions(mesh, &in_region, &areas);
-    score_regions(mesh, &sites, &flagged, &component, &mut regions);
+    score_regions(mesh, &sites, &flagged, flat.floor, &component, &mut regions);
     let line_out = lines_crossing_regions(mesh, lines, &in_region, &component, &mut regions);
-    control.step("detect", 4, STAGES)?;
-    regions.retain(|r| r.score > 0.0);
+    control.step("detect", 5, STAGES)?;
+    regions.retain(|r| r.severity > 0.0);
     for r in &mut regions {
         r.lines.sort_unstable();
     }
-    regions.sort_by(|a, b| b.score.total_cmp(&a.score).then(a.faces.cmp(&b.faces)));
+    regions.sort_by(|a, b| {
+        b.severity
+            .total_cmp(&a.severity)
+            .then(b.score.total_cmp(&a.score))
+            .then(a.faces.cmp(&b.faces))
+    });
     // a fold from +0.0 (an empty `sum` of f64 is −0.0, which reports print)
     let region_area: f64 = regions.iter().map(|r| r.area).fold(0.0, |a, b| a + b);
     let flagged_area_fraction = if total_area > 0.0 {
@@ -909,8 +1054,16 @@ pub fn detect_irregularities(
         flagged_area_fraction,
         fine_radius: scale.fine_radius,
         smooth_radius: scale.smooth_radius,
+        flat_spot_sites,
+        flat_spot_floor: flat.floor,
+        curvature_noise: flat.curvature_noise,
         site_cell: scale.site_cell,
     })
+}
+
+/// Whether the normal measure flags a site (its score above its threshold).
+fn normal_flagged(site: &Site) -> bool {
+    site.score.is_some_and(|sc| sc > site.threshold)
 }
 
 /// The lengths of the measure on one mesh (mesh units).
@@ -1311,6 +1464,8 @@ fn connected_regions(
             faces,
             score: 0.0,
             threshold: 0.0,
+            flat_spot: 0.0,
+            severity: 0.0,
             center: Vec3::ZERO,
             area,
             flagged_sites: 0,
@@ -1320,16 +1475,27 @@ fn connected_regions(
     (regions, comp)
 }
 
-/// Each region's score (largest flagged score inside), score-weighted
-/// centre and number of flagged sites.
+/// Each region's score (largest flagged score inside), flat spot,
+/// severity, centre (score-weighted; flat-spot-weighted where only the
+/// flat-spot measure flagged) and number of flagged sites. `flat_floor` is
+/// the flat-spot floor.
 fn score_regions(
     mesh: &SurfaceMesh,
     sites: &[Site],
     flagged: &[usize],
+    flat_floor: f64,
     component: &[u32],
     regions: &mut [IrregularRegion],
 ) {
-    let mut weight = vec![0.0; regions.len()];
+    // per region and measure (normal, flat spot): the weighted sum of
+    // positions, the weight, and the best score with its threshold
+    #[derive(Clone, Copy, Default)]
+    struct Tally {
+        sum: Vec3,
+        weight: f64,
+        best: Option<(f64, f64)>,
+    }
+    let mut tallies = vec![[Tally::default(); 2]; regions.len()];
     for &i in flagged {
         let Some(f) = mesh.vertex_faces(sites[i].vertex).next() else {
             continue;
@@ -1338,19 +1504,36 @@ fn score_regions(
         if r == u32::MAX {
             continue;
         }
-        let r = r as usize;
-        let sc = sites[i].score.unwrap_or(0.0);
-        if sc > regions[r].score {
-            regions[r].score = sc;
-            regions[r].threshold = sites[i].threshold;
+        let (site, r) = (&sites[i], r as usize);
+        let sc = site.score.unwrap_or(0.0);
+        let flat = site.flat_spot.unwrap_or(0.0);
+        let by_flat = flat_floor > 0.0 && flat > flat_floor;
+        let region = &mut regions[r];
+        for (k, flagged_by, weight, severity) in [
+            (0, normal_flagged(site), sc, sc / site.threshold),
+            (1, by_flat, flat, flat / flat_floor),
+        ] {
+            if !flagged_by || !severity.is_finite() {
+                continue;
+            }
+            let t = &mut tallies[r][k];
+            t.sum += weight * site.position;
+            t.weight += weight;
+            if t.best.is_none_or(|(b, _)| sc > b) {
+                t.best = Some((sc, site.threshold));
+            }
+            region.severity = region.severity.max(severity);
+            if k == 1 {
+                region.flat_spot = region.flat_spot.max(flat);
+            }
         }
-        regions[r].center += sc * sites[i].position;
-        regions[r].flagged_sites += 1;
-        weight[r] += sc;
+        region.flagged_sites += 1;
     }
-    for (r, w) in regions.iter_mut().zip(&weight) {
-        if *w > 0.0 {
-            r.center /= *w;
+    for (region, t) in regions.iter_mut().zip(&tallies) {
+        // the normal measure's numbers where it flagged, else the flat spot's
+        if let Some(t) = t.iter().find(|t| t.weight > 0.0) {
+            region.center = t.sum / t.weight;
+            (region.score, region.threshold) = t.best.unwrap_or((0.0, 0.0));
         }
     }
 }
@@ -1463,6 +1646,10 @@ fn fill_holes(mesh: &SurfaceMesh, in_region: &mut [bool]) {
         }
     }
 }
+
+/// The flat-spot measure (module documentation, step 8).
+#[path = "detect_flat_spot.rs"]
+mod flat_spot;
 
 /// The wider-scale comparisons measured for wide dents on coarse meshes
 /// (README, Default lights on real meshes; BENCHMARKS, session 21): a table

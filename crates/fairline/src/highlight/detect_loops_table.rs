@@ -287,26 +287,7 @@ fn curvature_drops(mesh: &SurfaceMesh, det: &Detection, a1: f64, a2: f64) -> Vec
     }
     rows
 }
-/// The normal curvature of `reference` in its most curved tangent
-/// direction at the normal `n0` (36 directions over half a turn), and that
-/// of `tensor` in the same direction: the two sides of a flat-spot drop.
-pub(super) fn most_curved_direction(
-    n0: Vec3,
-    reference: &glam::DMat3,
-    tensor: &glam::DMat3,
-) -> (f64, f64) {
-    let (bx, by) = frame(n0);
-    let k = |m: &glam::DMat3, t: Vec3| t.dot(*m * t);
-    let (mut best_t, mut best_k) = (bx, 0.0f64);
-    for i in 0..36 {
-        let a = i as f64 * std::f64::consts::PI / 36.0;
-        let t = a.cos() * bx + a.sin() * by;
-        if k(reference, t).abs() > best_k.abs() {
-            (best_t, best_k) = (t, k(reference, t));
-        }
-    }
-    (best_k, k(tensor, best_t))
-}
+pub(super) use super::flat_spot::most_curved_direction;
 
 /// Strict local extrema of `d` over `rings` rings of neighbours, every one
 /// of them lit: (vertex, is a maximum, isolation — the distance to the

@@ -406,7 +406,13 @@ fn smoothed_curvature_drops(
     let tensor = |c: &geom::PrincipalCurvatures, v: usize| {
         outer(c.d1[v]) * c.k1[v] + outer(c.d2[v]) * c.k2[v]
     };
-    let foot = (2.0 * geom::mean_edge_length(mesh)).max(det.fine_radius);
+    let foot = match std::env::var("FOOT")
+        .ok()
+        .and_then(|x| x.parse::<f64>().ok())
+    {
+        Some(f) => f * det.smooth_radius,
+        None => (2.0 * geom::mean_edge_length(mesh)).max(det.fine_radius),
+    };
     let grid = Grid::new(foot, p.iter().enumerate().map(|(i, &q)| (i as u32, q)));
     let mut rows = Vec::new();
     for site in det.sites.iter().filter(|s| s.score.is_some()) {
@@ -536,6 +542,75 @@ fn smoothed_flat_spot_table() {
                     far.get(far.len() / 2).copied().unwrap_or(0.0)
                 );
             }
+        }
+    }
+}
+
+#[test]
+#[ignore = "data dump (needs ../shared/data), not a check"]
+fn smoothed_flat_spot_dump() {
+    use std::io::Write;
+    let scales = list("SCALES", &[3.0, 4.0]);
+    let mut all = cases(
+        "bunny_npm.obj,lego_open.ply,bunny_zipper.ply,bob_small.ply,bunny_res4.ply,elephant_nonmanifold.obj",
+    );
+    {
+        use crate::highlight::detect_tests::{dome, field, hills, panel, saddle};
+        for n in [71u32, 224] {
+            all.push((format!("saddle {n}"), field(n, saddle), None));
+            all.push((format!("hills {n}"), field(n, hills), None));
+            all.push((format!("panel {n}"), field(n, panel), None));
+            all.push((format!("dome {n}"), field(n, dome), None));
+            all.push((
+                format!("cylinder {n}"),
+                crate::shapes::cylinder(1.0, 3.0, 2 * n, n / 2),
+                None,
+            ));
+            all.push((
+                format!("torus {n}"),
+                crate::shapes::torus(1.0, 0.4, 2 * n, n / 2),
+                None,
+            ));
+        }
+    }
+    let mut f = std::fs::File::create(std::env::var("DUMP").unwrap_or("/tmp/flat_dump.csv".into()))
+        .expect("dump");
+    writeln!(
+        f,
+        "mesh,c,R,noise,h,rel,ksR,dropR,dist,facet,score,thr,x,y,z,cell"
+    )
+    .unwrap();
+    for (name, mesh, centre) in all {
+        let (_, det) = default_detection(&mesh);
+        let h = geom::mean_edge_length(&mesh);
+        for &c in &scales {
+            let smooth = smoothed(&mesh, c * det.smooth_radius, 60);
+            let drops = smoothed_curvature_drops(&mesh, &smooth, &det);
+            for r in &drops {
+                let site = det
+                    .sites
+                    .iter()
+                    .find(|s| mesh.positions()[s.vertex.idx()] == r.2);
+                let dist = centre.map_or(-1.0, |cc| (r.2 - cc).length());
+                writeln!(
+                    f,
+                    "{name},{c},{},{},{h},{},{},{},{dist},{},{},{},{},{},{},{}",
+                    det.smooth_radius,
+                    det.noise_level,
+                    r.0,
+                    r.3,
+                    r.1,
+                    site.map_or(0.0, |s| s.facet_angle),
+                    site.and_then(|s| s.score).unwrap_or(-1.0),
+                    site.map_or(0.0, |s| s.threshold),
+                    r.2.x,
+                    r.2.y,
+                    r.2.z,
+                    det.site_cell,
+                )
+                .unwrap();
+            }
+            eprintln!("{name} c {c}: {} rows", drops.len());
         }
     }
 }

@@ -126,6 +126,9 @@ fn clean_smooth_surfaces_stay_quiet_at_every_resolution() {
                 "{name}: {}",
                 summary(&d)
             );
+            // the flat-spot measure stays far below its floor (measured:
+            // at most 0.05 against 0.5)
+            assert_eq!(d.flat_spot_sites, 0, "{name}: {}", summary(&d));
             fractions.push(d.flagged_area_fraction);
         }
         assert!(
@@ -288,6 +291,39 @@ fn planted_defects_are_found_ranked_first_with_a_tight_region() {
 /// Cancelling through the control's flag stops detection with the
 /// `Cancelled` error; progress reaches the callback stage by stage, and a
 /// control that is never raised changes nothing.
+/// The flat-spot measure (detect's module documentation, step 8) on
+/// clean panels as coarse as Spot (R raised to five mean edges, 31² and
+/// 41² vertices, where it is meant to work): no flat-spot site and no
+/// region. With the measure off (`flat_spot_factor` 0) no site has a
+/// flat-spot value and the floor is 0. (Its finds are tested on the
+/// dented Spot: real_inspect_cli; the generated families at 5k and 50k
+/// vertices have none: clean_smooth_surfaces_stay_quiet_at_every_resolution.)
+#[test]
+fn the_flat_spot_measure_is_quiet_on_clean_coarse_panels_and_can_be_off() {
+    for n in [31u32, 41] {
+        let clean = detect(&field(n, panel));
+        assert!(
+            clean.smooth_radius > 0.25,
+            "{n}: coarse: {}",
+            clean.smooth_radius
+        );
+        assert!(clean.flat_spot_floor >= 0.5, "{n}: the measure ran");
+        assert_eq!(clean.flat_spot_sites, 0, "{n}: {}", summary(&clean));
+        assert!(clean.regions.is_empty(), "{n}: {}", summary(&clean));
+    }
+    let mesh = field(31, panel);
+    let light = LightArray::default_for_mesh(&mesh, UpAxis::Auto).unwrap();
+    let off = detect_irregularities(
+        &mesh,
+        &light,
+        &HighlightLines::default(),
+        &DetectOptions::default().flat_spot_factor(0.0),
+    )
+    .unwrap();
+    assert!(off.sites.iter().all(|s| s.flat_spot.is_none()));
+    assert_eq!((off.flat_spot_sites, off.flat_spot_floor), (0, 0.0));
+}
+
 #[test]
 fn detection_reports_progress_and_stops_when_cancelled() {
     use std::sync::Arc;
@@ -311,7 +347,7 @@ fn detection_reports_progress_and_stops_when_cancelled() {
     );
     let d = detect_irregularities(&mesh, &light, &lines, &watched).unwrap();
     assert_eq!(d, plain, "a control never raised changes nothing");
-    assert_eq!(steps.load(Ordering::Relaxed), 4);
+    assert_eq!(steps.load(Ordering::Relaxed), 5);
     flag.store(true, Ordering::Relaxed);
     assert!(matches!(
         detect_irregularities(&mesh, &light, &lines, &watched),
