@@ -514,6 +514,10 @@ def detect(
     compared with a smooth cubic fit over ``smooth_radius`` light spacings;
     the score is the highlight-line displacement that causes, in tenths of a
     spacing, flagged above ``threshold`` (raised above the noise of scans).
+    A second measure flags flat spots wider than the fit (the curvature's
+    drop against the surface smoothed at four smooth radii; report keys
+    ``flat_spot_floor``, ``flat_spot_sites``, ``curvature_noise``, each
+    region's ``flat_spot``); regions are ranked by ``severity``.
     Light options as for :func:`highlight_lines` (linear lights only).
 
     Returns ``(region_faces, report)``: the face indices the CLI writes as

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 
 /// Finds surface defects that disturb the highlight lines — bumps, dents,
 /// flat spots, ripples, kinks up to about two light spacings across — and
-/// turns them into connected face regions, ranked by score. The surface's
+/// turns them into connected face regions. The surface's
 /// normals (from a fine local quadric fit) are compared with a smooth cubic
 /// fit over two spacings around each point; the score is the highlight-line
 /// displacement that difference causes, in tenths of a spacing (score 1 =
@@ -21,13 +21,18 @@ use std::path::PathBuf;
 /// shape finer than the smooth radius (ears, horns, legs, creases: the
 /// surface turns by more than 1 rad within it) is counted as shape and not
 /// judged (reported); on noisy scans the threshold rises above the noise
-/// (reported). The picture draws the readable lines (round parts: every
+/// (reported). A second measure flags flat spots wider than the fit: where
+/// the curvature falls, over an area, against the surface smoothed at four
+/// smooth radii (report keys flat_spot_floor, flat_spot_sites; regions are
+/// ranked by severity, how far their strongest site exceeds its measure's
+/// threshold). The picture draws the readable lines (round parts: every
 /// k-th line, see `highlight`) with a key. Writes the
 /// union of all regions as region JSON {"faces":[...]} (faces of the input
 /// mesh) with two rings of support faces added around each region (what
 /// fairing needs to move every vertex of it), ready for `fairline fair
 /// --region`; the report lists each region
-/// with its score, area, centre and the lines crossing it.
+/// with its score, flat spot, severity, area, centre and the lines
+/// crossing it.
 #[derive(clap::Args, Debug)]
 #[command(
     after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline detect fairline-demo/dented-panel.obj -o region.json --png detect.png --report detect.json\n  fairline detect fairline-demo/dented-panel.obj -o region.json && fairline fair fairline-demo/dented-panel.obj --region region.json -o faired.obj\n  fairline detect fairline-demo/wavy.obj --up y -o region-y.json"
