@@ -206,16 +206,16 @@ fn smoothed(mesh: &SurfaceMesh, h: f64, wavelength: f64) -> Option<SurfaceMesh> 
 /// The footprint-averaged curvatures of one site in the smoothed surface's
 /// most curved direction.
 #[derive(Clone, Copy, Debug)]
-struct Drop {
+pub(super) struct Drop {
     /// κ_s(t) of the smoothed surface.
-    smooth: f64,
+    pub smooth: f64,
     /// κ(t) of the input.
-    input: f64,
+    pub input: f64,
 }
 
 impl Drop {
     /// ρ = (κ_s − κ)/κ_s (0 where κ_s vanishes).
-    fn relative(&self) -> f64 {
+    pub fn relative(&self) -> f64 {
         if self.smooth.abs() > f64::EPSILON {
             (self.smooth - self.input) / self.smooth
         } else {
@@ -226,7 +226,7 @@ impl Drop {
 
 /// Steps 2 and 3 at the judged sites (`None` elsewhere and where no vertex
 /// of the footprint has a finite curvature).
-fn curvature_drops(
+pub(super) fn curvature_drops(
     mesh: &SurfaceMesh,
     smooth: &SurfaceMesh,
     sites: &[Site],

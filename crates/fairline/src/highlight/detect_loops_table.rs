@@ -24,6 +24,7 @@
 //! `cargo test --release -p fairline --lib loops_table -- --ignored --nocapture`
 //! (`MESHES`, `A1`, `A2` override the lists and the annulus).
 
+use super::flat_spot::most_curved_direction;
 use super::wide_table::dented;
 use super::*;
 use crate::highlight::UpAxis;
@@ -287,7 +288,6 @@ fn curvature_drops(mesh: &SurfaceMesh, det: &Detection, a1: f64, a2: f64) -> Vec
     }
     rows
 }
-pub(super) use super::flat_spot::most_curved_direction;
 
 /// Strict local extrema of `d` over `rings` rings of neighbours, every one
 /// of them lit: (vertex, is a maximum, isolation — the distance to the

@@ -13,9 +13,7 @@
 //! `cargo test --release -p fairline --lib smoothed_table -- --ignored --nocapture`
 //! (`MESHES`, `SCALES` (c), `ITER` override the lists).
 
-use super::loops_table::{
-    cases, default_detection, distances, extrema, most_curved_direction, persistent_extrema,
-};
+use super::loops_table::{cases, default_detection, distances, extrema, persistent_extrema};
 use super::*;
 
 fn list(var: &str, default: &[f64]) -> Vec<f64> {
@@ -396,16 +394,6 @@ fn smoothed_curvature_drops(
     smooth: &SurfaceMesh,
     det: &Detection,
 ) -> Vec<(f64, f64, Vec3, f64)> {
-    let method = geom::CurvatureMethod::Rusinkiewicz;
-    let (pc, ps) = (
-        geom::principal_curvatures(mesh, method),
-        geom::principal_curvatures(smooth, method),
-    );
-    let p = mesh.positions();
-    let outer = |a: Vec3| glam::DMat3::from_cols(a * a.x, a * a.y, a * a.z);
-    let tensor = |c: &geom::PrincipalCurvatures, v: usize| {
-        outer(c.d1[v]) * c.k1[v] + outer(c.d2[v]) * c.k2[v]
-    };
     let foot = match std::env::var("FOOT")
         .ok()
         .and_then(|x| x.parse::<f64>().ok())
@@ -413,41 +401,46 @@ fn smoothed_curvature_drops(
         Some(f) => f * det.smooth_radius,
         None => (2.0 * geom::mean_edge_length(mesh)).max(det.fine_radius),
     };
-    let grid = Grid::new(foot, p.iter().enumerate().map(|(i, &q)| (i as u32, q)));
-    let mut rows = Vec::new();
-    for site in det.sites.iter().filter(|s| s.score.is_some()) {
-        let (q0, n0) = (p[site.vertex.idx()], ps.normals[site.vertex.idx()]);
-        let (mut t0, mut t1, mut w) = (glam::DMat3::ZERO, glam::DMat3::ZERO, 0.0);
-        grid.around(q0, |u| {
-            let u = u as usize;
-            if (p[u] - q0).length() < foot
-                && pc.k1[u].is_finite()
-                && ps.k1[u].is_finite()
-                && ps.normals[u].dot(n0) > 0.5
-            {
-                t0 += tensor(&pc, u);
-                t1 += tensor(&ps, u);
-                w += 1.0;
-            }
-        });
-        if w == 0.0 {
-            continue;
-        }
-        let (t0, t1) = (t0 * (1.0 / w), t1 * (1.0 / w));
-        let (best_k, k0) = most_curved_direction(n0, &t1, &t0);
-        let rel = if best_k.abs() > 1e-12 {
-            (best_k - k0) / best_k
-        } else {
-            0.0
-        };
-        rows.push((
-            rel,
-            (best_k - k0) * det.smooth_radius,
-            q0,
-            best_k * det.smooth_radius,
+    let judged: Vec<usize> = (0..det.sites.len())
+        .filter(|&i| det.sites[i].score.is_some())
+        .collect();
+    let drops = super::flat_spot::curvature_drops(mesh, smooth, &det.sites, &judged, foot);
+    let r = det.smooth_radius;
+    judged
+        .iter()
+        .filter_map(|&i| {
+            let d = drops[i]?;
+            Some((
+                d.relative(),
+                (d.smooth - d.input) * r,
+                mesh.positions()[det.sites[i].vertex.idx()],
+                d.smooth * r,
+            ))
+        })
+        .collect()
+}
+
+/// The generated families at about 5k and 50k vertices (no dent).
+fn families() -> Vec<(String, SurfaceMesh, Option<Vec3>)> {
+    use crate::highlight::detect_tests::{dome, field, hills, panel, saddle};
+    let mut all = Vec::new();
+    for n in [71u32, 224] {
+        all.push((format!("saddle {n}"), field(n, saddle), None));
+        all.push((format!("hills {n}"), field(n, hills), None));
+        all.push((format!("panel {n}"), field(n, panel), None));
+        all.push((format!("dome {n}"), field(n, dome), None));
+        all.push((
+            format!("cylinder {n}"),
+            crate::shapes::cylinder(1.0, 3.0, 2 * n, n / 2),
+            None,
+        ));
+        all.push((
+            format!("torus {n}"),
+            crate::shapes::torus(1.0, 0.4, 2 * n, n / 2),
+            None,
         ));
     }
-    rows
+    all
 }
 
 #[test]
@@ -457,23 +450,7 @@ fn smoothed_flat_spot_table() {
     let iterations = list("ITER", &[60.0])[0] as usize;
     let mut all = cases("bunny_npm.obj,lego_open.ply,bunny_zipper.ply");
     if std::env::var("FAMILIES").is_ok() {
-        use crate::highlight::detect_tests::{dome, field, hills, panel, saddle};
-        for n in [71u32, 224] {
-            all.push((format!("saddle {n}"), field(n, saddle), None));
-            all.push((format!("hills {n}"), field(n, hills), None));
-            all.push((format!("panel {n}"), field(n, panel), None));
-            all.push((format!("dome {n}"), field(n, dome), None));
-            all.push((
-                format!("cylinder {n}"),
-                crate::shapes::cylinder(1.0, 3.0, 2 * n, n / 2),
-                None,
-            ));
-            all.push((
-                format!("torus {n}"),
-                crate::shapes::torus(1.0, 0.4, 2 * n, n / 2),
-                None,
-            ));
-        }
+        all.extend(families());
     }
     for (name, mesh, centre) in all {
         let (_, det) = default_detection(&mesh);
@@ -554,25 +531,7 @@ fn smoothed_flat_spot_dump() {
     let mut all = cases(
         "bunny_npm.obj,lego_open.ply,bunny_zipper.ply,bob_small.ply,bunny_res4.ply,elephant_nonmanifold.obj",
     );
-    {
-        use crate::highlight::detect_tests::{dome, field, hills, panel, saddle};
-        for n in [71u32, 224] {
-            all.push((format!("saddle {n}"), field(n, saddle), None));
-            all.push((format!("hills {n}"), field(n, hills), None));
-            all.push((format!("panel {n}"), field(n, panel), None));
-            all.push((format!("dome {n}"), field(n, dome), None));
-            all.push((
-                format!("cylinder {n}"),
-                crate::shapes::cylinder(1.0, 3.0, 2 * n, n / 2),
-                None,
-            ));
-            all.push((
-                format!("torus {n}"),
-                crate::shapes::torus(1.0, 0.4, 2 * n, n / 2),
-                None,
-            ));
-        }
-    }
+    all.extend(families());
     let mut f = std::fs::File::create(std::env::var("DUMP").unwrap_or("/tmp/flat_dump.csv".into()))
         .expect("dump");
     writeln!(
