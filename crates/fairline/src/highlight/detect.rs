@@ -1511,7 +1511,12 @@ fn score_regions(
         let region = &mut regions[r];
         for (k, flagged_by, weight, severity) in [
             (0, normal_flagged(site), sc, sc / site.threshold),
-            (1, by_flat, flat, flat / flat_floor),
+            (
+                1,
+                by_flat,
+                flat,
+                if by_flat { flat / flat_floor } else { 0.0 },
+            ),
         ] {
             if !flagged_by || !severity.is_finite() {
                 continue;
