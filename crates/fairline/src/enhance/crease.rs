@@ -692,21 +692,8 @@ mod tests {
     fn the_chord_strip_of_a_folded_sheet_is_found() {
         // rows of 3 vertices along z at x positions on the roof y = −|x|
         let xs = [-1.5, -1.0, -0.5, 0.3, 0.8, 1.3];
-        let mut pos = Vec::new();
-        for &x in &xs {
-            for z in 0..3 {
-                pos.push(Vec3::new(x, -f64::abs(x), z as f64));
-            }
-        }
-        let mut faces = Vec::new();
-        for i in 0..xs.len() as u32 - 1 {
-            for j in 0..2 {
-                let (a, b) = (3 * i + j, 3 * (i + 1) + j);
-                faces.push([a, a + 1, b]);
-                faces.push([a + 1, b + 1, b]);
-            }
-        }
-        let mesh = SurfaceMesh::new(pos, &faces).unwrap();
+        let roof: Vec<(f64, f64)> = xs.iter().map(|&x| (x, -f64::abs(x))).collect();
+        let mesh = extruded(&roof);
         let normals: Vec<(Vec3, f64)> = (0..mesh.face_count() as u32)
             .map(|f| {
                 let [a, b, c] = mesh.triangle(FaceId(f)).map(|v| mesh.positions()[v.idx()]);

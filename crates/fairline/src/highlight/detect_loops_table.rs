@@ -220,17 +220,12 @@ fn flat_spot_table() {
             drops.len()
         );
         for (label, key) in [("relative drop", 0usize), ("drop × R", 1)] {
-            let mut far: Vec<f64> = Vec::new();
-            let mut near = f64::NEG_INFINITY;
-            for r in &drops {
-                let v = if key == 0 { r.0 } else { r.1 };
-                match centre.map(|c| (r.2 - c).length()) {
-                    Some(dd) if dd < 0.15 => near = near.max(v),
-                    Some(dd) if dd < 0.6 => {}
-                    _ => far.push(v),
-                }
-            }
-            far.sort_by(|a, b| b.total_cmp(a));
+            let (far, near) = split_at_dent(
+                drops
+                    .iter()
+                    .map(|r| (r.2, if key == 0 { r.0 } else { r.1 })),
+                centre,
+            );
             let top: Vec<String> = far.iter().take(6).map(|x| format!("{x:.2}")).collect();
             println!(
                 "  {label}: largest elsewhere {}; at the dent {near:.2}; elsewhere above 0.5: {}, above 1: {}",
@@ -409,4 +404,24 @@ pub(super) fn persistent_extrema(
     // drop the non-extrema (persistence 0 births are ordinary vertices)
     out.retain(|e| e.2 > 0.0);
     out
+}
+
+/// Values at places split by their distance from the dent's centre: those
+/// farther than 0.6 (all of them without a dent), largest first, and the
+/// largest within 0.15 (−∞ when none).
+pub(super) fn split_at_dent(
+    values: impl Iterator<Item = (Vec3, f64)>,
+    centre: Option<Vec3>,
+) -> (Vec<f64>, f64) {
+    let mut far: Vec<f64> = Vec::new();
+    let mut near = f64::NEG_INFINITY;
+    for (q, v) in values {
+        match centre.map(|c| (q - c).length()) {
+            Some(dd) if dd < 0.15 => near = near.max(v),
+            Some(dd) if dd < 0.6 => {}
+            _ => far.push(v),
+        }
+    }
+    far.sort_by(|a, b| b.total_cmp(a));
+    (far, near)
 }

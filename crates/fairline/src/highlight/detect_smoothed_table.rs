@@ -13,7 +13,9 @@
 //! `cargo test --release -p fairline --lib smoothed_table -- --ignored --nocapture`
 //! (`MESHES`, `SCALES` (c), `ITER` override the lists).
 
-use super::loops_table::{cases, default_detection, distances, extrema, persistent_extrema};
+use super::loops_table::{
+    cases, default_detection, distances, extrema, persistent_extrema, split_at_dent,
+};
 use super::*;
 
 fn list(var: &str, default: &[f64]) -> Vec<f64> {
@@ -499,17 +501,12 @@ fn smoothed_flat_spot_table() {
                     .join(" ")
             );
             for (label, key) in [("relative drop", 0usize), ("drop × R", 1)] {
-                let mut far: Vec<f64> = Vec::new();
-                let mut near = f64::NEG_INFINITY;
-                for r in &drops {
-                    let v = if key == 0 { r.0 } else { r.1 };
-                    match centre.map(|cc| (r.2 - cc).length()) {
-                        Some(dd) if dd < 0.15 => near = near.max(v),
-                        Some(dd) if dd < 0.6 => {}
-                        _ => far.push(v),
-                    }
-                }
-                far.sort_by(|a, b| b.total_cmp(a));
+                let (far, near) = split_at_dent(
+                    drops
+                        .iter()
+                        .map(|r| (r.2, if key == 0 { r.0 } else { r.1 })),
+                    centre,
+                );
                 let top: Vec<String> = far.iter().take(6).map(|x| format!("{x:.2}")).collect();
                 println!(
                     "  wavelength {c} R, {label}: largest elsewhere {}; at the dent {near:.2}; elsewhere above 0.5: {} of {}, median {:.3}",
