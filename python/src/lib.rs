@@ -7,7 +7,7 @@
 //! these with shape/dtype checks, docstrings and numpy/trimesh conversions.
 //!
 //! Only this layer knows the library's current API: when the library is
-//! reshaped (issue #17 items 1–3), only these files change.
+//! reshaped, only these files change.
 //!
 //! Every computation runs with the GIL released (`Python::detach`).
 

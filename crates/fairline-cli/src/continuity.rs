@@ -1,5 +1,5 @@
 //! `fairline continuity`: G0 / G1 / G2 across the shared boundaries of a
-//! set of B-spline patches (issue #20 item 5).
+//! set of B-spline patches.
 
 use crate::common::Report;
 use crate::error::bad_input;

@@ -30,7 +30,7 @@ pub enum Method {
     /// lines the clean surface would have), then ¾ of that result + ¼ of
     /// the diffusion-flow result on the same region (closer to the
     /// defect-free surface than diffusion flow on every generated panel;
-    /// BENCHMARKS.md Session 22); --laplacian-weight adds a
+    /// BENCHMARKS.md, highlight-line fairing); --laplacian-weight adds a
     /// curvature-Laplacian term.
     Highlight,
     /// Yong et al. exactly (Algorithm 2): Willmore energy + distance of the

@@ -343,7 +343,7 @@ pub fn option_value<T: clap::ValueEnum>(value: &T) -> String {
 
 /// `err` with the file named: unchanged when its message (with its
 /// causes) already names `path`, else with `path` as context, so that the
-/// error line reads `PATH: message` (defect 10 of issue #16). The causes
+/// error line reads `PATH: message`. The causes
 /// are kept, so the exit status does not change.
 pub fn name_file(path: &Path, err: impl Into<anyhow::Error>) -> anyhow::Error {
     let err = err.into();

@@ -65,7 +65,7 @@ pub fn tessellated_mesh(surfaces: &[BSplineSurface], n: usize) -> Result<Surface
 /// Tessellates a part for a picture: one surface `n` × `n`; several, each on
 /// its [`fairline::highlight::patch_grid`] (about `n` samples along the
 /// part's diagonal, small faces get few), so that a part of hundreds of
-/// faces renders as fast as one surface of its size (issue #20 item 4).
+/// faces renders as fast as one surface of its size.
 pub fn tessellated_part(surfaces: &[BSplineSurface], n: usize) -> Result<SurfaceMesh> {
     Ok(tessellated_part_with_patches(surfaces, n)?.0)
 }

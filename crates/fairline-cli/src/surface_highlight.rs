@@ -52,7 +52,7 @@ pub fn polylines(lines: &[&SurfaceHighlightLine], width: f32) -> Vec<PolylineLay
 
 /// A picture of tessellated surfaces with polylines over them; a part of
 /// several patches gets each patch's index (its position in `surfaces`)
-/// written at the patch's visible centre (issue #20 item 7).
+/// written at the patch's visible centre.
 pub fn surface_picture(
     surfaces: &[BSplineSurface],
     polylines: Vec<PolylineLayer>,

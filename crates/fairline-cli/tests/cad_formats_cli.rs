@@ -1,4 +1,4 @@
-//! Command-line tests of the way back to CAD (issue #20 items 2–3):
+//! Command-line tests of the way back to CAD:
 //! `convert` between surface JSON, IGES and STEP keeps every number and
 //! trim; `fair-surface -o OUT.igs|.step` writes the faired part; commands
 //! that take surfaces take STEP files; bad STEP input exits 2 naming the
@@ -198,8 +198,8 @@ fn real_step_parts_are_read_drawn_and_written_back() {
     assert!(std::fs::metadata(&png).unwrap().len() > 10_000);
 }
 
-/// A STEP file whose p-curve disagrees with its 3-D edge (issue #20: the
-/// p-curves are used when they agree, else the 3-D edge, with a warning):
+/// A STEP file whose p-curve disagrees with its 3-D edge (the p-curves
+/// are used when they agree, else the 3-D edge, with a warning):
 /// fairline writes `part()` with a p-curve per trim curve; the corner
 /// (0.9, 0.9) of the outer loop moved to (0.95, 0.85) in the two p-curves
 /// that end and start there makes them leave their written 3-D edges. `info` reads the file (exit 0), warns naming the

@@ -1,4 +1,4 @@
-//! Pictures of real CAD parts with default options (issue #20): every
+//! Pictures of real CAD parts with default options: every
 //! STEP/IGES part in the repository and the shared data is drawn by
 //! `highlight`, `render` and `continuity`; the teapot's default highlight
 //! picture has readable line spacing in pixels; the impeller's default
@@ -183,8 +183,8 @@ fn the_teapots_default_picture_has_readable_line_spacing_in_pixels() {
 }
 
 /// The impeller's default picture thins its lines by their gaps on the
-/// screen, not on the surface (issue #20): blades seen at a grazing angle
-/// no longer show bands of lines a pixel or two apart. Measured on the PNG
+/// screen, not on the surface: blades seen at a grazing angle show no
+/// bands of lines a pixel or two apart. Measured on the PNG
 /// as in the teapot test: fewer than 5 % of the sampled line pixels have a
 /// neighbouring line within 4 px, and the lowest tenth of the gaps is at
 /// least 4 px (measured 1.9 % and 6 px; with the gaps on the surface the

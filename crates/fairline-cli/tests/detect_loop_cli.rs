@@ -1,4 +1,4 @@
-//! The detect → fair → detect loop of issue #18 item 3, end to end on the
+//! The detect → fair → detect loop, end to end on the
 //! command line: a panel with a known smooth truth and a planted dent.
 
 mod common;

@@ -283,10 +283,10 @@ fn dark_pixels(png: &Path) -> usize {
 
 /// On a round part `fair` fairs and draws the readable lines — every k-th
 /// light of detection's array, the lines `highlight` and `detect` show
-/// with the default lights (issue #18: at the detail spacing the lines lie
-/// a fraction of an edge apart on this coarse mesh, triangles crossed by
-/// more than four of them carry none, the picture was hatched fragments
-/// and highlight-line fairing did not converge). The report keeps
+/// with the default lights (at the detail spacing the lines lie a fraction
+/// of an edge apart on this coarse mesh, triangles crossed by more than
+/// four of them carry none, the picture would be hatched fragments and
+/// highlight-line fairing would not converge). The report keeps
 /// detection's lights under "light" and the fairing lights, k > 1 times
 /// their spacing, under "fairing_light"; fairing converges and the picture
 /// shows lines. The part: Spot with a dent planted on its flank, which

@@ -478,7 +478,7 @@ fn circular_lights_from_a_json_file() {
 /// lego_open.ply is a flat outline in the plane y = 0 (y-up). The default
 /// lights are chosen from the part (`--up auto`): they face it, so lines
 /// appear (z-up lights above it would see it edge-on, Z·N = 0, and give
-/// none — the defect of issue #18), and on a plane the highlight distance
+/// none), and on a plane the highlight distance
 /// is linear in P, so every line is straight. Lights in a plane with normal
 /// ±y give straight lines at z = A0.z − m·s (Z × H = −z).
 #[test]

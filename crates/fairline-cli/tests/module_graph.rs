@@ -1,5 +1,5 @@
-//! The CLI's modules import each other in one direction only (issue #17
-//! item 2: no `demo` ↔ `smooth`, `highlight` ↔ `surface_highlight` or
+//! The CLI's modules import each other in one direction only (no
+//! `demo` ↔ `smooth`, `highlight` ↔ `surface_highlight` or
 //! `common` ↔ `output` cycles). Reads the sources as text: every
 //! `crate::NAME` outside comments is an arrow from the file's top-level
 //! module to the module NAME; a cycle in that graph fails the test, with

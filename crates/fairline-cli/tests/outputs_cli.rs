@@ -1,5 +1,5 @@
-//! The output policy of every command (issue #16, defects 1, 4–8, 10) and
-//! what commands say on the terminal (issue #18 item 4): outputs checked
+//! The output policy of every command and what commands say on the
+//! terminal: outputs checked
 //! against inputs and each other before any work, special files refused,
 //! no temporary file left on SIGINT/SIGTERM, a closed pipe ends quietly,
 //! reports without null, a summary and warnings on standard error.

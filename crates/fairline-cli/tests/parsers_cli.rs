@@ -1,6 +1,6 @@
-//! Issue #16 through the `fairline` binary: polygon meshes whose preferred
-//! quad diagonal is taken (once a panic, exit 101, in every command that
-//! triangulates), STL output beyond f32 (once written as inf), and a seeded
+//! Input parsing through the `fairline` binary: polygon meshes whose
+//! preferred quad diagonal is taken (triangulated, no panic), STL output
+//! beyond f32 (refused, never written as inf), and a seeded
 //! mutation fuzz of the JSON files commands take (lights, region, fixed
 //! vertices, endpoints): never exit 101, exit 2 names an input file, and
 //! nothing is written on failure.

@@ -1,5 +1,5 @@
-//! Inspection with no options on the real meshes of ../shared/data (issue
-//! #18): `highlight` draws readable lines without a fragment warning,
+//! Inspection with no options on the real meshes of ../shared/data:
+//! `highlight` draws readable lines without a fragment warning,
 //! `detect` explains what it leaves as shape, and `fair`'s report measures
 //! what `detect` shows, with detect's own threshold.
 
@@ -192,7 +192,7 @@ fn fair_report_on_a_real_mesh_measures_what_detect_shows() {
     );
 }
 
-/// The detect → fair → detect loop of issue #18 item 3 on a real mesh:
+/// The detect → fair → detect loop on a real mesh:
 /// the region file `detect` writes for the dent planted on Spot's flank
 /// goes to `fair --region` as it is, with the default method and with
 /// diffusion flow; fairing converges (no warning), detection on the faired

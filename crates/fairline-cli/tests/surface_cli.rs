@@ -381,10 +381,10 @@ fn real_surfaces_teapot_and_impeller() {
     assert!(!json(&out)["lines"].as_array().unwrap().is_empty());
 }
 
-/// Issue #20 item 4: the default highlight output of a whole multi-patch
-/// part stays proportionate. The impeller (247 trimmed faces) with default
-/// lights and grid writes at most 50 MB and at most 100 kB per patch (it was
-/// 404 MB: every face got the full 200 × 200 grid and up to 100 lights); the
+/// The default highlight output of a whole multi-patch part stays
+/// proportionate. The impeller (247 trimmed faces) with default lights and
+/// grid writes at most 50 MB and at most 100 kB per patch (the full
+/// 200 × 200 grid on every face and up to 100 lights would make 404 MB); the
 /// lines still cover most faces and carry their patch index.
 #[test]
 fn whole_part_default_highlight_output_is_proportionate() {

@@ -1,5 +1,5 @@
 //! Command-line tests of the B-spline surface commands as a user drives
-//! them from the shell (issue #20 item 7): default circular lights derived
+//! them from the shell: default circular lights derived
 //! from the part and printed, line ids in the lines JSON and in the SVG
 //! with a legend of the lights, `fair-surface --lines --from ID:T --to ID:T`
 //! (and its JSON form) instead of (u, v) read off a picture, and the warning

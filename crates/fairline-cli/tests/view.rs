@@ -1356,7 +1356,7 @@ fn page_shows_bspline_patches_and_fairs_a_surface_from_uv_endpoints() {
     for k in (0..patches as usize).filter(|&k| k != patch) {
         assert_eq!(cp(&after, k), cp(&before, k), "patch {k} untouched");
     }
-    // occlusion (issue #19): hover and endpoint picks in the 3-D view take
+    // occlusion: hover and endpoint picks in the 3-D view take
     // only points in front. The camera turns about the patch until a point
     // of a pre-image lies behind the part — by a ray cast on the CPU against
     // the drawn triangles, independent of the page's depth-buffer test — with

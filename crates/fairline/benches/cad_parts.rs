@@ -1,4 +1,4 @@
-//! Benchmark of reading and analysing real CAD parts (issue #20): the
+//! Benchmark of reading and analysing real CAD parts: the
 //! impeller (IGES, 277 trimmed faces of ../shared/data) read and its
 //! continuity across patch boundaries (`fairline continuity`'s
 //! computation), the impeller written as STEP and parsed back (every trim a

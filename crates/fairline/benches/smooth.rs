@@ -1,5 +1,5 @@
-//! Smoothing and structure-line fairing timings (issue 5 targets on this
-//! 2-core machine): Taubin, uniform weights, 10 iterations (20 steps) on a
+//! Smoothing and structure-line fairing timings (with their speed targets
+//! on a 2-core machine): Taubin, uniform weights, 10 iterations (20 steps) on a
 //! 450k-vertex triangle mesh (target ≤ 0.15 s); one implicit step on the same
 //! mesh (≤ 1.5 s); structure-line fairing of a 1M-vertex zigzag quad grid
 //! (≤ 10 s). `cargo bench -p fairline --bench smooth`; sizes via
@@ -14,12 +14,12 @@ use fairline::Vec3;
 use fairline::fair::{QuadFairOptions, fair_structure_lines};
 use fairline::smooth::{ImplicitOptions, TaubinOptions, implicit_smooth, taubin_smooth};
 
-/// One default implicit step (nothing fixed) as `smooth::implicit_smooth`
-/// assembled it before the one constrained solve (session 18): the lower
-/// pattern straight from the one-rings, values filled per column,
-/// nested-dissection ordering from the positions, sequential LLᵀ. Kept here
-/// only to compare the two in one process (task `implicit-ab`).
-fn former_implicit_step(mesh: &fairline::SurfaceMesh) -> Vec<Vec3> {
+/// One default implicit step (nothing fixed) assembled directly, without
+/// the constrained solve: the lower pattern straight from the one-rings,
+/// values filled per column, nested-dissection ordering from the
+/// positions, sequential LLᵀ. Here only to compare the two in one process
+/// (task `implicit-ab`).
+fn direct_implicit_step(mesh: &fairline::SurfaceMesh) -> Vec<Vec3> {
     use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
     use fairline::geom::{self, LaplaceWeights};
     use fairline::solve::{CholeskyOptions, CholeskyOrdering, CholeskySolver, nested_dissection};
@@ -98,7 +98,7 @@ fn main() {
             );
         }
         if wanted("implicit-ab") {
-            // the one constrained solve against the former assembly, runs
+            // the one constrained solve against the direct assembly, runs
             // interleaved so that both see the same load
             let o = ImplicitOptions::default();
             let (mut new, mut old) = (Vec::new(), Vec::new());
@@ -108,7 +108,7 @@ fn main() {
                 let a = implicit_smooth(&mesh, &o).expect("implicit");
                 new.push(t.elapsed().as_secs_f64());
                 let t = std::time::Instant::now();
-                let b = former_implicit_step(&mesh);
+                let b = direct_implicit_step(&mesh);
                 old.push(t.elapsed().as_secs_f64());
                 for (p, q) in a.positions.iter().zip(&b) {
                     diff = diff.max(p.distance(*q));
@@ -117,7 +117,7 @@ fn main() {
             new.sort_by(|a, b| a.total_cmp(b));
             old.sort_by(|a, b| a.total_cmp(b));
             println!(
-                "{:>10} {:>28} {:>10.3}   (former assembly {:.3} s, max difference {:.2e} = {:.2e} mean edges)",
+                "{:>10} {:>28} {:>10.3}   (direct assembly {:.3} s, max difference {:.2e} = {:.2e} mean edges)",
                 mesh.vertex_count(),
                 "implicit 1 step (one solve)",
                 new[new.len() / 2],
@@ -161,8 +161,8 @@ fn main() {
         }
     }
     // the default (points on the input surface, deviation factor 0.1) and
-    // the options that were the default before session 17 (the thesis'
-    // penalty alone, deviation halved)
+    // the thesis' method as printed (its penalty alone, off the surface,
+    // deviation halved)
     let before = QuadFairOptions::default()
         .on_surface(false)
         .deviation_factor(0.5);

@@ -1,5 +1,5 @@
 //! Inputs and in-process timings for the whole-command cost measurements of
-//! BENCHMARKS.md (issue #17 item 3).
+//! BENCHMARKS.md.
 //!
 //! `cargo run --release -p fairline --example command_cost -- write DIR 450000,1000000`
 //! writes `DIR/surface-N.ply` (binary PLY, the jittered wavy height field of

@@ -1,6 +1,6 @@
-//! Seeded, deterministic mutation fuzzing of every reader (issue #16 build
-//! item 4): OBJ, PLY (ascii, binary little- and big-endian), OFF, STL (ascii
-//! and binary), surface JSON, IGES and STEP (issue #20). Valid seed files are mutated (byte and
+//! Seeded, deterministic mutation fuzzing of every reader: OBJ, PLY
+//! (ascii, binary little- and big-endian), OFF, STL (ascii
+//! and binary), surface JSON, IGES and STEP. Valid seed files are mutated (byte and
 //! bit flips, truncation, duplicated / deleted / swapped lines, huge numbers,
 //! NaN text, negative counts, random keywords, line-ending changes) by a
 //! xorshift generator with a fixed seed, so every run tries the same inputs.

@@ -1,5 +1,5 @@
 //! The halfedge builder (`SurfaceMesh::from_soup`) gives exactly the
-//! connectivity it gave before it was made faster (issue #17 item 3): every
+//! connectivity it gave before it was made faster: every
 //! halfedge's target, next, previous and face, every vertex's outgoing and
 //! every face's halfedge, the reversed faces and the split non-manifold
 //! vertices, hashed, against fingerprints recorded with the builder of

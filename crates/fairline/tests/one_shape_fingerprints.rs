@@ -1,5 +1,5 @@
 //! Fingerprints of results recorded before the last algorithms were put
-//! into the one shape of the crate (issue #17: highlight lines, curvature,
+//! into the one shape of the crate (highlight lines, curvature,
 //! polyline networks) and before the implicit smoothing step fused its
 //! assembly into the constrained solve: the same inputs must give the same
 //! bits. A fingerprint is the FNV-1a hash of the bits of every coordinate
@@ -351,7 +351,7 @@ const RECORDED: &[(&str, &str)] = &[
 ];
 
 #[test]
-fn results_equal_those_recorded_before_the_one_shape() {
+fn results_equal_the_recorded_fingerprints() {
     let got = cases();
     assert_eq!(got.len(), RECORDED.len(), "cases and records");
     for ((name, h), (want_name, want)) in got.iter().zip(RECORDED) {

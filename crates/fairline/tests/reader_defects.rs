@@ -1,5 +1,5 @@
-//! Issue #16 defects 3 and 12: what the readers used to accept silently and
-//! what the writers used to write as infinity. Each test states what a
+//! Inputs a careless reader accepts silently and values a careless writer
+//! writes as infinity. Each test states what a
 //! careful reader does with the case (see the module docs of `io::*`).
 
 use fairline::io::{

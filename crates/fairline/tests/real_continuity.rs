@@ -1,5 +1,5 @@
 //! Continuity across the patch boundaries of the real parts in
-//! ../shared/data/surfaces (issue #20 item 5), with the defaults of
+//! ../shared/data/surfaces, with the defaults of
 //! `fairline continuity` (position tolerance 1e-4 × the control points'
 //! bounding-box diagonal, 0.5°, 5 % curvature). The numbers are those of
 //! the README's "Continuity across patches" table, stated as bounds.

@@ -1,5 +1,5 @@
-//! Default lights and detection on every real mesh of ../shared/data/meshes
-//! (issue #18): the lines a user sees with no options are readable and not
+//! Default lights and detection on every real mesh of ../shared/data/meshes:
+//! the lines a user sees with no options are readable and not
 //! fragmented, and detection gives stable, explainable results.
 //!
 //! "Unfragmented" in numbers, for the drawn (readable) lines: at least 6
@@ -179,25 +179,24 @@ fn site_checksum(d: &fairline::highlight::Detection) -> u64 {
 /// regions, equal bit for bit what the code before the change gave (the
 /// checksums and scores below were recorded with it, same lights). The
 /// region scores were recorded again when the region margin began to grow
-/// with R on meshes coarse against the spacing (session 19): fewer,
+/// with R on meshes coarse against the spacing: fewer,
 /// larger regions around the same sites, whose checksums did not change.
 #[test]
-fn detection_scores_equal_the_recorded_ones_from_before_the_split() {
+fn detection_scores_equal_the_recorded_ones() {
     type Recorded = (&'static str, u64, &'static [f64]);
     let recorded: [Recorded; 3] = [
         (
             "meshes/spot.ply",
             7160788985567650308,
-            // ten regions before session 19; the region margin now grows
-            // with R on meshes this coarse (R = 3.8 × 1.5 s here), and the
-            // same flagged sites make three regions: the top three scores
+            // the region margin grows with R on meshes this coarse
+            // (R = 3.8 × 1.5 s here), and the flagged sites make three
+            // regions: the top three scores
             &[34.64891592583728, 29.557044101557654, 28.683151199758438],
         ),
         (
             "meshes/bunny_npm.obj",
             2465209405891117502,
-            // six regions before session 19, one with the margin grown
-            // with R
+            // one region, with the margin grown with R
             &[117.79797013972217],
         ),
         ("meshes/lego_open.ply", 10212499764174956624, &[]),

@@ -453,7 +453,7 @@ const HILL_BUMP: (f64, f64, f64) = (0.3, -0.2, 0.1);
 
 /// Detection with default options on a clean, strongly curved surface next
 /// to the same surface with a small planted bump: the curved shape stays
-/// quiet, the bump is found (issue #18).
+/// quiet, the bump is found.
 fn detect_section(demo: &Demo) -> Result<Section> {
     use crate::highlight_png::{Overlay, default_camera, detect_with_lines, image, stretches};
     use fairline::highlight::{DetectOptions, LightArray, UpAxis};
@@ -756,7 +756,7 @@ fn line_turning(m: &SurfaceMesh) -> (f64, f64) {
     (mean, angles.iter().copied().fold(0.0, f64::max))
 }
 
-/// Structure-line fairing against its baseline (issue #21 item 3): a
+/// Structure-line fairing against its baseline: a
 /// zigzag quad grid of a Gaussian bump, faired by fairline (points sliding
 /// along the input surface, Grüner thesis ch. 4) and by Taubin with 50
 /// iterations; distance to the true surface and straightness of the lines.

@@ -1005,10 +1005,9 @@ fn finish_job(shared: &Shared, ctx: &JobContext, result: Result<Outcome, String>
 }
 
 /// Runs a mesh job. `control` (see [`job_control`]) goes into every options
-/// struct through its `.control(..)` builder where the library has one
-/// (#17 item 1: FairOptions, the smoothing options, QuadFairOptions and
-/// EnhanceOptions get it this session); highlight fairing reports its
-/// iterations to it already.
+/// struct through its `.control(..)` builder (FairOptions, the smoothing
+/// options, QuadFairOptions and EnhanceOptions), which reports progress
+/// and cancels.
 fn run_method(
     req: &RunRequest,
     tri: &SurfaceMesh,

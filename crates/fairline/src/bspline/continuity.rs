@@ -1,4 +1,4 @@
-//! Continuity across patch boundaries (issue #20 item 5): which boundary
+//! Continuity across patch boundaries: which boundary
 //! curves of a set of B-spline patches are shared — found geometrically, so
 //! patches need no topology, and a boundary may be shared over part of its
 //! length only (T-junctions) — and how smoothly the patches join along each

@@ -102,7 +102,7 @@ pub const MIN_PATCH_GRID: usize = 12;
 /// length), so that grid points lie about `part_diagonal / grid` apart in
 /// space on every patch, between [`MIN_PATCH_GRID`] and `grid`. A part of
 /// many small faces then costs about as much as one surface of its size,
-/// not `grid²` samples per face (issue #20 item 4).
+/// not `grid²` samples per face.
 pub fn patch_grid(surface: &BSplineSurface, part_diagonal: f64, grid: usize) -> [usize; 2] {
     let (nu, nv) = (surface.count_u(), surface.count_v());
     let p = |i: usize, j: usize| surface.control_point(i, j);
@@ -204,8 +204,8 @@ pub fn part_mesh(
 /// A part tessellated for a picture (or for choosing its lights): one
 /// surface `n` × `n`; several, each on its [`patch_grid`] (about `n`
 /// samples along the part's diagonal, small faces get few), so that a part
-/// of hundreds of faces costs about as much as one surface of its size
-/// (issue #20 item 4). With the patch of every face.
+/// of hundreds of faces costs about as much as one surface of its size.
+/// With the patch of every face.
 pub fn tessellate_part(
     surfaces: &[BSplineSurface],
     n: usize,

@@ -132,7 +132,7 @@ fn bspline_trim_plane_with_circular_hole_has_exact_area() {
         let q = trimmed_area(&s, n, n);
         assert!(rel(q, exact) < 1e-5, "grid {n}: quadrature {q} vs {exact}");
     }
-    // Issue #20 item 4: the grid rule (Gauss–Legendre in whole cells split
+    // The grid rule (Gauss–Legendre in whole cells split
     // at the knots) is within 1e-6 of the closed form on the 64 × 64 grid of
     // `info --area`, and no further from it than the former triangle rule
     // (every triangle by the 6-point rule, cells across knots).
@@ -254,7 +254,7 @@ fn bspline_trim_cylinder_with_hole_has_exact_area() {
         let q = trimmed_area(&s, n, n);
         assert!(rel(q, exact) < 1e-4, "grid {n}: quadrature {q} vs {exact}");
     }
-    // Issue #20 item 4: the grid rule (Gauss–Legendre in whole cells split
+    // The grid rule (Gauss–Legendre in whole cells split
     // at the knots) is within 1e-6 of the closed form on the 64 × 64 grid of
     // `info --area`, and no further from it than the former triangle rule
     // (every triangle by the 6-point rule, cells across knots).
@@ -317,7 +317,7 @@ fn bspline_trim_torus_cut_by_a_curve_has_exact_area() {
         let q = trimmed_area(&s, n, n);
         assert!(rel(q, exact) < 1e-4, "grid {n}: quadrature {q} vs {exact}");
     }
-    // Issue #20 item 4: the grid rule (Gauss–Legendre in whole cells split
+    // The grid rule (Gauss–Legendre in whole cells split
     // at the knots) is within 1e-6 of the closed form on the 64 × 64 grid of
     // `info --area`, and no further from it than the former triangle rule
     // (every triangle by the 6-point rule, cells across knots).

@@ -1,4 +1,4 @@
-//! Evidence for issue #21 item 2: measured against surfaces known in closed
+//! Evidence for feature enhancement: measured against surfaces known in closed
 //! form, the vertex flow must leave a coarse, uniformly sampled mesh *closer*
 //! to the true surface than its input (the paper's purpose: a better
 //! approximation with the same vertices), with better normals near the
@@ -711,7 +711,7 @@ fn ground_truth_meshes_lie_on_their_surfaces() {
     }
 }
 
-/// One row of the table of issue #21 item 2 per shape and mesh.
+/// One row of the accuracy table per shape and mesh.
 struct Measured {
     name: &'static str,
     input: Accuracy,
@@ -786,39 +786,38 @@ fn measure_all() -> Vec<Measured> {
 /// boundary; it is held to "lower than the input".
 const UNDER_SAMPLED: [&str; 3] = ["rounded cube", "sharp cube", "filleted cylinder"];
 
-/// Issue #21 item 2 (BENCHMARKS.md, session 21), what holds with the
-/// defaults (λ = 1, μ = ½, one solve): on every shape the two-sided
+/// What holds with the defaults (λ = 1, μ = ½, one solve; BENCHMARKS.md):
+/// on every shape the two-sided
 /// Hausdorff AND the RMS distance to the true surface are lower than the
 /// input's, the mean triangle quality is at least 0.8, no triangle flips,
 /// and the default is closer than the paper's method (which leaves the
 /// surface) and than the projection onto the input mesh; by at least 20 %
 /// on the under-sampled shapes in both measures (the test below holds
-/// every shape to the issue's bounds, this one to the measured numbers:
-/// the filleted cylinder −29 % / −28 % since session 23, its junction
-/// normals, module `junction`); the normal
-/// error near the features falls on every shape (the fandisk-like part
-/// since session 23: 6.51° → 6.29°, its slope one strip wide taken as a
-/// side, module `crease`).
+/// every shape to the required bounds, this one to the measured numbers:
+/// the filleted cylinder −29 % / −28 % with its junction normals, module
+/// `junction`); the normal error near the features falls on every shape
+/// (the fandisk-like part 6.51° → 6.29°, its slope one strip wide taken
+/// as a side, module `crease`).
 #[test]
 fn vertex_flow_approximates_known_surfaces_better_than_its_input() {
     for m in measure_all() {
         let (name, input, out) = (m.name, &m.input, &m.default);
         let (h, rms) = (out.hausdorff / input.hausdorff, out.rms / input.rms);
         assert!(h < 1.0 && rms < 1.0, "{name}: {h:.3} {rms:.3}");
-        // the issue's 20 % where met, and what was measured before where
-        // it is not (no bound looser than session 19's)
+        // the required 20 % where met, and the measured numbers where
+        // they are better
         match name {
-            // −45.0 % / −44.7 % (session 23, the junction normals; RMS
-            // −36.8 % before)
+            // −45.0 % / −44.7 % (with the junction normals; RMS −36.8 %
+            // without them)
             "rounded cube" => assert!(h <= 0.6 && rms <= 0.56, "{name}: {h:.3} {rms:.3}"),
-            // −59 % / −65 % (session 22: a vertex at each corner where three
-            // sides' fits meet; −15 % / −27 % before)
+            // −59 % / −65 % (a vertex at each corner where three sides'
+            // fits meet; −15 % / −27 % without)
             "sharp cube" => {
                 assert!(h <= 0.5 && rms <= 0.5, "{name}: {h:.3} {rms:.3}");
                 assert!(out.normal_error_deg < 0.7 * input.normal_error_deg);
             }
-            // −29.4 % / −28.1 % (session 23: the junction normals of the
-            // Phong lift, module `junction`; −20.8 % / −19.0 % before)
+            // −29.4 % / −28.1 % (the junction normals of the Phong lift,
+            // module `junction`; −20.8 % / −19.0 % without them)
             "filleted cylinder" => assert!(h <= 0.72 && rms <= 0.73, "{name}: {h:.3} {rms:.3}"),
             _ => {}
         }
@@ -843,12 +842,12 @@ fn vertex_flow_approximates_known_surfaces_better_than_its_input() {
     }
 }
 
-/// Every claim of issue #21 item 2, unloosened: Hausdorff and RMS lower
+/// Every required claim, unloosened: Hausdorff and RMS lower
 /// than the input's on every shape and by at least 20 % on the
 /// under-sampled ones, the normal error near the features lower on every
 /// shape, mean quality at least 0.8.
 #[test]
-fn vertex_flow_meets_every_claim_of_issue_21_item_2() {
+fn vertex_flow_meets_every_accuracy_claim() {
     for m in measure_all() {
         let (name, input, out) = (m.name, &m.input, &m.default);
         let (h, rms) = (out.hausdorff / input.hausdorff, out.rms / input.rms);
@@ -891,7 +890,7 @@ fn red_blood_cell(subdivisions: u32) -> SurfaceMesh {
     mesh
 }
 
-/// The red blood cell moves toward its rim (issue #21 item 2; the paper's
+/// The red blood cell moves toward its rim (the paper's
 /// Fig. 1 shows a blood cell): with the defaults the share of vertices
 /// within 10 % of the radius from the rim grows, no triangle flips and the
 /// mean quality stays at least 0.8.
@@ -954,227 +953,4 @@ fn chord_faces_are_found_on_sharp_creases_only() {
             _ => {}
         }
     }
-}
-
-/// The RMS distance of `positions` to `truth` and each part's share of its
-/// square (mesh → surface and surface → mesh halves), parts by `part`.
-fn rms_by_part(
-    truth: &Truth,
-    positions: &[Vec3],
-    part: &dyn Fn(Vec3) -> usize,
-    parts: usize,
-) -> (f64, Vec<f64>) {
-    let mut m = truth.mesh.clone();
-    m.set_positions(positions.to_vec()).unwrap();
-    let areas = face_areas(&m);
-    let area: f64 = areas.iter().sum();
-    const K: usize = 8;
-    let mut share = vec![0.0; parts];
-    for f in 0..m.face_count() {
-        let t = m.triangle(FaceId(f as u32)).map(|v| positions[v.idx()]);
-        let a = areas[f] / ((K + 1) * (K + 2) / 2) as f64;
-        for i in 0..=K {
-            for j in 0..=K - i {
-                let (u, v) = (i as f64 / K as f64, j as f64 / K as f64);
-                let x = (1.0 - u - v) * t[0] + u * t[1] + v * t[2];
-                let (d, _) = (truth.closest)(x);
-                share[part(x)] += 0.5 * a * d * d / area;
-            }
-        }
-    }
-    let grid = FaceGrid::new(&m, positions, 2.0 * mean_edge_length(&m));
-    for &x in &truth.samples {
-        let d = grid.distance(x);
-        share[part(x)] += 0.5 * d * d / truth.samples.len() as f64;
-    }
-    (share.iter().sum::<f64>().sqrt(), share)
-}
-
-/// Where the filleted cylinder's remaining error lies (issue #21 item 2
-/// (a)): each part's share of the squared RMS (flats, fillets, wall), the
-/// vertices on each part, for the input, the defaults, the defaults with
-/// the true normals as the Phong corner normals (everywhere, or only at the
-/// input vertices next to the flat–fillet or fillet–wall junctions) and
-/// the defaults moved onto the true surface (what the distribution of the
-/// vertices alone allows). Table printer.
-#[test]
-#[ignore = "table printer (BENCHMARKS.md, session 23 — fillet)"]
-fn filleted_cylinder_error_by_part() {
-    let truth = cylinder_truth(10);
-    let (profile, _) = cylinder_profile();
-    let planar = |p: Vec3| DVec2::new((p.x * p.x + p.y * p.y).sqrt(), p.z);
-    let piece = |p: Vec3| {
-        let q = planar(p);
-        (0..5)
-            .min_by(|&a, &b| {
-                profile.0[a]
-                    .closest(q)
-                    .0
-                    .total_cmp(&profile.0[b].closest(q).0)
-            })
-            .unwrap()
-    };
-    let part = |p: Vec3| [0, 1, 2, 1, 0][piece(p)];
-    let e = mean_edge_length(&truth.mesh);
-    let near = |p: Vec3, c: [DVec2; 2]| c.iter().any(|&c| planar(p).distance(c) < 0.5 * e);
-    let flat_fillet = [DVec2::new(0.7, -1.0), DVec2::new(0.7, 1.0)];
-    let fillet_wall = [DVec2::new(1.0, -0.7), DVec2::new(1.0, 0.7)];
-    let input = rms_by_part(&truth, truth.mesh.positions(), &part, 3).0;
-    let row = |label: &str, positions: &[Vec3]| {
-        let (rms, share) = rms_by_part(&truth, positions, &part, 3);
-        let mut count = [0; 3];
-        for &p in positions {
-            count[part(p)] += 1;
-        }
-        println!(
-            "| {label} | {rms:.5} | {:+.1} % | {:.3e} | {:.3e} | {:.3e} | {} / {} / {} |",
-            100.0 * (rms / input - 1.0),
-            share[0],
-            share[1],
-            share[2],
-            count[0],
-            count[1],
-            count[2]
-        );
-    };
-    println!(
-        "| filleted cylinder | RMS | vs input | flats | fillets | wall | vertices flats / fillets / wall |"
-    );
-    println!("| --- | --- | --- | --- | --- | --- | --- |");
-    row("input", truth.mesh.positions());
-    let out = enhance_features(&truth.mesh, &EnhanceOptions::default()).unwrap();
-    row("default", &out.positions);
-    let oracle = |label: &str, keep: &dyn Fn(Vec3) -> bool| {
-        let normals = truth
-            .mesh
-            .positions()
-            .iter()
-            .map(|&p| keep(p).then(|| (truth.closest)(p).1))
-            .collect();
-        super::surface::TRUE_CORNER_NORMALS.with(|o| *o.borrow_mut() = Some(normals));
-        let out = enhance_features(&truth.mesh, &EnhanceOptions::default()).unwrap();
-        super::surface::TRUE_CORNER_NORMALS.with(|o| *o.borrow_mut() = None);
-        row(label, &out.positions);
-    };
-    oracle("true corner normals everywhere", &|_| true);
-    oracle("true corner normals at flat–fillet", &|p| {
-        near(p, flat_fillet)
-    });
-    oracle("true corner normals at fillet–wall", &|p| {
-        near(p, fillet_wall)
-    });
-    oracle("true corner normals at both junctions", &|p| {
-        near(p, flat_fillet) || near(p, fillet_wall)
-    });
-    let snapped: Vec<Vec3> = out
-        .positions
-        .iter()
-        .map(|&p| {
-            let (d, n) = (truth.closest)(p);
-            let (a, b) = (p - d * n, p + d * n);
-            if (truth.closest)(a).0 <= (truth.closest)(b).0 {
-                a
-            } else {
-                b
-            }
-        })
-        .collect();
-    row("default moved onto the true surface", &snapped);
-}
-
-/// Where the fandisk-like part's normal error near the features comes
-/// from: per strip of input faces between profile rows i and i + 1, the
-/// share of the near-feature area and the mean normal error there, for the
-/// input and the defaults (a table printer; BENCHMARKS.md, session 23).
-#[test]
-#[ignore = "table printer (BENCHMARKS.md, session 23 — fandisk)"]
-fn fandisk_normal_error_by_strip() {
-    let truth = fandisk_truth(12);
-    let (profile, _) = fandisk_profile();
-    let ns = (12.0 * profile.length() / 2.0).round() as u32;
-    let rows = profile_points(&profile, ns);
-    let row_of = |p: Vec3| {
-        (0..rows.len())
-            .min_by(|&a, &b| {
-                let (qa, qb) = (rows[a], rows[b]);
-                DVec2::new(p.x, p.z)
-                    .distance(qa)
-                    .total_cmp(&DVec2::new(p.x, p.z).distance(qb))
-            })
-            .unwrap_or(0)
-    };
-    let m0 = &truth.mesh;
-    let strip: Vec<usize> = m0
-        .faces()
-        .map(|f| {
-            m0.triangle(f)
-                .iter()
-                .map(|v| row_of(m0.positions()[v.idx()]))
-                .min()
-                .unwrap_or(0)
-        })
-        .collect();
-    let out = enhance_features(m0, &EnhanceOptions::default()).unwrap();
-    let table = |positions: &[Vec3]| {
-        let mut m = m0.clone();
-        m.set_positions(positions.to_vec()).unwrap();
-        let per_face = face_samples(&truth, &m, &face_areas(&m));
-        let near: f64 = per_face.iter().map(|f| f.3).sum();
-        let mut by_strip = vec![(0.0f64, 0.0f64); rows.len()];
-        for (f, s) in per_face.iter().zip(&strip) {
-            by_strip[*s].0 += f.3;
-            by_strip[*s].1 += f.2;
-        }
-        (near, by_strip)
-    };
-    let (near_in, input) = table(truth.mesh.positions());
-    let (near_out, after) = table(&out.positions);
-    println!(
-        "| strip (rows) | input near area | input mean ° | input share of the mean ° | default near area | default mean ° | default share of the mean ° |"
-    );
-    println!("| --- | --- | --- | --- | --- | --- | --- |");
-    for s in 0..rows.len() {
-        let (a, b) = (input[s], after[s]);
-        if a.0 == 0.0 && b.0 == 0.0 {
-            continue;
-        }
-        println!(
-            "| {s}–{} | {:.4} | {:.2} | {:.2} | {:.4} | {:.2} | {:.2} |",
-            s + 1,
-            a.0,
-            a.1 / a.0.max(1e-300),
-            a.1 / near_in,
-            b.0,
-            b.1 / b.0.max(1e-300),
-            b.1 / near_out
-        );
-    }
-    // each row's distance (x, z) to the nearer sharp crease, in the input
-    // and after (mean over the row's vertices; min, max)
-    let creases = [DVec2::new(-0.6, 0.0), DVec2::new(-0.3, 0.3)];
-    let to_crease = |p: Vec3| {
-        let q = DVec2::new(p.x, p.z);
-        q.distance(creases[0]).min(q.distance(creases[1]))
-    };
-    println!("| row | input distance to a sharp crease | after: mean / min / max |");
-    println!("| --- | --- | --- |");
-    for r in 1..6 {
-        let vs: Vec<usize> = (0..m0.vertex_count())
-            .filter(|&v| row_of(m0.positions()[v]) == r)
-            .collect();
-        let after: Vec<f64> = vs.iter().map(|&v| to_crease(out.positions[v])).collect();
-        println!(
-            "| {r} | {:.4} | {:.4} / {:.4} / {:.4} |",
-            to_crease(m0.positions()[vs[0]]),
-            after.iter().sum::<f64>() / after.len() as f64,
-            after.iter().copied().fold(f64::INFINITY, f64::min),
-            after.iter().copied().fold(0.0, f64::max)
-        );
-    }
-    let total = |t: &[(f64, f64)], near: f64| t.iter().map(|s| s.1).sum::<f64>() / near;
-    println!(
-        "total: input {:.2}°, default {:.2}°",
-        total(&input, near_in),
-        total(&after, near_out)
-    );
 }

@@ -1,4 +1,4 @@
-//! Bit-for-bit regression of [`enhance_features`] (issue #17 items 1–2):
+//! Bit-for-bit regression of [`enhance_features`]:
 //! checksums of the output positions and of the solver counts of the
 //! report, recorded with the code before the solver strategy moved to
 //! `crate::solve` and the function took the one algorithm shape (session
@@ -91,10 +91,9 @@ fn cases() -> Vec<(&'static str, SurfaceMesh, EnhanceOptions)> {
 }
 
 /// Recorded before the refactor (see the module documentation). The five
-/// cases with the smooth projection on the torus and the rounded cube were
-/// re-recorded in session 23, when the Phong lift's corner normals took the
-/// junction fits (module `junction`: a deliberate change of the output,
-/// issue #21 item 2 (a)); the open cylinder has no vertex where the split
+/// cases with the smooth projection on the torus and the rounded cube
+/// record the Phong lift with the junction fits as its corner normals
+/// (module `junction`); the open cylinder has no vertex where the split
 /// model is preferred, the other cases do not lift.
 const RECORDED: &[(&str, u64)] = &[
     ("torus default", 0xb1eb552ef0db9f0e),
@@ -112,7 +111,7 @@ const RECORDED: &[(&str, u64)] = &[
 ];
 
 #[test]
-fn results_are_bit_identical_to_those_recorded_before_the_refactor() {
+fn results_are_bit_identical_to_the_recorded_ones() {
     let mut mismatches = Vec::new();
     for (name, mesh, options) in cases() {
         let out = enhance_features(&mesh, &options).unwrap();

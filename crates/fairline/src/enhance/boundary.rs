@@ -1,5 +1,4 @@
-//! Boundary vertices that slide along the boundary curve of the input
-//! (issue #21 item 2).
+//! Boundary vertices that slide along the boundary curve of the input.
 //!
 //! Ji et al. fix the boundary ("For surfaces with boundaries, one needs to
 //! fix mesh vertices on the boundaries and only subject other internal

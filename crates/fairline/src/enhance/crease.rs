@@ -1,5 +1,5 @@
 //! Sharp creases that the input under-samples, and the surface the vertex
-//! flow puts its vertices on there (issue #21 item 2).
+//! flow puts its vertices on there.
 //!
 //! A coarse mesh sampled without regard to a sharp crease cuts it by a
 //! strip of *chord* faces: their vertices lie on the two sides, the faces
@@ -86,8 +86,8 @@
 //! concave and its convex crease is one strip of faces wide: as a chord
 //! strip it left both chords next to it without a side at one border, so
 //! neither crease was rebuilt (normal error near the features 6.74°
-//! against the input's 6.51°); as a side, 6.29°. Session 22 told such
-//! strips from chords by the sense of their bends alone (a chord bends the
+//! against the input's 6.51°); as a side, 6.29°. Telling such strips from
+//! chords by the sense of their bends alone (a chord bends the
 //! same way at both borders), which also took patches of one or two faces
 //! on coarsely sampled curved parts (the rounded cube's corners, whose
 //! bends change their sense at a vertex) and the cubes' twisted chord

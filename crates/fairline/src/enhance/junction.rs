@@ -1,5 +1,5 @@
 //! Vertex normals where a flat or gently curved part meets a fillet
-//! tangentially (issue #21 item 2 (a)).
+//! tangentially.
 //!
 //! The corner normals of the Phong lift (module `surface`) are area-weighted
 //! means of the normals of the faces around a vertex. On a smooth surface the

@@ -117,7 +117,7 @@
 //! them, until no triangle is flipped or degraded (§5: "we rectify the
 //! topological errors in the post-processing").
 //!
-//! **Projection onto the input surface** (issue #21 item 2; module
+//! **Projection onto the input surface** (module
 //! `surface`). The paper keeps the vertices near the input only through the
 //! quadratic distance model at their input positions, so a vertex sliding
 //! over a curved part leaves it along the tangent plane, and F_smo pulls
@@ -138,8 +138,8 @@
 //! tangent plane, the nearest plane along the normal, points near the
 //! intersection of two sides put onto it, and where three sides meet the
 //! nearest vertex put onto their common point): sharp cube Hausdorff
-//! −59 %, RMS −65 %, normal error near the edges 20.3° → 8.2° (session 21,
-//! without the corners and with a 10° threshold per edge: −15 % / −27 %,
+//! −59 %, RMS −65 %, normal error near the edges 20.3° → 8.2° (without
+//! the corners and with a 10° threshold per edge: −15 % / −27 %,
 //! 12.1°; the Phong fit alone: −9 % / −10 %, 17.4°).
 //!
 //! **Triangle quality.** μ keeps the mean quality (the paper's Fig. 5),

@@ -1,4 +1,4 @@
-//! The input surface as the place the vertices flow on (issue #21 item 2).
+//! The input surface as the place the vertices flow on.
 //!
 //! Ji et al. keep the vertices near the input only through the quadratic
 //! Pottmann–Hofer model of the squared distance at each vertex's *input*

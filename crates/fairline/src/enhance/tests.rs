@@ -612,7 +612,7 @@ fn every_triangle_keeps_a_quarter_of_its_input_quality() {
     );
 }
 
-/// The one algorithm shape (#17 item 1): the input is untouched, progress
+/// The one algorithm shape: the input is untouched, progress
 /// comes once per iteration and at the end, and raising the cancel flag
 /// stops the run at the next iteration with the Cancelled error.
 #[test]
@@ -673,17 +673,17 @@ fn vertex_flow_reports_progress_and_stops_when_cancelled() {
     assert_eq!(m.positions(), &before[..]);
 }
 
-/// Issue #21 item 2, the step bound at the defaults: on every real mesh of
+/// The step bound at the defaults: on every real mesh of
 /// ../shared/data/meshes that is a manifold triangle mesh, no output
 /// triangle is flipped or below [`QUALITY_FLOOR`] of its input quality and
 /// every position is finite; on the artist meshes and the small scans the
 /// solved step (after the quality guard) flips no triangle, so the repair
 /// has nothing to undo and no "flipped" warning is raised. spot (a clean
-/// artist mesh) flipped 33 triangles in its solved step before the guard
-/// (session 21), so there the guard works. The raw scan bunny_zipper has
+/// artist mesh) flips 33 triangles in its solved step without the guard,
+/// so there the guard works. The raw scan bunny_zipper has
 /// slivers of quality 0.001, which the projection alone can turn over: its
 /// step flips 2 after the guard's three re-solves, and the repair undoes
-/// them (measured, session 22).
+/// them (measured).
 #[test]
 fn real_meshes_flip_no_triangle_with_the_defaults() {
     for name in [

@@ -1,5 +1,5 @@
 //! End tangents of the desired highlight lines from a smooth surface fitted
-//! beyond the defect's footprint (issue #21 item 1; beyond the paper).
+//! beyond the defect's footprint (beyond the paper).
 //!
 //! Yong et al. §3.2 ask for desired curves that are "the highlight lines
 //! the surface would have without the irregularity": between the nodes Q0
@@ -39,7 +39,7 @@
 //! Why the fit and not the lines: on the truth of the generated family
 //! (module `family`), the paper's energy with tangents fitted to the
 //! *truth's* lines beats surface diffusion flow on all 24 cases in all four
-//! measures (BENCHMARKS.md Session 21), so clean directions at Q0 are what
+//! measures (BENCHMARKS.md), so clean directions at Q0 are what
 //! the paper's desired curves need. A Gaussian tail's slope falls by e
 //! every σ²/r (under one edge at the border of the family's regions), so
 //! one ring beyond R it is several times smaller than at the border and
@@ -52,7 +52,7 @@
 //! edges follows exactly, within 1.7° (the paper's: within 1.8°). The
 //! footprint (one ring), the radius (six edges) and the flow share of the
 //! default were chosen on the family and checked on 32 held-out cases
-//! (BENCHMARKS.md Session 22).
+//! (BENCHMARKS.md).
 
 use super::desired::{Run, Tangents, fitted_tangent, for_each_run, part};
 use super::region::MovableSet;

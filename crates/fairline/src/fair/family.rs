@@ -1,5 +1,5 @@
-//! A generated family of fairing problems with a known defect-free truth
-//! (issue #21 item 1): car-panel-like height fields (quadratic, cubic,
+//! A generated family of fairing problems with a known defect-free truth:
+//! car-panel-like height fields (quadratic, cubic,
 //! wavy, saddle-like) with a planted Gaussian bump or dent of several
 //! sizes, the region around it, the lights, and the two measures the
 //! comparison of highlight-line fairing with surface diffusion flow uses:
@@ -360,15 +360,15 @@ mod tests {
         (logs / rows.len() as f64).exp()
     }
 
-    /// Issue #21 item 1, measured: on the generated family (quadratic,
+    /// Measured: on the generated family (quadratic,
     /// cubic, wavy, saddle-like panels × bump/dent × σ 0.08, 0.11, 0.15)
     /// the default method (the paper's energy with the desired lines' end
     /// tangents from a smooth fit beyond the defect's footprint, module
     /// `end_tangents`, + ¼ of the diffusion-flow state, module `highlight`)
     /// ends closer to the defect-free truth than surface diffusion flow in
     /// all four measures (surface max and RMS, line max and RMS) on every
-    /// case — the widest saddle dent included (Session 21: 1.14× flow in
-    /// surface max with the input's outside tangents and 4 refits). On
+    /// case — the widest saddle dent included (with the input's outside
+    /// tangents and 4 refits it is 1.14× flow there in surface max). On
     /// (geometric) average it is 2× closer in surface max and 2.6× in line
     /// RMS, and at least 2.5× closer in surface max on every wavy panel
     /// (whose mean curvature is not harmonic). Nothing outside the movable
@@ -412,7 +412,7 @@ mod tests {
     /// 24 cases, 2.5× closer on average in surface max and 3× in line RMS,
     /// at least 3× closer in surface max on every wavy panel; it loses only
     /// on the widest regions or the saddle dents, by at most 1.7× (see
-    /// BENCHMARKS.md, "Session 17 — highlight fairing vs diffusion flow").
+    /// BENCHMARKS.md, "Highlight-line fairing").
     #[test]
     fn paper_fairing_against_diffusion_flow_on_the_generated_family() {
         let rows = against_flow(&FairOptions::default().method(FairMethod::Paper));
@@ -460,14 +460,14 @@ mod tests {
 
     /// Refitting the desired lines' tangents across their end nodes once
     /// the defect is gone ([`FairOptions::refits`], four refits, no flow
-    /// share; the default until Session 21, now off): started from the
+    /// share): started from the
     /// fitted tangents, the result's highlight lines end closer to the
     /// truth's lines than diffusion flow's (max and RMS) on every case, and
     /// the surface closer on all but the widest cubic bump and saddle dent,
     /// by at most 1.25× there — where the fitted tangents without refits
     /// win the saddle dent: the refits pull the desired lines back toward
     /// the faired lines and throw the gain of clean tangents away
-    /// (BENCHMARKS.md Sessions 21–22), which is why the default does not
+    /// (BENCHMARKS.md), which is why the default does not
     /// refit.
     #[test]
     fn refitted_tangents_bring_every_case_near_or_past_diffusion_flow() {

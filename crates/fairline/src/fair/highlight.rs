@@ -31,7 +31,7 @@
 //!
 //! Methods: [`FairMethod::Paper`] is F = ω1 f_fair + ω2 f_diff exactly
 //! (Yong et al. Eq. (15), Algorithm 2). [`FairMethod::Highlight`] (the
-//! default) goes beyond the paper in three ways (issue #21 item 1):
+//! default) goes beyond the paper in three ways:
 //!
 //! 1. **Desired lines with clean end tangents** (module `end_tangents`):
 //!    the tangents T0, T1 of the OGH curves of Eq. (5) are the directions
@@ -42,9 +42,8 @@
 //!    panels (saddles) a small tilt of the normals moves a line by a lot.
 //!    Optional refits ([`FairOptions::refits`], default 0): each time
 //!    Eq. (17) is met, the tangents are refitted across the end nodes to
-//!    the faired lines (module `desired`) and the iteration goes on — the
-//!    default of Sessions 18–21, measured to throw the clean tangents'
-//!    gain away (BENCHMARKS.md Sessions 21–22).
+//!    the faired lines (module `desired`) and the iteration goes on;
+//!    measured to throw the clean tangents' gain away (BENCHMARKS.md).
 //! 2. **A share of the diffusion-flow state** ([`FairOptions::flow_share`],
 //!    default ¼): the movable vertices end at (1 − s)·X_H + s·X_F, X_H the
 //!    highlight result and X_F the stationary state of surface diffusion
@@ -63,7 +62,7 @@
 //!    diagonal, so that ω3 does not depend on scale), default 0.
 //!
 //! Measured on 24 generated panels with a known truth (module `family`,
-//! BENCHMARKS.md Session 22): the default ends closer to the truth than
+//! BENCHMARKS.md): the default ends closer to the truth than
 //! diffusion flow in surface max/RMS and line max/RMS on every case, 2.1×
 //! closer in surface max and 2.6× in line RMS on (geometric) average, and
 //! on 32 held-out cases (other defect places and widths) as well; the
@@ -71,7 +70,7 @@
 //! [`FairOptions::flow_share`] and `laplacian_weight` at 0 the default is
 //! the paper's energy with the fitted end tangents.
 //!
-//! Shape (issue #17): [`fair_highlight_lines`] takes the mesh and
+//! Shape: [`fair_highlight_lines`] takes the mesh and
 //! [`FairOptions`] (region, lights, weights, stopping rule, refits and the
 //! [`crate::Control`] that reports each iteration and can cancel) and
 //! returns [`Output`]: the new positions and the serialisable
@@ -156,7 +155,7 @@ pub struct FairOptions {
     /// lines ([`super::desired::across_tangents`]) and the iteration goes
     /// on, this many times; 0 keeps the tangents of the smooth fit beyond
     /// the footprint ([`super::fitted_surface_tangents`]), which are closer
-    /// to the truth's on the generated family (BENCHMARKS.md Session 22).
+    /// to the truth's on the generated family (BENCHMARKS.md).
     pub refits: usize,
     /// Share of the surface-diffusion-flow state in the result of
     /// [`FairMethod::Highlight`] (default 0.25; 0 switches it off): the
@@ -412,11 +411,11 @@ struct Linearised {
 }
 
 /// Default [`FairOptions::refits`] (measured on the generated family,
-/// BENCHMARKS.md Session 22: with the fitted end tangents, refits lose
+/// BENCHMARKS.md: with the fitted end tangents, refits lose
 /// the widest saddle dent and cubic bump to diffusion flow).
 pub const DEFAULT_REFITS: usize = 0;
 /// Default [`FairOptions::flow_share`] (measured on the generated family,
-/// BENCHMARKS.md Sessions 19 and 22: without it the fitted end tangents
+/// BENCHMARKS.md: without it the fitted end tangents
 /// lose the widest cubic bump by 4 % in surface RMS).
 pub const DEFAULT_FLOW_SHARE: f64 = 0.25;
 

@@ -2,7 +2,7 @@
 //! file, or `--auto`: the regions detection suggests) and the Python `fair`
 //! do it: the margins around detected regions, the one report of the whole
 //! run and the sentences front ends warn with, written once so that every
-//! front end says the same (issue #17: one place per concept). The
+//! front end says the same (one place per concept). The
 //! fairing itself is [`super::fair_highlight_lines`] (Yong et al. §3).
 
 use super::{FairError, FairReport, grow_region};

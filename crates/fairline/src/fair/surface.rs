@@ -198,7 +198,7 @@ pub enum SurfaceFairMethod {
     /// SVD (lowered from 5 % as progress slows, see
     /// [`SurfaceFairOptions::min_truncation`]) on the selected targets only.
     Paper,
-    /// Beyond the paper (issue #20 item 6): Levenberg–Marquardt on the
+    /// Beyond the paper: Levenberg–Marquardt on the
     /// selected targets plus weak targets at the current pre-images of all
     /// other lines crossing the moved region plus a fairness energy on the
     /// control displacement; well posed whatever the number of targets.

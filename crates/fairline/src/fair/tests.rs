@@ -249,7 +249,7 @@ fn willmore_energy_of_a_sphere_is_four_pi() {
 }
 
 /// Fairs `mesh` (a smooth truth plus a planted defect) with both methods
-/// and checks the evidence of issue 4: outside untouched bit for bit, the
+/// and checks the evidence for fairing: outside untouched bit for bit, the
 /// region pulled back to the truth by at least `factor`, lower highlight
 /// deviation and Willmore energy, and a lower highlight deviation than the
 /// diffusion-flow baseline. Returns (truth distance before, after).
@@ -392,8 +392,8 @@ fn bump_on_a_sphere_patch_is_removed() {
 }
 
 /// A fingerprint of one fairing run: FNV-1a hashes of the output
-/// coordinates' bits and of the JSON report (without the keys added after
-/// issue #17), iterations, accepted steps, and two moments of the
+/// coordinates' bits and of the JSON report (its original keys only),
+/// iterations, accepted steps, and two moments of the
 /// displacement (Σ of all coordinate changes, Σ of their squares).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Fingerprint {
@@ -472,18 +472,14 @@ fn fingerprint_inputs() -> Vec<(&'static str, SurfaceMesh, LightArray, Vec<FaceI
     ]
 }
 
-/// Fingerprints recorded on 2026-11-24 from the code path before the one
-/// algorithm shape of issue #17 (the former test-only module `before_17`,
-/// `fair_highlight_lines(mesh, light, faces, options)`; x86-64 with
+/// Fingerprints recorded from a reference implementation
+/// (`fair_highlight_lines(mesh, light, faces, options)`; x86-64 with
 /// AVX-512), for (input, method, ω3): bits, report, iterations, accepted
 /// steps, displacement moments. The highlight method is taken with
-/// `refits(0).flow_share(0.0)` (the options it had then). Its four entries
-/// were re-recorded on 2026-11-25 (Session 22, same machine): since then
-/// [`FairMethod::Highlight`] builds its desired lines with the end tangents
-/// of the smooth fit beyond the defect's footprint (module
-/// `end_tangents`) instead of the paper's outside-part estimate, an
-/// intended change of that method only; the paper's and the baseline's
-/// entries are the 2026-11-24 records, unchanged.
+/// `refits(0).flow_share(0.0)`; its entries record
+/// [`FairMethod::Highlight`] with the end tangents of the smooth fit
+/// beyond the defect's footprint (module `end_tangents`); the paper's and
+/// the baseline's entries record those methods as published.
 const FINGERPRINTS_BEFORE_17: [(&str, FairMethod, f64, Fingerprint); 10] = [
     (
         "saddle dent",
@@ -639,18 +635,18 @@ fn same_simd_as_recorded() -> bool {
     }
 }
 
-/// Issue #17 item 1: the paper's method and the diffusion-flow baseline
+/// The paper's method and the diffusion-flow baseline
 /// give the same positions and the same JSON report, bit for bit, as the
 /// code path before the conversion to the one algorithm shape (recorded
 /// fingerprints, [`FINGERPRINTS_BEFORE_17`]); the highlight method without
 /// the later options (refits, flow share) those recorded with its fitted
-/// end tangents (Session 22); with and without ω3, on a
+/// end tangents; with and without ω3, on a
 /// family case and the bump plane; the keys added since (`refits`,
 /// `flow_share`, `flow_iterations`) are left out of the report hash. On a
 /// CPU with another SIMD path the hashes are not compared; the iteration
 /// counts, accepted steps and displacement moments (to 1e-9) still are.
 #[test]
-fn fairing_matches_the_fingerprints_recorded_before_17() {
+fn fairing_matches_the_recorded_fingerprints() {
     let exact = same_simd_as_recorded();
     let inputs = fingerprint_inputs();
     for (name, m, w3, want) in FINGERPRINTS_BEFORE_17 {

@@ -266,7 +266,7 @@ fn triangle_segments(
 /// the elements) carries no segment. The one rule of mesh triangles
 /// ([`face_segments`]) and B-spline grid cells
 /// (`highlight::surface::contour_field`, `linear_lights`), so that both
-/// draw the same lights (issue #20 item 7).
+/// draw the same lights.
 #[inline]
 pub(crate) fn too_many_levels(
     lo: f64,

@@ -43,7 +43,7 @@
 //!    the judged sites): the curvature must fall at least by half, and
 //!    stand out of what the mesh shows everywhere.
 //!
-//! Measured (BENCHMARKS, session 24): the wide dent on Spot 0.94 against
+//! Measured (BENCHMARKS.md): the wide dent on Spot 0.94 against
 //! its floor 0.54 (the narrow one 0.75 against 0.57); clean Spot at most
 //! 0.37, bunny_npm 0.20, the raw bunny scan 0.69 against its floor 0.95;
 //! every generated family (saddles, sin·sin hills, panels, domes,

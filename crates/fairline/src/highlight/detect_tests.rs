@@ -1,4 +1,4 @@
-//! Evidence for the defect detection (issue #18 item 1): generated surfaces
+//! Evidence for the defect detection: generated surfaces
 //! with a known smooth truth stay quiet at every resolution; small planted
 //! bumps, dents, flat spots and ripples are found and ranked first, with a
 //! region of about their footprint.
@@ -263,7 +263,7 @@ fn planted_defects_are_found_ranked_first_with_a_tight_region() {
             defect.name
         );
         let footprint_area = std::f64::consts::PI * footprint.powi(2);
-        // "no larger than about three times the footprint" (issue #18);
+        // "no larger than about three times the footprint";
         // measured: bump and dent 1.5×, flat spot 2.7×, ripple 3.06× (a
         // ripple of one spacing stays visible beyond its 10 % footprint)
         println!("  area / footprint {:.2}", top.area / footprint_area);

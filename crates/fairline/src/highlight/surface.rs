@@ -403,7 +403,7 @@ pub fn surface_highlight_lines(
 /// Radii of [`default_circular_lights`] unless told otherwise.
 pub const DEFAULT_CIRCULAR_RADII: usize = 10;
 
-/// Circular lights derived from a part (issue #20 item 7), for a user who
+/// Circular lights derived from a part, for a user who
 /// has none: the axis t is `axis` when given, else the area-weighted mean
 /// normal `Σ N dA / Σ dA` of the part when its length is at least 0.2 (an
 /// open panel or a shell facing one way), else +z (a closed body, whose
@@ -616,7 +616,7 @@ pub const DEFAULT_MAX_LIGHTS: usize = 1000;
 
 pub use crate::bspline::{MIN_PATCH_GRID, patch_grid};
 
-/// Highlight lines of every patch of a part, in one run (issue #20 item 4):
+/// Highlight lines of every patch of a part, in one run:
 /// for a single surface exactly [`surface_highlight_lines`] with `opts`;
 /// for several, each patch on its own [`patch_grid`] (the part's diagonal
 /// from the control points of all patches, `opts.grid_u` points along it),

@@ -965,8 +965,8 @@ fn circular_distance_at_near_tangent_configurations_matches_brute_force() {
     assert!(pairs > 20, "only {pairs} with two nearby minima");
 }
 
-/// Choosing the readable lights on a sample of the triangles (issue #18:
-/// 92–177 ms at 450k vertices with all of them) gives the same multiple k
+/// Choosing the readable lights on a sample of the triangles (92–177 ms at
+/// 450k vertices with all of them) gives the same multiple k
 /// as the median over every triangle, on every real mesh of ../shared/data
 /// and on generated parts, even when only 2 000 triangles are evaluated;
 /// with a budget above the face count the estimate is the full median

@@ -1867,7 +1867,7 @@ mod tests {
         );
     }
 
-    /// Issue #20 item 2: a flat annulus made of three surfaces of
+    /// A flat annulus made of three surfaces of
     /// revolution (entity 120: a generatrix line perpendicular to the axis,
     /// sectors of 120°, the middle one with the generatrix reversed, so its
     /// normal points the other way) is flat after conversion: every normal
@@ -2044,7 +2044,7 @@ mod tests {
         let mut changed = 0;
         for s in &imp.surfaces {
             let a = trimmed_area(&s.surface, 64, 64);
-            // Issue #20 item 4: the grid rule (whole cells split at the
+            // The grid rule (whole cells split at the
             // knots) equals the former triangle rule to 1e-6, except on
             // faces whose cells cross knots, where it is the nearer of the
             // two to a 1000 × 1000 midpoint rule (the former rule put a

@@ -1,5 +1,4 @@
-//! IGES export of (trimmed) B-spline surfaces: the way back to CAD (issue
-//! #20 item 3).
+//! IGES export of (trimmed) B-spline surfaces: the way back to CAD.
 //!
 //! Writes fixed-format ASCII IGES 5.3 (§2): 80-column records, section
 //! letter in column 73 and sequence number in columns 74–80; parameter data

@@ -1,5 +1,5 @@
 //! Text labels on regions of a rendered mesh (the patch indices of a part
-//! of many patches, issue #20 item 7), placed at each region's visible
+//! of many patches), placed at each region's visible
 //! centre after the z-buffer pass.
 
 use super::image::Image;

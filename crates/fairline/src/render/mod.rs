@@ -329,7 +329,7 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Image, RenderError>
 }
 
 /// [`render`] with text labels on regions of the first mesh (e.g. the
-/// patch indices of a part of many patches, issue #20 item 7): each label is
+/// patch indices of a part of many patches): each label is
 /// drawn at its region's *visible centre* — the visible pixel of the region
 /// farthest from the region's visible outline (chamfer distance transform of
 /// the per-pixel triangle ids) — on a light box, largest visible regions
@@ -460,7 +460,7 @@ fn frame_camera(
 /// scene order, as [`render_labelled`] counts them) seen at the centre of
 /// each pixel, row-major, `u32::MAX` where none. `None` for a scene with
 /// nothing finite to frame. Used to judge from which side a part's picture
-/// shows the most of it (issue #20). Errors as [`render`].
+/// shows the most of it. Errors as [`render`].
 pub fn visible_triangles(
     scene: &Scene,
     opts: &RenderOptions,

@@ -260,7 +260,7 @@ impl Evaluator<'_> {
 /// Moreton–Séquin estimate of H at the boundary (Eq. (28)), the Dirichlet
 /// data of H̃, then bends the first rings to honour it — on noisy sphere
 /// caps the largest error sat there, most at the patch corners
-/// (BENCHMARKS.md, Session 20). Free vertices get their vertex normal
+/// (BENCHMARKS.md). Free vertices get their vertex normal
 /// (replaced every iteration).
 fn g1_normals(
     mesh: &SurfaceMesh,

@@ -807,7 +807,7 @@ fn sphere_distance(m: &SurfaceMesh) -> (f64, f64) {
     (max, rms)
 }
 
-/// Schneider–Kobbelt on closed meshes (issue #21 item 4): without any
+/// Schneider–Kobbelt on closed meshes: without any
 /// constraint the harmonic field of H has no Dirichlet data (its Laplacian
 /// is singular); the method must still run, converge, and bring a noisy
 /// sphere back to a sphere — closer than Taubin — and leave a perfect
@@ -861,12 +861,12 @@ fn schneider_kobbelt_fairs_closed_meshes_with_and_without_fixed_vertices() {
 /// ring of 0.15 × the bounding-box diagonal, on the noisy input) against
 /// Taubin with its defaults on four noisy sphere caps (11² to 41² vertices,
 /// noise 0.3–1 % of the radius): the distance to the sphere must end at most
-/// Taubin's on every cap, both its largest value and its RMS (issue #21
-/// item 4), and the iteration must converge. (With the former two-ring
-/// normals it ended at 2.2× Taubin's RMS on the 21² cap and above the
-/// input's on the 41² cap; with the wide-ring fit alone, before its normals
-/// were made perpendicular to the boundary curve, its max was 3–32 % above
-/// Taubin's on three caps.) Numbers: BENCHMARKS.md, sessions 16, 17 and 20.
+/// Taubin's on every cap, both its largest value and its RMS, and the
+/// iteration must converge. (With two-ring normals it would end at 2.2×
+/// Taubin's RMS on the 21² cap and above the input's on the 41² cap; with
+/// the wide-ring fit alone, its normals not made perpendicular to the
+/// boundary curve, its max would be 3–32 % above Taubin's on three caps.)
+/// Numbers: BENCHMARKS.md.
 #[test]
 fn schneider_kobbelt_against_taubin_on_noisy_sphere_caps() {
     for (n, amp, noisy) in noisy_caps() {
@@ -933,9 +933,9 @@ fn rings_from_boundary(m: &SurfaceMesh) -> Vec<usize> {
     d
 }
 
-/// Schneider–Kobbelt on the cow "Spot" (closed, no constraints; issue #21
-/// item 4): it used to stop after one iteration because no step length of
-/// the clamped Gauss–Newton step lowered the merit. With the
+/// Schneider–Kobbelt on the cow "Spot" (closed, no constraints): an
+/// undamped method stops after one iteration because no step length of
+/// the clamped Gauss–Newton step lowers the merit. With the
 /// Levenberg–Marquardt fallback it keeps descending: more than one accepted
 /// iteration, each lowering the merit, the residual max |H − H̃|·ē below the
 /// input's, and nothing non-finite.
@@ -970,7 +970,7 @@ fn schneider_kobbelt_keeps_descending_on_spot() {
     assert!(m.positions().iter().all(|p| p.is_finite()));
 }
 
-/// Issue #21 item 5: the spring model's defaults on the cow "Spot" (the
+/// The spring model's defaults on the cow "Spot" (the
 /// real mesh of ../shared/data) keep its legs and horns: the relative
 /// stopping rule ends the iteration with the volume within 1 % and no vertex
 /// moved by more than two mean edge lengths, where the old fixed count of
@@ -1038,7 +1038,7 @@ fn fingerprint(p: &[Vec3], r: &SmoothReport) -> u64 {
 }
 
 /// The cases whose results were recorded before the smoothing family moved
-/// to the one algorithm shape (issue #17 item 1): (name, positions, report).
+/// to the one algorithm shape: (name, positions, report).
 fn recorded_cases() -> Vec<(&'static str, Vec<Vec3>, SmoothReport)> {
     let sphere = noisy_sphere(1.0, 3, 0.02);
     let caps = noisy_caps();
@@ -1165,10 +1165,8 @@ fn recorded_cases() -> Vec<(&'static str, Vec<Vec3>, SmoothReport)> {
 
 /// Results of [`recorded_cases`] before the change to the one shape:
 /// (name, fingerprint, Σx, Σy, Σz of the positions). The two open-cap
-/// Schneider–Kobbelt cases were re-recorded in session 20, when the
-/// estimated G¹ normals were made perpendicular to the boundary curve
-/// (issue #21 item 4, an intended change of the method); the closed-sphere
-/// case is unchanged.
+/// Schneider–Kobbelt cases record the method with its estimated G¹
+/// normals made perpendicular to the boundary curve.
 const RECORDED: &[(&str, u64, f64, f64, f64)] = &[
     (
         "laplace default",
@@ -1277,13 +1275,13 @@ const RECORDED: &[(&str, u64, f64, f64, f64)] = &[
     ),
 ];
 
-/// Issue #17 item 1: moving the five methods to the one shape (input by
+/// Moving the five methods to the one shape (input by
 /// reference, `Output` with positions and report, constraints as option
 /// fields) changed no result: positions and report bit for bit equal the
 /// fingerprints recorded before the change — for the explicit methods and
 /// the spring model. Implicit smoothing and Schneider–Kobbelt now solve
-/// through the one constrained solve (`solve::ConstrainedSolver`, issue #17
-/// item 2) on geom's cotangent Laplacian, whose diagonal −Σ w is summed in
+/// through the one constrained solve (`solve::ConstrainedSolver`) on
+/// geom's cotangent Laplacian, whose diagonal −Σ w is summed in
 /// another order: their results differ by round-off only. Measured against
 /// the former assembly (run side by side before it was removed): at most
 /// 2.0e-13 mean edge lengths over five implicit configurations (default;
@@ -1291,7 +1289,7 @@ const RECORDED: &[(&str, u64, f64, f64, f64)] = &[
 /// preservation and tangential motion; fixed boundary; t = 50, 3 steps).
 /// Here the coordinate sums must agree with the recorded ones to 1e-10.
 #[test]
-fn results_equal_those_recorded_before_the_one_shape() {
+fn results_equal_the_recorded_fingerprints() {
     let cases = recorded_cases();
     assert_eq!(cases.len(), RECORDED.len());
     for ((name, p, r), &(want_name, want, sx, sy, sz)) in cases.into_iter().zip(RECORDED) {

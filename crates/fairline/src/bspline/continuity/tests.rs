@@ -237,7 +237,7 @@ fn split_u(p: [[Vec3; 4]; 4]) -> ([[Vec3; 4]; 4], [[Vec3; 4]; 4]) {
     (l, r)
 }
 
-/// The one shape (#17): progress per phase, cancellation at the next
+/// The one shape: progress per phase, cancellation at the next
 /// phase, the same result with a control that never stops, and the report
 /// serialises to the CLI's keys with the class counts of its seams.
 #[test]

@@ -1,8 +1,7 @@
-//! Bit-for-bit regression of [`fair_structure_lines`] (issue #17 items
-//! 1–2): checksums of the output positions and the report, recorded with
-//! the code before the banded Cholesky and the line-block conjugate
-//! gradients moved to `crate::solve` and the function took the one
-//! algorithm shape (session 18, commit 85564a7).
+//! Bit-for-bit regression of [`fair_structure_lines`]: checksums of the
+//! output positions and the report, recorded with an independent earlier
+//! implementation (its own banded Cholesky and line-block conjugate
+//! gradients, commit 85564a7), which the current one must reproduce.
 
 use super::tests::{zigzag_grid, zigzag_staircase};
 use super::*;
@@ -103,7 +102,7 @@ const RECORDED: &[(&str, u64)] = &[
 ];
 
 #[test]
-fn results_are_bit_identical_to_those_recorded_before_the_refactor() {
+fn results_are_bit_identical_to_the_recorded_ones() {
     let mut mismatches = Vec::new();
     for (name, mesh, options, method) in cases() {
         let out = fair_structure_lines_with(&mesh, &options, method).unwrap();

@@ -1,5 +1,5 @@
 //! The input surface of structure-line fairing as a smooth reference: the
-//! points slide along it instead of leaving it (issue #21 item 3).
+//! points slide along it instead of leaving it.
 //!
 //! The input quad mesh is only a sampling of the surface the user means; its
 //! flat faces lie inside a convex surface by about κh²/8, which is as large

@@ -28,7 +28,7 @@ fn fair_in_place(
     Ok(out.report)
 }
 
-/// The one algorithm shape (#17 item 1): the input is untouched, progress
+/// The one algorithm shape: the input is untouched, progress
 /// comes once per iteration, and raising the cancel flag stops the run
 /// with the Cancelled error (here after the first iteration).
 #[test]
@@ -528,7 +528,7 @@ fn structure_line_cases() -> Vec<(String, SurfaceMesh, SurfaceMesh, Height)> {
     out
 }
 
-/// Issue #21 item 3: structure-line fairing without deformation. On zigzag
+/// Structure-line fairing without deformation. On zigzag
 /// quad meshes of known smooth surfaces (a saddle, a free-form patch, a
 /// cosine roof of 22 × 41 points, a Gaussian bump, and a staircase-shaped
 /// patch whose rows have 21 down to 9 points), the default fairing — points
@@ -542,7 +542,7 @@ fn structure_line_cases() -> Vec<(String, SurfaceMesh, SurfaceMesh, Height)> {
 /// - the boundary bit-identical.
 ///
 /// The thesis' method as printed (`on_surface: false`) leaves the surface
-/// by 10–100× more. Numbers: BENCHMARKS.md, session 17.
+/// by 10–100× more. Numbers: BENCHMARKS.md.
 #[test]
 fn zigzag_structure_lines_straighten_on_the_true_surface_better_than_taubin_50() {
     for (name, truth, zz, f) in structure_line_cases() {

@@ -1,5 +1,5 @@
-//! Regularised circular-highlight fairing (beyond Nishiyama et al.; issue
-//! #20 item 6, DESIGN.md §3).
+//! Regularised circular-highlight fairing (beyond Nishiyama et al.;
+//! DESIGN.md §3).
 //!
 //! The paper solves J Δr = −F for the selected targets only, with a
 //! truncated SVD. With few targets the system is underdetermined (more

@@ -509,8 +509,8 @@ fn check_case(c: &Case, drop: f64, closer: f64, name: &str) -> SurfaceFairReport
     rep
 }
 
-/// The guarantees of the paper's method (`--method paper`, the default up to
-/// session 15), with the thresholds it was tested against then, unchanged:
+/// The guarantees of the paper's method (`--method paper`), with its own
+/// thresholds:
 /// the regularised default trades some target residual for keeping every
 /// other line fair (see `check_case`), the paper's method keeps these.
 fn check_case_paper(c: &Case, max_iterations: usize, drop: f64, name: &str) -> SurfaceFairReport {
@@ -844,12 +844,11 @@ fn fingerprint(s: &BSplineSurface, residual_after: [f64; 2], objectives: &[f64])
     h
 }
 
-/// The one-shape `fair_surface(surface, options)` gives bit for bit what
-/// the former `fair_surface(surface, lights, endpoints, options)` gave: the
-/// fingerprints were recorded from the former code on the dome case (both
-/// solvers) before the change; the input surface is untouched.
+/// `fair_surface(surface, options)` gives bit for bit the recorded
+/// fingerprints of a reference implementation on the dome
+/// case (both solvers); the input surface is untouched.
 #[test]
-fn fair_surface_one_shape_is_bit_identical_to_the_former_api() {
+fn fair_surface_is_bit_identical_to_the_recorded_reference() {
     let clean = height_surface(15, 15, 1.0, 1.0, |x, y| 0.8 - 0.4 * (x * x + y * y));
     let c = case(clean, (11, 7, 0.03), Vec3::new(0.0, 0.0, 3.0), 0.4, 9, 0.2);
     let recorded = [

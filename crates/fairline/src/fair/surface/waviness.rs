@@ -1,6 +1,6 @@
 //! How wavy a planar polyline is: the measures by which fairing of B-spline
-//! surfaces is judged to keep the highlight lines it does not target fair
-//! (issue #20 item 6). They work on the (u, v) pre-images of highlight
+//! surfaces is judged to keep the highlight lines it does not target fair.
+//! They work on the (u, v) pre-images of highlight
 //! lines, which are planar curves, so curvature has a sign and inflections
 //! are defined.
 //!

@@ -596,7 +596,7 @@ fn quantile(xs: &[f64], q: f64) -> f64 {
     v[((v.len() - 1) as f64 * q).round() as usize]
 }
 
-/// Issue #20 item 7: linear highlight lines on a surface agree with the
+/// Linear highlight lines on a surface agree with the
 /// same lights on its tessellation. On the teapot's lid (the patches the
 /// lines used to miss: the lights were the middle 100 of a d_P range
 /// stretched by the near-silhouette samples, so only silhouette bands were
@@ -612,7 +612,7 @@ fn quantile(xs: &[f64], q: f64) -> f64 {
 /// (`contour::too_many_levels`).
 ///
 /// The lid is compared with its patches tessellated together (welded at
-/// the seams), not each patch alone (session 22, measured): on teapot
+/// the seams), not each patch alone (measured): on teapot
 /// patch 22 (a quarter of the lid's rim) 200 of its 1475 surface-line points (13.6 %)
 /// are light 0's line along its border u = 0, a seam in the lights' plane
 /// of symmetry, where the exact d_P is 0 all along the seam; the surface
@@ -838,7 +838,7 @@ fn default_circular_lights_over_a_dome_draw_nested_rings() {
     assert!(default_circular_lights(&[], None, 8).is_none());
 }
 
-/// Issue #20 item 2, the impeller's "flat shroud disc": its only flat faces
+/// The impeller's "flat shroud disc": its only flat faces
 /// are the two planes (faces 74 and 76, control points at one z), and their
 /// linear highlight lines are straight. What looks like a flat disc from
 /// above is a dish of revolution (rational bicubic faces, z from −2.37 at
@@ -1112,7 +1112,7 @@ fn readable_part_lights_on_the_teapot_leave_no_cell_to_the_line_count_rule() {
     assert_eq!(skipped, 0);
 }
 
-/// Issue #20 (pictures): the separation of neighbouring lines on the
+/// The separation of neighbouring lines on the
 /// screen ([`linear_separation_on_screen`]). On the plane z = 0 under
 /// lights along x (plane normal z), d_P = y: the lines are the lines
 /// y = m·s, s apart on the surface. Seen straight down the gap is s; seen
@@ -1271,7 +1271,7 @@ fn readable_lines_in_view_drop_lines_crowded_on_the_screen() {
     );
 }
 
-/// Issue #20 item 2, the "dash-dotted" line near the impeller's patch 17:
+/// The "dash-dotted" line near the impeller's patch 17:
 /// with the default lights (facing the blades), lights 14–16 fall apart
 /// into pieces on face 17, the same pieces at grid 200 and 800 (CLI,
 /// measured). Face 17 is a thin trimmed strip of a surface of revolution

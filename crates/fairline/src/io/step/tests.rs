@@ -1180,7 +1180,7 @@ fn round_trip_in_unit(surfaces: &[BSplineSurface], unit: LengthUnit) {
 }
 
 // ---------------------------------------------------------------------
-// P-curves (issue #20: ADVANCED_FACE bounds as trimming loops, using the
+// P-curves (ADVANCED_FACE bounds as trimming loops, using the
 // p-curves when present).
 
 impl File {
@@ -1661,8 +1661,8 @@ fn real_step_files_have_no_pcurves_and_read_from_their_edges() {
     }
 }
 
-// The p-curve check tracks the nearest edge point along the edge (issue
-// #20: cheap and still exact enough).
+// The p-curve check tracks the nearest edge point along the edge (cheap
+// and still exact enough).
 
 /// A square plate [0, 10]² (bilinear) trimmed by one loop: a cubic
 /// B-spline from (1, 1) to (9, 1) through a wave, then straight back
@@ -1791,7 +1791,7 @@ fn step_pcurve_check_along_polyline_edges_accepts_within_and_rejects_beyond_the_
 }
 
 // Faces whose bounds wind around their surface without a seam edge, with
-// p-curves (issue #20: use them there too when valid).
+// p-curves (use them there too when valid).
 
 impl File {
     /// A closed 2-D cubic B-spline p-curve `(u, v) = (θ, g(θ))` for
