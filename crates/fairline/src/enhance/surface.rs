@@ -288,15 +288,6 @@ fn corner_normals(
         .collect()
 }
 
-#[cfg(test)]
-thread_local! {
-    /// Tests only: the corner normals at the vertices given here replaced
-    /// by these (the true surface's normals), to measure what better corner
-    /// normals can give (`accuracy_tests::filleted_cylinder_error_by_part`).
-    pub(super) static TRUE_CORNER_NORMALS: std::cell::RefCell<Option<Vec<Option<Vec3>>>> =
-        const { std::cell::RefCell::new(None) };
-}
-
 /// The input surface of the vertex flow: the input mesh at its (normalised)
 /// positions with the crease-aware corner normals of its faces.
 pub(super) struct InputSurface<'a> {
@@ -336,28 +327,6 @@ impl<'a> InputSurface<'a> {
             &mut corner_normals,
             &separate,
         );
-        #[cfg(test)]
-        let corner_normals = TRUE_CORNER_NORMALS.with(|o| match &*o.borrow() {
-            Some(oracle) => corner_normals
-                .iter()
-                .enumerate()
-                .map(|(f, ns)| {
-                    let own = face_normals[f].0;
-                    let t = mesh.triangle(FaceId(f as u32));
-                    std::array::from_fn(|k| match oracle[t[k].idx()] {
-                        Some(m) if own != Vec3::ZERO => {
-                            if m.dot(own) < 0.0 {
-                                -m
-                            } else {
-                                m
-                            }
-                        }
-                        _ => ns[k],
-                    })
-                })
-                .collect(),
-            None => corner_normals,
-        });
         let vertex_normals = (0..mesh.vertex_count() as u32)
             .into_par_iter()
             .map(|v| {

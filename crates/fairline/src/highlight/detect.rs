@@ -1655,23 +1655,3 @@ fn fill_holes(mesh: &SurfaceMesh, in_region: &mut [bool]) {
 /// The flat-spot measure (module documentation, step 8).
 #[path = "detect_flat_spot.rs"]
 mod flat_spot;
-
-/// The wider-scale comparisons measured for wide dents on coarse meshes
-/// (README, Default lights on real meshes; BENCHMARKS.md): a table
-/// printer, not a check.
-#[cfg(test)]
-#[path = "detect_wide_table.rs"]
-mod wide_table;
-
-/// The loops and flat spots measured for the wide flank dent on Spot
-/// (README, Default lights on real meshes; BENCHMARKS.md): table
-/// printers, not checks.
-#[cfg(test)]
-#[path = "detect_loops_table.rs"]
-mod loops_table;
-
-/// The smoothed-mesh comparison of the highlight distance's extrema for
-/// the wide flank dent on Spot: a table printer, not a check.
-#[cfg(test)]
-#[path = "detect_smoothed_table.rs"]
-mod smoothed_table;
