@@ -67,8 +67,8 @@ def test_curvature_is_10x_faster_than_libigl():
     load = os.getloadavg()[0] / (os.cpu_count() or 1)
     if theirs < 10 * ours and not IN_CI and load > 2:
         # on a shared machine whose run queue is several times its cores,
-        # wall times measure the other processes (BENCHMARKS.md, session
-        # 16); under CI the target holds without excuse
+        # wall times measure the other processes; under CI the target
+        # holds without excuse
         print(f"SKIPPED: speed target not judged: load {load:.1f} per core")
         pytest.skip(f"machine overloaded (load {load:.1f} per core): ratio {theirs / ours:.1f}x not judged")
     assert theirs >= 10 * ours, f"fairline {ours:.3f} s vs libigl {theirs:.3f} s: only {theirs / ours:.1f}x"
