@@ -1,6 +1,6 @@
 """Exceptions raised by fairline.
 
-The classes follow the command-line tool's exit status (README "Commands"):
+The classes follow the command-line tool's exit status (README "Exit status"):
 
 * :class:`FairlineError` (a :class:`ValueError`): bad input or options, the
   CLI's exit status 2 — a malformed file, a non-manifold mesh, an index out

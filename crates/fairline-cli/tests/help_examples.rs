@@ -1,6 +1,7 @@
 //! Every example in every command's `--help` runs as printed on the files
 //! `fairline demo` writes: the help refers only to files a newcomer has
-//! after the README's first set-up command, and its examples work.
+//! after running `fairline demo` as the README's set-up does, and its
+//! examples work.
 
 mod common;
 

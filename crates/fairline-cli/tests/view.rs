@@ -1624,7 +1624,7 @@ fn workbench_timings() {
 }
 
 /// Keeps a screenshot the browser took: under the test's target folder
-/// always, and over the README's copy in docs/images/ only when
+/// always, and over the documentation's copy in docs/images/ only when
 /// `FAIRLINE_UPDATE_SCREENSHOTS` is set (a test run never changes tracked
 /// files otherwise).
 fn save_screenshot(name: &str, png: &[u8]) {

@@ -2,7 +2,8 @@
 //! ../shared/data/surfaces, with the defaults of
 //! `fairline continuity` (position tolerance 1e-4 × the control points'
 //! bounding-box diagonal, 0.5°, 5 % curvature). The numbers are those of
-//! the README's "Continuity across patches" table, stated as bounds.
+//! the table of docs/guide/inspect-cad.md, "Continuity across patch
+//! boundaries", stated as bounds.
 //!
 //! Shared edges are found between the patches' boundaries: the sides of
 //! untrimmed patches (the teapot), the trimming curves of trimmed ones (the

@@ -148,8 +148,8 @@ fn detection_on_real_meshes_is_stable_and_leaves_small_features_as_shape() {
         // belly) score above the noise-raised threshold but within their
         // discretisation floor (module documentation of `detect`, step 7)
         // and are counted as such. None of these meshes has a defect that
-        // stands out: no region on any of them (README, Detection on real
-        // meshes).
+        // stands out: no region on any of them (docs/guide/inspect-mesh.md,
+        // "Default lights on real meshes").
         assert!(d.judged_sites + d.shape_sites <= d.sites.len(), "{rel}");
         assert!(d.regions.is_empty(), "{rel}: {} regions", d.regions.len());
         assert_eq!(d.flagged_area_fraction, 0.0, "{rel}");

@@ -5,7 +5,7 @@
 //! The normal measure compares each site with a cubic over R; a dent or a
 //! flat spot wider than about R bends that cubic with it and is not seen
 //! (a 0.3-wide, 2 %-deep dent on the flank of the 2.9k-vertex Spot, with
-//! R = 0.24: README, Default lights on real meshes). What such a defect
+//! R = 0.24: docs/guide/inspect-mesh.md). What such a defect
 //! does to the surface is to take away its curvature: a flank that curves
 //! one way goes flat or turns the other way over the defect's area, while
 //! the surface smoothed at a wavelength of a few R — the intended shape at

@@ -1,6 +1,6 @@
 //! The JSON report of a command: the `--report` file of the CLI and the
-//! report dictionary of the Python package, one definition for both (README
-//! "Outputs and safety").
+//! report dictionary of the Python package, one definition for both (user
+//! guide, docs/guide/conventions.md).
 //!
 //! A report holds `"command"`, `"time_s"` (computation only), the keys the
 //! command adds (often every field of an algorithm's `Serialize` report,
