@@ -1,5 +1,6 @@
-"""The Python example of the README's "Python" section and the package
-docstring's example run as written, on the files `fairline demo` writes."""
+"""The Python examples of the README's "Python" section and of the user
+guide's Python page, and the package docstring's example, run as written,
+on the files `fairline demo` writes."""
 
 from __future__ import annotations
 
@@ -26,6 +27,15 @@ def test_readme_python_example_runs(tmp_path, demo):
     section = text[text.index("\n## Python\n") :]
     section = section[: section.index("\n## ", 1)]
     blocks = re.findall(r"```python\n(.*?)```", section, re.S)
+    assert len(blocks) == 1
+    run_in(tmp_path, demo, blocks[0])
+    assert (tmp_path / "wavy-smooth.ply").is_file()
+
+
+def test_guide_python_example_runs(tmp_path, demo):
+    need("trimesh")
+    text = (REPO / "docs" / "guide" / "python.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
     assert len(blocks) == 1
     run_in(tmp_path, demo, blocks[0])
     assert (tmp_path / "wavy-smooth.ply").is_file()
