@@ -445,7 +445,7 @@ mod tests {
     /// ω3 (the curvature-Laplacian term) pulls the result toward the
     /// diffusion-flow state: with ω3 = 1 no case is more than 10 % farther
     /// from the truth than flow in any measure (and the average gain
-    /// shrinks — the trade-off recorded in BENCHMARKS.md).
+    /// shrinks).
     #[test]
     fn laplacian_weight_moves_the_result_toward_diffusion_flow() {
         let rows = against_flow(&highlight_only().laplacian_weight(1.0));

@@ -410,12 +410,12 @@ struct Linearised {
     diff_nodes: Vec<DiffNode>,
 }
 
-/// Default [`FairOptions::refits`] (measured on the generated family,
-/// BENCHMARKS.md: with the fitted end tangents, refits lose
+/// Default [`FairOptions::refits`] (measured on the generated family: with
+/// the fitted end tangents, refits lose
 /// the widest saddle dent and cubic bump to diffusion flow).
 pub const DEFAULT_REFITS: usize = 0;
-/// Default [`FairOptions::flow_share`] (measured on the generated family,
-/// BENCHMARKS.md: without it the fitted end tangents
+/// Default [`FairOptions::flow_share`] (measured on the generated family:
+/// without it the fitted end tangents
 /// lose the widest cubic bump by 4 % in surface RMS).
 pub const DEFAULT_FLOW_SHARE: f64 = 0.25;
 

@@ -663,7 +663,7 @@ pub fn implicit_smooth(
             let opts = ConstrainedOptions {
                 points: Some(input.clone()),
                 // faer's rayon-parallel supernodal kernels made the 450k
-                // step slower on 2 cores (1.6 s vs 1.2 s wall, BENCHMARKS.md)
+                // step slower on 2 cores (1.6 s vs 1.2 s wall, measured)
                 parallel: false,
             };
             ConstrainedSolver::analyse(lap.symbolic.as_ref(), &inner_fixed, &opts)

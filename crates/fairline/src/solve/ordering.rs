@@ -8,7 +8,8 @@
 //! both halves are ordered recursively (in parallel with rayon). On a mesh
 //! with n vertices the separators have O(√n) vertices, so the factor of a
 //! Laplacian-like matrix needs O(n log n) entries and O(n^{3/2}) flops.
-//! Measured on the 450k-vertex benchmark mesh (BENCHMARKS.md "Smoothing"):
+//! Measured on the 450k-vertex benchmark mesh (`cargo bench -p fairline
+//! --bench smooth`):
 //! ordering plus symbolic analysis take about 0.3 s CPU against about 0.9 s
 //! for faer's AMD, the factor has 32.2M entries against AMD's 27.3M, and
 //! the numeric factorisation takes about as long; a whole implicit step
