@@ -255,9 +255,19 @@ fn run_child(
     };
     let stdout = out_reader.join().unwrap_or_default();
     let stderr = String::from_utf8_lossy(&err_reader.join().unwrap_or_default()).into_owned();
+    // past an address-space cap an allocation aborts the process, and a
+    // thread's stack cannot be mapped (a panic while building the pool)
     let out_of_memory = !killed
         && limits.memory_mb.is_some()
-        && (aborted(&status) || stderr.contains("memory allocation"));
+        && (aborted(&status)
+            || (status.code() == Some(101)
+                && [
+                    "memory allocation",
+                    "Cannot allocate memory",
+                    "Resource temporarily unavailable",
+                ]
+                .iter()
+                .any(|m| stderr.contains(m))));
     Ok(Ran {
         exit: status.code(),
         killed_by_deadline: killed,
@@ -533,6 +543,7 @@ impl PartJob<'_> {
             if ["warning:", "note:", "error:", "hint:"]
                 .iter()
                 .any(|p| line.starts_with(p))
+                && !line.contains("RUST_BACKTRACE")
             {
                 let line = line.replace(&*self.real_input.to_string_lossy(), &self.shown_input);
                 if line.starts_with("warning:") {
@@ -572,6 +583,13 @@ fn report_file(step: &Step) -> Option<String> {
 /// The `error:` and `hint:` lines of a command's standard error, joined;
 /// its last line when it has none.
 fn error_lines(stderr: &str) -> String {
+    // a panic: its message, the line after `panicked at`
+    let mut it = stderr.lines();
+    if it.any(|l| l.contains("panicked at"))
+        && let Some(msg) = it.next()
+    {
+        return format!("the command stopped on an internal error: {}", msg.trim());
+    }
     let lines: Vec<&str> = stderr
         .lines()
         .filter(|l| l.starts_with("error:") || l.starts_with("hint:"))
