@@ -34,6 +34,7 @@ import numpy as np
 
 from . import _native
 from ._errors import FairlineComputationError, FairlineError, FairlineFileError
+from ._inspect import inspect
 
 __version__ = _native.__version__
 
@@ -56,6 +57,7 @@ __all__ = [
     "write_surfaces",
     "surface_highlight_lines",
     "fair_surface",
+    "inspect",
     "from_trimesh",
     "to_trimesh",
 ]

@@ -17,6 +17,22 @@ impl std::fmt::Display for BadInput {
 }
 impl std::error::Error for BadInput {}
 
+/// Some parts of a `fairline inspect` run could not be judged (exit
+/// status 1; the report's rows say why).
+#[derive(Debug)]
+pub struct PartsFailed(pub u64);
+
+impl std::fmt::Display for PartsFailed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} part(s) could not be judged; their rows in the report say why",
+            self.0
+        )
+    }
+}
+impl std::error::Error for PartsFailed {}
+
 /// An error that exits with status 2.
 pub fn bad_input(msg: impl Into<String>) -> anyhow::Error {
     anyhow::Error::new(BadInput(msg.into()))

@@ -20,6 +20,7 @@ mod highlight;
 mod highlight_png;
 mod info;
 mod input;
+mod inspect;
 mod output;
 mod render;
 mod repair;
@@ -62,6 +63,7 @@ enum Command {
     Demo(demo::Args),
     View(view::Args),
     Repair(repair::Args),
+    Inspect(inspect::Args),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -81,6 +83,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Demo(a) => demo::run(a),
         Command::View(a) => view::run(a),
         Command::Repair(a) => repair::run(a),
+        Command::Inspect(a) => inspect::run(a),
     }
 }
 
@@ -116,6 +119,10 @@ fn main() {
         }
     };
     output::install_signal_handler();
+    if let Err(e) = output::apply_memory_limit() {
+        output::say(&format!("error: {e}"));
+        std::process::exit(error::EXIT_BAD_INPUT);
+    }
     // The command runs on a worker of rayon's pool: its parallel loops then
     // start from a worker and split work with the other threads directly,
     // instead of handing every loop to the pool and sleeping until it is

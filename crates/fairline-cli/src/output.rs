@@ -409,6 +409,30 @@ pub fn install_signal_handler() {
     drop(spawned);
 }
 
+/// Caps this process's address space at the number of MiB in the
+/// environment variable `FAIRLINE_MEMORY_LIMIT_MB`, when it is set (how
+/// `fairline inspect` limits each part's processes): an allocation beyond
+/// it aborts the process instead of exhausting the machine.
+pub fn apply_memory_limit() -> Result<()> {
+    let Some(value) = std::env::var_os(crate::inspect::MEMORY_LIMIT_ENV) else {
+        return Ok(());
+    };
+    let mb: u64 = value
+        .to_str()
+        .and_then(|v| v.trim().parse().ok())
+        .filter(|&mb| mb > 0)
+        .ok_or_else(|| {
+            bad_input(format!(
+                "{}={}: give a positive number of MiB",
+                crate::inspect::MEMORY_LIMIT_ENV,
+                value.to_string_lossy()
+            ))
+        })?;
+    let bytes = mb.saturating_mul(1 << 20);
+    rlimit::setrlimit(rlimit::Resource::AS, bytes, bytes)
+        .map_err(|e| anyhow::anyhow!("cannot limit the memory to {mb} MiB: {e}"))
+}
+
 /// How long work runs before its progress bar or spinner appears.
 const PROGRESS_DELAY: std::time::Duration = std::time::Duration::from_millis(800);
 
