@@ -332,18 +332,9 @@ pub fn require_extension(option: &str, path: &Path, allowed: &[&str]) -> Result<
     )))
 }
 
-/// The spelling of an option value on the command line
-/// (`schneider-kobbelt`), used for report values so that they match.
-pub fn option_value<T: clap::ValueEnum>(value: &T) -> String {
-    value
-        .to_possible_value()
-        .map(|p| p.get_name().to_string())
-        .unwrap_or_default()
-}
-
 /// `err` with the file named: unchanged when its message (with its
 /// causes) already names `path`, else with `path` as context, so that the
-/// error line reads `PATH: message` (defect 10 of issue #16). The causes
+/// error line reads `PATH: message`. The causes
 /// are kept, so the exit status does not change.
 pub fn name_file(path: &Path, err: impl Into<anyhow::Error>) -> anyhow::Error {
     let err = err.into();
