@@ -1,23 +1,32 @@
 //! Mesh commands: `read_mesh`, `write_mesh`, `curvature`, `highlight_lines`,
 //! `detect`, `fair`, `smooth`, `fair_quad`, `enhance`, `repair`.
 //!
-//! Each mirrors one CLI command (crates/fairline-cli/src/<command>.rs):
-//! the same library calls with the same options and defaults, the same
-//! refusals with the same messages, the same report keys. What the CLI does
-//! with files (reading the mesh, writing outputs, pictures) is left out:
-//! arrays come in and go out.
+//! Each runs one command: `fair` and `smooth` through the command layer
+//! (`fairline_commands`), as the CLI and the workbench do; the others mirror
+//! their CLI command (crates/fairline-cli/src/<command>.rs): the same
+//! library calls with the same options and defaults, the same refusals, the
+//! same report keys. What the CLI does with files (reading the mesh,
+//! writing outputs, pictures) is left out: arrays come in and go out.
 
 #![allow(clippy::too_many_arguments)]
 
 use crate::{Failure, Res, SoupArrays, mesh_from, positions_array, soup_arrays, soup_from};
+use fairline::enhance::{EnhanceSolver, Projection};
+use fairline::fair::FairMethod;
 use fairline::highlight::{
     CircularLight, CircularLights, DetectOptions, HighlightError, HighlightModel, HighlightOptions,
-    LightArray, LightChoice, Readability, UpAxis, circular_highlight_bands,
-    circular_highlight_lines, detect_irregularities,
+    LightArray, Readability, UpAxis, circular_highlight_bands, circular_highlight_lines,
+    detect_irregularities,
 };
-use fairline::io::JsonReport as Report;
+use fairline::io::RegionSpec;
 use fairline::mesh::{FaceId, VertexId};
-use fairline::{SurfaceMesh, Vec3};
+use fairline::smooth::SmoothMethod;
+use fairline::{Control, SurfaceMesh, Vec3};
+use fairline_commands::enhance::EnhanceSettings;
+use fairline_commands::fair::{FairInput, FairSettings};
+use fairline_commands::fair_quad::QuadSettings;
+use fairline_commands::smooth::SmoothSettings;
+use fairline_commands::{Choice, Lights, Report, Warning, Weights};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use serde_json::{Value, json};
@@ -142,17 +151,10 @@ fn fixed_vertices(fixed: &[i64], count: usize) -> Res<Vec<VertexId>> {
         .collect()
 }
 
-fn finite(name: &str, v: Option<f64>) -> Res<()> {
-    match v {
-        Some(x) if !x.is_finite() => Err(Failure::bad(format!("{name} must be finite"))),
-        _ => Ok(()),
-    }
-}
-
 /// New positions and the report.
 type PositionsOut<'py> = (Bound<'py, PyArray2<f64>>, String);
 
-/// `fairline smooth` (crates/fairline-cli/src/smooth.rs `run`).
+/// `fairline smooth`: the command layer's `smooth`.
 #[pyfunction]
 #[pyo3(signature = (v, indices, offsets, method = "taubin", weights = "uniform", exponent = -1.0,
     iterations = None, lambda_ = None, mu = None, pass_band = 0.1, time_step = 1.0, epsilon = None,
@@ -178,65 +180,31 @@ fn smooth<'py>(
     preserve_volume: bool,
     tangential: bool,
 ) -> PyResult<PositionsOut<'py>> {
-    use fairline::geom::LaplaceWeights;
-    use fairline::smooth::{SmoothError, SmoothMethod, SmoothOptions, smooth_warnings};
-    let Some(method) = SmoothMethod::from_name(method) else {
-        let names = SmoothMethod::ALL.map(SmoothMethod::name);
-        return Err(bad_choice("method", method, &names).into());
+    let mut settings = SmoothSettings {
+        method: SmoothMethod::parse(method).map_err(Failure::from)?,
+        weights: Weights::parse(weights).map_err(Failure::from)?,
+        exponent,
+        iterations,
+        lambda: lambda_,
+        mu,
+        pass_band,
+        time_step,
+        epsilon,
+        fix_boundary,
+        hierarchical_boundary,
+        fixed: Vec::new(),
+        preserve_volume,
+        tangential,
     };
-    let weights = match weights {
-        "uniform" => LaplaceWeights::Uniform,
-        "edge" => LaplaceWeights::EdgeLength { exponent },
-        "cotan" => LaplaceWeights::Cotangent,
-        other => return Err(bad_choice("weights", other, &["uniform", "edge", "cotan"]).into()),
-    };
-    for (n, x) in [
-        ("lambda_", lambda_),
-        ("mu", mu),
-        ("pass_band", Some(pass_band)),
-        ("time_step", Some(time_step)),
-        ("epsilon", epsilon),
-        ("exponent", Some(exponent)),
-    ] {
-        finite(n, x)?;
-    }
-    if iterations == Some(0) {
-        return Err(Failure::bad("iterations must be at least 1").into());
-    }
+    settings.check().map_err(Failure::from)?;
     let soup = soup_from(&v, &indices, &offsets)?;
     let (p, report) = crate::compute(py, move || -> Res<_> {
         let mesh = mesh_from(&soup)?;
-        let fixed = fixed_vertices(fixed.as_deref().unwrap_or(&[]), mesh.vertex_count())?;
-        let options = SmoothOptions::default()
-            .method(method)
-            .weights(weights)
-            .lambda(lambda_)
-            .mu(mu)
-            .pass_band(pass_band)
-            .time_step(time_step)
-            .epsilon(epsilon)
-            .iterations(iterations)
-            .fixed(fixed)
-            .fix_boundary(fix_boundary)
-            .hierarchical_boundary(hierarchical_boundary)
-            .preserve_volume(preserve_volume)
-            .tangential_only(tangential);
-        let mut report = Report::new("smooth");
-        let result = report.time(|| fairline::smooth::smooth(&mesh, &options));
-        let out = result.map_err(|e| match e {
-            SmoothError::Solve(_) => Failure::computation(e.to_string()),
-            other => Failure::bad(other.to_string()),
-        })?;
-        let r = &out.report;
-        report.set("method", method.name());
-        report.set("vertices", mesh.vertex_count());
-        report.set_fields(r);
-        for w in smooth_warnings(&mesh, &options, r) {
-            report.warn(w);
-        }
+        settings.fixed = fixed_vertices(fixed.as_deref().unwrap_or(&[]), mesh.vertex_count())?;
+        let out = fairline_commands::smooth::run(&mesh, &settings, &Control::new())?;
         Ok((
             mesh.original_values(&out.positions).to_vec(),
-            report.to_json().to_string(),
+            out.report.to_json().to_string(),
         ))
     })?;
     Ok((positions_array(py, &p), report))
@@ -248,7 +216,7 @@ fn output_positions(mesh: &SurfaceMesh) -> Vec<Vec3> {
     mesh.original_values(mesh.positions()).to_vec()
 }
 
-/// `fairline fair-quad` (crates/fairline-cli/src/smooth.rs `run_quad`).
+/// `fairline fair-quad`: the command layer's `fair-quad`.
 #[pyfunction]
 #[pyo3(signature = (v, indices, offsets, weight = 0.01, deviation = 0.1, deviation_factor = 0.1,
     iterations = 3, fix_boundary = false, fixed = None, off_surface = false))]
@@ -265,52 +233,30 @@ fn fair_quad<'py>(
     fixed: Option<Vec<i64>>,
     off_surface: bool,
 ) -> PyResult<PositionsOut<'py>> {
-    use fairline::fair::{QuadFairError, QuadFairOptions, fair_structure_lines};
-    if !weight.is_finite() || weight <= 0.0 {
-        return Err(Failure::bad("weight must be a positive number").into());
-    }
-    if !deviation.is_finite() || deviation < 0.0 {
-        return Err(Failure::bad("deviation must be ≥ 0").into());
-    }
-    if !deviation_factor.is_finite() || deviation_factor <= 0.0 {
-        return Err(Failure::bad("deviation_factor must be positive").into());
-    }
+    let mut settings = QuadSettings {
+        weight,
+        deviation,
+        deviation_factor,
+        iterations,
+        fix_boundary,
+        fixed: Vec::new(),
+        off_surface,
+    };
+    settings.check().map_err(Failure::from)?;
     let soup = soup_from(&v, &indices, &offsets)?;
     let (p, report) = crate::compute(py, move || -> Res<_> {
-        let mut mesh = mesh_from(&soup)?;
-        if !mesh.faces().any(|f| mesh.face_size(f) == 4) {
-            return Err(Failure::bad(
-                "fair-quad needs a quad mesh (no quadrilateral found)",
-            ));
-        }
-        let fixed = fixed_vertices(fixed.as_deref().unwrap_or(&[]), mesh.vertex_count())?;
-        let opts = QuadFairOptions::default()
-            .weight(weight)
-            .deviation(deviation)
-            .deviation_factor(deviation_factor)
-            .iterations(iterations)
-            .fix_boundary(fix_boundary)
-            .fixed(fixed)
-            .on_surface(!off_surface);
-        let mut report = Report::new("fair-quad");
-        let out = report
-            .time(|| fair_structure_lines(&mesh, &opts))
-            .map_err(|e| match e {
-                QuadFairError::Solve(_) => Failure::computation(e.to_string()),
-                other => Failure::bad(other.to_string()),
-            })?;
-        mesh.set_positions(out.positions)?;
-        let r = out.report;
-        report.set_fields(&r);
-        for w in r.warnings() {
-            report.warn(w);
-        }
-        Ok((output_positions(&mesh), report.to_json().to_string()))
+        let mesh = mesh_from(&soup)?;
+        settings.fixed = fixed_vertices(fixed.as_deref().unwrap_or(&[]), mesh.vertex_count())?;
+        let out = fairline_commands::fair_quad::run(&mesh, &settings, &Control::new())?;
+        Ok((
+            mesh.original_values(&out.positions).to_vec(),
+            out.report.to_json().to_string(),
+        ))
     })?;
     Ok((positions_array(py, &p), report))
 }
 
-/// `fairline enhance` (crates/fairline-cli/src/enhance.rs).
+/// `fairline enhance`: the command layer's `enhance`.
 #[pyfunction]
 #[pyo3(signature = (v, indices, offsets, lambda_ = 1.0, mu = 0.5, iterations = 1,
     solver = "auto", fixed = None, projection = "smooth"))]
@@ -326,34 +272,11 @@ fn enhance<'py>(
     fixed: Option<Vec<i64>>,
     projection: &str,
 ) -> PyResult<PositionsOut<'py>> {
-    use fairline::enhance::{
-        EnhanceError, EnhanceOptions, EnhanceSolver, Projection, enhance_features,
-    };
-    let projection = match projection {
-        "smooth" => Projection::Smooth,
-        "mesh" => Projection::Mesh,
-        "none" => Projection::None,
-        other => {
-            return Err(bad_choice("projection", other, &["smooth", "mesh", "none"]).into());
-        }
-    };
-    let solver = match solver {
-        "auto" => EnhanceSolver::Auto,
-        "direct" => EnhanceSolver::Direct,
-        "cg" => EnhanceSolver::Cg,
-        "amg" => EnhanceSolver::Amg,
-        other => {
-            return Err(bad_choice("solver", other, &["auto", "direct", "cg", "amg"]).into());
-        }
-    };
+    let projection = Projection::parse(projection).map_err(Failure::from)?;
+    let solver = EnhanceSolver::parse(solver).map_err(Failure::from)?;
     let soup = soup_from(&v, &indices, &offsets)?;
     let (p, report) = crate::compute(py, move || -> Res<_> {
         let mesh = mesh_from(&soup)?;
-        if !mesh.is_triangle_mesh() {
-            return Err(Failure::bad(
-                "enhance needs a triangle mesh (triangulate it first, e.g. with `fairline convert`)",
-            ));
-        }
         let mut fixed_ids = Vec::new();
         for (k, &f) in fixed.as_deref().unwrap_or(&[]).iter().enumerate() {
             // the library names a vertex beyond the mesh; a negative or
@@ -366,34 +289,19 @@ fn enhance<'py>(
             }
             fixed_ids.push(VertexId(f as u32));
         }
-        let options = EnhanceOptions::default()
-            .lambda(lambda_)
-            .mu(mu)
-            .iterations(iterations)
-            .solver(solver)
-            .projection(projection)
-            .fixed(fixed_ids);
-        let mut report = Report::new("enhance");
-        let result = report
-            .time(|| enhance_features(&mesh, &options))
-            .map_err(|e| match e {
-                EnhanceError::FixedVertexOutOfRange { vertex, vertices } => Failure::bad(format!(
-                    "fixed vertex {vertex} does not exist; the mesh has {vertices} vertices (0 to {})",
-                    vertices.saturating_sub(1)
-                )),
-                e @ EnhanceError::InvalidOption(_) => Failure::bad(e.to_string()),
-                e => Failure::computation(format!("vertex flow: {e}")),
-            })?;
-        let mut out = mesh.clone();
-        out.set_positions(result.positions)?;
-        let r = &result.report;
-        report.set_fields(r);
-        report.set("histogram_before", &r.quality_before.histogram);
-        report.set("histogram_after", &r.quality_after.histogram);
-        for w in r.warnings() {
-            report.warn(w);
-        }
-        Ok((output_positions(&out), report.to_json().to_string()))
+        let settings = EnhanceSettings {
+            lambda: lambda_,
+            mu,
+            iterations,
+            solver,
+            projection,
+            fixed: fixed_ids,
+        };
+        let out = fairline_commands::enhance::run(&mesh, &settings, &Control::new())?;
+        Ok((
+            mesh.original_values(&out.positions).to_vec(),
+            out.report.to_json().to_string(),
+        ))
     })?;
     Ok((positions_array(py, &p), report))
 }
@@ -417,7 +325,7 @@ fn repair<'py>(
         let r = &repaired.report;
         report.set_fields(r);
         for w in r.warnings() {
-            report.warn(w);
+            report.warn(Warning::Text(w));
         }
         Ok((repaired.soup, report.to_json().to_string()))
     })?;
@@ -459,13 +367,7 @@ impl LightOptions {
         lights: Option<String>,
         min_normal_cos: Option<f64>,
     ) -> Res<Self> {
-        let up = match up {
-            "auto" => UpAxis::Auto,
-            "x" => UpAxis::X,
-            "y" => UpAxis::Y,
-            "z" => UpAxis::Z,
-            other => return Err(bad_choice("up", other, &["auto", "x", "y", "z"])),
-        };
+        let up = UpAxis::parse(up)?;
         let lights = match lights {
             Some(text) => Some(
                 serde_json::from_str::<Value>(&text)
@@ -505,48 +407,58 @@ impl LightOptions {
         }
     }
 
-    /// What the caller said about a linear light array, for the library's
-    /// defaults (the CLI's `LightArgs` makes the same).
-    fn choice(&self) -> LightChoice {
-        LightChoice::default()
-            .direction(self.direction)
-            .plane_normal(self.plane_normal)
-            .up(self.up)
-            .plane_point(self.plane_point)
-            .spacing(self.spacing)
-    }
-
-    /// The linear light array (the CLI's `LightArgs::light_array`).
-    fn light_array(&self, mesh: &SurfaceMesh) -> Res<LightArray> {
-        if let Some(v) = &self.lights {
-            if v.get("center").is_some() {
-                return Err(Failure::bad(
-                    "lights: circular lights are drawn by `highlight_lines` only; this function needs a linear light array {\"plane_point\",\"plane_normal\",\"direction\",\"spacing\"}",
-                ));
-            }
-            return serde_json::from_value(v.clone())
-                .map_err(|e| Failure::bad(format!("lights: {e}")));
+    /// The lights as the command layer takes them, with `given` as the
+    /// whole array.
+    fn fields(&self, given: Option<LightArray>) -> Lights {
+        Lights {
+            direction: self.direction,
+            plane_normal: self.plane_normal,
+            up: self.up,
+            plane_point: self.plane_point,
+            spacing: self.spacing,
+            given,
+            min_normal_cos: self.min_normal_cos(),
         }
-        self.choice().light_array(mesh).map_err(highlight_error)
     }
 
-    /// The linear light array of a part of B-spline surfaces (the CLI's
-    /// `LightArgs::part_light_array`): from the dictionary as it is, or the
-    /// part's readable default lights with the given fields in place.
+    /// The `lights` dictionary as a linear light array, if given.
+    fn given(&self) -> Res<Option<LightArray>> {
+        match &self.lights {
+            Some(v) => serde_json::from_value(v.clone())
+                .map(Some)
+                .map_err(|e| Failure::bad(format!("lights: {e}"))),
+            None => Ok(None),
+        }
+    }
+
+    /// The lights of a command that needs a linear light array (a circular
+    /// `lights` dictionary is refused).
+    pub(crate) fn lights(&self) -> Res<Lights> {
+        if self
+            .lights
+            .as_ref()
+            .is_some_and(|v| v.get("center").is_some())
+        {
+            return Err(Failure::bad(
+                "lights: circular lights are drawn by `highlight_lines` only; this function needs a linear light array {\"plane_point\",\"plane_normal\",\"direction\",\"spacing\"}",
+            ));
+        }
+        Ok(self.fields(self.given()?))
+    }
+
+    /// The linear light array ([`Lights::light_array`]).
+    fn light_array(&self, mesh: &SurfaceMesh) -> Res<LightArray> {
+        Ok(self.lights()?.light_array(mesh)?)
+    }
+
+    /// The linear light array of a part of B-spline surfaces
+    /// ([`Lights::part_light_array`]).
     pub(crate) fn part_light_array(
         &self,
         surfaces: &[fairline::bspline::BSplineSurface],
     ) -> Res<LightArray> {
-        let given = match &self.lights {
-            Some(v) => Some(
-                serde_json::from_value(v.clone())
-                    .map_err(|e| Failure::bad(format!("lights: {e}")))?,
-            ),
-            None => None,
-        };
-        fairline::highlight::part_light_array(surfaces, &self.choice(), given)
-            .map(|(array, _)| array)
-            .map_err(highlight_error)
+        let (array, _) = self.fields(self.given()?).part_light_array(surfaces)?;
+        Ok(array)
     }
 
     /// The `up` axis as a vector (`None` for auto).
@@ -560,19 +472,15 @@ impl LightOptions {
             .unwrap_or(HighlightOptions::default().min_normal_cos)
     }
 
-    /// The lights to draw and read lines with (the CLI's
-    /// `LightArgs::readable`): `light` itself when it came from `lights`,
-    /// else [`LightChoice::readable`].
+    /// The lights to draw and read lines with ([`Lights::readable`]).
     fn readable(&self, mesh: &SurfaceMesh, light: LightArray) -> Res<LightArray> {
-        if self.lights.is_some() {
-            return Ok(light);
-        }
-        self.choice().readable(mesh, light).map_err(highlight_error)
+        let given = self.lights.is_some().then_some(light);
+        Ok(self.fields(given).readable(mesh, light)?)
     }
 
-    /// Model options (the CLI's `LightArgs::options`).
+    /// Model options.
     fn options(&self) -> HighlightOptions {
-        HighlightOptions::default().min_normal_cos(self.min_normal_cos())
+        self.fields(None).options()
     }
 }
 
@@ -723,7 +631,7 @@ fn highlight_lines(
             );
         }
         if lines.lines.is_empty() {
-            report.warn("no highlight line crosses the mesh; try other light options (--plane-normal, --direction, --spacing)");
+            report.warn(Warning::Text("no highlight line crosses the mesh; try other light options (--plane-normal, --direction, --spacing)".into()));
         }
         Ok((document.to_string(), report.to_json().to_string()))
     })?;
@@ -792,8 +700,8 @@ fn detect<'py>(
         if let Some(n) = max_regions {
             det.regions.truncate(n);
         }
-        let all = fairline::fair::suggested_region(&mesh, &det, source.as_deref());
-        let regions = fairline::fair::detected_region_entries(&det, source.as_deref());
+        let all = fairline_commands::regions::suggested_region(&mesh, &det, source.as_deref());
+        let regions = fairline_commands::regions::detected_region_entries(&det, source.as_deref());
         report.set("vertices", mesh.vertex_count());
         report.set("lines", lines.lines.len());
         report.set("spacing", array.spacing());
@@ -813,15 +721,15 @@ fn detect<'py>(
         report.set("region_faces", all.len());
         report.set("regions", regions);
         if lines.lines.is_empty() {
-            report.warn("no highlight line crosses the mesh, so nothing could be detected; try other light options (--plane-normal, --direction, --spacing)");
+            report.warn(Warning::Text("no highlight line crosses the mesh, so nothing could be detected; try other light options (--plane-normal, --direction, --spacing)".into()));
         }
         Ok((all, report.to_json().to_string()))
     })?;
     Ok((PyArray1::from_vec(py, faces), report))
 }
 
-/// `fairline fair` (crates/fairline-cli/src/fair.rs): new positions and
-/// the report. `region` is region JSON text ({"faces"}, {"vertices"} or
+/// `fairline fair`: the command layer's `fair`; new positions and the
+/// report. `region` is region JSON text ({"faces"}, {"vertices"} or
 /// {"sphere"}); `auto` detects the regions instead.
 #[pyfunction]
 #[pyo3(signature = (v, indices, offsets, region = None, auto = false, grow = 0,
@@ -850,21 +758,7 @@ fn fair<'py>(
     diff_weight: Option<f64>,
     laplacian_weight: Option<f64>,
 ) -> PyResult<PositionsOut<'py>> {
-    use fairline::fair::{
-        FairError, FairMethod, FairOptions, FairReport, fair_highlight_lines, grow_region,
-        regions_report, regions_warnings,
-    };
-    use fairline::io::RegionSpec;
-    let fair_method = match method {
-        "highlight" => FairMethod::Highlight,
-        "paper" => FairMethod::Paper,
-        "diffusion-flow" => FairMethod::DiffusionFlow,
-        other => {
-            return Err(
-                bad_choice("method", other, &["highlight", "paper", "diffusion-flow"]).into(),
-            );
-        }
-    };
+    let method = FairMethod::parse(method).map_err(Failure::from)?;
     match (&region, auto) {
         (Some(_), true) => {
             return Err(Failure::bad("region and auto=True cannot be given together").into());
@@ -883,143 +777,42 @@ fn fair<'py>(
         lights,
         min_normal_cos,
     )?;
-    let method = method.to_string();
+    let d = FairSettings::default();
+    let settings = FairSettings {
+        auto,
+        grow,
+        lights: light.lights()?,
+        max_iterations: max_iterations.unwrap_or(d.max_iterations),
+        epsilon: epsilon.unwrap_or(d.epsilon),
+        method,
+        fair_weight: fair_weight.unwrap_or(d.fair_weight),
+        diff_weight: diff_weight.unwrap_or(d.diff_weight),
+        laplacian_weight: laplacian_weight.unwrap_or(d.laplacian_weight),
+    };
     let soup = soup_from(&v, &indices, &offsets)?;
     let out = crate::compute(py, move || -> Res<_> {
         let mesh = mesh_from(&soup)?;
-        if !mesh.is_triangle_mesh() {
-            return Err(Failure::bad(
-                "highlight-line fairing needs a triangle mesh (this one has polygons; triangulate it first, e.g. with `fairline convert`)",
-            ));
-        }
-        // detection at the detail lights, fairing at the readable lights
-        // (the lines the mesh resolves), as the CLI's
-        let array = light.light_array(&mesh)?;
-        let fairing_light = light.readable(&mesh, array)?;
-        let d = FairOptions::default();
-        let options = FairOptions::default()
-            .light(fairing_light)
-            .method(fair_method)
-            .fair_weight(fair_weight.unwrap_or(d.fair_weight))
-            .diff_weight(diff_weight.unwrap_or(d.diff_weight))
-            .laplacian_weight(laplacian_weight.unwrap_or(d.laplacian_weight))
-            .max_iterations(max_iterations.unwrap_or(d.max_iterations))
-            .epsilon(epsilon.unwrap_or(d.epsilon))
-            .highlight(light.options());
-        let to_error = |e: FairError| -> Failure {
-            let f = match e {
-                FairError::Solve(_) => Failure::computation(e.to_string()),
-                other => Failure::bad(other.user_message()),
-            };
-            if region.is_some() {
-                Failure {
-                    kind: f.kind,
-                    message: format!("region: {}", f.message),
-                }
-            } else {
-                f
+        let faces = match &region {
+            Some(text) => {
+                let spec = RegionSpec::from_json(text)
+                    .map_err(|e| Failure::bad(format!("region: {e}")))?;
+                Some(
+                    spec.faces(&mesh)
+                        .map_err(|e| Failure::bad(format!("region: {e}")))?,
+                )
             }
+            None => None,
         };
-        let mut report = Report::new("fair");
-        let regions: Vec<Vec<FaceId>> = if let Some(text) = &region {
-            let spec =
-                RegionSpec::from_json(text).map_err(|e| Failure::bad(format!("region: {e}")))?;
-            vec![
-                spec.faces(&mesh)
-                    .map_err(|e| Failure::bad(format!("region: {e}")))?,
-            ]
-        } else {
-            let (det, grown) = report
-                .time(|| fairline::fair::detect_regions_to_fair(&mesh, array, light.options()))
-                .map_err(highlight_error)?;
-            report.set("detected_regions", det.regions.len());
-            grown
+        let input = FairInput {
+            mesh: &mesh,
+            region: faces.as_deref(),
+            name: None,
         };
-        let regions: Vec<Vec<FaceId>> = if grow > 0 {
-            regions
-                .iter()
-                .map(|f| grow_region(&mesh, f, grow))
-                .collect()
-        } else {
-            regions
-        };
-        let region_faces = fairline::fair::regions_union(&regions);
-        let detected_before =
-            fairline::highlight::detect_region(&mesh, &array, light.options(), &region_faces)
-                .map_err(highlight_error)?;
-        let mut current: SurfaceMesh = mesh.clone();
-        let mut results: Vec<FairReport> = Vec::new();
-        let mut skipped: Vec<Value> = Vec::new();
-        for (k, faces) in regions.iter().enumerate() {
-            let region_options = options.clone().region(faces.clone());
-            let outcome = report.time(|| fair_highlight_lines(&current, &region_options));
-            match outcome {
-                Ok(out) => {
-                    results.push(out.report);
-                    current
-                        .set_positions(out.positions)
-                        .map_err(|e| Failure::computation(e.to_string()))?;
-                }
-                Err(FairError::NoMovableVertex(msg)) if auto => {
-                    skipped.push(json!({"region": k, "reason": msg}));
-                }
-                Err(e) => return Err(to_error(e)),
-            }
-        }
-        // the detection score inside the region after, same lights (as the
-        // CLI's)
-        let detected_after =
-            fairline::highlight::detect_region(&current, &array, light.options(), &region_faces)
-                .map_err(highlight_error)?;
-        let (score_before, score_after) = (detected_before.score, detected_after.score);
-        report.set("detect_score_before", score_before);
-        report.set("detect_score_after", score_after);
-        report.set("detect_threshold", detected_before.threshold);
-        report.set("detect_flat_spot_before", detected_before.flat_spot);
-        report.set("detect_flat_spot_after", detected_after.flat_spot);
-        report.set(
-            "detect_flat_spot_floor",
-            detected_before.detection.flat_spot_floor,
-        );
-        // and `detect` on the output, with the lights it chooses there
-        let output_light = light.light_array(&current)?;
-        let as_detect = if output_light == array {
-            detected_after
-        } else {
-            fairline::highlight::detect_region(
-                &current,
-                &output_light,
-                light.options(),
-                &region_faces,
-            )
-            .map_err(highlight_error)?
-        };
-        report.set("detect_regions_after", as_detect.detection.regions.len());
-        if let Some(w) = as_detect.remaining_defect_warning(score_before, score_after) {
-            report.warn(w);
-        }
-        for w in regions_warnings(
-            &results,
-            options.max_iterations,
-            (score_before, score_after),
-        ) {
-            report.warn(w);
-        }
-        report.set("method", &method);
-        report.set("light", array);
-        report.set("fairing_light", fairing_light);
-        report.set("regions", results.len());
-        if auto {
-            report.set("skipped_regions", skipped);
-        }
-        let total_moved = current
-            .positions()
-            .iter()
-            .zip(mesh.positions())
-            .map(|(a, b)| (*a - *b).length())
-            .fold(0.0, f64::max);
-        report.set_fields(regions_report(&results, total_moved));
-        Ok((output_positions(&current), report.to_json().to_string()))
+        let out = fairline_commands::fair::run(input, &settings, &Control::new())?;
+        Ok((
+            output_positions(&out.mesh),
+            out.report.to_json().to_string(),
+        ))
     })?;
     Ok((positions_array(py, &out.0), out.1))
 }

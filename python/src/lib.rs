@@ -6,8 +6,9 @@
 //! `--report`). The pure-Python package `fairline` (python/fairline) wraps
 //! these with shape/dtype checks, docstrings and numpy/trimesh conversions.
 //!
-//! Only this layer knows the library's current API: when the library is
-//! reshaped, only these files change.
+//! The commands themselves (which steps, which report, which warnings) are
+//! the command layer's (`fairline_commands`), shared with the CLI and the
+//! workbench; this layer converts arrays and errors.
 //!
 //! Every computation runs with the GIL released (`Python::detach`).
 
@@ -70,6 +71,26 @@ impl From<fairline::io::IoError> for Failure {
             kind,
             message: e.to_string(),
         }
+    }
+}
+
+impl From<fairline_commands::CommandError> for Failure {
+    /// The command layer's kinds as the Python exception classes; the
+    /// message worded with the package's keyword names, the region named
+    /// `region`.
+    fn from(e: fairline_commands::CommandError) -> Self {
+        use fairline_commands::{ErrorKind, FrontEnd, Subject};
+        let kind = match e.kind() {
+            ErrorKind::BadInput => Kind::BadInput,
+            ErrorKind::Io => Kind::File,
+            ErrorKind::Computation | ErrorKind::Cancelled => Kind::Computation,
+        };
+        let message = e.message(FrontEnd::Python);
+        let message = match e.subject() {
+            Some(Subject::Region) => format!("region: {message}"),
+            _ => message,
+        };
+        Failure { kind, message }
     }
 }
 

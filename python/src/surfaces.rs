@@ -15,9 +15,9 @@ use fairline::highlight::{
     CircularLight, CircularLights, PartLights, PatchHighlights, SurfaceHighlightOptions,
     part_highlight_lines,
 };
-use fairline::io::JsonReport as Report;
 use fairline::io::surface_highlight_lines_json;
 use fairline::io::{parse_surfaces_json, surfaces_to_json};
+use fairline_commands::{Report, Warning};
 use pyo3::prelude::*;
 use serde_json::json;
 use std::path::PathBuf;
@@ -251,7 +251,7 @@ fn surface_highlight_lines(
         report.set("closed_lines", counts.closed_lines);
         report.set("points", counts.points);
         if line_count == 0 {
-            report.warn("no highlight line pre-image was found on the surface; try other radii, --circle-center or --circle-axis");
+            report.warn(Warning::Text("no highlight line pre-image was found on the surface; try other radii, --circle-center or --circle-axis".into()));
         }
         Ok((doc.to_string(), report.to_json().to_string()))
     })?;
@@ -359,16 +359,16 @@ fn fair_surface(
         }
         all[surface] = faired;
         if !rep.converged {
-            report.warn(format!(
+            report.warn(Warning::Text(format!(
                 "fairing did not converge ({:?} after {} iteration(s)); try --max-iterations or other endpoints",
                 rep.stop, rep.iterations
-            ));
+            )));
         }
         if rep.residual_after.max > rep.residual_before.max {
-            report.warn(format!(
+            report.warn(Warning::Text(format!(
                 "the largest highlight residual got worse: {:.4e} before, {:.4e} after",
                 rep.residual_before.max, rep.residual_after.max
-            ));
+            )));
         }
         Ok((surfaces_to_json(&all), report.to_json().to_string()))
     })?;

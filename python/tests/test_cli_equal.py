@@ -252,6 +252,37 @@ def test_fair_auto_equals_cli(cli, demo, tmp_path):
     same_report(report, cli_report(tmp_path / "r.json"), input_path=demo / "dented-panel.obj")
 
 
+def test_fair_with_grow_and_lights_equals_cli(cli, demo, tmp_path):
+    """Every fair option Python shares with the CLI: the region grown, the
+    lights given whole, the method and the iterations."""
+    lights = {"plane_point": [0, 0, 5], "plane_normal": [0, 0, 1], "direction": [1, 0.2, 0], "spacing": 0.12}
+    (tmp_path / "lights.json").write_text(json.dumps(lights))
+    region = demo / "dented-panel-region.json"
+    run(cli, "fair", demo / "dented-panel.obj", "--region", region, "--grow", "1", "--lights", tmp_path / "lights.json",
+        "--method", "diffusion-flow", "--max-iterations", "3", "-o", tmp_path / "f.ply", "--report", tmp_path / "r.json")
+    _, values, _ = read_ply(tmp_path / "f.ply")
+    V2, report = fairline.fair(*fairline.read_mesh(demo / "dented-panel.obj"), region, grow=1, lights=lights,
+                               method="diffusion-flow", max_iterations=3)
+    exact(V2, values)
+    same_report(report, cli_report(tmp_path / "r.json"), input_path=demo / "dented-panel.obj")
+
+
+def test_fair_quad_and_enhance_with_fixed_vertices_equal_cli(cli, demo, tmp_path):
+    V, F = zigzag_quads()
+    fairline.write_mesh(tmp_path / "zigzag.obj", V, F)
+    (tmp_path / "fixed.json").write_text(json.dumps({"vertices": [14, 15, 27]}))
+    run(cli, "fair-quad", tmp_path / "zigzag.obj", "--fixed", tmp_path / "fixed.json", "-o", tmp_path / "q.ply", "--report", tmp_path / "r.json")
+    _, values, _ = read_ply(tmp_path / "q.ply")
+    V2, report = fairline.fair_quad(V, F, fixed=[14, 15, 27])
+    exact(V2, values)
+    same_report(report, cli_report(tmp_path / "r.json"))
+    run(cli, "enhance", demo / "rounded-cube.obj", "--fixed", tmp_path / "fixed.json", "--iterations", "2", "-o", tmp_path / "e.ply", "--report", tmp_path / "r2.json")
+    _, values, _ = read_ply(tmp_path / "e.ply")
+    V3, report = fairline.enhance(*fairline.read_mesh(demo / "rounded-cube.obj"), fixed=[14, 15, 27], iterations=2)
+    exact(V3, values)
+    same_report(report, cli_report(tmp_path / "r2.json"))
+
+
 # ---- B-spline surfaces -----------------------------------------------------
 
 

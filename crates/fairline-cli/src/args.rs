@@ -6,10 +6,9 @@
 use crate::common::read_json;
 use crate::error::bad_input;
 use anyhow::Result;
-use fairline::highlight::{
-    CircularLights, HighlightError, HighlightOptions, LightArray, LightChoice, UpAxis,
-};
+use fairline::highlight::{CircularLights, HighlightError, HighlightOptions, LightArray, UpAxis};
 use fairline::{SurfaceMesh, Vec3};
+use fairline_commands::Lights;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -142,35 +141,46 @@ pub struct LightArgs {
 }
 
 impl LightArgs {
-    /// What the user said about the lights, for the library's defaults.
-    fn choice(&self) -> LightChoice {
-        LightChoice::default()
-            .direction(self.direction)
-            .plane_normal(self.plane_normal)
-            .up(self.up.axis())
-            .plane_point(self.plane_point)
-            .spacing(self.spacing)
+    /// The lights as the command layer takes them: the `--lights` file's
+    /// linear array, or the fields given (the readable-light policy and the
+    /// defaults are [`Lights`]'). A circular lights file is refused here:
+    /// only `highlight` draws circular lights.
+    pub fn lights(&self) -> Result<Lights> {
+        let given = match &self.lights {
+            Some(path) => {
+                if circular_file(path)?.is_some() {
+                    return Err(bad_input(format!(
+                        "{}: circular lights are drawn by `fairline highlight` only; this command needs a linear light array {{\"plane_point\",\"plane_normal\",\"direction\",\"spacing\"}}",
+                        path.display()
+                    )));
+                }
+                Some(read_json::<LightArray>(path)?)
+            }
+            None => None,
+        };
+        Ok(self.fields(given))
     }
 
-    /// The light array: from the file, or the part's default lights with
-    /// the given fields overridden ([`LightChoice::light_array`]).
-    pub fn light_array(&self, mesh: &SurfaceMesh) -> Result<LightArray> {
-        if let Some(path) = &self.lights {
-            if circular_file(path)?.is_some() {
-                return Err(bad_input(format!(
-                    "{}: circular lights are drawn by `fairline highlight` only; this command needs a linear light array {{\"plane_point\",\"plane_normal\",\"direction\",\"spacing\"}}",
-                    path.display()
-                )));
-            }
-            return read_json::<LightArray>(path);
+    /// The lights with `given` as the whole array (no file read).
+    fn fields(&self, given: Option<LightArray>) -> Lights {
+        Lights {
+            direction: self.direction,
+            plane_normal: self.plane_normal,
+            up: self.up.axis(),
+            plane_point: self.plane_point,
+            spacing: self.spacing,
+            given,
+            min_normal_cos: self.min_normal_cos,
         }
-        self.choice().light_array(mesh).map_err(to_input_error)
+    }
+
+    /// The light array ([`Lights::light_array`]).
+    pub fn light_array(&self, mesh: &SurfaceMesh) -> Result<LightArray> {
+        Ok(self.lights()?.light_array(mesh)?)
     }
 
     /// The light array of a part of B-spline surfaces and what its picture
-    /// can show: from the file (as it is), or the part's readable default
-    /// lights with the given fields in place
-    /// ([`fairline::highlight::part_light_array`]).
+    /// can show ([`Lights::part_light_array`]).
     pub fn part_light_array(
         &self,
         surfaces: &[fairline::bspline::BSplineSurface],
@@ -179,23 +189,18 @@ impl LightArgs {
             Some(path) => Some(read_json::<LightArray>(path)?),
             None => None,
         };
-        fairline::highlight::part_light_array(surfaces, &self.choice(), given)
-            .map_err(to_input_error)
+        Ok(self.fields(given).part_light_array(surfaces)?)
     }
 
-    /// The lights to draw and read lines with: `light` itself when the
-    /// lights came from a file, else [`LightChoice::readable`] (the
-    /// spacing given, or a readable multiple of the default's).
+    /// The lights to draw and read lines with ([`Lights::readable`]).
     pub fn readable(&self, mesh: &SurfaceMesh, light: LightArray) -> Result<LightArray> {
-        if self.lights.is_some() {
-            return Ok(light);
-        }
-        self.choice().readable(mesh, light).map_err(to_input_error)
+        let given = self.lights.is_some().then_some(light);
+        Ok(self.fields(given).readable(mesh, light)?)
     }
 
     /// Model options.
     pub fn options(&self) -> HighlightOptions {
-        HighlightOptions::default().min_normal_cos(self.min_normal_cos)
+        self.fields(None).options()
     }
 }
 
@@ -315,4 +320,19 @@ pub struct Radii(pub Vec<f64>);
 
 fn parse_radii(s: &str) -> Result<Radii, String> {
     parse_list(s).map(Radii)
+}
+
+/// The value parser of a choice of the command layer: its names (with
+/// their help) listed in `--help`, the value parsed by
+/// [`fairline_commands::Choice`].
+pub fn choice<T>() -> impl clap::builder::TypedValueParser<Value = T>
+where
+    T: fairline_commands::Choice + Send + Sync,
+{
+    use clap::builder::TypedValueParser;
+    let values = T::ALL
+        .iter()
+        .map(|n| clap::builder::PossibleValue::new(n.name).help(n.help));
+    clap::builder::PossibleValuesParser::new(values)
+        .map(|name: String| T::parse(&name).unwrap_or(T::ALL[0].value))
 }

@@ -3,26 +3,26 @@
 
 use crate::error::bad_input;
 use anyhow::{Context, Result};
-use fairline::io::JsonReport;
+use fairline_commands::{FrontEnd, Warning};
 use serde_json::Value;
 use std::path::Path;
 
-/// A command's JSON report: the library's [`fairline::io::JsonReport`]
-/// (`"command"`, `"time_s"` of the computation only, the command's keys,
-/// `"warnings"`; never `null`), whose warnings are also printed as
-/// `warning:` lines on standard error when they arise. A command that has a
-/// value that may legitimately be absent leaves the key out itself.
-pub struct Report(JsonReport);
+/// A command's JSON report ([`fairline_commands::Report`]: `"command"`,
+/// `"time_s"` of the computation only, the command's keys, `"warnings"`;
+/// never `null`), whose warnings are also printed as `warning:` lines on
+/// standard error when they arise. For the commands not yet run by the
+/// command layer.
+pub struct Report(fairline_commands::Report);
 
 impl Report {
     /// A report for `command`.
     pub fn new(command: &str) -> Self {
-        Report(JsonReport::new(command))
+        Report(fairline_commands::Report::new(command))
     }
     /// Prints the warnings recorded since there were `before`.
     fn print_since(&self, before: usize) {
         for w in &self.0.warnings()[before..] {
-            crate::output::warn(w);
+            crate::output::warn(w.message(FrontEnd::Cli));
         }
     }
     /// Sets a key (a non-finite value is left out with a warning).
@@ -42,7 +42,7 @@ impl Report {
     /// `"warnings"` in the report.
     pub fn warn(&mut self, msg: impl Into<String>) {
         let before = self.0.warnings().len();
-        self.0.warn(msg);
+        self.0.warn(Warning::Text(msg.into()));
         self.print_since(before);
     }
     /// Runs `f`, adding its wall time to the computation time.
@@ -55,11 +55,23 @@ impl Report {
     }
     /// Writes the report atomically when a path was given.
     pub fn write(&self, path: Option<&Path>) -> Result<()> {
-        if let Some(p) = path {
-            write_json(p, &self.to_json())?;
-        }
-        Ok(())
+        write_report(path, &self.0)
     }
+}
+
+/// Prints the warnings of a command's report as `warning:` lines.
+pub fn print_warnings(report: &fairline_commands::Report) {
+    for w in report.messages(FrontEnd::Cli) {
+        crate::output::warn(w);
+    }
+}
+
+/// Writes a command's report atomically when a path was given.
+pub fn write_report(path: Option<&Path>, report: &fairline_commands::Report) -> Result<()> {
+    if let Some(p) = path {
+        write_json(p, &report.to_json())?;
+    }
+    Ok(())
 }
 
 /// Writes pretty JSON atomically.

@@ -129,7 +129,7 @@ pub fn run(args: Args) -> Result<()> {
     // faces of the input mesh (triangulated polygons map back to their
     // polygon); the written region holds two more rings of faces: the
     // support that fairing needs to move every vertex of the suggested region
-    let all = fairline::fair::suggested_region(&mesh, &det, source.as_deref());
+    let all = fairline_commands::regions::suggested_region(&mesh, &det, source.as_deref());
     write_json(&args.output, &json!({"faces": all}))?;
     report.set("vertices", mesh.vertex_count());
     report.set("lines", lines.lines.len());
@@ -149,7 +149,7 @@ pub fn run(args: Args) -> Result<()> {
     report.set("region_faces", all.len());
     report.set(
         "regions",
-        fairline::fair::detected_region_entries(&det, source.as_deref()),
+        fairline_commands::regions::detected_region_entries(&det, source.as_deref()),
     );
     if let Some(png) = &args.png {
         write_picture(&args, png, &mesh, &light, &shown_light, &shown, &det)?;

@@ -1,18 +1,19 @@
 //! `fairline enhance`: feature enhancement by vertex flow (Ji et al. 2011).
 
-use crate::common::Report;
+use crate::args::choice;
+use crate::common::{print_warnings, write_report};
 use crate::error::bad_input;
 use crate::output::spinner;
 use anyhow::{Context, Result};
-use fairline::enhance::{
-    EnhanceError, EnhanceOptions, EnhanceSolver, Projection as SurfaceProjection, enhance_features,
-};
+use fairline::Control;
+use fairline::enhance::{EnhanceSolver, Projection};
 use fairline::geom::{CurvatureMethod, principal_curvatures, vertex_normals};
 use fairline::mesh::SurfaceMesh;
 use fairline::render::{
     Colormap, Image, Legend, MeshLayer, RenderOptions, Scene, render, scalar_colors, side_by_side,
 };
-use std::path::{Path, PathBuf};
+use fairline_commands::enhance::{self, EnhanceSettings};
+use std::path::PathBuf;
 
 /// Moves the vertices of a triangle mesh from flat regions toward ridges
 /// and valleys (vertex flow, Ji et al. 2011) without changing the
@@ -50,15 +51,15 @@ pub struct Args {
     /// `cg` for up to 40 iterations, fewer when its progress shows it
     /// would need more, then `amg` from there; `direct` only should that
     /// fail). All give the same result to 1e-8 of the size of the mesh.
-    #[arg(long, value_enum, default_value_t = Solver::Auto)]
-    pub solver: Solver,
+    #[arg(long, value_parser = choice::<EnhanceSolver>(), default_value = "auto")]
+    pub solver: EnhanceSolver,
     /// Where the vertices go after each solve: `smooth` (onto the Phong
     /// patch, α = ½, of the nearest input triangle: between the input's
     /// vertices they land on a smooth fit of the surface, not on its chords),
     /// `mesh` (onto the nearest point of the input mesh) or `none` (the
     /// paper's method: they slide along tangent planes and leave curved
     /// parts).
-    #[arg(long, value_enum, default_value_t = Projection::Smooth)]
+    #[arg(long, value_parser = choice::<Projection>(), default_value = "smooth")]
     pub projection: Projection,
     /// JSON file `{"vertices":[...]}` of vertices that must not move (list
     /// the boundary vertices here to keep the whole boundary in place).
@@ -74,32 +75,6 @@ pub struct Args {
     /// with the mesh edges.
     #[arg(long, value_name = "IMG.png")]
     pub png: Option<PathBuf>,
-}
-
-/// `--solver` values.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Solver {
-    /// The multigrid preconditioner on meshes with large flat or
-    /// cylindrical parts, else block-Jacobi conjugate gradients, then the
-    /// multigrid preconditioner if they are slow.
-    Auto,
-    /// Sparse Cholesky factorisation of the normal equations.
-    Direct,
-    /// Preconditioned conjugate gradients on the normal equations.
-    Cg,
-    /// Conjugate gradients preconditioned by a multigrid bi-Laplacian model.
-    Amg,
-}
-
-/// `--projection` values.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Projection {
-    /// Onto a smooth (Phong) fit of the input surface.
-    Smooth,
-    /// Onto the input triangle mesh.
-    Mesh,
-    /// Nowhere (Ji et al. as published).
-    None,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -127,40 +102,18 @@ pub fn run(args: Args) -> Result<()> {
             .map_err(|e| bad_input(e.to_string()))?,
         None => Vec::new(),
     };
-    let options = EnhanceOptions::default()
-        .lambda(args.lambda)
-        .mu(args.mu)
-        .iterations(args.iterations)
-        .solver(match args.solver {
-            Solver::Auto => EnhanceSolver::Auto,
-            Solver::Direct => EnhanceSolver::Direct,
-            Solver::Cg => EnhanceSolver::Cg,
-            Solver::Amg => EnhanceSolver::Amg,
-        })
-        .projection(match args.projection {
-            Projection::Smooth => SurfaceProjection::Smooth,
-            Projection::Mesh => SurfaceProjection::Mesh,
-            Projection::None => SurfaceProjection::None,
-        })
-        .fixed(fixed);
-    let mut report = Report::new("enhance");
-    let bar = spinner("vertex flow");
-    let result = report.time(|| enhance_features(&mesh, &options));
-    bar.finish_and_clear();
-    let result = match result {
-        Ok(r) => r,
-        Err(EnhanceError::FixedVertexOutOfRange { vertex, vertices }) => {
-            let file = args.fixed.as_deref().unwrap_or(Path::new("--fixed"));
-            return Err(bad_input(format!(
-                "{}: fixed vertex {vertex} does not exist; {} has {vertices} vertices (0 to {})",
-                file.display(),
-                args.mesh.display(),
-                vertices.saturating_sub(1)
-            )));
-        }
-        Err(e @ EnhanceError::InvalidOption(_)) => return Err(bad_input(e.to_string())),
-        Err(e) => return Err(e).context("vertex flow"),
+    let settings = EnhanceSettings {
+        lambda: args.lambda,
+        mu: args.mu,
+        iterations: args.iterations,
+        solver: args.solver,
+        projection: args.projection,
+        fixed,
     };
+    let bar = spinner("vertex flow");
+    let result = enhance::run(&mesh, &settings, &Control::new());
+    bar.finish_and_clear();
+    let result = result?;
     let mut out = mesh.clone();
     out.set_positions(result.positions)?;
     // the picture is made before anything is written
@@ -174,14 +127,9 @@ pub fn run(args: Args) -> Result<()> {
             .write_png(png)
             .with_context(|| format!("writing {}", png.display()))?;
     }
-    let r = &result.report;
-    report.set_fields(r);
-    report.set("histogram_before", &r.quality_before.histogram);
-    report.set("histogram_after", &r.quality_after.histogram);
-    for w in r.warnings() {
-        report.warn(w);
-    }
-    report.write(args.report.as_deref())?;
+    let r = &result.result;
+    print_warnings(&result.report);
+    write_report(args.report.as_deref(), &result.report)?;
     job.finish(format_args!(
         "vertex flow, {} iteration(s) on {} vertices ({} free), minimum triangle quality {:.3} → {:.3}",
         r.iterations, r.vertices, r.free_vertices, r.quality_before.min, r.quality_after.min

@@ -43,6 +43,11 @@ pub fn bad_input(msg: impl Into<String>) -> anyhow::Error {
 /// otherwise.
 pub fn exit_code(err: &anyhow::Error) -> i32 {
     for cause in err.chain() {
+        if let Some(e) = cause.downcast_ref::<fairline_commands::CommandError>()
+            && e.kind() == fairline_commands::ErrorKind::BadInput
+        {
+            return EXIT_BAD_INPUT;
+        }
         if cause.is::<BadInput>()
             || cause.is::<fairline::io::IoError>()
             || cause.is::<fairline::MeshError>()

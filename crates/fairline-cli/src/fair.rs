@@ -2,44 +2,21 @@
 //! §3, Algorithm 2) inside a region, with the surface-diffusion-flow
 //! baseline for comparison.
 
-use crate::args::{LightArgs, to_input_error};
-use crate::common::Report;
+use crate::args::{LightArgs, choice};
+use crate::common::{print_warnings, write_report};
 use crate::error::bad_input;
-use crate::output::progress;
+use crate::output::{progress, say};
 use anyhow::Result;
-use fairline::fair::{
-    AUTO_RINGS, FairError, FairMethod, FairOptions, FairReport, detect_regions_to_fair,
-    fair_highlight_lines, grow_region, regions_deviation, regions_report, regions_union,
-    regions_warnings,
-};
-use fairline::highlight::detect_region;
+use fairline::fair::{FairMethod, FairOptions, FairReport};
 use fairline::mesh::FaceId;
 use fairline::picture::{
     FAIRING_DESIRED_COLOR, FAIRING_LINE_COLOR, FAIRING_OUTLINE_COLOR, fairing_picture,
 };
 use fairline::render::RenderOptions;
 use fairline::{Control, SurfaceMesh};
-use serde_json::{Value, json};
-use std::path::PathBuf;
-
-/// The energy to minimise.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Method {
-    /// Yong et al.'s energy with the desired curves' end tangents taken
-    /// from a smooth surface fitted beyond the defect's footprint (the
-    /// lines the clean surface would have), then ¾ of that result + ¼ of
-    /// the diffusion-flow result on the same region (closer to the
-    /// defect-free surface than diffusion flow on every generated panel;
-    /// BENCHMARKS.md, highlight-line fairing); --laplacian-weight adds a
-    /// curvature-Laplacian term.
-    Highlight,
-    /// Yong et al. exactly (Algorithm 2): Willmore energy + distance of the
-    /// highlight lines to their desired curves, desired curves from the
-    /// input's outside parts, no refits, no diffusion-flow share.
-    Paper,
-    /// Baseline: surface diffusion flow ∂V/∂t = N Δ_B H (Xu et al.).
-    DiffusionFlow,
-}
+use fairline_commands::fair::{self, FairInput, FairSettings};
+use fairline_commands::{CommandError, FrontEnd, Subject};
+use std::path::{Path, PathBuf};
 
 /// Removes a local irregularity so that the highlight lines inside a region
 /// follow smooth desired curves (optimized geometric Hermite curves between
@@ -95,9 +72,14 @@ pub struct Args {
     /// Stop when max|x_i| / mean edge length < epsilon (Eq. (17)).
     #[arg(long, default_value_t = FairOptions::default().epsilon)]
     pub epsilon: f64,
-    /// Energy to minimise.
-    #[arg(long, value_enum, default_value_t = Method::Highlight)]
-    pub method: Method,
+    /// Energy to minimise: highlight (Yong et al.'s energy with the desired
+    /// curves' end tangents from a smooth surface fitted beyond the
+    /// defect's footprint, then ¾ of that result + ¼ of the diffusion-flow
+    /// result; --laplacian-weight adds a curvature-Laplacian term), paper
+    /// (Yong et al. exactly, Algorithm 2) or diffusion-flow (the baseline,
+    /// Xu et al.).
+    #[arg(long, value_parser = choice::<FairMethod>(), default_value = "highlight")]
+    pub method: FairMethod,
     /// Weight ω1 of the Willmore (fairness) energy.
     #[arg(long, default_value_t = FairOptions::default().fair_weight)]
     pub fair_weight: f64,
@@ -117,23 +99,41 @@ pub struct Args {
     pub report: Option<PathBuf>,
 }
 
-/// `e` with the region file's name in front, when there is one.
-fn name_region(e: anyhow::Error, region: Option<&std::path::Path>) -> anyhow::Error {
-    match region {
-        Some(p) => e.context(p.display().to_string()),
-        None => e,
+impl Args {
+    /// The command layer's settings of these arguments.
+    fn settings(&self, lights: fairline_commands::Lights) -> FairSettings {
+        FairSettings {
+            auto: self.auto,
+            grow: self.grow,
+            lights,
+            max_iterations: self.max_iterations,
+            epsilon: self.epsilon,
+            method: self.method,
+            fair_weight: self.fair_weight,
+            diff_weight: self.diff_weight,
+            laplacian_weight: self.laplacian_weight,
+        }
     }
 }
 
-/// Library errors that are the user's input (region, options) exit with 2.
-fn to_error(e: FairError) -> anyhow::Error {
-    match e {
-        FairError::NoMovableVertex(_)
-        | FairError::Region(_)
-        | FairError::InvalidOption(_)
-        | FairError::Mesh(_)
-        | FairError::Highlight(_) => bad_input(e.user_message()),
-        FairError::Solve(_) | FairError::Cancelled(_) => anyhow::Error::new(e),
+/// The region file's faces on `mesh`; errors name the file.
+fn read_region(path: &Path, mesh: &SurfaceMesh) -> Result<Vec<FaceId>> {
+    let spec = fairline::io::read_region(path).map_err(|e| bad_input(e.to_string()))?;
+    spec.faces(mesh)
+        .map_err(|e| bad_input(format!("{}: {e}", path.display())))
+}
+
+/// A failure of the command layer with the input it is about named: the
+/// mesh or the region file.
+fn name_subject(e: CommandError, args: &Args) -> anyhow::Error {
+    let path = match e.subject() {
+        Some(Subject::Input) => Some(args.mesh.as_path()),
+        Some(Subject::Region) => args.region.as_deref(),
+        None => None,
+    };
+    match path {
+        Some(p) => anyhow::Error::new(e).context(p.display().to_string()),
+        None => anyhow::Error::new(e),
     }
 }
 
@@ -148,230 +148,67 @@ pub fn run(args: Args) -> Result<()> {
         .check()?;
     let mesh = fairline::io::read_mesh(&args.mesh)?;
     crate::input::note_split_vertices(&args.mesh, &mesh);
-    if !mesh.is_triangle_mesh() {
-        return Err(bad_input(format!(
-            "{}: highlight-line fairing needs a triangle mesh (this one has polygons; triangulate it first, e.g. with `fairline convert`)",
-            args.mesh.display()
-        )));
+    let region = match &args.region {
+        Some(path) => Some(read_region(path, &mesh)?),
+        None => None,
+    };
+    let settings = args.settings(args.light.lights()?);
+    let name = args.mesh.display().to_string();
+    let input = FairInput {
+        mesh: &mesh,
+        region: region.as_deref(),
+        name: Some(&name),
+    };
+    let bar = progress(0, "fairing");
+    let shown = bar.clone();
+    let control = Control::new().on_progress(move |p| {
+        shown.set_length(p.total);
+        shown.set_position(p.done);
+    });
+    let out = fair::run(input, &settings, &control).map_err(|e| name_subject(e, &args))?;
+    bar.finish_and_clear();
+    for note in &out.notes {
+        say(&format!(
+            "note: {}",
+            note.message(FrontEnd::Cli, Some(&name))
+        ));
     }
-    // detection (the report's scores, --auto, the warning) measures at the
-    // detail lights, as `detect`; fairing works on the lines the mesh
-    // resolves: the readable lights (every k-th line on round parts, where
-    // the detail lines lie a fraction of an edge apart; the same lights on
-    // panels and whenever the spacing or a lights file is given)
-    let light = args.light.light_array(&mesh)?;
-    let fairing_light = args.light.readable(&mesh, light)?;
-    let options = fair_options(&args, fairing_light);
-    let mut report = Report::new("fair");
-    let regions = regions_to_fair(&args, &mesh, light, &mut report)?;
-    let regions = grow_regions(&mesh, regions, args.grow);
-    // the detection score inside the regions, before (same lights as after)
-    let region_faces = regions_union(&regions);
-    let before = detect_region(&mesh, &light, args.light.options(), &region_faces)
-        .map_err(to_input_error)?;
-    let faired = fair_each_region(&args, &mesh, &regions, &options, &mut report)?;
-    let current = &faired.mesh;
-    fairline::io::write_mesh(&args.output, current)?;
-    // the detection score inside the region after fairing, with the same
-    // lights as before
-    let after = detect_region(current, &light, args.light.options(), &region_faces)
-        .map_err(to_input_error)?;
-    let (score_before, score_after, threshold) = (before.score, after.score, before.threshold);
-    report.set("detect_score_before", score_before);
-    report.set("detect_score_after", score_after);
-    report.set("detect_threshold", threshold);
-    // the flat-spot measure inside the region (detect's second measure)
-    let flat_floor = before.detection.flat_spot_floor;
-    let (flat_before, flat_after) = (before.flat_spot, after.flat_spot);
-    report.set("detect_flat_spot_before", flat_before);
-    report.set("detect_flat_spot_after", flat_after);
-    report.set("detect_flat_spot_floor", flat_floor);
-    let flat_spot = if flat_floor > 0.0 && flat_before > flat_floor {
-        format!(", flat spot {flat_before:.2} → {flat_after:.2} (floor {flat_floor:.2})")
+    fairline::io::write_mesh(&args.output, &out.mesh)?;
+    print_warnings(&out.report);
+    match (&args.png, &out.first) {
+        (Some(png), Some((positions, r))) => {
+            let mut faired = mesh.clone();
+            faired.set_positions(positions.clone())?;
+            write_picture(png, &mesh, out.fairing_light, r, &faired)?;
+        }
+        (Some(png), None) => {
+            say("note: no region was faired, so no picture was written");
+            job.skip(png);
+        }
+        _ => {}
+    }
+    write_report(args.report.as_deref(), &out.report)?;
+    let (before, after) = (&out.before, &out.after);
+    let (floor, flat_before) = (before.detection.flat_spot_floor, before.flat_spot);
+    let flat_spot = if floor > 0.0 && flat_before > floor {
+        format!(
+            ", flat spot {flat_before:.2} → {:.2} (floor {floor:.2})",
+            after.flat_spot
+        )
     } else {
         String::new()
     };
-    // and `detect` on the output, with the lights it chooses there (the
-    // default lights follow the part, which fairing changed a little)
-    let output_light = args.light.light_array(current)?;
-    let as_detect = if output_light == light {
-        after
-    } else {
-        detect_region(current, &output_light, args.light.options(), &region_faces)
-            .map_err(to_input_error)?
-    };
-    report.set("detect_regions_after", as_detect.detection.regions.len());
-    if let Some(w) = as_detect.remaining_defect_warning(score_before, score_after) {
-        report.warn(format!("{}: {w}", args.mesh.display()));
-    }
-    if let (Some(png), Some(r), Some(faired_mesh)) =
-        (&args.png, faired.results.first(), &faired.first)
-    {
-        write_picture(png, &mesh, fairing_light, r, faired_mesh)?;
-    }
-    if faired.first.is_none()
-        && let Some(png) = &args.png
-    {
-        crate::output::say("note: no region was faired, so no picture was written");
-        job.skip(png);
-    }
-    report.set("method", crate::output::option_value(&args.method));
-    report.set("light", light);
-    report.set("fairing_light", fairing_light);
-    report.set("regions", faired.results.len());
-    if args.auto {
-        report.set("skipped_regions", &faired.skipped);
-    }
-    let total_moved = current
-        .positions()
-        .iter()
-        .zip(mesh.positions())
-        .map(|(a, b)| (*a - *b).length())
-        .fold(0.0, f64::max);
-    let results = &faired.results;
-    report.set_fields(regions_report(results, total_moved));
-    let converged = results.iter().all(|r| r.converged);
-    let (before, after) = regions_deviation(results);
-    for w in regions_warnings(results, args.max_iterations, (score_before, score_after)) {
-        report.warn(w);
-    }
-    report.write(args.report.as_deref())?;
+    let (dev_before, dev_after) = out.deviation();
     job.finish(format_args!(
-        "{} region(s) faired, {}, detection score {score_before:.2} → {score_after:.2} (threshold {threshold:.2}){flat_spot}, highlight deviation {before:.3e} → {after:.3e}, largest move {total_moved:.3e}",
-        results.len(),
-        if converged { "converged" } else { "not converged" }
+        "{} region(s) faired, {}, detection score {:.2} → {:.2} (threshold {:.2}){flat_spot}, highlight deviation {dev_before:.3e} → {dev_after:.3e}, largest move {:.3e}",
+        out.results.len(),
+        if out.converged() { "converged" } else { "not converged" },
+        before.score,
+        after.score,
+        before.threshold,
+        out.largest_move
     ));
     Ok(())
-}
-
-/// The library's fairing options from the command line (the region and
-/// the progress are set per region).
-fn fair_options(args: &Args, light: fairline::highlight::LightArray) -> FairOptions {
-    FairOptions::default()
-        .light(light)
-        .method(match args.method {
-            Method::Highlight => FairMethod::Highlight,
-            Method::Paper => FairMethod::Paper,
-            Method::DiffusionFlow => FairMethod::DiffusionFlow,
-        })
-        .fair_weight(args.fair_weight)
-        .diff_weight(args.diff_weight)
-        .laplacian_weight(args.laplacian_weight)
-        .max_iterations(args.max_iterations)
-        .epsilon(args.epsilon)
-        .highlight(args.light.options())
-}
-
-/// The regions to fair, in turn: the region file's one region, or with
-/// --auto every detected region grown by [`AUTO_RINGS`] (said on the
-/// terminal).
-fn regions_to_fair(
-    args: &Args,
-    mesh: &SurfaceMesh,
-    light: fairline::highlight::LightArray,
-    report: &mut Report,
-) -> Result<Vec<Vec<FaceId>>> {
-    if let Some(path) = &args.region {
-        let spec = fairline::io::read_region(path).map_err(|e| bad_input(e.to_string()))?;
-        return Ok(vec![
-            spec.faces(mesh)
-                .map_err(|e| bad_input(format!("{}: {e}", path.display())))?,
-        ]);
-    }
-    let (det, grown) = report
-        .time(|| detect_regions_to_fair(mesh, light, args.light.options()))
-        .map_err(to_input_error)?;
-    report.set("detected_regions", det.regions.len());
-    if det.regions.is_empty() {
-        eprintln!(
-            "note: {}: --auto found no defect above the detection threshold; nothing to fair",
-            args.mesh.display()
-        );
-    }
-    for (k, (r, g)) in det.regions.iter().zip(&grown).enumerate() {
-        eprintln!(
-            "note: --auto: region {} (score {:.1}) grown by {AUTO_RINGS} rings of faces: {} -> {} faces",
-            k + 1,
-            r.score,
-            r.faces.len(),
-            g.len()
-        );
-    }
-    Ok(grown)
-}
-
-/// Each region grown by `rings` rings of faces (--grow; said on the
-/// terminal), or the regions as they are.
-fn grow_regions(mesh: &SurfaceMesh, regions: Vec<Vec<FaceId>>, rings: usize) -> Vec<Vec<FaceId>> {
-    if rings == 0 {
-        return regions;
-    }
-    regions
-        .iter()
-        .map(|f| {
-            let grown = grow_region(mesh, f, rings);
-            eprintln!(
-                "note: region grown by {} rings of faces: {} -> {} faces",
-                rings,
-                f.len(),
-                grown.len()
-            );
-            grown
-        })
-        .collect()
-}
-
-/// What fairing the regions in turn gave.
-struct Faired {
-    /// The mesh after the last region.
-    mesh: SurfaceMesh,
-    /// Each faired region's report.
-    results: Vec<FairReport>,
-    /// The first region's faired mesh, for the picture.
-    first: Option<SurfaceMesh>,
-    /// Regions --auto skipped (no movable vertex), with the reason.
-    skipped: Vec<Value>,
-}
-
-/// Fairs the regions in turn, each on the result of the one before, with
-/// one progress bar over all of them.
-fn fair_each_region(
-    args: &Args,
-    mesh: &SurfaceMesh,
-    regions: &[Vec<FaceId>],
-    options: &FairOptions,
-    report: &mut Report,
-) -> Result<Faired> {
-    let mut faired = Faired {
-        mesh: mesh.clone(),
-        results: Vec::new(),
-        first: None,
-        skipped: Vec::new(),
-    };
-    let bar = progress((regions.len() * options.max_iterations) as u64, "fairing");
-    for (k, faces) in regions.iter().enumerate() {
-        let start = bar.position();
-        let shown = bar.clone();
-        let control = Control::new().on_progress(move |p| shown.set_position(start + p.done));
-        let region_options = options.clone().region(faces.clone()).control(control);
-        let outcome = report.time(|| fair_highlight_lines(&faired.mesh, &region_options));
-        match outcome {
-            Ok(out) => {
-                faired.results.push(out.report);
-                faired.mesh.set_positions(out.positions)?;
-                if faired.first.is_none() {
-                    faired.first = Some(faired.mesh.clone());
-                }
-            }
-            Err(FairError::NoMovableVertex(msg)) if args.auto => {
-                faired.skipped.push(json!({"region": k, "reason": msg}));
-            }
-            // a region that cannot be faired is the region file's fault: name it
-            Err(e) => return Err(name_region(to_error(e), args.region.as_deref())),
-        }
-    }
-    bar.finish_and_clear();
-    Ok(faired)
 }
 
 /// The --png before/after picture of the first region with the lines of

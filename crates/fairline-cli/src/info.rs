@@ -56,7 +56,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     // the same values without non-finite numbers (report.set warned)
-    let value = fairline::io::finite_only("", value, &mut Vec::new()).unwrap_or_default();
+    let value = fairline_commands::finite_only("", value, &mut Vec::new()).unwrap_or_default();
     report.write(args.report.as_deref())?;
     let summary = format!(
         "{}: {} vertices, {} faces, {}",

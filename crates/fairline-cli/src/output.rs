@@ -332,15 +332,6 @@ pub fn require_extension(option: &str, path: &Path, allowed: &[&str]) -> Result<
     )))
 }
 
-/// The spelling of an option value on the command line
-/// (`schneider-kobbelt`), used for report values so that they match.
-pub fn option_value<T: clap::ValueEnum>(value: &T) -> String {
-    value
-        .to_possible_value()
-        .map(|p| p.get_name().to_string())
-        .unwrap_or_default()
-}
-
 /// `err` with the file named: unchanged when its message (with its
 /// causes) already names `path`, else with `path` as context, so that the
 /// error line reads `PATH: message`. The causes

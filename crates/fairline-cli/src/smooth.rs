@@ -1,55 +1,20 @@
 //! `fairline smooth` (the classic smoothing family, Grüner thesis ch. 3) and
 //! `fairline fair-quad` (structure-line fairing of quad meshes, ch. 4).
 
-use crate::common::Report;
+use crate::args::choice;
+use crate::common::{print_warnings, write_report};
 use crate::error::bad_input;
 use crate::output::spinner;
 use anyhow::Result;
-use fairline::fair::{QuadFairOptions, fair_structure_lines};
-use fairline::geom::LaplaceWeights;
+use fairline::Control;
 use fairline::mesh::{SurfaceMesh, VertexId};
 use fairline::picture::{Picture, mesh_picture};
 use fairline::render::{RenderOptions, side_by_side};
-use fairline::smooth::{SmoothError, SmoothMethod, SmoothOptions, smooth, smooth_warnings};
+use fairline::smooth::SmoothMethod;
+use fairline_commands::Weights;
+use fairline_commands::fair_quad::{self, QuadSettings};
+use fairline_commands::smooth::{self, SmoothSettings};
 use std::path::{Path, PathBuf};
-
-/// Smoothing method.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Method {
-    /// Laplace smoothing x' = x + λΔx (Grüner §3.2.2).
-    Laplace,
-    /// Taubin λ|μ: a λ step then a μ step per iteration (§3.2.3).
-    Taubin,
-    /// Backward Euler (M − tL)x' = Mx, cotangent L (Desbrun et al.); triangles.
-    Implicit,
-    /// Spring model of Yamada et al. (§3.3); boundary fixed.
-    Spring,
-    /// Δ_B H = 0 with G¹ boundary (Schneider and Kobbelt, §3.4); triangles.
-    SchneiderKobbelt,
-}
-
-impl From<Method> for SmoothMethod {
-    fn from(m: Method) -> SmoothMethod {
-        match m {
-            Method::Laplace => SmoothMethod::Laplace,
-            Method::Taubin => SmoothMethod::Taubin,
-            Method::Implicit => SmoothMethod::Implicit,
-            Method::Spring => SmoothMethod::Spring,
-            Method::SchneiderKobbelt => SmoothMethod::SchneiderKobbelt,
-        }
-    }
-}
-
-/// Laplacian edge weights.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Weights {
-    /// w = 1 (umbrella).
-    Uniform,
-    /// w = |e|^exponent (exponent −1 by default, Fujiwara).
-    Edge,
-    /// Cotangent weights (Desbrun); triangle meshes.
-    Cotan,
-}
 
 /// Smooths a mesh with one of the classic methods, all sharing the
 /// constraints of Grüner §3.2.4: fixed vertices, fixed boundary,
@@ -66,10 +31,10 @@ pub struct Args {
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
     /// Method.
-    #[arg(long, value_enum, default_value = "taubin")]
-    pub method: Method,
+    #[arg(long, value_parser = choice::<SmoothMethod>(), default_value = "taubin")]
+    pub method: SmoothMethod,
     /// Laplacian weights (laplace, taubin).
-    #[arg(long, value_enum, default_value = "uniform")]
+    #[arg(long, value_parser = choice::<Weights>(), default_value = "uniform")]
     pub weights: Weights,
     /// Exponent of the edge-length weights.
     #[arg(long, default_value_t = -1.0, allow_hyphen_values = true)]
@@ -124,22 +89,6 @@ pub fn read_fixed(path: &Path, count: usize) -> Result<Vec<VertexId>> {
     fairline::io::read_fixed_vertices(path, count).map_err(|e| bad_input(e.to_string()))
 }
 
-fn finite(name: &str, v: Option<f64>) -> Result<()> {
-    match v {
-        Some(x) if !x.is_finite() => Err(bad_input(format!("--{name} must be finite"))),
-        _ => Ok(()),
-    }
-}
-
-/// A library error caused by the options or the mesh is bad input (exit 2);
-/// a failed solve is a computation failure (exit 1).
-fn smooth_error(e: SmoothError) -> anyhow::Error {
-    match e {
-        SmoothError::Solve(_) => anyhow::Error::new(e),
-        other => bad_input(other.to_string()),
-    }
-}
-
 /// Two meshes side by side under one camera framing the input.
 pub fn before_after(
     before: &SurfaceMesh,
@@ -159,6 +108,29 @@ pub fn before_after(
     Ok(())
 }
 
+impl Args {
+    /// The command layer's settings of these arguments (`fixed`: the
+    /// vertices of the --fixed file).
+    fn settings(&self, fixed: Vec<VertexId>) -> SmoothSettings {
+        SmoothSettings {
+            method: self.method,
+            weights: self.weights,
+            exponent: self.exponent,
+            iterations: self.iterations,
+            lambda: self.lambda,
+            mu: self.mu,
+            pass_band: self.pass_band,
+            time_step: self.time_step,
+            epsilon: self.epsilon,
+            fix_boundary: self.fix_boundary,
+            hierarchical_boundary: self.hierarchical_boundary,
+            fixed,
+            preserve_volume: self.preserve_volume,
+            tangential: self.tangential,
+        }
+    }
+}
+
 pub fn run(args: Args) -> Result<()> {
     let job = crate::output::Job::new("smooth")
         .input(&args.mesh)
@@ -167,57 +139,20 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--png", args.png.as_deref())
         .output_opt("--report", args.report.as_deref())
         .check()?;
-    for (n, v) in [
-        ("lambda", args.lambda),
-        ("mu", args.mu),
-        ("pass-band", Some(args.pass_band)),
-        ("time-step", Some(args.time_step)),
-        ("epsilon", args.epsilon),
-        ("exponent", Some(args.exponent)),
-    ] {
-        finite(n, v)?;
-    }
-    if args.iterations == Some(0) {
-        return Err(bad_input("--iterations must be at least 1"));
-    }
+    args.settings(Vec::new()).check()?;
     let mut mesh = fairline::io::read_mesh(&args.mesh)?;
     crate::input::note_split_vertices(&args.mesh, &mesh);
     let fixed = match &args.fixed {
         Some(p) => read_fixed(p, mesh.vertex_count())?,
         None => Vec::new(),
     };
-    let weights = match args.weights {
-        Weights::Uniform => LaplaceWeights::Uniform,
-        Weights::Edge => LaplaceWeights::EdgeLength {
-            exponent: args.exponent,
-        },
-        Weights::Cotan => LaplaceWeights::Cotangent,
-    };
-    let options = SmoothOptions::default()
-        .method(args.method.into())
-        .weights(weights)
-        .lambda(args.lambda)
-        .mu(args.mu)
-        .pass_band(args.pass_band)
-        .time_step(args.time_step)
-        .epsilon(args.epsilon)
-        .iterations(args.iterations)
-        .fixed(fixed)
-        .fix_boundary(args.fix_boundary)
-        .hierarchical_boundary(args.hierarchical_boundary)
-        .preserve_volume(args.preserve_volume)
-        .tangential_only(args.tangential);
-    let mut report = Report::new("smooth");
+    let settings = args.settings(fixed);
     let bar = spinner("smoothing");
-    let result = report.time(|| smooth(&mesh, &options));
+    let result = smooth::run(&mesh, &settings, &Control::new());
     bar.finish_and_clear();
-    let out = result.map_err(smooth_error)?;
-    let r = &out.report;
-    let name = options.method.name();
-    report.set("method", name);
-    report.set("vertices", mesh.vertex_count());
-    report.set_fields(r);
-    let warnings = smooth_warnings(&mesh, &options, r);
+    let out = result?;
+    let r = &out.result;
+    let name = settings.method.name();
     // the input is kept only for the before/after picture
     let input = args.png.is_some().then(|| mesh.clone());
     mesh.set_positions(out.positions)?;
@@ -225,10 +160,8 @@ pub fn run(args: Args) -> Result<()> {
     if let (Some(png), Some(input)) = (&args.png, &input) {
         before_after(input, &mesh, ["input", name], false, png)?;
     }
-    for w in warnings {
-        report.warn(w);
-    }
-    report.write(args.report.as_deref())?;
+    print_warnings(&out.report);
+    write_report(args.report.as_deref(), &out.report)?;
     job.finish(format_args!(
         "{name}, {} iteration(s){} on {} vertices, largest move {:.3e}",
         r.iterations,
@@ -290,6 +223,21 @@ pub struct QuadArgs {
     pub report: Option<PathBuf>,
 }
 
+impl QuadArgs {
+    /// The command layer's settings of these arguments.
+    fn settings(&self, fixed: Vec<VertexId>) -> QuadSettings {
+        QuadSettings {
+            weight: self.weight,
+            deviation: self.deviation,
+            deviation_factor: self.deviation_factor,
+            iterations: self.iterations,
+            fix_boundary: self.fix_boundary,
+            fixed,
+            off_surface: self.off_surface,
+        }
+    }
+}
+
 pub fn run_quad(args: QuadArgs) -> Result<()> {
     let job = crate::output::Job::new("fair-quad")
         .input(&args.mesh)
@@ -298,15 +246,7 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
         .output_opt("--png", args.png.as_deref())
         .output_opt("--report", args.report.as_deref())
         .check()?;
-    if !args.weight.is_finite() || args.weight <= 0.0 {
-        return Err(bad_input("--weight must be a positive number"));
-    }
-    if !args.deviation.is_finite() || args.deviation < 0.0 {
-        return Err(bad_input("--deviation must be ≥ 0"));
-    }
-    if !args.deviation_factor.is_finite() || args.deviation_factor <= 0.0 {
-        return Err(bad_input("--deviation-factor must be positive"));
-    }
+    args.settings(Vec::new()).check()?;
     let mut mesh = fairline::io::read_mesh(&args.mesh)?;
     crate::input::note_split_vertices(&args.mesh, &mesh);
     if !mesh.faces().any(|f| mesh.face_size(f) == 4) {
@@ -320,25 +260,12 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
         None => Vec::new(),
     };
     let input = mesh.clone();
-    let opts = QuadFairOptions::default()
-        .weight(args.weight)
-        .deviation(args.deviation)
-        .deviation_factor(args.deviation_factor)
-        .iterations(args.iterations)
-        .fix_boundary(args.fix_boundary)
-        .fixed(fixed)
-        .on_surface(!args.off_surface);
-    let mut report = Report::new("fair-quad");
     let bar = spinner("fairing structure lines");
-    let out = report.time(|| fair_structure_lines(&mesh, &opts));
+    let out = fair_quad::run(&mesh, &args.settings(fixed), &Control::new());
     bar.finish_and_clear();
-    let out = out.map_err(|e| match e {
-        fairline::fair::QuadFairError::Solve(_) => anyhow::Error::new(e),
-        other => bad_input(other.to_string()),
-    })?;
+    let out = out?;
     mesh.set_positions(out.positions)?;
-    let r = out.report;
-    report.set_fields(&r);
+    let r = out.result;
     fairline::io::write_mesh(&args.output, &mesh)?;
     if let Some(png) = &args.png {
         before_after(
@@ -349,10 +276,8 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
             png,
         )?;
     }
-    for w in r.warnings() {
-        report.warn(w);
-    }
-    report.write(args.report.as_deref())?;
+    print_warnings(&out.report);
+    write_report(args.report.as_deref(), &out.report)?;
     job.finish(format_args!(
         "{} iteration(s) on {} structure line(s), {} free vertices, structure energy {:.3e} → {:.3e}",
         r.iterations,

@@ -141,6 +141,20 @@ impl Control {
         self
     }
 
+    /// A control for one part of this run: the same cancel flag, and each
+    /// progress step passed through `map` before this control's callback
+    /// gets it (e.g. offset into the steps of the whole run).
+    pub fn mapped(&self, map: impl Fn(Progress) -> Progress + Send + Sync + 'static) -> Control {
+        let progress: Option<Arc<ProgressFn>> = self.progress.clone().map(|outer| {
+            let f: Arc<ProgressFn> = Arc::new(move |p| outer(map(p)));
+            f
+        });
+        Control {
+            progress,
+            cancel: self.cancel.clone(),
+        }
+    }
+
     /// Raise the cancel flag (creates none: without
     /// [`Control::cancel_flag`] this does nothing).
     pub fn cancel(&self) {

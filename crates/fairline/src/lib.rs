@@ -97,14 +97,11 @@
 //!   ([`mesh::Repaired`]): vertices may be removed or split, so there are
 //!   no "new positions" of the input's vertices.
 //!
-//! Every report whose run can go wrong in a way the user should hear about
-//! has a `warnings()` method (or, for the smoothing family,
-//! [`smooth::smooth_warnings`]) returning plain sentences: the CLI prints
-//! them as `warning:` lines and every front end lists them in its report,
-//! so the words are written once.
-//!
-//! A front end writes a report with [`io::JsonReport`], the one definition
-//! of the `--report` JSON (no `null`, `"time_s"`, `"warnings"`).
+//! The library returns plain data: what a run did (its report's fields)
+//! and nothing worded for a front end. The commands a user runs — which
+//! steps in which order, the JSON report, the warnings and the advice in
+//! them — are the crate `fairline-commands`, which the CLI, the Python
+//! package and the workbench all call.
 //!
 //! Conventions: f64 everywhere; faces are oriented counter-clockwise seen
 //! from outside, so normals point outward and a sphere of radius r has

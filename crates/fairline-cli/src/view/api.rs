@@ -4,15 +4,21 @@ use super::auth::{Guard, query_param};
 use super::doc::{Doc, Step, shell_word};
 use super::frame::{frame, vec3_bytes};
 use super::http::{HttpRequest, HttpResponse};
-use fairline::fair::{FairMethod, FairOptions, fair_highlight_lines, grow_region};
-use fairline::geom::{CurvatureMethod, LaplaceWeights, principal_curvatures};
+use fairline::fair::{FairMethod, grow_region};
+use fairline::geom::{CurvatureMethod, principal_curvatures};
 use fairline::highlight::{
     CircularLight, CircularLights, DetectOptions, HighlightLines, HighlightModel, HighlightOptions,
     LightArray, circular_highlight_bands, circular_highlight_lines, detect_irregularities,
 };
 use fairline::io::RegionSpec;
 use fairline::mesh::{FaceId, VertexId};
+use fairline::smooth::SmoothMethod;
 use fairline::{Control, SurfaceMesh, Vec3};
+use fairline_commands::enhance::{self, EnhanceSettings};
+use fairline_commands::fair::{self, FairInput, FairSettings};
+use fairline_commands::fair_quad::{self, QuadSettings};
+use fairline_commands::smooth::{self, SmoothSettings};
+use fairline_commands::{Choice, CommandError, ErrorKind, FrontEnd, Lights, Subject, Weights};
 use serde::Deserialize;
 use serde_json::{Value, json};
 use std::path::PathBuf;
@@ -314,13 +320,10 @@ fn vec_arg(v: Vec3) -> String {
 
 /// The light options of a command for a linear light array.
 fn light_args(l: &LightArray) -> String {
-    format!(
-        "--plane-point {} --plane-normal {} --direction {} --spacing {}",
-        vec_arg(l.plane_point()),
-        vec_arg(l.plane_normal()),
-        vec_arg(l.direction()),
-        l.spacing()
-    )
+    Lights::exactly(l)
+        .args("lights.json")
+        .trim_start()
+        .to_string()
 }
 
 /// Summary statistics of a scalar for the legend.
@@ -1004,10 +1007,8 @@ fn finish_job(shared: &Shared, ctx: &JobContext, result: Result<Outcome, String>
     }
 }
 
-/// Runs a mesh job. `control` (see [`job_control`]) goes into every options
-/// struct through its `.control(..)` builder (FairOptions, the smoothing
-/// options, QuadFairOptions and EnhanceOptions), which reports progress
-/// and cancels.
+/// Runs a mesh job: the command of the request with the job's `control`
+/// (see [`job_control`]: progress and cancellation).
 fn run_method(
     req: &RunRequest,
     tri: &SurfaceMesh,
@@ -1024,7 +1025,6 @@ fn run_method(
         out,
         control,
         faces: req.faces.as_ref().map(|f| to_faces(tri, f)),
-        started: Instant::now(),
     };
     match req.method.as_str() {
         "fair" => job.fair(),
@@ -1039,8 +1039,7 @@ fn run_method(
 
 /// One mesh job of [`run_method`]: the request, the document's meshes
 /// (`tri` triangulated, `mesh` as loaded), the file names the equivalent
-/// command line uses, the job's control, the region's faces (of `tri`) and
-/// when the job started.
+/// command line uses, the job's control and the region's faces (of `tri`).
 struct MeshJob<'j> {
     req: &'j RunRequest,
     tri: &'j SurfaceMesh,
@@ -1049,7 +1048,6 @@ struct MeshJob<'j> {
     out: &'j str,
     control: &'j Control,
     faces: Option<Vec<FaceId>>,
-    started: Instant,
 }
 
 impl MeshJob<'_> {
@@ -1067,168 +1065,108 @@ impl MeshJob<'_> {
         }
     }
 
-    /// The `--fixed` argument of the equivalent command line.
-    fn fixed_arg(&self) -> &'static str {
-        if self.faces.is_some() {
-            " --fixed fixed.json"
-        } else {
-            ""
-        }
-    }
-
-    /// Highlight-line fairing of the region.
+    /// Highlight-line fairing of the region: the `fair` command with the
+    /// page's lights and options, detection before and after included.
     fn fair(&self) -> Result<Outcome, String> {
-        let (o, file, out) = (&self.req.options, self.file, self.out);
+        let o = &self.req.options;
         let faces = self
             .faces
             .as_ref()
             .ok_or("fairing needs a region (faces)")?;
         let light = self.req.light.ok_or("fairing needs the light array")?;
-        let method = match o.method.as_deref().unwrap_or("highlight") {
-            "highlight" => FairMethod::Highlight,
-            "diffusion-flow" => FairMethod::DiffusionFlow,
-            m => return Err(format!("unknown fairing method `{m}`")),
+        let method = match o.method.as_deref() {
+            Some(m) => FairMethod::parse(m).map_err(job_error)?,
+            None => FairMethod::Highlight,
         };
-        let defaults = FairOptions::default();
-        let options = FairOptions::default()
-            .region(faces.clone())
-            .light(light)
-            .method(method)
-            .max_iterations(o.max_iterations.unwrap_or(defaults.max_iterations))
-            .epsilon(o.epsilon.unwrap_or(defaults.epsilon))
-            .control(self.control.clone());
-        let r = fair_highlight_lines(self.tri, &options).map_err(|e| e.to_string())?;
-        let mut report = serde_json::to_value(&r.report).map_err(|e| e.to_string())?;
-        report["command"] = json!("fair");
-        report["time_s"] = json!(self.started.elapsed().as_secs_f64());
-        let m = o.method.as_deref().unwrap_or("highlight");
+        let d = FairSettings::default();
+        let settings = FairSettings {
+            lights: Lights::exactly(&light),
+            method,
+            max_iterations: o.max_iterations.unwrap_or(d.max_iterations),
+            epsilon: o.epsilon.unwrap_or(d.epsilon),
+            ..d
+        };
+        let input = FairInput {
+            mesh: self.tri,
+            region: Some(faces),
+            name: Some(self.file),
+        };
+        let out = fair::run(input, &settings, self.control).map_err(job_error)?;
         Ok(Outcome {
             surfaces: None,
-            positions: r.positions,
-            report,
-            command: format!(
-                "fairline fair {file} --region region.json {} --method {m} --max-iterations {} --epsilon {} -o {out}",
-                light_args(&light),
-                options.max_iterations,
-                options.epsilon
-            ),
-            label: format!("fair ({m})"),
+            positions: out.mesh.positions().to_vec(),
+            report: out.report.to_json(),
+            command: settings.command_line(self.file, self.out),
+            label: format!("fair ({})", method.name()),
         })
     }
 
-    /// One of the smoothing methods, outside the region fixed.
+    /// One of the smoothing methods, outside the region fixed: the
+    /// `smooth` command with the page's options (cotangent weights unless
+    /// the page says otherwise; λ for Laplace smoothing only, Taubin's
+    /// comes from the pass band).
     fn smooth(&self) -> Result<Outcome, String> {
-        use fairline::smooth::{SmoothMethod, SmoothOptions, smooth};
         let o = &self.req.options;
-        let (weights, wname) = match o.weights.as_deref().unwrap_or("cotan") {
-            "uniform" => (LaplaceWeights::Uniform, "uniform"),
-            "cotan" => (LaplaceWeights::Cotangent, "cotan"),
-            w => return Err(format!("unknown weights `{w}` (uniform, cotan)")),
+        let method =
+            SmoothMethod::parse(o.method.as_deref().unwrap_or("taubin")).map_err(job_error)?;
+        let weights = Weights::parse(o.weights.as_deref().unwrap_or("cotan")).map_err(job_error)?;
+        let settings = SmoothSettings {
+            method,
+            weights,
+            iterations: o.iterations,
+            lambda: o.lambda.filter(|_| method == SmoothMethod::Laplace),
+            fixed: self.fixed_outside(),
+            ..SmoothSettings::default()
         };
-        let method = o.method.as_deref().unwrap_or("taubin").to_string();
-        let Some(smooth_method) = SmoothMethod::from_name(&method) else {
-            return Err(format!("unknown smoothing method `{method}`"));
-        };
-        let iterations = o.iterations;
-        // λ is the workbench's for Laplace smoothing only (Taubin's comes
-        // from the pass band)
-        let lambda = o.lambda.filter(|_| smooth_method == SmoothMethod::Laplace);
-        let options = SmoothOptions::default()
-            .method(smooth_method)
-            .weights(weights)
-            .lambda(lambda)
-            .iterations(iterations)
-            .fixed(self.fixed_outside())
-            .control(self.control.clone());
-        let smoothed = smooth(self.mesh, &options).map_err(|e| e.to_string())?;
-        let r = &smoothed.report;
-        let mut cmd = format!("fairline smooth {} --method {method}", self.file);
-        if matches!(method.as_str(), "laplace" | "taubin") {
-            cmd.push_str(&format!(" --weights {wname}"));
-        }
-        if let Some(i) = iterations {
-            cmd.push_str(&format!(" --iterations {i}"));
-        }
-        if method == "laplace"
-            && let Some(l) = o.lambda
-        {
-            cmd.push_str(&format!(" --lambda {l}"));
-        }
-        cmd.push_str(&format!("{} -o {}", self.fixed_arg(), self.out));
+        let out = smooth::run(self.mesh, &settings, self.control).map_err(job_error)?;
         Ok(Outcome {
             surfaces: None,
-            positions: smoothed.positions,
-            report: json!({
-                "command": "smooth",
-                "method": method,
-                "iterations": r.iterations,
-                "converged": r.converged,
-                "volume_before": r.volume_before,
-                "volume_after": r.volume_after,
-                "max_displacement": r.max_displacement,
-                "time_s": self.started.elapsed().as_secs_f64(),
-            }),
-            command: cmd,
-            label: format!("smooth ({method})"),
+            positions: out.positions,
+            report: out.report.to_json(),
+            command: settings.command_line(self.file, self.out),
+            label: format!("smooth ({})", method.name()),
         })
     }
 
-    /// Structure-line fairing of a quad mesh, outside the region fixed.
+    /// Structure-line fairing of a quad mesh, outside the region fixed:
+    /// the `fair-quad` command with the page's weight and iterations.
     fn fair_quad(&self) -> Result<Outcome, String> {
-        use fairline::fair::{QuadFairOptions, fair_structure_lines};
-        let (o, mesh) = (&self.req.options, self.mesh);
-        if !mesh.faces().any(|f| mesh.face_size(f) == 4) {
-            return Err("fair-quad needs a quad mesh (no quadrilateral found)".into());
-        }
-        let d = QuadFairOptions::default();
-        let opts = QuadFairOptions::default()
-            .weight(o.weight.unwrap_or(d.weight))
-            .iterations(o.iterations.unwrap_or(d.iterations))
-            .fixed(self.fixed_outside())
-            .control(self.control.clone());
-        let faired = fair_structure_lines(mesh, &opts).map_err(|e| e.to_string())?;
-        let r = &faired.report;
+        let o = &self.req.options;
+        let d = QuadSettings::default();
+        let settings = QuadSettings {
+            weight: o.weight.unwrap_or(d.weight),
+            iterations: o.iterations.unwrap_or(d.iterations),
+            fixed: self.fixed_outside(),
+            ..d
+        };
+        let out = fair_quad::run(self.mesh, &settings, self.control).map_err(job_error)?;
         Ok(Outcome {
             surfaces: None,
-            positions: faired.positions.clone(),
-            report: library_report("fair-quad", r, self.started.elapsed().as_secs_f64()),
-            command: format!(
-                "fairline fair-quad {} --weight {} --iterations {}{} -o {}",
-                self.file,
-                opts.weight,
-                opts.iterations,
-                self.fixed_arg(),
-                self.out
-            ),
+            positions: out.positions,
+            report: out.report.to_json(),
+            command: settings.command_line(self.file, self.out),
             label: "fair-quad".into(),
         })
     }
 
-    /// Feature enhancement by vertex flow, outside the region fixed.
+    /// Feature enhancement by vertex flow, outside the region fixed: the
+    /// `enhance` command with the page's λ, μ and iterations.
     fn enhance(&self) -> Result<Outcome, String> {
-        use fairline::enhance::{EnhanceOptions, enhance_features};
         let o = &self.req.options;
-        let d = EnhanceOptions::default();
-        let lambda = o.lambda.unwrap_or(1.0);
-        let mu = o.mu.unwrap_or(0.5);
-        let iterations = o.iterations.unwrap_or(d.iterations);
-        let opts = EnhanceOptions::default()
-            .lambda(lambda)
-            .mu(mu)
-            .iterations(iterations)
-            .fixed(self.fixed_outside())
-            .control(self.control.clone());
-        let r = enhance_features(self.tri, &opts).map_err(|e| e.to_string())?;
+        let d = EnhanceSettings::default();
+        let settings = EnhanceSettings {
+            lambda: o.lambda.unwrap_or(d.lambda),
+            mu: o.mu.unwrap_or(d.mu),
+            iterations: o.iterations.unwrap_or(d.iterations),
+            fixed: self.fixed_outside(),
+            ..d
+        };
+        let out = enhance::run(self.tri, &settings, self.control).map_err(job_error)?;
         Ok(Outcome {
             surfaces: None,
-            report: library_report("enhance", &r.report, self.started.elapsed().as_secs_f64()),
-            positions: r.positions,
-            command: format!(
-                "fairline enhance {} --lambda {lambda} --mu {mu} --iterations {iterations}{} -o {}",
-                self.file,
-                self.fixed_arg(),
-                self.out
-            ),
+            positions: out.positions,
+            report: out.report.to_json(),
+            command: settings.command_line(self.file, self.out),
             label: "enhance".into(),
         })
     }
@@ -1552,13 +1490,13 @@ fn run_fair_surface(
     })
 }
 
-/// The JSON of a library report (its fields are the CLI's report keys)
-/// with the command and the wall time added.
-fn library_report(command: &str, report: &impl serde::Serialize, time_s: f64) -> Value {
-    let mut value = serde_json::to_value(report).unwrap_or_else(|_| json!({}));
-    if let Value::Object(map) = &mut value {
-        map.insert("command".into(), json!(command));
-        map.insert("time_s".into(), json!(time_s));
+/// A failure of the command layer as the job's message: `cancelled` for a
+/// cancelled run, else the message worded for the workbench, with the
+/// region named when it is about the region.
+fn job_error(e: CommandError) -> String {
+    match (e.kind(), e.subject()) {
+        (ErrorKind::Cancelled, _) => "cancelled".into(),
+        (_, Some(Subject::Region)) => format!("region: {}", e.message(FrontEnd::Workbench)),
+        _ => e.message(FrontEnd::Workbench),
     }
-    value
 }

@@ -13,7 +13,6 @@ pub(crate) mod family;
 pub mod highlight;
 pub mod quad;
 pub mod region;
-mod regions;
 pub mod surface;
 mod system;
 
@@ -31,11 +30,6 @@ pub use quad::{
     fair_polyline_network, fair_structure_lines, structure_energy,
 };
 pub use region::{MovableSet, movable_vertices};
-pub use regions::{
-    AUTO_RINGS, DetectedRegionEntry, SUPPORT_RINGS, detect_regions_to_fair,
-    detected_region_entries, input_faces, regions_deviation, regions_report, regions_union,
-    regions_warnings, suggested_region,
-};
 pub use surface::{
     BoundaryControl, EndpointPair, Endpoints, FairIteration, FairStop, SurfaceFairError,
     SurfaceFairMethod, SurfaceFairOptions, SurfaceFairReport, TargetCurve, Waviness,

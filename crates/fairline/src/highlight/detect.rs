@@ -818,56 +818,6 @@ pub struct RegionDetection {
     pub overlaps: Vec<bool>,
 }
 
-impl RegionDetection {
-    /// The warning about what detection flags on a faired mesh (`self`:
-    /// the detection of the result as `fairline detect` would run it on
-    /// the output, with the lights it would choose there), worded as
-    /// `detect` would report it, with what to do; `None` when it flags
-    /// nothing (whatever the scores: `detect` would be quiet). Names the
-    /// best flagged region, its score and the threshold at its site, and
-    /// whether it overlaps the faired region; `score_before` and
-    /// `score_after` are the detection scores inside the faired region
-    /// with the same lights before and after (the report's).
-    pub fn remaining_defect_warning(&self, score_before: f64, score_after: f64) -> Option<String> {
-        let regions = &self.detection.regions;
-        let best = regions.first()?;
-        let overlapping = self.overlaps.iter().filter(|&&o| o).count();
-        let c = best.center;
-        let place = if self.overlaps.first().copied().unwrap_or(false) {
-            "inside the faired region"
-        } else {
-            "outside the faired region"
-        };
-        let advice = if overlapping == 0 {
-            "fair it too (`fairline detect` on the result writes its region, or use --auto)"
-        } else if score_after > score_before {
-            "the detection score inside the region got worse; try a larger region (--grow 2) or --method diffusion-flow"
-        } else {
-            "try --grow 2 or more iterations"
-        };
-        let what = if best.score > best.threshold || best.flat_spot <= 0.0 {
-            format!(
-                "the best scoring {:.2} (threshold {:.2} there)",
-                best.score, best.threshold
-            )
-        } else {
-            format!(
-                "the best a flat spot {:.2} (floor {:.2})",
-                best.flat_spot, self.detection.flat_spot_floor
-            )
-        };
-        Some(format!(
-            "a defect remains: detect on the result flags {} region(s) ({overlapping} overlapping the faired region), {what} at [{:.4}, {:.4}, {:.4}], {place}; detection score inside the faired region {:.2} -> {:.2}; {advice}",
-            regions.len(),
-            c.x,
-            c.y,
-            c.z,
-            score_before,
-            score_after,
-        ))
-    }
-}
-
 /// Detection with the default [`DetectOptions`] under `light` (the
 /// highlight lines computed with `highlight`), as `fairline detect` runs
 /// it, and its best site inside the face region `faces` (see

@@ -26,7 +26,6 @@ mod lines;
 mod obj;
 mod off;
 mod ply;
-mod report;
 pub mod selection;
 pub mod step;
 mod stl;
@@ -45,7 +44,6 @@ use thiserror::Error;
 
 pub use iges_read::{IgesError, IgesImport, IgesSurface, parse_iges, read_iges};
 pub use lines::{highlight_lines_json, highlight_lines_obj};
-pub use report::{JsonReport, finite_only};
 pub use surface_json::{
     MAX_SURFACE_JSON_BYTES, SurfaceJsonError, parse_surfaces_json, read_surfaces_json,
     surface_to_json, surfaces_to_json, write_surface_json, write_surfaces_json,

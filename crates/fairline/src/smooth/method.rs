@@ -212,39 +212,6 @@ pub fn smooth(
     }
 }
 
-/// The warnings a front end shows after [`smooth`] turned `input` into
-/// `report` with `options`, as plain sentences (the CLI prints them as
-/// `warning:` lines, every front end lists them in its report): the method
-/// did not converge; Schneider–Kobbelt ran on a closed mesh with no fixed
-/// vertex, where Δ_B H = 0 has no boundary data and its solutions are the
-/// surfaces of constant mean curvature.
-pub fn smooth_warnings(
-    input: &SurfaceMesh,
-    options: &SmoothOptions,
-    report: &SmoothReport,
-) -> Vec<String> {
-    let mut warnings = Vec::new();
-    if !report.converged {
-        warnings.push(format!(
-            "{} did not converge in {} iteration(s); try more --iterations or a larger --epsilon",
-            options.method.name(),
-            report.iterations
-        ));
-    }
-    let unanchored = options.method == SmoothMethod::SchneiderKobbelt
-        && input.is_closed()
-        && options.fixed.is_empty();
-    if unanchored {
-        warnings.push(
-            "schneider-kobbelt on a closed mesh without --fixed vertices: nothing holds the shape, \
-             and Δ_B H = 0 pulls it toward constant mean curvature (a sphere-like blob), erasing \
-             features such as ears or legs; fix the vertices that must stay (--fixed) to keep them"
-                .to_string(),
-        );
-    }
-    warnings
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -329,30 +296,5 @@ mod tests {
             );
         }
         assert_eq!(SmoothMethod::from_name("gauss"), None);
-    }
-
-    #[test]
-    fn warnings_name_the_method_and_the_unanchored_closed_mesh() {
-        let mesh = noisy_sphere();
-        let sk = SmoothOptions::default()
-            .method(SmoothMethod::SchneiderKobbelt)
-            .iterations(Some(1));
-        let out = smooth(&mesh, &sk).unwrap();
-        let w = smooth_warnings(&mesh, &sk, &out.report);
-        assert!(!out.report.converged);
-        assert_eq!(w.len(), 2, "{w:?}");
-        assert_eq!(
-            w[0],
-            "schneider-kobbelt did not converge in 1 iteration(s); try more --iterations or a larger --epsilon"
-        );
-        assert!(w[1].starts_with("schneider-kobbelt on a closed mesh without --fixed vertices"));
-        // anchored by a fixed vertex, or not Schneider–Kobbelt: no such warning
-        let anchored = sk.clone().fixed(vec![VertexId(0)]);
-        let out = smooth(&mesh, &anchored).unwrap();
-        assert_eq!(smooth_warnings(&mesh, &anchored, &out.report).len(), 1);
-        let taubin = SmoothOptions::default();
-        let out = smooth(&mesh, &taubin).unwrap();
-        assert!(out.report.converged);
-        assert!(smooth_warnings(&mesh, &taubin, &out.report).is_empty());
     }
 }

@@ -26,7 +26,7 @@ pub use laplace::{
     ImplicitOptions, LaplaceOptions, TaubinOptions, TaubinParameters, implicit_smooth,
     laplace_smooth, taubin_lambda_for_pass_band, taubin_smooth,
 };
-pub use method::{SmoothMethod, SmoothOptions, smooth, smooth_warnings};
+pub use method::{SmoothMethod, SmoothOptions, smooth};
 pub use schneider_kobbelt::{SchneiderKobbeltOptions, schneider_kobbelt};
 pub use spring::{SpringOptions, spring_smooth};
 

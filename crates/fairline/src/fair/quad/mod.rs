@@ -188,22 +188,6 @@ pub struct QuadFairReport {
     pub iterations: usize,
 }
 
-impl QuadFairReport {
-    /// What a front end warns about after the run, as plain sentences (the
-    /// CLI prints them as `warning:` lines, every front end lists them in
-    /// its report): the Eq. (30) structure-line energy got worse.
-    pub fn warnings(&self) -> Vec<String> {
-        let mut warnings = Vec::new();
-        if self.structure_energy_after > self.structure_energy_before {
-            warnings.push(format!(
-                "the structure-line energy got worse: {:.4e} before, {:.4e} after; try a larger --weight",
-                self.structure_energy_before, self.structure_energy_after
-            ));
-        }
-        warnings
-    }
-}
-
 /// Runs of four consecutive vertices of all lines (closed lines wrap), with
 /// the index of the line of each run.
 fn runs(lines: &[StructureLine]) -> (Vec<[u32; 4]>, Vec<u32>) {

@@ -1,16 +1,16 @@
-//! Fairing the regions of one mesh in turn, as `fairline fair` (a region
-//! file, or `--auto`: the regions detection suggests) and the Python `fair`
-//! do it: the margins around detected regions, the one report of the whole
-//! run and the sentences front ends warn with, written once so that every
-//! front end says the same (one place per concept). The
-//! fairing itself is [`super::fair_highlight_lines`] (Yong et al. §3).
+//! The regions of the `fair` and `detect` commands: the margins around
+//! detected regions, the regions `fair --auto` fairs in turn, the one
+//! report of a run over several regions and what it warns about. The
+//! fairing itself is [`fairline::fair::fair_highlight_lines`] (Yong et al.
+//! §3).
 
-use super::{FairError, FairReport, grow_region};
-use crate::highlight::{
+use crate::warning::Warning;
+use fairline::fair::{FairReport, grow_region};
+use fairline::highlight::{
     DetectOptions, Detection, HighlightError, HighlightModel, HighlightOptions, LightArray,
     detect_irregularities,
 };
-use crate::mesh::{FaceId, SurfaceMesh};
+use fairline::mesh::{FaceId, SurfaceMesh};
 use serde::Serialize;
 use serde_json::{Map, Value, json};
 
@@ -24,20 +24,6 @@ pub const SUPPORT_RINGS: usize = 2;
 /// Rings of faces `fairline fair --auto` adds around each detected region
 /// before fairing it.
 pub const AUTO_RINGS: usize = 4;
-
-impl FairError {
-    /// The message a front end shows for this error: a region without a
-    /// movable vertex says how to enlarge it; any other error is its own
-    /// message.
-    pub fn user_message(&self) -> String {
-        match self {
-            FairError::NoMovableVertex(msg) => format!(
-                "{msg}; a vertex can move only when every face around it and around its neighbours is in the region: enlarge the region or pass --grow 2"
-            ),
-            other => other.to_string(),
-        }
-    }
-}
 
 /// The regions `fairline fair --auto` fairs: the irregular regions that
 /// detection (default [`DetectOptions`]) finds on the highlight lines of
@@ -200,35 +186,32 @@ pub fn regions_deviation(results: &[FairReport]) -> (f64, f64) {
     )
 }
 
-/// What a front end warns about after fairing `results` with at most
-/// `max_iterations` iterations per region, as plain sentences (the CLI
-/// prints them as `warning:` lines, every front end lists them in its
-/// report): no region was faired; a region did not converge; the
-/// highlight-line deviation got worse (with the detection score inside the
-/// regions before and after, `detection_scores`, as `fairline detect`
-/// measures it).
+/// What fairing `results` with at most `max_iterations` iterations per
+/// region warns about: no region was faired; a region did not converge;
+/// the highlight-line deviation got worse (with the detection score inside
+/// the regions before and after, `detection_scores`, as `detect` measures
+/// it).
 pub fn regions_warnings(
     results: &[FairReport],
     max_iterations: usize,
     detection_scores: (f64, f64),
-) -> Vec<String> {
+) -> Vec<Warning> {
     let mut warnings = Vec::new();
     if results.is_empty() {
-        warnings.push(
-            "no region was faired (nothing detected): the output is the input unchanged".into(),
-        );
+        warnings.push(Warning::NothingFaired);
     }
     if !results.iter().all(|r| r.converged) {
-        warnings.push(format!(
-            "fairing did not converge within --max-iterations {max_iterations}; try more iterations or a larger region (--grow, --auto)"
-        ));
+        warnings.push(Warning::FairNotConverged { max_iterations });
     }
     let (before, after) = regions_deviation(results);
     let (score_before, score_after) = detection_scores;
     if after > before {
-        warnings.push(format!(
-            "the highlight-line deviation (distance of the lines inside the region from their own smoothed curves) got worse: {before:.4e} before, {after:.4e} after; the detection score (as `detect` measures it, same lights) went {score_before:.2} -> {score_after:.2}"
-        ));
+        warnings.push(Warning::DeviationWorse {
+            before,
+            after,
+            score_before,
+            score_after,
+        });
     }
     warnings
 }
@@ -236,9 +219,10 @@ pub fn regions_warnings(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fair::{FairMethod, FairOptions, fair_highlight_lines};
-    use crate::mesh::bounding_box;
-    use crate::{Vec3, shapes};
+    use crate::warning::FrontEnd;
+    use fairline::fair::{FairMethod, FairOptions, fair_highlight_lines};
+    use fairline::mesh::bounding_box;
+    use fairline::{Vec3, shapes};
 
     /// Two small bumps (at x = ∓0.5) on a crowned panel, their regions,
     /// the lights.
@@ -248,7 +232,7 @@ mod tests {
             0.3 * (1.0 - 0.45 * x * x - 0.25 * y * y) + bump(-0.5) + bump(0.5)
         });
         let region = |cx: f64| {
-            crate::io::RegionSpec::Sphere {
+            fairline::io::RegionSpec::Sphere {
                 center: Vec3::new(cx, 0.0, 0.0),
                 radius: 0.35,
             }
@@ -321,15 +305,22 @@ mod tests {
         );
         // 2 iterations of diffusion flow do not reach ε = 1e-14: said once
         assert!(!a.converged);
-        let w = regions_warnings(&reports, 2, (1.0, 0.5));
+        let w: Vec<String> = regions_warnings(&reports, 2, (1.0, 0.5))
+            .iter()
+            .map(|w| w.message(FrontEnd::Cli))
+            .collect();
         assert_eq!(
             w[0],
             "fairing did not converge within --max-iterations 2; try more iterations or a larger region (--grow, --auto)"
         );
         assert!(w.iter().all(|s| !s.starts_with("no region was faired")));
         // nothing faired: said, and nothing else
+        let none: Vec<String> = regions_warnings(&[], 3, (0.0, 0.0))
+            .iter()
+            .map(|w| w.message(FrontEnd::Cli))
+            .collect();
         assert_eq!(
-            regions_warnings(&[], 3, (0.0, 0.0)),
+            none,
             vec!["no region was faired (nothing detected): the output is the input unchanged"]
         );
     }
@@ -372,16 +363,5 @@ mod tests {
         assert_eq!(entries.len(), det.regions.len());
         assert_eq!(entries[0].faces, det.regions[0].faces.len());
         assert_eq!(entries[0].score, det.regions[0].score);
-    }
-
-    #[test]
-    fn a_region_without_movable_vertices_says_how_to_enlarge_it() {
-        let e = FairError::NoMovableVertex("the region is too thin".into());
-        assert_eq!(
-            e.user_message(),
-            "the region is too thin; a vertex can move only when every face around it and around its neighbours is in the region: enlarge the region or pass --grow 2"
-        );
-        let other = FairError::InvalidOption("epsilon".into());
-        assert_eq!(other.user_message(), other.to_string());
     }
 }

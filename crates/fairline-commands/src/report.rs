@@ -1,33 +1,36 @@
-//! The JSON report of a command: the `--report` file of the CLI and the
-//! report dictionary of the Python package, one definition for both (user
-//! guide, docs/guide/conventions.md).
+//! The JSON report of a command: the `--report` file of the CLI, the
+//! report dictionary of the Python package and the report panel of the
+//! workbench, one definition for all three.
 //!
 //! A report holds `"command"`, `"time_s"` (computation only), the keys the
 //! command adds (often every field of an algorithm's `Serialize` report,
-//! [`JsonReport::set_fields`]) and `"warnings"` when the command warned. It
+//! [`Report::set_fields`]) and `"warnings"` when the command warned. It
 //! never holds `null`: a value that does not serialise to a finite number
 //! (serde_json turns NaN and ±inf into `null`) is left out of its object,
 //! or written as the string `"not finite"` inside an array, with a warning
-//! naming the key. The library never prints: a front end shows the
-//! warnings ([`JsonReport::warnings`]) its own way.
+//! naming the key. The warnings are structured values ([`Warning`]); the
+//! JSON lists them worded with the CLI's option names, the same document in
+//! every front end, and a front end shows them its own way
+//! ([`Warning::message`]).
 
+use crate::warning::{FrontEnd, Warning};
 use serde_json::{Map, Value, json};
 use std::time::{Duration, Instant};
 
 /// A command's JSON report under construction; see the module documentation.
 #[derive(Clone, Debug)]
-pub struct JsonReport {
+pub struct Report {
     map: Map<String, Value>,
     compute: Duration,
-    warnings: Vec<String>,
+    warnings: Vec<Warning>,
 }
 
-impl JsonReport {
+impl Report {
     /// A report for `command`.
     pub fn new(command: &str) -> Self {
         let mut map = Map::new();
         map.insert("command".into(), json!(command));
-        JsonReport {
+        Report {
             map,
             compute: Duration::ZERO,
             warnings: Vec::new(),
@@ -39,9 +42,10 @@ impl JsonReport {
         let value = match serde_json::to_value(value) {
             Ok(v) => v,
             Err(e) => {
-                self.warn(format!(
-                    "report value `{key}` could not be written ({e}); left out"
-                ));
+                self.warn(Warning::ReportValueUnwritable {
+                    key: key.into(),
+                    error: e.to_string(),
+                });
                 return;
             }
         };
@@ -50,14 +54,12 @@ impl JsonReport {
             self.map.insert(key.into(), v);
         }
         for path in dropped {
-            self.warn(format!(
-                "report value `{path}` is not a finite number; left out of the report"
-            ));
+            self.warn(Warning::NotFinite { key: path });
         }
     }
 
     /// Sets every field of `fields` (a struct that serialises to an object,
-    /// e.g. a library report) as a key, like [`JsonReport::set`].
+    /// e.g. a library report) as a key, like [`Report::set`].
     pub fn set_fields(&mut self, fields: impl serde::Serialize) {
         match serde_json::to_value(fields) {
             Ok(Value::Object(map)) => {
@@ -66,18 +68,32 @@ impl JsonReport {
                 }
             }
             Ok(other) => self.set("value", other),
-            Err(e) => self.warn(format!("report could not be written ({e})")),
+            Err(e) => self.warn(Warning::ReportUnwritable {
+                error: e.to_string(),
+            }),
         }
     }
 
     /// Records a warning (listed under `"warnings"`).
-    pub fn warn(&mut self, msg: impl Into<String>) {
-        self.warnings.push(msg.into());
+    pub fn warn(&mut self, warning: Warning) {
+        self.warnings.push(warning);
     }
 
     /// The warnings so far, oldest first.
-    pub fn warnings(&self) -> &[String] {
+    pub fn warnings(&self) -> &[Warning] {
         &self.warnings
+    }
+
+    /// The warnings worded for `front_end`, oldest first.
+    pub fn messages(&self, front_end: FrontEnd) -> Vec<String> {
+        self.warnings.iter().map(|w| w.message(front_end)).collect()
+    }
+
+    /// Adds `seconds` to the computation time (work timed elsewhere).
+    pub fn add_time(&mut self, seconds: f64) {
+        if seconds.is_finite() && seconds > 0.0 {
+            self.compute += Duration::from_secs_f64(seconds);
+        }
     }
 
     /// Runs `f`, adding its wall time to the computation time.
@@ -93,7 +109,7 @@ impl JsonReport {
         let mut m = self.map.clone();
         m.insert("time_s".into(), json!(self.compute.as_secs_f64()));
         if !self.warnings.is_empty() {
-            m.insert("warnings".into(), json!(self.warnings));
+            m.insert("warnings".into(), json!(self.messages(FrontEnd::Cli)));
         }
         Value::Object(m)
     }
@@ -135,7 +151,7 @@ mod tests {
 
     #[test]
     fn non_finite_values_are_left_out_with_a_warning_naming_them() {
-        let mut r = JsonReport::new("smooth");
+        let mut r = Report::new("smooth");
         r.set("iterations", 3);
         r.set("bad", f64::NAN);
         r.set("nested", json!({"a": 1.0, "b": null, "c": [1.0, null]}));
@@ -156,7 +172,7 @@ mod tests {
         assert_eq!(j["energy"], 0.5);
         assert!(j.get("inf").is_none());
         assert!(j["time_s"].as_f64().is_some_and(|t| t >= 0.0));
-        let w = r.warnings();
+        let w = r.messages(FrontEnd::Cli);
         assert_eq!(w.len(), 4, "{w:?}");
         assert!(w[0].contains("`bad`"));
         assert!(w[1].contains("`nested.b`"));

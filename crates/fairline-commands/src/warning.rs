@@ -1,0 +1,255 @@
+//! What a command warns about, as structured values, and how each front
+//! end words them: the CLI names its options `--grow 2`, the Python package
+//! its keywords `grow=2`, the workbench its controls.
+
+use serde::Serialize;
+
+/// The front end a message is worded for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrontEnd {
+    /// `fairline COMMAND --option value`.
+    Cli,
+    /// The Python package's keyword arguments `option=value`.
+    Python,
+    /// The workbench's controls (named as on the page).
+    Workbench,
+}
+
+impl FrontEnd {
+    /// The name of option `name` (the CLI's long name without `--`, e.g.
+    /// `max-iterations`) in this front end.
+    pub fn option(self, name: &str) -> String {
+        match self {
+            FrontEnd::Cli => format!("--{name}"),
+            FrontEnd::Python if name == "lambda" => "lambda_".into(),
+            FrontEnd::Python => name.replace('-', "_"),
+            FrontEnd::Workbench => name.replace('-', " "),
+        }
+    }
+
+    /// Option `name` set to `value`: `--grow 2`, `grow=2`, `grow 2`.
+    pub fn setting(self, name: &str, value: &str) -> String {
+        match self {
+            FrontEnd::Cli => format!("--{name} {value}"),
+            FrontEnd::Python if value.parse::<f64>().is_ok() => {
+                format!("{}={value}", self.option(name))
+            }
+            FrontEnd::Python => format!("{}={value:?}", self.option(name)),
+            FrontEnd::Workbench => format!("{} {value}", self.option(name)),
+        }
+    }
+
+    /// A switch turned on: `--auto`, `auto=True`, `auto`.
+    pub fn switch(self, name: &str) -> String {
+        match self {
+            FrontEnd::Python => format!("{}=True", self.option(name)),
+            _ => self.option(name),
+        }
+    }
+}
+
+/// What detection still flags on a faired mesh, as `detect` on the output
+/// would report it ([`Warning::RemainingDefect`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RemainingDefect {
+    /// Regions detection flags on the result.
+    pub regions: usize,
+    /// How many of them share a face with the faired region.
+    pub overlapping: usize,
+    /// Whether the best one does.
+    pub best_inside: bool,
+    /// The best region's score and the threshold at its site.
+    pub score: f64,
+    /// The threshold at the best region's site.
+    pub threshold: f64,
+    /// The best region's flat-spot value (0 when none) and the floor.
+    pub flat_spot: f64,
+    /// The flat-spot floor of the detection.
+    pub flat_spot_floor: f64,
+    /// The best region's centre.
+    pub center: [f64; 3],
+    /// Detection score inside the faired region before and after.
+    pub score_before: f64,
+    /// Detection score inside the faired region after.
+    pub score_after: f64,
+}
+
+/// A warning of a command: something the user should hear about (a run
+/// that did not converge, a measure made worse, a value left out of the
+/// report). Worded by [`Warning::message`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Warning {
+    /// A report value is not a finite number and was left out.
+    NotFinite { key: String },
+    /// A report value could not be serialised.
+    ReportValueUnwritable { key: String, error: String },
+    /// A report could not be serialised.
+    ReportUnwritable { error: String },
+    /// `fair`: no region was faired.
+    NothingFaired,
+    /// `fair`: a region did not converge within the iterations allowed.
+    FairNotConverged { max_iterations: usize },
+    /// `fair`: the highlight-line deviation got worse.
+    DeviationWorse {
+        before: f64,
+        after: f64,
+        score_before: f64,
+        score_after: f64,
+    },
+    /// `fair`: detection on the result still flags a defect; `input` is
+    /// the name of the input the front end says it about.
+    RemainingDefect {
+        input: Option<String>,
+        defect: RemainingDefect,
+    },
+    /// `smooth`: the method did not converge.
+    SmoothNotConverged {
+        method: &'static str,
+        iterations: usize,
+    },
+    /// `smooth`: Schneider–Kobbelt on a closed mesh with nothing fixed.
+    Unanchored,
+    /// `fair-quad`: the Eq. (30) structure-line energy got worse.
+    QuadEnergyWorse { before: f64, after: f64 },
+    /// `enhance`: triangles flipped in a solved step and were repaired.
+    TrianglesFlipped { count: usize },
+    /// A sentence that names no option (a library report's, or a
+    /// command's not yet in this layer).
+    Text(String),
+}
+
+impl Warning {
+    /// The warning as a sentence with `front_end`'s option names.
+    pub fn message(&self, front_end: FrontEnd) -> String {
+        let o = |name: &str| front_end.option(name);
+        match self {
+            Warning::NotFinite { key } => {
+                format!("report value `{key}` is not a finite number; left out of the report")
+            }
+            Warning::ReportValueUnwritable { key, error } => {
+                format!("report value `{key}` could not be written ({error}); left out")
+            }
+            Warning::ReportUnwritable { error } => format!("report could not be written ({error})"),
+            Warning::NothingFaired => {
+                "no region was faired (nothing detected): the output is the input unchanged".into()
+            }
+            Warning::FairNotConverged { max_iterations } => format!(
+                "fairing did not converge within {}; try more iterations or a larger region ({}, {})",
+                front_end.setting("max-iterations", &max_iterations.to_string()),
+                o("grow"),
+                o("auto")
+            ),
+            Warning::DeviationWorse {
+                before,
+                after,
+                score_before,
+                score_after,
+            } => format!(
+                "the highlight-line deviation (distance of the lines inside the region from their own smoothed curves) got worse: {before:.4e} before, {after:.4e} after; the detection score (as `detect` measures it, same lights) went {score_before:.2} -> {score_after:.2}"
+            ),
+            Warning::RemainingDefect { input, defect } => {
+                let text = remaining_defect(defect, front_end);
+                match input {
+                    Some(name) => format!("{name}: {text}"),
+                    None => text,
+                }
+            }
+            Warning::SmoothNotConverged { method, iterations } => format!(
+                "{method} did not converge in {iterations} iteration(s); try more {} or a larger {}",
+                o("iterations"),
+                o("epsilon")
+            ),
+            Warning::Unanchored => format!(
+                "schneider-kobbelt on a closed mesh without {} vertices: nothing holds the shape, \
+                 and Δ_B H = 0 pulls it toward constant mean curvature (a sphere-like blob), erasing \
+                 features such as ears or legs; fix the vertices that must stay ({}) to keep them",
+                o("fixed"),
+                o("fixed")
+            ),
+            Warning::QuadEnergyWorse { before, after } => format!(
+                "the structure-line energy got worse: {before:.4e} before, {after:.4e} after; try a larger {}",
+                o("weight")
+            ),
+            Warning::TrianglesFlipped { count } => format!(
+                "{count} triangle(s) flipped their orientation in the solved step and were repaired by shortening their vertices' steps; try a smaller {} or fewer {}",
+                o("lambda"),
+                o("iterations")
+            ),
+            Warning::Text(text) => text.clone(),
+        }
+    }
+}
+
+/// The remaining-defect sentence: what `detect` on the result flags, where,
+/// and what to do.
+fn remaining_defect(d: &RemainingDefect, front_end: FrontEnd) -> String {
+    let place = if d.best_inside {
+        "inside the faired region"
+    } else {
+        "outside the faired region"
+    };
+    let advice = if d.overlapping == 0 {
+        match front_end {
+            FrontEnd::Cli => {
+                "fair it too (`fairline detect` on the result writes its region, or use --auto)"
+                    .to_string()
+            }
+            _ => format!(
+                "fair it too (detect on the result gives its region, or use {})",
+                front_end.switch("auto")
+            ),
+        }
+    } else if d.score_after > d.score_before {
+        format!(
+            "the detection score inside the region got worse; try a larger region ({}) or {}",
+            front_end.setting("grow", "2"),
+            front_end.setting("method", "diffusion-flow")
+        )
+    } else {
+        format!("try {} or more iterations", front_end.setting("grow", "2"))
+    };
+    let what = if d.score > d.threshold || d.flat_spot <= 0.0 {
+        format!(
+            "the best scoring {:.2} (threshold {:.2} there)",
+            d.score, d.threshold
+        )
+    } else {
+        format!(
+            "the best a flat spot {:.2} (floor {:.2})",
+            d.flat_spot, d.flat_spot_floor
+        )
+    };
+    let c = d.center;
+    format!(
+        "a defect remains: detect on the result flags {} region(s) ({} overlapping the faired region), {what} at [{:.4}, {:.4}, {:.4}], {place}; detection score inside the faired region {:.2} -> {:.2}; {advice}",
+        d.regions, d.overlapping, c[0], c[1], c[2], d.score_before, d.score_after,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_front_end_names_its_own_options() {
+        let w = Warning::FairNotConverged { max_iterations: 2 };
+        assert_eq!(
+            w.message(FrontEnd::Cli),
+            "fairing did not converge within --max-iterations 2; try more iterations or a larger region (--grow, --auto)"
+        );
+        assert_eq!(
+            w.message(FrontEnd::Python),
+            "fairing did not converge within max_iterations=2; try more iterations or a larger region (grow, auto)"
+        );
+        assert_eq!(FrontEnd::Python.option("lambda"), "lambda_");
+        assert_eq!(
+            FrontEnd::Python.setting("method", "diffusion-flow"),
+            "method=\"diffusion-flow\""
+        );
+        assert_eq!(
+            Warning::NothingFaired.message(FrontEnd::Cli),
+            "no region was faired (nothing detected): the output is the input unchanged"
+        );
+    }
+}
