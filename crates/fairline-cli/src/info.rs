@@ -159,7 +159,7 @@ hint                run `fairline repair {} OUT` to repair it",
 
 /// `info` of a surface file: what it holds, in its own unit.
 fn surface_info(args: &Args, job: &Job) -> Result<()> {
-    let file = crate::surface::load_surface_file(&args.mesh)?;
+    let file = crate::surface::load_surface_file_listing(&args.mesh)?;
     let surfaces = &file.surfaces;
     let mut report = Report::new("info");
     let area: Option<f64> = report.time(|| {
@@ -203,6 +203,14 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
     if let Some(u) = &unit {
         report.set("unit", u);
     }
+    // Faces the file holds that were not read: listed, and the command
+    // fails after printing unless --skip-unreadable was given.
+    report.set("unreadable_faces", file.unreadable.len());
+    report.set("unreadable", &file.unreadable);
+    let unreadable = file.unreadable_summary(crate::surface::UNREADABLE_NAMED, area);
+    if let Some(msg) = &unreadable {
+        report.warn(format!("{}: {msg}", args.mesh.display()));
+    }
     report.write(args.report.as_deref())?;
     let summary = format!(
         "{}: {} surface(s), {trimmed} trimmed, {rational} rational",
@@ -232,7 +240,15 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
         if let Some(a) = area {
             let _ = writeln!(out, "area                {a} (trimmed faces)");
         }
+        for u in &file.unreadable {
+            let _ = writeln!(out, "NOT READ            {u}");
+        }
         print_stdout(&out)?;
+    }
+    if let Some(msg) = unreadable
+        && !crate::surface::skip_unreadable()
+    {
+        return Err(crate::surface::unreadable_error(&args.mesh, &msg));
     }
     job.finish(summary);
     Ok(())

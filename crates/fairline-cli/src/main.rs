@@ -43,6 +43,11 @@ use clap::{Parser, Subcommand};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Surface files (IGES, STEP): go on without the faces that cannot be
+    /// read (each is still named in a warning) instead of failing with
+    /// exit status 1.
+    #[arg(long, global = true)]
+    skip_unreadable: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -115,6 +120,7 @@ fn main() {
             std::process::exit(code);
         }
     };
+    surface::set_skip_unreadable(cli.skip_unreadable);
     output::install_signal_handler();
     // The command runs on a worker of rayon's pool: its parallel loops then
     // start from a worker and split work with the other threads directly,
