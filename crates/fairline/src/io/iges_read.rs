@@ -94,6 +94,21 @@ pub enum IgesError {
         /// What is wrong in it (line, entity).
         error: Box<IgesError>,
     },
+    /// An entity fairline does not read where it stands (a curve type in a
+    /// boundary, a conic not in standard position, a plane without an
+    /// outer boundary): the face it belongs to is listed in
+    /// [`IgesImport::unreadable`] rather than failing the file.
+    #[error("line {line}: entity {entity_type} (directory entry {entity}): {message}")]
+    Unsupported {
+        /// Directory entry sequence number (odd, 1-based).
+        entity: usize,
+        /// Entity type number.
+        entity_type: i64,
+        /// 1-based line number in the file.
+        line: usize,
+        /// What is not supported.
+        message: String,
+    },
     /// An entity 128 does not make a valid B-spline surface.
     #[error("line {line}: entity 128 (directory entry {entity}): {source}")]
     Surface {
@@ -155,9 +170,10 @@ pub struct IgesImport {
     pub units: Option<String>,
     /// Every face the file holds that could not be read: trimmed (144)
     /// and bounded (143) surfaces whose base surface or boundaries could
-    /// not be read (their base surface is then left out too), independent
-    /// surface entities of a type not read, B-rep faces (510). None of
-    /// them is in [`Self::surfaces`].
+    /// not be read (a base surface that was read is still in
+    /// [`Self::surfaces`], untrimmed: `trimmed` set, no `trim_entity`;
+    /// [`crate::io::surface_file::read_surface_file`] leaves it out),
+    /// independent surface entities of a type not read, B-rep faces (510).
     pub unreadable: Vec<Unreadable>,
 }
 
@@ -383,6 +399,15 @@ impl<'a> Iges<'a> {
         (de > 0 && de % 2 == 1)
             .then(|| ((de - 1) / 2) as usize)
             .filter(|&k| k < self.dir.len())
+    }
+
+    fn unsupported(&self, k: usize, line: usize, message: String) -> IgesError {
+        IgesError::Unsupported {
+            entity: 2 * k + 1,
+            entity_type: self.dir[k].entity_type,
+            line,
+            message,
+        }
     }
 
     fn entity_error(&self, k: usize, line: usize, message: String) -> IgesError {
@@ -702,14 +727,9 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
     }
     let mut faces = g.trimming_loops(&bsplines, &revolved, &mut out.skipped_trimmed)?;
     g.untrimmed_faces(&bsplines, &revolved, &trimmed, &mut faces);
-    let (mut loops_of, mut planes, dropped) = (faces.loops, faces.planes, faces.dropped);
+    let (mut loops_of, mut planes) = (faces.loops, faces.planes);
     out.unreadable = faces.unreadable;
     for (k, &is_trimmed) in trimmed.iter().enumerate() {
-        if dropped[k] {
-            // the base of a face that could not be read (listed in
-            // `unreadable`): never returned untrimmed
-            continue;
-        }
         let mut s = match (bsplines[k].take(), revolved[k].take(), planes[k].take()) {
             (Some(s), _, _) => s,
             (None, Some(r), _) => r.into_iges_surface(k, is_trimmed),
@@ -765,8 +785,8 @@ impl Iges<'_> {
     /// parameters); planes (108) trimmed by a 144 become bounded NURBS
     /// planes with their loops ([`Iges::plane_face`]). A 144 whose base
     /// surface was not read, or whose boundaries cannot be read, is counted
-    /// in `skipped`, listed in [`Faces::unreadable`] and its base surface
-    /// marked in [`Faces::dropped`].
+    /// in `skipped` and listed in [`Faces::unreadable`] when that is for
+    /// something fairline does not read; errors of the file's data fail.
     fn trimming_loops(
         &self,
         bsplines: &[Option<IgesSurface>],
@@ -777,7 +797,6 @@ impl Iges<'_> {
         let mut f = Faces {
             loops: vec![None; n],
             planes: vec![None; n],
-            dropped: vec![false; n],
             unreadable: Vec::new(),
         };
         for k in 0..n {
@@ -828,9 +847,9 @@ impl Iges<'_> {
                     let loops = loops.into_iter().map(faces::chained).collect();
                     f.loops[b] = Some((2 * k + 1, loops));
                 }
+                Err(e) if !matches!(e, IgesError::Unsupported { .. }) => return Err(e),
                 other => {
                     *skipped += 1;
-                    f.dropped[b] = true;
                     let reason = match other {
                         Err(e) => e.to_string(),
                         _ if bsplines[b].is_some() || revolved[b].is_some() => {
@@ -863,8 +882,6 @@ struct Faces {
     loops: LoopsOf,
     /// Trimmed planes (144 on 108), complete.
     planes: Vec<Option<IgesSurface>>,
-    /// Bases of faces that could not be read.
-    dropped: Vec<bool>,
     /// The faces that could not be read.
     unreadable: Vec<Unreadable>,
 }
@@ -1053,11 +1070,20 @@ impl Iges<'_> {
                 out.push(arc_piece(c, z, radius, a0, a1));
             }
             126 => out.push(self.read_entity_126(k, &p, line)?),
+            104 => {
+                let (c, _) = self.conic(k, &p, line)?;
+                out.push(Piece {
+                    degree: c.degree,
+                    knots: c.knots,
+                    points: c.points,
+                    weights: c.weights,
+                });
+            }
             t => {
-                return Err(self.entity_error(
+                return Err(self.unsupported(
                     k,
                     line,
-                    format!("curve entity {t} is not supported in a trimming boundary (126, 110, 100, 102 are)"),
+                    format!("curve entity {t} is not supported in a trimming boundary (126, 110, 104, 100, 102 are)"),
                 ));
             }
         }
@@ -1203,7 +1229,9 @@ impl Revolved {
     /// `(t, v)`: a degree-1 curve whose every segment is parallel to an axis
     /// keeps its form (the map of θ is monotone, so such a segment stays a
     /// segment), with each control point's θ mapped exactly; any other curve
-    /// becomes a polyline through dense samples of it with θ mapped.
+    /// becomes a C¹ piecewise cubic within 1e-9 of the domain's diagonal of
+    /// the curve with θ mapped, broken where the curve has a knot or crosses
+    /// an arc joint ([`faces::hermite_trim`]).
     fn map_loop(&self, l: &TrimLoop) -> Result<TrimLoop, String> {
         let curves = l
             .curves
@@ -1225,13 +1253,34 @@ impl Revolved {
                 } else {
                     let [t0, t1] = c.domain();
                     let n = (64 * pts.len() * c.degree()).clamp(64, 8000);
-                    let samples: Vec<[f64; 2]> = (0..=n)
-                        .map(|k| {
-                            let p = c.eval(t0 + (t1 - t0) * k as f64 / n as f64);
-                            [t(p[0]), self.map.param(p[1])]
-                        })
-                        .collect();
-                    polyline(&samples)
+                    let f = |x: f64| {
+                        let p = c.eval(x);
+                        [t(p[0]), self.map.param(p[1])]
+                    };
+                    // kinks: the curve's own knots and where it crosses an
+                    // arc joint of either map
+                    let mut breaks: Vec<f64> = c.knots().to_vec();
+                    let joints = |m: &ArcMap| -> Vec<f64> {
+                        (1..m.arcs)
+                            .map(|k| m.start + k as f64 * m.sweep / m.arcs as f64)
+                            .collect()
+                    };
+                    let at = |k: usize| t0 + (t1 - t0) * k as f64 / n as f64;
+                    for (coord, m) in [(1, Some(self.map)), (0, self.tmap)] {
+                        let Some(m) = m else { continue };
+                        for j in joints(&m) {
+                            let side = |x: f64| c.eval(x)[coord] < j;
+                            for k in 0..n {
+                                let (lo, hi) = (at(k), at(k + 1));
+                                if side(lo) != side(hi) {
+                                    breaks.push(faces::crossing(&side, lo, hi));
+                                }
+                            }
+                        }
+                    }
+                    let (du, dv) = (self.surface.domain_u(), self.surface.domain_v());
+                    let tol = 1e-9 * (du[1] - du[0]).hypot(dv[1] - dv[0]);
+                    faces::hermite_trim(&f, t0, t1, &mut breaks, tol)
                 }
             })
             .collect::<Result<Vec<_>, String>>()?;
@@ -1321,6 +1370,20 @@ impl Iges<'_> {
             100 => {
                 let (c, m) = self.arc_generatrix(gen_k)?;
                 (c, Some(m))
+            }
+            104 => {
+                let p = self.parameters(gen_k)?;
+                let l = p.first().map_or(self.dir[gen_k].line, |t| t.1);
+                match self.conic(gen_k, &p, l) {
+                    // an ellipse's file parameter is its eccentric angle,
+                    // which the arcs' parameter equals at their joints
+                    Ok((mut c, Some(m))) => {
+                        self.transform_nurbs(gen_k, &mut c)?;
+                        (c, Some(m))
+                    }
+                    Ok(_) | Err(IgesError::Unsupported { .. }) => return Ok(None),
+                    Err(e) => return Err(e),
+                }
             }
             _ => return Ok(None),
         };

@@ -15,10 +15,8 @@
 //! the loop's parameter-space curves as entities 126 (rational B-spline
 //! curve, §4.23, `z = 0`, planar), joined by an entity 102 (composite curve,
 //! §4.4) when a loop has more than one. The model-space copy of a boundary
-//! (142's `CPTR`) is written too, as 126 curves with the trim curves'
-//! parameters ([`crate::io::model_curve`]: exact along parameter lines and
-//! on affine patches, else within [`model_tolerance`]); `PREF = 1`: the
-//! parameter-space curve is the preferred, exact representation.
+//! (142's `CPTR`) is not written (`CPTR = 0`, `PREF = 1`: the parameter
+//! space curve is the preferred representation).
 //!
 //! Reals are written in Rust's shortest round-trip form (`{:?}`, with the
 //! exponent as `E` and a decimal point always present), so that reading the
@@ -28,7 +26,6 @@
 use std::io::Write;
 use std::path::Path;
 
-use super::model_curve::{ModelCurve, model_curve};
 use super::units::LengthUnit;
 use super::{IoError, atomic_write};
 use crate::bspline::{BSplineSurface, TrimCurve};
@@ -144,32 +141,7 @@ impl Model {
             return;
         }
         let mut boundaries = Vec::with_capacity(s.trims().len());
-        let tolerance = model_tolerance(s);
         for lp in s.trims() {
-            let model: Vec<usize> = lp
-                .curves
-                .iter()
-                .map(|c| {
-                    self.push(Entity {
-                        entity_type: 126,
-                        form: 0,
-                        status: DEPENDENT,
-                        params: model_126(&model_curve(s, c, tolerance), c.domain()),
-                    })
-                })
-                .collect();
-            let model = if model.len() == 1 {
-                model[0]
-            } else {
-                let mut params = vec![model.len().to_string()];
-                params.extend(model.iter().map(usize::to_string));
-                self.push(Entity {
-                    entity_type: 102,
-                    form: 0,
-                    status: DEPENDENT,
-                    params,
-                })
-            };
             let members: Vec<usize> = lp
                 .curves
                 .iter()
@@ -194,7 +166,7 @@ impl Model {
                     params,
                 })
             };
-            // CRTN = 0 (unspecified), SPTR, BPTR, CPTR, PREF = 1.
+            // CRTN = 0 (unspecified), SPTR, BPTR, CPTR = 0, PREF = 1.
             boundaries.push(self.push(Entity {
                 entity_type: 142,
                 form: 0,
@@ -203,7 +175,7 @@ impl Model {
                     "0".into(),
                     surface.to_string(),
                     curve.to_string(),
-                    model.to_string(),
+                    "0".into(),
                     "1".into(),
                 ],
             }));
@@ -280,38 +252,6 @@ fn entity_126(c: &TrimCurve) -> Vec<String> {
     }
     let [t0, t1] = c.domain();
     p.extend([t0, t1, 0.0, 0.0, 1.0].map(iges_real));
-    p
-}
-
-/// The distance within which a written model-space curve follows its
-/// parameter-space curve where it is not exact
-/// ([`crate::io::model_curve`]): 1e-8 of the surface's control-net
-/// diagonal, at most 5e-8 (half the files' 1e-7 resolution).
-pub(crate) fn model_tolerance(s: &BSplineSurface) -> f64 {
-    let (lo, hi) = s.control_bounding_box();
-    (1e-8 * (hi - lo).length()).min(5e-8)
-}
-
-/// Parameters of entity 126 for a model-space curve, over the parameter
-/// range `[t0, t1]` of its trim curve.
-fn model_126(m: &ModelCurve, [t0, t1]: [f64; 2]) -> Vec<String> {
-    let n = m.points.len();
-    let mut p = Vec::with_capacity(12 + m.knots.len() + 4 * n);
-    p.push((n - 1).to_string());
-    p.push(m.degree.to_string());
-    p.push("0".into());
-    p.push(u8::from(m.points.first() == m.points.last()).to_string());
-    p.push(u8::from(m.weights.is_none()).to_string());
-    p.push("0".into());
-    p.extend(m.knots.iter().map(|&k| iges_real(k)));
-    match &m.weights {
-        Some(w) => p.extend(w.iter().map(|&w| iges_real(w))),
-        None => p.extend(std::iter::repeat_n("1.0".to_string(), n)),
-    }
-    for q in &m.points {
-        p.extend([q.x, q.y, q.z].map(iges_real));
-    }
-    p.extend([t0, t1].map(iges_real));
     p
 }
 

@@ -164,7 +164,14 @@ pub fn read_surface_file(path: impl AsRef<Path>) -> Result<SurfaceFile, SurfaceF
             let imp = read_iges(path)?;
             Ok(SurfaceFile {
                 unit: imp.units.as_deref().and_then(LengthUnit::from_iges_name),
-                surfaces: imp.surfaces.into_iter().map(|s| s.surface).collect(),
+                // a base surface whose trimmed or bounded surface could not
+                // be read (listed in `unreadable`) is not the face: left out
+                surfaces: imp
+                    .surfaces
+                    .into_iter()
+                    .filter(|s| !(s.trimmed && s.trim_entity.is_none()))
+                    .map(|s| s.surface)
+                    .collect(),
                 warnings: Vec::new(),
                 unreadable: imp.unreadable,
             })

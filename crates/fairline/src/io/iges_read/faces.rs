@@ -2,8 +2,8 @@
 //! (entity 108 under a 144) and the census of faces that cannot be read.
 
 use super::{
-    Faces, INT, Iges, IgesError, IgesSurface, Param, REAL, Revolved, TrimCurve, TrimLoop,
-    Unreadable, Vec3, param,
+    ArcMap, Faces, INT, Iges, IgesError, IgesSurface, Nurbs3, Param, REAL, Revolved, TrimCurve,
+    TrimLoop, Unreadable, Vec3, param,
 };
 use crate::bspline::BSplineSurface;
 
@@ -26,7 +26,7 @@ impl Iges<'_> {
     pub(super) fn why_not_read(&self, b: usize) -> String {
         match self.dir[b].entity_type {
             120 => format!(
-                "its surface of revolution ({}) has a generatrix fairline does not read (it reads a line 110, a circular arc 100 or a B-spline curve 126)",
+                "its surface of revolution ({}) has a generatrix fairline does not read (it reads a line 110, a circular arc 100, an elliptic arc 104 or a B-spline curve 126)",
                 self.describe_entity(b)
             ),
             t => format!(
@@ -37,7 +37,7 @@ impl Iges<'_> {
     }
 
     /// Lists the faces no trimmed surface (144) covers that cannot be
-    /// read: bounded surfaces (143, their base left out), B-rep faces
+    /// read: bounded surfaces (143, their base read untrimmed), B-rep faces
     /// (510), independent surface entities of a type fairline does not read
     /// and surfaces of revolution whose generatrix it does not read.
     pub(super) fn untrimmed_faces(
@@ -59,7 +59,6 @@ impl Iges<'_> {
                         .and_then(|de| self.entry(de));
                     let mut area = None;
                     if let Some(b) = base {
-                        faces.dropped[b] = true;
                         area = bsplines[b]
                             .as_ref()
                             .map(|s| &s.surface)
@@ -75,7 +74,7 @@ impl Iges<'_> {
                 }
                 510 => "a B-rep face (510): the B-rep entities (186, 514, 510, 508, 504, 502) are not read; write the file with trimmed surfaces (144), e.g. OpenCASCADE's write.iges.brep.mode = Faces".to_string(),
                 120 if independent && !trimmed[k] && revolved[k].is_none() => {
-                    "a surface of revolution whose generatrix fairline does not read (it reads a line 110, a circular arc 100 or a B-spline curve 126)".into()
+                    "a surface of revolution whose generatrix fairline does not read (it reads a line 110, a circular arc 100, an elliptic arc 104 or a B-spline curve 126)".into()
                 }
                 t if independent
                     && !trimmed[k]
@@ -148,7 +147,7 @@ impl Iges<'_> {
         let n1 = param(self, k, p, 2, line, &INT)?;
         let n2 = param(self, k, p, 3, line, &INT)?;
         if n1 == 0 {
-            return Err(self.entity_error(
+            return Err(self.unsupported(
                 k,
                 line,
                 "a plane (108) trimmed without an outer boundary (N1 = 0) has no extent".into(),
@@ -174,7 +173,7 @@ impl Iges<'_> {
             let lj = pj.first().map_or(self.dir[j].line, |t| t.1);
             let cptr = param(self, j, &pj, 4, lj, &INT)?;
             let curve = self.entry(cptr).ok_or_else(|| {
-                self.entity_error(
+                self.unsupported(
                     j,
                     lj,
                     format!("a boundary of a plane needs its model-space curve (CPTR = {cptr})"),
@@ -302,6 +301,272 @@ pub(super) fn chained(l: TrimLoop) -> TrimLoop {
     } else {
         l
     }
+}
+
+impl Iges<'_> {
+    /// Entity 104, conic arc (IGES 5.3 §4.5): `A B C D E F ZT X1 Y1 X2 Y2`,
+    /// the conic `Ax² + Bxy + Cy² + Dx + Ey + F = 0` in the plane `z = ZT`
+    /// of its definition space, from `(X1, Y1)` counter-clockwise to `(X2,
+    /// Y2)`, in standard position (form 1 ellipse `Ax² + Cy² + F = 0`, form
+    /// 2 hyperbola likewise with `A·C < 0`, form 3 parabola `Ax² + Ey = 0` or
+    /// `Cy² + Dx = 0`), as an exact rational quadratic B-spline in its
+    /// definition space (the entity's transformation is applied by the
+    /// caller). The ellipse comes with its [`ArcMap`] (parameter = the
+    /// eccentric angle at the arcs' joints, as IGES parametrises it).
+    pub(super) fn conic(
+        &self,
+        k: usize,
+        p: &[(Param, usize)],
+        line: usize,
+    ) -> Result<(Nurbs3, Option<ArcMap>), IgesError> {
+        let mut r = [0.0; 11];
+        for (n, v) in r.iter_mut().enumerate() {
+            *v = param(self, k, p, n + 1, line, &REAL)?;
+        }
+        let [a, b, c, d, e, f, z, x1, y1, x2, y2] = r;
+        let scale = [a, b, c, d, e, f]
+            .iter()
+            .fold(0.0_f64, |m, x| m.max(x.abs()));
+        let zero = |x: f64| x.abs() <= 1e-12 * scale;
+        let bad = |what: &str| self.entity_error(k, line, format!("the conic arc {what}"));
+        if !(scale > 0.0) {
+            return Err(bad("has no coefficients"));
+        }
+        let at = |x: f64, y: f64| Vec3::new(x, y, z);
+        if zero(b) && zero(d) && zero(e) && !zero(a) && !zero(c) && !zero(f) {
+            let (ra, rc) = (-f / a, -f / c);
+            if ra > 0.0 && rc > 0.0 {
+                // ellipse x²/ra + y²/rc = 1
+                let (sa, sc) = (ra.sqrt(), rc.sqrt());
+                let t0 = (y1 / sc).atan2(x1 / sa);
+                let mut t1 = (y2 / sc).atan2(x2 / sa);
+                while t1 <= t0 + 1e-12 {
+                    t1 += std::f64::consts::TAU;
+                }
+                let map = ArcMap::new(t0, t1, 1.0);
+                let curve = super::super::step::nurbs::ellipse_arc(
+                    at(0.0, 0.0),
+                    Vec3::X,
+                    Vec3::Y,
+                    sa,
+                    sc,
+                    &map,
+                );
+                return Ok((curve, Some(map)));
+            }
+            if ra * rc < 0.0 {
+                // hyperbola: transverse axis x (ra > 0) or y
+                let swap = ra < 0.0;
+                let (sa, sb) = if swap {
+                    (rc.sqrt(), (-ra).sqrt())
+                } else {
+                    (ra.sqrt(), (-rc).sqrt())
+                };
+                let (ax, ay) = if swap {
+                    (Vec3::Y, Vec3::X)
+                } else {
+                    (Vec3::X, Vec3::Y)
+                };
+                let local = |x: f64, y: f64| if swap { (y, x) } else { (x, y) };
+                let ((p1, q1), (p2, q2)) = (local(x1, y1), local(x2, y2));
+                if p1 * p2 <= 0.0 {
+                    return Err(bad("runs across both branches of the hyperbola"));
+                }
+                let branch = p1.signum();
+                let (t0, t1) = ((q1 / sb).asinh(), (q2 / sb).asinh());
+                let curve = hyperbola_arc(at(0.0, 0.0), branch * ax, ay, sa, sb, t0, t1);
+                return Ok((curve, None));
+            }
+            return Err(self.unsupported(
+                k,
+                line,
+                "the conic arc is not a real ellipse or hyperbola".into(),
+            ));
+        }
+        // parabola y = −(A/E)·x² or x = −(C/D)·y²
+        let (kq, along_x) = if zero(b) && zero(c) && zero(d) && zero(f) && !zero(a) && !zero(e) {
+            (-a / e, true)
+        } else if zero(a) && zero(b) && zero(e) && zero(f) && !zero(c) && !zero(d) {
+            (-c / d, false)
+        } else {
+            return Err(self.unsupported(
+                k,
+                line,
+                "the conic arc is not in standard position (IGES 5.3 §4.5)".into(),
+            ));
+        };
+        let (s0, s1) = if along_x { (x1, x2) } else { (y1, y2) };
+        let pt = |s: f64| {
+            if along_x {
+                at(s, kq * s * s)
+            } else {
+                at(kq * s * s, s)
+            }
+        };
+        let mid = if along_x {
+            at(0.5 * (s0 + s1), kq * s0 * s1)
+        } else {
+            at(kq * s0 * s1, 0.5 * (s0 + s1))
+        };
+        if s0 == s1 {
+            return Err(bad("has no length"));
+        }
+        Ok((
+            Nurbs3 {
+                degree: 2,
+                knots: vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0],
+                points: vec![pt(s0), mid, pt(s1)],
+                weights: None,
+            },
+            None,
+        ))
+    }
+
+    /// Applies entity `k`'s transformation matrix (124), if any, to `c`.
+    pub(super) fn transform_nurbs(&self, k: usize, c: &mut Nurbs3) -> Result<(), IgesError> {
+        let e = &self.dir[k];
+        if e.transform == 0 {
+            return Ok(());
+        }
+        let t = self.entry(e.transform).ok_or_else(|| {
+            self.entity_error(
+                k,
+                e.line,
+                "the transformation pointer is not a directory entry".into(),
+            )
+        })?;
+        let m = self.transform(t, 0)?;
+        for q in &mut c.points {
+            *q = m.transform_point3(*q);
+        }
+        Ok(())
+    }
+}
+
+/// The hyperbola arc `c + a·cosh t·x + b·sinh t·y`, `t` from `t0` to `t1`,
+/// as rational quadratic arcs of at most 1 in `t` (middle control point at
+/// the tangents' intersection, weight `cosh δ` for the half span `δ`; the
+/// hyperbolic analogue of Piegl & Tiller A7.1), parameter `t` at the joints.
+fn hyperbola_arc(c: Vec3, x: Vec3, y: Vec3, a: f64, b: f64, t0: f64, t1: f64) -> Nurbs3 {
+    let (lo, hi) = (t0.min(t1), t0.max(t1));
+    let arcs = (((hi - lo).ceil()) as usize).clamp(1, 64);
+    let d = (hi - lo) / arcs as f64;
+    let pt = |t: f64| c + a * t.cosh() * x + b * t.sinh() * y;
+    let mut knots = vec![lo; 3];
+    let (mut points, mut weights) = (vec![pt(lo)], vec![1.0]);
+    for k in 0..arcs {
+        let (s0, s1) = (lo + k as f64 * d, lo + (k + 1) as f64 * d);
+        let (tm, h) = (0.5 * (s0 + s1), 0.5 * d);
+        points.push(c + (a * tm.cosh() * x + b * tm.sinh() * y) / h.cosh());
+        weights.push(h.cosh());
+        points.push(pt(s1));
+        weights.push(1.0);
+        if k + 1 < arcs {
+            knots.extend([s1, s1]);
+        }
+    }
+    knots.extend([hi; 3]);
+    let n = Nurbs3 {
+        degree: 2,
+        knots,
+        points,
+        weights: Some(weights),
+    };
+    if t1 < t0 { n.reversed() } else { n }
+}
+
+/// Where `side` changes between `lo` and `hi` (bisection to the last bit).
+pub(super) fn crossing(side: &impl Fn(f64) -> bool, mut lo: f64, mut hi: f64) -> f64 {
+    let s0 = side(lo);
+    for _ in 0..64 {
+        let m = 0.5 * (lo + hi);
+        if m <= lo || m >= hi {
+            break;
+        }
+        if side(m) == s0 {
+            lo = m;
+        } else {
+            hi = m;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Deepest bisection of one piece in [`hermite_trim`] (2^16 pieces).
+const HERMITE_DEPTH: u32 = 16;
+
+/// The plane curve `f` on `[a, b]` as a C¹ piecewise cubic trim curve
+/// (cubic Hermite pieces as Bézier segments joined by triple knots, with
+/// `f`'s own parameter): `f` is interpolated with its derivative (central
+/// differences inside each piece between `breaks`, where `f` may have a
+/// kink) at parameters bisected until every piece is within `tolerance` of
+/// `f` at ¼, ½ and ¾ of it.
+pub(super) fn hermite_trim(
+    f: &impl Fn(f64) -> [f64; 2],
+    a: f64,
+    b: f64,
+    breaks: &mut Vec<f64>,
+    tolerance: f64,
+) -> Result<TrimCurve, String> {
+    if !(b > a) {
+        return Err(format!("the curve's parameter range [{a}, {b}] is empty"));
+    }
+    breaks.retain(|&x| x > a && x < b);
+    breaks.sort_by(f64::total_cmp);
+    breaks.dedup();
+    let mut ends = vec![a];
+    ends.extend(breaks.iter().copied());
+    ends.push(b);
+    let mut knots = vec![a; 4];
+    let mut points = vec![f(a)];
+    for w in ends.windows(2) {
+        let (lo, hi) = (w[0], w[1]);
+        let d = |x: f64| -> [f64; 2] {
+            let h = 1e-6 * (hi - lo);
+            let (p, q) = ((x - h).max(lo), (x + h).min(hi));
+            let (fp, fq) = (f(p), f(q));
+            [(fq[0] - fp[0]) / (q - p), (fq[1] - fp[1]) / (q - p)]
+        };
+        let mut stack = vec![(lo, hi, 0u32)];
+        while let Some((t0, t1, depth)) = stack.pop() {
+            let h = t1 - t0;
+            let (p0, p1, d0, d1) = (f(t0), f(t1), d(t0), d(t1));
+            let bez = [
+                p0,
+                [p0[0] + h / 3.0 * d0[0], p0[1] + h / 3.0 * d0[1]],
+                [p1[0] - h / 3.0 * d1[0], p1[1] - h / 3.0 * d1[1]],
+                p1,
+            ];
+            let at = |x: f64| -> [f64; 2] {
+                let y = 1.0 - x;
+                let c = [y * y * y, 3.0 * x * y * y, 3.0 * x * x * y, x * x * x];
+                let mut r = [0.0; 2];
+                for (k, q) in bez.iter().enumerate() {
+                    r[0] += c[k] * q[0];
+                    r[1] += c[k] * q[1];
+                }
+                r
+            };
+            let miss = [0.25, 0.5, 0.75]
+                .iter()
+                .map(|&x| {
+                    let (p, q) = (at(x), f(t0 + x * h));
+                    (p[0] - q[0]).hypot(p[1] - q[1])
+                })
+                .fold(0.0, f64::max);
+            if depth < HERMITE_DEPTH && !(miss <= tolerance) {
+                let tm = 0.5 * (t0 + t1);
+                // the right half first on the stack: pieces come off in order
+                stack.push((tm, t1, depth + 1));
+                stack.push((t0, tm, depth + 1));
+            } else {
+                points.extend([bez[1], bez[2], bez[3]]);
+                knots.extend([t1; 3]);
+            }
+        }
+    }
+    knots.push(b);
+    TrimCurve::new(3, knots, points, None)
 }
 
 #[cfg(test)]

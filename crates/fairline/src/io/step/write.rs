@@ -11,7 +11,7 @@
 //!   B-spline curve) and, as the 3-D curve, its image on the surface with
 //!   the same parameter ([`crate::io::model_curve`]: exact along parameter
 //!   lines and on affine patches, else a cubic within
-//!   [`crate::io::iges_write::model_tolerance`]), so that the two agree as
+//!   [`crate::io::model_curve::model_tolerance`]), so that the two agree as
 //!   a kernel such as OpenCASCADE requires. Vertices lie exactly on the
 //!   surface at the curves' ends.
 //!
@@ -186,6 +186,23 @@ fn curve2(d: &mut Data, c: &TrimCurve) -> u64 {
     }
 }
 
+/// Writes a polyline (degree-1 B-spline curve) through `pts`.
+fn polyline3(d: &mut Data, pts: &[Vec3]) -> u64 {
+    let ids: Vec<u64> = pts.iter().map(|&p| d.point(p)).collect();
+    let n = pts.len();
+    let knots: Vec<f64> = (0..n).map(|k| k as f64).collect();
+    let mut mults = vec![1usize; n];
+    mults[0] = 2;
+    mults[n - 1] = 2;
+    let m: Vec<String> = mults.iter().map(usize::to_string).collect();
+    d.add(format!(
+        "B_SPLINE_CURVE_WITH_KNOTS('',1,{},.POLYLINE_FORM.,.F.,.F.,({}),{},.UNSPECIFIED.)",
+        refs(&ids),
+        m.join(","),
+        reals(&knots)
+    ))
+}
+
 /// Writes a 3-D edge curve ([`crate::io::model_curve`]) and returns its id.
 fn curve3(d: &mut Data, c: &ModelCurve) -> u64 {
     let pts: Vec<u64> = c.points.iter().map(|&p| d.point(p)).collect();
@@ -208,7 +225,7 @@ fn curve3(d: &mut Data, c: &ModelCurve) -> u64 {
 /// Writes the face of a trimmed surface and returns its id.
 fn face(d: &mut Data, s: &BSplineSurface, ctx2: u64) -> u64 {
     let sid = surface(d, s);
-    let tolerance = crate::io::iges_write::model_tolerance(s);
+    let tolerance = crate::io::model_curve::model_tolerance(s);
     let mut bounds = Vec::new();
     for (l, lp) in s.trims().iter().enumerate() {
         let n = lp.curves.len();
@@ -231,7 +248,28 @@ fn face(d: &mut Data, s: &BSplineSurface, ctx2: u64) -> u64 {
                 let p = d.point(s.eval(end2[0], end2[1]));
                 d.add(format!("VERTEX_POINT('',#{p})"))
             };
-            let c3 = curve3(d, &model_curve(s, c, tolerance));
+            let m = model_curve(s, c, tolerance);
+            let c3 = if m.points.iter().all(|&p| p.distance(m.points[0]) <= tolerance) {
+                // a degenerate edge (along a pole): the points of the trim
+                // curve on the surface, as a polyline of the one point
+                let [t0, t1] = c.domain();
+                let spans = c.knots().windows(2).filter(|w| w[1] > w[0]).count();
+                let samples = (8 * spans * c.degree()).clamp(8, 512);
+                let pts: Vec<Vec3> = (0..=samples)
+                    .map(|i| {
+                        let t = if i == samples {
+                            t1
+                        } else {
+                            t0 + (t1 - t0) * i as f64 / samples as f64
+                        };
+                        let [u, v] = c.eval(t);
+                        s.eval(u, v)
+                    })
+                    .collect();
+                polyline3(d, &pts)
+            } else {
+                curve3(d, &m)
+            };
             let c2 = curve2(d, c);
             let dr = d.add(format!("DEFINITIONAL_REPRESENTATION('',(#{c2}),#{ctx2})"));
             let pc = d.add(format!("PCURVE('',#{sid},#{dr})"));
