@@ -34,8 +34,16 @@ pub fn run(args: Args) -> Result<()> {
         .check()?;
     if crate::surface::is_surface_path(&args.input) {
         let input = crate::surface::load_surface_file(&args.input)?;
-        let surfaces = input.surfaces;
         let mut report = Report::new("convert");
+        // reached only with --skip-unreadable (load_surface_file fails
+        // otherwise): the faces left out go into the report too
+        if let Some(msg) = input.unreadable_summary(crate::surface::UNREADABLE_NAMED, None) {
+            report.warn(format!(
+                "{}: {msg}; written without them",
+                args.input.display()
+            ));
+        }
+        let surfaces = input.surfaces;
         report.set("surfaces", surfaces.len());
         report.set(
             "trimmed",

@@ -159,7 +159,7 @@ hint                run `fairline repair {} OUT` to repair it",
 
 /// `info` of a surface file: what it holds, in its own unit.
 fn surface_info(args: &Args, job: &Job) -> Result<()> {
-    let file = crate::surface::load_surface_file(&args.mesh)?;
+    let file = crate::surface::load_surface_file_listing(&args.mesh)?;
     let surfaces = &file.surfaces;
     let mut report = Report::new("info");
     let area: Option<f64> = report.time(|| {
@@ -177,8 +177,11 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
         fairline::Vec3::splat(f64::INFINITY),
         fairline::Vec3::splat(f64::NEG_INFINITY),
     );
+    // the box of the faces themselves (sampled on the trimmed geometry), not
+    // of their control nets
     for s in surfaces {
-        let (a, b) = s.control_bounding_box();
+        let (a, b) =
+            fairline::bspline::face_bounding_box(s).unwrap_or_else(|| s.control_bounding_box());
         lo = lo.min(a);
         hi = hi.max(b);
     }
@@ -202,6 +205,14 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
     report.set("bounding_box", [lo.to_array(), hi.to_array()]);
     if let Some(u) = &unit {
         report.set("unit", u);
+    }
+    // Faces the file holds that were not read: listed, and the command
+    // fails after printing unless --skip-unreadable was given.
+    report.set("unreadable_faces", file.unreadable.len());
+    report.set("unreadable", &file.unreadable);
+    let unreadable = file.unreadable_summary(crate::surface::UNREADABLE_NAMED, area);
+    if let Some(msg) = &unreadable {
+        report.warn(format!("{}: {msg}", args.mesh.display()));
     }
     report.write(args.report.as_deref())?;
     let summary = format!(
@@ -228,12 +239,67 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
             "unit                {}",
             unit.as_deref().unwrap_or("(none)")
         );
-        let _ = writeln!(out, "bounding box        {lo:?} .. {hi:?} (control points)");
+        let _ = writeln!(
+            out,
+            "bounding box        ({}, {}, {}) .. ({}, {}, {}) (of the faces)",
+            human(lo.x),
+            human(lo.y),
+            human(lo.z),
+            human(hi.x),
+            human(hi.y),
+            human(hi.z)
+        );
         if let Some(a) = area {
-            let _ = writeln!(out, "area                {a} (trimmed faces)");
+            let _ = writeln!(out, "area                {} (trimmed faces)", human(a));
+        }
+        for u in &file.unreadable {
+            let _ = writeln!(out, "NOT READ            {u}");
         }
         print_stdout(&out)?;
     }
+    if let Some(msg) = unreadable
+        && !crate::surface::skip_unreadable()
+    {
+        return Err(crate::surface::unreadable_error(&args.mesh, &msg));
+    }
     job.finish(summary);
     Ok(())
+}
+
+/// A number as a person writes it: 7 significant digits, no trailing
+/// zeros, no exponent between 1e-4 and 1e12 (`28617.1`, `-0.5`, `12`).
+fn human(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{}", if x == 0.0 { 0.0 } else { x });
+    }
+    let mag = x.abs().log10().floor() as i32;
+    if !(-4..12).contains(&mag) {
+        let t = format!("{x:.6e}");
+        let (m, e) = t.split_once('e').unwrap_or((&t, "0"));
+        let m = m.trim_end_matches('0').trim_end_matches('.');
+        return format!("{m}e{e}");
+    }
+    let decimals = (6 - mag).max(0) as usize;
+    let t = format!("{x:.decimals$}");
+    let t = if t.contains('.') {
+        t.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        t
+    };
+    if t == "-0" { "0".into() } else { t }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn numbers_print_as_a_person_writes_them() {
+        use super::human;
+        assert_eq!(human(28617.096341), "28617.1");
+        assert_eq!(human(-15.000000001346898), "-15");
+        assert_eq!(human(0.5), "0.5");
+        assert_eq!(human(2.0e-7), "2e-7");
+        assert_eq!(human(-1.25e-16), "-1.25e-16");
+        assert_eq!(human(0.0), "0");
+        assert_eq!(human(123456789.0), "123456789");
+    }
 }

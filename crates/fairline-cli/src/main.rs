@@ -44,6 +44,11 @@ use clap::{Parser, Subcommand};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Surface files (IGES, STEP): go on without the faces that cannot be
+    /// read (each is still named in a warning) instead of failing with
+    /// exit status 1.
+    #[arg(long, global = true)]
+    skip_unreadable: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -118,6 +123,7 @@ fn main() {
             std::process::exit(code);
         }
     };
+    surface::set_skip_unreadable(cli.skip_unreadable);
     output::install_signal_handler();
     if let Err(e) = output::apply_memory_limit() {
         output::say(&format!("error: {e}"));

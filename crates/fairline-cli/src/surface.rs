@@ -14,9 +14,61 @@ pub fn is_surface_path(path: &Path) -> bool {
     SurfaceFormat::from_path(path).is_some()
 }
 
+static SKIP_UNREADABLE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// `--skip-unreadable`: faces a surface file holds but fairline cannot read
+/// are warned about instead of failing the command.
+pub fn set_skip_unreadable(on: bool) {
+    SKIP_UNREADABLE.store(on, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// Whether `--skip-unreadable` was given.
+pub fn skip_unreadable() -> bool {
+    SKIP_UNREADABLE.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// How many unreadable faces a message names.
+pub const UNREADABLE_NAMED: usize = 5;
+
+/// The error (exit status 1) for a file with faces that could not be read:
+/// names the first few and the count, and the way on.
+pub fn unreadable_error(path: &Path, summary: &str) -> anyhow::Error {
+    anyhow::anyhow!(
+        "{}: {summary}; the part is incomplete (pass --skip-unreadable to go on without them)",
+        path.display()
+    )
+}
+
+/// The surfaces of a file as read, unreadable faces listed but not
+/// refused (for `info`); the file's warnings are printed.
+pub fn load_surface_file_listing(path: &Path) -> Result<SurfaceFile> {
+    let file = read_surface_file(path).map_err(|e| crate::output::name_file(path, e))?;
+    if file.surfaces.is_empty() && file.unreadable.is_empty() {
+        return Err(bad_input(format!(
+            "{}: the file holds no B-spline surface",
+            path.display()
+        )));
+    }
+    for w in &file.warnings {
+        crate::output::warn(format!("{}: {w}", path.display()));
+    }
+    Ok(file)
+}
+
 /// All surfaces of a JSON, IGES or STEP file, with the file's length unit.
+/// Faces the file holds that cannot be read fail it (exit status 1, naming
+/// them) unless `--skip-unreadable` was given, which warns about them.
 pub fn load_surface_file(path: &Path) -> Result<SurfaceFile> {
     let file = read_surface_file(path).map_err(|e| crate::output::name_file(path, e))?;
+    if let Some(summary) = file.unreadable_summary(UNREADABLE_NAMED, None) {
+        if !skip_unreadable() {
+            return Err(unreadable_error(path, &summary));
+        }
+        crate::output::warn(format!(
+            "{}: {summary} (left out: --skip-unreadable)",
+            path.display()
+        ));
+    }
     if file.surfaces.is_empty() {
         return Err(bad_input(format!(
             "{}: the file holds no B-spline surface",

@@ -31,6 +31,7 @@
 //! points outward has `k1 = k2 = +1/r`, `H = +1/r`, `K = 1/r²`.
 
 pub mod basis;
+mod bounds;
 pub mod continuity;
 mod surface;
 mod tessellate;
@@ -41,6 +42,7 @@ mod trim;
 pub(crate) mod trim_tests;
 
 pub use basis::{MAX_DEGREE, MAX_ORDER, clamped_uniform_knots, find_span};
+pub use bounds::face_bounding_box;
 pub use surface::{
     BSplineSurface, BasisSupport, Curvature, MIN_WEIGHT_RATIO, SurfaceBasis, SurfaceDerivatives,
     unit_normal,

@@ -325,8 +325,19 @@ impl TrimmedDomain {
                 });
             }
             let mut pts: Vec<[f64; 2]> = Vec::new();
-            for c in &lp.curves {
+            let n = lp.curves.len();
+            for (k, c) in lp.curves.iter().enumerate() {
                 c.flatten_into(tolerance, &mut pts);
+                // A gap to the next curve's start (a degenerate edge at a
+                // pole that the file leaves out, or a seam's two sides)
+                // keeps this curve's end, so that the chord across the gap
+                // runs from end to start, as the loop's contract says.
+                let end = c.eval(c.domain()[1]);
+                let next = &lp.curves[(k + 1) % n];
+                let start = next.eval(next.domain()[0]);
+                if (end[0] - start[0]).hypot(end[1] - start[1]) > tolerance {
+                    pts.push(end);
+                }
             }
             // The last curve's end closes the loop back to its start.
             for p in &mut pts {

@@ -51,6 +51,9 @@ use super::step::nurbs::{ArcMap, Nurbs3, revolve};
 use super::step::{invert_point, polyline};
 use crate::Vec3;
 use crate::bspline::{BSplineError, BSplineSurface, TrimCurve, TrimLoop};
+use crate::io::surface_file::Unreadable;
+
+mod faces;
 
 /// Why an IGES file could not be imported; names the file line and entity.
 #[derive(Debug, Error)]
@@ -90,6 +93,21 @@ pub enum IgesError {
         path: PathBuf,
         /// What is wrong in it (line, entity).
         error: Box<IgesError>,
+    },
+    /// An entity fairline does not read where it stands (a curve type in a
+    /// boundary, a conic not in standard position, a plane without an
+    /// outer boundary): the face it belongs to is listed in
+    /// [`IgesImport::unreadable`] rather than failing the file.
+    #[error("line {line}: entity {entity_type} (directory entry {entity}): {message}")]
+    Unsupported {
+        /// Directory entry sequence number (odd, 1-based).
+        entity: usize,
+        /// Entity type number.
+        entity_type: i64,
+        /// 1-based line number in the file.
+        line: usize,
+        /// What is not supported.
+        message: String,
     },
     /// An entity 128 does not make a valid B-spline surface.
     #[error("line {line}: entity 128 (directory entry {entity}): {source}")]
@@ -150,6 +168,13 @@ pub struct IgesImport {
     pub skipped_surfaces: usize,
     /// Unit name from the Global section (field 15), if given.
     pub units: Option<String>,
+    /// Every face the file holds that could not be read: trimmed (144)
+    /// and bounded (143) surfaces whose base surface or boundaries could
+    /// not be read (a base surface that was read is still in
+    /// [`Self::surfaces`], untrimmed: `trimmed` set, no `trim_entity`;
+    /// [`crate::io::surface_file::read_surface_file`] leaves it out),
+    /// independent surface entities of a type not read, B-rep faces (510).
+    pub unreadable: Vec<Unreadable>,
 }
 
 /// Reads every rational B-spline surface (entity 128) of an ASCII IGES file.
@@ -338,6 +363,9 @@ struct DirEntry {
     transform: i64,
     param_lines: i64,
     form: i64,
+    /// Status number (field 9): blank, subordinate, use, hierarchy, two
+    /// digits each.
+    status: i64,
     line: usize,
 }
 
@@ -371,6 +399,15 @@ impl<'a> Iges<'a> {
         (de > 0 && de % 2 == 1)
             .then(|| ((de - 1) / 2) as usize)
             .filter(|&k| k < self.dir.len())
+    }
+
+    fn unsupported(&self, k: usize, line: usize, message: String) -> IgesError {
+        IgesError::Unsupported {
+            entity: 2 * k + 1,
+            entity_type: self.dir[k].entity_type,
+            line,
+            message,
+        }
     }
 
     fn entity_error(&self, k: usize, line: usize, message: String) -> IgesError {
@@ -645,6 +682,7 @@ fn directory(records: &[Record<'_>]) -> Result<Vec<DirEntry>, IgesError> {
             transform: d_field(a, 7)?,
             param_lines: d_field(b, 4)?,
             form: d_field(b, 5)?,
+            status: d_field(a, 9).unwrap_or(0),
             line: a.line,
         });
     }
@@ -687,12 +725,20 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
             _ => {}
         }
     }
-    let mut loops_of = g.trimming_loops(&bsplines, &revolved, &mut out.skipped_trimmed)?;
+    let mut faces = g.trimming_loops(&bsplines, &revolved, &mut out.skipped_trimmed)?;
+    g.untrimmed_faces(&bsplines, &revolved, &trimmed, &mut faces);
+    let (mut loops_of, mut planes) = (faces.loops, faces.planes);
+    out.unreadable = faces.unreadable;
     for (k, &is_trimmed) in trimmed.iter().enumerate() {
-        let mut s = match (bsplines[k].take(), revolved[k].take()) {
-            (Some(s), _) => s,
-            (None, Some(r)) => r.into_iges_surface(k, is_trimmed),
-            (None, None) => continue,
+        let mut s = match (bsplines[k].take(), revolved[k].take(), planes[k].take()) {
+            (Some(s), _, _) => s,
+            (None, Some(r), _) => r.into_iges_surface(k, is_trimmed),
+            (None, None, Some(p)) => {
+                out.trimmed += 1;
+                out.surfaces.push(p);
+                continue;
+            }
+            (None, None, None) => continue,
         };
         if let Some((de, loops)) = loops_of[k].take() {
             s.surface.set_trims(loops).map_err(|e| IgesError::Entity {
@@ -736,16 +782,24 @@ impl Iges<'_> {
 
     /// The trimming loops of every 144, by the directory entry of its base
     /// surface (loops of a surface of revolution mapped into its NURBS
-    /// parameters); a 144 whose base surface was not read, or whose
-    /// boundaries give no curves, is counted in `skipped`.
+    /// parameters); planes (108) trimmed by a 144 become bounded NURBS
+    /// planes with their loops ([`Iges::plane_face`]). A 144 whose base
+    /// surface was not read, or whose boundaries cannot be read, is counted
+    /// in `skipped` and listed in [`Faces::unreadable`] when that is for
+    /// something fairline does not read; errors of the file's data fail.
     fn trimming_loops(
         &self,
         bsplines: &[Option<IgesSurface>],
         revolved: &[Option<Revolved>],
         skipped: &mut usize,
-    ) -> Result<LoopsOf, IgesError> {
-        let mut loops_of: LoopsOf = vec![None; self.dir.len()];
-        for k in 0..self.dir.len() {
+    ) -> Result<Faces, IgesError> {
+        let n = self.dir.len();
+        let mut f = Faces {
+            loops: vec![None; n],
+            planes: vec![None; n],
+            unreadable: Vec::new(),
+        };
+        for k in 0..n {
             if self.dir[k].entity_type != 144 {
                 continue;
             }
@@ -759,33 +813,77 @@ impl Iges<'_> {
                     format!("surface pointer {base} is not a directory entry"),
                 ));
             };
-            let loops = match (&bsplines[b], &revolved[b]) {
+            let loops: Result<Option<Vec<TrimLoop>>, IgesError> = match (&bsplines[b], &revolved[b])
+            {
                 (Some(s), _) => {
                     let s = &s.surface;
-                    read_entity_144(self, k, s, (s.domain_u(), s.domain_v()), &p, line)?
+                    read_entity_144(self, k, s, (s.domain_u(), s.domain_v()), &p, line)
                 }
                 (_, Some(r)) => {
                     let domain = (r.surface.domain_u(), r.angles);
-                    match read_entity_144(self, k, &r.surface, domain, &p, line)? {
-                        Some(loops) => Some(
-                            loops
-                                .iter()
-                                .map(|l| r.map_loop(l))
-                                .collect::<Result<Vec<_>, String>>()
-                                .map_err(|m| self.entity_error(k, line, m))?,
-                        ),
-                        None => None,
-                    }
+                    read_entity_144(self, k, &r.surface, domain, &p, line).and_then(|loops| {
+                        loops
+                            .map(|loops| {
+                                loops
+                                    .iter()
+                                    .map(|l| r.map_loop(l))
+                                    .collect::<Result<Vec<_>, String>>()
+                                    .map_err(|m| self.entity_error(k, line, m))
+                            })
+                            .transpose()
+                    })
                 }
-                _ => None,
+                _ if self.dir[b].entity_type == 108 => match self.plane_face(k, b, &p, line) {
+                    Ok(s) => {
+                        f.planes[b] = Some(s);
+                        continue;
+                    }
+                    Err(e) => Err(e),
+                },
+                _ => Ok(None),
             };
             match loops {
-                Some(loops) => loops_of[b] = Some((2 * k + 1, loops)),
-                None => *skipped += 1,
+                Ok(Some(loops)) => {
+                    let loops = loops.into_iter().map(faces::chained).collect();
+                    f.loops[b] = Some((2 * k + 1, loops));
+                }
+                Err(e) if !matches!(e, IgesError::Unsupported { .. }) => return Err(e),
+                other => {
+                    *skipped += 1;
+                    let reason = match other {
+                        Err(e) => e.to_string(),
+                        _ if bsplines[b].is_some() || revolved[b].is_some() => {
+                            "a boundary (142) has neither a parameter-space nor a model-space curve"
+                                .into()
+                        }
+                        _ => self.why_not_read(b),
+                    };
+                    let estimated_area = bsplines[b]
+                        .as_ref()
+                        .map(|s| &s.surface)
+                        .or(revolved[b].as_ref().map(|r| &r.surface))
+                        .map(|s| crate::bspline::trimmed_area(s, 16, 16));
+                    f.unreadable.push(Unreadable {
+                        entity: self.describe_entity(k),
+                        reason,
+                        estimated_area,
+                    });
+                }
             }
         }
-        Ok(loops_of)
+        Ok(f)
     }
+}
+
+/// The faces [`Iges::trimming_loops`] found, by directory entry of the
+/// base surface.
+struct Faces {
+    /// Loops of 144s on 128 and 120 bases, and the 144's DE.
+    loops: LoopsOf,
+    /// Trimmed planes (144 on 108), complete.
+    planes: Vec<Option<IgesSurface>>,
+    /// The faces that could not be read.
+    unreadable: Vec<Unreadable>,
 }
 
 /// Entity 144, trimmed parametric surface (IGES 5.3 §4.34): `PTS N1 N2 PTO
@@ -972,11 +1070,20 @@ impl Iges<'_> {
                 out.push(arc_piece(c, z, radius, a0, a1));
             }
             126 => out.push(self.read_entity_126(k, &p, line)?),
+            104 => {
+                let (c, _) = self.conic(k, &p, line)?;
+                out.push(Piece {
+                    degree: c.degree,
+                    knots: c.knots,
+                    points: c.points,
+                    weights: c.weights,
+                });
+            }
             t => {
-                return Err(self.entity_error(
+                return Err(self.unsupported(
                     k,
                     line,
-                    format!("curve entity {t} is not supported in a trimming boundary (126, 110, 100, 102 are)"),
+                    format!("curve entity {t} is not supported in a trimming boundary (126, 110, 104, 100, 102 are)"),
                 ));
             }
         }
@@ -1108,6 +1215,9 @@ struct Revolved {
     surface: BSplineSurface,
     /// The arcs in `v` (parameter = angle at their joints).
     map: ArcMap,
+    /// The arcs in `u` of a circular-arc generatrix (100), whose file
+    /// parameter is the arc's angle; `None`: `u` is the file's `t`.
+    tmap: Option<ArcMap>,
     /// `[SA, TA]`.
     angles: [f64; 2],
     /// A transformation matrix (124) of the 120 was applied.
@@ -1119,7 +1229,9 @@ impl Revolved {
     /// `(t, v)`: a degree-1 curve whose every segment is parallel to an axis
     /// keeps its form (the map of θ is monotone, so such a segment stays a
     /// segment), with each control point's θ mapped exactly; any other curve
-    /// becomes a polyline through dense samples of it with θ mapped.
+    /// becomes a C¹ piecewise cubic within 1e-9 of the domain's diagonal of
+    /// the curve with θ mapped, broken where the curve has a knot or crosses
+    /// an arc joint ([`faces::hermite_trim`]).
     fn map_loop(&self, l: &TrimLoop) -> Result<TrimLoop, String> {
         let curves = l
             .curves
@@ -1131,19 +1243,44 @@ impl Revolved {
                     && pts
                         .windows(2)
                         .all(|w| w[0][0] == w[1][0] || w[0][1] == w[1][1]);
+                let t = |x: f64| self.tmap.map_or(x, |m| m.param(x));
                 if axis_parallel {
-                    let mapped = pts.iter().map(|p| [p[0], self.map.param(p[1])]).collect();
+                    let mapped = pts
+                        .iter()
+                        .map(|p| [t(p[0]), self.map.param(p[1])])
+                        .collect();
                     TrimCurve::new(1, c.knots().to_vec(), mapped, None)
                 } else {
                     let [t0, t1] = c.domain();
                     let n = (64 * pts.len() * c.degree()).clamp(64, 8000);
-                    let samples: Vec<[f64; 2]> = (0..=n)
-                        .map(|k| {
-                            let p = c.eval(t0 + (t1 - t0) * k as f64 / n as f64);
-                            [p[0], self.map.param(p[1])]
-                        })
-                        .collect();
-                    polyline(&samples)
+                    let f = |x: f64| {
+                        let p = c.eval(x);
+                        [t(p[0]), self.map.param(p[1])]
+                    };
+                    // kinks: the curve's own knots and where it crosses an
+                    // arc joint of either map
+                    let mut breaks: Vec<f64> = c.knots().to_vec();
+                    let joints = |m: &ArcMap| -> Vec<f64> {
+                        (1..m.arcs)
+                            .map(|k| m.start + k as f64 * m.sweep / m.arcs as f64)
+                            .collect()
+                    };
+                    let at = |k: usize| t0 + (t1 - t0) * k as f64 / n as f64;
+                    for (coord, m) in [(1, Some(self.map)), (0, self.tmap)] {
+                        let Some(m) = m else { continue };
+                        for j in joints(&m) {
+                            let side = |x: f64| c.eval(x)[coord] < j;
+                            for k in 0..n {
+                                let (lo, hi) = (at(k), at(k + 1));
+                                if side(lo) != side(hi) {
+                                    breaks.push(faces::crossing(&side, lo, hi));
+                                }
+                            }
+                        }
+                    }
+                    let (du, dv) = (self.surface.domain_u(), self.surface.domain_v());
+                    let tol = 1e-9 * (du[1] - du[0]).hypot(dv[1] - dv[0]);
+                    faces::hermite_trim(&f, t0, t1, &mut breaks, tol)
                 }
             })
             .collect::<Result<Vec<_>, String>>()?;
@@ -1221,15 +1358,35 @@ impl Iges<'_> {
         if !(len > 0.0 && len.is_finite()) {
             return Err(self.entity_error(k, line, "the axis line has no length".into()));
         }
-        if !matches!(self.dir[gen_k].entity_type, 110 | 126) {
-            return Ok(None);
-        }
-        let mut generatrix = Vec::new();
-        self.curve_pieces(gen_k, 0, &mut generatrix)?;
-        let [profile] = &generatrix[..] else {
-            return Ok(None);
+        let (profile, tmap) = match self.dir[gen_k].entity_type {
+            110 | 126 => {
+                let mut generatrix = Vec::new();
+                self.curve_pieces(gen_k, 0, &mut generatrix)?;
+                let [profile] = &generatrix[..] else {
+                    return Ok(None);
+                };
+                (profile.nurbs(), None)
+            }
+            100 => {
+                let (c, m) = self.arc_generatrix(gen_k)?;
+                (c, Some(m))
+            }
+            104 => {
+                let p = self.parameters(gen_k)?;
+                let l = p.first().map_or(self.dir[gen_k].line, |t| t.1);
+                match self.conic(gen_k, &p, l) {
+                    // an ellipse's file parameter is its eccentric angle,
+                    // which the arcs' parameter equals at their joints
+                    Ok((mut c, Some(m))) => {
+                        self.transform_nurbs(gen_k, &mut c)?;
+                        (c, Some(m))
+                    }
+                    Ok(_) | Err(IgesError::Unsupported { .. }) => return Ok(None),
+                    Err(e) => return Err(e),
+                }
+            }
+            _ => return Ok(None),
         };
-        let profile = profile.nurbs();
         let map = ArcMap::new(sa, ta, 1.0);
         let (knots_v, pts, w) = revolve(a, dir / len, &profile, &map);
         // revolve lays the net out angle-major; the file's u is the
@@ -1276,9 +1433,54 @@ impl Iges<'_> {
         Ok(Some(Revolved {
             surface,
             map,
+            tmap,
             angles: [sa, ta],
             transformed: transform.is_some(),
         }))
+    }
+}
+
+impl Iges<'_> {
+    /// A circular arc (100) as the generatrix of a surface of revolution:
+    /// rational quadratic arcs of at most 90° whose parameter is the arc's
+    /// angle at their joints and ends ([`ArcMap`] with scale 1; the IGES
+    /// arc is parametrised by its angle, IGES 5.3 §4.3), the arc's
+    /// transformation matrix applied.
+    fn arc_generatrix(&self, k: usize) -> Result<(Nurbs3, ArcMap), IgesError> {
+        let e = &self.dir[k];
+        let p = self.parameters(k)?;
+        let line = p.first().map_or(e.line, |t| t.1);
+        let mut r = [0.0; 7];
+        for (n, v) in r.iter_mut().enumerate() {
+            *v = param(self, k, &p, n + 1, line, &REAL)?;
+        }
+        let (z, c) = (r[0], [r[1], r[2]]);
+        let a0 = (r[4] - c[1]).atan2(r[3] - c[0]);
+        let mut a1 = (r[6] - c[1]).atan2(r[5] - c[0]);
+        let radius = (r[3] - c[0]).hypot(r[4] - c[1]);
+        while a1 <= a0 {
+            a1 += 2.0 * std::f64::consts::PI;
+        }
+        if !(radius > 0.0 && radius.is_finite()) {
+            return Err(self.entity_error(k, line, "the arc has no radius".into()));
+        }
+        let map = ArcMap::new(a0, a1, 1.0);
+        let mut curve =
+            super::step::nurbs::arc(Vec3::new(c[0], c[1], z), Vec3::X, Vec3::Y, radius, &map);
+        if e.transform != 0 {
+            let t = self.entry(e.transform).ok_or_else(|| {
+                self.entity_error(
+                    k,
+                    line,
+                    "the transformation pointer is not a directory entry".into(),
+                )
+            })?;
+            let m = self.transform(t, 0)?;
+            for q in &mut curve.points {
+                *q = m.transform_point3(*q);
+            }
+        }
+        Ok((curve, map))
     }
 }
 
@@ -1436,7 +1638,7 @@ mod tests {
     /// `(type, transform pointer, form, parameter data)`; parameter data are
     /// cut into records of exactly 64 columns (so parameters and Hollerith
     /// strings continue over records).
-    fn iges_file(global: &str, entities: &[(i64, i64, i64, &str)]) -> String {
+    pub(super) fn iges_file(global: &str, entities: &[(i64, i64, i64, &str)]) -> String {
         let mut s = String::new();
         s.push_str(&format!("{:<72}S{:>7}\n", "hand-made test file", 1));
         let g: Vec<char> = global.chars().collect();
@@ -1480,7 +1682,7 @@ mod tests {
         s
     }
 
-    const GLOBAL: &str = "1H,,1H;,4Htest,8Hfile.igs,3Hgen,3Hver,32,308,15,308,15,4Htest,\
+    pub(super) const GLOBAL: &str = "1H,,1H;,4Htest,8Hfile.igs,3Hgen,3Hver,32,308,15,308,15,4Htest,\
                           1.,2,2HMM,1,0.1,15H20240101.000000,1E-8,100.,1Ha,1Hb,11,0,\
                           15H20240101.000000;";
 

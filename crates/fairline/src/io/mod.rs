@@ -23,6 +23,7 @@
 pub mod iges_read;
 pub mod iges_write;
 mod lines;
+pub mod model_curve;
 mod obj;
 mod off;
 mod ply;
@@ -113,8 +114,9 @@ pub enum IoError {
     },
     /// The file name has no extension fairline knows.
     #[error(
-        "{}: unknown mesh format (expected extension .obj, .ply, .off or .stl)",
-        path.display()
+        "{}: unknown mesh format (expected extension .obj, .ply, .off or .stl); surface formats: .json (fairline's surface JSON), .igs/.iges (IGES 5.3), .step/.stp (STEP AP203/AP214/AP242){}",
+        path.display(),
+        foreign_surface_hint(path)
     )]
     UnknownFormat {
         /// The file.
@@ -1089,5 +1091,23 @@ mod tests {
                 (4, &b"c"[..])
             ]
         );
+    }
+}
+
+/// A hint for surface formats fairline does not read (Rhino .3dm, G+Smo
+/// .g2, ACIS .sat, Parasolid .x_t, OpenCASCADE .brep): export IGES or STEP.
+fn foreign_surface_hint(path: &Path) -> &'static str {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some(
+            "3dm" | "g2" | "sat" | "sab" | "x_t" | "x_b" | "brep" | "igs.gz" | "jt" | "catpart"
+            | "prt" | "sldprt",
+        ) => {
+            "; this surface format is not read: export IGES or STEP from the program that wrote it"
+        }
+        _ => "",
     }
 }

@@ -13,7 +13,7 @@ use thiserror::Error;
 use super::IoError;
 use super::iges_read::{IgesError, read_iges};
 use super::iges_write::{IgesWriteOptions, write_iges};
-use super::step::{StepError, StepWriteOptions, read_step, write_step};
+use super::step::{StepError, StepWriteOptions, read_step_with, write_step};
 use super::surface_json::{SurfaceJsonError, read_surfaces_json, write_surfaces_json};
 use super::units::LengthUnit;
 use crate::bspline::BSplineSurface;
@@ -58,6 +58,72 @@ pub struct SurfaceFile {
     /// What the reader did not take as the file says (STEP: p-curves that
     /// disagree with their 3-D edges); one line each.
     pub warnings: Vec<String>,
+    /// Every face (IGES: trimmed, bounded or free surface entity, B-rep
+    /// face; STEP: face) the reader could not read: it is in none of
+    /// [`Self::surfaces`]. A front end must not treat the part as complete
+    /// while this is not empty.
+    pub unreadable: Vec<Unreadable>,
+}
+
+/// A face of a file that was not read: what it is, where, and why.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Unreadable {
+    /// The entity: IGES `entity 144 (DE 35, line 77)`, STEP `#120
+    /// ADVANCED_FACE`.
+    pub entity: String,
+    /// Why it could not be read.
+    pub reason: String,
+    /// The area of the face where it can be estimated (the untrimmed area
+    /// of a base surface that was read: an upper bound), in the file's
+    /// unit squared.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimated_area: Option<f64>,
+}
+
+impl std::fmt::Display for Unreadable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.entity, self.reason)
+    }
+}
+
+impl SurfaceFile {
+    /// One line naming the unreadable faces: the count and the first
+    /// `first` of them; `None` when every face was read. `area` is the
+    /// total area of the faces read, for the estimated share of the
+    /// unreadable ones.
+    pub fn unreadable_summary(&self, first: usize, area: Option<f64>) -> Option<String> {
+        if self.unreadable.is_empty() {
+            return None;
+        }
+        let n = self.unreadable.len();
+        let named: Vec<String> = self
+            .unreadable
+            .iter()
+            .take(first)
+            .map(|u| u.to_string())
+            .collect();
+        let est: f64 = self
+            .unreadable
+            .iter()
+            .filter_map(|u| u.estimated_area)
+            .sum();
+        let share = match area {
+            Some(a) if est > 0.0 && (a + est) > 0.0 => format!(
+                " (at most {:.1} % of the part's area, from the faces whose surface was read)",
+                100.0 * est / (a + est)
+            ),
+            _ => String::new(),
+        };
+        Some(format!(
+            "could not read {n} face(s){share}: {}{}",
+            named.join("; "),
+            if n > named.len() {
+                format!("; … and {} more", n - named.len())
+            } else {
+                String::new()
+            }
+        ))
+    }
 }
 
 /// Why a surface file could not be read or written.
@@ -98,16 +164,25 @@ pub fn read_surface_file(path: impl AsRef<Path>) -> Result<SurfaceFile, SurfaceF
             let imp = read_iges(path)?;
             Ok(SurfaceFile {
                 unit: imp.units.as_deref().and_then(LengthUnit::from_iges_name),
-                surfaces: imp.surfaces.into_iter().map(|s| s.surface).collect(),
+                // a base surface whose trimmed or bounded surface could not
+                // be read (listed in `unreadable`) is not the face: left out
+                surfaces: imp
+                    .surfaces
+                    .into_iter()
+                    .filter(|s| !(s.trimmed && s.trim_entity.is_none()))
+                    .map(|s| s.surface)
+                    .collect(),
                 warnings: Vec::new(),
+                unreadable: imp.unreadable,
             })
         }
         Some(SurfaceFormat::Step) => {
-            let imp = read_step(path)?;
+            let imp = read_step_with(path, true)?;
             Ok(SurfaceFile {
                 unit: imp.unit,
                 surfaces: imp.surfaces.into_iter().map(|s| s.surface).collect(),
                 warnings: imp.warnings,
+                unreadable: imp.unreadable,
             })
         }
         None => Err(SurfaceFileError::UnknownFormat {

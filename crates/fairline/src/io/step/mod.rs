@@ -66,14 +66,22 @@ pub enum StepError {
 }
 
 /// Reads every face (and free bounded B-spline surface) of a STEP file as
-/// a trimmed B-spline surface. Errors name the file, line and `#id`.
+/// a trimmed B-spline surface. Errors name the file, line and `#id`; the
+/// first face that cannot be read is an error.
 pub fn read_step(path: impl AsRef<Path>) -> Result<StepImport, StepError> {
+    read_step_with(path, false)
+}
+
+/// [`read_step`]; with `collect`, a face that cannot be read is not an
+/// error but listed in [`StepImport::unreadable`] (errors of the file's
+/// syntax still are).
+pub fn read_step_with(path: impl AsRef<Path>, collect: bool) -> Result<StepImport, StepError> {
     let path = path.as_ref();
     let bytes = std::fs::read(path).map_err(|source| StepError::Read {
         path: path.to_path_buf(),
         source,
     })?;
-    parse_step_bytes(&bytes).map_err(|error| StepError::InFile {
+    parse_step_bytes_with(&bytes, collect).map_err(|error| StepError::InFile {
         path: path.to_path_buf(),
         error: Box::new(error),
     })
@@ -86,9 +94,14 @@ pub fn parse_step(text: &str) -> Result<StepImport, StepError> {
 
 /// Parses STEP bytes; see [`read_step`].
 pub fn parse_step_bytes(bytes: &[u8]) -> Result<StepImport, StepError> {
+    parse_step_bytes_with(bytes, false)
+}
+
+/// Parses STEP bytes; see [`read_step_with`].
+pub fn parse_step_bytes_with(bytes: &[u8], collect: bool) -> Result<StepImport, StepError> {
     let ex = p21::parse(bytes).map_err(|e| StepError::Syntax {
         line: e.line,
         message: e.message,
     })?;
-    read::read(&ex)
+    read::read(&ex, collect)
 }

@@ -92,6 +92,10 @@ pub struct StepImport {
     /// What the reader did not take as the file says (p-curves that
     /// disagree with their 3-D edges); one line each.
     pub warnings: Vec<String>,
+    /// The faces that could not be read (only when reading with
+    /// `collect`, see [`super::read_step_with`]); none of them is in
+    /// [`Self::surfaces`].
+    pub unreadable: Vec<crate::io::surface_file::Unreadable>,
 }
 
 /// Where the trimming curves of a file's faces came from, counted per
@@ -470,12 +474,106 @@ impl<'a> Reader<'a> {
                 }
                 Err(self.err(i, "surface curves nest too deeply".into()))
             }
+            "HYPERBOLA" | "PARABOLA" => self.open_conic(i),
             _ if i.is("B_SPLINE_CURVE_WITH_KNOTS") => Ok(Curve::Spline(self.bspline_curve(i)?)),
             t => Err(self.err(
                 i,
-                format!("curve type {t} is not supported (LINE, CIRCLE, ELLIPSE, B_SPLINE_CURVE_WITH_KNOTS, SURFACE_CURVE are)"),
+                format!("curve type {t} is not supported (LINE, CIRCLE, ELLIPSE, HYPERBOLA, PARABOLA, B_SPLINE_CURVE_WITH_KNOTS, SURFACE_CURVE are)"),
             )),
         }
+    }
+
+    /// A `HYPERBOLA` (`c + a·cosh t·x + b·sinh t·y`, ISO 10303-42
+    /// §4.4.14) or `PARABOLA` (`c + f·t²·x + 2f·t·y`, §4.4.15) as an exact
+    /// rational quadratic B-spline over the parameters of the file's
+    /// vertices that lie on it (an open conic is unbounded; its edges end
+    /// at vertices): the parabola as one Bézier arc whose parameter is `t`;
+    /// the hyperbola as arcs of at most 1 in `t`, each with its middle
+    /// control point at the tangents' intersection `c + (a·cosh tm·x +
+    /// b·sinh tm·y) / cosh δ` and weight `cosh δ` (`tm`, `δ` the arc's mid
+    /// parameter and half span; the hyperbolic analogue of Piegl & Tiller
+    /// A7.1), parameter equal to `t` at the arc joints.
+    fn open_conic(&self, i: &'a Instance) -> R<Curve> {
+        let hyperbola = i.type_name() == "HYPERBOLA";
+        let p = self.params(i, &["HYPERBOLA", "PARABOLA"])?;
+        let (c, x, y, _) = self.placement(self.refer(i, p, 1)?)?;
+        let a = self.num(i, p, 2)?;
+        let b = if hyperbola { self.num(i, p, 3)? } else { a };
+        if !(a > 0.0 && b > 0.0 && a.is_finite() && b.is_finite()) {
+            return Err(self.err(i, "the semi-axes or focal distance are not positive".into()));
+        }
+        let eval = |t: f64| -> Vec3 {
+            if hyperbola {
+                c + a * t.cosh() * x + b * t.sinh() * y
+            } else {
+                c + a * t * t * x + 2.0 * a * t * y
+            }
+        };
+        let inverse = |q: Vec3| -> f64 {
+            let r = q - c;
+            if hyperbola {
+                (r.dot(y) / b).asinh()
+            } else {
+                r.dot(y) / (2.0 * a)
+            }
+        };
+        // the parameters of the vertices on the curve
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for v in self.ex.instances.values() {
+            if v.type_name() != "VERTEX_POINT" {
+                continue;
+            }
+            let Ok(vp) = self.params(v, &["VERTEX_POINT"]) else {
+                continue;
+            };
+            let Ok(q) = self.refer(v, vp, 1).and_then(|pt| self.point(pt)) else {
+                continue;
+            };
+            let t = inverse(q);
+            let tol = 1e-7 * (1.0 + (q - c).length() + a + b);
+            if t.is_finite() && eval(t).distance(q) <= tol.max(self.uncertainty) {
+                lo = lo.min(t);
+                hi = hi.max(t);
+            }
+        }
+        if !(hi > lo) {
+            return Err(self.err(
+                i,
+                "no two vertices of the file lie on this open conic: its extent is unknown".into(),
+            ));
+        }
+        let arcs = if hyperbola {
+            ((hi - lo).ceil() as usize).clamp(1, 64)
+        } else {
+            1
+        };
+        let d = (hi - lo) / arcs as f64;
+        let mut knots = vec![lo; 3];
+        let mut points = vec![eval(lo)];
+        let mut weights = vec![1.0];
+        for k in 0..arcs {
+            let (t0, t1) = (lo + k as f64 * d, lo + (k + 1) as f64 * d);
+            let (tm, h) = (0.5 * (t0 + t1), 0.5 * d);
+            if hyperbola {
+                points.push(c + (a * tm.cosh() * x + b * tm.sinh() * y) / h.cosh());
+                weights.push(h.cosh());
+            } else {
+                points.push(c + a * t0 * t1 * x + a * (t0 + t1) * y);
+                weights.push(1.0);
+            }
+            points.push(eval(t1));
+            weights.push(1.0);
+            if k + 1 < arcs {
+                knots.extend([t1, t1]);
+            }
+        }
+        knots.extend([hi; 3]);
+        Ok(Curve::Spline(Nurbs3 {
+            degree: 2,
+            knots,
+            points,
+            weights: hyperbola.then_some(weights),
+        }))
     }
 
     /// Knots from distinct values and multiplicities.
@@ -706,7 +804,7 @@ impl<'a> Reader<'a> {
 }
 
 /// Reads the faces (and free bounded B-spline surfaces) of a parsed file.
-pub(super) fn read(ex: &Exchange) -> R<StepImport> {
+pub(super) fn read(ex: &Exchange, collect: bool) -> R<StepImport> {
     let (unit, angle) = units(ex);
     let rd = Reader {
         ex,
@@ -738,7 +836,15 @@ pub(super) fn read(ex: &Exchange) -> R<StepImport> {
     for id in ids {
         let i = &ex.instances[&id];
         match i.type_name() {
-            "ADVANCED_FACE" | "FACE_SURFACE" => out.surfaces.push(rd.face(i)?),
+            "ADVANCED_FACE" | "FACE_SURFACE" => match rd.face(i) {
+                Ok(s) => out.surfaces.push(s),
+                Err(e) if collect => out.unreadable.push(crate::io::surface_file::Unreadable {
+                    entity: format!("#{id} {}", i.type_name()),
+                    reason: e.to_string(),
+                    estimated_area: None,
+                }),
+                Err(e) => return Err(e),
+            },
             _ if i.is("B_SPLINE_SURFACE_WITH_KNOTS") && !bound_elsewhere.contains(&id) => {
                 out.surfaces.push(StepSurface {
                     surface: rd.bspline_surface(i)?,
@@ -778,6 +884,63 @@ impl Reader<'_> {
             worst.2
         ))
     }
+}
+
+/// For each edge of a loop with several agreeing p-curves (a seam), the
+/// index of the one to use (0: the first); `None` for the others. Every
+/// edge takes the candidate whose start lies nearest to the previous
+/// edge's end, starting from each candidate of the first such edge in
+/// turn; the start with the smallest total gap around the loop wins.
+fn seam_choice(found: &[(PcurveUse, Vec<TrimCurve>)]) -> Vec<Option<usize>> {
+    let n = found.len();
+    let cands: Vec<Vec<&TrimCurve>> = found
+        .iter()
+        .map(|(u, o)| match u {
+            PcurveUse::Used(c) => std::iter::once(c).chain(o.iter()).collect(),
+            _ => Vec::new(),
+        })
+        .collect();
+    let Some(first) = cands.iter().position(|c| c.len() > 1) else {
+        return cands.iter().map(|c| (!c.is_empty()).then_some(0)).collect();
+    };
+    let ends = |c: &TrimCurve| {
+        let [a, b] = c.domain();
+        (c.eval(a), c.eval(b))
+    };
+    let gap = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
+    let mut best: Option<(f64, Vec<Option<usize>>)> = None;
+    for start in 0..cands[first].len() {
+        let mut pick: Vec<Option<usize>> = vec![None; n];
+        pick[first] = Some(start);
+        let mut prev_end = Some(ends(cands[first][start]).1);
+        for step in 1..n {
+            let k = (first + step) % n;
+            let c = &cands[k];
+            if c.is_empty() {
+                prev_end = None;
+                continue;
+            }
+            let j = match prev_end {
+                Some(p) if c.len() > 1 => (0..c.len())
+                    .min_by(|&x, &y| gap(p, ends(c[x]).0).total_cmp(&gap(p, ends(c[y]).0)))
+                    .unwrap_or(0),
+                _ => 0,
+            };
+            pick[k] = Some(j);
+            prev_end = Some(ends(c[j]).1);
+        }
+        let mut total = 0.0;
+        for k in 0..n {
+            let next = (k + 1) % n;
+            if let (Some(a), Some(b)) = (pick[k], pick[next]) {
+                total += gap(ends(cands[k][a]).1, ends(cands[next][b]).0);
+            }
+        }
+        if best.as_ref().is_none_or(|b| total < b.0) {
+            best = Some((total, pick));
+        }
+    }
+    best.map(|b| b.1).unwrap_or_else(|| vec![None; n])
 }
 
 /// The file's distance uncertainty (the first positive
@@ -965,12 +1128,28 @@ impl<'a> Reader<'a> {
 
     /// A loop on a B-spline surface: p-curves on it when the edges have
     /// them, else the edge points projected onto the surface.
+    ///
+    /// A seam edge (a SEAM_CURVE with two p-curves that both agree with
+    /// the edge, as on a surface closed in u or v) takes the p-curve that
+    /// continues the loop: the choice that leaves the smallest total gap
+    /// between consecutive curves' ends and starts, so that a seam used
+    /// twice runs once along each side of the parameter domain.
     fn bspline_loop(&self, s: &BSplineSurface, sid: u64, edges: &[EdgeUse]) -> R<TrimLoop> {
         let mut curves = Vec::with_capacity(edges.len());
         let mut guess = None;
+        let mut found = Vec::with_capacity(edges.len());
         for e in edges {
-            let found = self.pcurve_trim(s, sid, e, &PcurveMap::IDENTITY, None)?;
-            if let Some(c) = self.count_trim(e, found) {
+            found.push(self.pcurve_trims(s, sid, e, &PcurveMap::IDENTITY, None, true)?);
+        }
+        let choice = seam_choice(&found);
+        for ((e, (use_, others)), pick) in edges.iter().zip(found).zip(choice) {
+            let use_ = match (use_, pick) {
+                (PcurveUse::Used(_), Some(k)) if k > 0 => {
+                    PcurveUse::Used(others.into_iter().nth(k - 1).expect("seam choice"))
+                }
+                (u, _) => u,
+            };
+            if let Some(c) = self.count_trim(e, use_) {
                 curves.push(c);
                 continue;
             }

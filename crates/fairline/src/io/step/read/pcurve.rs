@@ -397,9 +397,23 @@ impl<'a> Reader<'a> {
         map: &PcurveMap,
         seg: Option<&[(f64, f64)]>,
     ) -> R<PcurveUse> {
+        Ok(self.pcurve_trims(s, sid, e, map, seg, false)?.0)
+    }
+
+    /// [`Self::pcurve_trim`]; with `all`, also every further p-curve that
+    /// agrees with the edge (a seam's second p-curve), in the file's order.
+    pub(super) fn pcurve_trims(
+        &self,
+        s: &BSplineSurface,
+        sid: u64,
+        e: &EdgeUse,
+        map: &PcurveMap,
+        seg: Option<&[(f64, f64)]>,
+        all: bool,
+    ) -> R<(PcurveUse, Vec<TrimCurve>)> {
         let candidates = self.pcurves_on(e, sid)?;
         if candidates.is_empty() {
-            return Ok(PcurveUse::Absent);
+            return Ok((PcurveUse::Absent, Vec::new()));
         }
         let tolerance = self.pcurve_tolerance(s);
         // The edge's dense samples, for the full search where tracking
@@ -409,6 +423,7 @@ impl<'a> Reader<'a> {
         let dense = || samples.get_or_init(|| self.edge_samples(e)).as_slice();
         let range = self.edge_range(e);
         let mut best = f64::INFINITY;
+        let mut agreeing = Vec::new();
         for (_, curve) in candidates {
             // A p-curve that gives no valid trim curve disagrees with the
             // edge (it is not an error of the file's geometry).
@@ -417,14 +432,25 @@ impl<'a> Reader<'a> {
             };
             let d = disagreement(s, e, range, &dense, &trim, tolerance);
             if d <= tolerance {
-                return Ok(PcurveUse::Used(trim));
+                agreeing.push(trim);
+                if !all {
+                    break;
+                }
+                continue;
             }
             best = best.min(d);
         }
-        Ok(PcurveUse::Rejected {
-            distance: best,
-            tolerance,
-        })
+        if agreeing.is_empty() {
+            return Ok((
+                PcurveUse::Rejected {
+                    distance: best,
+                    tolerance,
+                },
+                agreeing,
+            ));
+        }
+        let first = agreeing.remove(0);
+        Ok((PcurveUse::Used(first), agreeing))
     }
 
     /// The p-curve's piece between the edge's vertices, in traversal order,
