@@ -3,7 +3,7 @@
 use super::auth::{Guard, query_param};
 use super::doc::{Doc, Step, shell_word};
 use super::frame::{frame, vec3_bytes};
-use super::http::{HttpRequest, HttpResponse};
+use super::http::{HttpRequest, HttpResponse, Service};
 use fairline::fair::{FairMethod, FairOptions, fair_highlight_lines, grow_region};
 use fairline::geom::{CurvatureMethod, LaplaceWeights, principal_curvatures};
 use fairline::highlight::{
@@ -85,16 +85,18 @@ struct ModelCache {
 
 /// The highlight model of document `doc` whose geometry is `mesh` (the
 /// positions of one of its steps, `positions`) under `light` with default
-/// options: the cached one when the key matches, else built and cached.
-/// Returns the model and whether it came from the cache.
+/// options: the cached one when the key matches, else built (without the
+/// workbench's lock held: other requests, cancel included, are answered
+/// meanwhile) and cached. Returns the model and whether it came from the
+/// cache.
 fn cached_model(
-    cache: &mut Option<ModelCache>,
+    shared: &Shared,
     doc: usize,
     positions: &Arc<Vec<Vec3>>,
     mesh: &SurfaceMesh,
     light: LightArray,
 ) -> Result<(Arc<HighlightModel>, bool), fairline::highlight::HighlightError> {
-    if let Some(c) = cache
+    if let Some(c) = &lock(shared).model_cache
         && c.doc == doc
         && Arc::ptr_eq(&c.positions, positions)
         && c.light == light
@@ -106,7 +108,7 @@ fn cached_model(
         light,
         HighlightOptions::default(),
     )?);
-    *cache = Some(ModelCache {
+    lock(shared).model_cache = Some(ModelCache {
         doc,
         positions: Arc::clone(positions),
         light,
@@ -185,12 +187,47 @@ fn bad(e: impl std::fmt::Display) -> Answer {
     error(400, e.to_string())
 }
 
+/// The workbench as the HTTP server sees it.
+pub struct Api(pub Arc<Shared>);
+
+impl Service for Api {
+    fn admit(&self, req: &HttpRequest) -> Result<usize, HttpResponse> {
+        match self.0.guard.check(req) {
+            Err(why) => Err(respond(error(403, why))),
+            Ok(()) => Ok(body_limit(req)),
+        }
+    }
+    fn handle(&self, req: &HttpRequest) -> HttpResponse {
+        handle(&self.0, req)
+    }
+}
+
+/// The largest request body of an endpoint (bytes): none for GET, face
+/// lists (4 to 10 bytes of JSON per triangle) for region and run calls,
+/// lights for lines and detection, a few fields for the rest.
+fn body_limit(req: &HttpRequest) -> usize {
+    if req.method != "POST" {
+        return 0;
+    }
+    let path = req.url.split('?').next().unwrap_or("");
+    match path.rsplit('/').next().unwrap_or("") {
+        "region" | "region-file" | "run" => 32 << 20,
+        "lines" | "detect" | "surface-lines" => 256 << 10,
+        _ => 4 << 10,
+    }
+}
+
 /// Answers one request.
 pub fn handle(shared: &Arc<Shared>, req: &HttpRequest) -> HttpResponse {
     let answer = match shared.guard.check(req) {
         Err(why) => error(403, why),
         Ok(()) => route(shared, req, &req.body),
     };
+    respond(answer)
+}
+
+/// The HTTP answer of `answer`, with the headers every answer has.
+fn respond(answer: Answer) -> HttpResponse {
     let mut headers = vec![
         ("Content-Type".to_string(), answer.content_type.to_string()),
         ("Cache-Control".to_string(), "no-store".to_string()),
@@ -438,6 +475,27 @@ struct LinesRequest {
     step: Option<usize>,
 }
 
+/// Most circular lights one request may ask for: each is one pass over
+/// the mesh (or the patch's grid) and one set of lines in the answer.
+const MAX_RADII: usize = 256;
+/// Most lights × grid nodes of one surface-lines request.
+const MAX_SURFACE_NODES: usize = 16_000_000;
+
+/// The circular lights of a request: at least one, at most [`MAX_RADII`].
+fn circular_lights(c: &CircularLights) -> Result<Vec<CircularLight>, Answer> {
+    if c.radii.len() > MAX_RADII {
+        return Err(bad(format!(
+            "{} radii asked for; at most {MAX_RADII} per request",
+            c.radii.len()
+        )));
+    }
+    match c.lights() {
+        Ok(l) if !l.is_empty() => Ok(l),
+        Ok(_) => Err(bad("circular lights need at least one radius")),
+        Err(e) => Err(bad(e)),
+    }
+}
+
 /// Lines into the header list and the float buffer.
 fn push_lines(
     lines: &HighlightLines,
@@ -466,19 +524,17 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         Ok(r) => r,
         Err(a) => return a,
     };
-    let mut guard = lock(shared);
-    let st = &mut *guard;
-    let d = &st.docs[k];
-    let (center, file) = (d.center, d.current_file());
-    let positions = Arc::clone(&d.step(req.step).positions);
-    let stepped;
-    let mesh = match req.step {
-        None => d.now(),
-        Some(_) => {
-            stepped = d.tri_at(req.step);
-            &stepped
-        }
+    let (center, file, positions, mesh) = {
+        let st = lock(shared);
+        let d = &st.docs[k];
+        (
+            d.center,
+            d.current_file(),
+            Arc::clone(&d.step(req.step).positions),
+            d.shared_tri_at(req.step),
+        )
     };
+    let mesh = mesh.as_ref();
     if let Some(b) = req.band
         && !(b > 0.0 && b.is_finite())
     {
@@ -492,10 +548,9 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     let mut model_cached = false;
     let command;
     if let Some(c) = req.circular {
-        let lights: Vec<CircularLight> = match c.lights() {
-            Ok(l) if !l.is_empty() => l,
-            Ok(_) => return bad("circular lights need at least one radius"),
-            Err(e) => return bad(e),
+        let lights = match circular_lights(&c) {
+            Ok(l) => l,
+            Err(a) => return a,
         };
         let lines = match circular_highlight_lines(mesh, &lights, &HighlightOptions::default()) {
             Ok(l) => l,
@@ -535,7 +590,7 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         let Some(light) = req.light else {
             return bad("give \"light\" or \"circular\"");
         };
-        let model = match cached_model(&mut st.model_cache, k, &positions, mesh, light) {
+        let model = match cached_model(shared, k, &positions, mesh, light) {
             Ok((m, hit)) => {
                 model_cached = hit;
                 m
@@ -595,17 +650,23 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         Ok(r) => r,
         Err(a) => return a,
     };
-    let mut guard = lock(shared);
-    let st = &mut *guard;
-    let d = &st.docs[k];
-    let (mesh, center, file) = (d.now(), d.center, d.current_file());
-    let positions = Arc::clone(&d.current().positions);
+    let (mesh, center, file, positions) = {
+        let st = lock(shared);
+        let d = &st.docs[k];
+        (
+            d.shared_tri_at(None),
+            d.center,
+            d.current_file(),
+            Arc::clone(&d.current().positions),
+        )
+    };
+    let mesh = mesh.as_ref();
     let defaults = DetectOptions::default();
     let opts = DetectOptions::default()
         .threshold(req.threshold.unwrap_or(defaults.threshold))
         .region_margin(req.region_radius.unwrap_or(defaults.region_margin));
     let t = Instant::now();
-    let model = match cached_model(&mut st.model_cache, k, &positions, mesh, req.light) {
+    let model = match cached_model(shared, k, &positions, mesh, req.light) {
         Ok((m, _)) => m,
         Err(e) => return bad(e),
     };
@@ -1433,12 +1494,17 @@ fn surface_lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         };
         (surface, d.center, d.current_file())
     };
-    let lights: Vec<CircularLight> = match req.circular.lights() {
-        Ok(l) if !l.is_empty() => l,
-        Ok(_) => return bad("circular lights need at least one radius"),
-        Err(e) => return bad(e),
+    let lights = match circular_lights(&req.circular) {
+        Ok(l) => l,
+        Err(a) => return a,
     };
     let grid = req.grid.unwrap_or(200).clamp(8, 2000);
+    if lights.len() * grid * grid > MAX_SURFACE_NODES {
+        return bad(format!(
+            "{} lights on a {grid} × {grid} grid: more than {MAX_SURFACE_NODES} light × grid nodes; use fewer radii or a coarser grid",
+            lights.len()
+        ));
+    }
     if let Some(b) = req.band
         && !(b > 0.0 && b.is_finite())
     {
