@@ -56,7 +56,15 @@ impl Report {
     /// Writes the report atomically when a path was given.
     pub fn write(&self, path: Option<&Path>) -> Result<()> {
         if let Some(p) = path {
-            write_json(p, &self.to_json())?;
+            // streamed: no copy of the report, no text of it in memory
+            fairline::io::atomic_write(p, |w| {
+                use std::io::Write;
+                self.0
+                    .write_pretty(&mut *w)
+                    .map_err(std::io::Error::other)?;
+                w.write_all(b"\n")
+            })
+            .with_context(|| format!("writing {}", p.display()))?;
         }
         Ok(())
     }
