@@ -487,3 +487,50 @@ fn the_browser_is_opened_without_the_token_on_a_command_line() {
     let _ = std::fs::remove_file(args.trim());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Saves stay in the save folder: an existing name is replaced only when
+/// asked, a symbolic link is never written through.
+#[cfg(unix)]
+#[test]
+fn saves_are_confined_to_the_save_folder() {
+    let dir = tmp("limits-save");
+    let mesh = dir.join("panel.obj");
+    panel(&mesh, 11);
+    let saves = dir.join("saves");
+    std::fs::create_dir_all(&saves).unwrap();
+    let outside = dir.join("outside.txt");
+    std::fs::write(&outside, "keep me").unwrap();
+    std::os::unix::fs::symlink(&outside, saves.join("link.obj")).unwrap();
+    let srv = start(&mesh, &saves);
+    ready(&srv);
+    assert_eq!(srv.post("/api/doc/0/save", r#"{"name":"a.obj"}"#).0, 200);
+    std::fs::write(saves.join("a.obj"), "mine").unwrap();
+    let (code, text) = srv.post("/api/doc/0/save", r#"{"name":"a.obj"}"#);
+    assert_eq!(code, 409, "{text}");
+    assert_eq!(
+        std::fs::read_to_string(saves.join("a.obj")).unwrap(),
+        "mine"
+    );
+    let (code, _) = srv.post("/api/doc/0/save", r#"{"name":"a.obj","overwrite":true}"#);
+    assert_eq!(code, 200);
+    assert_ne!(
+        std::fs::read_to_string(saves.join("a.obj")).unwrap(),
+        "mine"
+    );
+    for body in [
+        r#"{"name":"link.obj"}"#,
+        r#"{"name":"link.obj","overwrite":true}"#,
+    ] {
+        let (code, text) = srv.post("/api/doc/0/save", body);
+        assert_eq!(code, 400, "{text}");
+        assert!(text.contains("symbolic link"), "{text}");
+    }
+    assert_eq!(std::fs::read_to_string(&outside).unwrap(), "keep me");
+    assert!(
+        std::fs::symlink_metadata(saves.join("link.obj"))
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

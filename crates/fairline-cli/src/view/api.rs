@@ -1393,6 +1393,9 @@ fn save(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     #[derive(Deserialize)]
     struct Req {
         name: String,
+        /// Replace an existing file of that name (a regular file only).
+        #[serde(default)]
+        overwrite: bool,
     }
     let req: Req = match parse(body) {
         Ok(r) => r,
@@ -1414,11 +1417,28 @@ fn save(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
+    // the same policy as the CLI's outputs: an existing file is replaced
+    // only when asked, never through a symbolic link (the write and its
+    // rename stay in the save folder)
+    match std::fs::symlink_metadata(&path) {
+        Ok(m) if m.file_type().is_symlink() => {
+            return bad(format!(
+                "{name} in the save folder is a symbolic link; saves are not written through links"
+            ));
+        }
+        Ok(_) if !req.overwrite => {
+            return error(
+                409,
+                format!("{name} exists in the save folder; choose another name or overwrite it"),
+            );
+        }
+        _ => {}
+    }
     let bytes = match current_bytes(d, &ext) {
         Ok(b) => b,
         Err(e) => return bad(e),
     };
-    match fairline::io::atomic_write(&path, |w| std::io::Write::write_all(w, &bytes)) {
+    match fairline::io::atomic_write_here(&path, |w| std::io::Write::write_all(w, &bytes)) {
         Ok(()) => json_answer(&json!({
             "path": path.display().to_string(),
             "bytes": bytes.len(),
