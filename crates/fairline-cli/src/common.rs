@@ -69,7 +69,15 @@ pub fn print_warnings(report: &fairline_commands::Report) {
 /// Writes a command's report atomically when a path was given.
 pub fn write_report(path: Option<&Path>, report: &fairline_commands::Report) -> Result<()> {
     if let Some(p) = path {
-        write_json(p, &report.to_json())?;
+        // streamed: no copy of the report, no text of it in memory
+        fairline::io::atomic_write(p, |w| {
+            use std::io::Write;
+            report
+                .write_pretty(&mut *w)
+                .map_err(std::io::Error::other)?;
+            w.write_all(b"\n")
+        })
+        .with_context(|| format!("writing {}", p.display()))?;
     }
     Ok(())
 }

@@ -635,3 +635,35 @@ fn errors_reading_inputs_name_the_file() {
         assert!(!e.contains("panicked"), "{e}");
     }
 }
+
+/// A replaced output keeps its permissions; one with other hard links is
+/// refused (a rename would leave the other names with the old content).
+#[cfg(unix)]
+#[test]
+fn replaced_outputs_keep_their_mode_and_hard_links_are_refused() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tmp("outputs-mode");
+    let input = dir.join("in.obj");
+    std::fs::write(&input, wavy_obj(6)).unwrap();
+    let out = dir.join("out.ply");
+    std::fs::write(&out, "old").unwrap();
+    std::fs::set_permissions(&out, std::fs::Permissions::from_mode(0o600)).unwrap();
+    ok(&run(&["convert", s(&input), s(&out)]));
+    let meta = std::fs::metadata(&out).unwrap();
+    assert_eq!(meta.permissions().mode() & 0o777, 0o600);
+    assert!(meta.len() > 3);
+    let linked = dir.join("linked.ply");
+    let other = dir.join("other-name.ply");
+    std::fs::write(&linked, "old").unwrap();
+    std::fs::hard_link(&linked, &other).unwrap();
+    let o = run(&["convert", s(&input), s(&linked)]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("hard links") && err.contains("linked.ply"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_to_string(&linked).unwrap(), "old");
+    assert_eq!(std::fs::read_to_string(&other).unwrap(), "old");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -345,3 +345,37 @@ fn the_dirty_real_meshes_go_through_repair_and_then_every_command() {
         }
     }
 }
+
+/// One triangle repeated 200,000 times: `info` and `repair` take time and
+/// memory linear in the faces. (A pairwise comparison of the faces around a
+/// vertex, as `info` once made, takes about an hour here: 31 s at 20,000.)
+#[test]
+fn one_triangle_repeated_many_times_costs_linear_time() {
+    let dir = tmp("repair-duplicates");
+    let n = 200_000;
+    let mesh = dir.join("dup.obj");
+    let mut text = String::from("v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    text.push_str(&"f 1 2 3\n".repeat(n));
+    std::fs::write(&mesh, text).unwrap();
+    let t = std::time::Instant::now();
+    let o = run(&["info", s(&mesh), "--json"]);
+    let info_s = t.elapsed().as_secs_f64();
+    ok(&o);
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["faces"], n);
+    assert_eq!(j["manifold"], false);
+    let t = std::time::Instant::now();
+    let out = dir.join("one.obj");
+    let report = dir.join("r.json");
+    let o = run(&["repair", s(&mesh), s(&out), "--report", s(&report)]);
+    let repair_s = t.elapsed().as_secs_f64();
+    ok(&o);
+    let r = json(&report);
+    assert_eq!(r["faces_after"], 1);
+    assert_eq!(r["removed_faces"].as_array().map(Vec::len), Some(n - 1));
+    assert!(
+        info_s < 20.0 && repair_s < 20.0,
+        "info {info_s:.1} s, repair {repair_s:.1} s for {n} duplicates"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

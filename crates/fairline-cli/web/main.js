@@ -266,7 +266,15 @@ async function downloadMesh() {
 
 async function save() {
   const name = $('save-name').value.trim();
-  const r = await api.json(`/api/doc/${state.active}/save`, { name });
+  const url = `/api/doc/${state.active}/save`;
+  let r;
+  try {
+    r = await api.json(url, { name });
+  } catch (e) {
+    // an existing file is replaced only when the user says so
+    if (!/exists in the save folder/.test(String(e.message)) || !window.confirm(`${name} exists in the save folder. Replace it?`)) throw e;
+    r = await api.json(url, { name, overwrite: true });
+  }
   status(`saved ${r.path} (${r.bytes} bytes)`);
   showCommand(r.command);
 }

@@ -49,9 +49,14 @@ impl Report {
                 return;
             }
         };
+        self.insert(key, value);
+    }
+
+    /// Sets `key` to `value` without its non-finite numbers (in place).
+    fn insert(&mut self, key: &str, mut value: Value) {
         let mut dropped = Vec::new();
-        if let Some(v) = finite_only(key, value, &mut dropped) {
-            self.map.insert(key.into(), v);
+        if prune(&mut key.to_string(), &mut value, &mut dropped) {
+            self.map.insert(key.into(), value);
         }
         for path in dropped {
             self.warn(Warning::NotFinite { key: path });
@@ -64,7 +69,7 @@ impl Report {
         match serde_json::to_value(fields) {
             Ok(Value::Object(map)) => {
                 for (key, value) in map {
-                    self.set(&key, value);
+                    self.insert(&key, value);
                 }
             }
             Ok(other) => self.set("value", other),
@@ -115,33 +120,83 @@ impl Report {
     }
 }
 
+impl JsonReport {
+    /// Writes [`JsonReport::to_json`] as pretty JSON into `w` without
+    /// copying the report (a repair report lists millions of faces); the
+    /// same text as `serde_json::to_writer_pretty(w, &self.to_json())`.
+    pub fn write_pretty(&self, w: impl std::io::Write) -> serde_json::Result<()> {
+        serde_json::to_writer_pretty(w, &Whole(self))
+    }
+}
+
+/// A [`JsonReport`] serialised as [`JsonReport::to_json`] would be.
+struct Whole<'a>(&'a JsonReport);
+
+impl serde::Serialize for Whole<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let r = self.0;
+        let time = json!(r.compute.as_secs_f64());
+        let warnings = json!(r.warnings);
+        let mut entries: Vec<(&str, &Value)> = r
+            .map
+            .iter()
+            .filter(|(k, _)| k.as_str() != "time_s" && k.as_str() != "warnings")
+            .map(|(k, v)| (k.as_str(), v))
+            .collect();
+        entries.push(("time_s", &time));
+        if !r.warnings.is_empty() {
+            entries.push(("warnings", &warnings));
+        }
+        // the key order of the map (`to_json`'s)
+        entries.sort_by(|a, b| a.0.cmp(b.0));
+        let mut m = s.serialize_map(Some(entries.len()))?;
+        for (k, v) in entries {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
 /// `value` without its `null`s: dropped from objects, replaced by the
 /// string `"not finite"` in arrays; the path of each (`key.sub[3]`) is
 /// pushed to `dropped`. `None` when `value` itself is `null`.
-pub fn finite_only(path: &str, value: Value, dropped: &mut Vec<String>) -> Option<Value> {
+pub fn finite_only(path: &str, mut value: Value, dropped: &mut Vec<String>) -> Option<Value> {
+    prune(&mut path.to_string(), &mut value, dropped).then_some(value)
+}
+
+/// [`finite_only`] in place (no copy of a large report): whether `value`
+/// is kept; `path` is the path of `value` and is restored on return.
+fn prune(path: &mut String, value: &mut Value, dropped: &mut Vec<String>) -> bool {
+    use std::fmt::Write;
     match value {
         Value::Null => {
-            dropped.push(path.to_string());
-            None
+            dropped.push(path.clone());
+            false
         }
-        Value::Object(m) => Some(Value::Object(
-            m.into_iter()
-                .filter_map(|(k, v)| {
-                    let sub = format!("{path}.{k}");
-                    finite_only(&sub, v, dropped).map(|v| (k, v))
-                })
-                .collect(),
-        )),
-        Value::Array(a) => Some(Value::Array(
-            a.into_iter()
-                .enumerate()
-                .map(|(i, v)| {
-                    let sub = format!("{path}[{i}]");
-                    finite_only(&sub, v, dropped).unwrap_or_else(|| json!("not finite"))
-                })
-                .collect(),
-        )),
-        other => Some(other),
+        Value::Object(m) => {
+            m.retain(|k, v| {
+                let len = path.len();
+                path.push('.');
+                path.push_str(k);
+                let keep = prune(path, v, dropped);
+                path.truncate(len);
+                keep
+            });
+            true
+        }
+        Value::Array(a) => {
+            for (i, v) in a.iter_mut().enumerate() {
+                let len = path.len();
+                let _ = write!(path, "[{i}]");
+                if !prune(path, v, dropped) {
+                    *v = json!("not finite");
+                }
+                path.truncate(len);
+            }
+            true
+        }
+        _ => true,
     }
 }
 
@@ -180,5 +235,11 @@ mod tests {
         assert!(w[3].contains("`inf`"));
         assert_eq!(j["warnings"].as_array().map(Vec::len), Some(4));
         assert!(!j.to_string().contains("null"));
+        let mut streamed = Vec::new();
+        r.write_pretty(&mut streamed).unwrap();
+        assert_eq!(
+            String::from_utf8(streamed).unwrap(),
+            serde_json::to_string_pretty(&j).unwrap()
+        );
     }
 }

@@ -3,7 +3,7 @@
 use super::auth::{Guard, query_param};
 use super::doc::{Doc, Step, shell_word};
 use super::frame::{frame, vec3_bytes};
-use super::http::{HttpRequest, HttpResponse};
+use super::http::{HttpRequest, HttpResponse, Service};
 use fairline::fair::{FairMethod, grow_region};
 use fairline::geom::{CurvatureMethod, principal_curvatures};
 use fairline::highlight::{
@@ -91,16 +91,18 @@ struct ModelCache {
 
 /// The highlight model of document `doc` whose geometry is `mesh` (the
 /// positions of one of its steps, `positions`) under `light` with default
-/// options: the cached one when the key matches, else built and cached.
-/// Returns the model and whether it came from the cache.
+/// options: the cached one when the key matches, else built (without the
+/// workbench's lock held: other requests, cancel included, are answered
+/// meanwhile) and cached. Returns the model and whether it came from the
+/// cache.
 fn cached_model(
-    cache: &mut Option<ModelCache>,
+    shared: &Shared,
     doc: usize,
     positions: &Arc<Vec<Vec3>>,
     mesh: &SurfaceMesh,
     light: LightArray,
 ) -> Result<(Arc<HighlightModel>, bool), fairline::highlight::HighlightError> {
-    if let Some(c) = cache
+    if let Some(c) = &lock(shared).model_cache
         && c.doc == doc
         && Arc::ptr_eq(&c.positions, positions)
         && c.light == light
@@ -112,7 +114,7 @@ fn cached_model(
         light,
         HighlightOptions::default(),
     )?);
-    *cache = Some(ModelCache {
+    lock(shared).model_cache = Some(ModelCache {
         doc,
         positions: Arc::clone(positions),
         light,
@@ -191,12 +193,47 @@ fn bad(e: impl std::fmt::Display) -> Answer {
     error(400, e.to_string())
 }
 
+/// The workbench as the HTTP server sees it.
+pub struct Api(pub Arc<Shared>);
+
+impl Service for Api {
+    fn admit(&self, req: &HttpRequest) -> Result<usize, HttpResponse> {
+        match self.0.guard.check(req) {
+            Err(why) => Err(respond(error(403, why))),
+            Ok(()) => Ok(body_limit(req)),
+        }
+    }
+    fn handle(&self, req: &HttpRequest) -> HttpResponse {
+        handle(&self.0, req)
+    }
+}
+
+/// The largest request body of an endpoint (bytes): none for GET, face
+/// lists (4 to 10 bytes of JSON per triangle) for region and run calls,
+/// lights for lines and detection, a few fields for the rest.
+fn body_limit(req: &HttpRequest) -> usize {
+    if req.method != "POST" {
+        return 0;
+    }
+    let path = req.url.split('?').next().unwrap_or("");
+    match path.rsplit('/').next().unwrap_or("") {
+        "region" | "region-file" | "run" => 32 << 20,
+        "lines" | "detect" | "surface-lines" => 256 << 10,
+        _ => 4 << 10,
+    }
+}
+
 /// Answers one request.
 pub fn handle(shared: &Arc<Shared>, req: &HttpRequest) -> HttpResponse {
     let answer = match shared.guard.check(req) {
         Err(why) => error(403, why),
         Ok(()) => route(shared, req, &req.body),
     };
+    respond(answer)
+}
+
+/// The HTTP answer of `answer`, with the headers every answer has.
+fn respond(answer: Answer) -> HttpResponse {
     let mut headers = vec![
         ("Content-Type".to_string(), answer.content_type.to_string()),
         ("Cache-Control".to_string(), "no-store".to_string()),
@@ -441,6 +478,27 @@ struct LinesRequest {
     step: Option<usize>,
 }
 
+/// Most circular lights one request may ask for: each is one pass over
+/// the mesh (or the patch's grid) and one set of lines in the answer.
+const MAX_RADII: usize = 256;
+/// Most lights × grid nodes of one surface-lines request.
+const MAX_SURFACE_NODES: usize = 16_000_000;
+
+/// The circular lights of a request: at least one, at most [`MAX_RADII`].
+fn circular_lights(c: &CircularLights) -> Result<Vec<CircularLight>, Answer> {
+    if c.radii.len() > MAX_RADII {
+        return Err(bad(format!(
+            "{} radii asked for; at most {MAX_RADII} per request",
+            c.radii.len()
+        )));
+    }
+    match c.lights() {
+        Ok(l) if !l.is_empty() => Ok(l),
+        Ok(_) => Err(bad("circular lights need at least one radius")),
+        Err(e) => Err(bad(e)),
+    }
+}
+
 /// Lines into the header list and the float buffer.
 fn push_lines(
     lines: &HighlightLines,
@@ -469,19 +527,17 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         Ok(r) => r,
         Err(a) => return a,
     };
-    let mut guard = lock(shared);
-    let st = &mut *guard;
-    let d = &st.docs[k];
-    let (center, file) = (d.center, d.current_file());
-    let positions = Arc::clone(&d.step(req.step).positions);
-    let stepped;
-    let mesh = match req.step {
-        None => d.now(),
-        Some(_) => {
-            stepped = d.tri_at(req.step);
-            &stepped
-        }
+    let (center, file, positions, mesh) = {
+        let st = lock(shared);
+        let d = &st.docs[k];
+        (
+            d.center,
+            d.current_file(),
+            Arc::clone(&d.step(req.step).positions),
+            d.shared_tri_at(req.step),
+        )
     };
+    let mesh = mesh.as_ref();
     if let Some(b) = req.band
         && !(b > 0.0 && b.is_finite())
     {
@@ -495,10 +551,9 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     let mut model_cached = false;
     let command;
     if let Some(c) = req.circular {
-        let lights: Vec<CircularLight> = match c.lights() {
-            Ok(l) if !l.is_empty() => l,
-            Ok(_) => return bad("circular lights need at least one radius"),
-            Err(e) => return bad(e),
+        let lights = match circular_lights(&c) {
+            Ok(l) => l,
+            Err(a) => return a,
         };
         let lines = match circular_highlight_lines(mesh, &lights, &HighlightOptions::default()) {
             Ok(l) => l,
@@ -538,7 +593,7 @@ fn lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         let Some(light) = req.light else {
             return bad("give \"light\" or \"circular\"");
         };
-        let model = match cached_model(&mut st.model_cache, k, &positions, mesh, light) {
+        let model = match cached_model(shared, k, &positions, mesh, light) {
             Ok((m, hit)) => {
                 model_cached = hit;
                 m
@@ -598,17 +653,23 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         Ok(r) => r,
         Err(a) => return a,
     };
-    let mut guard = lock(shared);
-    let st = &mut *guard;
-    let d = &st.docs[k];
-    let (mesh, center, file) = (d.now(), d.center, d.current_file());
-    let positions = Arc::clone(&d.current().positions);
+    let (mesh, center, file, positions) = {
+        let st = lock(shared);
+        let d = &st.docs[k];
+        (
+            d.shared_tri_at(None),
+            d.center,
+            d.current_file(),
+            Arc::clone(&d.current().positions),
+        )
+    };
+    let mesh = mesh.as_ref();
     let defaults = DetectOptions::default();
     let opts = DetectOptions::default()
         .threshold(req.threshold.unwrap_or(defaults.threshold))
         .region_margin(req.region_radius.unwrap_or(defaults.region_margin));
     let t = Instant::now();
-    let model = match cached_model(&mut st.model_cache, k, &positions, mesh, req.light) {
+    let model = match cached_model(shared, k, &positions, mesh, req.light) {
         Ok((m, _)) => m,
         Err(e) => return bad(e),
     };
@@ -1269,6 +1330,9 @@ fn save(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     #[derive(Deserialize)]
     struct Req {
         name: String,
+        /// Replace an existing file of that name (a regular file only).
+        #[serde(default)]
+        overwrite: bool,
     }
     let req: Req = match parse(body) {
         Ok(r) => r,
@@ -1290,11 +1354,28 @@ fn save(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
+    // the same policy as the CLI's outputs: an existing file is replaced
+    // only when asked, never through a symbolic link (the write and its
+    // rename stay in the save folder)
+    match std::fs::symlink_metadata(&path) {
+        Ok(m) if m.file_type().is_symlink() => {
+            return bad(format!(
+                "{name} in the save folder is a symbolic link; saves are not written through links"
+            ));
+        }
+        Ok(_) if !req.overwrite => {
+            return error(
+                409,
+                format!("{name} exists in the save folder; choose another name or overwrite it"),
+            );
+        }
+        _ => {}
+    }
     let bytes = match current_bytes(d, &ext) {
         Ok(b) => b,
         Err(e) => return bad(e),
     };
-    match fairline::io::atomic_write(&path, |w| std::io::Write::write_all(w, &bytes)) {
+    match fairline::io::atomic_write_here(&path, |w| std::io::Write::write_all(w, &bytes)) {
         Ok(()) => json_answer(&json!({
             "path": path.display().to_string(),
             "bytes": bytes.len(),
@@ -1370,12 +1451,17 @@ fn surface_lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         };
         (surface, d.center, d.current_file())
     };
-    let lights: Vec<CircularLight> = match req.circular.lights() {
-        Ok(l) if !l.is_empty() => l,
-        Ok(_) => return bad("circular lights need at least one radius"),
-        Err(e) => return bad(e),
+    let lights = match circular_lights(&req.circular) {
+        Ok(l) => l,
+        Err(a) => return a,
     };
     let grid = req.grid.unwrap_or(200).clamp(8, 2000);
+    if lights.len() * grid * grid > MAX_SURFACE_NODES {
+        return bad(format!(
+            "{} lights on a {grid} × {grid} grid: more than {MAX_SURFACE_NODES} light × grid nodes; use fewer radii or a coarser grid",
+            lights.len()
+        ));
+    }
     if let Some(b) = req.band
         && !(b > 0.0 && b.is_finite())
     {

@@ -73,7 +73,9 @@ impl Guard {
         if header("X-Fairline-Token").is_some_and(|t| self.same(t.trim())) {
             return Ok(());
         }
-        if query_param(&req.url, "token").is_some_and(|t| self.same(&t)) {
+        // the page URL carries the token; API calls that change something
+        // (POST) must send the header
+        if req.method == "GET" && query_param(&req.url, "token").is_some_and(|t| self.same(&t)) {
             return Ok(());
         }
         if req.method == "GET"

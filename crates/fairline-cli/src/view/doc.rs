@@ -60,7 +60,7 @@ pub struct Doc {
     pub polygons: Option<SurfaceMesh>,
     /// The triangle mesh drawn and given to triangle algorithms (for
     /// surfaces, the tessellation); the same vertices as the input mesh.
-    pub tri: SurfaceMesh,
+    pub tri: Arc<SurfaceMesh>,
     /// Input face of each triangle when `mesh` has polygons.
     pub tri_source: Option<Vec<FaceId>>,
     /// Patch index of each triangle (surfaces), else empty.
@@ -82,7 +82,7 @@ pub struct Doc {
     /// `tri` with the current step's positions when that is not step 0
     /// (kept in step with `cursor`, so requests on the current state need no
     /// copy of the mesh; see [`Doc::now`]).
-    now_moved: Option<SurfaceMesh>,
+    now_moved: Option<Arc<SurfaceMesh>>,
     /// The triangles of `tri` as the page gets them (u32 triples).
     pub index_bytes: Vec<u8>,
     /// Where opening the file took its time (seconds): `read` (reading and
@@ -184,7 +184,7 @@ impl Doc {
             name: name.clone(),
             path: path.to_path_buf(),
             polygons,
-            tri,
+            tri: Arc::new(tri),
             tri_source,
             patch_of_triangle,
             grid,
@@ -243,10 +243,21 @@ impl Doc {
 
     /// The drawn triangle mesh at step `n`.
     pub fn tri_at(&self, n: Option<usize>) -> SurfaceMesh {
-        let mut m = self.tri.clone();
+        let mut m = (*self.tri).clone();
         // same vertex count by construction
         let _ = m.set_positions(self.step(n).positions.to_vec());
         m
+    }
+
+    /// The drawn triangle mesh at step `n`, shared: requests compute on it
+    /// after they have let go of the workbench's lock.
+    pub fn shared_tri_at(&self, n: Option<usize>) -> Arc<SurfaceMesh> {
+        let current = n.is_none_or(|n| n.min(self.history.len() - 1) == self.cursor);
+        if current {
+            Arc::clone(self.now_moved.as_ref().unwrap_or(&self.tri))
+        } else {
+            Arc::new(self.tri_at(n))
+        }
     }
 
     /// The mesh as read (polygons kept; for surfaces the tessellation).
@@ -283,13 +294,14 @@ impl Doc {
         let positions = self.history[self.cursor].positions.to_vec();
         match &mut self.now_moved {
             // same vertex count by construction
+            // (copied only while a request still computes on the old one)
             Some(m) => {
-                let _ = m.set_positions(positions);
+                let _ = Arc::make_mut(m).set_positions(positions);
             }
             None => {
-                let mut m = self.tri.clone();
+                let mut m = (*self.tri).clone();
                 let _ = m.set_positions(positions);
-                self.now_moved = Some(m);
+                self.now_moved = Some(Arc::new(m));
             }
         }
     }

@@ -5,7 +5,9 @@
 //! token as the first line of standard output, opens the browser (unless
 //! `--no-open`) and serves until interrupted. The page (crates/fairline-cli/web,
 //! embedded in the binary) is a client of the JSON API below; the only
-//! computation in JavaScript is shading.
+//! computation in JavaScript is shading. The browser is opened on a small
+//! redirect page (0600, removed after a minute), so that the token never
+//! appears on a command line.
 //!
 //! # Security
 //! - The listener is bound to 127.0.0.1.
@@ -17,8 +19,15 @@
 //! - The `Host` header must be `127.0.0.1:PORT` or `localhost:PORT` (DNS
 //!   rebinding), an `Origin` header, when present, `http://127.0.0.1:PORT`
 //!   or `http://localhost:PORT`, and `Sec-Fetch-Site: cross-site` is refused
-//!   (cross-site requests). POST requests need the header token: a form of
+//!   (cross-site requests). POST requests need the header token (the query
+//!   parameter is for GET only): a form of
 //!   another site cannot set it, and no CORS header is ever sent.
+//! - The token is checked on the request line and headers before any body
+//!   byte is read; bodies are bounded per endpoint; request heads and bodies
+//!   have deadlines; connections without the token share a small pool of
+//!   their own (the limits are documented in `http`). Circular lights are
+//!   at most 256 per request; lines and detection compute without the
+//!   workbench's lock, so cancel and other calls are answered meanwhile.
 //! - Only the files named on the command line are read; saves go to
 //!   `--save-dir` (default: the current folder) under a plain file name (no
 //!   separator, no `..`), atomically, never over an input file.
@@ -168,8 +177,8 @@ pub fn run(args: Args) -> Result<()> {
         auth::Guard::new(token, port),
     ));
     let state = Arc::clone(&shared);
-    let handler: http::Handler = Arc::new(move |req| api::handle(&state, req));
-    let server = std::thread::spawn(move || http::serve(listener, handler));
+    let service: Arc<dyn http::Service> = Arc::new(api::Api(state));
+    let server = std::thread::spawn(move || http::serve(listener, service));
     let mut docs = Vec::new();
     for f in &files {
         docs.push(doc::Doc::open(f, args.grid)?);
@@ -188,23 +197,70 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// Opens `url` with xdg-open (open on macOS); failure is a warning.
+/// Opens `url` in the browser without putting its token on a command line
+/// (where `ps` would show it to every local user): the opener (xdg-open,
+/// `open` on macOS) gets the path of a small page, readable by the owner
+/// only (0600), that redirects to `url`; the page is removed after
+/// [`REDIRECT_LIFETIME`]. Failure is a warning.
 fn open_browser(url: &str) {
     let opener = if cfg!(target_os = "macos") {
         "open"
     } else {
         "xdg-open"
     };
+    let page = match redirect_page(url) {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("warning: could not open a browser ({e}); open the URL above by hand");
+            return;
+        }
+    };
     match std::process::Command::new(opener)
-        .arg(url)
+        .arg(&page)
         .stdin(std::process::Stdio::null())
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::null())
         .spawn()
     {
-        Ok(_) => {}
-        Err(e) => eprintln!(
-            "warning: could not open a browser ({opener}: {e}); open the URL above by hand"
-        ),
+        Ok(_) => {
+            std::thread::spawn(move || {
+                std::thread::sleep(REDIRECT_LIFETIME);
+                let _ = std::fs::remove_file(&page);
+            });
+        }
+        Err(e) => {
+            let _ = std::fs::remove_file(&page);
+            eprintln!(
+                "warning: could not open a browser ({opener}: {e}); open the URL above by hand"
+            )
+        }
     }
+}
+
+/// How long the redirect page of [`open_browser`] stays on disk.
+const REDIRECT_LIFETIME: std::time::Duration = std::time::Duration::from_secs(60);
+
+/// Writes the redirect page to `url` as a new file, mode 0600, in the
+/// temporary folder; its path.
+fn redirect_page(url: &str) -> std::io::Result<PathBuf> {
+    let mut bytes = [0u8; 8];
+    getrandom::fill(&mut bytes).map_err(|e| std::io::Error::other(e.to_string()))?;
+    let tag: String = bytes.iter().map(|b| format!("{b:02x}")).collect();
+    let path =
+        std::env::temp_dir().join(format!("fairline-view-{}-{tag}.html", std::process::id()));
+    let mut options = std::fs::OpenOptions::new();
+    options.write(true).create_new(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.mode(0o600);
+    }
+    let mut f = options.open(&path)?;
+    // the URL is ours (host, port, hex token): nothing to escape
+    write!(
+        f,
+        "<!doctype html><meta charset=\"utf-8\"><meta http-equiv=\"refresh\" content=\"0;url={url}\"><title>fairline view</title><a href=\"{url}\">Open the fairline workbench</a>\n"
+    )?;
+    f.sync_all()?;
+    Ok(path)
 }

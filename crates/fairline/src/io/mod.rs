@@ -439,11 +439,18 @@ pub fn remove_temporary_files() -> usize {
 /// new content); an existing path must be a regular file. Device nodes,
 /// FIFOs, sockets and directories are refused, since a rename would replace
 /// them with a regular file.
-fn write_target(path: &Path) -> std::io::Result<PathBuf> {
+fn write_target(
+    path: &Path,
+    follow: bool,
+) -> std::io::Result<(PathBuf, Option<std::fs::Metadata>)> {
     use std::io::{Error, ErrorKind};
     match std::fs::symlink_metadata(path) {
-        Err(e) if e.kind() == ErrorKind::NotFound => Ok(path.to_path_buf()),
+        Err(e) if e.kind() == ErrorKind::NotFound => Ok((path.to_path_buf(), None)),
         Err(e) => Err(e),
+        Ok(m) if m.file_type().is_symlink() && !follow => Err(Error::new(
+            ErrorKind::InvalidInput,
+            "it is a symbolic link; refusing to write through it",
+        )),
         Ok(m) => {
             let (target, meta) = if m.file_type().is_symlink() {
                 let target = std::fs::canonicalize(path).map_err(|_| {
@@ -458,7 +465,13 @@ fn write_target(path: &Path) -> std::io::Result<PathBuf> {
                 (path.to_path_buf(), m)
             };
             if meta.is_file() {
-                Ok(target)
+                if hard_links(&meta) > 1 {
+                    return Err(Error::new(
+                        ErrorKind::InvalidInput,
+                        "it has other hard links, which replacing it would cut off (they would keep the old content); remove it first or write elsewhere",
+                    ));
+                }
+                Ok((target, Some(meta)))
             } else if meta.is_dir() {
                 Err(Error::new(ErrorKind::InvalidInput, "it is a directory"))
             } else {
@@ -471,25 +484,56 @@ fn write_target(path: &Path) -> std::io::Result<PathBuf> {
     }
 }
 
+/// Names a regular file has (1 where the platform does not count them).
+fn hard_links(meta: &std::fs::Metadata) -> u64 {
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::MetadataExt::nlink(meta)
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = meta;
+        1
+    }
+}
+
+/// [`atomic_write`] confined to `path` itself: an existing symbolic link
+/// at `path` is refused instead of followed, and the final rename replaces
+/// whatever name is at `path` (a rename never follows a link), so nothing
+/// outside `path`'s folder is ever written (the workbench's saves).
+pub fn atomic_write_here<F>(path: impl AsRef<Path>, write: F) -> Result<(), IoError>
+where
+    F: FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+{
+    atomic_write_to(path.as_ref(), false, write)
+}
+
 /// Writes a file atomically: `write` fills a temporary file
 /// `.NAME.PID.N.tmp` in the same directory, which is flushed, synced and
 /// then renamed over `path`. If anything fails, the temporary file is
 /// removed and `path` is untouched (no file is left behind when it did not
 /// exist). A symbolic link is followed and its target replaced; an existing
 /// `path` that is not a regular file (device, FIFO, socket, directory) is
-/// refused. The temporary file is listed while it exists, so that
+/// refused, and so is a file with other hard links (a rename would leave
+/// them with the old content). A replaced file keeps its permissions. The temporary file is listed while it exists, so that
 /// [`remove_temporary_files`] can remove it when the process is stopped by
 /// a signal.
 pub fn atomic_write<F>(path: impl AsRef<Path>, write: F) -> Result<(), IoError>
 where
     F: FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
 {
-    let path = path.as_ref();
+    atomic_write_to(path.as_ref(), true, write)
+}
+
+fn atomic_write_to<F>(path: &Path, follow: bool, write: F) -> Result<(), IoError>
+where
+    F: FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+{
     let io_err = |source| IoError::Io {
         path: path.to_path_buf(),
         source,
     };
-    let target = write_target(path).map_err(io_err)?;
+    let (target, existing) = write_target(path, follow).map_err(io_err)?;
     let file_name = target.file_name().ok_or_else(|| {
         io_err(std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
@@ -537,6 +581,9 @@ where
         write(&mut w)?;
         w.flush()?;
         let file = w.into_inner().map_err(|e| e.into_error())?;
+        if let Some(meta) = &existing {
+            file.set_permissions(meta.permissions())?;
+        }
         file.sync_all()?;
         drop(file);
         std::fs::rename(&guard.0, &target)

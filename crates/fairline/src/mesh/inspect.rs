@@ -482,29 +482,30 @@ fn count_non_manifold_vertices(soup: &Soup, nv: usize) -> usize {
             fill[v as usize] += 1;
         }
     }
+    // the faces around v joined where they share a second vertex: the
+    // (neighbour, face) pairs sorted, equal neighbours joined (linear in the
+    // faces around v up to the sort, however many repeat one vertex set)
     let mut bad = 0;
+    let mut pairs: Vec<(u32, u32)> = Vec::new();
+    let mut parent: Vec<u32> = Vec::new();
     for v in 0..nv {
         let faces = &vf[count[v] as usize..count[v + 1] as usize];
         if faces.len() <= 1 {
             continue;
         }
-        // the other two vertices of v in each face; faces sharing one are joined
-        let neighbours = |f: u32| -> (u32, u32) {
+        pairs.clear();
+        for (a, &f) in faces.iter().enumerate() {
             let face = soup.face(f as usize);
             let k = face.iter().position(|&x| x as usize == v).unwrap_or(0);
-            (
-                face[(k + 1) % face.len()],
-                face[(k + face.len() - 1) % face.len()],
-            )
-        };
-        let mut parent: Vec<u32> = (0..faces.len() as u32).collect();
-        for a in 0..faces.len() {
-            let (a1, a2) = neighbours(faces[a]);
-            for b in a + 1..faces.len() {
-                let (b1, b2) = neighbours(faces[b]);
-                if a1 == b1 || a1 == b2 || a2 == b1 || a2 == b2 {
-                    union(&mut parent, a as u32, b as u32);
-                }
+            pairs.push((face[(k + 1) % face.len()], a as u32));
+            pairs.push((face[(k + face.len() - 1) % face.len()], a as u32));
+        }
+        pairs.sort_unstable();
+        parent.clear();
+        parent.extend(0..faces.len() as u32);
+        for w in pairs.windows(2) {
+            if w[0].0 == w[1].0 {
+                union(&mut parent, w[0].1, w[1].1);
             }
         }
         let root = find(&mut parent, 0);
