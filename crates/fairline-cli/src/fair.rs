@@ -9,8 +9,8 @@ use crate::output::progress;
 use anyhow::Result;
 use fairline::fair::{
     AUTO_RINGS, FairError, FairMethod, FairOptions, FairReport, detect_regions_to_fair,
-    fair_highlight_lines, grow_region, regions_deviation, regions_report, regions_union,
-    regions_warnings,
+    fair_highlight_lines, grow_region, regions_deviation, regions_made_worse, regions_report,
+    regions_union, regions_warnings,
 };
 use fairline::highlight::detect_region;
 use fairline::mesh::FaceId;
@@ -241,6 +241,15 @@ pub fn run(args: Args) -> Result<()> {
         results.len(),
         if converged { "converged" } else { "not converged" }
     ));
+    if regions_made_worse(results) {
+        // the output is written so that it can be looked at, but it is not
+        // what was asked for: exit 1 (the warning above says what got worse)
+        anyhow::bail!(
+            "{}: fairing made the highlight lines worse (deviation {before:.4e} -> {after:.4e}); {} was written for inspection only",
+            args.mesh.display(),
+            args.output.display()
+        );
+    }
     Ok(())
 }
 

@@ -8,7 +8,7 @@
 use super::{FairError, FairReport, grow_region};
 use crate::highlight::{
     DetectOptions, Detection, HighlightError, HighlightModel, HighlightOptions, LightArray,
-    detect_irregularities,
+    detect_whole_part,
 };
 use crate::mesh::{FaceId, SurfaceMesh};
 use serde::Serialize;
@@ -40,8 +40,8 @@ impl FairError {
 }
 
 /// The regions `fairline fair --auto` fairs: the irregular regions that
-/// detection (default [`DetectOptions`]) finds on the highlight lines of
-/// `light`, best first, each grown by [`AUTO_RINGS`]; with the detection.
+/// detection of the whole part (default [`DetectOptions`],
+/// [`detect_whole_part`]) finds on the highlight lines of `light`, best first, each grown by [`AUTO_RINGS`]; with the detection.
 pub fn detect_regions_to_fair(
     mesh: &SurfaceMesh,
     light: LightArray,
@@ -49,7 +49,7 @@ pub fn detect_regions_to_fair(
 ) -> Result<(Detection, Vec<Vec<FaceId>>), HighlightError> {
     let model = HighlightModel::new(mesh, light, options)?;
     let lines = model.lines(mesh);
-    let detection = detect_irregularities(mesh, &light, &lines, &DetectOptions::default())?;
+    let detection = detect_whole_part(mesh, &light, &lines, &DetectOptions::default())?;
     let grown = detection
         .regions
         .iter()
@@ -169,6 +169,14 @@ pub fn regions_report(results: &[FairReport], max_displacement: f64) -> Map<Stri
     for key in ["highlight_deviation_before", "highlight_deviation_after"] {
         keys.insert(key.into(), json!(largest(&results, key)));
     }
+    keys.insert(
+        "highlight_deviation_worse".into(),
+        json!(
+            results
+                .iter()
+                .any(|r| r["highlight_deviation_worse"] == json!(true))
+        ),
+    );
     keys.insert("max_displacement".into(), json!(max_displacement));
     keys.insert("per_region".into(), Value::Array(results));
     keys
@@ -185,6 +193,15 @@ fn largest(results: &[Value], key: &str) -> f64 {
         .iter()
         .filter_map(|r| r[key].as_f64())
         .fold(0.0, f64::max)
+}
+
+/// Whether fairing made the highlight lines of any region worse
+/// ([`FairReport::highlight_deviation_worse`], or the largest deviation
+/// over the regions grew): the result is not what was asked for, and front
+/// ends exit 1 after the warning of [`regions_warnings`].
+pub fn regions_made_worse(results: &[FairReport]) -> bool {
+    let (before, after) = regions_deviation(results);
+    after > before || results.iter().any(|r| r.highlight_deviation_worse)
 }
 
 /// The highlight-line deviation of the faired regions, before and after
@@ -223,9 +240,9 @@ pub fn regions_warnings(
             "fairing did not converge within --max-iterations {max_iterations}; try more iterations or a larger region (--grow, --auto)"
         ));
     }
-    let (before, after) = regions_deviation(results);
     let (score_before, score_after) = detection_scores;
-    if after > before {
+    if regions_made_worse(results) {
+        let (before, after) = regions_deviation(results);
         warnings.push(format!(
             "the highlight-line deviation (distance of the lines inside the region from their own smoothed curves) got worse: {before:.4e} before, {after:.4e} after; the detection score (as `detect` measures it, same lights) went {score_before:.2} -> {score_after:.2}"
         ));
