@@ -9,7 +9,7 @@ use crate::output::progress;
 use anyhow::Result;
 use fairline::fair::{
     AUTO_RINGS, FairError, FairMethod, FairOptions, FairReport, detect_regions_to_fair,
-    fair_highlight_lines, grow_region, regions_deviation, regions_made_worse, regions_report,
+    fair_highlight_lines, fairing_made_worse, grow_region, regions_deviation, regions_report,
     regions_union, regions_warnings,
 };
 use fairline::highlight::detect_region;
@@ -241,11 +241,11 @@ pub fn run(args: Args) -> Result<()> {
         results.len(),
         if converged { "converged" } else { "not converged" }
     ));
-    if regions_made_worse(results) {
+    if fairing_made_worse(results, (score_after, threshold), (flat_after, flat_floor)) {
         // the output is written so that it can be looked at, but it is not
         // what was asked for: exit 1 (the warning above says what got worse)
         anyhow::bail!(
-            "{}: fairing made the highlight lines worse (deviation {before:.4e} -> {after:.4e}); {} was written for inspection only",
+            "{}: fairing made the highlight lines worse (deviation {before:.4e} -> {after:.4e}) and detection still flags the region (score {score_after:.2}, threshold {threshold:.2}); {} was written for inspection only",
             args.mesh.display(),
             args.output.display()
         );

@@ -642,11 +642,12 @@ fn main() {
         let t0 = Instant::now();
         let (det, light) = detect(&clean);
         clean_rows.push(format!(
-            "| {name} | {} | {} | {:.4} | {:.4} | {} | {:.1} % | {:.2} | {:.2} | {:.2} s |",
+            "| {name} | {} | {} | {:.4} | {:.4} | {} | {} | {:.1} % | {:.2} | {:.2} | {:.2} s |",
             if real { "real" } else { "generated" },
             clean.vertex_count(),
             light.spacing() / diag,
             det.smooth_radius / diag,
+            det.spacings.len(),
             det.regions.len(),
             100.0 * det.not_judged_fraction,
             det.threshold,

@@ -33,8 +33,8 @@ pub use quad::{
 pub use region::{MovableSet, movable_vertices};
 pub use regions::{
     AUTO_RINGS, DetectedRegionEntry, SUPPORT_RINGS, detect_regions_to_fair,
-    detected_region_entries, input_faces, regions_deviation, regions_made_worse, regions_report,
-    regions_union, regions_warnings, suggested_region,
+    detected_region_entries, fairing_made_worse, input_faces, regions_deviation,
+    regions_made_worse, regions_report, regions_union, regions_warnings, suggested_region,
 };
 pub use surface::{
     BoundaryControl, EndpointPair, Endpoints, FairIteration, FairStop, SurfaceFairError,

@@ -204,6 +204,25 @@ pub fn regions_made_worse(results: &[FairReport]) -> bool {
     after > before || results.iter().any(|r| r.highlight_deviation_worse)
 }
 
+/// Whether the result of fairing is not what was asked for, so that front
+/// ends exit 1 (after the warnings of [`regions_warnings`]): the
+/// highlight-line deviation got worse ([`regions_made_worse`]) and
+/// detection does not confirm that the defect is gone — inside the faired
+/// regions, the detection score after fairing is above its threshold or
+/// the flat-spot value above its floor (`score_after`, `threshold`,
+/// `flat_after`, `flat_floor` as `fairline fair` reports them; a floor of 0
+/// means the flat-spot measure is off). Where detection confirms the
+/// removal, a grown deviation is a warning only: the lines around the
+/// removed defect moved, which that measure reads as change.
+pub fn fairing_made_worse(
+    results: &[FairReport],
+    (score_after, threshold): (f64, f64),
+    (flat_after, flat_floor): (f64, f64),
+) -> bool {
+    let removed = score_after <= threshold && (flat_floor <= 0.0 || flat_after <= flat_floor);
+    regions_made_worse(results) && !removed
+}
+
 /// The highlight-line deviation of the faired regions, before and after
 /// (the largest over the regions; 0 when none was faired).
 pub fn regions_deviation(results: &[FairReport]) -> (f64, f64) {
@@ -348,6 +367,57 @@ mod tests {
         assert_eq!(
             regions_warnings(&[], 3, (0.0, 0.0)),
             vec!["no region was faired (nothing detected): the output is the input unchanged"]
+        );
+    }
+
+    /// A region whose highlight deviation grew is flagged in its report and
+    /// in the run's, the warning names the numbers, and front ends learn
+    /// that the result is not as asked (exit 1); one that improved is not.
+    #[test]
+    fn a_worse_highlight_deviation_is_flagged_and_warned_about() {
+        let (mesh, regions, light) = two_bumps();
+        let options = FairOptions::default().light(light).max_iterations(3);
+        let mut reports = fair_in_turn(&mesh, &regions, &options);
+        for r in &reports {
+            assert_eq!(
+                r.highlight_deviation_worse,
+                r.highlight_deviation_after > r.highlight_deviation_before
+            );
+            assert!(!r.highlight_deviation_worse, "{r:?}");
+        }
+        assert!(!regions_made_worse(&reports));
+        assert!(
+            regions_warnings(&reports, 3, (2.0, 0.5))
+                .iter()
+                .all(|w| !w.contains("got worse"))
+        );
+        assert_eq!(
+            regions_report(&reports, 0.1)["highlight_deviation_worse"],
+            json!(false)
+        );
+        // the second region made worse
+        let b = &mut reports[1];
+        b.highlight_deviation_after = 3.0 * b.highlight_deviation_before;
+        b.highlight_deviation_worse = true;
+        assert!(regions_made_worse(&reports));
+        assert_eq!(
+            regions_report(&reports, 0.1)["highlight_deviation_worse"],
+            json!(true)
+        );
+        // exit 1 unless detection confirms the defect is gone
+        assert!(fairing_made_worse(&reports, (2.5, 1.0), (0.0, 0.5)));
+        assert!(fairing_made_worse(&reports, (0.5, 1.0), (0.8, 0.5)));
+        assert!(!fairing_made_worse(&reports, (0.5, 1.0), (0.2, 0.5)));
+        reports[1].highlight_deviation_worse = false;
+        reports[1].highlight_deviation_after = 0.5 * reports[1].highlight_deviation_before;
+        assert!(!fairing_made_worse(&reports, (2.5, 1.0), (0.0, 0.5)));
+        reports[1].highlight_deviation_after = 3.0 * reports[1].highlight_deviation_before;
+        reports[1].highlight_deviation_worse = true;
+        let w = regions_warnings(&reports, 3, (2.0, 2.5));
+        assert!(
+            w.iter()
+                .any(|s| s.contains("got worse") && s.contains("2.00 -> 2.50")),
+            "{w:?}"
         );
     }
 

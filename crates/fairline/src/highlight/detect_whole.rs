@@ -171,3 +171,65 @@ fn merge_region(merged: &mut Detection, det: &Detection, r: &IrregularRegion) {
     }
     merged.regions.push(r.clone());
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::highlight::{HighlightOptions, UpAxis, highlight_lines};
+    use crate::{Vec3, shapes};
+
+    /// A torus whose tube (radius 1) is narrower than the default lights'
+    /// smooth radius, with a dent planted on its underside, and the lights.
+    fn torus(dent: f64) -> (SurfaceMesh, LightArray, HighlightLines) {
+        let mut mesh = shapes::torus(6.0, 1.0, 380, 60);
+        let centre = Vec3::new(6.0, 0.0, -1.0);
+        for q in mesh.positions_mut() {
+            let t = (*q - centre).length() / 0.4;
+            if t < 1.0 {
+                q.z += dent * (1.0 - t * t).powi(3);
+            }
+        }
+        let light = LightArray::default_for_mesh(&mesh, UpAxis::Auto).unwrap();
+        let lines = highlight_lines(&mesh, &light, &HighlightOptions::default()).unwrap();
+        (mesh, light, lines)
+    }
+
+    /// The default lights judge almost none of the tube (its turn within
+    /// the smooth radius exceeds the limit), and the summary leads with it;
+    /// the whole-part detection judges every face with finer arrays, finds
+    /// the dent on the underside first, and flags nothing on the clean torus.
+    #[test]
+    fn finer_arrays_judge_the_whole_torus_and_find_a_dent_underneath() {
+        let (clean, light, lines) = torus(0.0);
+        let opts = DetectOptions::default();
+        let one = detect_irregularities(&clean, &light, &lines, &opts).unwrap();
+        assert!(one.not_judged_fraction > 0.3, "{}", one.not_judged_fraction);
+        assert!(
+            one.summary().starts_with("not judged: "),
+            "{}",
+            one.summary()
+        );
+        assert!(one.not_judged_warning().is_some());
+        let whole = detect_whole_part(&clean, &light, &lines, &opts).unwrap();
+        assert!(whole.spacings.len() >= 2, "{:?}", whole.spacings);
+        assert!(whole.spacings[1] < light.spacing());
+        assert!(
+            whole.not_judged_fraction < NOT_JUDGED_SHARE,
+            "{}",
+            whole.not_judged_fraction
+        );
+        assert!(whole.regions.is_empty(), "{} regions", whole.regions.len());
+        assert!(whole.summary().starts_with("0 region(s) flagged"));
+        assert!(whole.not_judged_warning().is_none());
+
+        let (dented, light, lines) = torus(0.02);
+        let d = detect_whole_part(&dented, &light, &lines, &opts).unwrap();
+        let best = d.regions.first().expect("the dent is found");
+        assert!(
+            (best.center - Vec3::new(6.0, 0.0, -1.0)).length() < 0.4,
+            "{:?}",
+            best.center
+        );
+        assert!(best.spacing < light.spacing());
+    }
+}
