@@ -157,10 +157,13 @@ pub fn run(args: Args) -> Result<()> {
     if lines.lines.is_empty() {
         report.warn("no highlight line crosses the mesh, so nothing could be detected; try other light options (--plane-normal, --direction, --spacing)");
     }
+    if let Some(w) = det.not_judged_warning() {
+        report.warn(format!("{}: {w}", args.mesh.display()));
+    }
     report.write(args.report.as_deref())?;
     job.finish(format_args!(
-        "{} region(s) flagged ({} faces) from {} highlight line(s) on {} vertices",
-        det.regions.len(),
+        "{} ({} faces) from {} highlight line(s) on {} vertices",
+        det.summary(),
         all.len(),
         lines.lines.len(),
         mesh.vertex_count()
@@ -172,7 +175,18 @@ pub fn run(args: Args) -> Result<()> {
 /// finer than its scale, a noisy surface, sites within their
 /// discretisation floor.
 fn print_measure_notes(args: &Args, det: &Detection, spacing: f64) {
-    if det.shape_sites > 0 {
+    if det.spacings.len() > 1 {
+        eprintln!(
+            "note: {}: the lights (spacing {spacing:.4}) left part of the surface unjudged (shape finer than their scale); finer arrays judged it too (spacings {})",
+            args.mesh.display(),
+            det.spacings[1..]
+                .iter()
+                .map(|s| format!("{s:.4}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    if det.shape_sites > 0 && !det.unjudged_faces.is_empty() {
         // R is raised above --smooth-radius spacings on meshes too coarse
         // for the spacing (five mean edges at least): then only a finer
         // mesh is judged at a finer scale
@@ -245,12 +259,12 @@ fn write_picture(
     let (default_view, up) = crate::highlight_png::default_camera(light);
     let view = args.view.unwrap_or(default_view);
     let title = format!(
-        "{}: {} region(s){}",
+        "{}: {}{}",
         args.mesh
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default(),
-        det.regions.len(),
+        det.summary(),
         det.best_summary()
             .map(|b| format!(", best {b}"))
             .unwrap_or_default()

@@ -208,6 +208,17 @@ pub fn run(args: Args) -> Result<()> {
         before.threshold,
         out.largest_move
     ));
+    if out.made_worse() {
+        // the output is written so that it can be looked at, but it is not
+        // what was asked for: exit 1 (the warning above says what got worse)
+        anyhow::bail!(
+            "{}: fairing made the highlight lines worse (deviation {dev_before:.4e} -> {dev_after:.4e}) and detection still flags the region (score {:.2}, threshold {:.2}); {} was written for inspection only",
+            args.mesh.display(),
+            after.score,
+            before.threshold,
+            args.output.display()
+        );
+    }
     Ok(())
 }
 

@@ -355,7 +355,7 @@ pub fn detect_with_lines(
         &lines,
         &fairline::highlight::Readability::for_part(mesh, shown_light),
     );
-    let det = fairline::highlight::detect_irregularities(mesh, light, &shown, detect)?;
+    let det = fairline::highlight::detect_whole_part(mesh, light, &shown, detect)?;
     Ok((lines, shown, det))
 }
 

@@ -50,6 +50,10 @@ pub struct Args {
     /// Colour by a curvature field (Rusinkiewicz estimate).
     #[arg(long, value_enum)]
     pub scalar: Option<Scalar>,
+    /// Colour range LO,HI of --scalar (default: the 2nd-98th percentile,
+    /// symmetric about 0, so a few extreme vertices do not wash the map out).
+    #[arg(long, value_name = "LO,HI", value_parser = parse_range, allow_hyphen_values = true)]
+    pub range: Option<(f64, f64)>,
     /// Viewing direction X,Y,Z (from the eye towards the object).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     pub view: Option<Vec3>,
@@ -88,6 +92,11 @@ pub fn options(view: Option<Vec3>, size: (u32, u32)) -> Result<RenderOptions> {
 
 pub fn run(args: Args) -> Result<()> {
     crate::output::require_extension("--png", &args.png, &["png"])?;
+    if args.range.is_some() && args.scalar.is_none() {
+        return Err(bad_input(
+            "--range sets the colour range of --scalar; give --scalar too (e.g. --scalar mean --range -2,2)",
+        ));
+    }
     let job = crate::output::Job::new("render")
         .input(&args.input)
         .input_opt(args.light.lights.as_deref())
@@ -142,7 +151,7 @@ pub fn run(args: Args) -> Result<()> {
                 name: name.into(),
                 values: &values,
                 colormap: Colormap::Coolwarm,
-                range: None,
+                range: args.range,
             });
         }
         let mut img = match &patch_labels {
@@ -300,4 +309,17 @@ fn curvature_field(tri_mesh: &SurfaceMesh, s: Scalar) -> (Vec<f64>, &'static str
         Scalar::Gauss => "Gaussian curvature",
     };
     (values, name)
+}
+
+/// Parses `--range LO,HI`: two finite numbers, LO < HI.
+fn parse_range(s: &str) -> std::result::Result<(f64, f64), String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|e| format!("expected LO,HI (two numbers), got {s:?}: {e}"))?;
+    match v.as_slice() {
+        [lo, hi] if lo.is_finite() && hi.is_finite() && lo < hi => Ok((*lo, *hi)),
+        _ => Err(format!("expected LO,HI with LO < HI, got {s:?}")),
+    }
 }

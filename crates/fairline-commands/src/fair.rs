@@ -7,8 +7,8 @@ use crate::error::{CommandError, Subject};
 use crate::lights::Lights;
 use crate::names::Choice;
 use crate::regions::{
-    AUTO_RINGS, detect_regions_to_fair, regions_deviation, regions_report, regions_union,
-    regions_warnings,
+    AUTO_RINGS, detect_regions_to_fair, fairing_made_worse, regions_deviation, regions_report,
+    regions_union, regions_warnings,
 };
 use crate::report::Report;
 use crate::warning::{RemainingDefect, Warning};
@@ -287,6 +287,17 @@ impl FairOutcome {
     /// regions).
     pub fn deviation(&self) -> (f64, f64) {
         regions_deviation(&self.results)
+    }
+    /// Whether the result is not what was asked for: fairing made the
+    /// highlight lines worse and detection does not confirm the defect
+    /// gone ([`crate::regions::fairing_made_worse`]); front ends then exit
+    /// 1 (the CLI), raise or mark the result.
+    pub fn made_worse(&self) -> bool {
+        fairing_made_worse(
+            &self.results,
+            (self.after.score, self.before.threshold),
+            (self.after.flat_spot, self.before.detection.flat_spot_floor),
+        )
     }
 }
 

@@ -8,7 +8,7 @@ use crate::warning::Warning;
 use fairline::fair::{FairReport, grow_region};
 use fairline::highlight::{
     DetectOptions, Detection, HighlightError, HighlightModel, HighlightOptions, LightArray,
-    detect_irregularities,
+    detect_whole_part,
 };
 use fairline::mesh::{FaceId, SurfaceMesh};
 use serde::Serialize;
@@ -26,8 +26,9 @@ pub const SUPPORT_RINGS: usize = 2;
 pub const AUTO_RINGS: usize = 4;
 
 /// The regions `fairline fair --auto` fairs: the irregular regions that
-/// detection (default [`DetectOptions`]) finds on the highlight lines of
-/// `light`, best first, each grown by [`AUTO_RINGS`]; with the detection.
+/// detection of the whole part (default [`DetectOptions`],
+/// [`detect_whole_part`]) finds on the highlight lines of `light`, best
+/// first, each grown by [`AUTO_RINGS`]; with the detection.
 pub fn detect_regions_to_fair(
     mesh: &SurfaceMesh,
     light: LightArray,
@@ -35,7 +36,7 @@ pub fn detect_regions_to_fair(
 ) -> Result<(Detection, Vec<Vec<FaceId>>), HighlightError> {
     let model = HighlightModel::new(mesh, light, options)?;
     let lines = model.lines(mesh);
-    let detection = detect_irregularities(mesh, &light, &lines, &DetectOptions::default())?;
+    let detection = detect_whole_part(mesh, &light, &lines, &DetectOptions::default())?;
     let grown = detection
         .regions
         .iter()
@@ -155,6 +156,14 @@ pub fn regions_report(results: &[FairReport], max_displacement: f64) -> Map<Stri
     for key in ["highlight_deviation_before", "highlight_deviation_after"] {
         keys.insert(key.into(), json!(largest(&results, key)));
     }
+    keys.insert(
+        "highlight_deviation_worse".into(),
+        json!(
+            results
+                .iter()
+                .any(|r| r["highlight_deviation_worse"] == json!(true))
+        ),
+    );
     keys.insert("max_displacement".into(), json!(max_displacement));
     keys.insert("per_region".into(), Value::Array(results));
     keys
@@ -171,6 +180,32 @@ fn largest(results: &[Value], key: &str) -> f64 {
         .iter()
         .filter_map(|r| r[key].as_f64())
         .fold(0.0, f64::max)
+}
+
+/// Whether fairing made the highlight lines of any region worse
+/// ([`FairReport::highlight_deviation_worse`], or the largest deviation
+/// over the regions grew).
+pub fn regions_made_worse(results: &[FairReport]) -> bool {
+    let (before, after) = regions_deviation(results);
+    after > before || results.iter().any(|r| r.highlight_deviation_worse)
+}
+
+/// Whether the result of fairing is not what was asked for, so that front
+/// ends exit 1 (after the warnings of [`regions_warnings`]): the
+/// highlight-line deviation got worse ([`regions_made_worse`]) and
+/// detection does not confirm that the defect is gone — inside the faired
+/// regions, the detection score after fairing is above its threshold or
+/// the flat-spot value above its floor (a floor of 0 means the flat-spot
+/// measure is off). Where detection confirms the removal, a grown
+/// deviation is a warning only: the lines around the removed defect
+/// moved, which that measure reads as change.
+pub fn fairing_made_worse(
+    results: &[FairReport],
+    (score_after, threshold): (f64, f64),
+    (flat_after, flat_floor): (f64, f64),
+) -> bool {
+    let removed = score_after <= threshold && (flat_floor <= 0.0 || flat_after <= flat_floor);
+    regions_made_worse(results) && !removed
 }
 
 /// The highlight-line deviation of the faired regions, before and after
@@ -205,7 +240,7 @@ pub fn regions_warnings(
     }
     let (before, after) = regions_deviation(results);
     let (score_before, score_after) = detection_scores;
-    if after > before {
+    if regions_made_worse(results) {
         warnings.push(Warning::DeviationWorse {
             before,
             after,
@@ -322,6 +357,60 @@ mod tests {
         assert_eq!(
             none,
             vec!["no region was faired (nothing detected): the output is the input unchanged"]
+        );
+    }
+
+    /// A region whose highlight deviation grew is flagged in its report and
+    /// in the run's, the warning names the numbers, and front ends learn
+    /// that the result is not as asked (exit 1); one that improved is not.
+    #[test]
+    fn a_worse_highlight_deviation_is_flagged_and_warned_about() {
+        let (mesh, regions, light) = two_bumps();
+        let options = FairOptions::default().light(light).max_iterations(3);
+        let mut reports = fair_in_turn(&mesh, &regions, &options);
+        for r in &reports {
+            assert_eq!(
+                r.highlight_deviation_worse,
+                r.highlight_deviation_after > r.highlight_deviation_before
+            );
+            assert!(!r.highlight_deviation_worse, "{r:?}");
+        }
+        assert!(!regions_made_worse(&reports));
+        assert!(
+            regions_warnings(&reports, 3, (2.0, 0.5))
+                .iter()
+                .all(|w| !matches!(w, Warning::DeviationWorse { .. }))
+        );
+        assert_eq!(
+            regions_report(&reports, 0.1)["highlight_deviation_worse"],
+            json!(false)
+        );
+        // the second region made worse
+        let b = &mut reports[1];
+        b.highlight_deviation_after = 3.0 * b.highlight_deviation_before;
+        b.highlight_deviation_worse = true;
+        assert!(regions_made_worse(&reports));
+        assert_eq!(
+            regions_report(&reports, 0.1)["highlight_deviation_worse"],
+            json!(true)
+        );
+        // exit 1 unless detection confirms the defect is gone
+        assert!(fairing_made_worse(&reports, (2.5, 1.0), (0.0, 0.5)));
+        assert!(fairing_made_worse(&reports, (0.5, 1.0), (0.8, 0.5)));
+        assert!(!fairing_made_worse(&reports, (0.5, 1.0), (0.2, 0.5)));
+        reports[1].highlight_deviation_worse = false;
+        reports[1].highlight_deviation_after = 0.5 * reports[1].highlight_deviation_before;
+        assert!(!fairing_made_worse(&reports, (2.5, 1.0), (0.0, 0.5)));
+        reports[1].highlight_deviation_after = 3.0 * reports[1].highlight_deviation_before;
+        reports[1].highlight_deviation_worse = true;
+        let w: Vec<String> = regions_warnings(&reports, 3, (2.0, 2.5))
+            .iter()
+            .map(|w| w.message(FrontEnd::Cli))
+            .collect();
+        assert!(
+            w.iter()
+                .any(|s| s.contains("got worse") && s.contains("2.00 -> 2.50")),
+            "{w:?}"
         );
     }
 

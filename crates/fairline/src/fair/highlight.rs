@@ -357,6 +357,11 @@ pub struct FairReport {
     pub highlight_deviation_max_before: f64,
     /// The same after fairing.
     pub highlight_deviation_max_after: f64,
+    /// True when fairing made the highlight lines worse: the RMS deviation
+    /// after is larger than before ([`Self::highlight_deviation_before`]).
+    /// Front ends warn and exit 1 (the result is not what was asked for);
+    /// see [`super::regions_warnings`].
+    pub highlight_deviation_worse: bool,
     /// Desired lines of the input (§3.2).
     pub desired_lines: usize,
     /// Largest total displacement of a vertex (mesh units).
@@ -919,6 +924,7 @@ pub fn fair_highlight_lines(
         highlight_deviation_after: deviation_after.rms,
         highlight_deviation_max_before: deviation_before.max,
         highlight_deviation_max_after: deviation_after.max,
+        highlight_deviation_worse: deviation_after.rms > deviation_before.rms,
         desired_lines: desired_before.lines.len(),
         max_displacement,
         mean_edge_length: ebar,

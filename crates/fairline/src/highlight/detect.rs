@@ -430,6 +430,10 @@ pub struct IrregularRegion {
     pub flagged_sites: usize,
     /// Lines (positions in the input) crossing the region.
     pub lines: Vec<usize>,
+    /// Light spacing s of the array that judged the region (mesh units):
+    /// the given array's, or a finer one of [`detect_whole_part`] where the
+    /// given array judged nothing.
+    pub spacing: f64,
 }
 
 /// Result of [`detect_irregularities`]: the regions, the lines crossing
@@ -496,6 +500,19 @@ pub struct Detection {
     /// vertex with a normal has a site within √3 times this distance.
     #[serde(skip)]
     pub site_cell: f64,
+    /// Share of the part's area (0–1) that no light array judged: faces
+    /// whose nearest site has no score (shape finer than the measure's
+    /// scale, no fit), the mesh border left out ([`Self::shape_faces`]).
+    /// A front end's summary begins with it when it is not 0
+    /// ([`Self::summary`]): "0 regions" there does not mean "clean".
+    pub not_judged_fraction: f64,
+    /// Light spacings of the arrays that judged the part, the given one
+    /// first ([`detect_whole_part`] adds finer ones where it judged
+    /// nothing; one entry for [`detect_irregularities`]).
+    pub spacings: Vec<f64>,
+    /// The faces of [`Self::not_judged_fraction`], ascending.
+    #[serde(skip)]
+    pub unjudged_faces: Vec<FaceId>,
 }
 
 fn serialize_count<S: serde::Serializer, T>(v: &[T], s: S) -> Result<S::Ok, S::Error> {
@@ -519,6 +536,44 @@ impl Detection {
         self.regions.iter().map(|r| r.score).fold(0.0, f64::max)
     }
 
+    /// The one-line summary of a detection, as every front end prints it:
+    /// first, where at least [`NOT_JUDGED_SHARE`] of the part was not
+    /// judged, "not judged: 94 % of the part" (so that "0 regions" is
+    /// never read as "clean" where nothing was looked at), then the number
+    /// of regions.
+    pub fn summary(&self) -> String {
+        let regions = format!("{} region(s) flagged", self.regions.len());
+        match self.not_judged_percent() {
+            Some(p) => format!("not judged: {p} of the part; {regions}"),
+            None => regions,
+        }
+    }
+
+    /// The not-judged share as front ends print it ("94 %", "< 1 %"), or
+    /// `None` below [`NOT_JUDGED_SHARE`].
+    fn not_judged_percent(&self) -> Option<String> {
+        let f = self.not_judged_fraction;
+        if !(f >= NOT_JUDGED_SHARE) {
+            return None;
+        }
+        let p = 100.0 * f;
+        Some(if p < 1.0 {
+            "< 1 %".to_string()
+        } else {
+            format!("{p:.0} %")
+        })
+    }
+
+    /// The warning for reports where a share of the part was not judged
+    /// (see [`Self::summary`]); `None` below [`NOT_JUDGED_SHARE`].
+    pub fn not_judged_warning(&self) -> Option<String> {
+        let p = self.not_judged_percent()?;
+        let finest = self.spacings.iter().copied().fold(f64::INFINITY, f64::min);
+        Some(format!(
+            "not judged: {p} of the part: the surface there turns by more than the measure allows within its smooth radius even with light spacing {finest:.4} (the finest the mesh resolves: the radius is five mean edges at least), or no fit was possible; no region there means nothing was looked at, not that it is clean"
+        ))
+    }
+
     /// What flagged the best region, for titles and summaries: "score S"
     /// where the normal measure flagged it, "flat spot F (floor G)" where
     /// only the flat-spot measure did; `None` when nothing was flagged.
@@ -534,15 +589,21 @@ impl Detection {
         })
     }
 
-    /// The faces the measure did not judge as shape finer than its scale
-    /// (ascending): those whose centroid's nearest site has no score and
-    /// is not on the mesh border — [`Detection::shape_sites`], and the
+    /// The faces no light array judged ([`Self::unjudged_faces`],
+    /// ascending). For one array: those whose centroid's nearest site has no
+    /// score and is not on the mesh border — [`Detection::shape_sites`], and the
     /// rare site with no fit. A picture shows them so that "no region" is
     /// not read as "no defect" where nothing was looked at. The border,
     /// which the measure never judges (module documentation, step 3), is
     /// left out, as are faces with no site within two site cells (there
     /// are none on the mesh [`detect_irregularities`] ran on).
-    pub fn shape_faces(&self, mesh: &SurfaceMesh) -> Vec<FaceId> {
+    pub fn shape_faces(&self, _mesh: &SurfaceMesh) -> Vec<FaceId> {
+        self.unjudged_faces.clone()
+    }
+
+    /// The faces whose centroid's nearest site is not judged and not on the
+    /// border (see [`Self::shape_faces`]).
+    fn nearest_unjudged_faces(&self, mesh: &SurfaceMesh) -> Vec<FaceId> {
         let shape = |s: &Site| s.score.is_none() && !mesh.is_boundary_vertex(s.vertex);
         if !self.sites.iter().any(shape) || !(self.site_cell > 0.0) {
             return Vec::new();
@@ -831,7 +892,7 @@ pub fn detect_region(
     let options = DetectOptions::default();
     let model = super::HighlightModel::new(mesh, *light, highlight)?;
     let lines = model.lines(mesh);
-    let detection = detect_irregularities(mesh, light, &lines, &options)?;
+    let detection = detect_whole_part(mesh, light, &lines, &options)?;
     let mut in_faces = vec![false; mesh.face_count()];
     let mut inside = vec![false; mesh.vertex_count()];
     for f in faces {
@@ -974,6 +1035,7 @@ pub fn detect_irregularities(
     regions.retain(|r| r.severity > 0.0);
     for r in &mut regions {
         r.lines.sort_unstable();
+        r.spacing = scale.spacing;
     }
     regions.sort_by(|a, b| {
         b.severity
@@ -988,7 +1050,7 @@ pub fn detect_irregularities(
     } else {
         0.0
     };
-    Ok(Detection {
+    let mut detection = Detection {
         regions,
         lines: line_out,
         flagged_sites: flagged.len(),
@@ -1008,7 +1070,22 @@ pub fn detect_irregularities(
         flat_spot_floor: flat.floor,
         curvature_noise: flat.curvature_noise,
         site_cell: scale.site_cell,
-    })
+        not_judged_fraction: 0.0,
+        spacings: vec![scale.spacing],
+        unjudged_faces: Vec::new(),
+    };
+    detection.unjudged_faces = detection.nearest_unjudged_faces(mesh);
+    detection.not_judged_fraction = area_share(&detection.unjudged_faces, &areas, total_area);
+    Ok(detection)
+}
+
+/// Area of `faces` over `total` (0 when the total is not positive).
+fn area_share(faces: &[FaceId], areas: &[f64], total: f64) -> f64 {
+    if !(total > 0.0) {
+        return 0.0;
+    }
+    let a: f64 = faces.iter().map(|f| areas[f.idx()]).fold(0.0, |a, b| a + b);
+    (a / total).clamp(0.0, 1.0)
 }
 
 /// Whether the normal measure flags a site (its score above its threshold).
@@ -1420,6 +1497,7 @@ fn connected_regions(
             area,
             flagged_sites: 0,
             lines: Vec::new(),
+            spacing: 0.0,
         });
     }
     (regions, comp)
@@ -1605,3 +1683,7 @@ fn fill_holes(mesh: &SurfaceMesh, in_region: &mut [bool]) {
 /// The flat-spot measure (module documentation, step 8).
 #[path = "detect_flat_spot.rs"]
 mod flat_spot;
+
+#[path = "detect_whole.rs"]
+mod whole;
+pub use whole::{MAX_FINER_ARRAYS, NOT_JUDGED_SHARE, detect_whole_part};

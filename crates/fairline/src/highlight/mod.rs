@@ -22,8 +22,8 @@ pub mod surface;
 pub use circular::{circular_highlight_bands, circular_highlight_lines};
 pub use contour::{HighlightLine, HighlightLines, NodeId};
 pub use detect::{
-    DetectOptions, Detection, IrregularRegion, LineFairness, RegionDetection, Site,
-    detect_irregularities, detect_region,
+    DetectOptions, Detection, IrregularRegion, LineFairness, NOT_JUDGED_SHARE, RegionDetection,
+    Site, detect_irregularities, detect_region, detect_whole_part,
 };
 pub use drawn_stats::DrawnLineStats;
 pub use light::{CircleApproach, CircularLight, CircularLights, LightArray, UpAxis};

@@ -249,7 +249,11 @@ fn face(d: &mut Data, s: &BSplineSurface, ctx2: u64) -> u64 {
                 d.add(format!("VERTEX_POINT('',#{p})"))
             };
             let m = model_curve(s, c, tolerance);
-            let c3 = if m.points.iter().all(|&p| p.distance(m.points[0]) <= tolerance) {
+            let c3 = if m
+                .points
+                .iter()
+                .all(|&p| p.distance(m.points[0]) <= tolerance)
+            {
                 // a degenerate edge (along a pole): the points of the trim
                 // curve on the surface, as a polyline of the one point
                 let [t0, t1] = c.domain();
