@@ -15,7 +15,7 @@ use fairline::highlight::{
     SurfaceHighlightOptions, SurfaceLight, part_highlight_lines, readable_surface_lines,
     readable_surface_lines_in_view,
 };
-use fairline::io::surface_highlight_lines_json;
+use fairline::highlight::surface_highlight_lines_json;
 use fairline::picture::{Picture, labelled_mesh_picture, mesh_picture};
 use fairline::render::{PolylineLayer, RegionLabels, RenderOptions, SvgPlot};
 use serde_json::{Value, json};
@@ -52,7 +52,7 @@ pub fn polylines(lines: &[&SurfaceHighlightLine], width: f32) -> Vec<PolylineLay
 
 /// A picture of tessellated surfaces with polylines over them; a part of
 /// several patches gets each patch's index (its position in `surfaces`)
-/// written at the patch's visible centre (issue #20 item 7).
+/// written at the patch's visible centre.
 pub fn surface_picture(
     surfaces: &[BSplineSurface],
     polylines: Vec<PolylineLayer>,

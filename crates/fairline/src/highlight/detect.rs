@@ -1607,21 +1607,21 @@ fn fill_holes(mesh: &SurfaceMesh, in_region: &mut [bool]) {
 mod flat_spot;
 
 /// The wider-scale comparisons measured for wide dents on coarse meshes
-/// (README, Default lights on real meshes; BENCHMARKS, session 21): a table
+/// (README, Default lights on real meshes): a table
 /// printer, not a check.
 #[cfg(test)]
 #[path = "detect_wide_table.rs"]
 mod wide_table;
 
 /// The loops and flat spots measured for the wide flank dent on Spot
-/// (README, Default lights on real meshes; BENCHMARKS, session 22): table
+/// (README, Default lights on real meshes): table
 /// printers, not checks.
 #[cfg(test)]
 #[path = "detect_loops_table.rs"]
 mod loops_table;
 
 /// The smoothed-mesh comparison of the highlight distance's extrema for
-/// the wide flank dent on Spot (session 23): a table printer, not a check.
+/// the wide flank dent on Spot: a table printer, not a check.
 #[cfg(test)]
 #[path = "detect_smoothed_table.rs"]
 mod smoothed_table;

@@ -1,6 +1,5 @@
-//! The measured account of the wide flank dent on Spot, session 22 (issue
-//! #18, what remains; README, Default lights on real meshes; BENCHMARKS,
-//! Session 22 — detect): two table printers, not checks.
+//! The measured account of the wide flank dent on Spot (README, Default
+//! lights on real meshes): two table printers, not checks.
 //!
 //! - [`loop_extrema_table`]: the closed loop the default picture draws in
 //!   the dent bounds a disk that holds an extremum of the highlight
@@ -84,7 +83,7 @@ pub(super) fn distances(
         .iter()
         .zip(normals)
         .map(|(&q, &n)| {
-            let (d, b) = super::super::linear::vertex_distance(light, q, n, min_cos);
+            let (d, b) = super::super::light::vertex_distance(light, q, n, min_cos);
             ((b != 0).then_some(d), b)
         })
         .unzip()

@@ -14,7 +14,7 @@
 //! preconditioned with banded per-line blocks (no fill-in, no symbolic
 //! analysis when the free set changes between iterations).
 //!
-//! Fairing without deformation (issue #21 item 3): the penalty of Eq. (34)
+//! Fairing without deformation: the penalty of Eq. (34)
 //! holds every direction alike, so the solve straightens the lines partly
 //! by cutting across the surface (measured: 5e-3 from the true surface,
 //! farther than Taubin). By default ([`QuadFairOptions::on_surface`]) the

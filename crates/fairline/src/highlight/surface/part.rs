@@ -1,4 +1,4 @@
-//! Readable linear lights on parts of B-spline surfaces (issue #20): the
+//! Readable linear lights on parts of B-spline surfaces: the
 //! mesh side's default lights and readable drawing
 //! ([`LightArray::default_for_mesh`], [`LightArray::readable_multiple`],
 //! [`Readability`], see [`crate::highlight::readable`]) applied to a part,
@@ -184,7 +184,7 @@ fn covered_fraction(part: &CoverageInput, light: &LightArray) -> f64 {
         .positions()
         .par_iter()
         .zip(&part.normals)
-        .map(|(&p, &n)| crate::highlight::linear::vertex_distance(light, p, n, min_cos))
+        .map(|(&p, &n)| crate::highlight::light::vertex_distance(light, p, n, min_cos))
         .unzip();
     let gradient = crate::highlight::readable::face_distance_gradients(mesh, &d, &branch);
     let r = Readability::for_part(mesh, light);
@@ -409,7 +409,7 @@ pub fn readable_surface_lines(
 /// per unit times that is the gap in pixels), the separation measured as
 /// the picture shows it ([`linear_separation_on_screen`]; parallel
 /// projection along `view`), so that faces seen at a grazing angle, where
-/// the lines crowd on the screen, are thinned too (issue #20). Equal to
+/// the lines crowd on the screen, are thinned too. Equal to
 /// [`readable_surface_lines`] where the surface faces the viewer; never
 /// keeps a point that one drops. A zero or non-finite `view` gives
 /// [`readable_surface_lines`].
