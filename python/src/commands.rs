@@ -22,6 +22,8 @@ use fairline::io::RegionSpec;
 use fairline::mesh::{FaceId, VertexId};
 use fairline::smooth::SmoothMethod;
 use fairline::{Control, SurfaceMesh, Vec3};
+use fairline::geom::CurvatureMethod;
+use fairline_commands::curvature::CurvatureSettings;
 use fairline_commands::enhance::EnhanceSettings;
 use fairline_commands::fair::{FairInput, FairSettings};
 use fairline_commands::fair_quad::QuadSettings;
@@ -89,25 +91,17 @@ fn curvature<'py>(
     offsets: Idx<'py>,
     method: &str,
 ) -> PyResult<CurvatureOut<'py>> {
-    use fairline::geom::{CurvatureMethod, CurvatureOptions};
-    let m = match method {
-        "rusinkiewicz" => CurvatureMethod::Rusinkiewicz,
-        "meyer" => CurvatureMethod::Meyer,
-        other => return Err(bad_choice("method", other, &["rusinkiewicz", "meyer"]).into()),
+    let settings = CurvatureSettings {
+        method: CurvatureMethod::parse(method).map_err(Failure::from)?,
     };
     let soup = soup_from(&v, &indices, &offsets)?;
     let (out, n, report) = crate::compute(py, || -> Res<_> {
         let mesh = mesh_from(&soup)?;
-        let mut report = Report::new("curvature");
-        let options = CurvatureOptions::default().method(m);
-        let out = report
-            .time(|| fairline::geom::curvature(&mesh, &options))
-            .map_err(|e| Failure::bad(e.to_string()))?;
-        report.set_fields(&out.report);
+        let out = fairline_commands::curvature::run(&mesh, &settings, &Control::new())?;
         // one row per input vertex, as the CLI writes them (a split
         // non-manifold vertex takes the values of the fan that kept its index)
         let n = mesh.original_vertex_count();
-        Ok((out, n, report.to_json().to_string()))
+        Ok((out.output, n, out.report.to_json().to_string()))
     })?;
     let (c, mean, gauss) = (&out.fields, &out.mean, &out.gauss);
     let rows = |v: &[Vec3]| positions_array(py, &v[..n.min(v.len())]).into_any();
@@ -317,17 +311,8 @@ fn repair<'py>(
 ) -> PyResult<(SoupArrays<'py>, String)> {
     let soup = soup_from(&v, &indices, &offsets)?;
     let (out, report) = crate::compute(py, move || -> Res<_> {
-        let mut report = Report::new("repair");
-        let options = fairline::mesh::RepairOptions::default();
-        let repaired = report
-            .time(|| fairline::mesh::repair(&soup, &options))
-            .map_err(|e| Failure::bad(format!("cannot repair: {e}")))?;
-        let r = &repaired.report;
-        report.set_fields(r);
-        for w in r.warnings() {
-            report.warn(Warning::Text(w));
-        }
-        Ok((repaired.soup, report.to_json().to_string()))
+        let out = fairline_commands::repair::run(&soup, &Control::new())?;
+        Ok((out.repaired.soup, out.report.to_json().to_string()))
     })?;
     Ok((soup_arrays(py, &out), report))
 }
@@ -620,7 +605,7 @@ fn highlight_lines(
             );
             (lines, bands, None)
         };
-        let document = fairline::io::highlight_lines_json(&lines, bands.as_ref(), radii.as_deref());
+        let document = fairline::highlight::highlight_lines_json(&lines, bands.as_ref(), radii.as_deref());
         let counts = lines.counts();
         report.set("summary", counts);
         report.set_fields(counts);

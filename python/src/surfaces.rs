@@ -15,7 +15,7 @@ use fairline::highlight::{
     CircularLight, CircularLights, PartLights, PatchHighlights, SurfaceHighlightOptions,
     part_highlight_lines,
 };
-use fairline::io::surface_highlight_lines_json;
+use fairline::highlight::surface_highlight_lines_json;
 use fairline::io::{parse_surfaces_json, surfaces_to_json};
 use fairline_commands::{Report, Warning};
 use pyo3::prelude::*;

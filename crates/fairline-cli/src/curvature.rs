@@ -1,18 +1,14 @@
 //! `fairline curvature`: per-vertex principal curvatures written as PLY.
 
-use crate::common::Report;
+use crate::args::choice;
+use crate::common::write_report;
 use crate::output::spinner;
-use anyhow::{Context, Result};
-use fairline::geom::{CurvatureMethod, CurvatureOptions, curvature};
+use anyhow::Result;
+use fairline::Control;
+use fairline::geom::CurvatureMethod;
+use fairline_commands::curvature::{self, CurvatureSettings};
+use fairline_commands::{Choice, Subject};
 use std::path::PathBuf;
-
-#[derive(clap::ValueEnum, Clone, Copy, Debug)]
-pub enum Method {
-    /// Per-face shape-operator fit (Rusinkiewicz 2004).
-    Rusinkiewicz,
-    /// From the mean-curvature normal and angle defect (Meyer et al. 2003).
-    Meyer,
-}
 
 /// Per-vertex curvature as a binary PLY with double vertex properties
 /// `x y z nx ny nz k1 k2 mean gauss d1x d1y d1z d2x d2y d2z`.
@@ -29,8 +25,8 @@ pub struct Args {
     #[arg(short, long, value_name = "OUT.ply")]
     pub output: PathBuf,
     /// Estimator.
-    #[arg(long, value_enum, default_value = "rusinkiewicz")]
-    pub method: Method,
+    #[arg(long, value_parser = choice::<CurvatureMethod>(), default_value = "rusinkiewicz")]
+    pub method: CurvatureMethod,
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
@@ -45,16 +41,22 @@ pub fn run(args: Args) -> Result<()> {
         .check()?;
     let mesh = fairline::io::read_mesh(&args.mesh)?;
     crate::input::note_split_vertices(&args.mesh, &mesh);
-    let mut report = Report::new("curvature");
-    let options = CurvatureOptions::default().method(match args.method {
-        Method::Rusinkiewicz => CurvatureMethod::Rusinkiewicz,
-        Method::Meyer => CurvatureMethod::Meyer,
-    });
+    let settings = CurvatureSettings {
+        method: args.method,
+    };
     let bar = spinner("curvature");
-    let out = report
-        .time(|| curvature(&mesh, &options))
-        .with_context(|| args.mesh.display().to_string())?;
+    let result = curvature::run(&mesh, &settings, &Control::new());
     bar.finish_and_clear();
+    let result = result.map_err(|e| {
+        let about_input = e.subject() == Some(Subject::Input);
+        let e = anyhow::Error::new(e);
+        if about_input {
+            e.context(args.mesh.display().to_string())
+        } else {
+            e
+        }
+    })?;
+    let out = &result.output;
     let (c, mean, gauss) = (&out.fields, &out.mean, &out.gauss);
     let triangulated = out.report.triangulated;
     let comp =
@@ -96,11 +98,10 @@ pub fn run(args: Args) -> Result<()> {
         .map(|&(name, v)| (name, mesh.original_values(v)))
         .collect();
     fairline::io::write_ply_with_vertex_properties(&args.output, &mesh.to_soup(), &props)?;
-    report.set_fields(&out.report);
-    report.write(args.report.as_deref())?;
+    write_report(args.report.as_deref(), &result.report)?;
     job.finish(format_args!(
         "{} curvature of {} vertices{}",
-        format!("{:?}", args.method).to_lowercase(),
+        args.method.name(),
         mesh.vertex_count(),
         if triangulated {
             " (polygons triangulated)"

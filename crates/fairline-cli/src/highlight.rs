@@ -39,8 +39,8 @@ pub fn lines_format(path: &Path) -> Result<LinesFormat> {
 }
 
 /// Writes lines (and bands) atomically in the format of `path`'s
-/// extension ([`fairline::io::highlight_lines_json`],
-/// [`fairline::io::highlight_lines_obj`]).
+/// extension ([`fairline::highlight::highlight_lines_json`],
+/// [`fairline::highlight::highlight_lines_obj`]).
 pub fn write_lines(
     path: &Path,
     lines: &HighlightLines,
@@ -50,10 +50,10 @@ pub fn write_lines(
     match lines_format(path)? {
         LinesFormat::Json => crate::common::write_json(
             path,
-            &fairline::io::highlight_lines_json(lines, bands, radii),
+            &fairline::highlight::highlight_lines_json(lines, bands, radii),
         ),
         LinesFormat::Obj => {
-            let text = fairline::io::highlight_lines_obj(lines, bands);
+            let text = fairline::highlight::highlight_lines_obj(lines, bands);
             fairline::io::atomic_write(path, |w| {
                 use std::io::Write;
                 w.write_all(text.as_bytes())

@@ -1,9 +1,11 @@
 //! `fairline repair`: turns a dirty mesh into one every command accepts, and
 //! the hint every refusal of dirty input ends with.
 
-use crate::common::Report;
-use crate::output::{Job, say, warn};
-use anyhow::{Context, Result};
+use crate::common::{print_warnings, write_report};
+use crate::output::{Job, say};
+use anyhow::Result;
+use fairline::Control;
+use fairline_commands::repair;
 use std::path::{Path, PathBuf};
 
 /// Repairs a dirty mesh: splits non-manifold edges and vertices, removes
@@ -35,14 +37,11 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--report", args.report.as_deref())
         .check()?;
     let soup = fairline::io::read_soup(&args.input)?;
-    let mut report = Report::new("repair");
-    let repaired = report
-        .time(|| fairline::mesh::repair(&soup, &fairline::mesh::RepairOptions::default()))
-        .with_context(|| format!("{}: cannot repair", args.input.display()))?;
-    fairline::io::write_soup(&args.output, &repaired.soup)?;
-    let r = &repaired.report;
-    report.set_fields(r);
-    report.write(args.report.as_deref())?;
+    let out = repair::run(&soup, &Control::new())
+        .map_err(|e| anyhow::Error::new(e).context(args.input.display().to_string()))?;
+    fairline::io::write_soup(&args.output, &out.repaired.soup)?;
+    let r = &out.repaired.report;
+    write_report(args.report.as_deref(), &out.report)?;
     let count = |reason| {
         r.removed_faces
             .iter()
@@ -78,9 +77,7 @@ pub fn run(args: Args) -> Result<()> {
             say(&format!("  {n} {what}"));
         }
     }
-    for w in r.warnings() {
-        warn(w);
-    }
+    print_warnings(&out.report);
     job.finish(format_args!(
         "{}: {} vertices, {} faces → {} vertices, {} faces{}",
         args.input.display(),

@@ -15,7 +15,7 @@ use fairline::highlight::{
     SurfaceHighlightOptions, SurfaceLight, part_highlight_lines, readable_surface_lines,
     readable_surface_lines_in_view,
 };
-use fairline::io::surface_highlight_lines_json;
+use fairline::highlight::surface_highlight_lines_json;
 use fairline::picture::{Picture, labelled_mesh_picture, mesh_picture};
 use fairline::render::{PolylineLayer, RegionLabels, RenderOptions, SvgPlot};
 use serde_json::{Value, json};

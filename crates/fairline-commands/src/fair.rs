@@ -181,24 +181,7 @@ pub fn run(
     let mut notes = Vec::new();
     let regions = match input.region {
         Some(faces) => vec![faces.to_vec()],
-        None => {
-            let (det, grown) =
-                report.time(|| detect_regions_to_fair(mesh, light, lights.options()))?;
-            report.set("detected_regions", det.regions.len());
-            if det.regions.is_empty() {
-                notes.push(Note::NothingDetected);
-            }
-            for (k, (r, g)) in det.regions.iter().zip(&grown).enumerate() {
-                notes.push(Note::AutoRegionGrown {
-                    region: k + 1,
-                    score: r.score,
-                    rings: AUTO_RINGS,
-                    from: r.faces.len(),
-                    to: g.len(),
-                });
-            }
-            grown
-        }
+        None => detected_regions(mesh, light, lights, &mut report, &mut notes)?,
     };
     let regions = grow_regions(mesh, regions, settings.grow, &mut notes);
     let region_faces = regions_union(&regions);
@@ -219,33 +202,14 @@ pub fn run(
     let current = &faired.mesh;
     let after = detect_region(current, &light, lights.options(), &region_faces)?;
     let (score_before, score_after) = (before.score, after.score);
-    report.set("detect_score_before", score_before);
-    report.set("detect_score_after", score_after);
-    report.set("detect_threshold", before.threshold);
-    report.set("detect_flat_spot_before", before.flat_spot);
-    report.set("detect_flat_spot_after", after.flat_spot);
-    report.set("detect_flat_spot_floor", before.detection.flat_spot_floor);
-    // and `detect` on the output, with the lights it chooses there (the
-    // default lights follow the part, which fairing changed a little)
-    let output_light = lights.light_array(current)?;
-    let as_detect = if output_light == light {
-        None
-    } else {
-        Some(detect_region(
-            current,
-            &output_light,
-            lights.options(),
-            &region_faces,
-        )?)
+    let on_output = Detected {
+        mesh: current,
+        light,
+        region: &region_faces,
+        before: &before,
+        after: &after,
     };
-    let as_detect = as_detect.as_ref().unwrap_or(&after);
-    report.set("detect_regions_after", as_detect.detection.regions.len());
-    if let Some(defect) = remaining_defect(as_detect, score_before, score_after) {
-        report.warn(Warning::RemainingDefect {
-            input: input.name.map(str::to_string),
-            defect,
-        });
-    }
+    report_detection(&on_output, lights, input.name, &mut report)?;
     report.set("method", settings.method.name());
     report.set("light", light);
     report.set("fairing_light", fairing_light);
@@ -276,6 +240,80 @@ pub fn run(
         report,
         notes,
     })
+}
+
+/// Every region detection finds on `mesh` under `light`, grown by
+/// [`AUTO_RINGS`] (noted), with the detection's report keys.
+fn detected_regions(
+    mesh: &SurfaceMesh,
+    light: LightArray,
+    lights: &Lights,
+    report: &mut Report,
+    notes: &mut Vec<Note>,
+) -> Result<Vec<Vec<FaceId>>, CommandError> {
+    let (det, grown) = report.time(|| detect_regions_to_fair(mesh, light, lights.options()))?;
+    report.set("detected_regions", det.regions.len());
+    if det.regions.is_empty() {
+        notes.push(Note::NothingDetected);
+    }
+    for (k, (r, g)) in det.regions.iter().zip(&grown).enumerate() {
+        notes.push(Note::AutoRegionGrown {
+            region: k + 1,
+            score: r.score,
+            rings: AUTO_RINGS,
+            from: r.faces.len(),
+            to: g.len(),
+        });
+    }
+    Ok(grown)
+}
+
+/// The faired mesh with the detection inside the faired faces before and
+/// after (same lights).
+struct Detected<'a> {
+    mesh: &'a SurfaceMesh,
+    light: LightArray,
+    region: &'a [FaceId],
+    before: &'a RegionDetection,
+    after: &'a RegionDetection,
+}
+
+/// The detection keys of the report, and the warning when `detect` on the
+/// output (with the lights it chooses there: the default lights follow the
+/// part, which fairing changed a little) still flags a defect.
+fn report_detection(
+    d: &Detected<'_>,
+    lights: &Lights,
+    name: Option<&str>,
+    report: &mut Report,
+) -> Result<(), CommandError> {
+    let (before, after) = (d.before, d.after);
+    report.set("detect_score_before", before.score);
+    report.set("detect_score_after", after.score);
+    report.set("detect_threshold", before.threshold);
+    report.set("detect_flat_spot_before", before.flat_spot);
+    report.set("detect_flat_spot_after", after.flat_spot);
+    report.set("detect_flat_spot_floor", before.detection.flat_spot_floor);
+    let output_light = lights.light_array(d.mesh)?;
+    let as_detect = if output_light == d.light {
+        None
+    } else {
+        Some(detect_region(
+            d.mesh,
+            &output_light,
+            lights.options(),
+            d.region,
+        )?)
+    };
+    let as_detect = as_detect.as_ref().unwrap_or(after);
+    report.set("detect_regions_after", as_detect.detection.regions.len());
+    if let Some(defect) = remaining_defect(as_detect, before.score, after.score) {
+        report.warn(Warning::RemainingDefect {
+            input: name.map(str::to_string),
+            defect,
+        });
+    }
+    Ok(())
 }
 
 impl FairOutcome {

@@ -20,6 +20,7 @@
 
 #![forbid(unsafe_code)]
 
+pub mod curvature;
 pub mod enhance;
 pub mod error;
 pub mod fair;
@@ -27,6 +28,7 @@ pub mod fair_quad;
 pub mod lights;
 pub mod names;
 pub mod regions;
+pub mod repair;
 pub mod report;
 pub mod smooth;
 pub mod warning;

@@ -298,37 +298,6 @@ impl LightArray {
         })
     }
 
-    /// How many spacings of `self` apart the lines must be drawn to be
-    /// readable on `mesh`: k = max(1, round(ĝ/3)), with ĝ the area-weighted
-    /// median of the highlight-distance gradient |∇d| over the lit triangles
-    /// (neighbouring lines lie s/|∇d| apart on the surface, see
-    /// [`super::readable`]). The lines of the array with spacing k·s and the
-    /// same light 0 are exactly the lines of `self` whose index is a
-    /// multiple of k.
-    ///
-    /// With the default spacing s = w/20 (w the part's width across the
-    /// lights) this keeps the median line separation at about w/60 or more:
-    /// a panel facing the lights has ĝ ≈ 1–3 and keeps k = 1 (about 20
-    /// lights across); on a round part d_P grows like the tangent of the
-    /// normal's angle to Z (ĝ of 15–30 on the figures in ../shared/data),
-    /// and without thinning the lines would lie w/300–w/600 apart, below
-    /// what a picture resolves, and break into hatching.
-    ///
-    /// ĝ is estimated on at most 32 768 triangles spread over the part
-    /// (every k-th in face order; all of them on smaller meshes).
-    pub fn readable_multiple(&self, mesh: &SurfaceMesh) -> u32 {
-        self.readable_multiple_sampled(mesh, super::readable::GRADIENT_SAMPLE_FACES)
-    }
-
-    /// [`Self::readable_multiple`] with ĝ estimated on at most `budget`
-    /// triangles.
-    pub(crate) fn readable_multiple_sampled(&self, mesh: &SurfaceMesh, budget: usize) -> u32 {
-        match super::readable::sampled_median_distance_gradient(mesh, self, budget) {
-            Some(g) if g.is_finite() && g > 0.0 => (g / 3.0).round().clamp(1.0, 1000.0) as u32,
-            _ => 1,
-        }
-    }
-
     /// The default lights for reading the lines on a part:
     /// [`Self::default_for_mesh`] with its spacing multiplied by
     /// [`Self::readable_multiple`].
@@ -398,8 +367,24 @@ pub(crate) fn vertex_distances(mesh: &SurfaceMesh, light: &LightArray) -> (Vec<f
     crate::geom::vertex_normals(mesh)
         .iter()
         .zip(mesh.positions())
-        .map(|(&n, &p)| super::linear::vertex_distance(light, p, n, min_cos))
+        .map(|(&n, &p)| vertex_distance(light, p, n, min_cos))
         .unzip()
+}
+
+/// Distance value and branch of one vertex.
+#[inline]
+pub(crate) fn vertex_distance(light: &LightArray, p: Vec3, n: Vec3, min_cos: f64) -> (f64, i8) {
+    match light.highlight_distance(p, n, min_cos) {
+        Some(d) => (
+            d,
+            if light.plane_normal().dot(n) > 0.0 {
+                1
+            } else {
+                -1
+            },
+        ),
+        None => (0.0, 0),
+    }
 }
 
 /// A circular light source L(θ) = A + R(cos θ n + sin θ b), Nishiyama et

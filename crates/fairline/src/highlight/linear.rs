@@ -3,7 +3,7 @@
 
 use super::HighlightError;
 use super::contour::{self, Levels, NodeId, Segment};
-use super::light::LightArray;
+use super::light::{LightArray, vertex_distance};
 use super::readable::Readability;
 use super::{HighlightBands, HighlightLines};
 use crate::geom;
@@ -95,22 +95,6 @@ pub struct HighlightModel {
 /// distances, segments, chaining ([`highlight_lines`]).
 const MODEL_STAGE: &str = "highlight model";
 const MODEL_PHASES: u64 = 3;
-
-/// Distance value and branch of one vertex.
-#[inline]
-pub(crate) fn vertex_distance(light: &LightArray, p: Vec3, n: Vec3, min_cos: f64) -> (f64, i8) {
-    match light.highlight_distance(p, n, min_cos) {
-        Some(d) => (
-            d,
-            if light.plane_normal().dot(n) > 0.0 {
-                1
-            } else {
-                -1
-            },
-        ),
-        None => (0.0, 0),
-    }
-}
 
 impl HighlightModel {
     /// Builds the model (Yong et al. Algorithm 1). Errors when the mesh has

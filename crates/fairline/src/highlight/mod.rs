@@ -13,11 +13,13 @@ mod contour;
 pub mod detect;
 mod drawn_stats;
 mod light;
+mod lines_file;
 mod light_choice;
 mod linear;
 pub mod quartic;
 pub mod readable;
 pub mod surface;
+mod surface_lines_file;
 
 pub use circular::{circular_highlight_bands, circular_highlight_lines};
 pub use contour::{HighlightLine, HighlightLines, NodeId};
@@ -26,6 +28,8 @@ pub use detect::{
     Site, detect_irregularities, detect_region, detect_whole_part,
 };
 pub use drawn_stats::DrawnLineStats;
+pub use lines_file::{highlight_lines_json, highlight_lines_obj};
+pub use surface_lines_file::{SurfaceLineCounts, surface_highlight_lines_json, surface_line_json};
 pub use light::{CircleApproach, CircularLight, CircularLights, LightArray, UpAxis};
 pub use light_choice::LightChoice;
 pub use linear::{HighlightModel, HighlightOptions, highlight_lines};

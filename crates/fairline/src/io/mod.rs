@@ -22,7 +22,6 @@
 
 pub mod iges_read;
 pub mod iges_write;
-mod lines;
 pub mod model_curve;
 mod obj;
 mod off;
@@ -32,7 +31,6 @@ pub mod step;
 mod stl;
 pub mod surface_file;
 pub mod surface_json;
-mod surface_lines;
 pub mod units;
 
 use std::fmt;
@@ -44,12 +42,10 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use thiserror::Error;
 
 pub use iges_read::{IgesError, IgesImport, IgesSurface, parse_iges, read_iges};
-pub use lines::{highlight_lines_json, highlight_lines_obj};
 pub use surface_json::{
     MAX_SURFACE_JSON_BYTES, SurfaceJsonError, parse_surfaces_json, read_surfaces_json,
     surface_to_json, surfaces_to_json, write_surface_json, write_surfaces_json,
 };
-pub use surface_lines::{SurfaceLineCounts, surface_highlight_lines_json, surface_line_json};
 
 use crate::mesh::{MeshError, Soup, SurfaceMesh};
 

@@ -15,9 +15,9 @@
 //!    them back bit-identical (as PMP and OpenMesh do when reading such files).
 
 use super::MeshError;
-use super::inspect::{find, union};
 use super::soup::Soup;
-use super::surface_mesh::{NONE, SplitVertices, SurfaceMesh};
+use super::union_find::{find, union};
+use super::surface_mesh::{Halfedges, NONE, SplitVertices, SurfaceMesh};
 use rayon::prelude::*;
 
 /// Below this many faces the parallel steps run sequentially.
@@ -338,14 +338,6 @@ fn consistently_oriented(soup: &Soup, edges: &EdgeTable) -> bool {
     }
 }
 
-/// The halfedge arrays without the boundary links.
-pub(super) struct Halfedges {
-    pub to: Vec<u32>,
-    pub next: Vec<u32>,
-    pub prev: Vec<u32>,
-    pub face: Vec<u32>,
-    pub face_halfedge: Vec<u32>,
-}
 
 /// Step 4a: the halfedges of every face, in the face's (possibly reversed)
 /// order. Edge `e` owns halfedges `2e` (smaller → larger vertex) and `2e + 1`.
@@ -660,4 +652,31 @@ fn build_steps(soup: &Soup) -> Result<Built, MeshError> {
         }),
     );
     Ok(Built::Split { mesh, flip })
+}
+
+impl SurfaceMesh {
+    /// Builds a mesh from a soup (see [`super::build`] for the steps).
+    ///
+    /// Rejects: indices out of range, faces with fewer than three vertices or
+    /// a repeated vertex, non-finite coordinates, edges shared by more than
+    /// two faces, and components whose faces cannot be oriented consistently
+    /// (Möbius strips). Faces whose orientation disagrees with their
+    /// component's first face are reversed (see [`SurfaceMesh::flipped_faces`]).
+    ///
+    /// A vertex where several fans of faces meet (a non-manifold vertex) is
+    /// split, one copy per fan: the fan with the vertex's first corner keeps
+    /// the index, the others get copies appended after the input vertices.
+    /// The original and its copies are pinned ([`SurfaceMesh::is_pinned`]):
+    /// no algorithm moves them, so [`SurfaceMesh::to_soup`] can merge the
+    /// copies back and write the input's vertex list bit-identical.
+    pub fn from_soup(soup: &Soup) -> Result<Self, MeshError> {
+        build(soup)
+    }
+
+    /// [`SurfaceMesh::from_soup`] of a soup the caller no longer needs: its
+    /// positions become the mesh's without a copy (what the mesh readers
+    /// do). The same mesh, bit for bit.
+    pub fn from_owned_soup(soup: Soup) -> Result<Self, MeshError> {
+        build_owned(soup)
+    }
 }

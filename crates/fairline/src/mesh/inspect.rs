@@ -1,6 +1,7 @@
 //! Inspection of a [`Soup`] that may be broken: counts and defects, without
 //! refusing non-manifold or otherwise invalid input (`fairline info`).
 
+use super::union_find::{find, union};
 use super::{EdgeId, FaceId, HalfedgeId, MeshError, Soup, SurfaceMesh, VertexId, topology_summary};
 use crate::Vec3;
 use rayon::prelude::*;
@@ -128,25 +129,6 @@ pub(super) fn polygon_area(p: &[Vec3], face: &[u32]) -> (f64, bool) {
     }
     let a2 = s.length();
     (0.5 * a2, !(a2 > super::DEGENERATE_RELATIVE_AREA * scale))
-}
-
-/// Root of `x` in the union–find forest `parent` (path halving).
-pub(crate) fn find(parent: &mut [u32], mut x: u32) -> u32 {
-    while parent[x as usize] != x {
-        parent[x as usize] = parent[parent[x as usize] as usize];
-        x = parent[x as usize];
-    }
-    x
-}
-
-/// Joins the sets of `a` and `b` in `parent` (the smaller index becomes
-/// the root, so the forest does not depend on the order of the joins'
-/// roots).
-pub(crate) fn union(parent: &mut [u32], a: u32, b: u32) {
-    let (ra, rb) = (find(parent, a), find(parent, b));
-    if ra != rb {
-        parent[ra.max(rb) as usize] = ra.min(rb);
-    }
 }
 
 /// Counts and defects of a soup. Never fails; invalid faces are counted and

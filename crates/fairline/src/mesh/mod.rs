@@ -8,9 +8,10 @@ mod repair;
 mod soup;
 mod surface_mesh;
 mod topology;
+mod union_find;
 
 pub use inspect::{BoundingBox, MeshInfo, Stats, inspect};
-pub(crate) use inspect::{find as union_find_root, union as union_find_join};
+pub(crate) use union_find::{find as union_find_root, union as union_find_join};
 pub use repair::{
     RemovalReason, RemovedFace, RepairError, RepairOptions, RepairReport, Repaired, SplitEdge,
     SplitVertex, repair,

@@ -9,7 +9,8 @@
 //! vertex); copies made by splitting are appended at the end. Kept faces keep
 //! their order and their first vertex (a reversed face runs `v0, vn-1, …, v1`).
 
-use super::inspect::{find, polygon_area, union};
+use super::inspect::polygon_area;
+use super::union_find::{find, union};
 use super::soup::Soup;
 use super::{MeshError, SurfaceMesh};
 use crate::control::{Cancelled, Control};

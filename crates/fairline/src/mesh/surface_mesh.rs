@@ -6,11 +6,19 @@
 //! are linked into boundary loops. The outgoing halfedge stored for a boundary
 //! vertex is its boundary halfedge, so circulating from it visits the whole fan.
 
-use super::build::Halfedges;
 use super::soup::Soup;
 use super::{EdgeId, FaceId, HalfedgeId, MeshError, VertexId};
 use crate::Vec3;
 use rayon::prelude::*;
+
+/// The halfedge arrays without the boundary links.
+pub(super) struct Halfedges {
+    pub to: Vec<u32>,
+    pub next: Vec<u32>,
+    pub prev: Vec<u32>,
+    pub face: Vec<u32>,
+    pub face_halfedge: Vec<u32>,
+}
 
 /// "No element" in the index arrays.
 pub(super) const NONE: u32 = u32::MAX;
@@ -68,31 +76,6 @@ impl SurfaceMesh {
     /// Builds a mesh from positions and polygons (triangles, quads, n-gons).
     pub fn new<F: AsRef<[u32]>>(positions: Vec<Vec3>, faces: &[F]) -> Result<Self, MeshError> {
         Self::from_owned_soup(Soup::from_polygons(positions, faces))
-    }
-
-    /// Builds a mesh from a soup (see [`super::build`] for the steps).
-    ///
-    /// Rejects: indices out of range, faces with fewer than three vertices or
-    /// a repeated vertex, non-finite coordinates, edges shared by more than
-    /// two faces, and components whose faces cannot be oriented consistently
-    /// (Möbius strips). Faces whose orientation disagrees with their
-    /// component's first face are reversed (see [`SurfaceMesh::flipped_faces`]).
-    ///
-    /// A vertex where several fans of faces meet (a non-manifold vertex) is
-    /// split, one copy per fan: the fan with the vertex's first corner keeps
-    /// the index, the others get copies appended after the input vertices.
-    /// The original and its copies are pinned ([`SurfaceMesh::is_pinned`]):
-    /// no algorithm moves them, so [`SurfaceMesh::to_soup`] can merge the
-    /// copies back and write the input's vertex list bit-identical.
-    pub fn from_soup(soup: &Soup) -> Result<Self, MeshError> {
-        super::build::build(soup)
-    }
-
-    /// [`SurfaceMesh::from_soup`] of a soup the caller no longer needs: its
-    /// positions become the mesh's without a copy (what the mesh readers
-    /// do). The same mesh, bit for bit.
-    pub fn from_owned_soup(soup: Soup) -> Result<Self, MeshError> {
-        super::build::build_owned(soup)
     }
 
     /// Assembles a mesh from the builder's arrays.

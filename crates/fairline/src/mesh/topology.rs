@@ -35,14 +35,14 @@ pub fn components(mesh: &SurfaceMesh) -> (Vec<u32>, usize) {
     let mut parent: Vec<u32> = (0..n as u32).collect();
     for e in mesh.edges() {
         let (a, b) = mesh.edge_vertices(e);
-        super::inspect::union(&mut parent, a.0, b.0);
+        super::union_find::union(&mut parent, a.0, b.0);
     }
     // roots are the smallest vertex of their component (union keeps the
     // smaller root), so labels follow the first vertex of each component
     let mut label = vec![u32::MAX; n];
     let mut count = 0u32;
     for v in 0..n {
-        let r = super::inspect::find(&mut parent, v as u32) as usize;
+        let r = super::union_find::find(&mut parent, v as u32) as usize;
         if label[r] == u32::MAX {
             label[r] = count;
             count += 1;

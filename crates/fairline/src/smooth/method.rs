@@ -1,8 +1,7 @@
 //! The whole smoothing family behind one entry point, chosen by method:
 //! what `fairline smooth --method …`, the workbench and the Python `smooth`
-//! call, so that the choice of method, the per-method defaults and the
-//! warnings after a run live in one place (one place per
-//! concept). Each method is the function of its own module (Grüner thesis
+//! call, so that the choice of method and the per-method defaults live in
+//! one place. Each method is the function of its own module (Grüner thesis
 //! ch. 3); this only routes the shared options to it.
 
 use super::{

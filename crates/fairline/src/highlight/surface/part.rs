@@ -184,7 +184,7 @@ fn covered_fraction(part: &CoverageInput, light: &LightArray) -> f64 {
         .positions()
         .par_iter()
         .zip(&part.normals)
-        .map(|(&p, &n)| crate::highlight::linear::vertex_distance(light, p, n, min_cos))
+        .map(|(&p, &n)| crate::highlight::light::vertex_distance(light, p, n, min_cos))
         .unzip();
     let gradient = crate::highlight::readable::face_distance_gradients(mesh, &d, &branch);
     let r = Readability::for_part(mesh, light);

@@ -6,7 +6,7 @@
 //! file of several surfaces their `"surface"`. `"id"` is the position in
 //! `"lines"` (named by `fair-surface --from ID:T`).
 
-use crate::highlight::{PatchHighlights, SurfaceHighlightLine, SurfaceLight};
+use super::{PatchHighlights, SurfaceHighlightLine, SurfaceLight};
 use serde::Serialize;
 use serde_json::{Value, json};
 

@@ -4,7 +4,7 @@
 //! lines also carry `"radius"`; bands under `"bands"`), or OBJ `l`
 //! polylines in the groups `lines`, `band_lower`, `band_upper`.
 
-use crate::highlight::{HighlightBands, HighlightLine, HighlightLines};
+use super::{HighlightBands, HighlightLine, HighlightLines};
 use serde_json::{Value, json};
 
 /// One line as JSON; `radii` (circular lights) gives its `"radius"`.
