@@ -201,13 +201,14 @@ fn hermite_image(s: &BSplineSurface, c: &TrimCurve, tolerance: f64) -> ModelCurv
         let [u, v] = c.eval(t);
         s.eval(u, v)
     };
-    // C'(t): the trim curve's derivative by central differences inside
-    // its domain (one-sided at the ends), chained with S_u, S_v.
-    let deriv = |t: f64| -> Vec3 {
-        let h = 1e-6 * (b - a).max(f64::MIN_POSITIVE);
-        let (lo, hi) = ((t - h).max(a), (t + h).min(b));
-        let (p, q) = (c.eval(lo), c.eval(hi));
-        let dt = hi - lo;
+    // C'(t): the trim curve's derivative by central differences clipped to
+    // the piece [lo, hi] (pieces never straddle a knot, where the trim curve
+    // may have a kink), chained with S_u, S_v.
+    let deriv = |t: f64, lo: f64, hi: f64| -> Vec3 {
+        let h = 1e-6 * (hi - lo).max(f64::MIN_POSITIVE);
+        let (p0, p1) = ((t - h).max(lo), (t + h).min(hi));
+        let (p, q) = (c.eval(p0), c.eval(p1));
+        let dt = p1 - p0;
         if dt <= 0.0 {
             return Vec3::ZERO;
         }
@@ -242,8 +243,8 @@ fn hermite_image(s: &BSplineSurface, c: &TrimCurve, tolerance: f64) -> ModelCurv
         let (t0, t1) = (w[0], w[1]);
         let h = t1 - t0;
         let (p0, p1) = (eval(t0), eval(t1));
-        points.push(p0 + h / 3.0 * deriv(t0));
-        points.push(p1 - h / 3.0 * deriv(t1));
+        points.push(p0 + h / 3.0 * deriv(t0, t0, t1));
+        points.push(p1 - h / 3.0 * deriv(t1, t0, t1));
         points.push(p1);
         knots.extend([t1; 3]);
     }
@@ -262,7 +263,7 @@ fn hermite_image(s: &BSplineSurface, c: &TrimCurve, tolerance: f64) -> ModelCurv
 /// ¼, ½, ¾ of the piece.
 fn refine(
     eval: &impl Fn(f64) -> Vec3,
-    deriv: &impl Fn(f64) -> Vec3,
+    deriv: &impl Fn(f64, f64, f64) -> Vec3,
     t0: f64,
     t1: f64,
     tolerance: f64,
@@ -270,7 +271,7 @@ fn refine(
     out: &mut Vec<f64>,
 ) {
     let h = t1 - t0;
-    let (p0, p1, d0, d1) = (eval(t0), eval(t1), deriv(t0), deriv(t1));
+    let (p0, p1, d0, d1) = (eval(t0), eval(t1), deriv(t0, t0, t1), deriv(t1, t0, t1));
     let bez = [p0, p0 + h / 3.0 * d0, p1 - h / 3.0 * d1, p1];
     let at = |x: f64| {
         let y = 1.0 - x;

@@ -8,12 +8,10 @@
 //!   `SHELL_BASED_SURFACE_MODEL` (`MANIFOLD_SURFACE_SHAPE_REPRESENTATION`).
 //!   Each trim loop is an `EDGE_LOOP`; each of its curves an `EDGE_CURVE`
 //!   whose `SURFACE_CURVE` carries the exact trim curve as a `PCURVE` (a 2-D
-//!   B-spline curve) and, as the 3-D curve, its image on the surface with
-//!   the same parameter ([`crate::io::model_curve`]: exact along parameter
-//!   lines and on affine patches, else a cubic within
-//!   [`crate::io::model_curve::model_tolerance`]), so that the two agree as
-//!   a kernel such as OpenCASCADE requires. Vertices lie exactly on the
-//!   surface at the curves' ends.
+//!   B-spline curve) and, as the 3-D curve, a polyline through points of the
+//!   curve on the surface (the p-curve is the exact definition; CAD systems
+//!   rebuild the 3-D curve from it when they need it). Vertices lie exactly
+//!   on the surface at the curves' ends.
 //!
 //! Reals are written in the shortest form that reads back to the same
 //! `f64` (the syntax is the same as IGES's), knots as distinct values with
@@ -29,7 +27,6 @@ use std::path::Path;
 use crate::Vec3;
 use crate::bspline::{BSplineSurface, TrimCurve};
 use crate::io::iges_write::{iges_real as real, iges_timestamp};
-use crate::io::model_curve::{ModelCurve, model_curve};
 use crate::io::units::LengthUnit;
 use crate::io::{IoError, atomic_write};
 
@@ -203,29 +200,9 @@ fn polyline3(d: &mut Data, pts: &[Vec3]) -> u64 {
     ))
 }
 
-/// Writes a 3-D edge curve ([`crate::io::model_curve`]) and returns its id.
-fn curve3(d: &mut Data, c: &ModelCurve) -> u64 {
-    let pts: Vec<u64> = c.points.iter().map(|&p| d.point(p)).collect();
-    let (m, k) = knot_runs(&c.knots);
-    let deg = c.degree;
-    let pts = refs(&pts);
-    match &c.weights {
-        Some(w) => d.add(format!(
-            "(BOUNDED_CURVE()B_SPLINE_CURVE({deg},{pts},.UNSPECIFIED.,.F.,.F.)\
-             B_SPLINE_CURVE_WITH_KNOTS({m},{k},.UNSPECIFIED.)CURVE()\
-             GEOMETRIC_REPRESENTATION_ITEM()RATIONAL_B_SPLINE_CURVE({})REPRESENTATION_ITEM(''))",
-            reals(w)
-        )),
-        None => d.add(format!(
-            "B_SPLINE_CURVE_WITH_KNOTS('',{deg},{pts},.UNSPECIFIED.,.F.,.F.,{m},{k},.UNSPECIFIED.)"
-        )),
-    }
-}
-
 /// Writes the face of a trimmed surface and returns its id.
 fn face(d: &mut Data, s: &BSplineSurface, ctx2: u64) -> u64 {
     let sid = surface(d, s);
-    let tolerance = crate::io::model_curve::model_tolerance(s);
     let mut bounds = Vec::new();
     for (l, lp) in s.trims().iter().enumerate() {
         let n = lp.curves.len();
@@ -241,39 +218,28 @@ fn face(d: &mut Data, s: &BSplineSurface, ctx2: u64) -> u64 {
             .collect();
         let mut edges = Vec::with_capacity(n);
         for (k, c) in lp.curves.iter().enumerate() {
-            let end2 = c.eval(c.domain()[1]);
+            let [t0, t1] = c.domain();
+            let end2 = c.eval(t1);
             let v_end = if end2 == starts[(k + 1) % n] {
                 verts[(k + 1) % n]
             } else {
                 let p = d.point(s.eval(end2[0], end2[1]));
                 d.add(format!("VERTEX_POINT('',#{p})"))
             };
-            let m = model_curve(s, c, tolerance);
-            let c3 = if m
-                .points
-                .iter()
-                .all(|&p| p.distance(m.points[0]) <= tolerance)
-            {
-                // a degenerate edge (along a pole): the points of the trim
-                // curve on the surface, as a polyline of the one point
-                let [t0, t1] = c.domain();
-                let spans = c.knots().windows(2).filter(|w| w[1] > w[0]).count();
-                let samples = (8 * spans * c.degree()).clamp(8, 512);
-                let pts: Vec<Vec3> = (0..=samples)
-                    .map(|i| {
-                        let t = if i == samples {
-                            t1
-                        } else {
-                            t0 + (t1 - t0) * i as f64 / samples as f64
-                        };
-                        let [u, v] = c.eval(t);
-                        s.eval(u, v)
-                    })
-                    .collect();
-                polyline3(d, &pts)
-            } else {
-                curve3(d, &m)
-            };
+            let spans = c.knots().windows(2).filter(|w| w[1] > w[0]).count();
+            let samples = (8 * spans * c.degree()).clamp(8, 512);
+            let pts: Vec<Vec3> = (0..=samples)
+                .map(|i| {
+                    let t = if i == samples {
+                        t1
+                    } else {
+                        t0 + (t1 - t0) * i as f64 / samples as f64
+                    };
+                    let [u, v] = c.eval(t);
+                    s.eval(u, v)
+                })
+                .collect();
+            let c3 = polyline3(d, &pts);
             let c2 = curve2(d, c);
             let dr = d.add(format!("DEFINITIONAL_REPRESENTATION('',(#{c2}),#{ctx2})"));
             let pc = d.add(format!("PCURVE('',#{sid},#{dr})"));
