@@ -341,7 +341,7 @@ fn plant(mesh: &SurfaceMesh, kind: Kind, rng: &mut Rng, diag: f64) -> Option<Def
         .filter(|&&i| (p[i] - pc).length() < 0.3 * radius)
         .map(|&i| normals[i])
         .sum();
-    if !(n.length() > 0.0) {
+    if n.length().is_nan() || n.length() <= 0.0 {
         n = normals[c];
     }
     let n = n.normalize();
