@@ -224,7 +224,9 @@ fn smooth<'py>(
         let mut report = Report::new("smooth");
         let result = report.time(|| fairline::smooth::smooth(&mesh, &options));
         let out = result.map_err(|e| match e {
-            SmoothError::Solve(_) => Failure::computation(e.to_string()),
+            SmoothError::Solve(_) | SmoothError::Diverged(_) => {
+                Failure::computation(e.to_string())
+            }
             other => Failure::bad(other.to_string()),
         })?;
         let r = &out.report;

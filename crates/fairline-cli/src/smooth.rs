@@ -132,10 +132,10 @@ fn finite(name: &str, v: Option<f64>) -> Result<()> {
 }
 
 /// A library error caused by the options or the mesh is bad input (exit 2);
-/// a failed solve is a computation failure (exit 1).
+/// a failed solve or a diverged result is a computation failure (exit 1).
 fn smooth_error(e: SmoothError) -> anyhow::Error {
     match e {
-        SmoothError::Solve(_) => anyhow::Error::new(e),
+        SmoothError::Solve(_) | SmoothError::Diverged(_) => anyhow::Error::new(e),
         other => bad_input(other.to_string()),
     }
 }
