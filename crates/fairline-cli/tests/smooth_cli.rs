@@ -380,3 +380,59 @@ fn bad_input_exits_2_and_writes_nothing() {
         assert!(o.status.success() && String::from_utf8_lossy(&o.stdout).contains("Example"));
     }
 }
+
+/// An unstable step is a failure (exit 1, nothing written), never
+/// "converged" with coordinates near 1e306.
+#[test]
+fn a_diverging_smoothing_exits_1_and_writes_nothing() {
+    let dir = tmp("smooth-diverged");
+    let mut text = String::new();
+    let n = 8;
+    for j in 0..n {
+        for i in 0..n {
+            let _ = writeln!(text, "v {i} {j} {}", ((i * 7 + j * 3) % 5) as f64 * 0.1);
+        }
+    }
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let a = j * n + i + 1;
+            let _ = writeln!(
+                text,
+                "f {a} {} {}\nf {a} {} {}",
+                a + 1,
+                a + n + 1,
+                a + n + 1,
+                a + n
+            );
+        }
+    }
+    let input = dir.join("grid.obj");
+    std::fs::write(&input, text).unwrap();
+    for lambda in ["1e308", "1e6"] {
+        let out = dir.join("out.obj");
+        let report = dir.join("r.json");
+        let o = run(&[
+            "smooth",
+            s(&input),
+            "--method",
+            "laplace",
+            "--weights",
+            "cotan",
+            "--lambda",
+            lambda,
+            "-o",
+            s(&out),
+            "--report",
+            s(&report),
+        ]);
+        assert_eq!(
+            o.status.code(),
+            Some(1),
+            "lambda {lambda}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(String::from_utf8_lossy(&o.stderr).contains("diverged"));
+        assert!(!out.exists() && !report.exists());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -157,13 +157,15 @@ macro_rules! with_constraints {
 
 /// Smooths `mesh` with `options.method`: the method's own function with
 /// the options that apply to it (see [`SmoothOptions`]); the result is
-/// exactly that function's.
+/// exactly that function's, or [`SmoothError::Diverged`] when it is not a
+/// surface (non-finite, or moved beyond [`super::DIVERGED_DISPLACEMENT`]
+/// diagonals; see [`super::check_diverged`]).
 pub fn smooth(
     mesh: &SurfaceMesh,
     options: &SmoothOptions,
 ) -> Result<Output<SmoothReport>, SmoothError> {
     let o = options.clone();
-    match o.method {
+    let out = match o.method {
         SmoothMethod::Laplace => {
             let d = LaplaceOptions::default();
             let opts = d
@@ -208,7 +210,8 @@ pub fn smooth(
                 .max_iterations(o.iterations.unwrap_or(d.max_iterations));
             schneider_kobbelt(mesh, &opts.fixed(o.fixed).control(o.control))
         }
-    }
+    }?;
+    super::check_diverged(mesh, out)
 }
 
 #[cfg(test)]

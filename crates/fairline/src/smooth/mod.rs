@@ -65,6 +65,47 @@ pub enum SmoothError {
     /// The caller raised the cancel flag of the options' [`crate::Control`].
     #[error("cancelled")]
     Cancelled(#[from] crate::Cancelled),
+    /// The result is not a surface: a position is not finite, or vertices
+    /// moved far more than the mesh's size (an unstable step, e.g. a
+    /// Laplace λ far above 1). No result is given.
+    #[error("the smoothing diverged: {0}")]
+    Diverged(String),
+}
+
+/// How far (in bounding-box diagonals of the input) a vertex may move
+/// before a smoothing result counts as diverged: smoothing shrinks and
+/// flattens, so even heavy smoothing moves vertices less than one diagonal.
+pub const DIVERGED_DISPLACEMENT: f64 = 10.0;
+
+/// `out` when its positions are finite and no vertex moved more than
+/// [`DIVERGED_DISPLACEMENT`] diagonals of `input`; else
+/// [`SmoothError::Diverged`] saying which vertex and how far.
+pub fn check_diverged<R>(
+    input: &SurfaceMesh,
+    out: crate::Output<R>,
+) -> Result<crate::Output<R>, SmoothError> {
+    if let Some(v) = out.positions.iter().position(|p| !p.is_finite()) {
+        return Err(SmoothError::Diverged(format!(
+            "vertex {v} has a non-finite position; no result (use a smaller step, e.g. lambda ≤ 1)"
+        )));
+    }
+    let diagonal = crate::mesh::bounding_box(input.positions())
+        .map(|(lo, hi)| lo.distance(hi))
+        .unwrap_or(0.0);
+    let (mut worst, mut at) = (0.0f64, 0usize);
+    for (v, (p, q)) in input.positions().iter().zip(&out.positions).enumerate() {
+        let d = p.distance(*q);
+        if d > worst {
+            (worst, at) = (d, v);
+        }
+    }
+    if !worst.is_finite() || (diagonal > 0.0 && worst > DIVERGED_DISPLACEMENT * diagonal) {
+        return Err(SmoothError::Diverged(format!(
+            "vertex {at} moved {worst:.3e}, {:.1e} times the mesh's diagonal; no result (use a smaller step, e.g. lambda ≤ 1)",
+            worst / diagonal
+        )));
+    }
+    Ok(out)
 }
 
 /// Constraints of Grüner thesis §3.2.4, shared by every smoothing method;
