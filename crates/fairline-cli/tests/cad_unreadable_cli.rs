@@ -19,8 +19,8 @@ fn iges(entities: &[(i64, i64, &str)]) -> String {
         "1H,,1H;,,,,,32,308,15,308,15,,1.,2,2HMM,1,0.1,,1E-8,100.,,,11,0,;", 1
     ));
     let (mut d, mut p) = (String::new(), String::new());
-    let mut pseq = 1;
     for (k, &(ty, form, data)) in entities.iter().enumerate() {
+        let pseq = k + 1;
         let de = 2 * k + 1;
         assert!(data.len() <= 64);
         d.push_str(&format!(
@@ -39,7 +39,6 @@ fn iges(entities: &[(i64, i64, &str)]) -> String {
             de + 1
         ));
         p.push_str(&format!("{data:<64} {de:>7}P{pseq:>7}\n"));
-        pseq += 1;
     }
     out.push_str(&d);
     out.push_str(&p);

@@ -865,6 +865,24 @@ fn push_face(soup: &mut Soup, face: &[u32]) -> Result<(), &'static str> {
     Ok(())
 }
 
+/// A hint for surface formats fairline does not read (Rhino .3dm, G+Smo
+/// .g2, ACIS .sat, Parasolid .x_t, OpenCASCADE .brep): export IGES or STEP.
+fn foreign_surface_hint(path: &Path) -> &'static str {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some(
+            "3dm" | "g2" | "sat" | "sab" | "x_t" | "x_b" | "brep" | "igs.gz" | "jt" | "catpart"
+            | "prt" | "sldprt",
+        ) => {
+            "; this surface format is not read: export IGES or STEP from the program that wrote it"
+        }
+        _ => "",
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1134,23 +1152,5 @@ mod tests {
                 (4, &b"c"[..])
             ]
         );
-    }
-}
-
-/// A hint for surface formats fairline does not read (Rhino .3dm, G+Smo
-/// .g2, ACIS .sat, Parasolid .x_t, OpenCASCADE .brep): export IGES or STEP.
-fn foreign_surface_hint(path: &Path) -> &'static str {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some(
-            "3dm" | "g2" | "sat" | "sab" | "x_t" | "x_b" | "brep" | "igs.gz" | "jt" | "catpart"
-            | "prt" | "sldprt",
-        ) => {
-            "; this surface format is not read: export IGES or STEP from the program that wrote it"
-        }
-        _ => "",
     }
 }
