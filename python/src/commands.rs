@@ -13,6 +13,7 @@
 use crate::{Failure, Res, SoupArrays, mesh_from, positions_array, soup_arrays, soup_from};
 use fairline::enhance::{EnhanceSolver, Projection};
 use fairline::fair::FairMethod;
+use fairline::geom::CurvatureMethod;
 use fairline::highlight::{
     CircularLight, CircularLights, DetectOptions, HighlightError, HighlightModel, HighlightOptions,
     LightArray, Readability, UpAxis, circular_highlight_bands, circular_highlight_lines,
@@ -22,7 +23,6 @@ use fairline::io::RegionSpec;
 use fairline::mesh::{FaceId, VertexId};
 use fairline::smooth::SmoothMethod;
 use fairline::{Control, SurfaceMesh, Vec3};
-use fairline::geom::CurvatureMethod;
 use fairline_commands::curvature::CurvatureSettings;
 use fairline_commands::enhance::EnhanceSettings;
 use fairline_commands::fair::{FairInput, FairSettings};
@@ -605,7 +605,8 @@ fn highlight_lines(
             );
             (lines, bands, None)
         };
-        let document = fairline::highlight::highlight_lines_json(&lines, bands.as_ref(), radii.as_deref());
+        let document =
+            fairline::highlight::highlight_lines_json(&lines, bands.as_ref(), radii.as_deref());
         let counts = lines.counts();
         report.set("summary", counts);
         report.set_fields(counts);

@@ -11,11 +11,11 @@
 use crate::commands::{LightOptions, bad_choice, highlight_error, vec3};
 use crate::{Failure, Res};
 use fairline::bspline::BSplineSurface;
+use fairline::highlight::surface_highlight_lines_json;
 use fairline::highlight::{
     CircularLight, CircularLights, PartLights, PatchHighlights, SurfaceHighlightOptions,
     part_highlight_lines,
 };
-use fairline::highlight::surface_highlight_lines_json;
 use fairline::io::{parse_surfaces_json, surfaces_to_json};
 use fairline_commands::{Report, Warning};
 use pyo3::prelude::*;

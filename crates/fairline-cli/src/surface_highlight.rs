@@ -10,12 +10,12 @@ use crate::output::require_extension;
 use anyhow::Result;
 use fairline::Vec3;
 use fairline::bspline::BSplineSurface;
+use fairline::highlight::surface_highlight_lines_json;
 use fairline::highlight::{
     CircularLights, LightArray, PartLights, PatchHighlights, Readability, SurfaceHighlightLine,
     SurfaceHighlightOptions, SurfaceLight, part_highlight_lines, readable_surface_lines,
     readable_surface_lines_in_view,
 };
-use fairline::highlight::surface_highlight_lines_json;
 use fairline::picture::{Picture, labelled_mesh_picture, mesh_picture};
 use fairline::render::{PolylineLayer, RegionLabels, RenderOptions, SvgPlot};
 use serde_json::{Value, json};

@@ -3,7 +3,9 @@
 
 use crate::error::{CommandError, Subject};
 use crate::report::Report;
-use fairline::geom::{CurvatureError, CurvatureMethod, CurvatureOptions, CurvatureOutput, curvature};
+use fairline::geom::{
+    CurvatureError, CurvatureMethod, CurvatureOptions, CurvatureOutput, curvature,
+};
 use fairline::{Control, SurfaceMesh};
 
 /// The options of `curvature` (default: the CLI's).

@@ -173,7 +173,9 @@ impl From<FairError> for CommandError {
 impl From<SmoothError> for CommandError {
     fn from(e: SmoothError) -> Self {
         match e {
-            SmoothError::Solve(_) | SmoothError::Diverged(_) => CommandError::computation(chain_text(&e)),
+            SmoothError::Solve(_) | SmoothError::Diverged(_) => {
+                CommandError::computation(chain_text(&e))
+            }
             SmoothError::Cancelled(_) => CommandError::cancelled(),
             e => CommandError::bad_input(e.to_string()),
         }

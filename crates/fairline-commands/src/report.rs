@@ -120,7 +120,7 @@ impl Report {
     }
 }
 
-impl JsonReport {
+impl Report {
     /// Writes [`JsonReport::to_json`] as pretty JSON into `w` without
     /// copying the report (a repair report lists millions of faces); the
     /// same text as `serde_json::to_writer_pretty(w, &self.to_json())`.
@@ -130,7 +130,7 @@ impl JsonReport {
 }
 
 /// A [`JsonReport`] serialised as [`JsonReport::to_json`] would be.
-struct Whole<'a>(&'a JsonReport);
+struct Whole<'a>(&'a Report);
 
 impl serde::Serialize for Whole<'_> {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {

@@ -174,8 +174,8 @@ fn find_cycle(graph: &Graph) -> Option<Vec<String>> {
         stack.push(v.to_string());
         for w in graph
             .get(v)
-            .map(|m| m.keys().cloned().collect())
-            .unwrap_or_else(Vec::new)
+            .map(|m| m.keys().cloned().collect::<Vec<String>>())
+            .unwrap_or_default()
         {
             match state.get(&w) {
                 Some(1) => {

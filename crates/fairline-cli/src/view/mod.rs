@@ -257,9 +257,9 @@ fn redirect_page(url: &str) -> std::io::Result<PathBuf> {
     }
     let mut f = options.open(&path)?;
     // the URL is ours (host, port, hex token): nothing to escape
-    write!(
+    writeln!(
         f,
-        "<!doctype html><meta charset=\"utf-8\"><meta http-equiv=\"refresh\" content=\"0;url={url}\"><title>fairline view</title><a href=\"{url}\">Open the fairline workbench</a>\n"
+        "<!doctype html><meta charset=\"utf-8\"><meta http-equiv=\"refresh\" content=\"0;url={url}\"><title>fairline view</title><a href=\"{url}\">Open the fairline workbench</a>"
     )?;
     f.sync_all()?;
     Ok(path)

@@ -13,9 +13,9 @@ mod contour;
 pub mod detect;
 mod drawn_stats;
 mod light;
-mod lines_file;
 mod light_choice;
 mod linear;
+mod lines_file;
 pub mod quartic;
 pub mod readable;
 pub mod surface;
@@ -28,11 +28,10 @@ pub use detect::{
     Site, detect_irregularities, detect_region, detect_whole_part,
 };
 pub use drawn_stats::DrawnLineStats;
-pub use lines_file::{highlight_lines_json, highlight_lines_obj};
-pub use surface_lines_file::{SurfaceLineCounts, surface_highlight_lines_json, surface_line_json};
 pub use light::{CircleApproach, CircularLight, CircularLights, LightArray, UpAxis};
 pub use light_choice::LightChoice;
 pub use linear::{HighlightModel, HighlightOptions, highlight_lines};
+pub use lines_file::{highlight_lines_json, highlight_lines_obj};
 /// The one quartic solver (Nishiyama et al. Eq. (2.15)–(2.16)), shared by
 /// circular lights on meshes and on B-spline surfaces.
 pub use quartic::{Roots, quartic_roots};
@@ -45,6 +44,7 @@ pub use surface::{
     readable_surface_lines, readable_surface_lines_in_view, surface_highlight_lines,
     surface_signed_distance,
 };
+pub use surface_lines_file::{SurfaceLineCounts, surface_highlight_lines_json, surface_line_json};
 
 use crate::mesh::MeshError;
 

@@ -16,8 +16,8 @@
 
 use super::MeshError;
 use super::soup::Soup;
-use super::union_find::{find, union};
 use super::surface_mesh::{Halfedges, NONE, SplitVertices, SurfaceMesh};
+use super::union_find::{find, union};
 use rayon::prelude::*;
 
 /// Below this many faces the parallel steps run sequentially.
@@ -337,7 +337,6 @@ fn consistently_oriented(soup: &Soup, edges: &EdgeTable) -> bool {
         (0..ne).all(consistent)
     }
 }
-
 
 /// Step 4a: the halfedges of every face, in the face's (possibly reversed)
 /// order. Edge `e` owns halfedges `2e` (smaller → larger vertex) and `2e + 1`.

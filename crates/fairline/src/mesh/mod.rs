@@ -11,7 +11,6 @@ mod topology;
 mod union_find;
 
 pub use inspect::{BoundingBox, MeshInfo, Stats, inspect};
-pub(crate) use union_find::{find as union_find_root, union as union_find_join};
 pub use repair::{
     RemovalReason, RemovedFace, RepairError, RepairOptions, RepairReport, Repaired, SplitEdge,
     SplitVertex, repair,
@@ -22,6 +21,7 @@ pub use topology::{
     StructureLine, TopologySummary, Triangulation, boundary_loops, components, structure_lines,
     topology_summary, triangle_list, triangulate,
 };
+pub(crate) use union_find::{find as union_find_root, union as union_find_join};
 
 use thiserror::Error;
 

@@ -10,8 +10,8 @@
 //! their order and their first vertex (a reversed face runs `v0, vn-1, …, v1`).
 
 use super::inspect::polygon_area;
-use super::union_find::{find, union};
 use super::soup::Soup;
+use super::union_find::{find, union};
 use super::{MeshError, SurfaceMesh};
 use crate::control::{Cancelled, Control};
 use serde::Serialize;

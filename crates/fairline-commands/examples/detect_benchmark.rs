@@ -31,19 +31,20 @@
 //! from the held-out set.
 //!
 //! ```text
-//! cargo run --release -p fairline --example detect_benchmark -- [--set tuning|held-out] [--large] [--no-fair] [--parts a,b]
+//! cargo run --release -p fairline-commands --example detect_benchmark -- [--set tuning|held-out] [--large] [--no-fair] [--parts a,b]
 //! ```
 //!
 //! Default sizes are 5k–36k vertices (a few minutes on two cores);
 //! `--large` generates the surfaces at about 500k vertices and refines the
 //! real meshes to at least 100k.
 
-use fairline::fair::{AUTO_RINGS, FairMethod, FairOptions, fair_highlight_lines, grow_region};
+use fairline::fair::{FairMethod, FairOptions, fair_highlight_lines, grow_region};
 use fairline::highlight::{
     DetectOptions, Detection, HighlightModel, HighlightOptions, LightArray, LightChoice, UpAxis,
 };
 use fairline::mesh::bounding_box;
 use fairline::{FaceId, SurfaceMesh, Vec3, VertexId, geom, shapes};
+use fairline_commands::regions::AUTO_RINGS;
 use std::collections::{HashMap, VecDeque};
 use std::time::Instant;
 
