@@ -51,7 +51,7 @@ use super::step::nurbs::{ArcMap, Nurbs3, revolve};
 use super::step::{invert_point, polyline};
 use crate::Vec3;
 use crate::bspline::{BSplineError, BSplineSurface, TrimCurve, TrimLoop};
-use crate::io::surface_file::Unreadable;
+use crate::io::unreadable::Unreadable;
 
 mod faces;
 

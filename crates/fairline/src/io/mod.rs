@@ -32,6 +32,7 @@ mod stl;
 pub mod surface_file;
 pub mod surface_json;
 pub mod units;
+pub mod unreadable;
 
 use std::fmt;
 use std::fs::File;

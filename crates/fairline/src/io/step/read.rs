@@ -95,7 +95,7 @@ pub struct StepImport {
     /// The faces that could not be read (only when reading with
     /// `collect`, see [`super::read_step_with`]); none of them is in
     /// [`Self::surfaces`].
-    pub unreadable: Vec<crate::io::surface_file::Unreadable>,
+    pub unreadable: Vec<crate::io::unreadable::Unreadable>,
 }
 
 /// Where the trimming curves of a file's faces came from, counted per
@@ -838,7 +838,7 @@ pub(super) fn read(ex: &Exchange, collect: bool) -> R<StepImport> {
         match i.type_name() {
             "ADVANCED_FACE" | "FACE_SURFACE" => match rd.face(i) {
                 Ok(s) => out.surfaces.push(s),
-                Err(e) if collect => out.unreadable.push(crate::io::surface_file::Unreadable {
+                Err(e) if collect => out.unreadable.push(crate::io::unreadable::Unreadable {
                     entity: format!("#{id} {}", i.type_name()),
                     reason: e.to_string(),
                     estimated_area: None,
