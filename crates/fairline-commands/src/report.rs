@@ -137,7 +137,7 @@ impl serde::Serialize for Whole<'_> {
         use serde::ser::SerializeMap;
         let r = self.0;
         let time = json!(r.compute.as_secs_f64());
-        let warnings = json!(r.warnings);
+        let warnings = json!(r.messages(FrontEnd::Cli));
         let mut entries: Vec<(&str, &Value)> = r
             .map
             .iter()
