@@ -202,7 +202,11 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
     if let Some(a) = area {
         report.set("area", a);
     }
-    report.set("bounding_box", [lo.to_array(), hi.to_array()]);
+    // no face read: no bounding box (an empty box is not a number)
+    let has_box = !surfaces.is_empty() && lo.is_finite() && hi.is_finite();
+    if has_box {
+        report.set("bounding_box", [lo.to_array(), hi.to_array()]);
+    }
     if let Some(u) = &unit {
         report.set("unit", u);
     }
@@ -239,16 +243,20 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
             "unit                {}",
             unit.as_deref().unwrap_or("(none)")
         );
-        let _ = writeln!(
-            out,
-            "bounding box        ({}, {}, {}) .. ({}, {}, {}) (of the faces)",
-            human(lo.x),
-            human(lo.y),
-            human(lo.z),
-            human(hi.x),
-            human(hi.y),
-            human(hi.z)
-        );
+        if has_box {
+            let _ = writeln!(
+                out,
+                "bounding box        ({}, {}, {}) .. ({}, {}, {}) (of the faces)",
+                human(lo.x),
+                human(lo.y),
+                human(lo.z),
+                human(hi.x),
+                human(hi.y),
+                human(hi.z)
+            );
+        } else {
+            let _ = writeln!(out, "bounding box        (none: no face was read)");
+        }
         if let Some(a) = area {
             let _ = writeln!(out, "area                {} (trimmed faces)", human(a));
         }

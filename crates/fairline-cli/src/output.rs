@@ -400,12 +400,16 @@ pub fn install_signal_handler() {
     drop(spawned);
 }
 
+/// The environment variable that caps a process's address space in MiB
+/// (set by `fairline inspect` for each part's commands).
+pub const MEMORY_LIMIT_ENV: &str = "FAIRLINE_MEMORY_LIMIT_MB";
+
 /// Caps this process's address space at the number of MiB in the
 /// environment variable `FAIRLINE_MEMORY_LIMIT_MB`, when it is set (how
 /// `fairline inspect` limits each part's processes): an allocation beyond
 /// it aborts the process instead of exhausting the machine.
 pub fn apply_memory_limit() -> Result<()> {
-    let Some(value) = std::env::var_os(crate::inspect::MEMORY_LIMIT_ENV) else {
+    let Some(value) = std::env::var_os(MEMORY_LIMIT_ENV) else {
         return Ok(());
     };
     let mb: u64 = value
@@ -415,7 +419,7 @@ pub fn apply_memory_limit() -> Result<()> {
         .ok_or_else(|| {
             bad_input(format!(
                 "{}={}: give a positive number of MiB",
-                crate::inspect::MEMORY_LIMIT_ENV,
+                MEMORY_LIMIT_ENV,
                 value.to_string_lossy()
             ))
         })?;

@@ -57,10 +57,18 @@ pub fn load_surface_file_listing(path: &Path) -> Result<SurfaceFile> {
 
 /// All surfaces of a JSON, IGES or STEP file, with the file's length unit.
 /// Faces the file holds that cannot be read fail it (exit status 1, naming
-/// them) unless `--skip-unreadable` was given, which warns about them.
+/// them) unless `--skip-unreadable` was given, which warns about them; a
+/// file none of whose faces can be read is bad input (exit status 2).
 pub fn load_surface_file(path: &Path) -> Result<SurfaceFile> {
     let file = read_surface_file(path).map_err(|e| crate::output::name_file(path, e))?;
     if let Some(summary) = file.unreadable_summary(UNREADABLE_NAMED, None) {
+        if file.surfaces.is_empty() {
+            // nothing left to go on with: the file is unusable as it is
+            return Err(bad_input(format!(
+                "{}: no face could be read: {summary}",
+                path.display()
+            )));
+        }
         if !skip_unreadable() {
             return Err(unreadable_error(path, &summary));
         }

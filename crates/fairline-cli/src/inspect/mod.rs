@@ -19,7 +19,6 @@ mod part;
 mod plan;
 mod thumb;
 
-pub use part::MEMORY_LIMIT_ENV;
 
 use crate::error::bad_input;
 use crate::output::{Job, say};

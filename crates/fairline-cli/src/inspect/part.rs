@@ -21,9 +21,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// The environment variable that caps a `fairline` process's address
-/// space, in MiB (read at start-up by every command).
-pub const MEMORY_LIMIT_ENV: &str = "FAIRLINE_MEMORY_LIMIT_MB";
+use crate::output::MEMORY_LIMIT_ENV;
 
 /// Per-part limits.
 #[derive(Clone, Copy, Debug)]
