@@ -14,14 +14,16 @@ use std::path::PathBuf;
 /// flat spots, ripples, kinks up to about two light spacings across — and
 /// turns them into connected face regions. The surface's
 /// normals (from a fine local quadric fit) are compared with a smooth cubic
-/// fit over two spacings around each point; the score is the highlight-line
-/// displacement that difference causes, in tenths of a spacing (score 1 =
-/// the line is displaced by 0.1 spacing against the smooth surface's line).
+/// fit over 1.5 light spacings (--smooth-radius) around each point; the
+/// score is the highlight-line displacement that difference causes, in
+/// tenths of a spacing (score 1 = the line is displaced by 0.1 spacing
+/// against the smooth surface's line).
 /// Smooth shape (strong curvature, saddles, cylinders) scores near 0;
 /// shape finer than the smooth radius (ears, horns, legs, creases: the
-/// surface turns by more than 1 rad within it) is counted as shape and not
-/// judged (reported); on noisy scans the threshold rises above the noise
-/// (reported). A second measure flags flat spots wider than the fit: where
+/// surface turns by more than 1 rad within it) is judged again with light
+/// arrays of half the spacing, a quarter, … where the mesh resolves them,
+/// and what stays unjudged is reported first; on noisy scans the threshold
+/// rises above the noise (reported). A second measure flags flat spots wider than the fit: where
 /// the curvature falls, over an area, against the surface smoothed at four
 /// smooth radii (report keys flat_spot_floor, flat_spot_sites; regions are
 /// ranked by severity, how far their strongest site exceeds its measure's

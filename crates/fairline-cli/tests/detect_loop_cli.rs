@@ -204,7 +204,7 @@ fn the_remaining_defect_warning_says_what_detect_on_the_result_says() {
     ]);
     ok(&o);
     let r2 = json(&rep2);
-    // inside the faired region detection is quiet: the old rule said nothing
+    // inside the faired region detection is quiet
     let threshold = r2["detect_threshold"].as_f64().unwrap();
     assert!(
         r2["detect_score_after"].as_f64().unwrap() <= threshold,

@@ -1361,7 +1361,7 @@ fn page_shows_bspline_patches_and_fairs_a_surface_from_uv_endpoints() {
     // of a pre-image lies behind the part — by a ray cast on the CPU against
     // the drawn triangles, independent of the page's depth-buffer test — with
     // no unoccluded line point within the 8 px a pick reaches; a click there
-    // (where the old nearest-projection pick took the hidden point) picks
+    // (where a nearest-projection pick would take the hidden point) picks
     // nothing, and hovering there lights up no line
     let hidden = b.eval(HIDDEN_LINE_POINT);
     assert!(

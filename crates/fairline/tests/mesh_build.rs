@@ -1,10 +1,9 @@
 //! The halfedge builder (`SurfaceMesh::from_soup`) gives exactly the
-//! connectivity it gave before it was made faster: every
-//! halfedge's target, next, previous and face, every vertex's outgoing and
-//! every face's halfedge, the reversed faces and the split non-manifold
-//! vertices, hashed, against fingerprints recorded with the builder of
-//! commit 85564a7 (before the change). Inputs: the shapes the demo draws
-//! from, dirty meshes (faces reversed, vertices shuffled, bow ties and cones
+//! connectivity of the reference builder: every halfedge's target, next,
+//! previous and face, every vertex's outgoing and every face's halfedge,
+//! the reversed faces and the split non-manifold vertices, hashed, against
+//! fingerprints recorded with the builder of commit 85564a7. Inputs: the
+//! shapes the demo draws from, dirty meshes (faces reversed, vertices shuffled, bow ties and cones
 //! touching at a tip, isolated vertices, polygons), meshes large enough for
 //! the builder's parallel paths, and the real meshes of ../shared/data.
 

@@ -1,8 +1,7 @@
-//! Fingerprints of results recorded before the last algorithms were put
-//! into the one shape of the crate (highlight lines, curvature,
-//! polyline networks) and before the implicit smoothing step fused its
-//! assembly into the constrained solve: the same inputs must give the same
-//! bits. A fingerprint is the FNV-1a hash of the bits of every coordinate
+//! Fingerprints of results recorded from reference implementations of
+//! highlight lines, curvature, polyline networks and the implicit
+//! smoothing step (written outside the crate's one shape, with their own
+//! assembly): the same inputs must give the same bits. A fingerprint is the FNV-1a hash of the bits of every coordinate
 //! (and every count) of a result, so any change of any value shows.
 
 use fairline::Vec3;
@@ -331,7 +330,7 @@ fn dirty_soup() -> fairline::Soup {
     fairline::Soup::from_polygons(positions, &faces)
 }
 
-/// Recorded from the code before the changes (see the module doc).
+/// Recorded from the reference implementations (see the module doc).
 const RECORDED: &[(&str, &str)] = &[
     ("linear lines sphere", "4fd5d9c2b074a01f"),
     ("linear lines field", "78c4fe83d52bdcab"),

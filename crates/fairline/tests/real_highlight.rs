@@ -173,14 +173,12 @@ fn site_checksum(d: &fairline::highlight::Detection) -> u64 {
     h
 }
 
-/// Splitting `detect_irregularities` into named steps and adding the
-/// discretisation floor left the measure itself unchanged: the site scores
-/// and positions, and with the noise floors off (both factors 0) the
-/// regions, equal bit for bit what the code before the change gave (the
-/// checksums and scores below were recorded with it, same lights). The
-/// region scores were recorded again when the region margin began to grow
-/// with R on meshes coarse against the spacing: fewer,
-/// larger regions around the same sites, whose checksums did not change.
+/// The measure of `detect_irregularities` is pinned: the site scores and
+/// positions, and with the noise floors off (both factors 0) the regions,
+/// equal bit for bit the recorded checksums and scores below (same
+/// lights). The region scores are those of the region margin that grows
+/// with R on meshes coarse against the spacing (fewer, larger regions
+/// around the same sites).
 #[test]
 fn detection_scores_equal_the_recorded_ones() {
     type Recorded = (&'static str, u64, &'static [f64]);

@@ -535,7 +535,7 @@ fn detect_section(demo: &Demo) -> Result<Section> {
     Ok(Section {
         title: "Detection: quiet on curved shape, finds a small defect".into(),
         text: format!(
-            "Strongly curved sin·sin hills ({n} × {n} vertices over [−1, 1]², summits, saddles and valleys) checked with the lights `fairline detect` chooses for them with no options: the clean surface gets no region — strong but smooth curvature is shape, not a defect. The same hills with a bump {amplitude:.4} high (0.1 % of the bounding-box diagonal) and σ = {sigma} wide at ({cx}, {cy}) get one region, ranked first, around the bump. The measure compares the surface's normals with a smooth cubic fit over 1.5 light spacings (README, Detection)."
+            "Strongly curved sin·sin hills ({n} × {n} vertices over [−1, 1]², summits, saddles and valleys) checked with the lights `fairline detect` chooses for them with no options: the clean surface gets no region — strong but smooth curvature is shape, not a defect. The same hills with a bump {amplitude:.4} high (0.1 % of the bounding-box diagonal) and σ = {sigma} wide at ({cx}, {cy}) get one region, ranked first, around the bump. The measure compares the surface's normals with a smooth cubic fit over 1.5 light spacings (guide: Inspect a mesh, Highlight lines)."
         ),
         images,
         values: json!(values),

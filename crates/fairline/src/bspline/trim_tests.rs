@@ -386,12 +386,12 @@ fn builds_a_mesh(t: &Tessellation) -> Result<(), crate::MeshError> {
 
 /// A trimming loop through a point one ulp off a grid corner on the
 /// domain's border (as featuretype.STEP's plane faces have, their loops
-/// computed in floating point) used to become a second vertex beside the
-/// corner; the clipped cell's ear clipping then made a sliver on the
+/// computed in floating point) must not become a second vertex beside the
+/// corner: the clipped cell's ear clipping would make a sliver on the
 /// corner's edge, shared by three faces, and the part could not be drawn
 /// ("edge … is non-manifold"). Loop points within 1e-9 of a cell of a grid
-/// line are now moved onto it: the tessellation is a mesh on every grid,
-/// the corner is one vertex, and the area is still the polygon's.
+/// line are moved onto it: the tessellation is a mesh on every grid, the
+/// corner is one vertex, and the area is still the polygon's.
 #[test]
 fn a_loop_point_one_ulp_off_a_grid_corner_gives_a_manifold_tessellation() {
     let net = vec![

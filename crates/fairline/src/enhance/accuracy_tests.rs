@@ -775,8 +775,8 @@ fn measure_all() -> Vec<Measured> {
     all
 }
 
-/// The shapes whose coarse input under-samples the features, where the
-/// issue asks for at least 20 % lower distances: features narrower than
+/// The shapes whose coarse input under-samples the features, where vertex
+/// flow must give at least 20 % lower distances: features narrower than
 /// about three input edges, whose chords carry the input's largest errors
 /// (rounded cube: fillet r = 0.3 over 2.5 edges; filleted cylinder: fillet
 /// r = 0.3 over 3 edges; sharp cube: every edge and corner cut by chords

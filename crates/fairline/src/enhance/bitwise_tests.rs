@@ -1,9 +1,8 @@
 //! Bit-for-bit regression of [`enhance_features`]:
 //! checksums of the output positions and of the solver counts of the
-//! report, recorded with the code before the solver strategy moved to
-//! `crate::solve` and the function took the one algorithm shape (session
-//! 18, commit 85564a7). A refactor that changes one bit of one coordinate
-//! of any case fails here.
+//! report, recorded from the reference implementation of commit 85564a7
+//! (its own solver code, before the one algorithm shape). A refactor that
+//! changes one bit of one coordinate of any case fails here.
 
 use super::*;
 use crate::shapes;

@@ -35,7 +35,7 @@
 //!   whole 2-ring (the F_em rows mix x, y, z over the 1-ring; only the
 //!   F_smo rows are per coordinate), so its factor fills in heavily:
 //!   1.3 · 10⁷ nonzeros at 10k vertices, 2.2 · 10⁸ at 100k, 3.2 · 10⁹ (26 GB)
-//!   at 1M; the factorisation was 84–91 % of the time and 1M did not fit.
+//!   at 1M; the factorisation takes 84–91 % of the time and 1M does not fit.
 //! - **Conjugate gradients** — [`crate::solve::pcg_with`]:
 //!   block-Jacobi (3 × 3 per vertex) preconditioned CG on the same normal
 //!   equations, matrix-free: L is stored per vertex (the coefficients of

@@ -53,7 +53,7 @@
 //!
 //! Reach. Sixty Taubin iterations smooth a wavelength of 4 R when R is
 //! about five mean edges — the meshes too coarse for the spacing, where R
-//! is raised to 2 r_f and defects of the scale (a spacing or two)
+//! is raised to 2 r_f and defects a spacing or two wide
 //! can be wider than R: the case this measure is for. On finer meshes the
 //! filter reaches less far (its attenuation per iteration falls with
 //! (h/ℓ)⁴), so the smoothed surface keeps wide dents and the measure stays

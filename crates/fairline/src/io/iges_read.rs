@@ -29,7 +29,8 @@
 //! parameter-space curve alone.
 //!
 //! Surfaces of revolution (entity 120, IGES 5.3 §4.18: axis line `L`,
-//! generatrix `C(t)` — a line 110 or a B-spline curve 126 — and the angles
+//! generatrix `C(t)` — a line 110, a circular arc 100, an elliptic arc 104
+//! or a B-spline curve 126 — and the angles
 //! `SA`, `TA`) are converted exactly to NURBS (Piegl & Tiller A8.1, through
 //! [`crate::io::step`]'s `revolve`, as the STEP reader does for its
 //! analytic surfaces): `u` is the generatrix parameter `t` as in the file,
@@ -38,9 +39,11 @@
 //! are given in `(t, θ)`; `θ` is mapped to the arcs' parameter exactly
 //! where a boundary segment is parallel to an axis of `(t, θ)` (a line
 //! stays a line under the monotone map of one coordinate) and by dense
-//! sampling otherwise. A 144 on any other surface type is skipped and
-//! counted in [`IgesImport::skipped_trimmed`]. Bounded surfaces (143) are
-//! flagged but not trimmed.
+//! sampling otherwise. Planes (entity 108) trimmed by a 144 become bilinear
+//! patches with their boundaries from the 142s' model-space curves. A 144
+//! on any other surface type is counted in [`IgesImport::skipped_trimmed`]
+//! and listed, with bounded surfaces (143), B-rep faces (510) and surface
+//! entities of a type not read, in [`IgesImport::unreadable`].
 
 use std::path::{Path, PathBuf};
 
@@ -160,11 +163,11 @@ pub struct IgesImport {
     /// surface.
     pub trimmed: usize,
     /// Entities 144 not applied: their base surface is neither an entity
-    /// 128 nor a converted 120, or a boundary (142) has neither a
+    /// 128, a converted 120 nor a plane 108, or a boundary (142) has neither a
     /// parameter-space nor a model-space curve (that face stays untrimmed).
     pub skipped_trimmed: usize,
     /// Entities 120 not converted: their generatrix is not a single line
-    /// (110) or B-spline curve (126).
+    /// (110), circular arc (100), elliptic arc (104) or B-spline curve (126).
     pub skipped_surfaces: usize,
     /// Unit name from the Global section (field 15), if given.
     pub units: Option<String>,

@@ -649,7 +649,7 @@ fn newton_step(
     // Levenberg–Marquardt steps with ever stronger damping. Far from
     // Δ_B H = 0 (the cow "Spot": ears, horns and legs) the Gauss–Newton
     // step, clamped to half an edge, often lowers the merit for no step
-    // length down to 1/64 and the iteration used to stop after one step;
+    // length down to 1/64, so the iteration would stop after one step;
     // a strongly damped step turns toward −Jᵀf, which lowers the merit
     // for a small enough length whenever f is not stationary.
     let light = if any_floating { 1e-10 } else { 1e-12 };

@@ -973,8 +973,8 @@ fn schneider_kobbelt_keeps_descending_on_spot() {
 /// The spring model's defaults on the cow "Spot" (the
 /// real mesh of ../shared/data) keep its legs and horns: the relative
 /// stopping rule ends the iteration with the volume within 1 % and no vertex
-/// moved by more than two mean edge lengths, where the old fixed count of
-/// 200 sweeps moved them more than twice as far.
+/// moved by more than two mean edge lengths, where a fixed count of 200
+/// sweeps moves them more than twice as far.
 #[test]
 fn spring_defaults_keep_the_legs_and_horns_of_spot() {
     let Some(path) = crate::shared_data::shared_data("meshes/spot.ply") else {
@@ -997,7 +997,7 @@ fn spring_defaults_keep_the_legs_and_horns_of_spot() {
         "largest motion {} mean edge lengths",
         r.max_displacement / e
     );
-    // the fixed count of 200 sweeps (the old default) erodes the features
+    // a fixed count of 200 sweeps erodes the features
     let mut b = spot.clone();
     let rb = spring_smooth(
         &mut b,
@@ -1163,7 +1163,7 @@ fn recorded_cases() -> Vec<(&'static str, Vec<Vec3>, SmoothReport)> {
     out
 }
 
-/// Results of [`recorded_cases`] before the change to the one shape:
+/// Results of [`recorded_cases`] from the reference implementation:
 /// (name, fingerprint, Σx, Σy, Σz of the positions). The two open-cap
 /// Schneider–Kobbelt cases record the method with its estimated G¹
 /// normals made perpendicular to the boundary curve.
@@ -1275,19 +1275,19 @@ const RECORDED: &[(&str, u64, f64, f64, f64)] = &[
     ),
 ];
 
-/// Moving the five methods to the one shape (input by
-/// reference, `Output` with positions and report, constraints as option
-/// fields) changed no result: positions and report bit for bit equal the
-/// fingerprints recorded before the change — for the explicit methods and
-/// the spring model. Implicit smoothing and Schneider–Kobbelt now solve
-/// through the one constrained solve (`solve::ConstrainedSolver`) on
-/// geom's cotangent Laplacian, whose diagonal −Σ w is summed in
-/// another order: their results differ by round-off only. Measured against
-/// the former assembly (run side by side before it was removed): at most
-/// 2.0e-13 mean edge lengths over five implicit configurations (default;
-/// hierarchical boundary, t = 2, 3 steps; fixed vertices with volume
-/// preservation and tangential motion; fixed boundary; t = 50, 3 steps).
-/// Here the coordinate sums must agree with the recorded ones to 1e-10.
+/// The five methods in the one shape (input by reference, `Output` with
+/// positions and report, constraints as option fields) give the recorded
+/// results: positions and report bit for bit equal the fingerprints of the
+/// reference implementation for the explicit methods and the spring model.
+/// Implicit smoothing and Schneider–Kobbelt solve through the one
+/// constrained solve (`solve::ConstrainedSolver`) on geom's cotangent
+/// Laplacian, whose diagonal −Σ w is summed in another order than the
+/// reference's direct assembly: their results differ by round-off only
+/// (measured side by side: at most 2.0e-13 mean edge lengths over five
+/// implicit configurations — default; hierarchical boundary, t = 2, 3
+/// steps; fixed vertices with volume preservation and tangential motion;
+/// fixed boundary; t = 50, 3 steps). Here the coordinate sums must agree
+/// with the recorded ones to 1e-10.
 #[test]
 fn results_equal_the_recorded_fingerprints() {
     let cases = recorded_cases();

@@ -67,8 +67,8 @@ use rayon::prelude::*;
 use std::sync::Mutex;
 
 /// Nodes per chunk of the V-cycle's loops: small chunks balance the two
-/// threads on small meshes (10k-vertex rounded cube: 0.23 → 0.20 s for the
-/// whole command against chunks of 1024).
+/// threads on small meshes (10k-vertex rounded cube: 0.20 s for the whole
+/// command, 0.23 s with chunks of 1024).
 const NODES: usize = 256;
 
 /// Chunks of [`NODES`] nodes per parallel task at least: the coarse levels

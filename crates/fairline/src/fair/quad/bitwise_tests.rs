@@ -1,7 +1,7 @@
 //! Bit-for-bit regression of [`fair_structure_lines`]: checksums of the
-//! output positions and the report, recorded with an independent earlier
+//! output positions and the report, recorded with an independent reference
 //! implementation (its own banded Cholesky and line-block conjugate
-//! gradients, commit 85564a7), which the current one must reproduce.
+//! gradients, commit 85564a7), which this one must reproduce.
 
 use super::tests::{zigzag_grid, zigzag_staircase};
 use super::*;

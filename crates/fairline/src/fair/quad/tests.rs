@@ -533,7 +533,7 @@ fn structure_line_cases() -> Vec<(String, SurfaceMesh, SurfaceMesh, Height)> {
 /// cosine roof of 22 × 41 points, a Gaussian bump, and a staircase-shaped
 /// patch whose rows have 21 down to 9 points), the default fairing — points
 /// sliding along a fit of the input surface — against Taubin with 50
-/// iterations (the baseline, its defaults; also with the boundary
+/// iterations (the baseline, with its defaults; also with the boundary
 /// fixed, Taubin's best case):
 /// - closer to the true surface than both Taubin variants (max and RMS);
 /// - its lines closer to the truth's lines than Taubin 50 (mean and max of

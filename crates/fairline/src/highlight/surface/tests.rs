@@ -597,19 +597,18 @@ fn quantile(xs: &[f64], q: f64) -> f64 {
 }
 
 /// Linear highlight lines on a surface agree with the
-/// same lights on its tessellation. On the teapot's lid (the patches the
-/// lines used to miss: the lights were the middle 100 of a d_P range
-/// stretched by the near-silhouette samples, so only silhouette bands were
-/// drawn) and on a generated bump, more than 90 % of the mesh-line nodes
+/// same lights on its tessellation. On the teapot's lid (patches where
+/// lights taken as the middle 100 of a d_P range stretched by the
+/// near-silhouette samples would draw only silhouette bands) and on a
+/// generated bump, more than 90 % of the mesh-line nodes
 /// are on lights the surface draws too, 95 % of those lie within
 /// 0.1 spacing of the surface line of the same light and 95 % of the
 /// surface-line points within 0.1 spacing of the mesh line (the rest is
-/// near silhouettes, where the two drop different cells). The spout patch
-/// that once reached only 89.3 % coverage: its grid cells near the
-/// silhouette span 6–10 spacings, and the surface dropped cells spanning
-/// more than 4 spacings while the mesh counts ceil(hi/s) − floor(lo/s) ≤
-/// 4 + 2 levels per triangle; both now use the one rule
-/// (`contour::too_many_levels`).
+/// near silhouettes, where the two drop different cells). On the spout
+/// patch the grid cells near the silhouette span 6–10 spacings; dropping
+/// surface cells that span more than 4 spacings while the mesh keeps
+/// ceil(hi/s) − floor(lo/s) ≤ 4 + 2 levels per triangle would leave 89.3 %
+/// coverage, so both use the one rule (`contour::too_many_levels`).
 ///
 /// The lid is compared with its patches tessellated together (welded at
 /// the seams), not each patch alone (measured): on teapot
