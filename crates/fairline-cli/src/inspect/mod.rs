@@ -19,7 +19,6 @@ mod part;
 mod plan;
 mod thumb;
 
-
 use crate::error::bad_input;
 use crate::output::{Job, say};
 use anyhow::{Context, Result};
