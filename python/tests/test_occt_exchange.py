@@ -138,17 +138,19 @@ def fairline_writes(cli: Path, src: Path, out: Path) -> dict:
     return json.loads(info.stdout)
 
 
-# OCCT imports fairline's impeller (277 faces) in no less than 120 s: its
-# trims on surfaces of revolution are long p-curves OCCT rebuilds 3-D edges
-# from. Known failure, strict.
+# fairline's STEP of the impeller gives its trims polyline 3-D edge curves;
+# OCCT builds the faces from them and loses area (8.7e-3). Known failure,
+# strict; its IGES (p-curves only) reads back exactly.
+_STEP_EDGES = pytest.mark.xfail(strict=True, reason="polyline 3-D edge curves in fairline's STEP")
 REAL = [
-    "teapot.json",
-    pytest.param("impeller.igs", marks=pytest.mark.xfail(strict=True, reason="OCCT import of fairline's impeller exceeds 120 s")),
+    pytest.param("teapot.json", "step"),
+    pytest.param("teapot.json", "igs"),
+    pytest.param("impeller.igs", "step", marks=_STEP_EDGES),
+    pytest.param("impeller.igs", "igs"),
 ]
 
 
-@pytest.mark.parametrize("fmt", ["step", "igs"])
-@pytest.mark.parametrize("name", REAL)
+@pytest.mark.parametrize("name,fmt", REAL)
 def test_occt_reads_what_fairline_writes_of_real_files(cli, kernel, tmp_path, name, fmt):
     src = DATA / name
     if not src.is_file():
@@ -167,11 +169,11 @@ def test_occt_reads_what_fairline_writes_of_real_files(cli, kernel, tmp_path, na
 
 # fairline's STEP writer gives its edges polyline 3-D curves; OCCT builds
 # these faces from them and loses area (4.7e-4 on the cylinder, 2e-2 on the
-# revolved ellipse). Known failures, strict: a fix turns them into errors
-# that ask for this list to shrink.
+# revolved ellipse, 2.2e-3 on the patch closed at a pole). Known failures,
+# strict: a fix turns them into errors that ask for this list to shrink.
 STEP_WRITE_KNOWN_BAD = {
     "cylinder", "cone", "revolved-hyperbola", "revolved-ellipse", "extruded-ellipse",
-    "plate-with-hole", "boolean-union", "lofted",
+    "plate-with-hole", "boolean-union", "lofted", "pole-patch",
 }
 
 

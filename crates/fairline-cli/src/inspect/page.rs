@@ -126,7 +126,7 @@ fn csv(ranked: &[&PartRecord]) -> String {
         let int = |v: Option<u64>| v.map(|x| x.to_string()).unwrap_or_default();
         let cells = [
             csv_cell(&r.spec.path.to_string_lossy()),
-            format!("{:?}", r.spec.kind).to_lowercase(),
+            r.spec.kind.name().to_string(),
             status_name(r.status).into(),
             csv_cell(&verdict(r)),
             int(n.regions),
@@ -239,9 +239,9 @@ Worst first; click a column head to sort. Severity: how far a region's strongest
         };
         let _ = writeln!(
             h,
-            "<tr><td data-v=\"{rank}\">{thumb}</td><td><a href=\"{link}\">{}</a></td><td>{:?}</td><td class=\"{}\">{}</td>{}{}{}{}{}{}{}</tr>",
+            "<tr><td data-v=\"{rank}\">{thumb}</td><td><a href=\"{link}\">{}</a></td><td>{}</td><td class=\"{}\">{}</td>{}{}{}{}{}{}{}</tr>",
             esc(&r.spec.path.to_string_lossy()),
-            r.spec.kind,
+            r.spec.kind.label(),
             class_of(r),
             esc(&verdict(r)),
             int(n.regions),

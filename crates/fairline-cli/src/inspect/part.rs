@@ -444,9 +444,17 @@ impl PartJob<'_> {
         };
         n.worst_severity = field("severity");
         n.best_score = field("score");
+        // the command's own share (by area, after its finer light arrays
+        // re-judged what the first could not); the share of sites of the
+        // first array only where a report lacks it
         let sites = d.get("sites").and_then(Value::as_f64).unwrap_or(0.0);
         let judged = d.get("judged_sites").and_then(Value::as_f64).unwrap_or(0.0);
-        n.not_judged = (sites > 0.0).then(|| ((sites - judged) / sites).clamp(0.0, 1.0));
+        n.not_judged = d
+            .get("not_judged_fraction")
+            .and_then(Value::as_f64)
+            .filter(|f| f.is_finite())
+            .map(|f| f.clamp(0.0, 1.0))
+            .or_else(|| (sites > 0.0).then(|| ((sites - judged) / sites).clamp(0.0, 1.0)));
         n.warnings += d
             .get("warnings")
             .and_then(Value::as_array)

@@ -23,6 +23,24 @@ pub enum PartKind {
     Cad,
 }
 
+impl PartKind {
+    /// The kind's name in reports (`mesh`, `cad`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Mesh => "mesh",
+            Self::Cad => "cad",
+        }
+    }
+
+    /// The kind as the report page shows it.
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Mesh => "mesh",
+            Self::Cad => "CAD",
+        }
+    }
+}
+
 /// Per-part settings a manifest may give; every field left out keeps the
 /// single-file commands' default.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -142,8 +160,8 @@ pub fn plan(inputs: &[PathBuf], manifests: &[PathBuf]) -> Result<(Vec<PartSpec>,
 }
 
 /// Adds the part files under `dir` (recursively, symbolic links not
-/// followed into folders, hidden entries left out); returns how many
-/// other files were left out.
+/// followed into folders, hidden entries and JSON files that are not
+/// surface files left out); returns how many other files were left out.
 fn walk(dir: &Path, parts: &mut Vec<PartSpec>) -> Result<usize> {
     let mut ignored = 0;
     let mut stack = vec![dir.to_path_buf()];
@@ -162,7 +180,9 @@ fn walk(dir: &Path, parts: &mut Vec<PartSpec>) -> Result<usize> {
             };
             if ft.is_dir() {
                 stack.push(path);
-            } else if let Some(kind) = kind_of(&path) {
+            } else if let Some(kind) = kind_of(&path)
+                && !is_other_json(&path)
+            {
                 parts.push(PartSpec::new(path, kind, PartSettings::default()));
             } else {
                 ignored += 1;
@@ -170,6 +190,30 @@ fn walk(dir: &Path, parts: &mut Vec<PartSpec>) -> Result<usize> {
         }
     }
     Ok(ignored)
+}
+
+/// True for a `.json` file that is well-formed JSON but not a surface file
+/// (a lights file, a region, a report: neither `surfaces` nor
+/// `control_points` at its top level), which a folder search leaves out.
+/// A file that cannot be read or parsed stays a part, so that its row
+/// says why. Reads the file once, streaming, without keeping its values.
+fn is_other_json(path: &Path) -> bool {
+    if !path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+    {
+        return false;
+    }
+    let Ok(file) = std::fs::File::open(path) else {
+        return false;
+    };
+    // an object's top-level keys (values skipped); an array is valid JSON
+    // of another shape
+    type TopKeys = std::collections::BTreeMap<String, serde::de::IgnoredAny>;
+    match serde_json::from_reader::<_, TopKeys>(std::io::BufReader::new(file)) {
+        Ok(top) => !top.contains_key("surfaces") && !top.contains_key("control_points"),
+        Err(e) => e.is_data(), // valid JSON of another shape (an array, a number)
+    }
 }
 
 /// One row of a JSON manifest.
@@ -367,6 +411,29 @@ mod tests {
         );
         let long = part_id(Path::new(&"x/".repeat(100)));
         assert!(long.len() <= 60 + 9, "{long}");
+    }
+
+    #[test]
+    fn a_folder_search_leaves_out_json_that_is_not_a_surface_file() {
+        let dir = std::env::temp_dir().join(format!("fl-walk-json-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let write = |name: &str, text: &str| std::fs::write(dir.join(name), text).unwrap();
+        write("panel.json", r#"{"surfaces": []}"#);
+        write("one.json", r#"{"degree_u": 3, "control_points": []}"#);
+        write("lights.json", r#"{"center": [0, 0, 0], "axis": [0, 0, 1]}"#);
+        write("list.json", "[1, 2]");
+        write("broken.json", r#"{"surfaces": [ "#);
+        write("notes.txt", "x");
+        let mut parts = Vec::new();
+        let ignored = walk(&dir, &mut parts).unwrap();
+        let mut names: Vec<String> = parts
+            .iter()
+            .map(|p| p.path.file_name().unwrap().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["broken.json", "one.json", "panel.json"]);
+        assert_eq!(ignored, 3);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
