@@ -15,11 +15,13 @@
 //!     .output_opt("--report", args.report.as_deref())
 //!     .check()?;
 //! // ... read, compute, write ...
-//! job.finish(format_args!("taubin, 10 iterations on {n} vertices"));
+//! job.finish(format_args!("taubin, 10 iterations on {n} vertices"))?;
 //! ```
 //!
-//! [`Job::check`] refuses (exit status 2, the path and its option named,
-//! nothing written) an output that
+//! [`Job::check`] refuses (exit status 2, the path named, nothing read or
+//! written) an input that exists and is not a regular file (a directory, a
+//! FIFO, a device such as `/dev/zero`: reading one would wait or never
+//! end), and (its option named too) an output that
 //! - is one of the command's inputs: the same canonical path, or on Unix
 //!   the same device and inode (hard links, symbolic links, `./x.obj`
 //!   against `x.obj` are all caught — [`fairline::io::same_file`]);
@@ -112,6 +114,17 @@ impl Job {
     /// (exit status 2 and nothing written on a violation) and returns the
     /// checked job.
     pub fn check(self) -> Result<Self> {
+        for input in &self.inputs {
+            // a missing file is left to its reader, whose error names it
+            if let Err(e) = fairline::io::require_regular_file(input)
+                && e.kind() == std::io::ErrorKind::InvalidInput
+            {
+                return Err(bad_input(format!(
+                    "{}: {e}; nothing written",
+                    input.display()
+                )));
+            }
+        }
         for (k, (option, out)) in self.outputs.iter().enumerate() {
             check_output_path(option, out)?;
             for input in &self.inputs {

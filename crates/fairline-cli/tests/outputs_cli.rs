@@ -667,3 +667,107 @@ fn replaced_outputs_keep_their_mode_and_hard_links_are_refused() {
     assert_eq!(std::fs::read_to_string(&other).unwrap(), "old");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Runs `fairline` in `dir` with `args`, killing it after `secs` seconds
+/// (a run that waits on a FIFO must fail the test, not hang it).
+fn run_in_bounded(dir: &Path, args: &[&str], secs: u64) -> std::process::Output {
+    let mut child = common::bin()
+        .current_dir(dir)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed().as_secs() >= secs {
+            let _ = child.kill();
+            let o = child.wait_with_output().unwrap();
+            panic!("{args:?}: still running after {secs} s: {}", stderr(&o));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// An input that is not a regular file — a device that never ends
+/// (`/dev/zero`, `/dev/urandom` under a mesh name), a FIFO (opening it
+/// would wait for a writer), a directory — is refused before it is opened:
+/// exit status 2, the file named, nothing written, promptly.
+#[cfg(unix)]
+#[test]
+fn inputs_that_are_not_regular_files_are_refused_unread() {
+    let d = setup("special-inputs");
+    let i = d.join("in.obj");
+    let zero = d.join("zero.stl");
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    let random = d.join("random.ply");
+    std::os::unix::fs::symlink("/dev/urandom", &random).unwrap();
+    let fifo_mesh = d.join("pipe.obj");
+    let fifo_json = d.join("pipe.json");
+    for f in [&fifo_mesh, &fifo_json] {
+        let made = std::process::Command::new("mkfifo").arg(f).status();
+        assert!(made.unwrap().success(), "mkfifo {}", f.display());
+    }
+    let folder = d.join("folder.obj");
+    std::fs::create_dir(&folder).unwrap();
+    let zero_json = d.join("zero.json");
+    std::os::unix::fs::symlink("/dev/zero", &zero_json).unwrap();
+    let cases: Vec<(Vec<&str>, &Path, &str)> = vec![
+        (vec!["info", s(&zero)], &zero, "is a device"),
+        (
+            vec!["smooth", s(&zero), "-o", "o.obj"],
+            &zero,
+            "is a device",
+        ),
+        (
+            vec!["curvature", s(&random), "-o", "o.ply"],
+            &random,
+            "is a device",
+        ),
+        (
+            vec!["info", s(&fifo_mesh)],
+            &fifo_mesh,
+            "is a FIFO (named pipe)",
+        ),
+        (
+            vec!["convert", s(&fifo_mesh), "o.obj"],
+            &fifo_mesh,
+            "is a FIFO (named pipe)",
+        ),
+        (vec!["info", s(&folder)], &folder, "is a directory"),
+        (
+            vec!["fair", s(&i), "--region", s(&fifo_json), "-o", "o.obj"],
+            &fifo_json,
+            "is a FIFO (named pipe)",
+        ),
+        (
+            vec!["smooth", s(&i), "--fixed", s(&zero_json), "-o", "o.obj"],
+            &zero_json,
+            "is a device",
+        ),
+        (vec!["info", s(&zero_json)], &zero_json, "is a device"),
+        (
+            vec!["render", s(&zero_json), "--png", "p.png"],
+            &zero_json,
+            "is a device",
+        ),
+    ];
+    for (args, file, what) in cases {
+        let o = run_in_bounded(&d, &args, 30);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+        assert!(
+            e.contains(&format!(
+                "error: {}: {what}, not a regular file",
+                file.display()
+            )),
+            "{args:?}: {e}"
+        );
+        assert!(!e.contains("panicked"), "{e}");
+        for out in ["o.obj", "o.ply", "p.png"] {
+            assert!(!d.join(out).exists(), "{args:?} wrote {out}");
+        }
+    }
+}

@@ -356,6 +356,90 @@ pub fn read_ply_vertex_properties(
 /// Named per-vertex scalar values, in file order: `(name, one value per vertex)`.
 pub type VertexProperties = Vec<(String, Vec<f64>)>;
 
+/// The largest input file fairline reads whole (8 GiB): a binary STL of
+/// 160 million triangles, far beyond any mesh the algorithms can hold.
+pub const MAX_INPUT_FILE_BYTES: u64 = 8 << 30;
+
+/// Refuses a `path` that is not a regular file, before opening it: a
+/// directory, a FIFO (opening one would wait for a writer), a device such
+/// as `/dev/zero` or `/dev/urandom` (it never ends), a socket. Symbolic
+/// links are followed. The error is [`std::io::ErrorKind::InvalidInput`]
+/// with a message that says what the path is; a path that cannot be looked
+/// at gives the operating system's error.
+pub fn require_regular_file(path: impl AsRef<Path>) -> std::io::Result<()> {
+    let meta = std::fs::metadata(path)?;
+    if meta.is_file() {
+        return Ok(());
+    }
+    Err(std::io::Error::new(
+        std::io::ErrorKind::InvalidInput,
+        format!(
+            "is {}, not a regular file; give a file",
+            file_kind(&meta.file_type())
+        ),
+    ))
+}
+
+/// What a file that is not a regular file is, for messages.
+fn file_kind(t: &std::fs::FileType) -> &'static str {
+    if t.is_dir() {
+        return "a directory";
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a FIFO (named pipe)";
+        }
+        if t.is_char_device() || t.is_block_device() {
+            return "a device";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    "a special file"
+}
+
+/// Reads a whole input file: refused unless it is a regular file
+/// ([`require_regular_file`], checked before opening and again on the
+/// opened file), and refused (nothing more read) once it holds more than
+/// `max_bytes` bytes, so a file that grows while it is read is bounded too.
+/// Errors are [`std::io::Error`]s; callers add the path.
+pub fn read_input_file(path: impl AsRef<Path>, max_bytes: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let path = path.as_ref();
+    require_regular_file(path)?;
+    let file = File::open(path)?;
+    let meta = file.metadata()?;
+    if !meta.is_file() {
+        // replaced between the look and the opening
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!(
+                "is {}, not a regular file; give a file",
+                file_kind(&meta.file_type())
+            ),
+        ));
+    }
+    let too_large = |size: u64| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("is {size} bytes, more than the {max_bytes} bytes fairline reads"),
+        )
+    };
+    if meta.len() > max_bytes {
+        return Err(too_large(meta.len()));
+    }
+    let mut bytes = Vec::with_capacity(usize::try_from(meta.len()).unwrap_or(0));
+    file.take(max_bytes.saturating_add(1))
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(too_large(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 
 /// Items formatted per parallel chunk before a group of chunks is written.
@@ -666,7 +750,7 @@ pub fn ensure_distinct(input: impl AsRef<Path>, output: impl AsRef<Path>) -> Res
 // shared helpers of the format modules
 
 fn read_bytes(path: &Path) -> Result<Vec<u8>, IoError> {
-    std::fs::read(path).map_err(|source| IoError::Io {
+    read_input_file(path, MAX_INPUT_FILE_BYTES).map_err(|source| IoError::Io {
         path: path.to_path_buf(),
         source,
     })
@@ -907,6 +991,66 @@ mod tests {
             ],
             &[[0u32, 1, 2, 3]],
         )
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn special_files_are_refused_before_they_are_read() {
+        let dir = temp_dir("special-input");
+        // a device that never ends, under a mesh file name
+        let zero = dir.join("zero.stl");
+        std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+        let e = read_soup(&zero).unwrap_err();
+        assert!(matches!(e, IoError::Io { .. }), "{e}");
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "{}: is a device, not a regular file; give a file",
+                zero.display()
+            )
+        );
+        // a directory
+        let sub = dir.join("sub.obj");
+        std::fs::create_dir(&sub).unwrap();
+        let e = read_mesh(&sub).unwrap_err().to_string();
+        assert!(
+            e.contains("sub.obj: is a directory, not a regular file"),
+            "{e}"
+        );
+        // a FIFO: opening it would wait for a writer, so it must be refused
+        // without being opened; a writer unblocks a reader that hangs
+        let fifo = dir.join("pipe.obj");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        assert!(made.unwrap().success(), "mkfifo");
+        let (tx, rx) = std::sync::mpsc::channel();
+        let reading = fifo.clone();
+        std::thread::spawn(move || tx.send(read_soup(&reading).map(|_| ())));
+        let got = rx.recv_timeout(std::time::Duration::from_secs(10));
+        if got.is_err() {
+            drop(std::fs::OpenOptions::new().write(true).open(&fifo));
+            panic!("reading a FIFO waited for a writer");
+        }
+        let e = got.unwrap().unwrap_err().to_string();
+        assert!(
+            e.contains("pipe.obj: is a FIFO (named pipe), not a regular file"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn input_files_are_read_up_to_a_cap() {
+        let dir = temp_dir("cap");
+        let path = dir.join("ten.bin");
+        std::fs::write(&path, [7u8; 10]).unwrap();
+        assert_eq!(read_input_file(&path, 10).unwrap(), vec![7u8; 10]);
+        let e = read_input_file(&path, 9).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
+        assert_eq!(
+            e.to_string(),
+            "is 10 bytes, more than the 9 bytes fairline reads"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
