@@ -146,7 +146,7 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--png", args.png.as_deref())
         .output_opt("--report", args.report.as_deref())
         .check()?;
-    let mesh = fairline::io::read_mesh(&args.mesh)?;
+    let mesh = crate::input::read_mesh(&args.mesh)?;
     crate::input::note_split_vertices(&args.mesh, &mesh);
     let region = match &args.region {
         Some(path) => Some(read_region(path, &mesh)?),

@@ -37,6 +37,7 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--report", args.report.as_deref())
         .check()?;
     let soup = fairline::io::read_soup(&args.input)?;
+    crate::input::require_faces(&args.input, soup.face_count(), soup.vertex_count())?;
     let out = repair::run(&soup, &Control::new())
         .map_err(|e| anyhow::Error::new(e).context(args.input.display().to_string()))?;
     fairline::io::write_soup(&args.output, &out.repaired.soup)?;

@@ -771,3 +771,89 @@ fn inputs_that_are_not_regular_files_are_refused_unread() {
         }
     }
 }
+
+/// Writes `text` as `name` in `dir` and returns its path.
+fn put(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// A mesh without faces — no vertex at all, or vertices only — gives
+/// every command but `info` exit status 2 and a message naming the file,
+/// and writes nothing; `info` counts it and says it holds no surface.
+#[test]
+fn meshes_without_faces_are_refused_by_every_command_and_counted_by_info() {
+    let d = setup("no-faces");
+    let empty_ply = put(
+        &d,
+        "empty.ply",
+        "ply\nformat ascii 1.0\nelement vertex 0\nproperty double x\nproperty double y\nproperty double z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n",
+    );
+    let empty_off = put(&d, "empty.off", "OFF\n0 0 0\n");
+    let empty_stl = put(&d, "empty.stl", "solid nothing\nendsolid nothing\n");
+    let points = put(&d, "points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    let commands: Vec<Vec<&str>> = vec![
+        vec!["smooth", "-o", "o.obj", "--report", "r.json"],
+        vec!["fair", "--auto", "-o", "o.obj", "--report", "r.json"],
+        vec!["detect", "-o", "r.json"],
+        vec!["highlight", "-o", "o.json"],
+        vec!["curvature", "-o", "o.ply"],
+        vec!["render", "--png", "p.png"],
+        vec!["enhance", "-o", "o.obj"],
+        vec!["fair-quad", "-o", "o.obj"],
+    ];
+    for mesh in [&empty_ply, &empty_off, &empty_stl, &points] {
+        let none = mesh != &points;
+        let mut runs: Vec<Vec<&str>> = commands
+            .iter()
+            .map(|c| {
+                let mut args = vec![c[0], s(mesh)];
+                args.extend_from_slice(&c[1..]);
+                args
+            })
+            .collect();
+        runs.push(vec!["repair", s(mesh), "o.obj", "--report", "r.json"]);
+        for args in runs {
+            let o = run_in(&d, &args);
+            let e = stderr(&o);
+            assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+            let said = if none {
+                "the mesh is empty (no vertex, no face): there is no surface to work on"
+            } else {
+                "the mesh has no faces, only 3 vertices: there is no surface to work on"
+            };
+            assert!(
+                e.contains(&format!("error: {}: {said}", mesh.display())),
+                "{args:?}: {e}"
+            );
+            assert!(!e.contains("panicked"), "{e}");
+            assert!(temp_files(&d).is_empty(), "{args:?}: {:?}", names(&d));
+            for out in ["o.obj", "o.ply", "o.json", "r.json", "p.png"] {
+                assert!(!d.join(out).exists(), "{args:?} wrote {out}");
+            }
+        }
+        // info: the counts, no made-up box, edge lengths or genus, and a
+        // warning that there is no surface
+        let o = run_in(&d, &["info", s(mesh), "--json", "--report", "r.json"]);
+        ok(&o);
+        let e = stderr(&o);
+        assert!(
+            e.contains(&format!("warning: {}: the file ", mesh.display())),
+            "{e}"
+        );
+        assert!(e.contains("0 faces, no surface"), "{e}");
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(j["faces"], 0, "{j}");
+        assert_eq!(j["vertices"], if none { 0 } else { 3 }, "{j}");
+        assert!(j.get("edge_length").is_none(), "{j}");
+        assert!(j.get("genus").is_none(), "{j}");
+        assert_eq!(j.get("bbox").is_none(), none, "{j}");
+        let r = json(&d.join("r.json"));
+        assert!(
+            r["warnings"][0].as_str().unwrap().contains("the file "),
+            "{r}"
+        );
+        std::fs::remove_file(d.join("r.json")).unwrap();
+    }
+}

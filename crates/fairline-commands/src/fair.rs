@@ -166,6 +166,7 @@ pub fn run(
             "give a region, or auto to detect the regions (not both)",
         ));
     }
+    crate::require_faces(mesh.face_count(), mesh.original_vertex_count())?;
     if !mesh.is_triangle_mesh() {
         return Err(CommandError::bad_input(
             "highlight-line fairing needs a triangle mesh (this one has polygons; triangulate it first, e.g. with `fairline convert`)",
