@@ -45,7 +45,9 @@ pub fn run(args: Args) -> Result<()> {
     }
     let soup = fairline::io::read_soup(&args.mesh)?;
     let mut report = Report::new("info");
+    let bar = crate::output::spinner("inspecting");
     let info = report.time(|| fairline::mesh::inspect(&soup));
+    bar.finish_and_clear();
     let mut value = serde_json::to_value(&info)?;
     // Absent values (no genus for a non-manifold mesh, no manifold error for
     // a manifold one) are left out rather than written as null.

@@ -38,8 +38,10 @@ pub fn run(args: Args) -> Result<()> {
         .check()?;
     let soup = fairline::io::read_soup(&args.input)?;
     crate::input::require_faces(&args.input, soup.face_count(), soup.vertex_count())?;
+    let bar = crate::output::spinner("repairing");
     let out = repair::run(&soup, &Control::new())
         .map_err(|e| anyhow::Error::new(e).context(args.input.display().to_string()))?;
+    bar.finish_and_clear();
     fairline::io::write_soup(&args.output, &out.repaired.soup)?;
     let r = &out.repaired.report;
     write_report(args.report.as_deref(), &out.report)?;

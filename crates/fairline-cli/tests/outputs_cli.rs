@@ -857,3 +857,42 @@ fn meshes_without_faces_are_refused_by_every_command_and_counted_by_info() {
         std::fs::remove_file(d.join("r.json")).unwrap();
     }
 }
+
+/// With standard error not a terminal (a pipe here), a long run prints a
+/// line of progress now and then — never a bar redrawn in place — and a
+/// quick one prints none. The interval is shortened for the test through
+/// the environment.
+#[test]
+fn progress_off_a_terminal_is_a_line_now_and_then() {
+    let d = tmp("progress-lines");
+    let big = put(&d, "big.obj", &wavy_obj(150));
+    let o = common::bin()
+        .current_dir(&d)
+        .env("FAIRLINE_PROGRESS_INTERVAL_MS", "20")
+        .args(["smooth", s(&big), "--iterations", "400", "-o", "o.obj"])
+        .output()
+        .unwrap();
+    ok(&o);
+    let e = stderr(&o);
+    let lines: Vec<&str> = e
+        .lines()
+        .filter(|l| l.starts_with("progress: smoothing, "))
+        .collect();
+    assert!(!lines.is_empty(), "no progress line: {e}");
+    assert!(lines.iter().all(|l| l.ends_with(" s elapsed")), "{e}");
+    assert!(!e.contains('\r') && !e.contains('\x1b'), "a bar: {e:?}");
+    // the summary comes after the last progress line
+    assert!(
+        e.trim_end()
+            .lines()
+            .last()
+            .unwrap()
+            .starts_with("fairline smooth: "),
+        "{e}"
+    );
+    // a quick run, at the usual interval: no progress line
+    let small = put(&d, "small.obj", &wavy_obj(12));
+    let o = run_in(&d, &["smooth", s(&small), "-o", "o.obj"]);
+    ok(&o);
+    assert!(!stderr(&o).contains("progress:"), "{}", stderr(&o));
+}
