@@ -160,6 +160,6 @@ pub fn run(args: Args) -> Result<()> {
         img.write_png(p)?;
     }
     report.write(args.report.as_deref())?;
-    job.finish(summary);
+    job.finish(summary)?;
     Ok(())
 }

@@ -108,6 +108,6 @@ pub fn run(args: Args) -> Result<()> {
         } else {
             ""
         }
-    ));
+    ))?;
     Ok(())
 }

@@ -133,7 +133,7 @@ pub fn run(args: Args) -> Result<()> {
     job.finish(format_args!(
         "vertex flow, {} iteration(s) on {} vertices ({} free), minimum triangle quality {:.3} → {:.3}",
         r.iterations, r.vertices, r.free_vertices, r.quality_before.min, r.quality_after.min
-    ));
+    ))?;
     Ok(())
 }
 

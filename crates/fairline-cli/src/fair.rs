@@ -207,7 +207,7 @@ pub fn run(args: Args) -> Result<()> {
         after.score,
         before.threshold,
         out.largest_move
-    ));
+    ))?;
     if out.made_worse() {
         // the output is written so that it can be looked at, but it is not
         // what was asked for: exit 1 (the warning above says what got worse)

@@ -97,7 +97,7 @@ pub fn run(args: Args) -> Result<()> {
     );
     if args.json {
         print_stdout(&format!("{}\n", serde_json::to_string_pretty(&value)?))?;
-        job.finish(summary);
+        job.finish(summary)?;
         return Ok(());
     }
     let mut out = String::new();
@@ -189,7 +189,7 @@ hint                run `fairline repair {} OUT` to repair it",
         ),
     };
     print_stdout(&out)?;
-    job.finish(summary);
+    job.finish(summary)?;
     Ok(())
 }
 
@@ -298,7 +298,7 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
     {
         return Err(crate::surface::unreadable_error(&args.mesh, &msg));
     }
-    job.finish(summary);
+    job.finish(summary)?;
     Ok(())
 }
 

@@ -36,7 +36,12 @@
 //! A symbolic link to a regular file is allowed: its target gets the new
 //! content and the link stays. Every write is atomic
 //! ([`fairline::io::atomic_write`]: temporary file `.NAME.PID.N.tmp` in the
-//! same folder, then a rename). The temporary files in progress are removed
+//! same folder, then a rename), and a command's outputs are written all or
+//! none: `main` stages the writes of every command but `view`, `inspect`
+//! and `demo` ([`fairline::io::stage_writes`]: each file is written in
+//! full under its temporary name), and [`Job::finish`] renames them all
+//! into place; a command that fails before (an error, a signal) leaves
+//! none of them. The temporary files in progress are removed
 //! when a write fails and when the process gets SIGINT or SIGTERM
 //! ([`install_signal_handler`]; exit status 130 or 143).
 //!
@@ -181,9 +186,13 @@ impl Job {
         line
     }
 
-    /// Prints the summary line on standard error.
-    pub fn finish(&self, what: impl std::fmt::Display) {
+    /// Puts the outputs written so far in place, all together
+    /// ([`fairline::io::commit_staged_writes`]), and prints the summary
+    /// line on standard error.
+    pub fn finish(&self, what: impl std::fmt::Display) -> Result<()> {
+        fairline::io::commit_staged_writes()?;
         say(&self.summary(what));
+        Ok(())
     }
 }
 

@@ -186,7 +186,7 @@ pub fn run(args: Args) -> Result<()> {
         report.set("highlight", h);
     }
     report.write(args.report.as_deref())?;
-    job.finish(what);
+    job.finish(what)?;
     Ok(())
 }
 

@@ -95,7 +95,7 @@ pub fn run(args: Args) -> Result<()> {
         } else {
             "; vertex indices changed (see vertex_source in the report)"
         }
-    ));
+    ))?;
     Ok(())
 }
 

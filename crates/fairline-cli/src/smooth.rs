@@ -168,7 +168,7 @@ pub fn run(args: Args) -> Result<()> {
         if r.converged { "" } else { ", not converged" },
         mesh.vertex_count(),
         r.max_displacement
-    ));
+    ))?;
     Ok(())
 }
 
@@ -285,6 +285,6 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
         r.free_vertices,
         r.structure_energy_before,
         r.structure_energy_after
-    ));
+    ))?;
     Ok(())
 }

@@ -896,3 +896,52 @@ fn progress_off_a_terminal_is_a_line_now_and_then() {
     ok(&o);
     assert!(!stderr(&o).contains("progress:"), "{}", stderr(&o));
 }
+
+/// A command's outputs are written all or none: when a later output
+/// cannot be written (here the picture, over a file-size limit the mesh
+/// is under), the mesh written before it is not put in place either, an
+/// older file at its path keeps its content, and no temporary file stays.
+#[cfg(unix)]
+#[test]
+fn outputs_are_written_all_or_none() {
+    let d = setup("all-or-none");
+    let i = d.join("in.obj");
+    let args = [
+        "smooth",
+        s(&i),
+        "-o",
+        "s.obj",
+        "--png",
+        "p.png",
+        "--report",
+        "r.json",
+    ];
+    ok(&run_in(&d, &args));
+    let mesh = std::fs::metadata(d.join("s.obj")).unwrap().len();
+    let png = std::fs::metadata(d.join("p.png")).unwrap().len();
+    // a limit in blocks the mesh is under and the picture over, whether
+    // the shell counts blocks of 512 or of 1024 bytes
+    let blocks = mesh / 512 + 1;
+    assert!(1024 * blocks < png, "mesh {mesh} B, picture {png} B");
+    for f in ["p.png", "r.json"] {
+        std::fs::remove_file(d.join(f)).unwrap();
+    }
+    std::fs::write(d.join("s.obj"), "older\n").unwrap();
+    let o = std::process::Command::new("sh")
+        .current_dir(&d)
+        .arg("-c")
+        .arg(format!(
+            "trap '' XFSZ; ulimit -f {blocks}; exec \"$0\" \"$@\""
+        ))
+        .arg(env!("CARGO_BIN_EXE_fairline"))
+        .args(&args[..])
+        .output()
+        .unwrap();
+    let e = stderr(&o);
+    assert!(!o.status.success(), "{e}");
+    assert!(e.contains("p.png"), "{e}");
+    assert!(e.contains("not put in place; nothing written"), "{e}");
+    assert_eq!(std::fs::read_to_string(d.join("s.obj")).unwrap(), "older\n");
+    assert!(!d.join("p.png").exists() && !d.join("r.json").exists());
+    assert!(temp_files(&d).is_empty(), "{:?}", names(&d));
+}

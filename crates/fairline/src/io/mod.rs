@@ -479,16 +479,21 @@ pub(crate) fn write_formatted(
 }
 
 /// The temporary files [`atomic_write`] has created and not yet renamed or
-/// removed, and whether the process is shutting down (then no new temporary
-/// file may be created).
+/// removed, whether the process is shutting down (then no new temporary
+/// file may be created), and whether writes are staged ([`stage_writes`])
+/// with the staged files: (temporary file, path it is renamed to).
 struct LiveTemps {
     paths: Vec<PathBuf>,
     closing: bool,
+    staging: bool,
+    staged: Vec<(PathBuf, PathBuf)>,
 }
 
 static LIVE_TEMPS: std::sync::Mutex<LiveTemps> = std::sync::Mutex::new(LiveTemps {
     paths: Vec::new(),
     closing: false,
+    staging: false,
+    staged: Vec::new(),
 });
 
 fn live_temps() -> std::sync::MutexGuard<'static, LiveTemps> {
@@ -506,11 +511,76 @@ fn live_temps() -> std::sync::MutexGuard<'static, LiveTemps> {
 pub fn remove_temporary_files() -> usize {
     let mut live = live_temps();
     live.closing = true;
+    live.staged.clear();
     let mut removed = 0;
     for p in live.paths.drain(..) {
         if std::fs::remove_file(&p).is_ok() {
             removed += 1;
         }
+    }
+    removed
+}
+
+/// Stages every later [`atomic_write`] of this process: each file is
+/// written, flushed and synced in full under its temporary name beside its
+/// path, but renamed into place only by [`commit_staged_writes`], all of
+/// them together, or removed by [`discard_staged_writes`]. A program that
+/// writes several files for one request (a mesh, a report, a picture) thus
+/// writes all of them or none: a failure after the first file leaves no
+/// new file beside the old ones. Until the commit the files are not at
+/// their paths (nothing may read them back). [`remove_temporary_files`]
+/// removes staged files too. Meant for a command-line program; the library
+/// never calls it itself.
+pub fn stage_writes() {
+    live_temps().staging = true;
+}
+
+/// Renames every file staged since [`stage_writes`] over its path, in the
+/// order they were written, ends staging and returns the paths written. A
+/// rename is the one step that can still fail (it does not copy: the
+/// temporary file is in the same folder); then the files before it stay
+/// renamed, it and the rest are removed, and the error names its path.
+pub fn commit_staged_writes() -> Result<Vec<PathBuf>, IoError> {
+    let mut live = live_temps();
+    live.staging = false;
+    let staged = std::mem::take(&mut live.staged);
+    let mut written = Vec::with_capacity(staged.len());
+    let mut failure = None;
+    for (tmp, target) in staged {
+        if failure.is_none() {
+            match std::fs::rename(&tmp, &target) {
+                Ok(()) => written.push(target),
+                Err(source) => {
+                    failure = Some(IoError::Io {
+                        path: target,
+                        source,
+                    })
+                }
+            }
+        }
+        // renamed, or abandoned after a failed rename
+        let _ = std::fs::remove_file(&tmp);
+        live.paths.retain(|p| p != &tmp);
+    }
+    match failure {
+        Some(e) => Err(e),
+        None => Ok(written),
+    }
+}
+
+/// Removes every file staged since [`stage_writes`] without renaming it
+/// (the paths keep what they held before) and ends staging; returns how
+/// many files were removed.
+pub fn discard_staged_writes() -> usize {
+    let mut live = live_temps();
+    live.staging = false;
+    let staged = std::mem::take(&mut live.staged);
+    let mut removed = 0;
+    for (tmp, _) in staged {
+        if std::fs::remove_file(&tmp).is_ok() {
+            removed += 1;
+        }
+        live.paths.retain(|p| p != &tmp);
     }
     removed
 }
@@ -598,7 +668,8 @@ where
 /// refused, and so is a file with other hard links (a rename would leave
 /// them with the old content). A replaced file keeps its permissions. The temporary file is listed while it exists, so that
 /// [`remove_temporary_files`] can remove it when the process is stopped by
-/// a signal.
+/// a signal. After [`stage_writes`] the rename waits for
+/// [`commit_staged_writes`].
 pub fn atomic_write<F>(path: impl AsRef<Path>, write: F) -> Result<(), IoError>
 where
     F: FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
@@ -667,10 +738,23 @@ where
         }
         file.sync_all()?;
         drop(file);
-        std::fs::rename(&guard.0, &target)
+        Ok(())
     })();
+    if let Err(e) = result {
+        drop(guard);
+        return Err(io_err(e));
+    }
+    let mut live = live_temps();
+    if live.staging && !live.closing {
+        // renamed by commit_staged_writes, removed by discard_staged_writes
+        let tmp = guard.keep();
+        live.staged.push((tmp, target));
+        return Ok(());
+    }
+    drop(live);
+    let renamed = std::fs::rename(&guard.0, &target);
     drop(guard);
-    result.map_err(io_err)
+    renamed.map_err(io_err)
 }
 
 /// Buffer size of [`atomic_write`]'s writer.
@@ -678,6 +762,15 @@ const WRITE_BUFFER_BYTES: usize = 1 << 20;
 
 /// A temporary file of [`atomic_write`]: removed and unlisted when dropped.
 struct LiveTemp(PathBuf);
+
+impl LiveTemp {
+    /// The path, left in place and listed (a staged file).
+    fn keep(mut self) -> PathBuf {
+        let path = std::mem::take(&mut self.0);
+        std::mem::forget(self);
+        path
+    }
+}
 
 impl Drop for LiveTemp {
     fn drop(&mut self) {
