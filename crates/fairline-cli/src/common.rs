@@ -96,7 +96,7 @@ pub fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<()> {
 
 /// Reads and parses a JSON file; errors name the file (and exit with 2).
 pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
-    serde_json::from_str(&text).map_err(|e| bad_input(format!("{}: {e}", path.display())))
+    let bytes = fairline::io::read_input_file(path, fairline::io::MAX_INPUT_FILE_BYTES)
+        .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+    serde_json::from_slice(&bytes).map_err(|e| bad_input(format!("{}: {e}", path.display())))
 }

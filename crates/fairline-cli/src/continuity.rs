@@ -76,9 +76,11 @@ pub fn run(args: Args) -> Result<()> {
         .match_distance(args.match_distance)
         .samples(args.samples);
     let mut report = Report::new("continuity");
+    let bar = crate::output::spinner("continuity");
     let result = report
         .time(|| continuity(&surfaces, &opts))
         .map_err(|e| bad_input(format!("{}: {e}", args.surface_file.display())))?;
+    bar.finish_and_clear();
     let classes = [SeamClass::Gap, SeamClass::G0, SeamClass::G1, SeamClass::G2];
     let summary = format!(
         "{}: {} patches, {} shared edges: {}; tolerance {:.3e}, {}°, {} % curvature{}",
@@ -158,6 +160,6 @@ pub fn run(args: Args) -> Result<()> {
         img.write_png(p)?;
     }
     report.write(args.report.as_deref())?;
-    job.finish(summary);
+    job.finish(summary)?;
     Ok(())
 }

@@ -60,7 +60,7 @@ pub fn run(args: Args) -> Result<()> {
                 "{} surface(s) converted ({} trimmed)",
                 surfaces.len(),
                 surfaces.iter().filter(|s| s.is_trimmed()).count()
-            ));
+            ))?;
         } else {
             let mesh = crate::surface::tessellated_mesh(&surfaces, 64)?;
             report.set("vertices", mesh.vertex_count());
@@ -72,7 +72,7 @@ pub fn run(args: Args) -> Result<()> {
                 surfaces.len(),
                 mesh.vertex_count(),
                 mesh.face_count()
-            ));
+            ))?;
         }
         return Ok(());
     }
@@ -86,6 +86,6 @@ pub fn run(args: Args) -> Result<()> {
         "{} vertices, {} faces converted",
         soup.vertex_count(),
         soup.face_count()
-    ));
+    ))?;
     Ok(())
 }

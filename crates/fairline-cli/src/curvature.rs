@@ -39,7 +39,7 @@ pub fn run(args: Args) -> Result<()> {
         .output("-o", &args.output)
         .output_opt("--report", args.report.as_deref())
         .check()?;
-    let mesh = fairline::io::read_mesh(&args.mesh)?;
+    let mesh = crate::input::read_mesh(&args.mesh)?;
     crate::input::note_split_vertices(&args.mesh, &mesh);
     let settings = CurvatureSettings {
         method: args.method,
@@ -108,6 +108,6 @@ pub fn run(args: Args) -> Result<()> {
         } else {
             ""
         }
-    ));
+    ))?;
     Ok(())
 }

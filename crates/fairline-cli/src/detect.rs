@@ -169,7 +169,7 @@ pub fn run(args: Args) -> Result<()> {
         all.len(),
         lines.lines.len(),
         mesh.vertex_count()
-    ));
+    ))?;
     Ok(())
 }
 

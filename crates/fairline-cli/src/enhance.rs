@@ -89,7 +89,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(png) = &args.png {
         crate::output::require_extension("--png", png, &["png"])?;
     }
-    let mesh = fairline::io::read_mesh(&args.mesh)?;
+    let mesh = crate::input::read_mesh(&args.mesh)?;
     crate::input::note_split_vertices(&args.mesh, &mesh);
     if !mesh.is_triangle_mesh() {
         return Err(bad_input(format!(
@@ -133,7 +133,7 @@ pub fn run(args: Args) -> Result<()> {
     job.finish(format_args!(
         "vertex flow, {} iteration(s) on {} vertices ({} free), minimum triangle quality {:.3} → {:.3}",
         r.iterations, r.vertices, r.free_vertices, r.quality_before.min, r.quality_after.min
-    ));
+    ))?;
     Ok(())
 }
 

@@ -15,7 +15,7 @@ use fairline::picture::{
 use fairline::render::RenderOptions;
 use fairline::{Control, SurfaceMesh};
 use fairline_commands::fair::{self, FairInput, FairSettings};
-use fairline_commands::{CommandError, FrontEnd, Subject};
+use fairline_commands::{CommandError, FrontEnd, Note, Subject};
 use std::path::{Path, PathBuf};
 
 /// Removes a local irregularity so that the highlight lines inside a region
@@ -146,7 +146,7 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--png", args.png.as_deref())
         .output_opt("--report", args.report.as_deref())
         .check()?;
-    let mesh = fairline::io::read_mesh(&args.mesh)?;
+    let mesh = crate::input::read_mesh(&args.mesh)?;
     crate::input::note_split_vertices(&args.mesh, &mesh);
     let region = match &args.region {
         Some(path) => Some(read_region(path, &mesh)?),
@@ -168,6 +168,9 @@ pub fn run(args: Args) -> Result<()> {
     let out = fair::run(input, &settings, &control).map_err(|e| name_subject(e, &args))?;
     bar.finish_and_clear();
     for note in &out.notes {
+        if *note == Note::NothingDetected {
+            continue; // the summary line says it
+        }
         say(&format!(
             "note: {}",
             note.message(FrontEnd::Cli, Some(&name))
@@ -188,6 +191,26 @@ pub fn run(args: Args) -> Result<()> {
         _ => {}
     }
     write_report(args.report.as_deref(), &out.report)?;
+    if out.nothing_to_fair() {
+        // what was asked: fair what detection finds; it found nothing
+        job.finish(format_args!(
+            "nothing to fair (--auto found no defect above the detection threshold {:.2}; the output is the input unchanged)",
+            out.before.threshold
+        ))?;
+        return Ok(());
+    }
+    if out.nothing_faired() {
+        job.finish(format_args!(
+            "no region faired of the {} detected (none has a vertex free to move; the output is the input unchanged)",
+            out.regions
+        ))?;
+        anyhow::bail!(
+            "{}: detection found {} region(s) to fair, but none has a vertex free to move; {} is the input unchanged",
+            args.mesh.display(),
+            out.regions,
+            args.output.display()
+        );
+    }
     let (before, after) = (&out.before, &out.after);
     let (floor, flat_before) = (before.detection.flat_spot_floor, before.flat_spot);
     let flat_spot = if floor > 0.0 && flat_before > floor {
@@ -207,7 +230,7 @@ pub fn run(args: Args) -> Result<()> {
         after.score,
         before.threshold,
         out.largest_move
-    ));
+    ))?;
     if out.made_worse() {
         // the output is written so that it can be looked at, but it is not
         // what was asked for: exit 1 (the warning above says what got worse)

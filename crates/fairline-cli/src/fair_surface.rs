@@ -420,7 +420,7 @@ pub fn run(args: Args) -> Result<()> {
         rep.modified_control_points,
         rep.residual_before.max,
         rep.residual_after.max
-    ));
+    ))?;
     Ok(())
 }
 

@@ -115,7 +115,7 @@ pub fn run(args: HighlightArgs) -> Result<()> {
         counts.closed_lines,
         counts.nodes,
         mesh.vertex_count()
-    ));
+    ))?;
     Ok(())
 }
 

@@ -45,15 +45,39 @@ pub fn run(args: Args) -> Result<()> {
     }
     let soup = fairline::io::read_soup(&args.mesh)?;
     let mut report = Report::new("info");
+    let bar = crate::output::spinner("inspecting");
     let info = report.time(|| fairline::mesh::inspect(&soup));
+    bar.finish_and_clear();
     let mut value = serde_json::to_value(&info)?;
     // Absent values (no genus for a non-manifold mesh, no manifold error for
     // a manifold one) are left out rather than written as null.
+    // A file without edges has no edge lengths, one without a finite vertex
+    // no bounding box: left out too, rather than written as zeros.
+    let has_bbox = info.vertices > info.non_finite_vertices;
     if let serde_json::Value::Object(m) = &mut value {
         m.retain(|_, v| !v.is_null());
+        if info.edges == 0 {
+            m.remove("edge_length");
+        }
+        if !has_bbox {
+            m.remove("bbox");
+        }
         for (k, v) in m.iter() {
             report.set(k, v);
         }
+    }
+    if info.faces == 0 {
+        let what = match info.vertices {
+            0 => format!(
+                "{}: the file holds no vertex and no face: an empty mesh",
+                args.mesh.display()
+            ),
+            n => format!(
+                "{}: the file has no faces, so it holds no surface; only its {n} vertices are counted",
+                args.mesh.display()
+            ),
+        };
+        report.warn(what);
     }
     // the same values without non-finite numbers (report.set warned)
     let value = fairline_commands::finite_only("", value, &mut Vec::new()).unwrap_or_default();
@@ -63,7 +87,9 @@ pub fn run(args: Args) -> Result<()> {
         args.mesh.display(),
         info.vertices,
         info.faces,
-        if info.manifold_error.is_none() {
+        if info.faces == 0 {
+            "no surface"
+        } else if info.manifold_error.is_none() {
             "manifold"
         } else {
             "not a manifold"
@@ -71,7 +97,7 @@ pub fn run(args: Args) -> Result<()> {
     );
     if args.json {
         print_stdout(&format!("{}\n", serde_json::to_string_pretty(&value)?))?;
-        job.finish(summary);
+        job.finish(summary)?;
         return Ok(());
     }
     let mut out = String::new();
@@ -97,24 +123,33 @@ pub fn run(args: Args) -> Result<()> {
     let _ = writeln!(out, "components          {}", info.components);
     let _ = match info.genus {
         Some(g) => writeln!(out, "genus               {g}"),
+        None if info.faces == 0 => writeln!(out, "genus               undefined (no faces)"),
         None => writeln!(out, "genus               undefined (not a manifold)"),
     };
     let _ = writeln!(out, "euler               {}", info.euler_characteristic);
-    let _ = writeln!(
-        out,
-        "bbox                [{:.6}, {:.6}, {:.6}] – [{:.6}, {:.6}, {:.6}]",
-        info.bbox.min[0],
-        info.bbox.min[1],
-        info.bbox.min[2],
-        info.bbox.max[0],
-        info.bbox.max[1],
-        info.bbox.max[2]
-    );
-    let _ = writeln!(
-        out,
-        "edge length         min {:.6}  mean {:.6}  max {:.6}",
-        info.edge_length.min, info.edge_length.mean, info.edge_length.max
-    );
+    let _ = if has_bbox {
+        writeln!(
+            out,
+            "bbox                [{:.6}, {:.6}, {:.6}] – [{:.6}, {:.6}, {:.6}]",
+            info.bbox.min[0],
+            info.bbox.min[1],
+            info.bbox.min[2],
+            info.bbox.max[0],
+            info.bbox.max[1],
+            info.bbox.max[2]
+        )
+    } else {
+        writeln!(out, "bbox                none (no finite vertex)")
+    };
+    let _ = if info.edges > 0 {
+        writeln!(
+            out,
+            "edge length         min {:.6}  mean {:.6}  max {:.6}",
+            info.edge_length.min, info.edge_length.mean, info.edge_length.max
+        )
+    } else {
+        writeln!(out, "edge length         none (no edges)")
+    };
     let _ = writeln!(out, "area                {:.6}", info.area);
     let defects = [
         ("non-manifold edges", info.non_manifold_edges),
@@ -144,6 +179,7 @@ pub fn run(args: Args) -> Result<()> {
             "manifold            yes, once its {} non-manifold vertices are split per fan (every command does this)",
             info.non_manifold_vertices
         ),
+        None if info.faces == 0 => writeln!(out, "manifold            no surface (no faces)"),
         None => writeln!(out, "manifold            yes"),
         Some(e) => writeln!(
             out,
@@ -153,7 +189,7 @@ hint                run `fairline repair {} OUT` to repair it",
         ),
     };
     print_stdout(&out)?;
-    job.finish(summary);
+    job.finish(summary)?;
     Ok(())
 }
 
@@ -270,7 +306,7 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
     {
         return Err(crate::surface::unreadable_error(&args.mesh, &msg));
     }
-    job.finish(summary);
+    job.finish(summary)?;
     Ok(())
 }
 

@@ -72,6 +72,16 @@ enum Command {
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
+    // A command's outputs are written all or none: staged until its job
+    // finishes (output.rs). Not the workbench, whose saves are immediate,
+    // nor the commands that fill a folder of their own (a part's files are
+    // read back by `inspect`).
+    if !matches!(
+        cli.command,
+        Command::View(_) | Command::Inspect(_) | Command::Demo(_)
+    ) {
+        fairline::io::stage_writes();
+    }
     match cli.command {
         Command::Info(a) => info::run(a),
         Command::Convert(a) => convert::run(a),
@@ -135,8 +145,21 @@ fn main() {
     // done (two thread wake-ups per loop, thousands per second in the
     // conjugate-gradient solves; 10k-vertex `enhance`: 0.17 s, against
     // 0.20 s when the command runs outside the pool).
-    if let Err(e) = rayon::scope(|_| run(cli)) {
+    // a checked job's outputs are staged until it finishes: those of a
+    // command that failed are removed, those of one that returned without
+    // finishing are put in place
+    let result = rayon::scope(|_| run(cli)).and_then(|()| {
+        fairline::io::commit_staged_writes()?;
+        Ok(())
+    });
+    if let Err(e) = result {
+        let discarded = fairline::io::discard_staged_writes();
         output::say(&format!("error: {}", error_message(&e)));
+        if discarded > 0 {
+            output::say(&format!(
+                "note: the {discarded} output(s) finished before the error were not put in place; nothing written"
+            ));
+        }
         if let Some(hint) = repair::hint(&e) {
             output::say(&format!("hint: {hint}"));
         }

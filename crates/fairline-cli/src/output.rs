@@ -15,11 +15,13 @@
 //!     .output_opt("--report", args.report.as_deref())
 //!     .check()?;
 //! // ... read, compute, write ...
-//! job.finish(format_args!("taubin, 10 iterations on {n} vertices"));
+//! job.finish(format_args!("taubin, 10 iterations on {n} vertices"))?;
 //! ```
 //!
-//! [`Job::check`] refuses (exit status 2, the path and its option named,
-//! nothing written) an output that
+//! [`Job::check`] refuses (exit status 2, the path named, nothing read or
+//! written) an input that exists and is not a regular file (a directory, a
+//! FIFO, a device such as `/dev/zero`: reading one would wait or never
+//! end), and (its option named too) an output that
 //! - is one of the command's inputs: the same canonical path, or on Unix
 //!   the same device and inode (hard links, symbolic links, `./x.obj`
 //!   against `x.obj` are all caught — [`fairline::io::same_file`]);
@@ -34,7 +36,12 @@
 //! A symbolic link to a regular file is allowed: its target gets the new
 //! content and the link stays. Every write is atomic
 //! ([`fairline::io::atomic_write`]: temporary file `.NAME.PID.N.tmp` in the
-//! same folder, then a rename). The temporary files in progress are removed
+//! same folder, then a rename), and a command's outputs are written all or
+//! none: `main` stages the writes of every command but `view`, `inspect`
+//! and `demo` ([`fairline::io::stage_writes`]: each file is written in
+//! full under its temporary name), and [`Job::finish`] renames them all
+//! into place; a command that fails before (an error, a signal) leaves
+//! none of them. The temporary files in progress are removed
 //! when a write fails and when the process gets SIGINT or SIGTERM
 //! ([`install_signal_handler`]; exit status 130 or 143).
 //!
@@ -44,7 +51,8 @@
 //! ([`Job::finish`]: `fairline smooth: … in 0.42 s; wrote out.obj, r.json`),
 //! prints `warning: …` lines ([`warn`]) when something did not converge or
 //! a measure got worse, and shows a progress bar or spinner ([`progress`],
-//! [`spinner`]) only when standard error is a terminal. Standard output
+//! [`spinner`]) only when standard error is a terminal; otherwise (a log, a
+//! pipe) a long run prints a line `progress: …` every few seconds instead. Standard output
 //! carries data only (`info`); when the reader of a pipe goes away
 //! (`fairline info x.obj | head -1`) the command stops quietly with exit
 //! status 0 ([`print_stdout`]), as ripgrep does.
@@ -112,6 +120,17 @@ impl Job {
     /// (exit status 2 and nothing written on a violation) and returns the
     /// checked job.
     pub fn check(self) -> Result<Self> {
+        for input in &self.inputs {
+            // a missing file is left to its reader, whose error names it
+            if let Err(e) = fairline::io::require_regular_file(input)
+                && e.kind() == std::io::ErrorKind::InvalidInput
+            {
+                return Err(bad_input(format!(
+                    "{}: {e}; nothing written",
+                    input.display()
+                )));
+            }
+        }
         for (k, (option, out)) in self.outputs.iter().enumerate() {
             check_output_path(option, out)?;
             for input in &self.inputs {
@@ -167,9 +186,13 @@ impl Job {
         line
     }
 
-    /// Prints the summary line on standard error.
-    pub fn finish(&self, what: impl std::fmt::Display) {
+    /// Puts the outputs written so far in place, all together
+    /// ([`fairline::io::commit_staged_writes`]), and prints the summary
+    /// line on standard error.
+    pub fn finish(&self, what: impl std::fmt::Display) -> Result<()> {
+        fairline::io::commit_staged_writes()?;
         say(&self.summary(what));
+        Ok(())
     }
 }
 
@@ -450,14 +473,69 @@ fn show_later(bar: &indicatif::ProgressBar, tick: bool) {
     drop(spawned);
 }
 
-/// A progress bar of `len` steps on standard error when it is a terminal
-/// (hidden otherwise), drawn once the work has taken about a second.
+/// How often a line of progress is printed when standard error is not a
+/// terminal (a log file, a pipe, CI): often enough to show that a long run
+/// is alive, seldom enough not to fill the log.
+const PROGRESS_LINE_INTERVAL: std::time::Duration = std::time::Duration::from_secs(5);
+
+/// The environment variable that sets [`PROGRESS_LINE_INTERVAL`] in
+/// milliseconds instead (a positive integer; anything else is ignored).
+/// For the tests, which need a run shorter than five seconds to print;
+/// deliberately not in `--help`.
+pub const PROGRESS_INTERVAL_ENV: &str = "FAIRLINE_PROGRESS_INTERVAL_MS";
+
+/// The interval of the progress lines: [`PROGRESS_INTERVAL_ENV`] when it
+/// holds a positive number of milliseconds, else [`PROGRESS_LINE_INTERVAL`].
+fn progress_line_interval() -> std::time::Duration {
+    std::env::var(PROGRESS_INTERVAL_ENV)
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .filter(|&ms| ms > 0)
+        .map_or(PROGRESS_LINE_INTERVAL, std::time::Duration::from_millis)
+}
+
+/// The progress of work when standard error is not a terminal: a line
+/// `progress: MESSAGE, DONE/TOTAL steps, T elapsed` (the steps when `bar`
+/// has a length) on standard error after every interval
+/// ([`progress_line_interval`]) the work has run, until `bar` is finished
+/// or dropped. Quick work prints nothing; nothing is redrawn in place.
+fn print_progress_lines(bar: &indicatif::ProgressBar) {
+    let weak = bar.downgrade();
+    let every = progress_line_interval();
+    let spawned = std::thread::Builder::new()
+        .name("progress-lines".into())
+        .spawn(move || {
+            loop {
+                std::thread::sleep(every);
+                let Some(bar) = weak.upgrade() else { return };
+                if bar.is_finished() {
+                    return;
+                }
+                let steps = match bar.length() {
+                    Some(len) if len > 0 => format!(", {}/{len} steps", bar.position()),
+                    _ => String::new(),
+                };
+                say(&format!(
+                    "progress: {}{steps}, {} elapsed",
+                    bar.message(),
+                    seconds(bar.elapsed().as_secs_f64())
+                ));
+            }
+        });
+    drop(spawned);
+}
+
+/// A progress bar of `len` steps on standard error when it is a terminal,
+/// drawn once the work has taken about a second; otherwise a line of
+/// progress every few seconds ([`print_progress_lines`]).
 pub fn progress(len: u64, message: &str) -> indicatif::ProgressBar {
     let bar = indicatif::ProgressBar::hidden();
+    bar.set_length(len);
+    bar.set_message(message.to_string());
     if !std::io::stderr().is_terminal() {
+        print_progress_lines(&bar);
         return bar;
     }
-    bar.set_length(len);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
             "{spinner} {msg:<24} [{bar:32}] {pos}/{len} ({elapsed})",
@@ -465,24 +543,24 @@ pub fn progress(len: u64, message: &str) -> indicatif::ProgressBar {
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
         .progress_chars("=> "),
     );
-    bar.set_message(message.to_string());
     show_later(&bar, false);
     bar
 }
 
 /// A spinner for work of unknown length on standard error when it is a
-/// terminal (hidden otherwise), drawn once the work has taken about a
-/// second.
+/// terminal, drawn once the work has taken about a second; otherwise a
+/// line of progress every few seconds ([`print_progress_lines`]).
 pub fn spinner(message: &str) -> indicatif::ProgressBar {
     let bar = indicatif::ProgressBar::hidden();
+    bar.set_message(message.to_string());
     if !std::io::stderr().is_terminal() {
+        print_progress_lines(&bar);
         return bar;
     }
     bar.set_style(
         indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
     );
-    bar.set_message(message.to_string());
     show_later(&bar, true);
     bar
 }

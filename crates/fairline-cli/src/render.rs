@@ -186,7 +186,7 @@ pub fn run(args: Args) -> Result<()> {
         report.set("highlight", h);
     }
     report.write(args.report.as_deref())?;
-    job.finish(what);
+    job.finish(what)?;
     Ok(())
 }
 
@@ -214,7 +214,7 @@ fn check_light_options_need_highlight(args: &Args) -> Result<()> {
 /// label at its visible centre).
 fn load_mesh(args: &Args) -> Result<(SurfaceMesh, Option<RegionLabels>)> {
     if !crate::surface::is_surface_path(&args.input) {
-        return Ok((fairline::io::read_mesh(&args.input)?, None));
+        return Ok((crate::input::read_mesh(&args.input)?, None));
     }
     if args.surface.is_some() {
         let mesh = crate::surface::load_tessellated(&args.input, args.surface, 64)?;

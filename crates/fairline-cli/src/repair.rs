@@ -37,8 +37,11 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--report", args.report.as_deref())
         .check()?;
     let soup = fairline::io::read_soup(&args.input)?;
+    crate::input::require_faces(&args.input, soup.face_count(), soup.vertex_count())?;
+    let bar = crate::output::spinner("repairing");
     let out = repair::run(&soup, &Control::new())
         .map_err(|e| anyhow::Error::new(e).context(args.input.display().to_string()))?;
+    bar.finish_and_clear();
     fairline::io::write_soup(&args.output, &out.repaired.soup)?;
     let r = &out.repaired.report;
     write_report(args.report.as_deref(), &out.report)?;
@@ -92,7 +95,7 @@ pub fn run(args: Args) -> Result<()> {
         } else {
             "; vertex indices changed (see vertex_source in the report)"
         }
-    ));
+    ))?;
     Ok(())
 }
 

@@ -140,7 +140,7 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--report", args.report.as_deref())
         .check()?;
     args.settings(Vec::new()).check()?;
-    let mut mesh = fairline::io::read_mesh(&args.mesh)?;
+    let mut mesh = crate::input::read_mesh(&args.mesh)?;
     crate::input::note_split_vertices(&args.mesh, &mesh);
     let fixed = match &args.fixed {
         Some(p) => read_fixed(p, mesh.vertex_count())?,
@@ -168,7 +168,7 @@ pub fn run(args: Args) -> Result<()> {
         if r.converged { "" } else { ", not converged" },
         mesh.vertex_count(),
         r.max_displacement
-    ));
+    ))?;
     Ok(())
 }
 
@@ -247,7 +247,7 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
         .output_opt("--report", args.report.as_deref())
         .check()?;
     args.settings(Vec::new()).check()?;
-    let mut mesh = fairline::io::read_mesh(&args.mesh)?;
+    let mut mesh = crate::input::read_mesh(&args.mesh)?;
     crate::input::note_split_vertices(&args.mesh, &mesh);
     if !mesh.faces().any(|f| mesh.face_size(f) == 4) {
         return Err(bad_input(format!(
@@ -285,6 +285,6 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
         r.free_vertices,
         r.structure_energy_before,
         r.structure_energy_after
-    ));
+    ))?;
     Ok(())
 }

@@ -284,7 +284,7 @@ pub fn run(args: HighlightArgs) -> Result<()> {
         "{} highlight line pre-image(s) on {} surface(s)",
         counts.lines,
         results.len()
-    ));
+    ))?;
     Ok(())
 }
 

@@ -243,3 +243,73 @@ fn the_remaining_defect_warning_says_what_detect_on_the_result_says() {
         "{warnings:?}"
     );
 }
+
+/// `fair --auto` on the smooth panel: detection finds nothing, which is
+/// what was asked (exit status 0), and the run says so — the summary line
+/// begins "nothing to fair", the report says `nothing_to_fair` and claims
+/// no convergence, no picture is made — and the output is the input,
+/// bit for bit. On the dented panel the same run fairs and says so.
+#[test]
+fn fair_auto_with_nothing_to_fair_says_so_and_claims_nothing() {
+    let d = tmp("auto-nothing");
+    let clean = write(&d, "clean.obj", panel);
+    let (out, rep, png) = (d.join("out.obj"), d.join("r.json"), d.join("p.png"));
+    let o = run(&[
+        "fair",
+        s(&clean),
+        "--auto",
+        "-o",
+        s(&out),
+        "--report",
+        s(&rep),
+        "--png",
+        s(&png),
+    ]);
+    ok(&o);
+    let err = String::from_utf8_lossy(&o.stderr);
+    let summary = err
+        .lines()
+        .find(|l| l.starts_with("fairline fair: "))
+        .unwrap_or_else(|| panic!("no summary: {err}"));
+    assert!(
+        summary.starts_with(
+            "fairline fair: nothing to fair (--auto found no defect above the detection threshold"
+        ),
+        "{summary}"
+    );
+    assert!(
+        !err.contains("region(s) faired") && !err.contains("converged"),
+        "{err}"
+    );
+    assert!(!err.contains("warning:"), "{err}");
+    let r = json(&rep);
+    assert_eq!(r["nothing_to_fair"], true, "{r}");
+    assert_eq!(r["regions"], 0, "{r}");
+    assert!(r.get("converged").is_none(), "{r}");
+    assert!(!png.exists());
+    let (a, b) = (
+        fairline::io::read_mesh(&clean).unwrap(),
+        fairline::io::read_mesh(&out).unwrap(),
+    );
+    assert_eq!(bits(&a), bits(&b));
+    // with a dent there is something to fair, and the report says so
+    let dented = write(&d, "dented.obj", |x, y| panel(x, y) + dent(x, y));
+    let o = run(&[
+        "fair",
+        s(&dented),
+        "--auto",
+        "-o",
+        s(&out),
+        "--report",
+        s(&rep),
+    ]);
+    ok(&o);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("fairline fair: 1 region(s) faired, converged"),
+        "{err}"
+    );
+    let r = json(&rep);
+    assert_eq!(r["nothing_to_fair"], false, "{r}");
+    assert_eq!(r["converged"], true, "{r}");
+}

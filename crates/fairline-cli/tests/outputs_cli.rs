@@ -667,3 +667,281 @@ fn replaced_outputs_keep_their_mode_and_hard_links_are_refused() {
     assert_eq!(std::fs::read_to_string(&other).unwrap(), "old");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Runs `fairline` in `dir` with `args`, killing it after `secs` seconds
+/// (a run that waits on a FIFO must fail the test, not hang it).
+fn run_in_bounded(dir: &Path, args: &[&str], secs: u64) -> std::process::Output {
+    let mut child = common::bin()
+        .current_dir(dir)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed().as_secs() >= secs {
+            let _ = child.kill();
+            let o = child.wait_with_output().unwrap();
+            panic!("{args:?}: still running after {secs} s: {}", stderr(&o));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// An input that is not a regular file — a device that never ends
+/// (`/dev/zero`, `/dev/urandom` under a mesh name), a FIFO (opening it
+/// would wait for a writer), a directory — is refused before it is opened:
+/// exit status 2, the file named, nothing written, promptly.
+#[cfg(unix)]
+#[test]
+fn inputs_that_are_not_regular_files_are_refused_unread() {
+    let d = setup("special-inputs");
+    let i = d.join("in.obj");
+    let zero = d.join("zero.stl");
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    let random = d.join("random.ply");
+    std::os::unix::fs::symlink("/dev/urandom", &random).unwrap();
+    let fifo_mesh = d.join("pipe.obj");
+    let fifo_json = d.join("pipe.json");
+    for f in [&fifo_mesh, &fifo_json] {
+        let made = std::process::Command::new("mkfifo").arg(f).status();
+        assert!(made.unwrap().success(), "mkfifo {}", f.display());
+    }
+    let folder = d.join("folder.obj");
+    std::fs::create_dir(&folder).unwrap();
+    let zero_json = d.join("zero.json");
+    std::os::unix::fs::symlink("/dev/zero", &zero_json).unwrap();
+    let cases: Vec<(Vec<&str>, &Path, &str)> = vec![
+        (vec!["info", s(&zero)], &zero, "is a device"),
+        (
+            vec!["smooth", s(&zero), "-o", "o.obj"],
+            &zero,
+            "is a device",
+        ),
+        (
+            vec!["curvature", s(&random), "-o", "o.ply"],
+            &random,
+            "is a device",
+        ),
+        (
+            vec!["info", s(&fifo_mesh)],
+            &fifo_mesh,
+            "is a FIFO (named pipe)",
+        ),
+        (
+            vec!["convert", s(&fifo_mesh), "o.obj"],
+            &fifo_mesh,
+            "is a FIFO (named pipe)",
+        ),
+        (vec!["info", s(&folder)], &folder, "is a directory"),
+        (
+            vec!["fair", s(&i), "--region", s(&fifo_json), "-o", "o.obj"],
+            &fifo_json,
+            "is a FIFO (named pipe)",
+        ),
+        (
+            vec!["smooth", s(&i), "--fixed", s(&zero_json), "-o", "o.obj"],
+            &zero_json,
+            "is a device",
+        ),
+        (vec!["info", s(&zero_json)], &zero_json, "is a device"),
+        (
+            vec!["render", s(&zero_json), "--png", "p.png"],
+            &zero_json,
+            "is a device",
+        ),
+    ];
+    for (args, file, what) in cases {
+        let o = run_in_bounded(&d, &args, 30);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+        assert!(
+            e.contains(&format!(
+                "error: {}: {what}, not a regular file",
+                file.display()
+            )),
+            "{args:?}: {e}"
+        );
+        assert!(!e.contains("panicked"), "{e}");
+        for out in ["o.obj", "o.ply", "p.png"] {
+            assert!(!d.join(out).exists(), "{args:?} wrote {out}");
+        }
+    }
+}
+
+/// Writes `text` as `name` in `dir` and returns its path.
+fn put(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// A mesh without faces — no vertex at all, or vertices only — gives
+/// every command but `info` exit status 2 and a message naming the file,
+/// and writes nothing; `info` counts it and says it holds no surface.
+#[test]
+fn meshes_without_faces_are_refused_by_every_command_and_counted_by_info() {
+    let d = setup("no-faces");
+    let empty_ply = put(
+        &d,
+        "empty.ply",
+        "ply\nformat ascii 1.0\nelement vertex 0\nproperty double x\nproperty double y\nproperty double z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n",
+    );
+    let empty_off = put(&d, "empty.off", "OFF\n0 0 0\n");
+    let empty_stl = put(&d, "empty.stl", "solid nothing\nendsolid nothing\n");
+    let points = put(&d, "points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    let commands: Vec<Vec<&str>> = vec![
+        vec!["smooth", "-o", "o.obj", "--report", "r.json"],
+        vec!["fair", "--auto", "-o", "o.obj", "--report", "r.json"],
+        vec!["detect", "-o", "r.json"],
+        vec!["highlight", "-o", "o.json"],
+        vec!["curvature", "-o", "o.ply"],
+        vec!["render", "--png", "p.png"],
+        vec!["enhance", "-o", "o.obj"],
+        vec!["fair-quad", "-o", "o.obj"],
+    ];
+    for mesh in [&empty_ply, &empty_off, &empty_stl, &points] {
+        let none = mesh != &points;
+        let mut runs: Vec<Vec<&str>> = commands
+            .iter()
+            .map(|c| {
+                let mut args = vec![c[0], s(mesh)];
+                args.extend_from_slice(&c[1..]);
+                args
+            })
+            .collect();
+        runs.push(vec!["repair", s(mesh), "o.obj", "--report", "r.json"]);
+        for args in runs {
+            let o = run_in(&d, &args);
+            let e = stderr(&o);
+            assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+            let said = if none {
+                "the mesh is empty (no vertex, no face): there is no surface to work on"
+            } else {
+                "the mesh has no faces, only 3 vertices: there is no surface to work on"
+            };
+            assert!(
+                e.contains(&format!("error: {}: {said}", mesh.display())),
+                "{args:?}: {e}"
+            );
+            assert!(!e.contains("panicked"), "{e}");
+            assert!(temp_files(&d).is_empty(), "{args:?}: {:?}", names(&d));
+            for out in ["o.obj", "o.ply", "o.json", "r.json", "p.png"] {
+                assert!(!d.join(out).exists(), "{args:?} wrote {out}");
+            }
+        }
+        // info: the counts, no made-up box, edge lengths or genus, and a
+        // warning that there is no surface
+        let o = run_in(&d, &["info", s(mesh), "--json", "--report", "r.json"]);
+        ok(&o);
+        let e = stderr(&o);
+        assert!(
+            e.contains(&format!("warning: {}: the file ", mesh.display())),
+            "{e}"
+        );
+        assert!(e.contains("0 faces, no surface"), "{e}");
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(j["faces"], 0, "{j}");
+        assert_eq!(j["vertices"], if none { 0 } else { 3 }, "{j}");
+        assert!(j.get("edge_length").is_none(), "{j}");
+        assert!(j.get("genus").is_none(), "{j}");
+        assert_eq!(j.get("bbox").is_none(), none, "{j}");
+        let r = json(&d.join("r.json"));
+        assert!(
+            r["warnings"][0].as_str().unwrap().contains("the file "),
+            "{r}"
+        );
+        std::fs::remove_file(d.join("r.json")).unwrap();
+    }
+}
+
+/// With standard error not a terminal (a pipe here), a long run prints a
+/// line of progress now and then — never a bar redrawn in place — and a
+/// quick one prints none. The interval is shortened for the test through
+/// the environment.
+#[test]
+fn progress_off_a_terminal_is_a_line_now_and_then() {
+    let d = tmp("progress-lines");
+    let big = put(&d, "big.obj", &wavy_obj(150));
+    let o = common::bin()
+        .current_dir(&d)
+        .env("FAIRLINE_PROGRESS_INTERVAL_MS", "20")
+        .args(["smooth", s(&big), "--iterations", "400", "-o", "o.obj"])
+        .output()
+        .unwrap();
+    ok(&o);
+    let e = stderr(&o);
+    let lines: Vec<&str> = e
+        .lines()
+        .filter(|l| l.starts_with("progress: smoothing, "))
+        .collect();
+    assert!(!lines.is_empty(), "no progress line: {e}");
+    assert!(lines.iter().all(|l| l.ends_with(" s elapsed")), "{e}");
+    assert!(!e.contains('\r') && !e.contains('\x1b'), "a bar: {e:?}");
+    // the summary comes after the last progress line
+    assert!(
+        e.trim_end()
+            .lines()
+            .last()
+            .unwrap()
+            .starts_with("fairline smooth: "),
+        "{e}"
+    );
+    // a quick run, at the usual interval: no progress line
+    let small = put(&d, "small.obj", &wavy_obj(12));
+    let o = run_in(&d, &["smooth", s(&small), "-o", "o.obj"]);
+    ok(&o);
+    assert!(!stderr(&o).contains("progress:"), "{}", stderr(&o));
+}
+
+/// A command's outputs are written all or none: when a later output
+/// cannot be written (here the picture, over a file-size limit the mesh
+/// is under), the mesh written before it is not put in place either, an
+/// older file at its path keeps its content, and no temporary file stays.
+#[cfg(unix)]
+#[test]
+fn outputs_are_written_all_or_none() {
+    let d = setup("all-or-none");
+    let i = d.join("in.obj");
+    let args = [
+        "smooth",
+        s(&i),
+        "-o",
+        "s.obj",
+        "--png",
+        "p.png",
+        "--report",
+        "r.json",
+    ];
+    ok(&run_in(&d, &args));
+    let mesh = std::fs::metadata(d.join("s.obj")).unwrap().len();
+    let png = std::fs::metadata(d.join("p.png")).unwrap().len();
+    // a limit in blocks the mesh is under and the picture over, whether
+    // the shell counts blocks of 512 or of 1024 bytes
+    let blocks = mesh / 512 + 1;
+    assert!(1024 * blocks < png, "mesh {mesh} B, picture {png} B");
+    for f in ["p.png", "r.json"] {
+        std::fs::remove_file(d.join(f)).unwrap();
+    }
+    std::fs::write(d.join("s.obj"), "older\n").unwrap();
+    let o = std::process::Command::new("sh")
+        .current_dir(&d)
+        .arg("-c")
+        .arg(format!(
+            "trap '' XFSZ; ulimit -f {blocks}; exec \"$0\" \"$@\""
+        ))
+        .arg(env!("CARGO_BIN_EXE_fairline"))
+        .args(&args[..])
+        .output()
+        .unwrap();
+    let e = stderr(&o);
+    assert!(!o.status.success(), "{e}");
+    assert!(e.contains("p.png"), "{e}");
+    assert!(e.contains("not put in place; nothing written"), "{e}");
+    assert_eq!(std::fs::read_to_string(d.join("s.obj")).unwrap(), "older\n");
+    assert!(!d.join("p.png").exists() && !d.join("r.json").exists());
+    assert!(temp_files(&d).is_empty(), "{:?}", names(&d));
+}

@@ -32,6 +32,7 @@ pub fn run(
     settings: &CurvatureSettings,
     control: &Control,
 ) -> Result<CurvatureOutcome, CommandError> {
+    crate::require_faces(mesh.face_count(), mesh.original_vertex_count())?;
     let mut report = Report::new("curvature");
     let options = CurvatureOptions::default()
         .method(settings.method)

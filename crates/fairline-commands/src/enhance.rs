@@ -81,6 +81,7 @@ pub fn run(
     settings: &EnhanceSettings,
     control: &Control,
 ) -> Result<EnhanceOutcome, CommandError> {
+    crate::require_faces(mesh.face_count(), mesh.original_vertex_count())?;
     if !mesh.is_triangle_mesh() {
         return Err(CommandError::bad_input(
             "enhance needs a triangle mesh (triangulate it first, e.g. with `fairline convert`)",

@@ -150,6 +150,9 @@ pub struct FairOutcome {
     pub report: Report,
     /// What the run says on the way (regions detected and grown).
     pub notes: Vec<Note>,
+    /// Regions there were to fair: the region given, or those detection
+    /// found (`auto`; none when it found no defect).
+    pub regions: usize,
 }
 
 /// Fairs the regions of `input` with `settings`, reporting progress (one
@@ -166,6 +169,7 @@ pub fn run(
             "give a region, or auto to detect the regions (not both)",
         ));
     }
+    crate::require_faces(mesh.face_count(), mesh.original_vertex_count())?;
     if !mesh.is_triangle_mesh() {
         return Err(CommandError::bad_input(
             "highlight-line fairing needs a triangle mesh (this one has polygons; triangulate it first, e.g. with `fairline convert`)",
@@ -224,8 +228,12 @@ pub fn run(
         .map(|(a, b)| (*a - *b).length())
         .fold(0.0, f64::max);
     report.set_fields(regions_report(&faired.results, largest_move));
+    if settings.auto {
+        report.set("nothing_to_fair", regions.is_empty());
+    }
     let scores = (score_before, score_after);
-    for w in regions_warnings(&faired.results, settings.max_iterations, scores) {
+    let attempted = regions.len();
+    for w in regions_warnings(&faired.results, attempted, settings.max_iterations, scores) {
         report.warn(w);
     }
     Ok(FairOutcome {
@@ -239,6 +247,7 @@ pub fn run(
         largest_move,
         report,
         notes,
+        regions: attempted,
     })
 }
 
@@ -317,6 +326,18 @@ fn report_detection(
 }
 
 impl FairOutcome {
+    /// Whether there was nothing to fair: `auto` and detection found no
+    /// defect above its threshold. The output is the input, as asked.
+    pub fn nothing_to_fair(&self) -> bool {
+        self.regions == 0
+    }
+    /// Whether there were regions to fair but none was faired (`auto`
+    /// skips a detected region without a vertex free to move): the output
+    /// is the input unchanged, which is not what was asked for; front
+    /// ends exit 1 (the CLI), raise or mark the result.
+    pub fn nothing_faired(&self) -> bool {
+        self.regions > 0 && self.results.is_empty()
+    }
     /// Whether every faired region converged.
     pub fn converged(&self) -> bool {
         self.results.iter().all(|r| r.converged)

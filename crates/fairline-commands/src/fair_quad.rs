@@ -104,6 +104,7 @@ pub fn run(
     control: &Control,
 ) -> Result<QuadOutcome, CommandError> {
     settings.check()?;
+    crate::require_faces(mesh.face_count(), mesh.original_vertex_count())?;
     if !mesh.faces().any(|f| mesh.face_size(f) == 4) {
         return Err(CommandError::bad_input(
             "fair-quad needs a quad mesh (no quadrilateral found)",

@@ -40,6 +40,24 @@ pub use names::{Choice, Named, Weights};
 pub use report::{Report, finite_only};
 pub use warning::{FrontEnd, Warning};
 
+/// Refuses a mesh of `faces` faces and `vertices` vertices that has no
+/// face: it holds no surface for a command to work on (only `info` counts
+/// such a file). The error is about the input ([`Subject::Input`]).
+pub fn require_faces(faces: usize, vertices: usize) -> Result<(), CommandError> {
+    if faces > 0 {
+        return Ok(());
+    }
+    let what = match vertices {
+        0 => "is empty (no vertex, no face)".to_string(),
+        1 => "has no faces, only 1 vertex".to_string(),
+        n => format!("has no faces, only {n} vertices"),
+    };
+    Err(
+        CommandError::bad_input(format!("the mesh {what}: there is no surface to work on"))
+            .about(Subject::Input),
+    )
+}
+
 /// What a command says on the way (not a warning: nothing went wrong),
 /// worded by each front end ([`Note::message`]).
 #[derive(Clone, Debug, PartialEq)]

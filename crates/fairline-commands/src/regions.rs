@@ -131,7 +131,7 @@ pub fn detected_region_entries(
 /// The report keys of fairing `results` (one report per faired region, in
 /// order): a single region's report as it is; otherwise the run summed up
 /// — iterations, movable vertices and Willmore energies summed, converged
-/// when every region converged, the highlight deviations their largest,
+/// when every region converged (left out when there is none), the highlight deviations their largest,
 /// `max_displacement` the largest move of a vertex over the whole run
 /// (`max_displacement`, measured by the caller) — with every region's
 /// report under `per_region`.
@@ -146,7 +146,10 @@ pub fn regions_report(results: &[FairReport], max_displacement: f64) -> Map<Stri
     }
     let sum = |key: &str| -> f64 { results.iter().filter_map(|r| r[key].as_f64()).sum() };
     keys.insert("iterations".into(), json!(sum("iterations") as u64));
-    keys.insert("converged".into(), json!(all_converged(&results)));
+    // with no region faired nothing converged: the key is left out
+    if !results.is_empty() {
+        keys.insert("converged".into(), json!(all_converged(&results)));
+    }
     keys.insert(
         "movable_vertices".into(),
         json!(sum("movable_vertices") as u64),
@@ -221,19 +224,22 @@ pub fn regions_deviation(results: &[FairReport]) -> (f64, f64) {
     )
 }
 
-/// What fairing `results` with at most `max_iterations` iterations per
-/// region warns about: no region was faired; a region did not converge;
+/// What fairing `results` of `attempted` regions with at most
+/// `max_iterations` iterations per region warns about: there were regions
+/// but none was faired (none to fair is no warning); a region did not
+/// converge;
 /// the highlight-line deviation got worse (with the detection score inside
 /// the regions before and after, `detection_scores`, as `detect` measures
 /// it).
 pub fn regions_warnings(
     results: &[FairReport],
+    attempted: usize,
     max_iterations: usize,
     detection_scores: (f64, f64),
 ) -> Vec<Warning> {
     let mut warnings = Vec::new();
-    if results.is_empty() {
-        warnings.push(Warning::NothingFaired);
+    if results.is_empty() && attempted > 0 {
+        warnings.push(Warning::NothingFaired { regions: attempted });
     }
     if !results.iter().all(|r| r.converged) {
         warnings.push(Warning::FairNotConverged { max_iterations });
@@ -340,7 +346,7 @@ mod tests {
         );
         // 2 iterations of diffusion flow do not reach ε = 1e-14: said once
         assert!(!a.converged);
-        let w: Vec<String> = regions_warnings(&reports, 2, (1.0, 0.5))
+        let w: Vec<String> = regions_warnings(&reports, reports.len(), 2, (1.0, 0.5))
             .iter()
             .map(|w| w.message(FrontEnd::Cli))
             .collect();
@@ -349,15 +355,21 @@ mod tests {
             "fairing did not converge within --max-iterations 2; try more iterations or a larger region (--grow, --auto)"
         );
         assert!(w.iter().all(|s| !s.starts_with("no region was faired")));
-        // nothing faired: said, and nothing else
-        let none: Vec<String> = regions_warnings(&[], 3, (0.0, 0.0))
+        // regions but none faired: said, and nothing else
+        let none: Vec<String> = regions_warnings(&[], 2, 3, (0.0, 0.0))
             .iter()
             .map(|w| w.message(FrontEnd::Cli))
             .collect();
         assert_eq!(
             none,
-            vec!["no region was faired (nothing detected): the output is the input unchanged"]
+            vec![
+                "no region was faired: none of the 2 regions to fair has a vertex free to move (see skipped_regions in the report); the output is the input unchanged"
+            ]
         );
+        // no region to fair: nothing went wrong, no warning, no claim of
+        // convergence
+        assert!(regions_warnings(&[], 0, 3, (0.0, 0.0)).is_empty());
+        assert!(regions_report(&[], 0.0).get("converged").is_none());
     }
 
     /// A region whose highlight deviation grew is flagged in its report and
@@ -377,7 +389,7 @@ mod tests {
         }
         assert!(!regions_made_worse(&reports));
         assert!(
-            regions_warnings(&reports, 3, (2.0, 0.5))
+            regions_warnings(&reports, reports.len(), 3, (2.0, 0.5))
                 .iter()
                 .all(|w| !matches!(w, Warning::DeviationWorse { .. }))
         );
@@ -403,7 +415,7 @@ mod tests {
         assert!(!fairing_made_worse(&reports, (2.5, 1.0), (0.0, 0.5)));
         reports[1].highlight_deviation_after = 3.0 * reports[1].highlight_deviation_before;
         reports[1].highlight_deviation_worse = true;
-        let w: Vec<String> = regions_warnings(&reports, 3, (2.0, 2.5))
+        let w: Vec<String> = regions_warnings(&reports, reports.len(), 3, (2.0, 2.5))
             .iter()
             .map(|w| w.message(FrontEnd::Cli))
             .collect();

@@ -19,6 +19,7 @@ pub struct RepairOutcome {
 
 /// Repairs `soup`.
 pub fn run(soup: &Soup, control: &Control) -> Result<RepairOutcome, CommandError> {
+    crate::require_faces(soup.face_count(), soup.vertex_count())?;
     let mut report = Report::new("repair");
     let options = RepairOptions::default().control(control.clone());
     let repaired = report
@@ -27,6 +28,13 @@ pub fn run(soup: &Soup, control: &Control) -> Result<RepairOutcome, CommandError
             RepairError::Cancelled(_) => CommandError::cancelled(),
             e => CommandError::bad_input(format!("cannot repair: {e}")).about(Subject::Input),
         })?;
+    if repaired.soup.face_count() == 0 {
+        return Err(CommandError::bad_input(format!(
+            "cannot repair: every one of its {} faces was removed (invalid, duplicate or of zero area); no surface is left",
+            soup.face_count()
+        ))
+        .about(Subject::Input));
+    }
     let r = &repaired.report;
     report.set_fields(r);
     for w in r.warnings() {

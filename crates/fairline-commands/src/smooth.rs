@@ -151,6 +151,7 @@ pub fn run(
     control: &Control,
 ) -> Result<SmoothOutcome, CommandError> {
     settings.check()?;
+    crate::require_faces(mesh.face_count(), mesh.original_vertex_count())?;
     let options = settings.options().control(control.clone());
     let mut report = Report::new("smooth");
     let out = report.time(|| smooth(mesh, &options))?;

@@ -86,8 +86,8 @@ pub enum Warning {
     ReportValueUnwritable { key: String, error: String },
     /// A report could not be serialised.
     ReportUnwritable { error: String },
-    /// `fair`: no region was faired.
-    NothingFaired,
+    /// `fair`: there were `regions` regions to fair, but none was faired.
+    NothingFaired { regions: usize },
     /// `fair`: a region did not converge within the iterations allowed.
     FairNotConverged { max_iterations: usize },
     /// `fair`: the highlight-line deviation got worse.
@@ -131,8 +131,14 @@ impl Warning {
                 format!("report value `{key}` could not be written ({error}); left out")
             }
             Warning::ReportUnwritable { error } => format!("report could not be written ({error})"),
-            Warning::NothingFaired => {
-                "no region was faired (nothing detected): the output is the input unchanged".into()
+            Warning::NothingFaired { regions } => {
+                let which = match regions {
+                    1 => "the region to fair has no vertex".to_string(),
+                    n => format!("none of the {n} regions to fair has a vertex"),
+                };
+                format!(
+                    "no region was faired: {which} free to move (see skipped_regions in the report); the output is the input unchanged"
+                )
             }
             Warning::FairNotConverged { max_iterations } => format!(
                 "fairing did not converge within {}; try more iterations or a larger region ({}, {})",
@@ -248,8 +254,8 @@ mod tests {
             "method=\"diffusion-flow\""
         );
         assert_eq!(
-            Warning::NothingFaired.message(FrontEnd::Cli),
-            "no region was faired (nothing detected): the output is the input unchanged"
+            Warning::NothingFaired { regions: 1 }.message(FrontEnd::Cli),
+            "no region was faired: the region to fair has no vertex free to move (see skipped_regions in the report); the output is the input unchanged"
         );
     }
 }

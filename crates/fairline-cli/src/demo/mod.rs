@@ -108,7 +108,7 @@ pub fn run(args: Args) -> Result<()> {
         sections.len(),
         args.out.display(),
         args.out.join("index.html").display()
-    ));
+    ))?;
     crate::output::say(&format!(
         "look at a result interactively (lights, marking, fairing): fairline view {}",
         args.out.join("dented-panel.obj").display()

@@ -327,7 +327,7 @@ fn finish(job: &Job, output: &Path, records: &[PartRecord], planned: &[Planned])
         say(&job.summary(what));
         return Err(anyhow::Error::new(crate::error::PartsFailed(failed)));
     }
-    job.finish(what);
+    job.finish(what)?;
     Ok(())
 }
 

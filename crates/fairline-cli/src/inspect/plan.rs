@@ -230,8 +230,10 @@ struct ManifestRow {
 /// of `up`, `lights`, `threshold`, `tolerance` (an empty cell keeps the
 /// default). Paths are relative to the manifest's folder.
 pub fn read_manifest(path: &Path) -> Result<Vec<PartSpec>> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+    let bytes = fairline::io::read_input_file(path, fairline::io::MAX_INPUT_FILE_BYTES)
+        .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+    let text = String::from_utf8(bytes)
+        .map_err(|e| bad_input(format!("{}: not UTF-8 text: {e}", path.display())))?;
     let base = path.parent().unwrap_or(Path::new(""));
     let is_json = path
         .extension()
@@ -384,6 +386,7 @@ pub fn content_key(spec: &PartSpec) -> std::io::Result<String> {
 
 fn hash_file(h: &mut Sha256, path: &Path) -> std::io::Result<()> {
     use std::io::Read;
+    fairline::io::require_regular_file(path)?;
     let mut f = std::fs::File::open(path)?;
     let mut buf = vec![0u8; 1 << 16];
     loop {

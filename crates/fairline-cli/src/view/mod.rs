@@ -155,7 +155,9 @@ pub fn run(args: Args) -> Result<()> {
         .chain(args.file2.as_ref())
         .collect();
     for f in &files {
-        std::fs::File::open(f).map_err(|e| bad_input(format!("{}: {e}", f.display())))?;
+        fairline::io::require_regular_file(f)
+            .and_then(|()| std::fs::File::open(f))
+            .map_err(|e| bad_input(format!("{}: {e}", f.display())))?;
     }
     let token = auth::new_token()?;
     let listener = std::net::TcpListener::bind(("127.0.0.1", args.port.unwrap_or(0)))

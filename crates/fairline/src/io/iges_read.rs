@@ -184,9 +184,11 @@ pub struct IgesImport {
 /// Errors name the file, and the line and entity where known.
 pub fn read_iges(path: impl AsRef<Path>) -> Result<IgesImport, IgesError> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|source| IgesError::Read {
-        path: path.to_path_buf(),
-        source,
+    let bytes = super::read_input_file(path, super::MAX_INPUT_FILE_BYTES).map_err(|source| {
+        IgesError::Read {
+            path: path.to_path_buf(),
+            source,
+        }
     })?;
     parse_iges_bytes(&bytes).map_err(|error| IgesError::InFile {
         path: path.to_path_buf(),

@@ -356,6 +356,90 @@ pub fn read_ply_vertex_properties(
 /// Named per-vertex scalar values, in file order: `(name, one value per vertex)`.
 pub type VertexProperties = Vec<(String, Vec<f64>)>;
 
+/// The largest input file fairline reads whole (8 GiB): a binary STL of
+/// 160 million triangles, far beyond any mesh the algorithms can hold.
+pub const MAX_INPUT_FILE_BYTES: u64 = 8 << 30;
+
+/// Refuses a `path` that is not a regular file, before opening it: a
+/// directory, a FIFO (opening one would wait for a writer), a device such
+/// as `/dev/zero` or `/dev/urandom` (it never ends), a socket. Symbolic
+/// links are followed. The error is [`std::io::ErrorKind::InvalidInput`]
+/// with a message that says what the path is; a path that cannot be looked
+/// at gives the operating system's error.
+pub fn require_regular_file(path: impl AsRef<Path>) -> std::io::Result<()> {
+    let meta = std::fs::metadata(path)?;
+    if meta.is_file() {
+        return Ok(());
+    }
+    Err(std::io::Error::new(
+        std::io::ErrorKind::InvalidInput,
+        format!(
+            "is {}, not a regular file; give a file",
+            file_kind(&meta.file_type())
+        ),
+    ))
+}
+
+/// What a file that is not a regular file is, for messages.
+fn file_kind(t: &std::fs::FileType) -> &'static str {
+    if t.is_dir() {
+        return "a directory";
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a FIFO (named pipe)";
+        }
+        if t.is_char_device() || t.is_block_device() {
+            return "a device";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    "a special file"
+}
+
+/// Reads a whole input file: refused unless it is a regular file
+/// ([`require_regular_file`], checked before opening and again on the
+/// opened file), and refused (nothing more read) once it holds more than
+/// `max_bytes` bytes, so a file that grows while it is read is bounded too.
+/// Errors are [`std::io::Error`]s; callers add the path.
+pub fn read_input_file(path: impl AsRef<Path>, max_bytes: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let path = path.as_ref();
+    require_regular_file(path)?;
+    let file = File::open(path)?;
+    let meta = file.metadata()?;
+    if !meta.is_file() {
+        // replaced between the look and the opening
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!(
+                "is {}, not a regular file; give a file",
+                file_kind(&meta.file_type())
+            ),
+        ));
+    }
+    let too_large = |size: u64| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("is {size} bytes, more than the {max_bytes} bytes fairline reads"),
+        )
+    };
+    if meta.len() > max_bytes {
+        return Err(too_large(meta.len()));
+    }
+    let mut bytes = Vec::with_capacity(usize::try_from(meta.len()).unwrap_or(0));
+    file.take(max_bytes.saturating_add(1))
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(too_large(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 
 /// Items formatted per parallel chunk before a group of chunks is written.
@@ -395,16 +479,21 @@ pub(crate) fn write_formatted(
 }
 
 /// The temporary files [`atomic_write`] has created and not yet renamed or
-/// removed, and whether the process is shutting down (then no new temporary
-/// file may be created).
+/// removed, whether the process is shutting down (then no new temporary
+/// file may be created), and whether writes are staged ([`stage_writes`])
+/// with the staged files: (temporary file, path it is renamed to).
 struct LiveTemps {
     paths: Vec<PathBuf>,
     closing: bool,
+    staging: bool,
+    staged: Vec<(PathBuf, PathBuf)>,
 }
 
 static LIVE_TEMPS: std::sync::Mutex<LiveTemps> = std::sync::Mutex::new(LiveTemps {
     paths: Vec::new(),
     closing: false,
+    staging: false,
+    staged: Vec::new(),
 });
 
 fn live_temps() -> std::sync::MutexGuard<'static, LiveTemps> {
@@ -422,11 +511,76 @@ fn live_temps() -> std::sync::MutexGuard<'static, LiveTemps> {
 pub fn remove_temporary_files() -> usize {
     let mut live = live_temps();
     live.closing = true;
+    live.staged.clear();
     let mut removed = 0;
     for p in live.paths.drain(..) {
         if std::fs::remove_file(&p).is_ok() {
             removed += 1;
         }
+    }
+    removed
+}
+
+/// Stages every later [`atomic_write`] of this process: each file is
+/// written, flushed and synced in full under its temporary name beside its
+/// path, but renamed into place only by [`commit_staged_writes`], all of
+/// them together, or removed by [`discard_staged_writes`]. A program that
+/// writes several files for one request (a mesh, a report, a picture) thus
+/// writes all of them or none: a failure after the first file leaves no
+/// new file beside the old ones. Until the commit the files are not at
+/// their paths (nothing may read them back). [`remove_temporary_files`]
+/// removes staged files too. Meant for a command-line program; the library
+/// never calls it itself.
+pub fn stage_writes() {
+    live_temps().staging = true;
+}
+
+/// Renames every file staged since [`stage_writes`] over its path, in the
+/// order they were written, ends staging and returns the paths written. A
+/// rename is the one step that can still fail (it does not copy: the
+/// temporary file is in the same folder); then the files before it stay
+/// renamed, it and the rest are removed, and the error names its path.
+pub fn commit_staged_writes() -> Result<Vec<PathBuf>, IoError> {
+    let mut live = live_temps();
+    live.staging = false;
+    let staged = std::mem::take(&mut live.staged);
+    let mut written = Vec::with_capacity(staged.len());
+    let mut failure = None;
+    for (tmp, target) in staged {
+        if failure.is_none() {
+            match std::fs::rename(&tmp, &target) {
+                Ok(()) => written.push(target),
+                Err(source) => {
+                    failure = Some(IoError::Io {
+                        path: target,
+                        source,
+                    })
+                }
+            }
+        }
+        // renamed, or abandoned after a failed rename
+        let _ = std::fs::remove_file(&tmp);
+        live.paths.retain(|p| p != &tmp);
+    }
+    match failure {
+        Some(e) => Err(e),
+        None => Ok(written),
+    }
+}
+
+/// Removes every file staged since [`stage_writes`] without renaming it
+/// (the paths keep what they held before) and ends staging; returns how
+/// many files were removed.
+pub fn discard_staged_writes() -> usize {
+    let mut live = live_temps();
+    live.staging = false;
+    let staged = std::mem::take(&mut live.staged);
+    let mut removed = 0;
+    for (tmp, _) in staged {
+        if std::fs::remove_file(&tmp).is_ok() {
+            removed += 1;
+        }
+        live.paths.retain(|p| p != &tmp);
     }
     removed
 }
@@ -514,7 +668,8 @@ where
 /// refused, and so is a file with other hard links (a rename would leave
 /// them with the old content). A replaced file keeps its permissions. The temporary file is listed while it exists, so that
 /// [`remove_temporary_files`] can remove it when the process is stopped by
-/// a signal.
+/// a signal. After [`stage_writes`] the rename waits for
+/// [`commit_staged_writes`].
 pub fn atomic_write<F>(path: impl AsRef<Path>, write: F) -> Result<(), IoError>
 where
     F: FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
@@ -583,10 +738,23 @@ where
         }
         file.sync_all()?;
         drop(file);
-        std::fs::rename(&guard.0, &target)
+        Ok(())
     })();
+    if let Err(e) = result {
+        drop(guard);
+        return Err(io_err(e));
+    }
+    let mut live = live_temps();
+    if live.staging && !live.closing {
+        // renamed by commit_staged_writes, removed by discard_staged_writes
+        let tmp = guard.keep();
+        live.staged.push((tmp, target));
+        return Ok(());
+    }
+    drop(live);
+    let renamed = std::fs::rename(&guard.0, &target);
     drop(guard);
-    result.map_err(io_err)
+    renamed.map_err(io_err)
 }
 
 /// Buffer size of [`atomic_write`]'s writer.
@@ -594,6 +762,15 @@ const WRITE_BUFFER_BYTES: usize = 1 << 20;
 
 /// A temporary file of [`atomic_write`]: removed and unlisted when dropped.
 struct LiveTemp(PathBuf);
+
+impl LiveTemp {
+    /// The path, left in place and listed (a staged file).
+    fn keep(mut self) -> PathBuf {
+        let path = std::mem::take(&mut self.0);
+        std::mem::forget(self);
+        path
+    }
+}
 
 impl Drop for LiveTemp {
     fn drop(&mut self) {
@@ -666,7 +843,7 @@ pub fn ensure_distinct(input: impl AsRef<Path>, output: impl AsRef<Path>) -> Res
 // shared helpers of the format modules
 
 fn read_bytes(path: &Path) -> Result<Vec<u8>, IoError> {
-    std::fs::read(path).map_err(|source| IoError::Io {
+    read_input_file(path, MAX_INPUT_FILE_BYTES).map_err(|source| IoError::Io {
         path: path.to_path_buf(),
         source,
     })
@@ -907,6 +1084,66 @@ mod tests {
             ],
             &[[0u32, 1, 2, 3]],
         )
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn special_files_are_refused_before_they_are_read() {
+        let dir = temp_dir("special-input");
+        // a device that never ends, under a mesh file name
+        let zero = dir.join("zero.stl");
+        std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+        let e = read_soup(&zero).unwrap_err();
+        assert!(matches!(e, IoError::Io { .. }), "{e}");
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "{}: is a device, not a regular file; give a file",
+                zero.display()
+            )
+        );
+        // a directory
+        let sub = dir.join("sub.obj");
+        std::fs::create_dir(&sub).unwrap();
+        let e = read_mesh(&sub).unwrap_err().to_string();
+        assert!(
+            e.contains("sub.obj: is a directory, not a regular file"),
+            "{e}"
+        );
+        // a FIFO: opening it would wait for a writer, so it must be refused
+        // without being opened; a writer unblocks a reader that hangs
+        let fifo = dir.join("pipe.obj");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        assert!(made.unwrap().success(), "mkfifo");
+        let (tx, rx) = std::sync::mpsc::channel();
+        let reading = fifo.clone();
+        std::thread::spawn(move || tx.send(read_soup(&reading).map(|_| ())));
+        let got = rx.recv_timeout(std::time::Duration::from_secs(10));
+        if got.is_err() {
+            drop(std::fs::OpenOptions::new().write(true).open(&fifo));
+            panic!("reading a FIFO waited for a writer");
+        }
+        let e = got.unwrap().unwrap_err().to_string();
+        assert!(
+            e.contains("pipe.obj: is a FIFO (named pipe), not a regular file"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn input_files_are_read_up_to_a_cap() {
+        let dir = temp_dir("cap");
+        let path = dir.join("ten.bin");
+        std::fs::write(&path, [7u8; 10]).unwrap();
+        assert_eq!(read_input_file(&path, 10).unwrap(), vec![7u8; 10]);
+        let e = read_input_file(&path, 9).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
+        assert_eq!(
+            e.to_string(),
+            "is 10 bytes, more than the 9 bytes fairline reads"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -155,9 +155,16 @@ impl RegionSpec {
 }
 
 fn read_text(path: &Path) -> Result<String, IoError> {
-    std::fs::read_to_string(path).map_err(|source| IoError::Io {
+    let io_err = |source| IoError::Io {
         path: path.to_path_buf(),
         source,
+    };
+    let bytes = super::read_input_file(path, super::MAX_INPUT_FILE_BYTES).map_err(io_err)?;
+    String::from_utf8(bytes).map_err(|e| {
+        io_err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
+        ))
     })
 }
 

@@ -3,7 +3,8 @@
 //! Read: a file is binary when its size is exactly `84 + 50·n` for the
 //! triangle count `n` stored at byte 80 (a binary header may well begin with
 //! `solid`); otherwise it is ascii when it begins with `solid` and looks like
-//! text, else a binary file whose size does not match its count: a
+//! text (its tokens separated by any whitespace, line breaks optional),
+//! else a binary file whose size does not match its count: a
 //! truncated one is refused naming the first missing triangle, and bytes
 //! after the announced triangles are refused too (only a final line ending
 //! is tolerated), since they mean the count is wrong and data would be lost. STL stores every triangle
@@ -144,6 +145,28 @@ fn read_binary(bytes: &[u8], path: &Path) -> Result<Soup, IoError> {
     Ok(soup)
 }
 
+/// The words of the ascii STL grammar; a coordinate or a normal component
+/// is never one of them.
+const KEYWORDS: [&[u8]; 9] = [
+    b"solid",
+    b"endsolid",
+    b"facet",
+    b"normal",
+    b"outer",
+    b"loop",
+    b"vertex",
+    b"endloop",
+    b"endfacet",
+];
+
+fn is_keyword(tok: &[u8]) -> bool {
+    KEYWORDS.contains(&tok)
+}
+
+/// Reads ascii STL as a stream of whitespace-separated tokens, so that line
+/// breaks are optional (a whole file on one line reads the same). A solid's
+/// name is the rest of its `solid` line up to a `facet` or `endsolid` on
+/// that line; the name after `endsolid` ends likewise before a `solid`.
 fn read_ascii(bytes: &[u8], path: &Path) -> Result<Soup, IoError> {
     let err = |ln: usize, m: String| format_err(path, Location::Line(ln), m);
     let mut welder = Welder::with_capacity(0);
@@ -152,26 +175,51 @@ fn read_ascii(bytes: &[u8], path: &Path) -> Result<Soup, IoError> {
     let mut facet = 0usize;
     let mut open: Option<usize> = None; // line of the open `facet`
     let mut last_line = 1;
-    for (ln, line) in Lines::new(bytes, 1) {
+    let mut toks = Lines::new(bytes, 1)
+        .flat_map(|(ln, line)| tokens(line).map(move |t| (ln, t)))
+        .peekable();
+    while let Some((ln, keyword)) = toks.next() {
         last_line = ln;
-        let mut t = tokens(line);
-        let Some(keyword) = t.next() else { continue };
         match keyword {
-            b"solid" | b"endsolid" | b"outer" | b"endloop" => {}
+            b"solid" | b"endsolid" => {
+                // the name: the rest of the line, up to what may follow it
+                // there when the file is written without line breaks
+                let next: &[u8] = if keyword == b"solid" {
+                    b"facet"
+                } else {
+                    b"solid"
+                };
+                while toks
+                    .next_if(|&(l, t)| l == ln && t != next && t != b"endsolid")
+                    .is_some()
+                {}
+            }
             b"facet" => {
                 if open.is_some() {
                     return Err(err(ln, format!("facet {facet}: 'facet' before 'endfacet'")));
                 }
                 open = Some(ln);
                 corners.clear();
+                if toks.next_if(|&(_, t)| t == b"normal").is_some() {
+                    // the normal is ignored; its components are skipped
+                    for _ in 0..3 {
+                        toks.next_if(|&(_, t)| !is_keyword(t));
+                    }
+                }
             }
+            b"outer" => {
+                if toks.next_if(|&(_, t)| t == b"loop").is_none() {
+                    return Err(err(ln, format!("facet {facet}: 'outer' without 'loop'")));
+                }
+            }
+            b"endloop" => {}
             b"vertex" => {
                 if open.is_none() {
                     return Err(err(ln, format!("facet {facet}: 'vertex' outside a facet")));
                 }
                 let mut xyz = [0.0; 3];
                 for (k, c) in xyz.iter_mut().enumerate() {
-                    let Some(tok) = t.next() else {
+                    let Some((_, tok)) = toks.next_if(|&(_, t)| !is_keyword(t)) else {
                         return Err(err(
                             ln,
                             format!("facet {facet}: expected 3 coordinates, found {k}"),
@@ -348,6 +396,36 @@ mod tests {
         for cut in 0..out.len() {
             let _ = parse(&out[..cut]);
         }
+    }
+
+    #[test]
+    fn ascii_on_one_line_reads_as_with_line_breaks() {
+        let one_line = ASCII.split_ascii_whitespace().collect::<Vec<_>>().join(" ");
+        assert!(!one_line.contains('\n'));
+        let lines = parse(ASCII.as_bytes()).unwrap();
+        let flat = parse(one_line.as_bytes()).unwrap();
+        assert_eq!(flat.face_count(), 2);
+        assert_eq!(flat.positions, lines.positions);
+        assert_eq!(flat.indices, lines.indices);
+        assert_eq!(flat.offsets, lines.offsets);
+        // two solids, names of several words, no line break anywhere
+        let two = format!("{one_line} {}", one_line.replace("square", "second part"));
+        let two = parse(two.as_bytes()).unwrap();
+        assert_eq!(two.face_count(), 4);
+        assert_eq!(two.vertex_count(), 4);
+        // a vertex short of a coordinate is still named, not read past
+        let e = parse(
+            one_line
+                .replacen("vertex 1 0 0", "vertex 1 0", 1)
+                .as_bytes(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert_eq!(e, "t.stl:1: facet 0: expected 3 coordinates, found 2");
+        let e = parse(one_line.replacen("endloop", "endloop 7", 1).as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "t.stl:1: unexpected '7'");
     }
 
     #[test]

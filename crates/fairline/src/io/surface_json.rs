@@ -110,6 +110,7 @@ pub fn read_surfaces_json(path: impl AsRef<Path>) -> Result<Vec<BSplineSurface>,
         size,
         max: MAX_SURFACE_JSON_BYTES,
     };
+    super::require_regular_file(path).map_err(read_err)?;
     let file = fs::File::open(path).map_err(read_err)?;
     let size = file.metadata().map_err(read_err)?.len();
     if size > MAX_SURFACE_JSON_BYTES {

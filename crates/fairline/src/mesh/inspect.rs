@@ -93,7 +93,8 @@ pub struct MeshInfo {
     pub non_finite_vertices: usize,
     /// Euler characteristic V − E + F over the used vertices.
     pub euler_characteristic: i64,
-    /// Genus when the mesh is a valid oriented manifold, else `None`.
+    /// Genus when the mesh is a valid oriented manifold with at least one
+    /// face, else `None`.
     pub genus: Option<i64>,
     /// True when `SurfaceMesh` accepts the file.
     pub manifold: bool,
@@ -236,7 +237,8 @@ fn inspect_mesh(soup: &Soup, mesh: &SurfaceMesh, flip: &[u8]) -> MeshInfo {
         degenerate_faces,
         non_finite_vertices: 0,
         euler_characteristic: euler,
-        genus: Some(summary.genus),
+        // an empty surface has no genus
+        genus: (nf > 0).then_some(summary.genus),
         manifold: true,
         manifold_error: None,
         triangle_mesh: mesh.is_triangle_mesh(),

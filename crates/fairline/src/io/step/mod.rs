@@ -77,9 +77,11 @@ pub fn read_step(path: impl AsRef<Path>) -> Result<StepImport, StepError> {
 /// syntax still are).
 pub fn read_step_with(path: impl AsRef<Path>, collect: bool) -> Result<StepImport, StepError> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|source| StepError::Read {
-        path: path.to_path_buf(),
-        source,
+    let bytes = super::read_input_file(path, super::MAX_INPUT_FILE_BYTES).map_err(|source| {
+        StepError::Read {
+            path: path.to_path_buf(),
+            source,
+        }
     })?;
     parse_step_bytes_with(&bytes, collect).map_err(|error| StepError::InFile {
         path: path.to_path_buf(),
