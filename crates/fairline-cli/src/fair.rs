@@ -138,7 +138,7 @@ fn name_subject(e: CommandError, args: &Args) -> anyhow::Error {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let mut job = crate::output::Job::new("fair")
+    let job = crate::output::Job::new("fair")
         .input(&args.mesh)
         .input_opt(args.region.as_deref())
         .input_opt(args.light.lights.as_deref())
@@ -184,10 +184,7 @@ pub fn run(args: Args) -> Result<()> {
             faired.set_positions(positions.clone())?;
             write_picture(png, &mesh, out.fairing_light, r, &faired)?;
         }
-        (Some(png), None) => {
-            say("note: no region was faired, so no picture was written");
-            job.skip(png);
-        }
+        (Some(png), None) => write_unchanged_picture(png, &args.mesh, &mesh, out.fairing_light)?,
         _ => {}
     }
     write_report(args.report.as_deref(), &out.report)?;
@@ -243,6 +240,45 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The --png picture when no region was faired: the input's highlight
+/// lines under the fairing lights (drawn readable), titled with why the
+/// output is the input unchanged.
+fn write_unchanged_picture(
+    png: &std::path::Path,
+    path: &std::path::Path,
+    mesh: &SurfaceMesh,
+    light: fairline::highlight::LightArray,
+) -> Result<()> {
+    let model = fairline::highlight::HighlightModel::new(mesh, light, Default::default())?;
+    let lines = model.lines(mesh);
+    let shown = model.readable_lines(
+        mesh,
+        &lines,
+        &fairline::highlight::Readability::for_part(mesh, &light),
+    );
+    let title = format!(
+        "{}: nothing faired, the output is the input unchanged",
+        path.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    );
+    crate::highlight_png::write(
+        (900, 700),
+        png,
+        mesh,
+        crate::highlight_png::Overlay {
+            lines: &shown,
+            bands: None,
+            flagged: &[],
+            region: None,
+            unjudged: None,
+            view: crate::highlight_png::default_camera(&light),
+            title,
+            spacing: Some(light.spacing()),
+        },
+    )
 }
 
 /// The --png before/after picture of the first region with the lines of

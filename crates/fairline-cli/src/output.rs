@@ -69,7 +69,6 @@ pub struct Job {
     command: &'static str,
     inputs: Vec<PathBuf>,
     outputs: Vec<(String, PathBuf)>,
-    not_written: Vec<PathBuf>,
     started: Instant,
 }
 
@@ -81,7 +80,6 @@ impl Job {
             command,
             inputs: Vec::new(),
             outputs: Vec::new(),
-            not_written: Vec::new(),
             started: Instant::now(),
         }
     }
@@ -155,12 +153,6 @@ impl Job {
         Ok(self)
     }
 
-    /// Notes that a declared output was deliberately not written (it is
-    /// then left out of the summary).
-    pub fn skip(&mut self, path: &Path) {
-        self.not_written.push(path.to_path_buf());
-    }
-
     /// Seconds since the job started.
     pub fn elapsed_s(&self) -> f64 {
         self.started.elapsed().as_secs_f64()
@@ -171,7 +163,6 @@ impl Job {
         let written: Vec<String> = self
             .outputs
             .iter()
-            .filter(|(_, p)| !self.not_written.contains(p))
             .map(|(_, p)| p.display().to_string())
             .collect();
         let mut line = format!(
@@ -652,13 +643,12 @@ mod tests {
 
     #[test]
     fn summary_names_what_was_written() {
-        let mut job = Job::new("smooth")
+        let job = Job::new("smooth")
             .output("-o", "a.obj")
             .output("--png", "b.png");
-        job.skip(Path::new("b.png"));
         let s = job.summary("did it");
         assert!(s.starts_with("fairline smooth: did it in "), "{s}");
-        assert!(s.ends_with("; wrote a.obj"), "{s}");
+        assert!(s.ends_with("; wrote a.obj, b.png"), "{s}");
         assert_eq!(seconds(0.123), "0.12 s");
         assert_eq!(seconds(185.0), "3 min 05 s");
     }

@@ -247,8 +247,8 @@ fn the_remaining_defect_warning_says_what_detect_on_the_result_says() {
 /// `fair --auto` on the smooth panel: detection finds nothing, which is
 /// what was asked (exit status 0), and the run says so — the summary line
 /// begins "nothing to fair", the report says `nothing_to_fair` and claims
-/// no convergence, no picture is made — and the output is the input,
-/// bit for bit. On the dented panel the same run fairs and says so.
+/// no convergence, the picture asked for shows the input's lines and says
+/// nothing was faired — and the output is the input, bit for bit. On the dented panel the same run fairs and says so.
 #[test]
 fn fair_auto_with_nothing_to_fair_says_so_and_claims_nothing() {
     let d = tmp("auto-nothing");
@@ -286,7 +286,8 @@ fn fair_auto_with_nothing_to_fair_says_so_and_claims_nothing() {
     assert_eq!(r["nothing_to_fair"], true, "{r}");
     assert_eq!(r["regions"], 0, "{r}");
     assert!(r.get("converged").is_none(), "{r}");
-    assert!(!png.exists());
+    let picture = std::fs::read(&png).expect("the --png asked for is written");
+    assert!(picture.starts_with(b"\x89PNG"), "not a PNG");
     let (a, b) = (
         fairline::io::read_mesh(&clean).unwrap(),
         fairline::io::read_mesh(&out).unwrap(),

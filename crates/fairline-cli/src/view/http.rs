@@ -21,7 +21,9 @@
 //!   [`MAX_UNPROVEN`] have not yet made an admitted request. Every client
 //!   of a loopback server has the address 127.0.0.1, so the per-client
 //!   cap is per proof of the token: connections without it share their own
-//!   small pool, in which a newcomer evicts the oldest; when the whole pool
+//!   small pool, in which a newcomer evicts the oldest that has been open
+//!   for [`HEAD_GRACE`] (younger ones keep their place, and the newcomer
+//!   is admitted beside them while the whole pool has room); when the whole pool
 //!   is full, a newcomer evicts the oldest connection that is waiting for a
 //!   request (never one whose request is being served). A client with the
 //!   token therefore always gets a connection, and its request head (one
@@ -38,6 +40,10 @@ const MAX_HEAD: usize = 32 << 10;
 pub const MAX_CONNECTIONS: usize = 64;
 /// Most connections that have not yet made an admitted request.
 pub const MAX_UNPROVEN: usize = 16;
+/// Time an unproven connection keeps its place among the
+/// [`MAX_UNPROVEN`] against newcomers (a request head is one packet: a
+/// client that has not sent it by then is slow or idle).
+pub const HEAD_GRACE: Duration = Duration::from_secs(1);
 /// Time from a connection's opening (or a later request's first byte) to
 /// the end of the request head.
 pub const HEAD_DEADLINE: Duration = Duration::from_secs(5);
@@ -120,7 +126,13 @@ impl Pool {
         let mut g = self.lock();
         let unproven = g.1.iter().filter(|s| !s.proven).count();
         if unproven >= MAX_UNPROVEN {
-            evict_oldest(&mut g.1, |s| !s.proven && s.waiting);
+            // only one that had time to send its head: a client with the
+            // token is not evicted by a burst of newcomers before its
+            // connection's thread has read the head it sent at once
+            let now = Instant::now();
+            evict_oldest(&mut g.1, |s| {
+                !s.proven && s.waiting && now.duration_since(s.since) >= HEAD_GRACE
+            });
         }
         if g.1.len() >= MAX_CONNECTIONS && !evict_oldest(&mut g.1, |s| s.waiting) {
             return None;
