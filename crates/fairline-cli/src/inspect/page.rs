@@ -205,7 +205,7 @@ fn index_html(ranked: &[&PartRecord], records: &[PartRecord], ignored: usize) ->
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>fairline inspection</title><style>{STYLE}</style></head><body>\n\
 <h1>fairline inspection: {} part(s)</h1>\n<p>{} with suggested fairing regions, {} mostly not judged, {} failed, {} warning(s){}. \
 Worst first; click a column head to sort. Severity: how far a region's strongest site exceeds its measure's threshold \
-(1 = at the threshold). Not judged: share of detection sites where the shape is finer than the measure's scale.</p>\n",
+(1 = at the threshold). Not judged: share of the part's area that detection could not judge (shape finer than the scale of its finest light array, mesh boundary).</p>\n",
         t["parts"],
         t["with_regions"],
         t["mostly_not_judged"],
