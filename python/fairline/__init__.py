@@ -636,15 +636,24 @@ def _surfaces_text(surfaces: Union[Surface, Sequence[Surface]]) -> str:
     return text
 
 
-def read_surfaces(path: PathLike) -> List[Surface]:
-    """Reads B-spline surfaces from fairline JSON or IGES (entity 128).
+def read_surfaces(path: PathLike, *, skip_unreadable: bool = False) -> List[Surface]:
+    """Reads B-spline surfaces from fairline JSON, IGES or STEP.
 
     Returns a list of dicts in the JSON format of DESIGN.md §5
     (``degree_u``, ``degree_v``, ``knots_u``, ``knots_v``,
     ``control_points`` as an (nu, nv, 3) float64 array, ``weights`` when
     rational, ``trim`` when trimmed). Numbers are exact.
+
+    A face the file holds but fairline cannot read (an unsupported surface
+    or curve type) raises :class:`FairlineError` naming it, as the CLI
+    fails; with ``skip_unreadable=True`` the other faces are returned and a
+    :class:`FairlineWarning` names what was left out. A file none of whose
+    faces can be read always raises.
     """
-    return _surfaces_from(_native.read_surfaces(os.fspath(path)))
+    text, said = _native.read_surfaces(os.fspath(path), skip_unreadable)
+    for w in said:
+        warnings.warn(f"fairline read_surfaces: {w}", FairlineWarning, stacklevel=2)
+    return _surfaces_from(text)
 
 
 def write_surfaces(path: PathLike, surfaces: Union[Surface, Sequence[Surface]]) -> None:

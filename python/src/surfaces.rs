@@ -33,7 +33,10 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// All surfaces of a .json, .igs/.iges or .step/.stp file (the CLI's
 /// `surface::load_surfaces`, through `fairline::io::surface_file`), errors
 /// naming the file.
-fn load_surfaces(path: &std::path::Path) -> Res<Vec<BSplineSurface>> {
+fn load_surfaces(
+    path: &std::path::Path,
+    skip_unreadable: bool,
+) -> Res<(Vec<BSplineSurface>, Vec<String>)> {
     let named = |msg: String| {
         let shown = path.display().to_string();
         if msg.contains(&shown) {
@@ -42,17 +45,43 @@ fn load_surfaces(path: &std::path::Path) -> Res<Vec<BSplineSurface>> {
             format!("{shown}: {msg}")
         }
     };
-    let surfaces = fairline::io::surface_file::read_surface_file(path)
-        .map_err(|e| file_failure(&e, named(e.to_string())))?
-        .surfaces;
-    if surfaces.is_empty() {
+    let file = fairline::io::surface_file::read_surface_file(path)
+        .map_err(|e| file_failure(&e, named(e.to_string())))?;
+    let mut warnings = Vec::new();
+    if let Some(summary) = file.unreadable_summary(UNREADABLE_NAMED, None) {
+        if file.surfaces.is_empty() {
+            return Err(Failure::bad(format!(
+                "{}: no face could be read: {summary}",
+                path.display()
+            )));
+        }
+        if !skip_unreadable {
+            return Err(Failure::bad(format!(
+                "{}: {summary}; the part is incomplete (pass skip_unreadable=True to go on without them)",
+                path.display()
+            )));
+        }
+        warnings.push(format!(
+            "{}: {summary} (left out: skip_unreadable=True)",
+            path.display()
+        ));
+    }
+    if file.surfaces.is_empty() {
         return Err(Failure::bad(format!(
             "{}: the file holds no B-spline surface",
             path.display()
         )));
     }
-    Ok(surfaces)
+    warnings.extend(
+        file.warnings
+            .iter()
+            .map(|w| format!("{}: {w}", path.display())),
+    );
+    Ok((file.surfaces, warnings))
 }
+
+/// How many unreadable faces a message names (as the CLI's).
+const UNREADABLE_NAMED: usize = 5;
 
 /// A file that the operating system could not open is a `File` failure,
 /// anything else about its content bad input.
@@ -77,9 +106,14 @@ fn parse(text: &str, what: &str) -> Res<Vec<BSplineSurface>> {
 
 /// Reads a surface file; returns `{"surfaces":[...]}` JSON text.
 #[pyfunction]
-fn read_surfaces(py: Python<'_>, path: PathBuf) -> PyResult<String> {
-    let text = crate::compute(py, || load_surfaces(&path).map(|s| surfaces_to_json(&s)))?;
-    Ok(text)
+#[pyo3(signature = (path, skip_unreadable = false))]
+fn read_surfaces(
+    py: Python<'_>,
+    path: PathBuf,
+    skip_unreadable: bool,
+) -> PyResult<(String, Vec<String>)> {
+    let (surfaces, warnings) = crate::compute(py, || load_surfaces(&path, skip_unreadable))?;
+    Ok((surfaces_to_json(&surfaces), warnings))
 }
 
 /// Writes surfaces (JSON text) atomically, as .json, .igs/.iges or

@@ -165,3 +165,16 @@ def test_no_array_input_crashes():
             call()
         except FairlineError:
             pass
+
+
+def test_a_cad_file_with_no_readable_face_is_refused_naming_it(tmp_path):
+    f = tmp_path / "offset.stp"
+    f.write_text(
+        "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT('',(0.,0.,0.));\n"
+        "#2=DIRECTION('',(0.,0.,1.));\n#3=AXIS2_PLACEMENT_3D('',#1,#2,$);\n"
+        "#4=PLANE('',#3);\n#5=OFFSET_SURFACE('',#4,1.,.F.);\n#6=ADVANCED_FACE('',(),#5,.T.);\n"
+        "ENDSEC;\nEND-ISO-10303-21;\n"
+    )
+    for skip in (False, True):
+        with pytest.raises(fairline.FairlineError, match="no face could be read.*OFFSET_SURFACE"):
+            fairline.read_surfaces(f, skip_unreadable=skip)

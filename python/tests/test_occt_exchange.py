@@ -196,3 +196,17 @@ def test_occt_reads_what_fairline_writes_of_occt_parts(cli, parts, tmp_path, nam
     rel = abs(area - a) / a
     assert rel <= AREA_TOL, f"OCCT area {area} of {out.name} vs the part's {a} (rel. {rel:.2e})"
     assert seconds < 60
+
+
+def test_python_read_surfaces_never_drops_a_face_silently(parts):
+    """OCCT's IGES of the revolved hyperbola holds one face fairline does
+    not read (entity 144 over a hyperbolic profile): read_surfaces raises
+    naming it, and with skip_unreadable=True returns the others and warns."""
+    import fairline
+
+    src, n, _ = parts["revolved-hyperbola.igs"]
+    with pytest.raises(fairline.FairlineError, match="could not read 1 face"):
+        fairline.read_surfaces(src)
+    with pytest.warns(fairline.FairlineWarning, match="left out: skip_unreadable=True"):
+        surfaces = fairline.read_surfaces(src, skip_unreadable=True)
+    assert len(surfaces) == n - 1
