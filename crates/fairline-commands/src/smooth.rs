@@ -268,6 +268,39 @@ mod tests {
         assert!(smooth_warnings(&mesh, &taubin, &out.report).is_empty());
     }
 
+    /// A Schneider–Kobbelt run cut off by its work bound warns with the
+    /// reason and the option to raise, in each front end's words, and is
+    /// a run that stopped unconverged; with the default bound it runs.
+    #[test]
+    fn a_run_stopped_by_its_work_bound_says_so_and_names_the_option() {
+        let mesh = noisy_sphere();
+        let settings = SmoothSettings {
+            method: SmoothMethod::SchneiderKobbelt,
+            max_work: Some(1),
+            fixed: vec![VertexId(0)],
+            ..SmoothSettings::default()
+        };
+        let out = run(&mesh, &settings, &Control::new()).unwrap();
+        assert_eq!(out.stopped_unconverged(), Some(StopReason::WorkLimit));
+        let w = smooth_warnings(&mesh, &settings.options(), &out.result);
+        assert_eq!(w.len(), 1, "{w:?}");
+        let cli = w[0].message(FrontEnd::Cli);
+        assert!(
+            cli.starts_with("schneider-kobbelt stopped unconverged after 0 iteration(s): the next iteration would have exceeded the work bound (--max-work); raise --max-work"),
+            "{cli}"
+        );
+        assert!(w[0].message(FrontEnd::Python).contains("raise max_work"));
+        assert_eq!(out.report.to_json()["stop_reason"], "work_limit");
+        // the default bound lets it run its sweeps
+        let bounded = SmoothSettings {
+            max_work: None,
+            ..settings
+        };
+        let out = run(&mesh, &bounded, &Control::new()).unwrap();
+        assert!(out.result.iterations > 0, "{:?}", out.result);
+        assert_ne!(out.result.stop_reason, Some(StopReason::WorkLimit));
+    }
+
     #[test]
     fn the_command_line_names_what_differs_from_the_defaults() {
         let s = SmoothSettings {
