@@ -184,6 +184,7 @@ fn smooth<'py>(
         pass_band,
         time_step,
         epsilon,
+        max_work: None,
         fix_boundary,
         hierarchical_boundary,
         fixed: Vec::new(),

@@ -21,8 +21,8 @@ use std::path::PathBuf;
 /// then puts every moved vertex back onto a smooth fit of the input surface
 /// (--projection), so that the mesh approximates the shape better, not only
 /// differently. The vertices of --fixed and the corners of the boundary stay
-/// bit-identical; the other boundary vertices slide along the boundary curve
-/// (a chord across a corner is rebuilt; with --projection none the whole
+/// bit-identical; the other boundary vertices slide along the input's
+/// boundary polyline and stay on it (with --projection none the whole
 /// boundary stays); flipped triangles are repaired. The result does not depend on the scale or
 /// position of the input (internally normalised by the mean edge length).
 #[derive(clap::Args, Debug)]

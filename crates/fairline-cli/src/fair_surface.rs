@@ -7,7 +7,7 @@ use crate::surface_highlight::{palette_srgb, plot_lines, polylines, surface_pict
 use anyhow::Result;
 use fairline::bspline::BSplineSurface;
 use fairline::fair::{
-    BoundaryControl, EndpointPair, Endpoints, SurfaceFairError, SurfaceFairMethod,
+    BoundaryControl, EndpointPair, Endpoints, FairStop, SurfaceFairError, SurfaceFairMethod,
     SurfaceFairOptions, SurfaceFairReport, fair_surface,
 };
 use fairline::highlight::{
@@ -95,6 +95,12 @@ pub struct Args {
     /// paper's fixed rule (a larger value is taken as --truncation).
     #[arg(long, default_value_t = SurfaceFairOptions::default().min_truncation)]
     pub min_truncation: f64,
+    /// Step factor μ of the damped step, Nishiyama et al. Eq. (3.13): when
+    /// the full Gauss–Newton step R + Δr does not lower both the largest and
+    /// the mean |d_s| (Eq. (3.12)), R + μΔr is taken instead (paper; the
+    /// paper's 0.1 by default, 1 turns the damping off).
+    #[arg(long, default_value_t = SurfaceFairOptions::default().damped_step, value_name = "MU")]
+    pub damped_step: f64,
     /// Target sample spacing s as a fraction of the domain diagonal, Eq. (3.5).
     #[arg(long, default_value_t = SurfaceFairOptions::default().sample_spacing)]
     pub sample_spacing: f64,
@@ -421,6 +427,16 @@ pub fn run(args: Args) -> Result<()> {
         rep.residual_before.max,
         rep.residual_after.max
     ))?;
+    if !rep.converged && rep.method == SurfaceFairMethod::Paper {
+        // the paper's method promises the targets: written for inspection,
+        // but not what was asked for (the warning above says why)
+        anyhow::bail!(
+            "{}: the paper's method did not converge ({:?}); {} was written for inspection only",
+            args.surface_file.display(),
+            rep.stop,
+            args.output.display()
+        );
+    }
     Ok(())
 }
 
@@ -492,6 +508,7 @@ fn fair_options(args: &Args, lights: &[CircularLight], ends: &Endpoints) -> Surf
             args.min_truncation
         })
         .epsilon(args.epsilon)
+        .damped_step(args.damped_step)
         .max_iterations(args.max_iterations)
         .method(match args.method {
             MethodArg::Regularised => SurfaceFairMethod::Regularised,
@@ -650,15 +667,14 @@ fn before_after_svg(
     plot
 }
 
-/// Warnings when the iteration stopped before convergence or the largest
-/// residual grew.
+/// Warnings when the iteration stopped before convergence (naming why:
+/// Nishiyama et al.'s stopping rule Eq. (3.14) not met because mean |d_s|
+/// stopped decreasing, the iterations ran out or a step was not finite,
+/// and whether the targets give fewer equations than there are unknowns)
+/// or the largest residual grew.
 fn warn_about_convergence(report: &mut Report, rep: &SurfaceFairReport) {
-    if !rep.converged {
-        report.warn(format!(
-            "fairing did not converge ({:?} after {} iteration(s)); try --max-iterations or other endpoints",
-            rep.stop,
-            rep.iterations
-        ));
+    if let Some(text) = not_converged_warning(rep) {
+        report.warn(text);
     }
     if rep.residual_after.max > rep.residual_before.max {
         report.warn(format!(
@@ -666,4 +682,48 @@ fn warn_about_convergence(report: &mut Report, rep: &SurfaceFairReport) {
             rep.residual_before.max, rep.residual_after.max
         ));
     }
+}
+
+/// The sentence of a run that did not converge: the reason it stopped,
+/// the system's size when it is underdetermined, what to try; `None` when
+/// it converged.
+pub fn not_converged_warning(rep: &SurfaceFairReport) -> Option<String> {
+    if rep.converged {
+        return None;
+    }
+    let objective = match rep.method {
+        SurfaceFairMethod::Paper => "mean |d_s|",
+        SurfaceFairMethod::Regularised => "the objective",
+    };
+    let why = match rep.stop {
+        FairStop::Stalled => format!(
+            "stalled: {objective} stopped decreasing (neither the full nor the damped step lowered it at the finest truncation)"
+        ),
+        FairStop::MaxIterations => format!(
+            "out of iterations: --max-iterations {} ran without meeting the stopping rule",
+            rep.iterations
+        ),
+        FairStop::NonFiniteStep => {
+            "the step was not finite; the last finite surface is kept".to_string()
+        }
+        FairStop::Epsilon | FairStop::ZeroResidual => "the stopping rule did not hold".to_string(),
+    };
+    let (rows, cols) = (rep.jacobian.rows, rep.jacobian.cols);
+    let underdetermined = if rows < cols {
+        format!(
+            "; underdetermined: {rows} equations (target samples) for {cols} unknowns (3 per moved control point), so the targets do not fix the control points"
+        )
+    } else {
+        String::new()
+    };
+    let try_this = match rep.method {
+        SurfaceFairMethod::Paper => {
+            "try --method regularised (well posed whatever the number of targets), more or longer stretches, a smaller --sample-spacing, or --max-iterations"
+        }
+        SurfaceFairMethod::Regularised => "try --max-iterations or other endpoints",
+    };
+    Some(format!(
+        "fairing did not converge after {} iteration(s): {why}{underdetermined}; {try_this}",
+        rep.iterations
+    ))
 }

@@ -60,6 +60,13 @@ pub struct Args {
     /// Convergence threshold (spring, schneider-kobbelt).
     #[arg(long)]
     pub epsilon: Option<f64>,
+    /// Most work of schneider-kobbelt, in evaluations of Δ_B H at a vertex
+    /// (default 10000000, about ten seconds): an iteration that would go
+    /// beyond it is not started, and the run ends unconverged (exit 1).
+    /// Schneider-kobbelt also stops (exit 1, the reason in the report's
+    /// stop_reason) when its residual stagnates or diverges.
+    #[arg(long, value_name = "N")]
+    pub max_work: Option<u64>,
     /// Keep every boundary vertex fixed.
     #[arg(long)]
     pub fix_boundary: bool,
@@ -122,6 +129,7 @@ impl Args {
             pass_band: self.pass_band,
             time_step: self.time_step,
             epsilon: self.epsilon,
+            max_work: self.max_work,
             fix_boundary: self.fix_boundary,
             hierarchical_boundary: self.hierarchical_boundary,
             fixed,
@@ -151,6 +159,7 @@ pub fn run(args: Args) -> Result<()> {
     let result = smooth::run(&mesh, &settings, &Control::new());
     bar.finish_and_clear();
     let out = result?;
+    let stopped = out.stopped_unconverged();
     let r = &out.result;
     let name = settings.method.name();
     // the input is kept only for the before/after picture
@@ -169,6 +178,17 @@ pub fn run(args: Args) -> Result<()> {
         mesh.vertex_count(),
         r.max_displacement
     ))?;
+    if let Some(reason) = stopped {
+        // the output is written so that it can be looked at, but it is not
+        // what was asked for: exit 1 (the warning above says what to try)
+        anyhow::bail!(
+            "{}: {name} stopped unconverged ({}) after {} iteration(s); {} was written for inspection only",
+            args.mesh.display(),
+            reason.name(),
+            r.iterations,
+            args.output.display()
+        );
+    }
     Ok(())
 }
 

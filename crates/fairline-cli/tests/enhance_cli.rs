@@ -306,3 +306,87 @@ fn enhance_solvers_agree_from_the_command_line() {
         .count();
     assert!(moved > 100, "{moved} vertices moved");
 }
+
+/// Largest distance of the boundary vertices of `output` from the boundary
+/// polyline of `input` (same connectivity), over the bounding-box diagonal
+/// of `input`.
+fn boundary_offset(input: &fairline::SurfaceMesh, output: &fairline::SurfaceMesh) -> f64 {
+    let p = input.positions();
+    let edges: Vec<_> = fairline::mesh::boundary_loops(input)
+        .iter()
+        .flatten()
+        .map(|&h| (p[input.from_vertex(h).idx()], p[input.to_vertex(h).idx()]))
+        .collect();
+    assert!(!edges.is_empty(), "an open mesh");
+    let (lo, hi) = fairline::mesh::bounding_box(p).unwrap();
+    let worst = input
+        .vertices()
+        .filter(|&v| input.is_boundary_vertex(v))
+        .map(|v| {
+            let x = output.position(v);
+            edges
+                .iter()
+                .map(|&(a, b)| {
+                    let e = b - a;
+                    let s = ((x - a).dot(e) / e.length_squared().max(f64::MIN_POSITIVE))
+                        .clamp(0.0, 1.0);
+                    x.distance(a + s * e)
+                })
+                .fold(f64::INFINITY, f64::min)
+        })
+        .fold(0.0, f64::max);
+    worst / lo.distance(hi)
+}
+
+/// The written boundary vertices lie on the input's boundary polyline to
+/// 1e-12 of the diagonal, with every --projection, on a noisy generated
+/// open patch and on the real open outline lego_open.ply, while some of
+/// them slid along it (--projection none keeps them).
+#[test]
+fn enhance_keeps_boundary_vertices_on_the_input_boundary_polyline() {
+    let d = tmp("boundary");
+    let mut patch = fairline::shapes::height_field(21, 21, (-1.0, 1.0), (-1.0, 1.0), |x, y| {
+        0.5 * (x * x - 0.5 * y * y) + 0.3 * (-(x / 0.25) * (x / 0.25)).exp()
+    });
+    let noise = |i: usize, k: usize| ((i * 7919 + k * 104729) % 41) as f64 / 20.0 - 1.0;
+    for (i, p) in patch.positions_mut().iter_mut().enumerate() {
+        *p += 0.01 * fairline::Vec3::new(noise(i, 1), noise(i, 2), noise(i, 3));
+    }
+    let generated = d.join("patch.obj");
+    fairline::io::write_mesh(&generated, &patch).unwrap();
+    let mut inputs = vec![(generated, "patch")];
+    if let Some(lego) = data("meshes/lego_open.ply") {
+        inputs.push((lego, "lego_open"));
+    }
+    for (input, name) in inputs {
+        let mesh = fairline::io::read_mesh(&input).unwrap();
+        for projection in ["smooth", "mesh", "none"] {
+            let out = d.join(format!("{name}-{projection}.obj"));
+            let o = run(&[
+                "enhance",
+                s(&input),
+                "--projection",
+                projection,
+                "-o",
+                s(&out),
+            ]);
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            let result = fairline::io::read_mesh(&out).unwrap();
+            let off = boundary_offset(&mesh, &result);
+            let slid = mesh
+                .vertices()
+                .filter(|&v| mesh.is_boundary_vertex(v) && mesh.position(v) != result.position(v))
+                .count();
+            eprintln!(
+                "{name} --projection {projection}: {slid} boundary vertices slid, {off:.3e} × diagonal off the input boundary"
+            );
+            assert!(off <= 1e-12, "{name} {projection}: {off}");
+            assert_eq!(
+                slid == 0,
+                projection == "none",
+                "{name} {projection}: {slid}"
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

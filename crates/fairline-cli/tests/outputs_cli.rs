@@ -550,8 +550,12 @@ fn non_convergence_and_worse_measures_are_warned_about() {
             "r.json",
         ],
     );
-    ok(&o);
-    assert_eq!(json(&d.join("r.json"))["method"], "schneider-kobbelt");
+    // (cut off after two sweeps it did not converge: exit 1, the reason in
+    // the report)
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let r = json(&d.join("r.json"));
+    assert_eq!(r["method"], "schneider-kobbelt");
+    assert_eq!(r["stop_reason"], "max_iterations");
 }
 
 #[test]

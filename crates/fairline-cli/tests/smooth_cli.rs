@@ -6,6 +6,10 @@ use common::*;
 use std::fmt::Write as _;
 use std::path::Path;
 
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
 fn read_obj_vertices(p: &Path) -> Vec<[f64; 3]> {
     std::fs::read_to_string(p)
         .unwrap()
@@ -435,4 +439,86 @@ fn a_diverging_smoothing_exits_1_and_writes_nothing() {
         assert!(!out.exists() && !report.exists());
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Schneider–Kobbelt on closed meshes from the command line: a noisy
+/// sphere converges (exit 0, `stop_reason` "converged"); a noisy torus and
+/// the cow "Spot" (nothing fixed, so nothing anchors Δ_B H = 0) stop
+/// unconverged within seconds, exit 1 with the reason on stderr and in
+/// the report, the result written for inspection.
+#[test]
+fn schneider_kobbelt_on_closed_meshes_converges_or_exits_1_with_its_reason() {
+    let d = tmp("sk-closed");
+    let mut sphere = fairline::shapes::icosphere(1.0, 3);
+    for (i, p) in sphere.positions_mut().iter_mut().enumerate() {
+        *p *= 1.0 + 0.02 * ((i * 7919 % 13) as f64 / 6.0 - 1.0);
+    }
+    let mut torus = fairline::shapes::torus(1.0, 0.4, 48, 16);
+    for (i, p) in torus.positions_mut().iter_mut().enumerate() {
+        let w = |k: usize| ((i * 7919 + k * 104729) % 17) as f64 / 8.0 - 1.0;
+        *p += 0.01 * fairline::Vec3::new(w(1), w(2), w(3));
+    }
+    let (sphere_path, torus_path) = (d.join("sphere.obj"), d.join("torus.obj"));
+    fairline::io::write_mesh(&sphere_path, &sphere).unwrap();
+    fairline::io::write_mesh(&torus_path, &torus).unwrap();
+    let smooth = |input: &Path, name: &str| {
+        let (out, rep) = (
+            d.join(format!("{name}-smooth.obj")),
+            d.join(format!("{name}.json")),
+        );
+        let t = std::time::Instant::now();
+        let o = run(&[
+            "smooth",
+            s(input),
+            "--method",
+            "schneider-kobbelt",
+            "-o",
+            s(&out),
+            "--report",
+            s(&rep),
+        ]);
+        let seconds = t.elapsed().as_secs_f64();
+        eprintln!("{name}: exit {:?} in {seconds:.1} s", o.status.code());
+        assert!(out.exists(), "{name}: {}", stderr(&o));
+        (o, json(&rep), seconds)
+    };
+    let (o, r, _) = smooth(&sphere_path, "sphere");
+    ok(&o);
+    assert_eq!(r["stop_reason"], "converged", "{r}");
+    assert_eq!(r["converged"], true);
+    let mut closed = vec![(torus_path, "torus")];
+    if let Some(spot) = data("meshes/spot.ply") {
+        closed.push((spot, "spot"));
+    }
+    for (path, name) in closed {
+        let (o, r, seconds) = smooth(&path, name);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{name}: {e}");
+        let reason = r["stop_reason"].as_str().unwrap().to_string();
+        assert!(
+            [
+                "stagnated",
+                "diverged",
+                "no_descent",
+                "work_limit",
+                "max_iterations"
+            ]
+            .contains(&reason.as_str()),
+            "{name}: {r}"
+        );
+        assert_eq!(r["converged"], false);
+        assert!(
+            e.contains("stopped unconverged") && e.contains(&format!("({reason})")),
+            "{name}: {e}"
+        );
+        assert!(
+            r["warnings"][0]
+                .as_str()
+                .unwrap()
+                .contains("stopped unconverged"),
+            "{name}: {r}"
+        );
+        assert!(seconds < 60.0, "{name}: {seconds} s");
+    }
+    let _ = std::fs::remove_dir_all(&d);
 }

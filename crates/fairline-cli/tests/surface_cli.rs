@@ -427,3 +427,116 @@ fn whole_part_default_highlight_output_is_proportionate() {
         faces.len()
     );
 }
+
+/// The paper's method (Nishiyama et al. §3.3) that does not converge says
+/// why and exits 1: a short stretch on the bumped dome gives 14 target
+/// samples for 60 unknowns (20 moved control points), and mean |d_s| stops
+/// decreasing; the warning names both, on stderr and in the report, and the
+/// result is written for inspection. `--damped-step` (μ of Eq. (3.13),
+/// default the paper's 0.1) reaches the solver: with 1 no step is damped,
+/// with 0.1 on all nine stretches some are; 0 is refused.
+#[test]
+fn fair_surface_paper_method_that_stalls_says_why_and_exits_1() {
+    let d = tmp("fair-paper-stall");
+    let (surf, radii) = dome();
+    let f = d.join("dome.json");
+    write_surfaces_json(&f, std::slice::from_ref(&surf)).unwrap();
+    let ls = lights(&radii);
+    let ends = endpoints_around(&surf, &ls, CENTRE, 0.2, 200);
+    let mut short = ends[0];
+    for k in 0..2 {
+        short.end[k] = short.start[k] + 0.3 * (short.end[k] - short.start[k]);
+    }
+    let lf = d.join("lights.json");
+    std::fs::write(
+        &lf,
+        format!(
+            r#"{{"center":[0,0,3],"axis":[0,0,1],"radii":[{}]}}"#,
+            list(&radii)
+        ),
+    )
+    .unwrap();
+    let write_ends = |name: &str, e: &[fairline::fair::EndpointPair]| {
+        let p = d.join(name);
+        std::fs::write(
+            &p,
+            serde_json::to_string(&serde_json::json!({ "endpoints": e })).unwrap(),
+        )
+        .unwrap();
+        p
+    };
+    let (short_f, all_f) = (
+        write_ends("ends-short.json", &[short]),
+        write_ends("ends-all.json", &ends),
+    );
+    let fair = |ends: &std::path::Path, damped: &str, name: &str| {
+        let (out, rep) = (
+            d.join(format!("{name}.json")),
+            d.join(format!("{name}-r.json")),
+        );
+        let o = run(&[
+            "fair-surface",
+            s(&f),
+            "--lights",
+            s(&lf),
+            "--endpoints",
+            s(ends),
+            "--method",
+            "paper",
+            "--damped-step",
+            damped,
+            "-o",
+            s(&out),
+            "--report",
+            s(&rep),
+        ]);
+        (o, out, rep)
+    };
+    let (o, out, rep) = fair(&short_f, "0.1", "short");
+    let e = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(out.exists(), "written for inspection");
+    let r = json(&rep);
+    assert_eq!(r["converged"], false);
+    assert_eq!(r["stop"], "stalled");
+    let (rows, cols) = (
+        r["jacobian"]["rows"].as_u64().unwrap(),
+        r["jacobian"]["cols"].as_u64().unwrap(),
+    );
+    assert!(rows < cols, "{rows} x {cols}");
+    // (the shortened end lies off the line and snaps onto it: a warning of
+    // its own comes first)
+    let warning = r["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|w| w.as_str())
+        .find(|w| w.contains("did not converge"))
+        .unwrap_or_else(|| panic!("{r}"));
+    for part in [
+        "did not converge".to_string(),
+        "stalled: mean |d_s| stopped decreasing".to_string(),
+        format!("underdetermined: {rows} equations (target samples) for {cols} unknowns"),
+    ] {
+        assert!(warning.contains(&part), "{part}: {warning}");
+        assert!(e.contains(&part), "{part}: {e}");
+    }
+    assert!(e.contains("written for inspection only"), "{e}");
+    // μ reaches Eq. (3.13)
+    let steps = |rep: &std::path::Path| -> Vec<f64> {
+        json(rep)["history"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|h| h["step"].as_f64().unwrap())
+            .collect()
+    };
+    let (_, _, undamped) = fair(&all_f, "1", "undamped");
+    let (_, _, damped) = fair(&all_f, "0.1", "damped");
+    assert!(steps(&undamped).iter().all(|&x| x == 1.0));
+    assert!(steps(&damped).contains(&0.1), "{:?}", steps(&damped));
+    let (o, out, _) = fair(&all_f, "0", "zero");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!out.exists());
+    let _ = std::fs::remove_dir_all(&d);
+}

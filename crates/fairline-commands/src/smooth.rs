@@ -7,7 +7,7 @@ use crate::report::Report;
 use crate::warning::Warning;
 use crate::words::{push_changed, push_given, push_switch};
 use fairline::mesh::VertexId;
-use fairline::smooth::{SmoothMethod, SmoothOptions, SmoothReport, smooth};
+use fairline::smooth::{SmoothMethod, SmoothOptions, SmoothReport, StopReason, smooth};
 use fairline::{Control, SurfaceMesh};
 
 /// The options of `smooth` (defaults: the CLI's).
@@ -31,6 +31,9 @@ pub struct SmoothSettings {
     pub time_step: f64,
     /// Convergence threshold (spring, schneider-kobbelt).
     pub epsilon: Option<f64>,
+    /// Most work, in evaluations of Δ_B H at a vertex (schneider-kobbelt;
+    /// `None`: the library's default).
+    pub max_work: Option<u64>,
     /// Keep every boundary vertex fixed.
     pub fix_boundary: bool,
     /// Smooth the boundary as curves first.
@@ -55,6 +58,7 @@ impl Default for SmoothSettings {
             pass_band: 0.1,
             time_step: 1.0,
             epsilon: None,
+            max_work: None,
             fix_boundary: false,
             hierarchical_boundary: false,
             fixed: Vec::new(),
@@ -82,6 +86,9 @@ impl SmoothSettings {
         if self.iterations == Some(0) {
             return Err(CommandError::invalid("iterations", "must be at least 1"));
         }
+        if self.max_work == Some(0) {
+            return Err(CommandError::invalid("max-work", "must be at least 1"));
+        }
         Ok(())
     }
 
@@ -101,6 +108,7 @@ impl SmoothSettings {
         push_changed(&mut c, "pass-band", self.pass_band, d.pass_band);
         push_changed(&mut c, "time-step", self.time_step, d.time_step);
         push_given(&mut c, "epsilon", self.epsilon);
+        push_given(&mut c, "max-work", self.max_work);
         push_switch(&mut c, "fix-boundary", self.fix_boundary);
         push_switch(&mut c, "hierarchical-boundary", self.hierarchical_boundary);
         if !self.fixed.is_empty() {
@@ -123,6 +131,7 @@ impl SmoothSettings {
             .time_step(self.time_step)
             .epsilon(self.epsilon)
             .iterations(self.iterations)
+            .max_work(self.max_work)
             .fixed(self.fixed.clone())
             .fix_boundary(self.fix_boundary)
             .hierarchical_boundary(self.hierarchical_boundary)
@@ -132,7 +141,10 @@ impl SmoothSettings {
 }
 
 /// What `smooth` gives: the new positions, the library's report and the
-/// JSON report.
+/// JSON report. A method with a stopping rule of its own that stopped for
+/// another reason ([`SmoothOutcome::stopped_unconverged`]) did not give
+/// what was asked for: front ends say so as a failure of the computation
+/// (the CLI exits 1 after writing the result for inspection).
 #[derive(Clone, Debug)]
 pub struct SmoothOutcome {
     /// The smoothed positions of the input's vertices.
@@ -141,6 +153,16 @@ pub struct SmoothOutcome {
     pub result: SmoothReport,
     /// The JSON report.
     pub report: Report,
+}
+
+impl SmoothOutcome {
+    /// Why the method stopped, when it has a stopping rule of its own
+    /// (Schneider–Kobbelt) and stopped without meeting it.
+    pub fn stopped_unconverged(&self) -> Option<StopReason> {
+        self.result
+            .stop_reason
+            .filter(|r| *r != StopReason::Converged)
+    }
 }
 
 /// Smooths `mesh` with `settings`; progress and cancellation through
@@ -179,11 +201,21 @@ pub fn smooth_warnings(
     report: &SmoothReport,
 ) -> Vec<Warning> {
     let mut warnings = Vec::new();
-    if !report.converged {
-        warnings.push(Warning::SmoothNotConverged {
-            method: options.method.name(),
+    let method = options.method.name();
+    match report.stop_reason {
+        Some(StopReason::Converged) => {}
+        Some(reason) if reason != StopReason::MaxIterations => {
+            warnings.push(Warning::SmoothStopped {
+                method,
+                iterations: report.iterations,
+                reason,
+            })
+        }
+        _ if !report.converged => warnings.push(Warning::SmoothNotConverged {
+            method,
             iterations: report.iterations,
-        });
+        }),
+        _ => {}
     }
     let unanchored = options.method == SmoothMethod::SchneiderKobbelt
         && input.is_closed()
@@ -234,6 +266,39 @@ mod tests {
         let out = smooth(&mesh, &taubin).unwrap();
         assert!(out.report.converged);
         assert!(smooth_warnings(&mesh, &taubin, &out.report).is_empty());
+    }
+
+    /// A Schneider–Kobbelt run cut off by its work bound warns with the
+    /// reason and the option to raise, in each front end's words, and is
+    /// a run that stopped unconverged; with the default bound it runs.
+    #[test]
+    fn a_run_stopped_by_its_work_bound_says_so_and_names_the_option() {
+        let mesh = noisy_sphere();
+        let settings = SmoothSettings {
+            method: SmoothMethod::SchneiderKobbelt,
+            max_work: Some(1),
+            fixed: vec![VertexId(0)],
+            ..SmoothSettings::default()
+        };
+        let out = run(&mesh, &settings, &Control::new()).unwrap();
+        assert_eq!(out.stopped_unconverged(), Some(StopReason::WorkLimit));
+        let w = smooth_warnings(&mesh, &settings.options(), &out.result);
+        assert_eq!(w.len(), 1, "{w:?}");
+        let cli = w[0].message(FrontEnd::Cli);
+        assert!(
+            cli.starts_with("schneider-kobbelt stopped unconverged after 0 iteration(s): the next iteration would have exceeded the work bound (--max-work); raise --max-work"),
+            "{cli}"
+        );
+        assert!(w[0].message(FrontEnd::Python).contains("raise max_work"));
+        assert_eq!(out.report.to_json()["stop_reason"], "work_limit");
+        // the default bound lets it run its sweeps
+        let bounded = SmoothSettings {
+            max_work: None,
+            ..settings
+        };
+        let out = run(&mesh, &bounded, &Control::new()).unwrap();
+        assert!(out.result.iterations > 0, "{:?}", out.result);
+        assert_ne!(out.result.stop_reason, Some(StopReason::WorkLimit));
     }
 
     #[test]

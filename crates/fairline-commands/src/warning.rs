@@ -2,6 +2,9 @@
 //! end words them: the CLI names its options `--grow 2`, the Python package
 //! its keywords `grow=2`, the workbench its controls.
 
+use fairline::smooth::{
+    DEFAULT_MAX_WORK, DIVERGENCE_FACTOR, STAGNATION_DECREASE, STAGNATION_WINDOW, StopReason,
+};
 use serde::Serialize;
 
 /// The front end a message is worded for.
@@ -108,6 +111,13 @@ pub enum Warning {
         method: &'static str,
         iterations: usize,
     },
+    /// `smooth`: the method stopped before converging for `reason` (not
+    /// the most iterations: that is [`Warning::SmoothNotConverged`]).
+    SmoothStopped {
+        method: &'static str,
+        iterations: usize,
+        reason: StopReason,
+    },
     /// `smooth`: Schneider–Kobbelt on a closed mesh with nothing fixed.
     Unanchored,
     /// `fair-quad`: the Eq. (30) structure-line energy got worse.
@@ -166,6 +176,11 @@ impl Warning {
                 o("iterations"),
                 o("epsilon")
             ),
+            Warning::SmoothStopped {
+                method,
+                iterations,
+                reason,
+            } => smooth_stopped(method, *iterations, *reason, front_end),
             Warning::Unanchored => format!(
                 "schneider-kobbelt on a closed mesh without {} vertices: nothing holds the shape, \
                  and Δ_B H = 0 pulls it toward constant mean curvature (a sphere-like blob), erasing \
@@ -185,6 +200,50 @@ impl Warning {
             Warning::Text(text) => text.clone(),
         }
     }
+}
+
+/// Why a smoothing run stopped unconverged, and what to try.
+fn smooth_stopped(
+    method: &str,
+    iterations: usize,
+    reason: StopReason,
+    front_end: FrontEnd,
+) -> String {
+    let o = |name: &str| front_end.option(name);
+    let why = match reason {
+        StopReason::Stagnated => format!(
+            "the residual stagnated (it fell by less than {:.0} % over the last {STAGNATION_WINDOW} iterations)",
+            100.0 * STAGNATION_DECREASE
+        ),
+        StopReason::Diverged => format!(
+            "the residual diverged (it grew beyond {DIVERGENCE_FACTOR} times its smallest value)"
+        ),
+        StopReason::NoDescent => "no step lowered the residual".to_string(),
+        StopReason::WorkLimit => format!(
+            "the next iteration would have exceeded the work bound ({})",
+            o("max-work")
+        ),
+        StopReason::MaxIterations => "it ran the most iterations allowed".to_string(),
+        StopReason::Converged => "it converged".to_string(),
+    };
+    let try_this = match reason {
+        StopReason::WorkLimit => format!(
+            "raise {} (default {DEFAULT_MAX_WORK}), smooth fewer vertices ({} the others), or use another {} (taubin, implicit)",
+            o("max-work"),
+            o("fixed"),
+            o("method")
+        ),
+        StopReason::MaxIterations => {
+            format!("try more {} or a larger {}", o("iterations"), o("epsilon"))
+        }
+        _ => format!(
+            "fix the vertices that must stay ({}), try a larger {}, or another {} (taubin, implicit)",
+            o("fixed"),
+            o("epsilon"),
+            o("method")
+        ),
+    };
+    format!("{method} stopped unconverged after {iterations} iteration(s): {why}; {try_this}")
 }
 
 /// The remaining-defect sentence: what `detect` on the result flags, where,

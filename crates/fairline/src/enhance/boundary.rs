@@ -1,30 +1,18 @@
-//! Boundary vertices that slide along the boundary curve of the input.
+//! Boundary vertices that slide along the boundary polyline of the input.
 //!
 //! Ji et al. fix the boundary ("For surfaces with boundaries, one needs to
 //! fix mesh vertices on the boundaries and only subject other internal
-//! vertices on optimization", §6). A fixed
-//! boundary vertex pins the end of every feature that runs into it: where a crease
-//! meets the boundary, the boundary edge across it keeps the input's chord
-//! error and the rows of vertices next to it cannot reach the crease. So,
-//! with a projection ([`super::Projection::Smooth`] or
-//! [`super::Projection::Mesh`]), a boundary vertex is an unknown that may
-//! move *along* the boundary curve only:
+//! vertices on optimization", §6). A fixed boundary vertex pins the end of
+//! every feature that runs into it, so, with a projection
+//! ([`super::Projection::Smooth`] or [`super::Projection::Mesh`]), a
+//! boundary vertex is an unknown that may move *along* the input boundary
+//! polyline only — the boundary of the output lies on that of the input
+//! (to rounding), as with the paper's fixed boundary:
 //!
 //! 1. **Corners stay.** A boundary vertex where the boundary polyline turns
 //!    by more than [`super::FEATURE_ANGLE_DEG`] is a corner of the
-//!    boundary curve and stays fixed, unless one of its two boundary edges
-//!    is a chord across a corner (step 2): then the corner of the curve is
-//!    not a vertex of the input, and the vertex may slide toward it.
-//! 2. **Chords across corners** (the one-dimensional counterpart of the
-//!    chord strips of module `crease`): a boundary edge a → b whose two
-//!    ends both turn the same way by more than
-//!    [`super::FEATURE_ANGLE_DEG`], while the boundary is straight (within
-//!    [`super::FLAT_SIDE_DEG`]) or turns the other way (another feature) at
-//!    the vertices before a and after b, cuts a corner of the curve; the
-//!    corner
-//!    is rebuilt where the lines of the edges before a and after b meet (the
-//!    boundary section of the crease that module `crease` rebuilds inside).
-//! 3. **The rows of Eq. (20) of a boundary vertex** (module `system`): one
+//!    boundary curve and stays fixed (sliding past it would cut the corner).
+//! 2. **The rows of Eq. (20) of a boundary vertex** (module `system`): one
 //!    F_em row along the boundary tangent t (the tangential component of the
 //!    edge-energy gradient along the only direction the vertex may move);
 //!    the F_sd rows of the Pottmann–Hofer squared distance to a *curve*
@@ -35,21 +23,17 @@
 //!    the F_smo rows of the Laplacian along the boundary, v − ½ (v_prev +
 //!    v_next), which evens out the spacing along the curve without pulling
 //!    the boundary inward.
-//! 4. **Projection onto the boundary curve** after each solve: the nearest
-//!    point of the boundary polyline within [`super::surface::SEARCH_RINGS`]
-//!    edges along the loop from the vertex (not past a corner), lifted onto
-//!    the curve's Phong fit for [`super::Projection::Smooth`] — the Phong
-//!    tessellation of Boubekeur & Alexa 2008 in one dimension: on the edge
-//!    (a, b) at p = (1 − s) a + s b, p* = (1 − α) p + α ((1 − s) π_a(p) +
-//!    s π_b(p)) with π the projection onto the tangent line at an end,
-//!    α = ½, which reproduces a quadratic curve to second order — and on a
-//!    chord across a corner onto the two segments to the rebuilt corner,
-//!    onto the corner itself within [`super::SNAP_DISTANCE`] of the chord's
-//!    length. Straight boundary parts stay straight (the tangent at a vertex
-//!    of a straight part is its edges' direction, the lift vanishes).
+//! 3. **Projection onto the boundary polyline** after each solve and after
+//!    each halving of a step by the repair of flipped triangles: the nearest
+//!    point of the input boundary polyline within
+//!    [`super::surface::SEARCH_RINGS`] edges along the loop from the vertex
+//!    (not past a corner). Every projection mode does the same: a smooth
+//!    fit of the curve (the Phong lift the interior gets) would leave the
+//!    input's boundary by up to 1e-3 of the bounding-box diagonal on a range
+//!    scan, where the boundary is where the scan ends, not a sampled curve.
 
-use super::crease::{FEATURE_ANGLE_DEG, FLAT_SIDE_DEG, SNAP_DISTANCE};
-use super::surface::{PHONG_ALPHA, SEARCH_RINGS};
+use super::crease::FEATURE_ANGLE_DEG;
+use super::surface::SEARCH_RINGS;
 use crate::Vec3;
 use crate::mesh::{SurfaceMesh, boundary_loops};
 use rayon::prelude::*;
@@ -70,9 +54,6 @@ pub(super) struct BoundaryCurves {
     /// Turning angle of the boundary polyline at each boundary vertex
     /// (radians).
     turn: Vec<f64>,
-    /// For the boundary edge from vertex a to `next[a]`: the corner of the
-    /// curve that edge cuts (step 2 of the module documentation).
-    chord_corner: Vec<Option<Vec3>>,
     /// The boundary vertices' positions (the input, normalised).
     positions: Vec<Vec3>,
 }
@@ -86,8 +67,8 @@ fn angle(a: Vec3, b: Vec3) -> f64 {
     a.dot(b).clamp(-1.0, 1.0).acos()
 }
 
-/// The point of the segment (a, b) nearest to x and its parameter s.
-fn nearest_on_segment(x: Vec3, a: Vec3, b: Vec3) -> (Vec3, f64) {
+/// The point of the segment (a, b) nearest to x.
+fn nearest_on_segment(x: Vec3, a: Vec3, b: Vec3) -> Vec3 {
     let e = b - a;
     let l2 = e.length_squared();
     let s = if l2 > 0.0 {
@@ -95,7 +76,7 @@ fn nearest_on_segment(x: Vec3, a: Vec3, b: Vec3) -> (Vec3, f64) {
     } else {
         0.0
     };
-    (a + s * e, s)
+    a + s * e
 }
 
 impl BoundaryCurves {
@@ -109,7 +90,6 @@ impl BoundaryCurves {
                 next: Vec::new(),
                 corner: Vec::new(),
                 turn: Vec::new(),
-                chord_corner: Vec::new(),
                 positions: Vec::new(),
             };
         }
@@ -140,54 +120,14 @@ impl BoundaryCurves {
                 )
             })
             .collect();
-        // the axis each vertex turns about (its sign tells the way it turns)
-        let axis: Vec<Vec3> = (0..n)
-            .map(|v| {
-                if !on(v) {
-                    return Vec3::ZERO;
-                }
-                let p = positions[v];
-                (p - positions[prev[v] as usize]).cross(positions[next[v] as usize] - p)
-            })
-            .collect();
-        let (feature, flat) = (FEATURE_ANGLE_DEG.to_radians(), FLAT_SIDE_DEG.to_radians());
-        let chord_corner: Vec<Option<Vec3>> = (0..n)
-            .map(|a| {
-                if !on(a) || corner[a] {
-                    return None;
-                }
-                let b = next[a] as usize;
-                let (before, after) = (prev[a] as usize, next[b] as usize);
-                // both ends turn, the same way
-                if corner[b] || turn[a] <= feature || turn[b] <= feature {
-                    return None;
-                }
-                if !(axis[a].dot(axis[b]) > 0.0) || before == b || after == a {
-                    return None;
-                }
-                // the curve is straight before a and after b, or turns the
-                // other way there (another feature): not a sampled arc
-                let apart = |u: usize, w: usize| turn[u] < flat || axis[u].dot(axis[w]) < 0.0;
-                if !apart(before, a) || !apart(after, b) {
-                    return None;
-                }
-                rebuilt_corner(
-                    positions[before],
-                    positions[a],
-                    positions[b],
-                    positions[after],
-                )
-            })
-            .collect();
+        let feature = FEATURE_ANGLE_DEG.to_radians();
         for v in 0..n {
             if !on(v) {
                 continue;
             }
-            let p = prev[v] as usize;
-            let degenerate =
-                positions[v] == positions[p] || positions[v] == positions[next[v] as usize];
-            let at_chord = chord_corner[v].is_some() || chord_corner[p].is_some();
-            if degenerate || (turn[v] > feature && !at_chord) {
+            let degenerate = positions[v] == positions[prev[v] as usize]
+                || positions[v] == positions[next[v] as usize];
+            if degenerate || turn[v] > feature {
                 corner[v] = true;
             }
         }
@@ -196,7 +136,6 @@ impl BoundaryCurves {
             next,
             corner,
             turn,
-            chord_corner,
             positions: positions.to_vec(),
         }
     }
@@ -234,158 +173,51 @@ impl BoundaryCurves {
         ((b - a).normalize_or_zero(), curvature)
     }
 
-    /// The tangent of the boundary curve at vertex `v` used by the Phong lift
-    /// of its edge towards `other`: the edge's own direction where the curve
-    /// has a corner at `v` (a corner vertex, an end of a chord across a
-    /// corner, a turn above the feature angle), else the direction from the
-    /// previous to the next vertex.
-    fn lift_tangent(&self, v: usize, other: usize) -> Vec3 {
-        let own = (self.positions[other] - self.positions[v]).normalize_or_zero();
-        let p = self.prev[v] as usize;
-        let sharp = self.corner[v]
-            || self.chord_corner[v].is_some()
-            || self.chord_corner[p].is_some()
-            || self.turn[v] > FEATURE_ANGLE_DEG.to_radians();
-        if sharp {
-            return own;
+    /// The point of the input boundary polyline nearest to `x` among the
+    /// edges within [`SEARCH_RINGS`] edges along the loop from boundary
+    /// vertex `v` (not past a corner); `x` when `x` is not finite.
+    pub fn nearest(&self, v: usize, x: Vec3) -> Vec3 {
+        let mut best = (x, f64::INFINITY);
+        let mut consider = |a: usize| {
+            let b = self.next[a] as usize;
+            let q = nearest_on_segment(x, self.positions[a], self.positions[b]);
+            let d = x.distance(q);
+            if d < best.1 {
+                best = (q, d);
+            }
+        };
+        // backward: the edges ending at v, its predecessor, ...
+        let mut w = v;
+        for _ in 0..SEARCH_RINGS {
+            let p = self.prev[w] as usize;
+            consider(p);
+            if self.corner[p] || p == v {
+                break;
+            }
+            w = p;
         }
-        let t = (self.positions[self.next[v] as usize] - self.positions[p]).normalize_or_zero();
-        if t == Vec3::ZERO { own } else { t }
-    }
-
-    /// The point of the boundary curve over the edge from `a` to its next
-    /// vertex nearest to `x`, and its distance to `x` (before the lift):
-    /// on the polyline for `smooth` false, else on the rebuilt corner or the
-    /// curve's Phong fit (module documentation, step 4).
-    fn edge_point(&self, a: usize, x: Vec3, smooth: bool) -> (Vec3, f64) {
-        let b = self.next[a] as usize;
-        let (pa, pb) = (self.positions[a], self.positions[b]);
-        if smooth && let Some(c) = self.chord_corner[a] {
-            let (q1, _) = nearest_on_segment(x, pa, c);
-            let (q2, _) = nearest_on_segment(x, c, pb);
-            let q = if x.distance(q1) <= x.distance(q2) {
-                q1
-            } else {
-                q2
-            };
-            let q = if q.distance(c) <= SNAP_DISTANCE * pa.distance(pb) {
-                c
-            } else {
-                q
-            };
-            return (q, x.distance(q));
+        let mut w = v;
+        for _ in 0..SEARCH_RINGS {
+            consider(w);
+            let n = self.next[w] as usize;
+            if self.corner[n] || n == v {
+                break;
+            }
+            w = n;
         }
-        let (p, s) = nearest_on_segment(x, pa, pb);
-        let d = x.distance(p);
-        if !smooth {
-            return (p, d);
-        }
-        let (ta, tb) = (self.lift_tangent(a, b), self.lift_tangent(b, a));
-        let on_line = |q: Vec3, t: Vec3| q + (p - q).dot(t) * t;
-        let lifted = (1.0 - PHONG_ALPHA) * p
-            + PHONG_ALPHA * ((1.0 - s) * on_line(pa, ta) + s * on_line(pb, tb));
-        (if lifted.is_finite() { lifted } else { p }, d)
+        if best.0.is_finite() { best.0 } else { x }
     }
 
     /// Moves each boundary vertex of `vertices` from its solved position in
-    /// `positions` onto the boundary curve near its input position (module
-    /// documentation, step 4; `smooth` false: onto the polyline).
-    pub fn project(&self, vertices: &[u32], positions: &mut [Vec3], smooth: bool) {
+    /// `positions` onto the input boundary polyline near its input position
+    /// (module documentation, step 4).
+    pub fn project(&self, vertices: &[u32], positions: &mut [Vec3]) {
         let moved: Vec<Vec3> = vertices
             .par_iter()
-            .map(|&v| {
-                let x = positions[v as usize];
-                let mut best = (x, f64::INFINITY);
-                let mut consider = |a: usize| {
-                    let (q, d) = self.edge_point(a, x, smooth);
-                    if d < best.1 {
-                        best = (q, d);
-                    }
-                };
-                // backward: the edges ending at v, its predecessor, ...
-                let mut w = v as usize;
-                for _ in 0..SEARCH_RINGS {
-                    let p = self.prev[w] as usize;
-                    consider(p);
-                    if self.corner[p] || p == v as usize {
-                        break;
-                    }
-                    w = p;
-                }
-                let mut w = v as usize;
-                for _ in 0..SEARCH_RINGS {
-                    consider(w);
-                    let n = self.next[w] as usize;
-                    if self.corner[n] || n == v as usize {
-                        break;
-                    }
-                    w = n;
-                }
-                if best.0.is_finite() { best.0 } else { x }
-            })
+            .map(|&v| self.nearest(v as usize, positions[v as usize]))
             .collect();
         for (&v, q) in vertices.iter().zip(moved) {
             positions[v as usize] = q;
         }
-    }
-}
-
-/// The corner that a chord a → b cuts: where the line through `before`
-/// and a meets the line through b and `after` (the midpoint of their
-/// closest points), provided it lies ahead of a on the first line, behind b
-/// on the second, within two chord lengths, and the lines nearly meet
-/// (closer than a tenth of the chord).
-fn rebuilt_corner(before: Vec3, a: Vec3, b: Vec3, after: Vec3) -> Option<Vec3> {
-    let (u, w) = (
-        (a - before).normalize_or_zero(),
-        (after - b).normalize_or_zero(),
-    );
-    let chord = a.distance(b);
-    if u == Vec3::ZERO || w == Vec3::ZERO || !(chord > 0.0) {
-        return None;
-    }
-    // a + s u closest to b + r w
-    let c = u.dot(w);
-    let denominator = 1.0 - c * c;
-    if !(denominator > 1e-9) {
-        return None;
-    }
-    let d = a - b;
-    let (du, dw) = (d.dot(u), d.dot(w));
-    let s = (c * dw - du) / denominator;
-    let r = (dw - c * du) / denominator;
-    let (p, q) = (a + s * u, b + r * w);
-    let ahead = s > 0.0 && s <= 2.0 * chord && r < 0.0 && -r <= 2.0 * chord;
-    (ahead && p.distance(q) <= 0.1 * chord).then_some(0.5 * (p + q))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A chord across a right-angled corner of a boundary is rebuilt at the
-    /// corner; the vertices next to it may slide, a vertex on a real corner
-    /// stays.
-    #[test]
-    fn chords_across_boundary_corners_are_rebuilt() {
-        let c = rebuilt_corner(
-            Vec3::new(-2.0, 0.0, 0.0),
-            Vec3::new(-0.5, 0.0, 0.0),
-            Vec3::new(0.0, 0.5, 0.0),
-            Vec3::new(0.0, 2.0, 0.0),
-        )
-        .unwrap();
-        assert!(c.distance(Vec3::ZERO) < 1e-12, "{c}");
-        // lines that meet behind the chord (a concave notch seen the wrong
-        // way) give no corner
-        assert!(
-            rebuilt_corner(
-                Vec3::new(-2.0, 0.0, 0.0),
-                Vec3::new(-0.5, 0.0, 0.0),
-                Vec3::new(0.0, -0.5, 0.0),
-                Vec3::new(0.0, 2.0, 0.0),
-            )
-            .is_none()
-        );
     }
 }

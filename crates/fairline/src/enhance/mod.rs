@@ -103,8 +103,9 @@
 //! Boundary vertices slide along the boundary curve of the input (module
 //! `boundary`: one F_em row along the boundary, the Pottmann–Hofer distance
 //! to the curve, the Laplacian along the boundary, and after each solve
-//! the projection onto the curve's smooth fit, with corners that the input
-//! cuts by a chord rebuilt), so that a feature running into the boundary
+//! the projection onto the input boundary polyline, so that the output's
+//! boundary vertices lie on the input's boundary as with the paper's fixed
+//! boundary), so that a feature running into the boundary
 //! is not pinned by a fixed vertex next to it; the corners of the boundary
 //! curve (turning by more than [`FEATURE_ANGLE_DEG`]) stay bit for bit, and
 //! with [`Projection::None`] (the paper's method) the whole boundary
@@ -814,6 +815,7 @@ impl Flow {
         let outcome = repair::repair_flips(
             problem.mesh,
             &problem.input_faces,
+            &problem.boundary,
             &self.current,
             &mut target,
         );
@@ -881,11 +883,9 @@ impl Flow {
         }
         input_surface.project(&problem.interior_free, &mut target, options.projection);
         if options.projection != Projection::None {
-            problem.boundary.project(
-                &problem.boundary_free,
-                &mut target,
-                options.projection == Projection::Smooth,
-            );
+            problem
+                .boundary
+                .project(&problem.boundary_free, &mut target);
         }
         timings.repair_s += t.elapsed().as_secs_f64();
         Ok((x, target))

@@ -5,6 +5,7 @@
 //! input quality.
 
 use super::REPAIR_HALVINGS;
+use super::boundary::BoundaryCurves;
 use crate::Vec3;
 use crate::geom::{triangle_normal_area, triangle_quality};
 use crate::mesh::{FaceId, SurfaceMesh};
@@ -115,11 +116,15 @@ pub(super) struct RepairOutcome {
 /// that started at `start`, where no face is either): the steps of the
 /// vertices of such faces are halved, [`REPAIR_HALVINGS`] times at most,
 /// then reset to zero, until no face is flipped or below the quality floor.
+/// A halved step of a boundary vertex that slides along the boundary is
+/// projected back onto the input boundary polyline (`boundary`; the
+/// midpoint of two points of a polyline need not lie on it).
 /// Terminates: a face whose vertices are all back at `start` is neither,
 /// and every round moves at least one vertex back.
 pub(super) fn repair_flips(
     mesh: &SurfaceMesh,
     input: &InputFaces,
+    boundary: &BoundaryCurves,
     start: &[Vec3],
     target: &mut [Vec3],
 ) -> RepairOutcome {
@@ -141,7 +146,12 @@ pub(super) fn repair_flips(
                 backtracked[v] = true;
                 changed = true;
                 target[v] = if round < REPAIR_HALVINGS {
-                    start[v] + 0.5 * (target[v] - start[v])
+                    let halved = start[v] + 0.5 * (target[v] - start[v]);
+                    if boundary.is_on(v) {
+                        boundary.nearest(v, halved)
+                    } else {
+                        halved
+                    }
                 } else {
                     start[v]
                 };

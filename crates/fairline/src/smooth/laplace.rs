@@ -473,6 +473,7 @@ fn finish(
         max_displacement,
         converged: true,
         residual: None,
+        stop_reason: None,
         taubin: None,
     };
     Ok(Output {

@@ -86,6 +86,9 @@ pub struct SmoothOptions {
     /// steps; spring, schneider-kobbelt: the most sweeps). `None`: the
     /// method's default (10, 10, 1, 200, 50).
     pub iterations: Option<usize>,
+    /// Most work in evaluations of Δ_B H at a vertex (schneider-kobbelt;
+    /// `None`: [`super::DEFAULT_MAX_WORK`]).
+    pub max_work: Option<u64>,
     /// Vertices that never move (bit-identical in the output).
     pub fixed: Vec<VertexId>,
     /// Keep every boundary vertex fixed (laplace, taubin, implicit).
@@ -114,6 +117,7 @@ impl Default for SmoothOptions {
             time_step: ImplicitOptions::default().time_step,
             epsilon: None,
             iterations: None,
+            max_work: None,
             fixed: Vec::new(),
             fix_boundary: false,
             hierarchical_boundary: false,
@@ -133,6 +137,7 @@ super::setters!(SmoothOptions {
     time_step: f64,
     epsilon: Option<f64>,
     iterations: Option<usize>,
+    max_work: Option<u64>,
     fixed: Vec<VertexId>,
     fix_boundary: bool,
     hierarchical_boundary: bool,
@@ -207,7 +212,8 @@ pub fn smooth(
             let opts = d
                 .clone()
                 .epsilon(o.epsilon.unwrap_or(d.epsilon))
-                .max_iterations(o.iterations.unwrap_or(d.max_iterations));
+                .max_iterations(o.iterations.unwrap_or(d.max_iterations))
+                .max_work(o.max_work.unwrap_or(d.max_work));
             schneider_kobbelt(mesh, &opts.fixed(o.fixed).control(o.control))
         }
     }?;

@@ -27,7 +27,10 @@ pub use laplace::{
     laplace_smooth, taubin_lambda_for_pass_band, taubin_smooth,
 };
 pub use method::{SmoothMethod, SmoothOptions, smooth};
-pub use schneider_kobbelt::{SchneiderKobbeltOptions, schneider_kobbelt};
+pub use schneider_kobbelt::{
+    DEFAULT_MAX_WORK, DIVERGENCE_FACTOR, STAGNATION_DECREASE, STAGNATION_WINDOW,
+    SchneiderKobbeltOptions, schneider_kobbelt,
+};
 pub use spring::{SpringOptions, spring_smooth};
 
 use crate::Vec3;
@@ -153,11 +156,47 @@ pub struct SmoothReport {
     /// for the others.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub residual: Option<f64>,
+    /// Why an iterative method with a stopping rule of its own stopped
+    /// (Schneider–Kobbelt); `None` for the others.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stop_reason: Option<StopReason>,
     /// The scale factors Taubin smoothing used (`None` for the other
     /// methods); serialised flat as `lambda`, `mu`, `pass_band` and the
     /// `transfer` samples.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub taubin: Option<TaubinParameters>,
+}
+
+/// Why an iterative smoothing stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// The stopping criterion held.
+    Converged,
+    /// The most sweeps allowed ran.
+    MaxIterations,
+    /// The merit fell by less than a set fraction over a window of sweeps.
+    Stagnated,
+    /// No step length lowered the merit.
+    NoDescent,
+    /// The residual grew far beyond the smallest one seen.
+    Diverged,
+    /// The next sweep would have exceeded the work bound.
+    WorkLimit,
+}
+
+impl StopReason {
+    /// The name in the JSON report (`stop_reason`).
+    pub fn name(self) -> &'static str {
+        match self {
+            StopReason::Converged => "converged",
+            StopReason::MaxIterations => "max_iterations",
+            StopReason::Stagnated => "stagnated",
+            StopReason::NoDescent => "no_descent",
+            StopReason::Diverged => "diverged",
+            StopReason::WorkLimit => "work_limit",
+        }
+    }
 }
 
 /// Per-vertex role derived from [`Constraints`].

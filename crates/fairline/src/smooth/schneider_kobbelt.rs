@@ -1,7 +1,9 @@
 //! Fair surfaces with G¹ boundary conditions by Δ_B H = 0 (Schneider and
 //! Kobbelt; Grüner thesis §3.4, Eq. (25)–(29)).
 
-use super::{Constraints, Role, SmoothError, SmoothReport, max_distance, roles, setters};
+use super::{
+    Constraints, Role, SmoothError, SmoothReport, StopReason, max_distance, roles, setters,
+};
 use crate::geom::{self, LaplaceWeights};
 use crate::mesh::{SurfaceMesh, VertexId};
 use crate::solve::{ConstrainedOptions, ConstrainedSolver, least_squares, sparse_from_triplets};
@@ -39,9 +41,32 @@ pub struct SchneiderKobbeltOptions {
     /// Where the true normals are known, pass them in `normals`: with exact
     /// normals the method is exact on a sphere cap.
     pub normal_fit_rings: Option<usize>,
+    /// Most work, in evaluations of Δ_B H at one vertex (a sweep costs
+    /// about (probe groups of the Jacobian + line-search trials) ×
+    /// vertices): a sweep that would take the total beyond it is not
+    /// started ([`StopReason::WorkLimit`]).
+    pub max_work: u64,
     /// Progress callback and cancel flag (one step per outer iteration).
     pub control: Control,
 }
+
+/// Sweeps over which the merit must fall by [`STAGNATION_DECREASE`].
+pub const STAGNATION_WINDOW: usize = 5;
+/// Least relative decrease of the merit over [`STAGNATION_WINDOW`] sweeps
+/// before the iteration counts as stagnated: 10 % in five sweeps is a
+/// linear rate of 2 % a sweep, which would need hundreds of sweeps to
+/// converge. (A noisy 41² sphere cap crawls at 5 % a sweep for 17 sweeps
+/// before the Newton steps take over; the cow "Spot" falls to 1 % a sweep
+/// after 25 sweeps and stays there.)
+pub const STAGNATION_DECREASE: f64 = 0.1;
+/// A residual max |H − H̃|·ē this many times the smallest one so far
+/// counts as diverged (the merit falls at every accepted step, the
+/// largest residual may rise for a sweep: 1.4× on the 41² cap).
+pub const DIVERGENCE_FACTOR: f64 = 4.0;
+/// Default of [`SchneiderKobbeltOptions::max_work`]: 10⁷ evaluations of
+/// Δ_B H at a vertex, about ten seconds (a sweep over 2,930 vertices costs
+/// about 1.5·10⁵, one over 36,000 about 1.5·10⁶).
+pub const DEFAULT_MAX_WORK: u64 = 10_000_000;
 
 impl Default for SchneiderKobbeltOptions {
     fn default() -> Self {
@@ -51,6 +76,7 @@ impl Default for SchneiderKobbeltOptions {
             fixed: Vec::new(),
             normals: Vec::new(),
             normal_fit_rings: None,
+            max_work: DEFAULT_MAX_WORK,
             control: Control::default(),
         }
     }
@@ -62,6 +88,7 @@ setters!(SchneiderKobbeltOptions {
     fixed: Vec<VertexId>,
     normals: Vec<(VertexId, Vec3)>,
     normal_fit_rings: Option<usize>,
+    max_work: u64,
     control: Control,
 });
 
@@ -207,11 +234,14 @@ struct Evaluator<'a> {
     normals0: &'a [Vec3],
     nbrs: &'a [Vec<usize>],
     unknown: &'a [usize],
+    /// Evaluations so far (each one costs O(vertices)).
+    evaluations: std::cell::Cell<u64>,
 }
 
 impl Evaluator<'_> {
     fn evaluate(&self, p: &[Vec3]) -> Eval {
         let (mesh, n) = (self.mesh, self.roles.len());
+        self.evaluations.set(self.evaluations.get() + 1);
         let mut normals = geom::vertex_normals_max_at(mesh, p);
         for i in 0..n {
             if self.roles[i] != Role::Free {
@@ -728,6 +758,64 @@ fn newton_step(
     Ok(NewtonOutcome::NoDescent)
 }
 
+/// Why [`schneider_kobbelt`] stopped watching its sweeps: the merit
+/// history over the last [`STAGNATION_WINDOW`] sweeps, the smallest
+/// residual so far and the work done.
+struct Progress {
+    vertices: u64,
+    /// Probe groups of the Jacobian: the evaluations of a sweep at least.
+    groups: u64,
+    max_work: u64,
+    merits: Vec<f64>,
+    best_residual: f64,
+    /// Evaluations at the start of the last sweep and how many it took.
+    last_start: u64,
+    last_cost: u64,
+    /// Vertex evaluations so far (evaluations × vertices).
+    work: u64,
+}
+
+impl Progress {
+    fn new(vertices: usize, groups: usize, max_work: u64) -> Progress {
+        Progress {
+            vertices: vertices as u64,
+            groups: groups as u64,
+            max_work,
+            merits: Vec::new(),
+            best_residual: f64::INFINITY,
+            last_start: 0,
+            last_cost: 0,
+            work: 0,
+        }
+    }
+
+    /// Called at the head of every sweep with the current merit, residual
+    /// and evaluation count: why to stop, if the sweeps stagnated, diverged
+    /// or the next sweep would exceed the work bound.
+    fn stop(&mut self, merit: f64, residual: f64, evaluations: u64) -> Option<StopReason> {
+        self.last_cost = evaluations - self.last_start;
+        self.last_start = evaluations;
+        self.work = evaluations.saturating_mul(self.vertices);
+        self.merits.push(merit);
+        if !residual.is_finite() || residual > DIVERGENCE_FACTOR * self.best_residual {
+            return Some(StopReason::Diverged);
+        }
+        self.best_residual = self.best_residual.min(residual);
+        let k = self.merits.len();
+        if k > STAGNATION_WINDOW {
+            let before = self.merits[k - 1 - STAGNATION_WINDOW];
+            if merit > (1.0 - STAGNATION_DECREASE) * before {
+                return Some(StopReason::Stagnated);
+            }
+        }
+        let sweep = self.last_cost.max(self.groups + 1);
+        let next = self
+            .work
+            .saturating_add(sweep.saturating_mul(self.vertices));
+        (next > self.max_work).then_some(StopReason::WorkLimit)
+    }
+}
+
 /// Schneider–Kobbelt fairing of a triangle mesh with G¹ boundary (fixed
 /// boundary vertices and normals; Grüner §3.4). The fourth-order Δ_B H = 0
 /// is factorised into two nested second-order problems per outer iteration
@@ -766,7 +854,14 @@ fn newton_step(
 /// gives the accepted iterations and the final residual max |H − H̃| · ē.
 /// A step is accepted only if it lowers the merit Σ_i (Σ_j w_ij (H_i − H_j))²;
 /// when no step length down to 1/64 does, the iteration stops unconverged
-/// instead of drifting.
+/// instead of drifting ([`StopReason::NoDescent`]). It also stops
+/// unconverged, with the reason in the report's `stop_reason`, when the
+/// merit fell by less than [`STAGNATION_DECREASE`] over the last
+/// [`STAGNATION_WINDOW`] sweeps ([`StopReason::Stagnated`]), when the
+/// residual grew beyond [`DIVERGENCE_FACTOR`] times its smallest value
+/// ([`StopReason::Diverged`]), when the next sweep would take the work
+/// beyond `opts.max_work` ([`StopReason::WorkLimit`]) or after
+/// `opts.max_iterations` sweeps ([`StopReason::MaxIterations`]).
 pub fn schneider_kobbelt(
     mesh: &SurfaceMesh,
     opts: &SchneiderKobbeltOptions,
@@ -796,6 +891,7 @@ pub fn schneider_kobbelt(
         normals0: &normals0,
         nbrs: &nbrs,
         unknown: &unknowns.vertices,
+        evaluations: std::cell::Cell::new(0),
     };
     let (support, groups) = jacobian_pattern(&nbrs, &unknowns);
     // current positions (the connectivity is the input's)
@@ -803,9 +899,15 @@ pub fn schneider_kobbelt(
     let mut solver: Option<ConstrainedSolver> = None;
     let mut iterations = 0;
     let mut converged = m == 0 || !(ebar > 0.0);
+    let mut stop = if converged {
+        StopReason::Converged
+    } else {
+        StopReason::MaxIterations
+    };
     let mut residual = 0.0;
     let mut last_step = f64::INFINITY;
     let mut ev = evaluator.evaluate(&work);
+    let mut progress = Progress::new(mesh.vertex_count(), groups.len(), opts.max_work);
     while !converged {
         opts.control
             .step("iterations", iterations as u64, opts.max_iterations as u64)?;
@@ -820,9 +922,14 @@ pub fn schneider_kobbelt(
             * ebar;
         if last_step < opts.epsilon {
             converged = true;
+            stop = StopReason::Converged;
             break;
         }
         if iterations >= opts.max_iterations {
+            break;
+        }
+        if let Some(reason) = progress.stop(ev.merit, residual, evaluator.evaluations.get()) {
+            stop = reason;
             break;
         }
         let jac = finite_difference_jacobian(&evaluator, &ev, &work, &support, &groups, ebar);
@@ -843,7 +950,10 @@ pub fn schneider_kobbelt(
             }
             // the loop head computes the final residual and stops
             NewtonOutcome::BelowEpsilon => last_step = 0.0,
-            NewtonOutcome::NoDescent => break,
+            NewtonOutcome::NoDescent => {
+                stop = StopReason::NoDescent;
+                break;
+            }
         }
     }
     let report = SmoothReport {
@@ -853,10 +963,56 @@ pub fn schneider_kobbelt(
         max_displacement: max_distance(&work, &input),
         converged,
         residual: Some(residual),
+        stop_reason: Some(stop),
         taubin: None,
     };
     Ok(Output {
         positions: work,
         report,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The stopping rules on given merit and residual sequences: a merit
+    /// that falls by less than [`STAGNATION_DECREASE`] over
+    /// [`STAGNATION_WINDOW`] sweeps stagnates (by more it goes on), a
+    /// residual beyond [`DIVERGENCE_FACTOR`] times its smallest value
+    /// diverges, a non-finite one too, and a sweep that would pass the work
+    /// bound is not started.
+    #[test]
+    fn sweeps_stop_when_they_stagnate_diverge_or_would_exceed_the_work() {
+        let unbounded = || Progress::new(10, 3, u64::MAX);
+        // 3 % a sweep: 14 % over five sweeps, goes on
+        let mut p = unbounded();
+        for k in 0..40 {
+            assert_eq!(p.stop(0.97f64.powi(k), 1.0, 5 * k as u64 + 1), None, "{k}");
+        }
+        // 1 % a sweep: stagnated once five sweeps are seen
+        let mut p = unbounded();
+        let stops: Vec<Option<StopReason>> = (0..7)
+            .map(|k| p.stop(0.99f64.powi(k), 1.0, 5 * k as u64 + 1))
+            .collect();
+        assert_eq!(stops[..5], [None; 5]);
+        assert_eq!(stops[5], Some(StopReason::Stagnated));
+        // the residual: up to the factor goes on, beyond it diverges
+        let mut p = unbounded();
+        assert_eq!(p.stop(1.0, 1.0, 1), None);
+        assert_eq!(p.stop(0.5, DIVERGENCE_FACTOR, 6), None);
+        assert_eq!(
+            p.stop(0.25, 1.01 * DIVERGENCE_FACTOR, 11),
+            Some(StopReason::Diverged)
+        );
+        let mut p = unbounded();
+        assert_eq!(p.stop(1.0, f64::NAN, 1), Some(StopReason::Diverged));
+        // work: 10 vertices, sweeps of 5 evaluations; a bound of 200 allows
+        // the sweeps to 150 evaluations × vertices, not the next
+        let mut p = Progress::new(10, 3, 200);
+        assert_eq!(p.stop(1.0, 1.0, 1), None); // next: (3 + 1) × 10 = 40
+        assert_eq!(p.stop(0.5, 1.0, 6), None); // 60 + 50
+        assert_eq!(p.stop(0.25, 1.0, 11), None); // 110 + 50
+        assert_eq!(p.stop(0.125, 1.0, 16), Some(StopReason::WorkLimit)); // 160 + 50
+    }
 }

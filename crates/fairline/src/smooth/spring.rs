@@ -214,6 +214,7 @@ pub fn spring_smooth(
         max_displacement,
         converged,
         residual: None,
+        stop_reason: None,
         taubin: None,
     };
     Ok(Output {

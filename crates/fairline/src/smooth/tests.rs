@@ -1435,3 +1435,36 @@ fn the_report_serialises_to_the_cli_keys() {
     );
     assert!(v.get("lambda").is_none());
 }
+
+/// Schneider–Kobbelt on a noisy closed torus (no fixed vertex, so nothing
+/// anchors Δ_B H = 0): the run ends within its work bound and says why —
+/// `converged` exactly when the reason is [`StopReason::Converged`]. A work
+/// bound below one sweep stops it before the first sweep, unconverged, with
+/// the input unchanged; the other methods give no stop reason.
+#[test]
+fn schneider_kobbelt_on_a_noisy_torus_ends_with_a_reason_within_its_work() {
+    let mut torus = shapes::torus(1.0, 0.4, 48, 16);
+    for (i, p) in torus.positions_mut().iter_mut().enumerate() {
+        *p += 0.01 * Vec3::new(noise(i, 1), noise(i, 2), noise(i, 3));
+    }
+    let t = std::time::Instant::now();
+    let out = super::schneider_kobbelt(&torus, &SchneiderKobbeltOptions::default()).unwrap();
+    let seconds = t.elapsed().as_secs_f64();
+    let r = &out.report;
+    eprintln!(
+        "noisy torus: {:?} after {} iterations, residual {:?}, {seconds:.2} s",
+        r.stop_reason, r.iterations, r.residual
+    );
+    let reason = r.stop_reason.unwrap();
+    assert_eq!(r.converged, reason == StopReason::Converged, "{r:?}");
+    assert!(r.iterations <= SchneiderKobbeltOptions::default().max_iterations);
+    assert!(out.positions.iter().all(|p| p.is_finite()));
+    // a bound below one sweep's cost: no sweep, the input as it was
+    let tiny = SchneiderKobbeltOptions::default().max_work(torus.vertex_count() as u64);
+    let out = super::schneider_kobbelt(&torus, &tiny).unwrap();
+    assert_eq!(out.report.stop_reason, Some(StopReason::WorkLimit));
+    assert!(!out.report.converged && out.report.iterations == 0);
+    assert_eq!(out.positions, torus.positions());
+    let taubin = super::taubin_smooth(&torus, &TaubinOptions::default()).unwrap();
+    assert_eq!(taubin.report.stop_reason, None);
+}
