@@ -15,6 +15,15 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+/// The tests of this file measure the server's answer times under load
+/// they make themselves; run side by side on two cores they would measure
+/// each other. Each takes this lock for its whole run.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn exclusive() -> std::sync::MutexGuard<'static, ()> {
+    ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 struct Server {
     child: Child,
     port: u16,
@@ -158,6 +167,7 @@ fn ready(srv: &Server) {
 
 #[test]
 fn token_is_checked_before_the_body_and_bodies_are_bounded() {
+    let _one = exclusive();
     let dir = tmp("limits-body");
     let mesh = dir.join("panel.obj");
     panel(&mesh, 11);
@@ -235,6 +245,7 @@ fn token_is_checked_before_the_body_and_bodies_are_bounded() {
 
 #[test]
 fn slow_and_idle_connections_do_not_starve_an_authenticated_client() {
+    let _one = exclusive();
     let dir = tmp("limits-slow");
     let mesh = dir.join("panel.obj");
     panel(&mesh, 11);
@@ -306,6 +317,7 @@ fn slow_and_idle_connections_do_not_starve_an_authenticated_client() {
 
 #[test]
 fn ambiguous_framing_is_refused() {
+    let _one = exclusive();
     let dir = tmp("limits-framing");
     let mesh = dir.join("panel.obj");
     panel(&mesh, 11);
@@ -358,6 +370,7 @@ fn ambiguous_framing_is_refused() {
 
 #[test]
 fn the_query_token_is_for_get_only() {
+    let _one = exclusive();
     let dir = tmp("limits-query");
     let mesh = dir.join("panel.obj");
     panel(&mesh, 11);
@@ -384,6 +397,7 @@ fn the_query_token_is_for_get_only() {
 
 #[test]
 fn huge_light_requests_are_refused_and_long_ones_leave_the_server_answering() {
+    let _one = exclusive();
     let dir = tmp("limits-lines");
     let mesh = dir.join("panel.obj");
     panel(&mesh, 70);
@@ -434,6 +448,7 @@ fn huge_light_requests_are_refused_and_long_ones_leave_the_server_answering() {
 #[cfg(unix)]
 #[test]
 fn the_browser_is_opened_without_the_token_on_a_command_line() {
+    let _one = exclusive();
     use std::os::unix::fs::PermissionsExt;
     let dir = tmp("limits-open");
     let mesh = dir.join("panel.obj");
@@ -493,6 +508,7 @@ fn the_browser_is_opened_without_the_token_on_a_command_line() {
 #[cfg(unix)]
 #[test]
 fn saves_are_confined_to_the_save_folder() {
+    let _one = exclusive();
     let dir = tmp("limits-save");
     let mesh = dir.join("panel.obj");
     panel(&mesh, 11);
