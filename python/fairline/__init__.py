@@ -723,6 +723,7 @@ def fair_surface(
     boundary: str = "fixed",
     keep_weight: float = 0.01,
     fairness_weight: float = 0.003,
+    damped_step: float = 0.1,
 ) -> Tuple[List[Surface], Dict[str, Any]]:
     """Circular-highlight fairing of a B-spline surface (``fairline
     fair-surface``, Nishiyama et al. §3): each endpoint pair is snapped onto
@@ -730,7 +731,8 @@ def fair_surface(
     control points over the endpoints' knot box move. ``method``:
     ``"regularised"`` (Levenberg–Marquardt, keeps every other line fair) or
     ``"paper"`` (Gauss–Newton, truncated SVD); ``boundary``: ``"fixed"``,
-    ``"tangent"`` or ``"free"``.
+    ``"tangent"`` or ``"free"``; ``damped_step``: μ of the damped step
+    (Eq. 3.13; 1 turns the damping off).
 
     ``lights``: ``{"center","axis","radii"}``; ``endpoints``:
     ``{"endpoints": [{"radius", "start": [u, v], "end": [u, v]}]}`` (dicts
@@ -745,6 +747,7 @@ def fair_surface(
         truncation=float(truncation), min_truncation=float(min_truncation),
         sample_spacing=float(sample_spacing), grid=int(grid), method=method, boundary=boundary,
         keep_weight=float(keep_weight), fairness_weight=float(fairness_weight),
+        damped_step=float(damped_step),
     )
     return _surfaces_from(out), _report(report)
 

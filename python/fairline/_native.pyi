@@ -148,4 +148,5 @@ def fair_surface(
     boundary: str = "fixed",
     keep_weight: Optional[float] = None,
     fairness_weight: Optional[float] = None,
+    damped_step: Optional[float] = None,
 ) -> Tuple[str, str]: ...

@@ -298,7 +298,8 @@ fn surface_highlight_lines(
 #[pyfunction]
 #[pyo3(signature = (surfaces, lights, endpoints, surface = 0, max_iterations = None,
     epsilon = None, truncation = None, min_truncation = None, sample_spacing = None, grid = None,
-    method = "regularised", boundary = "fixed", keep_weight = None, fairness_weight = None))]
+    method = "regularised", boundary = "fixed", keep_weight = None, fairness_weight = None,
+    damped_step = None))]
 fn fair_surface(
     py: Python<'_>,
     surfaces: String,
@@ -315,6 +316,7 @@ fn fair_surface(
     boundary: &str,
     keep_weight: Option<f64>,
     fairness_weight: Option<f64>,
+    damped_step: Option<f64>,
 ) -> PyResult<(String, String)> {
     use fairline::fair::{
         BoundaryControl, Endpoints, SurfaceFairError, SurfaceFairMethod, SurfaceFairOptions,
@@ -369,7 +371,8 @@ fn fair_surface(
         .method(method)
         .boundary(boundary)
         .keep_weight(keep_weight.unwrap_or(d.keep_weight))
-        .fairness_weight(fairness_weight.unwrap_or(d.fairness_weight));
+        .fairness_weight(fairness_weight.unwrap_or(d.fairness_weight))
+        .damped_step(damped_step.unwrap_or(d.damped_step));
     let out = crate::compute(py, move || -> Res<_> {
         let input = all[surface].clone();
         let mut report = Report::new("fair-surface");
@@ -392,11 +395,8 @@ fn fair_surface(
             }
         }
         all[surface] = faired;
-        if !rep.converged {
-            report.warn(Warning::Text(format!(
-                "fairing did not converge ({:?} after {} iteration(s)); try --max-iterations or other endpoints",
-                rep.stop, rep.iterations
-            )));
+        if let Some(w) = fairline_commands::fair_surface::not_converged_warning(&rep) {
+            report.warn(Warning::Text(w));
         }
         if rep.residual_after.max > rep.residual_before.max {
             report.warn(Warning::Text(format!(

@@ -7,7 +7,7 @@ use crate::surface_highlight::{palette_srgb, plot_lines, polylines, surface_pict
 use anyhow::Result;
 use fairline::bspline::BSplineSurface;
 use fairline::fair::{
-    BoundaryControl, EndpointPair, Endpoints, FairStop, SurfaceFairError, SurfaceFairMethod,
+    BoundaryControl, EndpointPair, Endpoints, SurfaceFairError, SurfaceFairMethod,
     SurfaceFairOptions, SurfaceFairReport, fair_surface,
 };
 use fairline::highlight::{
@@ -673,7 +673,7 @@ fn before_after_svg(
 /// and whether the targets give fewer equations than there are unknowns)
 /// or the largest residual grew.
 fn warn_about_convergence(report: &mut Report, rep: &SurfaceFairReport) {
-    if let Some(text) = not_converged_warning(rep) {
+    if let Some(text) = fairline_commands::fair_surface::not_converged_warning(rep) {
         report.warn(text);
     }
     if rep.residual_after.max > rep.residual_before.max {
@@ -682,48 +682,4 @@ fn warn_about_convergence(report: &mut Report, rep: &SurfaceFairReport) {
             rep.residual_before.max, rep.residual_after.max
         ));
     }
-}
-
-/// The sentence of a run that did not converge: the reason it stopped,
-/// the system's size when it is underdetermined, what to try; `None` when
-/// it converged.
-pub fn not_converged_warning(rep: &SurfaceFairReport) -> Option<String> {
-    if rep.converged {
-        return None;
-    }
-    let objective = match rep.method {
-        SurfaceFairMethod::Paper => "mean |d_s|",
-        SurfaceFairMethod::Regularised => "the objective",
-    };
-    let why = match rep.stop {
-        FairStop::Stalled => format!(
-            "stalled: {objective} stopped decreasing (neither the full nor the damped step lowered it at the finest truncation)"
-        ),
-        FairStop::MaxIterations => format!(
-            "out of iterations: --max-iterations {} ran without meeting the stopping rule",
-            rep.iterations
-        ),
-        FairStop::NonFiniteStep => {
-            "the step was not finite; the last finite surface is kept".to_string()
-        }
-        FairStop::Epsilon | FairStop::ZeroResidual => "the stopping rule did not hold".to_string(),
-    };
-    let (rows, cols) = (rep.jacobian.rows, rep.jacobian.cols);
-    let underdetermined = if rows < cols {
-        format!(
-            "; underdetermined: {rows} equations (target samples) for {cols} unknowns (3 per moved control point), so the targets do not fix the control points"
-        )
-    } else {
-        String::new()
-    };
-    let try_this = match rep.method {
-        SurfaceFairMethod::Paper => {
-            "try --method regularised (well posed whatever the number of targets), more or longer stretches, a smaller --sample-spacing, or --max-iterations"
-        }
-        SurfaceFairMethod::Regularised => "try --max-iterations or other endpoints",
-    };
-    Some(format!(
-        "fairing did not converge after {} iteration(s): {why}{underdetermined}; {try_this}",
-        rep.iterations
-    ))
 }

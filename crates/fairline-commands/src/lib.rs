@@ -25,6 +25,7 @@ pub mod enhance;
 pub mod error;
 pub mod fair;
 pub mod fair_quad;
+pub mod fair_surface;
 pub mod lights;
 pub mod names;
 pub mod regions;
