@@ -38,10 +38,26 @@ pub fn bad_input(msg: impl Into<String>) -> anyhow::Error {
     anyhow::Error::new(BadInput(msg.into()))
 }
 
-/// Exit status for an error: 2 when any cause is bad input (our marker, a
-/// file-format error, an invalid mesh, malformed JSON, a missing file), 1
-/// otherwise.
+/// Exit status for an error — the one policy of every command
+/// (docs/guide/conventions.md, "Exit status"):
+///
+/// - 1 when an output could not be written once the run was under way,
+///   whatever its kind (mesh, picture, report, SVG, CSV, surface file):
+///   the temporary file could not be made, written, synced or renamed
+///   ([`fairline::io::write_failures`]); the inputs were good, the run
+///   failed;
+/// - else 2 when any cause is bad input or arguments (our marker — which
+///   also covers an output path refused before any work: a missing or
+///   unwritable folder, a directory, a hard-linked file —, a file-format
+///   error, an invalid mesh, malformed JSON, a missing input file);
+/// - 1 otherwise (the computation failed or did not give what was asked).
+///
+/// Either way nothing is written: the outputs are staged and put in place
+/// only when the command succeeds.
 pub fn exit_code(err: &anyhow::Error) -> i32 {
+    if fairline::io::write_failures() > 0 {
+        return EXIT_FAILURE;
+    }
     for cause in err.chain() {
         if let Some(e) = cause.downcast_ref::<fairline_commands::CommandError>()
             && e.kind() == fairline_commands::ErrorKind::BadInput

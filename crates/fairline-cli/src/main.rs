@@ -1,7 +1,8 @@
 //! `fairline`: highlight lines, fairing and smoothing of surfaces from the
 //! shell. Each subcommand lives in its own module; this file only dispatches.
 //!
-//! Exit status: 0 success, 1 failure of the computation, 2 bad input or usage.
+//! Exit status: 0 success, 1 the run failed or an output could not be
+//! written, 2 bad input or arguments (error.rs, `exit_code`).
 
 #![forbid(unsafe_code)]
 
@@ -39,7 +40,7 @@ use clap::{Parser, Subcommand};
     name = "fairline",
     version,
     about,
-    after_help = "Examples:\n  fairline demo --out fairline-demo\n  fairline info fairline-demo/sphere.ply --json\n  fairline curvature fairline-demo/sphere.ply -o sphere-curvature.ply\n\nExit status: 0 success, 1 computation failed, 2 bad input or usage."
+    after_help = "Examples:\n  fairline demo --out fairline-demo\n  fairline info fairline-demo/sphere.ply --json\n  fairline curvature fairline-demo/sphere.ply -o sphere-curvature.ply\n\nExit status: 0 success; 1 the run failed or an output could not be written; 2 bad input or arguments. Nothing is written unless the command succeeds."
 )]
 struct Cli {
     #[command(subcommand)]

@@ -28,8 +28,11 @@
 //! - is the same file as another output of the command;
 //! - exists and is not a regular file: a directory, a device node such as
 //!   `/dev/null`, a FIFO or a socket (writing goes through a temporary file
-//!   and a rename, which would replace it with a regular file); `-` and
-//!   anything under `/dev` or `/proc` (`/dev/stdout`) are refused too — the
+//!   and a rename, which would replace it with a regular file);
+//! - is a regular file with more than one hard link (the rename would
+//!   give this name a new file and leave the other names with the old
+//!   content: the links would silently break);
+//! - is `-` or anything under `/dev` or `/proc` (`/dev/stdout`): the
 //!   commands write files, never standard output;
 //! - lies in a folder that does not exist or cannot be written to.
 //!
@@ -130,7 +133,6 @@ impl Job {
             }
         }
         for (k, (option, out)) in self.outputs.iter().enumerate() {
-            check_output_path(option, out)?;
             for input in &self.inputs {
                 if fairline::io::same_file(input, out) {
                     return Err(bad_input(format!(
@@ -149,6 +151,7 @@ impl Job {
                     )));
                 }
             }
+            check_output_path(option, out)?;
         }
         Ok(self)
     }
@@ -286,6 +289,13 @@ fn check_output_path(option: &str, out: &Path) -> Result<()> {
             if !meta.is_file() {
                 return Err(bad_input(format!(
                     "{shown} ({option}): is not a regular file (a device, FIFO or socket); refusing to replace it"
+                )));
+            }
+            let links = fairline::io::hard_links(&meta);
+            if links > 1 {
+                return Err(bad_input(format!(
+                    "{shown} ({option}): {}",
+                    fairline::io::hard_link_refusal(links)
                 )));
             }
         }

@@ -551,10 +551,10 @@ pub fn commit_staged_writes() -> Result<Vec<PathBuf>, IoError> {
             match std::fs::rename(&tmp, &target) {
                 Ok(()) => written.push(target),
                 Err(source) => {
-                    failure = Some(IoError::Io {
+                    failure = Some(count_write_failure(IoError::Io {
                         path: target,
                         source,
-                    })
+                    }))
                 }
             }
         }
@@ -616,10 +616,11 @@ fn write_target(
                 (path.to_path_buf(), m)
             };
             if meta.is_file() {
-                if hard_links(&meta) > 1 {
+                let links = hard_links(&meta);
+                if links > 1 {
                     return Err(Error::new(
                         ErrorKind::InvalidInput,
-                        "it has other hard links, which replacing it would cut off (they would keep the old content); remove it first or write elsewhere",
+                        hard_link_refusal(links),
                     ));
                 }
                 Ok((target, Some(meta)))
@@ -635,8 +636,17 @@ fn write_target(
     }
 }
 
+/// Why a file with `links` hard links is not replaced: writing goes
+/// through a new file and a rename, which would leave the other names
+/// with the old content.
+pub fn hard_link_refusal(links: u64) -> String {
+    format!(
+        "it has {links} hard links, and replacing it would break them (the other names would keep the old content); remove this name first or write elsewhere; nothing written"
+    )
+}
+
 /// Names a regular file has (1 where the platform does not count them).
-fn hard_links(meta: &std::fs::Metadata) -> u64 {
+pub fn hard_links(meta: &std::fs::Metadata) -> u64 {
     #[cfg(unix)]
     {
         std::os::unix::fs::MetadataExt::nlink(meta)
@@ -719,7 +729,7 @@ where
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && attempt < 100 => {
                     attempt += 1;
                 }
-                Err(e) => return Err(io_err(e)),
+                Err(e) => return Err(count_write_failure(io_err(e))),
             }
         }
     };
@@ -742,7 +752,7 @@ where
     })();
     if let Err(e) = result {
         drop(guard);
-        return Err(io_err(e));
+        return Err(count_write_failure(io_err(e)));
     }
     let mut live = live_temps();
     if live.staging && !live.closing {
@@ -754,7 +764,26 @@ where
     drop(live);
     let renamed = std::fs::rename(&guard.0, &target);
     drop(guard);
-    renamed.map_err(io_err)
+    renamed.map_err(|e| count_write_failure(io_err(e)))
+}
+
+/// How many writes of this process failed once their file was being
+/// written: [`atomic_write`] after its checks of the path (the temporary
+/// file could not be created, written, synced or renamed; the writer
+/// failed) and renames of [`commit_staged_writes`]. A refusal of the path
+/// itself (a directory, a special file, other hard links) is not counted.
+static WRITE_FAILURES: AtomicU64 = AtomicU64::new(0);
+
+/// How many writes of this process failed while their file was written
+/// (see [`atomic_write`]); a front end tells an output that could not be
+/// written from an input that could not be read by it.
+pub fn write_failures() -> u64 {
+    WRITE_FAILURES.load(Ordering::Relaxed)
+}
+
+fn count_write_failure<E>(e: E) -> E {
+    WRITE_FAILURES.fetch_add(1, Ordering::Relaxed);
+    e
 }
 
 /// Buffer size of [`atomic_write`]'s writer.
@@ -1215,11 +1244,14 @@ mod tests {
     fn atomic_write_failure_leaves_nothing() {
         let dir = temp_dir("atomic");
         let path = dir.join("out.obj");
+        let failures = write_failures();
         let r = atomic_write(&path, |w| {
             w.write_all(b"partial")?;
             Err(std::io::Error::other("boom"))
         });
         assert!(r.is_err());
+        // counted as a write that failed (other tests may add theirs)
+        assert!(write_failures() > failures);
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
         // success replaces the file, failure keeps the old content
         atomic_write(&path, |w| w.write_all(b"one")).unwrap();
