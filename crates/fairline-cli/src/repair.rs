@@ -6,7 +6,7 @@ use crate::output::{Job, say};
 use anyhow::Result;
 use fairline::Control;
 use fairline_commands::repair;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Repairs a dirty mesh: splits non-manifold edges and vertices, removes
 /// unreferenced vertices and duplicate (same vertex set) and zero-area
@@ -102,31 +102,11 @@ pub fn run(args: Args) -> Result<()> {
 /// The hint appended to a refusal of dirty input: which file to repair and
 /// how, or `None` when the error is not about a repairable mesh.
 pub fn hint(err: &anyhow::Error) -> Option<String> {
-    use fairline::MeshError as M;
     let io = err
         .chain()
         .find_map(|c| c.downcast_ref::<fairline::io::IoError>())?;
     let fairline::io::IoError::Mesh { path, source } = io else {
         return None;
     };
-    match source {
-        M::NonManifoldEdge { .. }
-        | M::NonManifoldVertex { .. }
-        | M::NonOrientable { .. }
-        | M::RepeatedVertex { .. }
-        | M::FaceTooSmall { .. } => Some(format!(
-            "run `fairline repair {} {}` and use the repaired mesh",
-            path.display(),
-            repaired_name(path).display()
-        )),
-        _ => None,
-    }
-}
-
-/// `name-repaired.ext` in the current folder (the input's folder may be
-/// read-only).
-fn repaired_name(path: &Path) -> PathBuf {
-    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("mesh");
-    let ext = path.extension().and_then(|s| s.to_str()).unwrap_or("ply");
-    PathBuf::from(format!("{stem}-repaired.{ext}"))
+    fairline_commands::repair::repair_hint(source, fairline_commands::FrontEnd::Cli, Some(path))
 }

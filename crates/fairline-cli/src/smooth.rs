@@ -159,7 +159,7 @@ pub fn run(args: Args) -> Result<()> {
     let result = smooth::run(&mesh, &settings, &Control::new());
     bar.finish_and_clear();
     let out = result?;
-    let stopped = out.stopped_unconverged();
+    let stopped = out.stopped_error(fairline_commands::FrontEnd::Cli);
     let r = &out.result;
     let name = settings.method.name();
     // the input is kept only for the before/after picture
@@ -178,14 +178,13 @@ pub fn run(args: Args) -> Result<()> {
         mesh.vertex_count(),
         r.max_displacement
     ))?;
-    if let Some(reason) = stopped {
+    if let Some(e) = stopped {
         // the output is written so that it can be looked at, but it is not
-        // what was asked for: exit 1 (the warning above says what to try)
+        // what was asked for: exit 1 with the command layer's sentence
         anyhow::bail!(
-            "{}: {name} stopped unconverged ({}) after {} iteration(s); {} was written for inspection only",
+            "{}: {}; {} was written for inspection only",
             args.mesh.display(),
-            reason.name(),
-            r.iterations,
+            e.message(fairline_commands::FrontEnd::Cli),
             args.output.display()
         );
     }

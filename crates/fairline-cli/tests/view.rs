@@ -197,6 +197,52 @@ fn dented_panel(path: &Path, n: usize) {
 const LIGHT: &str =
     r#"{"plane_point":[0,0,6],"plane_normal":[0,0,1],"direction":[1,0,0],"spacing":0.1}"#;
 
+/// A smoothing job that does not give what was asked — Schneider–Kobbelt
+/// cut off before it converges, Laplace with λ = 1e308 exploding — ends
+/// failed with the reason in the command layer's words; the document keeps
+/// its state (nothing enters the history), so a save writes the state it
+/// kept, never the failed result.
+#[test]
+fn smoothing_jobs_that_fail_leave_the_document_as_it_was() {
+    let dir = tmp("view-smooth-fails");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 21);
+    let saves = dir.join("saves");
+    std::fs::create_dir_all(&saves).unwrap();
+    let srv = start(&[&mesh], &saves);
+    let (_, before) = srv.get("/api/doc/0/positions");
+    for (options, words) in [
+        (
+            json!({"method": "schneider-kobbelt", "iterations": 1}),
+            "schneider-kobbelt stopped unconverged (max_iterations) after 1 iteration(s)",
+        ),
+        (
+            json!({"method": "laplace", "weights": "cotan", "lambda": 1e308}),
+            "diverged",
+        ),
+    ] {
+        srv.json(
+            "/api/doc/0/run",
+            Some(&json!({"method": "smooth", "options": options})),
+        );
+        let job = srv.wait_job();
+        assert_eq!(job["state"], "failed", "{options}: {job}");
+        let message = job["message"].as_str().unwrap_or("");
+        assert!(message.contains(words), "{options}: {message}");
+        let history = &srv.json("/api/session", None)["docs"][0]["history"];
+        assert_eq!(history["cursor"], 0, "{options}: {history}");
+        assert_eq!(history["steps"].as_array().unwrap().len(), 1, "{history}");
+        let (_, now) = srv.get("/api/doc/0/positions");
+        assert!(now == before, "{options}: the positions changed");
+    }
+    srv.json("/api/doc/0/save", Some(&json!({"name": "kept.obj"})));
+    let saved = fairline::io::read_mesh(saves.join("kept.obj")).unwrap();
+    let input = fairline::io::read_mesh(&mesh).unwrap();
+    assert_eq!(saved.positions(), input.positions());
+    drop(srv);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A file of the shared data; panics when it is missing and CI is set,
 /// says so loudly otherwise.
 fn shared(rel: &str) -> Option<PathBuf> {

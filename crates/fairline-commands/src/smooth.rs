@@ -4,7 +4,7 @@
 use crate::error::CommandError;
 use crate::names::{Choice, Weights};
 use crate::report::Report;
-use crate::warning::Warning;
+use crate::warning::{FrontEnd, Warning};
 use crate::words::{push_changed, push_given, push_switch};
 use fairline::mesh::VertexId;
 use fairline::smooth::{SmoothMethod, SmoothOptions, SmoothReport, StopReason, smooth};
@@ -147,6 +147,8 @@ impl SmoothSettings {
 /// (the CLI exits 1 after writing the result for inspection).
 #[derive(Clone, Debug)]
 pub struct SmoothOutcome {
+    /// The method that ran.
+    pub method: SmoothMethod,
     /// The smoothed positions of the input's vertices.
     pub positions: Vec<fairline::Vec3>,
     /// What the method did.
@@ -162,6 +164,23 @@ impl SmoothOutcome {
         self.result
             .stop_reason
             .filter(|r| *r != StopReason::Converged)
+    }
+
+    /// The error of a run that stopped unconverged
+    /// ([`SmoothOutcome::stopped_unconverged`]), worded once for every
+    /// front end: `schneider-kobbelt stopped unconverged (stagnated) after
+    /// 12 iteration(s): the residual stagnated …; try …`. A failure of the
+    /// computation (CLI exit status 1, Python `FairlineComputationError`,
+    /// a failed workbench job); `None` when the run gave what was asked.
+    pub fn stopped_error(&self, front_end: FrontEnd) -> Option<CommandError> {
+        let reason = self.stopped_unconverged()?;
+        Some(CommandError::computation(crate::warning::smooth_stopped(
+            self.method.name(),
+            self.result.iterations,
+            reason,
+            true,
+            front_end,
+        )))
     }
 }
 
@@ -185,6 +204,7 @@ pub fn run(
         report.warn(w);
     }
     Ok(SmoothOutcome {
+        method: settings.method,
         positions: out.positions,
         result: r,
         report,
@@ -291,6 +311,16 @@ mod tests {
         );
         assert!(w[0].message(FrontEnd::Python).contains("raise max_work"));
         assert_eq!(out.report.to_json()["stop_reason"], "work_limit");
+        // the error every front end raises names the reason in its words
+        let e = out.stopped_error(FrontEnd::Python).unwrap();
+        assert_eq!(e.kind(), crate::ErrorKind::Computation);
+        let text = e.message(FrontEnd::Python);
+        assert!(
+            text.starts_with(
+                "schneider-kobbelt stopped unconverged (work_limit) after 0 iteration(s)"
+            ) && text.contains("raise max_work"),
+            "{text}"
+        );
         // the default bound lets it run its sweeps
         let bounded = SmoothSettings {
             max_work: None,
@@ -299,6 +329,9 @@ mod tests {
         let out = run(&mesh, &bounded, &Control::new()).unwrap();
         assert!(out.result.iterations > 0, "{:?}", out.result);
         assert_ne!(out.result.stop_reason, Some(StopReason::WorkLimit));
+        if out.stopped_unconverged().is_none() {
+            assert!(out.stopped_error(FrontEnd::Cli).is_none());
+        }
     }
 
     #[test]

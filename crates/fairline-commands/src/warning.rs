@@ -180,7 +180,7 @@ impl Warning {
                 method,
                 iterations,
                 reason,
-            } => smooth_stopped(method, *iterations, *reason, front_end),
+            } => smooth_stopped(method, *iterations, *reason, false, front_end),
             Warning::Unanchored => format!(
                 "schneider-kobbelt on a closed mesh without {} vertices: nothing holds the shape, \
                  and Δ_B H = 0 pulls it toward constant mean curvature (a sphere-like blob), erasing \
@@ -203,10 +203,14 @@ impl Warning {
 }
 
 /// Why a smoothing run stopped unconverged, and what to try.
-fn smooth_stopped(
+/// The sentence of a run that stopped without meeting its stopping rule:
+/// why and what to try; `tagged` adds the reason's report name
+/// (`stop_reason`) after "unconverged", as the error of the run says it.
+pub(crate) fn smooth_stopped(
     method: &str,
     iterations: usize,
     reason: StopReason,
+    tagged: bool,
     front_end: FrontEnd,
 ) -> String {
     let o = |name: &str| front_end.option(name);
@@ -243,7 +247,12 @@ fn smooth_stopped(
             o("method")
         ),
     };
-    format!("{method} stopped unconverged after {iterations} iteration(s): {why}; {try_this}")
+    let tag = if tagged {
+        format!(" ({})", reason.name())
+    } else {
+        String::new()
+    };
+    format!("{method} stopped unconverged{tag} after {iterations} iteration(s): {why}; {try_this}")
 }
 
 /// The remaining-defect sentence: what `detect` on the result flags, where,

@@ -1180,6 +1180,12 @@ impl MeshJob<'_> {
             ..SmoothSettings::default()
         };
         let out = smooth::run(self.mesh, &settings, self.control).map_err(job_error)?;
+        // a run that stopped unconverged is not what was asked for: the
+        // job fails with the reason, the document keeps its state (so a
+        // save cannot write the unconverged result)
+        if let Some(e) = out.stopped_error(fairline_commands::FrontEnd::Workbench) {
+            return Err(job_error(e));
+        }
         Ok(Outcome {
             surfaces: None,
             positions: out.positions,
