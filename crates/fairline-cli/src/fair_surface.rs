@@ -358,11 +358,32 @@ fn endpoint_pairs(args: &Args) -> Result<Vec<EndpointPair>> {
     Ok(pairs)
 }
 
-fn to_cli(e: SurfaceFairError) -> anyhow::Error {
+/// The library's error as the CLI's, naming the files it is about: an
+/// endpoint's light is in the endpoints (or lines) file and the lights
+/// file, drawn on the surface file; anything else about the input is the
+/// surface file's.
+fn to_cli(e: SurfaceFairError, args: &Args) -> anyhow::Error {
+    let surface = args.surface_file.display();
     match e {
         SurfaceFairError::Svd | SurfaceFairError::Surface(_) => anyhow::Error::new(e),
-        SurfaceFairError::NothingToMove(_) => bad_input(format!("{e} (--boundary free)")),
-        other => bad_input(other.to_string()),
+        SurfaceFairError::NothingToMove(_) => {
+            bad_input(format!("{surface}: {e} (--boundary free)"))
+        }
+        SurfaceFairError::NoLight { .. } | SurfaceFairError::NoPreImage { .. } => {
+            let ends = args
+                .endpoints
+                .as_deref()
+                .or(args.lines.as_deref())
+                .map_or("the endpoints".to_string(), |p| p.display().to_string());
+            let lights = args
+                .lights
+                .as_deref()
+                .map_or("the lights derived from the part".to_string(), |p| {
+                    format!("the lights of {}", p.display())
+                });
+            bad_input(format!("{ends}: {e} ({lights} on {surface})"))
+        }
+        other => bad_input(format!("{surface}: {other}")),
     }
 }
 
@@ -389,7 +410,7 @@ pub fn run(args: Args) -> Result<()> {
     let bar = crate::output::spinner("fairing");
     let out = report
         .time(|| fair_surface(&input, &opts))
-        .map_err(to_cli)?;
+        .map_err(|e| to_cli(e, &args))?;
     bar.finish_and_clear();
     let (faired, rep) = (out.surfaces, out.report);
     if derived {
