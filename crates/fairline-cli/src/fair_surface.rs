@@ -358,6 +358,15 @@ fn endpoint_pairs(args: &Args) -> Result<Vec<EndpointPair>> {
     Ok(pairs)
 }
 
+/// The file the endpoints come from: --endpoints, or --lines with
+/// --from/--to.
+fn endpoints_file(args: &Args) -> String {
+    args.endpoints
+        .as_deref()
+        .or(args.lines.as_deref())
+        .map_or("the endpoints".to_string(), |p| p.display().to_string())
+}
+
 /// The library's error as the CLI's, naming the files it is about: an
 /// endpoint's light is in the endpoints (or lines) file and the lights
 /// file, drawn on the surface file; anything else about the input is the
@@ -369,12 +378,11 @@ fn to_cli(e: SurfaceFairError, args: &Args) -> anyhow::Error {
         SurfaceFairError::NothingToMove(_) => {
             bad_input(format!("{surface}: {e} (--boundary free)"))
         }
+        SurfaceFairError::Invalid(ref m) if m.contains("endpoint") => {
+            bad_input(format!("{}: {e}", endpoints_file(args)))
+        }
         SurfaceFairError::NoLight { .. } | SurfaceFairError::NoPreImage { .. } => {
-            let ends = args
-                .endpoints
-                .as_deref()
-                .or(args.lines.as_deref())
-                .map_or("the endpoints".to_string(), |p| p.display().to_string());
+            let ends = endpoints_file(args);
             let lights = args
                 .lights
                 .as_deref()

@@ -189,6 +189,12 @@ fn side_corpus() -> Vec<Bad> {
             true,
         ),
         bad("number-side.json", "42", true),
+        // well-formed endpoints of a radius no light can have
+        bad(
+            "negative-side.json",
+            r#"{"endpoints":[{"radius":-1,"start":[0.3,0.4],"end":[0.6,0.5]}]}"#,
+            true,
+        ),
         // well-formed circular lights whose lines miss the surface
         bad(
             "far-side.json",
