@@ -25,15 +25,22 @@ Example::
 
 from __future__ import annotations
 
-import json
-import os
-import warnings
+import functools as _functools
+import json as _json
+import os as _os
+import warnings as _warnings
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
-import numpy as np
+import numpy as _np
 
 from . import _native
-from ._errors import FairlineComputationError, FairlineError, FairlineFileError
+from ._errors import (
+    FairlineComputationError,
+    FairlineError,
+    FairlineFileError,
+    FairlineNotConvergedError,
+    FairlineTypeError,
+)
 from ._inspect import inspect
 
 __version__ = _native.__version__
@@ -42,6 +49,8 @@ __all__ = [
     "FairlineError",
     "FairlineFileError",
     "FairlineComputationError",
+    "FairlineNotConvergedError",
+    "FairlineTypeError",
     "FairlineWarning",
     "read_mesh",
     "write_mesh",
@@ -62,8 +71,8 @@ __all__ = [
     "to_trimesh",
 ]
 
-PathLike = Union[str, "os.PathLike[str]"]
-Faces = Union[np.ndarray, Sequence[Sequence[int]]]
+PathLike = Union[str, "_os.PathLike[str]"]
+Faces = Union[_np.ndarray, Sequence[Sequence[int]]]
 Vector = Sequence[float]
 
 
@@ -78,41 +87,41 @@ class FairlineWarning(UserWarning):
 _U32_MAX = 2**32 - 1
 
 
-def _vertices(V: Any) -> np.ndarray:
+def _vertices(V: Any) -> _np.ndarray:
     """``V`` as a C-contiguous (n, 3) float64 array (integer and smaller
     float types are converted exactly); anything else raises."""
     try:
-        a = np.asarray(V)
+        a = _np.asarray(V)
     except (TypeError, ValueError) as e:
         raise FairlineError(f"V must be an (n, 3) array of numbers: {e}") from None
     if a.dtype.kind not in "fiu":
         raise FairlineError(f"V must hold real numbers, got dtype {a.dtype}")
     if a.ndim != 2 or a.shape[1] != 3:
         raise FairlineError(f"V must have shape (n, 3), got {a.shape}")
-    return np.ascontiguousarray(a, dtype=np.float64)
+    return _np.ascontiguousarray(a, dtype=_np.float64)
 
 
-def _index_array(a: np.ndarray, what: str) -> np.ndarray:
+def _index_array(a: _np.ndarray, what: str) -> _np.ndarray:
     if a.dtype.kind not in "iu":
         raise FairlineError(f"{what} must hold integers, got dtype {a.dtype}")
     return a
 
 
-def _faces(F: Any, n_vertices: int) -> Tuple[np.ndarray, np.ndarray]:
+def _faces(F: Any, n_vertices: int) -> Tuple[_np.ndarray, _np.ndarray]:
     """Faces as flat uint32 indices plus offsets (face f is
     ``indices[offsets[f]:offsets[f+1]]``)."""
-    rows: Optional[List[np.ndarray]] = None
-    if isinstance(F, np.ndarray):
-        a: Optional[np.ndarray] = F
+    rows: Optional[List[_np.ndarray]] = None
+    if isinstance(F, _np.ndarray):
+        a: Optional[_np.ndarray] = F
     else:
         try:
-            rows = [np.asarray(f) for f in F]
+            rows = [_np.asarray(f) for f in F]
         except TypeError:
             raise FairlineError("F must be an integer array or a list of faces") from None
         if not rows:
-            a = np.zeros((0, 3), dtype=np.int64)
+            a = _np.zeros((0, 3), dtype=_np.int64)
         elif all(r.ndim == 1 for r in rows) and len({r.shape[0] for r in rows}) == 1:
-            a = np.stack(rows)
+            a = _np.stack(rows)
         else:
             a = None
     if a is not None:
@@ -125,37 +134,37 @@ def _faces(F: Any, n_vertices: int) -> Tuple[np.ndarray, np.ndarray]:
     if a is not None:
         m, k = a.shape
         flat = a.reshape(-1)
-        offsets = np.arange(0, m * k + 1, k, dtype=np.int64) if k > 0 else np.zeros(m + 1, dtype=np.int64)
+        offsets = _np.arange(0, m * k + 1, k, dtype=_np.int64) if k > 0 else _np.zeros(m + 1, dtype=_np.int64)
     else:
         assert rows is not None
         for f, r in enumerate(rows):
             if r.ndim != 1:
                 raise FairlineError(f"F: face {f} must be a list of vertex indices, got shape {r.shape}")
             _index_array(r, f"F: face {f}")
-        flat = np.concatenate(rows) if rows else np.zeros(0, dtype=np.int64)
-        offsets = np.concatenate([[0], np.cumsum([len(r) for r in rows])])
+        flat = _np.concatenate(rows) if rows else _np.zeros(0, dtype=_np.int64)
+        offsets = _np.concatenate([[0], _np.cumsum([len(r) for r in rows])])
     if flat.size:
         if flat.min() < 0:
-            pos = int(np.argmax(flat < 0))
-            face = int(np.searchsorted(offsets, pos, side="right") - 1)
+            pos = int(_np.argmax(flat < 0))
+            face = int(_np.searchsorted(offsets, pos, side="right") - 1)
             raise FairlineError(
                 f"face {face} refers to vertex {int(flat[pos])}, but vertex indices start at 0"
             )
         if flat.max() > _U32_MAX:
-            pos = int(np.argmax(flat > _U32_MAX))
-            face = int(np.searchsorted(offsets, pos, side="right") - 1)
+            pos = int(_np.argmax(flat > _U32_MAX))
+            face = int(_np.searchsorted(offsets, pos, side="right") - 1)
             raise FairlineError(
                 f"face {face} refers to vertex {int(flat[pos])}, but the mesh has {n_vertices} vertices"
             )
     if offsets[-1] > _U32_MAX:
         raise FairlineError("mesh too large for 32-bit indices")
     return (
-        np.ascontiguousarray(flat, dtype=np.uint32),
-        np.ascontiguousarray(offsets, dtype=np.uint32),
+        _np.ascontiguousarray(flat, dtype=_np.uint32),
+        _np.ascontiguousarray(offsets, dtype=_np.uint32),
     )
 
 
-def _mesh(V: Any, F: Any) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _mesh(V: Any, F: Any) -> Tuple[_np.ndarray, _np.ndarray, _np.ndarray]:
     """(V, indices, offsets) for the native layer; a ``trimesh.Trimesh`` (or
     anything with ``vertices`` and ``faces``) may stand in for ``V``."""
     if F is None:
@@ -168,22 +177,22 @@ def _mesh(V: Any, F: Any) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
     return v, indices, offsets
 
 
-def _faces_out(indices: np.ndarray, offsets: np.ndarray) -> Faces:
+def _faces_out(indices: _np.ndarray, offsets: _np.ndarray) -> Faces:
     """(m, k) int64 when every face has k vertices, else a list of arrays."""
-    sizes = np.diff(offsets.astype(np.int64))
-    idx = indices.astype(np.int64)
+    sizes = _np.diff(offsets.astype(_np.int64))
+    idx = indices.astype(_np.int64)
     if len(sizes) == 0:
-        return np.zeros((0, 3), dtype=np.int64)
-    if np.all(sizes == sizes[0]):
+        return _np.zeros((0, 3), dtype=_np.int64)
+    if _np.all(sizes == sizes[0]):
         return idx.reshape(-1, int(sizes[0]))
-    return [idx[a:b] for a, b in zip(offsets[:-1].astype(np.int64), offsets[1:].astype(np.int64))]
+    return [idx[a:b] for a, b in zip(offsets[:-1].astype(_np.int64), offsets[1:].astype(_np.int64))]
 
 
 def _report(text: str) -> Dict[str, Any]:
     """The report dict; its warnings are issued as FairlineWarning."""
-    report = json.loads(text)
+    report = _json.loads(text)
     for w in report.get("warnings", []):
-        warnings.warn(f"fairline {report.get('command', '')}: {w}", FairlineWarning, stacklevel=3)
+        _warnings.warn(f"fairline {report.get('command', '')}: {w}", FairlineWarning, stacklevel=4)
     return report
 
 
@@ -191,7 +200,7 @@ def _vec(name: str, v: Optional[Vector]) -> Optional[List[float]]:
     if v is None:
         return None
     try:
-        a = np.asarray(v, dtype=np.float64).reshape(-1)
+        a = _np.asarray(v, dtype=_np.float64).reshape(-1)
     except (TypeError, ValueError):
         raise FairlineError(f"{name} must be three numbers, got {v!r}") from None
     if a.shape != (3,):
@@ -199,10 +208,31 @@ def _vec(name: str, v: Optional[Vector]) -> Optional[List[float]]:
     return [float(x) for x in a]
 
 
+def _number(name: str, x: Any) -> Optional[float]:
+    """An optional real number."""
+    if x is None:
+        return None
+    try:
+        return float(x)
+    except (TypeError, ValueError):
+        raise FairlineTypeError(f"{name} must be a number, got {x!r}") from None
+
+
+def _count(name: str, n: Any) -> Optional[int]:
+    """An optional non-negative whole number."""
+    if n is None:
+        return None
+    if isinstance(n, bool) or not isinstance(n, (int, _np.integer)):
+        raise FairlineTypeError(f"{name} must be a whole number, got {n!r}")
+    if n < 0:
+        raise FairlineError(f"{name} must be at least 0, got {n}")
+    return int(n)
+
+
 def _fixed(fixed: Optional[Sequence[int]]) -> Optional[List[int]]:
     if fixed is None:
         return None
-    a = np.asarray(fixed)
+    a = _np.asarray(fixed)
     if a.size == 0:
         return []
     if a.ndim != 1 or a.dtype.kind not in "iu":
@@ -216,23 +246,23 @@ def _json_text(name: str, value: Any) -> Optional[str]:
     """A dictionary (or a JSON file's path) as JSON text for the native layer."""
     if value is None:
         return None
-    if isinstance(value, (str, os.PathLike)):
-        path = os.fspath(value)
+    if isinstance(value, (str, _os.PathLike)):
+        path = _os.fspath(value)
         try:
             with open(path, encoding="utf-8") as f:
                 return f.read()
         except OSError as e:
             raise FairlineFileError(f"{path}: {e.strerror or e}") from None
     try:
-        return json.dumps(value, default=_jsonable, allow_nan=False)
+        return _json.dumps(value, default=_jsonable, allow_nan=False)
     except (TypeError, ValueError) as e:
         raise FairlineError(f"{name}: {e}") from None
 
 
 def _jsonable(o: Any) -> Any:
-    if isinstance(o, np.ndarray):
+    if isinstance(o, _np.ndarray):
         return o.tolist()
-    if isinstance(o, np.generic):
+    if isinstance(o, _np.generic):
         return o.item()
     raise TypeError(f"{type(o).__name__} is not JSON serialisable")
 
@@ -252,7 +282,7 @@ def _light_kwargs(direction, plane_normal, up, plane_point, spacing, lights, min
 # ---- files ------------------------------------------------------------------
 
 
-def read_mesh(path: PathLike) -> Tuple[np.ndarray, Faces]:
+def read_mesh(path: PathLike) -> Tuple[_np.ndarray, Faces]:
     """Reads a mesh file (``.obj .ply .off .stl``, chosen by extension).
 
     Returns ``(V, F)``: positions (n, 3) float64 and faces, (m, k) int64 when
@@ -265,7 +295,7 @@ def read_mesh(path: PathLike) -> Tuple[np.ndarray, Faces]:
     (``bunny.ply:12: vertex 3: expected 3 coordinates, found 2``), or
     :class:`FairlineFileError` when the file cannot be opened.
     """
-    v, indices, offsets = _native.read_mesh(os.fspath(path))
+    v, indices, offsets = _native.read_mesh(_os.fspath(path))
     return v, _faces_out(indices, offsets)
 
 
@@ -275,13 +305,13 @@ def write_mesh(path: PathLike, V: Any, F: Faces = None) -> None:
     doubles, STL is f32 by definition. Refuses non-finite coordinates and
     out-of-range indices (nothing is written then)."""
     v, indices, offsets = _mesh(V, F)
-    _native.write_mesh(os.fspath(path), v, indices, offsets)
+    _native.write_mesh(_os.fspath(path), v, indices, offsets)
 
 
 # ---- mesh algorithms ----------------------------------------------------------
 
 
-def curvature(V: Any, F: Faces = None, method: str = "rusinkiewicz") -> Tuple[Dict[str, np.ndarray], Dict[str, Any]]:
+def curvature(V: Any, F: Faces = None, method: str = "rusinkiewicz") -> Tuple[Dict[str, _np.ndarray], Dict[str, Any]]:
     """Per-vertex principal curvatures (``fairline curvature``).
 
     ``method``: ``"rusinkiewicz"`` (per-face shape-operator fit,
@@ -312,12 +342,13 @@ def smooth(
     pass_band: float = 0.1,
     time_step: float = 1.0,
     epsilon: Optional[float] = None,
+    max_work: Optional[int] = None,
     fix_boundary: bool = False,
     hierarchical_boundary: bool = False,
     fixed: Optional[Sequence[int]] = None,
     preserve_volume: bool = False,
     tangential: bool = False,
-) -> Tuple[np.ndarray, Dict[str, Any]]:
+) -> Tuple[_np.ndarray, Dict[str, Any]]:
     """The classic smoothing family (``fairline smooth``, Grüner thesis ch. 3).
 
     ``method``: ``"laplace"`` (x' = x + λΔx), ``"taubin"`` (λ|μ pairs),
@@ -337,17 +368,33 @@ def smooth(
 
     Returns ``(V_new, report)``; report keys ``iterations converged
     volume_before volume_after max_displacement`` (+ ``lambda mu pass_band
-    transfer`` for Taubin, ``residual`` for Schneider–Kobbelt).
+    transfer`` for Taubin, ``residual`` and ``stop_reason`` for
+    Schneider–Kobbelt).
+
+    ``max_work`` (schneider-kobbelt): the most work one run may do (the
+    CLI's ``--max-work``; default: the CLI's bound). Schneider–Kobbelt
+    stops early when its residual stagnates or diverges, or when the next
+    iteration would pass ``max_work``; a run that stops without converging
+    raises :class:`FairlineNotConvergedError` (``stop_reason``, ``report``
+    and the positions reached as ``V``), as the CLI exits 1. A result that
+    is not finite raises :class:`FairlineComputationError`.
     """
     v, indices, offsets = _mesh(V, F)
-    out, report = _native.smooth(
+    out, report, stopped = _native.smooth(
         v, indices, offsets, method=method, weights=weights, exponent=float(exponent),
-        iterations=iterations, lambda_=lambda_, mu=mu, pass_band=float(pass_band),
-        time_step=float(time_step), epsilon=epsilon, fix_boundary=bool(fix_boundary),
-        hierarchical_boundary=bool(hierarchical_boundary), fixed=_fixed(fixed),
-        preserve_volume=bool(preserve_volume), tangential=bool(tangential),
+        iterations=_count("iterations", iterations), lambda_=_number("lambda_", lambda_),
+        mu=_number("mu", mu), pass_band=float(pass_band), time_step=float(time_step),
+        epsilon=_number("epsilon", epsilon), max_work=_count("max_work", max_work),
+        fix_boundary=bool(fix_boundary), hierarchical_boundary=bool(hierarchical_boundary),
+        fixed=_fixed(fixed), preserve_volume=bool(preserve_volume),
+        tangential=bool(tangential),
     )
-    return out, _report(report)
+    doc = _report(report)
+    if stopped is not None:
+        raise FairlineNotConvergedError(
+            stopped, stop_reason=doc.get("stop_reason", ""), report=doc, V=out
+        )
+    return out, doc
 
 
 def fair_quad(
@@ -361,7 +408,7 @@ def fair_quad(
     fix_boundary: bool = False,
     fixed: Optional[Sequence[int]] = None,
     off_surface: bool = False,
-) -> Tuple[np.ndarray, Dict[str, Any]]:
+) -> Tuple[_np.ndarray, Dict[str, Any]]:
     """Structure-line fairing of a quad mesh (``fairline fair-quad``,
     Grüner thesis ch. 4, Eq. (30)–(34)): zigzagging structure lines are
     straightened by a sparse least-squares fit with a penalty ω‖p − p⁰‖²
@@ -395,7 +442,7 @@ def enhance(
     solver: str = "auto",
     fixed: Optional[Sequence[int]] = None,
     projection: str = "smooth",
-) -> Tuple[np.ndarray, Dict[str, Any]]:
+) -> Tuple[_np.ndarray, Dict[str, Any]]:
     """Feature enhancement by vertex flow (``fairline enhance``, Ji et al.
     2011): vertices slide from flat regions toward ridges and valleys,
     minimising F_em + λ F_sd + μ F_smo; connectivity unchanged, ``fixed``
@@ -419,7 +466,7 @@ def enhance(
     return out, _report(report)
 
 
-def repair(V: Any, F: Faces = None) -> Tuple[np.ndarray, Faces, Dict[str, Any]]:
+def repair(V: Any, F: Faces = None) -> Tuple[_np.ndarray, Faces, Dict[str, Any]]:
     """Repairs a dirty mesh (``fairline repair``): splits non-manifold edges
     and vertices, removes duplicate and zero-area faces and unreferenced
     vertices, makes the orientation consistent. Every kept vertex keeps its
@@ -439,9 +486,9 @@ def _lines(doc: Dict[str, Any]) -> Dict[str, Any]:
 
     def conv(lines: List[Dict[str, Any]]) -> List[Dict[str, Any]]:
         for line in lines:
-            line["points"] = np.asarray(line["points"], dtype=np.float64).reshape(-1, 3)
+            line["points"] = _np.asarray(line["points"], dtype=_np.float64).reshape(-1, 3)
             if "uv" in line:
-                line["uv"] = np.asarray(line["uv"], dtype=np.float64).reshape(-1, 2)
+                line["uv"] = _np.asarray(line["uv"], dtype=_np.float64).reshape(-1, 2)
         return lines
 
     conv(doc["lines"])
@@ -492,7 +539,7 @@ def highlight_lines(
         radii=None if radii is None else [float(r) for r in radii],
         band=None if band is None else float(band),
     )
-    return _lines(json.loads(doc)), _report(report)
+    return _lines(_json.loads(doc)), _report(report)
 
 
 def detect(
@@ -510,7 +557,7 @@ def detect(
     smooth_radius: float = 1.5,
     region_margin: float = 1.0,
     max_regions: Optional[int] = None,
-) -> Tuple[np.ndarray, Dict[str, Any]]:
+) -> Tuple[_np.ndarray, Dict[str, Any]]:
     """Finds defects that disturb the highlight lines (``fairline detect``)
     and turns them into a fairing region: the surface's normals are
     compared with a smooth cubic fit over ``smooth_radius`` light spacings;
@@ -533,7 +580,7 @@ def detect(
         threshold=float(threshold), smooth_radius=float(smooth_radius),
         region_margin=float(region_margin), max_regions=max_regions,
     )
-    return faces.astype(np.int64), _report(report)
+    return faces.astype(_np.int64), _report(report)
 
 
 def fair(
@@ -556,7 +603,7 @@ def fair(
     fair_weight: float = 1.0,
     diff_weight: float = 1.0,
     laplacian_weight: float = 0.0,
-) -> Tuple[np.ndarray, Dict[str, Any]]:
+) -> Tuple[_np.ndarray, Dict[str, Any]]:
     """Highlight-line fairing inside a region (``fairline fair``, Yong et
     al. §3, Algorithm 2): moves only vertices whose motion changes nothing
     outside the region until the highlight lines inside follow smooth
@@ -587,13 +634,13 @@ def fair(
     v, indices, offsets = _mesh(V, F)
     if region is None:
         region_text = None
-    elif isinstance(region, (dict, str, os.PathLike)):
+    elif isinstance(region, (dict, str, _os.PathLike)):
         region_text = _json_text("region", region)
     else:
-        faces = np.asarray(region)
+        faces = _np.asarray(region)
         if faces.ndim != 1 or (faces.size and faces.dtype.kind not in "iu"):
             raise FairlineError("region must be a list of face indices, a region dict or a path")
-        region_text = json.dumps({"faces": [int(f) for f in faces]})
+        region_text = _json.dumps({"faces": [int(f) for f in faces]})
     out, report = _native.fair(
         v, indices, offsets, region=region_text, auto=bool(auto), grow=int(grow),
         **_light_kwargs(direction, plane_normal, up, plane_point, spacing, lights, min_normal_cos),
@@ -610,17 +657,17 @@ Surface = Dict[str, Any]
 
 
 def _surfaces_from(text: str) -> List[Surface]:
-    doc = json.loads(text)
+    doc = _json.loads(text)
     out = doc["surfaces"]
     for s in out:
         if "control_points" in s:
             try:
-                s["control_points"] = np.asarray(s["control_points"], dtype=np.float64)
+                s["control_points"] = _np.asarray(s["control_points"], dtype=_np.float64)
             except ValueError:
                 pass  # ragged rows stay lists; the library refuses them
         if "weights" in s:
             try:
-                s["weights"] = np.asarray(s["weights"], dtype=np.float64)
+                s["weights"] = _np.asarray(s["weights"], dtype=_np.float64)
             except ValueError:
                 pass
     return out
@@ -650,16 +697,16 @@ def read_surfaces(path: PathLike, *, skip_unreadable: bool = False) -> List[Surf
     :class:`FairlineWarning` names what was left out. A file none of whose
     faces can be read always raises.
     """
-    text, said = _native.read_surfaces(os.fspath(path), skip_unreadable)
+    text, said = _native.read_surfaces(_os.fspath(path), skip_unreadable)
     for w in said:
-        warnings.warn(f"fairline read_surfaces: {w}", FairlineWarning, stacklevel=2)
+        _warnings.warn(f"fairline read_surfaces: {w}", FairlineWarning, stacklevel=3)
     return _surfaces_from(text)
 
 
 def write_surfaces(path: PathLike, surfaces: Union[Surface, Sequence[Surface]]) -> None:
     """Writes surfaces (a dict or a list of dicts as :func:`read_surfaces`
     returns) to a ``.json`` file atomically; the library checks them first."""
-    _native.write_surfaces(os.fspath(path), _surfaces_text(surfaces))
+    _native.write_surfaces(_os.fspath(path), _surfaces_text(surfaces))
 
 
 def surface_highlight_lines(
@@ -704,7 +751,7 @@ def surface_highlight_lines(
         circular=bool(circular),
         **_light_kwargs(direction, plane_normal, up, plane_point, spacing, lights, min_normal_cos),
     )
-    return _lines(json.loads(doc)), _report(report)
+    return _lines(_json.loads(doc)), _report(report)
 
 
 def fair_surface(
@@ -755,11 +802,11 @@ def fair_surface(
 # ---- trimesh adapters -----------------------------------------------------------
 
 
-def from_trimesh(mesh: Any) -> Tuple[np.ndarray, np.ndarray]:
+def from_trimesh(mesh: Any) -> Tuple[_np.ndarray, _np.ndarray]:
     """``(V, F)`` of a ``trimesh.Trimesh`` as float64 / int64 copies."""
     return (
-        np.array(mesh.vertices, dtype=np.float64, copy=True),
-        np.array(mesh.faces, dtype=np.int64, copy=True),
+        _np.array(mesh.vertices, dtype=_np.float64, copy=True),
+        _np.array(mesh.faces, dtype=_np.int64, copy=True),
     )
 
 
@@ -772,4 +819,44 @@ def to_trimesh(V: Any, F: Faces, **kwargs: Any) -> Any:
     except ImportError:
         raise ImportError("fairline.to_trimesh needs the trimesh package: pip install trimesh") from None
     kwargs.setdefault("process", False)
-    return trimesh.Trimesh(vertices=_vertices(V), faces=np.asarray(F, dtype=np.int64), **kwargs)
+    return trimesh.Trimesh(vertices=_vertices(V), faces=_np.asarray(F, dtype=_np.int64), **kwargs)
+
+
+# ---- every error a FairlineError ------------------------------------------
+
+
+def _checked(f: Any) -> Any:
+    """``f`` raising only :class:`FairlineError`: an error of a conversion
+    it did not foresee (numpy's ``ValueError`` for a bad array, Python's
+    ``TypeError`` for an argument of the wrong type) is raised as a
+    :class:`FairlineError` (:class:`FairlineTypeError` for a ``TypeError``
+    or an ``AttributeError``: an object of the wrong type)
+    naming the function, the original as its cause. Warnings turned into
+    errors and :class:`KeyboardInterrupt` pass unchanged."""
+
+    @_functools.wraps(f)
+    def checked(*args: Any, **kwargs: Any) -> Any:
+        try:
+            return f(*args, **kwargs)
+        except (FairlineError, Warning):
+            raise
+        except (TypeError, AttributeError) as e:
+            raise FairlineTypeError(f"{f.__name__}: {e}") from e
+        except (ValueError, IndexError, KeyError, ArithmeticError) as e:
+            raise FairlineError(f"{f.__name__}: {e}") from e
+        except OSError as e:
+            raise FairlineFileError(f"{f.__name__}: {e}") from e
+
+    return checked
+
+
+for _name in __all__:
+    _f = globals()[_name]
+    if callable(_f) and not isinstance(_f, type):
+        globals()[_name] = _checked(_f)
+del _name, _f
+
+
+def __dir__() -> List[str]:
+    """The public names only (no imported modules or typing names)."""
+    return sorted(__all__ + ["__version__"])

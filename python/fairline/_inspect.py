@@ -55,7 +55,9 @@ def _run_part(exe: str, planned: str, cwd: str, timeout: float, memory: int) -> 
                 "--part-timeout", repr(float(timeout)), "--part-memory", str(int(memory))]
         p = subprocess.run(args, capture_output=True, text=True, cwd=cwd)
         if p.returncode != 0:
-            raise RuntimeError(f"fairline inspect --run-part exited {p.returncode}: {p.stderr.strip()}")
+            raise FairlineComputationError(
+                f"fairline inspect --run-part exited {p.returncode}: {p.stderr.strip()}"
+            )
         files = {}
         for name in sorted(os.listdir(folder)):
             with open(os.path.join(folder, name), "rb") as f:

@@ -31,12 +31,13 @@ def smooth(
     pass_band: float = 0.1,
     time_step: float = 1.0,
     epsilon: Optional[float] = None,
+    max_work: Optional[int] = None,
     fix_boundary: bool = False,
     hierarchical_boundary: bool = False,
     fixed: Optional[Sequence[int]] = None,
     preserve_volume: bool = False,
     tangential: bool = False,
-) -> Tuple[_F64_2, str]: ...
+) -> Tuple[_F64_2, str, Optional[str]]: ...
 def fair_quad(
     v: _F64_2,
     indices: _U32,

@@ -22,13 +22,13 @@ use fairline::highlight::{
 use fairline::io::RegionSpec;
 use fairline::mesh::{FaceId, VertexId};
 use fairline::smooth::SmoothMethod;
-use fairline::{Control, SurfaceMesh, Vec3};
+use fairline::{SurfaceMesh, Vec3};
 use fairline_commands::curvature::CurvatureSettings;
 use fairline_commands::enhance::EnhanceSettings;
 use fairline_commands::fair::{FairInput, FairSettings};
 use fairline_commands::fair_quad::QuadSettings;
 use fairline_commands::smooth::SmoothSettings;
-use fairline_commands::{Choice, Lights, Report, Warning, Weights};
+use fairline_commands::{Choice, FrontEnd, Lights, Report, Warning, Weights};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use serde_json::{Value, json};
@@ -55,7 +55,9 @@ type Idx<'py> = PyReadonlyArray1<'py, u32>;
 /// the CLI's do.
 #[pyfunction]
 fn read_mesh<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<SoupArrays<'py>> {
-    let soup = crate::compute(py, || fairline::io::read_soup(&path).map_err(Failure::from))?;
+    let soup = crate::compute(py, move |_| {
+        fairline::io::read_soup(&path).map_err(Failure::from)
+    })?;
     Ok(soup_arrays(py, &soup))
 }
 
@@ -69,7 +71,7 @@ fn write_mesh(
     offsets: Idx<'_>,
 ) -> PyResult<()> {
     let soup = soup_from(&v, &indices, &offsets)?;
-    crate::compute(py, || {
+    crate::compute(py, move |_| {
         fairline::io::write_soup(&path, &soup).map_err(Failure::from)
     })?;
     Ok(())
@@ -95,9 +97,9 @@ fn curvature<'py>(
         method: CurvatureMethod::parse(method).map_err(Failure::from)?,
     };
     let soup = soup_from(&v, &indices, &offsets)?;
-    let (out, n, report) = crate::compute(py, || -> Res<_> {
+    let (out, n, report) = crate::compute(py, move |control| -> Res<_> {
         let mesh = mesh_from(&soup)?;
-        let out = fairline_commands::curvature::run(&mesh, &settings, &Control::new())?;
+        let out = fairline_commands::curvature::run(&mesh, &settings, control)?;
         // one row per input vertex, as the CLI writes them (a split
         // non-manifold vertex takes the values of the fan that kept its index)
         let n = mesh.original_vertex_count();
@@ -152,8 +154,8 @@ type PositionsOut<'py> = (Bound<'py, PyArray2<f64>>, String);
 #[pyfunction]
 #[pyo3(signature = (v, indices, offsets, method = "taubin", weights = "uniform", exponent = -1.0,
     iterations = None, lambda_ = None, mu = None, pass_band = 0.1, time_step = 1.0, epsilon = None,
-    fix_boundary = false, hierarchical_boundary = false, fixed = None, preserve_volume = false,
-    tangential = false))]
+    max_work = None, fix_boundary = false, hierarchical_boundary = false, fixed = None,
+    preserve_volume = false, tangential = false))]
 fn smooth<'py>(
     py: Python<'py>,
     v: V<'py>,
@@ -168,12 +170,13 @@ fn smooth<'py>(
     pass_band: f64,
     time_step: f64,
     epsilon: Option<f64>,
+    max_work: Option<u64>,
     fix_boundary: bool,
     hierarchical_boundary: bool,
     fixed: Option<Vec<i64>>,
     preserve_volume: bool,
     tangential: bool,
-) -> PyResult<PositionsOut<'py>> {
+) -> PyResult<(Bound<'py, PyArray2<f64>>, String, Option<String>)> {
     let mut settings = SmoothSettings {
         method: SmoothMethod::parse(method).map_err(Failure::from)?,
         weights: Weights::parse(weights).map_err(Failure::from)?,
@@ -184,7 +187,7 @@ fn smooth<'py>(
         pass_band,
         time_step,
         epsilon,
-        max_work: None,
+        max_work,
         fix_boundary,
         hierarchical_boundary,
         fixed: Vec::new(),
@@ -193,16 +196,22 @@ fn smooth<'py>(
     };
     settings.check().map_err(Failure::from)?;
     let soup = soup_from(&v, &indices, &offsets)?;
-    let (p, report) = crate::compute(py, move || -> Res<_> {
+    let (p, report, stopped) = crate::compute(py, move |control| -> Res<_> {
         let mesh = mesh_from(&soup)?;
         settings.fixed = fixed_vertices(fixed.as_deref().unwrap_or(&[]), mesh.vertex_count())?;
-        let out = fairline_commands::smooth::run(&mesh, &settings, &Control::new())?;
+        let out = fairline_commands::smooth::run(&mesh, &settings, control)?;
+        // a run that stopped unconverged: the sentence of the error the
+        // package raises (FairlineNotConvergedError, with the result)
+        let stopped = out
+            .stopped_error(FrontEnd::Python)
+            .map(|e| e.message(FrontEnd::Python));
         Ok((
             mesh.original_values(&out.positions).to_vec(),
             out.report.to_json().to_string(),
+            stopped,
         ))
     })?;
-    Ok((positions_array(py, &p), report))
+    Ok((positions_array(py, &p), report, stopped))
 }
 
 /// The positions the CLI writes: the input's vertex list (split copies of
@@ -239,10 +248,10 @@ fn fair_quad<'py>(
     };
     settings.check().map_err(Failure::from)?;
     let soup = soup_from(&v, &indices, &offsets)?;
-    let (p, report) = crate::compute(py, move || -> Res<_> {
+    let (p, report) = crate::compute(py, move |control| -> Res<_> {
         let mesh = mesh_from(&soup)?;
         settings.fixed = fixed_vertices(fixed.as_deref().unwrap_or(&[]), mesh.vertex_count())?;
-        let out = fairline_commands::fair_quad::run(&mesh, &settings, &Control::new())?;
+        let out = fairline_commands::fair_quad::run(&mesh, &settings, control)?;
         Ok((
             mesh.original_values(&out.positions).to_vec(),
             out.report.to_json().to_string(),
@@ -270,7 +279,7 @@ fn enhance<'py>(
     let projection = Projection::parse(projection).map_err(Failure::from)?;
     let solver = EnhanceSolver::parse(solver).map_err(Failure::from)?;
     let soup = soup_from(&v, &indices, &offsets)?;
-    let (p, report) = crate::compute(py, move || -> Res<_> {
+    let (p, report) = crate::compute(py, move |control| -> Res<_> {
         let mesh = mesh_from(&soup)?;
         let mut fixed_ids = Vec::new();
         for (k, &f) in fixed.as_deref().unwrap_or(&[]).iter().enumerate() {
@@ -292,7 +301,7 @@ fn enhance<'py>(
             projection,
             fixed: fixed_ids,
         };
-        let out = fairline_commands::enhance::run(&mesh, &settings, &Control::new())?;
+        let out = fairline_commands::enhance::run(&mesh, &settings, control)?;
         Ok((
             mesh.original_values(&out.positions).to_vec(),
             out.report.to_json().to_string(),
@@ -311,8 +320,8 @@ fn repair<'py>(
     offsets: Idx<'py>,
 ) -> PyResult<(SoupArrays<'py>, String)> {
     let soup = soup_from(&v, &indices, &offsets)?;
-    let (out, report) = crate::compute(py, move || -> Res<_> {
-        let out = fairline_commands::repair::run(&soup, &Control::new())?;
+    let (out, report) = crate::compute(py, move |control| -> Res<_> {
+        let out = fairline_commands::repair::run(&soup, control)?;
         Ok((out.repaired.soup, out.report.to_json().to_string()))
     })?;
     Ok((soup_arrays(py, &out), report))
@@ -478,6 +487,7 @@ pub(crate) fn highlight_error(e: HighlightError) -> Failure {
 /// The mesh, triangulated when it has polygons, and for each triangle the
 /// input face it came from (the CLI's `read_triangles`).
 fn triangles(soup: &fairline::Soup) -> Res<(SurfaceMesh, Option<Vec<FaceId>>)> {
+    fairline_commands::require_faces(soup.face_count(), soup.vertex_count())?;
     let mesh = mesh_from(soup)?;
     if mesh.is_triangle_mesh() {
         Ok((mesh, None))
@@ -547,7 +557,7 @@ fn highlight_lines(
     let circle_center = vec3("circle_center", circle_center)?;
     let circle_axis = vec3("circle_axis", circle_axis)?;
     let soup = soup_from(&v, &indices, &offsets)?;
-    let out = crate::compute(py, move || -> Res<_> {
+    let out = crate::compute(py, move |control| -> Res<_> {
         let (mesh, _) = triangles(&soup)?;
         let mut report = Report::new("highlight");
         report.set("vertices", mesh.vertex_count());
@@ -568,7 +578,7 @@ fn highlight_lines(
             }
             let (lines, bands) = report
                 .time(|| -> Result<_, HighlightError> {
-                    let opts = HighlightOptions::default();
+                    let opts = HighlightOptions::default().control(control.clone());
                     let lines = circular_highlight_lines(&mesh, &lights, &opts)?;
                     let bands = match band {
                         Some(rho) => Some(circular_highlight_bands(&mesh, &lights, rho, &opts)?),
@@ -585,7 +595,7 @@ fn highlight_lines(
         } else {
             let array = light.light_array(&mesh)?;
             let array = light.readable(&mesh, array)?;
-            let opts = light.options();
+            let opts = light.options().control(control.clone());
             let (lines, bands, shown) = report
                 .time(|| -> Result<_, HighlightError> {
                     let model = HighlightModel::new(&mesh, array, opts)?;
@@ -658,7 +668,7 @@ fn detect<'py>(
         min_normal_cos,
     )?;
     let soup = soup_from(&v, &indices, &offsets)?;
-    let (faces, report) = crate::compute(py, move || -> Res<_> {
+    let (faces, report) = crate::compute(py, move |control| -> Res<_> {
         let (mesh, source) = triangles(&soup)?;
         let array = light.light_array(&mesh)?;
         let d = DetectOptions::default();
@@ -666,14 +676,19 @@ fn detect<'py>(
         let opts = DetectOptions::default()
             .threshold(threshold)
             .smooth_radius(smooth_radius.unwrap_or(d.smooth_radius))
-            .region_margin(region_margin.unwrap_or(d.region_margin));
+            .region_margin(region_margin.unwrap_or(d.region_margin))
+            .control(control.clone());
         let mut report = Report::new("detect");
         // the measure works at the scale of `array`; the lines listed are
         // those of the readable lights (the CLI's `detect_with_lines`)
         let shown_light = light.readable(&mesh, array)?;
         let (lines, shown, mut det) = report
             .time(|| -> Result<_, HighlightError> {
-                let model = HighlightModel::new(&mesh, shown_light, light.options())?;
+                let model = HighlightModel::new(
+                    &mesh,
+                    shown_light,
+                    light.options().control(control.clone()),
+                )?;
                 let lines = model.lines(&mesh);
                 let shown = model.readable_lines(
                     &mesh,
@@ -777,7 +792,7 @@ fn fair<'py>(
         laplacian_weight: laplacian_weight.unwrap_or(d.laplacian_weight),
     };
     let soup = soup_from(&v, &indices, &offsets)?;
-    let out = crate::compute(py, move || -> Res<_> {
+    let out = crate::compute(py, move |control| -> Res<_> {
         let mesh = mesh_from(&soup)?;
         let faces = match &region {
             Some(text) => {
@@ -795,7 +810,7 @@ fn fair<'py>(
             region: faces.as_deref(),
             name: None,
         };
-        let out = fairline_commands::fair::run(input, &settings, &Control::new())?;
+        let out = fairline_commands::fair::run(input, &settings, control)?;
         Ok((
             output_positions(&out.mesh),
             out.report.to_json().to_string(),

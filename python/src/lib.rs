@@ -10,7 +10,8 @@
 //! the command layer's (`fairline_commands`), shared with the CLI and the
 //! workbench; this layer converts arrays and errors.
 //!
-//! Every computation runs with the GIL released (`Python::detach`).
+//! Every computation runs with the GIL released (`Python::detach`), and
+//! Ctrl-C stops it within a second ([`compute`]).
 
 #![forbid(unsafe_code)]
 
@@ -36,6 +37,9 @@ pub enum Kind {
     /// The computation failed (CLI exit status 1):
     /// `FairlineComputationError` (also a RuntimeError).
     Computation,
+    /// A signal handler raised while the computation ran (Ctrl-C): its
+    /// exception, a KeyboardInterrupt, is raised as it is ([`compute`]).
+    Interrupted,
 }
 
 /// An error on its way to Python: its kind and the message the CLI prints
@@ -95,8 +99,15 @@ impl From<fairline_commands::CommandError> for Failure {
 }
 
 impl From<fairline::MeshError> for Failure {
+    /// The library's message, with the CLI's `repair` hint in the
+    /// package's words when repair fixes it (a non-manifold edge …).
     fn from(e: fairline::MeshError) -> Self {
-        Failure::bad(e.to_string())
+        let hint =
+            fairline_commands::repair::repair_hint(&e, fairline_commands::FrontEnd::Python, None);
+        match hint {
+            Some(h) => Failure::bad(format!("{e}; hint: {h}")),
+            None => Failure::bad(e.to_string()),
+        }
     }
 }
 
@@ -106,6 +117,11 @@ impl From<Failure> for PyErr {
             Kind::BadInput => "FairlineError",
             Kind::File => "FairlineFileError",
             Kind::Computation => "FairlineComputationError",
+            Kind::Interrupted => {
+                return INTERRUPTION
+                    .with(|i| i.borrow_mut().take())
+                    .unwrap_or_else(|| pyo3::exceptions::PyKeyboardInterrupt::new_err(()));
+            }
         };
         Python::attach(|py| {
             let cls = py
@@ -206,12 +222,83 @@ pub fn soup_arrays<'py>(py: Python<'py>, soup: &Soup) -> SoupArrays<'py> {
     )
 }
 
+/// How often a computation in progress looks for a pending signal
+/// (Ctrl-C): well inside the one second a KeyboardInterrupt may take.
+const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
+
+/// How long an interrupted computation is given to stop at its next
+/// checkpoint before the KeyboardInterrupt is raised anyway (the run then
+/// ends in the background, its result dropped).
+const STOP_GRACE: std::time::Duration = std::time::Duration::from_millis(400);
+
+thread_local! {
+    /// The exception a signal handler raised during [`compute`] (a
+    /// KeyboardInterrupt for Ctrl-C), raised in place of its [`Failure`].
+    static INTERRUPTION: std::cell::RefCell<Option<PyErr>> = const { std::cell::RefCell::new(None) };
+}
+
+/// What a computation sends back: its result, or the payload of its panic.
+type Finished<T> = std::thread::Result<Res<T>>;
+
 /// Runs `f` with the GIL released, on a worker of rayon's pool as the CLI
 /// runs its commands (crates/fairline-cli/src/main.rs): the library's
 /// parallel loops then start from a worker instead of handing every loop to
 /// the pool and sleeping until it is done.
-pub fn compute<T: Send>(py: Python<'_>, f: impl FnOnce() -> Res<T> + Send) -> Res<T> {
-    py.detach(|| rayon::scope(|_| f()))
+///
+/// Meanwhile the calling thread looks for signals every [`SIGNAL_POLL`]
+/// (`Python::check_signals`, with the GIL taken for that moment): when a
+/// handler raises (Ctrl-C: KeyboardInterrupt), the run's [`Control`] is
+/// cancelled, so the algorithm stops at its next checkpoint, and the
+/// exception is raised within [`STOP_GRACE`] whether or not it has stopped.
+/// A panic in `f` is passed on to the caller.
+///
+/// [`Control`]: fairline::Control
+pub fn compute<T: Send + 'static>(
+    py: Python<'_>,
+    f: impl FnOnce(&fairline::Control) -> Res<T> + Send + 'static,
+) -> Res<T> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::mpsc::RecvTimeoutError;
+    let flag = std::sync::Arc::new(AtomicBool::new(false));
+    let control = fairline::Control::new().cancel_flag(std::sync::Arc::clone(&flag));
+    let (tx, mut rx) = std::sync::mpsc::channel::<Finished<T>>();
+    rayon::spawn(move || {
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(&control)));
+        // the caller may have gone (interrupted): the result is dropped
+        let _ = tx.send(result);
+    });
+    let wait = |py: Python<'_>, rx: std::sync::mpsc::Receiver<Finished<T>>, timeout| {
+        py.detach(move || {
+            let got = rx.recv_timeout(timeout);
+            (rx, got)
+        })
+    };
+    loop {
+        let (back, got) = wait(py, rx, SIGNAL_POLL);
+        rx = back;
+        match got {
+            Ok(Ok(result)) => return result,
+            Ok(Err(panic)) => std::panic::resume_unwind(panic),
+            Err(RecvTimeoutError::Disconnected) => {
+                return Err(Failure::computation(
+                    "the computation ended without a result",
+                ));
+            }
+            Err(RecvTimeoutError::Timeout) => {
+                if let Err(e) = py.check_signals() {
+                    flag.store(true, Ordering::Relaxed);
+                    // a run that stops in time frees its memory before the
+                    // exception is seen; its result is dropped either way
+                    let _ = wait(py, rx, STOP_GRACE);
+                    INTERRUPTION.with(|i| *i.borrow_mut() = Some(e));
+                    return Err(Failure {
+                        kind: Kind::Interrupted,
+                        message: "interrupted".into(),
+                    });
+                }
+            }
+        }
+    }
 }
 
 /// The native module.

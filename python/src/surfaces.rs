@@ -112,7 +112,7 @@ fn read_surfaces(
     path: PathBuf,
     skip_unreadable: bool,
 ) -> PyResult<(String, Vec<String>)> {
-    let (surfaces, warnings) = crate::compute(py, || load_surfaces(&path, skip_unreadable))?;
+    let (surfaces, warnings) = crate::compute(py, move |_| load_surfaces(&path, skip_unreadable))?;
     Ok((surfaces_to_json(&surfaces), warnings))
 }
 
@@ -128,7 +128,7 @@ fn write_surfaces(py: Python<'_>, path: PathBuf, surfaces: String) -> PyResult<(
         .into());
     }
     let surfaces = parse(&surfaces, "surfaces")?;
-    crate::compute(py, || {
+    crate::compute(py, move |_| {
         fairline::io::surface_file::write_surface_file(&path, &surfaces, None)
             .map_err(|e| file_failure(&e, e.to_string()))
     })?;
@@ -190,7 +190,7 @@ fn surface_highlight_lines(
     let circle_center = vec3("circle_center", circle_center)?;
     let circle_axis = vec3("circle_axis", circle_axis)?;
     let all = parse(&surfaces, "surfaces")?;
-    let out = crate::compute(py, move || -> Res<_> {
+    let out = crate::compute(py, move |_control| -> Res<_> {
         if all.is_empty() {
             return Err(Failure::bad("surfaces: no B-spline surface given"));
         }
@@ -373,9 +373,10 @@ fn fair_surface(
         .keep_weight(keep_weight.unwrap_or(d.keep_weight))
         .fairness_weight(fairness_weight.unwrap_or(d.fairness_weight))
         .damped_step(damped_step.unwrap_or(d.damped_step));
-    let out = crate::compute(py, move || -> Res<_> {
+    let out = crate::compute(py, move |control| -> Res<_> {
         let input = all[surface].clone();
         let mut report = Report::new("fair-surface");
+        let opts = opts.control(control.clone());
         let out = report
             .time(|| library_fair_surface(&input, &opts))
             .map_err(|e| match e {
