@@ -8,7 +8,9 @@
 //! divided by; a vertex whose normal cannot be defined gets the zero vector.
 
 mod areas;
+mod closest;
 mod curvature;
+mod deviation;
 mod laplace;
 mod measures;
 mod normals;
@@ -19,10 +21,15 @@ pub use areas::{
     barycentric_vertex_areas, barycentric_vertex_areas_at, face_areas, face_areas_at,
     mixed_corner_areas, mixed_vertex_areas, mixed_vertex_areas_at,
 };
+pub use closest::{ClosestPoint, TriangleGrid};
 pub use curvature::{
     CurvatureError, CurvatureMethod, CurvatureOptions, CurvatureOutput, CurvatureReport,
     PrincipalCurvatures, curvature, gaussian_curvature, mean_curvature, mean_curvature_normals,
     principal_curvatures, principal_curvatures_meyer, principal_curvatures_rusinkiewicz,
+};
+pub use deviation::{
+    Deviation, DeviationError, DeviationMethod, DeviationStats, Histogram, closest_point_deviation,
+    deviation, deviation_stats, displacement, same_connectivity,
 };
 pub use laplace::{
     LaplaceWeights, LaplacianPattern, cotangent_laplacian, cotangents, cotangents_at,
