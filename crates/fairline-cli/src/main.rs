@@ -12,6 +12,7 @@ mod convert;
 mod curvature;
 mod demo;
 mod detect;
+mod deviation;
 mod enhance;
 mod error;
 mod fair;
@@ -60,6 +61,7 @@ enum Command {
     Detect(detect::Args),
     FairSurface(fair_surface::Args),
     Continuity(continuity::Args),
+    Deviation(deviation::Args),
     Enhance(enhance::Args),
     Fair(fair::Args),
     Render(render::Args),
@@ -90,6 +92,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Detect(a) => detect::run(a),
         Command::FairSurface(a) => fair_surface::run(a),
         Command::Continuity(a) => continuity::run(a),
+        Command::Deviation(a) => deviation::run(a),
         Command::Enhance(a) => enhance::run(a),
         Command::Fair(a) => fair::run(a),
         Command::Render(a) => render::run(a),

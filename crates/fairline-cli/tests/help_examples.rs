@@ -59,6 +59,7 @@ fn every_help_example_runs_on_the_demo_files() {
         "enhance",
         "fair-surface",
         "continuity",
+        "deviation",
         "view",
     ];
     let mut ran = 0;
