@@ -16,6 +16,7 @@ mod measures;
 mod normals;
 pub(crate) use normals::{BATCH, face_area_vectors, gather_triangles, vertex_normals_into};
 mod quadric;
+mod section;
 
 pub use areas::{
     barycentric_vertex_areas, barycentric_vertex_areas_at, face_areas, face_areas_at,
@@ -45,6 +46,7 @@ pub use normals::{
     vertex_normals_max, vertex_normals_max_at,
 };
 pub use quadric::{QuadricFit, QuadricPatch, quadric_fit, quadric_fit_rings, quadric_patch_rings};
+pub use section::{SectionCurve, parallel_sections, plane_section};
 
 /// The degenerate-face threshold, defined with the meshes (whose inspection
 /// counts degenerate faces) and used by every area and normal here.
