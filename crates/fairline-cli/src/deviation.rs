@@ -193,7 +193,7 @@ pub fn picture(
         mesh,
         &Picture {
             scalar: Some(ScalarField {
-                name: "signed deviation (model units)".into(),
+                name: "deviation (model units)".into(),
                 values: &out.deviation.signed,
                 colormap: Colormap::Coolwarm,
                 range,
