@@ -25,6 +25,7 @@ mod inspect;
 mod output;
 mod render;
 mod repair;
+mod section;
 mod smooth;
 mod surface;
 mod surface_highlight;
@@ -70,6 +71,7 @@ enum Command {
     Demo(demo::Args),
     View(view::Args),
     Repair(repair::Args),
+    Section(section::Args),
     Inspect(inspect::Args),
 }
 
@@ -101,6 +103,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Demo(a) => demo::run(a),
         Command::View(a) => view::run(a),
         Command::Repair(a) => repair::run(a),
+        Command::Section(a) => section::run(a),
         Command::Inspect(a) => inspect::run(a),
     }
 }

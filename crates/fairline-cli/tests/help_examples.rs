@@ -60,6 +60,7 @@ fn every_help_example_runs_on_the_demo_files() {
         "fair-surface",
         "continuity",
         "deviation",
+        "section",
         "view",
     ];
     let mut ran = 0;
