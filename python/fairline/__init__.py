@@ -55,6 +55,7 @@ __all__ = [
     "read_mesh",
     "write_mesh",
     "curvature",
+    "deviation",
     "highlight_lines",
     "detect",
     "fair",
@@ -327,6 +328,39 @@ def curvature(V: Any, F: Faces = None, method: str = "rusinkiewicz") -> Tuple[Di
     cols, report = _native.curvature(v, indices, offsets, method=method)
     values = dict(cols)
     return values, _report(report)
+
+
+def deviation(
+    V_before: Any,
+    F_before: Faces,
+    V_after: Any,
+    F_after: Faces = None,
+    *,
+    region: Optional[Sequence[int]] = None,
+    bins: int = 41,
+) -> Tuple[Dict[str, np.ndarray], Dict[str, Any]]:
+    """Signed deviation of a mesh from a reference (``fairline deviation``).
+
+    One value per vertex of the *after* mesh: for meshes of the same
+    connectivity the vertex motion along the reference's normal, otherwise
+    the distance to the closest point of the reference, positive on the side
+    its normals point to (model units). ``F_after`` defaults to
+    ``F_before``. ``region``: faces of the after mesh; the report then
+    splits the statistics into ``inside_region`` (the intended motion) and
+    ``outside_region`` (side effects, 0 for highlight-line fairing).
+
+    Returns ``(values, report)``; ``values`` has ``signed``, ``distance``
+    (n,) float64 and ``in_region`` (n,) bool; the report has ``method``,
+    ``all`` (``min``, ``max``, ``max_abs``, ``mean``, ``mean_abs``, ``rms``,
+    ``p50_abs`` … ``p99_abs``, ``histogram``) and the region's parts.
+    """
+    v0, i0, o0 = _mesh(V_before, F_before)
+    if F_after is None and not (hasattr(V_after, "vertices") and hasattr(V_after, "faces")):
+        F_after = F_before
+    v1, i1, o1 = _mesh(V_after, F_after)
+    reg = None if region is None else [int(f) for f in region]
+    signed, distance, inside, report = _native.deviation(v0, i0, o0, v1, i1, o1, region=reg, bins=int(bins))
+    return {"signed": signed, "distance": distance, "in_region": inside}, _report(report)
 
 
 def smooth(

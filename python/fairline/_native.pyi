@@ -18,6 +18,16 @@ def write_mesh(path: str, v: _F64_2, indices: _U32, offsets: _U32) -> None: ...
 def curvature(
     v: _F64_2, indices: _U32, offsets: _U32, method: str = "rusinkiewicz"
 ) -> Tuple[List[Tuple[str, npt.NDArray[np.float64]]], str]: ...  # normals d1 d2 (n, 3); k1 k2 mean gauss (n,)
+def deviation(
+    v0: _F64_2,
+    indices0: _U32,
+    offsets0: _U32,
+    v1: _F64_2,
+    indices1: _U32,
+    offsets1: _U32,
+    region: Optional[Sequence[int]] = None,
+    bins: int = 41,
+) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.bool_], str]: ...
 def smooth(
     v: _F64_2,
     indices: _U32,

@@ -1,4 +1,4 @@
-//! Mesh commands: `read_mesh`, `write_mesh`, `curvature`, `highlight_lines`,
+//! Mesh commands: `read_mesh`, `write_mesh`, `curvature`, `deviation`, `highlight_lines`,
 //! `detect`, `fair`, `smooth`, `fair_quad`, `enhance`, `repair`.
 //!
 //! Each runs one command: `fair` and `smooth` through the command layer
@@ -37,6 +37,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(curvature, m)?)?;
+    m.add_function(wrap_pyfunction!(deviation, m)?)?;
     m.add_function(wrap_pyfunction!(smooth, m)?)?;
     m.add_function(wrap_pyfunction!(fair_quad, m)?)?;
     m.add_function(wrap_pyfunction!(enhance, m)?)?;
@@ -118,6 +119,65 @@ fn curvature<'py>(
         ("d2", rows(&c.d2)),
     ];
     Ok((values, report))
+}
+
+/// Per-vertex deviation: the signed and unsigned arrays (n,), the
+/// in-region flags (n,) (all false without a region), and the report.
+type DeviationOut<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<bool>>,
+    String,
+);
+
+/// `fairline deviation` (crates/fairline-cli/src/deviation.rs): the
+/// signed deviation of the second mesh from the first, per vertex of the
+/// second, through the command layer; `region`: faces of the second mesh.
+#[pyfunction]
+#[pyo3(signature = (v0, indices0, offsets0, v1, indices1, offsets1, region = None, bins = 41))]
+fn deviation<'py>(
+    py: Python<'py>,
+    v0: V<'py>,
+    indices0: Idx<'py>,
+    offsets0: Idx<'py>,
+    v1: V<'py>,
+    indices1: Idx<'py>,
+    offsets1: Idx<'py>,
+    region: Option<Vec<u32>>,
+    bins: usize,
+) -> PyResult<DeviationOut<'py>> {
+    let before = soup_from(&v0, &indices0, &offsets0)?;
+    let after = soup_from(&v1, &indices1, &offsets1)?;
+    let settings = fairline_commands::deviation::DeviationSettings { bins };
+    let (signed, distance, inside, report) = crate::compute(py, || -> Res<_> {
+        let before = mesh_from(&before)?;
+        let after = mesh_from(&after)?;
+        let faces: Option<Vec<FaceId>> = region.map(|r| r.into_iter().map(FaceId).collect());
+        let out = fairline_commands::deviation::run(
+            &before,
+            &after,
+            faces.as_deref(),
+            &settings,
+            &Control::new(),
+        )?;
+        // one value per input vertex, as the CLI's CSV
+        let n = after.original_vertex_count();
+        let cut = |v: &[f64]| v[..n.min(v.len())].to_vec();
+        let mut inside = out.in_region.clone();
+        inside.resize(n, false);
+        Ok((
+            cut(&out.deviation.signed),
+            cut(&out.deviation.distance),
+            inside,
+            out.report.to_json().to_string(),
+        ))
+    })?;
+    Ok((
+        PyArray1::from_vec(py, signed),
+        PyArray1::from_vec(py, distance),
+        PyArray1::from_vec(py, inside),
+        report,
+    ))
 }
 
 /// `option must be one of a, b; got x`.

@@ -13,6 +13,7 @@ mod convert;
 mod curvature;
 mod demo;
 mod detect;
+mod deviation;
 mod enhance;
 mod error;
 mod fair;
@@ -25,6 +26,7 @@ mod inspect;
 mod output;
 mod render;
 mod repair;
+mod section;
 mod smooth;
 mod surface;
 mod surface_highlight;
@@ -61,6 +63,7 @@ enum Command {
     Detect(detect::Args),
     FairSurface(fair_surface::Args),
     Continuity(continuity::Args),
+    Deviation(deviation::Args),
     Enhance(enhance::Args),
     Fair(fair::Args),
     Render(render::Args),
@@ -69,6 +72,7 @@ enum Command {
     Demo(demo::Args),
     View(view::Args),
     Repair(repair::Args),
+    Section(section::Args),
     Inspect(inspect::Args),
 }
 
@@ -91,6 +95,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Detect(a) => detect::run(a),
         Command::FairSurface(a) => fair_surface::run(a),
         Command::Continuity(a) => continuity::run(a),
+        Command::Deviation(a) => deviation::run(a),
         Command::Enhance(a) => enhance::run(a),
         Command::Fair(a) => fair::run(a),
         Command::Render(a) => render::run(a),
@@ -99,6 +104,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Demo(a) => demo::run(a),
         Command::View(a) => view::run(a),
         Command::Repair(a) => repair::run(a),
+        Command::Section(a) => section::run(a),
         Command::Inspect(a) => inspect::run(a),
     }
 }

@@ -59,6 +59,8 @@ fn every_help_example_runs_on_the_demo_files() {
         "enhance",
         "fair-surface",
         "continuity",
+        "deviation",
+        "section",
         "view",
     ];
     let mut ran = 0;

@@ -1683,3 +1683,207 @@ fn save_screenshot(name: &str, png: &[u8]) {
         std::fs::write(images.join(name), png).unwrap();
     }
 }
+
+/// A click of the left button at page pixel (x, y); `modifiers` as the
+/// DevTools protocol numbers them (8: shift).
+fn click_at(b: &mut cdp::Browser, x: f64, y: f64, modifiers: u32) {
+    for t in ["mouseMoved", "mousePressed", "mouseReleased"] {
+        b.call(
+            "Input.dispatchMouseEvent",
+            json!({"type": t, "x": x, "y": y, "button": "left", "clickCount": 1, "modifiers": modifiers}),
+        );
+    }
+}
+
+/// The evaluation tools over the API: after highlight-line fairing the
+/// deviation from the original state moves only the vertices of the faired
+/// region (outside it exactly 0) and agrees with `fairline deviation` on
+/// the same files; the probe on a sphere of radius 2 reads k1 ≈ k2 ≈ 1/2
+/// and the outward normal; bad requests get 400 or 404.
+#[test]
+fn api_deviation_and_probe_measure_what_the_cli_measures() {
+    let dir = tmp("view-tools-api");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 61);
+    let sphere = dir.join("sphere.obj");
+    fairline::io::write_mesh(&sphere, &fairline::shapes::icosphere(2.0, 4)).unwrap();
+    let srv = start(&[&mesh, &sphere], &dir);
+    start_fair_job(&srv, json!({}));
+    assert_eq!(srv.wait_job()["state"], "done");
+    let region = srv.json(
+        "/api/doc/0/region",
+        Some(&json!({"op": "sphere", "center": [0.5, -0.4, 0.0], "radius": 0.5})),
+    );
+    let (st, body) = srv.post(
+        "/api/doc/0/deviation",
+        &json!({"against": "original", "faces": region["faces"]}),
+    );
+    assert_eq!(st, 200, "{}", String::from_utf8_lossy(&body));
+    let (h, values) = parse_frame(&body);
+    assert_eq!(values.len(), 61 * 61);
+    assert_eq!(h["method"], "displacement");
+    assert_eq!(h["outside_region"]["max_abs"].as_f64(), Some(0.0), "{h}");
+    let inside = h["inside_region"]["max_abs"].as_f64().unwrap();
+    assert!(inside > 1e-4, "the dent was lifted: {inside}");
+    assert!(h["range"]["lo"].as_f64().unwrap() < 0.0 && h["range"]["hi"].as_f64().unwrap() > 0.0);
+    assert!(
+        h["command"]
+            .as_str()
+            .unwrap()
+            .starts_with("fairline deviation ")
+    );
+    // the CLI on the saved state gives the same statistics
+    srv.json("/api/doc/0/save", Some(&json!({"name": "faired.obj"})));
+    let report = dir.join("dev.json");
+    ok(&run(&[
+        "deviation",
+        s(&mesh),
+        s(&dir.join("faired.obj")),
+        "--report",
+        s(&report),
+    ]));
+    let cli = common::json(&report);
+    let rel = |a: &Value, b: &Value| {
+        let (a, b) = (a.as_f64().unwrap(), b.as_f64().unwrap());
+        (a - b).abs() <= 1e-9 * a.abs().max(1e-12)
+    };
+    assert!(
+        rel(&cli["all"]["max_abs"], &h["all"]["max_abs"]),
+        "{cli} vs {h}"
+    );
+    assert!(rel(&cli["all"]["rms"], &h["all"]["rms"]), "{cli} vs {h}");
+    // against the other document: closest points
+    let (st, body) = srv.post("/api/doc/0/deviation", &json!({"against": {"doc": 1}}));
+    assert_eq!(st, 200);
+    assert_eq!(parse_frame(&body).0["method"], "closest-point");
+    assert_eq!(
+        srv.post("/api/doc/0/deviation", &json!({"against": "yesterday"}))
+            .0,
+        400
+    );
+    assert_eq!(
+        srv.post("/api/doc/0/deviation", &json!({"against": {"doc": 7}}))
+            .0,
+        404
+    );
+    // the probe on the sphere: every triangle reads 1/r within 2 %
+    for face in [0, 1000, 5000] {
+        let p = srv.json("/api/doc/1/probe", Some(&json!({"face": face})));
+        for k in ["k1", "k2", "mean"] {
+            let v = p[k].as_f64().unwrap();
+            assert!((v - 0.5).abs() < 0.01, "{k} = {v} at face {face}");
+        }
+        assert!((p["r1"].as_f64().unwrap() - 2.0).abs() < 0.05, "{p}");
+        assert!((p["gauss"].as_f64().unwrap() - 0.25).abs() < 0.01, "{p}");
+        let q: Vec<f64> = serde_json::from_value(p["point"].clone()).unwrap();
+        let n: Vec<f64> = serde_json::from_value(p["normal"].clone()).unwrap();
+        let len = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+        let dot = (q[0] * n[0] + q[1] * n[1] + q[2] * n[2]) / len;
+        assert!(dot > 0.999, "outward normal: {dot}");
+    }
+    assert_eq!(
+        srv.post("/api/doc/1/probe", &json!({"face": 99_999_999})).0,
+        400
+    );
+}
+
+/// The Measure panel and the probe tool in real headless Chromium: the
+/// deviation after fairing colours the dent, draws the legend (blue to
+/// red) and the histogram, and splits the statistics at the marked region;
+/// a click with the probe on a sphere of radius 2 reads k1 ≈ 1/2, a
+/// shift-click a second point and their distance.
+#[test]
+fn page_measures_deviation_and_probes_curvature() {
+    let Some(exe) = cdp::chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "chromium is not installed and CI is set (apt-get install chromium)"
+        );
+        eprintln!(
+            "\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n"
+        );
+        return;
+    };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmp("view-tools-page");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 61);
+    let sphere = dir.join("sphere.obj");
+    fairline::io::write_mesh(&sphere, &fairline::shapes::icosphere(2.0, 4)).unwrap();
+    let srv = start(&[&mesh, &sphere], &dir);
+    start_fair_job(&srv, json!({}));
+    assert_eq!(srv.wait_job()["state"], "done");
+    let region = srv.json(
+        "/api/doc/0/region",
+        Some(&json!({"op": "sphere", "center": [0.5, -0.4, 0.0], "radius": 0.5})),
+    );
+    let mut b = cdp::Browser::launch(&exe, 1280, 800);
+    b.call("Page.navigate", json!({"url": srv.url}));
+    b.wait_for("document.body && document.body.dataset.ready === '1'", 120);
+    b.eval("document.querySelector('[data-view=top]').click()");
+    b.eval(&format!(
+        "window.fairline.state.regions[0] = {}",
+        region["faces"]
+    ));
+    b.eval("document.getElementById('deviation').click()");
+    b.wait_for("document.body.dataset.deviation", 60);
+    let h = b.eval("window.fairline.tools.deviation");
+    assert_eq!(h["outside_region"]["max_abs"].as_f64(), Some(0.0), "{h}");
+    assert!(h["inside_region"]["max_abs"].as_f64().unwrap() > 1e-4);
+    assert_eq!(
+        b.eval("document.querySelectorAll('#dev-stats tr').length"),
+        json!(4),
+        "header, all, inside, outside"
+    );
+    std::thread::sleep(Duration::from_millis(500));
+    let shot = b.screenshot();
+    save_screenshot("workbench-deviation.png", &shot.3);
+    // the legend runs from blue (negative) to red (positive)
+    let r = b.eval("(() => { const r = document.getElementById('dev-legend').getBoundingClientRect(); return [r.left, r.top, r.width]; })()");
+    let r: Vec<f64> = serde_json::from_value(r).unwrap();
+    let px = |x: f64, y: f64| {
+        let i = 4 * (y as usize * shot.0 as usize + x as usize);
+        (shot.2[i] as f64, shot.2[i + 1] as f64, shot.2[i + 2] as f64)
+    };
+    let left = px(r[0] + 3.0, r[1] + 8.0);
+    let right = px(r[0] + r[2] - 3.0, r[1] + 8.0);
+    assert!(left.2 > left.0 + 60.0, "legend starts blue: {left:?}");
+    assert!(right.0 > right.2 + 60.0, "legend ends red: {right:?}");
+    // the dent (lifted by fairing) shows red on the surface
+    let (cx, cy, cw, ch) = canvas_rect(&mut b);
+    let reddish = (cy..cy + ch)
+        .step_by(2)
+        .flat_map(|y| (cx..cx + cw).step_by(2).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            let p = px(x as f64, y as f64);
+            p.0 > p.2 + 50.0 && p.0 > 150.0
+        })
+        .count();
+    assert!(reddish > 5, "{reddish} red pixels on the surface");
+    // the probe on the sphere (the right half of the canvas)
+    b.eval("(() => { const t = document.getElementById('tool'); t.value = 'probe'; t.dispatchEvent(new Event('change')); })()");
+    let (x, y) = ((cx + 3 * cw / 4) as f64, (cy + ch / 2) as f64);
+    click_at(&mut b, x, y, 0);
+    b.wait_for("window.fairline.tools.probes.length === 1", 60);
+    let p = b.eval("window.fairline.tools.probes[0]");
+    let k1 = p["k1"].as_f64().unwrap();
+    assert!((k1 - 0.5).abs() < 0.01, "k1 = {k1} on a sphere of radius 2");
+    assert_eq!(p["doc"], 1);
+    click_at(&mut b, x + 40.0, y + 30.0, 8);
+    b.wait_for("window.fairline.tools.probes.length === 2", 60);
+    let d = b.eval("window.fairline.tools.distance").as_f64().unwrap();
+    let pts = b.eval("window.fairline.tools.probes.map((p) => p.point)");
+    let pts: Vec<Vec<f64>> = serde_json::from_value(pts).unwrap();
+    let want = ((pts[0][0] - pts[1][0]).powi(2)
+        + (pts[0][1] - pts[1][1]).powi(2)
+        + (pts[0][2] - pts[1][2]).powi(2))
+    .sqrt();
+    assert!(
+        d > 0.05 && (d - want).abs() < 1e-9,
+        "distance {d} vs {want}"
+    );
+    let text = b.eval("document.getElementById('probe-out').textContent");
+    assert!(text.as_str().unwrap().contains("distance"), "{text}");
+    std::thread::sleep(Duration::from_millis(300));
+    save_screenshot("workbench-probe.png", &b.screenshot().3);
+}

@@ -1,6 +1,6 @@
 // Colour map (a perceptually ordered blue–white–red diverging map, suited
 // to signed curvature) as a 256×1 texture, and its legend.
-function color(t) {
+export function color(t) {
   const stops = [[0, [0.23, 0.30, 0.75]], [0.5, [0.87, 0.87, 0.87]], [1, [0.71, 0.02, 0.15]]];
   for (let i = 1; i < stops.length; i++) {
     if (t <= stops[i][0]) {

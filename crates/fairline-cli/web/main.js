@@ -7,11 +7,14 @@ import { attachControls, local } from './picking.js';
 import { drawLegend } from './colormap.js';
 import { UvPanel, PALETTE, rgba } from './uvpanel.js';
 import { $, status, showCommand, showReport, showHistory, offer, offerJson } from './panels.js';
+import { Tools } from './tools.js';
 
 const state = { labels: [], surfaceDoc: -1, uvData: null, uvCircular: null, session: null, active: 0, regions: [], detected: [], before: false, job: null, lastDownload: null };
 window.fairline = { state };
 
 const viewer = new Viewer($('gl'));
+const tools = new Tools({ viewer, state });
+window.fairline.tools = tools;
 let lights = [];
 
 function activeDoc() { return state.session.docs[state.active]; }
@@ -57,6 +60,7 @@ async function reloadActive() {
   await loadGeometry(state.active, step);
   if (d.kind === 'surface') await loadOutlines(state.active, step);
   await applyScalar();
+  await tools.refresh();
   viewer.setOverlay(state.active, 'lines', null);
   viewer.setOverlay(state.active, 'stretches', null);
 }
@@ -153,6 +157,14 @@ let pickBusy = false;
 async function onPick(e, phase) {
   const tool = $('tool').value;
   if (tool === 'orbit') return false;
+  // shift-drag pans, except with the probe (shift-click: a second point)
+  if (e.shiftKey && tool !== 'probe') return false;
+  if (tool === 'probe') {
+    if (phase !== 'down') return true;
+    const hit = viewer.pickAt(...local($('gl'), e));
+    if (hit) await tools.probe(hit.doc, hit.face, hit.point, e.shiftKey);
+    return true;
+  }
   if (tool === 'endpoints') {
     // a click on a pre-image picks an endpoint, as in the (u, v) panel
     if (phase !== 'down' || !uvPanel || !uvPanel.lines.length) return true;
@@ -444,7 +456,9 @@ function wire() {
   document.querySelectorAll('[data-view]').forEach((b) => b.addEventListener('click', () => { viewer.camera.standard(b.dataset.view); viewer.dirty = true; }));
   $('fit').addEventListener('click', () => { viewer.camera.fit(Math.max(...state.session.docs.map((d) => d.radius))); viewer.dirty = true; });
   $('wireframe').addEventListener('change', () => { viewer.wireframe = $('wireframe').checked; viewer.dirty = true; });
-  $('scalar').addEventListener('change', guard(applyScalar));
+  $('scalar').addEventListener('change', guard(async () => { tools.clearDeviation(); await applyScalar(); }));
+  $('deviation').addEventListener('click', guard(() => tools.showDeviation()));
+  $('dev-clear').addEventListener('click', () => tools.clearDeviation());
   $('exact').addEventListener('click', guard(exactLines));
   $('detect').addEventListener('click', guard(detect));
   $('clearlines').addEventListener('click', () => { viewer.setOverlay(state.active, 'lines', null); viewer.setOverlay(state.active, 'stretches', null); });
@@ -485,7 +499,12 @@ function wire() {
       offerJson(value, 'endpoints.json');
     });
   }
-  attachControls($('gl'), viewer, (e, phase) => { onPick(e, phase); return $('tool').value !== 'orbit'; });
+  attachControls($('gl'), viewer, (e, phase) => {
+    const tool = $('tool').value;
+    if (tool === 'orbit' || (e.shiftKey && tool !== 'probe')) return false;
+    onPick(e, phase).catch((err) => status(err.message, true));
+    return true;
+  });
   window.addEventListener('resize', () => { viewer.dirty = true; });
 }
 
@@ -506,6 +525,7 @@ async function start() {
   docs.forEach((d) => d.scalars.forEach((s) => names.add(s.name)));
   for (const n of names) { const o = document.createElement('option'); o.value = n; o.textContent = n; $('scalar').append(o); }
   lights = docs.map((d) => new Lights(d.light, d.center, d.radius));
+  tools.init(docs);
   viewer.lightUniforms = (k) => lights[k].uniforms(viewer.camera);
   // a z-up part is seen from the front, a y-up one (most scanned meshes) from +z
   const ext = docs[0].bbox;

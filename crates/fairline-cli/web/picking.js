@@ -6,7 +6,7 @@ export function attachControls(canvas, viewer, onPick) {
   canvas.addEventListener('pointerdown', (e) => {
     canvas.setPointerCapture(e.pointerId);
     drag = { x: e.clientX, y: e.clientY, button: e.button, shift: e.shiftKey, picking: false };
-    if (e.button === 0 && !e.shiftKey && onPick(e, 'down')) drag.picking = true;
+    if (e.button === 0 && onPick(e, 'down')) drag.picking = true;
   });
   canvas.addEventListener('pointermove', (e) => {
     if (!drag) return;

@@ -21,6 +21,7 @@
 #![forbid(unsafe_code)]
 
 pub mod curvature;
+pub mod deviation;
 pub mod enhance;
 pub mod error;
 pub mod fair;

@@ -69,7 +69,7 @@ impl Shared {
 
 /// Documents, the save folder and the current job.
 pub struct State {
-    docs: Vec<Doc>,
+    pub(super) docs: Vec<Doc>,
     save_dir: PathBuf,
     job: Option<Job>,
     next_job: u64,
@@ -154,14 +154,14 @@ impl State {
 }
 
 /// An answer: status, content type, body, extra headers.
-struct Answer {
+pub(super) struct Answer {
     status: u16,
     content_type: &'static str,
     body: Vec<u8>,
     headers: Vec<(String, String)>,
 }
 
-fn json_answer(v: &Value) -> Answer {
+pub(super) fn json_answer(v: &Value) -> Answer {
     Answer {
         status: 200,
         content_type: "application/json",
@@ -170,7 +170,7 @@ fn json_answer(v: &Value) -> Answer {
     }
 }
 
-fn binary(body: Vec<u8>) -> Answer {
+pub(super) fn binary(body: Vec<u8>) -> Answer {
     Answer {
         status: 200,
         content_type: "application/octet-stream",
@@ -179,7 +179,7 @@ fn binary(body: Vec<u8>) -> Answer {
     }
 }
 
-fn error(status: u16, msg: impl Into<String>) -> Answer {
+pub(super) fn error(status: u16, msg: impl Into<String>) -> Answer {
     Answer {
         status,
         content_type: "application/json",
@@ -189,7 +189,7 @@ fn error(status: u16, msg: impl Into<String>) -> Answer {
 }
 
 /// A bad request (400) from any error.
-fn bad(e: impl std::fmt::Display) -> Answer {
+pub(super) fn bad(e: impl std::fmt::Display) -> Answer {
     error(400, e.to_string())
 }
 
@@ -217,7 +217,7 @@ fn body_limit(req: &HttpRequest) -> usize {
     }
     let path = req.url.split('?').next().unwrap_or("");
     match path.rsplit('/').next().unwrap_or("") {
-        "region" | "region-file" | "run" => 32 << 20,
+        "region" | "region-file" | "run" | "deviation" => 32 << 20,
         "lines" | "detect" | "surface-lines" => 256 << 10,
         _ => 4 << 10,
     }
@@ -333,6 +333,8 @@ fn route(shared: &Arc<Shared>, req: &HttpRequest, body: &[u8]) -> Answer {
                 (_, true, ["undo"]) => move_cursor(shared, k, -1),
                 (_, true, ["redo"]) => move_cursor(shared, k, 1),
                 (_, true, ["save"]) => save(shared, k, body),
+                (_, true, ["deviation"]) => super::tools::deviation(shared, k, body),
+                (_, true, ["probe"]) => super::tools::probe(shared, k, body),
                 _ => error(404, format!("no such API call: {path}")),
             }
         }
@@ -340,14 +342,14 @@ fn route(shared: &Arc<Shared>, req: &HttpRequest, body: &[u8]) -> Answer {
     }
 }
 
-fn lock(shared: &Shared) -> std::sync::MutexGuard<'_, State> {
+pub(super) fn lock(shared: &Shared) -> std::sync::MutexGuard<'_, State> {
     shared
         .state
         .lock()
         .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
-fn parse<T: for<'de> Deserialize<'de>>(body: &[u8]) -> Result<T, Answer> {
+pub(super) fn parse<T: for<'de> Deserialize<'de>>(body: &[u8]) -> Result<T, Answer> {
     serde_json::from_slice(body).map_err(|e| bad(format!("request: {e}")))
 }
 

@@ -22,6 +22,7 @@ web! {
     "panels.js" => "text/javascript; charset=utf-8",
     "colormap.js" => "text/javascript; charset=utf-8",
     "uvpanel.js" => "text/javascript; charset=utf-8",
+    "tools.js" => "text/javascript; charset=utf-8",
     "shaders/surface.vert" => "text/plain; charset=utf-8",
     "shaders/surface.frag" => "text/plain; charset=utf-8",
     "shaders/pick.vert" => "text/plain; charset=utf-8",

@@ -91,6 +91,8 @@
 //!   (or surfaces as JSON) as a file.
 //! - `POST /api/doc/K/save` `{"name":"file.obj"}`: writes the current mesh
 //!   (or surfaces .json) into the save folder, atomically.
+//! - `POST /api/doc/K/deviation`, `POST /api/doc/K/probe`: the evaluation
+//!   tools, documented in `tools`.
 
 mod api;
 mod assets;
@@ -98,6 +100,7 @@ mod auth;
 mod doc;
 mod frame;
 mod http;
+mod tools;
 
 use crate::error::bad_input;
 use anyhow::{Context, Result};

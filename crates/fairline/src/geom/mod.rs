@@ -8,21 +8,29 @@
 //! divided by; a vertex whose normal cannot be defined gets the zero vector.
 
 mod areas;
+mod closest;
 mod curvature;
+mod deviation;
 mod laplace;
 mod measures;
 mod normals;
 pub(crate) use normals::{BATCH, face_area_vectors, gather_triangles, vertex_normals_into};
 mod quadric;
+mod section;
 
 pub use areas::{
     barycentric_vertex_areas, barycentric_vertex_areas_at, face_areas, face_areas_at,
     mixed_corner_areas, mixed_vertex_areas, mixed_vertex_areas_at,
 };
+pub use closest::{ClosestPoint, TriangleGrid};
 pub use curvature::{
     CurvatureError, CurvatureMethod, CurvatureOptions, CurvatureOutput, CurvatureReport,
     PrincipalCurvatures, curvature, gaussian_curvature, mean_curvature, mean_curvature_normals,
     principal_curvatures, principal_curvatures_meyer, principal_curvatures_rusinkiewicz,
+};
+pub use deviation::{
+    Deviation, DeviationError, DeviationMethod, DeviationStats, Histogram, closest_point_deviation,
+    deviation, deviation_stats, displacement, same_connectivity,
 };
 pub use laplace::{
     LaplaceWeights, LaplacianPattern, cotangent_laplacian, cotangents, cotangents_at,
@@ -38,6 +46,7 @@ pub use normals::{
     vertex_normals_max, vertex_normals_max_at,
 };
 pub use quadric::{QuadricFit, QuadricPatch, quadric_fit, quadric_fit_rings, quadric_patch_rings};
+pub use section::{SectionCurve, parallel_sections, plane_section};
 
 /// The degenerate-face threshold, defined with the meshes (whose inspection
 /// counts degenerate faces) and used by every area and normal here.

@@ -1,0 +1,255 @@
+//! `fairline deviation`: the signed distance of one state of a surface
+//! from another, as a picture with legend and histogram, per-vertex CSV
+//! and a JSON report.
+
+use crate::args::{parse_size, parse_vec3};
+use crate::common::write_report;
+use crate::error::bad_input;
+use anyhow::Result;
+use fairline::geom::Histogram;
+use fairline::picture::{Picture, ScalarField, mesh_picture};
+use fairline::render::{Colormap, Image, linear_to_srgb8};
+use fairline::{Control, SurfaceMesh, Vec3};
+use fairline_commands::Subject;
+use fairline_commands::deviation::{self, DEFAULT_BINS, DeviationSettings, summary};
+use std::path::{Path, PathBuf};
+
+/// The signed deviation of AFTER from BEFORE, per vertex of AFTER: for
+/// meshes of the same connectivity the vertex motion along BEFORE's normal,
+/// otherwise the distance to the closest point of BEFORE, positive on the
+/// side BEFORE's normals point to. B-spline surfaces (.json .igs .step) are
+/// compared through their tessellations (--grid per patch and direction).
+/// The report gives max/mean/rms/percentiles and a histogram; with
+/// --region, separately inside the region (the intended motion) and
+/// outside it (side effects: 0 for highlight-line fairing). Lengths are in
+/// the files' units.
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline fair fairline-demo/dented-panel.obj --region fairline-demo/dented-panel-region.json -o faired.obj\n  fairline deviation fairline-demo/dented-panel.obj faired.obj --region fairline-demo/dented-panel-region.json --png deviation.png --report deviation.json\n  fairline deviation fairline-demo/sphere.ply fairline-demo/sphere.ply --csv d.csv"
+)]
+pub struct Args {
+    /// The reference: mesh (.obj .ply .off .stl) or surfaces (.json .igs .step).
+    pub before: PathBuf,
+    /// The measured state, one value per vertex of it.
+    pub after: PathBuf,
+    /// Region JSON (faces of AFTER): statistics inside and outside it.
+    #[arg(long, value_name = "REGION.json")]
+    pub region: Option<PathBuf>,
+    /// Picture of AFTER coloured by the signed deviation, with legend and
+    /// histogram.
+    #[arg(long, value_name = "IMG.png")]
+    pub png: Option<PathBuf>,
+    /// Per-vertex values: `vertex,x,y,z,signed,distance,in_region`.
+    #[arg(long, value_name = "OUT.csv")]
+    pub csv: Option<PathBuf>,
+    /// Write a JSON report.
+    #[arg(long, value_name = "FILE.json")]
+    pub report: Option<PathBuf>,
+    /// Colour range ±MAX of the picture (default: the largest |d|).
+    #[arg(long, value_name = "MAX")]
+    pub max: Option<f64>,
+    /// Histogram bins.
+    #[arg(long, default_value_t = DEFAULT_BINS)]
+    pub bins: usize,
+    /// Viewing direction X,Y,Z of the picture.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub view: Option<Vec3>,
+    /// Picture size WxH.
+    #[arg(long, value_parser = parse_size, default_value = "1200x900")]
+    pub size: (u32, u32),
+    /// Tessellation grid per patch and direction for surface files.
+    #[arg(long, default_value_t = 64, value_name = "N")]
+    pub grid: usize,
+}
+
+/// Reads a mesh, or tessellates a surface file `grid` × `grid` per patch.
+fn read(path: &Path, grid: usize) -> Result<SurfaceMesh> {
+    if crate::surface::is_surface_path(path) {
+        let s = crate::surface::load_surfaces(path)?;
+        crate::surface::tessellated_mesh(&s, grid)
+    } else {
+        crate::input::read_mesh(path)
+    }
+}
+
+pub fn run(args: Args) -> Result<()> {
+    crate::output::require_extension(
+        "--png",
+        args.png.as_deref().unwrap_or(Path::new("a.png")),
+        &["png"],
+    )?;
+    crate::output::require_extension(
+        "--csv",
+        args.csv.as_deref().unwrap_or(Path::new("a.csv")),
+        &["csv"],
+    )?;
+    if let Some(m) = args.max
+        && !(m.is_finite() && m > 0.0)
+    {
+        return Err(bad_input(format!("--max {m}: give a positive number")));
+    }
+    if !(2..=1024).contains(&args.grid) {
+        return Err(bad_input("--grid must be between 2 and 1024"));
+    }
+    let job = crate::output::Job::new("deviation")
+        .input(&args.before)
+        .input(&args.after)
+        .input_opt(args.region.as_deref())
+        .output_opt("--png", args.png.as_deref())
+        .output_opt("--csv", args.csv.as_deref())
+        .output_opt("--report", args.report.as_deref())
+        .check()?;
+    let before = read(&args.before, args.grid)?;
+    let after = read(&args.after, args.grid)?;
+    let region = match &args.region {
+        Some(path) => {
+            let spec = fairline::io::read_region(path).map_err(|e| bad_input(e.to_string()))?;
+            Some(
+                spec.faces(&after)
+                    .map_err(|e| bad_input(format!("{}: {e}", path.display())))?,
+            )
+        }
+        None => None,
+    };
+    let settings = DeviationSettings { bins: args.bins };
+    let out = deviation::run(
+        &before,
+        &after,
+        region.as_deref(),
+        &settings,
+        &Control::new(),
+    )
+    .map_err(|e| {
+        let path = match e.subject() {
+            Some(Subject::Input) => Some(args.before.as_path()),
+            Some(Subject::Region) => args.region.as_deref(),
+            None => None,
+        };
+        let bad = e.kind() == fairline_commands::ErrorKind::BadInput;
+        let msg = match path {
+            Some(p) => format!(
+                "{}: {}",
+                p.display(),
+                e.message(fairline_commands::FrontEnd::Cli)
+            ),
+            None => e.message(fairline_commands::FrontEnd::Cli),
+        };
+        if bad {
+            bad_input(msg)
+        } else {
+            anyhow::anyhow!(msg)
+        }
+    })?;
+    if let Some(png) = &args.png {
+        let img = picture(&after, &out, args.max, args.view, args.size)?;
+        img.write_png(png)?;
+    }
+    if let Some(csv) = &args.csv {
+        write_csv(csv, &after, &out)?;
+    }
+    write_report(args.report.as_deref(), &out.report)?;
+    job.finish(summary(&out))?;
+    Ok(())
+}
+
+/// `vertex,x,y,z,signed,distance,in_region` per vertex (original vertex
+/// indices; split non-manifold fans keep the value of the kept index).
+fn write_csv(path: &Path, mesh: &SurfaceMesh, out: &deviation::DeviationOutcome) -> Result<()> {
+    use std::io::Write;
+    let signed = mesh.original_values(&out.deviation.signed);
+    let dist = mesh.original_values(&out.deviation.distance);
+    fairline::io::atomic_write(path, |w| {
+        let mut w = std::io::BufWriter::new(w);
+        writeln!(w, "vertex,x,y,z,signed,distance,in_region")?;
+        for (i, (s, d)) in signed.iter().zip(dist).enumerate() {
+            let p = mesh.positions()[i];
+            let r = out.in_region.get(i).map_or(0, |&b| b as u8);
+            writeln!(w, "{i},{},{},{},{s},{d},{r}", p.x, p.y, p.z)?;
+        }
+        w.flush()
+    })
+    .map_err(|e| anyhow::anyhow!("writing {}: {e}", path.display()))
+}
+
+/// AFTER coloured by the signed deviation on a range centred on 0, with
+/// the colour bar (units in its title) and a histogram inset.
+pub fn picture(
+    mesh: &SurfaceMesh,
+    out: &deviation::DeviationOutcome,
+    max: Option<f64>,
+    view: Option<Vec3>,
+    size: (u32, u32),
+) -> Result<Image> {
+    let mut opts = crate::render::options(view, size)?;
+    if view.is_none()
+        && let Some((lo, hi)) = fairline::mesh::bounding_box(mesh.positions())
+    {
+        let light = fairline::highlight::LightArray::default_for(lo, hi, None);
+        (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
+    }
+    let m = max.unwrap_or(out.all.max_abs);
+    let range = (m > 0.0).then_some((-m, m));
+    let mut img = mesh_picture(
+        mesh,
+        &Picture {
+            scalar: Some(ScalarField {
+                name: "deviation (model units)".into(),
+                values: &out.deviation.signed,
+                colormap: Colormap::Coolwarm,
+                range,
+            }),
+            title: Some(summary_title(out)),
+            ..Default::default()
+        },
+        &opts,
+    )?;
+    draw_histogram(&mut img, &out.all.histogram);
+    Ok(img)
+}
+
+fn summary_title(out: &deviation::DeviationOutcome) -> String {
+    let mut t = format!(
+        "deviation: max |d| {:.3e}, rms {:.3e}",
+        out.all.max_abs, out.all.rms
+    );
+    if let (Some(i), Some(o)) = (&out.inside, &out.outside) {
+        t.push_str(&format!(
+            "; region max {:.2e}, outside max {:.2e}",
+            i.max_abs, o.max_abs
+        ));
+    }
+    t
+}
+
+/// A histogram of the signed values in the lower-left corner: one bar per
+/// bin, coloured as the bin's centre is on the map, bar heights on a
+/// logarithmic scale, ln(1 + count) (so that a few large values still show
+/// beside a bin of thousands at zero), with the range written under it.
+fn draw_histogram(img: &mut Image, h: &Histogram) {
+    let (w, ht) = (img.width.min(1600) / 4, img.height / 6);
+    if w < 40 || ht < 30 || h.counts.is_empty() {
+        return;
+    }
+    let (x0, y0) = (16i64, img.height as i64 - ht as i64 - 30);
+    img.fill_rect(x0 - 4, y0 - 4, w + 8, ht + 26, [255, 255, 255, 230]);
+    let n = h.counts.len();
+    let top = (h.counts.iter().copied().max().unwrap_or(0).max(1) as f64).ln_1p();
+    let bw = (w as f64 / n as f64).max(1.0);
+    for (k, &c) in h.counts.iter().enumerate() {
+        let t = (k as f64 + 0.5) / n as f64;
+        let colour = linear_to_srgb8(Colormap::Coolwarm.map(t));
+        let bh = ((c as f64).ln_1p() / top * ht as f64).round() as u32;
+        let x = x0 + (k as f64 * bw) as i64;
+        let bw_px = (bw.floor() as u32).max(1);
+        img.fill_rect(
+            x,
+            y0 + (ht - bh) as i64,
+            bw_px,
+            bh,
+            [colour[0], colour[1], colour[2], 255],
+        );
+    }
+    img.fill_rect(x0 + (w / 2) as i64, y0, 1, ht, [0, 0, 0, 255]);
+    let label = format!("{:.2e} .. 0 .. {:.2e} (log count)", h.lo, h.hi);
+    img.draw_text(x0, y0 + ht as i64 + 6, &label, [0, 0, 0, 255], 1);
+}

@@ -1,0 +1,225 @@
+//! The evaluation tools of the workbench: deviation between states or
+//! documents, and the point probe. Computations are the library's and the
+//! command layer's; this file parses requests and shapes answers.
+//!
+//! - `POST /api/doc/K/deviation` `{"against": "original" | "previous" |
+//!   {"doc": J}, "faces"?: [..]}`: the signed deviation of document K's
+//!   current state from its opening state, from the step before the
+//!   current one, or from document J's current state
+//!   ([`fairline_commands::deviation`]). Binary frame: the header holds
+//!   the report (`method`, `units`, `all`, and with `faces`
+//!   `inside_region` / `outside_region`: the statistics inside the marked
+//!   triangles' vertices and outside them), `range` (`lo`, `hi`: the
+//!   colour range ±max |d|, centred on 0), `summary` and `command`; then one f32
+//!   per vertex of document K.
+//! - `POST /api/doc/K/probe` `{"face": f, "point"?: [x,y,z]}` (point
+//!   relative to the document's `center`, default the triangle's
+//!   centroid): the point of triangle `f` closest to `point`, the
+//!   interpolated unit normal, the principal curvatures `k1 ≥ k2`
+//!   (Rusinkiewicz's estimate at the vertices, interpolated
+//!   barycentrically), their radii (`null` where |k| < 1e-12: flat),
+//!   `mean` and `gauss`. Positions in the answer are absolute.
+
+use super::api::{Answer, Shared, bad, binary, error, json_answer, lock, parse};
+use super::doc::{Doc, shell_word};
+use super::frame::frame;
+use fairline::geom::{
+    CurvatureMethod, PrincipalCurvatures, closest_point_on_triangle, principal_curvatures,
+};
+use fairline::mesh::FaceId;
+use fairline::{Control, SurfaceMesh, Vec3};
+use fairline_commands::deviation::{self, DeviationSettings};
+use serde::Deserialize;
+use serde_json::{Value, json};
+use std::sync::{Arc, Mutex};
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum Against {
+    Named(String),
+    Doc { doc: usize },
+}
+
+#[derive(Deserialize)]
+struct DeviationRequest {
+    against: Against,
+    #[serde(default)]
+    faces: Option<Vec<u32>>,
+}
+
+/// `POST /api/doc/K/deviation` (module documentation).
+pub fn deviation(shared: &Shared, k: usize, body: &[u8]) -> Answer {
+    let req: DeviationRequest = match parse(body) {
+        Ok(r) => r,
+        Err(a) => return a,
+    };
+    let (reference, measured, command) = {
+        let st = lock(shared);
+        let docs = &st.docs;
+        let d = &docs[k];
+        let (reference, ref_file) = match &req.against {
+            Against::Named(n) if n == "original" => (d.shared_tri_at(Some(0)), file_at(d, 0)),
+            Against::Named(n) if n == "previous" => {
+                let p = d.cursor.saturating_sub(1);
+                (d.shared_tri_at(Some(p)), file_at(d, p))
+            }
+            Against::Named(n) => {
+                return bad(format!(
+                    "against: `{n}`; give \"original\", \"previous\" or {{\"doc\": J}}"
+                ));
+            }
+            Against::Doc { doc } => match docs.get(*doc) {
+                Some(o) => (o.shared_tri_at(None), o.current_file()),
+                None => return error(404, format!("no document {doc}")),
+            },
+        };
+        let region = if req.faces.as_ref().is_some_and(|f| !f.is_empty()) {
+            " --region region.json"
+        } else {
+            ""
+        };
+        let command = format!(
+            "fairline deviation {ref_file} {}{region} --png deviation.png --report deviation.json",
+            d.current_file()
+        );
+        (reference, d.shared_tri_at(None), command)
+    };
+    let faces: Option<Vec<FaceId>> = req
+        .faces
+        .as_ref()
+        .filter(|f| !f.is_empty())
+        .map(|f| f.iter().map(|&i| FaceId(i)).collect());
+    let out = match deviation::run(
+        &reference,
+        &measured,
+        faces.as_deref(),
+        &DeviationSettings::default(),
+        &Control::new(),
+    ) {
+        Ok(o) => o,
+        Err(e) => return bad(e.message(fairline_commands::FrontEnd::Cli)),
+    };
+    // the whole range, as the histogram: a fairing moves few vertices,
+    // and a percentile would saturate all of them
+    let m = out.all.max_abs.max(1e-12);
+    let mut header = out.report.to_json();
+    header["range"] = json!({"lo": -m, "hi": m});
+    header["summary"] = json!(deviation::summary(&out));
+    header["command"] = json!(command);
+    let floats: Vec<f32> = out.deviation.signed.iter().map(|&x| x as f32).collect();
+    binary(frame(&header, &floats))
+}
+
+/// The file name of step `n` of `d` as the commands call it: the input
+/// file for step 0, else the output name a command would give it.
+fn file_at(d: &Doc, n: usize) -> String {
+    if n == 0 {
+        return shell_word(&d.path.display().to_string());
+    }
+    let stem = d
+        .path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let ext = if d.is_surface() {
+        "json".to_string()
+    } else {
+        d.path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_else(|| "ply".into())
+    };
+    shell_word(&format!("{stem}-step{n}.{ext}"))
+}
+
+#[derive(Deserialize)]
+struct ProbeRequest {
+    face: u32,
+    #[serde(default)]
+    point: Option<[f64; 3]>,
+}
+
+/// The principal curvatures of the last state probed: a probe is a click,
+/// and clicks come in series on one state.
+struct CurvatureCache {
+    doc: usize,
+    mesh: Arc<SurfaceMesh>,
+    curvatures: Arc<PrincipalCurvatures>,
+}
+
+static CURVATURE_CACHE: Mutex<Option<CurvatureCache>> = Mutex::new(None);
+
+fn curvatures_of(doc: usize, mesh: &Arc<SurfaceMesh>) -> Arc<PrincipalCurvatures> {
+    let mut cache = CURVATURE_CACHE.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(c) = cache.as_ref()
+        && c.doc == doc
+        && Arc::ptr_eq(&c.mesh, mesh)
+    {
+        return Arc::clone(&c.curvatures);
+    }
+    let curvatures = Arc::new(principal_curvatures(mesh, CurvatureMethod::Rusinkiewicz));
+    *cache = Some(CurvatureCache {
+        doc,
+        mesh: Arc::clone(mesh),
+        curvatures: Arc::clone(&curvatures),
+    });
+    curvatures
+}
+
+/// `1/k`, or `None` for |k| < 1e-12 (flat in that direction).
+fn radius(k: f64) -> Option<f64> {
+    (k.abs() >= 1e-12 && k.is_finite()).then(|| 1.0 / k)
+}
+
+/// `POST /api/doc/K/probe` (module documentation).
+pub fn probe(shared: &Shared, k: usize, body: &[u8]) -> Answer {
+    let req: ProbeRequest = match parse(body) {
+        Ok(r) => r,
+        Err(a) => return a,
+    };
+    let (mesh, center) = {
+        let st = lock(shared);
+        let d = &st.docs[k];
+        (d.shared_tri_at(None), d.center)
+    };
+    if req.face as usize >= mesh.face_count() {
+        return bad(format!(
+            "face {} out of range (the mesh has {} triangles)",
+            req.face,
+            mesh.face_count()
+        ));
+    }
+    let c = curvatures_of(k, &mesh);
+    let t = mesh.triangle(FaceId(req.face));
+    let p = t.map(|v| mesh.position(v));
+    let target = match req.point {
+        Some(q) if q.iter().all(|x| x.is_finite()) => Vec3::from(q) + center,
+        Some(_) => return bad("point must be finite"),
+        None => (p[0] + p[1] + p[2]) / 3.0,
+    };
+    let w = closest_point_on_triangle(target, p[0], p[1], p[2]);
+    let at = w[0] * p[0] + w[1] * p[1] + w[2] * p[2];
+    let lerp = |v: &[f64]| -> f64 {
+        let x = w[0] * v[t[0].idx()] + w[1] * v[t[1].idx()] + w[2] * v[t[2].idx()];
+        if x.is_finite() { x } else { 0.0 }
+    };
+    let n = (w[0] * c.normals[t[0].idx()]
+        + w[1] * c.normals[t[1].idx()]
+        + w[2] * c.normals[t[2].idx()])
+    .normalize_or_zero();
+    let (k1, k2) = (lerp(&c.k1), lerp(&c.k2));
+    let (k1, k2) = (k1.max(k2), k1.min(k2));
+    let answer: Value = json!({
+        "face": req.face,
+        "point": at.to_array(),
+        "normal": n.to_array(),
+        "k1": k1,
+        "k2": k2,
+        "r1": radius(k1),
+        "r2": radius(k2),
+        "mean": 0.5 * (k1 + k2),
+        "gauss": k1 * k2,
+        "method": "rusinkiewicz",
+    });
+    json_answer(&answer)
+}

@@ -1,0 +1,145 @@
+//! `fairline deviation`: closed-form distances between concentric spheres,
+//! the split of the statistics inside and outside a region, the picture,
+//! the CSV, and the refusal of bad input (exit 2, the file named, nothing
+//! written).
+
+mod common;
+use common::{json, ok, run, s, tmp};
+use fairline::shapes;
+
+#[test]
+fn concentric_spheres_deviate_by_their_radius_difference() {
+    let dir = tmp("deviation-spheres");
+    let (a, b) = (dir.join("inner.obj"), dir.join("outer.ply"));
+    fairline::io::write_mesh(&a, &shapes::icosphere(1.0, 4)).unwrap();
+    fairline::io::write_mesh(&b, &shapes::uv_sphere(1.2, 64, 32)).unwrap();
+    let (png, csv, report) = (dir.join("d.png"), dir.join("d.csv"), dir.join("d.json"));
+    let out = run(&[
+        "deviation",
+        s(&a),
+        s(&b),
+        "--png",
+        s(&png),
+        "--csv",
+        s(&csv),
+        "--report",
+        s(&report),
+        "--size",
+        "400x300",
+    ]);
+    ok(&out);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("fairline deviation:"), "{stderr}");
+    let r = json(&report);
+    assert_eq!(r["method"], "closest-point");
+    // the inner sphere's tessellation lies within 2e-3 of radius 1
+    let all = &r["all"];
+    assert!((all["min"].as_f64().unwrap() - 0.2).abs() < 3e-3, "{all}");
+    assert!((all["max"].as_f64().unwrap() - 0.2).abs() < 3e-3, "{all}");
+    assert!((all["rms"].as_f64().unwrap() - 0.2).abs() < 3e-3, "{all}");
+    let counts: usize = all["histogram"]["counts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_u64().unwrap() as usize)
+        .sum();
+    assert_eq!(counts, r["vertices"].as_u64().unwrap() as usize);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(text.starts_with("vertex,x,y,z,signed,distance,in_region\n"));
+    assert_eq!(
+        text.lines().count(),
+        1 + r["vertices"].as_u64().unwrap() as usize
+    );
+    let img = fairline::render::Image::decode_png(&std::fs::read(&png).unwrap()).unwrap();
+    assert_eq!((img.width, img.height), (400, 300));
+}
+
+#[test]
+fn region_splits_intended_motion_from_side_effects() {
+    let dir = tmp("deviation-region");
+    let before = shapes::plane(21);
+    let mut after = before.clone();
+    // lift the vertices of the first 40 triangles
+    let region: Vec<u32> = (0..40).collect();
+    let mut lifted = vec![false; before.vertex_count()];
+    for &f in &region {
+        for v in before.face_vertices(fairline::FaceId(f)) {
+            lifted[v.idx()] = true;
+        }
+    }
+    for (p, l) in after.positions_mut().iter_mut().zip(&lifted) {
+        if *l {
+            p.z += 0.03;
+        }
+    }
+    let (a, b, reg) = (
+        dir.join("a.obj"),
+        dir.join("b.obj"),
+        dir.join("region.json"),
+    );
+    fairline::io::write_mesh(&a, &before).unwrap();
+    fairline::io::write_mesh(&b, &after).unwrap();
+    std::fs::write(&reg, serde_json::json!({ "faces": region }).to_string()).unwrap();
+    let report = dir.join("r.json");
+    ok(&run(&[
+        "deviation",
+        s(&a),
+        s(&b),
+        "--region",
+        s(&reg),
+        "--report",
+        s(&report),
+    ]));
+    let r = json(&report);
+    assert_eq!(r["method"], "displacement");
+    assert!((r["inside_region"]["max_abs"].as_f64().unwrap() - 0.03).abs() < 1e-9);
+    assert_eq!(r["outside_region"]["max_abs"].as_f64().unwrap(), 0.0);
+    assert!(r["inside_region"]["count"].as_u64().unwrap() > 0);
+}
+
+#[test]
+fn bad_inputs_exit_2_naming_the_file_and_write_nothing() {
+    let dir = tmp("deviation-bad");
+    let good = dir.join("good.obj");
+    fairline::io::write_mesh(&good, &shapes::icosphere(1.0, 1)).unwrap();
+    let missing = dir.join("missing.obj");
+    let report = dir.join("r.json");
+    let o = run(&["deviation", s(&good), s(&missing), "--report", s(&report)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("missing.obj"));
+    assert!(!report.exists());
+    // a file with vertices but no face
+    let empty = dir.join("points.obj");
+    std::fs::write(&empty, "v 0 0 0\nv 1 0 0\n").unwrap();
+    let o = run(&["deviation", s(&empty), s(&good), "--report", s(&report)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("points.obj"));
+    assert!(!report.exists());
+    // a region face out of range names the region file
+    let reg = dir.join("region.json");
+    std::fs::write(&reg, r#"{"faces":[100000]}"#).unwrap();
+    let o = run(&[
+        "deviation",
+        s(&good),
+        s(&good),
+        "--region",
+        s(&reg),
+        "--report",
+        s(&report),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("region.json"));
+    assert!(!report.exists());
+    // a wrong picture extension
+    let o = run(&[
+        "deviation",
+        s(&good),
+        s(&good),
+        "--png",
+        s(&dir.join("d.jpg")),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let help = run(&["deviation", "--help"]);
+    ok(&help);
+    assert!(String::from_utf8_lossy(&help.stdout).contains("fairline deviation fairline-demo/"));
+}

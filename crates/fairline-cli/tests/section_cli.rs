@@ -1,0 +1,112 @@
+//! `fairline section`: a sphere cut by a horizontal plane is one closed
+//! circle whose curvature is 1/radius (within the curvature estimate's
+//! error) and whose comb teeth are scale × curvature long; bad input exits
+//! 2 with nothing written.
+
+mod common;
+use common::{json, ok, run, s, tmp};
+use fairline::shapes;
+
+#[test]
+fn sphere_section_is_a_circle_with_comb_scale_over_radius() {
+    let dir = tmp("section-sphere");
+    let mesh = dir.join("sphere.obj");
+    fairline::io::write_mesh(&mesh, &shapes::icosphere(2.0, 4)).unwrap();
+    let (csv, obj, report) = (dir.join("s.csv"), dir.join("s.obj"), dir.join("s.json"));
+    ok(&run(&[
+        "section",
+        s(&mesh),
+        "--plane-point",
+        "0,0,0.7",
+        "--plane-normal",
+        "0,0,1",
+        "--count",
+        "2",
+        "--spacing",
+        "-0.4",
+        "--comb-scale",
+        "0.5",
+        "--csv",
+        s(&csv),
+        "--obj",
+        s(&obj),
+        "--report",
+        s(&report),
+    ]));
+    let r = json(&report);
+    let sections = r["sections"].as_array().unwrap();
+    assert_eq!(sections.len(), 2);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut rows = 0;
+    for line in text.lines().skip(1) {
+        let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        let (x, y, z, k) = (v[3], v[4], v[5], v[6]);
+        let c = if v[0] == 0.0 { 0.7 } else { 0.3 };
+        assert!((z - c).abs() < 1e-9, "{line}");
+        let rho = (x * x + y * y).sqrt();
+        let want = (4.0f64 - c * c).sqrt();
+        assert!((rho - want).abs() < 0.01 * want, "{rho} vs {want}");
+        assert!(
+            (k * want - 1.0).abs() < 0.05,
+            "curvature {k} at radius {want}"
+        );
+        let comb = (v[7] * v[7] + v[8] * v[8] + v[9] * v[9]).sqrt();
+        assert!((comb - 0.5 * k).abs() < 1e-9, "comb {comb}");
+        // outward: away from the axis
+        assert!(v[7] * x + v[8] * y > 0.0, "{line}");
+        rows += 1;
+    }
+    let mut points = 0;
+    for sec in sections {
+        let curves = sec["curves"].as_array().unwrap();
+        assert_eq!(curves.len(), 1);
+        assert_eq!(curves[0]["closed"], true);
+        points += curves[0]["points"].as_u64().unwrap() as usize;
+    }
+    assert_eq!(rows, points);
+    let obj_text = std::fs::read_to_string(&obj).unwrap();
+    assert_eq!(
+        obj_text.lines().filter(|l| l.starts_with("l ")).count(),
+        2 + points
+    );
+}
+
+#[test]
+fn bad_input_exits_2_and_writes_nothing() {
+    let dir = tmp("section-bad");
+    let mesh = dir.join("sphere.obj");
+    fairline::io::write_mesh(&mesh, &shapes::icosphere(1.0, 1)).unwrap();
+    let csv = dir.join("s.csv");
+    for args in [
+        vec!["--plane-point", "0,0,0", "--plane-normal", "0,0,0"],
+        vec![
+            "--plane-point",
+            "0,0,0",
+            "--plane-normal",
+            "0,0,1",
+            "--count",
+            "0",
+        ],
+    ] {
+        let mut all = vec!["section", s(&mesh)];
+        all.extend(args);
+        all.extend(["--csv", s(&csv)]);
+        let o = run(&all);
+        assert_eq!(o.status.code(), Some(2), "{all:?}");
+        assert!(!csv.exists());
+    }
+    let missing = dir.join("nope.obj");
+    let o = run(&[
+        "section",
+        s(&missing),
+        "--plane-point",
+        "0,0,0",
+        "--plane-normal",
+        "0,0,1",
+        "--csv",
+        s(&csv),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("nope.obj"));
+    assert!(!csv.exists());
+}
