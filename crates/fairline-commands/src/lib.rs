@@ -20,6 +20,7 @@
 
 #![forbid(unsafe_code)]
 
+pub mod continuity;
 pub mod curvature;
 pub mod detect;
 pub mod enhance;
@@ -28,6 +29,7 @@ pub mod fair;
 pub mod fair_quad;
 pub mod fair_surface;
 pub mod highlight;
+pub mod info;
 pub mod lights;
 pub mod names;
 pub mod regions;
