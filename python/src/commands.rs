@@ -1,12 +1,11 @@
 //! Mesh commands: `read_mesh`, `write_mesh`, `curvature`, `deviation`, `highlight_lines`,
 //! `detect`, `fair`, `smooth`, `fair_quad`, `enhance`, `repair`.
 //!
-//! Each runs one command: `fair` and `smooth` through the command layer
-//! (`fairline_commands`), as the CLI and the workbench do; the others mirror
-//! their CLI command (crates/fairline-cli/src/<command>.rs): the same
-//! library calls with the same options and defaults, the same refusals, the
-//! same report keys. What the CLI does with files (reading the mesh,
-//! writing outputs, pictures) is left out: arrays come in and go out.
+//! Each runs one command: `curvature`, `detect`, `fair`, `smooth`,
+//! `fair_quad`, `enhance`, `repair` and `highlight_lines` through the
+//! command layer (`fairline_commands`), as the CLI and the workbench do.
+//! What the CLI does with files (reading the mesh, writing outputs,
+//! pictures) is left out: arrays come in and go out.
 
 #![allow(clippy::too_many_arguments)]
 
@@ -14,24 +13,22 @@ use crate::{Failure, Res, SoupArrays, mesh_from, positions_array, soup_arrays, s
 use fairline::enhance::{EnhanceSolver, Projection};
 use fairline::fair::FairMethod;
 use fairline::geom::CurvatureMethod;
-use fairline::highlight::{
-    CircularLight, CircularLights, DetectOptions, HighlightError, HighlightModel, HighlightOptions,
-    LightArray, Readability, UpAxis, circular_highlight_bands, circular_highlight_lines,
-    detect_irregularities,
-};
+use fairline::highlight::{CircularLights, HighlightOptions, LightArray, UpAxis};
 use fairline::io::RegionSpec;
 use fairline::mesh::{FaceId, VertexId};
 use fairline::smooth::SmoothMethod;
 use fairline::{SurfaceMesh, Vec3};
 use fairline_commands::curvature::CurvatureSettings;
+use fairline_commands::detect::{DetectInput, DetectSettings};
 use fairline_commands::enhance::EnhanceSettings;
 use fairline_commands::fair::{FairInput, FairSettings};
 use fairline_commands::fair_quad::QuadSettings;
+use fairline_commands::highlight::{HighlightLights, HighlightSettings};
 use fairline_commands::smooth::SmoothSettings;
-use fairline_commands::{Choice, FrontEnd, Lights, Report, Warning, Weights};
+use fairline_commands::{Choice, FrontEnd, Lights, Weights};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
-use serde_json::{Value, json};
+use serde_json::Value;
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
@@ -149,7 +146,7 @@ fn deviation<'py>(
     let before = soup_from(&v0, &indices0, &offsets0)?;
     let after = soup_from(&v1, &indices1, &offsets1)?;
     let settings = fairline_commands::deviation::DeviationSettings { bins };
-    let (signed, distance, inside, report) = crate::compute(py, || -> Res<_> {
+    let (signed, distance, inside, report) = crate::compute(py, move |control| -> Res<_> {
         let before = mesh_from(&before)?;
         let after = mesh_from(&after)?;
         let faces: Option<Vec<FaceId>> = region.map(|r| r.into_iter().map(FaceId).collect());
@@ -158,7 +155,7 @@ fn deviation<'py>(
             &after,
             faces.as_deref(),
             &settings,
-            &Control::new(),
+            control,
         )?;
         // one value per input vertex, as the CLI's CSV
         let n = after.original_vertex_count();
@@ -501,21 +498,6 @@ impl LightOptions {
         Ok(self.fields(self.given()?))
     }
 
-    /// The linear light array ([`Lights::light_array`]).
-    fn light_array(&self, mesh: &SurfaceMesh) -> Res<LightArray> {
-        Ok(self.lights()?.light_array(mesh)?)
-    }
-
-    /// The linear light array of a part of B-spline surfaces
-    /// ([`Lights::part_light_array`]).
-    pub(crate) fn part_light_array(
-        &self,
-        surfaces: &[fairline::bspline::BSplineSurface],
-    ) -> Res<LightArray> {
-        let (array, _) = self.fields(self.given()?).part_light_array(surfaces)?;
-        Ok(array)
-    }
-
     /// The `up` axis as a vector (`None` for auto).
     pub(crate) fn up_vector(&self) -> Option<Vec3> {
         self.up.vector()
@@ -526,22 +508,6 @@ impl LightOptions {
         self.min_normal_cos
             .unwrap_or(HighlightOptions::default().min_normal_cos)
     }
-
-    /// The lights to draw and read lines with ([`Lights::readable`]).
-    fn readable(&self, mesh: &SurfaceMesh, light: LightArray) -> Res<LightArray> {
-        let given = self.lights.is_some().then_some(light);
-        Ok(self.fields(given).readable(mesh, light)?)
-    }
-
-    /// Model options.
-    fn options(&self) -> HighlightOptions {
-        self.fields(None).options()
-    }
-}
-
-/// Library errors about lights, options or the mesh are bad input.
-pub(crate) fn highlight_error(e: HighlightError) -> Failure {
-    Failure::bad(e.to_string())
 }
 
 /// The mesh, triangulated when it has polygons, and for each triangle the
@@ -558,8 +524,8 @@ fn triangles(soup: &fairline::Soup) -> Res<(SurfaceMesh, Option<Vec<FaceId>>)> {
     }
 }
 
-/// `fairline highlight` on a mesh (crates/fairline-cli/src/highlight.rs):
-/// the lines document (as the CLI's JSON output) and the report.
+/// `fairline highlight` on a mesh: the command layer's `highlight`; the
+/// lines document (as the CLI's JSON output) and the report.
 #[pyfunction]
 #[pyo3(signature = (v, indices, offsets, direction = None, plane_normal = None, up = "auto",
     plane_point = None, spacing = None, lights = None, min_normal_cos = None,
@@ -616,87 +582,36 @@ fn highlight_lines(
     }
     let circle_center = vec3("circle_center", circle_center)?;
     let circle_axis = vec3("circle_axis", circle_axis)?;
-    let soup = soup_from(&v, &indices, &offsets)?;
-    let out = crate::compute(py, move |control| -> Res<_> {
-        let (mesh, _) = triangles(&soup)?;
-        let mut report = Report::new("highlight");
-        report.set("vertices", mesh.vertex_count());
-        report.set("faces", mesh.face_count());
-        let circular = match (circle_center, circle_axis, radii) {
-            (Some(c), Some(t), Some(radii)) => Some(CircularLights {
+    let lights = match (circle_center, circle_axis, radii) {
+        (Some(c), Some(t), Some(radii)) => HighlightLights::Circular {
+            spec: CircularLights {
                 center: c.to_array(),
                 axis: t.to_array(),
                 radii,
-            }),
-            _ => light.circular()?,
-        };
-        let (lines, bands, radii) = if let Some(spec) = circular {
-            let radii = spec.radii.clone();
-            let lights: Vec<CircularLight> = spec.lights().map_err(highlight_error)?;
-            if lights.is_empty() {
-                return Err(Failure::bad("circular lights need at least one radius"));
-            }
-            let (lines, bands) = report
-                .time(|| -> Result<_, HighlightError> {
-                    let opts = HighlightOptions::default().control(control.clone());
-                    let lines = circular_highlight_lines(&mesh, &lights, &opts)?;
-                    let bands = match band {
-                        Some(rho) => Some(circular_highlight_bands(&mesh, &lights, rho, &opts)?),
-                        None => None,
-                    };
-                    Ok((lines, bands))
-                })
-                .map_err(highlight_error)?;
-            report.set(
-                "light",
-                json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii}),
-            );
-            (lines, bands, Some(radii))
-        } else {
-            let array = light.light_array(&mesh)?;
-            let array = light.readable(&mesh, array)?;
-            let opts = light.options().control(control.clone());
-            let (lines, bands, shown) = report
-                .time(|| -> Result<_, HighlightError> {
-                    let model = HighlightModel::new(&mesh, array, opts)?;
-                    let lines = model.lines(&mesh);
-                    let bands = match band {
-                        Some(rho) => Some(model.bands(&mesh, rho)?),
-                        None => None,
-                    };
-                    let shown =
-                        model.readable_lines(&mesh, &lines, &Readability::for_part(&mesh, &array));
-                    Ok((lines, bands, shown))
-                })
-                .map_err(highlight_error)?;
-            report.set("light", json!({"kind": "linear", "array": array}));
-            report.set(
-                "drawn",
-                fairline::highlight::DrawnLineStats::of(&mesh, &array, &shown),
-            );
-            (lines, bands, None)
-        };
-        let document =
-            fairline::highlight::highlight_lines_json(&lines, bands.as_ref(), radii.as_deref());
-        let counts = lines.counts();
-        report.set("summary", counts);
-        report.set_fields(counts);
-        if let Some(b) = &bands {
-            report.set(
-                "band",
-                json!({"radius": b.radius, "lower_lines": b.lower.lines.len(), "upper_lines": b.upper.lines.len()}),
-            );
-        }
-        if lines.lines.is_empty() {
-            report.warn(Warning::Text("no highlight line crosses the mesh; try other light options (--plane-normal, --direction, --spacing)".into()));
-        }
-        Ok((document.to_string(), report.to_json().to_string()))
+            },
+            from_lights: false,
+        },
+        _ => match light.circular()? {
+            Some(spec) => HighlightLights::Circular {
+                spec,
+                from_lights: true,
+            },
+            None => HighlightLights::Linear(light.lights()?),
+        },
+    };
+    let settings = HighlightSettings { lights, band };
+    let soup = soup_from(&v, &indices, &offsets)?;
+    let out = crate::compute(py, move |control| -> Res<_> {
+        let (mesh, _) = triangles(&soup)?;
+        let out = fairline_commands::highlight::run(&mesh, &settings, control)?;
+        let document = fairline_commands::highlight::lines_document(&out);
+        Ok((document.to_string(), out.report.to_json().to_string()))
     })?;
     Ok(out)
 }
 
-/// `fairline detect` (crates/fairline-cli/src/detect.rs): the region's
-/// faces (as the CLI's `-o` JSON `faces`) and the report.
+/// `fairline detect`: the command layer's `detect`; the region's faces
+/// (as the CLI's `-o` JSON `faces`) and the report.
 #[pyfunction]
 #[pyo3(signature = (v, indices, offsets, direction = None, plane_normal = None, up = "auto",
     plane_point = None, spacing = None, lights = None, min_normal_cos = None,
@@ -727,65 +642,24 @@ fn detect<'py>(
         lights,
         min_normal_cos,
     )?;
+    let d = DetectSettings::default();
+    let settings = DetectSettings {
+        lights: light.lights()?,
+        threshold: threshold.unwrap_or(d.threshold),
+        smooth_radius: smooth_radius.unwrap_or(d.smooth_radius),
+        region_margin: region_margin.unwrap_or(d.region_margin),
+        max_regions,
+    };
     let soup = soup_from(&v, &indices, &offsets)?;
     let (faces, report) = crate::compute(py, move |control| -> Res<_> {
         let (mesh, source) = triangles(&soup)?;
-        let array = light.light_array(&mesh)?;
-        let d = DetectOptions::default();
-        let threshold = threshold.unwrap_or(d.threshold);
-        let opts = DetectOptions::default()
-            .threshold(threshold)
-            .smooth_radius(smooth_radius.unwrap_or(d.smooth_radius))
-            .region_margin(region_margin.unwrap_or(d.region_margin))
-            .control(control.clone());
-        let mut report = Report::new("detect");
-        // the measure works at the scale of `array`; the lines listed are
-        // those of the readable lights (the CLI's `detect_with_lines`)
-        let shown_light = light.readable(&mesh, array)?;
-        let (lines, shown, mut det) = report
-            .time(|| -> Result<_, HighlightError> {
-                let model = HighlightModel::new(
-                    &mesh,
-                    shown_light,
-                    light.options().control(control.clone()),
-                )?;
-                let lines = model.lines(&mesh);
-                let shown = model.readable_lines(
-                    &mesh,
-                    &lines,
-                    &Readability::for_part(&mesh, &shown_light),
-                );
-                let det = detect_irregularities(&mesh, &array, &shown, &opts)?;
-                Ok((lines, shown, det))
-            })
-            .map_err(highlight_error)?;
-        if let Some(n) = max_regions {
-            det.regions.truncate(n);
-        }
-        let all = fairline_commands::regions::suggested_region(&mesh, &det, source.as_deref());
-        let regions = fairline_commands::regions::detected_region_entries(&det, source.as_deref());
-        report.set("vertices", mesh.vertex_count());
-        report.set("lines", lines.lines.len());
-        report.set("spacing", array.spacing());
-        report.set("drawn_spacing", shown_light.spacing());
-        report.set(
-            "drawn",
-            fairline::highlight::DrawnLineStats::of(&mesh, &shown_light, &shown),
-        );
-        // the library's numbers of the measure, under its own names (as
-        // the CLI writes them)
-        if let Ok(serde_json::Value::Object(numbers)) = serde_json::to_value(&det) {
-            for (key, value) in numbers {
-                report.set(&key, value);
-            }
-        }
-        report.set("light", array);
-        report.set("region_faces", all.len());
-        report.set("regions", regions);
-        if lines.lines.is_empty() {
-            report.warn(Warning::Text("no highlight line crosses the mesh, so nothing could be detected; try other light options (--plane-normal, --direction, --spacing)".into()));
-        }
-        Ok((all, report.to_json().to_string()))
+        let input = DetectInput {
+            mesh: &mesh,
+            source: source.as_deref(),
+            name: None,
+        };
+        let out = fairline_commands::detect::run(input, &settings, control)?;
+        Ok((out.region, out.report.to_json().to_string()))
     })?;
     Ok((PyArray1::from_vec(py, faces), report))
 }

@@ -81,7 +81,7 @@ impl From<fairline::io::IoError> for Failure {
 impl From<fairline_commands::CommandError> for Failure {
     /// The command layer's kinds as the Python exception classes; the
     /// message worded with the package's keyword names, the region named
-    /// `region`.
+    /// `region` and the lights `lights`.
     fn from(e: fairline_commands::CommandError) -> Self {
         use fairline_commands::{ErrorKind, FrontEnd, Subject};
         let kind = match e.kind() {
@@ -92,6 +92,7 @@ impl From<fairline_commands::CommandError> for Failure {
         let message = e.message(FrontEnd::Python);
         let message = match e.subject() {
             Some(Subject::Region) => format!("region: {message}"),
+            Some(Subject::Lights) => format!("lights: {message}"),
             _ => message,
         };
         Failure { kind, message }

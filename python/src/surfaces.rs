@@ -8,18 +8,14 @@
 
 #![allow(clippy::too_many_arguments)]
 
-use crate::commands::{LightOptions, bad_choice, highlight_error, vec3};
+use crate::commands::{LightOptions, bad_choice, vec3};
 use crate::{Failure, Res};
 use fairline::bspline::BSplineSurface;
-use fairline::highlight::surface_highlight_lines_json;
-use fairline::highlight::{
-    CircularLight, CircularLights, PartLights, PatchHighlights, SurfaceHighlightOptions,
-    part_highlight_lines,
-};
+use fairline::highlight::CircularLights;
 use fairline::io::{parse_surfaces_json, surfaces_to_json};
-use fairline_commands::{Report, Warning};
+use fairline_commands::highlight::HighlightLights;
+use fairline_commands::surface_highlight::SurfaceHighlightSettings;
 use pyo3::prelude::*;
-use serde_json::json;
 use std::path::PathBuf;
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -135,8 +131,8 @@ fn write_surfaces(py: Python<'_>, path: PathBuf, surfaces: String) -> PyResult<(
     Ok(())
 }
 
-/// `fairline highlight SURFACES.json` (crates/fairline-cli/src/
-/// surface_highlight.rs): the lines document and the report.
+/// `fairline highlight SURFACES.json`: the command layer's
+/// `surface_highlight`; the lines document and the report.
 #[pyfunction]
 #[pyo3(signature = (surfaces, circle_center = None, circle_axis = None, radii = None, band = None,
     grid = 200, surface = None, direction = None, plane_normal = None, up = "auto",
@@ -189,110 +185,48 @@ fn surface_highlight_lines(
     )?;
     let circle_center = vec3("circle_center", circle_center)?;
     let circle_axis = vec3("circle_axis", circle_axis)?;
+    // as the CLI: given, from a circular `lights` dictionary, or derived
+    // from the whole part (`circular`)
+    let lights = if let (Some(c), Some(t), Some(radii)) = (circle_center, circle_axis, radii) {
+        HighlightLights::Circular {
+            spec: CircularLights {
+                center: c.to_array(),
+                axis: t.to_array(),
+                radii,
+            },
+            from_lights: false,
+        }
+    } else if let Some(spec) = light.circular()? {
+        HighlightLights::Circular {
+            spec,
+            from_lights: true,
+        }
+    } else if circular {
+        HighlightLights::DerivedCircular {
+            up: light.up_vector(),
+        }
+    } else {
+        HighlightLights::Linear(light.lights()?)
+    };
+    let settings = SurfaceHighlightSettings {
+        lights,
+        grid,
+        band,
+        surface,
+    };
     let all = parse(&surfaces, "surfaces")?;
-    let out = crate::compute(py, move |_control| -> Res<_> {
+    let out = crate::compute(py, move |control| -> Res<_> {
         if all.is_empty() {
             return Err(Failure::bad("surfaces: no B-spline surface given"));
         }
-        let all_surfaces = all.clone();
-        let chosen: Vec<(usize, BSplineSurface)> = match surface {
-            Some(k) => {
-                let s = all.get(k).cloned().ok_or_else(|| {
-                    Failure::bad(format!(
-                        "surface {k} is out of range (the file holds {} surfaces)",
-                        all.len()
-                    ))
-                })?;
-                vec![(k, s)]
-            }
-            None => all.into_iter().enumerate().collect(),
-        };
-        let surfaces: Vec<BSplineSurface> = chosen.iter().map(|(_, s)| s.clone()).collect();
-        let mut report = Report::new("highlight");
-        report.set("surfaces", chosen.len());
-        report.set("grid", grid);
-        let opts = SurfaceHighlightOptions::default().grid(grid).band(band);
-        // as the CLI: given, from a circular `lights` dictionary, or derived
-        // from the whole part (`circular`)
-        let spec = if let (Some(c), Some(t), Some(radii)) = (circle_center, circle_axis, radii) {
-            Some((
-                CircularLights {
-                    center: c.to_array(),
-                    axis: t.to_array(),
-                    radii,
-                },
-                false,
-            ))
-        } else if let Some(spec) = light.circular()? {
-            Some((spec, false))
-        } else if circular {
-            let spec = fairline::highlight::default_circular_lights(
-                &all_surfaces,
-                light.up_vector(),
-                fairline::highlight::DEFAULT_CIRCULAR_RADII,
-            )
-            .ok_or_else(|| {
-                Failure::bad(
-                    "cannot derive circular lights: the part has no area with a defined normal",
-                )
-            })?;
-            Some((spec, true))
-        } else {
-            None
-        };
-        let circular = if let Some((spec, derived)) = spec {
-            let lights = spec.lights().map_err(highlight_error)?;
-            if lights.is_empty() {
-                return Err(Failure::bad("circular lights need at least one radius"));
-            }
-            let mut l = json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii});
-            if derived {
-                l["derived"] = json!(true);
-            }
-            report.set("light", l);
-            Some(lights)
-        } else {
-            None
-        };
-        let array = match circular {
-            Some(_) => None,
-            None => {
-                let a = light.part_light_array(&surfaces)?;
-                report.set("light", json!({"kind": "linear", "array": a}));
-                Some(a)
-            }
-        };
-        let min_cos = light.min_normal_cos();
-        let part_lights = match (circular, array) {
-            (Some(c), _) => PartLights::Circular(c),
-            (None, Some(array)) => PartLights::Linear {
-                array,
-                min_cos,
-                max_lights: fairline::highlight::surface::DEFAULT_MAX_LIGHTS,
-            },
-            (None, None) => PartLights::Circular(Vec::new()),
-        };
-        let patches = report.time(|| part_highlight_lines(&surfaces, &part_lights, &opts, &|| {}));
-        let results: Vec<(usize, &PatchHighlights)> = chosen
-            .iter()
-            .zip(&patches)
-            .map(|((k, _), p)| (*k, p))
-            .collect();
-        // the CLI's lines document (`fairline::io::surface_highlight_lines_json`)
-        let (doc, counts) = surface_highlight_lines_json(&results, band);
-        let line_count = counts.lines;
-        report.set("lines", counts.lines);
-        report.set("closed_lines", counts.closed_lines);
-        report.set("points", counts.points);
-        if line_count == 0 {
-            report.warn(Warning::Text("no highlight line pre-image was found on the surface; try other radii, --circle-center or --circle-axis".into()));
-        }
-        Ok((doc.to_string(), report.to_json().to_string()))
+        let out =
+            fairline_commands::surface_highlight::run(&all, &settings, control, &|| {})?;
+        Ok((out.document.to_string(), out.report.to_json().to_string()))
     })?;
     Ok(out)
 }
 
-/// `fairline fair-surface` (crates/fairline-cli/src/fair_surface.rs): all
+/// `fairline fair-surface`: the command layer's `fair_surface`; all
 /// surfaces with surface `surface` faired (JSON text) and the report.
 /// `lights` and `endpoints` are the JSON texts of the CLI's files.
 #[pyfunction]
@@ -318,10 +252,8 @@ fn fair_surface(
     fairness_weight: Option<f64>,
     damped_step: Option<f64>,
 ) -> PyResult<(String, String)> {
-    use fairline::fair::{
-        BoundaryControl, Endpoints, SurfaceFairError, SurfaceFairMethod, SurfaceFairOptions,
-        fair_surface as library_fair_surface,
-    };
+    use fairline::fair::{BoundaryControl, Endpoints, SurfaceFairMethod};
+    use fairline_commands::fair_surface::{FairSurfaceInput, FairSurfaceSettings, run};
     let method = match method {
         "regularised" => SurfaceFairMethod::Regularised,
         "paper" => SurfaceFairMethod::Paper,
@@ -335,77 +267,38 @@ fn fair_surface(
             return Err(bad_choice("boundary", other, &["fixed", "tangent", "free"]).into());
         }
     };
-    let mut all = parse(&surfaces, "surfaces")?;
-    if surface >= all.len() {
-        return Err(Failure::bad(format!(
-            "surface {surface} is out of range (the file holds {} surfaces)",
-            all.len()
-        ))
-        .into());
-    }
+    let all = parse(&surfaces, "surfaces")?;
+    fairline_commands::fair_surface::check_surface(surface, all.len()).map_err(Failure::from)?;
     let spec: CircularLights =
         serde_json::from_str(&lights).map_err(|e| Failure::bad(format!("lights: {e}")))?;
-    let lights: Vec<CircularLight> = spec
-        .lights()
-        .map_err(|e| Failure::bad(format!("lights: {e}")))?;
     let ends: Endpoints =
         serde_json::from_str(&endpoints).map_err(|e| Failure::bad(format!("endpoints: {e}")))?;
-    let d = SurfaceFairOptions::default();
-    let truncation = truncation.unwrap_or(d.truncation);
-    let min_truncation = min_truncation.unwrap_or(d.min_truncation);
-    let opts = SurfaceFairOptions::default()
-        .lights(lights)
-        .endpoints(ends.endpoints)
-        .grid(grid.unwrap_or(d.grid))
-        .sample_spacing(sample_spacing.unwrap_or(d.sample_spacing))
-        .truncation(truncation)
-        // as the CLI: a larger floor is taken as `truncation`; NaN is left
-        // for the library's option check to refuse
-        .min_truncation(if min_truncation > truncation {
-            truncation
-        } else {
-            min_truncation
-        })
-        .epsilon(epsilon.unwrap_or(d.epsilon))
-        .max_iterations(max_iterations.unwrap_or(d.max_iterations))
-        .method(method)
-        .boundary(boundary)
-        .keep_weight(keep_weight.unwrap_or(d.keep_weight))
-        .fairness_weight(fairness_weight.unwrap_or(d.fairness_weight))
-        .damped_step(damped_step.unwrap_or(d.damped_step));
+    let d = FairSurfaceSettings::default();
+    let settings = FairSurfaceSettings {
+        surface,
+        max_iterations: max_iterations.unwrap_or(d.max_iterations),
+        epsilon: epsilon.unwrap_or(d.epsilon),
+        truncation: truncation.unwrap_or(d.truncation),
+        min_truncation: min_truncation.unwrap_or(d.min_truncation),
+        damped_step: damped_step.unwrap_or(d.damped_step),
+        sample_spacing: sample_spacing.unwrap_or(d.sample_spacing),
+        grid: grid.unwrap_or(d.grid),
+        method,
+        boundary,
+        keep_weight: keep_weight.unwrap_or(d.keep_weight),
+        fairness_weight: fairness_weight.unwrap_or(d.fairness_weight),
+    };
     let out = crate::compute(py, move |control| -> Res<_> {
-        let input = all[surface].clone();
-        let mut report = Report::new("fair-surface");
-        let opts = opts.control(control.clone());
-        let out = report
-            .time(|| library_fair_surface(&input, &opts))
-            .map_err(|e| match e {
-                SurfaceFairError::Svd | SurfaceFairError::Surface(_) => {
-                    Failure::computation(e.to_string())
-                }
-                SurfaceFairError::NothingToMove(_) => {
-                    Failure::bad(format!("{e} (boundary=\"free\")"))
-                }
-                other => Failure::bad(other.to_string()),
-            })?;
-        let (faired, rep) = (out.surfaces, out.report);
-        // the library's report carries the command's keys (as the CLI)
-        if let Ok(serde_json::Value::Object(fields)) = serde_json::to_value(&rep) {
-            for (key, value) in fields {
-                report.set(&key, value);
-            }
-        }
-        all[surface] = faired;
-        if let Some(w) = fairline_commands::fair_surface::not_converged_warning(&rep) {
-            report.warn(Warning::Text(w));
-        }
-        if rep.residual_after.max > rep.residual_before.max {
-            report.warn(Warning::Text(format!(
-                "the largest highlight residual got worse: {:.4e} before, {:.4e} after",
-                rep.residual_before.max, rep.residual_after.max
-            )));
-        }
-        Ok((surfaces_to_json(&all), report.to_json().to_string()))
+        let input = FairSurfaceInput {
+            surfaces: &all,
+            lights: Some(&spec),
+            endpoints: &ends.endpoints,
+        };
+        let out = run(input, &settings, control)?;
+        Ok((
+            surfaces_to_json(&out.surfaces),
+            out.report.to_json().to_string(),
+        ))
     })?;
     Ok(out)
 }

@@ -220,6 +220,23 @@ def test_detect_equals_cli(cli, demo, tmp_path):
     assert report["regions"], "the dented panel's dent must be found"
 
 
+@pytest.mark.parametrize("name,kwargs,args", [
+    ("dented-panel.obj", {"threshold": 1.5, "region_margin": 0.5, "max_regions": 1},
+     ["--threshold", "1.5", "--region-margin", "0.5", "--max-regions", "1"]),
+    ("dented-panel.obj", {"lights": {"plane_point": [0, 0, 5], "plane_normal": [0, 0, 1], "direction": [1, 0.2, 0], "spacing": 0.12}},
+     ["--plane-point", "0,0,5", "--plane-normal", "0,0,1", "--direction", "1,0.2,0", "--spacing", "0.12"]),
+    ("rounded-cube.obj", {}, []),
+])
+def test_detect_options_equal_cli(cli, demo, tmp_path, name, kwargs, args):
+    """The same detection policy in both: the measure at the lights asked
+    for, the lines read at their readable lights, what one light array
+    leaves unjudged judged again with finer arrays."""
+    run(cli, "detect", demo / name, *args, "-o", tmp_path / "region.json", "--report", tmp_path / "r.json")
+    faces, report = fairline.detect(*fairline.read_mesh(demo / name), **kwargs)
+    assert faces.tolist() == json.loads((tmp_path / "region.json").read_text())["faces"]
+    same_report(report, cli_report(tmp_path / "r.json"), input_path=demo / name)
+
+
 def test_fair_equals_cli(cli, demo, tmp_path):
     region = demo / "dented-panel-region.json"
     run(cli, "fair", demo / "dented-panel.obj", "--region", region, "--max-iterations", "5", "-o", tmp_path / "f.ply", "--report", tmp_path / "r.json")
@@ -337,6 +354,19 @@ def test_fair_surface_equals_cli(cli, demo, tmp_path):
     assert report["modified_control_points"] > 0
     fairline.write_surfaces(tmp_path / "py.json", faired)
     assert (tmp_path / "py.json").read_bytes() == (tmp_path / "out.json").read_bytes()
+
+
+@pytest.mark.parametrize("kwargs,args", [({"boundary": "tangent", "keep_weight": 0.5}, ["--boundary", "tangent", "--keep-weight", "0.5"]),
+                                         ({"grid": 80, "sample_spacing": 0.05}, ["--grid", "80", "--sample-spacing", "0.05"])])
+def test_fair_surface_options_equal_cli(cli, demo, tmp_path, kwargs, args):
+    lights, ends = demo / "bspline-panel-lights.json", demo / "bspline-panel-endpoints.json"
+    run(cli, "fair-surface", demo / "bspline-panel-dented.json", "--lights", lights, "--endpoints", ends, "--max-iterations", "2", *args,
+        "-o", tmp_path / "out.json", "--report", tmp_path / "r.json")
+    surfaces = fairline.read_surfaces(demo / "bspline-panel-dented.json")
+    faired, report = fairline.fair_surface(surfaces, json.loads(lights.read_text()), ends, max_iterations=2, **kwargs)
+    fairline.write_surfaces(tmp_path / "py.json", faired)
+    assert (tmp_path / "py.json").read_bytes() == (tmp_path / "out.json").read_bytes()
+    same_report(report, cli_report(tmp_path / "r.json"))
 
 
 # ---- defaults ------------------------------------------------------------------

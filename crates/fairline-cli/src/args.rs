@@ -179,19 +179,6 @@ impl LightArgs {
         Ok(self.lights()?.light_array(mesh)?)
     }
 
-    /// The light array of a part of B-spline surfaces and what its picture
-    /// can show ([`Lights::part_light_array`]).
-    pub fn part_light_array(
-        &self,
-        surfaces: &[fairline::bspline::BSplineSurface],
-    ) -> Result<(LightArray, fairline::highlight::Readability)> {
-        let given = match &self.lights {
-            Some(path) => Some(read_json::<LightArray>(path)?),
-            None => None,
-        };
-        Ok(self.fields(given).part_light_array(surfaces)?)
-    }
-
     /// The lights to draw and read lines with ([`Lights::readable`]).
     pub fn readable(&self, mesh: &SurfaceMesh, light: LightArray) -> Result<LightArray> {
         let given = self.lights.is_some().then_some(light);
@@ -216,20 +203,6 @@ pub fn circular_file(path: &Path) -> Result<Option<CircularLights>> {
     } else {
         Ok(None)
     }
-}
-
-/// The circular lights `--circular` derived from the part, printed on
-/// stderr as one line in the LIGHTS.json form; an input error when the part
-/// has no area to derive them from.
-pub fn derived_circular_lights(spec: Option<CircularLights>) -> Result<CircularLights> {
-    let spec = spec.ok_or_else(|| {
-        bad_input("cannot derive circular lights: the part has no area with a defined normal")
-    })?;
-    eprintln!(
-        "default circular lights (save as LIGHTS.json to reuse): {}",
-        serde_json::to_string(&spec)?
-    );
-    Ok(spec)
 }
 
 /// Maps library errors about the input (bad light, bad option, bad mesh)

@@ -31,13 +31,6 @@ impl Report {
         self.0.set(key, value);
         self.print_since(before);
     }
-    /// Sets every field of `fields` (a struct that serialises to an object,
-    /// e.g. a library report) as a key, like [`Report::set`].
-    pub fn set_fields(&mut self, fields: impl serde::Serialize) {
-        let before = self.0.warnings().len();
-        self.0.set_fields(fields);
-        self.print_since(before);
-    }
     /// Prints `warning: MSG` on standard error and records it under
     /// `"warnings"` in the report.
     pub fn warn(&mut self, msg: impl Into<String>) {

@@ -1,13 +1,14 @@
 //! `fairline continuity`: G0 / G1 / G2 across the shared boundaries of a
 //! set of B-spline patches.
 
-use crate::common::Report;
-use crate::error::bad_input;
+use crate::common::{print_warnings, write_report};
 use crate::output::{Job, say};
 use crate::surface_highlight::surface_picture;
 use anyhow::Result;
-use fairline::bspline::continuity::{ContinuityOptions, SeamClass, continuity};
+use fairline::Control;
+use fairline::bspline::continuity::{ContinuityOptions, SeamClass};
 use fairline::render::{PolylineLayer, RenderOptions, linear_to_srgb8};
+use fairline_commands::continuity::{self, ContinuitySettings};
 use std::path::PathBuf;
 
 /// Finds the boundary curves shared by the patches of SURFACES
@@ -69,18 +70,18 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--report", args.report.as_deref())
         .check()?;
     let surfaces = crate::surface::load_surfaces(&args.surface_file)?;
-    let opts = ContinuityOptions::default()
-        .tolerance(args.tolerance)
-        .angle_tolerance_deg(args.angle_tolerance)
-        .curvature_tolerance(args.curvature_tolerance)
-        .match_distance(args.match_distance)
-        .samples(args.samples);
-    let mut report = Report::new("continuity");
+    let settings = ContinuitySettings {
+        tolerance: args.tolerance,
+        angle_tolerance: args.angle_tolerance,
+        curvature_tolerance: args.curvature_tolerance,
+        match_distance: args.match_distance,
+        samples: args.samples,
+    };
     let bar = crate::output::spinner("continuity");
-    let result = report
-        .time(|| continuity(&surfaces, &opts))
-        .map_err(|e| bad_input(format!("{}: {e}", args.surface_file.display())))?;
+    let out = continuity::run(&surfaces, &settings, &Control::new());
     bar.finish_and_clear();
+    let out = out.map_err(|e| crate::output::name_file(&args.surface_file, e))?;
+    let result = &out.result;
     let classes = [SeamClass::Gap, SeamClass::G0, SeamClass::G1, SeamClass::G2];
     let summary = format!(
         "{}: {} patches, {} shared edges: {}; tolerance {:.3e}, {}°, {} % curvature{}",
@@ -125,10 +126,6 @@ pub fn run(args: Args) -> Result<()> {
             s.worst.z
         ));
     }
-    report.set_fields(&result);
-    report.set("surfaces", surfaces.len());
-    report.set("angle_tolerance_deg", args.angle_tolerance);
-    report.set("curvature_tolerance", args.curvature_tolerance);
     if let Some(p) = &args.png {
         let lines: Vec<PolylineLayer> = result
             .seams
@@ -159,7 +156,8 @@ pub fn run(args: Args) -> Result<()> {
         }
         img.write_png(p)?;
     }
-    report.write(args.report.as_deref())?;
+    print_warnings(&out.report);
+    write_report(args.report.as_deref(), &out.report)?;
     job.finish(summary)?;
     Ok(())
 }

@@ -1,12 +1,14 @@
 //! `fairline detect`: irregular stretches of highlight lines turned into
 //! suggested fairing regions.
 
-use crate::args::{LightArgs, parse_size, parse_vec3, to_input_error};
-use crate::common::{Report, write_json};
+use crate::args::{LightArgs, parse_size, parse_vec3};
+use crate::common::{print_warnings, write_json, write_report};
 use crate::input::read_triangles;
 use crate::output::spinner;
 use anyhow::Result;
+use fairline::Control;
 use fairline::highlight::{DetectOptions, Detection};
+use fairline_commands::detect::{self, DetectInput, DetectSettings};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -92,82 +94,45 @@ pub fn run(args: Args) -> Result<()> {
         .check()?;
     crate::args::check_view(args.view)?;
     let (mesh, source) = read_triangles(&args.mesh)?;
-    let light = args.light.light_array(&mesh)?;
-    let opts = DetectOptions::default()
-        .threshold(args.threshold)
-        .smooth_radius(args.smooth_radius)
-        .region_margin(args.region_margin);
-    let mut report = Report::new("detect");
+    let settings = DetectSettings {
+        lights: args.light.lights()?,
+        threshold: args.threshold,
+        smooth_radius: args.smooth_radius,
+        region_margin: args.region_margin,
+        max_regions: args.max_regions,
+    };
+    let name = args.mesh.display().to_string();
+    let input = DetectInput {
+        mesh: &mesh,
+        source: source.as_deref(),
+        name: Some(&name),
+    };
     let bar = spinner("detecting irregularities");
-    // the measure works at the scale of `light`; the lines shown and
-    // listed are those of the readable lights (a subset of the lines of
-    // `light` on round parts, the same lines on panels)
-    let shown_light = args.light.readable(&mesh, light)?;
-    let (lines, shown, mut det) = report
-        .time(|| {
-            crate::highlight_png::detect_with_lines(
-                &mesh,
-                &light,
-                &shown_light,
-                args.light.options(),
-                &opts,
-            )
-        })
-        .map_err(to_input_error)?;
+    let out = detect::run(input, &settings, &Control::new());
     bar.finish_and_clear();
+    let out = out?;
+    let (light, det) = (&out.light, &out.detection);
     if let Some(w) = crate::highlight_png::line_warning(
         &args.mesh,
-        &lines,
-        &shown,
-        &shown_light,
+        &out.lines,
+        &out.shown,
+        &out.shown_light,
         fairline::highlight::readable::part_width(mesh.positions(), light.across()),
     ) {
         eprintln!("{w}");
     }
-    print_measure_notes(&args, &det, light.spacing());
-    if let Some(n) = args.max_regions {
-        det.regions.truncate(n);
-    }
-    // faces of the input mesh (triangulated polygons map back to their
-    // polygon); the written region holds two more rings of faces: the
-    // support that fairing needs to move every vertex of the suggested region
-    let all = fairline_commands::regions::suggested_region(&mesh, &det, source.as_deref());
-    write_json(&args.output, &json!({"faces": all}))?;
-    report.set("vertices", mesh.vertex_count());
-    report.set("lines", lines.lines.len());
-    report.set("spacing", light.spacing());
-    report.set("drawn_spacing", shown_light.spacing());
-    report.set(
-        "drawn",
-        fairline::highlight::DrawnLineStats::of(&mesh, &shown_light, &shown),
-    );
-    // the library's numbers of the measure, under its own names
-    if let Ok(serde_json::Value::Object(numbers)) = serde_json::to_value(&det) {
-        for (key, value) in numbers {
-            report.set(&key, value);
-        }
-    }
-    report.set("light", light);
-    report.set("region_faces", all.len());
-    report.set(
-        "regions",
-        fairline_commands::regions::detected_region_entries(&det, source.as_deref()),
-    );
+    print_measure_notes(&args, det, light.spacing());
+    write_json(&args.output, &json!({"faces": out.region}))?;
     if let Some(png) = &args.png {
-        write_picture(&args, png, &mesh, &light, &shown_light, &shown, &det)?;
+        write_picture(&args, png, &mesh, light, &out.shown_light, &out.shown, det)?;
     }
-    if lines.lines.is_empty() {
-        report.warn("no highlight line crosses the mesh, so nothing could be detected; try other light options (--plane-normal, --direction, --spacing)");
-    }
-    if let Some(w) = det.not_judged_warning() {
-        report.warn(format!("{}: {w}", args.mesh.display()));
-    }
-    report.write(args.report.as_deref())?;
+    print_warnings(&out.report);
+    write_report(args.report.as_deref(), &out.report)?;
     job.finish(format_args!(
         "{} ({} faces) from {} highlight line(s) on {} vertices",
         det.summary(),
-        all.len(),
-        lines.lines.len(),
+        out.region.len(),
+        out.lines.lines.len(),
         mesh.vertex_count()
     ))?;
     Ok(())

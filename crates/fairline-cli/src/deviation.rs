@@ -123,7 +123,7 @@ pub fn run(args: Args) -> Result<()> {
         let path = match e.subject() {
             Some(Subject::Input) => Some(args.before.as_path()),
             Some(Subject::Region) => args.region.as_deref(),
-            None => None,
+            _ => None,
         };
         let bad = e.kind() == fairline_commands::ErrorKind::BadInput;
         let msg = match path {

@@ -129,7 +129,7 @@ fn name_subject(e: CommandError, args: &Args) -> anyhow::Error {
     let path = match e.subject() {
         Some(Subject::Input) => Some(args.mesh.as_path()),
         Some(Subject::Region) => args.region.as_deref(),
-        None => None,
+        _ => None,
     };
     match path {
         Some(p) => anyhow::Error::new(e).context(p.display().to_string()),

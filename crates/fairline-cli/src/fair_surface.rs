@@ -1,21 +1,22 @@
 //! `fairline fair-surface`: circular-highlight fairing of a B-spline surface
 //! (Nishiyama et al. §3).
 
-use crate::common::{Report, read_json};
+use crate::common::{print_warnings, read_json, write_report};
 use crate::error::bad_input;
 use crate::surface_highlight::{palette_srgb, plot_lines, polylines, surface_picture, uv_plot};
 use anyhow::Result;
+use fairline::Control;
 use fairline::bspline::BSplineSurface;
 use fairline::fair::{
-    BoundaryControl, EndpointPair, Endpoints, SurfaceFairError, SurfaceFairMethod,
-    SurfaceFairOptions, SurfaceFairReport, fair_surface,
+    BoundaryControl, EndpointPair, SurfaceFairMethod, SurfaceFairOptions, SurfaceFairReport,
 };
 use fairline::highlight::{
     CircularLight, CircularLights, SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight,
     surface_highlight_lines,
 };
 use fairline::render::{RenderOptions, SvgPlot, side_by_side};
-use serde_json::json;
+use fairline_commands::fair_surface::{self, FairSurfaceInput, FairSurfaceSettings};
+use fairline_commands::{CommandError, Subject};
 use std::path::PathBuf;
 
 /// Fairs a B-spline surface so that chosen stretches of its circular
@@ -148,11 +149,6 @@ pub enum BoundaryArg {
     Tangent,
     Free,
 }
-
-/// Most distance, as a fraction of the parameter domain's diagonal, at
-/// which an endpoint given as (u, v) may lie from the line it snaps to
-/// without a warning.
-pub const SNAP_WARNING_FRACTION: f64 = 0.02;
 
 /// A point named by a line id and the fraction of the line's length.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -367,31 +363,59 @@ fn endpoints_file(args: &Args) -> String {
         .map_or("the endpoints".to_string(), |p| p.display().to_string())
 }
 
-/// The library's error as the CLI's, naming the files it is about: an
-/// endpoint's light is in the endpoints (or lines) file and the lights
-/// file, drawn on the surface file; anything else about the input is the
-/// surface file's.
-fn to_cli(e: SurfaceFairError, args: &Args) -> anyhow::Error {
-    let surface = args.surface_file.display();
-    match e {
-        SurfaceFairError::Svd | SurfaceFairError::Surface(_) => anyhow::Error::new(e),
-        SurfaceFairError::NothingToMove(_) => {
-            bad_input(format!("{surface}: {e} (--boundary free)"))
+impl Args {
+    /// The command layer's settings of these arguments.
+    fn settings(&self) -> FairSurfaceSettings {
+        FairSurfaceSettings {
+            surface: self.surface,
+            max_iterations: self.max_iterations,
+            epsilon: self.epsilon,
+            truncation: self.truncation,
+            min_truncation: self.min_truncation,
+            damped_step: self.damped_step,
+            sample_spacing: self.sample_spacing,
+            grid: self.grid,
+            method: match self.method {
+                MethodArg::Regularised => SurfaceFairMethod::Regularised,
+                MethodArg::Paper => SurfaceFairMethod::Paper,
+            },
+            boundary: match self.boundary {
+                BoundaryArg::Fixed => BoundaryControl::Fixed,
+                BoundaryArg::Tangent => BoundaryControl::FixedWithTangents,
+                BoundaryArg::Free => BoundaryControl::Free,
+            },
+            keep_weight: self.keep_weight,
+            fairness_weight: self.fairness_weight,
         }
-        SurfaceFairError::Invalid(ref m) if m.contains("endpoint") => {
-            bad_input(format!("{}: {e}", endpoints_file(args)))
-        }
-        SurfaceFairError::NoLight { .. } | SurfaceFairError::NoPreImage { .. } => {
-            let ends = endpoints_file(args);
-            let lights = args
+    }
+
+    /// A failure of the command layer with the file it is about named: the
+    /// surface file or the lights file.
+    fn name_subject(&self, e: CommandError) -> anyhow::Error {
+        if e.subject() == Some(Subject::Endpoints) {
+            // an endpoint's light is in the endpoints (or lines) file and
+            // the lights file, drawn on the surface file
+            let lights = self
                 .lights
                 .as_deref()
                 .map_or("the lights derived from the part".to_string(), |p| {
                     format!("the lights of {}", p.display())
                 });
-            bad_input(format!("{ends}: {e} ({lights} on {surface})"))
+            return anyhow::Error::new(e).context(format!(
+                "{} ({lights} on {})",
+                endpoints_file(self),
+                self.surface_file.display()
+            ));
         }
-        other => bad_input(format!("{surface}: {other}")),
+        let path = match e.subject() {
+            Some(Subject::Input) => Some(self.surface_file.as_path()),
+            Some(Subject::Lights) => self.lights.as_deref(),
+            _ => None,
+        };
+        match path {
+            Some(p) => anyhow::Error::new(e).context(p.display().to_string()),
+            None => anyhow::Error::new(e),
+        }
     }
 }
 
@@ -399,51 +423,41 @@ pub fn run(args: Args) -> Result<()> {
     let job = output_job(&args)?;
     let input = crate::surface::load_surface_file(&args.surface_file)?;
     let unit = input.unit;
-    let mut surfaces = input.surfaces;
-    if args.surface >= surfaces.len() {
-        return Err(bad_input(format!(
-            "{}: --surface {} is out of range (the file holds {} surfaces)",
-            args.surface_file.display(),
-            args.surface,
-            surfaces.len()
-        )));
-    }
-    let (spec, derived, lights) = circular_lights(&args, &surfaces)?;
-    let ends = Endpoints {
-        endpoints: endpoint_pairs(&args)?,
+    let surfaces = input.surfaces;
+    let settings = args.settings();
+    fair_surface::check_surface(settings.surface, surfaces.len())
+        .map_err(|e| args.name_subject(e))?;
+    let given: Option<CircularLights> = match &args.lights {
+        Some(path) => Some(read_json(path)?),
+        None => None,
     };
-    let opts = fair_options(&args, &lights, &ends);
-    let input = surfaces[args.surface].clone();
-    let mut report = Report::new("fair-surface");
+    let endpoints = endpoint_pairs(&args)?;
     let bar = crate::output::spinner("fairing");
-    let out = report
-        .time(|| fair_surface(&input, &opts))
-        .map_err(|e| to_cli(e, &args))?;
+    let out = fair_surface::run(
+        FairSurfaceInput {
+            surfaces: &surfaces,
+            lights: given.as_ref(),
+            endpoints: &endpoints,
+        },
+        &settings,
+        &Control::new(),
+    );
     bar.finish_and_clear();
-    let (faired, rep) = (out.surfaces, out.report);
-    if derived {
-        report.set(
-            "light",
-            json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii, "derived": true}),
+    let out = out.map_err(|e| args.name_subject(e))?;
+    if let Some(spec) = &out.derived {
+        eprintln!(
+            "default circular lights (save as LIGHTS.json to reuse): {}",
+            serde_json::to_string(spec)?
         );
     }
-    let snap_warnings = snap_warnings(&input, &ends, &rep);
-    print_summary(&rep, opts.boundary);
-    // The library's report carries the command's keys.
-    if let serde_json::Value::Object(fields) = serde_json::to_value(&rep)? {
-        for (key, value) in fields {
-            report.set(&key, value);
-        }
-    }
-    for w in snap_warnings {
-        report.warn(w);
-    }
+    let rep = &out.result;
+    print_summary(rep, settings.boundary);
     // Pictures before the output file, so a failure leaves no output.
-    write_pictures(&args, &input, &faired, &lights, &rep)?;
-    surfaces[args.surface] = faired;
-    fairline::io::surface_file::write_surface_file(&args.output, &surfaces, unit.as_ref())?;
-    warn_about_convergence(&mut report, &rep);
-    report.write(args.report.as_deref())?;
+    let faired = &out.surfaces[settings.surface];
+    write_pictures(&args, &surfaces[settings.surface], faired, &out.lights, rep)?;
+    fairline::io::surface_file::write_surface_file(&args.output, &out.surfaces, unit.as_ref())?;
+    print_warnings(&out.report);
+    write_report(args.report.as_deref(), &out.report)?;
     job.finish(format_args!(
         "{} iteration(s), {}, {} control point(s) moved, largest residual {:.3e} → {:.3e}",
         rep.iterations,
@@ -456,7 +470,7 @@ pub fn run(args: Args) -> Result<()> {
         rep.residual_before.max,
         rep.residual_after.max
     ))?;
-    if !rep.converged && rep.method == SurfaceFairMethod::Paper {
+    if out.paper_unconverged() {
         // the paper's method promises the targets: written for inspection,
         // but not what was asked for (the warning above says why)
         anyhow::bail!(
@@ -494,94 +508,6 @@ fn output_job(args: &Args) -> Result<crate::output::Job> {
         .output_opt("--svg", args.svg.as_deref())
         .output_opt("--report", args.report.as_deref())
         .check()
-}
-
-/// The circular lights of the run: those of --lights, or derived from the
-/// whole part (as `fairline highlight --circular`); with whether they were
-/// derived.
-fn circular_lights(
-    args: &Args,
-    surfaces: &[BSplineSurface],
-) -> Result<(CircularLights, bool, Vec<CircularLight>)> {
-    let (spec, derived): (CircularLights, bool) = match &args.lights {
-        Some(path) => (read_json(path)?, false),
-        None => (
-            crate::args::derived_circular_lights(fairline::highlight::default_circular_lights(
-                surfaces,
-                None,
-                fairline::highlight::DEFAULT_CIRCULAR_RADII,
-            ))?,
-            true,
-        ),
-    };
-    let lights: Vec<CircularLight> = spec.lights().map_err(|e| match &args.lights {
-        Some(path) => bad_input(format!("{}: {e}", path.display())),
-        None => bad_input(e.to_string()),
-    })?;
-    Ok((spec, derived, lights))
-}
-
-/// The library's fairing options from the command line.
-fn fair_options(args: &Args, lights: &[CircularLight], ends: &Endpoints) -> SurfaceFairOptions {
-    SurfaceFairOptions::default()
-        .lights(lights.to_vec())
-        .endpoints(ends.endpoints.clone())
-        .grid(args.grid)
-        .sample_spacing(args.sample_spacing)
-        .truncation(args.truncation)
-        // a larger floor is taken as --truncation; NaN is left for the
-        // library's option check to refuse (f64::min would hide it)
-        .min_truncation(if args.min_truncation > args.truncation {
-            args.truncation
-        } else {
-            args.min_truncation
-        })
-        .epsilon(args.epsilon)
-        .damped_step(args.damped_step)
-        .max_iterations(args.max_iterations)
-        .method(match args.method {
-            MethodArg::Regularised => SurfaceFairMethod::Regularised,
-            MethodArg::Paper => SurfaceFairMethod::Paper,
-        })
-        .boundary(match args.boundary {
-            BoundaryArg::Fixed => BoundaryControl::Fixed,
-            BoundaryArg::Tangent => BoundaryControl::FixedWithTangents,
-            BoundaryArg::Free => BoundaryControl::Free,
-        })
-        .keep_weight(args.keep_weight)
-        .fairness_weight(args.fairness_weight)
-}
-
-/// Warnings for the endpoints that snapped far from where they were given
-/// (more than [`SNAP_WARNING_FRACTION`] of the parameter domain's
-/// diagonal): they were probably read off the wrong line.
-fn snap_warnings(input: &BSplineSurface, ends: &Endpoints, rep: &SurfaceFairReport) -> Vec<String> {
-    let (du, dv) = (input.domain_u(), input.domain_v());
-    let diag = (du[1] - du[0]).hypot(dv[1] - dv[0]);
-    let mut snap_warnings = Vec::new();
-    for t in &rep.targets {
-        for (k, d) in t.snap_distance.iter().enumerate() {
-            if *d > SNAP_WARNING_FRACTION * diag {
-                let given = ends.endpoints[t.index];
-                let p = if k == 0 { given.start } else { given.end };
-                let q = if k == 0 { t.start } else { t.end };
-                snap_warnings.push(format!(
-                    "endpoint {} {}: ({:.4}, {:.4}) lies {:.4} from the nearest line of radius {} (more than {} % of the domain diagonal {:.4}) and was snapped to ({:.4}, {:.4}); was it read off another line?",
-                    t.index,
-                    if k == 0 { "start" } else { "end" },
-                    p[0],
-                    p[1],
-                    d,
-                    t.radius,
-                    100.0 * SNAP_WARNING_FRACTION,
-                    diag,
-                    q[0],
-                    q[1]
-                ));
-            }
-        }
-    }
-    snap_warnings
 }
 
 /// The terminal line saying what was moved, what was held and how the
@@ -694,21 +620,4 @@ fn before_after_svg(
         1.0,
     );
     plot
-}
-
-/// Warnings when the iteration stopped before convergence (naming why:
-/// Nishiyama et al.'s stopping rule Eq. (3.14) not met because mean |d_s|
-/// stopped decreasing, the iterations ran out or a step was not finite,
-/// and whether the targets give fewer equations than there are unknowns)
-/// or the largest residual grew.
-fn warn_about_convergence(report: &mut Report, rep: &SurfaceFairReport) {
-    if let Some(text) = fairline_commands::fair_surface::not_converged_warning(rep) {
-        report.warn(text);
-    }
-    if rep.residual_after.max > rep.residual_before.max {
-        report.warn(format!(
-            "the largest highlight residual got worse: {:.4e} before, {:.4e} after",
-            rep.residual_before.max, rep.residual_after.max
-        ));
-    }
 }

@@ -2,18 +2,16 @@
 //! al. §2) or of concentric circular lights (Nishiyama et al. §2) on a
 //! triangle mesh, written as JSON or OBJ polylines.
 
-use crate::args::{HighlightArgs, Radii, circular_file, derived_circular_lights, to_input_error};
-use crate::common::Report;
+use crate::args::{HighlightArgs, Radii, circular_file};
+use crate::common::{print_warnings, write_report};
 use crate::error::bad_input;
 use crate::input::read_triangles;
 use crate::output::spinner;
 use anyhow::Result;
-use fairline::Vec3;
-use fairline::highlight::{
-    CircularLight, CircularLights, HighlightBands, HighlightError, HighlightLines, HighlightModel,
-    HighlightOptions, Readability, circular_highlight_bands, circular_highlight_lines,
-};
-use serde_json::json;
+use fairline::highlight::{CircularLights, HighlightBands, HighlightLines};
+use fairline::{Control, Vec3};
+use fairline_commands::Subject;
+use fairline_commands::highlight::{self, HighlightLights, HighlightOutcome, HighlightSettings};
 use std::path::Path;
 
 /// Output format of polylines.
@@ -80,35 +78,46 @@ pub fn run(args: HighlightArgs) -> Result<()> {
         .check()?;
     check_view_and_band(&args)?;
     let (mesh, _) = read_triangles(&args.mesh)?;
-    let mut report = Report::new("highlight");
-    report.set("vertices", mesh.vertex_count());
-    report.set("faces", mesh.face_count());
-    let bar = spinner("highlight lines");
-    let drawn = match circular_lights(&args, &mesh)? {
-        Some(spec) => circular_lines(&args, &mesh, spec, &mut report)?,
-        None => linear_lines(&args, &mesh, &mut report)?,
+    let settings = HighlightSettings {
+        lights: mesh_lights(&args)?,
+        band: args.band,
     };
+    let bar = spinner("highlight lines");
+    let out = highlight::run(&mesh, &settings, &Control::new());
     bar.finish_and_clear();
-    let lines = &drawn.lines;
+    let out = out.map_err(|e| match (e.subject(), &args.light.lights) {
+        (Some(Subject::Lights), Some(path)) => crate::output::name_file(path, e),
+        _ => anyhow::Error::new(e),
+    })?;
+    if let Some(spec) = &out.derived {
+        eprintln!(
+            "default circular lights (save as LIGHTS.json to reuse): {}",
+            serde_json::to_string(spec)?
+        );
+    }
+    if let (Some(light), Some(shown)) = (&out.light, &out.drawn)
+        && let Some(w) = crate::highlight_png::line_warning(
+            &args.mesh,
+            &out.lines,
+            shown,
+            light,
+            fairline::highlight::readable::part_width(mesh.positions(), light.across()),
+        )
+    {
+        eprintln!("{w}");
+    }
     write_lines(
         &args.output,
-        lines,
-        drawn.bands.as_ref(),
-        drawn.radii.as_deref(),
+        &out.lines,
+        out.bands.as_ref(),
+        out.radii.as_deref(),
     )?;
-    let counts = lines.counts();
-    report.set("summary", counts);
-    report.set_fields(counts);
-    if let Some(b) = &drawn.bands {
-        report.set("band", json!({"radius": b.radius, "lower_lines": b.lower.lines.len(), "upper_lines": b.upper.lines.len()}));
-    }
+    let counts = out.lines.counts();
     if let Some(png) = &args.png {
-        write_picture(&args, png, &mesh, &drawn)?;
+        write_picture(&args, png, &mesh, &MeshLines::of(&out))?;
     }
-    if lines.lines.is_empty() {
-        report.warn("no highlight line crosses the mesh; try other light options (--plane-normal, --direction, --spacing)");
-    }
-    report.write(args.report.as_deref())?;
+    print_warnings(&out.report);
+    write_report(args.report.as_deref(), &out.report)?;
     job.finish(format_args!(
         "{} highlight line(s) ({} closed, {} nodes) on {} vertices",
         counts.lines,
@@ -132,143 +141,69 @@ fn check_view_and_band(args: &HighlightArgs) -> Result<()> {
     Ok(())
 }
 
-/// What [`run`] computed on a mesh: the lines (and bands), the radii of
-/// circular lights, the readable subset drawn of linear lights (`None`:
-/// draw all lines), the picture's default view and up, and the light
-/// spacing for the picture's key (linear lights).
-struct MeshLines {
-    lines: HighlightLines,
-    bands: Option<HighlightBands>,
-    radii: Option<Vec<f64>>,
-    drawn: Option<HighlightLines>,
+/// What the picture of a run draws: the lines (and bands), the readable
+/// subset drawn of linear lights (`None`: draw all lines), the picture's
+/// default view and up, and the light spacing for the picture's key
+/// (linear lights).
+struct MeshLines<'a> {
+    lines: &'a HighlightLines,
+    bands: Option<&'a HighlightBands>,
+    drawn: Option<&'a HighlightLines>,
     view_up: (Vec3, Vec3),
     spacing: Option<f64>,
 }
 
-/// The circular lights asked for: given on the command line, in the
-/// `--lights` file, or derived from the part (`--circular`); `None` for a
+impl<'a> MeshLines<'a> {
+    fn of(out: &'a HighlightOutcome) -> Self {
+        let view_up = match (&out.light, out.circular.first()) {
+            (Some(light), _) => crate::highlight_png::default_camera(light),
+            (None, Some(c)) => {
+                let axis = c.axis();
+                (
+                    -axis + 0.35 * axis.any_orthonormal_vector(),
+                    axis.any_orthonormal_vector(),
+                )
+            }
+            (None, None) => (Vec3::new(0.0, 0.0, -1.0), Vec3::new(0.0, 1.0, 0.0)),
+        };
+        MeshLines {
+            lines: &out.lines,
+            bands: out.bands.as_ref(),
+            drawn: out.drawn.as_ref(),
+            view_up,
+            spacing: out.light.map(|l| l.spacing()),
+        }
+    }
+}
+
+/// The lights asked for: circular lights given on the command line, in the
+/// `--lights` file, or derived from the part (`--circular`); else the
 /// linear light array.
-fn circular_lights(
-    args: &HighlightArgs,
-    mesh: &fairline::SurfaceMesh,
-) -> Result<Option<CircularLights>> {
-    Ok(
-        match (args.circle_center, args.circle_axis, args.radii.clone()) {
-            (Some(c), Some(t), Some(Radii(radii))) => Some(CircularLights {
+fn mesh_lights(args: &HighlightArgs) -> Result<HighlightLights> {
+    if let (Some(c), Some(t), Some(Radii(radii))) =
+        (args.circle_center, args.circle_axis, args.radii.clone())
+    {
+        return Ok(HighlightLights::Circular {
+            spec: CircularLights {
                 center: c.to_array(),
                 axis: t.to_array(),
                 radii,
-            }),
-            _ => match &args.light.lights {
-                Some(path) => circular_file(path)?,
-                None if args.circular => Some(derived_circular_lights(
-                    fairline::highlight::default_circular_lights_for_mesh(
-                        mesh,
-                        args.light.up.vector(),
-                        fairline::highlight::DEFAULT_CIRCULAR_RADII,
-                    ),
-                )?),
-                None => None,
             },
+            from_lights: false,
+        });
+    }
+    Ok(match &args.light.lights {
+        Some(path) => match circular_file(path)? {
+            Some(spec) => HighlightLights::Circular {
+                spec,
+                from_lights: true,
+            },
+            None => HighlightLights::Linear(args.light.lights()?),
         },
-    )
-}
-
-/// Lines (and bands) of the circular lights `spec` (Nishiyama et al. §2);
-/// records the lights in the report.
-fn circular_lines(
-    args: &HighlightArgs,
-    mesh: &fairline::SurfaceMesh,
-    spec: CircularLights,
-    report: &mut Report,
-) -> Result<MeshLines> {
-    let radii = spec.radii.clone();
-    let from_file = args.circle_center.is_none() || args.circle_axis.is_none();
-    let lights: Vec<CircularLight> =
-        spec.lights()
-            .map_err(|e| match (&args.light.lights, from_file) {
-                (Some(path), true) => crate::output::name_file(path, to_input_error(e)),
-                _ => to_input_error(e),
-            })?;
-    if lights.is_empty() {
-        return Err(bad_input("circular lights need at least one radius"));
-    }
-    let (lines, bands) = report
-        .time(|| -> Result<_, HighlightError> {
-            let opts = HighlightOptions::default();
-            let lines = circular_highlight_lines(mesh, &lights, &opts)?;
-            let bands = match args.band {
-                Some(rho) => Some(circular_highlight_bands(mesh, &lights, rho, &opts)?),
-                None => None,
-            };
-            Ok((lines, bands))
-        })
-        .map_err(to_input_error)?;
-    let axis = lights[0].axis();
-    let view_up = (
-        -axis + 0.35 * axis.any_orthonormal_vector(),
-        axis.any_orthonormal_vector(),
-    );
-    let mut light =
-        json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii});
-    if args.circular {
-        light["derived"] = json!(true);
-    }
-    report.set("light", light);
-    Ok(MeshLines {
-        lines,
-        bands,
-        radii: Some(radii),
-        drawn: None,
-        view_up,
-        spacing: None,
-    })
-}
-
-/// Lines (and bands) of the readable linear light array (Yong et al. §2)
-/// and the readable subset to draw; records the lights and the drawn
-/// lines' statistics in the report, warns when the lines are hard to read.
-fn linear_lines(
-    args: &HighlightArgs,
-    mesh: &fairline::SurfaceMesh,
-    report: &mut Report,
-) -> Result<MeshLines> {
-    let light = args.light.light_array(mesh)?;
-    let light = args.light.readable(mesh, light)?;
-    let opts = args.light.options();
-    let (lines, bands, shown) = report
-        .time(|| -> Result<_, HighlightError> {
-            let model = HighlightModel::new(mesh, light, opts)?;
-            let lines = model.lines(mesh);
-            let bands = match args.band {
-                Some(rho) => Some(model.bands(mesh, rho)?),
-                None => None,
-            };
-            let shown = model.readable_lines(mesh, &lines, &Readability::for_part(mesh, &light));
-            Ok((lines, bands, shown))
-        })
-        .map_err(to_input_error)?;
-    report.set("light", json!({"kind": "linear", "array": light}));
-    report.set(
-        "drawn",
-        fairline::highlight::DrawnLineStats::of(mesh, &light, &shown),
-    );
-    if let Some(w) = crate::highlight_png::line_warning(
-        &args.mesh,
-        &lines,
-        &shown,
-        &light,
-        fairline::highlight::readable::part_width(mesh.positions(), light.across()),
-    ) {
-        eprintln!("{w}");
-    }
-    Ok(MeshLines {
-        lines,
-        bands,
-        radii: None,
-        drawn: Some(shown),
-        view_up: crate::highlight_png::default_camera(&light),
-        spacing: Some(light.spacing()),
+        None if args.circular => HighlightLights::DerivedCircular {
+            up: args.light.up.vector(),
+        },
+        None => HighlightLights::Linear(args.light.lights()?),
     })
 }
 
@@ -278,10 +213,10 @@ fn write_picture(
     args: &HighlightArgs,
     png: &Path,
     mesh: &fairline::SurfaceMesh,
-    drawn: &MeshLines,
+    drawn: &MeshLines<'_>,
 ) -> Result<()> {
-    let lines = &drawn.lines;
-    let band_lines = drawn.bands.as_ref().map(|b| {
+    let lines = drawn.lines;
+    let band_lines = drawn.bands.map(|b| {
         let mut all = b.lower.clone();
         all.lines.extend(b.upper.lines.iter().cloned());
         all
@@ -292,7 +227,7 @@ fn write_picture(
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let title = match &drawn.drawn {
+    let title = match drawn.drawn {
         Some(d) if d.lines.len() != lines.lines.len() => format!(
             "{name}: {} of {} line pieces drawn",
             d.lines.len(),
@@ -305,7 +240,7 @@ fn write_picture(
         png,
         mesh,
         crate::highlight_png::Overlay {
-            lines: drawn.drawn.as_ref().unwrap_or(lines),
+            lines: drawn.drawn.unwrap_or(lines),
             bands: band_lines.as_ref(),
             flagged: &[],
             region: None,

@@ -1,9 +1,11 @@
 //! `fairline info`: counts and defects of a mesh file, or the contents of a
 //! surface file (.json, .igs/.iges, .step/.stp).
 
-use crate::common::Report;
+use crate::common::{print_warnings, write_report};
 use crate::output::{Job, print_stdout};
 use anyhow::Result;
+use fairline::Control;
+use fairline_commands::info;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -44,44 +46,14 @@ pub fn run(args: Args) -> Result<()> {
         return surface_info(&args, &job);
     }
     let soup = fairline::io::read_soup(&args.mesh)?;
-    let mut report = Report::new("info");
     let bar = crate::output::spinner("inspecting");
-    let info = report.time(|| fairline::mesh::inspect(&soup));
+    let name = args.mesh.display().to_string();
+    let out = info::mesh(&soup, Some(&name), &Control::new());
     bar.finish_and_clear();
-    let mut value = serde_json::to_value(&info)?;
-    // Absent values (no genus for a non-manifold mesh, no manifold error for
-    // a manifold one) are left out rather than written as null.
-    // A file without edges has no edge lengths, one without a finite vertex
-    // no bounding box: left out too, rather than written as zeros.
+    let (info, value) = (&out.info, &out.value);
     let has_bbox = info.vertices > info.non_finite_vertices;
-    if let serde_json::Value::Object(m) = &mut value {
-        m.retain(|_, v| !v.is_null());
-        if info.edges == 0 {
-            m.remove("edge_length");
-        }
-        if !has_bbox {
-            m.remove("bbox");
-        }
-        for (k, v) in m.iter() {
-            report.set(k, v);
-        }
-    }
-    if info.faces == 0 {
-        let what = match info.vertices {
-            0 => format!(
-                "{}: the file holds no vertex and no face: an empty mesh",
-                args.mesh.display()
-            ),
-            n => format!(
-                "{}: the file has no faces, so it holds no surface; only its {n} vertices are counted",
-                args.mesh.display()
-            ),
-        };
-        report.warn(what);
-    }
-    // the same values without non-finite numbers (report.set warned)
-    let value = fairline_commands::finite_only("", value, &mut Vec::new()).unwrap_or_default();
-    report.write(args.report.as_deref())?;
+    print_warnings(&out.report);
+    write_report(args.report.as_deref(), &out.report)?;
     let summary = format!(
         "{}: {} vertices, {} faces, {}",
         args.mesh.display(),
@@ -96,7 +68,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     );
     if args.json {
-        print_stdout(&format!("{}\n", serde_json::to_string_pretty(&value)?))?;
+        print_stdout(&format!("{}\n", serde_json::to_string_pretty(value)?))?;
         job.finish(summary)?;
         return Ok(());
     }
@@ -197,64 +169,19 @@ hint                run `fairline repair {} OUT` to repair it",
 fn surface_info(args: &Args, job: &Job) -> Result<()> {
     let file = crate::surface::load_surface_file_listing(&args.mesh)?;
     let surfaces = &file.surfaces;
-    let mut report = Report::new("info");
-    let area: Option<f64> = report.time(|| {
-        args.area.then(|| {
-            use rayon::prelude::*;
-            // in parallel over the faces, summed in file order
-            let areas: Vec<f64> = surfaces
-                .par_iter()
-                .map(|s| fairline::bspline::trimmed_area(s, 64, 64))
-                .collect();
-            areas.iter().sum()
-        })
-    });
-    let (mut lo, mut hi) = (
-        fairline::Vec3::splat(f64::INFINITY),
-        fairline::Vec3::splat(f64::NEG_INFINITY),
+    let name = args.mesh.display().to_string();
+    let out = info::surfaces(
+        &file,
+        args.area,
+        Some(&name),
+        crate::surface::UNREADABLE_NAMED,
+        &Control::new(),
     );
-    // the box of the faces themselves (sampled on the trimmed geometry), not
-    // of their control nets
-    for s in surfaces {
-        let (a, b) =
-            fairline::bspline::face_bounding_box(s).unwrap_or_else(|| s.control_bounding_box());
-        lo = lo.min(a);
-        hi = hi.max(b);
-    }
-    let trimmed = surfaces.iter().filter(|s| s.is_trimmed()).count();
-    let rational = surfaces.iter().filter(|s| s.is_rational()).count();
-    let max_degree = surfaces
-        .iter()
-        .map(|s| s.degree_u().max(s.degree_v()))
-        .max()
-        .unwrap_or(0);
-    let control_points: usize = surfaces.iter().map(|s| s.control_points().len()).sum();
-    let unit = file.unit.as_ref().map(|u| u.name.clone());
-    report.set("surfaces", surfaces.len());
-    report.set("trimmed", trimmed);
-    report.set("rational", rational);
-    report.set("max_degree", max_degree);
-    report.set("control_points", control_points);
-    if let Some(a) = area {
-        report.set("area", a);
-    }
-    // no face read: no bounding box (an empty box is not a number)
-    let has_box = !surfaces.is_empty() && lo.is_finite() && hi.is_finite();
-    if has_box {
-        report.set("bounding_box", [lo.to_array(), hi.to_array()]);
-    }
-    if let Some(u) = &unit {
-        report.set("unit", u);
-    }
-    // Faces the file holds that were not read: listed, and the command
-    // fails after printing unless --skip-unreadable was given.
-    report.set("unreadable_faces", file.unreadable.len());
-    report.set("unreadable", &file.unreadable);
-    let unreadable = file.unreadable_summary(crate::surface::UNREADABLE_NAMED, area);
-    if let Some(msg) = &unreadable {
-        report.warn(format!("{}: {msg}", args.mesh.display()));
-    }
-    report.write(args.report.as_deref())?;
+    let (trimmed, rational, max_degree) = (out.trimmed, out.rational, out.max_degree);
+    let (control_points, area, unit) = (out.control_points, out.area, &out.unit);
+    let (unreadable, bounding_box) = (out.unreadable.clone(), out.bounding_box);
+    print_warnings(&out.report);
+    write_report(args.report.as_deref(), &out.report)?;
     let summary = format!(
         "{}: {} surface(s), {trimmed} trimmed, {rational} rational",
         args.mesh.display(),
@@ -263,25 +190,25 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
     if args.json {
         print_stdout(&format!(
             "{}\n",
-            serde_json::to_string_pretty(&report.to_json())?
+            serde_json::to_string_pretty(&out.report.to_json())?
         ))?;
     } else {
-        let mut out = String::new();
-        let _ = writeln!(out, "file                {}", args.mesh.display());
+        let mut text = String::new();
+        let _ = writeln!(text, "file                {}", args.mesh.display());
         let _ = writeln!(
-            out,
+            text,
             "surfaces            {} ({trimmed} trimmed, {rational} rational, degree <= {max_degree})",
             surfaces.len()
         );
-        let _ = writeln!(out, "control points      {control_points}");
+        let _ = writeln!(text, "control points      {control_points}");
         let _ = writeln!(
-            out,
+            text,
             "unit                {}",
             unit.as_deref().unwrap_or("(none)")
         );
-        if has_box {
+        if let Some((lo, hi)) = bounding_box {
             let _ = writeln!(
-                out,
+                text,
                 "bounding box        ({}, {}, {}) .. ({}, {}, {}) (of the faces)",
                 human(lo.x),
                 human(lo.y),
@@ -291,15 +218,15 @@ fn surface_info(args: &Args, job: &Job) -> Result<()> {
                 human(hi.z)
             );
         } else {
-            let _ = writeln!(out, "bounding box        (none: no face was read)");
+            let _ = writeln!(text, "bounding box        (none: no face was read)");
         }
         if let Some(a) = area {
-            let _ = writeln!(out, "area                {} (trimmed faces)", human(a));
+            let _ = writeln!(text, "area                {} (trimmed faces)", human(a));
         }
         for u in &file.unreadable {
-            let _ = writeln!(out, "NOT READ            {u}");
+            let _ = writeln!(text, "NOT READ            {u}");
         }
-        print_stdout(&out)?;
+        print_stdout(&text)?;
     }
     if let Some(msg) = unreadable
         && !crate::surface::skip_unreadable()

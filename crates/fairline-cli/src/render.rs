@@ -4,14 +4,12 @@ use crate::args::{LightArgs, parse_size, parse_vec3, to_input_error};
 use crate::common::Report;
 use crate::error::bad_input;
 use anyhow::{Context, Result};
-use fairline::SurfaceMesh;
-use fairline::Vec3;
 use fairline::geom::{CurvatureMethod, principal_curvatures};
-use fairline::highlight::{
-    DetectOptions, HighlightModel, LightArray, Readability, detect_irregularities,
-};
+use fairline::highlight::{HighlightModel, LightArray};
 use fairline::picture::{Picture, ScalarField, mesh_picture};
 use fairline::render::{Colormap, PolylineLayer, RegionLabels, RenderOptions};
+use fairline::{Control, SurfaceMesh, Vec3};
+use fairline_commands::detect::{self, DetectInput, DetectSettings};
 use std::path::PathBuf;
 
 /// Tessellation samples along the diagonal of a multi-patch part
@@ -70,7 +68,7 @@ pub struct Args {
     #[command(flatten)]
     pub light: LightArgs,
     /// With --highlight: flag where |κ − κ̄|·s exceeds this (see `detect`).
-    #[arg(long, default_value_t = DetectOptions::default().threshold, requires = "highlight")]
+    #[arg(long, default_value_t = DetectSettings::default().threshold, requires = "highlight")]
     pub threshold: f64,
     /// Surface index in a multi-surface file (default: all surfaces).
     #[arg(long)]
@@ -242,8 +240,8 @@ struct HighlightOverlay {
 }
 
 /// The readable highlight lines of `light` on `tri_mesh` (triangles) and
-/// the stretches detection flags on them (`--threshold`), seen from the
-/// camera of `opts`.
+/// the stretches the command layer's `detect` flags on them
+/// (`--threshold`), seen from the camera of `opts`.
 fn highlight_overlay(
     args: &Args,
     tri_mesh: &SurfaceMesh,
@@ -253,21 +251,33 @@ fn highlight_overlay(
     let shown_light = args.light.readable(tri_mesh, light)?;
     let model =
         HighlightModel::new(tri_mesh, shown_light, args.light.options()).map_err(to_input_error)?;
-    let all = model.lines(tri_mesh);
-    let lines = model.readable_lines(
-        tri_mesh,
-        &all,
-        &Readability::for_part(tri_mesh, &shown_light),
-    );
-    let det_opts = DetectOptions::default().threshold(args.threshold);
-    let det = detect_irregularities(tri_mesh, &light, &lines, &det_opts).map_err(to_input_error)?;
+    // the detection of `fairline detect` (the whole part, what one array
+    // leaves unjudged judged again with finer arrays) on the readable lines
+    let settings = DetectSettings {
+        threshold: args.threshold,
+        ..DetectSettings::default()
+    };
+    let input = DetectInput {
+        mesh: tri_mesh,
+        source: None,
+        name: None,
+    };
+    let out = detect::run_with_model(
+        input,
+        &settings,
+        light,
+        &model,
+        fairline_commands::Report::new("detect"),
+        &Control::new(),
+    )?;
+    let (all, lines, det) = (&out.lines, &out.shown, &out.detection);
     let stretches: Vec<Vec<Vec3>> = det
         .lines
         .iter()
         .flat_map(|l| l.stretches.iter().cloned())
         .collect();
     let key = crate::highlight_png::key_entries(&crate::highlight_png::Overlay {
-        lines: &lines,
+        lines,
         bands: None,
         flagged: &stretches,
         region: None,
@@ -280,13 +290,13 @@ fn highlight_overlay(
         "light": shown_light,
         "detect_light": light,
         "lines": all.lines.len(),
-        "drawn": fairline::highlight::DrawnLineStats::of(tri_mesh, &shown_light, &lines),
+        "drawn": fairline::highlight::DrawnLineStats::of(tri_mesh, &shown_light, lines),
         "nodes": lines.node_count(),
         "irregular_stretches": stretches.len(),
         "regions": det.regions.len(),
     });
     Ok(HighlightOverlay {
-        polylines: crate::highlight_png::line_layers(&lines, &stretches),
+        polylines: crate::highlight_png::line_layers(lines, &stretches),
         key,
         summary,
     })

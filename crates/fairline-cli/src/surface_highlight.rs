@@ -3,21 +3,22 @@
 //! with their (u, v) pre-images and 3D points; PNG of the shaded surface
 //! with the lines, SVG of the pre-images.
 
-use crate::args::{HighlightArgs, Radii, to_input_error};
-use crate::common::{Report, write_json};
+use crate::args::{HighlightArgs, Radii};
+use crate::common::{print_warnings, write_json, write_report};
 use crate::error::bad_input;
 use crate::output::require_extension;
 use anyhow::Result;
-use fairline::Vec3;
 use fairline::bspline::BSplineSurface;
-use fairline::highlight::surface_highlight_lines_json;
 use fairline::highlight::{
-    CircularLights, LightArray, PartLights, PatchHighlights, Readability, SurfaceHighlightLine,
-    SurfaceHighlightOptions, SurfaceLight, part_highlight_lines, readable_surface_lines,
-    readable_surface_lines_in_view,
+    CircularLights, PatchHighlights, Readability, SurfaceHighlightLine, SurfaceLight,
+    readable_surface_lines, readable_surface_lines_in_view,
 };
 use fairline::picture::{Picture, labelled_mesh_picture, mesh_picture};
 use fairline::render::{PolylineLayer, RegionLabels, RenderOptions, SvgPlot};
+use fairline::{Control, Vec3};
+use fairline_commands::Subject;
+use fairline_commands::highlight::HighlightLights;
+use fairline_commands::surface_highlight::{self, SurfaceHighlightSettings};
 use serde_json::{Value, json};
 
 /// Colours of successive lights (linear light, sRGB-ish) for pictures.
@@ -215,74 +216,60 @@ pub fn run(args: HighlightArgs) -> Result<()> {
     let job = output_job(&args)?;
     check_options(&args)?;
     let all = crate::surface::load_surfaces(&args.mesh)?;
-    if let Some(k) = args.surface
-        && k >= all.len()
-    {
-        return Err(bad_input(format!(
-            "{}: --surface {k} is out of range (the file holds {} surfaces)",
-            args.mesh.display(),
-            all.len()
-        )));
-    }
-    let circular_spec = circular_spec(&args, &all)?;
-    let chosen: Vec<(usize, BSplineSurface)> = match args.surface {
-        Some(k) => vec![(k, all[k].clone())],
-        None => all.into_iter().enumerate().collect(),
+    let settings = SurfaceHighlightSettings {
+        lights: highlight_lights(&args)?,
+        grid: args.grid,
+        band: args.band,
+        surface: args.surface,
     };
-    let surfaces: Vec<BSplineSurface> = chosen.iter().map(|(_, s)| s.clone()).collect();
-    let mut report = Report::new("highlight");
-    report.set("surfaces", chosen.len());
-    report.set("grid", args.grid);
-    let opts = SurfaceHighlightOptions::default()
-        .grid(args.grid)
-        .band(args.band);
-    let (part_lights, readable) = part_lights(&args, circular_spec, &surfaces, &mut report)?;
-    let bar = crate::output::progress(chosen.len() as u64, "highlight lines");
-    let patches =
-        report.time(|| part_highlight_lines(&surfaces, &part_lights, &opts, &|| bar.inc(1)));
-    let results: Vec<(usize, PatchHighlights)> = chosen
-        .iter()
-        .zip(patches)
-        .map(|((k, _), p)| (*k, p))
-        .collect();
+    let count = settings.surface.map_or(all.len(), |_| 1);
+    let bar = crate::output::progress(count as u64, "highlight lines");
+    let out = surface_highlight::run(&all, &settings, &Control::new(), &|| bar.inc(1));
     bar.finish_and_clear();
-    let (out, counts) = surface_highlight_lines_json(
-        &results.iter().map(|(k, p)| (*k, p)).collect::<Vec<_>>(),
-        args.band,
-    );
+    let mut out = out.map_err(|e| match e.subject() {
+        Some(Subject::Input) => crate::output::name_file(&args.mesh, e),
+        Some(Subject::Lights) => match &args.light.lights {
+            Some(path) => crate::output::name_file(path, e),
+            None => anyhow::Error::new(e),
+        },
+        _ => anyhow::Error::new(e),
+    })?;
+    if let Some(spec) = &out.derived {
+        eprintln!(
+            "default circular lights (save as LIGHTS.json to reuse): {}",
+            serde_json::to_string(spec)?
+        );
+    }
+    let (surfaces, results) = (&out.surfaces, &out.results);
     // Pictures first (they can fail on bad options); the lines file last.
     if let Some(p) = &args.png {
-        let view = match (&readable, args.view) {
+        let view = match (&out.readable, args.view) {
             (_, Some(v)) => Some((v, RenderOptions::default().up)),
             (Some((array, _)), None) => Some(fairline::highlight::part_view(array)),
             (None, None) => None,
         };
         let drawn = drawn_lines(
-            &surfaces,
-            &results,
-            readable.as_ref().map(|r| &r.1),
+            surfaces,
+            results,
+            out.readable.as_ref().map(|r| &r.1),
             view.map(|(dir, _)| dir),
         );
         if let Some((dir, up)) = view {
-            report.set("view", json!({"dir": dir.to_array(), "up": up.to_array()}));
+            out.report
+                .set("view", json!({"dir": dir.to_array(), "up": up.to_array()}));
         }
-        report.set("drawn", drawn_json(&drawn));
-        write_picture(&args, &surfaces, &results, &drawn, view, p)?;
+        out.report.set("drawn", drawn_json(&drawn));
+        write_picture(&args, surfaces, results, &drawn, view, p)?;
     }
     if let Some(p) = &args.svg {
-        write_svg(&args, &surfaces, &results, p)?;
+        write_svg(&args, surfaces, results, p)?;
     }
-    write_json(&args.output, &out)?;
-    report.set("lines", counts.lines);
-    report.set("closed_lines", counts.closed_lines);
-    report.set("points", counts.points);
-    if counts.lines == 0 {
-        report.warn("no highlight line pre-image was found on the surface; try other radii, --circle-center or --circle-axis");
-    }
-    report.write(args.report.as_deref())?;
+    write_json(&args.output, &out.document)?;
+    print_warnings(&out.report);
+    write_report(args.report.as_deref(), &out.report)?;
     job.finish(format_args!(
         "{} highlight line pre-image(s) on {} surface(s)",
-        counts.lines,
+        out.lines,
         results.len()
     ))?;
     Ok(())
@@ -329,83 +316,36 @@ fn check_options(args: &HighlightArgs) -> Result<()> {
     Ok(())
 }
 
-/// Circular lights: given, from a --lights file in the circular form, or
-/// (--circular) derived from the whole part `all`, so that `fair-surface`
-/// on the same file derives the same ones; with whether they were derived.
-/// `None` for linear lights.
-fn circular_spec(
-    args: &HighlightArgs,
-    all: &[BSplineSurface],
-) -> Result<Option<(CircularLights, bool)>> {
-    Ok(
-        if let (Some(c), Some(t), Some(Radii(radii))) =
-            (args.circle_center, args.circle_axis, args.radii.clone())
-        {
-            Some((
-                CircularLights {
-                    center: c.to_array(),
-                    axis: t.to_array(),
-                    radii,
-                },
-                false,
-            ))
-        } else if let Some(path) = &args.light.lights {
-            crate::args::circular_file(path)?.map(|c| (c, false))
-        } else if args.circular {
-            Some((
-                crate::args::derived_circular_lights(
-                    fairline::highlight::default_circular_lights(
-                        all,
-                        args.light.up.vector(),
-                        fairline::highlight::DEFAULT_CIRCULAR_RADII,
-                    ),
-                )?,
-                true,
-            ))
-        } else {
-            None
-        },
-    )
-}
-
-/// The lights of the run over the chosen `surfaces`: the circular ones of
-/// `circular_spec`, else the linear array of the --lights file or the
-/// part's readable default lights with the options given in place
-/// ([`fairline::highlight::part_light_array`], the mesh side's rule) with
-/// what its picture can show; recorded in the report.
-fn part_lights(
-    args: &HighlightArgs,
-    circular_spec: Option<(CircularLights, bool)>,
-    surfaces: &[BSplineSurface],
-    report: &mut Report,
-) -> Result<(PartLights, Option<(LightArray, Readability)>)> {
-    if let Some((spec, derived)) = circular_spec {
-        let lights = spec.lights().map_err(|e| match &args.light.lights {
-            Some(path) if args.circle_center.is_none() => {
-                crate::output::name_file(path, to_input_error(e))
-            }
-            _ => to_input_error(e),
-        })?;
-        if lights.is_empty() {
-            return Err(bad_input("circular lights need at least one radius"));
-        }
-        let mut light = json!({"kind": "circular", "center": spec.center, "axis": spec.axis, "radii": spec.radii});
-        if derived {
-            light["derived"] = json!(true);
-        }
-        report.set("light", light);
-        return Ok((PartLights::Circular(lights), None));
+/// The lights asked for: circular lights given on the command line, in the
+/// `--lights` file, or derived from the whole part (`--circular`); else the
+/// linear light array.
+fn highlight_lights(args: &HighlightArgs) -> Result<HighlightLights> {
+    if let (Some(c), Some(t), Some(Radii(radii))) =
+        (args.circle_center, args.circle_axis, args.radii.clone())
+    {
+        return Ok(HighlightLights::Circular {
+            spec: CircularLights {
+                center: c.to_array(),
+                axis: t.to_array(),
+                radii,
+            },
+            from_lights: false,
+        });
     }
-    let (array, readability) = args.light.part_light_array(surfaces)?;
-    report.set("light", json!({"kind": "linear", "array": array}));
-    Ok((
-        PartLights::Linear {
-            array,
-            min_cos: args.light.min_normal_cos,
-            max_lights: fairline::highlight::surface::DEFAULT_MAX_LIGHTS,
-        },
-        Some((array, readability)),
-    ))
+    if let Some(path) = &args.light.lights
+        && let Some(spec) = crate::args::circular_file(path)?
+    {
+        return Ok(HighlightLights::Circular {
+            spec,
+            from_lights: true,
+        });
+    }
+    if args.circular {
+        return Ok(HighlightLights::DerivedCircular {
+            up: args.light.up.vector(),
+        });
+    }
+    Ok(HighlightLights::Linear(args.light.lights()?))
 }
 
 /// The lines the picture draws: with linear lights the readable drawing of

@@ -1,7 +1,10 @@
 //! The commands run by the workbench are the CLI's: for each command the
-//! workbench runs (fair, smooth, fair-quad, enhance), the job's equivalent
+//! workbench runs (fair, smooth, fair-quad, enhance, fair-surface), the
+//! job's equivalent
 //! command line, run by the CLI, writes the bytes the workbench serves and
-//! the report the workbench shows (every key but the computation times).
+//! the report the workbench shows (every key but the computation times);
+//! the workbench's detection and its surface pre-images give the reports
+//! of their `fairline detect` and `fairline highlight` command lines.
 
 mod common;
 use common::{bin, s, tmp};
@@ -140,12 +143,24 @@ fn panel(path: &Path, n: usize, quads: bool) {
     std::fs::write(path, text).unwrap();
 }
 
-/// The report without its computation times (`time_s`, and the stage
-/// timings of `enhance`).
+/// The report without its computation times (`time_s` at any depth:
+/// fair-surface's history has one per iteration; the stage timings of
+/// `enhance`).
 fn without_time(mut v: Value) -> Value {
-    if let Value::Object(m) = &mut v {
-        m.remove("time_s");
-        m.remove("timings");
+    match &mut v {
+        Value::Object(m) => {
+            m.remove("time_s");
+            m.remove("timings");
+            for x in m.values_mut() {
+                *x = without_time(x.take());
+            }
+        }
+        Value::Array(a) => {
+            for x in a.iter_mut() {
+                *x = without_time(x.take());
+            }
+        }
+        _ => {}
     }
     v
 }
@@ -159,6 +174,13 @@ fn same_as_cli(srv: &Server, dir: &Path, request: Value) {
     std::fs::write(dir.join("region.json"), files["region"].to_string()).unwrap();
     std::fs::write(dir.join("fixed.json"), files["fixed"].to_string()).unwrap();
     let job = srv.job(&request);
+    same_job_as_cli(srv, dir, &job);
+}
+
+/// Runs the equivalent command line of the finished `job` with the CLI in
+/// `dir` (which holds the files the command line names) and asserts the
+/// same output bytes and report; undoes the job.
+fn same_job_as_cli(srv: &Server, dir: &Path, job: &Value) {
     let command = job["command"].as_str().unwrap().to_string();
     let words: Vec<&str> = command.split(' ').collect();
     assert_eq!(words[0], "fairline", "{command}");
@@ -255,5 +277,102 @@ fn the_workbench_runs_the_clis_fair_quad() {
         &dir,
         json!({"method": "fair-quad", "faces": faces, "options": {"weight": 0.02, "iterations": 2}}),
     );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_workbench_runs_the_clis_fair_surface() {
+    let dir = tmp("commands-equal-surface");
+    let o = bin()
+        .current_dir(&dir)
+        .args(["demo", "--out", "demo"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let demo = dir.join("demo");
+    let panel = dir.join("panel.json");
+    std::fs::copy(demo.join("bspline-panel-dented.json"), &panel).unwrap();
+    let lights = common::json(&demo.join("bspline-panel-lights.json"));
+    let ends = common::json(&demo.join("bspline-panel-endpoints.json"));
+    std::fs::write(dir.join("lights.json"), lights.to_string()).unwrap();
+    std::fs::write(dir.join("endpoints.json"), ends.to_string()).unwrap();
+    let srv = Server::start(&panel, &dir);
+    // the pre-images the page draws: the report of their command line
+    let (st, b) = srv.call(
+        "POST",
+        "/api/doc/0/surface-lines",
+        Some(&json!({"circular": lights, "patch": 0, "grid": 120, "band": 0.05})),
+    );
+    assert_eq!(st, 200, "{}", String::from_utf8_lossy(&b));
+    let header = frame_header(&b);
+    let report = cli_report(&dir, header["command"].as_str().unwrap());
+    assert!(report["lines"].as_u64().unwrap() > 0, "{report}");
+    assert_eq!(without_time(header["report"].clone()), without_time(report));
+    for options in [json!({"max_iterations": 3}), json!({})] {
+        let job = srv.job(
+            &json!({"method": "fair-surface", "patch": 0, "circular": lights,
+            "endpoints": ends["endpoints"], "options": options}),
+        );
+        assert!(job["report"]["modified_control_points"].as_u64().unwrap() > 0);
+        same_job_as_cli(&srv, &dir, &job);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Runs the CLI command line `command` in `dir` with `--report
+/// report.json`; the report.
+fn cli_report(dir: &Path, command: &str) -> Value {
+    let words: Vec<&str> = command.split(' ').collect();
+    assert_eq!(words[0], "fairline", "{command}");
+    let o = bin()
+        .current_dir(dir)
+        .args(&words[1..])
+        .args(["--report", "report.json"])
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{command}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    common::json(&dir.join("report.json"))
+}
+
+/// The JSON header of a binary frame answer.
+fn frame_header(b: &[u8]) -> Value {
+    let len = u32::from_le_bytes(b[..4].try_into().unwrap()) as usize;
+    serde_json::from_slice(&b[4..4 + len]).unwrap()
+}
+
+#[test]
+fn the_workbench_detects_as_the_cli() {
+    let dir = tmp("commands-equal-detect");
+    let mesh = dir.join("panel.obj");
+    panel(&mesh, 41, false);
+    let srv = Server::start(&mesh, &dir);
+    let light =
+        json!({"plane_point":[0,0,6],"plane_normal":[0,0,1],"direction":[1,0,0],"spacing":0.1});
+    for request in [
+        json!({"light": light}),
+        json!({"light": light, "threshold": 1.5, "region_radius": 0.5}),
+    ] {
+        let (st, b) = srv.call("POST", "/api/doc/0/detect", Some(&request));
+        assert_eq!(st, 200, "{}", String::from_utf8_lossy(&b));
+        let header = frame_header(&b);
+        let command = header["command"].as_str().unwrap();
+        assert!(command.starts_with("fairline detect "), "{command}");
+        let report = cli_report(&dir, command);
+        assert!(
+            !report["regions"].as_array().unwrap().is_empty(),
+            "{report}"
+        );
+        assert_eq!(
+            without_time(header["report"].clone()),
+            without_time(report.clone()),
+            "{command}"
+        );
+        let regions = header["regions"].as_array().unwrap();
+        assert_eq!(regions.len(), report["regions"].as_array().unwrap().len());
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1,6 +1,6 @@
-//! The CLI's modules import each other in one direction only (no
-//! `demo` ↔ `smooth`, `highlight` ↔ `surface_highlight` or
-//! `common` ↔ `output` cycles). Reads the sources as text: every
+//! The CLI's modules, and the command layer's, import each other in one
+//! direction only (no `demo` ↔ `smooth`, `highlight` ↔ `surface_highlight`
+//! or `common` ↔ `output` cycles). Reads the sources as text: every
 //! `crate::NAME` outside comments is an arrow from the file's top-level
 //! module to the module NAME; a cycle in that graph fails the test, with
 //! the modules of the cycle and the lines that make its arrows.
@@ -158,6 +158,28 @@ fn the_cli_modules_import_each_other_in_one_direction_only() {
     assert!(arrows > 20, "only {arrows} arrows found: {graph:?}");
     assert!(graph["highlight"].contains_key("surface_highlight"));
     assert!(graph["common"].contains_key("output"));
+    if let Some(cycle) = find_cycle(&graph) {
+        let lines: Vec<&String> = cycle.windows(2).map(|w| &graph[&w[0]][&w[1]]).collect();
+        panic!(
+            "import cycle {}:\n  {}",
+            cycle.join(" → "),
+            lines
+                .iter()
+                .map(|s| s.as_str())
+                .collect::<Vec<_>>()
+                .join("\n  ")
+        );
+    }
+}
+
+#[test]
+fn the_command_layer_modules_import_each_other_in_one_direction_only() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fairline-commands/src");
+    let graph = module_graph(&src);
+    let arrows: usize = graph.values().map(|t| t.len()).sum();
+    assert!(arrows > 10, "only {arrows} arrows found: {graph:?}");
+    assert!(graph["fair"].contains_key("regions"));
+    assert!(graph["detect"].contains_key("lights"));
     if let Some(cycle) = find_cycle(&graph) {
         let lines: Vec<&String> = cycle.windows(2).map(|w| &graph[&w[0]][&w[1]]).collect();
         panic!(

@@ -34,6 +34,10 @@ pub enum Subject {
     Input,
     /// The region to work in.
     Region,
+    /// The lights given (a lights file).
+    Lights,
+    /// The stretches of highlight lines to fair (an endpoints file).
+    Endpoints,
 }
 
 /// What the user can do about an error, worded by each front end.
@@ -41,6 +45,8 @@ pub enum Subject {
 enum Hint {
     /// Enlarge the region or grow it by two rings.
     GrowRegion,
+    /// Set option `.0` to `.1` (said in parentheses after the message).
+    Setting(&'static str, &'static str),
 }
 
 /// A command's failure: its kind, its message, and what it is about.
@@ -88,6 +94,12 @@ impl CommandError {
         self.subject = Some(subject);
         self
     }
+    /// The same error, naming the setting of option `option` (the CLI's
+    /// long name) to `value` that avoids it: "… (--boundary free)".
+    pub fn with_setting(mut self, option: &'static str, value: &'static str) -> Self {
+        self.hint = Some(Hint::Setting(option, value));
+        self
+    }
     /// The kind.
     pub fn kind(&self) -> ErrorKind {
         self.kind
@@ -103,11 +115,15 @@ impl CommandError {
             Some(o) => format!("{} {}", front_end.option(o), self.message),
             None => self.message.clone(),
         };
-        if let Some(Hint::GrowRegion) = self.hint {
-            text.push_str(&format!(
+        match self.hint {
+            Some(Hint::GrowRegion) => text.push_str(&format!(
                 "; a vertex can move only when every face around it and around its neighbours is in the region: enlarge the region or pass {}",
                 front_end.setting("grow", "2")
-            ));
+            )),
+            Some(Hint::Setting(option, value)) => {
+                text.push_str(&format!(" ({})", front_end.setting(option, value)))
+            }
+            None => {}
         }
         text
     }

@@ -20,19 +20,24 @@
 
 #![forbid(unsafe_code)]
 
+pub mod continuity;
 pub mod curvature;
+pub mod detect;
 pub mod deviation;
 pub mod enhance;
 pub mod error;
 pub mod fair;
 pub mod fair_quad;
 pub mod fair_surface;
+pub mod highlight;
+pub mod info;
 pub mod lights;
 pub mod names;
 pub mod regions;
 pub mod repair;
 pub mod report;
 pub mod smooth;
+pub mod surface_highlight;
 pub mod warning;
 mod words;
 

@@ -2,6 +2,7 @@
 //! end words them: the CLI names its options `--grow 2`, the Python package
 //! its keywords `grow=2`, the workbench its controls.
 
+use fairline::fair::{FairStop, SurfaceFairMethod};
 use fairline::smooth::{
     DEFAULT_MAX_WORK, DIVERGENCE_FACTOR, STAGNATION_DECREASE, STAGNATION_WINDOW, StopReason,
 };
@@ -124,6 +125,38 @@ pub enum Warning {
     QuadEnergyWorse { before: f64, after: f64 },
     /// `enhance`: triangles flipped in a solved step and were repaired.
     TrianglesFlipped { count: usize },
+    /// `fair-surface`: endpoint `index` (its start, or its end) lay
+    /// `distance` from the nearest line of its light's radius, more than
+    /// `fraction` of the parameter domain's `diagonal`, and was snapped
+    /// there.
+    EndpointSnappedFar {
+        index: usize,
+        fraction: f64,
+        start: bool,
+        given: [f64; 2],
+        snapped: [f64; 2],
+        distance: f64,
+        radius: f64,
+        diagonal: f64,
+    },
+    /// `fair-surface`: the iteration stopped without converging;
+    /// `equations` target samples against `unknowns` coordinates.
+    SurfaceFairNotConverged {
+        method: SurfaceFairMethod,
+        stop: FairStop,
+        iterations: usize,
+        equations: usize,
+        unknowns: usize,
+    },
+    /// `fair-surface`: the largest highlight residual grew.
+    HighlightResidualWorse { before: f64, after: f64 },
+    /// `detect`: no highlight line crosses the mesh, so nothing could be
+    /// detected.
+    NoLineToDetectOn,
+    /// `highlight`: no highlight line crosses the mesh.
+    NoLineCrossesTheMesh,
+    /// `highlight` on surfaces: no pre-image of a highlight line was found.
+    NoPreImage,
     /// A sentence that names no option (a library report's, or a
     /// command's not yet in this layer).
     Text(String),
@@ -197,9 +230,111 @@ impl Warning {
                 o("lambda"),
                 o("iterations")
             ),
+            Warning::EndpointSnappedFar {
+                index,
+                fraction,
+                start,
+                given: p,
+                snapped: q,
+                distance,
+                radius,
+                diagonal,
+            } => format!(
+                "endpoint {index} {}: ({:.4}, {:.4}) lies {distance:.4} from the nearest line of radius {radius} (more than {} % of the domain diagonal {diagonal:.4}) and was snapped to ({:.4}, {:.4}); was it read off another line?",
+                if *start { "start" } else { "end" },
+                p[0],
+                p[1],
+                100.0 * fraction,
+                q[0],
+                q[1]
+            ),
+            Warning::SurfaceFairNotConverged {
+                method,
+                stop,
+                iterations,
+                equations,
+                unknowns,
+            } => surface_not_converged(
+                *method,
+                *stop,
+                *iterations,
+                (*equations, *unknowns),
+                front_end,
+            ),
+            Warning::HighlightResidualWorse { before, after } => format!(
+                "the largest highlight residual got worse: {before:.4e} before, {after:.4e} after"
+            ),
+            Warning::NoLineToDetectOn => format!(
+                "no highlight line crosses the mesh, so nothing could be detected; try other light options ({}, {}, {})",
+                o("plane-normal"),
+                o("direction"),
+                o("spacing")
+            ),
+            Warning::NoLineCrossesTheMesh => format!(
+                "no highlight line crosses the mesh; try other light options ({}, {}, {})",
+                o("plane-normal"),
+                o("direction"),
+                o("spacing")
+            ),
+            Warning::NoPreImage => format!(
+                "no highlight line pre-image was found on the surface; try other radii, {} or {}",
+                o("circle-center"),
+                o("circle-axis")
+            ),
             Warning::Text(text) => text.clone(),
         }
     }
+}
+
+/// The sentence of a `fair-surface` run that did not converge: the reason
+/// it stopped, the system's size (`rows` equations, `cols` unknowns) when
+/// it is underdetermined, what to try.
+fn surface_not_converged(
+    method: SurfaceFairMethod,
+    stop: FairStop,
+    iterations: usize,
+    (rows, cols): (usize, usize),
+    front_end: FrontEnd,
+) -> String {
+    let o = |name: &str| front_end.option(name);
+    let objective = match method {
+        SurfaceFairMethod::Paper => "mean |d_s|",
+        SurfaceFairMethod::Regularised => "the objective",
+    };
+    let why = match stop {
+        FairStop::Stalled => format!(
+            "stalled: {objective} stopped decreasing (neither the full nor the damped step lowered it at the finest truncation)"
+        ),
+        FairStop::MaxIterations => format!(
+            "out of iterations: {} ran without meeting the stopping rule",
+            front_end.setting("max-iterations", &iterations.to_string())
+        ),
+        FairStop::NonFiniteStep => {
+            "the step was not finite; the last finite surface is kept".to_string()
+        }
+        FairStop::Epsilon | FairStop::ZeroResidual => "the stopping rule did not hold".to_string(),
+    };
+    let underdetermined = if rows < cols {
+        format!(
+            "; underdetermined: {rows} equations (target samples) for {cols} unknowns (3 per moved control point), so the targets do not fix the control points"
+        )
+    } else {
+        String::new()
+    };
+    let try_this = match method {
+        SurfaceFairMethod::Paper => format!(
+            "try {} (well posed whatever the number of targets), more or longer stretches, a smaller {}, or {}",
+            front_end.setting("method", "regularised"),
+            o("sample-spacing"),
+            o("max-iterations")
+        ),
+        SurfaceFairMethod::Regularised => {
+            format!("try {} or other endpoints", o("max-iterations"))
+        }
+    };
+    format!(
+        "fairing did not converge after {iterations} iteration(s): {why}{underdetermined}; {try_this}"
+    )
 }
 
 /// Why a smoothing run stopped unconverged, and what to try.

@@ -7,13 +7,14 @@ use super::http::{HttpRequest, HttpResponse, Service};
 use fairline::fair::{FairMethod, grow_region};
 use fairline::geom::{CurvatureMethod, principal_curvatures};
 use fairline::highlight::{
-    CircularLight, CircularLights, DetectOptions, HighlightLines, HighlightModel, HighlightOptions,
-    LightArray, circular_highlight_bands, circular_highlight_lines, detect_irregularities,
+    CircularLight, CircularLights, HighlightLines, HighlightModel, HighlightOptions, LightArray,
+    circular_highlight_bands, circular_highlight_lines,
 };
 use fairline::io::RegionSpec;
 use fairline::mesh::{FaceId, VertexId};
 use fairline::smooth::SmoothMethod;
 use fairline::{Control, SurfaceMesh, Vec3};
+use fairline_commands::detect::{DetectInput, DetectSettings, run_with_model as run_detect};
 use fairline_commands::enhance::{self, EnhanceSettings};
 use fairline_commands::fair::{self, FairInput, FairSettings};
 use fairline_commands::fair_quad::{self, QuadSettings};
@@ -650,6 +651,10 @@ struct DetectRequest {
     region_radius: Option<f64>,
 }
 
+/// Detection under the page's lights: the command layer's `detect` on the
+/// document's triangles with the lights given exactly (so its readable
+/// lights are the page's and the cached model of those lights serves),
+/// the detection of the whole part as `fairline detect` runs it.
 fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     let req: DetectRequest = match parse(body) {
         Ok(r) => r,
@@ -666,24 +671,33 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         )
     };
     let mesh = mesh.as_ref();
-    let defaults = DetectOptions::default();
-    let opts = DetectOptions::default()
-        .threshold(req.threshold.unwrap_or(defaults.threshold))
-        .region_margin(req.region_radius.unwrap_or(defaults.region_margin));
+    let defaults = DetectSettings::default();
+    let settings = DetectSettings {
+        lights: Lights::exactly(&req.light),
+        threshold: req.threshold.unwrap_or(defaults.threshold),
+        region_margin: req.region_radius.unwrap_or(defaults.region_margin),
+        ..defaults
+    };
     let t = Instant::now();
     let model = match cached_model(shared, k, &positions, mesh, req.light) {
         Ok((m, _)) => m,
         Err(e) => return bad(e),
     };
-    let lines = model.lines(mesh);
-    let det = match detect_irregularities(mesh, &req.light, &lines, &opts) {
-        Ok(d) => d,
-        Err(e) => return bad(e),
+    let input = DetectInput {
+        mesh,
+        source: None,
+        name: None,
     };
+    let report = fairline_commands::Report::new("detect");
+    let out = match run_detect(input, &settings, req.light, &model, report, &Control::new()) {
+        Ok(o) => o,
+        Err(e) => return bad(e.message(FrontEnd::Workbench)),
+    };
+    let (lines, det) = (&out.lines, &out.detection);
     let elapsed = t.elapsed().as_secs_f64();
     let mut meta = Vec::new();
     let mut floats = Vec::new();
-    push_lines(&lines, center, None, &mut meta, &mut floats);
+    push_lines(lines, center, None, &mut meta, &mut floats);
     let mut stretches = Vec::new();
     for l in &det.lines {
         for s in &l.stretches {
@@ -710,21 +724,13 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             })
         })
         .collect();
-    let mut command = format!(
-        "fairline detect {file} {} -o region.json",
-        light_args(&req.light)
-    );
-    if let Some(t) = req.threshold {
-        command.push_str(&format!(" --threshold {t}"));
-    }
-    if let Some(r) = req.region_radius {
-        command.push_str(&format!(" --region-margin {r}"));
-    }
+    let command = settings.command_line(&file, "region.json");
     let header = json!({
         "lines": meta,
         "bands": [],
         "stretches": stretches,
         "regions": regions,
+        "report": out.report.to_json(),
         "sites": det.sites.len(),
         "shape_sites": det.shape_sites,
         "smooth_radius": det.smooth_radius,
@@ -1435,29 +1441,32 @@ struct SurfaceLinesRequest {
     band: Option<f64>,
 }
 
-/// Circular highlight line pre-images of one patch (Nishiyama et al. §2):
-/// a frame with the 3-D points (minus the centre), then the (u, v) points;
-/// each line has `radius`, `closed`, `start`, `count` and `uv_start`.
+/// Circular highlight line pre-images of one patch (Nishiyama et al. §2),
+/// by the command layer's `surface_highlight` (so `report` is the report
+/// of the answer's `command`): a frame with the 3-D points (minus the
+/// centre), then the (u, v) points; each line has `radius`, `closed`,
+/// `start`, `count` and `uv_start`.
 fn surface_lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
-    use fairline::highlight::{SurfaceHighlightOptions, SurfaceLight, surface_highlight_lines};
+    use fairline_commands::highlight::HighlightLights;
+    use fairline_commands::surface_highlight::{SurfaceHighlightSettings, run};
     let req: SurfaceLinesRequest = match parse(body) {
         Ok(r) => r,
         Err(a) => return a,
     };
-    let (surface, center, file) = {
+    let (surfaces, center, file) = {
         let st = lock(shared);
         let d = &st.docs[k];
         let Some(s) = &d.current().surfaces else {
             return bad("surface lines are for B-spline surfaces");
         };
-        let Some(surface) = s.get(req.patch).cloned() else {
+        if req.patch >= s.len() {
             return bad(format!(
                 "no patch {} (the file holds {})",
                 req.patch,
                 s.len()
             ));
-        };
-        (surface, d.center, d.current_file())
+        }
+        (Arc::clone(s), d.center, d.current_file())
     };
     let lights = match circular_lights(&req.circular) {
         Ok(l) => l,
@@ -1476,12 +1485,20 @@ fn surface_lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         return bad("band must be a positive number");
     }
     let t = Instant::now();
-    let slights: Vec<SurfaceLight> = lights.iter().map(|l| SurfaceLight::Circular(*l)).collect();
-    let h = surface_highlight_lines(
-        &surface,
-        &slights,
-        &SurfaceHighlightOptions::default().grid(grid).band(req.band),
-    );
+    let settings = SurfaceHighlightSettings {
+        lights: HighlightLights::Circular {
+            spec: req.circular.clone(),
+            from_lights: false,
+        },
+        grid,
+        band: req.band,
+        surface: Some(req.patch),
+    };
+    let out = match run(&surfaces, &settings, &Control::new(), &|| {}) {
+        Ok(o) => o,
+        Err(e) => return bad(e.message(FrontEnd::Workbench)),
+    };
+    let (surface, h) = (&out.surfaces[0], &out.results[0].1.highlights);
     let elapsed = t.elapsed().as_secs_f64();
     let all: Vec<(&str, &fairline::highlight::SurfaceHighlightLine)> = h
         .lines
@@ -1515,6 +1532,7 @@ fn surface_lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         "uv_offset": uv_base,
         "domain": [[u0, u1], [v0, v1]],
         "time_s": elapsed,
+        "report": out.report.to_json(),
         "command": format!(
             "fairline highlight {file} --surface {} --circle-center {} --circle-axis {} --radii {} --grid {grid}{} -o lines.json --svg uv.svg",
             req.patch,
@@ -1527,8 +1545,10 @@ fn surface_lines(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     binary(frame(&header, &floats))
 }
 
-/// Circular-highlight fairing of one patch (Nishiyama et al. §3) with the
-/// library's default options; the patch is replaced and re-tessellated.
+/// Circular-highlight fairing of one patch (Nishiyama et al. §3): the
+/// command layer's `fair_surface` with the page's lights and endpoints and
+/// the library's defaults but for the iterations and ε; the patch is
+/// replaced and re-tessellated.
 fn run_fair_surface(
     req: &RunRequest,
     surfaces: &Arc<Vec<fairline::bspline::BSplineSurface>>,
@@ -1537,49 +1557,38 @@ fn run_fair_surface(
     out: &str,
     control: &Control,
 ) -> Result<Outcome, String> {
-    use fairline::fair::{Endpoints, SurfaceFairOptions, fair_surface};
+    use fairline::fair::Endpoints;
+    use fairline_commands::fair_surface::{FairSurfaceInput, FairSurfaceSettings, run};
     let circular = req
         .circular
         .as_ref()
         .ok_or("fair-surface needs the circular lights")?;
-    let lights = circular.lights().map_err(|e| e.to_string())?;
     let ends: Endpoints =
         serde_json::from_value(json!({"endpoints": req.endpoints.clone().unwrap_or(Value::Null)}))
             .map_err(|e| format!("endpoints: {e}"))?;
-    let input = surfaces.get(req.patch).ok_or("no such patch")?;
-    let mut opts = SurfaceFairOptions::default()
-        .lights(lights)
-        .endpoints(ends.endpoints);
-    if let Some(n) = req.options.max_iterations {
-        opts = opts.max_iterations(n);
+    if req.patch >= surfaces.len() {
+        return Err("no such patch".into());
     }
-    if let Some(e) = req.options.epsilon {
-        opts = opts.epsilon(e);
-    }
-    opts = opts.control(control.clone());
-    let t = Instant::now();
-    let faired = fair_surface(input, &opts).map_err(|e| e.to_string())?;
-    let (faired, rep) = (faired.surfaces, faired.report);
-    let mut all = surfaces.as_ref().clone();
-    all[req.patch] = faired;
-    let (mesh, _) = super::doc::tessellate_all(&all, grid).map_err(|e| e.to_string())?;
+    let d = FairSurfaceSettings::default();
+    let settings = FairSurfaceSettings {
+        surface: req.patch,
+        max_iterations: req.options.max_iterations.unwrap_or(d.max_iterations),
+        epsilon: req.options.epsilon.unwrap_or(d.epsilon),
+        ..d
+    };
+    let input = FairSurfaceInput {
+        surfaces: surfaces.as_slice(),
+        lights: Some(circular),
+        endpoints: &ends.endpoints,
+    };
+    let faired = run(input, &settings, control).map_err(job_error)?;
+    let (mesh, _) =
+        super::doc::tessellate_all(&faired.surfaces, grid).map_err(|e| e.to_string())?;
     Ok(Outcome {
         positions: mesh.positions().to_vec(),
-        surfaces: Some(Arc::new(all)),
-        report: json!({
-            "command": "fair-surface",
-            "iterations": rep.iterations,
-            "converged": rep.converged,
-            "modified_control_points": rep.modified_control_points,
-            "residual_before": rep.residual_before,
-            "residual_after": rep.residual_after,
-            "max_displacement": rep.max_displacement,
-            "time_s": t.elapsed().as_secs_f64(),
-        }),
-        command: format!(
-            "fairline fair-surface {file} --surface {} --lights lights.json --endpoints endpoints.json -o {out}",
-            req.patch
-        ),
+        surfaces: Some(Arc::new(faired.surfaces)),
+        report: faired.report.to_json(),
+        command: settings.command_line(file, out),
         label: format!("fair-surface (patch {})", req.patch),
     })
 }
@@ -1591,6 +1600,7 @@ fn job_error(e: CommandError) -> String {
     match (e.kind(), e.subject()) {
         (ErrorKind::Cancelled, _) => "cancelled".into(),
         (_, Some(Subject::Region)) => format!("region: {}", e.message(FrontEnd::Workbench)),
+        (_, Some(Subject::Lights)) => format!("lights: {}", e.message(FrontEnd::Workbench)),
         _ => e.message(FrontEnd::Workbench),
     }
 }

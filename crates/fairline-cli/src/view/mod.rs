@@ -61,8 +61,10 @@
 //!   `model` is about 0) and `command`. Detection reuses that model too.
 //! - `POST /api/doc/K/detect` `{"light":LIGHT, "threshold"?, "region_radius"?}`:
 //!   the same frame; the header adds `stretches` (irregular stretches,
-//!   `start`, `count`, `score`) and the ranked `regions` (`score`, `center`,
-//!   `faces` as triangle indices).
+//!   `start`, `count`, `score`), the ranked `regions` (`score`, `center`,
+//!   `faces` as triangle indices) and `report`: the command layer's
+//!   `detect` report, the one `command` (its `fairline detect` line)
+//!   writes.
 //! - `POST /api/doc/K/region` `{"faces":[..], "op":"grow"|"shrink", "rings":n}`
 //!   or `{"op":"sphere","center":[x,y,z],"radius":r}`: a triangle set.
 //! - `POST /api/doc/K/region-file` `{"faces":[..]}`: the region JSON of
