@@ -56,6 +56,7 @@ use crate::Vec3;
 use crate::bspline::{BSplineError, BSplineSurface, TrimCurve, TrimLoop};
 use crate::io::unreadable::Unreadable;
 
+mod brep;
 mod faces;
 
 /// Why an IGES file could not be imported; names the file line and entity.
@@ -734,7 +735,13 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
     g.untrimmed_faces(&bsplines, &revolved, &trimmed, &mut faces);
     let (mut loops_of, mut planes) = (faces.loops, faces.planes);
     out.unreadable = faces.unreadable;
+    let brep = g.brep_faces()?;
+    out.unreadable.extend(brep.unreadable);
     for (k, &is_trimmed) in trimmed.iter().enumerate() {
+        if brep.bases[k] {
+            // the surface of a B-rep face: read with the face
+            continue;
+        }
         let mut s = match (bsplines[k].take(), revolved[k].take(), planes[k].take()) {
             (Some(s), _, _) => s,
             (None, Some(r), _) => r.into_iges_surface(k, is_trimmed),
@@ -757,6 +764,8 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
         out.trimmed += usize::from(s.trimmed);
         out.surfaces.push(s);
     }
+    out.trimmed += brep.surfaces.len();
+    out.surfaces.extend(brep.surfaces);
     Ok(out)
 }
 

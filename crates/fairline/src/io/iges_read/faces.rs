@@ -72,7 +72,6 @@ impl Iges<'_> {
                     });
                     continue;
                 }
-                510 => "a B-rep face (510): the B-rep entities (186, 514, 510, 508, 504, 502) are not read; write the file with trimmed surfaces (144), e.g. OpenCASCADE's write.iges.brep.mode = Faces".to_string(),
                 120 if independent && !trimmed[k] && revolved[k].is_none() => {
                     "a surface of revolution whose generatrix fairline does not read (it reads a line 110, a circular arc 100, an elliptic arc 104 or a B-spline curve 126)".into()
                 }
