@@ -35,9 +35,15 @@ use std::collections::HashMap;
 
 use glam::DAffine3;
 
-use super::{INT, Iges, IgesError, IgesSurface, Nurbs3, Param, Piece, REAL, Unreadable, Vec3, param};
+use super::{
+    INT, Iges, IgesError, IgesSurface, Nurbs3, Param, Piece, REAL, Unreadable, Vec3, param,
+};
 use crate::bspline::BSplineSurface;
 use crate::io::step::p21::{Exchange, Instance, Value};
+
+/// Surface entities the translation reads (under a 510, or under a 144
+/// where the direct reading does not apply).
+pub(super) const TRANSLATED_SURFACES: [i64; 8] = [120, 122, 128, 190, 192, 194, 196, 198];
 
 /// The faces of an IGES file's B-rep entities.
 #[derive(Default)]
@@ -60,6 +66,69 @@ struct StepBuilder {
     edges: HashMap<(usize, usize), (u64, u64)>,
     /// VERTEX_POINT of each vertex-list entry `(502 index, entry)`.
     vertices: HashMap<(usize, usize), u64>,
+    /// Dense points of each EDGE_CURVE's curve.
+    edge_points: HashMap<u64, Vec<Vec3>>,
+    /// The edge curves' points of each ADVANCED_FACE's bounds.
+    boundaries: HashMap<u64, Vec<Vec<Vec3>>>,
+}
+
+/// Points along a curve for [`trims_follow_boundary`]: 512 per curve
+/// (a chord of a circle of radius `r` then deviates by less than 2e-5·r).
+fn dense_points(c: &Nurbs3) -> Vec<Vec3> {
+    let [a, b] = c.domain();
+    (0..=512)
+        .map(|i| c.eval(a + (b - a) * i as f64 / 512.0))
+        .collect()
+}
+
+/// The farthest a point of the trimmed surface's trim curves (evaluated
+/// on the surface) lies from the face's boundary curves, when it is
+/// farther than 1e-3 of the boundary's size: trims that do not follow the
+/// face's edges (a wrong period or side) would otherwise change the face
+/// without a word.
+fn trims_follow_boundary(s: &BSplineSurface, boundary: &[Vec<Vec3>]) -> Option<f64> {
+    let pts: Vec<Vec3> = boundary.iter().flatten().copied().collect();
+    let (lo, hi) = pts.iter().fold(
+        (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let size = (hi - lo).length();
+    if !(size > 0.0 && size.is_finite()) {
+        return None;
+    }
+    let tolerance = 1e-3 * size;
+    let distance = |q: Vec3| -> f64 {
+        boundary
+            .iter()
+            .flat_map(|poly| poly.windows(2))
+            .map(|w| {
+                let (a, b) = (w[0], w[1]);
+                let d = b - a;
+                let l2 = d.length_squared();
+                let t = if l2 > 0.0 {
+                    ((q - a).dot(d) / l2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                q.distance(a + t * d)
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    let mut worst = 0.0_f64;
+    for l in s.trims() {
+        for c in &l.curves {
+            let mut uv = Vec::new();
+            c.flatten_into(1e-6, &mut uv);
+            let step = (uv.len() / 256).max(1);
+            for p in uv.iter().step_by(step) {
+                worst = worst.max(distance(s.eval(p[0], p[1])));
+                if worst > tolerance {
+                    return Some(worst);
+                }
+            }
+        }
+    }
+    None
 }
 
 fn text(s: &str) -> Value {
@@ -103,6 +172,8 @@ impl StepBuilder {
             next: 1,
             edges: HashMap::new(),
             vertices: HashMap::new(),
+            edge_points: HashMap::new(),
+            boundaries: HashMap::new(),
         }
     }
 
@@ -124,10 +195,7 @@ impl StepBuilder {
             id,
             Instance {
                 id,
-                parts: parts
-                    .into_iter()
-                    .map(|(n, v)| (n.to_string(), v))
-                    .collect(),
+                parts: parts.into_iter().map(|(n, v)| (n.to_string(), v)).collect(),
                 line,
             },
         );
@@ -203,13 +271,7 @@ impl StepBuilder {
         let pts: Vec<u64> = c
             .points
             .iter()
-            .map(|p| {
-                self.simple(
-                    "CARTESIAN_POINT",
-                    vec![text(""), reals([p.x, p.y])],
-                    line,
-                )
-            })
+            .map(|p| self.simple("CARTESIAN_POINT", vec![text(""), reals([p.x, p.y])], line))
             .collect();
         self.bspline_curve(c, pts, line)
     }
@@ -356,9 +418,7 @@ impl Iges<'_> {
             param(self, k, &p, 2, line, &REAL)?,
             param(self, k, &p, 3, line, &REAL)?,
         );
-        Ok(self
-            .own_transform(k)?
-            .map_or(q, |m| m.transform_point3(q)))
+        Ok(self.own_transform(k)?.map_or(q, |m| m.transform_point3(q)))
     }
 
     /// A direction entity (123), normalised, in model space.
@@ -398,7 +458,13 @@ impl Iges<'_> {
 
     /// Writes the surface of a face into the exchange; errors name the
     /// surface entity.
-    fn brep_surface(&self, s: usize, id: u64, b: &mut StepBuilder) -> Result<(), IgesError> {
+    fn brep_surface(
+        &self,
+        s: usize,
+        id: u64,
+        trimmed: bool,
+        b: &mut StepBuilder,
+    ) -> Result<(), IgesError> {
         let e = &self.dir[s];
         let p = self.parameters(s)?;
         let line = p.first().map_or(e.line, |t| t.1);
@@ -406,10 +472,22 @@ impl Iges<'_> {
         let at = |q: Vec3| m.map_or(q, |m| m.transform_point3(q));
         let along = |d: Vec3| m.map_or(d, |m| m.transform_vector3(d).normalize());
         let point = |n: usize| -> Result<Vec3, IgesError> {
-            Ok(at(self.point_116(self.pointer(s, &p, n, line, &[116])?)?))
+            Ok(at(self.point_116(self.pointer(
+                s,
+                &p,
+                n,
+                line,
+                &[116],
+            )?)?))
         };
         let direction = |n: usize| -> Result<Vec3, IgesError> {
-            Ok(along(self.direction_123(self.pointer(s, &p, n, line, &[123])?)?))
+            Ok(along(self.direction_123(self.pointer(
+                s,
+                &p,
+                n,
+                line,
+                &[123],
+            )?)?))
         };
         let optional_direction = |n: usize| -> Result<Option<Vec3>, IgesError> {
             if e.form == 1 && param(self, s, &p, n, line, &INT)? != 0 {
@@ -457,7 +535,9 @@ impl Iges<'_> {
                     return Err(self.entity_error(
                         s,
                         line,
-                        format!("radius {r} and semi-angle {semi}°: need r ≥ 0 and 0° < angle < 90°"),
+                        format!(
+                            "radius {r} and semi-angle {semi}°: need r ≥ 0 and 0° < angle < 90°"
+                        ),
                     ));
                 }
                 let x = optional_direction(5)?;
@@ -541,8 +621,22 @@ impl Iges<'_> {
                     param(self, s, &p, 3, line, &REAL)?,
                     param(self, s, &p, 4, line, &REAL)?,
                 ));
-                let [t0, _] = directrix.domain();
-                let v = end - directrix.eval(t0);
+                let [t0, t1] = directrix.domain();
+                let first = directrix.eval(t0);
+                if trimmed
+                    && first.distance(directrix.eval(t1))
+                        <= 1e-9 * (1.0 + first.abs().max_element())
+                {
+                    // without edges shared with its neighbours, the side of
+                    // a closed profile's seam the face lies on is not
+                    // decided reliably from its boundary curves
+                    return Err(self.unsupported(
+                        s,
+                        line,
+                        "a trimmed tabulated cylinder (122) whose directrix is closed".into(),
+                    ));
+                }
+                let v = end - first;
                 let len = v.length();
                 if !(len > 0.0 && len.is_finite()) {
                     return Err(self.entity_error(s, line, "the generatrix has no length".into()));
@@ -584,17 +678,11 @@ impl Iges<'_> {
         let line = p.first().map_or(self.dir[k].line, |t| t.1);
         let count = param(self, k, &p, 1, line, &INT)?;
         if n == 0 || n as i64 > count {
-            return Err(self.entity_error(
-                k,
-                line,
-                format!("vertex {n} of a list of {count}"),
-            ));
+            return Err(self.entity_error(k, line, format!("vertex {n} of a list of {count}")));
         }
         let c = |i: usize| param(self, k, &p, 2 + 3 * (n - 1) + i, line, &REAL);
         let q = Vec3::new(c(0)?, c(1)?, c(2)?);
-        let q = self
-            .own_transform(k)?
-            .map_or(q, |m| m.transform_point3(q));
+        let q = self.own_transform(k)?.map_or(q, |m| m.transform_point3(q));
         let pt = b.point(q, line);
         let id = b.simple("VERTEX_POINT", vec![text(""), Value::Ref(pt)], line);
         b.vertices.insert((k, n), id);
@@ -648,6 +736,7 @@ impl Iges<'_> {
             line,
         );
         b.edges.insert((k, n), (id, sc));
+        b.edge_points.insert(id, dense_points(&curve));
         Ok((id, sc))
     }
 
@@ -695,6 +784,7 @@ impl Iges<'_> {
         k: usize,
         on: Option<(u64, [f64; 2])>,
         b: &mut StepBuilder,
+        boundary: &mut Vec<Vec<Vec3>>,
     ) -> Result<Option<(u64, bool)>, IgesError> {
         let p = self.parameters(k)?;
         let line = p.first().map_or(self.dir[k].line, |t| t.1);
@@ -720,6 +810,9 @@ impl Iges<'_> {
                         .map_err(|_| self.entity_error(k, line, format!("edge index {index}")))?;
                     let forward = param(self, k, &p, at + 3, line, &INT)? != 0;
                     let (ec, sc) = self.brep_edge(list, index, b)?;
+                    if let Some(pts) = b.edge_points.get(&ec) {
+                        boundary.push(pts.clone());
+                    }
                     *uses.entry(ec).or_default() += if forward { 1 } else { -1 };
                     if let Some((surface, scale)) = on
                         && pcurves > 0
@@ -743,7 +836,11 @@ impl Iges<'_> {
                 // a vertex: a degenerate edge at a pole, no curve
                 1 => {}
                 t => {
-                    return Err(self.entity_error(k, line, format!("loop entry type {t} (0 edge, 1 vertex)")));
+                    return Err(self.entity_error(
+                        k,
+                        line,
+                        format!("loop entry type {t} (0 edge, 1 vertex)"),
+                    ));
                 }
             }
             at += 5 + 2 * pcurves;
@@ -759,7 +856,12 @@ impl Iges<'_> {
     /// Writes face `k` (510) into the exchange: its loops, then its
     /// surface, then the ADVANCED_FACE (so that a face that fails leaves no
     /// surface behind to be read on its own).
-    fn brep_face(&self, k: usize, same_sense: bool, b: &mut StepBuilder) -> Result<(usize, u64), IgesError> {
+    fn brep_face(
+        &self,
+        k: usize,
+        same_sense: bool,
+        b: &mut StepBuilder,
+    ) -> Result<(usize, u64), IgesError> {
         let p = self.parameters(k)?;
         let line = p.first().map_or(self.dir[k].line, |t| t.1);
         let surface = self.pointer(
@@ -767,7 +869,9 @@ impl Iges<'_> {
             &p,
             1,
             line,
-            &[108, 114, 118, 120, 122, 128, 140, 143, 144, 190, 192, 194, 196, 198],
+            &[
+                108, 114, 118, 120, 122, 128, 140, 143, 144, 190, 192, 194, 196, 198,
+            ],
         )?;
         let count = param(self, k, &p, 2, line, &INT)?;
         if count < 0 || count as usize > p.len() {
@@ -778,9 +882,10 @@ impl Iges<'_> {
         let si = b.reserve();
         let on = self.pcurve_scale(surface).map(|scale| (si, scale));
         let mut bounds = Vec::new();
+        let mut boundary = Vec::new();
         for n in 0..count as usize {
             let lk = self.pointer(k, &p, 4 + n, line, &[508])?;
-            if let Some((lp, cancels)) = self.brep_loop(lk, on, b)? {
+            if let Some((lp, cancels)) = self.brep_loop(lk, on, b, &mut boundary)? {
                 if cancels && count == 1 {
                     // seams only: the face is the whole closed surface
                     continue;
@@ -793,12 +898,13 @@ impl Iges<'_> {
                 bounds.push(b.simple(kind, vec![text(""), Value::Ref(lp), flag(true)], line));
             }
         }
-        self.brep_surface(surface, si, b)?;
+        self.brep_surface(surface, si, false, b)?;
         let face = b.simple(
             "ADVANCED_FACE",
             vec![text(""), refs(bounds), Value::Ref(si), flag(same_sense)],
             line,
         );
+        b.boundaries.insert(face, boundary);
         Ok((surface, face))
     }
 
@@ -828,15 +934,121 @@ impl Iges<'_> {
         out
     }
 
-    /// Reads every B-rep face (510) of the file.
-    pub(super) fn brep_faces(&self) -> Result<BrepFaces, IgesError> {
+    /// A trimmed surface (144) whose boundaries' model-space curves (142's
+    /// `CPTR`) become the loops: each piece of a boundary curve (a member of
+    /// a composite curve 102) is an edge, its ends vertices shared by
+    /// position.
+    fn face_144(&self, k: usize, b: &mut StepBuilder) -> Result<(usize, u64), IgesError> {
+        let p = self.parameters(k)?;
+        let line = p.first().map_or(self.dir[k].line, |t| t.1);
+        let surface = self.pointer(k, &p, 1, line, &TRANSLATED_SURFACES)?;
+        if param(self, k, &p, 2, line, &INT)? == 0 {
+            return Err(self.unsupported(
+                k,
+                line,
+                "an outer boundary that is the boundary of the surface's domain (N1 = 0) on this surface".into(),
+            ));
+        }
+        let holes = param(self, k, &p, 3, line, &INT)?;
+        if holes < 0 || holes as usize > p.len() {
+            return Err(self.entity_error(k, line, format!("{holes} inner boundaries")));
+        }
+        let mut vertices: Vec<(Vec3, u64)> = Vec::new();
+        let mut bounds = Vec::new();
+        let mut boundary = Vec::new();
+        for n in 0..=holes as usize {
+            let bk = self.pointer(k, &p, 4 + n, line, &[142])?;
+            let bp = self.parameters(bk)?;
+            let bl = bp.first().map_or(self.dir[bk].line, |t| t.1);
+            let cptr = param(self, bk, &bp, 4, bl, &INT)?;
+            let Some(c) = self.entry(cptr) else {
+                return Err(self.unsupported(
+                    bk,
+                    bl,
+                    "a boundary without a model-space curve (CPTR) on this surface".into(),
+                ));
+            };
+            let mut pieces = Vec::new();
+            self.curve_pieces(c, 0, &mut pieces)?;
+            let size = pieces
+                .iter()
+                .flat_map(|q| q.points.iter())
+                .fold(0.0_f64, |m, q| m.max(q.abs().max_element()));
+            let close = 1e-9 * (1.0 + size);
+            let mut vertex = |q: Vec3, b: &mut StepBuilder| -> u64 {
+                if let Some((_, id)) = vertices.iter().find(|(v, _)| v.distance(q) <= close) {
+                    return *id;
+                }
+                let pt = b.point(q, bl);
+                let id = b.simple("VERTEX_POINT", vec![text(""), Value::Ref(pt)], bl);
+                vertices.push((q, id));
+                id
+            };
+            let mut edges = Vec::new();
+            for piece in pieces {
+                let n = piece.nurbs();
+                let [t0, t1] = n.domain();
+                let (v0, v1) = (vertex(n.eval(t0), b), vertex(n.eval(t1), b));
+                boundary.push(dense_points(&n));
+                let curve = b.curve(&n, bl);
+                let ec = b.simple(
+                    "EDGE_CURVE",
+                    vec![
+                        text(""),
+                        Value::Ref(v0),
+                        Value::Ref(v1),
+                        Value::Ref(curve),
+                        flag(true),
+                    ],
+                    bl,
+                );
+                edges.push(b.simple(
+                    "ORIENTED_EDGE",
+                    vec![
+                        text(""),
+                        Value::Derived,
+                        Value::Derived,
+                        Value::Ref(ec),
+                        flag(true),
+                    ],
+                    bl,
+                ));
+            }
+            let lp = b.simple("EDGE_LOOP", vec![text(""), refs(edges)], bl);
+            let kind = if n == 0 {
+                "FACE_OUTER_BOUND"
+            } else {
+                "FACE_BOUND"
+            };
+            bounds.push(b.simple(kind, vec![text(""), Value::Ref(lp), flag(true)], bl));
+        }
+        let si = b.reserve();
+        self.brep_surface(surface, si, true, b)?;
+        let face = b.simple(
+            "ADVANCED_FACE",
+            vec![text(""), refs(bounds), Value::Ref(si), flag(true)],
+            line,
+        );
+        b.boundaries.insert(face, boundary);
+        Ok((surface, face))
+    }
+
+    /// Reads every B-rep face (510) of the file, and the trimmed surfaces
+    /// (144) `trimmed` through the same translation.
+    pub(super) fn brep_faces(&self, trimmed: &[usize]) -> Result<BrepFaces, IgesError> {
         let mut out = BrepFaces {
             bases: vec![false; self.dir.len()],
             ..BrepFaces::default()
         };
         let faces: Vec<usize> = (0..self.dir.len())
             .filter(|&k| self.dir[k].entity_type == 510)
+            .chain(trimmed.iter().copied())
             .collect();
+        let faces = {
+            let mut f = faces;
+            f.sort_unstable();
+            f
+        };
         if faces.is_empty() {
             return Ok(out);
         }
@@ -851,19 +1063,28 @@ impl Iges<'_> {
             }
         }
         let senses = self.face_senses();
+        let mut unread: Vec<(usize, Unreadable)> = Vec::new();
         let mut b = StepBuilder::new();
         let mut face_of: HashMap<u64, (usize, usize)> = HashMap::new();
         for &k in &faces {
-            match self.brep_face(k, senses.get(&k).copied().unwrap_or(true), &mut b) {
+            let face = if self.dir[k].entity_type == 144 {
+                self.face_144(k, &mut b)
+            } else {
+                self.brep_face(k, senses.get(&k).copied().unwrap_or(true), &mut b)
+            };
+            match face {
                 Ok((surface, id)) => {
                     face_of.insert(id, (k, surface));
                 }
                 Err(IgesError::Unsupported { message, .. }) => {
-                    out.unreadable.push(Unreadable {
-                        entity: self.describe_entity(k),
-                        reason: format!("a B-rep face (510): {message}"),
-                        estimated_area: None,
-                    });
+                    unread.push((
+                        k,
+                        Unreadable {
+                            entity: self.describe_entity(k),
+                            reason: format!("{}: {message}", face_kind(self.dir[k].entity_type)),
+                            estimated_area: None,
+                        },
+                    ));
                 }
                 Err(e) => return Err(e),
             }
@@ -876,11 +1097,26 @@ impl Iges<'_> {
             let Some(&(k, surface)) = face_of.get(&s.entity) else {
                 continue;
             };
+            if let Some(d) = b
+                .boundaries
+                .get(&s.entity)
+                .and_then(|poly| trims_follow_boundary(&s.surface, poly))
+            {
+                unread.push((k, Unreadable {
+                    entity: self.describe_entity(k),
+                    reason: format!(
+                        "{}: its trims, computed from its edges, leave its boundary curves by {d:.3e} (more than 1e-3 of the boundary's size): the face could not be bounded reliably",
+                        face_kind(self.dir[k].entity_type)
+                    ),
+                    estimated_area: None,
+                }));
+                continue;
+            }
             let rational = s.surface.is_rational();
             out.surfaces.push(IgesSurface {
                 surface: s.surface,
                 directory_entry: 2 * k + 1,
-                entity_type: 510,
+                entity_type: self.dir[k].entity_type,
                 form: self.dir[surface].entity_type,
                 rational,
                 closed: [false; 2],
@@ -901,14 +1137,32 @@ impl Iges<'_> {
             let Some(&(k, _)) = id.and_then(|id| face_of.get(&id)) else {
                 continue;
             };
-            out.unreadable.push(Unreadable {
-                entity: self.describe_entity(k),
-                reason: format!("a B-rep face (510): {}", strip_step_id(&u.reason)),
-                estimated_area: None,
-            });
+            unread.push((
+                k,
+                Unreadable {
+                    entity: self.describe_entity(k),
+                    reason: format!(
+                        "{}: {}",
+                        face_kind(self.dir[k].entity_type),
+                        strip_step_id(&u.reason)
+                    ),
+                    estimated_area: None,
+                },
+            ));
         }
         out.surfaces.sort_by_key(|s| s.directory_entry);
+        unread.sort_by_key(|u| u.0);
+        out.unreadable = unread.into_iter().map(|u| u.1).collect();
         Ok(out)
+    }
+}
+
+/// What a face entity is, for messages.
+fn face_kind(entity_type: i64) -> &'static str {
+    if entity_type == 144 {
+        "a trimmed surface (144)"
+    } else {
+        "a B-rep face (510)"
     }
 }
 
@@ -921,5 +1175,74 @@ fn strip_step_id(message: &str) -> &str {
             rest.find(' ').map_or(rest, |j| &rest[j + 1..])
         }
         None => message,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::parse_iges;
+    use super::super::tests::{GLOBAL, iges_file};
+    use crate::bspline::trimmed_area;
+    use std::f64::consts::PI;
+
+    /// A cylinder face of radius 2 and height 3 as OpenCASCADE writes it
+    /// in B-rep mode: a 510 on a 192 bounded by one loop of the two end
+    /// circles and the seam used in both directions, with p-curves in
+    /// (degrees, height).
+    fn cylinder(pcurves: bool, surface_type: i64) -> String {
+        let surface = format!("{surface_type},7,9,2.,11;");
+        let lp = if pcurves {
+            "508,4,0,15,1,1,1,0,25,0,15,3,1,1,0,27,0,15,2,0,1,0,29,0,15,3,0,1,0,31;"
+        } else {
+            "508,4,0,15,1,1,0,0,15,3,1,0,0,15,2,0,0,0,15,3,0,0;"
+        };
+        let entities = [
+            (514, 0, 1, "514,1,3,1;"),
+            (510, 0, 1, "510,5,1,1,13;"),
+            (surface_type, 0, 1, surface.as_str()),
+            (116, 0, 0, "116,0.,0.,0.,0;"),
+            (123, 0, 0, "123,0.,0.,1.;"),
+            (123, 0, 0, "123,1.,0.,0.;"),
+            (508, 0, 1, lp),
+            (504, 0, 1, "504,3,17,19,1,19,1,21,19,2,19,2,23,19,1,19,2;"),
+            (100, 0, 0, "100,0.,0.,0.,2.,0.,2.,0.;"),
+            (502, 0, 1, "502,2,2.,0.,0.,2.,0.,3.;"),
+            (100, 0, 0, "100,3.,0.,0.,2.,0.,2.,0.;"),
+            (110, 0, 0, "110,2.,0.,0.,2.,0.,3.;"),
+            (110, 0, 0, "110,0.,0.,0.,360.,0.,0.;"),
+            (110, 0, 0, "110,360.,0.,0.,360.,3.,0.;"),
+            (110, 0, 0, "110,360.,3.,0.,0.,3.,0.;"),
+            (110, 0, 0, "110,0.,3.,0.,0.,0.,0.;"),
+        ];
+        iges_file(GLOBAL, &entities)
+    }
+
+    #[test]
+    fn iges_brep_cylinder_face_is_exact_with_and_without_pcurves() {
+        for pcurves in [true, false] {
+            let imp = parse_iges(&cylinder(pcurves, 192)).unwrap();
+            assert!(imp.unreadable.is_empty(), "{:?}", imp.unreadable);
+            assert_eq!(imp.surfaces.len(), 1);
+            let face = &imp.surfaces[0];
+            assert_eq!((face.entity_type, face.form), (510, 192));
+            assert_eq!(face.trim_entity, Some(3));
+            let area = trimmed_area(&face.surface, 64, 64);
+            let want = 2.0 * PI * 2.0 * 3.0;
+            assert!(
+                (area - want).abs() <= 1e-6 * want,
+                "p-curves {pcurves}: {area} vs {want}"
+            );
+        }
+    }
+
+    #[test]
+    fn iges_brep_face_on_a_surface_not_read_is_listed_not_dropped() {
+        // the same face on an offset surface (140) of the cylinder
+        let imp = parse_iges(&cylinder(true, 140)).unwrap();
+        assert!(imp.surfaces.is_empty());
+        assert_eq!(imp.unreadable.len(), 1, "{:?}", imp.unreadable);
+        let u = &imp.unreadable[0];
+        assert!(u.entity.starts_with("entity 510 (DE 3"), "{u:?}");
+        assert!(u.reason.contains("surface entity 140"), "{u:?}");
     }
 }
