@@ -48,10 +48,14 @@ MUST_READ = {
     f"{n}.{fmt}"
     for n in (
         "box", "cylinder", "cone", "sphere", "torus", "filleted-box", "plate-with-hole",
-        "boolean-union", "lofted", "nurbs-torus", "pole-patch",
+        "boolean-union", "lofted", "nurbs-torus", "pole-patch", "revolved-hyperbola",
+        "revolved-ellipse", "extruded-ellipse",
     )
-    for fmt in ("step", "igs")
-} | {f"{n}.step" for n in ("revolved-hyperbola", "revolved-ellipse", "extruded-ellipse")}
+    for fmt in ("step", "brep.igs", "igs")
+} - {"extruded-ellipse.igs"}
+# OCCT's faces-mode IGES of the extruded ellipse trims a tabulated cylinder
+# (122) over a closed directrix: fairline names that face as unreadable.
+MUST_REFUSE = {"extruded-ellipse.igs"}
 
 
 @pytest.fixture(scope="session")
@@ -116,6 +120,8 @@ def test_fairline_reads_what_occt_writes_or_says_so(cli, parts, name):
     got = check_read(cli, path, n, a)
     if name in MUST_READ:
         assert got == "read", f"{name} should read completely"
+    if name in MUST_REFUSE:
+        assert got == "refused", f"{name} should be refused, naming the face"
 
 
 def occt_import(path: Path, timeout: float):

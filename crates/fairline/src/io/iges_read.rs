@@ -41,9 +41,15 @@
 //! stays a line under the monotone map of one coordinate) and by dense
 //! sampling otherwise. Planes (entity 108) trimmed by a 144 become bilinear
 //! patches with their boundaries from the 142s' model-space curves. A 144
-//! on any other surface type is counted in [`IgesImport::skipped_trimmed`]
-//! and listed, with bounded surfaces (143), B-rep faces (510) and surface
-//! entities of a type not read, in [`IgesImport::unreadable`].
+//! on any other surface the B-rep reading converts (122, 190–198, a 120
+//! of a hyperbola or parabola) is read as a face bounded by its 142s'
+//! model-space curves, through the STEP reader ([`brep`]); one on a surface
+//! of another type is counted in [`IgesImport::skipped_trimmed`]
+//! and listed, with bounded surfaces (143) and surface entities of a type
+//! not read, in [`IgesImport::unreadable`].
+//!
+//! B-rep solids, shells and faces (186, 514, 510 with loops 508, edges 504
+//! and vertices 502) are read face by face ([`brep`]).
 
 use std::path::{Path, PathBuf};
 
@@ -56,6 +62,7 @@ use crate::Vec3;
 use crate::bspline::{BSplineError, BSplineSurface, TrimCurve, TrimLoop};
 use crate::io::unreadable::Unreadable;
 
+mod brep;
 mod faces;
 
 /// Why an IGES file could not be imported; names the file line and entity.
@@ -131,8 +138,10 @@ pub struct IgesSurface {
     pub surface: BSplineSurface,
     /// Directory entry sequence number of the entity (odd, 1-based).
     pub directory_entry: usize,
-    /// The entity it was read from: 128 (rational B-spline surface) or 120
-    /// (surface of revolution, converted exactly).
+    /// The entity it was read from: 128 (rational B-spline surface), 120
+    /// (surface of revolution, converted exactly), 108 (trimmed plane), 510
+    /// (B-rep face) or 144 (trimmed surface read through its topology;
+    /// for these two, [`Self::form`] is the surface's entity type).
     pub entity_type: i64,
     /// Form number (0 = free form, 1 plane, 2 cylinder, …).
     pub form: i64,
@@ -176,7 +185,9 @@ pub struct IgesImport {
     /// not be read (a base surface that was read is still in
     /// [`Self::surfaces`], untrimmed: `trimmed` set, no `trim_entity`;
     /// [`crate::io::surface_file::read_surface_file`] leaves it out),
-    /// independent surface entities of a type not read, B-rep faces (510).
+    /// independent surface entities of a type not read, B-rep faces (510)
+    /// and trimmed surfaces read through their topology whose surface or
+    /// edges are of a type not read.
     pub unreadable: Vec<Unreadable>,
 }
 
@@ -731,10 +742,20 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
         }
     }
     let mut faces = g.trimming_loops(&bsplines, &revolved, &mut out.skipped_trimmed)?;
-    g.untrimmed_faces(&bsplines, &revolved, &trimmed, &mut faces);
-    let (mut loops_of, mut planes) = (faces.loops, faces.planes);
-    out.unreadable = faces.unreadable;
+
+    let (mut loops_of, mut planes) = (
+        std::mem::take(&mut faces.loops),
+        std::mem::take(&mut faces.planes),
+    );
+    let brep = g.brep_faces(&faces.translated)?;
+    g.untrimmed_faces(&bsplines, &revolved, &trimmed, &brep.bases, &mut faces);
+    out.unreadable = std::mem::take(&mut faces.unreadable);
+    out.unreadable.extend(brep.unreadable);
     for (k, &is_trimmed) in trimmed.iter().enumerate() {
+        if brep.bases[k] && !is_trimmed {
+            // the surface of a B-rep face: read with the face
+            continue;
+        }
         let mut s = match (bsplines[k].take(), revolved[k].take(), planes[k].take()) {
             (Some(s), _, _) => s,
             (None, Some(r), _) => r.into_iges_surface(k, is_trimmed),
@@ -757,6 +778,8 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
         out.trimmed += usize::from(s.trimmed);
         out.surfaces.push(s);
     }
+    out.trimmed += brep.surfaces.len();
+    out.surfaces.extend(brep.surfaces);
     Ok(out)
 }
 
@@ -803,6 +826,7 @@ impl Iges<'_> {
             loops: vec![None; n],
             planes: vec![None; n],
             unreadable: Vec::new(),
+            translated: Vec::new(),
         };
         for k in 0..n {
             if self.dir[k].entity_type != 144 {
@@ -845,6 +869,12 @@ impl Iges<'_> {
                     }
                     Err(e) => Err(e),
                 },
+                // read with its base surface through the STEP reader's
+                // topology ([`brep`]): any surface that converts exactly
+                _ if brep::TRANSLATED_SURFACES.contains(&self.dir[b].entity_type) => {
+                    f.translated.push(k);
+                    continue;
+                }
                 _ => Ok(None),
             };
             match loops {
@@ -889,6 +919,8 @@ struct Faces {
     planes: Vec<Option<IgesSurface>>,
     /// The faces that could not be read.
     unreadable: Vec<Unreadable>,
+    /// 144s on other surfaces, read with the B-rep faces ([`brep`]).
+    translated: Vec<usize>,
 }
 
 /// Entity 144, trimmed parametric surface (IGES 5.3 §4.34): `PTS N1 N2 PTO

@@ -36,18 +36,24 @@ impl Iges<'_> {
         }
     }
 
-    /// Lists the faces no trimmed surface (144) covers that cannot be
-    /// read: bounded surfaces (143, their base read untrimmed), B-rep faces
-    /// (510), independent surface entities of a type fairline does not read
-    /// and surfaces of revolution whose generatrix it does not read.
+    /// Lists the faces no trimmed surface (144) or B-rep face (510, see
+    /// [`super::brep`]) covers that cannot be read: bounded surfaces (143,
+    /// their base read untrimmed), independent surface entities of a type
+    /// fairline does not read and surfaces of revolution whose generatrix
+    /// it does not read.
     pub(super) fn untrimmed_faces(
         &self,
         bsplines: &[Option<IgesSurface>],
         revolved: &[Option<Revolved>],
         trimmed: &[bool],
+        brep_bases: &[bool],
         faces: &mut Faces,
     ) {
         for k in 0..self.dir.len() {
+            if brep_bases[k] {
+                // read (or listed) with its B-rep face
+                continue;
+            }
             let e = &self.dir[k];
             let independent = (e.status / 10_000) % 100 == 0;
             let reason = match e.entity_type {
@@ -72,7 +78,6 @@ impl Iges<'_> {
                     });
                     continue;
                 }
-                510 => "a B-rep face (510): the B-rep entities (186, 514, 510, 508, 504, 502) are not read; write the file with trimmed surfaces (144), e.g. OpenCASCADE's write.iges.brep.mode = Faces".to_string(),
                 120 if independent && !trimmed[k] && revolved[k].is_none() => {
                     "a surface of revolution whose generatrix fairline does not read (it reads a line 110, a circular arc 100, an elliptic arc 104 or a B-spline curve 126)".into()
                 }
@@ -589,11 +594,12 @@ mod tests {
             (100, 0, 0, "100,0.,5.,2.5,6.,2.5,6.,2.5;"),
             (142, 0, 0, "142,0,1,0,15,2;"),
             (144, 0, 0, "144,1,1,1,13,17;"),
-            // a trimmed tabulated cylinder (122) and a B-rep face (510):
-            // not read, listed
+            // a trimmed tabulated cylinder (122) whose boundary does not
+            // lie on it and a B-rep face (510) on a plane 108: not read,
+            // listed
             (122, 0, 0, "122,3,0.,0.,1.;"),
             (144, 0, 0, "144,21,1,0,13;"),
-            (510, 0, 1, "510,1,1,0;"),
+            (510, 0, 1, "510,1,0,0;"),
         ];
         let imp = parse_iges(&iges_file(GLOBAL, &entities)).unwrap();
         assert_eq!(imp.surfaces.len(), 1);
@@ -606,11 +612,16 @@ mod tests {
         assert_eq!(names.len(), 2, "{names:?}");
         assert!(names[0].starts_with("entity 144 (DE 23"), "{names:?}");
         assert!(
-            imp.unreadable[0].reason.contains("entity 122"),
+            imp.unreadable[0].reason.contains("trimmed surface (144)"),
             "{:?}",
             imp.unreadable[0]
         );
         assert!(names[1].starts_with("entity 510 (DE 25"), "{names:?}");
+        assert!(
+            imp.unreadable[1].reason.contains("surface entity 108"),
+            "{:?}",
+            imp.unreadable[1]
+        );
     }
 
     #[test]

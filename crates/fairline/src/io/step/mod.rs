@@ -89,6 +89,13 @@ pub fn read_step_with(path: impl AsRef<Path>, collect: bool) -> Result<StepImpor
     })
 }
 
+/// Reads the faces of an exchange built in memory (by another format's
+/// reader, see [`crate::io::iges_read`]'s B-rep faces), collecting the faces
+/// that cannot be read (see [`read_step_with`]).
+pub(crate) fn read_exchange(ex: &p21::Exchange) -> Result<StepImport, StepError> {
+    read::read(ex, true)
+}
+
 /// Parses STEP text; see [`read_step`].
 pub fn parse_step(text: &str) -> Result<StepImport, StepError> {
     parse_step_bytes(text.as_bytes())
