@@ -219,8 +219,7 @@ fn surface_highlight_lines(
         if all.is_empty() {
             return Err(Failure::bad("surfaces: no B-spline surface given"));
         }
-        let out =
-            fairline_commands::surface_highlight::run(&all, &settings, control, &|| {})?;
+        let out = fairline_commands::surface_highlight::run(&all, &settings, control, &|| {})?;
         Ok((out.document.to_string(), out.report.to_json().to_string()))
     })?;
     Ok(out)
