@@ -205,12 +205,13 @@ def test_occt_reads_what_fairline_writes_of_occt_parts(cli, parts, tmp_path, nam
 
 
 def test_python_read_surfaces_never_drops_a_face_silently(parts):
-    """OCCT's IGES of the revolved hyperbola holds one face fairline does
-    not read (entity 144 over a hyperbolic profile): read_surfaces raises
-    naming it, and with skip_unreadable=True returns the others and warns."""
+    """OCCT's faces-mode IGES of the extruded ellipse holds one face
+    fairline does not read (a 144 on a tabulated cylinder over a closed
+    directrix): read_surfaces raises naming it, and with
+    skip_unreadable=True returns the others and warns."""
     import fairline
 
-    src, n, _ = parts["revolved-hyperbola.igs"]
+    src, n, _ = parts["extruded-ellipse.igs"]
     with pytest.raises(fairline.FairlineError, match="could not read 1 face"):
         fairline.read_surfaces(src)
     with pytest.warns(fairline.FairlineWarning, match="left out: skip_unreadable=True"):
