@@ -1841,3 +1841,126 @@ fn page_measures_deviation_and_probes_curvature() {
     std::thread::sleep(Duration::from_millis(300));
     save_screenshot("workbench-probe.png", &b.screenshot().3);
 }
+
+/// A key press (down and up) as the DevTools protocol sends it; `modifiers`
+/// 2: Ctrl, 8: Shift.
+fn press(b: &mut cdp::Browser, key: &str, code: &str, vk: u32, modifiers: u32) {
+    let text = if key.chars().count() == 1 && modifiers & 2 == 0 {
+        key
+    } else {
+        ""
+    };
+    b.call(
+        "Input.dispatchKeyEvent",
+        json!({"type": "keyDown", "key": key, "code": code, "windowsVirtualKeyCode": vk, "modifiers": modifiers, "text": text}),
+    );
+    b.call(
+        "Input.dispatchKeyEvent",
+        json!({"type": "keyUp", "key": key, "code": code, "windowsVirtualKeyCode": vk, "modifiers": modifiers}),
+    );
+}
+
+/// A page in headless Chromium at 1280 × 800 over `files`, ready.
+fn open_page(exe: &str, srv: &Server) -> cdp::Browser {
+    let mut b = cdp::Browser::launch(exe, 1280, 800);
+    b.call("Page.navigate", json!({"url": srv.url}));
+    b.wait_for("document.body && document.body.dataset.ready === '1'", 120);
+    b
+}
+
+/// The keyboard in real headless Chromium: `?` and the "?" button open the
+/// help overlay, which lists every shortcut and every tool, Escape closes
+/// it; Ctrl+Z and Ctrl+Shift+Z undo and redo on the server, B toggles
+/// before/after, M picks the probe; a `?` typed into the save-name field
+/// stays in the field. Every control of the page has a tooltip.
+#[test]
+fn page_keyboard_shortcuts_help_overlay_and_tooltips() {
+    let Some(exe) = cdp::chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "chromium is not installed and CI is set (apt-get install chromium)"
+        );
+        eprintln!(
+            "\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n"
+        );
+        return;
+    };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmp("view-keys");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 41);
+    let srv = start(&[&mesh], &dir);
+    start_fair_job(&srv, json!({}));
+    assert_eq!(srv.wait_job()["state"], "done");
+    let mut b = open_page(&exe, &srv);
+    let visible = "!document.getElementById('help').hidden";
+    assert_eq!(b.eval(visible), json!(false), "help hidden at first");
+    press(&mut b, "?", "Slash", 191, 8);
+    b.wait_for(visible, 10);
+    let listed = b.eval("document.getElementById('help').textContent");
+    let listed = listed.as_str().unwrap();
+    for keys in ["Ctrl+Z", "Ctrl+Shift+Z", "Ctrl+Enter", "Ctrl+S", "?"] {
+        assert!(listed.contains(keys), "{keys} missing from the help");
+    }
+    let tools: Vec<String> = serde_json::from_value(
+        b.eval("[...document.getElementById('tool').options].map((o) => o.textContent)"),
+    )
+    .unwrap();
+    assert!(tools.len() >= 6);
+    for t in &tools {
+        assert!(
+            listed.contains(t.as_str()),
+            "tool {t} missing from the help"
+        );
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    save_screenshot("workbench-help.png", &b.screenshot().3);
+    press(&mut b, "Escape", "Escape", 27, 0);
+    b.wait_for("document.getElementById('help').hidden", 10);
+    b.eval("document.getElementById('help-button').click()");
+    b.wait_for(visible, 10);
+    b.eval("document.getElementById('help-close').click()");
+    b.wait_for("document.getElementById('help').hidden", 10);
+    // undo and redo with the keyboard move the server's cursor
+    let cursor =
+        |srv: &Server| srv.json("/api/session", None)["docs"][0]["history"]["cursor"].clone();
+    assert_eq!(cursor(&srv), json!(1));
+    press(&mut b, "z", "KeyZ", 90, 2);
+    b.wait_for(
+        "document.getElementById('status').textContent === 'undone'",
+        30,
+    );
+    assert_eq!(cursor(&srv), json!(0));
+    press(&mut b, "Z", "KeyZ", 90, 2 | 8);
+    b.wait_for(
+        "document.getElementById('status').textContent === 'redone'",
+        30,
+    );
+    assert_eq!(cursor(&srv), json!(1));
+    press(&mut b, "b", "KeyB", 66, 0);
+    b.wait_for("window.fairline.state.before === true", 30);
+    press(&mut b, "b", "KeyB", 66, 0);
+    b.wait_for("window.fairline.state.before === false", 30);
+    press(&mut b, "m", "KeyM", 77, 0);
+    assert_eq!(
+        b.eval("document.getElementById('tool').value"),
+        json!("probe")
+    );
+    // keys typed into a field stay there
+    b.eval("document.getElementById('save-name').focus()");
+    press(&mut b, "?", "Slash", 191, 8);
+    press(&mut b, "b", "KeyB", 66, 0);
+    std::thread::sleep(Duration::from_millis(200));
+    assert_eq!(
+        b.eval("document.getElementById('save-name').value"),
+        json!("?b")
+    );
+    assert_eq!(b.eval(visible), json!(false), "no help while typing");
+    assert_eq!(b.eval("window.fairline.state.before"), json!(false));
+    // every control has a tooltip
+    let bare = b.eval(
+        "[...document.querySelectorAll('button, select, input, textarea, canvas, option')].filter((e) => !e.title && !(e.tagName === 'OPTION' && e.parentElement.id !== 'tool')).map((e) => e.id || e.outerHTML.slice(0, 60))",
+    );
+    assert_eq!(bare, json!([]), "controls without a tooltip");
+    let _ = std::fs::remove_dir_all(&dir);
+}

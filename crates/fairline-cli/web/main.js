@@ -8,6 +8,8 @@ import { drawLegend } from './colormap.js';
 import { UvPanel, PALETTE, rgba } from './uvpanel.js';
 import { $, status, showCommand, showReport, showHistory, offer, offerJson } from './panels.js';
 import { Tools } from './tools.js';
+import { installShortcuts } from './shortcuts.js';
+import { Help } from './help.js';
 
 const state = { labels: [], surfaceDoc: -1, uvData: null, uvCircular: null, session: null, active: 0, regions: [], detected: [], before: false, job: null, lastDownload: null };
 window.fairline = { state };
@@ -506,6 +508,37 @@ function wire() {
     return true;
   });
   window.addEventListener('resize', () => { viewer.dirty = true; });
+  const help = window.fairline.help = new Help($('help'), $('tool'));
+  $('help-button').addEventListener('click', () => help.toggle());
+  installShortcuts(shortcutActions(help));
+}
+
+// What each keyboard shortcut does (shortcuts.js names them); most press the
+// button or change the control a click would.
+function shortcutActions(help) {
+  const click = (id) => () => { if (!$(id).disabled) $(id).click(); };
+  const toggle = (id) => () => { $(id).checked = !$(id).checked; $(id).dispatchEvent(new Event('change')); };
+  return {
+    help: () => help.toggle(),
+    closeHelp: () => help.hide(),
+    run: click('run'),
+    undo: click('undo'),
+    redo: click('redo'),
+    save: click('save'),
+    before: toggle('before'),
+    wireframe: toggle('wireframe'),
+    resetView: () => { viewer.camera.standard('iso'); $('fit').click(); },
+    view: (name) => document.querySelector(`[data-view=${name}]`).click(),
+    exact: click('exact'),
+    detect: click('detect'),
+    deviation: click('deviation'),
+    tool: (name) => {
+      if (![...$('tool').options].some((o) => o.value === name)) return;
+      $('tool').value = name;
+      $('tool').dispatchEvent(new Event('change'));
+      status(`tool: ${$('tool').selectedOptions[0].textContent}`);
+    },
+  };
 }
 
 async function start() {
