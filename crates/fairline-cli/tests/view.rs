@@ -1964,3 +1964,104 @@ fn page_keyboard_shortcuts_help_overlay_and_tooltips() {
     assert_eq!(bare, json!([]), "controls without a tooltip");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The layout at 1280 × 800 in real headless Chromium: run and save lie
+/// inside the window without scrolling (and are the elements found at
+/// their centres, not covered); side by side, the active document's frame
+/// is highlighted and labelled, and a press in the other half makes that
+/// document active; a click on a history item undoes or redoes up to it.
+#[test]
+fn page_layout_action_bar_active_document_and_history_jumps() {
+    let Some(exe) = cdp::chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "chromium is not installed and CI is set (apt-get install chromium)"
+        );
+        eprintln!(
+            "\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n"
+        );
+        return;
+    };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmp("view-layout");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 41);
+    let other = dir.join("other.obj");
+    dented_panel(&other, 31);
+    let srv = start(&[&mesh, &other], &dir);
+    start_fair_job(&srv, json!({}));
+    assert_eq!(srv.wait_job()["state"], "done");
+    let mut b = open_page(&exe, &srv);
+    for id in ["run", "save", "undo", "redo"] {
+        let r = b.eval(&format!(
+            "(() => {{ const e = document.getElementById('{id}'); const r = e.getBoundingClientRect(); const top = document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2); return [r.left, r.top, r.right, r.bottom, top === e, window.innerWidth, window.innerHeight]; }})()"
+        ));
+        let v = r.as_array().unwrap();
+        let f = |i: usize| v[i].as_f64().unwrap();
+        assert_eq!((f(5), f(6)), (1280.0, 800.0));
+        assert!(
+            f(0) >= 0.0 && f(1) >= 0.0 && f(2) <= 1280.0 && f(3) <= 800.0 && f(2) > f(0),
+            "{id} outside the window: {r}"
+        );
+        assert_eq!(v[4], json!(true), "{id} is covered at its centre");
+    }
+    assert_eq!(
+        b.eval("document.scrollingElement.scrollHeight <= window.innerHeight"),
+        json!(true),
+        "the page itself does not scroll"
+    );
+    // side by side: document 0 active, highlighted and labelled
+    let frame = |b: &mut cdp::Browser, k: usize| {
+        b.eval(&format!("(() => {{ const f = document.querySelector('.docframe[data-doc=\"{k}\"]'); const r = f.getBoundingClientRect(); return [f.classList.contains('active'), f.textContent, getComputedStyle(f).borderTopColor, r.left, r.width]; }})()"))
+    };
+    assert_eq!(
+        b.eval("document.getElementById('docframes').hidden"),
+        json!(false)
+    );
+    let f0 = frame(&mut b, 0);
+    let f1 = frame(&mut b, 1);
+    assert_eq!(f0[0], json!(true), "{f0}");
+    assert_eq!(f1[0], json!(false), "{f1}");
+    assert!(
+        f0[1].as_str().unwrap().contains("panel.obj (active)"),
+        "{f0}"
+    );
+    assert!(!f1[1].as_str().unwrap().contains("active"), "{f1}");
+    assert_ne!(f0[2], f1[2], "the active frame's border stands out");
+    std::thread::sleep(Duration::from_millis(300));
+    save_screenshot("workbench-layout.png", &b.screenshot().3);
+    let (cx, cy, cw, ch) = canvas_rect(&mut b);
+    click_at(&mut b, (cx + 3 * cw / 4) as f64, (cy + ch / 2) as f64, 0);
+    b.wait_for("window.fairline.state.active === 1", 10);
+    let f1 = frame(&mut b, 1);
+    assert_eq!(f1[0], json!(true), "{f1}");
+    assert!(f1[1].as_str().unwrap().contains("other.obj (active)"));
+    assert_eq!(frame(&mut b, 0)[0], json!(false));
+    // the history shows the active document's: one step (as opened)
+    assert_eq!(
+        b.eval("document.querySelectorAll('#history li').length"),
+        json!(1)
+    );
+    click_at(&mut b, (cx + cw / 4) as f64, (cy + ch / 2) as f64, 0);
+    b.wait_for("window.fairline.state.active === 0", 10);
+    assert_eq!(
+        b.eval("document.querySelectorAll('#history li').length"),
+        json!(2)
+    );
+    // a click on the first history item goes back to it, on the second forward
+    let cursor =
+        |srv: &Server| srv.json("/api/session", None)["docs"][0]["history"]["cursor"].clone();
+    b.eval("document.querySelectorAll('#history li')[0].click()");
+    b.wait_for(
+        "document.querySelectorAll('#history li')[0].classList.contains('current')",
+        30,
+    );
+    assert_eq!(cursor(&srv), json!(0));
+    b.eval("document.querySelectorAll('#history li')[1].click()");
+    b.wait_for(
+        "document.querySelectorAll('#history li')[1].classList.contains('current')",
+        30,
+    );
+    assert_eq!(cursor(&srv), json!(1));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -10,6 +10,7 @@ import { $, status, showCommand, showReport, showHistory, offer, offerJson } fro
 import { Tools } from './tools.js';
 import { installShortcuts } from './shortcuts.js';
 import { Help } from './help.js';
+import { DocFrames } from './docframes.js';
 
 const state = { labels: [], surfaceDoc: -1, uvData: null, uvCircular: null, session: null, active: 0, regions: [], detected: [], before: false, job: null, lastDownload: null };
 window.fairline = { state };
@@ -18,6 +19,7 @@ const viewer = new Viewer($('gl'));
 const tools = new Tools({ viewer, state });
 window.fairline.tools = tools;
 let lights = [];
+let frames = null;
 
 function activeDoc() { return state.session.docs[state.active]; }
 
@@ -48,7 +50,8 @@ async function refreshSession() {
 // History, report, command and save folder of the active document.
 function showSession() {
   const d = activeDoc();
-  showHistory(d.history, () => {});
+  showHistory(d.history, guard(jumpTo));
+  if (frames) frames.show(state.active);
   const step = d.history.steps[d.history.cursor];
   showReport(step.report);
   showCommand(step.command);
@@ -253,6 +256,26 @@ async function historyMove(dir) {
     await reloadActive();
     status(dir === 'undo' ? 'undone' : 'redone');
   } catch (err) { status(err.message, true); }
+}
+
+// A click on a history item: undo or redo step by step up to it.
+async function jumpTo(i) {
+  const d = activeDoc();
+  const by = i - d.history.cursor;
+  if (!by) return;
+  for (let n = 0; n < Math.abs(by); n++) await api.json(`/api/doc/${state.active}/${by < 0 ? 'undo' : 'redo'}`, {});
+  state.before = false;
+  $('before').checked = false;
+  await reloadActive();
+  status(`at step ${i}: ${activeDoc().history.steps[i].label}`);
+}
+
+// Makes document k the one the panels, run, undo and save act on.
+function activate(k) {
+  if (k === state.active) return;
+  state.active = k;
+  showSession();
+  status(`active: ${activeDoc().name}`);
 }
 
 async function downloadRegion(what) {
@@ -559,6 +582,7 @@ async function start() {
   for (const n of names) { const o = document.createElement('option'); o.value = n; o.textContent = n; $('scalar').append(o); }
   lights = docs.map((d) => new Lights(d.light, d.center, d.radius));
   tools.init(docs);
+  frames = new DocFrames($('docframes'), $('gl'), docs.map((d) => d.name), activate);
   viewer.lightUniforms = (k) => lights[k].uniforms(viewer.camera);
   // a z-up part is seen from the front, a y-up one (most scanned meshes) from +z
   const ext = docs[0].bbox;

@@ -25,6 +25,7 @@ web! {
     "tools.js" => "text/javascript; charset=utf-8",
     "shortcuts.js" => "text/javascript; charset=utf-8",
     "help.js" => "text/javascript; charset=utf-8",
+    "docframes.js" => "text/javascript; charset=utf-8",
     "shaders/surface.vert" => "text/plain; charset=utf-8",
     "shaders/surface.frag" => "text/plain; charset=utf-8",
     "shaders/pick.vert" => "text/plain; charset=utf-8",
