@@ -2065,3 +2065,92 @@ fn page_layout_action_bar_active_document_and_history_jumps() {
     assert_eq!(cursor(&srv), json!(1));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Image capture and saved views in real headless Chromium: the view
+/// rendered at 640 × 360 comes back as a PNG of that size with the lit part
+/// in the middle, the canvas returns to its window size, a size out of
+/// range is refused, and the button offers a PNG named after the file and
+/// the size; a named view restores the camera after the camera moved and
+/// after the page is loaded again (kept per file in localStorage).
+#[test]
+fn page_captures_images_at_a_chosen_size_and_restores_saved_views() {
+    let Some(exe) = cdp::chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "chromium is not installed and CI is set (apt-get install chromium)"
+        );
+        eprintln!(
+            "\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n"
+        );
+        return;
+    };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmp("view-capture");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 41);
+    let srv = start(&[&mesh], &dir);
+    let mut b = open_page(&exe, &srv);
+    b.eval("document.querySelector('[data-view=top]').click()");
+    let png_b64 = b.eval("window.fairline.capture(640, 360).then(async (blob) => { const a = new Uint8Array(await blob.arrayBuffer()); let s = ''; for (const x of a) s += String.fromCharCode(x); return btoa(s); })");
+    use base64::Engine;
+    let png_bytes = base64::engine::general_purpose::STANDARD
+        .decode(png_b64.as_str().unwrap())
+        .unwrap();
+    let mut reader = png::Decoder::new(std::io::Cursor::new(png_bytes))
+        .read_info()
+        .unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((info.width, info.height), (640, 360));
+    let ch = info.color_type.samples();
+    let lum = |x: usize, y: usize| {
+        let i = ch * (y * 640 + x);
+        (buf[i] as f64 + buf[i + 1] as f64 + buf[i + 2] as f64) / 3.0
+    };
+    // plain shading would be uniform; with highlight lines, take the
+    // brightest pixel of the middle row against the corner
+    let brightest = (200..440).map(|x| lum(x, 180)).fold(0.0, f64::max);
+    assert!(
+        brightest > lum(2, 2) + 60.0,
+        "the part ({brightest}) is lit against the background ({})",
+        lum(2, 2)
+    );
+    b.wait_for(
+        "(() => { const c = document.getElementById('gl'); return c.width === c.clientWidth && c.height === c.clientHeight; })()",
+        10,
+    );
+    let refused = b.eval("window.fairline.capture(5, 5).then(() => 'made', (e) => e.message)");
+    assert!(refused.as_str().unwrap().contains("between"), "{refused}");
+    b.eval("(() => { document.getElementById('cap-w').value = '320'; document.getElementById('cap-h').value = '200'; document.getElementById('capture').click(); })()");
+    b.wait_for("window.fairline.state.lastDownload && window.fairline.state.lastDownload.name === 'panel-320x200.png'", 30);
+    // saved views
+    let camera = "(() => { const c = window.fairline.viewer.camera; return [c.up, c.yaw, c.pitch, c.distance, ...c.target]; })()";
+    b.eval("(() => { const c = window.fairline.viewer.camera; c.yaw = 0.7; c.pitch = 0.3; c.distance *= 0.6; c.target = [0.2, -0.1, 0]; })()");
+    let saved = b.eval(camera);
+    b.eval("(() => { document.getElementById('view-name').value = 'dent close'; document.getElementById('save-view').click(); })()");
+    assert_eq!(
+        b.eval("[...document.querySelectorAll('#views .view-restore')].map((e) => e.textContent)"),
+        json!(["dent close"])
+    );
+    b.eval(
+        "document.getElementById('fit').click(); document.querySelector('[data-view=iso]').click()",
+    );
+    assert_ne!(b.eval(camera), saved, "the camera moved");
+    b.eval("document.querySelector('#views .view-restore').click()");
+    assert_eq!(b.eval(camera), saved, "the saved view restored");
+    std::thread::sleep(Duration::from_millis(300));
+    save_screenshot("workbench-views.png", &b.screenshot().3);
+    // loaded again: the view is still there and restores
+    b.eval("window.previousPage = true");
+    b.call("Page.navigate", json!({"url": srv.url}));
+    b.wait_for("!window.previousPage && document.body && document.body.dataset.ready === '1' && document.querySelector('#views .view-restore')", 120);
+    assert_ne!(b.eval(camera), saved);
+    b.eval("document.querySelector('#views .view-restore').click()");
+    assert_eq!(b.eval(camera), saved, "restored after a reload");
+    b.eval("document.querySelector('#views .view-delete').click()");
+    assert_eq!(
+        b.eval("document.querySelectorAll('#views li').length"),
+        json!(0)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

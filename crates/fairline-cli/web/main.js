@@ -11,6 +11,8 @@ import { Tools } from './tools.js';
 import { installShortcuts } from './shortcuts.js';
 import { Help } from './help.js';
 import { DocFrames } from './docframes.js';
+import { capture } from './capture.js';
+import { SavedViews } from './views.js';
 
 const state = { labels: [], surfaceDoc: -1, uvData: null, uvCircular: null, session: null, active: 0, regions: [], detected: [], before: false, job: null, lastDownload: null };
 window.fairline = { state };
@@ -278,6 +280,17 @@ function activate(k) {
   status(`active: ${activeDoc().name}`);
 }
 
+// The view rendered at the size in the View panel, offered as a PNG named
+// after the active file and the size.
+async function captureImage() {
+  const w = Number($('cap-w').value), h = Number($('cap-h').value);
+  const blob = await capture(viewer, w, h);
+  const name = `${activeDoc().name.replace(/\.[^.]*$/, '')}-${w}x${h}.png`;
+  state.lastDownload = { name, bytes: blob.size };
+  offer(blob, name);
+  status(`image ${name} (${blob.size} bytes)`);
+}
+
 async function downloadRegion(what) {
   const faces = state.regions[state.active] || [];
   if (!faces.length) { status('mark a region first', true); return; }
@@ -506,6 +519,16 @@ function wire() {
   $('dl-fixed').addEventListener('click', guard(() => downloadRegion('fixed')));
   $('dl-mesh').addEventListener('click', guard(downloadMesh));
   $('save').addEventListener('click', guard(save));
+  $('capture').addEventListener('click', guard(captureImage));
+  const views = window.fairline.views = new SavedViews($('views'), viewer, state.session.docs.map((d) => d.name), (v) => {
+    $('up').value = v.up;
+    status(`view “${v.name}”`);
+  });
+  $('save-view').addEventListener('click', () => {
+    const name = $('view-name').value.trim() || `view ${views.all().length + 1}`;
+    views.save(name);
+    status(`saved the view “${name}”`);
+  });
   if (state.surfaceDoc >= 0) {
     $('surface-panel').hidden = false;
     uvPanel = window.fairline.uvPanel = new UvPanel($('uv'), (line) => {
@@ -550,6 +573,7 @@ function shortcutActions(help) {
     save: click('save'),
     before: toggle('before'),
     wireframe: toggle('wireframe'),
+    image: click('capture'),
     resetView: () => { viewer.camera.standard('iso'); $('fit').click(); },
     view: (name) => document.querySelector(`[data-view=${name}]`).click(),
     exact: click('exact'),
@@ -615,6 +639,7 @@ async function start() {
   // 3-D point k of pre-image i (document coordinates), for tests
   window.fairline.linePoint = linePoint;
   window.fairline.lights = lights;
+  window.fairline.capture = (w, h) => capture(viewer, w, h);
   window.fairline.timeFrames = (n) => viewer.timeFrames(n, (i) => {
     for (const l of lights) l.sweep = (i % 50) / 50;
   });

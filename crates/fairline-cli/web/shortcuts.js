@@ -20,6 +20,7 @@ export const SHORTCUTS = [
   { keys: '6', label: 'view from the bottom', action: 'view:bottom' },
   { keys: '0', label: 'iso view', action: 'view:iso' },
   { keys: 'W', label: 'wireframe on / off', action: 'wireframe' },
+  { keys: 'I', label: 'download an image of the view at the size given (View panel)', action: 'image' },
   { keys: 'L', label: 'exact highlight lines', action: 'exact' },
   { keys: 'D', label: 'detect irregularities', action: 'detect' },
   { keys: 'V', label: 'deviation map (Measure panel)', action: 'deviation' },

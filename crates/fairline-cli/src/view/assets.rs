@@ -26,6 +26,8 @@ web! {
     "shortcuts.js" => "text/javascript; charset=utf-8",
     "help.js" => "text/javascript; charset=utf-8",
     "docframes.js" => "text/javascript; charset=utf-8",
+    "capture.js" => "text/javascript; charset=utf-8",
+    "views.js" => "text/javascript; charset=utf-8",
     "shaders/surface.vert" => "text/plain; charset=utf-8",
     "shaders/surface.frag" => "text/plain; charset=utf-8",
     "shaders/pick.vert" => "text/plain; charset=utf-8",
