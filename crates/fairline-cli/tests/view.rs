@@ -450,7 +450,7 @@ fn requests_without_the_token_or_from_elsewhere_are_refused() {
     // POST with the cookie alone (what a cross-site form could send) does not
     let (st, head, body) = http(p, "GET", &format!("/?token={t}"), &[], b"");
     assert_eq!(st, 200);
-    assert!(String::from_utf8_lossy(&body).contains("<canvas id=\"gl\">"));
+    assert!(String::from_utf8_lossy(&body).contains("<canvas id=\"gl\""));
     let cookie = format!("fairline_{p}={t}");
     assert!(head.contains(&cookie), "{head}");
     assert!(head.contains("SameSite=Strict"));
@@ -1886,4 +1886,317 @@ fn page_measures_deviation_and_probes_curvature() {
     assert!(text.as_str().unwrap().contains("distance"), "{text}");
     std::thread::sleep(Duration::from_millis(300));
     save_screenshot("workbench-probe.png", &b.screenshot().3);
+}
+
+/// A key press (down and up) as the DevTools protocol sends it; `modifiers`
+/// 2: Ctrl, 8: Shift.
+fn press(b: &mut cdp::Browser, key: &str, code: &str, vk: u32, modifiers: u32) {
+    let text = if key.chars().count() == 1 && modifiers & 2 == 0 {
+        key
+    } else {
+        ""
+    };
+    b.call(
+        "Input.dispatchKeyEvent",
+        json!({"type": "keyDown", "key": key, "code": code, "windowsVirtualKeyCode": vk, "modifiers": modifiers, "text": text}),
+    );
+    b.call(
+        "Input.dispatchKeyEvent",
+        json!({"type": "keyUp", "key": key, "code": code, "windowsVirtualKeyCode": vk, "modifiers": modifiers}),
+    );
+}
+
+/// A page in headless Chromium at 1280 × 800 over `files`, ready.
+fn open_page(exe: &str, srv: &Server) -> cdp::Browser {
+    let mut b = cdp::Browser::launch(exe, 1280, 800);
+    b.call("Page.navigate", json!({"url": srv.url}));
+    b.wait_for("document.body && document.body.dataset.ready === '1'", 120);
+    b
+}
+
+/// The keyboard in real headless Chromium: `?` and the "?" button open the
+/// help overlay, which lists every shortcut and every tool, Escape closes
+/// it; Ctrl+Z and Ctrl+Shift+Z undo and redo on the server, B toggles
+/// before/after, M picks the probe; a `?` typed into the save-name field
+/// stays in the field. Every control of the page has a tooltip.
+#[test]
+fn page_keyboard_shortcuts_help_overlay_and_tooltips() {
+    let Some(exe) = cdp::chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "chromium is not installed and CI is set (apt-get install chromium)"
+        );
+        eprintln!(
+            "\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n"
+        );
+        return;
+    };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmp("view-keys");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 41);
+    let srv = start(&[&mesh], &dir);
+    start_fair_job(&srv, json!({}));
+    assert_eq!(srv.wait_job()["state"], "done");
+    let mut b = open_page(&exe, &srv);
+    let visible = "!document.getElementById('help').hidden";
+    assert_eq!(b.eval(visible), json!(false), "help hidden at first");
+    press(&mut b, "?", "Slash", 191, 8);
+    b.wait_for(visible, 10);
+    let listed = b.eval("document.getElementById('help').textContent");
+    let listed = listed.as_str().unwrap();
+    for keys in ["Ctrl+Z", "Ctrl+Shift+Z", "Ctrl+Enter", "Ctrl+S", "?"] {
+        assert!(listed.contains(keys), "{keys} missing from the help");
+    }
+    let tools: Vec<String> = serde_json::from_value(
+        b.eval("[...document.getElementById('tool').options].map((o) => o.textContent)"),
+    )
+    .unwrap();
+    assert!(tools.len() >= 6);
+    for t in &tools {
+        assert!(
+            listed.contains(t.as_str()),
+            "tool {t} missing from the help"
+        );
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    save_screenshot("workbench-help.png", &b.screenshot().3);
+    press(&mut b, "Escape", "Escape", 27, 0);
+    b.wait_for("document.getElementById('help').hidden", 10);
+    b.eval("document.getElementById('help-button').click()");
+    b.wait_for(visible, 10);
+    b.eval("document.getElementById('help-close').click()");
+    b.wait_for("document.getElementById('help').hidden", 10);
+    // undo and redo with the keyboard move the server's cursor
+    let cursor =
+        |srv: &Server| srv.json("/api/session", None)["docs"][0]["history"]["cursor"].clone();
+    assert_eq!(cursor(&srv), json!(1));
+    press(&mut b, "z", "KeyZ", 90, 2);
+    b.wait_for(
+        "document.getElementById('status').textContent === 'undone'",
+        30,
+    );
+    assert_eq!(cursor(&srv), json!(0));
+    press(&mut b, "Z", "KeyZ", 90, 2 | 8);
+    b.wait_for(
+        "document.getElementById('status').textContent === 'redone'",
+        30,
+    );
+    assert_eq!(cursor(&srv), json!(1));
+    press(&mut b, "b", "KeyB", 66, 0);
+    b.wait_for("window.fairline.state.before === true", 30);
+    press(&mut b, "b", "KeyB", 66, 0);
+    b.wait_for("window.fairline.state.before === false", 30);
+    press(&mut b, "m", "KeyM", 77, 0);
+    assert_eq!(
+        b.eval("document.getElementById('tool').value"),
+        json!("probe")
+    );
+    // keys typed into a field stay there
+    b.eval("document.getElementById('save-name').focus()");
+    press(&mut b, "?", "Slash", 191, 8);
+    press(&mut b, "b", "KeyB", 66, 0);
+    std::thread::sleep(Duration::from_millis(200));
+    assert_eq!(
+        b.eval("document.getElementById('save-name').value"),
+        json!("?b")
+    );
+    assert_eq!(b.eval(visible), json!(false), "no help while typing");
+    assert_eq!(b.eval("window.fairline.state.before"), json!(false));
+    // every control has a tooltip
+    let bare = b.eval(
+        "[...document.querySelectorAll('button, select, input, textarea, canvas, option')].filter((e) => !e.title && !(e.tagName === 'OPTION' && e.parentElement.id !== 'tool')).map((e) => e.id || e.outerHTML.slice(0, 60))",
+    );
+    assert_eq!(bare, json!([]), "controls without a tooltip");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The layout at 1280 × 800 in real headless Chromium: run and save lie
+/// inside the window without scrolling (and are the elements found at
+/// their centres, not covered); side by side, the active document's frame
+/// is highlighted and labelled, and a press in the other half makes that
+/// document active; a click on a history item undoes or redoes up to it.
+#[test]
+fn page_layout_action_bar_active_document_and_history_jumps() {
+    let Some(exe) = cdp::chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "chromium is not installed and CI is set (apt-get install chromium)"
+        );
+        eprintln!(
+            "\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n"
+        );
+        return;
+    };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmp("view-layout");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 41);
+    let other = dir.join("other.obj");
+    dented_panel(&other, 31);
+    let srv = start(&[&mesh, &other], &dir);
+    start_fair_job(&srv, json!({}));
+    assert_eq!(srv.wait_job()["state"], "done");
+    let mut b = open_page(&exe, &srv);
+    for id in ["run", "save", "undo", "redo"] {
+        let r = b.eval(&format!(
+            "(() => {{ const e = document.getElementById('{id}'); const r = e.getBoundingClientRect(); const top = document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2); return [r.left, r.top, r.right, r.bottom, top === e, window.innerWidth, window.innerHeight]; }})()"
+        ));
+        let v = r.as_array().unwrap();
+        let f = |i: usize| v[i].as_f64().unwrap();
+        assert_eq!((f(5), f(6)), (1280.0, 800.0));
+        assert!(
+            f(0) >= 0.0 && f(1) >= 0.0 && f(2) <= 1280.0 && f(3) <= 800.0 && f(2) > f(0),
+            "{id} outside the window: {r}"
+        );
+        assert_eq!(v[4], json!(true), "{id} is covered at its centre");
+    }
+    assert_eq!(
+        b.eval("document.scrollingElement.scrollHeight <= window.innerHeight"),
+        json!(true),
+        "the page itself does not scroll"
+    );
+    // side by side: document 0 active, highlighted and labelled
+    let frame = |b: &mut cdp::Browser, k: usize| {
+        b.eval(&format!("(() => {{ const f = document.querySelector('.docframe[data-doc=\"{k}\"]'); const r = f.getBoundingClientRect(); return [f.classList.contains('active'), f.textContent, getComputedStyle(f).borderTopColor, r.left, r.width]; }})()"))
+    };
+    assert_eq!(
+        b.eval("document.getElementById('docframes').hidden"),
+        json!(false)
+    );
+    let f0 = frame(&mut b, 0);
+    let f1 = frame(&mut b, 1);
+    assert_eq!(f0[0], json!(true), "{f0}");
+    assert_eq!(f1[0], json!(false), "{f1}");
+    assert!(
+        f0[1].as_str().unwrap().contains("panel.obj (active)"),
+        "{f0}"
+    );
+    assert!(!f1[1].as_str().unwrap().contains("active"), "{f1}");
+    assert_ne!(f0[2], f1[2], "the active frame's border stands out");
+    std::thread::sleep(Duration::from_millis(300));
+    save_screenshot("workbench-layout.png", &b.screenshot().3);
+    let (cx, cy, cw, ch) = canvas_rect(&mut b);
+    click_at(&mut b, (cx + 3 * cw / 4) as f64, (cy + ch / 2) as f64, 0);
+    b.wait_for("window.fairline.state.active === 1", 10);
+    let f1 = frame(&mut b, 1);
+    assert_eq!(f1[0], json!(true), "{f1}");
+    assert!(f1[1].as_str().unwrap().contains("other.obj (active)"));
+    assert_eq!(frame(&mut b, 0)[0], json!(false));
+    // the history shows the active document's: one step (as opened)
+    assert_eq!(
+        b.eval("document.querySelectorAll('#history li').length"),
+        json!(1)
+    );
+    click_at(&mut b, (cx + cw / 4) as f64, (cy + ch / 2) as f64, 0);
+    b.wait_for("window.fairline.state.active === 0", 10);
+    assert_eq!(
+        b.eval("document.querySelectorAll('#history li').length"),
+        json!(2)
+    );
+    // a click on the first history item goes back to it, on the second forward
+    let cursor =
+        |srv: &Server| srv.json("/api/session", None)["docs"][0]["history"]["cursor"].clone();
+    b.eval("document.querySelectorAll('#history li')[0].click()");
+    b.wait_for(
+        "document.querySelectorAll('#history li')[0].classList.contains('current')",
+        30,
+    );
+    assert_eq!(cursor(&srv), json!(0));
+    b.eval("document.querySelectorAll('#history li')[1].click()");
+    b.wait_for(
+        "document.querySelectorAll('#history li')[1].classList.contains('current')",
+        30,
+    );
+    assert_eq!(cursor(&srv), json!(1));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Image capture and saved views in real headless Chromium: the view
+/// rendered at 640 × 360 comes back as a PNG of that size with the lit part
+/// in the middle, the canvas returns to its window size, a size out of
+/// range is refused, and the button offers a PNG named after the file and
+/// the size; a named view restores the camera after the camera moved and
+/// after the page is loaded again (kept per file in localStorage).
+#[test]
+fn page_captures_images_at_a_chosen_size_and_restores_saved_views() {
+    let Some(exe) = cdp::chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "chromium is not installed and CI is set (apt-get install chromium)"
+        );
+        eprintln!(
+            "\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n"
+        );
+        return;
+    };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmp("view-capture");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 41);
+    let srv = start(&[&mesh], &dir);
+    let mut b = open_page(&exe, &srv);
+    b.eval("document.querySelector('[data-view=top]').click()");
+    let png_b64 = b.eval("window.fairline.capture(640, 360).then(async (blob) => { const a = new Uint8Array(await blob.arrayBuffer()); let s = ''; for (const x of a) s += String.fromCharCode(x); return btoa(s); })");
+    use base64::Engine;
+    let png_bytes = base64::engine::general_purpose::STANDARD
+        .decode(png_b64.as_str().unwrap())
+        .unwrap();
+    let mut reader = png::Decoder::new(std::io::Cursor::new(png_bytes))
+        .read_info()
+        .unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((info.width, info.height), (640, 360));
+    let ch = info.color_type.samples();
+    let lum = |x: usize, y: usize| {
+        let i = ch * (y * 640 + x);
+        (buf[i] as f64 + buf[i + 1] as f64 + buf[i + 2] as f64) / 3.0
+    };
+    // plain shading would be uniform; with highlight lines, take the
+    // brightest pixel of the middle row against the corner
+    let brightest = (200..440).map(|x| lum(x, 180)).fold(0.0, f64::max);
+    assert!(
+        brightest > lum(2, 2) + 60.0,
+        "the part ({brightest}) is lit against the background ({})",
+        lum(2, 2)
+    );
+    b.wait_for(
+        "(() => { const c = document.getElementById('gl'); return c.width === c.clientWidth && c.height === c.clientHeight; })()",
+        10,
+    );
+    let refused = b.eval("window.fairline.capture(5, 5).then(() => 'made', (e) => e.message)");
+    assert!(refused.as_str().unwrap().contains("between"), "{refused}");
+    b.eval("(() => { document.getElementById('cap-w').value = '320'; document.getElementById('cap-h').value = '200'; document.getElementById('capture').click(); })()");
+    b.wait_for("window.fairline.state.lastDownload && window.fairline.state.lastDownload.name === 'panel-320x200.png'", 30);
+    // saved views
+    let camera = "(() => { const c = window.fairline.viewer.camera; return [c.up, c.yaw, c.pitch, c.distance, ...c.target]; })()";
+    b.eval("(() => { const c = window.fairline.viewer.camera; c.yaw = 0.7; c.pitch = 0.3; c.distance *= 0.6; c.target = [0.2, -0.1, 0]; })()");
+    let saved = b.eval(camera);
+    b.eval("(() => { document.getElementById('view-name').value = 'dent close'; document.getElementById('save-view').click(); })()");
+    assert_eq!(
+        b.eval("[...document.querySelectorAll('#views .view-restore')].map((e) => e.textContent)"),
+        json!(["dent close"])
+    );
+    b.eval(
+        "document.getElementById('fit').click(); document.querySelector('[data-view=iso]').click()",
+    );
+    assert_ne!(b.eval(camera), saved, "the camera moved");
+    b.eval("document.querySelector('#views .view-restore').click()");
+    assert_eq!(b.eval(camera), saved, "the saved view restored");
+    std::thread::sleep(Duration::from_millis(300));
+    save_screenshot("workbench-views.png", &b.screenshot().3);
+    // loaded again: the view is still there and restores
+    b.eval("window.previousPage = true");
+    b.call("Page.navigate", json!({"url": srv.url}));
+    b.wait_for("!window.previousPage && document.body && document.body.dataset.ready === '1' && document.querySelector('#views .view-restore')", 120);
+    assert_ne!(b.eval(camera), saved);
+    b.eval("document.querySelector('#views .view-restore').click()");
+    assert_eq!(b.eval(camera), saved, "restored after a reload");
+    b.eval("document.querySelector('#views .view-delete').click()");
+    assert_eq!(
+        b.eval("document.querySelectorAll('#views li').length"),
+        json!(0)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

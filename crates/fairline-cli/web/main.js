@@ -8,6 +8,11 @@ import { drawLegend } from './colormap.js';
 import { UvPanel, PALETTE, rgba } from './uvpanel.js';
 import { $, status, showCommand, showReport, showHistory, offer, offerJson } from './panels.js';
 import { Tools } from './tools.js';
+import { installShortcuts } from './shortcuts.js';
+import { Help } from './help.js';
+import { DocFrames } from './docframes.js';
+import { capture } from './capture.js';
+import { SavedViews } from './views.js';
 
 const state = { labels: [], surfaceDoc: -1, uvData: null, uvCircular: null, session: null, active: 0, regions: [], detected: [], before: false, job: null, lastDownload: null };
 window.fairline = { state };
@@ -16,6 +21,7 @@ const viewer = new Viewer($('gl'));
 const tools = new Tools({ viewer, state });
 window.fairline.tools = tools;
 let lights = [];
+let frames = null;
 
 function activeDoc() { return state.session.docs[state.active]; }
 
@@ -46,7 +52,8 @@ async function refreshSession() {
 // History, report, command and save folder of the active document.
 function showSession() {
   const d = activeDoc();
-  showHistory(d.history, () => {});
+  showHistory(d.history, guard(jumpTo));
+  if (frames) frames.show(state.active);
   const step = d.history.steps[d.history.cursor];
   showReport(step.report);
   showCommand(step.command);
@@ -251,6 +258,37 @@ async function historyMove(dir) {
     await reloadActive();
     status(dir === 'undo' ? 'undone' : 'redone');
   } catch (err) { status(err.message, true); }
+}
+
+// A click on a history item: undo or redo step by step up to it.
+async function jumpTo(i) {
+  const d = activeDoc();
+  const by = i - d.history.cursor;
+  if (!by) return;
+  for (let n = 0; n < Math.abs(by); n++) await api.json(`/api/doc/${state.active}/${by < 0 ? 'undo' : 'redo'}`, {});
+  state.before = false;
+  $('before').checked = false;
+  await reloadActive();
+  status(`at step ${i}: ${activeDoc().history.steps[i].label}`);
+}
+
+// Makes document k the one the panels, run, undo and save act on.
+function activate(k) {
+  if (k === state.active) return;
+  state.active = k;
+  showSession();
+  status(`active: ${activeDoc().name}`);
+}
+
+// The view rendered at the size in the View panel, offered as a PNG named
+// after the active file and the size.
+async function captureImage() {
+  const w = Number($('cap-w').value), h = Number($('cap-h').value);
+  const blob = await capture(viewer, w, h);
+  const name = `${activeDoc().name.replace(/\.[^.]*$/, '')}-${w}x${h}.png`;
+  state.lastDownload = { name, bytes: blob.size };
+  offer(blob, name);
+  status(`image ${name} (${blob.size} bytes)`);
 }
 
 async function downloadRegion(what) {
@@ -481,6 +519,16 @@ function wire() {
   $('dl-fixed').addEventListener('click', guard(() => downloadRegion('fixed')));
   $('dl-mesh').addEventListener('click', guard(downloadMesh));
   $('save').addEventListener('click', guard(save));
+  $('capture').addEventListener('click', guard(captureImage));
+  const views = window.fairline.views = new SavedViews($('views'), viewer, state.session.docs.map((d) => d.name), (v) => {
+    $('up').value = v.up;
+    status(`view “${v.name}”`);
+  });
+  $('save-view').addEventListener('click', () => {
+    const name = $('view-name').value.trim() || `view ${views.all().length + 1}`;
+    views.save(name);
+    status(`saved the view “${name}”`);
+  });
   if (state.surfaceDoc >= 0) {
     $('surface-panel').hidden = false;
     uvPanel = window.fairline.uvPanel = new UvPanel($('uv'), (line) => {
@@ -506,6 +554,38 @@ function wire() {
     return true;
   });
   window.addEventListener('resize', () => { viewer.dirty = true; });
+  const help = window.fairline.help = new Help($('help'), $('tool'));
+  $('help-button').addEventListener('click', () => help.toggle());
+  installShortcuts(shortcutActions(help));
+}
+
+// What each keyboard shortcut does (shortcuts.js names them); most press the
+// button or change the control a click would.
+function shortcutActions(help) {
+  const click = (id) => () => { if (!$(id).disabled) $(id).click(); };
+  const toggle = (id) => () => { $(id).checked = !$(id).checked; $(id).dispatchEvent(new Event('change')); };
+  return {
+    help: () => help.toggle(),
+    closeHelp: () => help.hide(),
+    run: click('run'),
+    undo: click('undo'),
+    redo: click('redo'),
+    save: click('save'),
+    before: toggle('before'),
+    wireframe: toggle('wireframe'),
+    image: click('capture'),
+    resetView: () => { viewer.camera.standard('iso'); $('fit').click(); },
+    view: (name) => document.querySelector(`[data-view=${name}]`).click(),
+    exact: click('exact'),
+    detect: click('detect'),
+    deviation: click('deviation'),
+    tool: (name) => {
+      if (![...$('tool').options].some((o) => o.value === name)) return;
+      $('tool').value = name;
+      $('tool').dispatchEvent(new Event('change'));
+      status(`tool: ${$('tool').selectedOptions[0].textContent}`);
+    },
+  };
 }
 
 async function start() {
@@ -526,6 +606,7 @@ async function start() {
   for (const n of names) { const o = document.createElement('option'); o.value = n; o.textContent = n; $('scalar').append(o); }
   lights = docs.map((d) => new Lights(d.light, d.center, d.radius));
   tools.init(docs);
+  frames = new DocFrames($('docframes'), $('gl'), docs.map((d) => d.name), activate);
   viewer.lightUniforms = (k) => lights[k].uniforms(viewer.camera);
   // a z-up part is seen from the front, a y-up one (most scanned meshes) from +z
   const ext = docs[0].bbox;
@@ -558,6 +639,7 @@ async function start() {
   // 3-D point k of pre-image i (document coordinates), for tests
   window.fairline.linePoint = linePoint;
   window.fairline.lights = lights;
+  window.fairline.capture = (w, h) => capture(viewer, w, h);
   window.fairline.timeFrames = (n) => viewer.timeFrames(n, (i) => {
     for (const l of lights) l.sweep = (i % 50) / 50;
   });

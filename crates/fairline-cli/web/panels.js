@@ -44,7 +44,7 @@ export function showHistory(history, onPick) {
   history.steps.forEach((s, i) => {
     const li = document.createElement('li');
     li.textContent = s.label;
-    li.title = s.command;
+    li.title = i === history.cursor ? `${s.command}\n(the current state)` : `${s.command}\nclick: go to this state (undo or redo up to it)`;
     if (i === history.cursor) li.classList.add('current');
     li.addEventListener('click', () => onPick(i));
     ol.append(li);

@@ -237,10 +237,14 @@ export class Viewer {
     return [k * cw, 0, cw, h];
   }
 
+  // The drawing buffer follows the canvas's size on the page, or
+  // `fixedSize` ([w, h] device pixels) while an image is captured.
   resize() {
     const dpr = window.devicePixelRatio || 1;
-    const w = Math.max(1, Math.round(this.canvas.clientWidth * dpr));
-    const h = Math.max(1, Math.round(this.canvas.clientHeight * dpr));
+    const [w, h] = this.fixedSize || [
+      Math.max(1, Math.round(this.canvas.clientWidth * dpr)),
+      Math.max(1, Math.round(this.canvas.clientHeight * dpr)),
+    ];
     if (this.canvas.width !== w || this.canvas.height !== h) {
       this.canvas.width = w;
       this.canvas.height = h;
