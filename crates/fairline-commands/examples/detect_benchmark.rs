@@ -31,12 +31,14 @@
 //! from the held-out set.
 //!
 //! ```text
-//! cargo run --release -p fairline-commands --example detect_benchmark -- [--set tuning|held-out] [--large] [--no-fair] [--parts a,b]
+//! cargo run --release -p fairline-commands --example detect_benchmark -- [--set tuning|held-out] [--large] [--no-fair] [--parts a,b] [--dump DIR]
 //! ```
 //!
 //! Default sizes are 5k–36k vertices (a few minutes on two cores);
 //! `--large` generates the surfaces at about 500k vertices and refines the
-//! real meshes to at least 100k.
+//! real meshes to at least 100k. `--dump DIR` writes each clean part (PLY)
+//! and each planted case (defective positions, footprint, the detection's
+//! site scores) for analysis elsewhere, without judging the cases.
 
 use fairline::fair::{FairMethod, FairOptions, fair_highlight_lines, grow_region};
 use fairline::highlight::{
@@ -406,7 +408,7 @@ fn plant(mesh: &SurfaceMesh, kind: Kind, rng: &mut Rng, diag: f64) -> Option<Def
 
 /// Detection options: the defaults, or for tuning runs (tuning seeds
 /// only) `--margin M`, `--noise-factor K`, `--smooth-radius R`,
-/// `--threshold T`.
+/// `--threshold T`, `--discretisation-factor K`.
 fn detect_options() -> DetectOptions {
     let args: Vec<String> = std::env::args().collect();
     let value = |f: &str| {
@@ -427,6 +429,9 @@ fn detect_options() -> DetectOptions {
     }
     if let Some(v) = value("--threshold") {
         o = o.threshold(v);
+    }
+    if let Some(v) = value("--discretisation-factor") {
+        o = o.discretisation_factor(v);
     }
     o
 }
@@ -656,6 +661,10 @@ fn main() {
             t0.elapsed().as_secs_f64()
         ));
         eprintln!("{}", clean_rows.last().map_or("", String::as_str));
+        if let Some(dir) = value("--dump") {
+            std::fs::create_dir_all(&dir).expect("dump folder");
+            fairline::io::write_mesh(format!("{dir}/{name}.ply"), &clean).expect("dump mesh");
+        }
         if flag("--clean-only") {
             continue;
         }
@@ -666,6 +675,10 @@ fn main() {
                     eprintln!("  {name}: no place for a {}", kind.name());
                     continue;
                 };
+                if let Some(dir) = value("--dump") {
+                    dump_case(&dir, &name, seed, k, &clean, &defect);
+                    continue;
+                }
                 let c = run_case(&name, real, &clean, defect, diag, fair);
                 eprintln!(
                     "  {name} seed {seed} {:9} depth {:.2} % radius {:.1} %: found {} first {} false {} size {} not judged {:.0} %{}",
@@ -797,4 +810,53 @@ fn print_tables(set: &str, seeds: &[u64], cases: &[CaseResult], clean_rows: &[St
             fmt_opt(median(r.clone()), 2),
         );
     }
+}
+
+/// Writes a planted case for analysis outside the benchmark: the defective
+/// positions (little-endian f64, n × 3), the footprint (one byte per face)
+/// and a line of metadata.
+fn dump_case(dir: &str, part: &str, seed: u64, k: usize, clean: &SurfaceMesh, d: &Defect) {
+    use std::io::Write;
+    let stem = format!("{dir}/{part}-{seed}-{k}");
+    let mut bytes = Vec::with_capacity(24 * d.positions.len());
+    for q in &d.positions {
+        for c in [q.x, q.y, q.z] {
+            bytes.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    std::fs::write(format!("{stem}.pos"), bytes).expect("dump positions");
+    let foot: Vec<u8> = d.footprint.iter().map(|&f| f as u8).collect();
+    std::fs::write(format!("{stem}.foot"), foot).expect("dump footprint");
+    let mut mesh = clean.clone();
+    mesh.set_positions(d.positions.clone()).expect("positions");
+    let (det, _) = detect(&mesh);
+    let mut sites = String::new();
+    for s in &det.sites {
+        sites += &format!(
+            "{} {} {} {} {}\n",
+            s.vertex.0,
+            s.score.unwrap_or(f64::NAN),
+            s.threshold,
+            s.flat_spot.unwrap_or(f64::NAN),
+            det.regions
+                .iter()
+                .position(|r| r.faces.iter().any(|f| d.footprint[f.idx()]))
+                .map_or(-1, |i| i as i64)
+        );
+    }
+    std::fs::write(format!("{stem}.sites"), sites).expect("dump sites");
+    let mut meta = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(format!("{dir}/cases.txt"))
+        .expect("dump metadata");
+    writeln!(
+        meta,
+        "{part} {seed} {k} {} {} {} {}",
+        d.kind.name().replace(' ', "_"),
+        d.depth,
+        d.radius,
+        clean.vertex_count()
+    )
+    .expect("dump metadata");
 }
