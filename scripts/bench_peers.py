@@ -11,8 +11,10 @@ date.
 
 Each row alternates the runs of the two sides (ours, theirs, ours, …), so
 both see the same load, and reports the median wall seconds of each and
-the ratio theirs / ours. Whole-process rows also give the median CPU
-seconds (user + system of the child process).
+the ratio theirs / ours, and the median CPU seconds of each (user + system
+of the child process for whole processes; of this process, all threads, for
+calls in process): on a loaded machine wall times measure the other
+processes too, CPU seconds much less so.
 
 The mesh is the raw Stanford bunny scan (bunny_zipper.ply) split 4 × 4
 (every triangle into four at its edge midpoints, twice) and cut to
@@ -168,10 +170,13 @@ def med(values, k=0):
 
 
 def timed(f):
+    """``f`` as a measurement: wall and CPU seconds (this process, all threads)."""
+
     def run():
+        c = time.process_time()
         t = time.perf_counter()
         f()
-        return time.perf_counter() - t
+        return time.perf_counter() - t, time.process_time() - c
 
     return run
 
@@ -211,11 +216,11 @@ def main() -> None:
     load_before = load()
     rows = []
 
-    def row(what, ours_name, theirs_name, ours, theirs, cpu=True):
+    def row(what, ours_name, theirs_name, ours, theirs):
         ra, rb = alternate(ours, theirs, a.runs)
         wa, wb = med(ra), med(rb)
         cells = [what, ours_name, f"{wa:.3f}", theirs_name, f"{wb:.3f}", f"{wb / wa:.1f}×" if wa > 0 else "–"]
-        cells.append(f"{med(ra, 1):.2f} / {med(rb, 1):.2f}" if cpu else "")
+        cells.append(f"{med(ra, 1):.2f} / {med(rb, 1):.2f}")
         rows.append(cells)
         print("  " + " | ".join(cells), file=sys.stderr, flush=True)
 
@@ -268,27 +273,27 @@ def main() -> None:
 
         taubin = dict(method="taubin", lambda_=TAUBIN_LAMBDA, mu=-TAUBIN_NU, iterations=TAUBIN_PAIRS)
         row("Taubin 10 pairs from (V, F)", "`Mesh(V, F).smooth()`", "trimesh filter_taubin",
-            timed(lambda: fairline.Mesh(V, F).smooth(**taubin)), timed(trimesh_taubin), cpu=False)
+            timed(lambda: fairline.Mesh(V, F).smooth(**taubin)), timed(trimesh_taubin))
         row("Taubin 10 pairs on a built mesh", "`mesh.smooth()`", "trimesh filter_taubin",
-            timed(lambda: m.smooth(**taubin)), timed(trimesh_taubin), cpu=False)
+            timed(lambda: m.smooth(**taubin)), timed(trimesh_taubin))
         row("principal curvature from (V, F)", "`Mesh(V, F).principal_curvatures()`", "igl.principal_curvature",
             timed(lambda: fairline.Mesh(V, F).principal_curvatures()), timed(lambda: igl.principal_curvature(V, F)),
-            cpu=False)
+            )
         row("principal curvature on a built mesh", "`mesh.principal_curvatures()`", "igl.principal_curvature",
-            timed(m.principal_curvatures), timed(lambda: igl.principal_curvature(V, F)), cpu=False)
+            timed(m.principal_curvatures), timed(lambda: igl.principal_curvature(V, F)))
         row("cotangent Laplacian", "`mesh.cotangent_laplacian()`", "igl.cotmatrix",
-            timed(m.cotangent_laplacian), timed(lambda: igl.cotmatrix(V, F)), cpu=False)
+            timed(m.cotangent_laplacian), timed(lambda: igl.cotmatrix(V, F)))
         row("mass matrix (Voronoi)", "`mesh.mass_matrix()`", "igl.massmatrix",
-            timed(m.mass_matrix), timed(lambda: igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI)), cpu=False)
+            timed(m.mass_matrix), timed(lambda: igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI)))
         row("vertex normals (area-weighted)", "`mesh.vertex_normals()`", "igl.per_vertex_normals",
             timed(m.vertex_normals),
-            timed(lambda: igl.per_vertex_normals(V, F, igl.PER_VERTEX_NORMALS_WEIGHTING_TYPE_AREA)), cpu=False)
+            timed(lambda: igl.per_vertex_normals(V, F, igl.PER_VERTEX_NORMALS_WEIGHTING_TYPE_AREA)))
         row("vertex normals (area-weighted)", "`mesh.vertex_normals()`", "trimesh vertex_normals",
             timed(m.vertex_normals),
-            timed(lambda: trimesh.Trimesh(V, F, process=False).vertex_normals), cpu=False)
+            timed(lambda: trimesh.Trimesh(V, F, process=False).vertex_normals))
         row("highlight lines, default lights", "`mesh.highlight_lines()` (arrays)",
             "`fairline.highlight_lines(V, F)` (dicts)",
-            timed(m.highlight_lines), timed(lambda: fairline.highlight_lines(V, F)), cpu=False)
+            timed(m.highlight_lines), timed(lambda: fairline.highlight_lines(V, F)))
         del tm
 
     print(f"\nMachine: {os.cpu_count()} cores ({cpu_model()}), {platform.system()} {platform.release()}; "
