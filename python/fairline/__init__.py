@@ -11,6 +11,12 @@ meshes with mixed polygons; a ``trimesh.Trimesh`` may be passed as ``V``
 with the keys of the CLI's ``--report`` JSON (``"command"``, ``"time_s"``,
 …); report warnings are also issued as :class:`FairlineWarning`.
 
+:class:`Mesh` builds a mesh's connectivity once and keeps it for repeated
+calls, with the operators of libigl and trimesh (vertex normals, principal
+curvatures, the cotangent Laplacian and mass matrix as scipy.sparse
+matrices, smoothing, highlight lines as flat arrays); every function takes
+a :class:`Mesh` in place of ``(V, F)``.
+
 Errors raise :class:`FairlineError` (a :class:`ValueError`) with the CLI's
 message; see :mod:`fairline._errors`. Computations release the GIL.
 
@@ -29,7 +35,7 @@ import functools as _functools
 import json as _json
 import os as _os
 import warnings as _warnings
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as _np
 
@@ -52,6 +58,8 @@ __all__ = [
     "FairlineNotConvergedError",
     "FairlineTypeError",
     "FairlineWarning",
+    "Mesh",
+    "PrincipalCurvatures",
     "read_mesh",
     "write_mesh",
     "curvature",
@@ -166,8 +174,13 @@ def _faces(F: Any, n_vertices: int) -> Tuple[_np.ndarray, _np.ndarray]:
 
 
 def _mesh(V: Any, F: Any) -> Tuple[_np.ndarray, _np.ndarray, _np.ndarray]:
-    """(V, indices, offsets) for the native layer; a ``trimesh.Trimesh`` (or
-    anything with ``vertices`` and ``faces``) may stand in for ``V``."""
+    """(V, indices, offsets) for the native layer; a :class:`Mesh` or a
+    ``trimesh.Trimesh`` (or anything with ``vertices`` and ``faces``) may
+    stand in for ``V``."""
+    if isinstance(V, Mesh):
+        if F is not None:
+            raise FairlineError("F must be left out when V is a fairline.Mesh")
+        return V._V, V._indices, V._offsets
     if F is None:
         if hasattr(V, "vertices") and hasattr(V, "faces"):
             V, F = V.vertices, V.faces
@@ -324,8 +337,11 @@ def curvature(V: Any, F: Faces = None, method: str = "rusinkiewicz") -> Tuple[Di
     ``mean``, ``gauss`` (n,), and the principal directions ``d1``, ``d2``
     (n, 3) — the columns the CLI writes to its PLY, bit for bit.
     """
-    v, indices, offsets = _mesh(V, F)
-    cols, report = _native.curvature(v, indices, offsets, method=method)
+    if isinstance(V, Mesh) and F is None:
+        cols, report = V._curvature(method=method)
+    else:
+        v, indices, offsets = _mesh(V, F)
+        cols, report = _native.curvature(v, indices, offsets, method=method)
     values = dict(cols)
     return values, _report(report)
 
@@ -413,9 +429,8 @@ def smooth(
     and the positions reached as ``V``), as the CLI exits 1. A result that
     is not finite raises :class:`FairlineComputationError`.
     """
-    v, indices, offsets = _mesh(V, F)
-    out, report, stopped = _native.smooth(
-        v, indices, offsets, method=method, weights=weights, exponent=float(exponent),
+    options = dict(
+        method=method, weights=weights, exponent=float(exponent),
         iterations=_count("iterations", iterations), lambda_=_number("lambda_", lambda_),
         mu=_number("mu", mu), pass_band=float(pass_band), time_step=float(time_step),
         epsilon=_number("epsilon", epsilon), max_work=_count("max_work", max_work),
@@ -423,6 +438,11 @@ def smooth(
         fixed=_fixed(fixed), preserve_volume=bool(preserve_volume),
         tangential=bool(tangential),
     )
+    if isinstance(V, Mesh) and F is None:
+        out, report, stopped = V._smooth(**options)
+    else:
+        v, indices, offsets = _mesh(V, F)
+        out, report, stopped = _native.smooth(v, indices, offsets, **options)
     doc = _report(report)
     if stopped is not None:
         raise FairlineNotConvergedError(
@@ -562,18 +582,63 @@ def highlight_lines(
 
     Returns ``(lines, report)``: ``lines`` is the CLI's output JSON,
     ``{"lines": [{"index", "closed", "points": (k, 3) array, "radius"?}],
-    "bands"?: {...}}``.
+    "bands"?: {...}}``, each line's ``points`` a view of one array.
+    :meth:`Mesh.highlight_lines` gives the same lines as flat arrays with
+    offsets, without a dict per line.
     """
-    v, indices, offsets = _mesh(V, F)
-    doc, report = _native.highlight_lines(
-        v, indices, offsets,
+    mesh = V if isinstance(V, Mesh) and F is None else _native.Mesh(*_mesh(V, F))
+    arrays, report = mesh._highlight_lines(
+        **_highlight_kwargs(
+            direction, plane_normal, up, plane_point, spacing, lights, min_normal_cos,
+            circle_center, circle_axis, radii, band,
+        )
+    )
+    doc: Dict[str, Any] = {"lines": _line_dicts(arrays)}
+    if "lower" in arrays:
+        doc["bands"] = {
+            "radius": arrays["band_radius"],
+            "lower": _line_dicts(arrays["lower"]),
+            "upper": _line_dicts(arrays["upper"]),
+        }
+    return doc, _report(report)
+
+
+def _highlight_kwargs(
+    direction: Optional[Vector] = None,
+    plane_normal: Optional[Vector] = None,
+    up: str = "auto",
+    plane_point: Optional[Vector] = None,
+    spacing: Optional[float] = None,
+    lights: Any = None,
+    min_normal_cos: float = 0.1,
+    circle_center: Optional[Vector] = None,
+    circle_axis: Optional[Vector] = None,
+    radii: Optional[Sequence[float]] = None,
+    band: Optional[float] = None,
+) -> Dict[str, Any]:
+    """The options of :func:`highlight_lines` for the native layer."""
+    return dict(
         **_light_kwargs(direction, plane_normal, up, plane_point, spacing, lights, min_normal_cos),
         circle_center=_vec("circle_center", circle_center),
         circle_axis=_vec("circle_axis", circle_axis),
         radii=None if radii is None else [float(r) for r in radii],
         band=None if band is None else float(band),
     )
-    return _lines(_json.loads(doc)), _report(report)
+
+
+def _line_dicts(arrays: Dict[str, Any]) -> List[Dict[str, Any]]:
+    """The lines of :meth:`Mesh.highlight_lines`'s flat arrays as the
+    dicts of the CLI's lines file (``points`` are views of one array)."""
+    points = arrays["points"]
+    offsets = arrays["offsets"].tolist()
+    radius = arrays["radius"].tolist() if "radius" in arrays else None
+    out = []
+    for k, (index, closed) in enumerate(zip(arrays["index"].tolist(), arrays["closed"].tolist())):
+        line: Dict[str, Any] = {"index": index, "closed": closed, "points": points[offsets[k] : offsets[k + 1]]}
+        if radius is not None:
+            line["radius"] = radius[k]
+        out.append(line)
+    return out
 
 
 def detect(
@@ -833,6 +898,161 @@ def fair_surface(
     return _surfaces_from(out), _report(report)
 
 
+# ---- a mesh built once ------------------------------------------------------------
+
+
+class PrincipalCurvatures(NamedTuple):
+    """Principal curvatures per vertex (:meth:`Mesh.principal_curvatures`):
+    ``k1 ≥ k2`` (n,) signed, a sphere of radius r with outward normals
+    giving +1/r, and the unit principal directions ``d1``, ``d2`` (n, 3)."""
+
+    k1: _np.ndarray
+    k2: _np.ndarray
+    d1: _np.ndarray
+    d2: _np.ndarray
+
+
+def _scipy_sparse(what: str) -> Any:
+    try:
+        import scipy.sparse
+    except ImportError:
+        raise FairlineError(f"Mesh.{what} returns a scipy.sparse matrix and needs scipy: pip install scipy") from None
+    return scipy.sparse
+
+
+class Mesh(_native.Mesh):
+    """A mesh whose connectivity (halfedges, split non-manifold vertices,
+    the triangles of a polygon mesh) is built once, when it is made, and
+    kept: every method and every module function given a ``Mesh`` skips
+    that work, which on large meshes is a good part of a call.
+
+    ``Mesh(V, F)`` takes what the module functions take (``V`` (n, 3)
+    positions, ``F`` faces; or a ``trimesh.Trimesh`` as ``V``) and raises
+    :class:`FairlineError` for what they refuse (an index out of range, a
+    non-manifold edge …). ``Mesh.read(path)`` reads a mesh file. A ``Mesh``
+    may be passed as ``V`` (with ``F`` left out) to every function of the
+    package; :func:`curvature`, :func:`smooth` and :func:`highlight_lines`
+    then reuse its connectivity. Results equal those of the module
+    functions on ``(V, F)`` bit for bit.
+
+    The mesh is immutable: ``V`` and ``F`` are read-only copies, and
+    :meth:`smooth` returns new positions (make a new ``Mesh`` of them to go
+    on). Methods release the GIL; Ctrl-C stops them.
+    """
+
+    def __new__(cls, V: Any, F: Faces = None) -> "Mesh":
+        v, indices, offsets = _mesh(V, F)
+        # copies: the connectivity is built from these and must not change
+        return cls._of_arrays(_np.array(v, dtype=_np.float64, copy=True), _np.array(indices, copy=True), offsets)
+
+    @classmethod
+    def _of_arrays(cls, v: _np.ndarray, indices: _np.ndarray, offsets: _np.ndarray) -> "Mesh":
+        self = super().__new__(cls, v, indices, offsets)
+        for a in (v, indices, offsets):
+            a.setflags(write=False)
+        self._V, self._indices, self._offsets = v, indices, offsets
+        self._F: Optional[Faces] = None
+        return self
+
+    def __init__(self, V: Any = None, F: Faces = None) -> None:
+        pass  # built by __new__
+
+    @classmethod
+    def read(cls, path: PathLike) -> "Mesh":
+        """A mesh file (``.obj .ply .off .stl``) as a :class:`Mesh` (as
+        :func:`read_mesh`, then ``Mesh(V, F)``)."""
+        try:
+            v, indices, offsets = _native.read_mesh(_os.fspath(path))
+        except TypeError as e:
+            raise FairlineTypeError(f"Mesh.read: {e}") from e
+        return cls._of_arrays(v, indices, offsets)
+
+    def __repr__(self) -> str:
+        return f"fairline.Mesh({self.vertex_count} vertices, {self.face_count} faces)"
+
+    @property
+    def V(self) -> _np.ndarray:
+        """Positions (n, 3) float64, read-only."""
+        return self._V
+
+    @property
+    def F(self) -> Faces:
+        """Faces: (m, k) int64 when every face has k vertices, else a list
+        of int64 arrays (as :func:`read_mesh` returns them)."""
+        if self._F is None:
+            self._F = _faces_out(self._indices, self._offsets)
+        return self._F
+
+    # the names trimesh gives them, so that a Mesh goes where a trimesh goes
+    vertices = V
+    faces = F
+
+    def vertex_normals(self) -> _np.ndarray:
+        """Unit vertex normals (n, 3): the area-weighted sum of the face
+        normals around each vertex (Yong et al. Eq. (3); the
+        ``igl.per_vertex_normals`` area weighting); zero where none is
+        defined (an isolated vertex)."""
+        return self._vertex_normals()
+
+    def curvature(self, method: str = "rusinkiewicz") -> Tuple[Dict[str, _np.ndarray], Dict[str, Any]]:
+        """:func:`curvature` of this mesh: ``(values, report)``."""
+        return curvature(self, method=method)
+
+    def principal_curvatures(self, method: str = "rusinkiewicz") -> PrincipalCurvatures:
+        """Principal curvatures and directions per vertex, ``(k1, k2, d1,
+        d2)`` as a named tuple: k1 ≥ k2 signed (a sphere of radius r with
+        outward normals has +1/r; libigl's ``principal_curvature`` returns
+        (PD1, PD2, PV1, PV2) with its own sign). ``method`` as for
+        :func:`curvature` (Rusinkiewicz 2004 by default)."""
+        values, _ = curvature(self, method=method)
+        return PrincipalCurvatures(values["k1"], values["k2"], values["d1"], values["d2"])
+
+    def cotangent_laplacian(self) -> Any:
+        """The cotangent Laplacian as an (n, n) ``scipy.sparse.csr_matrix``:
+        L_ij = ½ (cot α_ij + cot β_ij) for each edge, L_ii = −Σ_j L_ij
+        (Meyer et al. 2003 Eq. (8); libigl's ``cotmatrix`` convention:
+        symmetric, negative semi-definite, constants in its null space; not
+        divided by areas). Cotangents of degenerate triangles are 0 and
+        their magnitudes are clamped to 1e6. Triangle meshes only; needs
+        scipy (:class:`FairlineError` otherwise)."""
+        sparse = _scipy_sparse("cotangent_laplacian")
+        kind, data, a, b, n = self._cotangent_laplacian()
+        if kind == "csr":
+            return sparse.csr_matrix((data, a, b), shape=(n, n))
+        return sparse.coo_matrix((data, (a, b)), shape=(n, n)).tocsr()
+
+    def mass_matrix(self) -> Any:
+        """The lumped mass matrix as an (n, n) diagonal
+        ``scipy.sparse.csr_matrix``: the mixed Voronoi area of each vertex
+        (Meyer et al. 2003 §3.3; libigl's ``massmatrix`` with
+        ``MASSMATRIX_TYPE_VORONOI``); the diagonal sums to the surface area.
+        Needs scipy (:class:`FairlineError` otherwise)."""
+        sparse = _scipy_sparse("mass_matrix")
+        return sparse.diags(self._vertex_areas(), format="csr")
+
+    def smooth(self, method: str = "taubin", *, report: bool = False, **options: Any) -> Any:
+        """:func:`smooth` of this mesh; returns the new positions (n, 3), or
+        ``(V_new, report)`` with ``report=True``. Options as for
+        :func:`smooth` (``iterations``, ``lambda_``, ``mu``, ``weights``,
+        ``fixed`` …); a run that stops unconverged raises
+        :class:`FairlineNotConvergedError`."""
+        V_new, doc = smooth(self, None, method, **options)
+        return (V_new, doc) if report else V_new
+
+    def highlight_lines(self, *, report: bool = False, **options: Any) -> Any:
+        """Highlight lines of this mesh as flat arrays (options as for
+        :func:`highlight_lines`): a dict with ``points`` (N, 3) float64,
+        the nodes of every line in turn; ``offsets`` (L + 1,) int64, line k
+        being ``points[offsets[k]:offsets[k + 1]]``; ``index`` (L,) int64,
+        the light of each line; ``closed`` (L,) bool; for circular lights
+        ``radius`` (L,); with ``band``, ``band_radius`` and the band
+        boundaries ``lower`` and ``upper`` as dicts of the same arrays.
+        With ``report=True`` returns ``(arrays, report)``."""
+        arrays, text = self._highlight_lines(**_highlight_kwargs(**options))
+        doc = _report(text)
+        return (arrays, doc) if report else arrays
+
+
 # ---- trimesh adapters -----------------------------------------------------------
 
 
@@ -889,6 +1109,16 @@ for _name in __all__:
     if callable(_f) and not isinstance(_f, type):
         globals()[_name] = _checked(_f)
 del _name, _f
+
+
+for _name in ("read", "vertex_normals", "curvature", "principal_curvatures", "cotangent_laplacian",
+              "mass_matrix", "smooth", "highlight_lines"):
+    _m = Mesh.__dict__[_name]
+    if isinstance(_m, classmethod):
+        setattr(Mesh, _name, classmethod(_checked(_m.__func__)))
+    else:
+        setattr(Mesh, _name, _checked(_m))
+del _name, _m
 
 
 def __dir__() -> List[str]:

@@ -2,7 +2,7 @@
 functions of the ``fairline`` package instead: they check shapes and types
 and convert the JSON texts returned here into dicts and arrays."""
 
-from typing import List, Optional, Sequence, Tuple
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -161,3 +161,58 @@ def fair_surface(
     fairness_weight: Optional[float] = None,
     damped_step: Optional[float] = None,
 ) -> Tuple[str, str]: ...
+
+class Mesh:
+    """A mesh with its connectivity built once (python/src/mesh.rs); the
+    package's ``fairline.Mesh`` subclasses it."""
+
+    def __new__(cls, v: _F64_2, indices: _U32, offsets: _U32) -> "Mesh": ...
+    @property
+    def vertex_count(self) -> int: ...
+    @property
+    def face_count(self) -> int: ...
+    @property
+    def is_triangle_mesh(self) -> bool: ...
+    def _vertex_normals(self) -> _F64_2: ...
+    def _curvature(
+        self, method: str = "rusinkiewicz"
+    ) -> Tuple[List[Tuple[str, npt.NDArray[np.float64]]], str]: ...
+    # ("csr", data, indices, indptr, n) or ("coo", data, rows, cols, n)
+    def _cotangent_laplacian(
+        self,
+    ) -> Tuple[str, npt.NDArray[np.float64], npt.NDArray[np.int64], npt.NDArray[np.int64], int]: ...
+    def _vertex_areas(self) -> npt.NDArray[np.float64]: ...
+    def _smooth(
+        self,
+        method: str = "taubin",
+        weights: str = "uniform",
+        exponent: float = -1.0,
+        iterations: Optional[int] = None,
+        lambda_: Optional[float] = None,
+        mu: Optional[float] = None,
+        pass_band: float = 0.1,
+        time_step: float = 1.0,
+        epsilon: Optional[float] = None,
+        max_work: Optional[int] = None,
+        fix_boundary: bool = False,
+        hierarchical_boundary: bool = False,
+        fixed: Optional[Sequence[int]] = None,
+        preserve_volume: bool = False,
+        tangential: bool = False,
+    ) -> Tuple[_F64_2, str, Optional[str]]: ...
+    # points (N, 3), offsets (L + 1,), index (L,), closed (L,), radius (L,)?;
+    # with a band also band_radius, lower, upper
+    def _highlight_lines(
+        self,
+        direction: Optional[Sequence[float]] = None,
+        plane_normal: Optional[Sequence[float]] = None,
+        up: str = "auto",
+        plane_point: Optional[Sequence[float]] = None,
+        spacing: Optional[float] = None,
+        lights: Optional[str] = None,
+        min_normal_cos: Optional[float] = None,
+        circle_center: Optional[Sequence[float]] = None,
+        circle_axis: Optional[Sequence[float]] = None,
+        radii: Optional[Sequence[float]] = None,
+        band: Optional[float] = None,
+    ) -> Tuple[Dict[str, Any], str]: ...

@@ -77,7 +77,7 @@ fn write_mesh(
 
 /// Per-vertex curvature: (name, array) pairs — `normals`, `d1`, `d2` as
 /// (n, 3), `k1`, `k2`, `mean`, `gauss` as (n,) — plus the report.
-type CurvatureOut<'py> = (Vec<(&'static str, Bound<'py, PyAny>)>, String);
+pub(crate) type CurvatureOut<'py> = (Vec<(&'static str, Bound<'py, PyAny>)>, String);
 
 /// `fairline curvature` (crates/fairline-cli/src/curvature.rs): the
 /// values of the columns the CLI writes to its PLY, one row per input
@@ -91,19 +91,51 @@ fn curvature<'py>(
     offsets: Idx<'py>,
     method: &str,
 ) -> PyResult<CurvatureOut<'py>> {
-    let settings = CurvatureSettings {
-        method: CurvatureMethod::parse(method).map_err(Failure::from)?,
-    };
+    let settings = curvature_settings(method)?;
     let soup = soup_from(&v, &indices, &offsets)?;
-    let (out, n, report) = crate::compute(py, move |control| -> Res<_> {
+    let out = crate::compute(py, move |control| -> Res<_> {
         let mesh = mesh_from(&soup)?;
-        let out = fairline_commands::curvature::run(&mesh, &settings, control)?;
-        // one row per input vertex, as the CLI writes them (a split
-        // non-manifold vertex takes the values of the fan that kept its index)
-        let n = mesh.original_vertex_count();
-        Ok((out.output, n, out.report.to_json().to_string()))
+        run_curvature(&mesh, &settings, control)
     })?;
-    let (c, mean, gauss) = (&out.fields, &out.mean, &out.gauss);
+    Ok(curvature_arrays(py, &out))
+}
+
+/// The curvature settings of a method name.
+pub(crate) fn curvature_settings(method: &str) -> Res<CurvatureSettings> {
+    Ok(CurvatureSettings {
+        method: CurvatureMethod::parse(method).map_err(Failure::from)?,
+    })
+}
+
+/// What `curvature` computed, one row per input vertex, and the report.
+pub(crate) struct CurvatureRows {
+    output: fairline::geom::CurvatureOutput,
+    rows: usize,
+    report: String,
+}
+
+/// The command layer's `curvature` on a built mesh.
+pub(crate) fn run_curvature(
+    mesh: &SurfaceMesh,
+    settings: &CurvatureSettings,
+    control: &fairline::Control,
+) -> Res<CurvatureRows> {
+    let out = fairline_commands::curvature::run(mesh, settings, control)?;
+    // one row per input vertex, as the CLI writes them (a split
+    // non-manifold vertex takes the values of the fan that kept its index)
+    let rows = mesh.original_vertex_count();
+    let report = out.report.to_json().to_string();
+    Ok(CurvatureRows {
+        output: out.output,
+        rows,
+        report,
+    })
+}
+
+/// The (name, array) pairs and the report of a curvature result.
+pub(crate) fn curvature_arrays<'py>(py: Python<'py>, out: &CurvatureRows) -> CurvatureOut<'py> {
+    let n = out.rows;
+    let (c, mean, gauss) = (&out.output.fields, &out.output.mean, &out.output.gauss);
     let rows = |v: &[Vec3]| positions_array(py, &v[..n.min(v.len())]).into_any();
     let col = |v: &[f64]| PyArray1::from_slice(py, &v[..n.min(v.len())]).into_any();
     let values = vec![
@@ -115,7 +147,7 @@ fn curvature<'py>(
         ("d1", rows(&c.d1)),
         ("d2", rows(&c.d2)),
     ];
-    Ok((values, report))
+    (values, out.report.clone())
 }
 
 /// Per-vertex deviation: the signed and unsigned arrays (n,), the
@@ -234,7 +266,49 @@ fn smooth<'py>(
     preserve_volume: bool,
     tangential: bool,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, String, Option<String>)> {
-    let mut settings = SmoothSettings {
+    let settings = smooth_settings(
+        method,
+        weights,
+        exponent,
+        iterations,
+        lambda_,
+        mu,
+        pass_band,
+        time_step,
+        epsilon,
+        max_work,
+        fix_boundary,
+        hierarchical_boundary,
+        preserve_volume,
+        tangential,
+    )?;
+    let soup = soup_from(&v, &indices, &offsets)?;
+    let (p, report, stopped) = crate::compute(py, move |control| -> Res<_> {
+        let mesh = mesh_from(&soup)?;
+        run_smooth(&mesh, settings, fixed, control)
+    })?;
+    Ok((positions_array(py, &p), report, stopped))
+}
+
+/// The settings of `smooth` from the package's arguments (checked; fixed
+/// vertices are set by [`run_smooth`], which knows the mesh).
+pub(crate) fn smooth_settings(
+    method: &str,
+    weights: &str,
+    exponent: f64,
+    iterations: Option<usize>,
+    lambda_: Option<f64>,
+    mu: Option<f64>,
+    pass_band: f64,
+    time_step: f64,
+    epsilon: Option<f64>,
+    max_work: Option<u64>,
+    fix_boundary: bool,
+    hierarchical_boundary: bool,
+    preserve_volume: bool,
+    tangential: bool,
+) -> Res<SmoothSettings> {
+    let settings = SmoothSettings {
         method: SmoothMethod::parse(method).map_err(Failure::from)?,
         weights: Weights::parse(weights).map_err(Failure::from)?,
         exponent,
@@ -252,23 +326,29 @@ fn smooth<'py>(
         tangential,
     };
     settings.check().map_err(Failure::from)?;
-    let soup = soup_from(&v, &indices, &offsets)?;
-    let (p, report, stopped) = crate::compute(py, move |control| -> Res<_> {
-        let mesh = mesh_from(&soup)?;
-        settings.fixed = fixed_vertices(fixed.as_deref().unwrap_or(&[]), mesh.vertex_count())?;
-        let out = fairline_commands::smooth::run(&mesh, &settings, control)?;
-        // a run that stopped unconverged: the sentence of the error the
-        // package raises (FairlineNotConvergedError, with the result)
-        let stopped = out
-            .stopped_error(FrontEnd::Python)
-            .map(|e| e.message(FrontEnd::Python));
-        Ok((
-            mesh.original_values(&out.positions).to_vec(),
-            out.report.to_json().to_string(),
-            stopped,
-        ))
-    })?;
-    Ok((positions_array(py, &p), report, stopped))
+    Ok(settings)
+}
+
+/// The command layer's `smooth` on a built mesh: the new positions (one
+/// per input vertex), the report, and for a run that stopped unconverged
+/// the sentence of the error the package raises
+/// (FairlineNotConvergedError, with the result).
+pub(crate) fn run_smooth(
+    mesh: &SurfaceMesh,
+    mut settings: SmoothSettings,
+    fixed: Option<Vec<i64>>,
+    control: &fairline::Control,
+) -> Res<(Vec<Vec3>, String, Option<String>)> {
+    settings.fixed = fixed_vertices(fixed.as_deref().unwrap_or(&[]), mesh.vertex_count())?;
+    let out = fairline_commands::smooth::run(mesh, &settings, control)?;
+    let stopped = out
+        .stopped_error(FrontEnd::Python)
+        .map(|e| e.message(FrontEnd::Python));
+    Ok((
+        mesh.original_values(&out.positions).to_vec(),
+        out.report.to_json().to_string(),
+        stopped,
+    ))
 }
 
 /// The positions the CLI writes: the input's vertex list (split copies of
@@ -518,10 +598,15 @@ fn triangles(soup: &fairline::Soup) -> Res<(SurfaceMesh, Option<Vec<FaceId>>)> {
     if mesh.is_triangle_mesh() {
         Ok((mesh, None))
     } else {
-        let t = fairline::mesh::triangulate(&mesh)
-            .map_err(|e| Failure::bad(format!("triangulating its polygons: {e}")))?;
+        let t = triangulated(&mesh)?;
         Ok((t.mesh, Some(t.source_face)))
     }
+}
+
+/// The triangles of a polygon mesh (vertices unchanged).
+pub(crate) fn triangulated(mesh: &SurfaceMesh) -> Res<fairline::mesh::Triangulation> {
+    fairline::mesh::triangulate(mesh)
+        .map_err(|e| Failure::bad(format!("triangulating its polygons: {e}")))
 }
 
 /// `fairline highlight` on a mesh: the command layer's `highlight`; the
@@ -547,6 +632,45 @@ fn highlight_lines(
     radii: Option<Vec<f64>>,
     band: Option<f64>,
 ) -> PyResult<(String, String)> {
+    let settings = highlight_settings(
+        direction,
+        plane_normal,
+        up,
+        plane_point,
+        spacing,
+        lights,
+        min_normal_cos,
+        circle_center,
+        circle_axis,
+        radii,
+        band,
+    )?;
+    let soup = soup_from(&v, &indices, &offsets)?;
+    let out = crate::compute(py, move |control| -> Res<_> {
+        let (mesh, _) = triangles(&soup)?;
+        let out = fairline_commands::highlight::run(&mesh, &settings, control)?;
+        let document = fairline_commands::highlight::lines_document(&out);
+        Ok((document.to_string(), out.report.to_json().to_string()))
+    })?;
+    Ok(out)
+}
+
+/// The settings of `highlight_lines` from the package's arguments: linear
+/// lights, or circular ones given by `circle_center`/`circle_axis`/`radii`
+/// or by a circular `lights` dictionary.
+pub(crate) fn highlight_settings(
+    direction: Option<[f64; 3]>,
+    plane_normal: Option<[f64; 3]>,
+    up: &str,
+    plane_point: Option<[f64; 3]>,
+    spacing: Option<f64>,
+    lights: Option<String>,
+    min_normal_cos: Option<f64>,
+    circle_center: Option<[f64; 3]>,
+    circle_axis: Option<[f64; 3]>,
+    radii: Option<Vec<f64>>,
+    band: Option<f64>,
+) -> Res<HighlightSettings> {
     let light = LightOptions::new(
         direction,
         plane_normal,
@@ -564,21 +688,24 @@ fn highlight_lines(
     if circle_given.iter().any(|&b| b) && !circle_given.iter().all(|&b| b) {
         return Err(Failure::bad(
             "circular lights need circle_center, circle_axis and radii together",
-        )
-        .into());
+        ));
     }
     if circle_given[0] && light.lights.is_some() {
-        return Err(Failure::bad("circle_center cannot be given together with lights").into());
+        return Err(Failure::bad(
+            "circle_center cannot be given together with lights",
+        ));
     }
     if let Some(r) = &radii
         && r.iter().any(|x| !x.is_finite())
     {
-        return Err(Failure::bad("radii must be finite numbers").into());
+        return Err(Failure::bad("radii must be finite numbers"));
     }
     if let Some(b) = band
         && !(b > 0.0 && b.is_finite())
     {
-        return Err(Failure::bad(format!("band must be a positive number, got {b}")).into());
+        return Err(Failure::bad(format!(
+            "band must be a positive number, got {b}"
+        )));
     }
     let circle_center = vec3("circle_center", circle_center)?;
     let circle_axis = vec3("circle_axis", circle_axis)?;
@@ -599,15 +726,7 @@ fn highlight_lines(
             None => HighlightLights::Linear(light.lights()?),
         },
     };
-    let settings = HighlightSettings { lights, band };
-    let soup = soup_from(&v, &indices, &offsets)?;
-    let out = crate::compute(py, move |control| -> Res<_> {
-        let (mesh, _) = triangles(&soup)?;
-        let out = fairline_commands::highlight::run(&mesh, &settings, control)?;
-        let document = fairline_commands::highlight::lines_document(&out);
-        Ok((document.to_string(), out.report.to_json().to_string()))
-    })?;
-    Ok(out)
+    Ok(HighlightSettings { lights, band })
 }
 
 /// `fairline detect`: the command layer's `detect`; the region's faces

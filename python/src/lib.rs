@@ -16,6 +16,7 @@
 #![forbid(unsafe_code)]
 
 mod commands;
+mod mesh;
 mod surfaces;
 
 use fairline::{Soup, SurfaceMesh, Vec3};
@@ -307,6 +308,7 @@ pub fn compute<T: Send + 'static>(
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     commands::register(m)?;
+    mesh::register(m)?;
     surfaces::register(m)?;
     Ok(())
 }

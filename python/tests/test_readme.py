@@ -1,5 +1,6 @@
 """The Python examples of the README's "Python" section and of the user
-guide's Python page, and the package docstring's example, run as written,
+guide's Python page (in order, as one script), and the package docstring's
+example, run as written,
 on the files `fairline demo` writes."""
 
 from __future__ import annotations
@@ -36,8 +37,9 @@ def test_guide_python_example_runs(tmp_path, demo):
     need("trimesh")
     text = (REPO / "docs" / "guide" / "python.md").read_text()
     blocks = re.findall(r"```python\n(.*?)```", text, re.S)
-    assert len(blocks) == 1
-    run_in(tmp_path, demo, blocks[0])
+    assert len(blocks) == 2
+    # the page's examples follow one another: the second uses the first's V, F
+    run_in(tmp_path, demo, "\n".join(blocks))
     assert (tmp_path / "wavy-smooth.ply").is_file()
 
 

@@ -166,13 +166,15 @@ pub fn volume_at(mesh: &SurfaceMesh, positions: &[Vec3]) -> f64 {
     let parts: Vec<f64> = (0..mesh.face_count() as u32)
         .into_par_iter()
         .map(|f| {
-            let verts: Vec<Vec3> = mesh
-                .face_vertices(FaceId(f))
-                .map(|v| p[v.idx()] - c)
-                .collect();
+            // the fan of triangles (v0, v_i, v_i+1), without a list per face
+            let mut verts = mesh.face_vertices(FaceId(f)).map(|v| p[v.idx()] - c);
+            let (Some(first), Some(mut prev)) = (verts.next(), verts.next()) else {
+                return 0.0;
+            };
             let mut s = 0.0;
-            for i in 1..verts.len() - 1 {
-                s += verts[0].dot(verts[i].cross(verts[i + 1]));
+            for v in verts {
+                s += first.dot(prev.cross(v));
+                prev = v;
             }
             s
         })

@@ -1020,9 +1020,29 @@ fn parse_f64(tok: &[u8]) -> Option<f64> {
     std::str::from_utf8(tok).ok()?.parse().ok()
 }
 
-/// Parses a decimal integer token.
+/// Parses a decimal integer token: an optional `+` or `-`, then one or more
+/// ASCII digits (Rust's `i64` grammar); `None` on anything else or beyond
+/// the range of `i64`. Read straight from the bytes (face indices are most of
+/// the tokens of a mesh file).
 fn parse_i64(tok: &[u8]) -> Option<i64> {
-    std::str::from_utf8(tok).ok()?.parse().ok()
+    let (negative, digits) = match tok {
+        [b'-', rest @ ..] => (true, rest),
+        [b'+', rest @ ..] => (false, rest),
+        _ => (false, tok),
+    };
+    if digits.is_empty() {
+        return None;
+    }
+    // accumulated as a negative number, so that i64::MIN fits
+    let mut v: i64 = 0;
+    for &b in digits {
+        let d = b.wrapping_sub(b'0');
+        if d > 9 {
+            return None;
+        }
+        v = v.checked_mul(10)?.checked_sub(i64::from(d))?;
+    }
+    if negative { Some(v) } else { v.checked_neg() }
 }
 
 /// A token for an error message: lossy UTF-8, at most 40 characters.
@@ -1094,6 +1114,42 @@ fn foreign_surface_hint(path: &Path) -> &'static str {
 mod tests {
     use super::*;
     use crate::Vec3;
+
+    #[test]
+    fn integer_tokens_read_as_rust_reads_them() {
+        let cases: &[&[u8]] = &[
+            b"0",
+            b"7",
+            b"-7",
+            b"+7",
+            b"0042",
+            b"-0",
+            b"9223372036854775807",
+            b"-9223372036854775808",
+            b"9223372036854775808",
+            b"-9223372036854775809",
+            b"99999999999999999999",
+            b"",
+            b"-",
+            b"+",
+            b"1.0",
+            b"1e3",
+            b"12a",
+            b" 1",
+            b"--1",
+            b"+-1",
+            b"\xd9\xa3",
+            b"\xff",
+        ];
+        for &tok in cases {
+            let std = std::str::from_utf8(tok)
+                .ok()
+                .and_then(|s| s.parse::<i64>().ok());
+            assert_eq!(parse_i64(tok), std, "{:?}", String::from_utf8_lossy(tok));
+        }
+        assert_eq!(parse_i64(b"-9223372036854775808"), Some(i64::MIN));
+        assert_eq!(parse_i64(b"123456"), Some(123_456));
+    }
 
     fn temp_dir(tag: &str) -> PathBuf {
         let n = TEMP_COUNTER.fetch_add(1, Ordering::Relaxed);

@@ -83,6 +83,8 @@ pub(super) fn validate(soup: &Soup) -> Result<(), MeshError> {
 pub(super) struct EdgeTable {
     /// Edge of every corner.
     pub corner_edge: Vec<u32>,
+    /// Face of every corner.
+    pub corner_face: Vec<u32>,
     /// The two vertices of every edge, smaller first.
     pub lo_hi: Vec<(u32, u32)>,
     /// Up to two incidences of every edge; `NONE` when absent.
@@ -237,6 +239,7 @@ pub(super) fn match_edges(soup: &Soup) -> Result<EdgeTable, MeshError> {
     }
     Ok(EdgeTable {
         corner_edge,
+        corner_face,
         lo_hi,
         incidences,
     })
@@ -338,8 +341,17 @@ fn consistently_oriented(soup: &Soup, edges: &EdgeTable) -> bool {
     }
 }
 
+/// One halfedge's entries of the arrays `to`, `next`, `prev` and `face`, as
+/// zipped iterators hand them out.
+type LinkSlots<'a> = (((&'a mut u32, &'a mut u32), &'a mut u32), &'a mut u32);
+
 /// Step 4a: the halfedges of every face, in the face's (possibly reversed)
 /// order. Edge `e` owns halfedges `2e` (smaller → larger vertex) and `2e + 1`.
+///
+/// Every halfedge is found from its own edge's corners (a gather, parallel
+/// over halfedges): corner `c` stands for the halfedge of the edge from
+/// corner `c` to the next corner of its face, walked in the face's order
+/// (from the next corner back to `c` when the face is reversed).
 pub(super) fn link_faces(
     soup: &Soup,
     edges: &EdgeTable,
@@ -347,52 +359,105 @@ pub(super) fn link_faces(
 ) -> Result<Halfedges, MeshError> {
     let nf = soup.face_count();
     let nh = 2 * edges.lo_hi.len();
-    let mut to = vec![0u32; nh];
-    for (e, &(lo, hi)) in edges.lo_hi.iter().enumerate() {
-        to[2 * e] = hi;
-        to[2 * e + 1] = lo;
+    let parallel = nf >= PARALLEL_FACES;
+    let face_range = |f: usize| (soup.offsets[f] as usize, soup.offsets[f + 1] as usize);
+    // the corners after and before corner `c` of face `f`
+    let after = |c: usize, (s, t): (usize, usize)| if c + 1 == t { s } else { c + 1 };
+    let before = |c: usize, (s, t): (usize, usize)| if c == s { t - 1 } else { c - 1 };
+    let half_of = |c: usize| -> u32 {
+        let f = edges.corner_face[c] as usize;
+        let c1 = after(c, face_range(f));
+        let from = if flip[f] == 1 {
+            soup.indices[c1]
+        } else {
+            soup.indices[c]
+        };
+        let e = edges.corner_edge[c];
+        if edges.lo_hi[e as usize].0 == from {
+            2 * e
+        } else {
+            2 * e + 1
+        }
+    };
+    let corners = soup.indices.len();
+    let corner_half: Vec<u32> = if parallel {
+        (0..corners).into_par_iter().map(half_of).collect()
+    } else {
+        (0..corners).map(half_of).collect()
+    };
+    // the (face, corner) of halfedge h: the incidence of its edge whose
+    // corner stands for it
+    let owner = |h: usize| -> Option<(usize, usize)> {
+        edges.incidences[h / 2]
+            .iter()
+            .find(|&&(f, c)| f != NONE && corner_half[c as usize] as usize == h)
+            .map(|&(f, c)| (f as usize, c as usize))
+    };
+    // two faces that walk one edge in the same direction: orientation
+    // reports this first, so only reachable through an inconsistent table;
+    // named as the face order meets it (the later face of the first pair)
+    let conflict = |e: usize| -> Option<usize> {
+        let [(f, c), (g, d)] = edges.incidences[e];
+        (g != NONE && corner_half[c as usize] == corner_half[d as usize]).then(|| f.max(g) as usize)
+    };
+    let ne = edges.lo_hi.len();
+    let first_conflict = if parallel {
+        (0..ne).into_par_iter().filter_map(conflict).min()
+    } else {
+        (0..ne).filter_map(conflict).min()
+    };
+    if let Some(face) = first_conflict {
+        return Err(MeshError::NonOrientable { face });
     }
+    let mut to = vec![0u32; nh];
     let mut next = vec![NONE; nh];
     let mut prev = vec![NONE; nh];
     let mut face = vec![NONE; nh];
-    let mut face_halfedge = vec![NONE; nf];
-    let mut hes: Vec<u32> = Vec::new();
-    for f in 0..nf {
-        let (s, t) = (soup.offsets[f] as usize, soup.offsets[f + 1] as usize);
-        let n = t - s;
-        hes.clear();
-        for k in 0..n {
-            // walk the face in its (possibly reversed) order: reversed, the
-            // k-th halfedge runs from corner c + 1 back to corner c
-            let (from, c) = if flip[f] == 1 {
-                let c = s + (n - 1 - k);
-                let c1 = if c + 1 == t { s } else { c + 1 };
-                (soup.indices[c1], c)
+    let link = |(h, (((to, next), prev), face)): (usize, LinkSlots)| {
+        let (lo, hi) = edges.lo_hi[h / 2];
+        *to = if h % 2 == 0 { hi } else { lo };
+        if let Some((f, c)) = owner(h) {
+            let range = face_range(f);
+            let (n, p) = if flip[f] == 1 {
+                (before(c, range), after(c, range))
             } else {
-                (soup.indices[s + k], s + k)
+                (after(c, range), before(c, range))
             };
-            let e = edges.corner_edge[c] as usize;
-            let h = if edges.lo_hi[e].0 == from {
-                2 * e
-            } else {
-                2 * e + 1
-            };
-            if face[h] != NONE {
-                // two faces share a directed edge: orientation reports this
-                // first, so only reachable through an inconsistent table
-                return Err(MeshError::NonOrientable { face: f });
-            }
-            face[h] = f as u32;
-            hes.push(h as u32);
+            *next = corner_half[n];
+            *prev = corner_half[p];
+            *face = f as u32;
         }
-        for k in 0..n {
-            let h = hes[k];
-            let hn = hes[if k + 1 == n { 0 } else { k + 1 }];
-            next[h as usize] = hn;
-            prev[hn as usize] = h;
-        }
-        face_halfedge[f] = hes[0];
+    };
+    if parallel {
+        to.par_iter_mut()
+            .zip(next.par_iter_mut())
+            .zip(prev.par_iter_mut())
+            .zip(face.par_iter_mut())
+            .enumerate()
+            .for_each(link);
+    } else {
+        to.iter_mut()
+            .zip(next.iter_mut())
+            .zip(prev.iter_mut())
+            .zip(face.iter_mut())
+            .enumerate()
+            .for_each(link);
     }
+    // a face's first halfedge: that of its first corner, or of its last
+    // when it is reversed
+    let first = |f: usize| {
+        let (s, t) = face_range(f);
+        if flip[f] == 1 {
+            corner_half[t - 1]
+        } else {
+            corner_half[s]
+        }
+    };
+    let face_halfedge: Vec<u32> = if parallel {
+        (0..nf).into_par_iter().map(first).collect()
+    } else {
+        (0..nf).map(first).collect()
+    };
     Ok(Halfedges {
         to,
         next,
