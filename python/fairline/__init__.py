@@ -64,6 +64,8 @@ __all__ = [
     "write_mesh",
     "curvature",
     "deviation",
+    "section",
+    "draft",
     "highlight_lines",
     "detect",
     "fair",
@@ -377,6 +379,74 @@ def deviation(
     reg = None if region is None else [int(f) for f in region]
     signed, distance, inside, report = _native.deviation(v0, i0, o0, v1, i1, o1, region=reg, bins=int(bins))
     return {"signed": signed, "distance": distance, "in_region": inside}, _report(report)
+
+
+def section(
+    V: Any,
+    F: Faces = None,
+    *,
+    point: Vector,
+    normal: Vector,
+    count: int = 1,
+    spacing: float = 0.0,
+    comb_scale: float = 1.0,
+) -> Tuple[Dict[str, _np.ndarray], Dict[str, Any]]:
+    """Plane sections with their curvature combs (``fairline section``).
+
+    ``count`` parallel planes ``spacing`` apart along ``normal``, the first
+    through ``point``; polygon meshes are triangulated first. The curvature
+    of a section point comes from the surface (Meusnier's theorem); the comb
+    vector is ``-comb_scale * curvature * m`` with ``m`` towards the centre
+    of curvature (the comb stands on the convex side).
+
+    Returns ``(curves, report)``; ``curves`` has the flat arrays ``points``
+    (n, 3), ``curvature`` (n,), ``comb`` (n, 3), and per curve ``offsets``
+    (curves + 1,: curve ``i`` is ``points[offsets[i]:offsets[i + 1]]``),
+    ``closed`` (bool) and ``plane`` (the index of its plane). The report
+    lists per plane its ``offset`` and curves (``points``, ``closed``,
+    ``length``, ``max_curvature``).
+    """
+    v, indices, offsets = _mesh(V, F)
+    pts, kappa, comb, starts, closed, plane, report = _native.section(
+        v, indices, offsets, _vec("point", point), _vec("normal", normal),
+        count=int(count), spacing=float(spacing), comb_scale=float(comb_scale),
+    )
+    curves = {
+        "points": pts,
+        "curvature": kappa,
+        "comb": comb,
+        "offsets": starts,
+        "closed": closed,
+        "plane": plane,
+    }
+    return curves, _report(report)
+
+
+def draft(
+    V: Any,
+    F: Faces = None,
+    *,
+    pull: Vector = (0.0, 0.0, 1.0),
+    min_angle: float = 3.0,
+) -> Tuple[Dict[str, _np.ndarray], Dict[str, Any]]:
+    """Draft angles against a pull direction (``fairline draft``).
+
+    The draft angle is ``asin(n . pull)`` in degrees (90° minus the angle
+    between the normal and the pull): positive where the surface looks
+    along the pull, negative where it looks away, 0 on walls parallel to it.
+    Faces with ``|angle| < min_angle`` have insufficient draft.
+
+    Returns ``(values, report)``; ``values`` has ``vertex`` (n,) (from the
+    area-weighted vertex normals), ``face`` (m,) and ``below`` (m,) bool;
+    the report has ``below_share`` (the share of the area below the
+    minimum), ``positive_share``, ``negative_share``, ``min_deg``,
+    ``max_deg``.
+    """
+    v, indices, offsets = _mesh(V, F)
+    vertex, face, below, report = _native.draft(
+        v, indices, offsets, _vec("pull", pull), min_angle=float(min_angle)
+    )
+    return {"vertex": vertex, "face": face, "below": below}, _report(report)
 
 
 def smooth(

@@ -28,6 +28,23 @@ def deviation(
     region: Optional[Sequence[int]] = None,
     bins: int = 41,
 ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.bool_], str]: ...
+def section(
+    v: _F64_2,
+    indices: _U32,
+    offsets: _U32,
+    point: Sequence[float],
+    normal: Sequence[float],
+    count: int = 1,
+    spacing: float = 0.0,
+    comb_scale: float = 1.0,
+) -> Tuple[_F64_2, npt.NDArray[np.float64], _F64_2, _U32, npt.NDArray[np.bool_], _U32, str]: ...
+def draft(
+    v: _F64_2,
+    indices: _U32,
+    offsets: _U32,
+    pull: Sequence[float],
+    min_angle: float = 3.0,
+) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.bool_], str]: ...
 def smooth(
     v: _F64_2,
     indices: _U32,

@@ -1,4 +1,5 @@
-//! Mesh commands: `read_mesh`, `write_mesh`, `curvature`, `deviation`, `highlight_lines`,
+//! Mesh commands: `read_mesh`, `write_mesh`, `curvature`, `deviation`,
+//! `section`, `draft`, `highlight_lines`,
 //! `detect`, `fair`, `smooth`, `fair_quad`, `enhance`, `repair`.
 //!
 //! Each runs one command: `curvature`, `detect`, `fair`, `smooth`,
@@ -35,6 +36,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(curvature, m)?)?;
     m.add_function(wrap_pyfunction!(deviation, m)?)?;
+    m.add_function(wrap_pyfunction!(section, m)?)?;
+    m.add_function(wrap_pyfunction!(draft, m)?)?;
     m.add_function(wrap_pyfunction!(smooth, m)?)?;
     m.add_function(wrap_pyfunction!(fair_quad, m)?)?;
     m.add_function(wrap_pyfunction!(enhance, m)?)?;
@@ -205,6 +208,135 @@ fn deviation<'py>(
         PyArray1::from_vec(py, signed),
         PyArray1::from_vec(py, distance),
         PyArray1::from_vec(py, inside),
+        report,
+    ))
+}
+
+/// Plane sections as flat arrays: points (n, 3), curvature (n,), comb
+/// vectors (n, 3) at the comb scale, curve offsets (curves + 1,) into the
+/// points, closed flags and plane index per curve, and the report.
+type SectionOut<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<u32>>,
+    Bound<'py, PyArray1<bool>>,
+    Bound<'py, PyArray1<u32>>,
+    String,
+);
+
+/// `fairline section` (crates/fairline-cli/src/section.rs) through the
+/// command layer: polygons are triangulated first.
+#[pyfunction]
+#[pyo3(signature = (v, indices, offsets, point, normal, count = 1, spacing = 0.0, comb_scale = 1.0))]
+fn section<'py>(
+    py: Python<'py>,
+    v: V<'py>,
+    indices: Idx<'py>,
+    offsets: Idx<'py>,
+    point: [f64; 3],
+    normal: [f64; 3],
+    count: usize,
+    spacing: f64,
+    comb_scale: f64,
+) -> PyResult<SectionOut<'py>> {
+    let soup = soup_from(&v, &indices, &offsets)?;
+    let settings = fairline_commands::section::SectionSettings {
+        point: Vec3::from(point),
+        normal: Vec3::from(normal),
+        count,
+        spacing,
+        comb_scale,
+    };
+    let (points, curvature, comb, starts, closed, plane, report) =
+        crate::compute(py, move |control| -> Res<_> {
+            let mesh = mesh_from(&soup)?;
+            let mesh = if mesh.is_triangle_mesh() {
+                mesh
+            } else {
+                fairline::mesh::triangulate(&mesh)
+                    .map_err(|e| Failure::bad(e.to_string()))?
+                    .mesh
+            };
+            let out = fairline_commands::section::run(&mesh, &settings, control)?;
+            let (mut points, mut curvature, mut comb) = (Vec::new(), Vec::new(), Vec::new());
+            let (mut starts, mut closed, mut plane) = (vec![0u32], Vec::new(), Vec::new());
+            for (k, curves) in out.sections.iter().enumerate() {
+                for c in curves {
+                    points.extend_from_slice(&c.points);
+                    curvature.extend_from_slice(&c.curvature);
+                    comb.extend(c.comb(settings.comb_scale));
+                    starts.push(points.len() as u32);
+                    closed.push(c.closed);
+                    plane.push(k as u32);
+                }
+            }
+            Ok((
+                points,
+                curvature,
+                comb,
+                starts,
+                closed,
+                plane,
+                out.report.to_json().to_string(),
+            ))
+        })?;
+    Ok((
+        positions_array(py, &points),
+        PyArray1::from_vec(py, curvature),
+        positions_array(py, &comb),
+        PyArray1::from_vec(py, starts),
+        PyArray1::from_vec(py, closed),
+        PyArray1::from_vec(py, plane),
+        report,
+    ))
+}
+
+/// Draft angles: per input vertex (n,), per face of the mesh as given
+/// (m,), the below-minimum flag per face (m,), and the report.
+type DraftOut<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<bool>>,
+    String,
+);
+
+/// `fairline draft` (crates/fairline-cli/src/draft.rs) through the
+/// command layer.
+#[pyfunction]
+#[pyo3(signature = (v, indices, offsets, pull, min_angle = 3.0))]
+fn draft<'py>(
+    py: Python<'py>,
+    v: V<'py>,
+    indices: Idx<'py>,
+    offsets: Idx<'py>,
+    pull: [f64; 3],
+    min_angle: f64,
+) -> PyResult<DraftOut<'py>> {
+    let soup = soup_from(&v, &indices, &offsets)?;
+    let settings = fairline_commands::draft::DraftSettings {
+        pull: Vec3::from(pull),
+        min_angle,
+    };
+    let (vertex, face, below, report) = crate::compute(py, move |control| -> Res<_> {
+        let mesh = mesh_from(&soup)?;
+        let out = fairline_commands::draft::run(&mesh, &settings, control)?;
+        // one value per input vertex (a split non-manifold vertex keeps
+        // the value of the fan that kept its index)
+        let n = mesh.original_vertex_count();
+        let mut vertex = out.angles.vertex_deg.clone();
+        vertex.truncate(n);
+        Ok((
+            vertex,
+            out.angles.face_deg.clone(),
+            out.below.clone(),
+            out.report.to_json().to_string(),
+        ))
+    })?;
+    Ok((
+        PyArray1::from_vec(py, vertex),
+        PyArray1::from_vec(py, face),
+        PyArray1::from_vec(py, below),
         report,
     ))
 }

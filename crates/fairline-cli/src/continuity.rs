@@ -84,26 +84,9 @@ pub fn run(args: Args) -> Result<()> {
     let result = &out.result;
     let classes = [SeamClass::Gap, SeamClass::G0, SeamClass::G1, SeamClass::G2];
     let summary = format!(
-        "{}: {} patches, {} shared edges: {}; tolerance {:.3e}, {}°, {} % curvature{}",
+        "{}: {}",
         args.surface_file.display(),
-        surfaces.len(),
-        result.seams.len(),
-        classes
-            .iter()
-            .map(|c| format!("{} {}", result.classes.get(*c), c.name()))
-            .collect::<Vec<_>>()
-            .join(", "),
-        result.tolerance,
-        args.angle_tolerance,
-        100.0 * args.curvature_tolerance,
-        if result.degenerate_sides > 0 {
-            format!(
-                "; {} boundary pieces shorter than the matching distance (poles, slivers) skipped",
-                result.degenerate_sides
-            )
-        } else {
-            String::new()
-        }
+        continuity::summary(&out, surfaces.len(), &settings)
     );
     for s in result
         .seams

@@ -14,6 +14,7 @@ mod curvature;
 mod demo;
 mod detect;
 mod deviation;
+mod draft;
 mod enhance;
 mod error;
 mod fair;
@@ -64,6 +65,7 @@ enum Command {
     FairSurface(fair_surface::Args),
     Continuity(continuity::Args),
     Deviation(deviation::Args),
+    Draft(draft::Args),
     Enhance(enhance::Args),
     Fair(fair::Args),
     Render(render::Args),
@@ -96,6 +98,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::FairSurface(a) => fair_surface::run(a),
         Command::Continuity(a) => continuity::run(a),
         Command::Deviation(a) => deviation::run(a),
+        Command::Draft(a) => draft::run(a),
         Command::Enhance(a) => enhance::run(a),
         Command::Fair(a) => fair::run(a),
         Command::Render(a) => render::run(a),

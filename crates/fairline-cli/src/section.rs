@@ -2,11 +2,12 @@
 //! tessellated) as polylines with their curvature combs.
 
 use crate::args::parse_vec3;
-use crate::common::Report;
+use crate::common::{print_warnings, write_report};
 use crate::error::bad_input;
 use anyhow::Result;
-use fairline::Vec3;
-use fairline::geom::{SectionCurve, parallel_sections};
+use fairline::geom::SectionCurve;
+use fairline::{Control, Vec3};
+use fairline_commands::section::{self, SectionSettings};
 use std::path::{Path, PathBuf};
 
 /// Cuts the surface with `--count` parallel planes `--spacing` apart (the
@@ -51,9 +52,6 @@ pub struct Args {
     pub grid: usize,
 }
 
-/// Most planes of one run.
-const MAX_COUNT: usize = 10_000;
-
 pub fn run(args: Args) -> Result<()> {
     if args.csv.is_none() && args.obj.is_none() && args.report.is_none() {
         return Err(bad_input("nothing to write: give --csv, --obj or --report"));
@@ -68,17 +66,20 @@ pub fn run(args: Args) -> Result<()> {
         args.obj.as_deref().unwrap_or(Path::new("a.obj")),
         &["obj"],
     )?;
-    if args.plane_normal.length() < 1e-300 {
-        return Err(bad_input("--plane-normal must not be zero"));
-    }
-    if args.count == 0 || args.count > MAX_COUNT {
-        return Err(bad_input(format!("--count must be 1 to {MAX_COUNT}")));
-    }
-    if !args.spacing.is_finite() || !args.comb_scale.is_finite() {
-        return Err(bad_input("--spacing and --comb-scale must be finite"));
-    }
     if !(2..=1024).contains(&args.grid) {
         return Err(bad_input("--grid must be between 2 and 1024"));
+    }
+    let settings = SectionSettings {
+        point: args.plane_point,
+        normal: args.plane_normal,
+        count: args.count,
+        spacing: args.spacing,
+        comb_scale: args.comb_scale,
+    };
+    // the settings are checked before any file is read
+    let probe = fairline::shapes::plane(2);
+    if let Err(e) = section::run(&probe, &settings, &Control::new()) {
+        return Err(e.into());
     }
     let job = crate::output::Job::new("section")
         .input(&args.input)
@@ -92,50 +93,17 @@ pub fn run(args: Args) -> Result<()> {
     } else {
         crate::input::read_triangles(&args.input)?.0
     };
-    let mut report = Report::new("section");
-    let sections = report.time(|| {
-        parallel_sections(
-            &mesh,
-            args.plane_point,
-            args.plane_normal,
-            args.count,
-            args.spacing,
-        )
-    });
+    let out = section::run(&mesh, &settings, &Control::new())
+        .map_err(|e| crate::output::name_file(&args.input, e))?;
     if let Some(p) = &args.csv {
-        write_csv(p, &sections, args.comb_scale)?;
+        write_csv(p, &out.sections, args.comb_scale)?;
     }
     if let Some(p) = &args.obj {
-        write_obj(p, &sections, args.comb_scale)?;
+        write_obj(p, &out.sections, args.comb_scale)?;
     }
-    let curves: usize = sections.iter().map(Vec::len).sum();
-    let summary: Vec<serde_json::Value> = sections
-        .iter()
-        .enumerate()
-        .map(|(k, s)| {
-            serde_json::json!({
-                "section": k,
-                "offset": k as f64 * args.spacing,
-                "curves": s.iter().map(|c| serde_json::json!({
-                    "points": c.points.len(),
-                    "closed": c.closed,
-                    "length": c.length(),
-                    "max_curvature": c.curvature.iter().copied().fold(0.0, f64::max),
-                })).collect::<Vec<_>>(),
-            })
-        })
-        .collect();
-    report.set("sections", summary);
-    report.set("comb_scale", args.comb_scale);
-    if curves == 0 {
-        report.warn("no plane crosses the surface; check --plane-point and --plane-normal");
-    }
-    report.write(args.report.as_deref())?;
-    job.finish(format_args!(
-        "{} section(s), {curves} curve(s) of {} vertices",
-        sections.len(),
-        mesh.vertex_count()
-    ))?;
+    print_warnings(&out.report);
+    write_report(args.report.as_deref(), &out.report)?;
+    job.finish(section::summary(&out, mesh.vertex_count()))?;
     Ok(())
 }
 

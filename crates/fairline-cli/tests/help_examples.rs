@@ -61,6 +61,7 @@ fn every_help_example_runs_on_the_demo_files() {
         "continuity",
         "deviation",
         "section",
+        "draft",
         "view",
     ];
     let mut ran = 0;

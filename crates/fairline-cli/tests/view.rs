@@ -2200,3 +2200,628 @@ fn page_captures_images_at_a_chosen_size_and_restores_saved_views() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// An open cone about +z with its apex up, half-angle `deg` degrees,
+/// height 1, 64 segments around and 6 rings: every face lies in the plane
+/// through the apex and a chord of the base circle, a draft of
+/// atan(tan(deg) cos(π/64)) against +z.
+fn cone(path: &Path, deg: f64) {
+    let (n, m) = (64u32, 6u32);
+    let r0 = deg.to_radians().tan();
+    let mut p = Vec::new();
+    for j in 0..m {
+        let t = j as f64 / m as f64;
+        for i in 0..n {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            p.push(fairline::Vec3::new(
+                r0 * (1.0 - t) * a.cos(),
+                r0 * (1.0 - t) * a.sin(),
+                t,
+            ));
+        }
+    }
+    let apex = p.len() as u32;
+    p.push(fairline::Vec3::new(0.0, 0.0, 1.0));
+    let mut f = Vec::new();
+    for j in 0..m - 1 {
+        for i in 0..n {
+            let (a, b) = (j * n + i, j * n + (i + 1) % n);
+            f.push([a, b, b + n]);
+            f.push([a, b + n, a + n]);
+        }
+    }
+    for i in 0..n {
+        f.push([(m - 1) * n + i, (m - 1) * n + (i + 1) % n, apex]);
+    }
+    let mesh = fairline::SurfaceMesh::new(p, &f).unwrap();
+    fairline::io::write_mesh(path, &mesh).unwrap();
+}
+
+/// Two flat Bézier patches side by side over [0, 2] × [0, 1]; the second's
+/// row next to the seam x = 1 lifted by 0.01: a kink of atan(0.03) (G0 at
+/// the default angle tolerance).
+fn kinked_pair(path: &Path) {
+    use fairline::bspline::BSplineSurface;
+    let patch = |x0: f64, lift: f64| {
+        let net = (0..4)
+            .map(|i| {
+                (0..4)
+                    .map(|j| {
+                        let z = if i == 1 { lift } else { 0.0 };
+                        fairline::Vec3::new(x0 + i as f64 / 3.0, j as f64 / 3.0, z)
+                    })
+                    .collect()
+            })
+            .collect();
+        BSplineSurface::bezier(net, None).unwrap()
+    };
+    fairline::io::write_surfaces_json(path, &[patch(0.0, 0.0), patch(1.0, 0.01)]).unwrap();
+}
+
+/// The shape and B-spline tools over the API: sections of a sphere of
+/// radius 2 are circles of curvature 1/√(4 − d²) and agree with
+/// `fairline section`; the draft of a 64-sided cone of half-angle 10° is
+/// atan(tan 10° cos(π/64)) on every face (nothing below 3°, everything below 15°) and agrees with
+/// `fairline draft`; the kinked pair of patches has one G0 edge of angle
+/// atan(0.03) drawn along the seam x = 1, and a control net of 2 × 16
+/// points and 48 edges; mesh documents refuse the B-spline tools, bad
+/// requests get 400.
+#[test]
+fn api_section_draft_continuity_and_control_net() {
+    let dir = tmp("view-shape-api");
+    let sphere = dir.join("sphere.obj");
+    fairline::io::write_mesh(&sphere, &fairline::shapes::icosphere(2.0, 4)).unwrap();
+    let cone_path = dir.join("cone.obj");
+    cone(&cone_path, 10.0);
+    let pair = dir.join("pair.json");
+    kinked_pair(&pair);
+    let srv = start(&[&sphere, &cone_path], &dir);
+    // sections: planes z = −0.4, 0.1, 0.6 of the sphere (centre at the origin)
+    let c: Vec<f64> =
+        serde_json::from_value(srv.json("/api/session", None)["docs"][0]["center"].clone())
+            .unwrap();
+    // (off the equator, where the icosphere has vertices on the plane)
+    let body = json!({"point": [-c[0], -c[1], -0.4 - c[2]], "normal": [0, 0, 1], "count": 3, "spacing": 0.5, "comb_scale": 0.1});
+    let (st, b) = srv.post("/api/doc/0/section", &body);
+    assert_eq!(st, 200, "{}", String::from_utf8_lossy(&b));
+    let (h, data) = parse_frame(&b);
+    let lines = h["lines"].as_array().unwrap();
+    assert_eq!(lines.len(), 3, "{h}");
+    let n = h["points"].as_u64().unwrap() as usize;
+    assert_eq!(data.len(), 6 * n, "points, then comb vectors");
+    for (l, d) in lines.iter().zip([-0.4f64, 0.1, 0.6]) {
+        assert_eq!(l["closed"], true);
+        let (s, k) = (
+            l["start"].as_u64().unwrap() as usize,
+            l["count"].as_u64().unwrap() as usize,
+        );
+        // |comb at scale 1| = κ
+        let mean: f64 = (s..s + k)
+            .map(|i| {
+                let v = &data[3 * n + 3 * i..3 * n + 3 * i + 3];
+                ((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) as f64).sqrt()
+            })
+            .sum::<f64>()
+            / k as f64;
+        let want = 1.0 / (4.0 - d * d).sqrt();
+        assert!((mean - want).abs() < 0.03 * want, "κ {mean} vs {want}");
+        for i in s..s + k {
+            assert!((data[3 * i + 2] as f64 + c[2] - d).abs() < 1e-5);
+        }
+    }
+    let cmd = h["command"].as_str().unwrap();
+    assert!(cmd.starts_with("fairline section "), "{cmd}");
+    // the CLI on the same planes: the same curves
+    let report = dir.join("section.json");
+    ok(&run(&[
+        "section",
+        s(&sphere),
+        "--plane-point",
+        "0,0,-0.4",
+        "--plane-normal",
+        "0,0,1",
+        "--count",
+        "3",
+        "--spacing",
+        "0.5",
+        "--report",
+        s(&report),
+    ]));
+    let cli = common::json(&report);
+    for k in 0..3 {
+        let (a, b) = (
+            &cli["sections"][k]["curves"][0]["length"],
+            &h["report"]["sections"][k]["curves"][0]["length"],
+        );
+        assert!(
+            (a.as_f64().unwrap() - b.as_f64().unwrap()).abs() < 1e-6,
+            "{a} vs {b}"
+        );
+    }
+    assert_eq!(
+        srv.post(
+            "/api/doc/0/section",
+            &json!({"point": [0, 0, 0], "normal": [0, 0, 0]})
+        )
+        .0,
+        400
+    );
+    // draft: the cone's mantle has its half-angle everywhere
+    for (min, share) in [(3.0, 0.0), (15.0, 1.0)] {
+        let (st, b) = srv.post(
+            "/api/doc/1/draft",
+            &json!({"pull": [0, 0, 2], "min_angle": min}),
+        );
+        assert_eq!(st, 200, "{}", String::from_utf8_lossy(&b));
+        let (h, data) = parse_frame(&b);
+        let r = &h["report"];
+        assert!(
+            (r["below_share"].as_f64().unwrap() - share).abs() < 1e-12,
+            "{r}"
+        );
+        // the faces are secant planes through the apex and a chord of the
+        // base circle: a cone of half-angle atan(tan 10° cos(π/64))
+        let exact = (10f64.to_radians().tan() * (std::f64::consts::PI / 64.0).cos())
+            .atan()
+            .to_degrees();
+        assert!((r["min_deg"].as_f64().unwrap() - exact).abs() < 1e-9, "{r}");
+        assert!((r["max_deg"].as_f64().unwrap() - exact).abs() < 1e-9, "{r}");
+        assert_eq!(
+            h["below"].as_array().unwrap().len(),
+            if share > 0.0 { 64 * 11 } else { 0 }
+        );
+        assert_eq!(data.len(), 64 * 6 + 1);
+        let rim = data[..64].iter().all(|&a| (a as f64 - 10.0).abs() < 0.05);
+        assert!(rim, "the mantle's vertices read 10°: {:?}", &data[..4]);
+    }
+    let report = dir.join("draft.json");
+    ok(&run(&[
+        "draft",
+        s(&cone_path),
+        "--pull",
+        "0,0,1",
+        "--min-angle",
+        "15",
+        "--report",
+        s(&report),
+    ]));
+    assert_eq!(common::json(&report)["below_share"].as_f64(), Some(1.0));
+    assert_eq!(
+        srv.post("/api/doc/1/draft", &json!({"pull": [0, 0, 0]})).0,
+        400
+    );
+    assert_eq!(
+        srv.post(
+            "/api/doc/1/draft",
+            &json!({"pull": [0, 0, 1], "min_angle": 91})
+        )
+        .0,
+        400
+    );
+    // B-spline tools refuse meshes
+    assert_eq!(srv.post("/api/doc/0/continuity", &json!({})).0, 400);
+    assert_eq!(srv.get("/api/doc/0/control-net").0, 400);
+    drop(srv);
+    let srv = start(&[&pair], &dir);
+    let (st, b) = srv.post("/api/doc/0/continuity", &json!({}));
+    assert_eq!(st, 200, "{}", String::from_utf8_lossy(&b));
+    let (h, data) = parse_frame(&b);
+    let edges = h["edges"].as_array().unwrap();
+    assert_eq!(edges.len(), 1, "{h}");
+    assert_eq!(edges[0]["class"], "G0");
+    let want = 0.03f64.atan().to_degrees();
+    assert!((edges[0]["g1_max_deg"].as_f64().unwrap() - want).abs() < 1e-9);
+    let center: Vec<f64> =
+        serde_json::from_value(srv.json("/api/session", None)["docs"][0]["center"].clone())
+            .unwrap();
+    let count = edges[0]["count"].as_u64().unwrap() as usize;
+    assert!(count >= 2 && data.len() == 3 * count);
+    for p in data.chunks(3) {
+        assert!(
+            (p[0] as f64 + center[0] - 1.0).abs() < 1e-6,
+            "on the seam x = 1"
+        );
+    }
+    assert!(h["summary"].as_str().unwrap().contains("1 G0"), "{h}");
+    assert!(
+        h["command"]
+            .as_str()
+            .unwrap()
+            .starts_with("fairline continuity ")
+    );
+    let (st, b) = srv.post("/api/doc/0/continuity", &json!({"angle_tolerance": 5}));
+    assert_eq!(st, 200);
+    assert_eq!(parse_frame(&b).0["edges"][0]["class"], "G1");
+    let (st, b) = srv.get("/api/doc/0/control-net");
+    assert_eq!(st, 200);
+    let (h, data) = parse_frame(&b);
+    assert_eq!(h["points"], 32);
+    assert_eq!(h["segments"], 48);
+    assert_eq!(data.len(), 3 * 32 + 6 * 48);
+    assert_eq!(h["patches"][1]["start"], 16);
+    // the lifted row of the second patch (i = 1): z = 0.01
+    let z = data[3 * (16 + 4) + 2] as f64 + center[2];
+    assert!((z - 0.01).abs() < 1e-6, "{z}");
+}
+
+/// Counts the pixels of the canvas whose colour passes `keep`.
+fn count_pixels(
+    shot: &(u32, u32, Vec<u8>, Vec<u8>),
+    rect: (u32, u32, u32, u32),
+    keep: impl Fn(f64, f64, f64) -> bool,
+) -> usize {
+    let (cx, cy, cw, ch) = rect;
+    (cy..(cy + ch).min(shot.1))
+        .flat_map(|y| (cx..(cx + cw).min(shot.0)).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            let i = 4 * (y as usize * shot.0 as usize + x as usize);
+            keep(shot.2[i] as f64, shot.2[i + 1] as f64, shot.2[i + 2] as f64)
+        })
+        .count()
+}
+
+/// Sections and the draft map in real headless Chromium: a click with the
+/// section tool on the panel draws five green section curves with magenta
+/// combs, and the comb scale slider sets the teeth's length; the draft map of
+/// a sphere against +z fills the band |z| < r sin 20° in yellow (its share
+/// of the area sin 20°) under a legend from blue to red.
+#[test]
+fn page_draws_sections_with_combs_and_the_draft_map() {
+    let Some(exe) = cdp::chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "chromium is not installed and CI is set (apt-get install chromium)"
+        );
+        eprintln!(
+            "\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n"
+        );
+        return;
+    };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmp("view-shape-page");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 61);
+    let srv = start(&[&mesh], &dir);
+    let mut b = open_page(&exe, &srv);
+    b.eval("document.querySelector('[data-view=iso]').click()");
+    b.eval("document.getElementById('sec-normal').value = 'y'; document.getElementById('sec-count').value = '5'; document.getElementById('sec-spacing').value = '0.6'");
+    b.eval("(() => { const t = document.getElementById('tool'); t.value = 'section'; t.dispatchEvent(new Event('change')); })()");
+    let rect = canvas_rect(&mut b);
+    let (cx, cy, cw, ch) = rect;
+    click_at(&mut b, (cx + cw / 2) as f64, (cy + ch / 2) as f64, 0);
+    b.wait_for("document.body.dataset.sections", 60);
+    assert_eq!(b.eval("document.body.dataset.sections"), json!("5"));
+    let overlays = b.eval("Object.keys(window.fairline.viewer.docs[0].overlays).sort()");
+    assert_eq!(overlays, json!(["comb", "section"]), "{overlays}");
+    let short = b.eval("window.fairline.shape.combLength").as_f64().unwrap();
+    b.eval("(() => { const s = document.getElementById('sec-comb-scale'); s.value = '-0.3'; s.dispatchEvent(new Event('input')); })()");
+    let long = b.eval("window.fairline.shape.combLength").as_f64().unwrap();
+    assert!(
+        short > 0.0 && (long / short - 10f64.powf(-0.3)).abs() < 1e-6,
+        "{short} {long}"
+    );
+    assert!(
+        b.eval("document.getElementById('command').textContent")
+            .as_str()
+            .unwrap()
+            .starts_with("fairline section ")
+    );
+    std::thread::sleep(Duration::from_millis(400));
+    let shot = b.screenshot();
+    save_screenshot("workbench-section.png", &shot.3);
+    let green = count_pixels(&shot, rect, |r, g, b| g > 180.0 && r < 120.0 && b < 150.0);
+    let magenta = count_pixels(&shot, rect, |r, g, b| r > 180.0 && b > 160.0 && g < 120.0);
+    assert!(green > 200, "{green} green section pixels");
+    assert!(magenta > 200, "{magenta} magenta comb pixels");
+    b.eval("document.getElementById('sec-comb').click()");
+    assert_eq!(
+        b.eval("Object.keys(window.fairline.viewer.docs[0].overlays)"),
+        json!(["section"])
+    );
+    b.eval("document.getElementById('sec-clear').click()");
+    assert_eq!(
+        b.eval("Object.keys(window.fairline.viewer.docs[0].overlays).length"),
+        json!(0)
+    );
+    drop(b);
+    drop(srv);
+    // the draft map of a sphere
+    let sphere = dir.join("sphere.obj");
+    fairline::io::write_mesh(&sphere, &fairline::shapes::icosphere(2.0, 5)).unwrap();
+    let srv = start(&[&sphere], &dir);
+    let mut b = open_page(&exe, &srv);
+    b.eval("document.querySelector('[data-view=front]').click()");
+    b.eval("document.getElementById('draft-min').value = '20'");
+    b.eval("document.getElementById('draft').click()");
+    b.wait_for("document.body.dataset.draft", 60);
+    let share: f64 = b
+        .eval("Number(document.body.dataset.draft)")
+        .as_f64()
+        .unwrap();
+    assert!((share - 20f64.to_radians().sin()).abs() < 0.01, "{share}");
+    assert!(
+        b.eval("document.getElementById('draft-out').textContent")
+            .as_str()
+            .unwrap()
+            .contains("below 20°")
+    );
+    std::thread::sleep(Duration::from_millis(400));
+    let shot = b.screenshot();
+    save_screenshot("workbench-draft.png", &shot.3);
+    let rect = canvas_rect(&mut b);
+    let yellow = count_pixels(&shot, rect, |r, g, b| r > 180.0 && g > 150.0 && b < 110.0);
+    assert!(yellow > 1000, "{yellow} yellow pixels of the band");
+    // the band is around the equator: the middle row of the sphere is
+    // yellow, its top is not (red: the top looks along the pull)
+    let (cx, cy, cw, ch) = rect;
+    let px = |x: u32, y: u32| {
+        let i = 4 * (y as usize * shot.0 as usize + x as usize);
+        (shot.2[i] as f64, shot.2[i + 1] as f64, shot.2[i + 2] as f64)
+    };
+    let mid = px(cx + cw / 2, cy + ch / 2);
+    assert!(
+        mid.0 > 180.0 && mid.1 > 150.0 && mid.2 < 110.0,
+        "equator {mid:?}"
+    );
+    let top = (cy..cy + ch / 2)
+        .map(|y| px(cx + cw / 2, y))
+        .find(|p| (p.0 - p.2).abs() > 40.0)
+        .unwrap();
+    assert!(top.0 > top.2 + 40.0, "the top is red: {top:?}");
+    let r = b.eval("(() => { const r = document.getElementById('draft-legend').getBoundingClientRect(); return [r.left, r.top, r.width]; })()");
+    let r: Vec<f64> = serde_json::from_value(r).unwrap();
+    let left = px((r[0] + 3.0) as u32, (r[1] + 8.0) as u32);
+    let right = px((r[0] + r[2] - 3.0) as u32, (r[1] + 8.0) as u32);
+    assert!(left.2 > left.0 + 60.0, "legend starts blue: {left:?}");
+    assert!(right.0 > right.2 + 60.0, "legend ends red: {right:?}");
+    b.eval("document.getElementById('draft-clear').click()");
+    assert!(b.eval("document.body.dataset.draft").is_null());
+}
+
+/// The B-spline tools on the teapot in real headless Chromium: the
+/// continuity button colours every shared patch edge by its class, lists
+/// the edges with their values and the legend with the counts of
+/// `fairline continuity`; detected stretches are drawn over them; the
+/// control net toggles on and off.
+#[test]
+fn page_draws_continuity_classes_and_the_control_net() {
+    let Some(exe) = cdp::chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "chromium is not installed and CI is set (apt-get install chromium)"
+        );
+        eprintln!(
+            "\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n"
+        );
+        return;
+    };
+    let Some(teapot) = shared("surfaces/teapot.json") else {
+        return;
+    };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmp("view-patches-page");
+    let report = dir.join("continuity.json");
+    ok(&run(&["continuity", s(&teapot), "--report", s(&report)]));
+    let cli = common::json(&report);
+    let srv = start(&[&teapot], &dir);
+    let mut b = open_page(&exe, &srv);
+    assert_eq!(
+        b.eval("document.getElementById('patch-panel').hidden"),
+        json!(false)
+    );
+    b.eval("document.getElementById('continuity').click()");
+    b.wait_for("document.body.dataset.continuity", 60);
+    let edges = cli["edges"].as_array().unwrap().len();
+    assert_eq!(
+        b.eval("Number(document.body.dataset.continuity)"),
+        json!(edges)
+    );
+    assert_eq!(
+        b.eval("document.querySelectorAll('#cont-edges tr').length"),
+        json!(edges + 1),
+        "header and one row per edge"
+    );
+    for class in ["gap", "G0", "G1", "G2"] {
+        let n = cli["classes"][class].as_u64().unwrap();
+        let text = b.eval(&format!(
+            "document.querySelector('#cont-legend [data-class={class}]').textContent"
+        ));
+        assert_eq!(text, json!(format!("{class} ({n})")));
+        let drawn = b.eval(&format!(
+            "!!window.fairline.viewer.docs[0].overlays['cont-{class}']"
+        ));
+        assert_eq!(drawn, json!(n > 0), "{class}");
+    }
+    b.eval("document.getElementById('patch-panel').scrollIntoView()");
+    std::thread::sleep(Duration::from_millis(400));
+    let shot = b.screenshot();
+    save_screenshot("workbench-continuity.png", &shot.3);
+    let rect = canvas_rect(&mut b);
+    let coloured = count_pixels(&shot, rect, |r, g, b| {
+        (g > 150.0 && r < 90.0 && b < 120.0)
+            || (b > 200.0 && r < 120.0)
+            || (r > 200.0 && g < 160.0 && b < 60.0)
+    });
+    assert!(coloured > 100, "{coloured} pixels of class colours");
+    // detection keeps the continuity edges (its stretches draw over them)
+    b.eval("document.getElementById('detect').click()");
+    b.wait_for(
+        "/region/.test(document.getElementById('status').textContent)",
+        120,
+    );
+    let kept = b.eval("Object.keys(window.fairline.viewer.docs[0].overlays).filter((n) => n.startsWith('cont-')).length");
+    assert!(kept.as_u64().unwrap() >= 1, "{kept}");
+    b.eval("document.getElementById('cont-clear').click()");
+    assert!(b.eval("document.body.dataset.continuity").is_null());
+    // the control net: the teapot's 32 bicubic patches have 16 points each
+    b.eval("document.getElementById('clearlines').click()");
+    b.eval("document.getElementById('control-net').click()");
+    b.wait_for("document.body.dataset.net", 60);
+    let patches = srv.json("/api/session", None)["docs"][0]["patches"]
+        .as_u64()
+        .unwrap();
+    let net: u64 = b
+        .eval("Number(document.body.dataset.net)")
+        .as_u64()
+        .unwrap();
+    assert!(net >= 4 * patches, "{net} control points");
+    std::thread::sleep(Duration::from_millis(400));
+    let shot = b.screenshot();
+    save_screenshot("workbench-control-net.png", &shot.3);
+    let violet = count_pixels(&shot, rect, |r, g, b| r > 170.0 && b > 180.0 && g < 130.0);
+    assert!(violet > 300, "{violet} pixels of the control net");
+    b.eval("document.getElementById('control-net').click()");
+    b.wait_for("!document.body.dataset.net", 30);
+    assert_eq!(
+        b.eval("!!window.fairline.viewer.docs[0].overlays.net"),
+        json!(false)
+    );
+}
+
+/// Session files over the API and the command line: after a fairing step
+/// and with a region marked, `POST /api/session-file` writes the session
+/// (absolute file path, history position, the page's view) and the current
+/// state beside it; `fairline view --session` reopens the file at that
+/// state (two steps: as opened, restored) with the page's view handed
+/// back; a broken or foreign session file exits 2 naming it.
+#[test]
+fn session_file_saves_and_reopens_files_view_and_history_position() {
+    let dir = tmp("view-session-api");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 41);
+    let srv = start(&[&mesh], &dir);
+    start_fair_job(&srv, json!({}));
+    assert_eq!(srv.wait_job()["state"], "done");
+    let (_, faired) = srv.get("/api/doc/0/positions");
+    let view = json!({"active": 0, "names": ["panel.obj"], "camera": {"up": "z", "yaw": 0.3, "pitch": 0.2, "distance": 5.0, "target": [0.1, 0.0, 0.0]}, "controls": {"spacing": "0.5"}, "marks": [[1, 2, 3]]});
+    let r = srv.json(
+        "/api/session-file",
+        Some(&json!({"name": "work-session.json", "view": view})),
+    );
+    let path = dir.join("work-session.json");
+    assert_eq!(r["path"], json!(path.display().to_string()));
+    assert_eq!(r["states"].as_array().unwrap().len(), 1);
+    let saved = common::json(&path);
+    assert_eq!(saved["fairline_session"], 1);
+    assert_eq!(saved["documents"][0]["cursor"], 1);
+    assert_eq!(saved["documents"][0]["steps"].as_array().unwrap().len(), 2);
+    assert_eq!(saved["view"], view);
+    let file = PathBuf::from(saved["files"][0].as_str().unwrap());
+    assert!(file.is_absolute() && file.ends_with("panel.obj"));
+    let state = dir.join(saved["documents"][0]["state"].as_str().unwrap());
+    assert!(state.is_file(), "{}", state.display());
+    // not over an input, not without .json
+    assert_eq!(
+        srv.post("/api/session-file", &json!({"name": "panel.obj"}))
+            .0,
+        400
+    );
+    assert_eq!(
+        srv.post("/api/session-file", &json!({"name": "../x.json"}))
+            .0,
+        400
+    );
+    drop(srv);
+    let srv = start(&[Path::new("--session"), &path], &dir);
+    let info = srv.json("/api/session", None);
+    assert_eq!(info["restore"], view);
+    assert_eq!(info["docs"][0]["history"]["cursor"], 1);
+    assert_eq!(
+        info["docs"][0]["history"]["steps"]
+            .as_array()
+            .unwrap()
+            .len(),
+        2
+    );
+    let (_, restored) = srv.get("/api/doc/0/positions");
+    assert_eq!(restored, faired, "the faired state is the current one");
+    let (_, opened) = srv.get("/api/doc/0/positions?step=0");
+    assert_ne!(opened, faired);
+    drop(srv);
+    // broken and foreign session files: exit 2 naming the file
+    let broken = dir.join("broken.json");
+    std::fs::write(&broken, "{\"fairline_session\": 1, \"files\": []}").unwrap();
+    let other = dir.join("other.json");
+    std::fs::write(&other, "{\"light\": 1}").unwrap();
+    for f in [&broken, &other] {
+        let o = run(&["view", "--no-open", "--session", s(f)]);
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(String::from_utf8_lossy(&o.stderr).contains(s(f)));
+    }
+}
+
+/// The session in real headless Chromium: Ctrl+Shift+S saves the camera,
+/// the light controls and the marks; `fairline view --session` opens a
+/// page with the same camera, light spacing, marked triangles and history
+/// position.
+#[test]
+fn page_saves_a_session_and_reopens_it_as_it_was() {
+    let Some(exe) = cdp::chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "chromium is not installed and CI is set (apt-get install chromium)"
+        );
+        eprintln!(
+            "\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n"
+        );
+        return;
+    };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmp("view-session-page");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 41);
+    let srv = start(&[&mesh], &dir);
+    start_fair_job(&srv, json!({}));
+    assert_eq!(srv.wait_job()["state"], "done");
+    let mut b = open_page(&exe, &srv);
+    b.eval("document.querySelector('[data-view=top]').click()");
+    b.eval("(() => { const s = document.getElementById('spacing'); s.value = '0.75'; s.dispatchEvent(new Event('input')); const m = document.getElementById('mode'); m.value = '2'; m.dispatchEvent(new Event('input')); })()");
+    b.eval(
+        "window.fairline.viewer.camera.distance *= 1.3; window.fairline.viewer.camera.yaw = 0.4",
+    );
+    b.eval("window.fairline.session.ctx.setRegion(0, [5, 6, 7, 8])");
+    b.eval("document.getElementById('session-name').value = 'page-session.json'");
+    press(&mut b, "S", "KeyS", 83, 2 | 8);
+    b.wait_for(
+        "/session saved/.test(document.getElementById('status').textContent)",
+        30,
+    );
+    let camera = b.eval("window.fairline.viewer.camera.distance");
+    drop(b);
+    drop(srv);
+    let path = dir.join("page-session.json");
+    assert!(path.is_file());
+    let srv = start(&[Path::new("--session"), &path], &dir);
+    let mut b = open_page(&exe, &srv);
+    b.wait_for("document.body.dataset.sessionApplied === '1'", 30);
+    assert_eq!(b.eval("window.fairline.viewer.camera.yaw"), json!(0.4));
+    assert_eq!(b.eval("window.fairline.viewer.camera.distance"), camera);
+    assert_eq!(
+        b.eval("document.getElementById('spacing').value"),
+        json!("0.75")
+    );
+    assert_eq!(b.eval("document.getElementById('mode').value"), json!("2"));
+    assert_eq!(b.eval("window.fairline.lights[0].spacingExp"), json!(0.75));
+    assert_eq!(
+        b.eval("window.fairline.state.regions[0]"),
+        json!([5, 6, 7, 8])
+    );
+    assert_eq!(
+        b.eval("document.querySelectorAll('#history li').length"),
+        json!(2)
+    );
+    assert!(
+        b.eval("document.getElementById('status').textContent")
+            .as_str()
+            .unwrap()
+            .contains("session restored")
+    );
+    b.eval("document.getElementById('session-name').scrollIntoView()");
+    std::thread::sleep(Duration::from_millis(300));
+    save_screenshot("workbench-session.png", &b.screenshot().3);
+}

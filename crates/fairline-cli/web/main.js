@@ -13,6 +13,9 @@ import { Help } from './help.js';
 import { DocFrames } from './docframes.js';
 import { capture } from './capture.js';
 import { SavedViews } from './views.js';
+import { ShapeTools } from './shape.js';
+import { SurfaceTools } from './surfacetools.js';
+import { Session } from './session.js';
 
 const state = { labels: [], surfaceDoc: -1, uvData: null, uvCircular: null, session: null, active: 0, regions: [], detected: [], before: false, job: null, lastDownload: null };
 window.fairline = { state };
@@ -20,6 +23,9 @@ window.fairline = { state };
 const viewer = new Viewer($('gl'));
 const tools = new Tools({ viewer, state });
 window.fairline.tools = tools;
+const shape = window.fairline.shape = new ShapeTools({ viewer, state });
+const surfaceTools = window.fairline.surfaceTools = new SurfaceTools({ viewer, state });
+const sessionFile = window.fairline.session = new Session({ viewer, state, setRegion: (k, faces) => setRegionOf(k, faces), jumpTo: (k, c, steps) => jumpDoc(k, c, steps), activate: (k) => activate(k) });
 let lights = [];
 let frames = null;
 
@@ -68,6 +74,8 @@ async function reloadActive() {
   if (d.kind === 'surface') await loadOutlines(state.active, step);
   await applyScalar();
   await tools.refresh();
+  await shape.refresh();
+  await surfaceTools.refresh();
   viewer.setOverlay(state.active, 'lines', null);
   viewer.setOverlay(state.active, 'stretches', null);
 }
@@ -154,10 +162,12 @@ async function takeRegion(i) {
   viewer.dirty = true;
 }
 
-function setRegion(faces) {
-  state.regions[state.active] = faces;
-  viewer.setRegion(state.active, faces);
-  $('regioninfo').textContent = faces.length ? `${faces.length} triangles marked` : '';
+function setRegion(faces) { setRegionOf(state.active, faces); }
+
+function setRegionOf(k, faces) {
+  state.regions[k] = faces;
+  viewer.setRegion(k, faces);
+  if (k === state.active) $('regioninfo').textContent = faces.length ? `${faces.length} triangles marked` : '';
 }
 
 let pickBusy = false;
@@ -170,6 +180,12 @@ async function onPick(e, phase) {
     if (phase !== 'down') return true;
     const hit = viewer.pickAt(...local($('gl'), e));
     if (hit) await tools.probe(hit.doc, hit.face, hit.point, e.shiftKey);
+    return true;
+  }
+  if (tool === 'section') {
+    if (phase !== 'down') return true;
+    const hit = viewer.pickAt(...local($('gl'), e));
+    if (hit) await shape.cut(hit.doc, hit.point);
     return true;
   }
   if (tool === 'endpoints') {
@@ -270,6 +286,23 @@ async function jumpTo(i) {
   $('before').checked = false;
   await reloadActive();
   status(`at step ${i}: ${activeDoc().history.steps[i].label}`);
+}
+
+// Moves document k to history step `cursor` (a session's position) when
+// its history has the same steps up to it; otherwise says so.
+async function jumpDoc(k, cursor, steps) {
+  const d = state.session.docs[k];
+  const labels = (steps || []).map((s) => s.label);
+  const same = labels.length === cursor + 1 && labels.every((l, i) => d.history.steps[i] && d.history.steps[i].label === l);
+  if (cursor === d.history.cursor) return;
+  if (!same || cursor >= d.history.steps.length) {
+    status(`${d.name}: the session's step ${cursor} is not in this history; open it with fairline view --session FILE`, true);
+    return;
+  }
+  const active = state.active;
+  state.active = k;
+  await jumpTo(cursor);
+  state.active = active;
 }
 
 // Makes document k the one the panels, run, undo and save act on.
@@ -494,9 +527,21 @@ function wire() {
   document.querySelectorAll('[data-view]').forEach((b) => b.addEventListener('click', () => { viewer.camera.standard(b.dataset.view); viewer.dirty = true; }));
   $('fit').addEventListener('click', () => { viewer.camera.fit(Math.max(...state.session.docs.map((d) => d.radius))); viewer.dirty = true; });
   $('wireframe').addEventListener('change', () => { viewer.wireframe = $('wireframe').checked; viewer.dirty = true; });
-  $('scalar').addEventListener('change', guard(async () => { tools.clearDeviation(); await applyScalar(); }));
-  $('deviation').addEventListener('click', guard(() => tools.showDeviation()));
+  $('scalar').addEventListener('change', guard(async () => { tools.clearDeviation(); shape.clearDraft(); await applyScalar(); }));
+  $('deviation').addEventListener('click', guard(() => { shape.clearDraft(); return tools.showDeviation(); }));
   $('dev-clear').addEventListener('click', () => tools.clearDeviation());
+  $('sec-clear').addEventListener('click', () => shape.clearSection());
+  $('sec-comb').addEventListener('change', () => shape.drawSection());
+  $('sec-comb-scale').addEventListener('input', () => shape.drawSection());
+  $('draft').addEventListener('click', guard(() => { tools.clearDeviation(); return shape.showDraft(); }));
+  $('draft-clear').addEventListener('click', () => shape.clearDraft());
+  if (state.session.docs.some((d) => d.kind === 'surface')) {
+    $('patch-panel').hidden = false;
+    const surfaceDoc = () => (activeDoc().kind === 'surface' ? state.active : state.surfaceDoc);
+    $('continuity').addEventListener('click', guard(() => surfaceTools.showContinuity(surfaceDoc())));
+    $('cont-clear').addEventListener('click', () => surfaceTools.clearContinuity());
+    $('control-net').addEventListener('change', guard(() => surfaceTools.showNet(surfaceDoc(), $('control-net').checked)));
+  }
   $('exact').addEventListener('click', guard(exactLines));
   $('detect').addEventListener('click', guard(detect));
   $('clearlines').addEventListener('click', () => { viewer.setOverlay(state.active, 'lines', null); viewer.setOverlay(state.active, 'stretches', null); });
@@ -520,6 +565,12 @@ function wire() {
   $('dl-mesh').addEventListener('click', guard(downloadMesh));
   $('save').addEventListener('click', guard(save));
   $('capture').addEventListener('click', guard(captureImage));
+  $('save-session').addEventListener('click', guard(() => sessionFile.save()));
+  $('open-session').addEventListener('change', guard(async () => {
+    const f = $('open-session').files[0];
+    if (f) await sessionFile.open(f);
+    $('open-session').value = '';
+  }));
   const views = window.fairline.views = new SavedViews($('views'), viewer, state.session.docs.map((d) => d.name), (v) => {
     $('up').value = v.up;
     status(`view “${v.name}”`);
@@ -579,6 +630,10 @@ function shortcutActions(help) {
     exact: click('exact'),
     detect: click('detect'),
     deviation: click('deviation'),
+    draft: click('draft'),
+    continuity: click('continuity'),
+    controlNet: () => { if (!$('patch-panel').hidden) toggle('control-net')(); },
+    saveSession: () => { sessionFile.save().catch((err) => status(err.message, true)); },
     tool: (name) => {
       if (![...$('tool').options].some((o) => o.value === name)) return;
       $('tool').value = name;
@@ -625,8 +680,9 @@ async function start() {
     placeLabels();
     if (!document.body.dataset.ready) { mark('frame'); document.body.dataset.ready = '1'; }
   };
+  if (state.session.restore) await sessionFile.apply(state.session.restore);
   viewer.dirty = true;
-  status('ready');
+  status(state.session.restore ? 'ready: session restored' : 'ready');
   window.fairline.viewer = viewer;
   window.fairline.timeline = timeline;
   // for tests and scripting: CSS pixel (page) of point k of pre-image i

@@ -30,6 +30,11 @@ export const SHORTCUTS = [
   { keys: 'S', label: 'tool: sphere', action: 'tool:sphere' },
   { keys: 'N', label: 'tool: endpoints', action: 'tool:endpoints' },
   { keys: 'M', label: 'tool: probe (measure)', action: 'tool:probe' },
+  { keys: 'X', label: 'tool: section', action: 'tool:section' },
+  { keys: 'A', label: 'draft-angle map (Draft panel)', action: 'draft' },
+  { keys: 'C', label: 'continuity of the patch edges (surfaces)', action: 'continuity' },
+  { keys: 'K', label: 'control net on / off (surfaces)', action: 'controlNet' },
+  { keys: 'Ctrl+Shift+S', label: 'save the session (file, lights, view, marks, history) as JSON', action: 'saveSession', anywhere: true },
 ];
 
 // Whether key event `e` is the combination `keys` ("Ctrl+Shift+Z", "?").

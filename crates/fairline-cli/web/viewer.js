@@ -70,8 +70,9 @@ function setUniforms(gl, prog, values) {
 // the GLSL compiler keeps the loop instead of unrolling it).
 const THETA_SAMPLES = 48;
 
-// Overlays drawn after all others (the hovered line, picked endpoints).
-const ON_TOP = new Set(['hover', 'ends']);
+// Overlays drawn after all others (the hovered line, picked endpoints,
+// detected irregular stretches over the continuity edges).
+const ON_TOP = new Set(['hover', 'ends', 'stretches']);
 
 export function segments(lines, data) {
   let n = 0;
@@ -209,6 +210,29 @@ export class Viewer {
     this.dirty = true;
   }
 
+  // A named set of triangles filled with a translucent RGBA colour over the
+  // surface (the draft tool's faces below the minimum angle); null clears.
+  setFaceSet(k, name, faces, color) {
+    const gl = this.gl;
+    const d = this.docs[k];
+    d.faceSets = d.faceSets || {};
+    if (!faces || faces.length === 0) { delete d.faceSets[name]; this.dirty = true; return; }
+    const idx = new Uint32Array(faces.length * 3);
+    faces.forEach((f, i) => idx.set(d.indices.subarray(3 * f, 3 * f + 3), 3 * i));
+    const r = d.faceSets[name] || { vao: gl.createVertexArray(), idx: gl.createBuffer() };
+    gl.bindVertexArray(r.vao);
+    gl.bindBuffer(gl.ARRAY_BUFFER, d.pos);
+    gl.enableVertexAttribArray(0);
+    gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 0, 0);
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, r.idx);
+    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, idx, gl.DYNAMIC_DRAW);
+    gl.bindVertexArray(null);
+    r.count = idx.length;
+    r.color = color;
+    d.faceSets[name] = r;
+    this.dirty = true;
+  }
+
   wireOf(d) {
     if (d.wire) return d.wire;
     const gl = this.gl;
@@ -288,6 +312,16 @@ export class Viewer {
       gl.disable(gl.POLYGON_OFFSET_FILL);
       gl.useProgram(this.line.p);
       setUniforms(gl, this.line, { uViewProj: vpm });
+      for (const set of Object.values(d.faceSets || {})) {
+        gl.enable(gl.BLEND);
+        gl.blendFunc(gl.SRC_ALPHA, gl.ONE_MINUS_SRC_ALPHA);
+        gl.depthFunc(gl.LEQUAL);
+        setUniforms(gl, this.line, { uColor: set.color });
+        gl.bindVertexArray(set.vao);
+        gl.drawElements(gl.TRIANGLES, set.count, gl.UNSIGNED_INT, 0);
+        gl.depthFunc(gl.LESS);
+        gl.disable(gl.BLEND);
+      }
       if (d.region) {
         gl.enable(gl.BLEND);
         gl.blendFunc(gl.SRC_ALPHA, gl.ONE_MINUS_SRC_ALPHA);

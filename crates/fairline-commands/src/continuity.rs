@@ -78,3 +78,32 @@ pub fn run(
     report.set("curvature_tolerance", settings.curvature_tolerance);
     Ok(ContinuityOutcome { result, report })
 }
+
+/// A one-line summary of an outcome over `surfaces` patches: the counts
+/// per class, the tolerances and the skipped degenerate pieces (the CLI's
+/// stderr line after the file name, the workbench's status).
+pub fn summary(out: &ContinuityOutcome, surfaces: usize, settings: &ContinuitySettings) -> String {
+    use fairline::bspline::continuity::SeamClass;
+    let r = &out.result;
+    let classes = [SeamClass::Gap, SeamClass::G0, SeamClass::G1, SeamClass::G2];
+    format!(
+        "{surfaces} patches, {} shared edges: {}; tolerance {:.3e}, {}°, {} % curvature{}",
+        r.seams.len(),
+        classes
+            .iter()
+            .map(|c| format!("{} {}", r.classes.get(*c), c.name()))
+            .collect::<Vec<_>>()
+            .join(", "),
+        r.tolerance,
+        settings.angle_tolerance,
+        100.0 * settings.curvature_tolerance,
+        if r.degenerate_sides > 0 {
+            format!(
+                "; {} boundary pieces shorter than the matching distance (poles, slivers) skipped",
+                r.degenerate_sides
+            )
+        } else {
+            String::new()
+        }
+    )
+}

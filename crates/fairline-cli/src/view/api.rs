@@ -50,8 +50,12 @@ impl Shared {
     }
 
     /// Hands over the documents read and lets the waiting API calls go.
-    pub fn set_docs(&self, docs: Vec<Doc>) {
-        lock(self).docs = docs;
+    pub fn set_docs(&self, docs: Vec<Doc>, restore: Option<Value>) {
+        {
+            let mut st = lock(self);
+            st.docs = docs;
+            st.restore = restore;
+        }
         *self.loaded.lock().unwrap_or_else(|e| e.into_inner()) = true;
         self.loaded_signal.notify_all();
     }
@@ -75,6 +79,8 @@ pub struct State {
     job: Option<Job>,
     next_job: u64,
     model_cache: Option<ModelCache>,
+    /// The page's view of the session file opened (`--session`).
+    pub(super) restore: Option<Value>,
 }
 
 /// The last linear-light highlight model built (Yong et al. Algorithm 1):
@@ -150,7 +156,13 @@ impl State {
             job: None,
             next_job: 1,
             model_cache: None,
+            restore: None,
         }
+    }
+
+    /// The folder saves go to.
+    pub(super) fn save_dir(&self) -> &std::path::Path {
+        &self.save_dir
     }
 }
 
@@ -218,7 +230,7 @@ fn body_limit(req: &HttpRequest) -> usize {
     }
     let path = req.url.split('?').next().unwrap_or("");
     match path.rsplit('/').next().unwrap_or("") {
-        "region" | "region-file" | "run" | "deviation" => 32 << 20,
+        "region" | "region-file" | "run" | "deviation" | "session-file" => 32 << 20,
         "lines" | "detect" | "surface-lines" => 256 << 10,
         _ => 4 << 10,
     }
@@ -280,6 +292,7 @@ fn route(shared: &Arc<Shared>, req: &HttpRequest, body: &[u8]) -> Answer {
     match (get, post, parts.as_slice()) {
         (true, _, ["session"]) => json_answer(&session(&lock(shared))),
         (true, _, ["job"]) => json_answer(&job_json(&lock(shared))),
+        (_, true, ["session-file"]) => super::session::save(shared, body),
         (_, true, ["job", "cancel"]) => {
             let mut st = lock(shared);
             if let Some(j) = st.job.as_mut()
@@ -336,6 +349,10 @@ fn route(shared: &Arc<Shared>, req: &HttpRequest, body: &[u8]) -> Answer {
                 (_, true, ["save"]) => save(shared, k, body),
                 (_, true, ["deviation"]) => super::tools::deviation(shared, k, body),
                 (_, true, ["probe"]) => super::tools::probe(shared, k, body),
+                (_, true, ["section"]) => super::shape::section(shared, k, body),
+                (_, true, ["draft"]) => super::shape::draft(shared, k, body),
+                (_, true, ["continuity"]) => super::surface_tools::continuity(shared, k, body),
+                (true, _, ["control-net"]) => super::surface_tools::control_net(shared, k),
                 _ => error(404, format!("no such API call: {path}")),
             }
         }
@@ -354,7 +371,7 @@ pub(super) fn parse<T: for<'de> Deserialize<'de>>(body: &[u8]) -> Result<T, Answ
     serde_json::from_slice(body).map_err(|e| bad(format!("request: {e}")))
 }
 
-fn vec_arg(v: Vec3) -> String {
+pub(super) fn vec_arg(v: Vec3) -> String {
     format!("{},{},{}", v.x, v.y, v.z)
 }
 
@@ -419,7 +436,7 @@ fn session(st: &State) -> Value {
             })
         })
         .collect();
-    json!({"docs": docs, "save_dir": st.save_dir.display().to_string(), "job": job_json(st)})
+    json!({"docs": docs, "save_dir": st.save_dir.display().to_string(), "job": job_json(st), "restore": st.restore})
 }
 
 fn job_json(st: &State) -> Value {
@@ -1266,7 +1283,7 @@ fn move_cursor(shared: &Shared, k: usize, by: i64) -> Answer {
 }
 
 /// The current mesh (or surfaces) in a format, as bytes.
-fn current_bytes(d: &Doc, ext: &str) -> Result<Vec<u8>, String> {
+pub(super) fn current_bytes(d: &Doc, ext: &str) -> Result<Vec<u8>, String> {
     if ext == "json" {
         let Some(s) = &d.current().surfaces else {
             return Err("JSON is for surfaces; meshes download as obj, ply, off or stl".into());

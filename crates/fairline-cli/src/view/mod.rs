@@ -95,6 +95,15 @@
 //!   (or surfaces .json) into the save folder, atomically.
 //! - `POST /api/doc/K/deviation`, `POST /api/doc/K/probe`: the evaluation
 //!   tools, documented in `tools`.
+//! - `POST /api/doc/K/section`, `POST /api/doc/K/draft`: plane sections
+//!   with curvature combs and the draft-angle map, documented in `shape`.
+//! - `POST /api/session-file`: saves the session (files, view, marks,
+//!   history positions) as JSON, documented in `session`; `GET
+//!   /api/session` gives the page's part of an opened session as
+//!   `restore`.
+//! - `POST /api/doc/K/continuity`, `GET /api/doc/K/control-net`: the
+//!   continuity of patch boundaries and the control net of surface
+//!   documents, documented in `surface_tools`.
 
 mod api;
 mod assets;
@@ -102,6 +111,9 @@ mod auth;
 mod doc;
 mod frame;
 mod http;
+mod session;
+mod shape;
+mod surface_tools;
 mod tools;
 
 use crate::error::bad_input;
@@ -118,11 +130,12 @@ use std::sync::Arc;
 /// line of standard output and serves until interrupted (Ctrl-C).
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline view fairline-demo/dented-panel.obj\n  fairline view fairline-demo/dented-roof.obj fairline-demo/dented-roof-faired.obj --no-open\n  fairline view fairline-demo/bspline-panel-dented.json --port 8765 --save-dir out"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline view fairline-demo/dented-panel.obj\n  fairline view fairline-demo/dented-roof.obj fairline-demo/dented-roof-faired.obj --no-open\n  fairline view fairline-demo/bspline-panel-dented.json --port 8765 --save-dir out\n  fairline view --session out/panel-session.json"
 )]
 pub struct Args {
     /// Mesh or surface to open.
-    pub file: PathBuf,
+    #[arg(required_unless_present = "session")]
+    pub file: Option<PathBuf>,
     /// A second mesh or surface shown beside the first.
     pub file2: Option<PathBuf>,
     /// Port on 127.0.0.1 (default: a free one).
@@ -137,6 +150,10 @@ pub struct Args {
     /// Grid points per direction and patch when tessellating surfaces.
     #[arg(long, default_value_t = 64, value_name = "N")]
     pub grid: usize,
+    /// A session file saved from the page (its files, view, lights, marks
+    /// and history positions) to open instead of FILE.
+    #[arg(long, value_name = "SESSION.json", conflicts_with_all = ["file", "file2"])]
+    pub session: Option<PathBuf>,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -156,9 +173,32 @@ pub fn run(args: Args) -> Result<()> {
     // the files must be readable before the URL is printed; they are read
     // after it, so that the browser starts while a large mesh loads (its
     // requests wait in the listen queue until the server answers)
-    let files: Vec<&PathBuf> = std::iter::once(&args.file)
-        .chain(args.file2.as_ref())
-        .collect();
+    let session = match &args.session {
+        Some(p) => Some(session::read(p)?),
+        None => None,
+    };
+    let session_dir = args
+        .session
+        .as_ref()
+        .and_then(|p| p.parent().map(std::path::Path::to_path_buf))
+        .unwrap_or_default();
+    let files: Vec<PathBuf> = match &session {
+        Some(s) => s
+            .files
+            .iter()
+            .map(|f| session::resolve(&session_dir, f))
+            .collect(),
+        None => args
+            .file
+            .iter()
+            .chain(args.file2.as_ref())
+            .cloned()
+            .collect(),
+    };
+    let grid = session.as_ref().and_then(|s| s.grid).unwrap_or(args.grid);
+    if !(2..=1024).contains(&grid) {
+        return Err(bad_input("--grid must be between 2 and 1024"));
+    }
     for f in &files {
         fairline::io::require_regular_file(f)
             .and_then(|()| std::fs::File::open(f))
@@ -188,11 +228,18 @@ pub fn run(args: Args) -> Result<()> {
     let server = std::thread::spawn(move || http::serve(listener, service));
     let mut docs = Vec::new();
     for f in &files {
-        docs.push(doc::Doc::open(f, args.grid)?);
+        docs.push(doc::Doc::open(f, grid)?);
+    }
+    if let Some(s) = &session {
+        for (d, entry) in docs.iter_mut().zip(&s.documents) {
+            if let Some(w) = session::restore(d, entry, &session_dir) {
+                eprintln!("warning: {w}");
+            }
+        }
     }
     let names: Vec<String> = docs.iter().map(|d| d.name.clone()).collect();
     let load_s: f64 = docs.iter().filter_map(|d| d.load_s["total"].as_f64()).sum();
-    shared.set_docs(docs);
+    shared.set_docs(docs, session.map(|s| s.view));
     eprintln!(
         "fairline view: serving {} on 127.0.0.1:{port} (read in {load_s:.2} s; saves go to {}); Ctrl-C to stop",
         names.join(" and "),

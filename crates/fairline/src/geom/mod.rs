@@ -11,6 +11,7 @@ mod areas;
 mod closest;
 mod curvature;
 mod deviation;
+mod draft;
 mod laplace;
 mod measures;
 mod normals;
@@ -32,6 +33,7 @@ pub use deviation::{
     Deviation, DeviationError, DeviationMethod, DeviationStats, Histogram, closest_point_deviation,
     deviation, deviation_stats, displacement, same_connectivity,
 };
+pub use draft::{DraftAngles, DraftError, DraftShares, draft_angles};
 pub use laplace::{
     LaplaceWeights, LaplacianPattern, cotangent_laplacian, cotangents, cotangents_at,
     edge_length_laplacian, halfedge_weights, halfedge_weights_at, laplacian,

@@ -1,0 +1,144 @@
+//! The B-spline tools of the workbench: the continuity of the patch
+//! boundaries drawn on the part, and the control net. The continuity is
+//! the command layer's ([`fairline_commands::continuity`]); this file
+//! parses requests and shapes answers. Both need a surface document.
+//!
+//! - `POST /api/doc/K/continuity` `{"tolerance"?, "angle_tolerance"?,
+//!   "curvature_tolerance"?}` (the CLI's options; defaults the CLI's): the
+//!   G0 / G1 / G2 class of every shared patch edge of the current state.
+//!   Binary frame: the header is the command layer's report (`edges` with
+//!   `surfaces`, `sides`, `class`, `g0_max`, `g1_max_deg`,
+//!   `g2_max_relative`, `worst`, …, each with `start`, `count` into the
+//!   points; `classes`, `tolerance`), plus `summary` and `command`; the data
+//!   are the sample points along each edge (minus `center`).
+//! - `GET /api/doc/K/control-net`: the control points of every patch of
+//!   the current state. Binary frame: the header lists `patches`
+//!   (`index`, `count_u`, `count_v`, `start`: the first point), `points`
+//!   (their number) and `segments` (the number of control-net edges); the
+//!   data are the points (minus `center`, row by row along v), then the
+//!   net's edges as point pairs (rows along u and along v).
+
+use super::api::{Answer, Shared, bad, binary, lock, parse};
+use super::frame::frame;
+use fairline::{Control, Vec3};
+use fairline_commands::FrontEnd;
+use fairline_commands::continuity::{self, ContinuitySettings};
+use serde::Deserialize;
+use serde_json::json;
+
+#[derive(Deserialize, Default)]
+struct ContinuityRequest {
+    #[serde(default)]
+    tolerance: Option<f64>,
+    #[serde(default)]
+    angle_tolerance: Option<f64>,
+    #[serde(default)]
+    curvature_tolerance: Option<f64>,
+}
+
+/// `POST /api/doc/K/continuity` (module documentation).
+pub fn continuity(shared: &Shared, k: usize, body: &[u8]) -> Answer {
+    let req: ContinuityRequest = if body.iter().all(|b| b.is_ascii_whitespace()) {
+        ContinuityRequest::default()
+    } else {
+        match parse(body) {
+            Ok(r) => r,
+            Err(a) => return a,
+        }
+    };
+    let (surfaces, center, file) = {
+        let st = lock(shared);
+        let d = &st.docs[k];
+        let Some(s) = d.current().surfaces.clone() else {
+            return bad("continuity is for B-spline surfaces (open a .json, .igs or .step file)");
+        };
+        (s, d.center, d.current_file())
+    };
+    let mut settings = ContinuitySettings {
+        tolerance: req.tolerance,
+        ..Default::default()
+    };
+    if let Some(a) = req.angle_tolerance {
+        settings.angle_tolerance = a;
+    }
+    if let Some(c) = req.curvature_tolerance {
+        settings.curvature_tolerance = c;
+    }
+    let finite = [settings.angle_tolerance, settings.curvature_tolerance]
+        .iter()
+        .chain(settings.tolerance.as_ref())
+        .all(|x| x.is_finite() && *x >= 0.0);
+    if !finite {
+        return bad("the tolerances must be finite and not negative");
+    }
+    let out = match continuity::run(&surfaces, &settings, &Control::new()) {
+        Ok(o) => o,
+        Err(e) => return bad(e.message(FrontEnd::Workbench)),
+    };
+    let mut header = out.report.to_json();
+    let mut floats: Vec<f32> = Vec::new();
+    if let Some(edges) = header["edges"].as_array_mut() {
+        for (e, seam) in edges.iter_mut().zip(&out.result.seams) {
+            e["start"] = json!(floats.len() / 3);
+            e["count"] = json!(seam.points.len());
+            for p in &seam.points {
+                let q = *p - center;
+                floats.extend([q.x as f32, q.y as f32, q.z as f32]);
+            }
+        }
+    }
+    let mut command = format!("fairline continuity {file}");
+    if let Some(t) = settings.tolerance {
+        command.push_str(&format!(" --tolerance {t}"));
+    }
+    command.push_str(&format!(
+        " --angle-tolerance {} --curvature-tolerance {} --png continuity.png --report continuity.json",
+        settings.angle_tolerance, settings.curvature_tolerance
+    ));
+    header["summary"] = json!(continuity::summary(&out, surfaces.len(), &settings));
+    header["command"] = json!(command);
+    binary(frame(&header, &floats))
+}
+
+/// `GET /api/doc/K/control-net` (module documentation).
+pub fn control_net(shared: &Shared, k: usize) -> Answer {
+    let (surfaces, center) = {
+        let st = lock(shared);
+        let d = &st.docs[k];
+        let Some(s) = d.current().surfaces.clone() else {
+            return bad("the control net is for B-spline surfaces");
+        };
+        (s, d.center)
+    };
+    let push = |out: &mut Vec<f32>, p: Vec3| {
+        let q = p - center;
+        out.extend([q.x as f32, q.y as f32, q.z as f32]);
+    };
+    let (mut points, mut segments) = (Vec::new(), Vec::new());
+    let mut patches = Vec::new();
+    for (index, s) in surfaces.iter().enumerate() {
+        let (nu, nv) = (s.count_u(), s.count_v());
+        patches
+            .push(json!({"index": index, "count_u": nu, "count_v": nv, "start": points.len() / 3}));
+        for i in 0..nu {
+            for j in 0..nv {
+                push(&mut points, s.control_point(i, j));
+                if j + 1 < nv {
+                    push(&mut segments, s.control_point(i, j));
+                    push(&mut segments, s.control_point(i, j + 1));
+                }
+                if i + 1 < nu {
+                    push(&mut segments, s.control_point(i, j));
+                    push(&mut segments, s.control_point(i + 1, j));
+                }
+            }
+        }
+    }
+    let header = json!({
+        "patches": patches,
+        "points": points.len() / 3,
+        "segments": segments.len() / 6,
+    });
+    points.extend(segments);
+    binary(frame(&header, &points))
+}
