@@ -64,7 +64,10 @@ fn masks(path: &Path, left_half: bool) -> Masks {
         .map(|i| px(i % w, i / w)[..3] == [250, 250, 250])
         .collect();
     let (label, sizes) = pieces(&panel, w, h);
-    if let Some(k) = (0..sizes.len()).filter(|&k| sizes[k] >= 200).max_by_key(|&k| sizes[k]) {
+    if let Some(k) = (0..sizes.len())
+        .filter(|&k| sizes[k] >= 200)
+        .max_by_key(|&k| sizes[k])
+    {
         let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0, 0);
         for i in (0..w * h).filter(|&i| label[i] as usize == k + 1) {
             let (x, y) = (i % w, i / w);

@@ -469,10 +469,11 @@ fn snap(f: Vec3, up: Vec3) -> Vec3 {
         Vec3::Z,
         Vec3::NEG_Z,
     ] {
-        if f.dot(axis) >= cos && axis.dot(up).abs() < 0.05 {
-            if let Some(a) = (axis - axis.dot(up) * up).try_normalize() {
-                return a;
-            }
+        if f.dot(axis) >= cos
+            && axis.dot(up).abs() < 0.05
+            && let Some(a) = (axis - axis.dot(up) * up).try_normalize()
+        {
+            return a;
         }
     }
     f
