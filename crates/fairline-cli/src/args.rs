@@ -309,3 +309,16 @@ where
     clap::builder::PossibleValuesParser::new(values)
         .map(|name: String| T::parse(&name).unwrap_or(T::ALL[0].value))
 }
+
+/// Parses `--range LO,HI`: two finite numbers, LO < HI.
+pub fn parse_range(s: &str) -> std::result::Result<(f64, f64), String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|e| format!("expected LO,HI (two numbers), got {s:?}: {e}"))?;
+    match v.as_slice() {
+        [lo, hi] if lo.is_finite() && hi.is_finite() && lo < hi => Ok((*lo, *hi)),
+        _ => Err(format!("expected LO,HI with LO < HI, got {s:?}")),
+    }
+}

@@ -120,7 +120,8 @@ pub fn run(args: Args) -> Result<()> {
                 width_px: 3.0,
             })
             .collect();
-        let opts = RenderOptions::with_size(1000, 800);
+        let mut opts = RenderOptions::with_size(1000, 800);
+        (opts.view_dir, opts.up) = crate::surface::camera(&surfaces, None)?;
         let mut img = surface_picture(
             &surfaces,
             lines,

@@ -124,7 +124,7 @@ pub fn run(args: Args) -> Result<()> {
     print_measure_notes(&args, det, light.spacing());
     write_json(&args.output, &json!({"faces": out.region}))?;
     if let Some(png) = &args.png {
-        write_picture(&args, png, &mesh, light, &out.shown_light, &out.shown, det)?;
+        write_picture(&args, png, &mesh, &out.shown_light, &out.shown, det)?;
     }
     print_warnings(&out.report);
     write_report(args.report.as_deref(), &out.report)?;
@@ -217,14 +217,12 @@ fn write_picture(
     args: &Args,
     png: &std::path::Path,
     mesh: &fairline::SurfaceMesh,
-    light: &fairline::highlight::LightArray,
     shown_light: &fairline::highlight::LightArray,
     shown: &fairline::highlight::HighlightLines,
     det: &Detection,
 ) -> Result<()> {
     let stretches = crate::highlight_png::stretches(det);
-    let (default_view, up) = crate::highlight_png::default_camera(light);
-    let view = args.view.unwrap_or(default_view);
+    let (view, up) = crate::render::camera(mesh, args.view);
     let title = format!(
         "{}: {}{}",
         args.mesh

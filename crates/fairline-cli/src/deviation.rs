@@ -45,9 +45,13 @@ pub struct Args {
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
-    /// Colour range ±MAX of the picture (default: the largest |d|).
-    #[arg(long, value_name = "MAX")]
+    /// Colour range ±MAX of the picture (default: the 98th percentile of
+    /// the non-zero |d|, values beyond drawn in the end colours).
+    #[arg(long, value_name = "MAX", conflicts_with = "range")]
     pub max: Option<f64>,
+    /// Colour range LO,HI of the picture (instead of ±MAX).
+    #[arg(long, value_name = "LO,HI", value_parser = crate::args::parse_range, allow_hyphen_values = true)]
+    pub range: Option<(f64, f64)>,
     /// Histogram bins.
     #[arg(long, default_value_t = DEFAULT_BINS)]
     pub bins: usize,
@@ -141,7 +145,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     })?;
     if let Some(png) = &args.png {
-        let img = picture(&after, &out, args.max, args.view, args.size)?;
+        let img = picture(&after, &out, args.max, args.range, args.view, args.size)?;
         img.write_png(png)?;
     }
     if let Some(csv) = &args.csv {
@@ -177,18 +181,15 @@ pub fn picture(
     mesh: &SurfaceMesh,
     out: &deviation::DeviationOutcome,
     max: Option<f64>,
+    range: Option<(f64, f64)>,
     view: Option<Vec3>,
     size: (u32, u32),
 ) -> Result<Image> {
-    let mut opts = crate::render::options(view, size)?;
-    if view.is_none()
-        && let Some((lo, hi)) = fairline::mesh::bounding_box(mesh.positions())
-    {
-        let light = fairline::highlight::LightArray::default_for(lo, hi, None);
-        (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
-    }
-    let m = max.unwrap_or(out.all.max_abs);
-    let range = (m > 0.0).then_some((-m, m));
+    let (opts, _) = crate::render::options(mesh, view, size)?;
+    let range = match range {
+        Some(r) => Some(r),
+        None => max.filter(|m| *m > 0.0 && m.is_finite()).map(|m| (-m, m)),
+    };
     let mut img = mesh_picture(
         mesh,
         &Picture {

@@ -10,7 +10,8 @@ use fairline::enhance::{EnhanceSolver, Projection};
 use fairline::geom::{CurvatureMethod, principal_curvatures, vertex_normals};
 use fairline::mesh::SurfaceMesh;
 use fairline::render::{
-    Colormap, Image, Legend, MeshLayer, RenderOptions, Scene, render, scalar_colors, side_by_side,
+    Colormap, Image, Legend, MeshLayer, RenderOptions, Scene, clipped, render, scalar_colors,
+    side_by_side,
 };
 use fairline_commands::enhance::{self, EnhanceSettings};
 use std::path::PathBuf;
@@ -145,7 +146,8 @@ pub fn picture(input: &SurfaceMesh, output: &SurfaceMesh, size: (u32, u32)) -> R
     let h_out = principal_curvatures(output, CurvatureMethod::Rusinkiewicz).mean();
     let (c_in, range) = scalar_colors(&h_in, Colormap::Coolwarm, None);
     let (c_out, _) = scalar_colors(&h_out, Colormap::Coolwarm, Some(range));
-    let opts = RenderOptions::with_size(size.0, size.1);
+    let mut opts = RenderOptions::with_size(size.0, size.1);
+    (opts.view_dir, opts.up) = crate::render::camera(input, None);
     let panel = |mesh: &SurfaceMesh, colors: &[[f32; 3]]| -> Result<Image> {
         let triangles: Vec<[u32; 3]> = mesh
             .faces()
@@ -164,6 +166,7 @@ pub fn picture(input: &SurfaceMesh, output: &SurfaceMesh, size: (u32, u32)) -> R
                 colormap: Colormap::Coolwarm,
                 min: range.0,
                 max: range.1,
+                clipped: clipped(&h_in, range) || clipped(&h_out, range),
             }),
             ..Default::default()
         };

@@ -274,7 +274,7 @@ fn write_unchanged_picture(
             flagged: &[],
             region: None,
             unjudged: None,
-            view: crate::highlight_png::default_camera(&light),
+            view: crate::render::camera(mesh, None),
             title,
             spacing: Some(light.spacing()),
         },
@@ -293,7 +293,7 @@ fn write_picture(
     faired: &SurfaceMesh,
 ) -> Result<()> {
     let mut opts = RenderOptions::with_size(900, 700);
-    (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
+    (opts.view_dir, opts.up) = crate::render::camera(mesh, None);
     let mut img = fairing_picture(mesh, faired, r, &opts)?;
     crate::highlight_png::draw_key(
         &mut img,

@@ -567,7 +567,8 @@ fn before_after_png(
     before: &SurfaceHighlights,
     after: &SurfaceHighlights,
 ) -> Result<fairline::render::Image> {
-    let opts = RenderOptions::with_size(900, 700);
+    let mut opts = RenderOptions::with_size(900, 700);
+    (opts.view_dir, opts.up) = crate::surface::camera(std::slice::from_ref(input), None)?;
     let pic = |s: &BSplineSurface, h: &SurfaceHighlights, t: &str| {
         surface_picture(
             std::slice::from_ref(s),

@@ -85,7 +85,7 @@ pub fn run(args: HighlightArgs) -> Result<()> {
     let bar = spinner("highlight lines");
     let out = highlight::run(&mesh, &settings, &Control::new());
     bar.finish_and_clear();
-    let out = out.map_err(|e| match (e.subject(), &args.light.lights) {
+    let mut out = out.map_err(|e| match (e.subject(), &args.light.lights) {
         (Some(Subject::Lights), Some(path)) => crate::output::name_file(path, e),
         _ => anyhow::Error::new(e),
     })?;
@@ -114,7 +114,13 @@ pub fn run(args: HighlightArgs) -> Result<()> {
     )?;
     let counts = out.lines.counts();
     if let Some(png) = &args.png {
-        write_picture(&args, png, &mesh, &MeshLines::of(&out))?;
+        let pv = fairline::picture::part_view(&mesh);
+        let view = (args.view.unwrap_or(pv.view_dir), pv.up);
+        write_picture(&args, png, &mesh, &MeshLines::of(&out), view)?;
+        out.report.set(
+            "view",
+            serde_json::json!({"dir": view.0.to_array(), "up": view.1.to_array(), "part": pv}),
+        );
     }
     print_warnings(&out.report);
     write_report(args.report.as_deref(), &out.report)?;
@@ -142,35 +148,21 @@ fn check_view_and_band(args: &HighlightArgs) -> Result<()> {
 }
 
 /// What the picture of a run draws: the lines (and bands), the readable
-/// subset drawn of linear lights (`None`: draw all lines), the picture's
-/// default view and up, and the light spacing for the picture's key
-/// (linear lights).
+/// subset drawn of linear lights (`None`: draw all lines), and the light
+/// spacing for the picture's key (linear lights).
 struct MeshLines<'a> {
     lines: &'a HighlightLines,
     bands: Option<&'a HighlightBands>,
     drawn: Option<&'a HighlightLines>,
-    view_up: (Vec3, Vec3),
     spacing: Option<f64>,
 }
 
 impl<'a> MeshLines<'a> {
     fn of(out: &'a HighlightOutcome) -> Self {
-        let view_up = match (&out.light, out.circular.first()) {
-            (Some(light), _) => crate::highlight_png::default_camera(light),
-            (None, Some(c)) => {
-                let axis = c.axis();
-                (
-                    -axis + 0.35 * axis.any_orthonormal_vector(),
-                    axis.any_orthonormal_vector(),
-                )
-            }
-            (None, None) => (Vec3::new(0.0, 0.0, -1.0), Vec3::new(0.0, 1.0, 0.0)),
-        };
         MeshLines {
             lines: &out.lines,
             bands: out.bands.as_ref(),
             drawn: out.drawn.as_ref(),
-            view_up,
             spacing: out.light.map(|l| l.spacing()),
         }
     }
@@ -214,6 +206,7 @@ fn write_picture(
     png: &Path,
     mesh: &fairline::SurfaceMesh,
     drawn: &MeshLines<'_>,
+    view: (Vec3, Vec3),
 ) -> Result<()> {
     let lines = drawn.lines;
     let band_lines = drawn.bands.map(|b| {
@@ -221,7 +214,6 @@ fn write_picture(
         all.lines.extend(b.upper.lines.iter().cloned());
         all
     });
-    let view = args.view.unwrap_or(drawn.view_up.0);
     let name = args
         .mesh
         .file_name()
@@ -245,7 +237,7 @@ fn write_picture(
             flagged: &[],
             region: None,
             unjudged: None,
-            view: (view, drawn.view_up.1),
+            view,
             title,
             spacing: drawn.spacing,
         },

@@ -22,37 +22,6 @@ const REGION: [f32; 3] = [0.85, 0.55, 0.25];
 /// Tint of faces detection did not judge (linear light).
 const UNJUDGED: [f32; 3] = [0.30, 0.42, 0.72];
 
-/// The one camera of a part's pictures (render, highlight, detect, fair):
-/// [`camera`] of the part's light array.
-pub fn default_camera(light: &LightArray) -> (Vec3, Vec3) {
-    camera(light.plane_normal(), light.across())
-}
-
-/// Viewing direction (from the eye toward the part) and screen-up vector
-/// for lights with plane normal Z and across direction Z × H. The screen
-/// shows +y up (the up axis of figures and scans, and the plan view of a
-/// z-up panel) unless the plane faces along y (Z within 45° of the y axis:
-/// a part seen from the top with `--up y`), where the across direction is
-/// up. Looking down −Z, tilted a little so the relief shows:
-///
-/// - the plane faces sideways (Z more than 45° from both the y and the z
-///   axis: a figure whose thinnest direction is horizontal): from a little
-///   above, the part upright;
-/// - otherwise (a panel, or a figure facing the viewer): toward the screen
-///   up direction, the near edge of a panel at the bottom.
-pub fn camera(z: Vec3, across: Vec3) -> (Vec3, Vec3) {
-    let half = std::f64::consts::FRAC_1_SQRT_2;
-    let up = (Vec3::Y - Vec3::Y.dot(z) * z).normalize_or_zero();
-    if z.dot(Vec3::Y).abs() >= half || up == Vec3::ZERO {
-        return (-z + 0.35 * across, across);
-    }
-    if z.dot(Vec3::Z).abs() < half {
-        (-z - 0.35 * up, up)
-    } else {
-        (-z + 0.35 * up, up)
-    }
-}
-
 /// Polyline layers for highlight lines (dark ink, 1.6 px) and irregular
 /// stretches drawn over them (warning colour, 3.5 px).
 pub fn line_layers(lines: &HighlightLines, flagged: &[Vec<Vec3>]) -> Vec<PolylineLayer> {

@@ -7,7 +7,7 @@ use anyhow::{Context, Result};
 use fairline::geom::{CurvatureMethod, principal_curvatures};
 use fairline::highlight::{HighlightModel, LightArray};
 use fairline::picture::{Picture, ScalarField, mesh_picture};
-use fairline::render::{Colormap, PolylineLayer, RegionLabels, RenderOptions};
+use fairline::render::{Colormap, PartView, PolylineLayer, RegionLabels, RenderOptions};
 use fairline::{Control, SurfaceMesh, Vec3};
 use fairline_commands::detect::{self, DetectInput, DetectSettings};
 use std::path::PathBuf;
@@ -50,7 +50,7 @@ pub struct Args {
     pub scalar: Option<Scalar>,
     /// Colour range LO,HI of --scalar (default: the 2nd-98th percentile,
     /// symmetric about 0, so a few extreme vertices do not wash the map out).
-    #[arg(long, value_name = "LO,HI", value_parser = parse_range, allow_hyphen_values = true)]
+    #[arg(long, value_name = "LO,HI", value_parser = crate::args::parse_range, allow_hyphen_values = true)]
     pub range: Option<(f64, f64)>,
     /// Viewing direction X,Y,Z (from the eye towards the object).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
@@ -78,14 +78,38 @@ pub struct Args {
     pub report: Option<PathBuf>,
 }
 
-/// Render options with the command-line view and size.
-pub fn options(view: Option<Vec3>, size: (u32, u32)) -> Result<RenderOptions> {
-    let mut opts = RenderOptions::with_size(size.0, size.1);
+/// Render options of a picture of `mesh` at `size`: the camera rule's
+/// view of the part ([`fairline::picture::part_view`]), or the command
+/// line's `view` with the part's up; and the rule's view for the report.
+pub fn options(
+    mesh: &SurfaceMesh,
+    view: Option<Vec3>,
+    size: (u32, u32),
+) -> Result<(RenderOptions, PartView)> {
     crate::args::check_view(view)?;
-    if let Some(v) = view {
-        opts.view_dir = v;
-    }
-    Ok(opts)
+    let pv = fairline::picture::part_view(mesh);
+    let mut opts = RenderOptions::with_size(size.0, size.1);
+    opts.view_dir = view.unwrap_or(pv.view_dir);
+    opts.up = pv.up;
+    Ok((opts, pv))
+}
+
+/// The view direction and up of a picture of `mesh`: the camera rule's
+/// ([`fairline::picture::part_view`]), the direction replaced by `view`
+/// when given.
+pub fn camera(mesh: &SurfaceMesh, view: Option<Vec3>) -> (Vec3, Vec3) {
+    let pv = fairline::picture::part_view(mesh);
+    (view.unwrap_or(pv.view_dir), pv.up)
+}
+
+/// The report's account of a picture's camera: the direction and up used
+/// and the rule's view of the part with why its up is up.
+pub fn view_json(opts: &RenderOptions, pv: &PartView) -> serde_json::Value {
+    serde_json::json!({
+        "dir": opts.view_dir.to_array(),
+        "up": opts.up.to_array(),
+        "part": pv,
+    })
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -103,7 +127,7 @@ pub fn run(args: Args) -> Result<()> {
         .check()?;
     check_light_options_need_highlight(&args)?;
     let (mesh, patch_labels) = load_mesh(&args)?;
-    let mut opts = options(args.view, args.size)?;
+    let (opts, part_view) = options(&mesh, args.view, args.size)?;
     let tri;
     let tri_mesh = if mesh.is_triangle_mesh() {
         &mesh
@@ -113,13 +137,11 @@ pub fn run(args: Args) -> Result<()> {
             .mesh;
         &tri
     };
-    // one camera per part: the view of highlight, detect and fair, from
-    // the part's default lights, with or without --highlight
-    let light = args.light.light_array(tri_mesh)?;
-    if args.view.is_none() {
-        (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
-    }
-    let light = args.highlight.then_some(light);
+    let light = if args.highlight {
+        Some(args.light.light_array(tri_mesh)?)
+    } else {
+        None
+    };
     let mut report = Report::new("render");
     let mut summary = None;
     let bar = crate::output::spinner("rendering");
@@ -167,6 +189,7 @@ pub fn run(args: Args) -> Result<()> {
     report.set("faces", mesh.face_count());
     report.set("width", args.size.0);
     report.set("height", args.size.1);
+    report.set("view", view_json(&opts, &part_view));
     let mut what = format!(
         "{}x{} picture of {} vertices",
         args.size.0,
@@ -319,17 +342,4 @@ fn curvature_field(tri_mesh: &SurfaceMesh, s: Scalar) -> (Vec<f64>, &'static str
         Scalar::Gauss => "Gaussian curvature",
     };
     (values, name)
-}
-
-/// Parses `--range LO,HI`: two finite numbers, LO < HI.
-fn parse_range(s: &str) -> std::result::Result<(f64, f64), String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|t| t.trim().parse::<f64>())
-        .collect::<std::result::Result<_, _>>()
-        .map_err(|e| format!("expected LO,HI (two numbers), got {s:?}: {e}"))?;
-    match v.as_slice() {
-        [lo, hi] if lo.is_finite() && hi.is_finite() && lo < hi => Ok((*lo, *hi)),
-        _ => Err(format!("expected LO,HI with LO < HI, got {s:?}")),
-    }
 }

@@ -104,7 +104,8 @@ pub fn before_after(
     wireframe: bool,
     path: &Path,
 ) -> Result<()> {
-    let opts = RenderOptions::with_size(700, 560);
+    let mut opts = RenderOptions::with_size(700, 560);
+    (opts.view_dir, opts.up) = crate::render::camera(before, None);
     let pic = Picture {
         wireframe,
         ..Default::default()

@@ -130,6 +130,20 @@ pub fn tessellated_part(surfaces: &[BSplineSurface], n: usize) -> Result<Surface
     Ok(tessellated_part_with_patches(surfaces, n)?.0)
 }
 
+/// The view direction and up of a picture of a part of `surfaces`: the
+/// camera rule's ([`fairline::picture::part_view`] of the part tessellated
+/// with 64 samples along its diagonal), the direction replaced by `view`
+/// when given.
+pub fn camera(
+    surfaces: &[BSplineSurface],
+    view: Option<fairline::Vec3>,
+) -> Result<(fairline::Vec3, fairline::Vec3)> {
+    Ok(crate::render::camera(
+        &tessellated_part(surfaces, 64)?,
+        view,
+    ))
+}
+
 /// [`tessellated_part`] and the patch (index into `surfaces`) of every face
 /// ([`fairline::bspline::tessellate_part`]).
 pub fn tessellated_part_with_patches(

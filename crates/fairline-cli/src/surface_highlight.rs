@@ -243,11 +243,7 @@ pub fn run(args: HighlightArgs) -> Result<()> {
     let (surfaces, results) = (&out.surfaces, &out.results);
     // Pictures first (they can fail on bad options); the lines file last.
     if let Some(p) = &args.png {
-        let view = match (&out.readable, args.view) {
-            (_, Some(v)) => Some((v, RenderOptions::default().up)),
-            (Some((array, _)), None) => Some(fairline::highlight::part_view(array)),
-            (None, None) => None,
-        };
+        let view = Some(crate::surface::camera(surfaces, args.view)?);
         let drawn = drawn_lines(
             surfaces,
             results,

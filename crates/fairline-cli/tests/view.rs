@@ -1026,7 +1026,7 @@ fn page_in_headless_chromium_shades_stripes_and_runs_a_repair_session() {
         "the surface ({mid}) is lit against the background ({bg})"
     );
     // halving the spacing (slider −1) about doubles the stripes
-    b.eval("(() => { const m = document.getElementById('mode'); m.value = '1'; m.dispatchEvent(new Event('input')); const s = document.getElementById('spacing'); s.value = '-1'; s.dispatchEvent(new Event('input')); })()");
+    b.eval("(() => { const m = document.getElementById('mode'); m.value = '1'; m.dispatchEvent(new Event('input')); const s = document.getElementById('spacing'); s.value = String(Number(s.value) - 1); s.dispatchEvent(new Event('input')); })()");
     std::thread::sleep(Duration::from_millis(400));
     let dense = b.screenshot();
     let dense_stripes = dark_runs(&dense, row, x0, x1, 40.0);
@@ -1258,11 +1258,14 @@ fn page_shows_bspline_patches_and_fairs_a_surface_from_uv_endpoints() {
     b.eval(&format!(
         "document.getElementById('patch').value = '{patch}'"
     ));
+    // the circular lights' radii at the default array's spacing (slider 0)
+    b.eval("(() => { const s = document.getElementById('spacing'); s.value = '0'; s.dispatchEvent(new Event('input')); })()");
     b.eval("document.getElementById('uvlines').click()");
     b.wait_for("window.fairline.uvPanel.lines.length > 0", 60);
-    // fly to the patch, as a user would to work on it
+    // fly to the patch, seen from above in the z-up frame, as a user would
+    // to work on the lid's knob
     b.eval(&format!(
-        "(() => {{ const v = window.fairline.viewer; v.camera.target = {}; v.camera.zoom(0.12); v.dirty = true; }})()",
+        "(() => {{ const v = window.fairline.viewer; v.camera.up = 'z'; v.camera.yaw = -0.6; v.camera.pitch = 0.5; v.camera.target = {}; v.camera.zoom(0.12); v.dirty = true; }})()",
         labels[patch]
     ));
     std::thread::sleep(Duration::from_millis(500));
@@ -2824,4 +2827,145 @@ fn page_saves_a_session_and_reopens_it_as_it_was() {
     b.eval("document.getElementById('session-name').scrollIntoView()");
     std::thread::sleep(Duration::from_millis(300));
     save_screenshot("workbench-session.png", &b.screenshot().3);
+}
+
+/// Mean distance (pixels) between the dark stripes crossing the middle of
+/// the canvas: along the middle row and the middle column, the part's
+/// extent (pixels brighter than the background by 30 or darker than 60)
+/// over the number of dark runs; the smaller of the two (the direction
+/// more across the stripes).
+fn stripe_separation(img: &(u32, u32, Vec<u8>, Vec<u8>), rect: (u32, u32, u32, u32)) -> f64 {
+    let (cx, cy, cw, ch) = rect;
+    let bg = lum(img, cx + 3, cy + 3);
+    let on_part = |x: u32, y: u32| {
+        let l = lum(img, x, y);
+        (l - bg).abs() > 30.0
+    };
+    let mut best = f64::INFINITY;
+    let row: Vec<(u32, u32)> = (cx + 4..cx + cw - 4).map(|x| (x, cy + ch / 2)).collect();
+    let col: Vec<(u32, u32)> = (cy + 4..cy + ch - 4).map(|y| (cx + cw / 2, y)).collect();
+    for line in [row, col] {
+        let part: Vec<&(u32, u32)> = line.iter().filter(|&&(x, y)| on_part(x, y)).collect();
+        let (mut runs, mut inside) = (0usize, false);
+        for &&(x, y) in &part {
+            let d = lum(img, x, y) < 60.0;
+            if d && !inside {
+                runs += 1;
+            }
+            inside = d;
+        }
+        if runs >= 2 {
+            best = best.min(part.len() as f64 / runs as f64);
+        }
+    }
+    best
+}
+
+/// The page's first view, its spacing and its "before":
+///
+/// - the first view is the camera rule's view of the part (the `view` the
+///   session gives, the one every `fairline` picture of the file uses),
+///   seen in the part's own up frame;
+/// - the spacing slider spans ×0.05 to ×20 of the default array (log scale)
+///   and the default spacing is chosen on the screen: the stripes lie
+///   15–25 px apart at the first view;
+/// - with "before" on, the exact lines shown are those of the state before
+///   the last step (the server's lines of that step), not the faired
+///   state's, and switching "before" off shows the current state's again.
+#[test]
+fn page_opens_on_the_part_view_with_screen_spaced_stripes_and_overlays_of_the_state_shown() {
+    let Some(exe) = cdp::chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "chromium is not installed and CI is set (apt-get install chromium)"
+        );
+        eprintln!(
+            "\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n"
+        );
+        return;
+    };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmp("view-part-view");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 61);
+    let srv = start(&[&mesh], &dir);
+    let mut b = open_page(&exe, &srv);
+
+    // the first view: the session's part view, in the part's frame
+    let session = srv.json("/api/session", None);
+    let view = &session["docs"][0]["view"];
+    let dir_expected: Vec<f64> = serde_json::from_value(view["view_dir"].clone()).unwrap();
+    let eye: Vec<f64> =
+        serde_json::from_value(b.eval("window.fairline.viewer.camera.direction()")).unwrap();
+    for k in 0..3 {
+        assert!(
+            (eye[k] + dir_expected[k]).abs() < 1e-6,
+            "the page looks from {eye:?}, the part view from {dir_expected:?}"
+        );
+    }
+    assert_eq!(b.eval("document.getElementById('up').value"), json!("part"));
+
+    // the slider spans ×0.05–×20 on a log2 scale
+    let (lo, hi): (f64, f64) = serde_json::from_value(b.eval(
+        "(() => { const s = document.getElementById('spacing'); return [Number(s.min), Number(s.max)]; })()",
+    ))
+    .unwrap();
+    assert!(
+        lo <= 0.05f64.log2() && hi >= 20f64.log2(),
+        "slider spans ×{} to ×{}",
+        lo.exp2(),
+        hi.exp2()
+    );
+    // stripes 15–25 px apart at the first view
+    std::thread::sleep(Duration::from_millis(400));
+    let rect = canvas_rect(&mut b);
+    let shot = b.screenshot();
+    let sep = stripe_separation(&shot, rect);
+    eprintln!(
+        "stripes {sep:.1} px apart at the first view (slider {}, predicted {})",
+        b.eval("document.getElementById('spacing').value"),
+        b.eval("window.fairline.stripePx")
+    );
+    assert!(
+        (15.0..=25.0).contains(&sep),
+        "stripes {sep:.1} px apart at the first view"
+    );
+
+    // a smoothing step, then the exact lines of the current state
+    b.eval("(() => { document.getElementById('method').value = 'smooth:taubin'; document.getElementById('iterations').value = '40'; })()");
+    b.eval("document.getElementById('run').click()");
+    b.wait_for("document.body.dataset.lastJob", 300);
+    assert_eq!(b.eval("document.body.dataset.lastJob"), json!("done"));
+    b.eval("document.getElementById('exact').click()");
+    b.wait_for("window.fairline.state.linesShown", 60);
+    let after = b.eval("window.fairline.state.linesShown");
+    assert_eq!(after["step"], Value::Null, "{after}");
+    // "before" on: the lines of step 0, equal to the server's for step 0
+    b.eval("window.fairline.state.linesShown = null; document.getElementById('before').click()");
+    b.wait_for("window.fairline.state.linesShown", 60);
+    let before = b.eval("window.fairline.state.linesShown");
+    assert_eq!(before["step"], json!(0), "{before}");
+    let light = b.eval("window.fairline.lights[0].array(window.fairline.viewer.camera)");
+    let frame_of = |step: Option<u64>| {
+        let mut body = json!({"light": light});
+        if let Some(s) = step {
+            body["step"] = json!(s);
+        }
+        let (st, bytes) = srv.post("/api/doc/0/lines", &body);
+        assert_eq!(st, 200);
+        parse_frame(&bytes).1
+    };
+    let (old, new) = (frame_of(Some(0)), frame_of(None));
+    assert_ne!(old, new, "the smoothing step changes the lines");
+    let first = |v: &[f32]| v.iter().take(3).map(|&x| f64::from(x)).collect::<Vec<_>>();
+    let shown: Vec<f64> = serde_json::from_value(before["first"].clone()).unwrap();
+    assert_eq!(shown, first(&old), "before shows the lines of step 0");
+    assert_eq!(before["floats"], json!(old.len()));
+    // "before" off: the current state's lines again
+    b.eval("window.fairline.state.linesShown = null; document.getElementById('before').click()");
+    b.wait_for("window.fairline.state.linesShown", 60);
+    let again = b.eval("window.fairline.state.linesShown");
+    assert_eq!(again["floats"], json!(new.len()), "{again}");
+    let shown: Vec<f64> = serde_json::from_value(again["first"].clone()).unwrap();
+    assert_eq!(shown, first(&new));
 }

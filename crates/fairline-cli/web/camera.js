@@ -1,5 +1,9 @@
 // Orbit camera: a target, a distance and an orientation (yaw about the up
-// axis, pitch); 4×4 matrices in column-major order as WebGL expects.
+// axis from the front toward the right, pitch above the horizontal) in the
+// frame of an up axis: the part's own ('part': the up and front of the
+// camera rule the server sends, the same as every `fairline` picture's),
+// or z (front −y) or y (front +z); 4×4 matrices in column-major order as
+// WebGL expects.
 export function perspective(fovy, aspect, near, far) {
   const f = 1 / Math.tan(fovy / 2);
   const nf = 1 / (near - far);
@@ -32,18 +36,41 @@ export function multiply(a, b) {
 export class Camera {
   constructor() {
     this.up = 'z';
-    this.yaw = -0.6;
-    this.pitch = 0.5;
+    this.part = { up: [0, 0, 1], front: [0, -1, 0] };
+    this.iso = [0.61, 0.44];
+    this.yaw = this.iso[0];
+    this.pitch = this.iso[1];
     this.distance = 3;
     this.target = [0, 0, 0];
     this.radius = 1;
   }
-  upVector() { return this.up === 'z' ? [0, 0, 1] : [0, 1, 0]; }
-  // unit vector from the target to the eye
+  // Takes the part's view (`view` of the session: unit `view_dir` from the eye
+  // toward the part, `up`, horizontal `front`) as the 'part' frame and the
+  // iso view, and looks from it.
+  setPartView(view) {
+    if (!view) return;
+    const up = norm(view.up), front = norm(view.front), right = cross(up, front);
+    const e = norm(view.view_dir.map((c) => -c));
+    this.part = { up, front };
+    this.iso = [Math.atan2(dot(e, right), dot(e, front)), Math.asin(Math.max(-1, Math.min(1, dot(e, up))))];
+    this.up = 'part';
+    this.standard('iso');
+  }
+  upVector() {
+    if (this.up === 'part') return this.part.up;
+    return this.up === 'z' ? [0, 0, 1] : [0, 1, 0];
+  }
+  frontVector() {
+    if (this.up === 'part') return this.part.front;
+    return this.up === 'z' ? [0, -1, 0] : [0, 0, 1];
+  }
+  // unit vector from the target to the eye:
+  // cos(pitch)·(cos(yaw)·front + sin(yaw)·(up × front)) + sin(pitch)·up
   direction() {
     const cp = Math.cos(this.pitch), sp = Math.sin(this.pitch);
     const cy = Math.cos(this.yaw), sy = Math.sin(this.yaw);
-    return this.up === 'z' ? [cp * sy, -cp * cy, sp] : [cp * sy, sp, cp * cy];
+    const up = this.upVector(), front = this.frontVector(), right = cross(up, front);
+    return [0, 1, 2].map((i) => cp * (cy * front[i] + sy * right[i]) + sp * up[i]);
   }
   eye() {
     const d = this.direction();
@@ -78,7 +105,7 @@ export class Camera {
   }
   zoom(factor) { this.distance = Math.max(1e-6 * this.radius, this.distance * factor); }
   standard(name) {
-    const views = { front: [0, 0], back: [Math.PI, 0], right: [Math.PI / 2, 0], left: [-Math.PI / 2, 0], top: [0, 1.55], bottom: [0, -1.55], iso: [-0.6, 0.5] };
+    const views = { front: [0, 0], back: [Math.PI, 0], right: [Math.PI / 2, 0], left: [-Math.PI / 2, 0], top: [0, 1.55], bottom: [0, -1.55], iso: this.iso };
     const v = views[name] || views.iso;
     this.yaw = v[0];
     this.pitch = v[1];

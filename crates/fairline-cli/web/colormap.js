@@ -29,21 +29,39 @@ export function colormapTexture(gl) {
 }
 
 // Draws the legend of `name` over [lo, hi] into a 2-D canvas (cleared when
-// name is empty).
-export function drawLegend(canvas, name, lo, hi) {
+// name is empty): the bar, the range at its ends (and 0 at the middle of a
+// range centred on 0, as the server's rule makes it for signed fields),
+// and, when values lie beyond the range (`clipped`), arrowheads at the
+// ends and the words "values beyond: clipped".
+export function drawLegend(canvas, name, lo, hi, clipped = false) {
   const g = canvas.getContext('2d');
   g.clearRect(0, 0, canvas.width, canvas.height);
+  canvas.dataset.range = name ? `${lo},${hi}` : '';
+  canvas.dataset.clipped = name && clipped ? '1' : '';
   if (!name) return;
-  for (let x = 0; x < canvas.width; x++) {
-    const c = color(x / (canvas.width - 1));
+  const tip = clipped ? 8 : 0;
+  const w = canvas.width - 2 * tip;
+  for (let x = 0; x < w; x++) {
+    const c = color(x / (w - 1));
     g.fillStyle = `rgb(${c[0] * 255},${c[1] * 255},${c[2] * 255})`;
-    g.fillRect(x, 0, 1, 16);
+    g.fillRect(tip + x, 0, 1, 16);
+  }
+  if (clipped) {
+    for (const [x0, x1, t] of [[tip, 0, 0], [canvas.width - tip, canvas.width, 1]]) {
+      const c = color(t);
+      g.fillStyle = `rgb(${c[0] * 255},${c[1] * 255},${c[2] * 255})`;
+      g.beginPath(); g.moveTo(x0, 0); g.lineTo(x1, 8); g.lineTo(x0, 16); g.closePath(); g.fill();
+    }
   }
   g.fillStyle = '#dde';
   g.font = '11px sans-serif';
-  g.fillText(lo.toPrecision(3), 0, 30);
+  g.fillText(lo.toPrecision(3), tip, 30);
   const hs = hi.toPrecision(3);
-  g.fillText(hs, canvas.width - g.measureText(hs).width, 30);
-  const mid = name;
+  g.fillText(hs, canvas.width - tip - g.measureText(hs).width, 30);
+  const mid = Math.abs(lo + hi) <= 1e-9 * Math.abs(hi - lo) ? `${name} (0 at the middle)` : name;
   g.fillText(mid, (canvas.width - g.measureText(mid).width) / 2, 30);
+  if (clipped && canvas.height >= 44) {
+    const note = 'values beyond: clipped';
+    g.fillText(note, (canvas.width - g.measureText(note).width) / 2, 43);
+  }
 }

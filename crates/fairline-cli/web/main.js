@@ -17,7 +17,7 @@ import { ShapeTools } from './shape.js';
 import { SurfaceTools } from './surfacetools.js';
 import { Session } from './session.js';
 
-const state = { labels: [], surfaceDoc: -1, uvData: null, uvCircular: null, session: null, active: 0, regions: [], detected: [], before: false, job: null, lastDownload: null };
+const state = { labels: [], surfaceDoc: -1, uvData: null, uvCircular: null, session: null, active: 0, regions: [], detected: [], before: false, job: null, lastDownload: null, shown: { lines: false, detect: false } };
 window.fairline = { state };
 
 const viewer = new Viewer($('gl'));
@@ -66,10 +66,17 @@ function showSession() {
   $('save-dir').textContent = `saves go to ${state.session.save_dir}`;
 }
 
+// The history step the page shows: the one before the current step while
+// "before" is on, else the current one (undefined).
+function shownStep() {
+  const d = activeDoc();
+  return state.before && d.history.cursor > 0 ? d.history.cursor - 1 : undefined;
+}
+
 async function reloadActive() {
   await refreshSession();
   const d = activeDoc();
-  const step = state.before && d.history.cursor > 0 ? d.history.cursor - 1 : undefined;
+  const step = shownStep();
   await loadGeometry(state.active, step);
   if (d.kind === 'surface') await loadOutlines(state.active, step);
   await applyScalar();
@@ -78,6 +85,7 @@ async function reloadActive() {
   await surfaceTools.refresh();
   viewer.setOverlay(state.active, 'lines', null);
   viewer.setOverlay(state.active, 'stretches', null);
+  state.shown = { lines: false, detect: false };
 }
 
 async function applyScalar() {
@@ -86,7 +94,7 @@ async function applyScalar() {
     if (!name || !state.session.docs[k].scalars.some((s) => s.name === name)) { viewer.setScalar(k, null); continue; }
     const { header, data } = await api.scalar(k, name);
     viewer.setScalar(k, data, header);
-    if (k === state.active) drawLegend($('legend'), name, header.lo, header.hi);
+    if (k === state.active) drawLegend($('legend'), name, header.lo, header.hi, header.clipped);
   }
   if (!name) drawLegend($('legend'), '', 0, 0);
 }
@@ -120,9 +128,14 @@ async function exactLines() {
   const circ = l.mode === 4 || l.mode === 5;
   const body = circ ? { circular: l.circular(viewer.camera) } : { light: l.array(viewer.camera) };
   if (l.mode === 2 || l.mode === 5) body.band = 0.5 * l.bandFraction * l.spacing();
+  const step = shownStep();
+  if (step !== undefined) body.step = step;
+  state.shown.lines = true;
   status('computing exact lines…');
   const { header, data } = await api.frame(`/api/doc/${k}/lines`, body);
   viewer.setOverlay(k, 'lines', segments(header.lines.concat(header.bands), data), [0.1, 0.9, 1.0, 1]);
+  // which state the lines shown belong to (for tests and scripting)
+  state.linesShown = { step: step === undefined ? null : step, floats: data.length, first: Array.from(data.slice(0, 3)) };
   showCommand(header.command);
   status(`${header.lines.length} exact lines in ${(header.time_s * 1000).toFixed(0)} ms of server time`);
 }
@@ -130,7 +143,11 @@ async function exactLines() {
 async function detect() {
   const k = state.active;
   status('detecting irregularities…');
-  const { header, data } = await api.frame(`/api/doc/${k}/detect`, { light: lights[k].array(viewer.camera) });
+  const body = { light: lights[k].array(viewer.camera) };
+  const step = shownStep();
+  if (step !== undefined) body.step = step;
+  state.shown.detect = true;
+  const { header, data } = await api.frame(`/api/doc/${k}/detect`, body);
   viewer.setOverlay(k, 'lines', segments(header.lines, data), [0.1, 0.9, 1.0, 1]);
   viewer.setOverlay(k, 'stretches', segments(header.stretches.map((s) => ({ start: s.start, count: s.count, closed: false })), data), [1.0, 0.15, 0.1, 1]);
   state.detected = header.regions;
@@ -544,7 +561,7 @@ function wire() {
   }
   $('exact').addEventListener('click', guard(exactLines));
   $('detect').addEventListener('click', guard(detect));
-  $('clearlines').addEventListener('click', () => { viewer.setOverlay(state.active, 'lines', null); viewer.setOverlay(state.active, 'stretches', null); });
+  $('clearlines').addEventListener('click', () => { viewer.setOverlay(state.active, 'lines', null); viewer.setOverlay(state.active, 'stretches', null); state.shown = { lines: false, detect: false }; });
   $('grow').addEventListener('click', guard(() => growShrink('grow')));
   $('shrink').addEventListener('click', guard(() => growShrink('shrink')));
   $('clearregion').addEventListener('click', () => setRegion([]));
@@ -554,9 +571,12 @@ function wire() {
   $('redo').addEventListener('click', guard(() => historyMove('redo')));
   $('before').addEventListener('change', guard(async () => {
     state.before = $('before').checked;
-    const d = activeDoc();
-    const step = state.before && d.history.cursor > 0 ? d.history.cursor - 1 : undefined;
+    const step = shownStep();
     await loadGeometry(state.active, step);
+    // the overlays shown are computed again on the state shown: the lines
+    // and the detection of the state before, not the faired state's
+    if (state.shown.detect) await detect();
+    else if (state.shown.lines) await exactLines();
     status(state.before ? 'showing the state before the last step' : 'showing the current state');
   }));
   $('dl-lights').addEventListener('click', downloadLights);
@@ -643,6 +663,26 @@ function shortcutActions(help) {
   };
 }
 
+// Stripes this many CSS pixels apart at the first view (the default
+// spacing is chosen on the screen, not in model units).
+const STRIPE_PX = 20;
+
+// Sets the spacing slider so that the lines of document `d` lie about
+// STRIPE_PX apart at the current view: lines of spacing s lie s/ĝ apart on
+// the part (ĝ the median |∇d| the server measured), and a model unit at
+// the target spans height / (2·distance·tan(fov/2)) pixels.
+function defaultSpacing(d) {
+  const g = d.gradient_median;
+  const h = $('gl').clientHeight;
+  if (!(g > 0) || !(h > 0) || !(d.light.spacing > 0)) return;
+  const pxPerUnit = h / (2 * viewer.camera.distance * Math.tan(0.3));
+  const px = (d.light.spacing / g) * pxPerUnit;
+  const s = $('spacing');
+  const exp = Math.log2(STRIPE_PX / px);
+  s.value = String(Math.max(Number(s.min), Math.min(Number(s.max), exp)));
+  window.fairline.stripePx = px * Math.pow(2, Number(s.value));
+}
+
 async function start() {
   mark('modules');
   // every session has document 0: its geometry is asked for at once, beside
@@ -663,14 +703,15 @@ async function start() {
   tools.init(docs);
   frames = new DocFrames($('docframes'), $('gl'), docs.map((d) => d.name), activate);
   viewer.lightUniforms = (k) => lights[k].uniforms(viewer.camera);
-  // a z-up part is seen from the front, a y-up one (most scanned meshes) from +z
-  const ext = docs[0].bbox;
-  const span = [0, 1, 2].map((i) => ext[1][i] - ext[0][i]);
-  if (span[1] > 1.05 * Math.max(span[0], span[2])) { viewer.camera.up = 'y'; $('up').value = 'y'; }
+  // the first view is the camera rule's of the first document, as in
+  // every `fairline` picture of it
+  viewer.camera.setPartView(docs[0].view);
+  $('up').value = viewer.camera.up;
   await Promise.all(docs.map((_, k) => loadGeometry(k, undefined, k === 0 ? early : undefined)));
   state.surfaceDoc = docs.findIndex((d) => d.kind === 'surface');
   await Promise.all(docs.map((d, k) => (d.kind === 'surface' ? loadOutlines(k) : null)));
   viewer.camera.fit(Math.max(...docs.map((d) => d.radius)));
+  defaultSpacing(docs[0]);
   await viewer.ready();
   mark('shaders');
   showSession();

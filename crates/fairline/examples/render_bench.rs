@@ -39,6 +39,7 @@ fn main() {
             colormap: Colormap::Viridis,
             min: lo,
             max: hi,
+            clipped: false,
         }),
         title: Some(format!("{} triangles", t.len())),
         ..Default::default()

@@ -69,6 +69,20 @@ impl MeshView {
     }
 }
 
+/// The camera rule's view of `mesh` ([`crate::render::part_view`] over its
+/// triangles, polygons triangulated): the view every picture of the part
+/// starts from.
+pub fn part_view(mesh: &SurfaceMesh) -> crate::render::PartView {
+    let triangles: Vec<[u32; 3]> = if mesh.is_triangle_mesh() {
+        mesh.faces()
+            .map(|f| mesh.triangle(f).map(|v| v.0))
+            .collect()
+    } else {
+        triangle_list(mesh)
+    };
+    crate::render::part_view(mesh.positions(), &triangles)
+}
+
 /// A per-vertex scalar field to colour a mesh with.
 #[derive(Clone, Debug)]
 pub struct ScalarField<'a> {
@@ -138,6 +152,7 @@ fn mesh_picture_impl(
             colormap: field.colormap,
             min: lo,
             max: hi,
+            clipped: crate::render::clipped(field.values, (lo, hi)),
         });
     }
     let mut polylines = Vec::new();

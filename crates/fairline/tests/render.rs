@@ -113,6 +113,7 @@ fn render_sample_pictures() {
             colormap: Colormap::Coolwarm,
             min: lo,
             max: hi,
+            clipped: false,
         }),
         title: Some("sphere + torus: Gaussian curvature".into()),
         ..Default::default()
@@ -219,6 +220,7 @@ fn render_sample_pictures() {
             colormap: Colormap::Viridis,
             min: zl,
             max: zh,
+            clipped: false,
         }),
         title: Some("top view".into()),
         ..Default::default()

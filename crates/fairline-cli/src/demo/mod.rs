@@ -346,7 +346,7 @@ fn highlight_section(demo: &Demo) -> Result<Section> {
         .flat_map(|l| l.stretches.iter().cloned())
         .collect();
     let faces = det.all_faces();
-    let view = crate::highlight_png::default_camera(&light);
+    let view = crate::render::camera(&dented, None);
     let size = (demo.opts.width, demo.opts.height);
     let img_lines = demo.save(
         "highlight-dent-lines.png",
@@ -455,7 +455,7 @@ const HILL_BUMP: (f64, f64, f64) = (0.3, -0.2, 0.1);
 /// to the same surface with a small planted bump: the curved shape stays
 /// quiet, the bump is found.
 fn detect_section(demo: &Demo) -> Result<Section> {
-    use crate::highlight_png::{Overlay, default_camera, detect_with_lines, image, stretches};
+    use crate::highlight_png::{Overlay, detect_with_lines, image, stretches};
     use fairline::highlight::{DetectOptions, LightArray, UpAxis};
     let n = 161;
     let clean = shapes::height_field(n, n, (-1.0, 1.0), (-1.0, 1.0), hills_height);
@@ -508,7 +508,7 @@ fn detect_section(demo: &Demo) -> Result<Section> {
                         flagged: &flagged,
                         region: Some(&faces),
                         unjudged: Some(&unjudged),
-                        view: default_camera(&light),
+                        view: crate::render::camera(&clean, None),
                         title: title.clone(),
                         spacing: Some(shown_light.spacing()),
                     },
@@ -660,7 +660,7 @@ fn fair_section(demo: &Demo) -> Result<Section> {
     let out = fair_highlight_lines(&mesh, &options.method(FairMethod::DiffusionFlow))?;
     let (flow, flow_mesh) = (out.report, with_positions(out.positions)?);
     let mut opts = demo.opts.clone();
-    (opts.view_dir, opts.up) = crate::highlight_png::default_camera(&light);
+    (opts.view_dir, opts.up) = crate::render::camera(&mesh, None);
     let img = demo.save(
         "fair-before-after.png",
         &fairing_picture(&mesh, &faired, &r, &opts)?,

@@ -383,15 +383,32 @@ fn light_args(l: &LightArray) -> String {
         .to_string()
 }
 
-/// Summary statistics of a scalar for the legend.
-fn scalar_range(v: &[f64]) -> Value {
-    let mut f: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-    if f.is_empty() {
-        return json!({"min": 0.0, "max": 0.0, "lo": 0.0, "hi": 0.0});
+/// Summary statistics of a scalar for the legend: its extremes `min`,
+/// `max`, the colour range `lo`, `hi` of the pictures' rule
+/// ([`fairline::render::scalar_range`]; `signed` for the curvatures and
+/// for a field with values of both signs), whether it is `signed` (a
+/// diverging map centred on 0) and whether values lie beyond the range
+/// (`clipped`).
+fn scalar_range(v: &[f64], signed: Option<bool>) -> Value {
+    let (min, max) = v
+        .iter()
+        .filter(|x| x.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    if min > max {
+        return json!({"min": 0.0, "max": 0.0, "lo": -1.0, "hi": 1.0, "signed": true, "clipped": false});
     }
-    f.sort_by(f64::total_cmp);
-    let q = |p: f64| f[((f.len() - 1) as f64 * p).round() as usize];
-    json!({"min": f[0], "max": f[f.len() - 1], "lo": q(0.02), "hi": q(0.98)})
+    let signed = signed.unwrap_or(min < 0.0 && max > 0.0);
+    let (lo, hi) = fairline::render::scalar_range(v, signed);
+    json!({
+        "min": min,
+        "max": max,
+        "lo": lo,
+        "hi": hi,
+        "signed": signed,
+        "clipped": fairline::render::clipped(v, (lo, hi)),
+    })
 }
 
 fn session(st: &State) -> Value {
@@ -408,7 +425,7 @@ fn session(st: &State) -> Value {
                 json!({"name": "gauss"}),
             ];
             for (n, v) in &d.ply_scalars {
-                let mut s = scalar_range(v);
+                let mut s = scalar_range(v, None);
                 s["name"] = json!(n);
                 scalars.push(s);
             }
@@ -423,6 +440,9 @@ fn session(st: &State) -> Value {
                 "center": d.center.to_array(),
                 "radius": d.radius,
                 "bbox": [d.bbox.0.to_array(), d.bbox.1.to_array()],
+                "view": d.view,
+                // lines of the default spacing lie about spacing/ĝ apart
+                "gradient_median": fairline::highlight::readable::distance_gradient_median(&d.tri, &light),
                 "scalars": scalars,
                 "grid": d.grid,
                 "patches": d.history[0].surfaces.as_ref().map(|s| s.len()).unwrap_or(0),
@@ -468,6 +488,7 @@ fn scalar(shared: &Shared, k: usize, name: &str, step: Option<usize>) -> Answer 
             .map(|(_, v)| v.clone());
         (d.tri_at(step), ply)
     };
+    let signed = ply.is_none().then_some(true);
     let values = match (name, ply) {
         (_, Some(v)) => v,
         ("k1" | "k2" | "mean" | "gauss", None) => {
@@ -481,7 +502,7 @@ fn scalar(shared: &Shared, k: usize, name: &str, step: Option<usize>) -> Answer 
         }
         _ => return error(404, format!("no scalar `{name}`")),
     };
-    let range = scalar_range(&values);
+    let range = scalar_range(&values, signed);
     let floats: Vec<f32> = values
         .iter()
         .map(|&x| if x.is_finite() { x as f32 } else { 0.0 })
@@ -666,6 +687,9 @@ struct DetectRequest {
     light: LightArray,
     threshold: Option<f64>,
     region_radius: Option<f64>,
+    /// The history step to detect on (`None`: the current state), so that
+    /// the page's "before" shows the detection of the state before.
+    step: Option<usize>,
 }
 
 /// Detection under the page's lights: the command layer's `detect` on the
@@ -681,10 +705,10 @@ fn detect(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         let st = lock(shared);
         let d = &st.docs[k];
         (
-            d.shared_tri_at(None),
+            d.shared_tri_at(req.step),
             d.center,
             d.current_file(),
-            Arc::clone(&d.current().positions),
+            Arc::clone(&d.step(req.step).positions),
         )
     };
     let mesh = mesh.as_ref();

@@ -75,6 +75,9 @@ pub struct Doc {
     pub radius: f64,
     /// Bounding box of the input.
     pub bbox: (Vec3, Vec3),
+    /// The camera rule's view of the input ([`fairline::picture::part_view`]):
+    /// the workbench's first view, the same as the command line's pictures.
+    pub view: fairline::render::PartView,
     /// Steps; `history[cursor]` is the current state.
     pub history: Vec<Step>,
     /// Index of the current step.
@@ -167,8 +170,13 @@ impl Doc {
         };
         // the first frame needs the normals and the triangles: computed
         // here, in parallel
-        let ((positions, index_bytes), normals) = rayon::join(
-            || (Arc::new(tri.positions().to_vec()), triangle_bytes(&tri)),
+        let (((positions, index_bytes), view), normals) = rayon::join(
+            || {
+                rayon::join(
+                    || (Arc::new(tri.positions().to_vec()), triangle_bytes(&tri)),
+                    || fairline::picture::part_view(&tri),
+                )
+            },
             || super::frame::vec3_bytes(&fairline::geom::vertex_normals(&tri), Vec3::ZERO),
         );
         let normal_bytes = OnceLock::new();
@@ -192,6 +200,7 @@ impl Doc {
             center,
             radius,
             bbox: (lo, hi),
+            view,
             history: vec![Step {
                 label: "open".into(),
                 command: format!("fairline view {}", shell_word(&path.display().to_string())),

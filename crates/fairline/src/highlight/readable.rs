@@ -62,6 +62,15 @@ pub fn face_distance_gradients(mesh: &SurfaceMesh, d: &[f64], branch: &[i8]) -> 
 /// than the rounding of k = round(ĝ/3) needs.
 pub(crate) const GRADIENT_SAMPLE_FACES: usize = 32_768;
 
+/// The area-weighted median ĝ of |∇d_P| under `light` (model units of d
+/// per unit of length: lines of spacing s lie about s/ĝ apart on the
+/// part), estimated on at most 32 768 triangles spread over the part;
+/// `None` when no triangle has a gradient. What a viewer needs to choose
+/// a spacing whose lines lie a given number of pixels apart.
+pub fn distance_gradient_median(mesh: &SurfaceMesh, light: &LightArray) -> Option<f64> {
+    sampled_median_distance_gradient(mesh, light, GRADIENT_SAMPLE_FACES)
+}
+
 /// The area-weighted median ĝ of |∇d| (see [`face_distance_gradients`])
 /// under `light`, estimated on at most `budget` triangles picked by
 /// [`sample_faces`] (all of them when F ≤ budget),

@@ -131,16 +131,26 @@ fn coolwarm(t: f64) -> [f64; 3] {
     [0, 1, 2].map(|k| (a[k] as f64 * (1.0 - f) + b[k] as f64 * f) / 255.0)
 }
 
+/// The colour range of a scalar picture, the one rule of every picture
+/// and of the workbench: for a `signed` quantity (mean or Gaussian
+/// curvature, signed deviation) `(-m, m)` with `m` the 98th percentile of
+/// the finite non-zero |values| (exact zeros, such as the vertices a fairing
+/// left in place or the flat faces of a CAD part, carry no magnitude), so 0 is the neutral colour of a diverging map;
+/// otherwise the 2nd to 98th percentile of the finite values. Either way a
+/// few extreme values do not wash the map out; the values beyond are drawn
+/// in the end colours (clipped). An empty field gets (−1, 1) or (0, 1); a
+/// constant one a small non-empty range around its value.
+pub fn scalar_range(values: &[f64], signed: bool) -> (f64, f64) {
+    let (lo, hi) = auto_range(values, signed);
+    widen_if_empty(lo, hi)
+}
+
 /// Colours for per-vertex scalar `values` (e.g. curvature) under `cmap`.
 ///
-/// With `range = None` the range is chosen robustly from the finite values:
-/// the 2nd to 98th percentile, so a few outliers do not wash out the map;
-/// for a diverging map the range is made symmetric about 0, `(-m, m)` with
-/// `m` the larger magnitude of the two percentiles, so 0 is always the
-/// neutral colour. A given range is used as is (if `lo > hi` it is swapped;
-/// a non-finite range falls back to the automatic one). An empty or constant
-/// field gets a small non-empty range around its value. NaN and infinite
-/// values are drawn in [`NAN_COLOR`].
+/// With `range = None` the range is [`scalar_range`] of the values, signed
+/// for a diverging map. A given range is used as is (if `lo > hi` it is
+/// swapped; a non-finite range falls back to the automatic one). NaN and
+/// infinite values are drawn in [`NAN_COLOR`].
 ///
 /// Returns the linear-light colours (one per value) and the range used,
 /// which is what a [`Legend`] should show.
@@ -168,6 +178,14 @@ pub fn scalar_colors(
     (colors, (lo, hi))
 }
 
+/// Whether some finite value of `values` lies outside `range` (the picture
+/// shows it in an end colour: its legend says so).
+pub fn clipped(values: &[f64], range: (f64, f64)) -> bool {
+    values
+        .iter()
+        .any(|v| v.is_finite() && (*v < range.0 || *v > range.1))
+}
+
 fn auto_range(values: &[f64], symmetric: bool) -> (f64, f64) {
     let mut finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
     if finite.is_empty() {
@@ -175,17 +193,25 @@ fn auto_range(values: &[f64], symmetric: bool) -> (f64, f64) {
     }
     let n = finite.len();
     let rank = |q: f64| ((q * (n - 1) as f64).round() as usize).min(n - 1);
+    if symmetric {
+        let mut mag: Vec<f64> = finite
+            .iter()
+            .map(|v| v.abs())
+            .filter(|&a| a > 0.0)
+            .collect();
+        if mag.is_empty() {
+            return (-1.0, 1.0);
+        }
+        let k = ((0.98 * (mag.len() - 1) as f64).round() as usize).min(mag.len() - 1);
+        let m = *mag.select_nth_unstable_by(k, f64::total_cmp).1;
+        return (-m, m);
+    }
     let (i_lo, i_hi) = (rank(0.02), rank(0.98));
     let hi = *finite.select_nth_unstable_by(i_hi, f64::total_cmp).1;
     let lo = *finite[..=i_hi]
         .select_nth_unstable_by(i_lo, f64::total_cmp)
         .1;
-    if symmetric {
-        let m = lo.abs().max(hi.abs());
-        (-m, m)
-    } else {
-        (lo, hi)
-    }
+    (lo, hi)
 }
 
 fn widen_if_empty(lo: f64, hi: f64) -> (f64, f64) {
@@ -209,6 +235,9 @@ pub struct Legend {
     pub min: f64,
     /// Value at the top of the bar.
     pub max: f64,
+    /// Whether values beyond `min`..`max` exist and are drawn in the end
+    /// colours: the bar then ends in arrowheads and says "beyond: clipped".
+    pub clipped: bool,
 }
 
 impl Legend {
@@ -235,7 +264,12 @@ impl Legend {
             .max()
             .unwrap_or(0);
         let body = Self::bar_width(scale) + 3 * scale + label_w;
-        body.max(Image::text_width(&self.title, scale)) + 2 * pad
+        let note = if self.clipped {
+            Image::text_width(CLIPPED_NOTE, scale)
+        } else {
+            0
+        };
+        body.max(Image::text_width(&self.title, scale)).max(note) + 2 * pad
     }
 
     /// Draws the legend into `img` inside the box `x, y, w, h` (bar vertically
@@ -254,12 +288,37 @@ impl Legend {
         let cap = Image::cap_height(scale) as i64;
         // Gap between title and bar leaves room for the top tick label.
         let gap = pad + cap;
-        let avail = h as i64 - 2 * pad - text_h - gap - cap;
-        let bar_h = (avail.min((img.height as f64 * 0.6) as i64)).max(8);
-        let top = y + (h as i64 - bar_h - text_h - gap) / 2 + text_h + gap;
-        let bar_x = x + pad;
         let bar_w = Self::bar_width(scale) as i64;
+        // arrowheads beyond the bar's ends and the note below: clipped values
+        let (tip, note_h) = if self.clipped {
+            (bar_w / 2 + 1, text_h + pad)
+        } else {
+            (0, 0)
+        };
+        let avail = h as i64 - 2 * pad - text_h - gap - cap - 2 * tip - note_h;
+        let bar_h = (avail.min((img.height as f64 * 0.6) as i64)).max(8);
+        let top = y + (h as i64 - bar_h - text_h - gap - note_h) / 2 + text_h + gap;
+        let bar_x = x + pad;
         img.draw_text(bar_x, top - text_h - gap, &self.title, text_colour, scale);
+        if self.clipped {
+            let (hi_c, lo_c) = (
+                linear_to_srgb8(self.colormap.map(1.0)),
+                linear_to_srgb8(self.colormap.map(0.0)),
+            );
+            for r in 0..tip {
+                let inset = (bar_w * (tip - r) / tip.max(1)) / 2;
+                let w = (bar_w - 2 * inset).max(1) as u32;
+                img.fill_rect(bar_x + inset, top - 1 - tip + r, w, 1, hi_c);
+                img.fill_rect(bar_x + inset, top + bar_h + tip - r, w, 1, lo_c);
+            }
+            img.draw_text(
+                bar_x,
+                top + bar_h + tip + pad,
+                CLIPPED_NOTE,
+                text_colour,
+                scale,
+            );
+        }
         for r in 0..bar_h {
             let t = 1.0 - r as f64 / (bar_h - 1).max(1) as f64;
             let c = linear_to_srgb8(self.colormap.map(t));
@@ -284,6 +343,9 @@ impl Legend {
         }
     }
 }
+
+/// The legend's note when values lie beyond its range.
+const CLIPPED_NOTE: &str = "values beyond: clipped";
 
 /// A short tick label: up to 4 significant digits, scientific notation for
 /// very small or large magnitudes (`1.25e-3`), `0` for zero.
@@ -364,6 +426,25 @@ mod tests {
         assert!(r.0 < 2.0 && r.1 > 2.0);
         let (_, r) = scalar_colors(&[], Colormap::Viridis, Some((5.0, 1.0)));
         assert_eq!(r, (1.0, 5.0));
+    }
+
+    #[test]
+    fn signed_range_is_symmetric_and_ignores_exact_zeros() {
+        // a fairing moved 100 of 1100 vertices: the zeros do not shrink the range
+        let mut v = vec![0.0; 1000];
+        v.extend((1..=100).map(|i| -f64::from(i) * 0.01));
+        let (lo, hi) = scalar_range(&v, true);
+        assert_eq!(lo, -hi);
+        assert!(hi > 0.95 && hi <= 1.0, "{hi}");
+        // one outlier beyond the 98th percentile is clipped, not the range
+        v.push(50.0);
+        let (_, hi) = scalar_range(&v, true);
+        assert!(hi < 1.01, "{hi}");
+        assert!(clipped(&v, (-hi, hi)));
+        assert!(!clipped(&[0.5, f64::NAN], (-hi, hi)));
+        assert_eq!(scalar_range(&[0.0, 0.0], true), (-1.0, 1.0));
+        let (lo, hi) = scalar_range(&[1.0, 2.0, 3.0], false);
+        assert!(lo >= 1.0 && hi <= 3.0 && lo < hi);
     }
 
     #[test]

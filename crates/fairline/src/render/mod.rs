@@ -29,12 +29,14 @@ mod image;
 mod labels;
 mod raster;
 pub mod svg;
+mod view;
 
 pub use camera::{Camera, DEFAULT_FOV_Y_DEG, Projection, view_frame};
-pub use colormap::{Colormap, Legend, NAN_COLOR, scalar_colors};
+pub use colormap::{Colormap, Legend, NAN_COLOR, clipped, scalar_colors, scalar_range};
 pub use image::{Image, linear_to_srgb8, side_by_side};
 pub use labels::{PlacedLabel, RegionLabels};
 pub use svg::SvgPlot;
+pub use view::{PartView, UpReason, part_view};
 
 use crate::Vec3;
 use std::path::PathBuf;

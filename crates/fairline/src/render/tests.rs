@@ -129,6 +129,7 @@ fn render_is_deterministic_across_runs_and_thread_counts() {
             colormap: Colormap::Coolwarm,
             min: lo,
             max: hi,
+            clipped: false,
         }),
         title: Some("determinism".into()),
         ..Default::default()
@@ -217,6 +218,7 @@ fn legend_and_title_draw_in_their_strips() {
             colormap: Colormap::Viridis,
             min: -1.0,
             max: 2.5,
+            clipped: false,
         }),
         title: Some("Title".into()),
         ..Default::default()
@@ -302,6 +304,7 @@ fn degenerate_and_nan_input_does_not_panic() {
             colormap: Colormap::Turbo,
             min: nan,
             max: f64::INFINITY,
+            clipped: false,
         }),
         title: None,
     };
