@@ -97,7 +97,7 @@ pub fn deviation(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         &Control::new(),
     ) {
         Ok(o) => o,
-        Err(e) => return bad(e.message(fairline_commands::FrontEnd::Cli)),
+        Err(e) => return bad(e.message(fairline_commands::FrontEnd::Workbench)),
     };
     // the whole range, as the histogram: a fairing moves few vertices,
     // and a percentile would saturate all of them
