@@ -134,7 +134,7 @@ fn picture(
     view: Option<Vec3>,
     size: (u32, u32),
 ) -> Result<fairline::render::Image> {
-    let opts = crate::render::options(view, size)?;
+    let (opts, _) = crate::render::options(mesh, view, size)?;
     // the outline as one polyline layer: a non-finite point breaks it
     let mut points = Vec::new();
     for [a, b] in below_outline(mesh, &out.below) {
