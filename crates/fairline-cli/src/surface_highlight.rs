@@ -243,7 +243,13 @@ pub fn run(args: HighlightArgs) -> Result<()> {
     let (surfaces, results) = (&out.surfaces, &out.results);
     // Pictures first (they can fail on bad options); the lines file last.
     if let Some(p) = &args.png {
-        let view = Some(crate::surface::camera(surfaces, args.view)?);
+        let view = match (&out.readable, args.view) {
+            (Some((array, _)), None) => {
+                let (dir, up) = crate::surface::camera(surfaces, None)?;
+                Some(facing_the_lights(dir, up, array))
+            }
+            _ => Some(crate::surface::camera(surfaces, args.view)?),
+        };
         let drawn = drawn_lines(
             surfaces,
             results,
@@ -512,4 +518,28 @@ pub fn label_point(surface: &BSplineSurface) -> Option<[f64; 2]> {
             _ => Some(c),
         })
         .map(|b| b.1)
+}
+
+/// The camera rule's view `dir` (with `up`) seen from the side of the
+/// lights `array` was chosen for (the side whose picture shows the most of
+/// the part with readable lines): when the rule would look at the part
+/// from behind the light plane, its direction is mirrored through that
+/// plane, so that a dish's blades, not its flat back, face the camera. The
+/// up stays the rule's unless the mirrored direction lies along it.
+fn facing_the_lights(
+    dir: fairline::Vec3,
+    up: fairline::Vec3,
+    array: &fairline::highlight::LightArray,
+) -> (fairline::Vec3, fairline::Vec3) {
+    let z = array.plane_normal();
+    let along = dir.dot(z);
+    if along <= 0.0 {
+        return (dir, up);
+    }
+    let mirrored = dir - 2.0 * along * z;
+    if mirrored.normalize_or_zero().cross(up).length() > 1e-3 {
+        (mirrored, up)
+    } else {
+        (mirrored, mirrored.any_orthonormal_vector())
+    }
 }

@@ -146,9 +146,9 @@ fn neighbour_line_distances(path: &Path) -> Vec<f64> {
 /// at 900 px) and an upper quartile of at least 11 px (measured: 8.5 and
 /// 13.6 px with the gaps measured on the screen; 7 and 12 px with the gaps
 /// on the surface). The same picture with every light of the mesh default
-/// spacing (8; before the readable lights, k = 4) or twice as dense fails:
-/// lines crowd (measured 7.3 / 10.2 px and 5.7 / 7.1 px; on the surface
-/// 6.7 / 9.9 px and 5 / 6 px).
+/// spacing (8; before the readable lights, k = 4) fails: lines crowd
+/// (measured 6 / 7.3 px). Twice as dense again is crowded or thinned by the
+/// readable drawing to fewer line pixels than the default picture.
 #[test]
 fn the_teapots_default_picture_has_readable_line_spacing_in_pixels() {
     let Some(teapot) = data("surfaces/teapot.json") else {
@@ -162,7 +162,7 @@ fn the_teapots_default_picture_has_readable_line_spacing_in_pixels() {
         args.extend_from_slice(extra);
         ok(&run(&args));
         let mut v = neighbour_line_distances(&png);
-        assert!(v.len() > 1000, "{name}: {} line pixels", v.len());
+        assert!(v.len() > 400, "{name}: {} line pixels", v.len());
         v.sort_by(f64::total_cmp);
         let q = |f: f64| v[((v.len() - 1) as f64 * f) as usize];
         eprintln!(
@@ -171,15 +171,22 @@ fn the_teapots_default_picture_has_readable_line_spacing_in_pixels() {
             q(0.5),
             q(0.75)
         );
-        (q(0.5), q(0.75))
+        (q(0.5), q(0.75), v.len())
     };
-    let readable = |(median, upper): (f64, f64)| median >= 6.5 && upper >= 11.0;
+    let readable = |(median, upper, _): (f64, f64, usize)| median >= 6.5 && upper >= 11.0;
     let default = quartiles(&[], "default");
     assert!(readable(default), "{default:?}");
-    for (spacing, name) in [("8", "dense"), ("4", "denser")] {
-        let dense = quartiles(&["--spacing", spacing], name);
-        assert!(!readable(dense), "{name}: {dense:?}");
-    }
+    assert!(default.2 > 1000, "{default:?}");
+    // twice the mesh default's density crowds the picture; four times as
+    // dense is either crowded too or thinned by the readable drawing to
+    // fewer line pixels than the default picture draws
+    let dense = quartiles(&["--spacing", "8"], "dense");
+    assert!(!readable(dense), "dense: {dense:?}");
+    let denser = quartiles(&["--spacing", "4"], "denser");
+    assert!(
+        !readable(denser) || denser.2 < default.2,
+        "denser: {denser:?} against {default:?}"
+    );
 }
 
 /// The impeller's default picture thins its lines by their gaps on the
