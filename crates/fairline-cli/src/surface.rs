@@ -138,10 +138,8 @@ pub fn camera(
     surfaces: &[BSplineSurface],
     view: Option<fairline::Vec3>,
 ) -> Result<(fairline::Vec3, fairline::Vec3)> {
-    Ok(crate::render::camera(
-        &tessellated_part(surfaces, 64)?,
-        view,
-    ))
+    let pv = fairline::picture::part_view(&tessellated_part(surfaces, 64)?);
+    Ok((view.unwrap_or(pv.view_dir), pv.up))
 }
 
 /// [`tessellated_part`] and the patch (index into `surfaces`) of every face
