@@ -4,8 +4,11 @@
 //! `(x − point) · n = 0`: polylines through the points where edges cross
 //! the plane (linear interpolation of the signed distances along the
 //! edge), chained across the triangles. A vertex on the plane counts as
-//! above it (distance ≥ 0), so every crossing is on an edge interior or at
-//! its lower end and each triangle is crossed by 0 or 2 of its edges.
+//! above it (distance ≥ 0), so each triangle is crossed by 0 or 2 of its
+//! edges, each crossing on an edge interior or at a vertex on the plane.
+//! A vertex on the plane is one point of the section however many of its
+//! edges cross there; a triangle whose two crossings are the same vertex
+//! only touches the plane and links nothing.
 //!
 //! The curvature of the section curve at a point comes from the surface
 //! (Meusnier's theorem): with `S` the shape operator of the library's
@@ -92,8 +95,10 @@ fn section_with(
         .iter()
         .map(|p| (*p - point).dot(n))
         .collect();
-    // the crossing of each crossed edge
+    // the crossing of each crossed edge, and the point it stands for: a
+    // vertex on the plane once, however many of its edges cross there
     let mut crossing: HashMap<EdgeId, usize> = HashMap::new();
+    let mut on_plane: HashMap<usize, usize> = HashMap::new();
     let mut points: Vec<Vec3> = Vec::new();
     // the surface normal and shape operator at each crossing
     let mut frames: Vec<(Vec3, DMat3)> = Vec::new();
@@ -111,6 +116,20 @@ fn section_with(
         let t = sa / (sa - sb); // sa and sb differ in sign: sa − sb ≠ 0
         let (pa, pb) = (mesh.position(a), mesh.position(b));
         let t = t.clamp(0.0, 1.0);
+        let at_vertex = if sa == 0.0 {
+            Some(a.idx())
+        } else if sb == 0.0 {
+            Some(b.idx())
+        } else {
+            None
+        };
+        if let Some(v) = at_vertex {
+            if let Some(&i) = on_plane.get(&v) {
+                crossing.insert(e, i);
+                continue;
+            }
+            on_plane.insert(v, points.len());
+        }
         crossing.insert(e, points.len());
         points.push(pa + t * (pb - pa));
         let nrm = ((1.0 - t) * pc.normals[a.idx()] + t * pc.normals[b.idx()]).normalize_or_zero();
@@ -126,9 +145,14 @@ fn section_with(
             .face_halfedges(f)
             .filter_map(|h| crossing.get(&mesh.edge(h)).copied())
             .collect();
-        if let [a, b] = hit[..] {
-            links[a].push(b);
-            links[b].push(a);
+        if let [a, b] = hit[..]
+            && a != b
+        {
+            // an edge in the plane is shared by two crossed triangles
+            if !links[a].contains(&b) {
+                links[a].push(b);
+                links[b].push(a);
+            }
         }
     }
     let extent = crate::mesh::bounding_box(mesh.positions())
@@ -292,6 +316,32 @@ mod tests {
         }
         let l = cv.length();
         assert!((l - 2.0 * std::f64::consts::PI * rho).abs() < 0.01 * l);
+    }
+
+    /// The plane through the equator of an icosphere holds vertices and
+    /// whole edges of the mesh: each vertex is one point of the curve, and
+    /// the curvature is 1/r at every point (no zero teeth where a vertex's
+    /// edges would give repeated points).
+    #[test]
+    fn a_plane_through_vertices_gives_each_vertex_once() {
+        let r = 2.0;
+        let m = shapes::icosphere(r, 4);
+        let on_equator = m.positions().iter().filter(|p| p.z.abs() < 1e-12).count();
+        assert!(on_equator > 8, "the icosphere has vertices on its equator");
+        let curves = plane_section(&m, Vec3::ZERO, Vec3::Z);
+        assert_eq!(curves.len(), 1, "{curves:?}");
+        let cv = &curves[0];
+        assert!(cv.closed);
+        let n = cv.points.len();
+        for i in 0..n {
+            let d = cv.points[i].distance(cv.points[(i + 1) % n]);
+            assert!(d > 1e-9, "repeated point {i} of {n}");
+        }
+        for k in &cv.curvature {
+            assert!((k * r - 1.0).abs() < 0.05, "{k} vs {}", 1.0 / r);
+        }
+        let l = cv.length();
+        assert!((l - 2.0 * std::f64::consts::PI * r).abs() < 0.01 * l);
     }
 
     #[test]
