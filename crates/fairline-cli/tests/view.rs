@@ -2681,12 +2681,14 @@ fn page_draws_continuity_classes_and_the_control_net() {
     );
 }
 
-/// Session files over the API and the command line: after a fairing step
-/// and with a region marked, `POST /api/session-file` writes the session
-/// (absolute file path, history position, the page's view) and the current
-/// state beside it; `fairline view --session` reopens the file at that
-/// state (two steps: as opened, restored) with the page's view handed
-/// back; a broken or foreign session file exits 2 naming it.
+/// Session files over the API and the command line: after two fairing
+/// steps, one undone, and with a region marked, `POST /api/session-file`
+/// writes the session (absolute file path, history position, the page's
+/// view) and each step's state beside it; `fairline view --session`
+/// reopens the file with the whole history (labels, commands, reports),
+/// at the saved position, the undone step still there to redo, and the
+/// page's view handed back; a broken or foreign session file exits 2
+/// naming it.
 #[test]
 fn session_file_saves_and_reopens_files_view_and_history_position() {
     let dir = tmp("view-session-api");
@@ -2696,6 +2698,12 @@ fn session_file_saves_and_reopens_files_view_and_history_position() {
     start_fair_job(&srv, json!({}));
     assert_eq!(srv.wait_job()["state"], "done");
     let (_, faired) = srv.get("/api/doc/0/positions");
+    start_fair_job(&srv, json!({"method": "diffusion-flow"}));
+    assert_eq!(srv.wait_job()["state"], "done");
+    let (_, faired_twice) = srv.get("/api/doc/0/positions");
+    assert_ne!(faired, faired_twice, "the second step moved the mesh");
+    let steps_before = srv.json("/api/session", None)["docs"][0]["history"]["steps"].clone();
+    assert_eq!(srv.json("/api/doc/0/undo", Some(&json!({})))["cursor"], 1);
     let view = json!({"active": 0, "names": ["panel.obj"], "camera": {"up": "z", "yaw": 0.3, "pitch": 0.2, "distance": 5.0, "target": [0.1, 0.0, 0.0]}, "controls": {"spacing": "0.5"}, "marks": [[1, 2, 3]]});
     let r = srv.json(
         "/api/session-file",
@@ -2703,11 +2711,11 @@ fn session_file_saves_and_reopens_files_view_and_history_position() {
     );
     let path = dir.join("work-session.json");
     assert_eq!(r["path"], json!(path.display().to_string()));
-    assert_eq!(r["states"].as_array().unwrap().len(), 1);
+    assert_eq!(r["states"].as_array().unwrap().len(), 2);
     let saved = common::json(&path);
     assert_eq!(saved["fairline_session"], 1);
     assert_eq!(saved["documents"][0]["cursor"], 1);
-    assert_eq!(saved["documents"][0]["steps"].as_array().unwrap().len(), 2);
+    assert_eq!(saved["documents"][0]["steps"].as_array().unwrap().len(), 3);
     assert_eq!(saved["view"], view);
     let file = PathBuf::from(saved["files"][0].as_str().unwrap());
     assert!(file.is_absolute() && file.ends_with("panel.obj"));
@@ -2730,16 +2738,16 @@ fn session_file_saves_and_reopens_files_view_and_history_position() {
     assert_eq!(info["restore"], view);
     assert_eq!(info["docs"][0]["history"]["cursor"], 1);
     assert_eq!(
-        info["docs"][0]["history"]["steps"]
-            .as_array()
-            .unwrap()
-            .len(),
-        2
+        info["docs"][0]["history"]["steps"], steps_before,
+        "the same steps, labels and commands"
     );
     let (_, restored) = srv.get("/api/doc/0/positions");
     assert_eq!(restored, faired, "the faired state is the current one");
     let (_, opened) = srv.get("/api/doc/0/positions?step=0");
     assert_ne!(opened, faired);
+    assert_eq!(srv.json("/api/doc/0/redo", Some(&json!({})))["cursor"], 2);
+    let (_, redone) = srv.get("/api/doc/0/positions");
+    assert_eq!(redone, faired_twice, "the undone step is there to redo");
     drop(srv);
     // broken and foreign session files: exit 2 naming the file
     let broken = dir.join("broken.json");

@@ -1308,8 +1308,15 @@ fn move_cursor(shared: &Shared, k: usize, by: i64) -> Answer {
 
 /// The current mesh (or surfaces) in a format, as bytes.
 pub(super) fn current_bytes(d: &Doc, ext: &str) -> Result<Vec<u8>, String> {
+    step_bytes(d, d.cursor, ext)
+}
+
+/// The state of step `n` of `d` (clamped to the history) as a file of
+/// format `ext`: a mesh format, or JSON for surfaces.
+pub(super) fn step_bytes(d: &Doc, n: usize, ext: &str) -> Result<Vec<u8>, String> {
+    let step = d.step(Some(n));
     if ext == "json" {
-        let Some(s) = &d.current().surfaces else {
+        let Some(s) = &step.surfaces else {
             return Err("JSON is for surfaces; meshes download as obj, ply, off or stl".into());
         };
         return Ok(fairline::io::surfaces_to_json(s).into_bytes());
@@ -1317,7 +1324,9 @@ pub(super) fn current_bytes(d: &Doc, ext: &str) -> Result<Vec<u8>, String> {
     if !matches!(ext, "obj" | "ply" | "off" | "stl") {
         return Err(format!("unknown format `{ext}` (obj, ply, off, stl, json)"));
     }
-    let mesh = d.mesh_now();
+    let mut mesh = d.input_mesh().clone();
+    mesh.set_positions(step.positions.to_vec())
+        .map_err(|e| e.to_string())?;
     let dir = std::env::temp_dir();
     let name = format!(
         "fairline-view-{}-{}.{ext}",

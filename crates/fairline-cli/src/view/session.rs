@@ -6,23 +6,23 @@
 //! - `POST /api/session-file` `{"name": "NAME.json", "view": {...}}`
 //!   writes the session into the save folder (atomically; an existing
 //!   session file of that name is replaced, an input file or a link
-//!   never). For every document whose current step is not the opening
-//!   one, the current state is written beside it as
-//!   `STEM-session-stepN.EXT` (the input's mesh format; surfaces as JSON)
-//!   and named in the session: the history's states live only in the
-//!   workbench's memory, so a reopened session has two steps, the file as
-//!   opened and the saved state, with the earlier steps' labels and
-//!   commands kept in the restored step's report. Answers `path`,
+//!   never). Every step of every document after the opening one, the
+//!   redo tail included, is written beside it as `STEM-docK-stepN.EXT`
+//!   (the input's mesh format; surfaces as JSON) and named in the session,
+//!   so a reopened session has the whole history — undo, redo, each step's
+//!   label, command and report — at the saved position. Answers `path`,
 //!   `states` (the state files written) and `command`.
 //!
 //! The format (`"fairline_session": 1`): `files` (absolute paths),
-//! `grid`, `documents[k]` with `cursor`, `steps` (`label`, `command` of
-//! each step up to the cursor) and `state` (the state file, relative to
-//! the session file's folder, or null at the opening step), and `view`:
-//! what the page restores (opaque to the server).
+//! `grid`, `documents[k]` with `cursor`, `steps` (`label`, `command`,
+//! `report` and `state` of each step: the state file relative to the
+//! session file's folder, null for the opening step) and `state` (the
+//! current step's file), and `view`: what the page restores (opaque to the
+//! server). A session whose steps name no state files (written by an
+//! earlier fairline) reopens with two steps: as opened and `state`.
 
 use super::api::{
-    Answer, Shared, bad, current_bytes, error, json_answer, lock, parse, safe_file_name,
+    Answer, Shared, bad, error, json_answer, lock, parse, safe_file_name, step_bytes,
 };
 use super::doc::{Doc, Step, shell_word, tessellate_all};
 use crate::error::bad_input;
@@ -58,7 +58,7 @@ pub struct SessionFile {
 pub struct SessionDoc {
     /// The current step when the session was saved.
     pub cursor: usize,
-    /// Label and command of each step up to the cursor.
+    /// Label, command, report and state file of each step.
     #[serde(default)]
     pub steps: Vec<Value>,
     /// The current state's file (relative to the session file's folder),
@@ -99,53 +99,91 @@ pub fn resolve(base: &Path, path: &Path) -> PathBuf {
     }
 }
 
-/// Moves `doc` to the state saved in `entry` (the state file, relative to
-/// `base`): a second step after the opening one. Returns a warning when
-/// the state cannot be restored (the document stays as opened).
-pub fn restore(doc: &mut Doc, entry: &SessionDoc, base: &Path) -> Option<String> {
-    let state = entry.state.as_ref()?;
-    let path = resolve(base, state);
-    let loaded: Result<(
-        Vec<fairline::Vec3>,
-        Option<Vec<fairline::bspline::BSplineSurface>>,
-    )> = (|| {
-        if doc.is_surface() {
-            let s = crate::surface::load_surfaces(&path)?;
-            let (mesh, _) = tessellate_all(&s, doc.grid)?;
-            Ok((mesh.positions().to_vec(), Some(s)))
-        } else {
-            Ok((fairline::io::read_mesh(&path)?.positions().to_vec(), None))
-        }
-    })();
-    let (positions, surfaces) = match loaded {
-        Ok(x) => x,
-        Err(e) => {
-            return Some(format!(
-                "{}: the saved state was not restored ({e:#}); {} stays as opened",
-                path.display(),
-                doc.name
-            ));
-        }
+/// Reads one saved state: the positions of `doc`'s drawn mesh and, for a
+/// surface document, the surfaces.
+fn load_state(
+    doc: &Doc,
+    path: &Path,
+) -> Result<(
+    Vec<fairline::Vec3>,
+    Option<Vec<fairline::bspline::BSplineSurface>>,
+)> {
+    let (positions, surfaces) = if doc.is_surface() {
+        let s = crate::surface::load_surfaces(path)?;
+        let (mesh, _) = tessellate_all(&s, doc.grid)?;
+        (mesh.positions().to_vec(), Some(s))
+    } else {
+        (fairline::io::read_mesh(path)?.positions().to_vec(), None)
     };
     if positions.len() != doc.tri.vertex_count() {
-        return Some(format!(
-            "{}: {} vertices, but {} has {}; the saved state was not restored",
-            path.display(),
+        anyhow::bail!(
+            "{} vertices, but {} has {}",
             positions.len(),
             doc.name,
             doc.tri.vertex_count()
-        ));
+        );
     }
-    let last = entry.steps.last().cloned().unwrap_or(Value::Null);
-    let label = last["label"].as_str().unwrap_or("step").to_string();
-    let command = last["command"].as_str().unwrap_or("").to_string();
-    doc.push(Step::new(
-        format!("{label} (restored, step {} of the session)", entry.cursor),
-        command,
-        json!({"command": "session", "state": path.display().to_string(), "history": entry.steps}),
-        Arc::new(positions),
-        surfaces.map(Arc::new),
-    ));
+    Ok((positions, surfaces))
+}
+
+/// Rebuilds `doc`'s history from `entry` (state files relative to `base`)
+/// and moves to the saved position. Returns a warning when a state cannot
+/// be restored: the history then ends before it.
+pub fn restore(doc: &mut Doc, entry: &SessionDoc, base: &Path) -> Option<String> {
+    let per_step = entry.steps.len() > 1
+        && entry.steps[1..]
+            .iter()
+            .all(|s| s["state"].as_str().is_some());
+    // (state file, label, command, report) of each step after the opening
+    let saved: Vec<(PathBuf, String, String, Value)> = if per_step {
+        entry.steps[1..]
+            .iter()
+            .map(|s| {
+                (
+                    resolve(base, Path::new(s["state"].as_str().unwrap_or_default())),
+                    s["label"].as_str().unwrap_or("step").to_string(),
+                    s["command"].as_str().unwrap_or("").to_string(),
+                    s["report"].clone(),
+                )
+            })
+            .collect()
+    } else {
+        let state = entry.state.as_ref()?;
+        let path = resolve(base, state);
+        let last = entry.steps.last().cloned().unwrap_or(Value::Null);
+        vec![(
+            path.clone(),
+            format!(
+                "{} (restored, step {} of the session)",
+                last["label"].as_str().unwrap_or("step"),
+                entry.cursor
+            ),
+            last["command"].as_str().unwrap_or("").to_string(),
+            json!({"command": "session", "state": path.display().to_string(), "history": entry.steps}),
+        )]
+    };
+    let cursor = if per_step { entry.cursor } else { 1 };
+    for (path, label, command, report) in saved {
+        match load_state(doc, &path) {
+            Ok((positions, surfaces)) => doc.push(Step::new(
+                label,
+                command,
+                report,
+                Arc::new(positions),
+                surfaces.map(Arc::new),
+            )),
+            Err(e) => {
+                let kept = doc.history.len();
+                doc.set_cursor(cursor.min(kept - 1));
+                return Some(format!(
+                    "{}: the saved state was not restored ({e:#}); {} keeps {kept} of its steps",
+                    path.display(),
+                    doc.name
+                ));
+            }
+        }
+    }
+    doc.set_cursor(cursor);
     None
 }
 
@@ -204,24 +242,31 @@ pub fn save(shared: &Shared, body: &[u8]) -> Answer {
     let mut documents = Vec::new();
     let mut states = Vec::new();
     for (k, d) in st.docs.iter().enumerate() {
-        let steps: Vec<Value> = d.history[..=d.cursor]
-            .iter()
-            .map(|s| json!({"label": s.label, "command": s.command}))
-            .collect();
-        let state = if d.cursor == 0 {
-            None
-        } else {
-            let file = format!("{stem}-doc{k}-step{}.{}", d.cursor, state_ext(d));
-            let bytes = match current_bytes(d, &state_ext(d)) {
-                Ok(b) => b,
-                Err(e) => return bad(e),
+        let ext = state_ext(d);
+        let mut steps = Vec::new();
+        for (n, step) in d.history.iter().enumerate() {
+            let file = if n == 0 {
+                None
+            } else {
+                let file = format!("{stem}-doc{k}-step{n}.{ext}");
+                let bytes = match step_bytes(d, n, &ext) {
+                    Ok(b) => b,
+                    Err(e) => return bad(e),
+                };
+                if let Err(a) = write_in_save_dir(&st.docs, &dir.join(&file), &bytes) {
+                    return a;
+                }
+                states.push(dir.join(&file).display().to_string());
+                Some(file)
             };
-            if let Err(a) = write_in_save_dir(&st.docs, &dir.join(&file), &bytes) {
-                return a;
-            }
-            states.push(dir.join(&file).display().to_string());
-            Some(PathBuf::from(file))
-        };
+            steps.push(json!({
+                "label": step.label,
+                "command": step.command,
+                "report": step.report,
+                "state": file,
+            }));
+        }
+        let state = steps[d.cursor]["state"].as_str().map(PathBuf::from);
         documents.push(SessionDoc {
             cursor: d.cursor,
             steps,
