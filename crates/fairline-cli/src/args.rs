@@ -230,7 +230,7 @@ pub fn to_input_error(e: HighlightError) -> anyhow::Error {
 /// squares, refined onto the true zero; JSON lines carry "uv" and "points".
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline highlight fairline-demo/sphere.ply -o sphere-lines.json --png sphere-lines.png\n  fairline highlight fairline-demo/dented-panel.obj --direction 0,1,0 --plane-normal 0,0,1 --plane-point 0,0,5 --spacing 0.1 -o lines.obj\n  fairline highlight fairline-demo/dented-panel.obj --circle-center 0,0,5 --circle-axis 0,0,1 --radii 1,2,3 --band 0.05 -o circles.json\n  fairline highlight fairline-demo/bspline-panel-dented.json --circle-center 2,1.5,2.5 --circle-axis 0,0,1 --radii 2.4,2.6,2.8,3.0 --grid 300 -o surface-lines.json --png surface-lines.png --svg uv.svg"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline highlight fairline-demo/sphere.ply -o sphere-lines.json --png sphere-lines.png\n  fairline highlight fairline-demo/dented-panel.obj --direction 0,1,0 --plane-normal 0,0,1 --plane-point 0,0,5 --spacing 0.1 -o lines.obj\n  fairline highlight fairline-demo/dented-panel.obj --circle-center 0,0,5 --circle-axis 0,0,1 --radii 1,2,3 --band 0.05 -o circles.json\n  fairline highlight fairline-demo/bspline-panel-dented.json -o lines.igs --curve-tolerance 1e-4\n  fairline highlight fairline-demo/bspline-panel-dented.json --circle-center 2,1.5,2.5 --circle-axis 0,0,1 --radii 2.4,2.6,2.8,3.0 --grid 300 -o surface-lines.json --png surface-lines.png --svg uv.svg"
 )]
 pub struct HighlightArgs {
     /// Input triangle (or polygon) mesh.
@@ -256,9 +256,21 @@ pub struct HighlightArgs {
     /// Also compute highlight bands of this radius (mesh units).
     #[arg(long, value_name = "RHO")]
     pub band: Option<f64>,
-    /// Output polylines (.json or .obj).
-    #[arg(short, long, value_name = "LINES.json|.obj")]
+    /// Output: polylines (.json or .obj), or B-spline curves for CAD
+    /// (.igs/.iges: one cubic entity 126 per line within
+    /// --curve-tolerance, named HLm by its light m, or PkLj on patch k of a
+    /// surface file; the surface file's length unit, millimetres for a
+    /// mesh).
+    #[arg(short, long, value_name = "LINES.json|.obj|.igs")]
     pub output: PathBuf,
+    /// With -o LINES.igs: the largest distance from a curve to its line
+    /// (default 1e-4 of the part's bounding-box diagonal; for a mesh at
+    /// least a tenth of its mean edge length, the scale at which its lines
+    /// bend at every edge). Lines no cubic follows within it are written as
+    /// exact polylines (degree 1). The report's `curves` key gives the
+    /// distance reached, the control points and the polylines.
+    #[arg(long, value_name = "DISTANCE")]
+    pub curve_tolerance: Option<f64>,
     /// Picture of the lines on the shaded mesh (or surface).
     #[arg(long, value_name = "IMG.png")]
     pub png: Option<PathBuf>,

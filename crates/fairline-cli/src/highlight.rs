@@ -21,19 +21,55 @@ pub enum LinesFormat {
     Json,
     /// Wavefront OBJ `l` elements.
     Obj,
+    /// B-spline curves in IGES ([`fairline_commands::curves`]).
+    Iges,
 }
 
 /// The format of `path` from its extension.
 pub fn lines_format(path: &Path) -> Result<LinesFormat> {
-    crate::output::require_extension("-o", path, &["json", "obj"])?;
-    let obj = path
+    crate::output::require_extension("-o", path, &["json", "obj", "igs", "iges"])?;
+    let ext = path
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-    Ok(if obj {
-        LinesFormat::Obj
-    } else {
-        LinesFormat::Json
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    Ok(match ext.as_str() {
+        "obj" => LinesFormat::Obj,
+        "igs" | "iges" => LinesFormat::Iges,
+        _ => LinesFormat::Json,
     })
+}
+
+/// Refuses a `--curve-tolerance` that is not a positive number.
+pub fn check_curve_tolerance(t: Option<f64>) -> Result<()> {
+    match t {
+        Some(t) if !(t > 0.0 && t.is_finite()) => Err(bad_input(format!(
+            "--curve-tolerance must be a positive number, got {t}"
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// Writes `lines` as B-spline curves of IGES entities 126 within `tol` in
+/// `unit`; returns the report's `curves` key.
+pub fn write_curves(
+    path: &Path,
+    lines: &[fairline_commands::curves::LinePolyline<'_>],
+    tol: f64,
+    unit: Option<&fairline::io::units::LengthUnit>,
+) -> Result<serde_json::Value> {
+    let out = fairline_commands::curves::fit(lines, tol);
+    let mut options = fairline::io::iges_write::IgesWriteOptions::default();
+    if let Some(u) = unit {
+        options = options.unit(u.clone());
+    }
+    fairline::io::iges_write::write_curves_iges(path, &out.curves, &options)?;
+    let left_out = out.summary["left_out"].as_u64().unwrap_or(0);
+    if left_out > 0 {
+        crate::output::warn(format!(
+            "{left_out} line(s) of fewer than two distinct points are not written as curves"
+        ));
+    }
+    Ok(out.summary)
 }
 
 /// Writes lines (and bands) atomically in the format of `path`'s
@@ -46,6 +82,10 @@ pub fn write_lines(
     radii: Option<&[f64]>,
 ) -> Result<()> {
     match lines_format(path)? {
+        LinesFormat::Iges => Err(anyhow::anyhow!(
+            "{}: curves are written by write_curves",
+            path.display()
+        )),
         LinesFormat::Json => crate::common::write_json(
             path,
             &fairline::highlight::highlight_lines_json(lines, bands, radii),
@@ -65,7 +105,12 @@ pub fn run(args: HighlightArgs) -> Result<()> {
     if crate::surface::is_surface_path(&args.mesh) {
         return crate::surface_highlight::run(args);
     }
-    lines_format(&args.output)?;
+    let format = lines_format(&args.output)?;
+    if format != LinesFormat::Iges && args.curve_tolerance.is_some() {
+        return Err(bad_input(
+            "--curve-tolerance is for curves: give -o LINES.igs".to_string(),
+        ));
+    }
     if let Some(p) = &args.png {
         crate::output::require_extension("--png", p, &["png"])?;
     }
@@ -77,6 +122,7 @@ pub fn run(args: HighlightArgs) -> Result<()> {
         .output_opt("--report", args.report.as_deref())
         .check()?;
     check_view_and_band(&args)?;
+    check_curve_tolerance(args.curve_tolerance)?;
     let (mesh, _) = read_triangles(&args.mesh)?;
     let settings = HighlightSettings {
         lights: mesh_lights(&args)?,
@@ -106,12 +152,22 @@ pub fn run(args: HighlightArgs) -> Result<()> {
     {
         eprintln!("{w}");
     }
-    write_lines(
-        &args.output,
-        &out.lines,
-        out.bands.as_ref(),
-        out.radii.as_deref(),
-    )?;
+    if format == LinesFormat::Iges {
+        let summary = write_curves(
+            &args.output,
+            &fairline_commands::curves::mesh_lines(&out.lines),
+            fairline_commands::curves::mesh_tolerance(args.curve_tolerance, &mesh),
+            None,
+        )?;
+        out.report.set("curves", summary);
+    } else {
+        write_lines(
+            &args.output,
+            &out.lines,
+            out.bands.as_ref(),
+            out.radii.as_deref(),
+        )?;
+    }
     let counts = out.lines.counts();
     if let Some(png) = &args.png {
         let pv = fairline::picture::part_view(&mesh);

@@ -215,7 +215,8 @@ fn picture_key(results: &[(usize, PatchHighlights)]) -> Vec<([f32; 3], String)> 
 pub fn run(args: HighlightArgs) -> Result<()> {
     let job = output_job(&args)?;
     check_options(&args)?;
-    let all = crate::surface::load_surfaces(&args.mesh)?;
+    let file = crate::surface::load_surface_file(&args.mesh)?;
+    let (all, unit) = (file.surfaces, file.unit);
     let settings = SurfaceHighlightSettings {
         lights: highlight_lights(&args)?,
         grid: args.grid,
@@ -266,7 +267,21 @@ pub fn run(args: HighlightArgs) -> Result<()> {
     if let Some(p) = &args.svg {
         write_svg(&args, surfaces, results, p)?;
     }
-    write_json(&args.output, &out.document)?;
+    if crate::highlight::lines_format(&args.output)? == crate::highlight::LinesFormat::Iges {
+        let tol = fairline_commands::curves::tolerance(
+            args.curve_tolerance,
+            crate::surface::surfaces_diagonal(surfaces),
+        );
+        let summary = crate::highlight::write_curves(
+            &args.output,
+            &fairline_commands::curves::surface_lines(results),
+            tol,
+            unit.as_ref(),
+        )?;
+        out.report.set("curves", summary);
+    } else {
+        write_json(&args.output, &out.document)?;
+    }
     print_warnings(&out.report);
     write_report(args.report.as_deref(), &out.report)?;
     job.finish(format_args!(
@@ -280,7 +295,15 @@ pub fn run(args: HighlightArgs) -> Result<()> {
 /// The output checks of the command (file kinds by extension, nothing
 /// written over an input) and its job.
 fn output_job(args: &HighlightArgs) -> Result<crate::output::Job> {
-    require_extension("-o", &args.output, &["json"])?;
+    require_extension("-o", &args.output, &["json", "igs", "iges"])?;
+    crate::highlight::check_curve_tolerance(args.curve_tolerance)?;
+    if args.curve_tolerance.is_some()
+        && crate::highlight::lines_format(&args.output)? != crate::highlight::LinesFormat::Iges
+    {
+        return Err(crate::error::bad_input(
+            "--curve-tolerance is for curves: give -o LINES.igs".to_string(),
+        ));
+    }
     if let Some(p) = &args.png {
         require_extension("--png", p, &["png"])?;
     }

@@ -193,6 +193,15 @@ fn bad_input_exits_with_2_and_writes_nothing() {
             o_s,
         ],
         vec!["highlight", m, "--band", "-2", "-o", o_s],
+        vec!["highlight", m, "--curve-tolerance", "0.1", "-o", o_s],
+        vec![
+            "highlight",
+            m,
+            "--curve-tolerance",
+            "-1",
+            "-o",
+            d.join("x.igs").to_str().unwrap(),
+        ],
         vec!["detect", m, "-o", d.join("r.obj").to_str().unwrap()],
         vec!["detect", m, "--threshold", "0", "-o", o_s],
         vec![
@@ -222,6 +231,7 @@ fn bad_input_exits_with_2_and_writes_nothing() {
             String::from_utf8_lossy(&o.stderr)
         );
         assert!(!out.exists(), "{args:?} wrote output");
+        assert!(!d.join("x.igs").exists(), "{args:?} wrote output");
     }
     // never overwrites the input
     let o = run(&["highlight", m, "-o", m]);
@@ -627,5 +637,51 @@ fn demo_finds_the_planted_dent() {
     for png in ["detect-curved-clean.png", "detect-curved-bump.png"] {
         let (dark, _) = dark_and_red(&out.join(png));
         assert!(dark > 200, "{png}: {dark} dark pixels");
+    }
+}
+
+/// `-o LINES.igs`: one IGES entity 126 per line, a cubic with far fewer
+/// control points than the line has points on a smooth bowl, named by its
+/// light (`HLm` in the directory entry's label field), within the
+/// tolerance the report gives; the JSON output of the same run has the
+/// same lines.
+#[test]
+fn lines_as_iges_curves() {
+    let d = tmp("curves");
+    let mesh = d.join("bowl.obj");
+    std::fs::write(&mesh, height_field_obj(61, |x, y| 0.1 * (x * x + y * y))).unwrap();
+    let m = mesh.to_str().unwrap();
+    let (igs, json, rep) = (d.join("lines.igs"), d.join("lines.json"), d.join("r.json"));
+    ok(&run(&[
+        "highlight",
+        m,
+        "-o",
+        igs.to_str().unwrap(),
+        "--report",
+        rep.to_str().unwrap(),
+    ]));
+    ok(&run(&["highlight", m, "-o", json.to_str().unwrap()]));
+    let lines = common::json(&json)["lines"].as_array().unwrap().len();
+    let r = common::json(&rep);
+    let c = &r["curves"];
+    assert_eq!(c["curves"].as_u64().unwrap() as usize, lines, "{c}");
+    assert!(c["max_deviation"].as_f64().unwrap() <= c["tolerance"].as_f64().unwrap());
+    assert!(
+        c["control_points"].as_u64().unwrap() < c["points"].as_u64().unwrap() / 3,
+        "{c}"
+    );
+    let text = std::fs::read_to_string(&igs).unwrap();
+    let records: Vec<&str> = text.lines().collect();
+    assert!(records.iter().all(|l| l.len() == 80), "80-column records");
+    // directory entries: two records per entity, the second with the label
+    let dir: Vec<&str> = records
+        .iter()
+        .copied()
+        .filter(|l| &l[72..73] == "D")
+        .collect();
+    assert_eq!(dir.len(), 2 * lines);
+    for pair in dir.chunks(2) {
+        assert_eq!(pair[0][..8].trim(), "126");
+        assert!(pair[1][56..64].trim().starts_with("HL"), "{}", pair[1]);
     }
 }

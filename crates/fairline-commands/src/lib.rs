@@ -22,6 +22,7 @@
 
 pub mod continuity;
 pub mod curvature;
+pub mod curves;
 pub mod detect;
 pub mod deviation;
 pub mod draft;

@@ -17,6 +17,10 @@
 //! (142's `CPTR`) is not written (`CPTR = 0`, `PREF = 1`: the parameter
 //! space curve is the preferred representation).
 //!
+//! [`curves_to_iges`] writes model-space curves instead (highlight lines
+//! as curves): each an independent entity 126, not planar, named by the
+//! directory entry's label and subscript (fields 18–19).
+//!
 //! Reals are written in Rust's shortest round-trip form (`{:?}`, with the
 //! exponent as `E` and a decimal point always present), so that reading the
 //! file back with [`crate::io::read_iges`] gives every control point,
@@ -25,6 +29,7 @@
 use std::io::Write;
 use std::path::Path;
 
+use super::model_curve::ModelCurve;
 use super::units::LengthUnit;
 use super::{IoError, atomic_write};
 use crate::bspline::{BSplineSurface, TrimCurve};
@@ -107,6 +112,9 @@ struct Entity {
     form: i64,
     status: &'static str,
     params: Vec<String>,
+    /// Entity label and subscript (directory fields 18 and 19), shown
+    /// by CAD systems as the entity's name.
+    name: Option<(String, usize)>,
 }
 
 /// Status numbers (IGES 5.3 §2.2.4.4.9): visible; independent or physically
@@ -135,6 +143,7 @@ impl Model {
             form: 0,
             status: if trimmed { DEPENDENT } else { INDEPENDENT },
             params: entity_128(s),
+            name: None,
         });
         if !trimmed {
             return;
@@ -150,6 +159,7 @@ impl Model {
                         form: 0,
                         status: DEPENDENT_PARAMETRIC,
                         params: entity_126(c),
+                        name: None,
                     })
                 })
                 .collect();
@@ -163,6 +173,7 @@ impl Model {
                     form: 0,
                     status: DEPENDENT_PARAMETRIC,
                     params,
+                    name: None,
                 })
             };
             // CRTN = 0 (unspecified), SPTR, BPTR, CPTR = 0, PREF = 1.
@@ -177,6 +188,7 @@ impl Model {
                     "0".into(),
                     "1".into(),
                 ],
+                name: None,
             }));
         }
         // PTS, N1 = 1 (outer boundary given), N2 holes, PTO, PTI…
@@ -191,6 +203,7 @@ impl Model {
             form: 0,
             status: INDEPENDENT,
             params,
+            name: None,
         });
     }
 }
@@ -290,6 +303,21 @@ pub fn surfaces_to_iges(
     surfaces: &[BSplineSurface],
     options: &IgesWriteOptions,
 ) -> Result<String, String> {
+    check_options(options)?;
+    let mut model = Model::default();
+    for s in surfaces {
+        model.add_surface(s);
+    }
+    Ok(model_text(
+        &model,
+        options,
+        "fairline: B-spline surfaces (entity 128, trims as 144/142/126)",
+    ))
+}
+
+/// Fails when a string of the options is not plain printable ASCII of at
+/// most 60 characters.
+fn check_options(options: &IgesWriteOptions) -> Result<(), String> {
     for (what, s) in [
         ("unit name", &options.unit.name),
         ("timestamp", &options.timestamp),
@@ -301,20 +329,112 @@ pub fn surfaces_to_iges(
             ));
         }
     }
+    Ok(())
+}
+
+/// A model-space curve to be written, with the name a CAD system shows
+/// for it: a label of at most 8 printable ASCII characters and a number.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedCurve {
+    /// The curve.
+    pub curve: ModelCurve,
+    /// Label (directory field 18; cut to 8 characters, spaces removed).
+    pub label: String,
+    /// Subscript (directory field 19).
+    pub number: usize,
+}
+
+/// The whole IGES file for model-space curves: each an independent entity
+/// 126 (rational B-spline curve, IGES 5.3 §4.23, non-planar) named by its
+/// label and number. Fails when a string of the options is not plain
+/// printable ASCII, or a curve's knot vector does not fit its points.
+pub fn curves_to_iges(curves: &[NamedCurve], options: &IgesWriteOptions) -> Result<String, String> {
+    check_options(options)?;
     let mut model = Model::default();
-    for s in surfaces {
-        model.add_surface(s);
+    for (k, c) in curves.iter().enumerate() {
+        let m = &c.curve;
+        if m.points.len() < 2
+            || m.knots.len() != m.points.len() + m.degree + 1
+            || m.weights
+                .as_ref()
+                .is_some_and(|w| w.len() != m.points.len())
+        {
+            return Err(format!(
+                "curve {k} ({} {}): {} control points, degree {}, {} knots",
+                c.label,
+                c.number,
+                m.points.len(),
+                m.degree,
+                m.knots.len()
+            ));
+        }
+        let label: String = c
+            .label
+            .chars()
+            .filter(|ch| ch.is_ascii_graphic())
+            .take(8)
+            .collect();
+        model.push(Entity {
+            entity_type: 126,
+            form: 0,
+            status: INDEPENDENT,
+            params: entity_126_model(m),
+            name: Some((label, c.number)),
+        });
     }
+    Ok(model_text(
+        &model,
+        options,
+        "fairline: model-space curves (entity 126)",
+    ))
+}
+
+/// Parameters of entity 126 for a model-space curve (not planar).
+fn entity_126_model(c: &ModelCurve) -> Vec<String> {
+    let n = c.points.len();
+    let closed = c.points.first() == c.points.last();
+    let mut p = Vec::with_capacity(12 + c.knots.len() + 4 * n);
+    p.push((n - 1).to_string());
+    p.push(c.degree.to_string());
+    p.push("0".into());
+    p.push(u8::from(closed).to_string());
+    p.push(u8::from(c.weights.is_none()).to_string());
+    p.push("0".into());
+    p.extend(c.knots.iter().map(|&k| iges_real(k)));
+    match &c.weights {
+        Some(w) => p.extend(w.iter().map(|&w| iges_real(w))),
+        None => p.extend(std::iter::repeat_n("1.0".to_string(), n)),
+    }
+    for q in &c.points {
+        p.extend([q.x, q.y, q.z].map(iges_real));
+    }
+    let (t0, t1) = (c.knots[c.degree], c.knots[n]);
+    p.extend([t0, t1, 0.0, 0.0, 0.0].map(iges_real));
+    p
+}
+
+/// Writes `curves` as an IGES file ([`curves_to_iges`]), atomically.
+pub fn write_curves_iges(
+    path: impl AsRef<Path>,
+    curves: &[NamedCurve],
+    options: &IgesWriteOptions,
+) -> Result<(), IoError> {
+    let path = path.as_ref();
+    let text = curves_to_iges(curves, options).map_err(|message| IoError::InvalidData {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    atomic_write(path, |w| w.write_all(text.as_bytes()))
+}
+
+/// The text of an IGES file of `model`: start section `summary`, the
+/// global section of `options`, directory and parameter data, terminate.
+fn model_text(model: &Model, options: &IgesWriteOptions, summary: &str) -> String {
     let mut out = String::new();
     let record = |out: &mut String, data: &str, letter: char, seq: usize| {
         out.push_str(&format!("{data:<72}{letter}{seq:>7}\n"));
     };
-    record(
-        &mut out,
-        "fairline: B-spline surfaces (entity 128, trims as 144/142/126)",
-        'S',
-        1,
-    );
+    record(&mut out, summary, 'S', 1);
     let product = hollerith(&options.product);
     let unit = options.unit.iges_name();
     let global: Vec<String> = vec![
@@ -362,16 +482,18 @@ pub fn surfaces_to_iges(
             "{t:>8}{pseq:>8}{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}D{de:>7}\n",
             0, 0, 0, 0, 0, 0, e.status
         ));
+        let (label, number) = match &e.name {
+            Some((l, n)) => (l.as_str(), *n),
+            None => ("", 0),
+        };
         dir.push_str(&format!(
-            "{t:>8}{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}D{:>7}\n",
+            "{t:>8}{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}{label:>8}{number:>8}D{:>7}\n",
             0,
             0,
             lines.len(),
             e.form,
             "",
             "",
-            "",
-            0,
             de + 1
         ));
         for l in lines {
@@ -389,7 +511,7 @@ pub fn surfaces_to_iges(
         pseq - 1
     );
     record(&mut out, &terminate, 'T', 1);
-    Ok(out)
+    out
 }
 
 /// Writes `surfaces` as an IGES file (see the module documentation),

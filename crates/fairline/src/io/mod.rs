@@ -20,6 +20,7 @@
 //!
 //! The format is chosen by the file extension ([`MeshFormat::from_path`]).
 
+pub mod curve_fit;
 pub mod iges_read;
 pub mod iges_write;
 pub mod model_curve;
