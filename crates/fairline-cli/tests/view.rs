@@ -1139,6 +1139,16 @@ fn page_in_headless_chromium_shades_stripes_and_runs_a_repair_session() {
         region["faces"].as_array().is_some_and(|f| !f.is_empty()),
         "{region}"
     );
+    b.eval("document.getElementById('dl-curves').click()");
+    b.wait_for("window.fairline.state.lastDownload && window.fairline.state.lastDownload.name.endsWith('-lines.igs')", 60);
+    let curves = b.eval("window.fairline.state.lastDownload.curves");
+    assert!(curves["curves"].as_u64().unwrap() > 0, "{curves}");
+    assert!(
+        b.eval("document.getElementById('command').textContent")
+            .as_str()
+            .unwrap()
+            .ends_with("-o lines.igs")
+    );
     // the downloaded region is valid input for the CLI
     std::fs::write(dir.join("region.json"), region.to_string()).unwrap();
     ok(&run(&[
@@ -2976,4 +2986,59 @@ fn page_opens_on_the_part_view_with_screen_spaced_stripes_and_overlays_of_the_st
     assert_eq!(again["floats"], json!(new.len()), "{again}");
     let shown: Vec<f64> = serde_json::from_value(again["first"].clone()).unwrap();
     assert_eq!(shown, first(&new));
+}
+
+/// `POST /api/doc/0/lines-curves`: the lines of the page's lights as IGES
+/// curves, the same file the equivalent command writes (same curves, same
+/// control points, same deviation); a bad tolerance or no light is a 400.
+#[test]
+fn lines_as_curves_match_the_equivalent_command() {
+    let dir = tmp("view-curves");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 23);
+    let srv = start(&[&mesh], &dir);
+    let light: Value = serde_json::from_str(LIGHT).unwrap();
+    let r = srv.json("/api/doc/0/lines-curves", Some(&json!({"light": light})));
+    assert_eq!(r["name"], "panel-lines.igs");
+    let iges = r["iges"].as_str().unwrap();
+    assert!(
+        iges.starts_with("fairline: model-space curves"),
+        "{}",
+        &iges[..80]
+    );
+    let command = r["command"].as_str().unwrap();
+    assert!(command.starts_with("fairline highlight ") && command.ends_with("-o lines.igs"));
+    // the equivalent command, run as the CLI
+    let words: Vec<String> = command
+        .split_whitespace()
+        .skip(1)
+        .map(|w| w.trim_matches('\'').to_string())
+        .collect();
+    let out = dir.join("lines.igs");
+    let rep = dir.join("r.json");
+    let mut args: Vec<String> = words[..words.len() - 1].to_vec();
+    args.push(out.display().to_string());
+    args.extend(["--report".into(), rep.display().to_string()]);
+    let argv: Vec<&str> = args.iter().map(String::as_str).collect();
+    let o = run(&argv);
+    ok(&o);
+    let cli = common::json(&rep)["curves"].clone();
+    for key in [
+        "curves",
+        "control_points",
+        "points",
+        "polylines",
+        "max_deviation",
+        "tolerance",
+    ] {
+        assert_eq!(
+            r["curves"][key], cli[key],
+            "{key}: {} vs {cli}",
+            r["curves"]
+        );
+    }
+    assert!(r["curves"]["curves"].as_u64().unwrap() > 0);
+    for bad in [json!({"light": light, "tolerance": -1.0}), json!({})] {
+        assert_eq!(srv.post("/api/doc/0/lines-curves", &bad).0, 400, "{bad}");
+    }
 }

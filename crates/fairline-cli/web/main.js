@@ -357,6 +357,23 @@ function downloadLights() {
   offerJson(value, 'lights.json');
 }
 
+// The highlight lines of the current lights as IGES curves for CAD.
+async function downloadCurves() {
+  const k = state.active;
+  const l = lights[k];
+  const circ = l.mode === 4 || l.mode === 5;
+  const body = circ ? { circular: l.circular(viewer.camera) } : { light: l.array(viewer.camera) };
+  const step = shownStep();
+  if (step !== undefined) body.step = step;
+  status('fitting curves to the lines…');
+  const r = await api.json(`/api/doc/${k}/lines-curves`, body);
+  state.lastDownload = { name: r.name, curves: r.curves };
+  offer(new Blob([r.iges], { type: 'model/iges' }), r.name);
+  showCommand(r.command);
+  const c = r.curves;
+  status(`${c.curves} curves in ${r.name}: ${c.control_points} control points for ${c.points} line points, within ${c.tolerance.toPrecision(2)}${c.polylines ? `; ${c.polylines} short lines as polylines` : ''}${r.note ? ` (${r.note})` : ''}`);
+}
+
 async function downloadMesh() {
   const fmt = $('dl-format').value;
   const { blob, disposition } = await api.blob(`/api/doc/${state.active}/download?format=${fmt}`);
@@ -583,6 +600,7 @@ function wire() {
   $('dl-region').addEventListener('click', guard(() => downloadRegion('region')));
   $('dl-fixed').addEventListener('click', guard(() => downloadRegion('fixed')));
   $('dl-mesh').addEventListener('click', guard(downloadMesh));
+  $('dl-curves').addEventListener('click', guard(downloadCurves));
   $('save').addEventListener('click', guard(save));
   $('capture').addEventListener('click', guard(captureImage));
   $('save-session').addEventListener('click', guard(() => sessionFile.save()));

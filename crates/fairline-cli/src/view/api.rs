@@ -338,6 +338,7 @@ fn route(shared: &Arc<Shared>, req: &HttpRequest, body: &[u8]) -> Answer {
                 (true, _, ["scalar", name]) => scalar(shared, k, name, step),
                 (true, _, ["download"]) => download(shared, k, url),
                 (_, true, ["lines"]) => lines(shared, k, body),
+                (_, true, ["lines-curves"]) => super::tools::lines_curves(shared, k, body),
                 (true, _, ["outlines"]) => outlines(shared, k, step),
                 (_, true, ["surface-lines"]) => surface_lines(shared, k, body),
                 (_, true, ["detect"]) => detect(shared, k, body),
@@ -376,7 +377,7 @@ pub(super) fn vec_arg(v: Vec3) -> String {
 }
 
 /// The light options of a command for a linear light array.
-fn light_args(l: &LightArray) -> String {
+pub(super) fn light_args(l: &LightArray) -> String {
     Lights::exactly(l)
         .args("lights.json")
         .trim_start()

@@ -223,3 +223,103 @@ pub fn probe(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     });
     json_answer(&answer)
 }
+
+#[derive(Deserialize)]
+struct CurvesRequest {
+    light: Option<fairline::highlight::LightArray>,
+    circular: Option<fairline::highlight::CircularLights>,
+    /// The history step (`None`: the current state).
+    step: Option<usize>,
+    /// The largest distance from a curve to its line (`None`: the
+    /// command's default for a mesh).
+    tolerance: Option<f64>,
+}
+
+/// `POST /api/doc/K/lines-curves` `{"light"|"circular", "step"?,
+/// "tolerance"?}`: the highlight lines of the lights given on the drawn
+/// mesh (a surface document's tessellation), as cubic B-spline curves in
+/// an IGES file (`fairline highlight -o LINES.igs`, the command layer's
+/// [`fairline_commands::curves`]). Answers `name` (the file name offered),
+/// `iges` (the file's text), `curves` (the report's `curves` key) and
+/// `command`.
+pub fn lines_curves(shared: &Shared, k: usize, body: &[u8]) -> Answer {
+    use fairline_commands::curves;
+    use fairline_commands::highlight::{self, HighlightLights, HighlightSettings};
+    let req: CurvesRequest = match parse(body) {
+        Ok(r) => r,
+        Err(a) => return a,
+    };
+    if let Some(t) = req.tolerance
+        && !(t > 0.0 && t.is_finite())
+    {
+        return bad(format!("tolerance must be a positive number, got {t}"));
+    }
+    let (mesh, file, stem, surface) = {
+        let st = lock(shared);
+        let d = &st.docs[k];
+        let stem = d
+            .path
+            .file_stem()
+            .map(|s| s.to_string_lossy().replace(['"', '\\', '/'], "_"))
+            .unwrap_or_else(|| "part".into());
+        (
+            d.shared_tri_at(req.step),
+            d.current_file(),
+            stem,
+            d.is_surface(),
+        )
+    };
+    let (lights, args) = match (req.light, req.circular) {
+        (Some(l), _) => (
+            HighlightLights::Linear(fairline_commands::Lights::exactly(&l)),
+            super::api::light_args(&l),
+        ),
+        (None, Some(c)) => {
+            let radii: Vec<String> = c.radii.iter().map(|r| r.to_string()).collect();
+            let args = format!(
+                "--circle-center {} --circle-axis {} --radii {}",
+                super::api::vec_arg(Vec3::from(c.center)),
+                super::api::vec_arg(Vec3::from(c.axis)),
+                radii.join(",")
+            );
+            (
+                HighlightLights::Circular {
+                    spec: c,
+                    from_lights: false,
+                },
+                args,
+            )
+        }
+        (None, None) => return bad("give \"light\" or \"circular\""),
+    };
+    let settings = HighlightSettings { lights, band: None };
+    let out = match highlight::run(&mesh, &settings, &Control::new()) {
+        Ok(o) => o,
+        Err(e) => return bad(e.to_string()),
+    };
+    let tol = curves::mesh_tolerance(req.tolerance, &mesh);
+    let fitted = curves::fit(&curves::mesh_lines(&out.lines), tol);
+    let text = match fairline::io::iges_write::curves_to_iges(
+        &fitted.curves,
+        &fairline::io::iges_write::IgesWriteOptions::default(),
+    ) {
+        Ok(t) => t,
+        Err(e) => return error(500, e),
+    };
+    let tolerance_arg = req
+        .tolerance
+        .map(|t| format!(" --curve-tolerance {t}"))
+        .unwrap_or_default();
+    let mut answer = json!({
+        "name": format!("{stem}-lines.igs"),
+        "iges": text,
+        "curves": fitted.summary,
+        "command": format!("fairline highlight {file} {args}{tolerance_arg} -o lines.igs"),
+    });
+    if surface {
+        answer["note"] = json!(
+            "curves of the lines on the tessellation; the command gives the surfaces' exact lines"
+        );
+    }
+    json_answer(&answer)
+}
