@@ -16,9 +16,7 @@
 //! are nevertheless re-oriented (outer counter-clockwise, holes clockwise)
 //! so that the trimmed region is always on their left.
 
-use super::basis::{
-    BasisDerivs, MAX_DEGREE, MAX_ORDER, basis_funs, ders_basis_funs, find_span,
-};
+use super::basis::{BasisDerivs, MAX_DEGREE, MAX_ORDER, basis_funs, ders_basis_funs, find_span};
 use thiserror::Error;
 
 /// Largest deviation of a flattened trim polyline from its curves, as a
@@ -208,10 +206,7 @@ impl TrimCurve {
             return (self.eval(t), [0.0, 0.0]);
         }
         let c = [x[0] / x[2], x[1] / x[2]];
-        let dc = [
-            (dx[0] - dx[2] * c[0]) / x[2],
-            (dx[1] - dx[2] * c[1]) / x[2],
-        ];
+        let dc = [(dx[0] - dx[2] * c[0]) / x[2], (dx[1] - dx[2] * c[1]) / x[2]];
         (c, dc)
     }
 

@@ -196,7 +196,11 @@ fn iso(s: &BSplineSurface, c: &TrimCurve) -> Option<Curve3> {
         };
         // A check of the construction (an unclamped surface's end, say):
         // the cut agrees with S(c(t)) to rounding, or the edge is fitted.
-        let size = curve.points.iter().map(|q| q.abs().max_element()).fold(0.0, f64::max);
+        let size = curve
+            .points
+            .iter()
+            .map(|q| q.abs().max_element())
+            .fold(0.0, f64::max);
         let agrees = (0..=16).all(|i| {
             let t = t0 + (t1 - t0) * i as f64 / 16.0;
             let [u, v] = c.eval(t);
@@ -211,9 +215,23 @@ fn iso(s: &BSplineSurface, c: &TrimCurve) -> Option<Curve3> {
 /// coordinate `fixed` (0: u, 1: v) at `x`, with its degree and knots.
 fn iso_net(s: &BSplineSurface, fixed: usize, x: f64) -> (usize, Vec<f64>, Vec<[f64; 4]>) {
     let (p, kn, n, q, other, m) = if fixed == 0 {
-        (s.degree_u(), s.knots_u(), s.count_u(), s.degree_v(), s.knots_v(), s.count_v())
+        (
+            s.degree_u(),
+            s.knots_u(),
+            s.count_u(),
+            s.degree_v(),
+            s.knots_v(),
+            s.count_v(),
+        )
     } else {
-        (s.degree_v(), s.knots_v(), s.count_v(), s.degree_u(), s.knots_u(), s.count_u())
+        (
+            s.degree_v(),
+            s.knots_v(),
+            s.count_v(),
+            s.degree_u(),
+            s.knots_u(),
+            s.count_u(),
+        )
     };
     let span = find_span(kn, p, n, x);
     let mut nb = [0.0; crate::bspline::MAX_ORDER];
@@ -352,7 +370,16 @@ fn fit_span(
     let tm = t0 + 0.5 * h;
     let (pm, dm) = composite(s, c, tm, false);
     let a = fit_span(s, c, (t0, p0, d0), (tm, pm, dm), tol, depth + 1, false, out);
-    let b = fit_span(s, c, (tm, pm, dm), (t1, p1, d1), tol, depth + 1, corner, out);
+    let b = fit_span(
+        s,
+        c,
+        (tm, pm, dm),
+        (t1, p1, d1),
+        tol,
+        depth + 1,
+        corner,
+        out,
+    );
     a.max(b)
 }
 
@@ -372,7 +399,16 @@ fn fitted(s: &BSplineSurface, c: &TrimCurve, tol: f64) -> (Curve3, f64) {
     for w in breaks.windows(2) {
         let (p0, d0) = composite(s, c, w[0], false);
         let (p1, d1) = composite(s, c, w[1], true);
-        dev = dev.max(fit_span(s, c, (w[0], p0, d0), (w[1], p1, d1), tol, 0, true, &mut pieces));
+        dev = dev.max(fit_span(
+            s,
+            c,
+            (w[0], p0, d0),
+            (w[1], p1, d1),
+            tol,
+            0,
+            true,
+            &mut pieces,
+        ));
     }
     let mut knots = vec![t0; 4];
     let mut points = pieces.first().map(|p| p.bez.to_vec()).unwrap_or_default();
@@ -451,7 +487,13 @@ mod tests {
         // u = 0.3 from v = 1.7 down to v = 0.2 (reversed, cut inside), and
         // v = 0.5 over the whole of u.
         for c in [
-            TrimCurve::new(1, vec![5.0, 5.0, 8.0, 8.0], vec![[0.3, 1.7], [0.3, 0.2]], None).unwrap(),
+            TrimCurve::new(
+                1,
+                vec![5.0, 5.0, 8.0, 8.0],
+                vec![[0.3, 1.7], [0.3, 0.2]],
+                None,
+            )
+            .unwrap(),
             TrimCurve::line([0.0, 0.5], [1.0, 0.5]).unwrap(),
             TrimCurve::line([1.0, 2.0], [1.0, 0.0]).unwrap(),
         ] {
