@@ -21,6 +21,10 @@ use crate::bspline::{BSplineSurface, TrimCurve, find_span};
 /// Deepest bisection of one trim-curve knot span while fitting.
 pub(crate) const MAX_DEPTH: u32 = 40;
 
+/// Most cubic pieces of one fitted curve: past it no piece is bisected
+/// (the distance reached is still returned).
+pub(crate) const MAX_PIECES: usize = 1 << 16;
+
 /// A 3-D (rational) B-spline curve: degree, knots, control points, weights.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Curve3 {
@@ -64,7 +68,8 @@ pub(crate) enum Kind {
 /// The 3-D curve of `c` on `s` (see the module documentation), how it was
 /// made and the largest distance from `S(c(t))` at the fitting samples (0
 /// when exact). `tolerance` (a length) bounds the fit; a non-positive one
-/// fits to [`MAX_DEPTH`].
+/// fits to [`MAX_DEPTH`] (and never below 1e-13 of the surface's largest
+/// coordinate, the rounding of its points); a fit stops at [`MAX_PIECES`].
 pub(crate) fn edge_curve(s: &BSplineSurface, c: &TrimCurve, tolerance: f64) -> (Curve3, Kind, f64) {
     if let Some(curve) = affine(s, c) {
         return (curve, Kind::Affine, 0.0);
@@ -363,7 +368,7 @@ fn fit_span(
         let [u, v] = c.eval(t0 + h * x);
         err = err.max(bezier(&bez, x).distance(s.eval(u, v)));
     }
-    if !(err > tol) || depth >= MAX_DEPTH || !err.is_finite() {
+    if !(err > tol) || depth >= MAX_DEPTH || out.len() >= MAX_PIECES || !err.is_finite() {
         out.push(Piece { t1, bez, corner });
         return if err.is_finite() { err } else { f64::INFINITY };
     }
@@ -386,6 +391,9 @@ fn fit_span(
 /// The fitted cubic (see the module documentation) and its largest sampled
 /// distance from `S(c(t))`.
 fn fitted(s: &BSplineSurface, c: &TrimCurve, tol: f64) -> (Curve3, f64) {
+    // Not below the rounding of the surface's coordinates.
+    let (lo, hi) = s.control_bounding_box();
+    let tol = tol.max(1e-13 * lo.abs().max(hi.abs()).max_element());
     let [t0, t1] = c.domain();
     let mut breaks = vec![t0];
     for &k in c.knots() {
@@ -559,5 +567,44 @@ mod tests {
         assert!(distance(&s, &c, &coarse) > 1e-6);
         let loops = TrimLoop { curves: vec![c] };
         assert_eq!(loops.curves.len(), 1);
+    }
+
+    #[test]
+    fn fits_far_from_the_origin_stop_at_the_rounding_of_the_points() {
+        // The patch moved 1e9 away: a tolerance of 1e-12 is below the
+        // rounding of its points (about 1e-7); the fit stops there instead
+        // of bisecting every piece to the deepest level.
+        let s0 = rational_patch();
+        let far = Vec3::splat(1e9);
+        let net: Vec<Vec<Vec3>> = (0..s0.count_u())
+            .map(|i| {
+                (0..s0.count_v())
+                    .map(|j| s0.control_point(i, j) + far)
+                    .collect()
+            })
+            .collect();
+        let w: Vec<Vec<f64>> = (0..s0.count_u())
+            .map(|i| (0..s0.count_v()).map(|j| s0.weight(i, j)).collect())
+            .collect();
+        let s = BSplineSurface::new(
+            2,
+            3,
+            s0.knots_u().to_vec(),
+            s0.knots_v().to_vec(),
+            net,
+            Some(w),
+        )
+        .unwrap();
+        let c = TrimCurve::new(
+            2,
+            vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0],
+            vec![[0.1, 0.1], [0.5, 1.9], [0.9, 0.3]],
+            None,
+        )
+        .unwrap();
+        let (e, kind, dev) = edge_curve(&s, &c, 1e-12);
+        assert_eq!(kind, Kind::Fitted);
+        assert!(e.points.len() < 2000, "{} points", e.points.len());
+        assert!(dev < 1e-3, "{dev}");
     }
 }

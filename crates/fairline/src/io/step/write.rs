@@ -250,7 +250,9 @@ fn face(d: &mut Data, s: &BSplineSurface, ctx2: u64, fit: f64, deviation: &mut f
                 d.add(format!("VERTEX_POINT('',#{p})"))
             };
             let (e3, _, dev) = edge_curve(s, c, fit);
-            *deviation = deviation.max(dev);
+            if dev.is_finite() {
+                *deviation = deviation.max(dev);
+            }
             let c3 = curve3(d, &e3);
             let c2 = curve2(d, c);
             let dr = d.add(format!("DEFINITIONAL_REPRESENTATION('',(#{c2}),#{ctx2})"));
