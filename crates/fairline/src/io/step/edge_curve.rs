@@ -14,9 +14,17 @@
 //!   the trim curve's knots), every piece bisected until `C` at 8 interior
 //!   samples is within the tolerance (at most [`MAX_DEPTH`] bisections). The
 //!   largest sampled distance is returned so the writer can state it.
+//!
+//! The curves are [`ModelCurve`]s, the writers' 3-D curve type. Unlike
+//! [`crate::io::model_curve::model_curve`] (straight iso segments only, the
+//! whole iso-curve, triple knots), an iso edge here is any polynomial trim
+//! curve linear along the line and is cut to the edge, a fitted curve is C1
+//! inside the trim curve's knot spans, and the fit is bounded below by the
+//! rounding of the surface's points and above by [`MAX_PIECES`].
 
 use crate::Vec3;
 use crate::bspline::{BSplineSurface, TrimCurve, find_span};
+use crate::io::model_curve::ModelCurve;
 
 /// Deepest bisection of one trim-curve knot span while fitting.
 pub(crate) const MAX_DEPTH: u32 = 40;
@@ -25,33 +33,23 @@ pub(crate) const MAX_DEPTH: u32 = 40;
 /// (the distance reached is still returned).
 pub(crate) const MAX_PIECES: usize = 1 << 16;
 
-/// A 3-D (rational) B-spline curve: degree, knots, control points, weights.
-#[derive(Clone, Debug, PartialEq)]
-pub(crate) struct Curve3 {
-    pub degree: usize,
-    pub knots: Vec<f64>,
-    pub points: Vec<Vec3>,
-    pub weights: Option<Vec<f64>>,
-}
-
-impl Curve3 {
-    /// The curve point at `t` (clamped to the domain), Piegl & Tiller A4.1.
-    pub fn eval(&self, t: f64) -> Vec3 {
-        let p = self.degree;
-        let n = self.points.len();
-        let t = t.clamp(self.knots[p], self.knots[n]);
-        let span = find_span(&self.knots, p, n, t);
-        let mut nb = [0.0; crate::bspline::MAX_ORDER];
-        crate::bspline::basis::basis_funs(span, t, p, &self.knots, &mut nb);
-        let (mut a, mut w) = (Vec3::ZERO, 0.0);
-        for (r, &b) in nb.iter().enumerate().take(p + 1) {
-            let i = span - p + r;
-            let wi = self.weights.as_ref().map_or(1.0, |ws| ws[i]);
-            a += self.points[i] * (b * wi);
-            w += b * wi;
-        }
-        a / w
+/// The point of a 3-D (rational) B-spline curve at `t` (clamped to the
+/// domain), Piegl & Tiller A4.1.
+pub(crate) fn curve_point(c: &ModelCurve, t: f64) -> Vec3 {
+    let p = c.degree;
+    let n = c.points.len();
+    let t = t.clamp(c.knots[p], c.knots[n]);
+    let span = find_span(&c.knots, p, n, t);
+    let mut nb = [0.0; crate::bspline::MAX_ORDER];
+    crate::bspline::basis::basis_funs(span, t, p, &c.knots, &mut nb);
+    let (mut a, mut w) = (Vec3::ZERO, 0.0);
+    for (r, &b) in nb.iter().enumerate().take(p + 1) {
+        let i = span - p + r;
+        let wi = c.weights.as_ref().map_or(1.0, |ws| ws[i]);
+        a += c.points[i] * (b * wi);
+        w += b * wi;
     }
+    a / w
 }
 
 /// How an edge curve was made.
@@ -70,7 +68,11 @@ pub(crate) enum Kind {
 /// when exact). `tolerance` (a length) bounds the fit; a non-positive one
 /// fits to [`MAX_DEPTH`] (and never below 1e-13 of the surface's largest
 /// coordinate, the rounding of its points); a fit stops at [`MAX_PIECES`].
-pub(crate) fn edge_curve(s: &BSplineSurface, c: &TrimCurve, tolerance: f64) -> (Curve3, Kind, f64) {
+pub(crate) fn edge_curve(
+    s: &BSplineSurface,
+    c: &TrimCurve,
+    tolerance: f64,
+) -> (ModelCurve, Kind, f64) {
     if let Some(curve) = affine(s, c) {
         return (curve, Kind::Affine, 0.0);
     }
@@ -84,7 +86,7 @@ pub(crate) fn edge_curve(s: &BSplineSurface, c: &TrimCurve, tolerance: f64) -> (
 /// `S(u, v) = O + (u − u0)/(u1 − u0)·A + (v − v0)/(v1 − v0)·B` when `s` is
 /// one bilinear polynomial span on a parallelogram (the difference of the
 /// diagonals exactly zero, or within 1e-15 of the net's size).
-fn affine(s: &BSplineSurface, c: &TrimCurve) -> Option<Curve3> {
+fn affine(s: &BSplineSurface, c: &TrimCurve) -> Option<ModelCurve> {
     if s.degree_u() != 1 || s.degree_v() != 1 || s.count_u() != 2 || s.count_v() != 2 {
         return None;
     }
@@ -111,11 +113,12 @@ fn affine(s: &BSplineSurface, c: &TrimCurve) -> Option<Curve3> {
         .iter()
         .map(|&[u, v]| p00 + a * ((u - u0) / (u1 - u0)) + b * ((v - v0) / (v1 - v0)))
         .collect();
-    Some(Curve3 {
+    Some(ModelCurve {
         degree: c.degree(),
         knots: c.knots().to_vec(),
         points,
         weights: c.weights().map(<[f64]>::to_vec),
+        exact: true,
     })
 }
 
@@ -145,7 +148,7 @@ fn linear(c: &TrimCurve, k: usize) -> Option<(f64, f64)> {
 
 /// The cut of the surface's iso-curve that `c` traces, when `c` is
 /// isoparametric (see the module documentation).
-fn iso(s: &BSplineSurface, c: &TrimCurve) -> Option<Curve3> {
+fn iso(s: &BSplineSurface, c: &TrimCurve) -> Option<ModelCurve> {
     let pts = c.control_points();
     for fixed in 0..2 {
         let x0 = pts[0][fixed];
@@ -193,11 +196,12 @@ fn iso(s: &BSplineSurface, c: &TrimCurve) -> Option<Curve3> {
             .iter()
             .map(|h| Vec3::new(h[0] / h[3], h[1] / h[3], h[2] / h[3]))
             .collect();
-        let curve = Curve3 {
+        let curve = ModelCurve {
             degree,
             knots,
             points,
             weights: rational.then(|| net.iter().map(|h| h[3]).collect()),
+            exact: true,
         };
         // A check of the construction (an unclamped surface's end, say):
         // the cut agrees with S(c(t)) to rounding, or the edge is fitted.
@@ -209,7 +213,7 @@ fn iso(s: &BSplineSurface, c: &TrimCurve) -> Option<Curve3> {
         let agrees = (0..=16).all(|i| {
             let t = t0 + (t1 - t0) * i as f64 / 16.0;
             let [u, v] = c.eval(t);
-            curve.eval(t).distance(s.eval(u, v)) <= 1e-11 * size.max(f64::MIN_POSITIVE)
+            curve_point(&curve, t).distance(s.eval(u, v)) <= 1e-11 * size.max(f64::MIN_POSITIVE)
         });
         return agrees.then_some(curve);
     }
@@ -390,7 +394,7 @@ fn fit_span(
 
 /// The fitted cubic (see the module documentation) and its largest sampled
 /// distance from `S(c(t))`.
-fn fitted(s: &BSplineSurface, c: &TrimCurve, tol: f64) -> (Curve3, f64) {
+fn fitted(s: &BSplineSurface, c: &TrimCurve, tol: f64) -> (ModelCurve, f64) {
     // Not below the rounding of the surface's coordinates.
     let (lo, hi) = s.control_bounding_box();
     let tol = tol.max(1e-13 * lo.abs().max(hi.abs()).max_element());
@@ -432,11 +436,12 @@ fn fitted(s: &BSplineSurface, c: &TrimCurve, tol: f64) -> (Curve3, f64) {
     }
     knots.extend([t1; 4]);
     (
-        Curve3 {
+        ModelCurve {
             degree: 3,
             knots,
             points,
             weights: None,
+            exact: false,
         },
         dev,
     )
@@ -448,7 +453,7 @@ mod tests {
     use crate::bspline::{TrimCurve, TrimLoop};
 
     /// Largest distance of the curve from `S(c(t))` at 2001 parameters.
-    fn distance(s: &BSplineSurface, c: &TrimCurve, e: &Curve3) -> f64 {
+    fn distance(s: &BSplineSurface, c: &TrimCurve, e: &ModelCurve) -> f64 {
         let [t0, t1] = c.domain();
         assert_eq!(e.knots[0], t0);
         assert_eq!(*e.knots.last().unwrap(), t1);
@@ -457,7 +462,7 @@ mod tests {
             .map(|i| {
                 let t = t0 + (t1 - t0) * i as f64 / 2000.0;
                 let [u, v] = c.eval(t);
-                e.eval(t).distance(s.eval(u, v))
+                curve_point(e, t).distance(s.eval(u, v))
             })
             .fold(0.0, f64::max)
     }

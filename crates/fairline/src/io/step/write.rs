@@ -31,9 +31,10 @@ use std::path::Path;
 
 use crate::Vec3;
 
-use super::edge_curve::{Curve3, edge_curve};
+use super::edge_curve::edge_curve;
 use crate::bspline::{BSplineSurface, TrimCurve, control_diagonal};
 use crate::io::iges_write::{iges_real as real, iges_timestamp};
+use crate::io::model_curve::ModelCurve;
 use crate::io::units::LengthUnit;
 use crate::io::{IoError, atomic_write};
 
@@ -195,7 +196,7 @@ fn curve2(d: &mut Data, c: &TrimCurve) -> u64 {
 }
 
 /// Writes a 3-D (rational) B-spline curve and returns its id.
-fn curve3(d: &mut Data, c: &Curve3) -> u64 {
+fn curve3(d: &mut Data, c: &ModelCurve) -> u64 {
     let pts: Vec<u64> = c.points.iter().map(|&p| d.point(p)).collect();
     let closed = match (c.points.first(), c.points.last()) {
         (Some(a), Some(b)) if a == b && c.points.len() > 2 => ".T.",
