@@ -144,14 +144,10 @@ def fairline_writes(cli: Path, src: Path, out: Path) -> dict:
     return json.loads(info.stdout)
 
 
-# fairline's STEP of the impeller gives its trims polyline 3-D edge curves;
-# OCCT builds the faces from them and loses area (8.7e-3). Known failure,
-# strict; its IGES (p-curves only) reads back exactly.
-_STEP_EDGES = pytest.mark.xfail(strict=True, reason="polyline 3-D edge curves in fairline's STEP")
 REAL = [
     pytest.param("teapot.json", "step"),
     pytest.param("teapot.json", "igs"),
-    pytest.param("impeller.igs", "step", marks=_STEP_EDGES),
+    pytest.param("impeller.igs", "step"),
     pytest.param("impeller.igs", "igs"),
 ]
 
@@ -173,23 +169,10 @@ def test_occt_reads_what_fairline_writes_of_real_files(cli, kernel, tmp_path, na
     assert seconds < 60, f"OCCT took {seconds:.0f} s to import {out.name}"
 
 
-# fairline's STEP writer gives its edges polyline 3-D curves; OCCT builds
-# these faces from them and loses area (4.7e-4 on the cylinder, 2e-2 on the
-# revolved ellipse, 2.2e-3 on the patch closed at a pole). Known failures,
-# strict: a fix turns them into errors that ask for this list to shrink.
-STEP_WRITE_KNOWN_BAD = {
-    "cylinder", "cone", "revolved-hyperbola", "revolved-ellipse", "extruded-ellipse",
-    "plate-with-hole", "boolean-union", "lofted", "pole-patch",
-}
-
-
 def _write_cases():
     for n in sorted(x[: -len(".step")] for x in MUST_READ if x.endswith(".step")):
         for fmt in ("step", "igs"):
-            marks = []
-            if fmt == "step" and n in STEP_WRITE_KNOWN_BAD:
-                marks = [pytest.mark.xfail(strict=True, reason="polyline 3-D edge curves in fairline's STEP")]
-            yield pytest.param(n, fmt, marks=marks)
+            yield pytest.param(n, fmt)
 
 
 @pytest.mark.parametrize("name,fmt", list(_write_cases()))

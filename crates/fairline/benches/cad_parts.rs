@@ -2,7 +2,8 @@
 //! impeller (IGES, 277 trimmed faces of ../shared/data) read and its
 //! continuity across patch boundaries (`fairline continuity`'s
 //! computation), the impeller written as STEP and parsed back (every trim a
-//! p-curve on a polyline 3-D edge, each checked against its edge), and STEP
+//! p-curve beside its exact or fitted 3-D edge, each checked against its
+//! edge), and STEP
 //! reading of the real part in
 //! `tests/data/step/featuretype.STEP` (no p-curves: trims from the 3-D
 //! edges) and of the same part written back by fairline (every trim a

@@ -16,7 +16,7 @@
 //! are nevertheless re-oriented (outer counter-clockwise, holes clockwise)
 //! so that the trimmed region is always on their left.
 
-use super::basis::{MAX_DEGREE, MAX_ORDER, basis_funs, find_span};
+use super::basis::{BasisDerivs, MAX_DEGREE, MAX_ORDER, basis_funs, ders_basis_funs, find_span};
 use thiserror::Error;
 
 /// Largest deviation of a flattened trim polyline from its curves, as a
@@ -171,6 +171,43 @@ impl TrimCurve {
         } else {
             self.points[span - p]
         }
+    }
+
+    /// The curve point and first derivative `dc/dt` at `t` (clamped to the
+    /// domain), Piegl & Tiller A3.2 on the basis derivatives of A2.3, and
+    /// for a rational curve the quotient rule of Eq. 4.8
+    /// (`c' = (A' − w' c) / w`). At a knot the derivative is the one of the
+    /// span to the left when `left` (the curve arriving there), else of the
+    /// span to the right; at the domain ends, of the end spans.
+    pub fn eval_d1(&self, t: f64, left: bool) -> ([f64; 2], [f64; 2]) {
+        let [a, b] = self.domain();
+        let t = if t >= a { t.min(b) } else { a };
+        let p = self.degree;
+        let n = self.points.len();
+        let mut span = find_span(&self.knots, p, n, t);
+        if left {
+            while span > p && self.knots[span] >= t {
+                span -= 1;
+            }
+        }
+        let mut d: BasisDerivs = [[0.0; MAX_ORDER]; 3];
+        ders_basis_funs(span, t, p, 1, &self.knots, &mut d);
+        let (mut x, mut dx) = ([0.0f64; 3], [0.0f64; 3]);
+        for r in 0..=p {
+            let i = span - p + r;
+            let wi = self.weights.as_ref().map_or(1.0, |ws| ws[i]);
+            let h = [wi * self.points[i][0], wi * self.points[i][1], wi];
+            for k in 0..3 {
+                x[k] += d[0][r] * h[k];
+                dx[k] += d[1][r] * h[k];
+            }
+        }
+        if !(x[2] > 0.0 && x[2].is_finite()) {
+            return (self.eval(t), [0.0, 0.0]);
+        }
+        let c = [x[0] / x[2], x[1] / x[2]];
+        let dc = [(dx[0] - dx[2] * c[0]) / x[2], (dx[1] - dx[2] * c[1]) / x[2]];
+        (c, dc)
     }
 
     /// Appends the flattened curve to `out` without its last point: every

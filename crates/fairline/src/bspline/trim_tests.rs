@@ -485,3 +485,43 @@ fn a_part_with_a_non_manifold_edge_is_made_into_a_mesh_with_its_patches() {
     assert_eq!(mesh.face_count(), 4, "the repeated triangle is left out");
     assert_eq!(patch, vec![0, 0, 1, 2]);
 }
+
+#[test]
+fn trim_curve_derivative_matches_differences_and_takes_the_side_asked_for() {
+    // A rational circle: the derivative against central differences
+    // (step 1e-6, error O(h²) ≈ 1e-11 times the curvature terms), and
+    // tangent to the circle.
+    let c = circle_curve([0.5, -0.25], 2.0, true);
+    let [a, b] = c.domain();
+    for i in 1..40 {
+        let t = a + (b - a) * (i as f64 + 0.3) / 40.0;
+        let (p, d) = c.eval_d1(t, false);
+        let e = c.eval(t);
+        assert!((p[0] - e[0]).hypot(p[1] - e[1]) < 1e-14, "{p:?} vs {e:?}");
+        let h = 1e-6;
+        let (q0, q1) = (c.eval(t - h), c.eval(t + h));
+        let fd = [(q1[0] - q0[0]) / (2.0 * h), (q1[1] - q0[1]) / (2.0 * h)];
+        let err = (d[0] - fd[0]).hypot(d[1] - fd[1]);
+        assert!(
+            err < 1e-6 * (1.0 + d[0].hypot(d[1])),
+            "t {t}: {d:?} vs {fd:?}"
+        );
+        let radial = [p[0] - 0.5, p[1] + 0.25];
+        assert!((radial[0] * d[0] + radial[1] * d[1]).abs() < 1e-12 * d[0].hypot(d[1]) * 2.0);
+    }
+    // A polyline's corner: the derivative of the segment arriving with
+    // `left`, of the one leaving without; the ends use their own segments.
+    let l = TrimCurve::new(
+        1,
+        vec![0.0, 0.0, 1.0, 3.0, 3.0],
+        vec![[0.0, 0.0], [2.0, 1.0], [2.0, 5.0]],
+        None,
+    )
+    .unwrap();
+    assert_eq!(l.eval_d1(1.0, true).1, [2.0, 1.0]);
+    assert_eq!(l.eval_d1(1.0, false).1, [0.0, 2.0]);
+    assert_eq!(l.eval_d1(0.0, true).1, [2.0, 1.0]);
+    assert_eq!(l.eval_d1(3.0, false).1, [0.0, 2.0]);
+    let corner = l.eval_d1(1.0, true).0;
+    assert!((corner[0] - 2.0).abs() < 1e-15 && (corner[1] - 1.0).abs() < 1e-15);
+}

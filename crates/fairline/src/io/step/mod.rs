@@ -8,8 +8,11 @@
 //! - `read`: geometry and topology to
 //!   [`BSplineSurface`](crate::bspline::BSplineSurface)s with trims;
 //! - `nurbs`: exact NURBS forms of conics and swept surfaces;
-//! - `write`: B-spline surfaces and faces with p-curves.
+//! - `edge_curve`: the 3-D curves of trim curves on their surfaces, exact
+//!   or fitted within a stated tolerance;
+//! - `write`: B-spline surfaces and faces with p-curves and 3-D edge curves.
 
+mod edge_curve;
 pub(crate) mod nurbs;
 pub mod p21;
 mod read;

@@ -379,8 +379,8 @@ fn round_trip(surfaces: &[BSplineSurface]) -> String {
 }
 
 /// Every trim curve of a written file is read from its p-curve (the 3-D
-/// curves the writer puts beside them are polylines through points of the
-/// curves, which the p-curves agree with within the polyline allowance).
+/// curves the writer puts beside them are the curves on the surface, exact
+/// or fitted within the file's uncertainty, which the p-curves agree with).
 fn assert_trims_from_pcurves(surfaces: &[BSplineSurface], back: &StepImport) {
     let curves: usize = surfaces
         .iter()
@@ -424,6 +424,9 @@ fn step_write_round_trip_of_generated_and_read_surfaces() {
     let generated = crate::io::iges_write::tests::generated();
     let text = round_trip(&generated);
     assert!(text.contains("RATIONAL_B_SPLINE_SURFACE") && text.contains("ADVANCED_FACE"));
+    // The 3-D edge curves are the curves on the surfaces (cubics, conics,
+    // iso-curves), no polylines sampled from them.
+    assert!(!text.contains(".POLYLINE_FORM."));
     // Faces read from hand-written files (exact conics, projected
     // polylines) come back bit-identical after writing.
     let mut f = File::default();
@@ -1707,8 +1710,8 @@ fn plate_with_a_wavy_side(bump: f64) -> BSplineSurface {
     s.with_trims(vec![TrimLoop { curves }]).unwrap()
 }
 
-/// The plate written as STEP with its 3-D edges (polylines through points
-/// of the exact curves) and, from a second writing with the wave's middle
+/// The plate written as STEP with its 3-D edges (the exact curves on the
+/// plane: the trim curves mapped by the planar surface) and, from a second writing with the wave's middle
 /// control point moved by `bump`, the p-curves: the lines holding 2-D
 /// points are taken from the second text (both writings number their
 /// instances alike).
@@ -1726,16 +1729,16 @@ fn plate_with_a_bumped_pcurve(bump: f64) -> String {
 }
 
 #[test]
-fn step_pcurve_check_along_polyline_edges_accepts_within_and_rejects_beyond_the_tolerance() {
+fn step_pcurve_check_along_written_edges_accepts_within_and_rejects_beyond_the_tolerance() {
     // The tolerance here is 1e-6 of the plate's control box diagonal
     // (1.4e-5; the writer's uncertainty is 1e-7). The middle control point
     // of a cubic with knots 0,0,0,0,½,1,1,1,1 moves the curve by at most
     // bump · N₂(½) = bump / 2, across the curve there (its tangent is
-    // level at t = ½ by symmetry). The 3-D edge is the writer's polyline
-    // (48 chords), whose chords are allowed L·θ/2 ≤ 0.0038 (0.0025 at
-    // t = ½; see the pcurve module docs): bumps of 1e-7 and 1e-6 are
-    // accepted, 0.1 and 0.3 (0.05, 0.15 across) rejected, with the largest
-    // distance bump/2 less at most the allowance.
+    // level at t = ½ by symmetry). The 3-D edge is the writer's exact
+    // cubic (the unbumped wave mapped by the plane): bumps of 1e-7 and 1e-6
+    // are accepted, 0.1 and 0.3 (0.05, 0.15 across) rejected, with the
+    // largest distance about bump/2 (the distance to the nearest point of
+    // the edge, a little less than the offset across it).
     let tolerance = 1e-6 * 200f64.sqrt();
     for (bump, used) in [
         (0.0, true),
@@ -1769,7 +1772,8 @@ fn step_pcurve_check_along_polyline_edges_accepts_within_and_rejects_beyond_the_
             );
         } else {
             // The warning states the largest distance: half the bump (the
-            // check samples t = ½) less at most the chords' allowance.
+            // check samples t = ½), the nearest point of the edge a little
+            // along it making it less by at most 0.004.
             let w = &imp.warnings[0];
             let largest: f64 = w
                 .split("largest ")

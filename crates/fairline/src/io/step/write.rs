@@ -8,10 +8,15 @@
 //!   `SHELL_BASED_SURFACE_MODEL` (`MANIFOLD_SURFACE_SHAPE_REPRESENTATION`).
 //!   Each trim loop is an `EDGE_LOOP`; each of its curves an `EDGE_CURVE`
 //!   whose `SURFACE_CURVE` carries the exact trim curve as a `PCURVE` (a 2-D
-//!   B-spline curve) and, as the 3-D curve, a polyline through points of the
-//!   curve on the surface (the p-curve is the exact definition; CAD systems
-//!   rebuild the 3-D curve from it when they need it). Vertices lie exactly
-//!   on the surface at the curves' ends.
+//!   B-spline curve) and, as the 3-D curve, a B-spline curve with the trim
+//!   curve's parameter (see `edge_curve`): exact where the curve on the
+//!   surface is one (on a plane, along an iso-parameter line), elsewhere a
+//!   cubic fitted to [`FIT_TOLERANCE`] × the part's size. Kernels such as
+//!   OpenCASCADE build the faces' edges from the 3-D curves and check that
+//!   the p-curves agree with them within the file's uncertainty, which is
+//!   written as at least 10 × that tolerance and at least the largest
+//!   distance a fitted curve has from the curve on the surface. Vertices
+//!   lie exactly on the surface at the curves' ends.
 //!
 //! Reals are written in the shortest form that reads back to the same
 //! `f64` (the syntax is the same as IGES's), knots as distinct values with
@@ -25,10 +30,17 @@ use std::io::Write as _;
 use std::path::Path;
 
 use crate::Vec3;
-use crate::bspline::{BSplineSurface, TrimCurve};
+
+use super::edge_curve::edge_curve;
+use crate::bspline::{BSplineSurface, TrimCurve, control_diagonal};
 use crate::io::iges_write::{iges_real as real, iges_timestamp};
+use crate::io::model_curve::ModelCurve;
 use crate::io::units::LengthUnit;
 use crate::io::{IoError, atomic_write};
+
+/// The tolerance of fitted 3-D edge curves, relative to the diagonal of
+/// the control points' bounding box of all surfaces written.
+pub const FIT_TOLERANCE: f64 = 1e-8;
 
 /// What the header and unit context of a written STEP file say.
 #[derive(Clone, Debug, PartialEq)]
@@ -183,31 +195,43 @@ fn curve2(d: &mut Data, c: &TrimCurve) -> u64 {
     }
 }
 
-/// Writes a polyline (degree-1 B-spline curve) through `pts`.
-fn polyline3(d: &mut Data, pts: &[Vec3]) -> u64 {
-    let ids: Vec<u64> = pts.iter().map(|&p| d.point(p)).collect();
-    let n = pts.len();
-    let knots: Vec<f64> = (0..n).map(|k| k as f64).collect();
-    let mut mults = vec![1usize; n];
-    mults[0] = 2;
-    mults[n - 1] = 2;
-    let m: Vec<String> = mults.iter().map(usize::to_string).collect();
-    d.add(format!(
-        "B_SPLINE_CURVE_WITH_KNOTS('',1,{},.POLYLINE_FORM.,.F.,.F.,({}),{},.UNSPECIFIED.)",
-        refs(&ids),
-        m.join(","),
-        reals(&knots)
-    ))
+/// Writes a 3-D (rational) B-spline curve and returns its id.
+fn curve3(d: &mut Data, c: &ModelCurve) -> u64 {
+    let pts: Vec<u64> = c.points.iter().map(|&p| d.point(p)).collect();
+    let closed = match (c.points.first(), c.points.last()) {
+        (Some(a), Some(b)) if a == b && c.points.len() > 2 => ".T.",
+        _ => ".F.",
+    };
+    let (m, k) = knot_runs(&c.knots);
+    let deg = c.degree;
+    let pts = refs(&pts);
+    match &c.weights {
+        Some(w) => d.add(format!(
+            "(BOUNDED_CURVE()B_SPLINE_CURVE({deg},{pts},.UNSPECIFIED.,{closed},.F.)\
+             B_SPLINE_CURVE_WITH_KNOTS({m},{k},.UNSPECIFIED.)CURVE()\
+             GEOMETRIC_REPRESENTATION_ITEM()RATIONAL_B_SPLINE_CURVE({})REPRESENTATION_ITEM(''))",
+            reals(w)
+        )),
+        None => d.add(format!(
+            "B_SPLINE_CURVE_WITH_KNOTS('',{deg},{pts},.UNSPECIFIED.,{closed},.F.,{m},{k},.UNSPECIFIED.)"
+        )),
+    }
 }
 
-/// Writes the face of a trimmed surface and returns its id.
-fn face(d: &mut Data, s: &BSplineSurface, ctx2: u64) -> u64 {
+/// Writes the face of a trimmed surface and returns its id; `fit` is the
+/// tolerance of fitted edge curves, `deviation` grows to the largest
+/// distance of a written edge curve from its curve on the surface.
+fn face(d: &mut Data, s: &BSplineSurface, ctx2: u64, fit: f64, deviation: &mut f64) -> u64 {
     let sid = surface(d, s);
     let mut bounds = Vec::new();
     for (l, lp) in s.trims().iter().enumerate() {
         let n = lp.curves.len();
         // One vertex per curve start; a curve ends at the next one's start
-        // vertex when their points coincide exactly.
+        // vertex when their points coincide to rounding (1e-12 of the
+        // parameter domain's diagonal: a closed curve is one edge from its
+        // vertex back to it, not an edge between two vertices at one place).
+        let (du, dv) = (s.domain_u(), s.domain_v());
+        let joint = 1e-12 * (du[1] - du[0]).hypot(dv[1] - dv[0]);
         let starts: Vec<[f64; 2]> = lp.curves.iter().map(|c| c.eval(c.domain()[0])).collect();
         let verts: Vec<u64> = starts
             .iter()
@@ -218,28 +242,19 @@ fn face(d: &mut Data, s: &BSplineSurface, ctx2: u64) -> u64 {
             .collect();
         let mut edges = Vec::with_capacity(n);
         for (k, c) in lp.curves.iter().enumerate() {
-            let [t0, t1] = c.domain();
-            let end2 = c.eval(t1);
-            let v_end = if end2 == starts[(k + 1) % n] {
+            let end2 = c.eval(c.domain()[1]);
+            let next = starts[(k + 1) % n];
+            let v_end = if (end2[0] - next[0]).hypot(end2[1] - next[1]) <= joint {
                 verts[(k + 1) % n]
             } else {
                 let p = d.point(s.eval(end2[0], end2[1]));
                 d.add(format!("VERTEX_POINT('',#{p})"))
             };
-            let spans = c.knots().windows(2).filter(|w| w[1] > w[0]).count();
-            let samples = (8 * spans * c.degree()).clamp(8, 512);
-            let pts: Vec<Vec3> = (0..=samples)
-                .map(|i| {
-                    let t = if i == samples {
-                        t1
-                    } else {
-                        t0 + (t1 - t0) * i as f64 / samples as f64
-                    };
-                    let [u, v] = c.eval(t);
-                    s.eval(u, v)
-                })
-                .collect();
-            let c3 = polyline3(d, &pts);
+            let (e3, _, dev) = edge_curve(s, c, fit);
+            if dev.is_finite() {
+                *deviation = deviation.max(dev);
+            }
+            let c3 = curve3(d, &e3);
             let c2 = curve2(d, c);
             let dr = d.add(format!("DEFINITIONAL_REPRESENTATION('',(#{c2}),#{ctx2})"));
             let pc = d.add(format!("PCURVE('',#{sid},#{dr})"));
@@ -329,29 +344,36 @@ pub fn surfaces_to_step(
     ));
     let pd = d.add(format!("PRODUCT_DEFINITION('design','',#{pdf},#{pdc})"));
     let pds = d.add(format!("PRODUCT_DEFINITION_SHAPE('','',#{pd})"));
+    let ctx2 = d.add(
+        "(GEOMETRIC_REPRESENTATION_CONTEXT(2)PARAMETRIC_REPRESENTATION_CONTEXT()\
+         REPRESENTATION_CONTEXT('2D SPACE',''))",
+    );
+    let fit = FIT_TOLERANCE * control_diagonal(surfaces);
+    let mut deviation = 0.0f64;
+    let mut faces = Vec::new();
+    let mut free = Vec::new();
+    for s in surfaces {
+        if s.is_trimmed() {
+            faces.push(face(&mut d, s, ctx2, fit, &mut deviation));
+        } else {
+            free.push(surface(&mut d, s));
+        }
+    }
+    // The uncertainty: at least 1e-7 (of the file's unit) and 10 times the
+    // fitting tolerance, and never less than the largest distance of a
+    // written edge curve from its curve on the surface.
+    let uncertainty = (10.0 * fit).max(1e-7).max(deviation);
     let lu = length_unit(&mut d, &options.unit);
     let au = d.add("(NAMED_UNIT(*)PLANE_ANGLE_UNIT()SI_UNIT($,.RADIAN.))");
     let su = d.add("(NAMED_UNIT(*)SI_UNIT($,.STERADIAN.)SOLID_ANGLE_UNIT())");
     let unc = d.add(format!(
-        "UNCERTAINTY_MEASURE_WITH_UNIT(LENGTH_MEASURE(1.E-7),#{lu},'distance_accuracy_value','')"
+        "UNCERTAINTY_MEASURE_WITH_UNIT(LENGTH_MEASURE({}),#{lu},'distance_accuracy_value','')",
+        real(uncertainty)
     ));
     let ctx = d.add(format!(
         "(GEOMETRIC_REPRESENTATION_CONTEXT(3)GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#{unc}))\
          GLOBAL_UNIT_ASSIGNED_CONTEXT((#{lu},#{au},#{su}))REPRESENTATION_CONTEXT('',''))"
     ));
-    let ctx2 = d.add(
-        "(GEOMETRIC_REPRESENTATION_CONTEXT(2)PARAMETRIC_REPRESENTATION_CONTEXT()\
-         REPRESENTATION_CONTEXT('2D SPACE',''))",
-    );
-    let mut faces = Vec::new();
-    let mut free = Vec::new();
-    for s in surfaces {
-        if s.is_trimmed() {
-            faces.push(face(&mut d, s, ctx2));
-        } else {
-            free.push(surface(&mut d, s));
-        }
-    }
     if !faces.is_empty() {
         let shell = d.add(format!("OPEN_SHELL('',{})", refs(&faces)));
         let model = d.add(format!("SHELL_BASED_SURFACE_MODEL('',(#{shell}))"));
