@@ -15,12 +15,11 @@
 //!   samples is within the tolerance (at most [`MAX_DEPTH`] bisections). The
 //!   largest sampled distance is returned so the writer can state it.
 //!
-//! The curves are [`ModelCurve`]s, the writers' 3-D curve type. Unlike
-//! [`crate::io::model_curve::model_curve`] (straight iso segments only, the
-//! whole iso-curve, triple knots), an iso edge here is any polynomial trim
-//! curve linear along the line and is cut to the edge, a fitted curve is C1
-//! inside the trim curve's knot spans, and the fit is bounded below by the
-//! rounding of the surface's points and above by [`MAX_PIECES`].
+//! The curves are [`ModelCurve`]s, the writers' 3-D curve type. An iso
+//! edge is any polynomial trim curve linear along the line, cut to the
+//! edge; a fitted curve is C1 inside the trim curve's knot spans, and the
+//! fit is bounded below by the rounding of the surface's points and above
+//! by [`MAX_PIECES`].
 
 use crate::Vec3;
 use crate::bspline::{BSplineSurface, TrimCurve, find_span};
