@@ -160,4 +160,5 @@ def fair_surface(
     keep_weight: Optional[float] = None,
     fairness_weight: Optional[float] = None,
     damped_step: Optional[float] = None,
+    damping: str = "residual",
 ) -> Tuple[str, str]: ...
