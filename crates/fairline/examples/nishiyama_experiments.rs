@@ -67,16 +67,14 @@ struct Experiment {
 }
 
 /// The control point `(i, j)` moved by `dz` along z; `count` concentric
-/// lights (centre `c`, axis z) with radii spread by ±`spread`/2 around the
+/// lights (centre `c`, axis z; the triple `(c, spread, count)`) with radii spread by ±`spread`/2 around the
 /// one whose line passes over the defect.
 fn experiment(
     name: &'static str,
     paper: &'static str,
     clean: BSplineSurface,
     (i, j, dz): (usize, usize, f64),
-    c: Vec3,
-    spread: f64,
-    count: usize,
+    (c, spread, count): (Vec3, f64, usize),
     disc: f64,
 ) -> Experiment {
     let mut defective = clean.clone();
@@ -200,9 +198,7 @@ fn main() {
             "(the tests' nine lights)",
             height_surface(15, 15, 1.0, 1.0, |x, y| 0.8 - 0.4 * (x * x + y * y)),
             (11, 7, 0.03),
-            Vec3::new(0.0, 0.0, 3.0),
-            0.4,
-            9,
+            (Vec3::new(0.0, 0.0, 3.0), 0.4, 9),
             0.2,
         ),
         experiment(
@@ -210,9 +206,7 @@ fn main() {
             "12 lights, 5 iterations, 192×36, 0.95 s",
             height_surface(15, 15, 1.0, 1.0, |x, y| 0.8 - 0.4 * (x * x + y * y)),
             (11, 7, 0.03),
-            Vec3::new(0.0, 0.0, 3.0),
-            0.4,
-            12,
+            (Vec3::new(0.0, 0.0, 3.0), 0.4, 12),
             0.2,
         ),
         experiment(
@@ -220,9 +214,7 @@ fn main() {
             "11 lights, 4 iterations, 460×165, 6.32 s",
             height_surface(21, 20, 1.0, 1.0, |x, y| 0.35 * (x * x - y * y)),
             (6, 13, 0.02),
-            Vec3::new(0.0, 0.0, 2.0),
-            0.3,
-            11,
+            (Vec3::new(0.0, 0.0, 2.0), 0.3, 11),
             0.16,
         ),
         experiment(
@@ -232,9 +224,7 @@ fn main() {
                 0.3 - 0.12 * x * x - 0.05 * y * y + 0.02 * x * y
             }),
             (8, 12, -0.015),
-            Vec3::new(2.0, 1.5, 2.5),
-            0.3,
-            18,
+            (Vec3::new(2.0, 1.5, 2.5), 0.3, 18),
             0.2,
         ),
     ];
