@@ -254,8 +254,8 @@ fn fair_surface(
 ) -> PyResult<(String, String)> {
     use fairline::fair::{BoundaryControl, Endpoints, PaperDamping, SurfaceFairMethod};
     let names: Vec<&str> = PaperDamping::ALL.iter().map(|d| d.name()).collect();
-    let damping = PaperDamping::from_name(damping)
-        .ok_or_else(|| bad_choice("damping", damping, &names))?;
+    let damping =
+        PaperDamping::from_name(damping).ok_or_else(|| bad_choice("damping", damping, &names))?;
     use fairline_commands::fair_surface::{FairSurfaceInput, FairSurfaceSettings, run};
     let method = match method {
         "regularised" => SurfaceFairMethod::Regularised,
