@@ -940,6 +940,7 @@ def fair_surface(
     keep_weight: float = 0.01,
     fairness_weight: float = 0.003,
     damped_step: float = 0.1,
+    damping: str = "residual",
 ) -> Tuple[List[Surface], Dict[str, Any]]:
     """Circular-highlight fairing of a B-spline surface (``fairline
     fair-surface``, Nishiyama et al. §3): each endpoint pair is snapped onto
@@ -948,7 +949,9 @@ def fair_surface(
     ``"regularised"`` (Levenberg–Marquardt, keeps every other line fair) or
     ``"paper"`` (Gauss–Newton, truncated SVD); ``boundary``: ``"fixed"``,
     ``"tangent"`` or ``"free"``; ``damped_step``: μ of the damped step
-    (Eq. 3.13; 1 turns the damping off).
+    (Eq. 3.13; 1 turns the damping off); ``damping``: when the paper's
+    solver damps a step, ``"residual"`` (when Σ d_s² grows), ``"max-mean"``
+    (Eq. 3.12 as printed) or ``"off"``.
 
     ``lights``: ``{"center","axis","radii"}``; ``endpoints``:
     ``{"endpoints": [{"radius", "start": [u, v], "end": [u, v]}]}`` (dicts
@@ -963,7 +966,7 @@ def fair_surface(
         truncation=float(truncation), min_truncation=float(min_truncation),
         sample_spacing=float(sample_spacing), grid=int(grid), method=method, boundary=boundary,
         keep_weight=float(keep_weight), fairness_weight=float(fairness_weight),
-        damped_step=float(damped_step),
+        damped_step=float(damped_step), damping=damping,
     )
     return _surfaces_from(out), _report(report)
 

@@ -177,6 +177,7 @@ def fair_surface(
     keep_weight: Optional[float] = None,
     fairness_weight: Optional[float] = None,
     damped_step: Optional[float] = None,
+    damping: str = "residual",
 ) -> Tuple[str, str]: ...
 
 class Mesh:

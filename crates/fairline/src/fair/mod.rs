@@ -31,9 +31,9 @@ pub use quad::{
 };
 pub use region::{MovableSet, movable_vertices};
 pub use surface::{
-    BoundaryControl, EndpointPair, Endpoints, FairIteration, FairStop, SurfaceFairError,
-    SurfaceFairMethod, SurfaceFairOptions, SurfaceFairReport, TargetCurve, Waviness,
-    endpoints_around, fair_surface, polyline_waviness, target_curves,
+    BoundaryControl, EndpointPair, Endpoints, FairIteration, FairStop, PaperDamping,
+    SurfaceFairError, SurfaceFairMethod, SurfaceFairOptions, SurfaceFairReport, TargetCurve,
+    Waviness, endpoints_around, fair_surface, polyline_waviness, target_curves,
 };
 
 #[cfg(test)]

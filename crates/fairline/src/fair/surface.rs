@@ -85,8 +85,11 @@ pub struct SurfaceFairOptions {
     /// iteration at the floor. Equal to `truncation` for the paper's fixed
     /// rule.
     pub min_truncation: f64,
-    /// Step factor μ of Eq. (3.13) used when Eq. (3.12) fails (0.1).
+    /// Step factor μ of Eq. (3.13) used when a step is damped (0.1).
     pub damped_step: f64,
+    /// When the paper's solver damps a step ([`SurfaceFairMethod::Paper`]
+    /// only).
+    pub damping: PaperDamping,
     /// ε of the stopping rule Eq. (3.14) (1e-4).
     pub epsilon: f64,
     /// Most Gauss–Newton iterations.
@@ -153,6 +156,11 @@ impl SurfaceFairOptions {
         self.damped_step = v;
         self
     }
+    /// Sets [`Self::damping`].
+    pub fn damping(mut self, v: PaperDamping) -> Self {
+        self.damping = v;
+        self
+    }
     /// Sets [`Self::epsilon`].
     pub fn epsilon(mut self, v: f64) -> Self {
         self.epsilon = v;
@@ -194,15 +202,58 @@ impl SurfaceFairOptions {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SurfaceFairMethod {
-    /// Nishiyama et al. §3.3 as published: Gauss–Newton with a truncated
-    /// SVD (lowered from 5 % as progress slows, see
-    /// [`SurfaceFairOptions::min_truncation`]) on the selected targets only.
+    /// Nishiyama et al. §3.3: Gauss–Newton with a truncated SVD (lowered
+    /// from 5 % as progress slows, see
+    /// [`SurfaceFairOptions::min_truncation`]) on the selected targets
+    /// only, one unknown per moved control point (its normal component).
     Paper,
     /// Beyond the paper: Levenberg–Marquardt on the
     /// selected targets plus weak targets at the current pre-images of all
     /// other lines crossing the moved region plus a fairness energy on the
     /// control displacement; well posed whatever the number of targets.
     Regularised,
+}
+
+/// When [`SurfaceFairMethod::Paper`] takes the damped step R + μΔr of
+/// Nishiyama et al. Eq. (3.13) instead of the full step of Eq. (3.11).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PaperDamping {
+    /// When the full step raises the sum of squares Σ d_s² — the quantity
+    /// the least-squares step of Eq. (3.9) minimises (default). Near the
+    /// least-squares floor a full step lowers Σ d_s² while the largest
+    /// |d_s| may rise a little; Eq. (3.12) as printed then damps every step
+    /// and the iteration creeps by μ per step.
+    #[default]
+    Residual,
+    /// Eq. (3.12) as printed: when the full step raises max |d_s| or mean
+    /// |d_s|.
+    MaxMean,
+    /// Never: the regular Newton step of Eq. (3.11).
+    Off,
+}
+
+impl PaperDamping {
+    /// Every rule, in the order of the CLI's `--damping` list.
+    pub const ALL: [PaperDamping; 3] = [
+        PaperDamping::Residual,
+        PaperDamping::MaxMean,
+        PaperDamping::Off,
+    ];
+
+    /// The rule's name: the CLI's `--damping` value.
+    pub fn name(self) -> &'static str {
+        match self {
+            PaperDamping::Residual => "residual",
+            PaperDamping::MaxMean => "max-mean",
+            PaperDamping::Off => "off",
+        }
+    }
+
+    /// The rule named `name` ([`PaperDamping::name`]), if there is one.
+    pub fn from_name(name: &str) -> Option<PaperDamping> {
+        PaperDamping::ALL.into_iter().find(|m| m.name() == name)
+    }
 }
 
 /// Which control points on the boundary of the patch may move.
@@ -232,6 +283,7 @@ impl Default for SurfaceFairOptions {
             truncation: 0.05,
             min_truncation: 1e-3,
             damped_step: 0.1,
+            damping: PaperDamping::Residual,
             epsilon: 1e-4,
             max_iterations: 20,
             method: SurfaceFairMethod::Regularised,
@@ -348,7 +400,9 @@ impl From<(f64, f64)> for Residual {
 pub struct JacobianSize {
     /// Target samples with a defined d_s.
     pub rows: usize,
-    /// Unknowns: three per moved control point.
+    /// Unknowns: one per moved control point (its normal component) with
+    /// [`SurfaceFairMethod::Paper`], three (x, y, z) with
+    /// [`SurfaceFairMethod::Regularised`].
     pub cols: usize,
 }
 
@@ -363,7 +417,8 @@ pub struct FairIteration {
     pub step: f64,
     /// Jacobian rows (samples).
     pub rows: usize,
-    /// Jacobian columns (control point components).
+    /// Jacobian columns (unknowns: one per moved control point with
+    /// [`SurfaceFairMethod::Paper`], three with the regularised solver).
     pub cols: usize,
     /// Singular values kept by the truncation.
     pub rank: usize,
@@ -739,6 +794,34 @@ pub fn target_curves(
     Ok(out)
 }
 
+/// Raises the samples n(i) of every target by a common whole factor k
+/// (spacing s/k of Eq. (3.5); the old samples stay among the new) until
+/// there are at least as many samples as `unknowns`: Nishiyama et al. §3.3
+/// choose n(i) "such that the linear system is always an overdetermined
+/// system". At most 64 times as many samples.
+fn overdetermine(surface: &BSplineSurface, targets: &mut [TargetCurve], unknowns: usize) {
+    let rows: usize = targets.iter().map(|t| t.samples.len()).sum();
+    if rows == 0 || rows >= unknowns {
+        return;
+    }
+    let k = unknowns.div_ceil(rows).clamp(2, 64);
+    for t in targets.iter_mut() {
+        let hermite = CubicHermite {
+            p0: Vec3::new(t.start[0], t.start[1], 0.0),
+            p1: Vec3::new(t.end[0], t.end[1], 0.0),
+            v0: Vec3::new(t.tangent_start[0], t.tangent_start[1], 0.0),
+            v1: Vec3::new(t.tangent_end[0], t.tangent_end[1], 0.0),
+        };
+        let n = (t.samples.len().max(2) - 1) * k + 1;
+        t.samples = (0..n)
+            .map(|j| {
+                let p = hermite.point(j as f64 / (n - 1) as f64);
+                surface_clamp(surface, [p.x, p.y])
+            })
+            .collect();
+    }
+}
+
 fn surface_clamp(surface: &BSplineSurface, p: [f64; 2]) -> [f64; 2] {
     let (u, v) = surface.clamp_parameters(p[0], p[1]);
     [u, v]
@@ -938,23 +1021,98 @@ fn jacobian_rows(
         .collect()
 }
 
-/// The dense Jacobian of [`jacobian_rows`] (samples × `cols`).
-fn jacobian(
+/// The Jacobian of Eq. (3.9)–(3.10) with one unknown per selected control
+/// point, its displacement along `dirs[k]` (Nishiyama et al. §3.3: "the
+/// selected components of the control points"), by forward differences
+/// re-evaluating only the samples each column affects (as
+/// [`jacobian_rows`]). Samples × `dirs.len()`.
+fn jacobian_along(
     surface: &BSplineSurface,
     lights: &[CircularLight],
     samples: &[Sample],
     f: &[Option<f64>],
-    cols: usize,
+    dirs: &[Vec3],
     dw: f64,
 ) -> Mat<f64> {
-    let entries = jacobian_rows(surface, lights, samples, f, dw);
-    let mut j = Mat::<f64>::zeros(samples.len(), cols);
+    let entries: Vec<Vec<(usize, f64)>> = samples
+        .par_iter()
+        .zip(f.par_iter())
+        .with_min_len(8)
+        .map(|(s, &f0)| {
+            let mut e = Vec::with_capacity(s.coeffs.len());
+            let Some(f0) = f0 else { return e };
+            let d = surface.derivatives(s.uv[0], s.uv[1]);
+            let light = &lights[s.light];
+            for &(c, r, ru, rv) in &s.coeffs {
+                let k = c / 3;
+                let ax = dw * dirs[k];
+                let q = d.point + r * ax;
+                let n = (d.su + ru * ax).cross(d.sv + rv * ax);
+                let g = light.signed_distance(q, n).map_or(0.0, |fd| (fd - f0) / dw);
+                if g.is_finite() {
+                    e.push((k, g));
+                }
+            }
+            e
+        })
+        .collect();
+    let mut j = Mat::<f64>::zeros(samples.len(), dirs.len());
     for (row, e) in entries.iter().enumerate() {
         for &(c, g) in e {
             j[(row, c)] = g;
         }
     }
     j
+}
+
+/// The direction each selected control point moves in with
+/// [`SurfaceFairMethod::Paper`]: the unit surface normal at its Greville
+/// abscissae (the point of the domain it pulls on most); where that normal
+/// is undefined, the mean normal of the samples (or +z).
+fn control_directions(
+    surface: &BSplineSurface,
+    selected: &[(usize, usize)],
+    samples: &[Sample],
+) -> Vec<Vec3> {
+    let greville = |knots: &[f64], p: usize, i: usize| {
+        if p == 0 {
+            knots[i]
+        } else {
+            knots[i + 1..=i + p].iter().sum::<f64>() / p as f64
+        }
+    };
+    let mean = samples
+        .iter()
+        .filter_map(|s| surface.normal(s.uv[0], s.uv[1]))
+        .fold(Vec3::ZERO, |a, n| a + n);
+    let fallback = if mean.length() > 0.0 && mean.is_finite() {
+        mean.normalize()
+    } else {
+        Vec3::Z
+    };
+    selected
+        .iter()
+        .map(|&(i, j)| {
+            let u = greville(surface.knots_u(), surface.degree_u(), i);
+            let v = greville(surface.knots_v(), surface.degree_v(), j);
+            let (u, v) = surface.clamp_parameters(u, v);
+            surface
+                .normal(u, v)
+                .filter(|n| n.is_finite() && n.length() > 0.0)
+                .map_or(fallback, |n| n.normalize())
+        })
+        .collect()
+}
+
+/// Σ (F + J Δr)²: the sum of squares the linearisation of Eq. (3.8)
+/// predicts after the step Δr.
+fn predicted_sum_of_squares(j: &Mat<f64>, f: &[f64], dr: &[f64]) -> f64 {
+    (0..j.nrows())
+        .map(|r| {
+            let lin: f64 = (0..j.ncols()).map(|c| j[(r, c)] * dr[c]).sum();
+            (f[r] + lin).powi(2)
+        })
+        .sum()
 }
 
 /// The thin SVD J = U S Vᵀ of the Jacobian, computed once per iteration
@@ -1003,6 +1161,21 @@ fn truncated_svd_solve(svd: &JacobianSvd, f: &[f64], truncation: f64) -> (Vec<f6
     (dr, rank)
 }
 
+/// Moves selected control point k by `mu · dr[k]` along `dirs[k]`.
+fn apply_along(
+    surface: &mut BSplineSurface,
+    base: &[Vec3],
+    selected: &[(usize, usize)],
+    dirs: &[Vec3],
+    dr: &[f64],
+    mu: f64,
+) -> Result<(), SurfaceFairError> {
+    for (k, &(i, j)) in selected.iter().enumerate() {
+        surface.set_control_point(i, j, base[k] + (mu * dr[k]) * dirs[k])?;
+    }
+    Ok(())
+}
+
 /// Moves the selected control points by `mu · dr`.
 fn apply(
     surface: &mut BSplineSurface,
@@ -1048,16 +1221,25 @@ struct Solved {
 /// unknowns r (three components each). Then, by `opts.method`:
 ///
 /// - [`SurfaceFairMethod::Paper`]: Gauss–Newton on d_s(u_ij, v_ij) = 0
-///   (Eq. (3.6)–(3.9)) with the Jacobian of Eq. (3.10) ([`jacobian`], Δw
-///   relative to the control net size) and the truncated SVD (the paper's
-///   5 %, lowered tenfold down to `opts.min_truncation` whenever a step is
-///   rejected or gains less than a halving of mean |d_s|); full step
-///   R + Δr (Eq. (3.11)) when both max and mean |d_s| decrease
-///   (Eq. (3.12)), otherwise R + μΔr (Eq. (3.13)). Stops when
-///   |mean⁽ᵖ⁺¹⁾ − mean⁽ᵖ⁾| / mean⁽ᵖ⁾ < ε (Eq. (3.14), only once the
-///   truncation is at its floor), when the residual vanishes, when even the
-///   damped step at the floor does not lower the mean ([`FairStop::Stalled`],
-///   not converged), or after `opts.max_iterations`.
+///   (Eq. (3.6)–(3.9)). The unknowns are "the selected components of the
+///   control points" (§3.3): one per moved control point, its displacement
+///   along the surface normal at its Greville abscissae — tangential moves
+///   hardly change d_s and would only add near-zero singular values. When
+///   the targets have fewer samples than unknowns, n(i) is raised until the
+///   system is overdetermined, as §3.3 prescribes. The Jacobian is that of
+///   Eq. (3.10) (Δw relative to the control net size), solved by the
+///   truncated SVD (the paper's 5 %, lowered tenfold down to
+///   `opts.min_truncation` whenever a step is rejected or gains less than a
+///   halving of mean |d_s|); full step R + Δr (Eq. (3.11)), or R + μΔr
+///   (Eq. (3.13)) when `opts.damping` says the full step diverges (by
+///   default: when it raises Σ d_s²; [`PaperDamping::MaxMean`]: Eq. (3.12)
+///   as printed). Stops when |mean⁽ᵖ⁺¹⁾ − mean⁽ᵖ⁾| / mean⁽ᵖ⁾ < ε
+///   (Eq. (3.14), only once the truncation is at its floor) or when the
+///   step at the floor would lower Σ d_s² by less than ε relative (the
+///   least-squares problem is solved), when the residual vanishes, when
+///   even the damped step at the floor is not accepted
+///   ([`FairStop::Stalled`], not converged), or after
+///   `opts.max_iterations` (not converged).
 /// - [`SurfaceFairMethod::Regularised`]: Levenberg–Marquardt on the
 ///   objective of [`regularised`] (targets + weak targets on every other line
 ///   crossing the moved region + thin-plate energy of the displacement),
@@ -1076,7 +1258,7 @@ pub fn fair_surface(
         return Err(SurfaceFairError::Invalid("no endpoints given".into()));
     }
     let lights = &opts.lights[..];
-    let targets = target_curves(surface, opts)?;
+    let mut targets = target_curves(surface, opts)?;
     let ends: Vec<[f64; 2]> = targets.iter().flat_map(|t| [t.start, t.end]).collect();
     let kb = knot_box(surface, &ends);
     type ControlIndices = Vec<(usize, usize)>;
@@ -1086,6 +1268,13 @@ pub fn fair_surface(
         .partition(|&(i, j)| on_held_boundary(surface, opts.boundary, i, j));
     if selected.is_empty() {
         return Err(SurfaceFairError::NothingToMove(held.len()));
+    }
+    let unknowns = match opts.method {
+        SurfaceFairMethod::Paper => selected.len(),
+        SurfaceFairMethod::Regularised => 3 * selected.len(),
+    };
+    if opts.method == SurfaceFairMethod::Paper {
+        overdetermine(surface, &mut targets, unknowns);
     }
     let mut column = vec![None; surface.count_u() * surface.count_v()];
     for (k, &(i, j)) in selected.iter().enumerate() {
@@ -1154,7 +1343,7 @@ pub fn fair_surface(
             modified_control_points: selected.len(),
             jacobian: JacobianSize {
                 rows: samples.len(),
-                cols: 3 * selected.len(),
+                cols: unknowns,
             },
             modified_indices: selected,
             held_boundary_points: held,
@@ -1183,7 +1372,8 @@ fn solve_paper(
     dw: f64,
     tiny: f64,
 ) -> Result<Solved, SurfaceFairError> {
-    let cols = 3 * selected.len();
+    let dirs = control_directions(surface, selected, samples);
+    let cols = dirs.len();
     let mut current = surface.clone();
     let mut f = residuals(&current, lights, samples);
     let mut now = stats(&f);
@@ -1206,11 +1396,12 @@ fn solve_paper(
             .iter()
             .map(|&(i, j)| current.control_point(i, j))
             .collect();
-        let j = jacobian(&current, lights, samples, &f, cols, dw);
+        let j = jacobian_along(&current, lights, samples, &f, &dirs, dw);
         let fv: Vec<f64> = f.iter().map(|x| x.unwrap_or(0.0)).collect();
+        let ss_now: f64 = fv.iter().map(|x| x * x).sum();
         let svd = jacobian_svd(&j)?;
         // Try the current truncation; if neither the full nor the damped
-        // step lowers mean |d_s|, lower the truncation (same SVD).
+        // step is accepted, lower the truncation (same SVD).
         let mut accepted = None;
         loop {
             let (dr, rank) = truncated_svd_solve(&svd, &fv, trunc);
@@ -1218,18 +1409,40 @@ fn solve_paper(
                 stop = FairStop::NonFiniteStep;
                 break;
             }
+            // Eq. (3.14) on the linear model: when the step would change
+            // the sum of squares by less than ε (relative), the
+            // least-squares problem is solved and another step only
+            // shuffles the residual.
+            let gain = ss_now - predicted_sum_of_squares(&j, &fv, &dr);
+            if gain <= opts.epsilon * ss_now && trunc <= opts.min_truncation {
+                converged = true;
+                stop = FairStop::Epsilon;
+                break;
+            }
             let mut trial = current.clone();
             let mut step = 1.0;
-            apply(&mut trial, &base, selected, &dr, step)?;
+            apply_along(&mut trial, &base, selected, &dirs, &dr, step)?;
             let mut ft = residuals(&trial, lights, samples);
             let mut st = stats(&ft);
-            if !(st.0 < now.0 && st.1 < now.1) {
+            let mut ss = sum_of_squares(&ft);
+            let damp = match opts.damping {
+                PaperDamping::Residual => !(ss < ss_now),
+                PaperDamping::MaxMean => !(st.0 < now.0 && st.1 < now.1),
+                PaperDamping::Off => false,
+            };
+            if damp {
                 step = opts.damped_step;
-                apply(&mut trial, &base, selected, &dr, step)?;
+                apply_along(&mut trial, &base, selected, &dirs, &dr, step)?;
                 ft = residuals(&trial, lights, samples);
                 st = stats(&ft);
+                ss = sum_of_squares(&ft);
             }
-            if st.1 < now.1 {
+            let better = match opts.damping {
+                PaperDamping::Residual => ss < ss_now,
+                PaperDamping::MaxMean => st.1 < now.1,
+                PaperDamping::Off => ss.is_finite(),
+            };
+            if better {
                 accepted = Some((trial, ft, st, step, rank));
                 break;
             }
@@ -1281,6 +1494,11 @@ fn solve_paper(
         after: now,
         keep_samples: 0,
     })
+}
+
+/// Σ d_s² (infinite if any is undefined).
+fn sum_of_squares(r: &[Option<f64>]) -> f64 {
+    r.iter().map(|x| x.map_or(f64::INFINITY, |x| x * x)).sum()
 }
 
 /// Mean of d_s² (infinite if any is undefined; 0 for none).

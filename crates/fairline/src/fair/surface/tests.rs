@@ -569,8 +569,15 @@ fn check_case_paper(c: &Case, max_iterations: usize, drop: f64, name: &str) -> S
     );
     assert!(a.0 <= b.0 / 20.0, "{name}: max {} -> {}", b.0, a.0);
     assert!(rep.history.len() <= max_iterations);
+    assert!(rep.converged, "{name}: stopped by {:?}", rep.stop);
+    // one unknown per moved control point (its normal component), more
+    // samples than unknowns
+    assert_eq!(rep.jacobian.cols, rep.modified_indices.len());
+    assert!(rep.jacobian.rows >= rep.jacobian.cols);
+    // every accepted step lowers Σ d_s², what the least-squares step
+    // minimises (the default damping rule)
     for w in rep.history.windows(2) {
-        assert!(w[1].mean_abs < w[0].mean_abs);
+        assert!(w[1].objective < w[0].objective);
     }
     // Control points outside the selection: bit-identical.
     let sel: std::collections::HashSet<(usize, usize)> =
@@ -654,6 +661,68 @@ fn fair_paper_method_keeps_its_guarantees_on_dome_saddle_and_roof() {
         0.2,
     );
     check_case_paper(&c, 8, 300.0, "roof (paper)");
+}
+
+/// The paper's solver converges on the dome within the paper's iteration
+/// counts (Table 1: 5 and 8) with the default damping rule and with none;
+/// the damping of Eq. (3.12) as printed damps nearly every step near the
+/// least-squares floor and needs more. An underdetermined target set (one
+/// short stretch) gets more samples until there are as many as unknowns.
+#[test]
+fn fair_paper_method_converges_on_the_dome_and_says_how_it_damped() {
+    let clean = height_surface(15, 15, 1.0, 1.0, |x, y| 0.8 - 0.4 * (x * x + y * y));
+    let c = case(clean, (11, 7, 0.03), Vec3::new(0.0, 0.0, 3.0), 0.4, 9, 0.2);
+    let base = SurfaceFairOptions::default().method(SurfaceFairMethod::Paper);
+    let endpoints = endpoints_around(&c.bumped, &c.lights, c.centre, c.disc, base.grid);
+    let mut counts = Vec::new();
+    for damping in PaperDamping::ALL {
+        assert_eq!(PaperDamping::from_name(damping.name()), Some(damping));
+        let (_, rep) = fair(
+            &c.bumped,
+            &c.lights,
+            &endpoints,
+            &base.clone().damping(damping),
+        )
+        .unwrap();
+        eprintln!(
+            "dome, damping {}: {} iterations ({:?}), mean |d_s| {:.3e} -> {:.3e}",
+            damping.name(),
+            rep.iterations,
+            rep.stop,
+            rep.residual_before.mean,
+            rep.residual_after.mean
+        );
+        assert!(
+            rep.residual_after.mean < rep.residual_before.mean / 50.0,
+            "{damping:?}"
+        );
+        let damped = rep.history.iter().filter(|i| i.step < 1.0).count();
+        match damping {
+            PaperDamping::Off => assert_eq!(damped, 0),
+            PaperDamping::MaxMean => assert!(damped > 0),
+            PaperDamping::Residual => {}
+        }
+        counts.push((damping, rep.converged, rep.iterations));
+    }
+    assert!(counts[0].1 && counts[0].2 <= 8, "{counts:?}");
+    assert!(counts[2].1 && counts[2].2 <= 8, "{counts:?}");
+    assert!(counts[1].2 > counts[0].2, "{counts:?}");
+    // one short stretch: fewer samples than moved control points at the
+    // default spacing
+    let mut short = endpoints[0];
+    for k in 0..2 {
+        short.end[k] = short.start[k] + 0.3 * (short.end[k] - short.start[k]);
+    }
+    let (_, rep) = fair(&c.bumped, &c.lights, &[short], &base).unwrap();
+    let spaced = base.clone().lights(c.lights.clone()).endpoints(vec![short]);
+    let at_default: usize = target_curves(&c.bumped, &spaced)
+        .unwrap()
+        .iter()
+        .map(|t| t.samples.len())
+        .sum();
+    assert!(at_default < rep.jacobian.cols, "{at_default}");
+    assert!(rep.jacobian.rows >= rep.jacobian.cols, "{:?}", rep.jacobian);
+    assert!(rep.residual_after.mean < rep.residual_before.mean);
 }
 
 #[test]
@@ -853,7 +922,7 @@ fn fair_surface_is_bit_identical_to_the_recorded_reference() {
     let c = case(clean, (11, 7, 0.03), Vec3::new(0.0, 0.0, 3.0), 0.4, 9, 0.2);
     let recorded = [
         (SurfaceFairMethod::Regularised, 0x7541_3e89_b3a5_edd4_u64, 6),
-        (SurfaceFairMethod::Paper, 0x5768_9381_f884_5f4d_u64, 20),
+        (SurfaceFairMethod::Paper, 0xf7af_9a37_0f1b_c430_u64, 6),
     ];
     for (method, expected, iterations) in recorded {
         let base = SurfaceFairOptions::default().method(method);
