@@ -75,6 +75,21 @@ impl Choice for FairMethod {
             value: FairMethod::DiffusionFlow,
             help: "Baseline: surface diffusion flow ∂V/∂t = N Δ_B H (Xu et al.)",
         },
+        Named {
+            name: "membrane",
+            value: FairMethod::Membrane,
+            help: "Membrane energy, ΔX = 0 on the movable vertices (Grüner §3.1.2, Eq. (14)); no lights",
+        },
+        Named {
+            name: "thin-plate",
+            value: FairMethod::ThinPlate,
+            help: "Thin-plate energy, Δ²X = 0 on the movable vertices (Grüner §3.1.2, Eq. (13)); no lights",
+        },
+        Named {
+            name: "mvs",
+            value: FairMethod::Mvs,
+            help: "Minimum variation of curvature, Δ³X = 0 on the movable vertices (Grüner §3.1.3); no lights",
+        },
     ];
 }
 
