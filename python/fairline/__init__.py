@@ -532,6 +532,8 @@ def fair_quad(
     fix_boundary: bool = False,
     fixed: Optional[Sequence[int]] = None,
     off_surface: bool = False,
+    method: str = "structure-lines",
+    tolerance: float = 0.1,
 ) -> Tuple[_np.ndarray, Dict[str, Any]]:
     """Structure-line fairing of a quad mesh (``fairline fair-quad``,
     Grüner thesis ch. 4, Eq. (30)–(34)): zigzagging structure lines are
@@ -543,6 +545,14 @@ def fair_quad(
     every solve (they slide along it while the lines straighten);
     ``off_surface=True`` gives the thesis' method as printed.
 
+    ``method="network"`` fairs the polyline network with tolerance
+    cylinders instead (Grüner §3.1.1, after Hofer et al.): only the heights
+    z move, minimising the bending energy of every structure line with each
+    vertex within ``tolerance`` mean edge lengths of its input height
+    (``fixed`` vertices and, with ``fix_boundary``, the boundary do not
+    move); the report adds ``network_energy_before network_energy_after
+    at_bound tolerance``.
+
     Returns ``(V_new, report)``; report keys ``structure_lines
     free_vertices structure_energy_before structure_energy_after
     max_displacement iterations``.
@@ -552,6 +562,7 @@ def fair_quad(
         v, indices, offsets, weight=float(weight), deviation=float(deviation),
         deviation_factor=float(deviation_factor), iterations=int(iterations),
         fix_boundary=bool(fix_boundary), fixed=_fixed(fixed), off_surface=bool(off_surface),
+        method=str(method), tolerance=float(tolerance),
     )
     return out, _report(report)
 

@@ -93,6 +93,22 @@ impl Choice for FairMethod {
     ];
 }
 
+impl Choice for crate::fair_quad::QuadMethod {
+    const OPTION: &'static str = "method";
+    const ALL: &'static [Named<Self>] = &[
+        Named {
+            name: "structure-lines",
+            value: crate::fair_quad::QuadMethod::StructureLines,
+            help: "Straighten the structure lines (Grüner ch. 4, Eq. (30)–(34))",
+        },
+        Named {
+            name: "network",
+            value: crate::fair_quad::QuadMethod::Network,
+            help: "Fair polyline network: least bending of the heights, each inside its tolerance cylinder (Grüner §3.1.1)",
+        },
+    ];
+}
+
 impl Choice for SmoothMethod {
     const OPTION: &'static str = "method";
     const ALL: &'static [Named<Self>] = &[
