@@ -532,6 +532,8 @@ def fair_quad(
     fix_boundary: bool = False,
     fixed: Optional[Sequence[int]] = None,
     off_surface: bool = False,
+    method: str = "structure-lines",
+    tolerance: float = 0.1,
 ) -> Tuple[_np.ndarray, Dict[str, Any]]:
     """Structure-line fairing of a quad mesh (``fairline fair-quad``,
     Grüner thesis ch. 4, Eq. (30)–(34)): zigzagging structure lines are
@@ -543,6 +545,14 @@ def fair_quad(
     every solve (they slide along it while the lines straighten);
     ``off_surface=True`` gives the thesis' method as printed.
 
+    ``method="network"`` fairs the polyline network with tolerance
+    cylinders instead (Grüner §3.1.1, after Hofer et al.): only the heights
+    z move, minimising the bending energy of every structure line with each
+    vertex within ``tolerance`` mean edge lengths of its input height
+    (``fixed`` vertices and, with ``fix_boundary``, the boundary do not
+    move); the report adds ``network_energy_before network_energy_after
+    at_bound tolerance``.
+
     Returns ``(V_new, report)``; report keys ``structure_lines
     free_vertices structure_energy_before structure_energy_after
     max_displacement iterations``.
@@ -552,6 +562,7 @@ def fair_quad(
         v, indices, offsets, weight=float(weight), deviation=float(deviation),
         deviation_factor=float(deviation_factor), iterations=int(iterations),
         fix_boundary=bool(fix_boundary), fixed=_fixed(fixed), off_surface=bool(off_surface),
+        method=str(method), tolerance=float(tolerance),
     )
     return out, _report(report)
 
@@ -940,6 +951,7 @@ def fair_surface(
     keep_weight: float = 0.01,
     fairness_weight: float = 0.003,
     damped_step: float = 0.1,
+    damping: str = "residual",
 ) -> Tuple[List[Surface], Dict[str, Any]]:
     """Circular-highlight fairing of a B-spline surface (``fairline
     fair-surface``, Nishiyama et al. §3): each endpoint pair is snapped onto
@@ -948,7 +960,9 @@ def fair_surface(
     ``"regularised"`` (Levenberg–Marquardt, keeps every other line fair) or
     ``"paper"`` (Gauss–Newton, truncated SVD); ``boundary``: ``"fixed"``,
     ``"tangent"`` or ``"free"``; ``damped_step``: μ of the damped step
-    (Eq. 3.13; 1 turns the damping off).
+    (Eq. 3.13; 1 turns the damping off); ``damping``: when the paper's
+    solver damps a step, ``"residual"`` (when Σ d_s² grows), ``"max-mean"``
+    (Eq. 3.12 as printed) or ``"off"``.
 
     ``lights``: ``{"center","axis","radii"}``; ``endpoints``:
     ``{"endpoints": [{"radius", "start": [u, v], "end": [u, v]}]}`` (dicts
@@ -963,7 +977,7 @@ def fair_surface(
         truncation=float(truncation), min_truncation=float(min_truncation),
         sample_spacing=float(sample_spacing), grid=int(grid), method=method, boundary=boundary,
         keep_weight=float(keep_weight), fairness_weight=float(fairness_weight),
-        damped_step=float(damped_step),
+        damped_step=float(damped_step), damping=damping,
     )
     return _surfaces_from(out), _report(report)
 

@@ -76,6 +76,8 @@ def fair_quad(
     fix_boundary: bool = False,
     fixed: Optional[Sequence[int]] = None,
     off_surface: bool = False,
+    method: str = "structure-lines",
+    tolerance: float = 0.1,
 ) -> Tuple[_F64_2, str]: ...
 def enhance(
     v: _F64_2,
@@ -177,6 +179,7 @@ def fair_surface(
     keep_weight: Optional[float] = None,
     fairness_weight: Optional[float] = None,
     damped_step: Optional[float] = None,
+    damping: str = "residual",
 ) -> Tuple[str, str]: ...
 
 class Mesh:

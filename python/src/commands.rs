@@ -23,7 +23,7 @@ use fairline_commands::curvature::CurvatureSettings;
 use fairline_commands::detect::{DetectInput, DetectSettings};
 use fairline_commands::enhance::EnhanceSettings;
 use fairline_commands::fair::{FairInput, FairSettings};
-use fairline_commands::fair_quad::QuadSettings;
+use fairline_commands::fair_quad::{QuadMethod, QuadSettings};
 use fairline_commands::highlight::{HighlightLights, HighlightSettings};
 use fairline_commands::smooth::SmoothSettings;
 use fairline_commands::{Choice, FrontEnd, Lights, Weights};
@@ -492,7 +492,9 @@ fn output_positions(mesh: &SurfaceMesh) -> Vec<Vec3> {
 /// `fairline fair-quad`: the command layer's `fair-quad`.
 #[pyfunction]
 #[pyo3(signature = (v, indices, offsets, weight = 0.01, deviation = 0.1, deviation_factor = 0.1,
-    iterations = 3, fix_boundary = false, fixed = None, off_surface = false))]
+    iterations = 3, fix_boundary = false, fixed = None, off_surface = false,
+    method = "structure-lines", tolerance = 0.1))]
+#[allow(clippy::too_many_arguments)]
 fn fair_quad<'py>(
     py: Python<'py>,
     v: V<'py>,
@@ -505,8 +507,13 @@ fn fair_quad<'py>(
     fix_boundary: bool,
     fixed: Option<Vec<i64>>,
     off_surface: bool,
+    method: &str,
+    tolerance: f64,
 ) -> PyResult<PositionsOut<'py>> {
+    let method = QuadMethod::parse(method).map_err(Failure::from)?;
     let mut settings = QuadSettings {
+        method,
+        tolerance,
         weight,
         deviation,
         deviation_factor,

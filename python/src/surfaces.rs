@@ -232,7 +232,7 @@ fn surface_highlight_lines(
 #[pyo3(signature = (surfaces, lights, endpoints, surface = 0, max_iterations = None,
     epsilon = None, truncation = None, min_truncation = None, sample_spacing = None, grid = None,
     method = "regularised", boundary = "fixed", keep_weight = None, fairness_weight = None,
-    damped_step = None))]
+    damped_step = None, damping = "residual"))]
 fn fair_surface(
     py: Python<'_>,
     surfaces: String,
@@ -250,8 +250,12 @@ fn fair_surface(
     keep_weight: Option<f64>,
     fairness_weight: Option<f64>,
     damped_step: Option<f64>,
+    damping: &str,
 ) -> PyResult<(String, String)> {
-    use fairline::fair::{BoundaryControl, Endpoints, SurfaceFairMethod};
+    use fairline::fair::{BoundaryControl, Endpoints, PaperDamping, SurfaceFairMethod};
+    let names: Vec<&str> = PaperDamping::ALL.iter().map(|d| d.name()).collect();
+    let damping =
+        PaperDamping::from_name(damping).ok_or_else(|| bad_choice("damping", damping, &names))?;
     use fairline_commands::fair_surface::{FairSurfaceInput, FairSurfaceSettings, run};
     let method = match method {
         "regularised" => SurfaceFairMethod::Regularised,
@@ -280,6 +284,7 @@ fn fair_surface(
         truncation: truncation.unwrap_or(d.truncation),
         min_truncation: min_truncation.unwrap_or(d.min_truncation),
         damped_step: damped_step.unwrap_or(d.damped_step),
+        damping,
         sample_spacing: sample_spacing.unwrap_or(d.sample_spacing),
         grid: grid.unwrap_or(d.grid),
         method,

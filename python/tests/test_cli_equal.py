@@ -138,6 +138,25 @@ def test_fair_quad_equals_cli(cli, tmp_path, kwargs, args):
     assert report["structure_energy_after"] < report["structure_energy_before"]
 
 
+def test_fair_quad_network_equals_cli(cli, tmp_path):
+    # the polyline network with tolerance cylinders (Grüner §3.1.1): only
+    # the heights move, within tolerance × the mean edge length
+    V, F = zigzag_quads()
+    V[:, 2] += np.where(np.arange(len(V)) % 2 == 0, 0.01, -0.01)
+    fairline.write_mesh(tmp_path / "zigzag.obj", V, F)
+    args = ["--method", "network", "--tolerance", "0.05", "--fix-boundary"]
+    run(cli, "fair-quad", tmp_path / "zigzag.obj", *args, "-o", tmp_path / "q.ply", "--report", tmp_path / "r.json")
+    _, values, _ = read_ply(tmp_path / "q.ply")
+    V2, report = fairline.fair_quad(V, F, method="network", tolerance=0.05, fix_boundary=True)
+    exact(V2, values)
+    same_report(report, cli_report(tmp_path / "r.json"))
+    assert report["method"] == "network"
+    assert report["network_energy_after"] < report["network_energy_before"]
+    assert np.array_equal(V2[:, :2], V[:, :2])
+    with pytest.raises(fairline.FairlineError):
+        fairline.fair_quad(V, F, method="fast")
+
+
 @pytest.mark.parametrize("kwargs,args", [({}, []), ({"lambda_": 0.5, "solver": "cg"}, ["--lambda", "0.5", "--solver", "cg"]),
                                          ({"projection": "none"}, ["--projection", "none"])])
 def test_enhance_equals_cli(cli, demo, tmp_path, kwargs, args):

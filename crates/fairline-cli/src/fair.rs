@@ -76,8 +76,10 @@ pub struct Args {
     /// curves' end tangents from a smooth surface fitted beyond the
     /// defect's footprint, then ¾ of that result + ¼ of the diffusion-flow
     /// result; --laplacian-weight adds a curvature-Laplacian term), paper
-    /// (Yong et al. exactly, Algorithm 2) or diffusion-flow (the baseline,
-    /// Xu et al.).
+    /// (Yong et al. exactly, Algorithm 2), diffusion-flow (the baseline,
+    /// Xu et al.), or an energy of the Grüner thesis minimised over the
+    /// movable vertices without lights: membrane (ΔX = 0), thin-plate
+    /// (Δ²X = 0) or mvs (minimum variation of curvature, Δ³X = 0).
     #[arg(long, value_parser = choice::<FairMethod>(), default_value = "highlight")]
     pub method: FairMethod,
     /// Weight ω1 of the Willmore (fairness) energy.

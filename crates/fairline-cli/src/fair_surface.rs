@@ -8,7 +8,8 @@ use anyhow::Result;
 use fairline::Control;
 use fairline::bspline::BSplineSurface;
 use fairline::fair::{
-    BoundaryControl, EndpointPair, SurfaceFairMethod, SurfaceFairOptions, SurfaceFairReport,
+    BoundaryControl, EndpointPair, PaperDamping, SurfaceFairMethod, SurfaceFairOptions,
+    SurfaceFairReport,
 };
 use fairline::highlight::{
     CircularLight, CircularLights, SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight,
@@ -96,12 +97,19 @@ pub struct Args {
     /// paper's fixed rule (a larger value is taken as --truncation).
     #[arg(long, default_value_t = SurfaceFairOptions::default().min_truncation)]
     pub min_truncation: f64,
-    /// Step factor μ of the damped step, Nishiyama et al. Eq. (3.13): when
-    /// the full Gauss–Newton step R + Δr does not lower both the largest and
-    /// the mean |d_s| (Eq. (3.12)), R + μΔr is taken instead (paper; the
-    /// paper's 0.1 by default, 1 turns the damping off).
+    /// Step factor μ of the damped step R + μΔr, Nishiyama et al.
+    /// Eq. (3.13) (paper; the paper's 0.1 by default, 1 turns the damping
+    /// off).
     #[arg(long, default_value_t = SurfaceFairOptions::default().damped_step, value_name = "MU")]
     pub damped_step: f64,
+    /// When the paper's solver damps a step (paper): `residual` when the
+    /// full step raises Σ d_s², the sum of squares the least-squares step
+    /// minimises (default); `max-mean` when it raises the largest or the
+    /// mean |d_s| (Eq. (3.12) as printed: near the least-squares floor it
+    /// damps nearly every step and the iteration creeps); `off` never
+    /// (Eq. (3.11)).
+    #[arg(long, value_enum, default_value = "residual")]
+    pub damping: DampingArg,
     /// Target sample spacing s as a fraction of the domain diagonal, Eq. (3.5).
     #[arg(long, default_value_t = SurfaceFairOptions::default().sample_spacing)]
     pub sample_spacing: f64,
@@ -140,6 +148,14 @@ pub struct Args {
 pub enum MethodArg {
     Regularised,
     Paper,
+}
+
+/// `--damping`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum DampingArg {
+    Residual,
+    MaxMean,
+    Off,
 }
 
 /// `--boundary`.
@@ -373,6 +389,11 @@ impl Args {
             truncation: self.truncation,
             min_truncation: self.min_truncation,
             damped_step: self.damped_step,
+            damping: match self.damping {
+                DampingArg::Residual => PaperDamping::Residual,
+                DampingArg::MaxMean => PaperDamping::MaxMean,
+                DampingArg::Off => PaperDamping::Off,
+            },
             sample_spacing: self.sample_spacing,
             grid: self.grid,
             method: match self.method {

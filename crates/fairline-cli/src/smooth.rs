@@ -12,7 +12,7 @@ use fairline::picture::{Picture, mesh_picture};
 use fairline::render::{RenderOptions, side_by_side};
 use fairline::smooth::SmoothMethod;
 use fairline_commands::Weights;
-use fairline_commands::fair_quad::{self, QuadSettings};
+use fairline_commands::fair_quad::{self, QuadMethod, QuadSettings};
 use fairline_commands::smooth::{self, SmoothSettings};
 use std::path::{Path, PathBuf};
 
@@ -200,9 +200,16 @@ pub fn run(args: Args) -> Result<()> {
 /// keeps its shape (`--off-surface`: the thesis' method as printed).
 /// The weight is scale-invariant: ω is divided by the squared mean edge
 /// length, so the same value behaves the same on a mesh of any size.
+///
+/// `--method network` fairs the polyline network instead (Grüner §3.1.1,
+/// after Hofer et al.): only the heights z move, minimising the bending
+/// energy Σ (z_{k−1} − 2z_k + z_{k+1})² of every structure line with each
+/// vertex inside its tolerance cylinder |z − z⁰| ≤ h·ē (`--tolerance h`,
+/// ē the mean edge length); `--fixed` and `--fix-boundary` give zero
+/// tolerance.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline fair-quad fairline-demo/quad-saddle.obj -o faired.obj\n  fairline fair-quad fairline-demo/quad-saddle.obj --weight 0.005 --deviation 0.05 --deviation-factor 0.5 --iterations 4 --fix-boundary -o faired.obj --png cmp.png --report r.json"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline fair-quad fairline-demo/quad-saddle.obj -o faired.obj\n  fairline fair-quad fairline-demo/quad-saddle.obj --weight 0.005 --deviation 0.05 --deviation-factor 0.5 --iterations 4 --fix-boundary -o faired.obj --png cmp.png --report r.json\n  fairline fair-quad fairline-demo/quad-saddle.obj --method network --tolerance 0.05 -o network.obj --report r.json"
 )]
 pub struct QuadArgs {
     /// Input quad mesh (.obj .ply .off).
@@ -210,6 +217,13 @@ pub struct QuadArgs {
     /// Output mesh.
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
+    /// What to minimise.
+    #[arg(long, value_parser = crate::args::choice::<QuadMethod>(), default_value = "structure-lines")]
+    pub method: QuadMethod,
+    /// Half height h of the tolerance cylinders of `--method network`, in
+    /// mean edge lengths (|z − z⁰| ≤ h·ē).
+    #[arg(long, default_value_t = 0.1)]
+    pub tolerance: f64,
     /// Penalty weight ω (scale-invariant, see above).
     #[arg(long, default_value_t = 0.01)]
     pub weight: f64,
@@ -247,6 +261,8 @@ impl QuadArgs {
     /// The command layer's settings of these arguments.
     fn settings(&self, fixed: Vec<VertexId>) -> QuadSettings {
         QuadSettings {
+            method: self.method,
+            tolerance: self.tolerance,
             weight: self.weight,
             deviation: self.deviation,
             deviation_factor: self.deviation_factor,
@@ -291,7 +307,13 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
         before_after(
             &input,
             &mesh,
-            ["input", "structure-line fairing"],
+            [
+                "input",
+                match args.method {
+                    QuadMethod::StructureLines => "structure-line fairing",
+                    QuadMethod::Network => "polyline network",
+                },
+            ],
             true,
             png,
         )?;

@@ -115,6 +115,57 @@ fn fair_removes_a_bump_and_touches_nothing_outside() {
     assert!(f("highlight_deviation_after") < r2["highlight_deviation_after"].as_f64().unwrap());
 }
 
+/// `--method membrane|thin-plate|mvs` (Grüner §3.1.2–3.1.3): the energy
+/// methods remove the bump from the region, no vertex outside it moves,
+/// and the report names the method.
+#[test]
+fn energy_methods_fair_the_region_and_touch_nothing_outside() {
+    let d = tmp("energy");
+    let mesh = bump_panel(&d);
+    let region = d.join("region.json");
+    std::fs::write(&region, r#"{"sphere":{"center":[0,0,0],"radius":0.5}}"#).unwrap();
+    let a = fairline::io::read_mesh(&mesh).unwrap();
+    for method in ["membrane", "thin-plate", "mvs"] {
+        let (out, rep) = (
+            d.join(format!("{method}.obj")),
+            d.join(format!("{method}.json")),
+        );
+        ok(&run(&[
+            "fair",
+            s(&mesh),
+            "--region",
+            s(&region),
+            "--method",
+            method,
+            "-o",
+            s(&out),
+            "--report",
+            s(&rep),
+        ]));
+        let r = json(&rep);
+        assert_eq!(r["method"], method);
+        assert_eq!(r["converged"], true);
+        let b = fairline::io::read_mesh(&out).unwrap();
+        for (v, (x, y)) in bits(&a).iter().zip(&bits(&b)).enumerate() {
+            if x != y {
+                assert!(
+                    a.positions()[v].length() < 0.5,
+                    "{method}: vertex {v} moved"
+                );
+            }
+        }
+        let err = b
+            .positions()
+            .iter()
+            .map(|p| (p.z - 0.03 * p.x * p.x).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            err < 0.03 / 5.0,
+            "{method}: largest distance to the panel {err}"
+        );
+    }
+}
+
 #[test]
 fn auto_detects_and_fairs() {
     let d = tmp("auto");

@@ -99,6 +99,103 @@ fn fair_quad_straightens_a_zigzag_grid_keeps_fixed_vertices_and_writes_a_picture
     assert_ne!(read_obj_vertices(&off), b);
 }
 
+/// n×n quad grid of a saddle with a height zigzag (±a) across the lines.
+fn height_zigzag_quads(n: usize, a: f64) -> String {
+    let mut out = String::new();
+    let h = 2.0 / (n - 1) as f64;
+    for j in 0..n {
+        for i in 0..n {
+            let (x, y) = (-1.0 + h * i as f64, -1.0 + h * j as f64);
+            let inner = i > 0 && j > 0 && i < n - 1 && j < n - 1;
+            let dz = if inner && (i + j) % 2 == 0 {
+                a * h
+            } else {
+                0.0
+            };
+            writeln!(out, "v {x} {y} {}", 0.4 * (x * x - y * y) + dz).unwrap();
+        }
+    }
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let a = j * n + i + 1;
+            writeln!(out, "f {} {} {} {}", a, a + 1, a + 1 + n, a + n).unwrap();
+        }
+    }
+    out
+}
+
+/// `fair-quad --method network` (Grüner §3.1.1): only the heights move,
+/// each by at most the tolerance h·ē; the network's bending energy falls;
+/// fixed and (with --fix-boundary) boundary vertices stay bit-identical.
+#[test]
+fn fair_quad_network_moves_heights_within_their_tolerance_cylinders() {
+    let d = tmp("fq-network");
+    let input = d.join("zz.obj");
+    std::fs::write(&input, height_zigzag_quads(10, 0.3)).unwrap();
+    std::fs::write(d.join("fixed.json"), r#"{"vertices":[44]}"#).unwrap();
+    let out = d.join("out.obj");
+    let rep = d.join("r.json");
+    let o = run(&[
+        "fair-quad",
+        s(&input),
+        "--method",
+        "network",
+        "--tolerance",
+        "0.2",
+        "--fix-boundary",
+        "--fixed",
+        s(&d.join("fixed.json")),
+        "-o",
+        s(&out),
+        "--report",
+        s(&rep),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = json(&rep);
+    assert_eq!(r["method"], "network");
+    let (e0, e1) = (
+        r["network_energy_before"].as_f64().unwrap(),
+        r["network_energy_after"].as_f64().unwrap(),
+    );
+    assert!(e1 < 0.5 * e0, "{e0} → {e1}");
+    assert!(r["at_bound"].as_u64().unwrap() > 0);
+    let (a, b) = (read_obj_vertices(&input), read_obj_vertices(&out));
+    let ebar = 2.0 / 9.0; // the grid spacing; slopes make edges up to 1.5× longer
+    for (v, (p, q)) in a.iter().zip(&b).enumerate() {
+        assert_eq!(p[0].to_bits(), q[0].to_bits());
+        assert_eq!(p[1].to_bits(), q[1].to_bits());
+        assert!((p[2] - q[2]).abs() <= 0.2 * 1.5 * ebar, "vertex {v}");
+        let (i, j) = (v % 10, v / 10);
+        if v == 44 || i == 0 || j == 0 || i == 9 || j == 9 {
+            assert_eq!(p[2].to_bits(), q[2].to_bits(), "vertex {v}");
+        }
+    }
+    // a tolerance of 0 holds everything
+    let o = run(&[
+        "fair-quad",
+        s(&input),
+        "--method",
+        "network",
+        "--tolerance",
+        "0",
+        "-o",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(read_obj_vertices(&out), a);
+    let o = run(&[
+        "fair-quad",
+        s(&input),
+        "--method",
+        "network",
+        "--tolerance",
+        "-1",
+        "-o",
+        s(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}
+
 #[test]
 fn smooth_methods_run_from_the_command_line_with_their_report_keys() {
     let d = tmp("methods");

@@ -498,6 +498,9 @@ fn method_name(m: FairMethod) -> &'static str {
         FairMethod::Highlight => "highlight (default)",
         FairMethod::Paper => "paper",
         FairMethod::DiffusionFlow => "diffusion-flow",
+        FairMethod::Membrane => "membrane",
+        FairMethod::ThinPlate => "thin-plate",
+        FairMethod::Mvs => "mvs",
     }
 }
 

@@ -1,17 +1,37 @@
 //! `fair-quad`: structure-line fairing of a quad mesh (Grüner thesis ch. 4,
-//! Eq. (30)–(34)), as every front end runs it.
+//! Eq. (30)–(34)), or the fair polyline network with tolerance cylinders
+//! (§3.1.1), as every front end runs it.
 
 use crate::error::{CommandError, Subject};
 use crate::report::Report;
 use crate::warning::Warning;
 use crate::words::{push_changed, push_switch};
-use fairline::fair::{QuadFairOptions, QuadFairReport, fair_structure_lines};
+use fairline::fair::{
+    PolylineNetworkOptions, QuadFairOptions, QuadFairReport, fair_polyline_network,
+    fair_structure_lines, structure_energy,
+};
 use fairline::mesh::VertexId;
 use fairline::{Control, SurfaceMesh, Vec3};
+
+/// What `fair-quad` minimises.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum QuadMethod {
+    /// The straightness of the structure lines, Eq. (30)–(34) (ch. 4).
+    #[default]
+    StructureLines,
+    /// The height-only bending energy of the polyline network, every vertex
+    /// inside its tolerance cylinder (§3.1.1, Eq. (11) after Hofer et al.).
+    Network,
+}
 
 /// The options of `fair-quad` (defaults: the CLI's).
 #[derive(Clone, Debug, PartialEq)]
 pub struct QuadSettings {
+    /// What is minimised.
+    pub method: QuadMethod,
+    /// Half height h of the tolerance cylinders of
+    /// [`QuadMethod::Network`], in mean edge lengths (|z − z⁰| ≤ h·ē).
+    pub tolerance: f64,
     /// Penalty weight ω (scale-invariant).
     pub weight: f64,
     /// Runs whose Eq. (30) deviation exceeds it free their middle points.
@@ -31,6 +51,8 @@ pub struct QuadSettings {
 impl Default for QuadSettings {
     fn default() -> Self {
         QuadSettings {
+            method: QuadMethod::StructureLines,
+            tolerance: 0.1,
             weight: 0.01,
             deviation: 0.1,
             deviation_factor: 0.1,
@@ -46,6 +68,9 @@ impl QuadSettings {
     /// Refuses a weight that is not positive, a negative deviation and a
     /// factor that is not positive (naming the option).
     pub fn check(&self) -> Result<(), CommandError> {
+        if !self.tolerance.is_finite() || self.tolerance < 0.0 {
+            return Err(CommandError::invalid("tolerance", "must be ≥ 0"));
+        }
         if !self.weight.is_finite() || self.weight <= 0.0 {
             return Err(CommandError::invalid("weight", "must be a positive number"));
         }
@@ -65,6 +90,18 @@ impl QuadSettings {
     /// writing `output` (shell words); fixed vertices from `fixed.json`.
     pub fn command_line(&self, input: &str, output: &str) -> String {
         let d = QuadSettings::default();
+        if self.method == QuadMethod::Network {
+            let mut c = format!(
+                "fairline fair-quad {input} --method network --tolerance {}",
+                self.tolerance
+            );
+            push_switch(&mut c, "fix-boundary", self.fix_boundary);
+            if !self.fixed.is_empty() {
+                c.push_str(" --fixed fixed.json");
+            }
+            c.push_str(&format!(" -o {output}"));
+            return c;
+        }
         let mut c = format!(
             "fairline fair-quad {input} --weight {} --iterations {}",
             self.weight, self.iterations
@@ -97,7 +134,8 @@ pub struct QuadOutcome {
     pub report: Report,
 }
 
-/// Fairs the structure lines of the quad mesh `mesh`.
+/// Fairs the structure lines of the quad mesh `mesh` (or its polyline
+/// network, [`QuadMethod::Network`]).
 pub fn run(
     mesh: &SurfaceMesh,
     settings: &QuadSettings,
@@ -110,6 +148,9 @@ pub fn run(
             "fair-quad needs a quad mesh (no quadrilateral found)",
         )
         .about(Subject::Input));
+    }
+    if settings.method == QuadMethod::Network {
+        return run_network(mesh, settings, control);
     }
     let options = QuadFairOptions::default()
         .weight(settings.weight)
@@ -130,6 +171,71 @@ pub fn run(
             after: r.structure_energy_after,
         });
     }
+    Ok(QuadOutcome {
+        positions: out.positions,
+        result: r,
+        report,
+    })
+}
+
+/// The fair polyline network with tolerance cylinders (Grüner thesis
+/// §3.1.1): only the heights move, each within ±h·ē of its input (h =
+/// `settings.tolerance`, ē the mean edge length); fixed vertices and, with
+/// `fix_boundary`, the boundary get no tolerance. The report carries the
+/// structure-line keys (Eq. (30) energy before and after, vertices free to
+/// move, QP iterations) and the network's own: `network_energy_before`,
+/// `network_energy_after`, `at_bound` (vertices on the top or bottom of
+/// their cylinder), `tolerance`.
+fn run_network(
+    mesh: &SurfaceMesh,
+    settings: &QuadSettings,
+    control: &Control,
+) -> Result<QuadOutcome, CommandError> {
+    let ebar = fairline::geom::mean_edge_length(mesh);
+    let mut h = vec![settings.tolerance * ebar; mesh.vertex_count()];
+    for v in &settings.fixed {
+        if let Some(x) = h.get_mut(v.idx()) {
+            *x = 0.0;
+        }
+    }
+    if settings.fix_boundary {
+        for v in mesh.vertices() {
+            if mesh.is_boundary_vertex(v) {
+                h[v.idx()] = 0.0;
+            }
+        }
+    }
+    let free_vertices = h.iter().filter(|x| **x > 0.0).count();
+    let options = PolylineNetworkOptions::default()
+        .tolerance(settings.tolerance)
+        .per_vertex(Some(h))
+        .control(control.clone());
+    let mut report = Report::new("fair-quad");
+    let out = report.time(|| fair_polyline_network(mesh, &options))?;
+    let n = out.report;
+    let mut after = mesh.clone();
+    after.set_positions(out.positions.clone())?;
+    let max_displacement = out
+        .positions
+        .iter()
+        .zip(mesh.positions())
+        .map(|(a, b)| (*a - *b).length())
+        .fold(0.0, f64::max);
+    let r = QuadFairReport {
+        vertices: mesh.vertex_count(),
+        structure_lines: fairline::mesh::structure_lines(mesh).len(),
+        free_vertices,
+        structure_energy_before: structure_energy(mesh),
+        structure_energy_after: structure_energy(&after),
+        max_displacement,
+        iterations: n.iterations,
+    };
+    report.set_fields(&r);
+    report.set("method", "network");
+    report.set("tolerance", settings.tolerance);
+    report.set("network_energy_before", n.energy_before);
+    report.set("network_energy_after", n.energy_after);
+    report.set("at_bound", n.at_bound);
     Ok(QuadOutcome {
         positions: out.positions,
         result: r,

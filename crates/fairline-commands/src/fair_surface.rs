@@ -12,8 +12,8 @@ use crate::words::push_changed;
 use fairline::Control;
 use fairline::bspline::BSplineSurface;
 use fairline::fair::{
-    BoundaryControl, EndpointPair, SurfaceFairError, SurfaceFairMethod, SurfaceFairOptions,
-    SurfaceFairReport, fair_surface,
+    BoundaryControl, EndpointPair, PaperDamping, SurfaceFairError, SurfaceFairMethod,
+    SurfaceFairOptions, SurfaceFairReport, fair_surface,
 };
 use fairline::highlight::{
     CircularLight, CircularLights, DEFAULT_CIRCULAR_RADII, default_circular_lights,
@@ -42,6 +42,8 @@ pub struct FairSurfaceSettings {
     pub min_truncation: f64,
     /// Step factor μ of the damped step, Eq. (3.13).
     pub damped_step: f64,
+    /// When the paper's solver damps a step (Eq. (3.12)–(3.13)).
+    pub damping: PaperDamping,
     /// Target sample spacing as a fraction of the domain diagonal.
     pub sample_spacing: f64,
     /// Grid points per direction for the pre-images.
@@ -66,6 +68,7 @@ impl Default for FairSurfaceSettings {
             truncation: d.truncation,
             min_truncation: d.min_truncation,
             damped_step: d.damped_step,
+            damping: d.damping,
             sample_spacing: d.sample_spacing,
             grid: d.grid,
             method: SurfaceFairMethod::Regularised,
@@ -119,6 +122,9 @@ impl FairSurfaceSettings {
             d.min_truncation,
         );
         push_changed(&mut c, "damped-step", self.damped_step, d.damped_step);
+        if self.damping != d.damping {
+            c.push_str(&format!(" --damping {}", self.damping.name()));
+        }
         push_changed(
             &mut c,
             "sample-spacing",
@@ -164,6 +170,7 @@ impl FairSurfaceSettings {
             })
             .epsilon(self.epsilon)
             .damped_step(self.damped_step)
+            .damping(self.damping)
             .max_iterations(self.max_iterations)
             .method(self.method)
             .boundary(self.boundary)
@@ -372,11 +379,12 @@ mod tests {
             max_iterations: 3,
             method: SurfaceFairMethod::Paper,
             boundary: BoundaryControl::Free,
+            damping: PaperDamping::MaxMean,
             ..FairSurfaceSettings::default()
         };
         assert_eq!(
             s.command_line("in.json", "out.json"),
-            "fairline fair-surface in.json --surface 2 --lights lights.json --endpoints endpoints.json --max-iterations 3 --method paper --boundary free -o out.json"
+            "fairline fair-surface in.json --surface 2 --lights lights.json --endpoints endpoints.json --max-iterations 3 --damping max-mean --method paper --boundary free -o out.json"
         );
     }
 

@@ -75,6 +75,37 @@ impl Choice for FairMethod {
             value: FairMethod::DiffusionFlow,
             help: "Baseline: surface diffusion flow ∂V/∂t = N Δ_B H (Xu et al.)",
         },
+        Named {
+            name: "membrane",
+            value: FairMethod::Membrane,
+            help: "Membrane energy, ΔX = 0 on the movable vertices (Grüner §3.1.2, Eq. (14)); no lights",
+        },
+        Named {
+            name: "thin-plate",
+            value: FairMethod::ThinPlate,
+            help: "Thin-plate energy, Δ²X = 0 on the movable vertices (Grüner §3.1.2, Eq. (13)); no lights",
+        },
+        Named {
+            name: "mvs",
+            value: FairMethod::Mvs,
+            help: "Minimum variation of curvature, Δ³X = 0 on the movable vertices (Grüner §3.1.3); no lights",
+        },
+    ];
+}
+
+impl Choice for crate::fair_quad::QuadMethod {
+    const OPTION: &'static str = "method";
+    const ALL: &'static [Named<Self>] = &[
+        Named {
+            name: "structure-lines",
+            value: crate::fair_quad::QuadMethod::StructureLines,
+            help: "Straighten the structure lines (Grüner ch. 4, Eq. (30)–(34))",
+        },
+        Named {
+            name: "network",
+            value: crate::fair_quad::QuadMethod::Network,
+            help: "Fair polyline network: least bending of the heights, each inside its tolerance cylinder (Grüner §3.1.1)",
+        },
     ];
 }
 

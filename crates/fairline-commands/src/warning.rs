@@ -298,7 +298,7 @@ fn surface_not_converged(
 ) -> String {
     let o = |name: &str| front_end.option(name);
     let objective = match method {
-        SurfaceFairMethod::Paper => "mean |d_s|",
+        SurfaceFairMethod::Paper => "the residual d_s",
         SurfaceFairMethod::Regularised => "the objective",
     };
     let why = match stop {
@@ -316,7 +316,7 @@ fn surface_not_converged(
     };
     let underdetermined = if rows < cols {
         format!(
-            "; underdetermined: {rows} equations (target samples) for {cols} unknowns (3 per moved control point), so the targets do not fix the control points"
+            "; underdetermined: {rows} equations (target samples) for {cols} unknowns, so the targets do not fix the control points"
         )
     } else {
         String::new()

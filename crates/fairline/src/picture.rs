@@ -244,6 +244,9 @@ pub fn fairing_picture(
                     FairMethod::Highlight => "after highlight-line fairing",
                     FairMethod::Paper => "after highlight-line fairing (Yong et al.)",
                     FairMethod::DiffusionFlow => "after surface diffusion flow (baseline)",
+                    FairMethod::Membrane => "after membrane-energy fairing",
+                    FairMethod::ThinPlate => "after thin-plate-energy fairing",
+                    FairMethod::Mvs => "after minimum-variation fairing",
                 }
                 .into(),
             ),

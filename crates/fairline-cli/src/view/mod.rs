@@ -71,7 +71,8 @@
 //!   DESIGN.md §5 in the input file's face indices, and `fixed`: the fixed
 //!   vertices file (every vertex not inside the region).
 //! - `POST /api/doc/K/run` `{"method":M, "faces"?, "light"?, "options"?}`
-//!   with M one of `fair` (options `method` highlight|diffusion-flow,
+//!   with M one of `fair` (options `method`
+//!   highlight|paper|diffusion-flow|membrane|thin-plate|mvs,
 //!   `max_iterations`, `epsilon`), `smooth` (options `method`, `iterations`,
 //!   `lambda`, `weights`), `fair-quad` (`weight`, `iterations`), `enhance`
 //!   (`lambda`, `mu`, `iterations`): starts a job on a thread; answers

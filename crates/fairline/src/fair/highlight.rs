@@ -117,6 +117,30 @@ pub enum FairMethod {
     /// Baseline: surface diffusion flow ∂V/∂t = N Δ_B H (Xu et al.) on the
     /// same movable vertices.
     DiffusionFlow,
+    /// Membrane energy (Grüner thesis §3.1.2, Eq. (14)): ΔX = 0 on the
+    /// movable vertices, the others held ([`super::energy_fairing`]); no
+    /// lights are used and the vertices move freely (not along normals).
+    Membrane,
+    /// Thin-plate energy (Grüner §3.1.2, Eq. (13)): Δ²X = 0 on the movable
+    /// vertices ([`super::energy_fairing`]).
+    ThinPlate,
+    /// Linearised variation of curvature, minimum variation surfaces
+    /// (Grüner §3.1.3, Eq. (15)): Δ³X = 0 on the movable vertices
+    /// ([`super::energy_fairing`]).
+    Mvs,
+}
+
+impl FairMethod {
+    /// The energy of an energy-functional method, `None` for the
+    /// highlight-line methods.
+    pub fn energy(self) -> Option<super::FairEnergy> {
+        match self {
+            FairMethod::Membrane => Some(super::FairEnergy::Membrane),
+            FairMethod::ThinPlate => Some(super::FairEnergy::ThinPlate),
+            FairMethod::Mvs => Some(super::FairEnergy::VariationOfCurvature),
+            FairMethod::Highlight | FairMethod::Paper | FairMethod::DiffusionFlow => None,
+        }
+    }
 }
 
 /// Options of [`fair_highlight_lines`]: the region, the lights, the energy
@@ -600,9 +624,8 @@ impl<'a> Energy<'a> {
                 r.extend_scaled(diff, self.w2.sqrt());
                 r
             }
-            FairMethod::DiffusionFlow => {
-                diffusion_residual(mesh, &frozen, normals, col, &set.movable)
-            }
+            // diffusion flow (the energy methods do not iterate)
+            _ => diffusion_residual(mesh, &frozen, normals, col, &set.movable),
         };
         Linearised {
             objective: residual.energy(),
@@ -630,7 +653,8 @@ impl<'a> Energy<'a> {
                 }
                 f_fair + self.w2 * difference_energy_after(mesh, model, diff_nodes)
             }
-            FairMethod::DiffusionFlow => {
+            // diffusion flow (the energy methods do not iterate)
+            _ => {
                 let frozen = Frozen::new(mesh);
                 diffusion_residual(mesh, &frozen, model.normals(), col, &set.movable).energy()
             }
@@ -733,7 +757,7 @@ fn iterate(
     let mut tangents = initial_tangents;
     let mut refits_left = match options.method {
         FairMethod::Highlight => options.refits,
-        FairMethod::Paper | FairMethod::DiffusionFlow => 0,
+        _ => 0,
     };
     let mut refits = 0;
     let mut current = energy.linearise(mesh, model, &lines, &tangents);
@@ -870,7 +894,7 @@ pub fn fair_highlight_lines(
             options.highlight.min_normal_cos,
             ebar,
         ),
-        FairMethod::Paper | FairMethod::DiffusionFlow => Tangents::new(),
+        _ => Tangents::new(),
     };
     let desired_before = desired_lines_with(
         &lines_before,
@@ -884,15 +908,32 @@ pub fn fair_highlight_lines(
         converged,
         refits,
         mut lines,
-    } = iterate(
-        &energy,
-        &mut mesh,
-        &mut model,
-        &lines_before,
-        ebar,
-        options,
-        initial_tangents.clone(),
-    )?;
+    } = match options.method.energy() {
+        Some(e) => {
+            options.control.step("iterations", 0, 1)?;
+            let fairing = super::energy_fairing(&mesh, &set.is_movable, e)?;
+            let positions = mesh.positions_mut();
+            for v in &set.movable {
+                positions[v.idx()] = fairing[v.idx()];
+            }
+            model.update(&mesh, &set.movable)?;
+            Iterate {
+                history: Vec::new(),
+                converged: true,
+                refits: 0,
+                lines: model.lines(&mesh),
+            }
+        }
+        None => iterate(
+            &energy,
+            &mut mesh,
+            &mut model,
+            &lines_before,
+            ebar,
+            options,
+            initial_tangents.clone(),
+        )?,
+    };
     if let Some(flow) = &flow {
         lines = blend_flow(
             &mut mesh,

@@ -3,10 +3,12 @@
 //! highlight lines (§3.2, §3.5) and the surface-diffusion-flow baseline;
 //! structure-line fairing of quad meshes (Grüner) in [`quad`];
 //! circular-highlight fairing of B-spline surfaces (Nishiyama et al. §3) in
-//! [`surface`].
+//! [`surface`]; membrane, thin-plate and minimum-variation energy fairing
+//! of a region (Grüner §3.1.2–3.1.3) in [`energy`].
 
 mod desired;
 mod end_tangents;
+pub mod energy;
 mod error;
 #[cfg(test)]
 pub(crate) mod family;
@@ -21,6 +23,7 @@ pub use desired::{
     desired_lines_with,
 };
 pub use end_tangents::fitted_surface_tangents;
+pub use energy::{FairEnergy, energy_fairing};
 pub use error::FairError;
 pub use highlight::{
     FairMethod, FairOptions, FairReport, IterationReport, fair_highlight_lines, grow_region,
@@ -31,9 +34,9 @@ pub use quad::{
 };
 pub use region::{MovableSet, movable_vertices};
 pub use surface::{
-    BoundaryControl, EndpointPair, Endpoints, FairIteration, FairStop, SurfaceFairError,
-    SurfaceFairMethod, SurfaceFairOptions, SurfaceFairReport, TargetCurve, Waviness,
-    endpoints_around, fair_surface, polyline_waviness, target_curves,
+    BoundaryControl, EndpointPair, Endpoints, FairIteration, FairStop, PaperDamping,
+    SurfaceFairError, SurfaceFairMethod, SurfaceFairOptions, SurfaceFairReport, TargetCurve,
+    Waviness, endpoints_around, fair_surface, polyline_waviness, target_curves,
 };
 
 #[cfg(test)]

@@ -513,7 +513,13 @@ fn check_case(c: &Case, drop: f64, closer: f64, name: &str) -> SurfaceFairReport
 /// thresholds:
 /// the regularised default trades some target residual for keeping every
 /// other line fair (see `check_case`), the paper's method keeps these.
-fn check_case_paper(c: &Case, max_iterations: usize, drop: f64, name: &str) -> SurfaceFairReport {
+fn check_case_paper(
+    c: &Case,
+    max_iterations: usize,
+    drop: f64,
+    gain: f64,
+    name: &str,
+) -> SurfaceFairReport {
     let opts = SurfaceFairOptions {
         max_iterations,
         method: SurfaceFairMethod::Paper,
@@ -549,10 +555,10 @@ fn check_case_paper(c: &Case, max_iterations: usize, drop: f64, name: &str) -> S
     // truncation is lowered to 1e-3 as progress slows. What remains is the
     // least-squares floor: the Hermite targets are not exactly highlight
     // lines of any surface the selected control points can reach (more
-    // samples than effective unknowns — the rank at 1e-3 is ~50–100 of
-    // 3 × the selected points, as tangential moves hardly change d_s).
+    // samples than unknowns, one coordinate per moved point).
     assert!(a.1 <= b.1 / drop, "{name}: mean {} -> {}", b.1, a.1);
-    // the fixed 5 % rule of the paper, for comparison: stalls higher
+    // the fixed 5 % rule of the paper, for comparison: stalls higher (its
+    // mean |d_s| at least 1/`gain` times ours)
     let fixed = SurfaceFairOptions {
         min_truncation: opts.truncation,
         ..opts.clone()
@@ -564,12 +570,20 @@ fn check_case_paper(c: &Case, max_iterations: usize, drop: f64, name: &str) -> S
         rep5.history.len()
     );
     assert!(
-        a.1 < 0.5 * rep5.residual_after.mean,
+        a.1 < gain * rep5.residual_after.mean,
         "{name}: no gain over 5 %"
     );
     assert!(a.0 <= b.0 / 20.0, "{name}: max {} -> {}", b.0, a.0);
     assert!(rep.history.len() <= max_iterations);
+    assert!(rep.converged, "{name}: stopped by {:?}", rep.stop);
+    // one unknown per moved control point (one coordinate), more
+    // samples than unknowns
+    assert_eq!(rep.jacobian.cols, rep.modified_indices.len());
+    assert!(rep.jacobian.rows >= rep.jacobian.cols);
+    // every accepted step lowers Σ d_s², what the least-squares step
+    // minimises (the default damping rule), and mean |d_s|
     for w in rep.history.windows(2) {
+        assert!(w[1].objective < w[0].objective);
         assert!(w[1].mean_abs < w[0].mean_abs);
     }
     // Control points outside the selection: bit-identical.
@@ -638,10 +652,21 @@ fn check_case_paper(c: &Case, max_iterations: usize, drop: f64, name: &str) -> S
 fn fair_paper_method_keeps_its_guarantees_on_dome_saddle_and_roof() {
     let clean = height_surface(15, 15, 1.0, 1.0, |x, y| 0.8 - 0.4 * (x * x + y * y));
     let c = case(clean, (11, 7, 0.03), Vec3::new(0.0, 0.0, 3.0), 0.4, 9, 0.2);
-    check_case_paper(&c, 8, 100.0, "dome (paper)");
+    // The paper gives no residual, only iterations (Table 1: 5 for the
+    // dome's first fairing, 4 for the saddle's, 6 for the roof's; measured
+    // 4, 5 and 4). On the dome the target residual drops 90× (not 100×):
+    // with one coordinate per control point, as the paper's Jacobian sizes
+    // show, the least-squares floor is higher than with three (113×), since
+    // the tangential moves only reparametrise the surface under the
+    // parameter-space targets; the surface itself ends closer to the
+    // defect-free one (normal deviation 2.4e-3 vs 3.3e-3 with three). With
+    // one coordinate the paper's fixed 5 % truncation gets closer to the
+    // floor as well (8.8e-4 vs 9.3e-4), so the lowered truncation gains
+    // 1.7× over it on the dome (not 2×).
+    check_case_paper(&c, 8, 90.0, 0.6, "dome (paper)");
     let clean = height_surface(21, 20, 1.0, 1.0, |x, y| 0.35 * (x * x - y * y));
     let c = case(clean, (6, 13, 0.02), Vec3::new(0.0, 0.0, 2.0), 0.3, 9, 0.16);
-    check_case_paper(&c, 8, 500.0, "saddle (paper)");
+    check_case_paper(&c, 8, 500.0, 0.5, "saddle (paper)");
     let clean = height_surface(21, 22, 1.5, 1.0, |x, y| {
         0.3 - 0.12 * x * x - 0.05 * y * y + 0.02 * x * y
     });
@@ -653,7 +678,69 @@ fn fair_paper_method_keeps_its_guarantees_on_dome_saddle_and_roof() {
         11,
         0.2,
     );
-    check_case_paper(&c, 8, 300.0, "roof (paper)");
+    check_case_paper(&c, 8, 300.0, 0.5, "roof (paper)");
+}
+
+/// The paper's solver converges on the dome within the paper's iteration
+/// counts (Table 1: 5 and 8) with the default damping rule and with none;
+/// the damping of Eq. (3.12) as printed damps nearly every step near the
+/// least-squares floor and needs more. An underdetermined target set (one
+/// short stretch) gets more samples until there are as many as unknowns.
+#[test]
+fn fair_paper_method_converges_on_the_dome_and_says_how_it_damped() {
+    let clean = height_surface(15, 15, 1.0, 1.0, |x, y| 0.8 - 0.4 * (x * x + y * y));
+    let c = case(clean, (11, 7, 0.03), Vec3::new(0.0, 0.0, 3.0), 0.4, 9, 0.2);
+    let base = SurfaceFairOptions::default().method(SurfaceFairMethod::Paper);
+    let endpoints = endpoints_around(&c.bumped, &c.lights, c.centre, c.disc, base.grid);
+    let mut counts = Vec::new();
+    for damping in PaperDamping::ALL {
+        assert_eq!(PaperDamping::from_name(damping.name()), Some(damping));
+        let (_, rep) = fair(
+            &c.bumped,
+            &c.lights,
+            &endpoints,
+            &base.clone().damping(damping),
+        )
+        .unwrap();
+        eprintln!(
+            "dome, damping {}: {} iterations ({:?}), mean |d_s| {:.3e} -> {:.3e}",
+            damping.name(),
+            rep.iterations,
+            rep.stop,
+            rep.residual_before.mean,
+            rep.residual_after.mean
+        );
+        assert!(
+            rep.residual_after.mean < rep.residual_before.mean / 50.0,
+            "{damping:?}"
+        );
+        let damped = rep.history.iter().filter(|i| i.step < 1.0).count();
+        match damping {
+            PaperDamping::Off => assert_eq!(damped, 0),
+            PaperDamping::MaxMean => assert!(damped > 0),
+            PaperDamping::Residual => {}
+        }
+        counts.push((damping, rep.converged, rep.iterations));
+    }
+    assert!(counts[0].1 && counts[0].2 <= 8, "{counts:?}");
+    assert!(counts[2].1 && counts[2].2 <= 8, "{counts:?}");
+    assert!(counts[1].2 > counts[0].2, "{counts:?}");
+    // one short stretch: fewer samples than moved control points at the
+    // default spacing
+    let mut short = endpoints[0];
+    for k in 0..2 {
+        short.end[k] = short.start[k] + 0.3 * (short.end[k] - short.start[k]);
+    }
+    let (_, rep) = fair(&c.bumped, &c.lights, &[short], &base).unwrap();
+    let spaced = base.clone().lights(c.lights.clone()).endpoints(vec![short]);
+    let at_default: usize = target_curves(&c.bumped, &spaced)
+        .unwrap()
+        .iter()
+        .map(|t| t.samples.len())
+        .sum();
+    assert!(at_default < rep.jacobian.cols, "{at_default}");
+    assert!(rep.jacobian.rows >= rep.jacobian.cols, "{:?}", rep.jacobian);
+    assert!(rep.residual_after.mean < rep.residual_before.mean);
 }
 
 #[test]
@@ -853,7 +940,7 @@ fn fair_surface_is_bit_identical_to_the_recorded_reference() {
     let c = case(clean, (11, 7, 0.03), Vec3::new(0.0, 0.0, 3.0), 0.4, 9, 0.2);
     let recorded = [
         (SurfaceFairMethod::Regularised, 0x7541_3e89_b3a5_edd4_u64, 6),
-        (SurfaceFairMethod::Paper, 0x5768_9381_f884_5f4d_u64, 20),
+        (SurfaceFairMethod::Paper, 0x129f_60c5_df05_5c76_u64, 4),
     ];
     for (method, expected, iterations) in recorded {
         let base = SurfaceFairOptions::default().method(method);
