@@ -24,6 +24,7 @@ mod highlight_png;
 mod info;
 mod input;
 mod inspect;
+mod lines_file;
 mod output;
 mod render;
 mod repair;

@@ -267,12 +267,12 @@ pub fn run(args: HighlightArgs) -> Result<()> {
     if let Some(p) = &args.svg {
         write_svg(&args, surfaces, results, p)?;
     }
-    if crate::highlight::lines_format(&args.output)? == crate::highlight::LinesFormat::Iges {
+    if crate::lines_file::lines_format(&args.output)? == crate::lines_file::LinesFormat::Iges {
         let tol = fairline_commands::curves::tolerance(
             args.curve_tolerance,
             crate::surface::surfaces_diagonal(surfaces),
         );
-        let summary = crate::highlight::write_curves(
+        let summary = crate::lines_file::write_curves(
             &args.output,
             &fairline_commands::curves::surface_lines(results),
             tol,
@@ -296,9 +296,9 @@ pub fn run(args: HighlightArgs) -> Result<()> {
 /// written over an input) and its job.
 fn output_job(args: &HighlightArgs) -> Result<crate::output::Job> {
     require_extension("-o", &args.output, &["json", "igs", "iges"])?;
-    crate::highlight::check_curve_tolerance(args.curve_tolerance)?;
+    crate::lines_file::check_curve_tolerance(args.curve_tolerance)?;
     if args.curve_tolerance.is_some()
-        && crate::highlight::lines_format(&args.output)? != crate::highlight::LinesFormat::Iges
+        && crate::lines_file::lines_format(&args.output)? != crate::lines_file::LinesFormat::Iges
     {
         return Err(crate::error::bad_input(
             "--curve-tolerance is for curves: give -o LINES.igs".to_string(),
