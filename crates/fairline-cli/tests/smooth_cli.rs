@@ -159,6 +159,19 @@ fn fair_quad_network_moves_heights_within_their_tolerance_cylinders() {
     );
     assert!(e1 < 0.5 * e0, "{e0} → {e1}");
     assert!(r["at_bound"].as_u64().unwrap() > 0);
+    // the structure-line energy is another measure: where it rose, the
+    // report and stderr say so
+    let rose = r["structure_energy_after"].as_f64().unwrap()
+        > r["structure_energy_before"].as_f64().unwrap();
+    let warned = r["warnings"].as_array().is_some_and(|w| {
+        w.iter().any(|m| {
+            m.as_str()
+                .unwrap_or("")
+                .contains("structure-line energy got worse")
+        })
+    });
+    assert_eq!(rose, warned, "{r}");
+    assert_eq!(rose, stderr(&o).contains("structure-line energy got worse"));
     let (a, b) = (read_obj_vertices(&input), read_obj_vertices(&out));
     let ebar = 2.0 / 9.0; // the grid spacing; slopes make edges up to 1.5× longer
     for (v, (p, q)) in a.iter().zip(&b).enumerate() {

@@ -231,6 +231,12 @@ fn run_network(
         iterations: n.iterations,
     };
     report.set_fields(&r);
+    if r.structure_energy_after > r.structure_energy_before {
+        report.warn(Warning::NetworkStructureWorse {
+            before: r.structure_energy_before,
+            after: r.structure_energy_after,
+        });
+    }
     report.set("method", "network");
     report.set("tolerance", settings.tolerance);
     report.set("network_energy_before", n.energy_before);

@@ -123,6 +123,10 @@ pub enum Warning {
     Unanchored,
     /// `fair-quad`: the Eq. (30) structure-line energy got worse.
     QuadEnergyWorse { before: f64, after: f64 },
+    /// `fair-quad --method network`: the structure-line energy (Eq. (30))
+    /// rose; the network lowers the heights' bending, not the lines'
+    /// turning.
+    NetworkStructureWorse { before: f64, after: f64 },
     /// `enhance`: triangles flipped in a solved step and were repaired.
     TrianglesFlipped { count: usize },
     /// `fair-surface`: endpoint `index` (its start, or its end) lay
@@ -224,6 +228,10 @@ impl Warning {
             Warning::QuadEnergyWorse { before, after } => format!(
                 "the structure-line energy got worse: {before:.4e} before, {after:.4e} after; try a larger {}",
                 o("weight")
+            ),
+            Warning::NetworkStructureWorse { before, after } => format!(
+                "the structure-line energy got worse: {before:.4e} before, {after:.4e} after; the network method lowers the bending of the heights within their tolerance cylinders, not the turning of the lines (the default {} straightens structure lines)",
+                o("method")
             ),
             Warning::TrianglesFlipped { count } => format!(
                 "{count} triangle(s) flipped their orientation in the solved step and were repaired by shortening their vertices' steps; try a smaller {} or fewer {}",
