@@ -51,7 +51,7 @@ fn a_wrong_output_extension_is_refused_the_same_way_by_every_command() {
                 "-o".into(),
                 bad("lines.txt"),
             ],
-            "-o must name a .json or .obj file",
+            "-o must name a .json, .obj, .igs or .iges file",
         ),
         (
             vec![
