@@ -287,7 +287,7 @@ mod tests {
         let e = <FairMethod as Choice>::parse("fast").unwrap_err();
         assert_eq!(
             e.message(crate::FrontEnd::Python),
-            "method must be one of highlight, paper, diffusion-flow; got \"fast\""
+            "method must be one of highlight, paper, diffusion-flow, membrane, thin-plate, mvs; got \"fast\""
         );
     }
 }
