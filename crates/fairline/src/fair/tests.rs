@@ -425,7 +425,12 @@ pub(crate) fn fingerprint(
             .flat_map(|c| c.to_bits().to_le_bytes()),
     );
     if let Some(map) = report.as_object_mut() {
-        for key in ["refits", "flow_share", "flow_iterations"] {
+        for key in [
+            "refits",
+            "flow_share",
+            "flow_iterations",
+            "highlight_deviation_worse",
+        ] {
             map.remove(key);
         }
     }
@@ -642,7 +647,8 @@ fn same_simd_as_recorded() -> bool {
 /// the later options (refits, flow share) those recorded with its fitted
 /// end tangents; with and without ω3, on a
 /// family case and the bump plane; the keys added since (`refits`,
-/// `flow_share`, `flow_iterations`) are left out of the report hash. On a
+/// `flow_share`, `flow_iterations`, `highlight_deviation_worse`) are left
+/// out of the report hash. On a
 /// CPU with another SIMD path the hashes are not compared; the iteration
 /// counts, accepted steps and displacement moments (to 1e-9) still are.
 #[test]
