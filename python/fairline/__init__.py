@@ -67,6 +67,7 @@ __all__ = [
     "section",
     "draft",
     "highlight_lines",
+    "highlight_curves",
     "detect",
     "fair",
     "smooth",
@@ -76,6 +77,7 @@ __all__ = [
     "read_surfaces",
     "write_surfaces",
     "surface_highlight_lines",
+    "surface_highlight_curves",
     "fair_surface",
     "inspect",
     "from_trimesh",
@@ -684,6 +686,57 @@ def highlight_lines(
     return doc, _report(report)
 
 
+def highlight_curves(
+    V: Any,
+    F: Faces = None,
+    *,
+    tolerance: Optional[float] = None,
+    path: Optional[PathLike] = None,
+    unit: Optional[str] = None,
+    direction: Optional[Vector] = None,
+    plane_normal: Optional[Vector] = None,
+    up: str = "auto",
+    plane_point: Optional[Vector] = None,
+    spacing: Optional[float] = None,
+    lights: Any = None,
+    min_normal_cos: float = 0.1,
+    circle_center: Optional[Vector] = None,
+    circle_axis: Optional[Vector] = None,
+    radii: Optional[Sequence[float]] = None,
+) -> Tuple[List[Dict[str, Any]], Dict[str, Any]]:
+    """Highlight lines of a mesh as cubic B-spline curves for a CAD system
+    (``fairline highlight MESH -o LINES.igs``): the lines of
+    :func:`highlight_lines` (same light options) each fitted within
+    ``tolerance`` (default: 1e-4 of the bounding-box diagonal, at least a
+    tenth of the mean edge length), kept as a polyline where no shorter
+    cubic fits. With ``path`` (``.igs``/``.iges``) the curves are written
+    atomically as IGES entities 126 labelled ``HLm`` (light m), in ``unit``
+    (an IGES unit name; millimetres by default) — the file the CLI writes.
+
+    Returns ``(curves, report)``: each curve a dict with ``label``,
+    ``number``, ``degree``, ``knots`` (float64) and ``points`` ((k, 3)
+    control points); the report as :func:`highlight_lines`' with
+    ``"curves"``: counts, ``tolerance`` and ``max_deviation`` (the largest
+    distance from a line point to its curve).
+    """
+    mesh = V if isinstance(V, Mesh) and F is None else _native.Mesh(*_mesh(V, F))
+    options = _highlight_kwargs(
+        direction, plane_normal, up, plane_point, spacing, lights, min_normal_cos,
+        circle_center, circle_axis, radii,
+    )
+    del options["band"]
+    curves, report = mesh._highlight_curves(**_curves_kwargs(tolerance, path, unit), **options)
+    return curves, _report(report)
+
+
+def _curves_kwargs(tolerance: Optional[float], path: Optional[PathLike], unit: Optional[str]) -> Dict[str, Any]:
+    return dict(
+        tolerance=None if tolerance is None else float(tolerance),
+        path=None if path is None else _os.fspath(path),
+        unit=None if unit is None else str(unit),
+    )
+
+
 def _highlight_kwargs(
     direction: Optional[Vector] = None,
     plane_normal: Optional[Vector] = None,
@@ -934,6 +987,52 @@ def surface_highlight_lines(
     return _lines(_json.loads(doc)), _report(report)
 
 
+def surface_highlight_curves(
+    surfaces: Union[Surface, Sequence[Surface]],
+    *,
+    tolerance: Optional[float] = None,
+    path: Optional[PathLike] = None,
+    unit: Optional[str] = None,
+    circle_center: Optional[Vector] = None,
+    circle_axis: Optional[Vector] = None,
+    radii: Optional[Sequence[float]] = None,
+    grid: int = 200,
+    surface: Optional[int] = None,
+    direction: Optional[Vector] = None,
+    plane_normal: Optional[Vector] = None,
+    up: str = "auto",
+    plane_point: Optional[Vector] = None,
+    spacing: Optional[float] = None,
+    lights: Any = None,
+    min_normal_cos: float = 0.1,
+    circular: bool = False,
+) -> Tuple[List[Dict[str, Any]], Dict[str, Any]]:
+    """The exact highlight lines of B-spline surfaces as cubic B-spline
+    curves for a CAD system (``fairline highlight PART.igs -o
+    LINES.igs``): the lines of :func:`surface_highlight_lines` (same light
+    options) fitted within ``tolerance`` (default: 1e-4 of the part's
+    diagonal). With ``path`` (``.igs``/``.iges``) they are written
+    atomically as IGES entities 126 labelled ``PkLj`` (patch k, light j) in
+    ``unit`` — give the unit of the file the surfaces came from (an IGES
+    unit name such as ``"MM"`` or ``"IN"``; millimetres by default), since
+    the surfaces' dicts do not carry it.
+
+    Returns ``(curves, report)`` as :func:`highlight_curves`.
+    """
+    curves, report = _native.surface_highlight_curves(
+        _surfaces_text(surfaces),
+        **_curves_kwargs(tolerance, path, unit),
+        circle_center=_vec("circle_center", circle_center),
+        circle_axis=_vec("circle_axis", circle_axis),
+        radii=None if radii is None else [float(r) for r in radii],
+        grid=int(grid),
+        surface=surface,
+        circular=bool(circular),
+        **_light_kwargs(direction, plane_normal, up, plane_point, spacing, lights, min_normal_cos),
+    )
+    return curves, _report(report)
+
+
 def fair_surface(
     surfaces: Union[Surface, Sequence[Surface]],
     lights: Any,
@@ -1136,6 +1235,24 @@ class Mesh(_native.Mesh):
         doc = _report(text)
         return (arrays, doc) if report else arrays
 
+    def highlight_curves(
+        self,
+        *,
+        tolerance: Optional[float] = None,
+        path: Optional[PathLike] = None,
+        unit: Optional[str] = None,
+        **options: Any,
+    ) -> Tuple[List[Dict[str, Any]], Dict[str, Any]]:
+        """Highlight lines of this mesh as B-spline curves, as
+        :func:`highlight_curves` (light options as :func:`highlight_lines`,
+        no ``band``). Returns ``(curves, report)``."""
+        if "band" in options:
+            raise FairlineError("band: band boundaries are not written as curves")
+        light = _highlight_kwargs(**options)
+        del light["band"]
+        curves, text = self._highlight_curves(**_curves_kwargs(tolerance, path, unit), **light)
+        return curves, _report(text)
+
 
 # ---- trimesh adapters -----------------------------------------------------------
 
@@ -1196,7 +1313,7 @@ del _name, _f
 
 
 for _name in ("read", "vertex_normals", "curvature", "principal_curvatures", "cotangent_laplacian",
-              "mass_matrix", "smooth", "highlight_lines"):
+              "mass_matrix", "smooth", "highlight_lines", "highlight_curves"):
     _m = Mesh.__dict__[_name]
     if isinstance(_m, classmethod):
         setattr(Mesh, _name, classmethod(_checked(_m.__func__)))

@@ -163,6 +163,25 @@ def surface_highlight_lines(
     min_normal_cos: Optional[float] = None,
     circular: bool = False,
 ) -> Tuple[str, str]: ...
+def surface_highlight_curves(
+    surfaces: str,
+    tolerance: Optional[float] = None,
+    path: Optional[str] = None,
+    unit: Optional[str] = None,
+    circle_center: Optional[Sequence[float]] = None,
+    circle_axis: Optional[Sequence[float]] = None,
+    radii: Optional[Sequence[float]] = None,
+    grid: int = 200,
+    surface: Optional[int] = None,
+    direction: Optional[Sequence[float]] = None,
+    plane_normal: Optional[Sequence[float]] = None,
+    up: str = "auto",
+    plane_point: Optional[Sequence[float]] = None,
+    spacing: Optional[float] = None,
+    lights: Optional[str] = None,
+    min_normal_cos: Optional[float] = None,
+    circular: bool = False,
+) -> Tuple[List[Dict[str, Any]], str]: ...
 def fair_surface(
     surfaces: str,
     lights: str,
@@ -236,3 +255,19 @@ class Mesh:
         radii: Optional[Sequence[float]] = None,
         band: Optional[float] = None,
     ) -> Tuple[Dict[str, Any], str]: ...
+    def _highlight_curves(
+        self,
+        tolerance: Optional[float] = None,
+        path: Optional[str] = None,
+        unit: Optional[str] = None,
+        direction: Optional[Sequence[float]] = None,
+        plane_normal: Optional[Sequence[float]] = None,
+        up: str = "auto",
+        plane_point: Optional[Sequence[float]] = None,
+        spacing: Optional[float] = None,
+        lights: Optional[str] = None,
+        min_normal_cos: Optional[float] = None,
+        circle_center: Optional[Sequence[float]] = None,
+        circle_axis: Optional[Sequence[float]] = None,
+        radii: Optional[Sequence[float]] = None,
+    ) -> Tuple[List[Dict[str, Any]], str]: ...

@@ -16,6 +16,7 @@
 #![forbid(unsafe_code)]
 
 mod commands;
+mod curves;
 mod mesh;
 mod surfaces;
 

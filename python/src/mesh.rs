@@ -328,4 +328,62 @@ impl Mesh {
         }
         Ok((d, out.report.to_json().to_string()))
     }
+
+    /// `highlight_lines` fitted as cubic B-spline curves within
+    /// `tolerance` (the command's default for a mesh when `None`), written
+    /// to `path` as IGES in `unit` (millimetres when `None`) when given;
+    /// the curves ([`crate::curves::list`])
+    /// and the report with its `curves` key.
+    #[pyo3(signature = (tolerance = None, path = None, unit = None, direction = None, plane_normal = None,
+        up = "auto", plane_point = None, spacing = None, lights = None, min_normal_cos = None,
+        circle_center = None, circle_axis = None, radii = None))]
+    fn _highlight_curves<'py>(
+        &self,
+        py: Python<'py>,
+        tolerance: Option<f64>,
+        path: Option<std::path::PathBuf>,
+        unit: Option<String>,
+        direction: Option<[f64; 3]>,
+        plane_normal: Option<[f64; 3]>,
+        up: &str,
+        plane_point: Option<[f64; 3]>,
+        spacing: Option<f64>,
+        lights: Option<String>,
+        min_normal_cos: Option<f64>,
+        circle_center: Option<[f64; 3]>,
+        circle_axis: Option<[f64; 3]>,
+        radii: Option<Vec<f64>>,
+    ) -> PyResult<(Bound<'py, pyo3::types::PyList>, String)> {
+        crate::curves::check(tolerance, path.as_deref())?;
+        let unit = crate::curves::unit(unit.as_deref())?;
+        let settings = highlight_settings(
+            direction,
+            plane_normal,
+            up,
+            plane_point,
+            spacing,
+            lights,
+            min_normal_cos,
+            circle_center,
+            circle_axis,
+            radii,
+            None,
+        )?;
+        let mesh = Arc::clone(&self.mesh);
+        let cache = Arc::clone(&self.triangles);
+        let (curves, report) = crate::compute(py, move |control| -> Res<_> {
+            use fairline_commands::curves;
+            fairline_commands::require_faces(mesh.face_count(), mesh.original_vertex_count())?;
+            let triangles = Mesh::triangles(&mesh, &cache)?;
+            let mut out = fairline_commands::highlight::run(&triangles, &settings, control)?;
+            let tol = curves::mesh_tolerance(tolerance, &triangles);
+            let fitted = curves::fit(&curves::mesh_lines(&out.lines), tol);
+            if let Some(p) = &path {
+                crate::curves::write(p, &fitted.curves, unit)?;
+            }
+            out.report.set("curves", fitted.summary);
+            Ok((fitted.curves, out.report.to_json().to_string()))
+        })?;
+        Ok((crate::curves::list(py, &curves)?, report))
+    }
 }

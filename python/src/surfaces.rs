@@ -1,5 +1,5 @@
 //! B-spline surfaces: `read_surfaces`, `write_surfaces`,
-//! `surface_highlight_lines`, `fair_surface`.
+//! `surface_highlight_lines`, `surface_highlight_curves`, `fair_surface`.
 //!
 //! Surfaces cross into Python as the JSON of DESIGN.md §5 (fairline's
 //! surface file format, numbers printed exactly), which the Python layer
@@ -22,6 +22,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_surfaces, m)?)?;
     m.add_function(wrap_pyfunction!(write_surfaces, m)?)?;
     m.add_function(wrap_pyfunction!(surface_highlight_lines, m)?)?;
+    m.add_function(wrap_pyfunction!(surface_highlight_curves, m)?)?;
     m.add_function(wrap_pyfunction!(fair_surface, m)?)?;
     Ok(())
 }
@@ -131,6 +132,73 @@ fn write_surfaces(py: Python<'_>, path: PathBuf, surfaces: String) -> PyResult<(
     Ok(())
 }
 
+/// The settings of `surface_highlight_lines` and
+/// `surface_highlight_curves` from the package's arguments: circular
+/// lights given, from a circular `lights` dictionary or derived from the
+/// whole part (`circular`), else linear lights, as the CLI chooses them.
+fn surface_settings(
+    circle_center: Option<[f64; 3]>,
+    circle_axis: Option<[f64; 3]>,
+    radii: Option<Vec<f64>>,
+    band: Option<f64>,
+    grid: usize,
+    surface: Option<usize>,
+    light: LightOptions,
+    circular: bool,
+) -> Res<SurfaceHighlightSettings> {
+    if !(2..=4000).contains(&grid) {
+        return Err(Failure::bad(format!(
+            "grid must be between 2 and 4000, got {grid}"
+        )));
+    }
+    if let Some(b) = band
+        && !(b > 0.0 && b.is_finite())
+    {
+        return Err(Failure::bad(format!(
+            "band must be a positive number, got {b}"
+        )));
+    }
+    let given = [
+        circle_center.is_some(),
+        circle_axis.is_some(),
+        radii.is_some(),
+    ];
+    if given.iter().any(|&b| b) && !given.iter().all(|&b| b) {
+        return Err(Failure::bad(
+            "circular lights need circle_center, circle_axis and radii together",
+        ));
+    }
+    let circle_center = vec3("circle_center", circle_center)?;
+    let circle_axis = vec3("circle_axis", circle_axis)?;
+    let lights = if let (Some(c), Some(t), Some(radii)) = (circle_center, circle_axis, radii) {
+        HighlightLights::Circular {
+            spec: CircularLights {
+                center: c.to_array(),
+                axis: t.to_array(),
+                radii,
+            },
+            from_lights: false,
+        }
+    } else if let Some(spec) = light.circular()? {
+        HighlightLights::Circular {
+            spec,
+            from_lights: true,
+        }
+    } else if circular {
+        HighlightLights::DerivedCircular {
+            up: light.up_vector(),
+        }
+    } else {
+        HighlightLights::Linear(light.lights()?)
+    };
+    Ok(SurfaceHighlightSettings {
+        lights,
+        grid,
+        band,
+        surface,
+    })
+}
+
 /// `fairline highlight SURFACES.json`: the command layer's
 /// `surface_highlight`; the lines document and the report.
 #[pyfunction]
@@ -155,25 +223,6 @@ fn surface_highlight_lines(
     min_normal_cos: Option<f64>,
     circular: bool,
 ) -> PyResult<(String, String)> {
-    if !(2..=4000).contains(&grid) {
-        return Err(Failure::bad(format!("grid must be between 2 and 4000, got {grid}")).into());
-    }
-    if let Some(b) = band
-        && !(b > 0.0 && b.is_finite())
-    {
-        return Err(Failure::bad(format!("band must be a positive number, got {b}")).into());
-    }
-    let given = [
-        circle_center.is_some(),
-        circle_axis.is_some(),
-        radii.is_some(),
-    ];
-    if given.iter().any(|&b| b) && !given.iter().all(|&b| b) {
-        return Err(Failure::bad(
-            "circular lights need circle_center, circle_axis and radii together",
-        )
-        .into());
-    }
     let light = LightOptions::new(
         direction,
         plane_normal,
@@ -183,37 +232,16 @@ fn surface_highlight_lines(
         lights,
         min_normal_cos,
     )?;
-    let circle_center = vec3("circle_center", circle_center)?;
-    let circle_axis = vec3("circle_axis", circle_axis)?;
-    // as the CLI: given, from a circular `lights` dictionary, or derived
-    // from the whole part (`circular`)
-    let lights = if let (Some(c), Some(t), Some(radii)) = (circle_center, circle_axis, radii) {
-        HighlightLights::Circular {
-            spec: CircularLights {
-                center: c.to_array(),
-                axis: t.to_array(),
-                radii,
-            },
-            from_lights: false,
-        }
-    } else if let Some(spec) = light.circular()? {
-        HighlightLights::Circular {
-            spec,
-            from_lights: true,
-        }
-    } else if circular {
-        HighlightLights::DerivedCircular {
-            up: light.up_vector(),
-        }
-    } else {
-        HighlightLights::Linear(light.lights()?)
-    };
-    let settings = SurfaceHighlightSettings {
-        lights,
-        grid,
+    let settings = surface_settings(
+        circle_center,
+        circle_axis,
+        radii,
         band,
+        grid,
         surface,
-    };
+        light,
+        circular,
+    )?;
     let all = parse(&surfaces, "surfaces")?;
     let out = crate::compute(py, move |control| -> Res<_> {
         if all.is_empty() {
@@ -223,6 +251,76 @@ fn surface_highlight_lines(
         Ok((out.document.to_string(), out.report.to_json().to_string()))
     })?;
     Ok(out)
+}
+
+/// `fairline highlight SURFACES.json -o LINES.igs`: the surfaces' exact
+/// lines (level 0) fitted as cubic B-spline curves within `tolerance`
+/// (the command's default when `None`), written to `path` as IGES in
+/// `unit` when given; the curves ([`crate::curves::list`]) and the report
+/// with its `curves` key.
+#[pyfunction]
+#[pyo3(signature = (surfaces, tolerance = None, path = None, unit = None, circle_center = None,
+    circle_axis = None, radii = None, grid = 200, surface = None, direction = None,
+    plane_normal = None, up = "auto", plane_point = None, spacing = None, lights = None,
+    min_normal_cos = None, circular = false))]
+fn surface_highlight_curves<'py>(
+    py: Python<'py>,
+    surfaces: String,
+    tolerance: Option<f64>,
+    path: Option<PathBuf>,
+    unit: Option<String>,
+    circle_center: Option<[f64; 3]>,
+    circle_axis: Option<[f64; 3]>,
+    radii: Option<Vec<f64>>,
+    grid: usize,
+    surface: Option<usize>,
+    direction: Option<[f64; 3]>,
+    plane_normal: Option<[f64; 3]>,
+    up: &str,
+    plane_point: Option<[f64; 3]>,
+    spacing: Option<f64>,
+    lights: Option<String>,
+    min_normal_cos: Option<f64>,
+    circular: bool,
+) -> PyResult<(Bound<'py, pyo3::types::PyList>, String)> {
+    crate::curves::check(tolerance, path.as_deref())?;
+    let unit = crate::curves::unit(unit.as_deref())?;
+    let light = LightOptions::new(
+        direction,
+        plane_normal,
+        up,
+        plane_point,
+        spacing,
+        lights,
+        min_normal_cos,
+    )?;
+    let settings = surface_settings(
+        circle_center,
+        circle_axis,
+        radii,
+        None,
+        grid,
+        surface,
+        light,
+        circular,
+    )?;
+    let all = parse(&surfaces, "surfaces")?;
+    let (curves, report) = crate::compute(py, move |control| -> Res<_> {
+        use fairline_commands::curves;
+        if all.is_empty() {
+            return Err(Failure::bad("surfaces: no B-spline surface given"));
+        }
+        let mut out =
+            fairline_commands::surface_highlight::run(&all, &settings, control, &|| {})?;
+        let tol = curves::surface_tolerance(tolerance, &all);
+        let fitted = curves::fit(&curves::surface_lines(&out.results), tol);
+        if let Some(p) = &path {
+            crate::curves::write(p, &fitted.curves, unit)?;
+        }
+        out.report.set("curves", fitted.summary);
+        Ok((fitted.curves, out.report.to_json().to_string()))
+    })?;
+    Ok((crate::curves::list(py, &curves)?, report))
 }
 
 /// `fairline fair-surface`: the command layer's `fair_surface`; all

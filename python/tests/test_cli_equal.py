@@ -361,6 +361,80 @@ def test_surface_highlight_lines_equal_cli(cli, demo, tmp_path):
     assert lines["lines"]
 
 
+def without_timestamps(text: str) -> str:
+    """An IGES file's text with its generation time (YYYYMMDD.HHNNSS) blanked."""
+    return re.sub(r"\d{8}\.\d{6}", "00000000.000000", text)
+
+
+def scipy_curve_distance(curve, points) -> float:
+    """Largest distance from `points` to `curve`, evaluated by scipy's
+    B-spline (an independent evaluator) on a fine parameter grid."""
+    from scipy.interpolate import BSpline
+
+    k, t, c = curve["degree"], np.asarray(curve["knots"]), np.asarray(curve["points"])
+    spline = BSpline(t, c, k)
+    p = np.asarray(points)
+    u = np.linspace(t[k], t[-k - 1], 40 * len(c) + 200)
+    nearest = np.linalg.norm(p[:, None, :] - spline(u)[None, :, :], axis=2).argmin(axis=1)
+    # golden-section search for the closest parameter between the
+    # neighbours of the nearest sample
+    lo = u[np.maximum(nearest - 1, 0)]
+    hi = u[np.minimum(nearest + 1, len(u) - 1)]
+    g = (np.sqrt(5.0) - 1.0) / 2.0
+    for _ in range(60):
+        a, b = hi - g * (hi - lo), lo + g * (hi - lo)
+        da = np.linalg.norm(spline(a) - p, axis=1)
+        db = np.linalg.norm(spline(b) - p, axis=1)
+        hi = np.where(da < db, b, hi)
+        lo = np.where(da < db, lo, a)
+    return float(np.linalg.norm(spline(0.5 * (lo + hi)) - p, axis=1).max())
+
+
+@pytest.mark.parametrize(
+    "name,kwargs,args",
+    [
+        ("dented-panel.obj", {}, []),
+        ("dented-panel.obj", {"tolerance": 0.002}, ["--curve-tolerance", "0.002"]),
+        ("bspline-panel-dented.json", {}, []),
+    ],
+)
+def test_highlight_curves_write_the_clis_file(cli, demo, tmp_path, name, kwargs, args):
+    src = demo / name
+    run(cli, "highlight", src, *args, "-o", tmp_path / "cli.igs", "--report", tmp_path / "r.json")
+    ours = tmp_path / "py.igs"
+    if name.endswith(".json"):
+        curves, report = fairline.surface_highlight_curves(fairline.read_surfaces(src), path=ours, **kwargs)
+        lines = [l for l in fairline.surface_highlight_lines(fairline.read_surfaces(src))[0]["lines"] if l["level"] == 0]
+    else:
+        V, F = fairline.read_mesh(src)
+        curves, report = fairline.highlight_curves(V, F, path=ours, **kwargs)
+        again, _ = fairline.Mesh(V, F).highlight_curves(**kwargs)
+        assert [c["label"] for c in again] == [c["label"] for c in curves]
+        lines = fairline.highlight_lines(V, F)[0]["lines"]
+    assert without_timestamps(ours.read_text()) == without_timestamps((tmp_path / "cli.igs").read_text())
+    same_report(report, cli_report(tmp_path / "r.json"))
+    summary = report["curves"]
+    assert summary["curves"] == len(curves) == len(lines) > 0
+    assert sum(len(c["points"]) for c in curves) == summary["control_points"]
+    # every line point lies within the tolerance of its curve, by scipy
+    tol = summary["tolerance"]
+    worst = max(scipy_curve_distance(c, l["points"]) for c, l in zip(curves, lines))
+    assert worst <= tol * 1.001, f"{worst} > {tol}"
+
+
+def test_highlight_curves_refuse_bad_options(demo, tmp_path):
+    V, F = fairline.read_mesh(demo / "dented-panel.obj")
+    with pytest.raises(fairline.FairlineError, match="tolerance must be a positive number"):
+        fairline.highlight_curves(V, F, tolerance=-1)
+    with pytest.raises(fairline.FairlineError, match=r"curves are written as \.igs or \.iges"):
+        fairline.highlight_curves(V, F, path=tmp_path / "lines.json")
+    with pytest.raises(fairline.FairlineError, match="unit must be an IGES unit name"):
+        fairline.highlight_curves(V, F, path=tmp_path / "lines.igs", unit="furlong")
+    assert not list(tmp_path.iterdir()), "nothing is written on bad options"
+    curves, _ = fairline.highlight_curves(V, F, path=tmp_path / "lines.igs", unit="in")
+    assert "2HIN" in (tmp_path / "lines.igs").read_text()
+
+
 def test_fair_surface_equals_cli(cli, demo, tmp_path):
     lights, ends = demo / "bspline-panel-lights.json", demo / "bspline-panel-endpoints.json"
     run(cli, "fair-surface", demo / "bspline-panel-dented.json", "--lights", lights, "--endpoints", ends, "--max-iterations", "3",

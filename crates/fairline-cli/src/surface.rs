@@ -159,19 +159,3 @@ fn tessellated_with(
 ) -> Result<(SurfaceMesh, Vec<u32>)> {
     Ok(fairline::bspline::tessellate_part_with(surfaces, grid)?)
 }
-
-/// The diagonal of the box of the faces of `surfaces` (trimmed geometry,
-/// [`fairline::bspline::face_bounding_box`]; the control net's box where a
-/// face has none); 0 for no surface.
-pub fn surfaces_diagonal(surfaces: &[BSplineSurface]) -> f64 {
-    let mut lo = fairline::Vec3::splat(f64::INFINITY);
-    let mut hi = fairline::Vec3::splat(f64::NEG_INFINITY);
-    for s in surfaces {
-        let (a, b) =
-            fairline::bspline::face_bounding_box(s).unwrap_or_else(|| s.control_bounding_box());
-        lo = lo.min(a);
-        hi = hi.max(b);
-    }
-    let d = (hi - lo).length();
-    if d.is_finite() { d } else { 0.0 }
-}

@@ -268,10 +268,7 @@ pub fn run(args: HighlightArgs) -> Result<()> {
         write_svg(&args, surfaces, results, p)?;
     }
     if crate::lines_file::lines_format(&args.output)? == crate::lines_file::LinesFormat::Iges {
-        let tol = fairline_commands::curves::tolerance(
-            args.curve_tolerance,
-            crate::surface::surfaces_diagonal(surfaces),
-        );
+        let tol = fairline_commands::curves::surface_tolerance(args.curve_tolerance, surfaces);
         let summary = crate::lines_file::write_curves(
             &args.output,
             &fairline_commands::curves::surface_lines(results),

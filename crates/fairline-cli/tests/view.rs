@@ -3042,3 +3042,69 @@ fn lines_as_curves_match_the_equivalent_command() {
         assert_eq!(srv.post("/api/doc/0/lines-curves", &bad).0, 400, "{bad}");
     }
 }
+
+/// The text of an IGES file with its generation timestamps
+/// (`YYYYMMDD.HHNNSS`, Global fields 18 and 25) blanked.
+fn without_timestamps(text: &str) -> String {
+    let b = text.as_bytes();
+    let mut out = b.to_vec();
+    let stamp = |w: &[u8]| {
+        w.len() == 15
+            && w[8] == b'.'
+            && w.iter()
+                .enumerate()
+                .all(|(i, c)| i == 8 || c.is_ascii_digit())
+    };
+    for i in 0..b.len().saturating_sub(15) {
+        if stamp(&b[i..i + 15]) {
+            out[i..i + 15].copy_from_slice(b"00000000.000000");
+        }
+    }
+    String::from_utf8(out).unwrap()
+}
+
+#[test]
+fn lines_as_curves_of_a_surface_file_are_its_exact_lines_as_the_command_writes_them() {
+    let Some(teapot) = shared("surfaces/teapot.json") else {
+        return;
+    };
+    let dir = tmp("view-surface-curves");
+    // an IGES part (declares its unit) made from the teapot
+    let part = dir.join("teapot.igs");
+    ok(&run(&["convert", s(&teapot), s(&part)]));
+    let srv = start(&[&part], &dir);
+    let light: Value = serde_json::from_str(LIGHT).unwrap();
+    let r = srv.json("/api/doc/0/lines-curves", Some(&json!({"light": light})));
+    assert_eq!(r["name"], "teapot-lines.igs");
+    assert!(r.get("note").is_none(), "{r}");
+    let command = r["command"].as_str().unwrap();
+    let words: Vec<String> = command
+        .split_whitespace()
+        .skip(1)
+        .map(|w| w.trim_matches('\'').to_string())
+        .collect();
+    let out = dir.join("lines.igs");
+    let rep = dir.join("r.json");
+    let mut args: Vec<String> = words[..words.len() - 1].to_vec();
+    args.push(out.display().to_string());
+    args.extend(["--report".into(), rep.display().to_string()]);
+    let argv: Vec<&str> = args.iter().map(String::as_str).collect();
+    ok(&run(&argv));
+    // the same exact lines, fitted the same way, in the same unit: the
+    // same file but for the time it was made
+    let cli_text = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(
+        without_timestamps(r["iges"].as_str().unwrap()),
+        without_timestamps(&cli_text)
+    );
+    let cli = common::json(&rep)["curves"].clone();
+    assert_eq!(r["curves"], cli);
+    assert!(
+        r["curves"]["curves"].as_u64().unwrap() > 32,
+        "{}",
+        r["curves"]
+    );
+    // labels name the patch and the light (PkLj), not a mesh light (HLm)
+    assert!(cli_text.contains("P0L"), "patch labels");
+    assert!(!cli_text.contains("HL0"));
+}

@@ -371,7 +371,7 @@ async function downloadCurves() {
   offer(new Blob([r.iges], { type: 'model/iges' }), r.name);
   showCommand(r.command);
   const c = r.curves;
-  status(`${c.curves} curves in ${r.name}: ${c.control_points} control points for ${c.points} line points, within ${c.tolerance.toPrecision(2)}${c.polylines ? `; ${c.polylines} short lines as polylines` : ''}${r.note ? ` (${r.note})` : ''}`);
+  status(`${c.curves} curves in ${r.name}: ${c.control_points} control points for ${c.points} line points, within ${c.tolerance.toPrecision(2)}${c.polylines ? `; ${c.polylines} short lines as polylines` : ''}`);
 }
 
 async function downloadMesh() {

@@ -11,6 +11,7 @@
 //! index). Band boundaries are not written.
 
 use fairline::Vec3;
+use fairline::bspline::BSplineSurface;
 use fairline::highlight::HighlightLines;
 use fairline::highlight::surface::PatchHighlights;
 use fairline::io::curve_fit::fit_polyline;
@@ -90,6 +91,32 @@ pub fn tolerance(given: Option<f64>, diagonal: f64) -> f64 {
     match given {
         Some(t) if t.is_finite() && t > 0.0 => t,
         _ => DEFAULT_RELATIVE_TOLERANCE * diagonal.max(0.0),
+    }
+}
+
+/// The bounding-box diagonal of the faces of `surfaces` (trimmed geometry,
+/// [`fairline::bspline::face_bounding_box`]; the control net's box where a
+/// face has none); 0 for no surface.
+pub fn surfaces_diagonal(surfaces: &[BSplineSurface]) -> f64 {
+    let mut lo = Vec3::splat(f64::INFINITY);
+    let mut hi = Vec3::splat(f64::NEG_INFINITY);
+    for s in surfaces {
+        let (a, b) =
+            fairline::bspline::face_bounding_box(s).unwrap_or_else(|| s.control_bounding_box());
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    let d = (hi - lo).length();
+    if d.is_finite() { d } else { 0.0 }
+}
+
+/// The tolerance for the lines of surfaces: `given`, else
+/// [`DEFAULT_RELATIVE_TOLERANCE`] of the part's diagonal
+/// ([`surfaces_diagonal`]).
+pub fn surface_tolerance(given: Option<f64>, surfaces: &[BSplineSurface]) -> f64 {
+    match given {
+        Some(t) if t.is_finite() && t > 0.0 => t,
+        _ => tolerance(None, surfaces_diagonal(surfaces)),
     }
 }
 

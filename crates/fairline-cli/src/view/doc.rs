@@ -67,6 +67,9 @@ pub struct Doc {
     pub patch_of_triangle: Vec<u32>,
     /// Tessellation grid per patch direction (surfaces).
     pub grid: usize,
+    /// The length unit a surface file declares (IGES, STEP), written
+    /// into the files made from it.
+    pub unit: Option<fairline::io::units::LengthUnit>,
     /// Scalar vertex properties read from a PLY file.
     pub ply_scalars: Vec<(String, Vec<f64>)>,
     /// Bounding-box centre of the input (binary positions are relative to it).
@@ -124,11 +127,13 @@ impl Doc {
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_else(|| path.display().to_string());
+        let mut unit = None;
         let (mesh, surfaces, patch_of_triangle, ply_scalars) =
             if crate::surface::is_surface_path(path) {
-                let surfaces = crate::surface::load_surfaces(path)?;
-                let (mesh, patch) = tessellate_all(&surfaces, grid)?;
-                (mesh, Some(Arc::new(surfaces)), patch, Vec::new())
+                let file = crate::surface::load_surface_file(path)?;
+                unit = file.unit;
+                let (mesh, patch) = tessellate_all(&file.surfaces, grid)?;
+                (mesh, Some(Arc::new(file.surfaces)), patch, Vec::new())
             } else {
                 let mesh = fairline::io::read_mesh(path)?;
                 let is_ply = path
@@ -196,6 +201,7 @@ impl Doc {
             tri_source,
             patch_of_triangle,
             grid,
+            unit,
             ply_scalars,
             center,
             radius,

@@ -236,12 +236,13 @@ struct CurvesRequest {
 }
 
 /// `POST /api/doc/K/lines-curves` `{"light"|"circular", "step"?,
-/// "tolerance"?}`: the highlight lines of the lights given on the drawn
-/// mesh (a surface document's tessellation), as cubic B-spline curves in
-/// an IGES file (`fairline highlight -o LINES.igs`, the command layer's
-/// [`fairline_commands::curves`]). Answers `name` (the file name offered),
-/// `iges` (the file's text), `curves` (the report's `curves` key) and
-/// `command`.
+/// "tolerance"?}`: the highlight lines of the lights given, as cubic
+/// B-spline curves in an IGES file (`fairline highlight FILE -o LINES.igs`,
+/// the command layer's [`fairline_commands::curves`]): on a mesh the lines
+/// of the drawn mesh, on a surface document the surfaces' exact lines
+/// (every patch, the command's grid), in the file's length unit. Answers
+/// `name` (the file name offered), `iges` (the file's text), `curves` (the
+/// report's `curves` key) and `command`.
 pub fn lines_curves(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     use fairline_commands::curves;
     use fairline_commands::highlight::{self, HighlightLights, HighlightSettings};
@@ -254,7 +255,7 @@ pub fn lines_curves(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     {
         return bad(format!("tolerance must be a positive number, got {t}"));
     }
-    let (mesh, file, stem, surface) = {
+    let (mesh, surfaces, unit, file, stem) = {
         let st = lock(shared);
         let d = &st.docs[k];
         let stem = d
@@ -264,9 +265,10 @@ pub fn lines_curves(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             .unwrap_or_else(|| "part".into());
         (
             d.shared_tri_at(req.step),
+            d.step(req.step).surfaces.clone(),
+            d.unit.clone(),
             d.current_file(),
             stem,
-            d.is_surface(),
         )
     };
     let (lights, args) = match (req.light, req.circular) {
@@ -292,17 +294,36 @@ pub fn lines_curves(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         }
         (None, None) => return bad("give \"light\" or \"circular\""),
     };
-    let settings = HighlightSettings { lights, band: None };
-    let out = match highlight::run(&mesh, &settings, &Control::new()) {
-        Ok(o) => o,
-        Err(e) => return bad(e.to_string()),
+    let fitted = match &surfaces {
+        Some(surfaces) => {
+            use fairline_commands::surface_highlight::{SurfaceHighlightSettings, run};
+            // the command's defaults: every patch, its grid
+            let settings = SurfaceHighlightSettings {
+                lights,
+                ..SurfaceHighlightSettings::default()
+            };
+            let out = match run(surfaces, &settings, &Control::new(), &|| {}) {
+                Ok(o) => o,
+                Err(e) => return bad(e.message(fairline_commands::FrontEnd::Workbench)),
+            };
+            let tol = curves::surface_tolerance(req.tolerance, surfaces);
+            curves::fit(&curves::surface_lines(&out.results), tol)
+        }
+        None => {
+            let settings = HighlightSettings { lights, band: None };
+            let out = match highlight::run(&mesh, &settings, &Control::new()) {
+                Ok(o) => o,
+                Err(e) => return bad(e.to_string()),
+            };
+            let tol = curves::mesh_tolerance(req.tolerance, &mesh);
+            curves::fit(&curves::mesh_lines(&out.lines), tol)
+        }
     };
-    let tol = curves::mesh_tolerance(req.tolerance, &mesh);
-    let fitted = curves::fit(&curves::mesh_lines(&out.lines), tol);
-    let text = match fairline::io::iges_write::curves_to_iges(
-        &fitted.curves,
-        &fairline::io::iges_write::IgesWriteOptions::default(),
-    ) {
+    let mut options = fairline::io::iges_write::IgesWriteOptions::default();
+    if let Some(u) = unit.filter(|_| surfaces.is_some()) {
+        options = options.unit(u);
+    }
+    let text = match fairline::io::iges_write::curves_to_iges(&fitted.curves, &options) {
         Ok(t) => t,
         Err(e) => return error(500, e),
     };
@@ -310,16 +331,11 @@ pub fn lines_curves(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         .tolerance
         .map(|t| format!(" --curve-tolerance {t}"))
         .unwrap_or_default();
-    let mut answer = json!({
+    let answer = json!({
         "name": format!("{stem}-lines.igs"),
         "iges": text,
         "curves": fitted.summary,
         "command": format!("fairline highlight {file} {args}{tolerance_arg} -o lines.igs"),
     });
-    if surface {
-        answer["note"] = json!(
-            "curves of the lines on the tessellation; the command gives the surfaces' exact lines"
-        );
-    }
     json_answer(&answer)
 }
