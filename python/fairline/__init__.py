@@ -78,6 +78,7 @@ __all__ = [
     "write_surfaces",
     "surface_highlight_lines",
     "surface_highlight_curves",
+    "surface_iso_curves",
     "fair_surface",
     "inspect",
     "from_trimesh",
@@ -985,6 +986,35 @@ def surface_highlight_lines(
         **_light_kwargs(direction, plane_normal, up, plane_point, spacing, lights, min_normal_cos),
     )
     return _lines(_json.loads(doc)), _report(report)
+
+
+def surface_iso_curves(
+    surfaces: Union[Surface, Sequence[Surface]],
+    *,
+    count: int = 5,
+    samples: int = 200,
+    surface: Optional[int] = None,
+    comb_scale: float = 1.0,
+) -> Tuple[Dict[str, _np.ndarray], Dict[str, Any]]:
+    """Isoparametric curves of B-spline surfaces with their exact curvature
+    combs (``fairline section SURFACES --iso N``): ``count`` curves per
+    direction and surface, the domain's ends (the patch edges) included,
+    each sampled at ``samples`` even parameters plus its interior knots; on
+    trimmed faces only the pieces inside the face. The curvature is the
+    curve's own, ``|C' x C''| / |C'|^3`` from the surface derivatives; the
+    comb vector ``-comb_scale * curvature * m`` stands on the convex side.
+
+    Returns ``(curves, report)``; ``curves`` has the flat arrays ``points``
+    (n, 3), ``params`` (n,: the running parameter), ``curvature`` (n,),
+    ``comb`` (n, 3), and per curve ``offsets`` (curves + 1,), ``surface``,
+    ``fixed`` (0: u held, the curve runs along v; 1: v held) and ``value``
+    (the held parameter).
+    """
+    curves, report = _native.surface_iso_curves(
+        _surfaces_text(surfaces), count=int(count), samples=int(samples), surface=surface,
+        comb_scale=float(comb_scale),
+    )
+    return curves, _report(report)
 
 
 def surface_highlight_curves(

@@ -163,6 +163,13 @@ def surface_highlight_lines(
     min_normal_cos: Optional[float] = None,
     circular: bool = False,
 ) -> Tuple[str, str]: ...
+def surface_iso_curves(
+    surfaces: str,
+    count: int = 5,
+    samples: int = 200,
+    surface: Optional[int] = None,
+    comb_scale: float = 1.0,
+) -> Tuple[Dict[str, Any], str]: ...
 def surface_highlight_curves(
     surfaces: str,
     tolerance: Optional[float] = None,

@@ -1,5 +1,6 @@
 //! B-spline surfaces: `read_surfaces`, `write_surfaces`,
-//! `surface_highlight_lines`, `surface_highlight_curves`, `fair_surface`.
+//! `surface_highlight_lines`, `surface_highlight_curves`,
+//! `surface_iso_curves`, `fair_surface`.
 //!
 //! Surfaces cross into Python as the JSON of DESIGN.md §5 (fairline's
 //! surface file format, numbers printed exactly), which the Python layer
@@ -23,6 +24,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(write_surfaces, m)?)?;
     m.add_function(wrap_pyfunction!(surface_highlight_lines, m)?)?;
     m.add_function(wrap_pyfunction!(surface_highlight_curves, m)?)?;
+    m.add_function(wrap_pyfunction!(surface_iso_curves, m)?)?;
     m.add_function(wrap_pyfunction!(fair_surface, m)?)?;
     Ok(())
 }
@@ -321,6 +323,62 @@ fn surface_highlight_curves<'py>(
         Ok((fitted.curves, out.report.to_json().to_string()))
     })?;
     Ok((crate::curves::list(py, &curves)?, report))
+}
+
+/// `fairline section SURFACES --iso N`: isoparametric curves with their
+/// exact curvature combs as flat arrays — a dict of `points` (n, 3),
+/// `params` (n,), `curvature` (n,), `comb` (n, 3), per curve `offsets`
+/// (curves + 1,), `surface`, `fixed` (0: u held, 1: v held) and `value` —
+/// and the report.
+#[pyfunction]
+#[pyo3(signature = (surfaces, count = 5, samples = 200, surface = None, comb_scale = 1.0))]
+fn surface_iso_curves<'py>(
+    py: Python<'py>,
+    surfaces: String,
+    count: usize,
+    samples: usize,
+    surface: Option<usize>,
+    comb_scale: f64,
+) -> PyResult<(Bound<'py, pyo3::types::PyDict>, String)> {
+    use fairline_commands::section::{IsoSettings, iso};
+    let settings = IsoSettings {
+        count,
+        samples,
+        surface,
+        comb_scale,
+    };
+    let all = parse(&surfaces, "surfaces")?;
+    let (out, report) = crate::compute(py, move |control| -> Res<_> {
+        if all.is_empty() {
+            return Err(Failure::bad("surfaces: no B-spline surface given"));
+        }
+        let out = iso(&all, &settings, control)?;
+        let report = out.report.to_json().to_string();
+        Ok((out.curves, report))
+    })?;
+    let (mut points, mut params, mut curvature, mut comb) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut offsets, mut index, mut fixed, mut value) = (vec![0i64], Vec::new(), Vec::new(), Vec::new());
+    for (k, c) in &out {
+        points.extend_from_slice(&c.curve.points);
+        params.extend_from_slice(&c.params);
+        curvature.extend_from_slice(&c.curve.curvature);
+        comb.extend(c.curve.comb(comb_scale));
+        offsets.push(points.len() as i64);
+        index.push(*k as i64);
+        fixed.push(i64::from(c.fixed == fairline::bspline::Direction::V));
+        value.push(c.value);
+    }
+    let d = pyo3::types::PyDict::new(py);
+    d.set_item("points", crate::positions_array(py, &points))?;
+    d.set_item("params", numpy::PyArray1::from_vec(py, params))?;
+    d.set_item("curvature", numpy::PyArray1::from_vec(py, curvature))?;
+    d.set_item("comb", crate::positions_array(py, &comb))?;
+    d.set_item("offsets", numpy::PyArray1::from_vec(py, offsets))?;
+    d.set_item("surface", numpy::PyArray1::from_vec(py, index))?;
+    d.set_item("fixed", numpy::PyArray1::from_vec(py, fixed))?;
+    d.set_item("value", numpy::PyArray1::from_vec(py, value))?;
+    Ok((d, report))
 }
 
 /// `fairline fair-surface`: the command layer's `fair_surface`; all

@@ -422,6 +422,25 @@ def test_highlight_curves_write_the_clis_file(cli, demo, tmp_path, name, kwargs,
     assert worst <= tol * 1.001, f"{worst} > {tol}"
 
 
+def test_surface_iso_curves_equal_cli(cli, demo, tmp_path):
+    src = demo / "bspline-panel-dented.json"
+    run(cli, "section", src, "--iso", "4", "--samples", "30", "--comb-scale", "0.2",
+        "--csv", tmp_path / "c.csv", "--report", tmp_path / "r.json")
+    curves, report = fairline.surface_iso_curves(fairline.read_surfaces(src), count=4, samples=30, comb_scale=0.2)
+    same_report(report, cli_report(tmp_path / "r.json"))
+    rows = np.loadtxt(tmp_path / "c.csv", delimiter=",", skiprows=1, usecols=(0, 2, 3, 5, 6, 7, 8, 9, 10, 11, 12))
+    fixed = [line.split(",")[1] for line in (tmp_path / "c.csv").read_text().splitlines()[1:]]
+    exact(curves["points"], rows[:, 4:7])
+    exact(curves["params"], rows[:, 3])
+    exact(curves["curvature"], rows[:, 7])
+    exact(curves["comb"], rows[:, 8:11])
+    per_point = np.repeat(np.arange(len(curves["surface"])), np.diff(curves["offsets"]))
+    assert np.array_equal(per_point, rows[:, 2].astype(int))
+    exact(curves["value"][per_point], rows[:, 1])
+    assert ["uv"[f] for f in curves["fixed"][per_point]] == fixed
+    assert len(curves["surface"]) == report["iso"]["curves"] == 8
+
+
 def test_highlight_curves_refuse_bad_options(demo, tmp_path):
     V, F = fairline.read_mesh(demo / "dented-panel.obj")
     with pytest.raises(fairline.FairlineError, match="tolerance must be a positive number"):

@@ -1,7 +1,9 @@
 //! `fairline section`: a sphere cut by a horizontal plane is one closed
 //! circle whose curvature is 1/radius (within the curvature estimate's
 //! error) and whose comb teeth are scale × curvature long; bad input exits
-//! 2 with nothing written.
+//! 2 with nothing written. Iso-curves of a B-spline cylinder have the
+//! closed-form curvature 1/radius along its circles and none along its
+//! rulings.
 
 mod common;
 use common::{json, ok, run, s, tmp};
@@ -109,4 +111,108 @@ fn bad_input_exits_2_and_writes_nothing() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("nope.obj"));
     assert!(!csv.exists());
+}
+
+/// A quarter cylinder of radius 2 about the z axis, height 1: rational
+/// quadratic circles in u, straight rulings in v.
+const QUARTER_CYLINDER: &str = r#"{"surfaces":[{"degree_u":2,"degree_v":1,
+"knots_u":[0,0,0,1,1,1],"knots_v":[0,0,1,1],
+"control_points":[[[2,0,0],[2,0,1]],[[2,2,0],[2,2,1]],[[0,2,0],[0,2,1]]],
+"weights":[[1,1],[0.7071067811865476,0.7071067811865476],[1,1]]}]}"#;
+
+#[test]
+fn iso_curves_of_a_cylinder_have_the_closed_form_combs() {
+    let dir = tmp("section-iso");
+    let part = dir.join("cylinder.json");
+    std::fs::write(&part, QUARTER_CYLINDER).unwrap();
+    let (csv, obj, report) = (dir.join("c.csv"), dir.join("c.obj"), dir.join("c.json"));
+    let o = run(&[
+        "section",
+        s(&part),
+        "--iso",
+        "3",
+        "--samples",
+        "40",
+        "--comb-scale",
+        "0.5",
+        "--csv",
+        s(&csv),
+        "--obj",
+        s(&obj),
+        "--report",
+        s(&report),
+    ]);
+    ok(&o);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("6 iso-curve(s) of 240 points on 1 surface(s)"),
+        "{stderr}"
+    );
+    let r = json(&report);
+    assert_eq!(r["iso"]["curves"], 6);
+    assert!((r["iso"]["max_curvature"].as_f64().unwrap() - 0.5).abs() < 1e-12);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(text.starts_with("surface,fixed,value,curve,point,t,x,y,z,curvature,comb_x"));
+    let mut rows = 0;
+    for line in text.lines().skip(1) {
+        let w: Vec<&str> = line.split(',').collect();
+        let v: Vec<f64> = w.iter().map(|x| x.parse().unwrap_or(f64::NAN)).collect();
+        let (x, y, k) = (v[6], v[7], v[9]);
+        assert!((x.hypot(y) - 2.0).abs() < 1e-12, "on the cylinder: {line}");
+        let comb = [v[10], v[11], v[12]];
+        match w[1] {
+            // u held: a ruling, straight
+            "u" => assert!(k == 0.0 && comb == [0.0, 0.0, 0.0], "{line}"),
+            // v held: a circle of radius 2, the comb outward, 0.5 × κ long
+            "v" => {
+                assert!((k - 0.5).abs() < 1e-12, "{line}");
+                assert!((comb[0] - 0.125 * x).abs() < 1e-12, "{line}");
+                assert!((comb[1] - 0.125 * y).abs() < 1e-12, "{line}");
+                assert!(comb[2].abs() < 1e-12, "{line}");
+            }
+            other => panic!("fixed {other}"),
+        }
+        rows += 1;
+    }
+    assert_eq!(rows, 240);
+    let obj_text = std::fs::read_to_string(&obj).unwrap();
+    assert_eq!(
+        obj_text.lines().filter(|l| l.starts_with("l ")).count(),
+        6 + 240
+    );
+}
+
+#[test]
+fn iso_combs_refuse_meshes_and_bad_counts_and_write_nothing() {
+    let dir = tmp("section-iso-bad");
+    let mesh = dir.join("sphere.obj");
+    fairline::io::write_mesh(&mesh, &shapes::icosphere(1.0, 1)).unwrap();
+    let part = dir.join("cylinder.json");
+    std::fs::write(&part, QUARTER_CYLINDER).unwrap();
+    let csv = dir.join("c.csv");
+    for (input, extra, says) in [
+        (&mesh, vec!["--iso", "3"], "--iso is for B-spline surfaces"),
+        (&part, vec!["--iso", "0"], "--iso 0"),
+        (&part, vec!["--iso", "3", "--samples", "1"], "--samples 1"),
+        (
+            &part,
+            vec!["--iso", "3", "--surface", "4"],
+            "--surface 4 is out of range",
+        ),
+        (
+            &part,
+            vec!["--iso", "3", "--plane-point", "0,0,0"],
+            "cannot be used with",
+        ),
+        (&part, vec!["--samples", "10"], "--iso"),
+    ] {
+        let mut all = vec!["section", s(input)];
+        all.extend(extra);
+        all.extend(["--csv", s(&csv)]);
+        let o = run(&all);
+        assert_eq!(o.status.code(), Some(2), "{all:?}");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(stderr.contains(says), "{all:?}: {stderr}");
+        assert!(!csv.exists());
+    }
 }

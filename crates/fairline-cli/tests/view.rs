@@ -2414,6 +2414,7 @@ fn api_section_draft_continuity_and_control_net() {
     // B-spline tools refuse meshes
     assert_eq!(srv.post("/api/doc/0/continuity", &json!({})).0, 400);
     assert_eq!(srv.get("/api/doc/0/control-net").0, 400);
+    assert_eq!(srv.post("/api/doc/0/iso-combs", &json!({})).0, 400);
     drop(srv);
     let srv = start(&[&pair], &dir);
     let (st, b) = srv.post("/api/doc/0/continuity", &json!({}));
@@ -2455,6 +2456,29 @@ fn api_section_draft_continuity_and_control_net() {
     // the lifted row of the second patch (i = 1): z = 0.01
     let z = data[3 * (16 + 4) + 2] as f64 + center[2];
     assert!((z - 0.01).abs() < 1e-6, "{z}");
+    // iso-curve combs: 2 per direction on each of the 2 patches, each
+    // point with its comb vector
+    let (st, b) = srv.post("/api/doc/0/iso-combs", &json!({"count": 2, "samples": 20}));
+    assert_eq!(st, 200);
+    let (h, data) = parse_frame(&b);
+    assert_eq!(h["lines"].as_array().unwrap().len(), 8);
+    let n = h["points"].as_u64().unwrap() as usize;
+    assert_eq!(data.len(), 6 * n);
+    assert_eq!(h["report"]["iso"]["curves"], 8);
+    assert!(
+        h["command"]
+            .as_str()
+            .unwrap()
+            .contains("--iso 2 --samples 20"),
+        "{h}"
+    );
+    for bad in [
+        json!({"count": 0}),
+        json!({"surface": 9}),
+        json!({"samples": 1}),
+    ] {
+        assert_eq!(srv.post("/api/doc/0/iso-combs", &bad).0, 400, "{bad}");
+    }
 }
 
 /// Counts the pixels of the canvas whose colour passes `keep`.
@@ -2687,6 +2711,54 @@ fn page_draws_continuity_classes_and_the_control_net() {
     b.wait_for("!document.body.dataset.net", 30);
     assert_eq!(
         b.eval("!!window.fairline.viewer.docs[0].overlays.net"),
+        json!(false)
+    );
+    // the iso-curve combs: as many curves as the equivalent command gives,
+    // drawn in the comb colour; the comb-length slider redraws them
+    b.eval("(() => { const c = document.getElementById('iso-count'); c.value = '3'; })()");
+    b.eval("document.getElementById('iso-combs').click()");
+    b.wait_for("document.body.dataset.iso", 60);
+    let drawn = b
+        .eval("Number(document.body.dataset.iso)")
+        .as_u64()
+        .unwrap();
+    let command = b
+        .eval("document.getElementById('command').textContent")
+        .as_str()
+        .unwrap()
+        .to_string();
+    assert!(
+        command.contains("fairline section ") && command.contains("--iso 3"),
+        "{command}"
+    );
+    let rep = dir.join("combs.json");
+    ok(&run(&[
+        "section",
+        s(&teapot),
+        "--iso",
+        "3",
+        "--report",
+        s(&rep),
+    ]));
+    assert_eq!(common::json(&rep)["iso"]["curves"], json!(drawn));
+    assert!(
+        drawn >= 6 * patches,
+        "{drawn} iso-curves on {patches} patches"
+    );
+    std::thread::sleep(Duration::from_millis(400));
+    let shot = b.screenshot();
+    save_screenshot("workbench-iso-combs.png", &shot.3);
+    let cyan = count_pixels(&shot, rect, |r, g, b| r < 120.0 && g > 170.0 && b > 190.0);
+    assert!(cyan > 300, "{cyan} pixels of the combs");
+    let before = b.eval("window.fairline.surfaceTools.isoCombLength");
+    b.eval("(() => { const s = document.getElementById('iso-comb-scale'); s.value = '0.5'; s.dispatchEvent(new Event('input')); })()");
+    let after = b.eval("window.fairline.surfaceTools.isoCombLength");
+    let ratio = after.as_f64().unwrap() / before.as_f64().unwrap();
+    assert!((ratio - 10f64.sqrt()).abs() < 1e-6, "{ratio}");
+    b.eval("document.getElementById('iso-combs').click()");
+    b.wait_for("!document.body.dataset.iso", 30);
+    assert_eq!(
+        b.eval("!!window.fairline.viewer.docs[0].overlays['iso-comb']"),
         json!(false)
     );
 }

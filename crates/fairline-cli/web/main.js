@@ -575,6 +575,9 @@ function wire() {
     $('continuity').addEventListener('click', guard(() => surfaceTools.showContinuity(surfaceDoc())));
     $('cont-clear').addEventListener('click', () => surfaceTools.clearContinuity());
     $('control-net').addEventListener('change', guard(() => surfaceTools.showNet(surfaceDoc(), $('control-net').checked)));
+    $('iso-combs').addEventListener('change', guard(() => surfaceTools.showIso(surfaceDoc(), $('iso-combs').checked)));
+    $('iso-count').addEventListener('change', guard(() => ($('iso-combs').checked ? surfaceTools.showIso(surfaceDoc(), true) : null)));
+    $('iso-comb-scale').addEventListener('input', () => surfaceTools.drawIso());
   }
   $('exact').addEventListener('click', guard(exactLines));
   $('detect').addEventListener('click', guard(detect));
@@ -671,6 +674,7 @@ function shortcutActions(help) {
     draft: click('draft'),
     continuity: click('continuity'),
     controlNet: () => { if (!$('patch-panel').hidden) toggle('control-net')(); },
+    isoCombs: () => { if (!$('patch-panel').hidden) toggle('iso-combs')(); },
     saveSession: () => { sessionFile.save().catch((err) => status(err.message, true)); },
     tool: (name) => {
       if (![...$('tool').options].some((o) => o.value === name)) return;

@@ -34,6 +34,7 @@ export const SHORTCUTS = [
   { keys: 'A', label: 'draft-angle map (Draft panel)', action: 'draft' },
   { keys: 'C', label: 'continuity of the patch edges (surfaces)', action: 'continuity' },
   { keys: 'K', label: 'control net on / off (surfaces)', action: 'controlNet' },
+  { keys: 'U', label: 'iso-curve curvature combs on / off (surfaces)', action: 'isoCombs' },
   { keys: 'Ctrl+Shift+S', label: 'save the session (file, lights, view, marks, history) as JSON', action: 'saveSession', anywhere: true },
 ];
 

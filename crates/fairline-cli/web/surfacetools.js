@@ -1,7 +1,9 @@
 // B-spline tools: the continuity of the patch boundaries drawn on the part
 // (each shared edge coloured by its class: gap, G0, G1, G2; the values
-// listed) and the control net. Classes and nets come from the server
-// (/api/doc/K/continuity, /api/doc/K/control-net); this file only draws.
+// listed), the control net and the curvature combs of the isoparametric
+// curves. Classes, nets and combs come from the server
+// (/api/doc/K/continuity, /api/doc/K/control-net, /api/doc/K/iso-combs);
+// this file only draws.
 import * as api from './api.js';
 import { segments } from './viewer.js';
 import { $, status, showCommand } from './panels.js';
@@ -13,6 +15,8 @@ export const CLASS_COLORS = {
   G2: [0.1, 0.8, 0.25, 1],
 };
 const NET_COLOR = [0.85, 0.35, 0.95, 1];
+const ISO_COLOR = [0.95, 0.95, 0.3, 1];
+const ISO_COMB_COLOR = [0.2, 0.85, 0.95, 1];
 
 // Segments repeated with offsets of ±`w` along each axis: lines a few
 // pixels wide where WebGL draws them one pixel wide.
@@ -37,6 +41,7 @@ export class SurfaceTools {
     this.ctx = ctx;
     this.continuity = null; // the last answer's header, while shown
     this.net = null;
+    this.iso = null; // { doc, header, data } of the shown iso-curve combs
   }
 
   async showContinuity(k) {
@@ -152,10 +157,64 @@ export class SurfaceTools {
     status(`control net: ${n} control points in ${header.patches.length} patch(es), ${header.segments} edges`);
   }
 
+  // The iso-curves of document k with their curvature combs; `on` false
+  // removes them.
+  async showIso(k, on) {
+    const { viewer } = this.ctx;
+    if (!on) {
+      viewer.setOverlay(k, 'iso', null);
+      viewer.setOverlay(k, 'iso-comb', null);
+      this.iso = null;
+      delete document.body.dataset.iso;
+      return;
+    }
+    const count = Math.max(1, Math.min(50, Math.round(Number($('iso-count').value) || 5)));
+    status('combing the iso-curves…');
+    const { header, data } = await api.frame(`/api/doc/${k}/iso-combs`, { count });
+    this.iso = { doc: k, header, data };
+    this.drawIso();
+    document.body.dataset.iso = String(header.lines.length);
+    status(header.summary);
+    showCommand(header.command);
+  }
+
+  // Draws the shown iso-curves and their combs: teeth from each point, and
+  // the envelope through the teeth's ends; the comb length is set so that
+  // the 95th percentile of the curvature gets a tenth of the part's radius
+  // at the slider's middle.
+  drawIso() {
+    const { viewer, state } = this.ctx;
+    const s = this.iso;
+    if (!s) return;
+    const { header, data } = s;
+    const n = header.points;
+    const pts = data.subarray(0, 3 * n);
+    viewer.setOverlay(s.doc, 'iso', segments(header.lines, pts), ISO_COLOR);
+    const ref = header.curvature_p95 > 0 ? header.curvature_p95 : header.max_curvature;
+    if (!(ref > 0)) {
+      viewer.setOverlay(s.doc, 'iso-comb', null);
+      this.isoCombLength = 0;
+      return;
+    }
+    const len = 0.1 * state.session.docs[s.doc].radius * 10 ** Number($('iso-comb-scale').value);
+    const scale = len / ref;
+    this.isoCombLength = scale * header.max_curvature;
+    const segs = [];
+    for (const l of header.lines) {
+      const end = (i) => [0, 1, 2].map((a) => pts[3 * i + a] + scale * data[3 * n + 3 * i + a]);
+      for (let i = l.start; i < l.start + l.count; i++) {
+        segs.push(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2], ...end(i));
+        if (i + 1 < l.start + l.count) segs.push(...end(i), ...end(i + 1));
+      }
+    }
+    viewer.setOverlay(s.doc, 'iso-comb', new Float32Array(segs), ISO_COMB_COLOR);
+  }
+
   // After a step: shown results follow the current state.
   async refresh() {
     const k = this.ctx.state.active;
     if (this.continuity && this.continuityDoc === k) await this.showContinuity(k);
     if (this.net && this.net.doc === k) await this.showNet(k, true);
+    if (this.iso && this.iso.doc === k) await this.showIso(k, true);
   }
 }

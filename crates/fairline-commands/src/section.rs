@@ -1,10 +1,13 @@
 //! `section`: plane sections of a triangle mesh (a surface's tessellation)
-//! with the curvature of each section point, as every front end runs them.
+//! with the curvature of each section point, and isoparametric curves of
+//! B-spline surfaces with their exact curvature (`--iso`), as every front
+//! end runs them.
 //! Writing the CSV and OBJ files stays in the CLI.
 
 use crate::error::{CommandError, Subject};
 use crate::report::Report;
 use crate::warning::Warning;
+use fairline::bspline::{BSplineSurface, IsoCurve, iso_curves};
 use fairline::geom::{SectionCurve, parallel_sections};
 use fairline::{Control, SurfaceMesh, Vec3};
 
@@ -148,6 +151,165 @@ pub fn summary(out: &SectionOutcome, vertices: usize) -> String {
     )
 }
 
+/// Most iso-curves per direction and surface of one run.
+pub const MAX_ISO_COUNT: usize = 1000;
+/// Most samples along one iso-curve.
+pub const MAX_ISO_SAMPLES: usize = 100_000;
+
+/// The options of `section --iso`: isoparametric curves of B-spline
+/// surfaces with their exact curvature combs (defaults: 5 per direction,
+/// 200 samples each, every surface, comb scale 1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IsoSettings {
+    /// Iso-curves per direction and surface, ends of the domain (the patch
+    /// edges) included (1 to [`MAX_ISO_COUNT`]; 1: the middle one).
+    pub count: usize,
+    /// Even samples along each curve, the interior knots added (2 to
+    /// [`MAX_ISO_SAMPLES`]).
+    pub samples: usize,
+    /// The one surface to comb (`None`: all).
+    pub surface: Option<usize>,
+    /// Length of a comb tooth per unit curvature (reported).
+    pub comb_scale: f64,
+}
+
+impl Default for IsoSettings {
+    fn default() -> Self {
+        IsoSettings {
+            count: 5,
+            samples: 200,
+            surface: None,
+            comb_scale: 1.0,
+        }
+    }
+}
+
+/// What `section --iso` gives: each curve with the index of its surface,
+/// and the JSON report.
+#[derive(Clone, Debug)]
+pub struct IsoOutcome {
+    /// `(surface index, piece of an iso-curve)`, surfaces in order, u-held
+    /// curves first on each.
+    pub curves: Vec<(usize, IsoCurve)>,
+    /// The JSON report: `iso` (`count`, `samples`, `comb_scale`,
+    /// `surfaces`, `curves`, `max_curvature`) and per curve `surface`,
+    /// `fixed` (`u` or `v`), `value`, `points`, `length`, `max_curvature`.
+    pub report: Report,
+}
+
+/// The isoparametric curves of `surfaces` with their curvature combs
+/// ([`fairline::bspline::iso_curves`]: exact curvature from the surface
+/// derivatives; on trimmed faces the pieces inside the face). Errors: a
+/// count, sample number, comb scale or surface index out of range
+/// ([`CommandError::invalid`]).
+pub fn iso(
+    surfaces: &[BSplineSurface],
+    settings: &IsoSettings,
+    control: &Control,
+) -> Result<IsoOutcome, CommandError> {
+    let s = settings;
+    if s.count == 0 || s.count > MAX_ISO_COUNT {
+        return Err(CommandError::invalid(
+            "iso",
+            format!(
+                "{}; give 1 to {MAX_ISO_COUNT} curves per direction",
+                s.count
+            ),
+        ));
+    }
+    if !(2..=MAX_ISO_SAMPLES).contains(&s.samples) {
+        return Err(CommandError::invalid(
+            "samples",
+            format!("{}; give 2 to {MAX_ISO_SAMPLES}", s.samples),
+        ));
+    }
+    if !s.comb_scale.is_finite() {
+        return Err(CommandError::invalid("comb-scale", "must be finite"));
+    }
+    if let Some(k) = s.surface
+        && k >= surfaces.len()
+    {
+        return Err(CommandError::invalid(
+            "surface",
+            format!(
+                "{k} is out of range (the file holds {} surfaces)",
+                surfaces.len()
+            ),
+        ));
+    }
+    let chosen: Vec<usize> = match s.surface {
+        Some(k) => vec![k],
+        None => (0..surfaces.len()).collect(),
+    };
+    let mut report = Report::new("section");
+    let mut curves = Vec::new();
+    report.time(|| -> Result<(), CommandError> {
+        for (done, &k) in chosen.iter().enumerate() {
+            control
+                .step("surfaces", done as u64, chosen.len() as u64)
+                .map_err(|_| CommandError::cancelled())?;
+            curves.extend(
+                iso_curves(&surfaces[k], s.count, s.samples)
+                    .into_iter()
+                    .map(|c| (k, c)),
+            );
+        }
+        Ok(())
+    })?;
+    let kmax = curves
+        .iter()
+        .map(|(_, c)| max_curvature(&c.curve))
+        .fold(0.0, f64::max);
+    let listed: Vec<serde_json::Value> = curves
+        .iter()
+        .map(|(k, c)| {
+            serde_json::json!({
+                "surface": k,
+                "fixed": c.fixed.to_string(),
+                "value": c.value,
+                "points": c.curve.points.len(),
+                "length": c.curve.length(),
+                "max_curvature": max_curvature(&c.curve),
+            })
+        })
+        .collect();
+    report.set(
+        "iso",
+        serde_json::json!({
+            "count": s.count,
+            "samples": s.samples,
+            "comb_scale": s.comb_scale,
+            "surfaces": chosen.len(),
+            "curves": curves.len(),
+            "max_curvature": kmax,
+        }),
+    );
+    report.set("curves", listed);
+    if curves.is_empty() {
+        report.warn(Warning::Text(
+            "no iso-curve lies on the faces (every sample is trimmed away)".into(),
+        ));
+    }
+    Ok(IsoOutcome { curves, report })
+}
+
+/// A one-line summary of `section --iso`.
+pub fn iso_summary(out: &IsoOutcome) -> String {
+    let points: usize = out.curves.iter().map(|(_, c)| c.curve.points.len()).sum();
+    let surfaces = out.report.to_json()["iso"]["surfaces"]
+        .as_u64()
+        .unwrap_or(0);
+    let kmax = out
+        .curves
+        .iter()
+        .map(|(_, c)| max_curvature(&c.curve))
+        .fold(0.0, f64::max);
+    format!(
+        "{} iso-curve(s) of {points} points on {surfaces} surface(s); largest curvature {kmax:.3e}",
+        out.curves.len()
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -188,5 +350,76 @@ mod tests {
             ..Default::default()
         };
         assert!(run(&m, &zero, &Control::new()).is_err());
+    }
+
+    #[test]
+    fn iso_curves_of_a_flat_patch_are_straight_and_bad_settings_are_named() {
+        let plane = fairline::bspline::BSplineSurface::new(
+            1,
+            1,
+            vec![0.0, 0.0, 1.0, 1.0],
+            vec![0.0, 0.0, 1.0, 1.0],
+            vec![
+                vec![Vec3::ZERO, Vec3::Y],
+                vec![Vec3::X, Vec3::new(1.0, 1.0, 0.0)],
+            ],
+            None,
+        )
+        .unwrap();
+        let surfaces = vec![plane.clone(), plane];
+        let out = iso(&surfaces, &IsoSettings::default(), &Control::new()).unwrap();
+        // 5 per direction on each of the two surfaces
+        assert_eq!(out.curves.len(), 20);
+        let r = out.report.to_json();
+        assert_eq!(r["iso"]["curves"], 20);
+        assert_eq!(r["iso"]["max_curvature"], 0.0);
+        assert_eq!(r["curves"][0]["fixed"], "u");
+        assert_eq!(r["curves"][0]["length"], 1.0);
+        assert!(iso_summary(&out).starts_with("20 iso-curve(s) of 4000 points on 2 surface(s)"));
+        let one = IsoSettings {
+            surface: Some(1),
+            count: 1,
+            ..Default::default()
+        };
+        let out = iso(&surfaces, &one, &Control::new()).unwrap();
+        assert!(out.curves.iter().all(|(k, c)| *k == 1 && c.value == 0.5));
+        for (bad, option) in [
+            (
+                IsoSettings {
+                    count: 0,
+                    ..Default::default()
+                },
+                "iso",
+            ),
+            (
+                IsoSettings {
+                    samples: 1,
+                    ..Default::default()
+                },
+                "samples",
+            ),
+            (
+                IsoSettings {
+                    surface: Some(2),
+                    ..Default::default()
+                },
+                "surface",
+            ),
+            (
+                IsoSettings {
+                    comb_scale: f64::NAN,
+                    ..Default::default()
+                },
+                "comb-scale",
+            ),
+        ] {
+            let e = iso(&surfaces, &bad, &Control::new()).unwrap_err();
+            assert!(
+                e.message(crate::FrontEnd::Cli)
+                    .contains(&format!("--{option}")),
+                "{}",
+                e.message(crate::FrontEnd::Cli)
+            );
+        }
     }
 }

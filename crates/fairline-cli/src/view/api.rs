@@ -354,6 +354,7 @@ fn route(shared: &Arc<Shared>, req: &HttpRequest, body: &[u8]) -> Answer {
                 (_, true, ["draft"]) => super::shape::draft(shared, k, body),
                 (_, true, ["continuity"]) => super::surface_tools::continuity(shared, k, body),
                 (true, _, ["control-net"]) => super::surface_tools::control_net(shared, k),
+                (_, true, ["iso-combs"]) => super::surface_tools::iso_combs(shared, k, body),
                 _ => error(404, format!("no such API call: {path}")),
             }
         }

@@ -1,5 +1,6 @@
 //! The B-spline tools of the workbench: the continuity of the patch
-//! boundaries drawn on the part, and the control net. The continuity is
+//! boundaries drawn on the part, the control net and the curvature combs
+//! of the isoparametric curves. The continuity is
 //! the command layer's ([`fairline_commands::continuity`]); this file
 //! parses requests and shapes answers. Both need a surface document.
 //!
@@ -17,6 +18,16 @@
 //!   (their number) and `segments` (the number of control-net edges); the
 //!   data are the points (minus `center`, row by row along v), then the
 //!   net's edges as point pairs (rows along u and along v).
+//! - `POST /api/doc/K/iso-combs` `{"count"?, "samples"?, "surface"?}`
+//!   (defaults `fairline section --iso`'s: 5, 200, every patch): the
+//!   isoparametric curves of the current state with their exact curvature
+//!   (the command layer's [`fairline_commands::section::iso`]). Binary
+//!   frame as the plane sections': the header lists `lines` (`start`,
+//!   `count`, `closed`, `surface`, `fixed`, `value`), `points`,
+//!   `max_curvature`, `curvature_p95` (the 95th percentile of the
+//!   curvature, for a comb length that long teeth at a few points do not
+//!   shrink), `report`, `summary` and `command`; the data are the points
+//!   (minus `center`), then one comb vector −κ·m per point at scale 1.
 
 use super::api::{Answer, Shared, bad, binary, lock, parse};
 use super::frame::frame;
@@ -140,5 +151,95 @@ pub fn control_net(shared: &Shared, k: usize) -> Answer {
         "segments": segments.len() / 6,
     });
     points.extend(segments);
+    binary(frame(&header, &points))
+}
+
+#[derive(Deserialize)]
+struct IsoRequest {
+    #[serde(default)]
+    count: Option<usize>,
+    #[serde(default)]
+    samples: Option<usize>,
+    #[serde(default)]
+    surface: Option<usize>,
+}
+
+/// `POST /api/doc/K/iso-combs` (module documentation).
+pub fn iso_combs(shared: &Shared, k: usize, body: &[u8]) -> Answer {
+    use fairline_commands::section::{self, IsoSettings, max_curvature};
+    let req: IsoRequest = match parse(body) {
+        Ok(r) => r,
+        Err(a) => return a,
+    };
+    let (surfaces, center, file) = {
+        let st = lock(shared);
+        let d = &st.docs[k];
+        let Some(s) = d.current().surfaces.clone() else {
+            return bad("iso-curve combs are for B-spline surfaces");
+        };
+        (s, d.center, d.current_file())
+    };
+    let defaults = IsoSettings::default();
+    let settings = IsoSettings {
+        count: req.count.unwrap_or(defaults.count),
+        samples: req.samples.unwrap_or(defaults.samples),
+        surface: req.surface,
+        comb_scale: 1.0,
+    };
+    let out = match section::iso(&surfaces, &settings, &Control::new()) {
+        Ok(o) => o,
+        Err(e) => return bad(e.message(FrontEnd::Workbench)),
+    };
+    let mut points: Vec<f32> = Vec::new();
+    let mut combs: Vec<f32> = Vec::new();
+    let mut lines = Vec::new();
+    let mut kmax = 0.0f64;
+    let mut all: Vec<f64> = Vec::new();
+    for (surface, c) in &out.curves {
+        lines.push(json!({
+            "start": points.len() / 3,
+            "count": c.curve.points.len(),
+            "closed": false,
+            "surface": surface,
+            "fixed": c.fixed.to_string(),
+            "value": c.value,
+        }));
+        for p in &c.curve.points {
+            let q = *p - center;
+            points.extend([q.x as f32, q.y as f32, q.z as f32]);
+        }
+        for t in c.curve.comb(1.0) {
+            combs.extend([t.x as f32, t.y as f32, t.z as f32]);
+        }
+        kmax = kmax.max(max_curvature(&c.curve));
+        all.extend_from_slice(&c.curve.curvature);
+    }
+    all.sort_by(f64::total_cmp);
+    let p95 = all
+        .get(((all.len() as f64 * 0.95) as usize).min(all.len().saturating_sub(1)))
+        .copied()
+        .unwrap_or(0.0);
+    let mut command = format!(
+        "fairline section {file} --iso {} --samples {}",
+        settings.count, settings.samples
+    );
+    if let Some(s) = settings.surface {
+        command.push_str(&format!(" --surface {s}"));
+    }
+    command.push_str(" --obj combs.obj --report combs.json");
+    let mut summary = section::iso_summary(&out);
+    for w in out.report.messages(FrontEnd::Workbench) {
+        summary.push_str(&format!("; warning: {w}"));
+    }
+    let header = json!({
+        "lines": lines,
+        "points": points.len() / 3,
+        "max_curvature": kmax,
+        "curvature_p95": p95,
+        "report": out.report.to_json(),
+        "summary": summary,
+        "command": command,
+    });
+    points.extend(combs);
     binary(frame(&header, &points))
 }

@@ -14,6 +14,7 @@
 //!   derivatives A4.4 ([`BSplineSurface`]), also on whole parameter grids
 //!   ([`BSplineSurface::derivatives_grid`], [`tessellate`]);
 //! - normals and curvature from the first and second fundamental forms;
+//!   isoparametric curves with exact curvature combs ([`iso_curves`]);
 //! - local support (Piegl & Tiller Eq. 2.4, property P2.1):
 //!   [`BSplineSurface::basis_support`], [`BSplineSurface::control_points_in_box`];
 //!
@@ -33,6 +34,7 @@
 pub mod basis;
 mod bounds;
 pub mod continuity;
+mod iso;
 mod surface;
 mod tessellate;
 #[cfg(test)]
@@ -43,6 +45,7 @@ pub(crate) mod trim_tests;
 
 pub use basis::{MAX_DEGREE, MAX_ORDER, clamped_uniform_knots, find_span};
 pub use bounds::face_bounding_box;
+pub use iso::{IsoCurve, curve_curvature, iso_curve, iso_curves};
 pub use surface::{
     BSplineSurface, BasisSupport, Curvature, MIN_WEIGHT_RATIO, SurfaceBasis, SurfaceDerivatives,
     unit_normal,
