@@ -17,6 +17,12 @@ export const CLASS_COLORS = {
 const NET_COLOR = [0.85, 0.35, 0.95, 1];
 const ISO_COLOR = [0.95, 0.95, 0.3, 1];
 const ISO_COMB_COLOR = [0.2, 0.85, 0.95, 1];
+// The tooth of the median curvature at the comb slider's middle, as a
+// share of the part's radius; the longest tooth drawn, in units of it; the
+// teeth drawn per curve (the envelope goes through every sample).
+const ISO_TOOTH = 0.025;
+const ISO_TOOTH_CAP = 4;
+const ISO_TEETH_PER_CURVE = 60;
 
 // Segments repeated with offsets of ±`w` along each axis: lines a few
 // pixels wide where WebGL draws them one pixel wide.
@@ -174,14 +180,17 @@ export class SurfaceTools {
     this.iso = { doc: k, header, data };
     this.drawIso();
     document.body.dataset.iso = String(header.lines.length);
-    status(header.summary);
+    status(`${header.summary}${this.isoClipped ? `; ${this.isoClipped} teeth longer than ${ISO_TOOTH_CAP}× the median curvature's cut to it (shorten the combs to see them whole)` : ''}`);
     showCommand(header.command);
   }
 
-  // Draws the shown iso-curves and their combs: teeth from each point, and
-  // the envelope through the teeth's ends; the comb length is set so that
-  // the 95th percentile of the curvature gets a tenth of the part's radius
-  // at the slider's middle.
+  // Draws the shown iso-curves and their combs: teeth (about
+  // ISO_TEETH_PER_CURVE per curve), and the envelope through the ends of
+  // the teeth of every sample. At the slider's middle the median curvature
+  // gets a tooth of ISO_TOOTH of the part's radius; teeth
+  // longer than ISO_TOOTH_CAP times that are cut to it (and counted), so
+  // that the sharp places of a part neither shrink every other comb nor
+  // cover the part.
   drawIso() {
     const { viewer, state } = this.ctx;
     const s = this.iso;
@@ -190,23 +199,38 @@ export class SurfaceTools {
     const n = header.points;
     const pts = data.subarray(0, 3 * n);
     viewer.setOverlay(s.doc, 'iso', segments(header.lines, pts), ISO_COLOR);
-    const ref = header.curvature_p95 > 0 ? header.curvature_p95 : header.max_curvature;
+    const ref = header.curvature_median > 0 ? header.curvature_median : header.max_curvature;
     if (!(ref > 0)) {
       viewer.setOverlay(s.doc, 'iso-comb', null);
       this.isoCombLength = 0;
+      this.isoClipped = 0;
       return;
     }
-    const len = 0.1 * state.session.docs[s.doc].radius * 10 ** Number($('iso-comb-scale').value);
+    const len = ISO_TOOTH * state.session.docs[s.doc].radius * 10 ** Number($('iso-comb-scale').value);
     const scale = len / ref;
+    const cap = ISO_TOOTH_CAP * len;
     this.isoCombLength = scale * header.max_curvature;
+    let clipped = 0;
+    const ends = new Float32Array(3 * n);
+    for (let i = 0; i < n; i++) {
+      const t = [0, 1, 2].map((a) => scale * data[3 * n + 3 * i + a]);
+      const l = Math.hypot(t[0], t[1], t[2]);
+      const f = l > cap ? cap / l : 1;
+      if (f < 1) clipped++;
+      for (let a = 0; a < 3; a++) ends[3 * i + a] = pts[3 * i + a] + f * t[a];
+    }
     const segs = [];
     for (const l of header.lines) {
-      const end = (i) => [0, 1, 2].map((a) => pts[3 * i + a] + scale * data[3 * n + 3 * i + a]);
+      const stride = Math.max(1, Math.floor(l.count / ISO_TEETH_PER_CURVE));
       for (let i = l.start; i < l.start + l.count; i++) {
-        segs.push(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2], ...end(i));
-        if (i + 1 < l.start + l.count) segs.push(...end(i), ...end(i + 1));
+        const last = i + 1 === l.start + l.count;
+        if ((i - l.start) % stride === 0 || last) {
+          segs.push(pts[3 * i], pts[3 * i + 1], pts[3 * i + 2], ends[3 * i], ends[3 * i + 1], ends[3 * i + 2]);
+        }
+        if (!last) segs.push(...ends.subarray(3 * i, 3 * i + 6));
       }
     }
+    this.isoClipped = clipped;
     viewer.setOverlay(s.doc, 'iso-comb', new Float32Array(segs), ISO_COMB_COLOR);
   }
 

@@ -24,10 +24,11 @@
 //!   (the command layer's [`fairline_commands::section::iso`]). Binary
 //!   frame as the plane sections': the header lists `lines` (`start`,
 //!   `count`, `closed`, `surface`, `fixed`, `value`), `points`,
-//!   `max_curvature`, `curvature_p95` (the 95th percentile of the
-//!   curvature, for a comb length that long teeth at a few points do not
-//!   shrink), `report`, `summary` and `command`; the data are the points
-//!   (minus `center`), then one comb vector −κ·m per point at scale 1.
+//!   `max_curvature`, `curvature_median` (the median curvature of the
+//!   curved points, for a comb length that the sharp places of a part do
+//!   not shrink), `report`, `summary` and `command`; the data are the
+//!   points (minus `center`), then one comb vector −κ·m per point at scale
+//!   1.
 
 use super::api::{Answer, Shared, bad, binary, lock, parse};
 use super::frame::frame;
@@ -214,11 +215,10 @@ pub fn iso_combs(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         kmax = kmax.max(max_curvature(&c.curve));
         all.extend_from_slice(&c.curve.curvature);
     }
+    // the median of the curved points' curvature (straight rulings left out)
+    all.retain(|&k| k > 0.0);
     all.sort_by(f64::total_cmp);
-    let p95 = all
-        .get(((all.len() as f64 * 0.95) as usize).min(all.len().saturating_sub(1)))
-        .copied()
-        .unwrap_or(0.0);
+    let median = all.get(all.len() / 2).copied().unwrap_or(0.0);
     let mut command = format!(
         "fairline section {file} --iso {} --samples {}",
         settings.count, settings.samples
@@ -235,7 +235,7 @@ pub fn iso_combs(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         "lines": lines,
         "points": points.len() / 3,
         "max_curvature": kmax,
-        "curvature_p95": p95,
+        "curvature_median": median,
         "report": out.report.to_json(),
         "summary": summary,
         "command": command,
