@@ -312,8 +312,7 @@ fn surface_highlight_curves<'py>(
         if all.is_empty() {
             return Err(Failure::bad("surfaces: no B-spline surface given"));
         }
-        let mut out =
-            fairline_commands::surface_highlight::run(&all, &settings, control, &|| {})?;
+        let mut out = fairline_commands::surface_highlight::run(&all, &settings, control, &|| {})?;
         let tol = curves::surface_tolerance(tolerance, &all);
         let fitted = curves::fit(&curves::surface_lines(&out.results), tol);
         if let Some(p) = &path {
@@ -358,7 +357,8 @@ fn surface_iso_curves<'py>(
     })?;
     let (mut points, mut params, mut curvature, mut comb) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let (mut offsets, mut index, mut fixed, mut value) = (vec![0i64], Vec::new(), Vec::new(), Vec::new());
+    let (mut offsets, mut index, mut fixed, mut value) =
+        (vec![0i64], Vec::new(), Vec::new(), Vec::new());
     for (k, c) in &out {
         points.extend_from_slice(&c.curve.points);
         params.extend_from_slice(&c.params);
