@@ -1798,12 +1798,48 @@ fn api_deviation_and_probe_measure_what_the_cli_measures() {
         srv.post("/api/doc/1/probe", &json!({"face": 99_999_999})).0,
         400
     );
+    // with a light: the highlight distance of Yong et al. Eq. (1) at the
+    // probed vertex, with the area-weighted normal the lines are drawn with
+    let light: Value = serde_json::from_str(LIGHT).unwrap();
+    let array: fairline::highlight::LightArray = serde_json::from_str(LIGHT).unwrap();
+    let sphere_mesh = fairline::io::read_mesh(&sphere).unwrap();
+    let normals = fairline::geom::vertex_normals(&sphere_mesh);
+    let center: Vec<f64> =
+        serde_json::from_value(srv.json("/api/session", None)["docs"][1]["center"].clone())
+            .unwrap();
+    let mut judged = 0;
+    for face in (0u32..5120).step_by(256) {
+        let v = sphere_mesh.triangle(fairline::mesh::FaceId(face))[0];
+        let q = sphere_mesh.position(v);
+        let at = [q.x - center[0], q.y - center[1], q.z - center[2]];
+        let p = srv.json(
+            "/api/doc/1/probe",
+            Some(&json!({"face": face, "point": at, "light": light})),
+        );
+        match array.highlight_distance(q, normals[v.idx()], 0.1) {
+            Some(want) => {
+                let d = p["highlight"]["distance"].as_f64().unwrap();
+                assert!(
+                    (d - want).abs() <= 1e-9 * want.abs().max(1.0),
+                    "{d} vs {want}"
+                );
+                let m = p["highlight"]["light"].as_f64().unwrap();
+                assert!((m - want / array.spacing()).abs() < 1e-9);
+                judged += 1;
+            }
+            None => assert!(p["highlight"].is_null(), "{p}"),
+        }
+    }
+    assert!(judged >= 5, "{judged} probes judged");
+    let p = srv.json("/api/doc/1/probe", Some(&json!({"face": 0})));
+    assert!(p.get("highlight").is_none(), "no light, no highlight: {p}");
 }
 
 /// The Measure panel and the probe tool in real headless Chromium: the
 /// deviation after fairing colours the dent, draws the legend (blue to
 /// red) and the histogram, and splits the statistics at the marked region;
-/// a click with the probe on a sphere of radius 2 reads k1 ≈ 1/2, a
+/// a click with the probe on a sphere of radius 2 reads k1 ≈ 1/2 and the
+/// highlight distance under the page's lights, a
 /// shift-click a second point and their distance.
 #[test]
 fn page_measures_deviation_and_probes_curvature() {
@@ -1897,6 +1933,8 @@ fn page_measures_deviation_and_probes_curvature() {
     );
     let text = b.eval("document.getElementById('probe-out').textContent");
     assert!(text.as_str().unwrap().contains("distance"), "{text}");
+    // the page sends its lights: the highlight distance under the probe
+    assert!(text.as_str().unwrap().contains("highlight"), "{text}");
     std::thread::sleep(Duration::from_millis(300));
     save_screenshot("workbench-probe.png", &b.screenshot().3);
 }

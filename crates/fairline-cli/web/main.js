@@ -196,7 +196,11 @@ async function onPick(e, phase) {
   if (tool === 'probe') {
     if (phase !== 'down') return true;
     const hit = viewer.pickAt(...local($('gl'), e));
-    if (hit) await tools.probe(hit.doc, hit.face, hit.point, e.shiftKey);
+    if (hit) {
+      const l = lights[hit.doc];
+      const linear = l && !(l.mode === 4 || l.mode === 5);
+      await tools.probe(hit.doc, hit.face, hit.point, e.shiftKey, linear ? l.array(viewer.camera) : undefined);
+    }
     return true;
   }
   if (tool === 'section') {

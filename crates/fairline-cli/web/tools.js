@@ -1,7 +1,7 @@
 // Evaluation tools: the deviation map (legend, histogram, statistics
 // inside and outside the marked region) and the point probe (position,
-// normal, principal curvatures; shift-click two points for their
-// distance). Every number comes from the server (/api/doc/K/deviation,
+// normal, principal curvatures, the highlight distance under the current
+// lights; shift-click two points for their distance). Every number comes from the server (/api/doc/K/deviation,
 // /api/doc/K/probe); this file only draws.
 import * as api from './api.js';
 import { color, drawLegend } from './colormap.js';
@@ -119,8 +119,12 @@ export class Tools {
 
   // A probe at triangle `face` of document `k` (point relative to the
   // document's centre); `pair`: keep the previous probe and measure.
-  async probe(k, face, point, pair) {
-    const r = await api.json(`/api/doc/${k}/probe`, { face, point });
+  // `light`: the document's linear light array, for the highlight
+  // distance under the probe (none for circular lights).
+  async probe(k, face, point, pair, light) {
+    const body = { face, point };
+    if (light) body.light = light;
+    const r = await api.json(`/api/doc/${k}/probe`, body);
     r.doc = k;
     this.probes = pair && this.probes.length === 1 ? [this.probes[0], r] : [r];
     this.showProbe();
@@ -139,6 +143,13 @@ export class Tools {
       `radii ${fmt(p.r1)}  ${fmt(p.r2)}`,
       `mean ${fmt(p.mean)}  Gauss ${fmt(p.gauss)}`,
     ];
+    if (p.highlight) {
+      const m = Math.round(p.highlight.light);
+      const off = (p.highlight.light - m) * p.highlight.spacing;
+      lines.push(`highlight d ${fmt(p.highlight.distance)}: light ${p.highlight.light.toFixed(2)}, ${fmt(Math.abs(off))} from line ${m}`);
+    } else if ('highlight' in p) {
+      lines.push('highlight: the normal is nearly parallel to the light plane here');
+    }
     if (this.probes.length === 2) {
       const [a, b] = this.probes;
       const d = Math.hypot(a.point[0] - b.point[0], a.point[1] - b.point[1], a.point[2] - b.point[2]);

@@ -12,13 +12,19 @@
 //!   triangles' vertices and outside them), `range` (`lo`, `hi`: the
 //!   colour range ±max |d|, centred on 0), `summary` and `command`; then one f32
 //!   per vertex of document K.
-//! - `POST /api/doc/K/probe` `{"face": f, "point"?: [x,y,z]}` (point
+//! - `POST /api/doc/K/probe` `{"face": f, "point"?: [x,y,z], "light"?}` (point
 //!   relative to the document's `center`, default the triangle's
 //!   centroid): the point of triangle `f` closest to `point`, the
 //!   interpolated unit normal, the principal curvatures `k1 ≥ k2`
 //!   (Rusinkiewicz's estimate at the vertices, interpolated
 //!   barycentrically), their radii (`null` where |k| < 1e-12: flat),
-//!   `mean` and `gauss`. Positions in the answer are absolute.
+//!   `mean` and `gauss`. Positions in the answer are absolute. With
+//!   `"light"` (a linear light array) also `highlight`: the highlight
+//!   distance d of Yong et al. Eq. (1) at the vertices (their area-weighted
+//!   normals, Eq. (3), as the lines are drawn), interpolated as the
+//!   lines are drawn (`distance`), the light `spacing` and `light` = d / s
+//!   (an integer on a highlight line, between two lights elsewhere);
+//!   `null` where a corner's normal is nearly parallel to the light plane.
 
 use super::api::{Answer, Shared, bad, binary, error, json_answer, lock, parse};
 use super::doc::{Doc, shell_word};
@@ -137,6 +143,8 @@ struct ProbeRequest {
     face: u32,
     #[serde(default)]
     point: Option<[f64; 3]>,
+    #[serde(default)]
+    light: Option<fairline::highlight::LightArray>,
 }
 
 /// The principal curvatures of the last state probed: a probe is a click,
@@ -209,7 +217,7 @@ pub fn probe(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     .normalize_or_zero();
     let (k1, k2) = (lerp(&c.k1), lerp(&c.k2));
     let (k1, k2) = (k1.max(k2), k1.min(k2));
-    let answer: Value = json!({
+    let mut answer: Value = json!({
         "face": req.face,
         "point": at.to_array(),
         "normal": n.to_array(),
@@ -221,6 +229,23 @@ pub fn probe(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         "gauss": k1 * k2,
         "method": "rusinkiewicz",
     });
+    if let Some(light) = req.light {
+        let min_cos = fairline::highlight::HighlightOptions::default().min_normal_cos;
+        let d: Option<Vec<f64>> = t
+            .iter()
+            .map(|v| {
+                let n = fairline::geom::vertex_normal(&mesh, *v);
+                light.highlight_distance(mesh.position(*v), n, min_cos)
+            })
+            .collect();
+        answer["highlight"] = match d {
+            Some(d) => {
+                let at = w[0] * d[0] + w[1] * d[1] + w[2] * d[2];
+                json!({"distance": at, "spacing": light.spacing(), "light": at / light.spacing()})
+            }
+            None => Value::Null,
+        };
+    }
     json_answer(&answer)
 }
 
