@@ -1125,6 +1125,61 @@ fn page_in_headless_chromium_shades_stripes_and_runs_a_repair_session() {
         differing > 20,
         "before/after toggle changes the picture ({differing} pixels)"
     );
+    // the split view: the state before left of the divider, the current
+    // state right of it
+    b.eval("document.getElementById('before').click()");
+    b.wait_for(
+        "document.getElementById('status').textContent.includes('current state')",
+        30,
+    );
+    std::thread::sleep(Duration::from_millis(400));
+    let after = b.screenshot();
+    b.eval("document.getElementById('compare').click()");
+    b.wait_for("document.body.dataset.compare === '0'", 30);
+    std::thread::sleep(Duration::from_millis(400));
+    let split = b.screenshot();
+    save_screenshot("workbench-compare.png", &split.3);
+    let (cx, cy, cw, ch) = canvas_rect(&mut b);
+    let dpr = split.0 as f64 / b.eval("window.innerWidth").as_f64().unwrap();
+    let mid = ((cx as f64 + cw as f64 / 2.0) * dpr) as u32;
+    let (top, bottom) = ((cy as f64 * dpr) as u32, ((cy + ch) as f64 * dpr) as u32);
+    let differ = |x0: u32, x1: u32| {
+        (top..bottom)
+            .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                let i = 4 * (y as usize * split.0 as usize + x as usize);
+                split.2[i..i + 3] != after.2[i..i + 3]
+            })
+            .count()
+    };
+    let left = differ((cx as f64 * dpr) as u32, mid - 3);
+    let right = differ(mid + 3, ((cx + cw) as f64 * dpr) as u32);
+    assert!(
+        left > 20,
+        "left of the divider shows the state before ({left} pixels differ)"
+    );
+    assert_eq!(right, 0, "right of the divider is the current state");
+    let divider = differ(mid - 2, mid + 2);
+    assert!(
+        divider > (bottom - top) as usize,
+        "the divider is drawn ({divider})"
+    );
+    // the slider moves the divider: at 0 the whole view is the current state
+    b.eval("(() => { const s = document.getElementById('split'); s.value = '0'; s.dispatchEvent(new Event('input')); })()");
+    std::thread::sleep(Duration::from_millis(400));
+    let shot = b.screenshot();
+    let moved = (top..bottom)
+        .flat_map(|y| {
+            ((cx as f64 * dpr) as u32 + 3..((cx + cw) as f64 * dpr) as u32).map(move |x| (x, y))
+        })
+        .filter(|&(x, y)| {
+            let i = 4 * (y as usize * shot.0 as usize + x as usize);
+            shot.2[i..i + 3] != after.2[i..i + 3]
+        })
+        .count();
+    assert_eq!(moved, 0, "divider at the left edge: the current state");
+    b.eval("document.getElementById('compare').click()");
+    b.wait_for("!document.body.dataset.compare", 30);
     b.eval("document.getElementById('undo').click()");
     b.wait_for(
         "document.getElementById('status').textContent === 'undone'",

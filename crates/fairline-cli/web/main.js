@@ -83,9 +83,30 @@ async function reloadActive() {
   await tools.refresh();
   await shape.refresh();
   await surfaceTools.refresh();
+  await showCompare();
   viewer.setOverlay(state.active, 'lines', null);
   viewer.setOverlay(state.active, 'stretches', null);
   state.shown = { lines: false, detect: false };
+}
+
+// The before/after divider: the state before the current step is drawn
+// left of it, the current state (with its overlays) right of it; on the
+// active document only.
+async function showCompare() {
+  const k = state.active;
+  const d = activeDoc();
+  viewer.docs.forEach((_, j) => { if (j !== k) viewer.setCompare(j, null); });
+  if (!$('compare').checked || d.history.cursor === 0) {
+    viewer.setCompare(k, null);
+    delete document.body.dataset.compare;
+    if ($('compare').checked) status('compare: no step yet on this document');
+    return;
+  }
+  const step = d.history.cursor - 1;
+  const [p, n] = await Promise.all([api.positions(k, step), api.normals(k, step)]);
+  viewer.setCompare(k, p, n, Number($('split').value));
+  document.body.dataset.compare = String(step);
+  status(`compare: left of the divider the state before "${d.history.steps[d.history.cursor].label}", right of it the current state`);
 }
 
 async function applyScalar() {
@@ -603,6 +624,8 @@ function wire() {
     else if (state.shown.lines) await exactLines();
     status(state.before ? 'showing the state before the last step' : 'showing the current state');
   }));
+  $('compare').addEventListener('change', guard(showCompare));
+  $('split').addEventListener('input', () => viewer.setSplit(state.active, Number($('split').value)));
   $('dl-lights').addEventListener('click', downloadLights);
   $('dl-region').addEventListener('click', guard(() => downloadRegion('region')));
   $('dl-fixed').addEventListener('click', guard(() => downloadRegion('fixed')));
@@ -668,6 +691,7 @@ function shortcutActions(help) {
     redo: click('redo'),
     save: click('save'),
     before: toggle('before'),
+    compare: toggle('compare'),
     wireframe: toggle('wireframe'),
     image: click('capture'),
     resetView: () => { viewer.camera.standard('iso'); $('fit').click(); },

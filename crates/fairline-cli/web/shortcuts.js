@@ -11,6 +11,7 @@ export const SHORTCUTS = [
   { keys: 'Ctrl+Y', label: 'redo', action: 'redo' },
   { keys: 'Ctrl+S', label: 'save the current state under the name given (also in a field)', action: 'save', anywhere: true },
   { keys: 'B', label: 'toggle before / after the last step', action: 'before' },
+  { keys: 'Shift+B', label: 'before / after split view with a divider on / off', action: 'compare' },
   { keys: 'F', label: 'reset the view: fit every document, seen from iso', action: 'resetView' },
   { keys: '1', label: 'view from the front', action: 'view:front' },
   { keys: '2', label: 'view from the back', action: 'view:back' },

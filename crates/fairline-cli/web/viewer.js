@@ -161,6 +161,55 @@ export class Viewer {
     this.dirty = true;
   }
 
+  // The state to compare document k with, drawn left of `split` (0–1 of
+  // the document's viewport) with the current state right of it; `null`
+  // positions end the comparison. Shares the triangles and scalars of the
+  // document's geometry.
+  setCompare(k, positions, normals, split) {
+    const gl = this.gl;
+    const d = this.docs[k];
+    if (!d) return;
+    if (!positions) {
+      if (d.compare) {
+        gl.deleteBuffer(d.compare.pos);
+        gl.deleteBuffer(d.compare.nrm);
+        gl.deleteVertexArray(d.compare.vao);
+      }
+      d.compare = null;
+      this.dirty = true;
+      return;
+    }
+    if (!d.compare) {
+      d.compare = { vao: gl.createVertexArray(), pos: gl.createBuffer(), nrm: gl.createBuffer(), split: 0.5 };
+      gl.bindVertexArray(d.compare.vao);
+      gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, d.idx);
+      gl.bindBuffer(gl.ARRAY_BUFFER, d.scl);
+      gl.enableVertexAttribArray(2);
+      gl.vertexAttribPointer(2, 1, gl.FLOAT, false, 0, 0);
+    }
+    const c = d.compare;
+    gl.bindVertexArray(c.vao);
+    gl.bindBuffer(gl.ARRAY_BUFFER, c.pos);
+    gl.bufferData(gl.ARRAY_BUFFER, positions, gl.DYNAMIC_DRAW);
+    gl.enableVertexAttribArray(0);
+    gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 0, 0);
+    gl.bindBuffer(gl.ARRAY_BUFFER, c.nrm);
+    gl.bufferData(gl.ARRAY_BUFFER, normals, gl.DYNAMIC_DRAW);
+    gl.enableVertexAttribArray(1);
+    gl.vertexAttribPointer(1, 3, gl.FLOAT, false, 0, 0);
+    gl.bindVertexArray(null);
+    if (split !== undefined) c.split = Math.max(0, Math.min(1, split));
+    this.dirty = true;
+  }
+
+  // Moves the divider of document k's comparison (0–1 of its viewport).
+  setSplit(k, split) {
+    const d = this.docs[k];
+    if (!d || !d.compare) return;
+    d.compare.split = Math.max(0, Math.min(1, split));
+    this.dirty = true;
+  }
+
   setScalar(k, values, range) {
     const gl = this.gl;
     const d = this.docs[k];
@@ -290,26 +339,37 @@ export class Viewer {
       gl.viewport(...vp);
       gl.scissor(...vp);
       const vpm = this.camera.viewProj(vp[2] / vp[3]);
-      gl.useProgram(this.surface.p);
-      gl.activeTexture(gl.TEXTURE0);
-      gl.bindTexture(gl.TEXTURE_2D, this.colormap);
-      setUniforms(gl, this.surface, Object.assign({}, this.lightUniforms ? this.lightUniforms(k) : { uMode: 0 }, {
-        uViewProj: vpm,
-        uEye: this.camera.eye(),
-        uMinCos: d.meta.min_normal_cos,
-        uThetaSamples: THETA_SAMPLES,
-        uRadiusCount: this.lightUniforms ? Math.min(16, (this.lightUniforms(k).uRadii || []).length) : 0,
-        uScalarOn: d.scalarOn ? 1 : 0,
-        uScalarLo: d.scalarRange ? d.scalarRange.lo : 0,
-        uScalarHi: d.scalarRange ? d.scalarRange.hi : 1,
-        uColormap: 0,
-        uBaseColor: [0.78, 0.8, 0.84],
-      }));
-      gl.enable(gl.POLYGON_OFFSET_FILL);
-      gl.polygonOffset(1, 1);
-      gl.bindVertexArray(d.vao);
-      gl.drawElements(gl.TRIANGLES, d.count, gl.UNSIGNED_INT, 0);
-      gl.disable(gl.POLYGON_OFFSET_FILL);
+      const shade = (vao) => {
+        gl.useProgram(this.surface.p);
+        gl.activeTexture(gl.TEXTURE0);
+        gl.bindTexture(gl.TEXTURE_2D, this.colormap);
+        setUniforms(gl, this.surface, Object.assign({}, this.lightUniforms ? this.lightUniforms(k) : { uMode: 0 }, {
+          uViewProj: vpm,
+          uEye: this.camera.eye(),
+          uMinCos: d.meta.min_normal_cos,
+          uThetaSamples: THETA_SAMPLES,
+          uRadiusCount: this.lightUniforms ? Math.min(16, (this.lightUniforms(k).uRadii || []).length) : 0,
+          uScalarOn: d.scalarOn ? 1 : 0,
+          uScalarLo: d.scalarRange ? d.scalarRange.lo : 0,
+          uScalarHi: d.scalarRange ? d.scalarRange.hi : 1,
+          uColormap: 0,
+          uBaseColor: [0.78, 0.8, 0.84],
+        }));
+        gl.enable(gl.POLYGON_OFFSET_FILL);
+        gl.polygonOffset(1, 1);
+        gl.bindVertexArray(vao);
+        gl.drawElements(gl.TRIANGLES, d.count, gl.UNSIGNED_INT, 0);
+        gl.disable(gl.POLYGON_OFFSET_FILL);
+      };
+      // the compared state left of the split (its shading only), the
+      // current state with its overlays right of it
+      const xs = d.compare ? vp[0] + Math.round(d.compare.split * vp[2]) : vp[0];
+      if (d.compare) {
+        gl.scissor(vp[0], vp[1], xs - vp[0], vp[3]);
+        shade(d.compare.vao);
+        gl.scissor(xs, vp[1], vp[0] + vp[2] - xs, vp[3]);
+      }
+      shade(d.vao);
       gl.useProgram(this.line.p);
       setUniforms(gl, this.line, { uViewProj: vpm });
       for (const set of Object.values(d.faceSets || {})) {
@@ -350,6 +410,13 @@ export class Viewer {
       }
       gl.depthFunc(gl.LESS);
       gl.bindVertexArray(null);
+      if (d.compare) {
+        // the divider, two device pixels wide
+        gl.scissor(Math.max(vp[0], xs - 1), vp[1], 2, vp[3]);
+        gl.clearColor(1.0, 0.75, 0.2, 1);
+        gl.clear(gl.COLOR_BUFFER_BIT);
+        gl.clearColor(0.16, 0.18, 0.21, 1);
+      }
     });
     gl.disable(gl.SCISSOR_TEST);
     this.frames++;
