@@ -55,13 +55,28 @@ export function drawLegend(canvas, name, lo, hi, clipped = false) {
   }
   g.fillStyle = '#dde';
   g.font = '11px sans-serif';
-  g.fillText(lo.toPrecision(3), tip, 30);
+  const ls = lo.toPrecision(3);
+  g.fillText(ls, tip, 30);
   const hs = hi.toPrecision(3);
   g.fillText(hs, canvas.width - tip - g.measureText(hs).width, 30);
-  const mid = Math.abs(lo + hi) <= 1e-9 * Math.abs(hi - lo) ? `${name} (0 at the middle)` : name;
-  g.fillText(mid, (canvas.width - g.measureText(mid).width) / 2, 30);
-  if (clipped && canvas.height >= 44) {
+  // the name between the end values where it fits, else under them (or,
+  // on a legend too short for a second line, as much of it as fits)
+  const room = canvas.width - 2 * tip - g.measureText(ls).width - g.measureText(hs).width - 16;
+  const centred = Math.abs(lo + hi) <= 1e-9 * Math.abs(hi - lo);
+  let mid = centred ? `${name} (0 at the middle)` : name;
+  let y = 30;
+  if (g.measureText(mid).width > room) {
+    if (canvas.height >= 44) {
+      y = 43;
+    } else {
+      mid = name;
+      while (mid.length > 1 && g.measureText(`${mid}…`).width > room) mid = mid.slice(0, -1);
+      if (mid !== name) mid = `${mid}…`;
+    }
+  }
+  g.fillText(mid, (canvas.width - g.measureText(mid).width) / 2, y);
+  if (clipped && canvas.height >= y + 14) {
     const note = 'values beyond: clipped';
-    g.fillText(note, (canvas.width - g.measureText(note).width) / 2, 43);
+    g.fillText(note, (canvas.width - g.measureText(note).width) / 2, y + 13);
   }
 }
