@@ -1007,8 +1007,9 @@ def surface_iso_curves(
     Returns ``(curves, report)``; ``curves`` has the flat arrays ``points``
     (n, 3), ``params`` (n,: the running parameter), ``curvature`` (n,),
     ``comb`` (n, 3), and per curve ``offsets`` (curves + 1,), ``surface``,
-    ``fixed`` (0: u held, the curve runs along v; 1: v held) and ``value``
-    (the held parameter).
+    ``kind`` (0: u held, the curve runs along v; 1: v held; 2: an edge of a
+    trimmed face, its trimming curve on the surface) and ``value`` (the held
+    parameter, or the edge's trimming loop).
     """
     curves, report = _native.surface_iso_curves(
         _surfaces_text(surfaces), count=int(count), samples=int(samples), surface=surface,

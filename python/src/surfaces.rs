@@ -327,7 +327,8 @@ fn surface_highlight_curves<'py>(
 /// `fairline section SURFACES --iso N`: isoparametric curves with their
 /// exact curvature combs as flat arrays — a dict of `points` (n, 3),
 /// `params` (n,), `curvature` (n,), `comb` (n, 3), per curve `offsets`
-/// (curves + 1,), `surface`, `fixed` (0: u held, 1: v held) and `value` —
+/// (curves + 1,), `surface`, `kind` (0: u held, 1: v held, 2: an edge of a trimmed face) and `value` (the held
+/// parameter, or the edge's trimming loop) —
 /// and the report.
 #[pyfunction]
 #[pyo3(signature = (surfaces, count = 5, samples = 200, surface = None, comb_scale = 1.0))]
@@ -357,7 +358,7 @@ fn surface_iso_curves<'py>(
     })?;
     let (mut points, mut params, mut curvature, mut comb) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let (mut offsets, mut index, mut fixed, mut value) =
+    let (mut offsets, mut index, mut kind, mut value) =
         (vec![0i64], Vec::new(), Vec::new(), Vec::new());
     for (k, c) in &out {
         points.extend_from_slice(&c.curve.points);
@@ -366,8 +367,12 @@ fn surface_iso_curves<'py>(
         comb.extend(c.curve.comb(comb_scale));
         offsets.push(points.len() as i64);
         index.push(*k as i64);
-        fixed.push(i64::from(c.fixed == fairline::bspline::Direction::V));
-        value.push(c.value);
+        kind.push(match c.kind_name() {
+            "u" => 0i64,
+            "v" => 1,
+            _ => 2,
+        });
+        value.push(c.kind_value());
     }
     let d = pyo3::types::PyDict::new(py);
     d.set_item("points", crate::positions_array(py, &points))?;
@@ -376,7 +381,7 @@ fn surface_iso_curves<'py>(
     d.set_item("comb", crate::positions_array(py, &comb))?;
     d.set_item("offsets", numpy::PyArray1::from_vec(py, offsets))?;
     d.set_item("surface", numpy::PyArray1::from_vec(py, index))?;
-    d.set_item("fixed", numpy::PyArray1::from_vec(py, fixed))?;
+    d.set_item("kind", numpy::PyArray1::from_vec(py, kind))?;
     d.set_item("value", numpy::PyArray1::from_vec(py, value))?;
     Ok((d, report))
 }

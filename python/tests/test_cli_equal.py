@@ -429,7 +429,7 @@ def test_surface_iso_curves_equal_cli(cli, demo, tmp_path):
     curves, report = fairline.surface_iso_curves(fairline.read_surfaces(src), count=4, samples=30, comb_scale=0.2)
     same_report(report, cli_report(tmp_path / "r.json"))
     rows = np.loadtxt(tmp_path / "c.csv", delimiter=",", skiprows=1, usecols=(0, 2, 3, 5, 6, 7, 8, 9, 10, 11, 12))
-    fixed = [line.split(",")[1] for line in (tmp_path / "c.csv").read_text().splitlines()[1:]]
+    kind = [line.split(",")[1] for line in (tmp_path / "c.csv").read_text().splitlines()[1:]]
     exact(curves["points"], rows[:, 4:7])
     exact(curves["params"], rows[:, 3])
     exact(curves["curvature"], rows[:, 7])
@@ -437,7 +437,7 @@ def test_surface_iso_curves_equal_cli(cli, demo, tmp_path):
     per_point = np.repeat(np.arange(len(curves["surface"])), np.diff(curves["offsets"]))
     assert np.array_equal(per_point, rows[:, 2].astype(int))
     exact(curves["value"][per_point], rows[:, 1])
-    assert ["uv"[f] for f in curves["fixed"][per_point]] == fixed
+    assert [("u", "v", "trim")[f] for f in curves["kind"][per_point]] == kind
     assert len(curves["surface"]) == report["iso"]["curves"] == 8
 
 

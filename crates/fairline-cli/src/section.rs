@@ -35,7 +35,8 @@ pub struct Args {
     pub plane_normal: Option<Vec3>,
     /// B-spline surfaces: instead of plane sections, N isoparametric curves
     /// per direction and surface (the domain's ends, the patch edges,
-    /// included) with their exact curvature combs, cut to trimmed faces.
+    /// included) with their exact curvature combs, cut to trimmed faces,
+    /// whose edges (trimming curves on the surface) are combed as well.
     #[arg(long, value_name = "N")]
     pub iso: Option<usize>,
     /// With --iso: samples along each iso-curve (the interior knots added).
@@ -54,7 +55,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1.0)]
     pub comb_scale: f64,
     /// Points as CSV: `section,curve,point,x,y,z,curvature,comb_x,comb_y,comb_z`
-    /// (with --iso: `surface,fixed,value,curve,point,t,x,y,z,curvature,comb_x,comb_y,comb_z`).
+    /// (with --iso: `surface,kind,value,curve,point,t,x,y,z,curvature,comb_x,comb_y,comb_z`).
     #[arg(long, value_name = "OUT.csv")]
     pub csv: Option<PathBuf>,
     /// Polylines as OBJ lines (`l`): the sections, then the comb teeth.
@@ -179,7 +180,7 @@ fn write_iso_csv(path: &Path, curves: &[(usize, IsoCurve)], scale: f64) -> Resul
         let mut w = std::io::BufWriter::new(w);
         writeln!(
             w,
-            "surface,fixed,value,curve,point,t,x,y,z,curvature,comb_x,comb_y,comb_z"
+            "surface,kind,value,curve,point,t,x,y,z,curvature,comb_x,comb_y,comb_z"
         )?;
         for (j, (k, c)) in curves.iter().enumerate() {
             let comb = c.curve.comb(scale);
@@ -188,8 +189,8 @@ fn write_iso_csv(path: &Path, curves: &[(usize, IsoCurve)], scale: f64) -> Resul
                 writeln!(
                     w,
                     "{k},{},{},{j},{i},{},{},{},{},{},{},{},{}",
-                    c.fixed,
-                    c.value,
+                    c.kind_name(),
+                    c.kind_value(),
                     c.params[i],
                     p.x,
                     p.y,

@@ -152,7 +152,7 @@ fn iso_curves_of_a_cylinder_have_the_closed_form_combs() {
     assert_eq!(r["iso"]["curves"], 6);
     assert!((r["iso"]["max_curvature"].as_f64().unwrap() - 0.5).abs() < 1e-12);
     let text = std::fs::read_to_string(&csv).unwrap();
-    assert!(text.starts_with("surface,fixed,value,curve,point,t,x,y,z,curvature,comb_x"));
+    assert!(text.starts_with("surface,kind,value,curve,point,t,x,y,z,curvature,comb_x"));
     let mut rows = 0;
     for line in text.lines().skip(1) {
         let w: Vec<&str> = line.split(',').collect();
@@ -170,7 +170,7 @@ fn iso_curves_of_a_cylinder_have_the_closed_form_combs() {
                 assert!((comb[1] - 0.125 * y).abs() < 1e-12, "{line}");
                 assert!(comb[2].abs() < 1e-12, "{line}");
             }
-            other => panic!("fixed {other}"),
+            other => panic!("kind {other}"),
         }
         rows += 1;
     }

@@ -193,7 +193,8 @@ pub struct IsoOutcome {
     pub curves: Vec<(usize, IsoCurve)>,
     /// The JSON report: `iso` (`count`, `samples`, `comb_scale`,
     /// `surfaces`, `curves`, `max_curvature`) and per curve `surface`,
-    /// `fixed` (`u` or `v`), `value`, `points`, `length`, `max_curvature`.
+    /// `kind` (`u`, `v`: the parameter held; `trim`: an edge of a trimmed
+    /// face), `value` (the held parameter, or the edge's loop), `points`, `length`, `max_curvature`.
     pub report: Report,
 }
 
@@ -265,8 +266,8 @@ pub fn iso(
         .map(|(k, c)| {
             serde_json::json!({
                 "surface": k,
-                "fixed": c.fixed.to_string(),
-                "value": c.value,
+                "kind": c.kind_name(),
+                "value": c.kind_value(),
                 "points": c.curve.points.len(),
                 "length": c.curve.length(),
                 "max_curvature": max_curvature(&c.curve),
@@ -373,7 +374,7 @@ mod tests {
         let r = out.report.to_json();
         assert_eq!(r["iso"]["curves"], 20);
         assert_eq!(r["iso"]["max_curvature"], 0.0);
-        assert_eq!(r["curves"][0]["fixed"], "u");
+        assert_eq!(r["curves"][0]["kind"], "u");
         assert_eq!(r["curves"][0]["length"], 1.0);
         assert!(iso_summary(&out).starts_with("20 iso-curve(s) of 4000 points on 2 surface(s)"));
         let one = IsoSettings {
@@ -382,7 +383,11 @@ mod tests {
             ..Default::default()
         };
         let out = iso(&surfaces, &one, &Control::new()).unwrap();
-        assert!(out.curves.iter().all(|(k, c)| *k == 1 && c.value == 0.5));
+        assert!(
+            out.curves
+                .iter()
+                .all(|(k, c)| *k == 1 && c.kind_value() == 0.5)
+        );
         for (bad, option) in [
             (
                 IsoSettings {

@@ -23,7 +23,7 @@
 //!   isoparametric curves of the current state with their exact curvature
 //!   (the command layer's [`fairline_commands::section::iso`]). Binary
 //!   frame as the plane sections': the header lists `lines` (`start`,
-//!   `count`, `closed`, `surface`, `fixed`, `value`), `points`,
+//!   `count`, `closed`, `surface`, `kind`, `value`), `points`,
 //!   `max_curvature`, `curvature_median` (the median curvature of the
 //!   curved points, for a comb length that the sharp places of a part do
 //!   not shrink), `report`, `summary` and `command`; the data are the
@@ -202,8 +202,8 @@ pub fn iso_combs(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             "count": c.curve.points.len(),
             "closed": false,
             "surface": surface,
-            "fixed": c.fixed.to_string(),
-            "value": c.value,
+            "kind": c.kind_name(),
+            "value": c.kind_value(),
         }));
         for p in &c.curve.points {
             let q = *p - center;

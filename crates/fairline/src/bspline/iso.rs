@@ -16,19 +16,48 @@
 //! interior knot (where the curvature of a low-degree surface may jump).
 //! On a trimmed face only the pieces inside the face are kept
 //! ([`BSplineSurface::contains_uv`]), split where the curve leaves it.
+//!
+//! The edges of a trimmed face are its trimming curves `c(t) = (u, v)`,
+//! mapped onto the surface: `C = S(c(t))`, with
+//! `C' = S_u u' + S_v v'` and
+//! `C'' = S_uu u'² + 2 S_uv u'v' + S_vv v'² + S_u u'' + S_v v''`
+//! ([`TrimCurve::eval_d2`](super::TrimCurve::eval_d2)), sampled in the same
+//! way over each curve's domain. The edges of an untrimmed patch are the
+//! iso-curves at the ends of its domain.
 
 use super::{BSplineSurface, Direction};
 use crate::Vec3;
 use crate::geom::SectionCurve;
 
-/// One piece of an isoparametric curve, with its curvature.
+/// Which curve on the surface an [`IsoCurve`] is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum IsoKind {
+    /// An isoparametric curve: `fixed` held at `value` (`U`: the curve
+    /// `S(value, t)` runs along v).
+    Held {
+        /// The parameter held.
+        fixed: Direction,
+        /// Its value.
+        value: f64,
+    },
+    /// Curve `curve` of trimming loop `loop_index`, mapped onto the surface:
+    /// an edge of a trimmed face.
+    TrimEdge {
+        /// The loop (0: the first loop of the face).
+        loop_index: usize,
+        /// The curve within the loop.
+        curve: usize,
+    },
+}
+
+/// One piece of an isoparametric curve or of a trimmed face's edge, with
+/// its curvature.
 #[derive(Clone, Debug, PartialEq)]
 pub struct IsoCurve {
-    /// The parameter held (`U`: the curve `S(value, t)` runs along v).
-    pub fixed: Direction,
-    /// The value of the held parameter.
-    pub value: f64,
-    /// The running parameter at each point.
+    /// Which curve it is.
+    pub kind: IsoKind,
+    /// The running parameter at each point (the iso-curve's free surface
+    /// parameter, or the trimming curve's parameter).
     pub params: Vec<f64>,
     /// Points, curvature and the unit vector towards the centre of
     /// curvature at each sample (never closed).
@@ -118,8 +147,7 @@ pub fn iso_curve(
         }
         let (kappa, m) = curve_curvature(d1, d2);
         let c = current.get_or_insert_with(|| IsoCurve {
-            fixed,
-            value: held,
+            kind: IsoKind::Held { fixed, value: held },
             params: Vec::new(),
             curve: SectionCurve {
                 points: Vec::new(),
@@ -138,11 +166,63 @@ pub fn iso_curve(
     pieces
 }
 
+/// The edges of a trimmed face: every curve of every trimming loop mapped
+/// onto the surface (module documentation), each sampled with `samples`
+/// parameters plus its interior knots; none for an untrimmed surface.
+pub fn trim_edges(surface: &BSplineSurface, samples: usize) -> Vec<IsoCurve> {
+    let mut out = Vec::new();
+    for (l, lp) in surface.trims().iter().enumerate() {
+        for (k, tc) in lp.curves.iter().enumerate() {
+            let mut c = IsoCurve {
+                kind: IsoKind::TrimEdge {
+                    loop_index: l,
+                    curve: k,
+                },
+                params: Vec::new(),
+                curve: SectionCurve {
+                    points: Vec::new(),
+                    closed: false,
+                    curvature: Vec::new(),
+                    towards_center: Vec::new(),
+                },
+            };
+            let ts = sample_params(tc.knots(), tc.domain(), samples);
+            let last = ts.len().saturating_sub(1);
+            for (i, &t) in ts.iter().enumerate() {
+                // at a knot, the span the curve arrives from (the last
+                // sample takes the last span)
+                let (uv, d1, d2) = tc.eval_d2(t, i == last);
+                let (u, v) = surface.clamp_parameters(uv[0], uv[1]);
+                let d = surface.derivatives(u, v);
+                if !d.point.is_finite() {
+                    continue;
+                }
+                let c1 = d.su * d1[0] + d.sv * d1[1];
+                let c2 = d.suu * (d1[0] * d1[0])
+                    + d.suv * (2.0 * d1[0] * d1[1])
+                    + d.svv * (d1[1] * d1[1])
+                    + d.su * d2[0]
+                    + d.sv * d2[1];
+                let (kappa, m) = curve_curvature(c1, c2);
+                c.params.push(t);
+                c.curve.points.push(d.point);
+                c.curve.curvature.push(kappa);
+                c.curve.towards_center.push(m);
+            }
+            if c.params.len() >= 2 {
+                out.push(c);
+            }
+        }
+    }
+    out
+}
+
 /// `count` isoparametric curves per direction of `surface`: for each held
 /// parameter, `count` values evenly spaced over its domain, ends included
 /// (the patch edges of an untrimmed surface; one value, the middle, when
-/// `count` is 1); u-held curves first. Each curve sampled with `samples`
-/// parameters ([`iso_curve`]).
+/// `count` is 1); u-held curves first; then, on a trimmed face, its edges
+/// ([`trim_edges`]). Each curve sampled with `samples` parameters
+/// ([`iso_curve`]).
 pub fn iso_curves(surface: &BSplineSurface, count: usize, samples: usize) -> Vec<IsoCurve> {
     let mut out = Vec::new();
     for fixed in [Direction::U, Direction::V] {
@@ -161,7 +241,43 @@ pub fn iso_curves(surface: &BSplineSurface, count: usize, samples: usize) -> Vec
             out.extend(iso_curve(surface, fixed, value, samples));
         }
     }
+    out.extend(trim_edges(surface, samples));
     out
+}
+
+impl IsoCurve {
+    /// The held parameter and its value, `None` for a trimmed face's edge.
+    pub fn held(&self) -> Option<(Direction, f64)> {
+        match self.kind {
+            IsoKind::Held { fixed, value } => Some((fixed, value)),
+            IsoKind::TrimEdge { .. } => None,
+        }
+    }
+
+    /// `u` or `v` (the parameter held), or `trim` (an edge of a trimmed
+    /// face): the curve's kind as the files and reports name it.
+    pub fn kind_name(&self) -> &'static str {
+        match self.kind {
+            IsoKind::Held {
+                fixed: Direction::U,
+                ..
+            } => "u",
+            IsoKind::Held {
+                fixed: Direction::V,
+                ..
+            } => "v",
+            IsoKind::TrimEdge { .. } => "trim",
+        }
+    }
+
+    /// The held parameter's value, or for an edge the index of its
+    /// trimming loop.
+    pub fn kind_value(&self) -> f64 {
+        match self.kind {
+            IsoKind::Held { value, .. } => value,
+            IsoKind::TrimEdge { loop_index, .. } => loop_index as f64,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -253,7 +369,7 @@ mod tests {
         let s = quarter_cylinder(1.0, 1.0);
         let all = iso_curves(&s, 3, 10);
         assert_eq!(all.len(), 6);
-        let values: Vec<f64> = all.iter().map(|c| c.value).collect();
+        let values: Vec<f64> = all.iter().map(|c| c.kind_value()).collect();
         assert_eq!(values, vec![0.0, 0.5, 1.0, 0.0, 0.5, 1.0]);
         // a trim keeping u < 0.5 cuts the v-held curves in half and drops
         // the u-held curve at u = 1
@@ -261,14 +377,34 @@ mod tests {
         let half = TrimLoop::polygon(&[[0.0, 0.0], [0.5, 0.0], [0.5, 1.0], [0.0, 1.0]]).unwrap();
         let t = s.clone().with_trims(vec![half]).unwrap();
         let trimmed = iso_curves(&t, 3, 41);
-        assert!(trimmed.iter().all(|c| c.params.iter().all(|&p| {
-            let u = if c.fixed == Direction::U { c.value } else { p };
+        let held: Vec<&IsoCurve> = trimmed.iter().filter(|c| c.held().is_some()).collect();
+        assert!(held.iter().all(|c| c.params.iter().all(|&p| {
+            let u = match c.held() {
+                Some((Direction::U, value)) => value,
+                _ => p,
+            };
             u <= 0.5 + 1e-12
         })));
-        assert!(
-            !trimmed
-                .iter()
-                .any(|c| c.fixed == Direction::U && c.value == 1.0)
+        assert!(!held.iter().any(|c| c.held() == Some((Direction::U, 1.0))));
+        // the face's four edges follow: on the cylinder the two straight
+        // ones (u = 0, 0.5) and the two arcs (v = 0, 1) of curvature 1
+        let edges: Vec<&IsoCurve> = trimmed.iter().filter(|c| c.kind_name() == "trim").collect();
+        assert_eq!(edges.len(), 4);
+        for e in &edges {
+            let k = &e.curve.curvature;
+            let arc = k.iter().all(|&k| (k - 1.0).abs() < 1e-12);
+            let straight = k.iter().all(|&k| k.abs() < 1e-9);
+            assert!(arc || straight, "{:?}", e.kind);
+            assert!(
+                e.curve
+                    .points
+                    .iter()
+                    .all(|p| (p.x.hypot(p.y) - 1.0).abs() < 1e-12)
+            );
+        }
+        assert_eq!(
+            edges.iter().filter(|e| e.curve.curvature[0] > 0.5).count(),
+            2
         );
         // no NaN anywhere, even at a degenerate input
         for c in &trimmed {

@@ -180,6 +180,16 @@ impl TrimCurve {
     /// span to the left when `left` (the curve arriving there), else of the
     /// span to the right; at the domain ends, of the end spans.
     pub fn eval_d1(&self, t: f64, left: bool) -> ([f64; 2], [f64; 2]) {
+        let (c, d1, _) = self.eval_d2(t, left);
+        (c, d1)
+    }
+
+    /// The curve point and its first and second derivatives at `t`, as
+    /// [`TrimCurve::eval_d1`] (the same span at a knot), the second by the
+    /// quotient rule of Piegl & Tiller Eq. 4.8 differentiated once more:
+    /// `c'' = (A'' − 2w'c' − w''c) / w`. Zero derivatives where the weight
+    /// vanishes.
+    pub fn eval_d2(&self, t: f64, left: bool) -> ([f64; 2], [f64; 2], [f64; 2]) {
         let [a, b] = self.domain();
         let t = if t >= a { t.min(b) } else { a };
         let p = self.degree;
@@ -191,8 +201,8 @@ impl TrimCurve {
             }
         }
         let mut d: BasisDerivs = [[0.0; MAX_ORDER]; 3];
-        ders_basis_funs(span, t, p, 1, &self.knots, &mut d);
-        let (mut x, mut dx) = ([0.0f64; 3], [0.0f64; 3]);
+        ders_basis_funs(span, t, p, 2, &self.knots, &mut d);
+        let (mut x, mut dx, mut ddx) = ([0.0f64; 3], [0.0f64; 3], [0.0f64; 3]);
         for r in 0..=p {
             let i = span - p + r;
             let wi = self.weights.as_ref().map_or(1.0, |ws| ws[i]);
@@ -200,14 +210,20 @@ impl TrimCurve {
             for k in 0..3 {
                 x[k] += d[0][r] * h[k];
                 dx[k] += d[1][r] * h[k];
+                ddx[k] += d[2][r] * h[k];
             }
         }
         if !(x[2] > 0.0 && x[2].is_finite()) {
-            return (self.eval(t), [0.0, 0.0]);
+            return (self.eval(t), [0.0, 0.0], [0.0, 0.0]);
         }
-        let c = [x[0] / x[2], x[1] / x[2]];
-        let dc = [(dx[0] - dx[2] * c[0]) / x[2], (dx[1] - dx[2] * c[1]) / x[2]];
-        (c, dc)
+        let w = x[2];
+        let c = [x[0] / w, x[1] / w];
+        let dc = [(dx[0] - dx[2] * c[0]) / w, (dx[1] - dx[2] * c[1]) / w];
+        let ddc = [
+            (ddx[0] - 2.0 * dx[2] * dc[0] - ddx[2] * c[0]) / w,
+            (ddx[1] - 2.0 * dx[2] * dc[1] - ddx[2] * c[1]) / w,
+        ];
+        (c, dc, ddc)
     }
 
     /// Appends the flattened curve to `out` without its last point: every

@@ -487,6 +487,30 @@ fn a_part_with_a_non_manifold_edge_is_made_into_a_mesh_with_its_patches() {
 }
 
 #[test]
+fn trim_curve_second_derivative_gives_the_circle_curvature() {
+    // On the rational circle of radius 2: c'' against differences of c',
+    // and the curvature |c' × c''| / |c'|³ is 1/2 everywhere.
+    let c = circle_curve([0.5, -0.25], 2.0, true);
+    let [a, b] = c.domain();
+    for i in 1..40 {
+        let t = a + (b - a) * (i as f64 + 0.3) / 40.0;
+        let (p, d1, d2) = c.eval_d2(t, false);
+        assert_eq!((p, d1), c.eval_d1(t, false));
+        let h = 1e-6;
+        let (q0, q1) = (c.eval_d1(t - h, false).1, c.eval_d1(t + h, false).1);
+        let fd = [(q1[0] - q0[0]) / (2.0 * h), (q1[1] - q0[1]) / (2.0 * h)];
+        let err = (d2[0] - fd[0]).hypot(d2[1] - fd[1]);
+        assert!(
+            err < 1e-5 * (1.0 + d2[0].hypot(d2[1])),
+            "t {t}: {d2:?} vs {fd:?}"
+        );
+        let speed = d1[0].hypot(d1[1]);
+        let kappa = (d1[0] * d2[1] - d1[1] * d2[0]).abs() / speed.powi(3);
+        assert!((kappa - 0.5).abs() < 1e-12, "t {t}: κ {kappa}");
+    }
+}
+
+#[test]
 fn trim_curve_derivative_matches_differences_and_takes_the_side_asked_for() {
     // A rational circle: the derivative against central differences
     // (step 1e-6, error O(h²) ≈ 1e-11 times the curvature terms), and
