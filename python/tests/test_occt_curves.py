@@ -88,3 +88,53 @@ def test_occt_reads_highlight_lines_as_curves_within_the_tolerance(cli, demo, tm
     # OCCT's projection measures the distance to the curve, the fit the
     # distance at the point's own parameter: the first is never larger
     assert worst <= tol, f"a line point is {worst} from its curve (tolerance {tol})"
+
+
+def occt_face_surfaces(path: Path) -> list:
+    """The surfaces of the faces OCCT builds from an IGES file, in order."""
+    if IGESControl_Reader is None:
+        missing("python package 'OCP' (cadquery-ocp-novtk, OpenCASCADE)")
+    from OCP.TopAbs import TopAbs_FACE
+
+    r = IGESControl_Reader()
+    assert r.ReadFile(str(path)) == IFSelect_RetDone, f"OCCT cannot read {path}"
+    r.TransferRoots()
+    ex = TopExp_Explorer(r.OneShape(), TopAbs_FACE)
+    out = []
+    while ex.More():
+        out.append(BRep_Tool.Surface_s(TopoDS.Face_s(ex.Current())))
+        ex.Next()
+    return out
+
+
+def test_exact_surface_deviation_agrees_with_occt_projection(cli, demo, tmp_path):
+    """`fairline deviation BEFORE.json AFTER.json` measures against the
+    B-spline surfaces themselves: every distance equals OCCT's own point
+    projection onto the same surface (read back from fairline's IGES) to
+    1e-9 of the part's size."""
+    from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
+
+    before, after = demo / "bspline-panel-dented.json", demo / "bspline-panel-faired.json"
+    subprocess.run([str(cli), "convert", str(before), str(tmp_path / "before.igs")], check=True, capture_output=True)
+    p = subprocess.run(
+        [str(cli), "deviation", str(before), str(after),
+         "--csv", str(tmp_path / "exact.csv"), "--report", str(tmp_path / "exact.json")],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert p.returncode == 0, p.stderr
+    report = json.loads((tmp_path / "exact.json").read_text())
+    assert report["method"] == "surface-point"
+    assert report["unrefined"] == 0 and report["unmatched"] == 0
+    (surface,) = occt_face_surfaces(tmp_path / "before.igs")
+    rows = [line.split(",") for line in (tmp_path / "exact.csv").read_text().splitlines()[1:]]
+    size = 4.0
+    worst = 0.0
+    moved = 0
+    for row in rows[:: max(1, len(rows) // 400)]:
+        x, y, z, distance = (float(v) for v in row[1:4] + row[5:6])
+        proj = GeomAPI_ProjectPointOnSurf(gp_Pnt(x, y, z), surface)
+        assert proj.NbPoints() > 0
+        worst = max(worst, abs(proj.LowerDistance() - distance))
+        moved += distance > 1e-6
+    assert moved > 10, "the faired panel moved somewhere"
+    assert worst <= 1e-9 * size, f"fairline vs OCCT projection: {worst}"

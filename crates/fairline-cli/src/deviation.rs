@@ -17,8 +17,11 @@ use std::path::{Path, PathBuf};
 /// The signed deviation of AFTER from BEFORE, per vertex of AFTER: for
 /// meshes of the same connectivity the vertex motion along BEFORE's normal,
 /// otherwise the distance to the closest point of BEFORE, positive on the
-/// side BEFORE's normals point to. B-spline surfaces (.json .igs .step) are
-/// compared through their tessellations (--grid per patch and direction).
+/// side BEFORE's normals point to. When BEFORE is a B-spline surface file
+/// (.json .igs .step) the distance is to its surfaces themselves (the
+/// closest point by point inversion, started on a --grid tessellation),
+/// exact to rounding; an AFTER surface file is measured at the vertices of
+/// its tessellation (--grid per patch and direction).
 /// The report gives max/mean/rms/percentiles and a histogram; with
 /// --region, separately inside the region (the intended motion) and
 /// outside it (side effects: 0 for highlight-line fairing). Lengths are in
@@ -103,7 +106,17 @@ pub fn run(args: Args) -> Result<()> {
         .output_opt("--csv", args.csv.as_deref())
         .output_opt("--report", args.report.as_deref())
         .check()?;
-    let before = read(&args.before, args.grid)?;
+    // B-spline surfaces are measured against exactly, meshes against their
+    // triangles
+    enum Reference {
+        Surfaces(Vec<fairline::bspline::BSplineSurface>),
+        Mesh(SurfaceMesh),
+    }
+    let before = if crate::surface::is_surface_path(&args.before) {
+        Reference::Surfaces(crate::surface::load_surfaces(&args.before)?)
+    } else {
+        Reference::Mesh(read(&args.before, args.grid)?)
+    };
     let after = read(&args.after, args.grid)?;
     let region = match &args.region {
         Some(path) => {
@@ -116,13 +129,19 @@ pub fn run(args: Args) -> Result<()> {
         None => None,
     };
     let settings = DeviationSettings { bins: args.bins };
-    let out = deviation::run(
-        &before,
-        &after,
-        region.as_deref(),
-        &settings,
-        &Control::new(),
-    )
+    let out = match &before {
+        Reference::Surfaces(surfaces) => deviation::run_on_surfaces(
+            surfaces,
+            args.grid,
+            &after,
+            region.as_deref(),
+            &settings,
+            &Control::new(),
+        ),
+        Reference::Mesh(mesh) => {
+            deviation::run(mesh, &after, region.as_deref(), &settings, &Control::new())
+        }
+    }
     .map_err(|e| {
         let path = match e.subject() {
             Some(Subject::Input) => Some(args.before.as_path()),

@@ -1,7 +1,8 @@
 //! `fairline deviation`: closed-form distances between concentric spheres,
 //! the split of the statistics inside and outside a region, the picture,
 //! the CSV, and the refusal of bad input (exit 2, the file named, nothing
-//! written).
+//! written); a B-spline reference measured exactly (points off a rational
+//! cylinder at their radial distance).
 
 mod common;
 use common::{json, ok, run, s, tmp};
@@ -142,4 +143,80 @@ fn bad_inputs_exit_2_naming_the_file_and_write_nothing() {
     let help = run(&["deviation", "--help"]);
     ok(&help);
     assert!(String::from_utf8_lossy(&help.stdout).contains("fairline deviation fairline-demo/"));
+}
+
+/// A quarter cylinder of radius 2 about the z axis, height 1, as exact
+/// rational B-spline surface JSON.
+const QUARTER_CYLINDER: &str = r#"{"surfaces":[{"degree_u":2,"degree_v":1,
+"knots_u":[0,0,0,1,1,1],"knots_v":[0,0,1,1],
+"control_points":[[[2,0,0],[2,0,1]],[[2,2,0],[2,2,1]],[[0,2,0],[0,2,1]]],
+"weights":[[1,1],[0.7071067811865476,0.7071067811865476],[1,1]]}]}"#;
+
+#[test]
+fn a_surface_reference_is_measured_exactly_not_through_its_tessellation() {
+    let dir = tmp("deviation-surface");
+    let part = dir.join("cylinder.json");
+    std::fs::write(&part, QUARTER_CYLINDER).unwrap();
+    // points at radius 2.1 and 1.95 over the quarter: +0.1 and −0.05 away
+    let mut text = String::new();
+    let mut want = Vec::new();
+    for i in 0..12 {
+        for j in 0..4 {
+            let a = 0.05 + 1.45 * i as f64 / 11.0;
+            let r = if (i + j) % 2 == 0 { 2.1 } else { 1.95 };
+            text.push_str(&format!(
+                "v {} {} {}\n",
+                r * a.cos(),
+                r * a.sin(),
+                0.3 * j as f64
+            ));
+            want.push(r - 2.0);
+        }
+    }
+    for i in 0..11 {
+        for j in 0..3 {
+            let k = 4 * i + j + 1;
+            text.push_str(&format!(
+                "f {} {} {}\nf {} {} {}\n",
+                k,
+                k + 4,
+                k + 5,
+                k,
+                k + 5,
+                k + 1
+            ));
+        }
+    }
+    let points = dir.join("points.obj");
+    std::fs::write(&points, text).unwrap();
+    let (csv, report) = (dir.join("d.csv"), dir.join("d.json"));
+    ok(&run(&[
+        "deviation",
+        s(&part),
+        s(&points),
+        "--grid",
+        "4",
+        "--csv",
+        s(&csv),
+        "--report",
+        s(&report),
+    ]));
+    let r = json(&report);
+    assert_eq!(r["method"], "surface-point");
+    assert_eq!(r["unrefined"], 0);
+    let rows = std::fs::read_to_string(&csv).unwrap();
+    for (line, want) in rows.lines().skip(1).zip(&want) {
+        let signed: f64 = line.split(',').nth(4).unwrap().parse().unwrap();
+        // exact to rounding although a 4 × 4 tessellation is 3 % off
+        assert!((signed - want).abs() < 1e-12, "{line}: want {want}");
+    }
+    // a surface file against itself: zero to rounding
+    ok(&run(&[
+        "deviation",
+        s(&part),
+        s(&part),
+        "--report",
+        s(&report),
+    ]));
+    assert!(json(&report)["all"]["max_abs"].as_f64().unwrap() < 1e-13);
 }

@@ -728,6 +728,28 @@ fn real_mesh_and_surface_load_with_curvature_and_patches() {
     assert_eq!(st, 200);
     let v: Value = serde_json::from_slice(&j).unwrap();
     assert_eq!(v["surfaces"].as_array().unwrap().len(), patches);
+    // the deviation of a surface document is measured against its
+    // surfaces exactly, as the equivalent command measures it
+    let (st, b) = srv.post("/api/doc/1/deviation", &json!({"against": "original"}));
+    assert_eq!(st, 200, "{}", String::from_utf8_lossy(&b));
+    let (h, _) = parse_frame(&b);
+    assert_eq!(h["method"], "surface-point", "{h}");
+    assert!(h["all"]["max_abs"].as_f64().unwrap() < 1e-12, "{h}");
+    let command = h["command"].as_str().unwrap();
+    assert!(command.contains("--grid 64"), "{command}");
+    let rep = dir.join("dev.json");
+    ok(&run(&[
+        "deviation",
+        s(&teapot),
+        s(&teapot),
+        "--grid",
+        "64",
+        "--report",
+        s(&rep),
+    ]));
+    let cli = common::json(&rep);
+    assert_eq!(h["all"], cli["all"]);
+    assert_eq!(h["unrefined"], cli["unrefined"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

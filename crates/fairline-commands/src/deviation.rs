@@ -5,6 +5,7 @@
 
 use crate::error::{CommandError, Subject};
 use crate::report::Report;
+use fairline::bspline::{BSplineSurface, surface_deviation};
 use fairline::geom::{Deviation, DeviationError, DeviationStats, deviation, deviation_stats};
 use fairline::mesh::FaceId;
 use fairline::{Control, SurfaceMesh};
@@ -57,15 +58,7 @@ pub fn run(
 ) -> Result<DeviationOutcome, CommandError> {
     crate::require_faces(reference.face_count(), reference.original_vertex_count())?;
     crate::require_faces(measured.face_count(), measured.original_vertex_count())?;
-    if settings.bins == 0 || settings.bins > 10_000 {
-        return Err(CommandError::invalid(
-            "--bins",
-            format!("{} bins; give 1 to 10000", settings.bins),
-        ));
-    }
-    if control.is_cancelled() {
-        return Err(CommandError::cancelled());
-    }
+    check(settings, control)?;
     let mut report = Report::new("deviation");
     let triangulated;
     let reference = if reference.is_triangle_mesh() {
@@ -78,11 +71,70 @@ pub fn run(
     };
     let dev = report
         .time(|| deviation(reference, measured))
-        .map_err(|e| match e {
-            DeviationError::NotTriangles | DeviationError::EmptyReference => {
-                CommandError::bad_input(e.to_string()).about(Subject::Input)
-            }
-        })?;
+        .map_err(reference_error)?;
+    finish(dev, measured, region, settings, report)
+}
+
+/// A reference that gives nothing to measure against (about the input).
+fn reference_error(e: DeviationError) -> CommandError {
+    match e {
+        DeviationError::NotTriangles | DeviationError::EmptyReference => {
+            CommandError::bad_input(e.to_string()).about(Subject::Input)
+        }
+    }
+}
+
+/// The deviation of `measured` (a surface file's tessellation, or a mesh)
+/// from the B-spline surfaces `reference` themselves: the exact distance to
+/// the closest point of the surfaces ([`fairline::bspline::surface_deviation`],
+/// started from their tessellation `grid` × `grid` per surface), not to a
+/// tessellation. Errors as [`run`]'s, and a grid out of 2..=1024.
+pub fn run_on_surfaces(
+    reference: &[BSplineSurface],
+    grid: usize,
+    measured: &SurfaceMesh,
+    region: Option<&[FaceId]>,
+    settings: &DeviationSettings,
+    control: &Control,
+) -> Result<DeviationOutcome, CommandError> {
+    crate::require_faces(measured.face_count(), measured.original_vertex_count())?;
+    check(settings, control)?;
+    if !(2..=1024).contains(&grid) {
+        return Err(CommandError::invalid(
+            "grid",
+            format!("{grid}; give 2 to 1024"),
+        ));
+    }
+    let mut report = Report::new("deviation");
+    let dev = report
+        .time(|| surface_deviation(reference, measured.positions(), grid))
+        .map_err(reference_error)?;
+    finish(dev, measured, region, settings, report)
+}
+
+/// The bins and the cancel flag, checked before any work.
+fn check(settings: &DeviationSettings, control: &Control) -> Result<(), CommandError> {
+    if settings.bins == 0 || settings.bins > 10_000 {
+        return Err(CommandError::invalid(
+            "--bins",
+            format!("{} bins; give 1 to 10000", settings.bins),
+        ));
+    }
+    if control.is_cancelled() {
+        return Err(CommandError::cancelled());
+    }
+    Ok(())
+}
+
+/// The statistics (all, inside and outside the region) and the report of
+/// a measured deviation.
+fn finish(
+    dev: Deviation,
+    measured: &SurfaceMesh,
+    region: Option<&[FaceId]>,
+    settings: &DeviationSettings,
+    mut report: Report,
+) -> Result<DeviationOutcome, CommandError> {
     let all = deviation_stats(&dev.signed, settings.bins);
     let mut in_region = Vec::new();
     let (mut inside, mut outside) = (None, None);
@@ -116,6 +168,9 @@ pub fn run(
     report.set("units", "model units (the length unit of the files)");
     report.set("vertices", measured.vertex_count());
     report.set("unmatched", dev.unmatched);
+    if dev.method == fairline::geom::DeviationMethod::SurfacePoint {
+        report.set("unrefined", dev.unrefined);
+    }
     report.set("all", &all);
     if let (Some(i), Some(o)) = (&inside, &outside) {
         report.set("inside_region", i);
@@ -140,6 +195,7 @@ pub fn summary(out: &DeviationOutcome) -> String {
         match out.deviation.method {
             fairline::geom::DeviationMethod::Displacement => "vertex displacement",
             fairline::geom::DeviationMethod::ClosestPoint => "closest point",
+            fairline::geom::DeviationMethod::SurfacePoint => "closest point on the surfaces",
         },
         out.all.max_abs,
         out.all.mean,

@@ -59,49 +59,75 @@ pub fn deviation(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         Ok(r) => r,
         Err(a) => return a,
     };
-    let (reference, measured, command) = {
+    // a surface reference is measured against exactly (its surfaces, the
+    // start grid its document's), as the command does
+    let (reference, surfaces, measured, command) = {
         let st = lock(shared);
         let docs = &st.docs;
         let d = &docs[k];
-        let (reference, ref_file) = match &req.against {
-            Against::Named(n) if n == "original" => (d.shared_tri_at(Some(0)), file_at(d, 0)),
-            Against::Named(n) if n == "previous" => {
-                let p = d.cursor.saturating_sub(1);
-                (d.shared_tri_at(Some(p)), file_at(d, p))
-            }
+        let (owner, step) = match &req.against {
+            Against::Named(n) if n == "original" => (d, Some(0)),
+            Against::Named(n) if n == "previous" => (d, Some(d.cursor.saturating_sub(1))),
             Against::Named(n) => {
                 return bad(format!(
                     "against: `{n}`; give \"original\", \"previous\" or {{\"doc\": J}}"
                 ));
             }
             Against::Doc { doc } => match docs.get(*doc) {
-                Some(o) => (o.shared_tri_at(None), o.current_file()),
+                Some(o) => (o, None),
                 None => return error(404, format!("no document {doc}")),
             },
         };
+        let ref_file = match step {
+            Some(n) => file_at(owner, n),
+            None => owner.current_file(),
+        };
+        let surfaces = owner.step(step).surfaces.clone().map(|s| (s, owner.grid));
         let region = if req.faces.as_ref().is_some_and(|f| !f.is_empty()) {
             " --region region.json"
         } else {
             ""
         };
+        let grid = if d.is_surface() {
+            format!(" --grid {}", d.grid)
+        } else {
+            String::new()
+        };
         let command = format!(
-            "fairline deviation {ref_file} {}{region} --png deviation.png --report deviation.json",
+            "fairline deviation {ref_file} {}{grid}{region} --png deviation.png --report deviation.json",
             d.current_file()
         );
-        (reference, d.shared_tri_at(None), command)
+        (
+            owner.shared_tri_at(step),
+            surfaces,
+            d.shared_tri_at(None),
+            command,
+        )
     };
     let faces: Option<Vec<FaceId>> = req
         .faces
         .as_ref()
         .filter(|f| !f.is_empty())
         .map(|f| f.iter().map(|&i| FaceId(i)).collect());
-    let out = match deviation::run(
-        &reference,
-        &measured,
-        faces.as_deref(),
-        &DeviationSettings::default(),
-        &Control::new(),
-    ) {
+    let settings = DeviationSettings::default();
+    let out = match &surfaces {
+        Some((s, grid)) => deviation::run_on_surfaces(
+            s,
+            *grid,
+            &measured,
+            faces.as_deref(),
+            &settings,
+            &Control::new(),
+        ),
+        None => deviation::run(
+            &reference,
+            &measured,
+            faces.as_deref(),
+            &settings,
+            &Control::new(),
+        ),
+    };
+    let out = match out {
         Ok(o) => o,
         Err(e) => return bad(e.message(fairline_commands::FrontEnd::Workbench)),
     };

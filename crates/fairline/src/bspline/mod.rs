@@ -15,6 +15,8 @@
 //!   ([`BSplineSurface::derivatives_grid`], [`tessellate`]);
 //! - normals and curvature from the first and second fundamental forms;
 //!   isoparametric curves with exact curvature combs ([`iso_curves`]);
+//! - point inversion A6.1 and the exact deviation of points from a part
+//!   ([`closest_point_on_surface`], [`surface_deviation`]);
 //! - local support (Piegl & Tiller Eq. 2.4, property P2.1):
 //!   [`BSplineSurface::basis_support`], [`BSplineSurface::control_points_in_box`];
 //!
@@ -35,6 +37,7 @@ pub mod basis;
 mod bounds;
 pub mod continuity;
 mod iso;
+mod project;
 mod surface;
 mod tessellate;
 #[cfg(test)]
@@ -46,6 +49,7 @@ pub(crate) mod trim_tests;
 pub use basis::{MAX_DEGREE, MAX_ORDER, clamped_uniform_knots, find_span};
 pub use bounds::face_bounding_box;
 pub use iso::{IsoCurve, curve_curvature, iso_curve, iso_curves};
+pub use project::{closest_point_on_surface, surface_deviation};
 pub use surface::{
     BSplineSurface, BasisSupport, Curvature, MIN_WEIGHT_RATIO, SurfaceBasis, SurfaceDerivatives,
     unit_normal,

@@ -34,6 +34,10 @@ pub enum DeviationMethod {
     Displacement,
     /// Different meshes: signed distance to the closest reference point.
     ClosestPoint,
+    /// B-spline surfaces: signed distance to the closest point of the
+    /// surfaces themselves (point inversion,
+    /// [`crate::bspline::surface_deviation`]).
+    SurfacePoint,
 }
 
 /// Per-vertex deviation of a measured mesh from a reference.
@@ -49,6 +53,10 @@ pub struct Deviation {
     pub distance: Vec<f64>,
     /// Vertices whose value could not be measured (set to 0).
     pub unmatched: usize,
+    /// B-spline references: points whose closest point could not be
+    /// refined onto a face and are measured against the tessellation
+    /// ([`crate::bspline::surface_deviation`]); 0 for meshes.
+    pub unrefined: usize,
 }
 
 /// Errors of [`deviation`].
@@ -115,6 +123,7 @@ pub fn displacement(reference: &SurfaceMesh, positions: &[Vec3]) -> Deviation {
         signed,
         distance,
         unmatched,
+        unrefined: 0,
     }
 }
 
@@ -164,6 +173,7 @@ pub fn closest_point_deviation(
         signed,
         distance,
         unmatched,
+        unrefined: 0,
     })
 }
 
