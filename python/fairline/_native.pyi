@@ -163,6 +163,15 @@ def surface_highlight_lines(
     min_normal_cos: Optional[float] = None,
     circular: bool = False,
 ) -> Tuple[str, str]: ...
+def surface_deviation(
+    surfaces: str,
+    v1: _F64_2,
+    indices1: _U32,
+    offsets1: _U32,
+    grid: int = 64,
+    region: Optional[Sequence[int]] = None,
+    bins: int = 41,
+) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.bool_], str]: ...
 def surface_iso_curves(
     surfaces: str,
     count: int = 5,

@@ -36,6 +36,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(curvature, m)?)?;
     m.add_function(wrap_pyfunction!(deviation, m)?)?;
+    m.add_function(wrap_pyfunction!(surface_deviation, m)?)?;
     m.add_function(wrap_pyfunction!(section, m)?)?;
     m.add_function(wrap_pyfunction!(draft, m)?)?;
     m.add_function(wrap_pyfunction!(smooth, m)?)?;
@@ -161,6 +162,58 @@ type DeviationOut<'py> = (
     Bound<'py, PyArray1<bool>>,
     String,
 );
+
+/// `fairline deviation SURFACES MESH`: the exact signed distance of every
+/// vertex of a mesh from B-spline surfaces (JSON text), through the
+/// command layer's `run_on_surfaces`; `grid`: the start tessellation.
+#[pyfunction]
+#[pyo3(signature = (surfaces, v1, indices1, offsets1, grid = 64, region = None, bins = 41))]
+fn surface_deviation<'py>(
+    py: Python<'py>,
+    surfaces: String,
+    v1: V<'py>,
+    indices1: Idx<'py>,
+    offsets1: Idx<'py>,
+    grid: usize,
+    region: Option<Vec<u32>>,
+    bins: usize,
+) -> PyResult<DeviationOut<'py>> {
+    let reference = fairline::io::parse_surfaces_json(&surfaces)
+        .map_err(|e| Failure::bad(format!("surfaces: {e}")))?;
+    let after = soup_from(&v1, &indices1, &offsets1)?;
+    let settings = fairline_commands::deviation::DeviationSettings { bins };
+    let (signed, distance, inside, report) = crate::compute(py, move |control| -> Res<_> {
+        if reference.is_empty() {
+            return Err(Failure::bad("surfaces: no B-spline surface given"));
+        }
+        let after = mesh_from(&after)?;
+        let faces: Option<Vec<FaceId>> = region.map(|r| r.into_iter().map(FaceId).collect());
+        let out = fairline_commands::deviation::run_on_surfaces(
+            &reference,
+            grid,
+            &after,
+            faces.as_deref(),
+            &settings,
+            control,
+        )?;
+        let n = after.original_vertex_count();
+        let cut = |v: &[f64]| v[..n.min(v.len())].to_vec();
+        let mut inside = out.in_region.clone();
+        inside.resize(n, false);
+        Ok((
+            cut(&out.deviation.signed),
+            cut(&out.deviation.distance),
+            inside,
+            out.report.to_json().to_string(),
+        ))
+    })?;
+    Ok((
+        PyArray1::from_vec(py, signed),
+        PyArray1::from_vec(py, distance),
+        PyArray1::from_vec(py, inside),
+        report,
+    ))
+}
 
 /// `fairline deviation` (crates/fairline-cli/src/deviation.rs): the
 /// signed deviation of the second mesh from the first, per vertex of the

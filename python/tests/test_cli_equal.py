@@ -520,3 +520,16 @@ def test_every_default_is_the_clis(cli, command):
             assert float(default) == float(value), f"{command} {name}: {default!r} != {value!r}"
         found += 1
     assert found > 0 or command == "curvature" and params["method"].default == "rusinkiewicz"
+
+
+def test_surface_deviation_equals_cli(cli, demo, tmp_path):
+    before, after = demo / "bspline-panel-dented.json", demo / "bspline-panel-faired.json"
+    run(cli, "convert", after, tmp_path / "after.obj")
+    run(cli, "deviation", before, tmp_path / "after.obj", "--csv", tmp_path / "d.csv", "--report", tmp_path / "r.json")
+    V, F = fairline.read_mesh(tmp_path / "after.obj")
+    values, report = fairline.surface_deviation(fairline.read_surfaces(before), V, F)
+    same_report(report, cli_report(tmp_path / "r.json"))
+    assert report["method"] == "surface-point"
+    rows = np.loadtxt(tmp_path / "d.csv", delimiter=",", skiprows=1, usecols=(4, 5))
+    exact(values["signed"], rows[:, 0])
+    exact(values["distance"], rows[:, 1])
