@@ -110,12 +110,12 @@ pub fn run(args: Args) -> Result<()> {
     // triangles
     enum Reference {
         Surfaces(Vec<fairline::bspline::BSplineSurface>),
-        Mesh(SurfaceMesh),
+        Mesh(Box<SurfaceMesh>),
     }
     let before = if crate::surface::is_surface_path(&args.before) {
         Reference::Surfaces(crate::surface::load_surfaces(&args.before)?)
     } else {
-        Reference::Mesh(read(&args.before, args.grid)?)
+        Reference::Mesh(Box::new(read(&args.before, args.grid)?))
     };
     let after = read(&args.after, args.grid)?;
     let region = match &args.region {
