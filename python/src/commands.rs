@@ -163,6 +163,40 @@ type DeviationOut<'py> = (
     String,
 );
 
+/// A deviation's signed and unsigned values and region flags, one per
+/// input vertex (`n`: the input's vertex count, as the CLI's CSV), and the
+/// report's JSON text.
+fn per_input_vertex(
+    out: &fairline_commands::deviation::DeviationOutcome,
+    n: usize,
+) -> (Vec<f64>, Vec<f64>, Vec<bool>, String) {
+    let cut = |v: &[f64]| v[..n.min(v.len())].to_vec();
+    let mut inside = out.in_region.clone();
+    inside.resize(n, false);
+    (
+        cut(&out.deviation.signed),
+        cut(&out.deviation.distance),
+        inside,
+        out.report.to_json().to_string(),
+    )
+}
+
+/// [`per_input_vertex`]'s values as numpy arrays.
+fn deviation_out(
+    py: Python<'_>,
+    signed: Vec<f64>,
+    distance: Vec<f64>,
+    inside: Vec<bool>,
+    report: String,
+) -> DeviationOut<'_> {
+    (
+        PyArray1::from_vec(py, signed),
+        PyArray1::from_vec(py, distance),
+        PyArray1::from_vec(py, inside),
+        report,
+    )
+}
+
 /// `fairline deviation SURFACES MESH`: the exact signed distance of every
 /// vertex of a mesh from B-spline surfaces (JSON text), through the
 /// command layer's `run_on_surfaces`; `grid`: the start tessellation.
@@ -196,23 +230,9 @@ fn surface_deviation<'py>(
             &settings,
             control,
         )?;
-        let n = after.original_vertex_count();
-        let cut = |v: &[f64]| v[..n.min(v.len())].to_vec();
-        let mut inside = out.in_region.clone();
-        inside.resize(n, false);
-        Ok((
-            cut(&out.deviation.signed),
-            cut(&out.deviation.distance),
-            inside,
-            out.report.to_json().to_string(),
-        ))
+        Ok(per_input_vertex(&out, after.original_vertex_count()))
     })?;
-    Ok((
-        PyArray1::from_vec(py, signed),
-        PyArray1::from_vec(py, distance),
-        PyArray1::from_vec(py, inside),
-        report,
-    ))
+    Ok(deviation_out(py, signed, distance, inside, report))
 }
 
 /// `fairline deviation` (crates/fairline-cli/src/deviation.rs): the
@@ -245,24 +265,9 @@ fn deviation<'py>(
             &settings,
             control,
         )?;
-        // one value per input vertex, as the CLI's CSV
-        let n = after.original_vertex_count();
-        let cut = |v: &[f64]| v[..n.min(v.len())].to_vec();
-        let mut inside = out.in_region.clone();
-        inside.resize(n, false);
-        Ok((
-            cut(&out.deviation.signed),
-            cut(&out.deviation.distance),
-            inside,
-            out.report.to_json().to_string(),
-        ))
+        Ok(per_input_vertex(&out, after.original_vertex_count()))
     })?;
-    Ok((
-        PyArray1::from_vec(py, signed),
-        PyArray1::from_vec(py, distance),
-        PyArray1::from_vec(py, inside),
-        report,
-    ))
+    Ok(deviation_out(py, signed, distance, inside, report))
 }
 
 /// Plane sections as flat arrays: points (n, 3), curvature (n,), comb

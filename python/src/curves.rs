@@ -8,6 +8,8 @@
 use crate::{Failure, Res, positions_array};
 use fairline::io::iges_write::{IgesWriteOptions, NamedCurve, write_curves_iges};
 use fairline::io::units::LengthUnit;
+use fairline_commands::curves::{LinePolyline, fit};
+use fairline_commands::report::Report;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -51,13 +53,26 @@ pub(crate) fn unit(name: Option<&str>) -> Res<Option<LengthUnit>> {
     }
 }
 
-/// Writes the curves atomically as IGES in `unit` (millimetres when none).
-pub(crate) fn write(path: &PathBuf, curves: &[NamedCurve], unit: Option<LengthUnit>) -> Res<()> {
-    let mut options = IgesWriteOptions::default();
-    if let Some(u) = unit {
-        options = options.unit(u);
+/// Fits `lines` within `tolerance`, writes the curves atomically as IGES
+/// in `unit` (millimetres when none) when `path` is given, and sets the
+/// report's `curves` key: the curves and the report's JSON text.
+pub(crate) fn fit_and_write(
+    lines: &[LinePolyline<'_>],
+    tolerance: f64,
+    path: Option<&PathBuf>,
+    unit: Option<LengthUnit>,
+    mut report: Report,
+) -> Res<(Vec<NamedCurve>, String)> {
+    let fitted = fit(lines, tolerance);
+    if let Some(path) = path {
+        let mut options = IgesWriteOptions::default();
+        if let Some(u) = unit {
+            options = options.unit(u);
+        }
+        write_curves_iges(path, &fitted.curves, &options).map_err(Failure::from)?;
     }
-    write_curves_iges(path, curves, &options).map_err(Failure::from)
+    report.set("curves", fitted.summary);
+    Ok((fitted.curves, report.to_json().to_string()))
 }
 
 /// The curves as a list of dicts: `label` (the IGES label, `HLm` or

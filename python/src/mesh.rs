@@ -375,14 +375,15 @@ impl Mesh {
             use fairline_commands::curves;
             fairline_commands::require_faces(mesh.face_count(), mesh.original_vertex_count())?;
             let triangles = Mesh::triangles(&mesh, &cache)?;
-            let mut out = fairline_commands::highlight::run(&triangles, &settings, control)?;
+            let out = fairline_commands::highlight::run(&triangles, &settings, control)?;
             let tol = curves::mesh_tolerance(tolerance, &triangles);
-            let fitted = curves::fit(&curves::mesh_lines(&out.lines), tol);
-            if let Some(p) = &path {
-                crate::curves::write(p, &fitted.curves, unit)?;
-            }
-            out.report.set("curves", fitted.summary);
-            Ok((fitted.curves, out.report.to_json().to_string()))
+            crate::curves::fit_and_write(
+                &curves::mesh_lines(&out.lines),
+                tol,
+                path.as_ref(),
+                unit,
+                out.report,
+            )
         })?;
         Ok((crate::curves::list(py, &curves)?, report))
     }

@@ -312,14 +312,15 @@ fn surface_highlight_curves<'py>(
         if all.is_empty() {
             return Err(Failure::bad("surfaces: no B-spline surface given"));
         }
-        let mut out = fairline_commands::surface_highlight::run(&all, &settings, control, &|| {})?;
+        let out = fairline_commands::surface_highlight::run(&all, &settings, control, &|| {})?;
         let tol = curves::surface_tolerance(tolerance, &all);
-        let fitted = curves::fit(&curves::surface_lines(&out.results), tol);
-        if let Some(p) = &path {
-            crate::curves::write(p, &fitted.curves, unit)?;
-        }
-        out.report.set("curves", fitted.summary);
-        Ok((fitted.curves, out.report.to_json().to_string()))
+        crate::curves::fit_and_write(
+            &curves::surface_lines(&out.results),
+            tol,
+            path.as_ref(),
+            unit,
+            out.report,
+        )
     })?;
     Ok((crate::curves::list(py, &curves)?, report))
 }
