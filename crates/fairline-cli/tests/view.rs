@@ -3196,19 +3196,8 @@ fn lines_as_curves_match_the_equivalent_command() {
     let command = r["command"].as_str().unwrap();
     assert!(command.starts_with("fairline highlight ") && command.ends_with("-o lines.igs"));
     // the equivalent command, run as the CLI
-    let words: Vec<String> = command
-        .split_whitespace()
-        .skip(1)
-        .map(|w| w.trim_matches('\'').to_string())
-        .collect();
-    let out = dir.join("lines.igs");
-    let rep = dir.join("r.json");
-    let mut args: Vec<String> = words[..words.len() - 1].to_vec();
-    args.push(out.display().to_string());
-    args.extend(["--report".into(), rep.display().to_string()]);
-    let argv: Vec<&str> = args.iter().map(String::as_str).collect();
-    let o = run(&argv);
-    ok(&o);
+    let (out, rep) = (dir.join("lines.igs"), dir.join("r.json"));
+    run_equivalent(command, &out, &rep);
     let cli = common::json(&rep)["curves"].clone();
     for key in [
         "curves",
@@ -3228,6 +3217,22 @@ fn lines_as_curves_match_the_equivalent_command() {
     for bad in [json!({"light": light, "tolerance": -1.0}), json!({})] {
         assert_eq!(srv.post("/api/doc/0/lines-curves", &bad).0, 400, "{bad}");
     }
+}
+
+/// Runs a workbench's equivalent command (`fairline … -o FILE`) as the CLI,
+/// its output file replaced by `out` and a report written to `report`;
+/// asserts it succeeds.
+fn run_equivalent(command: &str, out: &Path, report: &Path) {
+    let words: Vec<String> = command
+        .split_whitespace()
+        .skip(1)
+        .map(|w| w.trim_matches('\'').to_string())
+        .collect();
+    let mut args: Vec<String> = words[..words.len() - 1].to_vec();
+    args.push(out.display().to_string());
+    args.extend(["--report".into(), report.display().to_string()]);
+    let argv: Vec<&str> = args.iter().map(String::as_str).collect();
+    ok(&run(&argv));
 }
 
 /// The text of an IGES file with its generation timestamps
@@ -3265,18 +3270,8 @@ fn lines_as_curves_of_a_surface_file_are_its_exact_lines_as_the_command_writes_t
     assert_eq!(r["name"], "teapot-lines.igs");
     assert!(r.get("note").is_none(), "{r}");
     let command = r["command"].as_str().unwrap();
-    let words: Vec<String> = command
-        .split_whitespace()
-        .skip(1)
-        .map(|w| w.trim_matches('\'').to_string())
-        .collect();
-    let out = dir.join("lines.igs");
-    let rep = dir.join("r.json");
-    let mut args: Vec<String> = words[..words.len() - 1].to_vec();
-    args.push(out.display().to_string());
-    args.extend(["--report".into(), rep.display().to_string()]);
-    let argv: Vec<&str> = args.iter().map(String::as_str).collect();
-    ok(&run(&argv));
+    let (out, rep) = (dir.join("lines.igs"), dir.join("r.json"));
+    run_equivalent(command, &out, &rep);
     // the same exact lines, fitted the same way, in the same unit: the
     // same file but for the time it was made
     let cli_text = std::fs::read_to_string(&out).unwrap();
