@@ -155,6 +155,9 @@ pub fn summary(out: &SectionOutcome, vertices: usize) -> String {
 pub const MAX_ISO_COUNT: usize = 1000;
 /// Most samples along one iso-curve.
 pub const MAX_ISO_SAMPLES: usize = 100_000;
+/// Most iso-curve samples of one run (memory stays bounded whatever the
+/// counts asked for).
+pub const MAX_ISO_POINTS: usize = 20_000_000;
 
 /// The options of `section --iso`: isoparametric curves of B-spline
 /// surfaces with their exact curvature combs (defaults: 5 per direction,
@@ -242,6 +245,20 @@ pub fn iso(
         Some(k) => vec![k],
         None => (0..surfaces.len()).collect(),
     };
+    // the iso-curves' samples (trim edges come on top, as many per curve)
+    let planned = chosen.len() as f64 * 2.0 * s.count as f64 * s.samples as f64;
+    if planned > MAX_ISO_POINTS as f64 {
+        return Err(CommandError::invalid(
+            "samples",
+            format!(
+                "{}: {} surfaces × 2 × {} curves × {} samples is more than {MAX_ISO_POINTS} points; give fewer curves or samples, or one --surface",
+                s.samples,
+                chosen.len(),
+                s.count,
+                s.samples
+            ),
+        ));
+    }
     let mut report = Report::new("section");
     let mut curves = Vec::new();
     report.time(|| -> Result<(), CommandError> {
@@ -416,6 +433,14 @@ mod tests {
                     ..Default::default()
                 },
                 "comb-scale",
+            ),
+            (
+                IsoSettings {
+                    count: 1000,
+                    samples: 100_000,
+                    ..Default::default()
+                },
+                "samples",
             ),
         ] {
             let e = iso(&surfaces, &bad, &Control::new()).unwrap_err();
