@@ -360,6 +360,7 @@ def deviation(
     *,
     region: Optional[Sequence[int]] = None,
     bins: int = 41,
+    broad_wavelength: Optional[float] = None,
 ) -> Tuple[Dict[str, np.ndarray], Dict[str, Any]]:
     """Signed deviation of a mesh from a reference (``fairline deviation``).
 
@@ -370,19 +371,30 @@ def deviation(
     ``F_before``. ``region``: faces of the after mesh; the report then
     splits the statistics into ``inside_region`` (the intended motion) and
     ``outside_region`` (side effects, 0 for highlight-line fairing).
+    The deviation is also split by wavelength (``broad_wavelength``, model
+    units; default ten mean edge lengths of the after mesh) into its
+    ``broad`` part (whole neighbourhoods moved: offset, drift, the
+    shrinkage of a smoothing) and its ``local`` part (the noise or defect
+    a repair removes); ``broad + local == signed``.
 
-    Returns ``(values, report)``; ``values`` has ``signed``, ``distance``
-    (n,) float64 and ``in_region`` (n,) bool; the report has ``method``,
-    ``all`` (``min``, ``max``, ``max_abs``, ``mean``, ``mean_abs``, ``rms``,
-    ``p50_abs`` … ``p99_abs``, ``histogram``) and the region's parts.
+    Returns ``(values, report)``; ``values`` has ``signed``, ``distance``,
+    ``broad``, ``local`` (n,) float64 and ``in_region`` (n,) bool; the
+    report has ``method``, ``all`` (``min``, ``max``, ``max_abs``,
+    ``mean``, ``mean_abs``, ``rms``, ``p50_abs`` … ``p99_abs``,
+    ``histogram``), ``broad``, ``local``, ``broad_wavelength`` and the
+    region's parts.
     """
     v0, i0, o0 = _mesh(V_before, F_before)
     if F_after is None and not (hasattr(V_after, "vertices") and hasattr(V_after, "faces")):
         F_after = F_before
     v1, i1, o1 = _mesh(V_after, F_after)
     reg = None if region is None else [int(f) for f in region]
-    signed, distance, inside, report = _native.deviation(v0, i0, o0, v1, i1, o1, region=reg, bins=int(bins))
-    return {"signed": signed, "distance": distance, "in_region": inside}, _report(report)
+    wavelength = None if broad_wavelength is None else float(broad_wavelength)
+    signed, distance, inside, broad, local, report = _native.deviation(
+        v0, i0, o0, v1, i1, o1, region=reg, bins=int(bins), broad_wavelength=wavelength
+    )
+    values = {"signed": signed, "distance": distance, "in_region": inside, "broad": broad, "local": local}
+    return values, _report(report)
 
 
 def surface_deviation(
@@ -393,6 +405,7 @@ def surface_deviation(
     grid: int = 64,
     region: Optional[Sequence[int]] = None,
     bins: int = 41,
+    broad_wavelength: Optional[float] = None,
 ) -> Tuple[Dict[str, np.ndarray], Dict[str, Any]]:
     """Signed distance of every vertex of a mesh from B-spline surfaces
     (``fairline deviation PART.igs MESH``): the exact distance to the
@@ -404,10 +417,13 @@ def surface_deviation(
     """
     v1, i1, o1 = _mesh(V, F)
     reg = None if region is None else [int(f) for f in region]
-    signed, distance, inside, report = _native.surface_deviation(
-        _surfaces_text(surfaces), v1, i1, o1, grid=int(grid), region=reg, bins=int(bins)
+    wavelength = None if broad_wavelength is None else float(broad_wavelength)
+    signed, distance, inside, broad, local, report = _native.surface_deviation(
+        _surfaces_text(surfaces), v1, i1, o1, grid=int(grid), region=reg, bins=int(bins),
+        broad_wavelength=wavelength,
     )
-    return {"signed": signed, "distance": distance, "in_region": inside}, _report(report)
+    values = {"signed": signed, "distance": distance, "in_region": inside, "broad": broad, "local": local}
+    return values, _report(report)
 
 
 def section(

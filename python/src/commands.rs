@@ -155,21 +155,28 @@ pub(crate) fn curvature_arrays<'py>(py: Python<'py>, out: &CurvatureRows) -> Cur
 }
 
 /// Per-vertex deviation: the signed and unsigned arrays (n,), the
-/// in-region flags (n,) (all false without a region), and the report.
+/// in-region flags (n,) (all false without a region), the broad and local
+/// parts (n,), and the report.
 type DeviationOut<'py> = (
     Bound<'py, PyArray1<f64>>,
     Bound<'py, PyArray1<f64>>,
     Bound<'py, PyArray1<bool>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
     String,
 );
 
-/// A deviation's signed and unsigned values and region flags, one per
-/// input vertex (`n`: the input's vertex count, as the CLI's CSV), and the
-/// report's JSON text.
+/// A deviation's per-input-vertex values (signed, distance, in region,
+/// broad, local) and the report's JSON text.
+type DeviationValues = (Vec<f64>, Vec<f64>, Vec<bool>, Vec<f64>, Vec<f64>, String);
+
+/// A deviation's signed and unsigned values, region flags and broad and
+/// local parts, one per input vertex (`n`: the input's vertex count, as
+/// the CLI's CSV), and the report's JSON text.
 fn per_input_vertex(
     out: &fairline_commands::deviation::DeviationOutcome,
     n: usize,
-) -> (Vec<f64>, Vec<f64>, Vec<bool>, String) {
+) -> DeviationValues {
     let cut = |v: &[f64]| v[..n.min(v.len())].to_vec();
     let mut inside = out.in_region.clone();
     inside.resize(n, false);
@@ -177,22 +184,21 @@ fn per_input_vertex(
         cut(&out.deviation.signed),
         cut(&out.deviation.distance),
         inside,
+        cut(&out.split.broad),
+        cut(&out.split.local),
         out.report.to_json().to_string(),
     )
 }
 
 /// [`per_input_vertex`]'s values as numpy arrays.
-fn deviation_out(
-    py: Python<'_>,
-    signed: Vec<f64>,
-    distance: Vec<f64>,
-    inside: Vec<bool>,
-    report: String,
-) -> DeviationOut<'_> {
+fn deviation_out(py: Python<'_>, values: DeviationValues) -> DeviationOut<'_> {
+    let (signed, distance, inside, broad, local, report) = values;
     (
         PyArray1::from_vec(py, signed),
         PyArray1::from_vec(py, distance),
         PyArray1::from_vec(py, inside),
+        PyArray1::from_vec(py, broad),
+        PyArray1::from_vec(py, local),
         report,
     )
 }
@@ -201,7 +207,7 @@ fn deviation_out(
 /// vertex of a mesh from B-spline surfaces (JSON text), through the
 /// command layer's `run_on_surfaces`; `grid`: the start tessellation.
 #[pyfunction]
-#[pyo3(signature = (surfaces, v1, indices1, offsets1, grid = 64, region = None, bins = 41))]
+#[pyo3(signature = (surfaces, v1, indices1, offsets1, grid = 64, region = None, bins = 41, broad_wavelength = None))]
 fn surface_deviation<'py>(
     py: Python<'py>,
     surfaces: String,
@@ -211,12 +217,16 @@ fn surface_deviation<'py>(
     grid: usize,
     region: Option<Vec<u32>>,
     bins: usize,
+    broad_wavelength: Option<f64>,
 ) -> PyResult<DeviationOut<'py>> {
     let reference = fairline::io::parse_surfaces_json(&surfaces)
         .map_err(|e| Failure::bad(format!("surfaces: {e}")))?;
     let after = soup_from(&v1, &indices1, &offsets1)?;
-    let settings = fairline_commands::deviation::DeviationSettings { bins };
-    let (signed, distance, inside, report) = crate::compute(py, move |control| -> Res<_> {
+    let settings = fairline_commands::deviation::DeviationSettings {
+        bins,
+        broad_wavelength,
+    };
+    let values = crate::compute(py, move |control| -> Res<_> {
         if reference.is_empty() {
             return Err(Failure::bad("surfaces: no B-spline surface given"));
         }
@@ -232,14 +242,14 @@ fn surface_deviation<'py>(
         )?;
         Ok(per_input_vertex(&out, after.original_vertex_count()))
     })?;
-    Ok(deviation_out(py, signed, distance, inside, report))
+    Ok(deviation_out(py, values))
 }
 
 /// `fairline deviation` (crates/fairline-cli/src/deviation.rs): the
 /// signed deviation of the second mesh from the first, per vertex of the
 /// second, through the command layer; `region`: faces of the second mesh.
 #[pyfunction]
-#[pyo3(signature = (v0, indices0, offsets0, v1, indices1, offsets1, region = None, bins = 41))]
+#[pyo3(signature = (v0, indices0, offsets0, v1, indices1, offsets1, region = None, bins = 41, broad_wavelength = None))]
 fn deviation<'py>(
     py: Python<'py>,
     v0: V<'py>,
@@ -250,11 +260,15 @@ fn deviation<'py>(
     offsets1: Idx<'py>,
     region: Option<Vec<u32>>,
     bins: usize,
+    broad_wavelength: Option<f64>,
 ) -> PyResult<DeviationOut<'py>> {
     let before = soup_from(&v0, &indices0, &offsets0)?;
     let after = soup_from(&v1, &indices1, &offsets1)?;
-    let settings = fairline_commands::deviation::DeviationSettings { bins };
-    let (signed, distance, inside, report) = crate::compute(py, move |control| -> Res<_> {
+    let settings = fairline_commands::deviation::DeviationSettings {
+        bins,
+        broad_wavelength,
+    };
+    let values = crate::compute(py, move |control| -> Res<_> {
         let before = mesh_from(&before)?;
         let after = mesh_from(&after)?;
         let faces: Option<Vec<FaceId>> = region.map(|r| r.into_iter().map(FaceId).collect());
@@ -267,7 +281,7 @@ fn deviation<'py>(
         )?;
         Ok(per_input_vertex(&out, after.original_vertex_count()))
     })?;
-    Ok(deviation_out(py, signed, distance, inside, report))
+    Ok(deviation_out(py, values))
 }
 
 /// Plane sections as flat arrays: points (n, 3), curvature (n,), comb

@@ -58,3 +58,22 @@ def test_bad_region_is_refused():
     V, F = grid(5)
     with pytest.raises(fairline.FairlineError, match="out of range"):
         fairline.deviation(V, F, V, region=[10_000])
+
+
+def test_broad_and_local_parts_split_an_offset_from_a_spike():
+    V, F = grid(41)
+    W = V.copy()
+    W[:, 2] += 0.01
+    spike = 20 * 41 + 20
+    W[spike, 2] += 0.02
+    values, report = fairline.deviation(V, F, W, broad_wavelength=0.5)
+    assert report["broad_wavelength"] == 0.5
+    assert np.allclose(values["broad"] + values["local"], values["signed"], atol=1e-12)
+    assert report["broad"]["mean"] == pytest.approx(0.01, abs=1e-4)
+    assert values["local"][spike] > 0.015
+    assert np.abs(np.delete(values["local"], spike)).max() < 0.005
+    # the default: ten mean edge lengths (edges 0.05 and 0.05·√2)
+    _, default = fairline.deviation(V, F, W)
+    assert 0.5 < default["broad_wavelength"] < 0.6
+    with pytest.raises(fairline.FairlineError, match="broad"):
+        fairline.deviation(V, F, W, broad_wavelength=-1.0)

@@ -24,11 +24,14 @@ use std::path::{Path, PathBuf};
 /// its tessellation (--grid per patch and direction).
 /// The report gives max/mean/rms/percentiles and a histogram; with
 /// --region, separately inside the region (the intended motion) and
-/// outside it (side effects: 0 for highlight-line fairing). Lengths are in
-/// the files' units.
+/// outside it (side effects: 0 for highlight-line fairing); and the
+/// deviation split by wavelength into its broad part (whole
+/// neighbourhoods moved: offset, drift, the shrinkage of a smoothing) and
+/// its local part (a few vertices moved against their neighbours: the
+/// noise or the defect a repair removes). Lengths are in the files' units.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline fair fairline-demo/dented-panel.obj --region fairline-demo/dented-panel-region.json -o faired.obj\n  fairline deviation fairline-demo/dented-panel.obj faired.obj --region fairline-demo/dented-panel-region.json --png deviation.png --report deviation.json\n  fairline deviation fairline-demo/sphere.ply fairline-demo/sphere.ply --csv d.csv"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline fair fairline-demo/dented-panel.obj --region fairline-demo/dented-panel-region.json -o faired.obj\n  fairline deviation fairline-demo/dented-panel.obj faired.obj --region fairline-demo/dented-panel-region.json --png deviation.png --report deviation.json\n  fairline deviation fairline-demo/sphere.ply fairline-demo/sphere.ply --csv d.csv\n  fairline smooth fairline-demo/wavy.obj --method laplace -o laplace.obj\n  fairline deviation fairline-demo/wavy.obj laplace.obj --show broad --png shrinkage.png"
 )]
 pub struct Args {
     /// The reference: mesh (.obj .ply .off .stl) or surfaces (.json .igs .step).
@@ -42,7 +45,7 @@ pub struct Args {
     /// histogram.
     #[arg(long, value_name = "IMG.png")]
     pub png: Option<PathBuf>,
-    /// Per-vertex values: `vertex,x,y,z,signed,distance,in_region`.
+    /// Per-vertex values: `vertex,x,y,z,signed,distance,in_region,broad,local`.
     #[arg(long, value_name = "OUT.csv")]
     pub csv: Option<PathBuf>,
     /// Write a JSON report.
@@ -58,6 +61,15 @@ pub struct Args {
     /// Histogram bins.
     #[arg(long, default_value_t = DEFAULT_BINS)]
     pub bins: usize,
+    /// The wavelength (model units) that splits the deviation into its
+    /// broad part (longer waves) and its local part (default: ten mean
+    /// edge lengths of AFTER, so noise is local and the shape broad).
+    #[arg(long, value_name = "LENGTH")]
+    pub broad_wavelength: Option<f64>,
+    /// What the picture colours: the signed deviation, its broad part or
+    /// its local part.
+    #[arg(long, value_enum, default_value_t = Show::Signed)]
+    pub show: Show,
     /// Viewing direction X,Y,Z of the picture.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     pub view: Option<Vec3>,
@@ -67,6 +79,17 @@ pub struct Args {
     /// Tessellation grid per patch and direction for surface files.
     #[arg(long, default_value_t = 64, value_name = "N")]
     pub grid: usize,
+}
+
+/// The part of the deviation a picture shows.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Show {
+    /// The signed deviation.
+    Signed,
+    /// Its broad part (waves longer than --broad-wavelength).
+    Broad,
+    /// Its local part.
+    Local,
 }
 
 /// Reads a mesh, or tessellates a surface file `grid` × `grid` per patch.
@@ -128,7 +151,10 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => None,
     };
-    let settings = DeviationSettings { bins: args.bins };
+    let settings = DeviationSettings {
+        bins: args.bins,
+        broad_wavelength: args.broad_wavelength,
+    };
     let out = match &before {
         Reference::Surfaces(surfaces) => deviation::run_on_surfaces(
             surfaces,
@@ -164,7 +190,9 @@ pub fn run(args: Args) -> Result<()> {
         }
     })?;
     if let Some(png) = &args.png {
-        let img = picture(&after, &out, args.max, args.range, args.view, args.size)?;
+        let img = picture(
+            &after, &out, args.show, args.max, args.range, args.view, args.size,
+        )?;
         img.write_png(png)?;
     }
     if let Some(csv) = &args.csv {
@@ -175,30 +203,36 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// `vertex,x,y,z,signed,distance,in_region` per vertex (original vertex
-/// indices; split non-manifold fans keep the value of the kept index).
+/// `vertex,x,y,z,signed,distance,in_region,broad,local` per vertex
+/// (original vertex indices; split non-manifold fans keep the value of the
+/// kept index).
 fn write_csv(path: &Path, mesh: &SurfaceMesh, out: &deviation::DeviationOutcome) -> Result<()> {
     use std::io::Write;
     let signed = mesh.original_values(&out.deviation.signed);
     let dist = mesh.original_values(&out.deviation.distance);
+    let broad = mesh.original_values(&out.split.broad);
+    let local = mesh.original_values(&out.split.local);
     fairline::io::atomic_write(path, |w| {
         let mut w = std::io::BufWriter::new(w);
-        writeln!(w, "vertex,x,y,z,signed,distance,in_region")?;
+        writeln!(w, "vertex,x,y,z,signed,distance,in_region,broad,local")?;
         for (i, (s, d)) in signed.iter().zip(dist).enumerate() {
             let p = mesh.positions()[i];
             let r = out.in_region.get(i).map_or(0, |&b| b as u8);
-            writeln!(w, "{i},{},{},{},{s},{d},{r}", p.x, p.y, p.z)?;
+            let (b, l) = (broad[i], local[i]);
+            writeln!(w, "{i},{},{},{},{s},{d},{r},{b},{l}", p.x, p.y, p.z)?;
         }
         w.flush()
     })
     .map_err(|e| anyhow::anyhow!("writing {}: {e}", path.display()))
 }
 
-/// AFTER coloured by the signed deviation on a range centred on 0, with
-/// the colour bar (units in its title) and a histogram inset.
+/// AFTER coloured by the signed deviation (or its broad or local part) on
+/// a range centred on 0, with the colour bar (units in its title) and a
+/// histogram inset of the values shown.
 pub fn picture(
     mesh: &SurfaceMesh,
     out: &deviation::DeviationOutcome,
+    show: Show,
     max: Option<f64>,
     range: Option<(f64, f64)>,
     view: Option<Vec3>,
@@ -209,21 +243,41 @@ pub fn picture(
         Some(r) => Some(r),
         None => max.filter(|m| *m > 0.0 && m.is_finite()).map(|m| (-m, m)),
     };
+    let (name, values, stats, title) = match show {
+        Show::Signed => (
+            "deviation (model units)",
+            &out.deviation.signed,
+            &out.all,
+            summary_title(out),
+        ),
+        Show::Broad => (
+            "broad part (model units)",
+            &out.split.broad,
+            &out.broad,
+            part_title("broad part, waves over", out.split.wavelength, &out.broad),
+        ),
+        Show::Local => (
+            "local part (model units)",
+            &out.split.local,
+            &out.local,
+            part_title("local part, waves under", out.split.wavelength, &out.local),
+        ),
+    };
     let mut img = mesh_picture(
         mesh,
         &Picture {
             scalar: Some(ScalarField {
-                name: "deviation (model units)".into(),
-                values: &out.deviation.signed,
+                name: name.into(),
+                values,
                 colormap: Colormap::Coolwarm,
                 range,
             }),
-            title: Some(summary_title(out)),
+            title: Some(title),
             ..Default::default()
         },
         &opts,
     )?;
-    draw_histogram(&mut img, &out.all.histogram);
+    draw_histogram(&mut img, &stats.histogram);
     Ok(img)
 }
 
@@ -239,6 +293,14 @@ fn summary_title(out: &deviation::DeviationOutcome) -> String {
         ));
     }
     t
+}
+
+/// The title of a picture of the broad or local part.
+fn part_title(what: &str, wavelength: f64, stats: &fairline::geom::DeviationStats) -> String {
+    format!(
+        "{what} {wavelength:.2e}: max |d| {:.3e}, mean {:+.2e}, rms {:.3e}",
+        stats.max_abs, stats.mean, stats.rms
+    )
 }
 
 /// A histogram of the signed values in the lower-left corner: one bar per

@@ -46,7 +46,7 @@ fn concentric_spheres_deviate_by_their_radius_difference() {
         .sum();
     assert_eq!(counts, r["vertices"].as_u64().unwrap() as usize);
     let text = std::fs::read_to_string(&csv).unwrap();
-    assert!(text.starts_with("vertex,x,y,z,signed,distance,in_region\n"));
+    assert!(text.starts_with("vertex,x,y,z,signed,distance,in_region,broad,local\n"));
     assert_eq!(
         text.lines().count(),
         1 + r["vertices"].as_u64().unwrap() as usize
@@ -96,6 +96,68 @@ fn region_splits_intended_motion_from_side_effects() {
     assert!((r["inside_region"]["max_abs"].as_f64().unwrap() - 0.03).abs() < 1e-9);
     assert_eq!(r["outside_region"]["max_abs"].as_f64().unwrap(), 0.0);
     assert!(r["inside_region"]["count"].as_u64().unwrap() > 0);
+}
+
+/// A shift of the whole plane plus a one-vertex spike: `--show broad`
+/// colours the shift, `--show local` the spike; the CSV's `broad` and
+/// `local` add up to `signed`.
+#[test]
+fn broad_and_local_parts_are_shown_and_written() {
+    let dir = tmp("deviation-broad");
+    let before = shapes::plane(41);
+    let mut after = before.clone();
+    let spike = 20 * 41 + 20;
+    for (i, p) in after.positions_mut().iter_mut().enumerate() {
+        p.z += 0.01 + if i == spike { 0.02 } else { 0.0 };
+    }
+    let (a, b) = (dir.join("a.obj"), dir.join("b.obj"));
+    fairline::io::write_mesh(&a, &before).unwrap();
+    fairline::io::write_mesh(&b, &after).unwrap();
+    let (csv, report) = (dir.join("d.csv"), dir.join("r.json"));
+    let mut pictures = Vec::new();
+    for show in ["broad", "local"] {
+        let png = dir.join(format!("{show}.png"));
+        let out = run(&[
+            "deviation",
+            s(&a),
+            s(&b),
+            "--broad-wavelength",
+            "0.5",
+            "--show",
+            show,
+            "--png",
+            s(&png),
+            "--csv",
+            s(&csv),
+            "--report",
+            s(&report),
+            "--size",
+            "400x400",
+        ]);
+        ok(&out);
+        assert!(String::from_utf8_lossy(&out.stderr).contains("broad (waves over 5.000e-1)"));
+        let img = fairline::render::Image::decode_png(&std::fs::read(&png).unwrap()).unwrap();
+        assert_eq!((img.width, img.height), (400, 400));
+        pictures.push(img);
+    }
+    // the two parts are two different fields on the part
+    assert!(pictures[0] != pictures[1]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    for line in text.lines().skip(1) {
+        let f: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        assert!((f[7] + f[8] - f[4]).abs() < 1e-12, "{line}");
+    }
+    let r = json(&report);
+    assert_eq!(r["broad_wavelength"], 0.5);
+    assert!((r["broad"]["mean"].as_f64().unwrap() - 0.01).abs() < 1e-4);
+    assert!(r["local"]["max_abs"].as_f64().unwrap() > 0.015);
+    let bad = run(&["deviation", s(&a), s(&b), "--broad-wavelength", "0"]);
+    assert_eq!(
+        bad.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&bad.stderr)
+    );
 }
 
 #[test]

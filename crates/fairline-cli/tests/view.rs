@@ -1842,6 +1842,32 @@ fn api_deviation_and_probe_measure_what_the_cli_measures() {
         "{cli} vs {h}"
     );
     assert!(rel(&cli["all"]["rms"], &h["all"]["rms"]), "{cli} vs {h}");
+    // its broad and local parts add up to it, and the command says which
+    let part = |show: &str| {
+        let (st, body) = srv.post(
+            "/api/doc/0/deviation",
+            &json!({"against": "original", "faces": region["faces"], "show": show}),
+        );
+        assert_eq!(st, 200, "{}", String::from_utf8_lossy(&body));
+        parse_frame(&body)
+    };
+    let ((hb, broad), (hl, local)) = (part("broad"), part("local"));
+    assert!(hl["command"].as_str().unwrap().contains(" --show local "));
+    assert_eq!(hb["broad"], h["broad"]);
+    for ((b, l), d) in broad.iter().zip(&local).zip(&values) {
+        assert!(
+            (b + l - d).abs() <= 1e-6 * (b.abs() + l.abs()) + 1e-12,
+            "{b} + {l} vs {d}"
+        );
+    }
+    assert_eq!(
+        srv.post(
+            "/api/doc/0/deviation",
+            &json!({"against": "original", "show": "everything"})
+        )
+        .0,
+        400
+    );
     // against the other document: closest points
     let (st, body) = srv.post("/api/doc/0/deviation", &json!({"against": {"doc": 1}}));
     assert_eq!(st, 200);
@@ -1958,8 +1984,8 @@ fn page_measures_deviation_and_probes_curvature() {
     assert!(h["inside_region"]["max_abs"].as_f64().unwrap() > 1e-4);
     assert_eq!(
         b.eval("document.querySelectorAll('#dev-stats tr').length"),
-        json!(4),
-        "header, all, inside, outside"
+        json!(6),
+        "header, all, inside, outside, broad, local"
     );
     std::thread::sleep(Duration::from_millis(500));
     let shot = b.screenshot();

@@ -588,6 +588,7 @@ function wire() {
   $('wireframe').addEventListener('change', () => { viewer.wireframe = $('wireframe').checked; viewer.dirty = true; });
   $('scalar').addEventListener('change', guard(async () => { tools.clearDeviation(); shape.clearDraft(); await applyScalar(); }));
   $('deviation').addEventListener('click', guard(() => { shape.clearDraft(); return tools.showDeviation(); }));
+  $('dev-show').addEventListener('change', guard(() => (tools.deviation ? tools.showDeviation() : null)));
   $('dev-clear').addEventListener('click', () => tools.clearDeviation());
   $('sec-clear').addEventListener('click', () => shape.clearSection());
   $('sec-comb').addEventListener('change', () => shape.drawSection());

@@ -46,7 +46,8 @@ function showStats(header) {
     const td = document.createElement('td'); td.textContent = c; head.append(td);
   }
   t.append(head);
-  const rows = [['all', header.all], ['inside region', header.inside_region], ['outside region', header.outside_region]];
+  const rows = [['all', header.all], ['inside region', header.inside_region], ['outside region', header.outside_region],
+    ['broad part', header.broad], ['local part', header.local]];
   for (const [name, s] of rows) {
     if (!s) continue;
     const tr = document.createElement('tr');
@@ -85,7 +86,8 @@ export class Tools {
     const k = state.active;
     const v = $('dev-against').value;
     const against = v.startsWith('doc:') ? { doc: Number(v.slice(4)) } : v;
-    const body = { against };
+    const show = $('dev-show').value;
+    const body = { against, show };
     const faces = state.regions[k] || [];
     if (faces.length) body.faces = faces;
     status('measuring deviation…');
@@ -94,8 +96,9 @@ export class Tools {
     this.deviationDoc = k;
     viewer.setScalar(k, data, header.range);
     $('scalar').value = '';
-    drawLegend($('dev-legend'), 'deviation (model units)', header.range.lo, header.range.hi);
-    drawHistogram($('dev-hist'), header.all.histogram);
+    const part = { signed: [header.all, 'deviation'], broad: [header.broad, 'broad part of the deviation'], local: [header.local, 'local part of the deviation'] }[show];
+    drawLegend($('dev-legend'), `${part[1]} (model units)`, header.range.lo, header.range.hi);
+    drawHistogram($('dev-hist'), part[0].histogram);
     showStats(header);
     showCommand(header.command);
     document.body.dataset.deviation = String(header.all.max_abs);

@@ -1,28 +1,48 @@
 //! `deviation`: the signed distance, per vertex of a measured mesh, to a
 //! reference (the state before fairing, or another file), and its
 //! statistics — over the whole surface and, given a region, inside it (the
-//! intended motion) and outside it (side effects, about 0 for fairing).
+//! intended motion) and outside it (side effects, about 0 for fairing);
+//! and split by wavelength ([`fairline::geom::split_by_wavelength`]) into
+//! its broad part (what moved whole neighbourhoods: an offset, a drift,
+//! the shrinkage of a smoothing — side effects of a repair) and its local
+//! part (what moved a few vertices against their neighbours: the noise or
+//! the defect a repair is meant to remove).
 
 use crate::error::{CommandError, Subject};
 use crate::report::Report;
 use fairline::bspline::{BSplineSurface, surface_deviation};
-use fairline::geom::{Deviation, DeviationError, DeviationStats, deviation, deviation_stats};
+use fairline::geom::{
+    Deviation, DeviationError, DeviationStats, WavelengthSplit, deviation, deviation_stats,
+    split_by_wavelength,
+};
 use fairline::mesh::FaceId;
 use fairline::{Control, SurfaceMesh};
 
 /// Bins of the histogram in the report (default).
 pub const DEFAULT_BINS: usize = 41;
 
+/// The wavelength of the broad/local split, in mean edge lengths of the
+/// measured mesh, when none is given: noise (one to a few edges) is local,
+/// the shape is broad.
+pub const DEFAULT_BROAD_WAVELENGTH_EDGES: f64 = 10.0;
+
 /// The options of `deviation` (default: the CLI's).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DeviationSettings {
     /// Histogram bins (at least 1).
     pub bins: usize,
+    /// The wavelength (model units) that splits the deviation into its
+    /// broad and local parts; `None`: [`DEFAULT_BROAD_WAVELENGTH_EDGES`]
+    /// mean edge lengths of the measured mesh.
+    pub broad_wavelength: Option<f64>,
 }
 
 impl Default for DeviationSettings {
     fn default() -> Self {
-        DeviationSettings { bins: DEFAULT_BINS }
+        DeviationSettings {
+            bins: DEFAULT_BINS,
+            broad_wavelength: None,
+        }
     }
 }
 
@@ -39,6 +59,12 @@ pub struct DeviationOutcome {
     pub outside: Option<DeviationStats>,
     /// Per vertex of the measured mesh: inside the region (empty without one).
     pub in_region: Vec<bool>,
+    /// The signed deviation split by wavelength into broad and local parts.
+    pub split: WavelengthSplit,
+    /// Statistics of the broad part (waves longer than the split's).
+    pub broad: DeviationStats,
+    /// Statistics of the local part.
+    pub local: DeviationStats,
     /// The JSON report.
     pub report: Report,
 }
@@ -114,9 +140,17 @@ pub fn run_on_surfaces(
 
 /// The bins and the cancel flag, checked before any work.
 fn check(settings: &DeviationSettings, control: &Control) -> Result<(), CommandError> {
+    if let Some(w) = settings.broad_wavelength
+        && !(w.is_finite() && w > 0.0)
+    {
+        return Err(CommandError::invalid(
+            "broad-wavelength",
+            format!("{w}; give a positive length"),
+        ));
+    }
     if settings.bins == 0 || settings.bins > 10_000 {
         return Err(CommandError::invalid(
-            "--bins",
+            "bins",
             format!("{} bins; give 1 to 10000", settings.bins),
         ));
     }
@@ -176,12 +210,25 @@ fn finish(
         report.set("inside_region", i);
         report.set("outside_region", o);
     }
+    let wavelength = settings.broad_wavelength.unwrap_or_else(|| {
+        DEFAULT_BROAD_WAVELENGTH_EDGES * fairline::geom::mean_edge_length(measured)
+    });
+    let split = report.time(|| split_by_wavelength(measured, &dev.signed, wavelength));
+    let broad = deviation_stats(&split.broad, settings.bins);
+    let local = deviation_stats(&split.local, settings.bins);
+    report.set("broad_wavelength", split.wavelength);
+    report.set("broad_converged", split.converged);
+    report.set("broad", &broad);
+    report.set("local", &local);
     Ok(DeviationOutcome {
         deviation: dev,
         all,
         inside,
         outside,
         in_region,
+        split,
+        broad,
+        local,
         report,
     })
 }
@@ -208,6 +255,13 @@ pub fn summary(out: &DeviationOutcome) -> String {
             i.max_abs, i.count, o.max_abs, o.count
         ));
     }
+    s.push_str(&format!(
+        "; broad (waves over {:.3e}) max {:.3e} mean {:+.3e}, local max {:.3e}",
+        out.split.wavelength, out.broad.max_abs, out.broad.mean, out.local.max_abs
+    ));
+    if !out.split.converged {
+        s.push_str(" (the broad/local split did not converge: its parts are approximate)");
+    }
     s
 }
 
@@ -215,6 +269,114 @@ pub fn summary(out: &DeviationOutcome) -> String {
 mod tests {
     use super::*;
     use fairline::shapes;
+
+    #[test]
+    fn an_offset_is_broad_motion_and_a_spike_is_local() {
+        let m = shapes::plane(41);
+        let mut moved = m.clone();
+        let spike = 20 * 41 + 20;
+        for (i, p) in moved.positions_mut().iter_mut().enumerate() {
+            p.z += 0.01 + if i == spike { 0.02 } else { 0.0 };
+        }
+        let out = run(
+            &m,
+            &moved,
+            None,
+            &DeviationSettings::default(),
+            &Control::new(),
+        )
+        .unwrap();
+        // the default wavelength: ten mean edges
+        let edge = fairline::geom::mean_edge_length(&moved);
+        assert!((out.split.wavelength - 10.0 * edge).abs() < 1e-12);
+        // ten edges: the spike (two edges wide) is local
+        let settings = DeviationSettings {
+            broad_wavelength: Some(0.5),
+            ..DeviationSettings::default()
+        };
+        let out = run(&m, &moved, None, &settings, &Control::new()).unwrap();
+        assert!(out.split.converged);
+        assert!((out.broad.mean - 0.01).abs() < 1e-4);
+        assert!(out.local.max_abs > 0.015 && out.split.local[spike] > 0.015);
+        let far = out
+            .split
+            .local
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| *i != spike);
+        assert!(far.map(|(_, l)| l.abs()).fold(0.0, f64::max) < 0.005);
+        let r = out.report.to_json();
+        assert!(r["broad"]["rms"].as_f64().unwrap() > 0.0099);
+        assert_eq!(r["broad_converged"], true);
+        assert!(summary(&out).contains("broad (waves over 5.000e-1) max"));
+        let bad = DeviationSettings {
+            broad_wavelength: Some(-1.0),
+            ..DeviationSettings::default()
+        };
+        assert!(run(&m, &moved, None, &bad, &Control::new()).is_err());
+    }
+
+    /// Smoothing a noisy unit sphere: the shrinkage of Laplace smoothing
+    /// is broad motion (about uniform, inward), the noise it removes is
+    /// local; Taubin smoothing removes the same noise with a small fraction
+    /// of the broad motion.
+    #[test]
+    fn smoothing_shrinkage_is_broad_and_the_noise_removed_is_local() {
+        use crate::smooth::{SmoothSettings, run as smooth};
+        use fairline::smooth::SmoothMethod;
+        let clean = shapes::icosphere(1.0, 4);
+        let mut noisy = clean.clone();
+        let mut state = 12345u64;
+        let noise: Vec<f64> = (0..noisy.vertex_count())
+            .map(|_| {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.02
+            })
+            .collect();
+        for (p, e) in noisy.positions_mut().iter_mut().zip(&noise) {
+            *p *= 1.0 + e;
+        }
+        let split = |method| {
+            let settings = SmoothSettings {
+                method,
+                ..SmoothSettings::default()
+            };
+            let out = smooth(&noisy, &settings, &Control::new()).unwrap();
+            let mut after = noisy.clone();
+            after.positions_mut().copy_from_slice(&out.positions);
+            run(
+                &noisy,
+                &after,
+                None,
+                &DeviationSettings::default(),
+                &Control::new(),
+            )
+            .unwrap()
+        };
+        let laplace = split(SmoothMethod::Laplace);
+        let taubin = split(SmoothMethod::Taubin);
+        // Laplace: the sphere shrinks (broad, inward, nearly uniform)
+        assert!(laplace.broad.mean < -0.01, "{}", laplace.broad.mean);
+        assert!(laplace.broad.p95_abs < 1.5 * laplace.broad.mean.abs());
+        // both remove the noise (local, about its rms 0.0058)
+        for out in [&laplace, &taubin] {
+            assert!(
+                out.local.rms > 0.004 && out.local.rms < 0.008,
+                "{}",
+                out.local.rms
+            );
+        }
+        // Taubin keeps the shape: a tenth of Laplace's broad motion (ten
+        // edges of the sphere: 0.77)
+        assert!(
+            taubin.broad.rms < 0.1 * laplace.broad.rms,
+            "{} {}",
+            taubin.broad.rms,
+            laplace.broad.rms
+        );
+    }
 
     #[test]
     fn region_splits_motion_inside_from_outside() {

@@ -3,15 +3,18 @@
 //! command layer's; this file parses requests and shapes answers.
 //!
 //! - `POST /api/doc/K/deviation` `{"against": "original" | "previous" |
-//!   {"doc": J}, "faces"?: [..]}`: the signed deviation of document K's
+//!   {"doc": J}, "faces"?: [..], "show"?: "signed" | "broad" | "local"}`:
+//!   the signed deviation (or its broad or local part) of document K's
 //!   current state from its opening state, from the step before the
 //!   current one, or from document J's current state
 //!   ([`fairline_commands::deviation`]). Binary frame: the header holds
 //!   the report (`method`, `units`, `all`, and with `faces`
 //!   `inside_region` / `outside_region`: the statistics inside the marked
-//!   triangles' vertices and outside them), `range` (`lo`, `hi`: the
-//!   colour range ±max |d|, centred on 0), `summary` and `command`; then one f32
-//!   per vertex of document K.
+//!   triangles' vertices and outside them; `broad`, `local` and
+//!   `broad_wavelength`: the parts split by wavelength), `range` (`lo`,
+//!   `hi`: the colour range ±max |d| of the part shown, centred on 0),
+//!   `summary` and `command`; then one f32 per vertex of document K: the
+//!   part shown.
 //! - `POST /api/doc/K/probe` `{"face": f, "point"?: [x,y,z], "light"?}` (point
 //!   relative to the document's `center`, default the triangle's
 //!   centroid): the point of triangle `f` closest to `point`, the
@@ -51,6 +54,8 @@ struct DeviationRequest {
     against: Against,
     #[serde(default)]
     faces: Option<Vec<u32>>,
+    #[serde(default)]
+    show: Option<String>,
 }
 
 /// `POST /api/doc/K/deviation` (module documentation).
@@ -59,6 +64,12 @@ pub fn deviation(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         Ok(r) => r,
         Err(a) => return a,
     };
+    let show = req.show.as_deref().unwrap_or("signed");
+    if !matches!(show, "signed" | "broad" | "local") {
+        return bad(format!(
+            "show: `{show}`; give \"signed\", \"broad\" or \"local\""
+        ));
+    }
     // a surface reference is measured against exactly (its surfaces, the
     // start grid its document's), as the command does
     let (reference, surfaces, measured, command) = {
@@ -93,8 +104,13 @@ pub fn deviation(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         } else {
             String::new()
         };
+        let show_option = if show == "signed" {
+            String::new()
+        } else {
+            format!(" --show {show}")
+        };
         let command = format!(
-            "fairline deviation {ref_file} {}{grid}{region} --png deviation.png --report deviation.json",
+            "fairline deviation {ref_file} {}{grid}{region}{show_option} --png deviation.png --report deviation.json",
             d.current_file()
         );
         (
@@ -131,14 +147,19 @@ pub fn deviation(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         Ok(o) => o,
         Err(e) => return bad(e.message(fairline_commands::FrontEnd::Workbench)),
     };
+    let (values, stats) = match show {
+        "broad" => (&out.split.broad, &out.broad),
+        "local" => (&out.split.local, &out.local),
+        _ => (&out.deviation.signed, &out.all),
+    };
     // the whole range, as the histogram: a fairing moves few vertices,
     // and a percentile would saturate all of them
-    let m = out.all.max_abs.max(1e-12);
+    let m = stats.max_abs.max(1e-12);
     let mut header = out.report.to_json();
     header["range"] = json!({"lo": -m, "hi": m});
     header["summary"] = json!(deviation::summary(&out));
     header["command"] = json!(command);
-    let floats: Vec<f32> = out.deviation.signed.iter().map(|&x| x as f32).collect();
+    let floats: Vec<f32> = values.iter().map(|&x| x as f32).collect();
     binary(frame(&header, &floats))
 }
 

@@ -18,6 +18,7 @@ mod normals;
 pub(crate) use normals::{BATCH, face_area_vectors, gather_triangles, vertex_normals_into};
 mod quadric;
 mod section;
+mod wavelength;
 
 pub use areas::{
     barycentric_vertex_areas, barycentric_vertex_areas_at, face_areas, face_areas_at,
@@ -49,6 +50,7 @@ pub use normals::{
 };
 pub use quadric::{QuadricFit, QuadricPatch, quadric_fit, quadric_fit_rings, quadric_patch_rings};
 pub use section::{SectionCurve, parallel_sections, plane_section};
+pub use wavelength::{WavelengthSplit, split_by_wavelength};
 
 /// The degenerate-face threshold, defined with the meshes (whose inspection
 /// counts degenerate faces) and used by every area and normal here.
