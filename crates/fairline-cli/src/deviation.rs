@@ -92,10 +92,19 @@ pub enum Show {
     Local,
 }
 
-/// Reads a mesh, or tessellates a surface file `grid` × `grid` per patch.
+/// Reads a mesh, or tessellates a surface file `grid` × `grid` per patch
+/// (refused, exit 2, when that is more than the command layer's
+/// [`deviation::MAX_GRID_POINTS`]).
 fn read(path: &Path, grid: usize) -> Result<SurfaceMesh> {
     if crate::surface::is_surface_path(path) {
         let s = crate::surface::load_surfaces(path)?;
+        deviation::check_grid(s.len(), grid).map_err(|e| {
+            bad_input(format!(
+                "{}: {}",
+                path.display(),
+                e.message(fairline_commands::FrontEnd::Cli)
+            ))
+        })?;
         crate::surface::tessellated_mesh(&s, grid)
     } else {
         crate::input::read_mesh(path)

@@ -281,4 +281,31 @@ fn a_surface_reference_is_measured_exactly_not_through_its_tessellation() {
         s(&report),
     ]));
     assert!(json(&report)["all"]["max_abs"].as_f64().unwrap() < 1e-13);
+    // a grid that would tessellate 30 surfaces into 30 × 1000² points is
+    // refused before any work, on either side, naming the counts
+    let one = QUARTER_CYLINDER
+        .strip_prefix(r#"{"surfaces":["#)
+        .and_then(|t| t.strip_suffix("]}"))
+        .unwrap();
+    let many = dir.join("many.json");
+    let thirty = vec![one; 30].join(",");
+    std::fs::write(&many, format!(r#"{{"surfaces":[{thirty}]}}"#)).unwrap();
+    for (before, after) in [(&many, &points), (&points, &many)] {
+        let out = run(&[
+            "deviation",
+            s(before),
+            s(after),
+            "--grid",
+            "1000",
+            "--report",
+            s(&dir.join("refused.json")),
+        ]);
+        assert_eq!(out.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("30 surfaces × 1000² is more than 20000000 points"),
+            "{err}"
+        );
+        assert!(!dir.join("refused.json").exists());
+    }
 }

@@ -18,6 +18,32 @@ use fairline::geom::{
 use fairline::mesh::FaceId;
 use fairline::{Control, SurfaceMesh};
 
+/// Most tessellation points of B-spline surfaces measured against or
+/// measured (surfaces × grid²): memory stays bounded whatever the grid
+/// asked for.
+pub const MAX_GRID_POINTS: usize = 20_000_000;
+
+/// Refuses a tessellation grid out of 2..=1024, or one that would give
+/// `surfaces` × `grid`² more than [`MAX_GRID_POINTS`] points.
+pub fn check_grid(surfaces: usize, grid: usize) -> Result<(), CommandError> {
+    if !(2..=1024).contains(&grid) {
+        return Err(CommandError::invalid(
+            "grid",
+            format!("{grid}; give 2 to 1024"),
+        ));
+    }
+    let points = surfaces as f64 * (grid * grid) as f64;
+    if points > MAX_GRID_POINTS as f64 {
+        return Err(CommandError::invalid(
+            "grid",
+            format!(
+                "{grid}: {surfaces} surfaces × {grid}² is more than {MAX_GRID_POINTS} points; give a smaller grid"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Bins of the histogram in the report (default).
 pub const DEFAULT_BINS: usize = 41;
 
@@ -114,7 +140,8 @@ fn reference_error(e: DeviationError) -> CommandError {
 /// from the B-spline surfaces `reference` themselves: the exact distance to
 /// the closest point of the surfaces ([`fairline::bspline::surface_deviation`],
 /// started from their tessellation `grid` × `grid` per surface), not to a
-/// tessellation. Errors as [`run`]'s, and a grid out of 2..=1024.
+/// tessellation. Errors as [`run`]'s, and a grid refused by
+/// [`check_grid`].
 pub fn run_on_surfaces(
     reference: &[BSplineSurface],
     grid: usize,
@@ -125,12 +152,7 @@ pub fn run_on_surfaces(
 ) -> Result<DeviationOutcome, CommandError> {
     crate::require_faces(measured.face_count(), measured.original_vertex_count())?;
     check(settings, control)?;
-    if !(2..=1024).contains(&grid) {
-        return Err(CommandError::invalid(
-            "grid",
-            format!("{grid}; give 2 to 1024"),
-        ));
-    }
+    check_grid(reference.len(), grid)?;
     let mut report = Report::new("deviation");
     let dev = report
         .time(|| surface_deviation(reference, measured.positions(), grid))
