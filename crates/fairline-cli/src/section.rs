@@ -2,7 +2,7 @@
 //! tessellated) as polylines with their curvature combs; with `--iso`,
 //! isoparametric curves of B-spline surfaces with their exact combs.
 
-use crate::args::parse_vec3;
+use crate::args::{parse_size, parse_vec3};
 use crate::common::{print_warnings, write_report};
 use crate::error::bad_input;
 use anyhow::Result;
@@ -20,9 +20,13 @@ use std::path::{Path, PathBuf};
 /// triangulated, surface files (.json .igs .step) tessellated (--grid).
 /// With --iso N on a surface file: N isoparametric curves per direction
 /// of each surface, with the exact curvature of the surface's derivatives.
+/// --png draws the part with the curves and their combs (teeth and the
+/// line through their tips; without --comb-scale the median curvature's
+/// tooth is 4 % of the part's diagonal, teeth longer than 4× it are cut
+/// and counted in the title).
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline section fairline-demo/sphere.ply --plane-point 0,0,0 --plane-normal 0,0,1 --csv sections.csv\n  fairline section fairline-demo/dented-panel.obj --plane-point 0,-1.5,0 --plane-normal 0,1,0 --count 7 --spacing 0.5 --comb-scale 0.2 --obj sections.obj --report sections.json\n  fairline section fairline-demo/bspline-panel-dented.json --iso 7 --comb-scale 0.5 --obj combs.obj --csv combs.csv"
+    after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline section fairline-demo/sphere.ply --plane-point 0,0,0 --plane-normal 0,0,1 --csv sections.csv\n  fairline section fairline-demo/dented-panel.obj --plane-point 0,-1.5,0 --plane-normal 0,1,0 --count 7 --spacing 0.5 --comb-scale 0.2 --obj sections.obj --report sections.json\n  fairline section fairline-demo/bspline-panel-dented.json --iso 7 --comb-scale 0.5 --obj combs.obj --csv combs.csv\n  fairline section fairline-demo/bspline-panel-dented.json --iso 9 --png combs.png"
 )]
 pub struct Args {
     /// Mesh (.obj .ply .off .stl) or surfaces (.json .igs .step).
@@ -51,9 +55,10 @@ pub struct Args {
     /// Distance between the planes (along the normal).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub spacing: f64,
-    /// Length of the comb per unit curvature.
-    #[arg(long, default_value_t = 1.0)]
-    pub comb_scale: f64,
+    /// Length of the comb per unit curvature (default 1 in the files;
+    /// in the picture, the median curvature's tooth 4 % of the diagonal).
+    #[arg(long)]
+    pub comb_scale: Option<f64>,
     /// Points as CSV: `section,curve,point,x,y,z,curvature,comb_x,comb_y,comb_z`
     /// (with --iso: `surface,kind,value,curve,point,t,x,y,z,curvature,comb_x,comb_y,comb_z`).
     #[arg(long, value_name = "OUT.csv")]
@@ -64,6 +69,15 @@ pub struct Args {
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
+    /// Picture of the part with the curves and their curvature combs.
+    #[arg(long, value_name = "IMG.png")]
+    pub png: Option<PathBuf>,
+    /// Viewing direction X,Y,Z of the picture.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub view: Option<Vec3>,
+    /// Picture size WxH.
+    #[arg(long, value_parser = parse_size, default_value = "1200x900")]
+    pub size: (u32, u32),
     /// Tessellation grid per patch and direction for plane sections of
     /// surface files.
     #[arg(long, default_value_t = 64, value_name = "N")]
@@ -71,8 +85,21 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if args.csv.is_none() && args.obj.is_none() && args.report.is_none() {
-        return Err(bad_input("nothing to write: give --csv, --obj or --report"));
+    if args.csv.is_none() && args.obj.is_none() && args.report.is_none() && args.png.is_none() {
+        return Err(bad_input(
+            "nothing to write: give --csv, --obj, --png or --report",
+        ));
+    }
+    crate::output::require_extension(
+        "--png",
+        args.png.as_deref().unwrap_or(Path::new("a.png")),
+        &["png"],
+    )?;
+    crate::args::check_view(args.view)?;
+    if let Some(c) = args.comb_scale
+        && !c.is_finite()
+    {
+        return Err(bad_input(format!("--comb-scale {c}: give a finite number")));
     }
     crate::output::require_extension(
         "--csv",
@@ -100,7 +127,7 @@ pub fn run(args: Args) -> Result<()> {
         normal,
         count: args.count,
         spacing: args.spacing,
-        comb_scale: args.comb_scale,
+        comb_scale: args.comb_scale.unwrap_or(1.0),
     };
     // the settings are checked before any file is read
     let probe = fairline::shapes::plane(2);
@@ -111,6 +138,7 @@ pub fn run(args: Args) -> Result<()> {
         .input(&args.input)
         .output_opt("--csv", args.csv.as_deref())
         .output_opt("--obj", args.obj.as_deref())
+        .output_opt("--png", args.png.as_deref())
         .output_opt("--report", args.report.as_deref())
         .check()?;
     let mesh = if crate::surface::is_surface_path(&args.input) {
@@ -121,11 +149,17 @@ pub fn run(args: Args) -> Result<()> {
     };
     let out = section::run(&mesh, &settings, &Control::new())
         .map_err(|e| crate::output::name_file(&args.input, e))?;
+    let scale = args.comb_scale.unwrap_or(1.0);
     if let Some(p) = &args.csv {
-        write_csv(p, &out.sections, args.comb_scale)?;
+        write_csv(p, &out.sections, scale)?;
     }
     if let Some(p) = &args.obj {
-        write_obj(p, &out.sections, args.comb_scale)?;
+        write_obj(p, &out.sections, scale)?;
+    }
+    if let Some(p) = &args.png {
+        let curves: Vec<&SectionCurve> = out.sections.iter().flatten().collect();
+        let what = format!("{} plane sections", args.count);
+        comb_picture(&mesh, &curves, &what, &args)?.write_png(p)?;
     }
     print_warnings(&out.report);
     write_report(args.report.as_deref(), &out.report)?;
@@ -139,7 +173,7 @@ fn run_iso(args: &Args, count: usize) -> Result<()> {
         count,
         samples: args.samples,
         surface: args.surface,
-        comb_scale: args.comb_scale,
+        comb_scale: args.comb_scale.unwrap_or(1.0),
     };
     // the settings are checked before any file is read (but the index)
     let probe = IsoSettings {
@@ -157,21 +191,116 @@ fn run_iso(args: &Args, count: usize) -> Result<()> {
         .input(&args.input)
         .output_opt("--csv", args.csv.as_deref())
         .output_opt("--obj", args.obj.as_deref())
+        .output_opt("--png", args.png.as_deref())
         .output_opt("--report", args.report.as_deref())
         .check()?;
     let surfaces = crate::surface::load_surfaces(&args.input)?;
     let out = section::iso(&surfaces, &settings, &Control::new())?;
+    let scale = args.comb_scale.unwrap_or(1.0);
     if let Some(p) = &args.csv {
-        write_iso_csv(p, &out.curves, args.comb_scale)?;
+        write_iso_csv(p, &out.curves, scale)?;
     }
     if let Some(p) = &args.obj {
         let curves: Vec<SectionCurve> = out.curves.iter().map(|(_, c)| c.curve.clone()).collect();
-        write_obj(p, &[curves], args.comb_scale)?;
+        write_obj(p, &[curves], scale)?;
+    }
+    if let Some(p) = &args.png {
+        let part = crate::surface::tessellated_part(&surfaces, 256)?;
+        let curves: Vec<&SectionCurve> = out.curves.iter().map(|(_, c)| &c.curve).collect();
+        let what = format!("{} iso-curves", curves.len());
+        comb_picture(&part, &curves, &what, args)?.write_png(p)?;
     }
     print_warnings(&out.report);
     write_report(args.report.as_deref(), &out.report)?;
     job.finish(section::iso_summary(&out))?;
     Ok(())
+}
+
+/// Longest tooth of a picture with the automatic comb scale, in teeth of
+/// the median curvature.
+const TOOTH_CAP: f64 = 4.0;
+
+/// The part with `curves` (dark) and their combs: the teeth (every other
+/// sample of long curves, at most about 80 per curve) and the line through
+/// their tips. The comb scale is `--comb-scale`, else the one that makes
+/// the median curvature's tooth 4 % of the part's diagonal, with teeth
+/// longer than [`TOOTH_CAP`] of it cut (their count is in the title).
+fn comb_picture(
+    mesh: &fairline::SurfaceMesh,
+    curves: &[&SectionCurve],
+    what: &str,
+    args: &Args,
+) -> Result<fairline::render::Image> {
+    use fairline::picture::{Picture, mesh_picture};
+    use fairline::render::PolylineLayer;
+    let (opts, _) = crate::render::options(mesh, args.view, args.size)?;
+    let diagonal = fairline::mesh::bounding_box(mesh.positions())
+        .map_or(1.0, |(lo, hi)| (hi - lo).length())
+        .max(f64::MIN_POSITIVE);
+    let mut kappa: Vec<f64> = curves
+        .iter()
+        .flat_map(|c| c.curvature.iter().map(|k| k.abs()))
+        .filter(|k| k.is_finite() && *k > 1e-12)
+        .collect();
+    kappa.sort_by(f64::total_cmp);
+    let median = kappa.get(kappa.len() / 2).copied().unwrap_or(0.0);
+    let (scale, cap) = match args.comb_scale {
+        Some(c) => (c, f64::INFINITY),
+        None if median > 0.0 => {
+            let tooth = 0.04 * diagonal;
+            (tooth / median, TOOTH_CAP * tooth)
+        }
+        None => (0.0, f64::INFINITY),
+    };
+    let gap = Vec3::splat(f64::NAN);
+    let (mut lines, mut teeth, mut tips) = (Vec::new(), Vec::new(), Vec::new());
+    let mut cut = 0usize;
+    for c in curves {
+        lines.extend_from_slice(&c.points);
+        if c.closed
+            && let Some(&first) = c.points.first()
+        {
+            lines.push(first);
+        }
+        lines.push(gap);
+        let comb = c.comb(scale);
+        let step = c.points.len().div_ceil(80).max(1);
+        for (i, (p, t)) in c.points.iter().zip(&comb).enumerate() {
+            let len = t.length();
+            let t = if len > cap {
+                cut += 1;
+                *t * (cap / len)
+            } else {
+                *t
+            };
+            let tip = *p + t;
+            tips.push(if tip.is_finite() { tip } else { gap });
+            if i % step == 0 && tip.is_finite() {
+                teeth.extend_from_slice(&[*p, tip, gap]);
+            }
+        }
+        tips.push(gap);
+    }
+    let layer = |points: Vec<Vec3>, color: [f32; 3], width_px: f32| PolylineLayer {
+        points,
+        closed: false,
+        color,
+        width_px,
+    };
+    let mut title = format!("{what}, combs {scale:.2e} per unit curvature (median {median:.2e})");
+    if cut > 0 {
+        title.push_str(&format!("; {cut} teeth cut at {TOOTH_CAP}x"));
+    }
+    let picture = Picture {
+        polylines: vec![
+            layer(teeth, [0.75, 0.2, 0.55], 1.0),
+            layer(tips, [0.55, 0.05, 0.4], 1.5),
+            layer(lines, [0.02, 0.02, 0.08], 2.0),
+        ],
+        title: Some(title),
+        ..Default::default()
+    };
+    Ok(mesh_picture(mesh, &picture, &opts)?)
 }
 
 fn write_iso_csv(path: &Path, curves: &[(usize, IsoCurve)], scale: f64) -> Result<()> {

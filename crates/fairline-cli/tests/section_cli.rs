@@ -182,6 +182,40 @@ fn iso_curves_of_a_cylinder_have_the_closed_form_combs() {
     );
 }
 
+/// `--png`: the part with its curves and combs; with the automatic scale
+/// the teeth (magenta) show, with `--comb-scale 0` none do.
+#[test]
+fn iso_comb_picture_draws_the_teeth() {
+    let dir = tmp("section-iso-png");
+    let part = dir.join("cylinder.json");
+    std::fs::write(&part, QUARTER_CYLINDER).unwrap();
+    let magenta = |scale: Option<&str>| {
+        let png = dir.join("combs.png");
+        let mut args = vec!["section", s(&part), "--iso", "4", "--png", s(&png)];
+        args.extend(["--size", "400x300"]);
+        if let Some(c) = scale {
+            args.extend(["--comb-scale", c]);
+        }
+        let o = run(&args);
+        ok(&o);
+        let img = fairline::render::Image::decode_png(&std::fs::read(&png).unwrap()).unwrap();
+        assert_eq!((img.width, img.height), (400, 300));
+        let mut n = 0;
+        for y in 0..img.height {
+            for x in 0..img.width {
+                let [r, g, b, _] = img.get(x, y).unwrap();
+                if r as i32 > g as i32 + 60 && b as i32 > g as i32 + 30 {
+                    n += 1;
+                }
+            }
+        }
+        n
+    };
+    let (auto, none) = (magenta(None), magenta(Some("0")));
+    assert!(auto > 300, "teeth drawn: {auto} pixels");
+    assert!(none < auto / 20, "no teeth at scale 0: {none} vs {auto}");
+}
+
 #[test]
 fn iso_combs_refuse_meshes_and_bad_counts_and_write_nothing() {
     let dir = tmp("section-iso-bad");
