@@ -3019,6 +3019,14 @@ fn page_saves_a_session_and_reopens_it_as_it_was() {
         "window.fairline.viewer.camera.distance *= 1.3; window.fairline.viewer.camera.yaw = 0.4",
     );
     b.eval("window.fairline.session.ctx.setRegion(0, [5, 6, 7, 8])");
+    // the evaluation tools shown: three sections, the local deviation
+    b.eval("document.getElementById('sec-count').value = '3'");
+    b.eval("window.fairline.shape.cut(0, [0.1, 0.2, 0])");
+    b.wait_for("document.body.dataset.sections", 30);
+    let sections = b.eval("document.body.dataset.sections");
+    b.eval("document.getElementById('dev-show').value = 'local'");
+    b.eval("document.getElementById('deviation').click()");
+    b.wait_for("document.body.dataset.deviation", 60);
     b.eval("document.getElementById('session-name').value = 'page-session.json'");
     press(&mut b, "S", "KeyS", 83, 2 | 8);
     b.wait_for(
@@ -3048,6 +3056,30 @@ fn page_saves_a_session_and_reopens_it_as_it_was() {
     assert_eq!(
         b.eval("document.querySelectorAll('#history li').length"),
         json!(2)
+    );
+    // the sections and the deviation map are shown again, as saved
+    b.wait_for(
+        "document.body.dataset.sections && document.body.dataset.deviation",
+        60,
+    );
+    assert_eq!(b.eval("document.body.dataset.sections"), sections);
+    assert_eq!(
+        b.eval("document.getElementById('sec-count').value"),
+        json!("3")
+    );
+    assert_eq!(
+        b.eval("document.getElementById('dev-show').value"),
+        json!("local")
+    );
+    assert_eq!(
+        b.eval("window.fairline.shape.section.point"),
+        json!([0.1, 0.2, 0])
+    );
+    assert!(
+        b.eval("window.fairline.tools.deviation.local.max_abs")
+            .as_f64()
+            .unwrap()
+            > 0.0
     );
     assert!(
         b.eval("document.getElementById('status').textContent")

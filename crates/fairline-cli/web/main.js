@@ -25,7 +25,7 @@ const tools = new Tools({ viewer, state });
 window.fairline.tools = tools;
 const shape = window.fairline.shape = new ShapeTools({ viewer, state });
 const surfaceTools = window.fairline.surfaceTools = new SurfaceTools({ viewer, state });
-const sessionFile = window.fairline.session = new Session({ viewer, state, setRegion: (k, faces) => setRegionOf(k, faces), jumpTo: (k, c, steps) => jumpDoc(k, c, steps), activate: (k) => activate(k) });
+const sessionFile = window.fairline.session = new Session({ viewer, state, tools, shape, surfaceTools, setRegion: (k, faces) => setRegionOf(k, faces), jumpTo: (k, c, steps) => jumpDoc(k, c, steps), activate: (k) => activate(k) });
 let lights = [];
 let frames = null;
 

@@ -6,12 +6,16 @@
 import * as api from './api.js';
 import { $, status, showCommand } from './panels.js';
 
-// The page controls a session keeps (the light array's and the view's).
-const CONTROLS = ['up', 'mode', 'follow', 'spacing', 'direction', 'tilt', 'turn', 'band', 'linewidth', 'sweep', 'radii', 'wireframe'];
+// The page controls a session keeps (the light array's, the view's and the
+// evaluation tools').
+const CONTROLS = ['up', 'mode', 'follow', 'spacing', 'direction', 'tilt', 'turn', 'band', 'linewidth', 'sweep', 'radii', 'wireframe',
+  'sec-normal', 'sec-count', 'sec-spacing', 'sec-comb', 'sec-comb-scale', 'dev-against', 'dev-show', 'draft-pull', 'draft-min',
+  'iso-count', 'iso-comb-scale'];
 
 export class Session {
-  // `ctx`: viewer, state, and `setRegion(k, faces)`, `jumpTo(k, cursor)`
-  // callbacks of the page.
+  // `ctx`: viewer, state, the evaluation tools (`tools`: deviation,
+  // `shape`: sections and draft, `surfaceTools`: iso combs), and
+  // `setRegion(k, faces)`, `jumpTo(k, cursor)` callbacks of the page.
   constructor(ctx) {
     this.ctx = ctx;
   }
@@ -28,7 +32,47 @@ export class Session {
       camera: { up: c.up, yaw: c.yaw, pitch: c.pitch, distance: c.distance, target: c.target.slice() },
       controls,
       marks: state.session.docs.map((_, k) => state.regions[k] || []),
+      tools: this.collectTools(),
     };
+  }
+
+  // Which evaluation overlays are shown, on which document: the sections
+  // (through their picked point), the deviation map, the draft map, the
+  // iso combs. Their settings are controls (CONTROLS).
+  collectTools() {
+    const { tools, shape, surfaceTools } = this.ctx;
+    const out = {};
+    if (shape && shape.section) out.section = { doc: shape.section.doc, point: shape.section.point.slice() };
+    if (tools && tools.deviation) out.deviation = { doc: tools.deviationDoc };
+    if (shape && shape.draft) out.draft = { doc: shape.draftDoc };
+    if (surfaceTools && surfaceTools.iso) out.iso = { doc: surfaceTools.iso.doc };
+    return out;
+  }
+
+  // Shows again the overlays `collectTools` recorded (after the controls,
+  // history and marks are restored); an entry naming no open document, or
+  // iso combs on a mesh, is left out.
+  async applyTools(saved) {
+    const { tools, shape, surfaceTools, state } = this.ctx;
+    if (!saved || typeof saved !== 'object') return;
+    const docs = state.session.docs;
+    const doc = (e) => (e && Number.isInteger(e.doc) && e.doc >= 0 && e.doc < docs.length ? e.doc : null);
+    const s = saved.section;
+    if (shape && doc(s) !== null && Array.isArray(s.point) && s.point.length === 3 && s.point.every(Number.isFinite)) {
+      await shape.cut(doc(s), s.point.map(Number));
+    }
+    if (surfaceTools && doc(saved.iso) !== null && docs[doc(saved.iso)].kind === 'surface') {
+      $('iso-combs').checked = true;
+      await surfaceTools.showIso(doc(saved.iso), true);
+    }
+    // a colour map: the deviation or the draft of the document shown active
+    if (shape && doc(saved.draft) !== null) {
+      this.ctx.activate(doc(saved.draft));
+      await shape.showDraft();
+    } else if (tools && doc(saved.deviation) !== null) {
+      this.ctx.activate(doc(saved.deviation));
+      await tools.showDeviation();
+    }
   }
 
   // Saves the session into the save folder under the name in the Files
@@ -77,6 +121,7 @@ export class Session {
       const n = state.session.docs[k] ? state.session.docs[k].triangles : 0;
       if (Array.isArray(faces)) this.ctx.setRegion(k, faces.filter((f) => Number.isInteger(f) && f >= 0 && f < n));
     });
+    await this.applyTools(view.tools);
     if (Number.isInteger(view.active) && view.active < names.length) this.ctx.activate(view.active);
     viewer.dirty = true;
     document.body.dataset.sessionApplied = '1';

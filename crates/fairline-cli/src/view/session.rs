@@ -18,7 +18,9 @@
 //! `report` and `state` of each step: the state file relative to the
 //! session file's folder, null for the opening step) and `state` (the
 //! current step's file), and `view`: what the page restores (opaque to the
-//! server). A session whose steps name no state files (written by an
+//! server: camera, controls, marks, and `tools`, the evaluation overlays
+//! shown — sections with their picked point, the deviation or draft map,
+//! iso combs — which the page computes again). A session whose steps name no state files (written by an
 //! earlier fairline) reopens with two steps: as opened and `state`.
 
 use super::api::{
