@@ -1,16 +1,18 @@
 //! Surface files by extension: the one place that maps `.json`,
-//! `.igs`/`.iges` and `.step`/`.stp` to their readers and writers.
+//! `.igs`/`.iges`, `.step`/`.stp` and `.g2` to their readers and writers.
 //!
-//! Reading keeps the file's length unit ([`SurfaceFile::unit`]; JSON has
-//! none) and writing puts it back, so converting between formats changes
-//! no coordinate. Every writer keeps control points, knots, weights and
-//! trimming curves bit-identical on a read → write → read round trip.
+//! Reading keeps the file's length unit ([`SurfaceFile::unit`]; JSON and
+//! GoTools have none) and writing puts it back, so converting between
+//! formats changes no coordinate. Every writer keeps control points, knots,
+//! weights and trimming curves bit-identical on a read → write → read round
+//! trip. GoTools `.g2` is read only ([`SurfaceFormat::is_writable`]).
 
 use std::path::{Path, PathBuf};
 
 use thiserror::Error;
 
 use super::IoError;
+use super::gotools::{GoToolsError, read_gotools};
 use super::iges_read::{IgesError, read_iges};
 use super::iges_write::{IgesWriteOptions, write_iges};
 use super::step::{StepError, StepWriteOptions, read_step_with, write_step};
@@ -28,11 +30,14 @@ pub enum SurfaceFormat {
     Iges,
     /// STEP ISO 10303-21 (AP203/AP214/AP242 geometry).
     Step,
+    /// SINTEF GoTools text format (`.g2`; spline and bounded spline
+    /// surfaces), read only: see [`super::gotools`].
+    GoTools,
 }
 
 impl SurfaceFormat {
     /// The format named by the extension (case-insensitive): `.json`,
-    /// `.igs`/`.iges`, `.step`/`.stp`; `None` otherwise.
+    /// `.igs`/`.iges`, `.step`/`.stp`, `.g2`; `None` otherwise.
     pub fn from_path(path: impl AsRef<Path>) -> Option<Self> {
         let ext = path
             .as_ref()
@@ -43,8 +48,14 @@ impl SurfaceFormat {
             Some("json") => Some(Self::Json),
             Some("igs" | "iges") => Some(Self::Iges),
             Some("step" | "stp") => Some(Self::Step),
+            Some("g2") => Some(Self::GoTools),
             _ => None,
         }
+    }
+
+    /// Whether fairline writes this format (GoTools is read only).
+    pub fn is_writable(self) -> bool {
+        !matches!(self, Self::GoTools)
     }
 }
 
@@ -60,7 +71,8 @@ pub struct SurfaceFile {
     /// disagree with their 3-D edges); one line each.
     pub warnings: Vec<String>,
     /// Every face (IGES: trimmed, bounded or free surface entity, B-rep
-    /// face; STEP: face) the reader could not read: it is in none of
+    /// face; STEP: face; GoTools: any object that is not a readable spline
+    /// surface) the reader could not read: it is in none of
     /// [`Self::surfaces`]. A front end must not treat the part as complete
     /// while this is not empty.
     pub unreadable: Vec<Unreadable>,
@@ -118,15 +130,27 @@ pub enum SurfaceFileError {
     /// STEP.
     #[error(transparent)]
     Step(#[from] StepError),
+    /// GoTools.
+    #[error(transparent)]
+    GoTools(#[from] GoToolsError),
     /// Writing.
     #[error(transparent)]
     Io(#[from] IoError),
     /// The extension names no surface format.
     #[error(
-        "{}: unknown surface format (expected extension .json, .igs/.iges or .step/.stp)",
+        "{}: unknown surface format (expected extension .json, .igs/.iges, .step/.stp or .g2)",
         path.display()
     )]
     UnknownFormat {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The extension names a format fairline reads but does not write.
+    #[error(
+        "{}: fairline does not write this surface format (write .json, .igs/.iges or .step/.stp)",
+        path.display()
+    )]
+    ReadOnlyFormat {
         /// The file.
         path: PathBuf,
     },
@@ -165,6 +189,14 @@ pub fn read_surface_file(path: impl AsRef<Path>) -> Result<SurfaceFile, SurfaceF
                 unreadable: imp.unreadable,
             })
         }
+        Some(SurfaceFormat::GoTools) => {
+            let imp = read_gotools(path)?;
+            Ok(SurfaceFile {
+                surfaces: imp.surfaces,
+                unreadable: imp.unreadable,
+                ..SurfaceFile::default()
+            })
+        }
         None => Err(SurfaceFileError::UnknownFormat {
             path: path.to_path_buf(),
         }),
@@ -198,6 +230,9 @@ pub fn write_surface_file(
                 ..StepWriteOptions::default()
             },
         )?),
+        Some(SurfaceFormat::GoTools) => Err(SurfaceFileError::ReadOnlyFormat {
+            path: path.to_path_buf(),
+        }),
         None => Err(SurfaceFileError::UnknownFormat {
             path: path.to_path_buf(),
         }),
