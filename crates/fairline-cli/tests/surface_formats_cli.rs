@@ -1,7 +1,8 @@
 //! Command-line tests of the B-spline surface formats fairline reads but
-//! does not write (GoTools `.g2`): `info` reads them, `convert` turns
-//! them into STEP keeping every number, objects that are not read are
-//! named, and writing them is refused before anything is read.
+//! does not write (GoTools `.g2`, geomdl JSON): `info` reads them,
+//! `convert` turns them into STEP or IGES keeping every number, objects
+//! that are not read are named, and writing `.g2` is refused before
+//! anything is read.
 
 mod common;
 
@@ -106,4 +107,41 @@ fn gotools_objects_not_read_are_named_and_g2_is_not_written() {
         err.contains("bad.g2") && err.contains("object 1 (class 200)"),
         "{err}"
     );
+}
+
+/// The geomdl (NURBS-Python) file of the library's tests: a rational
+/// quarter cylinder of radius 2 and height 3, and a bicubic.
+fn geomdl_file() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../fairline/tests/data/geomdl/cylinder_and_bicubic.json")
+}
+
+#[test]
+fn geomdl_json_files_are_read_and_converted_to_iges() {
+    let d = tmp("geomdl");
+    let f = geomdl_file();
+    let o = run(&["info", "--json", s(&f)]);
+    ok(&o);
+    let info: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(info["surfaces"], 2, "{info}");
+    assert_eq!(info["rational"], 1, "{info}");
+
+    let out = d.join("part.igs");
+    ok(&run(&["convert", s(&f), s(&out)]));
+    let back = read_surface_file(&out).unwrap();
+    assert_eq!(back.surfaces, read_surface_file(&f).unwrap().surfaces);
+    // geomdl's evaluate_single at (0.3, 0.7) on the cylinder
+    let p = back.surfaces[0].eval(0.3, 0.7);
+    let want = [1.7947512999907453, 0.8825348555051692, 2.1];
+    for (got, want) in p.to_array().into_iter().zip(want) {
+        assert!((got - want).abs() < 1e-12, "{p}");
+    }
+
+    // a JSON file of neither schema says which it expected
+    let bad = d.join("bad.json");
+    std::fs::write(&bad, r#"{"nothing": 1}"#).unwrap();
+    let o = run(&["info", s(&bad)]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("bad.json") && err.contains("geomdl"), "{err}");
 }

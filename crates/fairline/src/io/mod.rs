@@ -21,6 +21,7 @@
 //! The format is chosen by the file extension ([`MeshFormat::from_path`]).
 
 pub mod curve_fit;
+pub mod geomdl;
 pub mod gotools;
 pub mod iges_read;
 pub mod iges_write;
@@ -47,8 +48,9 @@ use thiserror::Error;
 pub use gotools::{GoToolsError, GoToolsImport, parse_gotools, read_gotools};
 pub use iges_read::{IgesError, IgesImport, IgesSurface, parse_iges, read_iges};
 pub use surface_json::{
-    MAX_SURFACE_JSON_BYTES, SurfaceJsonError, parse_surfaces_json, read_surfaces_json,
-    surface_to_json, surfaces_to_json, write_surface_json, write_surfaces_json,
+    MAX_SURFACE_JSON_BYTES, SurfaceJsonError, parse_surface_json_any, parse_surfaces_json,
+    read_surface_json_file, read_surfaces_json, surface_to_json, surfaces_to_json,
+    write_surface_json, write_surfaces_json,
 };
 
 use crate::mesh::{MeshError, Soup, SurfaceMesh};

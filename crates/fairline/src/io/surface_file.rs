@@ -16,7 +16,7 @@ use super::gotools::{GoToolsError, read_gotools};
 use super::iges_read::{IgesError, read_iges};
 use super::iges_write::{IgesWriteOptions, write_iges};
 use super::step::{StepError, StepWriteOptions, read_step_with, write_step};
-use super::surface_json::{SurfaceJsonError, read_surfaces_json, write_surfaces_json};
+use super::surface_json::{SurfaceJsonError, read_surface_json_file, write_surfaces_json};
 use super::units::LengthUnit;
 pub use super::unreadable::Unreadable;
 use crate::bspline::BSplineSurface;
@@ -24,7 +24,8 @@ use crate::bspline::BSplineSurface;
 /// A surface file format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SurfaceFormat {
-    /// fairline's surface JSON (DESIGN.md §5).
+    /// fairline's surface JSON (DESIGN.md §5); reading also takes geomdl's
+    /// JSON (NURBS-Python, [`super::geomdl`]), told apart by its content.
     Json,
     /// IGES 5.3 (entity 128, trims as 144/142).
     Iges,
@@ -160,10 +161,14 @@ pub enum SurfaceFileError {
 pub fn read_surface_file(path: impl AsRef<Path>) -> Result<SurfaceFile, SurfaceFileError> {
     let path = path.as_ref();
     match SurfaceFormat::from_path(path) {
-        Some(SurfaceFormat::Json) => Ok(SurfaceFile {
-            surfaces: read_surfaces_json(path)?,
-            ..SurfaceFile::default()
-        }),
+        Some(SurfaceFormat::Json) => {
+            let imp = read_surface_json_file(path)?;
+            Ok(SurfaceFile {
+                surfaces: imp.surfaces,
+                unreadable: imp.unreadable,
+                ..SurfaceFile::default()
+            })
+        }
         Some(SurfaceFormat::Iges) => {
             let imp = read_iges(path)?;
             Ok(SurfaceFile {
