@@ -16,11 +16,46 @@
 //! sense are not read, and the untrimmed surface is not the face).
 
 use serde_json::{Map, Value};
+use thiserror::Error;
 
-use super::surface_json::{SurfaceJsonError, field_error};
 use super::unreadable::Unreadable;
 use crate::Vec3;
-use crate::bspline::BSplineSurface;
+use crate::bspline::{BSplineError, BSplineSurface};
+
+/// Why a geomdl document could not be read (the surface JSON reader wraps
+/// it with the file's name).
+#[derive(Debug, Error)]
+pub enum GeomdlError {
+    /// `shape` or its `type` or `data` is missing or malformed.
+    #[error("geomdl JSON: {0}")]
+    Layout(String),
+    /// A field of an entry of `shape.data` is missing or malformed.
+    #[error("surface {surface}: field `{field}`: {message}")]
+    Field {
+        /// Index of the entry in `shape.data`.
+        surface: usize,
+        /// The field, with indices.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The fields are well formed but do not make a valid surface.
+    #[error("surface {surface}: {source}")]
+    Surface {
+        /// Index of the entry in `shape.data`.
+        surface: usize,
+        /// The validation error.
+        source: BSplineError,
+    },
+}
+
+fn field_error(surface: usize, field: &str, message: &str) -> GeomdlError {
+    GeomdlError::Field {
+        surface,
+        field: field.to_string(),
+        message: message.to_string(),
+    }
+}
 
 /// The surfaces of a geomdl JSON document.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -38,8 +73,8 @@ pub fn is_geomdl(top: &Map<String, Value>) -> bool {
 
 /// Reads the surfaces of a geomdl document's top-level object; errors name
 /// the entry of `shape.data` (`surface k`, from 0) and the field.
-pub fn parse_geomdl(top: &Map<String, Value>) -> Result<GeomdlImport, SurfaceJsonError> {
-    let layout = |m: &str| SurfaceJsonError::Layout(format!("geomdl JSON: {m}"));
+pub fn parse_geomdl(top: &Map<String, Value>) -> Result<GeomdlImport, GeomdlError> {
+    let layout = |m: &str| GeomdlError::Layout(m.to_string());
     let Some(Value::Object(shape)) = top.get("shape") else {
         return Err(layout("`shape` is not an object"));
     };
@@ -96,7 +131,7 @@ pub fn parse_geomdl(top: &Map<String, Value>) -> Result<GeomdlImport, SurfaceJso
 }
 
 /// A non-negative integer field.
-fn count(k: usize, o: &Map<String, Value>, name: &str) -> Result<usize, SurfaceJsonError> {
+fn count(k: usize, o: &Map<String, Value>, name: &str) -> Result<usize, GeomdlError> {
     o.get(name)
         .ok_or_else(|| field_error(k, name, "missing"))?
         .as_u64()
@@ -105,7 +140,7 @@ fn count(k: usize, o: &Map<String, Value>, name: &str) -> Result<usize, SurfaceJ
 }
 
 /// An array of numbers.
-fn numbers(k: usize, name: &str, v: Option<&Value>) -> Result<Vec<f64>, SurfaceJsonError> {
+fn numbers(k: usize, name: &str, v: Option<&Value>) -> Result<Vec<f64>, GeomdlError> {
     let Some(Value::Array(a)) = v else {
         return Err(field_error(k, name, "missing or not an array of numbers"));
     };
@@ -119,7 +154,7 @@ fn numbers(k: usize, name: &str, v: Option<&Value>) -> Result<Vec<f64>, SurfaceJ
 }
 
 /// One `"spline"` surface entry.
-fn surface(k: usize, o: &Map<String, Value>) -> Result<BSplineSurface, SurfaceJsonError> {
+fn surface(k: usize, o: &Map<String, Value>) -> Result<BSplineSurface, GeomdlError> {
     let degree_u = count(k, o, "degree_u")?;
     let degree_v = count(k, o, "degree_v")?;
     let size_u = count(k, o, "size_u")?;
@@ -194,7 +229,7 @@ fn surface(k: usize, o: &Map<String, Value>) -> Result<BSplineSurface, SurfaceJs
         points,
         weights,
     )
-    .map_err(|source| SurfaceJsonError::Surface { surface: k, source })
+    .map_err(|source| GeomdlError::Surface { surface: k, source })
 }
 
 #[cfg(test)]

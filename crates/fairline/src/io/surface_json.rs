@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use serde_json::{Map, Value};
 use thiserror::Error;
 
-use super::geomdl::{GeomdlImport, is_geomdl, parse_geomdl};
+use super::geomdl::{GeomdlError, GeomdlImport, is_geomdl, parse_geomdl};
 use crate::Vec3;
 use crate::bspline::{BSplineError, BSplineSurface, TrimCurve, TrimLoop};
 
@@ -175,7 +175,21 @@ pub fn parse_surface_json_any(text: &str) -> Result<GeomdlImport, SurfaceJsonErr
         ));
     };
     if is_geomdl(&obj) {
-        return parse_geomdl(&obj);
+        return parse_geomdl(&obj).map_err(|e| match e {
+            GeomdlError::Layout(m) => SurfaceJsonError::Layout(format!("geomdl JSON: {m}")),
+            GeomdlError::Field {
+                surface,
+                field,
+                message,
+            } => SurfaceJsonError::Field {
+                surface,
+                field,
+                message,
+            },
+            GeomdlError::Surface { surface, source } => {
+                SurfaceJsonError::Surface { surface, source }
+            }
+        });
     }
     let surfaces = if let Some(list) = obj.get("surfaces") {
         let Value::Array(list) = list else {
@@ -203,7 +217,7 @@ pub fn parse_surface_json_any(text: &str) -> Result<GeomdlImport, SurfaceJsonErr
     })
 }
 
-pub(super) fn field_error(surface: usize, field: &str, message: &str) -> SurfaceJsonError {
+fn field_error(surface: usize, field: &str, message: &str) -> SurfaceJsonError {
     SurfaceJsonError::Field {
         surface,
         field: field.to_string(),
