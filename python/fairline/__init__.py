@@ -960,7 +960,8 @@ def _surfaces_text(surfaces: Union[Surface, Sequence[Surface]]) -> str:
 
 
 def read_surfaces(path: PathLike, *, skip_unreadable: bool = False) -> List[Surface]:
-    """Reads B-spline surfaces from fairline JSON, IGES or STEP.
+    """Reads B-spline surfaces from fairline JSON, IGES, STEP, GoTools
+    ``.g2`` or geomdl (NURBS-Python) JSON, by extension and content.
 
     Returns a list of dicts in the JSON format of DESIGN.md §5
     (``degree_u``, ``degree_v``, ``knots_u``, ``knots_v``,

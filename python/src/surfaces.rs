@@ -29,7 +29,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// All surfaces of a .json, .igs/.iges or .step/.stp file (the CLI's
+/// All surfaces of a .json, .igs/.iges, .step/.stp or .g2 file (the CLI's
 /// `surface::load_surfaces`, through `fairline::io::surface_file`), errors
 /// naming the file.
 fn load_surfaces(
@@ -119,7 +119,9 @@ fn read_surfaces(
 /// .step/.stp by the extension (`fairline::io::surface_file`).
 #[pyfunction]
 fn write_surfaces(py: Python<'_>, path: PathBuf, surfaces: String) -> PyResult<()> {
-    if fairline::io::surface_file::SurfaceFormat::from_path(&path).is_none() {
+    if !fairline::io::surface_file::SurfaceFormat::from_path(&path)
+        .is_some_and(fairline::io::surface_file::SurfaceFormat::is_writable)
+    {
         return Err(Failure::bad(format!(
             "{}: surfaces are written as .json, .igs/.iges or .step/.stp",
             path.display()

@@ -225,7 +225,7 @@ pub fn to_input_error(e: HighlightError) -> anyhow::Error {
 /// (circular lines also carry "radius"; bands under "bands"), or OBJ `l`
 /// polylines (groups lines, band_lower, band_upper).
 ///
-/// B-spline surfaces (.json, .igs/.iges, .step/.stp) are handled as in Nishiyama et al.
+/// B-spline surfaces (.json, .igs/.iges, .step/.stp, .g2) are handled as in Nishiyama et al.
 /// §2: d_s sampled on a --grid × --grid (u, v) grid, contoured by marching
 /// squares, refined onto the true zero; JSON lines carry "uv" and "points".
 #[derive(clap::Args, Debug)]

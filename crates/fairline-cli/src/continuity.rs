@@ -23,7 +23,7 @@ use std::path::PathBuf;
     after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline continuity fairline-demo/bspline-panel-dented.json --report seams.json --png seams.png\n\nReport: {\"edges\":[{\"surfaces\":[i,j],\"sides\":[..],\"g0_max\":..,\"g1_max_deg\":..,\"g2_max\":..,\"g2_max_relative\":..,\"class\":\"G0\"|\"G1\"|\"G2\"|\"gap\",\"worst\":[x,y,z],\"length\":..}],\"classes\":{..},\"tolerance\":..,...}"
 )]
 pub struct Args {
-    /// Input surfaces (.json, .igs/.iges or .step/.stp).
+    /// Input surfaces (.json, .igs/.iges, .step/.stp or .g2).
     pub surface_file: PathBuf,
     /// Position tolerance for G0, model units (default 1e-4 × the diagonal
     /// of the control points' bounding box).

@@ -11,7 +11,8 @@ use std::path::PathBuf;
 /// B-spline surfaces (.json, .igs/.iges, .step/.stp) convert between these
 /// three formats by extension, exactly (control points, knots, weights and
 /// trimming curves bit-identical; the length unit kept), or to a mesh
-/// (tessellated, 64 × 64 per surface).
+/// (tessellated, 64 × 64 per surface); GoTools (.g2) and geomdl JSON are
+/// read and convert to any of them.
 #[derive(clap::Args, Debug)]
 #[command(
     after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline convert fairline-demo/wavy.obj wavy.ply\n  fairline convert fairline-demo/bspline-panel-dented.json panel-mesh.obj\n  fairline convert fairline-demo/bspline-panel-dented.json panel.igs\n  fairline convert fairline-demo/bspline-panel-dented.json panel.step"
@@ -32,6 +33,14 @@ pub fn run(args: Args) -> Result<()> {
         .output("OUT", &args.output)
         .output_opt("--report", args.report.as_deref())
         .check()?;
+    if crate::surface::is_surface_path(&args.output)
+        && !crate::surface::is_writable_surface_path(&args.output)
+    {
+        return Err(crate::error::bad_input(format!(
+            "{}: fairline reads this surface format but does not write it (write .json, .igs/.iges or .step/.stp)",
+            args.output.display()
+        )));
+    }
     if crate::surface::is_surface_path(&args.input) {
         let input = crate::surface::load_surface_file(&args.input)?;
         let mut report = Report::new("convert");

@@ -58,7 +58,7 @@ use std::path::PathBuf;
     after_help = "Examples (on the files `fairline demo` writes into fairline-demo/):\n  fairline fair-surface fairline-demo/bspline-panel-dented.json --lights fairline-demo/bspline-panel-lights.json --endpoints fairline-demo/bspline-panel-endpoints.json -o panel-faired.json --report fair.json --png fair.png --svg uv.svg\n  fairline highlight fairline-demo/bspline-panel-dented.json --lights fairline-demo/bspline-panel-lights.json -o panel-lines.json --svg panel-lines.svg\n  fairline fair-surface fairline-demo/bspline-panel-dented.json --lights fairline-demo/bspline-panel-lights.json --lines panel-lines.json --from 5:0.35 --to 5:0.65 -o panel-faired.json"
 )]
 pub struct Args {
-    /// Input surface (.json, .igs/.iges or .step/.stp).
+    /// Input surface (.json, .igs/.iges, .step/.stp or .g2).
     pub surface_file: PathBuf,
     /// Circular lights JSON (default: derived from the part and printed).
     #[arg(long, value_name = "LIGHTS.json")]
@@ -507,9 +507,9 @@ pub fn run(args: Args) -> Result<()> {
 /// The output checks of the command (file kinds by extension, nothing
 /// written over an input) and its job.
 fn output_job(args: &Args) -> Result<crate::output::Job> {
-    if !crate::surface::is_surface_path(&args.output) {
+    if !crate::surface::is_writable_surface_path(&args.output) {
         return Err(bad_input(format!(
-            "{}: -o must name a surface file (.json, .igs/.iges or .step/.stp)",
+            "{}: -o must name a surface file fairline writes (.json, .igs/.iges or .step/.stp)",
             args.output.display()
         )));
     }

@@ -1,5 +1,5 @@
 //! `fairline info`: counts and defects of a mesh file, or the contents of a
-//! surface file (.json, .igs/.iges, .step/.stp).
+//! surface file (.json, .igs/.iges, .step/.stp, .g2).
 
 use crate::common::{print_warnings, write_report};
 use crate::output::{Job, print_stdout};
@@ -13,7 +13,7 @@ use std::path::PathBuf;
 /// non-manifold edges and vertices, components, genus, degenerate faces,
 /// bounding box, edge lengths. Works on broken (non-manifold, invalid) files
 /// too: it reports the defects instead of refusing. For a surface file
-/// (.json, .igs/.iges, .step/.stp): surfaces, trimmed and rational ones,
+/// (.json, .igs/.iges, .step/.stp, .g2): surfaces, trimmed and rational ones,
 /// degrees, control points, length unit, bounding box and (`--area`) the
 /// total trimmed area.
 #[derive(clap::Args, Debug)]

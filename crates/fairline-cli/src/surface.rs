@@ -1,5 +1,5 @@
-//! Loading B-spline surfaces from the command line (.json, .igs/.iges or
-//! .step/.stp, by extension through `fairline::io::surface_file`) and
+//! Loading B-spline surfaces from the command line (.json, .igs/.iges,
+//! .step/.stp or .g2, by extension through `fairline::io::surface_file`) and
 //! turning them into meshes for drawing.
 
 use crate::error::bad_input;
@@ -9,9 +9,16 @@ use fairline::bspline::BSplineSurface;
 use fairline::io::surface_file::{SurfaceFile, SurfaceFormat, read_surface_file};
 use std::path::Path;
 
-/// True when the path names a surface file (.json, .igs/.iges, .step/.stp).
+/// True when the path names a surface file (.json, .igs/.iges, .step/.stp,
+/// .g2).
 pub fn is_surface_path(path: &Path) -> bool {
     SurfaceFormat::from_path(path).is_some()
+}
+
+/// True when the path names a surface file fairline writes (.json,
+/// .igs/.iges, .step/.stp).
+pub fn is_writable_surface_path(path: &Path) -> bool {
+    SurfaceFormat::from_path(path).is_some_and(SurfaceFormat::is_writable)
 }
 
 static SKIP_UNREADABLE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);

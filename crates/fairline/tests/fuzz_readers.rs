@@ -1,6 +1,7 @@
 //! Seeded, deterministic mutation fuzzing of every reader: OBJ, PLY
 //! (ascii, binary little- and big-endian), OFF, STL (ascii
-//! and binary), surface JSON, IGES and STEP. Valid seed files are mutated (byte and
+//! and binary), surface JSON (fairline's and geomdl's), IGES, STEP and
+//! GoTools. Valid seed files are mutated (byte and
 //! bit flips, truncation, duplicated / deleted / swapped lines, huge numbers,
 //! NaN text, negative counts, random keywords, line-ending changes) by a
 //! xorshift generator with a fixed seed, so every run tries the same inputs.
@@ -519,6 +520,59 @@ fn fuzz_step() {
     let imp = fairline::io::step::parse_step(&written).unwrap();
     assert_eq!(imp.surfaces.len(), 2, "the seed holds two surfaces");
     fuzz("written.step", written.as_bytes(), 12, &read_step_bytes);
+}
+
+fn read_surface_text(
+    parse: fn(&str) -> Result<Vec<BSplineSurface>, String>,
+) -> impl Fn(&[u8], &str) -> Result<(), String> {
+    move |bytes, name| {
+        let text = String::from_utf8_lossy(bytes);
+        let surfaces = parse(&text).map_err(|e| format!("{name}: {e}"))?;
+        for s in surfaces {
+            let (u, v) = s.domain_center();
+            let p = s.eval(u, v);
+            assert!(
+                p.is_finite(),
+                "{name}: a surface that reads evaluates to {p}"
+            );
+        }
+        Ok(())
+    }
+}
+
+/// GoTools: a spline surface, a bounded one over it with linear parameter
+/// curves, a curve (listed) and a rational surface.
+#[test]
+fn fuzz_gotools() {
+    let surface = "3 0\n2 2\n0 0 1 1\n3 2\n0 0 0.5 1 1\n0 0 0\n1 0 1\n0 1 1\n1 1 2\n0 2 2\n1 2 3\n";
+    let line = |a: &str, b: &str| format!("1 100 0\n2 0\n2 2\n0 0 1 1\n{a}\n{b}\n");
+    let mut seed = format!("200 1 0 0\n{surface}\n210 1 0 0\n200\n{surface}1\n3 1e-6\n");
+    seed.push_str(&line("0 0", "1 0"));
+    seed.push_str(&line("1 0", "0 1"));
+    seed.push_str(&line("0 1", "0 0"));
+    seed.push_str("100 1 0 0\n3 0\n2 2\n0 0 1 1\n0 0 0\n1 1 1\n");
+    seed.push_str("200 1 0 0\n3 1\n2 2\n0 0 1 1\n2 2\n0 0 1 1\n");
+    seed.push_str("1 0 0 1\n1 0 0 0.5\n0 1 0 1\n1 1 1 2\n");
+    let imp = fairline::io::parse_gotools(&seed).unwrap();
+    assert_eq!((imp.surfaces.len(), imp.unreadable.len()), (3, 1));
+    let read = read_surface_text(|t| {
+        fairline::io::parse_gotools(t)
+            .map(|i| i.surfaces)
+            .map_err(|e| e.to_string())
+    });
+    fuzz("seed.g2", seed.as_bytes(), 13, &read);
+}
+
+/// geomdl JSON: the file geomdl wrote for the library's tests.
+#[test]
+fn fuzz_geomdl_json() {
+    let seed = include_bytes!("data/geomdl/cylinder_and_bicubic.json");
+    let read = read_surface_text(|t| {
+        fairline::io::parse_surface_json_any(t)
+            .map(|i| i.surfaces)
+            .map_err(|e| e.to_string())
+    });
+    fuzz("geomdl.json", seed, 14, &read);
 }
 
 /// The inputs that once failed (`tests/corpus/<what>/<file>`), read through

@@ -21,6 +21,8 @@
 //! The format is chosen by the file extension ([`MeshFormat::from_path`]).
 
 pub mod curve_fit;
+pub mod geomdl;
+pub mod gotools;
 pub mod iges_read;
 pub mod iges_write;
 pub mod model_curve;
@@ -43,10 +45,12 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use thiserror::Error;
 
+pub use gotools::{GoToolsError, GoToolsImport, parse_gotools, read_gotools};
 pub use iges_read::{IgesError, IgesImport, IgesSurface, parse_iges, read_iges};
 pub use surface_json::{
-    MAX_SURFACE_JSON_BYTES, SurfaceJsonError, parse_surfaces_json, read_surfaces_json,
-    surface_to_json, surfaces_to_json, write_surface_json, write_surfaces_json,
+    MAX_SURFACE_JSON_BYTES, SurfaceJsonError, parse_surface_json_any, parse_surfaces_json,
+    read_surface_json_file, read_surfaces_json, surface_to_json, surfaces_to_json,
+    write_surface_json, write_surfaces_json,
 };
 
 use crate::mesh::{MeshError, Soup, SurfaceMesh};
@@ -112,7 +116,7 @@ pub enum IoError {
     },
     /// The file name has no extension fairline knows.
     #[error(
-        "{}: unknown mesh format (expected extension .obj, .ply, .off or .stl); surface formats: .json (fairline's surface JSON), .igs/.iges (IGES 5.3), .step/.stp (STEP AP203/AP214/AP242){}",
+        "{}: unknown mesh format (expected extension .obj, .ply, .off or .stl); surface formats: .json (fairline's surface JSON), .igs/.iges (IGES 5.3), .step/.stp (STEP AP203/AP214/AP242), .g2 (GoTools){}",
         path.display(),
         foreign_surface_hint(path)
     )]
@@ -1093,8 +1097,8 @@ fn push_face(soup: &mut Soup, face: &[u32]) -> Result<(), &'static str> {
     Ok(())
 }
 
-/// A hint for surface formats fairline does not read (Rhino .3dm, G+Smo
-/// .g2, ACIS .sat, Parasolid .x_t, OpenCASCADE .brep): export IGES or STEP.
+/// A hint for surface formats fairline does not read (Rhino .3dm, ACIS
+/// .sat, Parasolid .x_t, OpenCASCADE .brep): export IGES or STEP.
 fn foreign_surface_hint(path: &Path) -> &'static str {
     let ext = path
         .extension()
@@ -1102,8 +1106,8 @@ fn foreign_surface_hint(path: &Path) -> &'static str {
         .map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some(
-            "3dm" | "g2" | "sat" | "sab" | "x_t" | "x_b" | "brep" | "igs.gz" | "jt" | "catpart"
-            | "prt" | "sldprt",
+            "3dm" | "sat" | "sab" | "x_t" | "x_b" | "brep" | "igs.gz" | "jt" | "catpart" | "prt"
+            | "sldprt",
         ) => {
             "; this surface format is not read: export IGES or STEP from the program that wrote it"
         }

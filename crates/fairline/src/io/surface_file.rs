@@ -1,20 +1,22 @@
 //! Surface files by extension: the one place that maps `.json`,
-//! `.igs`/`.iges` and `.step`/`.stp` to their readers and writers.
+//! `.igs`/`.iges`, `.step`/`.stp` and `.g2` to their readers and writers.
 //!
-//! Reading keeps the file's length unit ([`SurfaceFile::unit`]; JSON has
-//! none) and writing puts it back, so converting between formats changes
-//! no coordinate. Every writer keeps control points, knots, weights and
-//! trimming curves bit-identical on a read → write → read round trip.
+//! Reading keeps the file's length unit ([`SurfaceFile::unit`]; JSON and
+//! GoTools have none) and writing puts it back, so converting between
+//! formats changes no coordinate. Every writer keeps control points, knots,
+//! weights and trimming curves bit-identical on a read → write → read round
+//! trip. GoTools `.g2` is read only ([`SurfaceFormat::is_writable`]).
 
 use std::path::{Path, PathBuf};
 
 use thiserror::Error;
 
 use super::IoError;
+use super::gotools::{GoToolsError, read_gotools};
 use super::iges_read::{IgesError, read_iges};
 use super::iges_write::{IgesWriteOptions, write_iges};
 use super::step::{StepError, StepWriteOptions, read_step_with, write_step};
-use super::surface_json::{SurfaceJsonError, read_surfaces_json, write_surfaces_json};
+use super::surface_json::{SurfaceJsonError, read_surface_json_file, write_surfaces_json};
 use super::units::LengthUnit;
 pub use super::unreadable::Unreadable;
 use crate::bspline::BSplineSurface;
@@ -22,17 +24,21 @@ use crate::bspline::BSplineSurface;
 /// A surface file format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SurfaceFormat {
-    /// fairline's surface JSON (DESIGN.md §5).
+    /// fairline's surface JSON (DESIGN.md §5); reading also takes geomdl's
+    /// JSON (NURBS-Python, [`super::geomdl`]), told apart by its content.
     Json,
     /// IGES 5.3 (entity 128, trims as 144/142).
     Iges,
     /// STEP ISO 10303-21 (AP203/AP214/AP242 geometry).
     Step,
+    /// SINTEF GoTools text format (`.g2`; spline and bounded spline
+    /// surfaces), read only: see [`super::gotools`].
+    GoTools,
 }
 
 impl SurfaceFormat {
     /// The format named by the extension (case-insensitive): `.json`,
-    /// `.igs`/`.iges`, `.step`/`.stp`; `None` otherwise.
+    /// `.igs`/`.iges`, `.step`/`.stp`, `.g2`; `None` otherwise.
     pub fn from_path(path: impl AsRef<Path>) -> Option<Self> {
         let ext = path
             .as_ref()
@@ -43,8 +49,14 @@ impl SurfaceFormat {
             Some("json") => Some(Self::Json),
             Some("igs" | "iges") => Some(Self::Iges),
             Some("step" | "stp") => Some(Self::Step),
+            Some("g2") => Some(Self::GoTools),
             _ => None,
         }
+    }
+
+    /// Whether fairline writes this format (GoTools is read only).
+    pub fn is_writable(self) -> bool {
+        !matches!(self, Self::GoTools)
     }
 }
 
@@ -60,7 +72,8 @@ pub struct SurfaceFile {
     /// disagree with their 3-D edges); one line each.
     pub warnings: Vec<String>,
     /// Every face (IGES: trimmed, bounded or free surface entity, B-rep
-    /// face; STEP: face) the reader could not read: it is in none of
+    /// face; STEP: face; GoTools: any object that is not a readable spline
+    /// surface) the reader could not read: it is in none of
     /// [`Self::surfaces`]. A front end must not treat the part as complete
     /// while this is not empty.
     pub unreadable: Vec<Unreadable>,
@@ -118,15 +131,27 @@ pub enum SurfaceFileError {
     /// STEP.
     #[error(transparent)]
     Step(#[from] StepError),
+    /// GoTools.
+    #[error(transparent)]
+    GoTools(#[from] GoToolsError),
     /// Writing.
     #[error(transparent)]
     Io(#[from] IoError),
     /// The extension names no surface format.
     #[error(
-        "{}: unknown surface format (expected extension .json, .igs/.iges or .step/.stp)",
+        "{}: unknown surface format (expected extension .json, .igs/.iges, .step/.stp or .g2)",
         path.display()
     )]
     UnknownFormat {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The extension names a format fairline reads but does not write.
+    #[error(
+        "{}: fairline does not write this surface format (write .json, .igs/.iges or .step/.stp)",
+        path.display()
+    )]
+    ReadOnlyFormat {
         /// The file.
         path: PathBuf,
     },
@@ -136,10 +161,14 @@ pub enum SurfaceFileError {
 pub fn read_surface_file(path: impl AsRef<Path>) -> Result<SurfaceFile, SurfaceFileError> {
     let path = path.as_ref();
     match SurfaceFormat::from_path(path) {
-        Some(SurfaceFormat::Json) => Ok(SurfaceFile {
-            surfaces: read_surfaces_json(path)?,
-            ..SurfaceFile::default()
-        }),
+        Some(SurfaceFormat::Json) => {
+            let imp = read_surface_json_file(path)?;
+            Ok(SurfaceFile {
+                surfaces: imp.surfaces,
+                unreadable: imp.unreadable,
+                ..SurfaceFile::default()
+            })
+        }
         Some(SurfaceFormat::Iges) => {
             let imp = read_iges(path)?;
             Ok(SurfaceFile {
@@ -163,6 +192,14 @@ pub fn read_surface_file(path: impl AsRef<Path>) -> Result<SurfaceFile, SurfaceF
                 surfaces: imp.surfaces.into_iter().map(|s| s.surface).collect(),
                 warnings: imp.warnings,
                 unreadable: imp.unreadable,
+            })
+        }
+        Some(SurfaceFormat::GoTools) => {
+            let imp = read_gotools(path)?;
+            Ok(SurfaceFile {
+                surfaces: imp.surfaces,
+                unreadable: imp.unreadable,
+                ..SurfaceFile::default()
             })
         }
         None => Err(SurfaceFileError::UnknownFormat {
@@ -198,6 +235,9 @@ pub fn write_surface_file(
                 ..StepWriteOptions::default()
             },
         )?),
+        Some(SurfaceFormat::GoTools) => Err(SurfaceFileError::ReadOnlyFormat {
+            path: path.to_path_buf(),
+        }),
         None => Err(SurfaceFileError::UnknownFormat {
             path: path.to_path_buf(),
         }),

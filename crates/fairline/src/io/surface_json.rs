@@ -4,7 +4,8 @@
 //! control net's shape and optional `"trims"` (closed loops of 2-D B-spline
 //! curves in (u, v), the first the outer boundary, the rest holes; each curve
 //! `{"degree","knots","control_points":[[u,v],...],"weights"?}`); a file holds
-//! one surface or `{"surfaces":[...]}`.
+//! one surface or `{"surfaces":[...]}`. A file whose top level has `shape`
+//! is geomdl's JSON instead ([`super::geomdl`]).
 //!
 //! Numbers are written as the shortest decimal that reads back to the same
 //! f64 and read exactly (serde_json `float_roundtrip`), so a round trip is
@@ -17,6 +18,7 @@ use std::path::{Path, PathBuf};
 use serde_json::{Map, Value};
 use thiserror::Error;
 
+use super::geomdl::{GeomdlError, GeomdlImport, is_geomdl, parse_geomdl};
 use crate::Vec3;
 use crate::bspline::{BSplineError, BSplineSurface, TrimCurve, TrimLoop};
 
@@ -42,8 +44,11 @@ pub enum SurfaceJsonError {
     /// The text is not JSON (the message carries line and column).
     #[error("invalid JSON: {0}")]
     Syntax(String),
-    /// The top level is neither a surface object nor `{"surfaces": [...]}`.
-    #[error("expected a surface object or {{\"surfaces\": [...]}}: {0}")]
+    /// The top level is neither a surface object nor `{"surfaces": [...]}`
+    /// nor geomdl's `{"shape": ...}`, or a geomdl entry is not read.
+    #[error(
+        "expected a surface object, {{\"surfaces\": [...]}} or geomdl's {{\"shape\": ...}}: {0}"
+    )]
     Layout(String),
     /// A field of a surface is missing or has the wrong type or shape.
     #[error("surface {surface}: field `{field}`: {message}")]
@@ -95,12 +100,36 @@ pub enum SurfaceJsonError {
 /// full precision, far beyond real CAD surfaces.
 pub const MAX_SURFACE_JSON_BYTES: u64 = 32 << 20;
 
-/// Reads every surface of a JSON file (DESIGN.md §5): a single surface gives
-/// a list of one. Errors name the file, the surface index and the field.
-/// Files over [`MAX_SURFACE_JSON_BYTES`] are refused before being read.
+/// Reads every surface of a JSON file (DESIGN.md §5, or geomdl's JSON,
+/// see [`super::geomdl`]): a single surface gives a list of one. Errors
+/// name the file, the surface index and the field; a geomdl entry that is
+/// not read (see [`read_surface_json_file`]) is an error here. Files over
+/// [`MAX_SURFACE_JSON_BYTES`] are refused before being read.
 pub fn read_surfaces_json(path: impl AsRef<Path>) -> Result<Vec<BSplineSurface>, SurfaceJsonError> {
-    use std::io::Read;
     let path = path.as_ref();
+    let text = read_text(path)?;
+    parse_surfaces_json(&text).map_err(|error| in_file(path, error))
+}
+
+/// The surfaces of a JSON file of either schema (fairline's, DESIGN.md §5,
+/// or geomdl's, told apart by its top-level `shape`), with the geomdl
+/// entries that are not read listed rather than refused.
+pub fn read_surface_json_file(path: impl AsRef<Path>) -> Result<GeomdlImport, SurfaceJsonError> {
+    let path = path.as_ref();
+    let text = read_text(path)?;
+    parse_surface_json_any(&text).map_err(|error| in_file(path, error))
+}
+
+fn in_file(path: &Path, error: SurfaceJsonError) -> SurfaceJsonError {
+    SurfaceJsonError::InFile {
+        path: path.to_path_buf(),
+        error: Box::new(error),
+    }
+}
+
+/// The text of a JSON file, refused over [`MAX_SURFACE_JSON_BYTES`].
+fn read_text(path: &Path) -> Result<String, SurfaceJsonError> {
+    use std::io::Read;
     let read_err = |source| SurfaceJsonError::Read {
         path: path.to_path_buf(),
         source,
@@ -124,14 +153,20 @@ pub fn read_surfaces_json(path: impl AsRef<Path>) -> Result<Vec<BSplineSurface>,
     if text.len() as u64 > MAX_SURFACE_JSON_BYTES {
         return Err(too_large(text.len() as u64));
     }
-    parse_surfaces_json(&text).map_err(|error| SurfaceJsonError::InFile {
-        path: path.to_path_buf(),
-        error: Box::new(error),
-    })
+    Ok(text)
 }
 
 /// Parses surfaces from JSON text; see [`read_surfaces_json`].
 pub fn parse_surfaces_json(text: &str) -> Result<Vec<BSplineSurface>, SurfaceJsonError> {
+    let imp = parse_surface_json_any(text)?;
+    if let Some(u) = imp.unreadable.first() {
+        return Err(SurfaceJsonError::Layout(u.to_string()));
+    }
+    Ok(imp.surfaces)
+}
+
+/// Parses JSON text of either schema; see [`read_surface_json_file`].
+pub fn parse_surface_json_any(text: &str) -> Result<GeomdlImport, SurfaceJsonError> {
     let value: Value =
         serde_json::from_str(text).map_err(|e| SurfaceJsonError::Syntax(e.to_string()))?;
     let Value::Object(obj) = value else {
@@ -139,7 +174,24 @@ pub fn parse_surfaces_json(text: &str) -> Result<Vec<BSplineSurface>, SurfaceJso
             "the top level is not an object".into(),
         ));
     };
-    if let Some(list) = obj.get("surfaces") {
+    if is_geomdl(&obj) {
+        return parse_geomdl(&obj).map_err(|e| match e {
+            GeomdlError::Layout(m) => SurfaceJsonError::Layout(format!("geomdl JSON: {m}")),
+            GeomdlError::Field {
+                surface,
+                field,
+                message,
+            } => SurfaceJsonError::Field {
+                surface,
+                field,
+                message,
+            },
+            GeomdlError::Surface { surface, source } => {
+                SurfaceJsonError::Surface { surface, source }
+            }
+        });
+    }
+    let surfaces = if let Some(list) = obj.get("surfaces") {
         let Value::Array(list) = list else {
             return Err(SurfaceJsonError::Layout(
                 "`surfaces` is not an array".into(),
@@ -151,14 +203,18 @@ pub fn parse_surfaces_json(text: &str) -> Result<Vec<BSplineSurface>, SurfaceJso
                 Value::Object(o) => surface_from_object(k, o),
                 _ => Err(field_error(k, "", "the surface is not an object")),
             })
-            .collect()
+            .collect::<Result<Vec<_>, _>>()?
     } else if obj.contains_key("degree_u") || obj.contains_key("control_points") {
-        Ok(vec![surface_from_object(0, &obj)?])
+        vec![surface_from_object(0, &obj)?]
     } else {
-        Err(SurfaceJsonError::Layout(
-            "neither `surfaces` nor `control_points` found".into(),
-        ))
-    }
+        return Err(SurfaceJsonError::Layout(
+            "neither `surfaces` nor `control_points` (fairline surface JSON) nor `shape` (geomdl JSON) found".into(),
+        ));
+    };
+    Ok(GeomdlImport {
+        surfaces,
+        unreadable: Vec::new(),
+    })
 }
 
 fn field_error(surface: usize, field: &str, message: &str) -> SurfaceJsonError {
