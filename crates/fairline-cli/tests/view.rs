@@ -3092,6 +3092,130 @@ fn page_saves_a_session_and_reopens_it_as_it_was() {
     save_screenshot("workbench-session.png", &b.screenshot().3);
 }
 
+/// The reflection zebra (Shading: reflection zebra): dark stripes cross
+/// the curved panel at the default spacing; at the finest spacing, where
+/// the stripes get denser than the pixels, the pattern fades to grey
+/// instead of breaking into black specks.
+#[test]
+fn page_shades_a_reflection_zebra_that_fades_instead_of_speckling() {
+    let Some(exe) = cdp::chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "chromium is not installed and CI is set (apt-get install chromium)"
+        );
+        eprintln!(
+            "\n*** SKIPPED: chromium not found: the browser tests did NOT run (apt-get install chromium) ***\n"
+        );
+        return;
+    };
+    let _one = BROWSER_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tmp("view-reflection-zebra");
+    let mesh = dir.join("panel.obj");
+    dented_panel(&mesh, 81);
+    let srv = start(&[&mesh], &dir);
+    let mut b = open_page(&exe, &srv);
+    let set = |b: &mut cdp::Browser, id: &str, v: &str| {
+        b.eval(&format!("(() => {{ const e = document.getElementById('{id}'); e.value = '{v}'; e.dispatchEvent(new Event('input')); e.dispatchEvent(new Event('change')); }})()"));
+        std::thread::sleep(Duration::from_millis(400));
+    };
+    let rect = canvas_rect(&mut b);
+    // share of the part's pixels that are nearly black, and of the dark
+    // ones in runs shorter than 3 pixels along the rows (specks)
+    let dark_share = |shot: &(u32, u32, Vec<u8>, Vec<u8>)| {
+        let (cx, cy, cw, ch) = rect;
+        let bg = lum(shot, cx + 3, cy + 3);
+        let (mut part, mut dark) = (0usize, 0usize);
+        for y in (cy + 4..cy + ch - 4).step_by(2) {
+            for x in cx + 4..cx + cw - 4 {
+                let l = lum(shot, x, y);
+                if (l - bg).abs() > 12.0 {
+                    part += 1;
+                    dark += usize::from(l < 45.0);
+                }
+            }
+        }
+        dark as f64 / part.max(1) as f64
+    };
+    // of the dark pixels (nearly black) of the canvas, the share in
+    // specks: 8-connected dark blobs of fewer than 15 pixels
+    let speck_share = |shot: &(u32, u32, Vec<u8>, Vec<u8>)| {
+        let (cx, cy, cw, ch) = rect;
+        let (w, h) = (cw as usize - 8, ch as usize - 8);
+        let dark: Vec<bool> = (0..w * h)
+            .map(|i| lum(shot, cx + 4 + (i % w) as u32, cy + 4 + (i / w) as u32) < 45.0)
+            .collect();
+        let mut seen = vec![false; w * h];
+        let (mut total, mut specks) = (0usize, 0usize);
+        for start in 0..w * h {
+            if !dark[start] || seen[start] {
+                continue;
+            }
+            seen[start] = true;
+            let mut stack = vec![start];
+            let mut size = 0usize;
+            while let Some(i) = stack.pop() {
+                size += 1;
+                let (x, y) = ((i % w) as i64, (i / w) as i64);
+                for (dx, dy) in [
+                    (-1, -1),
+                    (0, -1),
+                    (1, -1),
+                    (-1, 0),
+                    (1, 0),
+                    (-1, 1),
+                    (0, 1),
+                    (1, 1),
+                ] {
+                    let (nx, ny) = (x + dx, y + dy);
+                    if nx < 0 || ny < 0 || nx >= w as i64 || ny >= h as i64 {
+                        continue;
+                    }
+                    let j = ny as usize * w + nx as usize;
+                    if dark[j] && !seen[j] {
+                        seen[j] = true;
+                        stack.push(j);
+                    }
+                }
+            }
+            total += size;
+            if size < 15 {
+                specks += size;
+            }
+        }
+        specks as f64 / total.max(1) as f64
+    };
+    set(&mut b, "mode", "6");
+    assert_eq!(b.eval("window.fairline.lights[0].mode"), json!(6));
+    let zebra = b.screenshot();
+    let share = dark_share(&zebra);
+    let sep = stripe_separation(&zebra, rect);
+    eprintln!("reflection zebra: {share:.2} of the part dark, stripes {sep:.1} px apart");
+    assert!(
+        (0.15..0.85).contains(&share),
+        "stripes cross the part: {share:.2} dark"
+    );
+    assert!(
+        sep.is_finite() && sep > 4.0,
+        "separate stripes: {sep:.1} px"
+    );
+    save_screenshot("workbench-reflection-zebra.png", &zebra.3);
+    // the finest spacing: grey, not specks
+    set(&mut b, "spacing", "-4.33");
+    let fine = b.screenshot();
+    let (fine_share, specks) = (dark_share(&fine), speck_share(&fine));
+    eprintln!(
+        "finest spacing: {fine_share:.3} of the part nearly black, {specks:.3} of that in specks (default spacing {:.3})",
+        speck_share(&zebra)
+    );
+    // where the stripes are denser than the pixels the part is grey: far
+    // less black than the half of the default zebra, and few specks
+    assert!(
+        fine_share < 0.5 * share,
+        "the dense zebra fades: {fine_share:.3} black"
+    );
+    assert!(specks < 0.15, "specks: {specks:.3} of the dark pixels");
+}
+
 /// Mean distance (pixels) between the dark stripes crossing the middle of
 /// the canvas: along the middle row and the middle column, the part's
 /// extent (pixels brighter than the background by 30 or darker than 60)

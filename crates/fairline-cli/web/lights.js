@@ -85,14 +85,15 @@ export class Lights {
     const c = this.circular(camera);
     const n = a.direction;
     const b = cross(c.axis, n); // n × b = axis
-    const isophote = this.mode === 3;
+    // isophotes and the reflection zebra step an angle (degrees)
+    const angular = this.mode === 3 || this.mode === 6;
     return {
       uMode: this.mode,
       uA0: rel(a.plane_point),
       uZ: a.plane_normal,
       uH: a.direction,
-      uSpacing: isophote ? 10 * Math.pow(2, this.spacingExp) : a.spacing,
-      uBandHalf: 0.5 * this.bandFraction * a.spacing,
+      uSpacing: angular ? 10 * Math.pow(2, this.spacingExp) : a.spacing,
+      uBandHalf: this.mode === 6 ? 0.5 * this.bandFraction : 0.5 * this.bandFraction * a.spacing,
       uLineWidth: this.lineWidth,
       uCircleCenter: rel(c.center),
       uCircleN: n,

@@ -122,7 +122,10 @@ async function applyScalar() {
 
 function updateLightReadouts() {
   const l = lights[state.active];
-  $('spacing-out').textContent = l.spacing().toPrecision(3);
+  // isophotes and the reflection zebra step an angle
+  $('spacing-out').textContent = l.mode === 3 || l.mode === 6
+    ? `${(10 * Math.pow(2, l.spacingExp)).toPrecision(3)}°`
+    : l.spacing().toPrecision(3);
   $('direction-out').textContent = `${l.directionDeg}°`;
 }
 

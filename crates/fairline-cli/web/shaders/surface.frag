@@ -20,12 +20,21 @@
 // at most 4 stationary points, so the samples bracket the global minimum).
 // d_s = d·(N × L̇)/|N × L̇|, L̇ of Eq. (2.17).
 //
-// Isophotes: lines of constant N·Z (angle steps of uSpacingAngle).
+// Isophotes: lines of constant N·Z (angle steps of uSpacing degrees).
+//
+// Reflection zebra (as Rhino's Zebra and Alias' diagnostic shading): the
+// eye's ray reflected at the fragment, R = reflect(−V, N), looks up an
+// environment of parallel tube lights at infinity along H: the stripe is
+// the angle of R around H, atan2(R·(H × Z), R·Z), in steps of uSpacing
+// degrees, dark over the band fraction 2·uBandHalf of each step. The
+// stripes move with the eye, unlike the lines of the light array.
+// Every stripe pattern fades to its mean where its period on the screen
+// falls below about three pixels (fwidth), never to speckle.
 precision highp float;
 in vec3 vPos;
 in vec3 vNormal;
 in float vScalar;
-uniform int uMode;            // 0 plain, 1 lines, 2 bands, 3 isophotes, 4 circular lines, 5 circular bands
+uniform int uMode;            // 0 plain, 1 lines, 2 bands, 3 isophotes, 4 circular lines, 5 circular bands, 6 reflection zebra
 uniform vec3 uA0;             // light 0 point, relative to the document centre
 uniform vec3 uZ;              // plane normal (unit)
 uniform vec3 uH;              // light direction (unit, orthogonal to Z)
@@ -128,6 +137,18 @@ void main() {
     float off = abs(t - floor(t + 0.5));
     float w = fwidth(t) * uLineWidth;
     float a = 1.0 - smoothstep(0.5 * w, w, off);
+    color = mix(color, vec3(0.02), a);
+  } else if (uMode == 6) {
+    vec3 r = reflect(-view, n);
+    vec3 b = cross(uH, uZ);
+    float ang = atan(dot(r, b), dot(r, uZ)) * (180.0 / PI);
+    float t = ang / max(uSpacing, 1e-6);
+    // the angle jumps by 360° behind the axis: the width of the step, not
+    // of the jump, is the filter's
+    float aa = min(fwidth(t), 0.5);
+    float off = abs(t - floor(t + 0.5));
+    float a = 1.0 - smoothstep(uBandHalf - aa, uBandHalf + aa, off);
+    a = mix(a, 2.0 * uBandHalf, smoothstep(0.15, 0.35, aa));
     color = mix(color, vec3(0.02), a);
   } else if (uMode == 4 || uMode == 5) {
     float a = 0.0;
