@@ -10,7 +10,9 @@
 //! - upright: the up axis the report gives is the part's known up;
 //! - the highlight lines cross most of the part (share of part pixels
 //!   within a few pixels of a line) and isolated specks are a small share
-//!   of the line pixels.
+//!   of the line pixels;
+//! - so do the dark stripes of `render --zebra` (the reflection zebra,
+//!   default period), seen from the same camera.
 
 mod common;
 use common::*;
@@ -304,7 +306,16 @@ fn every_picture_of_a_part_shows_it_upright_from_one_camera_with_readable_lines(
             "--png",
             s(&png("smooth")),
         ]));
-        let m: Vec<Masks> = ["render", "highlight", "mean", "smooth"]
+        ok(&run(&[
+            "render",
+            s(&file),
+            "--zebra",
+            "--png",
+            s(&png("zebra")),
+            "--size",
+            SIZE,
+        ]));
+        let m: Vec<Masks> = ["render", "highlight", "mean", "smooth", "zebra"]
             .iter()
             .map(|c| masks(&png(c), *c == "smooth"))
             .collect();
@@ -313,6 +324,8 @@ fn every_picture_of_a_part_shows_it_upright_from_one_camera_with_readable_lines(
         let (iou_h, iou_d) = (iou(&n[0], &n[1]), iou(&n[0], &n[2]));
         let iou_s = iou(&n[0], &n[3]);
         let (reach, specks) = line_measures(&m[1]);
+        let iou_z = iou(&n[0], &n[4]);
+        let (zebra_reach, zebra_specks) = line_measures(&m[4]);
         let reported: Vec<f64> = json(&report("render"))["view"]["up"]
             .as_array()
             .map(|a| a.iter().filter_map(|v| v.as_f64()).collect())
@@ -320,14 +333,24 @@ fn every_picture_of_a_part_shows_it_upright_from_one_camera_with_readable_lines(
         let upright =
             reported.len() == 3 && reported.iter().zip(up).map(|(a, b)| a * b).sum::<f64>() > 0.95;
         table.push_str(&format!(
-            "{name:26} cover {cover:.3} iou(render,highlight) {iou_h:.3} iou(render,mean curvature) {iou_d:.3} iou(render,smooth) {iou_s:.3} line reach {reach:.3} specks {specks:.3} up {reported:?}\n"
+            "{name:26} cover {cover:.3} iou(render,highlight) {iou_h:.3} iou(render,mean curvature) {iou_d:.3} iou(render,smooth) {iou_s:.3} line reach {reach:.3} specks {specks:.3} zebra: iou {iou_z:.3} reach {zebra_reach:.3} specks {zebra_specks:.3} up {reported:?}\n"
         ));
         if cover < MIN_COVER {
             failures.push(format!("{name}: the part covers {cover:.3} of the frame"));
         }
-        if iou_h < MIN_IOU || iou_d < MIN_IOU || iou_s < MIN_IOU {
+        if iou_h < MIN_IOU || iou_d < MIN_IOU || iou_s < MIN_IOU || iou_z < MIN_IOU {
             failures.push(format!(
-                "{name}: silhouettes differ between commands (IoU {iou_h:.3}, {iou_d:.3}, {iou_s:.3})"
+                "{name}: silhouettes differ between commands (IoU {iou_h:.3}, {iou_d:.3}, {iou_s:.3}, {iou_z:.3})"
+            ));
+        }
+        if zebra_reach < MIN_LINE_REACH {
+            failures.push(format!(
+                "{name}: zebra stripes reach {zebra_reach:.3} of the part"
+            ));
+        }
+        if zebra_specks > MAX_SPECKS {
+            failures.push(format!(
+                "{name}: specks are {zebra_specks:.3} of the zebra's dark pixels"
             ));
         }
         if !upright {

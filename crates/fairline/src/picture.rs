@@ -107,6 +107,8 @@ pub struct Picture<'a> {
     pub wireframe: bool,
     /// Title at the top.
     pub title: Option<String>,
+    /// A reflection zebra over the shading.
+    pub zebra: Option<crate::render::ReflectionZebra>,
 }
 
 /// Renders one mesh with an optional scalar field, polylines and wireframe.
@@ -142,7 +144,7 @@ fn mesh_picture_impl(
     let view = MeshView::new(mesh);
     let mut legend = None;
     let colors;
-    let mut layer = view.layer();
+    let mut layer = view.layer().with_zebra(picture.zebra);
     if let Some(field) = &picture.scalar {
         let (c, (lo, hi)) = scalar_colors(field.values, field.colormap, field.range);
         colors = c;

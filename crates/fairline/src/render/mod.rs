@@ -99,6 +99,79 @@ pub struct MeshLayer<'a> {
     /// `true`: both sides are lit alike (open panels). `false`: back faces
     /// are drawn in a flat dark brown so an inverted orientation stands out.
     pub two_sided: bool,
+    /// Reflection zebra stripes over the shading (smooth layers).
+    pub zebra: Option<ReflectionZebra>,
+}
+
+/// A reflection zebra (as Rhino's Zebra, Alias' diagnostic shading): the
+/// eye's ray reflected at each sample, R = V − 2(N·V)N, looks up an
+/// environment of parallel tube lights at infinity along `axis`; the stripe
+/// is the angle of R about the axis, atan2(R·(axis × zenith), R·zenith), in
+/// steps of `period_deg`, dark over `band` of each step. Where the stripes
+/// get closer than about three pixels they fade to their mean (a dark share
+/// of `band`), never to speckle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReflectionZebra {
+    /// The tubes' direction (unit).
+    pub axis: Vec3,
+    /// The direction the angle is measured from (unit, orthogonal to `axis`).
+    pub zenith: Vec3,
+    /// The angle of one stripe period, degrees (positive).
+    pub period_deg: f64,
+    /// The dark share of a period, in (0, 1).
+    pub band: f64,
+}
+
+impl ReflectionZebra {
+    /// The zebra of tubes along `axis` seen from `zenith` (both made unit
+    /// and orthogonal; `None` when they are parallel or not finite), a
+    /// period of `period_deg` degrees and half of each period dark.
+    pub fn new(axis: Vec3, zenith: Vec3, period_deg: f64) -> Option<Self> {
+        let axis = axis.try_normalize()?;
+        let zenith = (zenith - axis * zenith.dot(axis)).try_normalize()?;
+        (period_deg.is_finite() && period_deg > 0.0).then_some(ReflectionZebra {
+            axis,
+            zenith,
+            period_deg,
+            band: 0.5,
+        })
+    }
+
+    /// The stripe coordinate (periods) of the reflection of the ray `ray`
+    /// (from the eye) at unit normal `n`.
+    pub fn stripe(&self, ray: Vec3, n: Vec3) -> f64 {
+        let r = ray - n * (2.0 * n.dot(ray));
+        let b = self.axis.cross(self.zenith);
+        r.dot(b).atan2(r.dot(self.zenith)).to_degrees() / self.period_deg
+    }
+
+    /// The dark coverage (0..1) of a sample at stripe coordinate `t` whose
+    /// neighbours one output pixel away differ by `dt` periods.
+    pub fn coverage(&self, t: f64, dt: f64) -> f64 {
+        // the angle jumps by a whole turn behind the axis: the smaller way
+        let turn = 360.0 / self.period_deg;
+        let dt = dt.abs() % turn;
+        let aa = dt.min(turn - dt).min(0.5);
+        let half = 0.5 * self.band.clamp(0.0, 1.0);
+        let off = (t - (t + 0.5).floor()).abs();
+        let edge = |x: f64| {
+            let lo = half - aa;
+            let hi = half + aa;
+            if hi - lo < 1e-12 {
+                f64::from(u8::from(x < half))
+            } else {
+                1.0 - smoothstep(lo, hi, x)
+            }
+        };
+        let fade = smoothstep(0.15, 0.35, aa);
+        edge(off) * (1.0 - fade) + self.band * fade
+    }
+}
+
+/// Hermite step from 0 at `a` to 1 at `b`.
+fn smoothstep(a: f64, b: f64, x: f64) -> f64 {
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
 }
 
 impl<'a> MeshLayer<'a> {
@@ -112,7 +185,14 @@ impl<'a> MeshLayer<'a> {
             base_color: [0.55, 0.57, 0.60],
             wireframe: None,
             two_sided: true,
+            zebra: None,
         }
+    }
+
+    /// Draws a reflection zebra over the shading.
+    pub fn with_zebra(mut self, zebra: Option<ReflectionZebra>) -> Self {
+        self.zebra = zebra;
+        self
     }
 
     /// Sets per-vertex normals (smooth shading).

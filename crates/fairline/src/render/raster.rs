@@ -38,6 +38,8 @@ const WIRE_WIDTH_PX: f64 = 1.0;
 const COLORED_SPECULAR: f64 = 0.3;
 /// Colour of back faces of one-sided layers (linear light).
 const BACK_FACE_COLOR: [f32; 3] = [0.16, 0.09, 0.05];
+/// Linear-light colour of the dark stripes of a reflection zebra.
+const ZEBRA_DARK: [f32; 3] = [0.02, 0.02, 0.02];
 
 /// A projected vertex.
 #[derive(Clone, Copy, Debug)]
@@ -527,6 +529,7 @@ struct TriShade {
     /// Specular strength factor (reduced on colour-mapped layers).
     spec_scale: f64,
     two_sided: bool,
+    zebra: Option<super::ReflectionZebra>,
 }
 
 impl<'s, 'a> Ctx<'s, 'a> {
@@ -736,7 +739,80 @@ impl<'s, 'a> Ctx<'s, 'a> {
                 1.0
             },
             two_sided: m.two_sided,
+            zebra: m.zebra,
         }
+    }
+
+    /// The barycentric weights (perspective-correct) of sample (`px`, `py`)
+    /// on triangle `t`, and its edge functions; `clamp`: weights of samples
+    /// outside the triangle cut at 0 (shading), else continued linearly
+    /// (derivatives).
+    fn weights(&self, t: &TriShade, px: f64, py: f64, clamp: bool) -> ([f64; 3], [f64; 3]) {
+        let [(ax, ay), (bx, by), (cx, cy)] = t.p;
+        let e = [
+            edge_f(bx, by, cx, cy, px, py),
+            edge_f(cx, cy, ax, ay, px, py),
+            edge_f(ax, ay, bx, by, px, py),
+        ];
+        let area = e[0] + e[1] + e[2];
+        let mut w = if area.abs() > 1e-12 {
+            e.map(|v| if clamp { (v / area).max(0.0) } else { v / area })
+        } else {
+            [1.0 / 3.0; 3]
+        };
+        if self.perspective {
+            w = [w[0] / t.z[0], w[1] / t.z[1], w[2] / t.z[2]];
+        }
+        let sum = w[0] + w[1] + w[2];
+        let w = if sum.abs() > 1e-12 && sum.is_finite() {
+            w.map(|v| v / sum)
+        } else {
+            [1.0 / 3.0; 3]
+        };
+        (w, e)
+    }
+
+    /// The ray from the eye through sample (`px`, `py`) and the
+    /// interpolated unit normal there, facing the eye.
+    fn ray_and_normal(&self, t: &TriShade, px: f64, py: f64) -> (Vec3, Vec3, bool) {
+        let (w, _) = self.weights(t, px, py, false);
+        let ndc_x = px / self.sw as f64 * 2.0 - 1.0;
+        let ndc_y = 1.0 - py / self.sh as f64 * 2.0;
+        let ray = self.camera.ray_direction(ndc_x, ndc_y);
+        let back = t.face_n.dot(-ray) < 0.0;
+        let mut n = match &t.normals {
+            Some(ns) => (ns[0] * w[0] + ns[1] * w[1] + ns[2] * w[2])
+                .try_normalize()
+                .unwrap_or(t.face_n),
+            None => t.face_n,
+        };
+        if back {
+            n = -n;
+        }
+        (ray, n, back)
+    }
+
+    /// The zebra's dark coverage at sample (`px`, `py`) of triangle `t`:
+    /// the stripe coordinate there and its change over one output pixel
+    /// (the triangle's interpolation continued, so the filter sees the
+    /// pattern's density on the screen).
+    fn zebra_coverage(&self, t: &TriShade, z: &super::ReflectionZebra, px: f64, py: f64) -> f64 {
+        let at = |x: f64, y: f64| {
+            let (ray, n, _) = self.ray_and_normal(t, x, y);
+            z.stripe(ray, n)
+        };
+        let step = self.s as f64;
+        let t0 = at(px, py);
+        let turn = 360.0 / z.period_deg;
+        let wrap = |d: f64| {
+            let d = d.abs() % turn;
+            d.min(turn - d)
+        };
+        let dt = wrap(at(px + step, py) - t0).max(wrap(at(px, py + step) - t0));
+        if !(t0.is_finite() && dt.is_finite()) {
+            return 0.0;
+        }
+        z.coverage(t0, dt)
     }
 
     /// Linear-light colour of the sample at (`px`, `py`) (sample coordinates) on triangle `t`.
@@ -805,6 +881,15 @@ impl<'s, 'a> Ctx<'s, 'a> {
         let (diffuse, spec) = (diffuse as f32, (spec * t.spec_scale) as f32);
         for c in col.iter_mut() {
             *c = *c * diffuse + spec;
+        }
+
+        if let Some(z) = &t.zebra
+            && (!back || t.two_sided)
+        {
+            let a = self.zebra_coverage(t, z, px, py) as f32;
+            for k in 0..3 {
+                col[k] += (ZEBRA_DARK[k] - col[k]) * a;
+            }
         }
 
         if let Some(wc) = t.wire {

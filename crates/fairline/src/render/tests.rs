@@ -526,3 +526,33 @@ fn region_labels_that_would_overlap_are_left_out() {
         }
     }
 }
+
+/// A mirror facing +z, tubes along x seen from +z: a ray tilted by α in
+/// the yz plane reflects to the angle −α about the tubes; at a stripe's
+/// centre the coverage is 1 where the stripes are wide on the screen and
+/// falls to the band share (the mean) where they are denser than the
+/// pixels.
+#[test]
+fn reflection_zebra_measures_the_reflected_angle_and_fades_to_its_mean() {
+    use super::ReflectionZebra;
+    let z = ReflectionZebra::new(Vec3::X, Vec3::Z, 10.0).unwrap();
+    for alpha in [0.0f64, 5.0, 23.0, -40.0] {
+        let a = alpha.to_radians();
+        let ray = Vec3::new(0.0, a.sin(), -a.cos());
+        let t = z.stripe(ray, Vec3::Z);
+        assert!((t + alpha / 10.0).abs() < 1e-12, "{alpha}: {t}");
+    }
+    // a zenith not orthogonal to the axis is made so; parallel ones refused
+    let tilted = ReflectionZebra::new(Vec3::X, Vec3::new(0.3, 0.0, 1.0), 10.0).unwrap();
+    assert!(tilted.zenith.dot(Vec3::X).abs() < 1e-15);
+    assert!(ReflectionZebra::new(Vec3::X, Vec3::X, 10.0).is_none());
+    assert!(ReflectionZebra::new(Vec3::X, Vec3::Z, 0.0).is_none());
+    // coverage: dark at the stripe's centre, light half a period off, the
+    // band share where one pixel spans a third of a period or more
+    assert!((z.coverage(3.0, 0.01) - 1.0).abs() < 1e-12);
+    assert!(z.coverage(3.5, 0.01).abs() < 1e-12);
+    assert!((z.coverage(3.0, 0.4) - 0.5).abs() < 1e-12);
+    assert!((z.coverage(3.5, 0.4) - 0.5).abs() < 1e-12);
+    // a whole turn between two pixels (the jump behind the axis) is no step
+    assert!((z.coverage(3.0, 36.0 + 0.01) - 1.0).abs() < 1e-12);
+}
