@@ -61,9 +61,15 @@ use super::step::{invert_point, polyline};
 use crate::Vec3;
 use crate::bspline::{BSplineError, BSplineSurface, TrimCurve, TrimLoop};
 use crate::io::unreadable::Unreadable;
+use surfaces::Converted;
 
 mod brep;
+mod curve_ops;
 mod faces;
+mod offset;
+#[cfg(test)]
+mod surface_tests;
+mod surfaces;
 
 /// Why an IGES file could not be imported; names the file line and entity.
 #[derive(Debug, Error)]
@@ -189,6 +195,10 @@ pub struct IgesImport {
     /// and trimmed surfaces read through their topology whose surface or
     /// edges are of a type not read.
     pub unreadable: Vec<Unreadable>,
+    /// Faces read with a caveat: an offset surface (140) that is not a
+    /// plane is a fitted B-spline (the tolerance and the largest deviation
+    /// found are named).
+    pub warnings: Vec<String>,
 }
 
 /// Reads every rational B-spline surface (entity 128) of an ASCII IGES file.
@@ -731,6 +741,12 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
     // The surfaces (128, and 120 converted to NURBS), by directory entry.
     let mut bsplines: Vec<Option<IgesSurface>> = vec![None; g.dir.len()];
     let mut revolved: Vec<Option<Revolved>> = vec![None; g.dir.len()];
+    // 114, 118, 122 and 140 converted, or why not
+    let mut conv = Conversions {
+        surfaces: vec![None; g.dir.len()],
+        failed: vec![None; g.dir.len()],
+    };
+    let mut offset_bases = vec![false; g.dir.len()];
     for k in 0..g.dir.len() {
         match g.dir[k].entity_type {
             128 => bsplines[k] = Some(read_entity_128(&g, k, trimmed[k])?),
@@ -738,22 +754,57 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
                 revolved[k] = g.read_entity_120(k)?;
                 out.skipped_surfaces += usize::from(revolved[k].is_none());
             }
+            t @ (114 | 118 | 122 | 140) => {
+                if t == 140
+                    && let Some(b) = g
+                        .parameters(k)
+                        .ok()
+                        .and_then(|p| text_of(&p, 5).and_then(parse_int))
+                        .and_then(|de| g.entry(de))
+                {
+                    offset_bases[b] = true;
+                }
+                match g.convert_surface(k, 0) {
+                    Ok(c) => {
+                        if let Some((tolerance, deviation)) = c.fit {
+                            out.warnings.push(format!(
+                                "{}: the offset surface is approximated by a bicubic B-spline within {tolerance:.1e} (largest deviation found {deviation:.1e})",
+                                g.describe_entity(k)
+                            ));
+                        }
+                        conv.surfaces[k] = Some(c);
+                    }
+                    Err(IgesError::Unsupported { message, .. }) => {
+                        out.skipped_surfaces += 1;
+                        conv.failed[k] = Some(message);
+                    }
+                    Err(e) => return Err(e),
+                }
+            }
             _ => {}
         }
     }
-    let mut faces = g.trimming_loops(&bsplines, &revolved, &mut out.skipped_trimmed)?;
+    let mut faces = g.trimming_loops(&bsplines, &revolved, &conv, &mut out.skipped_trimmed)?;
 
     let (mut loops_of, mut planes) = (
         std::mem::take(&mut faces.loops),
         std::mem::take(&mut faces.planes),
     );
     let brep = g.brep_faces(&faces.translated)?;
-    g.untrimmed_faces(&bsplines, &revolved, &trimmed, &brep.bases, &mut faces);
+    g.untrimmed_faces(
+        &bsplines,
+        &revolved,
+        &conv,
+        &trimmed,
+        &brep.bases,
+        &mut faces,
+    );
     out.unreadable = std::mem::take(&mut faces.unreadable);
     out.unreadable.extend(brep.unreadable);
     for (k, &is_trimmed) in trimmed.iter().enumerate() {
-        if brep.bases[k] && !is_trimmed {
-            // the surface of a B-rep face: read with the face
+        if (brep.bases[k] || offset_bases[k]) && !is_trimmed {
+            // the surface of a B-rep face (read with the face) or the base
+            // of an offset surface (read as the offset)
             continue;
         }
         let mut s = match (bsplines[k].take(), revolved[k].take(), planes[k].take()) {
@@ -764,7 +815,13 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
                 out.surfaces.push(p);
                 continue;
             }
-            (None, None, None) => continue,
+            // a converted base of a 144 read through the B-rep translation
+            // is that face's
+            (None, None, None) if brep.bases[k] => continue,
+            (None, None, None) => match conv.surfaces[k].take() {
+                Some(c) => c.into_iges_surface(k, &g.dir[k], is_trimmed),
+                None => continue,
+            },
         };
         if let Some((de, loops)) = loops_of[k].take() {
             s.surface.set_trims(loops).map_err(|e| IgesError::Entity {
@@ -781,6 +838,13 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
     out.trimmed += brep.surfaces.len();
     out.surfaces.extend(brep.surfaces);
     Ok(out)
+}
+
+/// The surface entities converted to B-spline surfaces ([`surfaces`]), by
+/// directory entry, and why the others of their types were not.
+struct Conversions {
+    surfaces: Vec<Option<Converted>>,
+    failed: Vec<Option<String>>,
 }
 
 /// The trimming loops of a base surface and the DE of their 144.
@@ -819,6 +883,7 @@ impl Iges<'_> {
         &self,
         bsplines: &[Option<IgesSurface>],
         revolved: &[Option<Revolved>],
+        conv: &Conversions,
         skipped: &mut usize,
     ) -> Result<Faces, IgesError> {
         let n = self.dir.len();
@@ -842,41 +907,62 @@ impl Iges<'_> {
                     format!("surface pointer {base} is not a directory entry"),
                 ));
             };
-            let loops: Result<Option<Vec<TrimLoop>>, IgesError> = match (&bsplines[b], &revolved[b])
-            {
-                (Some(s), _) => {
-                    let s = &s.surface;
-                    read_entity_144(self, k, s, (s.domain_u(), s.domain_v()), &p, line)
-                }
-                (_, Some(r)) => {
-                    let domain = (r.surface.domain_u(), r.angles);
-                    read_entity_144(self, k, &r.surface, domain, &p, line).and_then(|loops| {
-                        loops
-                            .map(|loops| {
-                                loops
-                                    .iter()
-                                    .map(|l| r.map_loop(l))
-                                    .collect::<Result<Vec<_>, String>>()
-                                    .map_err(|m| self.entity_error(k, line, m))
-                            })
-                            .transpose()
-                    })
-                }
-                _ if self.dir[b].entity_type == 108 => match self.plane_face(k, b, &p, line) {
-                    Ok(s) => {
-                        f.planes[b] = Some(s);
+            // a converted surface whose boundaries are all given in its
+            // parameters, mapped exactly
+            let mapped = conv.surfaces[b]
+                .as_ref()
+                .and_then(|c| c.axes.map(|a| (c, a)))
+                .filter(|_| self.boundaries_in_parameter_space(&p, line));
+            let loops: Result<Option<Vec<TrimLoop>>, IgesError> =
+                match (&bsplines[b], &revolved[b], mapped) {
+                    (Some(s), _, _) => {
+                        let s = &s.surface;
+                        read_entity_144(self, k, s, (s.domain_u(), s.domain_v()), &p, line)
+                    }
+                    (_, _, Some((c, axes))) => {
+                        let r = c.file_range();
+                        let domain = ([r[0], r[1]], [r[2], r[3]]);
+                        read_entity_144(self, k, &c.surface, domain, &p, line).and_then(|loops| {
+                            loops
+                                .map(|loops| {
+                                    loops
+                                        .into_iter()
+                                        .map(|l| surfaces::map_loop(l, &axes, &c.surface))
+                                        .collect::<Result<Vec<_>, String>>()
+                                        .map_err(|m| self.entity_error(k, line, m))
+                                })
+                                .transpose()
+                        })
+                    }
+                    (_, Some(r), _) => {
+                        let domain = (r.surface.domain_u(), r.angles);
+                        read_entity_144(self, k, &r.surface, domain, &p, line).and_then(|loops| {
+                            loops
+                                .map(|loops| {
+                                    loops
+                                        .iter()
+                                        .map(|l| r.map_loop(l))
+                                        .collect::<Result<Vec<_>, String>>()
+                                        .map_err(|m| self.entity_error(k, line, m))
+                                })
+                                .transpose()
+                        })
+                    }
+                    _ if self.dir[b].entity_type == 108 => match self.plane_face(k, b, &p, line) {
+                        Ok(s) => {
+                            f.planes[b] = Some(s);
+                            continue;
+                        }
+                        Err(e) => Err(e),
+                    },
+                    // read with its base surface through the STEP reader's
+                    // topology ([`brep`]): any surface that converts exactly
+                    _ if brep::TRANSLATED_SURFACES.contains(&self.dir[b].entity_type) => {
+                        f.translated.push(k);
                         continue;
                     }
-                    Err(e) => Err(e),
-                },
-                // read with its base surface through the STEP reader's
-                // topology ([`brep`]): any surface that converts exactly
-                _ if brep::TRANSLATED_SURFACES.contains(&self.dir[b].entity_type) => {
-                    f.translated.push(k);
-                    continue;
-                }
-                _ => Ok(None),
-            };
+                    _ => Ok(None),
+                };
             match loops {
                 Ok(Some(loops)) => {
                     let loops = loops.into_iter().map(faces::chained).collect();
@@ -891,12 +977,18 @@ impl Iges<'_> {
                             "a boundary (142) has neither a parameter-space nor a model-space curve"
                                 .into()
                         }
-                        _ => self.why_not_read(b),
+                        _ => match &conv.failed[b] {
+                            Some(m) => {
+                                format!("its base surface, {}: {m}", self.describe_entity(b))
+                            }
+                            None => self.why_not_read(b),
+                        },
                     };
                     let estimated_area = bsplines[b]
                         .as_ref()
                         .map(|s| &s.surface)
                         .or(revolved[b].as_ref().map(|r| &r.surface))
+                        .or(conv.surfaces[b].as_ref().map(|c| &c.surface))
                         .map(|s| crate::bspline::trimmed_area(s, 16, 16));
                     f.unreadable.push(Unreadable {
                         entity: self.describe_entity(k),
@@ -1107,6 +1199,7 @@ impl Iges<'_> {
                 out.push(arc_piece(c, z, radius, a0, a1));
             }
             126 => out.push(self.read_entity_126(k, &p, line)?),
+            112 => out.push(self.read_entity_112(k, &p, line)?),
             104 => {
                 let (c, _) = self.conic(k, &p, line)?;
                 out.push(Piece {
@@ -1120,7 +1213,7 @@ impl Iges<'_> {
                 return Err(self.unsupported(
                     k,
                     line,
-                    format!("curve entity {t} is not supported in a trimming boundary (126, 110, 104, 100, 102 are)"),
+                    format!("curve entity {t} is not supported in a trimming boundary (126, 112, 110, 104, 100, 102 are)"),
                 ));
             }
         }

@@ -43,7 +43,8 @@ use crate::io::step::p21::{Exchange, Instance, Value};
 
 /// Surface entities the translation reads (under a 510, or under a 144
 /// where the direct reading does not apply).
-pub(super) const TRANSLATED_SURFACES: [i64; 8] = [120, 122, 128, 190, 192, 194, 196, 198];
+pub(super) const TRANSLATED_SURFACES: [i64; 11] =
+    [114, 118, 120, 122, 128, 140, 190, 192, 194, 196, 198];
 
 /// The faces of an IGES file's B-rep entities.
 #[derive(Default)]
@@ -355,7 +356,7 @@ fn one_piece(pieces: Vec<Piece>) -> Option<Nurbs3> {
 
 impl Iges<'_> {
     /// The transformation matrix (124) of entity `k`, if it has one.
-    fn own_transform(&self, k: usize) -> Result<Option<DAffine3>, IgesError> {
+    pub(super) fn own_transform(&self, k: usize) -> Result<Option<DAffine3>, IgesError> {
         let e = &self.dir[k];
         if e.transform == 0 {
             return Ok(None);
@@ -375,7 +376,7 @@ impl Iges<'_> {
 
     /// The directory index a pointer parameter names, checked to be of one
     /// of `types`.
-    fn pointer(
+    pub(super) fn pointer(
         &self,
         k: usize,
         p: &[(Param, usize)],
@@ -446,14 +447,10 @@ impl Iges<'_> {
     fn model_curve(&self, k: usize) -> Result<Nurbs3, IgesError> {
         let mut pieces = Vec::new();
         self.curve_pieces(k, 0, &mut pieces)?;
-        let n = pieces.len();
-        one_piece(pieces).ok_or_else(|| {
-            self.unsupported(
-                k,
-                self.dir[k].line,
-                format!("a composite curve of {n} members as an edge or profile"),
-            )
-        })
+        if pieces.is_empty() {
+            return Err(self.entity_error(k, self.dir[k].line, "the curve is empty".into()));
+        }
+        self.joined_pieces(k, pieces)
     }
 
     /// Writes the surface of a face into the exchange; errors name the
@@ -657,11 +654,16 @@ impl Iges<'_> {
                 let surface = super::read_entity_128(self, s, false)?.surface;
                 b.bspline_surface(&surface, line)
             }
+            // converted with their own transformation: not applied twice
+            114 | 118 | 140 => {
+                let surface = self.convert_surface(s, 0)?.surface;
+                b.bspline_surface(&surface, line)
+            }
             t => {
                 return Err(self.unsupported(
                     s,
                     line,
-                    format!("surface entity {t} under a B-rep face is not read (108 under 144; 120, 122, 128, 190, 192, 194, 196, 198 under 510 are)"),
+                    format!("surface entity {t} under a B-rep face is not read (108 under 144; 114, 118, 120, 122, 128, 140, 190, 192, 194, 196, 198 under 510 are)"),
                 ));
             }
         };
@@ -702,7 +704,7 @@ impl Iges<'_> {
             return Err(self.entity_error(k, line, format!("edge {n} of a list of {count}")));
         }
         let f = 2 + 5 * (n - 1);
-        let ck = self.pointer(k, &p, f, line, &[100, 102, 104, 110, 126])?;
+        let ck = self.pointer(k, &p, f, line, &[100, 102, 104, 110, 112, 126])?;
         let curve = self.model_curve(ck)?;
         let vertex = |i: usize, b: &mut StepBuilder| -> Result<u64, IgesError> {
             let list = self.pointer(k, &p, f + i, line, &[502])?;
@@ -1237,12 +1239,12 @@ mod tests {
 
     #[test]
     fn iges_brep_face_on_a_surface_not_read_is_listed_not_dropped() {
-        // the same face on an offset surface (140) of the cylinder
-        let imp = parse_iges(&cylinder(true, 140)).unwrap();
+        // the same face on a plane (108), which is read only under a 144
+        let imp = parse_iges(&cylinder(true, 108)).unwrap();
         assert!(imp.surfaces.is_empty());
         assert_eq!(imp.unreadable.len(), 1, "{:?}", imp.unreadable);
         let u = &imp.unreadable[0];
         assert!(u.entity.starts_with("entity 510 (DE 3"), "{u:?}");
-        assert!(u.reason.contains("surface entity 140"), "{u:?}");
+        assert!(u.reason.contains("surface entity 108"), "{u:?}");
     }
 }
