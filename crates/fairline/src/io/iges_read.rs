@@ -774,10 +774,7 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
                         }
                         conv.surfaces[k] = Some(c);
                     }
-                    Err(IgesError::Unsupported { message, .. }) => {
-                        out.skipped_surfaces += 1;
-                        conv.failed[k] = Some(message);
-                    }
+                    Err(IgesError::Unsupported { message, .. }) => conv.failed[k] = Some(message),
                     Err(e) => return Err(e),
                 }
             }
@@ -799,6 +796,10 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
         &brep.bases,
         &mut faces,
     );
+    // not converted on their own; those under a B-rep face are that face's
+    out.skipped_surfaces += (0..g.dir.len())
+        .filter(|&k| conv.failed[k].is_some() && !brep.bases[k])
+        .count();
     out.unreadable = std::mem::take(&mut faces.unreadable);
     out.unreadable.extend(brep.unreadable);
     for (k, &is_trimmed) in trimmed.iter().enumerate() {

@@ -455,11 +455,32 @@ impl Iges<'_> {
 
     /// Writes the surface of a face into the exchange; errors name the
     /// surface entity.
-    fn brep_surface(
+    fn brep_surface(&self, s: usize, id: u64, b: &mut StepBuilder) -> Result<(), IgesError> {
+        let e = &self.dir[s];
+        let p = self.parameters(s)?;
+        let line = p.first().map_or(e.line, |t| t.1);
+        if e.entity_type == 140 && e.transform == 0 {
+            let base = self.pointer(s, &p, 5, line, &TRANSLATED_SURFACES)?;
+            if (190..=198).contains(&self.dir[base].entity_type) {
+                let d = param(self, s, &p, 4, line, &REAL)?;
+                return self.analytic_surface(base, d, id, b);
+            }
+        }
+        self.analytic_surface(s, 0.0, id, b)
+    }
+
+    /// [`Self::brep_surface`] of surface `s`, offset by `offset` along its
+    /// normal where it is a plane, cylinder, cone, sphere or torus (190–198,
+    /// whose IGES parametrisations have `Su × Sv` pointing out of the solid
+    /// they bound; IGES 5.3 §4.20): the offset is the same kind of surface,
+    /// moved (plane), of radius `r + d` (cylinder, sphere), minor radius
+    /// `r + d` (torus), or moved by `−d·sin θ` along its axis with radius
+    /// `r + d·cos θ` (cone of semi-angle θ): exact.
+    fn analytic_surface(
         &self,
         s: usize,
+        offset: f64,
         id: u64,
-        trimmed: bool,
         b: &mut StepBuilder,
     ) -> Result<(), IgesError> {
         let e = &self.dir[s];
@@ -504,10 +525,22 @@ impl Iges<'_> {
                 Err(self.entity_error(s, line, format!("the {what} {x} is not positive")))
             }
         };
+        let grown = |r: f64, what: &str| -> Result<f64, IgesError> {
+            let x = r + offset;
+            if x > 0.0 && x.is_finite() {
+                Ok(x)
+            } else {
+                Err(self.unsupported(
+                    s,
+                    line,
+                    format!("an offset by {offset} leaves the {what} {x}, not positive"),
+                ))
+            }
+        };
         let parts = match e.entity_type {
             190 => {
-                let o = point(1)?;
                 let n = direction(2)?;
+                let o = point(1)? + offset * n;
                 let x = optional_direction(3)?;
                 let ax = b.placement(o, n, x, line);
                 vec![("PLANE", vec![text(""), Value::Ref(ax)])]
@@ -515,7 +548,7 @@ impl Iges<'_> {
             192 => {
                 let o = point(1)?;
                 let z = direction(2)?;
-                let r = positive(3, "radius")?;
+                let r = grown(positive(3, "radius")?, "radius")?;
                 let x = optional_direction(4)?;
                 let ax = b.placement(o, z, x, line);
                 vec![(
@@ -537,6 +570,16 @@ impl Iges<'_> {
                         ),
                     ));
                 }
+                let (sin, cos) = semi.to_radians().sin_cos();
+                let o = o - offset * sin * z;
+                let r = r + offset * cos;
+                if !(r >= 0.0 && r.is_finite()) {
+                    return Err(self.unsupported(
+                        s,
+                        line,
+                        format!("an offset by {offset} leaves the cone's radius {r}, negative"),
+                    ));
+                }
                 let x = optional_direction(5)?;
                 let ax = b.placement(o, z, x, line);
                 vec![(
@@ -551,7 +594,7 @@ impl Iges<'_> {
             }
             196 => {
                 let o = point(1)?;
-                let r = positive(2, "radius")?;
+                let r = grown(positive(2, "radius")?, "radius")?;
                 let (z, x) = if e.form == 1 {
                     (direction(3)?, optional_direction(4)?)
                 } else {
@@ -567,7 +610,7 @@ impl Iges<'_> {
                 let o = point(1)?;
                 let z = direction(2)?;
                 let big = positive(3, "major radius")?;
-                let small = positive(4, "minor radius")?;
+                let small = grown(positive(4, "minor radius")?, "minor radius")?;
                 let x = optional_direction(5)?;
                 let ax = b.placement(o, z, x, line);
                 vec![(
@@ -609,53 +652,12 @@ impl Iges<'_> {
                     vec![text(""), Value::Ref(c), Value::Ref(ax)],
                 )]
             }
-            122 => {
-                let dk = self.pointer(s, &p, 1, line, &[100, 102, 104, 110, 126])?;
-                let mut directrix = self.model_curve(dk)?;
-                directrix.points.iter_mut().for_each(|q| *q = at(*q));
-                let end = at(Vec3::new(
-                    param(self, s, &p, 2, line, &REAL)?,
-                    param(self, s, &p, 3, line, &REAL)?,
-                    param(self, s, &p, 4, line, &REAL)?,
-                ));
-                let [t0, t1] = directrix.domain();
-                let first = directrix.eval(t0);
-                if trimmed
-                    && first.distance(directrix.eval(t1))
-                        <= 1e-9 * (1.0 + first.abs().max_element())
-                {
-                    // without edges shared with its neighbours, the side of
-                    // a closed profile's seam the face lies on is not
-                    // decided reliably from its boundary curves
-                    return Err(self.unsupported(
-                        s,
-                        line,
-                        "a trimmed tabulated cylinder (122) whose directrix is closed".into(),
-                    ));
-                }
-                let v = end - first;
-                let len = v.length();
-                if !(len > 0.0 && len.is_finite()) {
-                    return Err(self.entity_error(s, line, "the generatrix has no length".into()));
-                }
-                let c = b.curve(&directrix, line);
-                let d = b.direction(v / len, line);
-                let vec = b.simple(
-                    "VECTOR",
-                    vec![text(""), Value::Ref(d), Value::Real(len)],
-                    line,
-                );
-                vec![(
-                    "SURFACE_OF_LINEAR_EXTRUSION",
-                    vec![text(""), Value::Ref(c), Value::Ref(vec)],
-                )]
-            }
             128 => {
                 let surface = super::read_entity_128(self, s, false)?.surface;
                 b.bspline_surface(&surface, line)
             }
             // converted with their own transformation: not applied twice
-            114 | 118 | 140 => {
+            114 | 118 | 122 | 140 => {
                 let surface = self.convert_surface(s, 0)?.surface;
                 b.bspline_surface(&surface, line)
             }
@@ -900,7 +902,7 @@ impl Iges<'_> {
                 bounds.push(b.simple(kind, vec![text(""), Value::Ref(lp), flag(true)], line));
             }
         }
-        self.brep_surface(surface, si, false, b)?;
+        self.brep_surface(surface, si, b)?;
         let face = b.simple(
             "ADVANCED_FACE",
             vec![text(""), refs(bounds), Value::Ref(si), flag(same_sense)],
@@ -1025,7 +1027,7 @@ impl Iges<'_> {
             bounds.push(b.simple(kind, vec![text(""), Value::Ref(lp), flag(true)], bl));
         }
         let si = b.reserve();
-        self.brep_surface(surface, si, true, b)?;
+        self.brep_surface(surface, si, b)?;
         let face = b.simple(
             "ADVANCED_FACE",
             vec![text(""), refs(bounds), Value::Ref(si), flag(true)],
