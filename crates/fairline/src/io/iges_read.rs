@@ -63,6 +63,7 @@ use crate::bspline::{BSplineError, BSplineSurface, TrimCurve, TrimLoop};
 use crate::io::unreadable::Unreadable;
 use surfaces::Converted;
 
+mod bounded;
 mod brep;
 mod curve_ops;
 mod faces;
@@ -782,6 +783,7 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
         }
     }
     let mut faces = g.trimming_loops(&bsplines, &revolved, &conv, &mut out.skipped_trimmed)?;
+    g.bounded_surfaces(&bsplines, &revolved, &conv, &mut faces)?;
 
     let (mut loops_of, mut planes) = (
         std::mem::take(&mut faces.loops),
@@ -893,6 +895,7 @@ impl Iges<'_> {
             planes: vec![None; n],
             unreadable: Vec::new(),
             translated: Vec::new(),
+            bounded_failed: vec![None; n],
         };
         for k in 0..n {
             if self.dir[k].entity_type != 144 {
@@ -1014,6 +1017,8 @@ struct Faces {
     unreadable: Vec<Unreadable>,
     /// 144s on other surfaces, read with the B-rep faces ([`brep`]).
     translated: Vec<usize>,
+    /// Why a bounded surface (143) was not read, by its directory entry.
+    bounded_failed: Vec<Option<String>>,
 }
 
 /// Entity 144, trimmed parametric surface (IGES 5.3 §4.34): `PTS N1 N2 PTO

@@ -59,6 +59,10 @@ impl Iges<'_> {
             let independent = (e.status / 10_000) % 100 == 0;
             let reason = match e.entity_type {
                 143 => {
+                    let Some(reason) = faces.bounded_failed[k].take() else {
+                        // read ([`Iges::bounded_surfaces`])
+                        continue;
+                    };
                     let base = self
                         .parameters(k)
                         .ok()
@@ -75,7 +79,7 @@ impl Iges<'_> {
                     }
                     faces.unreadable.push(Unreadable {
                         entity: self.describe_entity(k),
-                        reason: "a bounded surface (143): its model-space boundaries (141) are not read".into(),
+                        reason: format!("a bounded surface (143): {reason}"),
                         estimated_area: area,
                     });
                     continue;

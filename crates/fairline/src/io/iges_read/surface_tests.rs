@@ -335,3 +335,72 @@ fn iges_offset_surfaces_of_a_plane_and_a_cylinder() {
     let e = parse_iges(&iges_file(GLOBAL, &[(140, 0, 0, "140,0.,0.,1.,1.,1;")])).unwrap_err();
     assert!(e.to_string().contains("directory entry 1"), "{e}");
 }
+
+#[test]
+fn iges_bounded_surface_is_read_from_model_or_parameter_space_boundaries() {
+    // a plane 3 × 2 (128, u = x/3, v = y/2) bounded by the unit square
+    // (1, 0.5)–(2, 1.5), given in model space only (143 TYPE 0: projected)
+    // or with parameter-space curves (TYPE 1)
+    let plane = "128,1,1,1,1,0,0,1,0,0,0.,0.,1.,1.,0.,0.,1.,1.,1.,1.,1.,1.,\
+                 0.,0.,0.,3.,0.,0.,0.,2.,0.,3.,2.,0.,0.,1.,0.,1.;";
+    let model = [
+        "110,1.,.5,0.,2.,.5,0.;",
+        "110,2.,.5,0.,2.,1.5,0.;",
+        "110,2.,1.5,0.,1.,1.5,0.;",
+        "110,1.,1.5,0.,1.,.5,0.;",
+    ];
+    let (a, b) = (1.0 / 3.0, 2.0 / 3.0);
+    let pcurves = [
+        format!("110,{a},.25,0.,{b},.25,0.;"),
+        format!("110,{b},.25,0.,{b},.75,0.;"),
+        format!("110,{b},.75,0.,{a},.75,0.;"),
+        format!("110,{a},.75,0.,{a},.25,0.;"),
+    ];
+    for with_pcurves in [false, true] {
+        let (t, boundary) = if with_pcurves {
+            (1, "141,1,1,3,1,7,1,1,17;")
+        } else {
+            (0, "141,0,0,3,1,7,1,0;")
+        };
+        let head = format!("143,{t},3,1,5;");
+        let imp = parse_iges(&iges_file(
+            GLOBAL,
+            &[
+                (143, 0, 0, &head),
+                (128, 0, 0, plane),
+                (141, 0, 0, boundary),
+                (102, 0, 0, "102,4,9,11,13,15;"),
+                (110, 0, 0, model[0]),
+                (110, 0, 0, model[1]),
+                (110, 0, 0, model[2]),
+                (110, 0, 0, model[3]),
+                (102, 0, 0, "102,4,19,21,23,25;"),
+                (110, 0, 0, &pcurves[0]),
+                (110, 0, 0, &pcurves[1]),
+                (110, 0, 0, &pcurves[2]),
+                (110, 0, 0, &pcurves[3]),
+            ],
+        ))
+        .unwrap();
+        assert!(imp.unreadable.is_empty(), "{:?}", imp.unreadable);
+        assert_eq!(imp.surfaces.len(), 1);
+        assert_eq!(imp.surfaces[0].trim_entity, Some(1));
+        let area = trimmed_area(&imp.surfaces[0].surface, 64, 64);
+        assert!((area - 1.0).abs() < 1e-9, "p-curves {with_pcurves}: {area}");
+    }
+
+    // a bounded surface on a surface fairline does not read is listed
+    let imp = parse_iges(&iges_file(
+        GLOBAL,
+        &[
+            (143, 0, 0, "143,0,3,1,5;"),
+            (108, 0, 0, "108,0.,0.,1.,0.,0,0.,0.,0.,0.;"),
+            (141, 0, 0, "141,0,0,3,1,7,1,0;"),
+            (110, 0, 0, "110,0.,0.,0.,1.,0.,0.;"),
+        ],
+    ))
+    .unwrap();
+    assert!(imp.surfaces.is_empty());
+    assert_eq!(imp.unreadable.len(), 1, "{:?}", imp.unreadable);
+    assert!(imp.unreadable[0].reason.contains("bounded surface (143)"));
+}
