@@ -50,6 +50,13 @@
 //!
 //! B-rep solids, shells and faces (186, 514, 510 with loops 508, edges 504
 //! and vertices 502) are read face by face ([`brep`]).
+//!
+//! Tabulated cylinders (122), ruled surfaces (118), parametric spline
+//! surfaces (114, and curves 112) and offset surfaces (140) are converted
+//! to B-splines ([`surfaces`]; exact except an offset of a surface that is
+//! not a plane, cylinder, cone, sphere or torus, fitted within a stated
+//! tolerance and named in [`IgesImport::warnings`]); bounded surfaces (143
+//! with boundaries 141) are read as trimmed surfaces ([`bounded`]).
 
 use std::path::{Path, PathBuf};
 
@@ -146,7 +153,8 @@ pub struct IgesSurface {
     /// Directory entry sequence number of the entity (odd, 1-based).
     pub directory_entry: usize,
     /// The entity it was read from: 128 (rational B-spline surface), 120
-    /// (surface of revolution, converted exactly), 108 (trimmed plane), 510
+    /// (surface of revolution, converted exactly), 114, 118, 122, 140
+    /// (converted, [`surfaces`]), 108 (trimmed plane), 510
     /// (B-rep face) or 144 (trimmed surface read through its topology;
     /// for these two, [`Self::form`] is the surface's entity type).
     pub entity_type: i64,
@@ -172,8 +180,10 @@ pub struct IgesSurface {
 /// The result of [`read_iges`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct IgesImport {
-    /// Every entity 128 and every surface of revolution (120) that could be
-    /// converted, in directory order.
+    /// Every entity 128 and every surface of revolution (120), tabulated
+    /// cylinder (122), ruled (118), parametric spline (114) and offset
+    /// (140) surface that could be converted, in directory order (an offset
+    /// surface's base is not a face of its own), then the B-rep faces.
     pub surfaces: Vec<IgesSurface>,
     /// How many of them are referenced by a trimmed (144) or bounded (143)
     /// surface.
@@ -182,8 +192,9 @@ pub struct IgesImport {
     /// 128, a converted 120 nor a plane 108, or a boundary (142) has neither a
     /// parameter-space nor a model-space curve (that face stays untrimmed).
     pub skipped_trimmed: usize,
-    /// Entities 120 not converted: their generatrix is not a single line
-    /// (110), circular arc (100), elliptic arc (104) or B-spline curve (126).
+    /// Surface entities not converted: 120 whose generatrix is not a single
+    /// line (110), circular arc (100), elliptic arc (104) or B-spline curve
+    /// (126), and 114, 118, 122, 140 that cannot be (outside B-rep faces).
     pub skipped_surfaces: usize,
     /// Unit name from the Global section (field 15), if given.
     pub units: Option<String>,
