@@ -15,6 +15,7 @@ use super::{
     Vec3, faces, param, parse_int, read_entity_128, text_of,
 };
 use crate::bspline::BSplineSurface;
+use crate::bspline::basis::MAX_DEGREE;
 
 /// Deepest chain of offset surfaces (140 of a 140 …) read.
 const MAX_OFFSET_DEPTH: usize = 8;
@@ -297,6 +298,19 @@ impl Iges<'_> {
     /// The pieces of curve `k` joined into one NURBS (exact,
     /// [`joined`]); an error when they do not follow each other.
     pub(super) fn joined_pieces(&self, k: usize, pieces: Vec<Piece>) -> Result<Nurbs3, IgesError> {
+        if let Some(q) = pieces
+            .iter()
+            .find(|q| q.degree == 0 || q.degree > MAX_DEGREE)
+        {
+            return Err(self.entity_error(
+                k,
+                self.dir[k].line,
+                format!(
+                    "a curve of degree {} (1 to {MAX_DEGREE} are read)",
+                    q.degree
+                ),
+            ));
+        }
         let curves: Vec<Nurbs3> = pieces.iter().map(Piece::nurbs).collect();
         if let [one] = &curves[..] {
             return Ok(one.clone());
