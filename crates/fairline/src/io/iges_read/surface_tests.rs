@@ -404,3 +404,54 @@ fn iges_bounded_surface_is_read_from_model_or_parameter_space_boundaries() {
     assert_eq!(imp.unreadable.len(), 1, "{:?}", imp.unreadable);
     assert!(imp.unreadable[0].reason.contains("bounded surface (143)"));
 }
+
+#[test]
+fn iges_hostile_surface_entities_fail_naming_the_entity() {
+    let cases: [(&[(i64, i64, i64, &str)], usize); 6] = [
+        // a tabulated cylinder whose directrix is itself
+        (&[(122, 0, 0, "122,1,0.,0.,1.;")], 1),
+        // a composite directrix that contains itself
+        (
+            &[(122, 0, 0, "122,3,0.,0.,1.;"), (102, 0, 0, "102,1,3;")],
+            3,
+        ),
+        // a ruled surface without its second rail
+        (
+            &[
+                (118, 0, 1, "118,3,0,0,0;"),
+                (110, 0, 0, "110,0.,0.,0.,1.,0.,0.;"),
+            ],
+            1,
+        ),
+        // a ruled surface whose parameters end early
+        (
+            &[(118, 0, 1, "118,3;"), (110, 0, 0, "110,0.,0.,0.,1.,0.,0.;")],
+            1,
+        ),
+        // a bounded surface with a negative number of boundaries
+        (
+            &[
+                (143, 0, 0, "143,0,3,-1,5;"),
+                (122, 0, 0, "122,5,0.,0.,1.;"),
+                (110, 0, 0, "110,0.,0.,0.,1.,0.,0.;"),
+            ],
+            1,
+        ),
+        // a parametric spline curve of no segments as a directrix
+        (
+            &[
+                (122, 0, 0, "122,3,0.,0.,1.;"),
+                (112, 0, 0, "112,3,1,3,0,0.;"),
+            ],
+            3,
+        ),
+    ];
+    for (entities, de) in cases {
+        let e = parse_iges(&iges_file(GLOBAL, entities)).unwrap_err();
+        let text = e.to_string();
+        assert!(
+            text.contains(&format!("directory entry {de})")) && text.contains("line "),
+            "{entities:?}: {text}"
+        );
+    }
+}
