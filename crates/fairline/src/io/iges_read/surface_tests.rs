@@ -405,9 +405,12 @@ fn iges_bounded_surface_is_read_from_model_or_parameter_space_boundaries() {
     assert!(imp.unreadable[0].reason.contains("bounded surface (143)"));
 }
 
+/// Entity type, transformation, form and parameters, as `iges_file` takes.
+type Entity<'a> = (i64, i64, i64, &'a str);
+
 #[test]
 fn iges_hostile_surface_entities_fail_naming_the_entity() {
-    let cases: [(&[(i64, i64, i64, &str)], usize); 6] = [
+    let cases: [(&[Entity<'_>], usize); 6] = [
         // a tabulated cylinder whose directrix is itself
         (&[(122, 0, 0, "122,1,0.,0.,1.;")], 1),
         // a composite directrix that contains itself
