@@ -192,6 +192,26 @@ def offset_cylinder():
     return BRepBuilderAPI_MakeFace(Geom_OffsetSurface(cyl, 2.0), 0.0, 2.0, 0.0, 5.0, 1e-7).Face()
 
 
+def offset_bspline():
+    """One face: the offset by 1.5 of a bicubic B-spline bump (an offset
+    surface 140 of a 128 in IGES, which fairline fits)."""
+    from OCP.Geom import Geom_OffsetSurface
+
+    poles = TColgp_Array2OfPnt(1, 4, 1, 4)
+    for i in range(4):
+        for j in range(4):
+            x, y = 10.0 * i / 3.0, 8.0 * j / 3.0
+            poles.SetValue(i + 1, j + 1, gp_Pnt(x, y, 2.0 * math.sin(0.3 * x) * math.cos(0.25 * y)))
+    knots = TColStd_Array1OfReal(1, 2)
+    knots.SetValue(1, 0.0)
+    knots.SetValue(2, 1.0)
+    mults = TColStd_Array1OfInteger(1, 2)
+    mults.SetValue(1, 4)
+    mults.SetValue(2, 4)
+    bs = Geom_BSplineSurface(poles, knots, knots, mults, mults, 3, 3)
+    return BRepBuilderAPI_MakeFace(Geom_OffsetSurface(bs, 1.5), 1e-7).Face()
+
+
 def half_ellipse_perimeter(a: float, b: float, n: int = 20000) -> float:
     """The length of half an ellipse with semi-axes a, b: the midpoint rule
     on a smooth periodic integrand (converges geometrically; 1e-13 here)."""
@@ -229,6 +249,7 @@ PARTS = {
     "pole-patch": (pole_patch, None),
     "extruded-circle": (extruded_circle, 2 * math.pi * 3 * 4),
     "offset-cylinder": (offset_cylinder, 12 * 2 * 5),
+    "offset-bspline": (offset_bspline, None),
 }
 
 

@@ -52,12 +52,16 @@ MUST_READ = {
         "revolved-ellipse", "extruded-ellipse",
     )
     for fmt in ("step", "brep.igs", "igs")
-} | {f"{n}.{fmt}" for n in ("extruded-circle", "offset-cylinder") for fmt in ("igs", "brep.igs")}
-# Files read with a warning that names an approximated face: OCCT's
-# faces-mode IGES of the offset cylinder is an offset surface (140) of a
-# surface of revolution, which fairline fits by a bicubic B-spline within
-# 1e-7 of its size (B-rep mode offsets a cylinder 192: exact).
-APPROXIMATED = {"offset-cylinder.igs"}
+} | {
+    f"{n}.{fmt}"
+    for n in ("extruded-circle", "offset-cylinder", "offset-bspline")
+    for fmt in ("igs", "brep.igs")
+}
+# Files read with a warning that names an approximated face: an offset
+# surface (140) of a B-spline surface, which fairline fits by a bicubic
+# B-spline within 1e-7 of its size (the offset cylinder, a 140 of a line
+# revolved or of a cylinder 192, is exact).
+APPROXIMATED = {"offset-bspline.igs", "offset-bspline.brep.igs"}
 
 
 @pytest.fixture(scope="session")

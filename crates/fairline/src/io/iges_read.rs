@@ -1463,6 +1463,16 @@ impl Iges<'_> {
     /// `None` (counted in [`IgesImport::skipped_surfaces`]). Exact: Piegl &
     /// Tiller A8.1 ([`revolve`]) with arcs of at most 90°.
     fn read_entity_120(&self, k: usize) -> Result<Option<Revolved>, IgesError> {
+        self.revolved_offset(k, 0.0)
+    }
+
+    /// [`Self::read_entity_120`] of the surface offset by `offset` along
+    /// its normal `Su × Sv` (IGES 5.3 §4.20), for a line generatrix (110)
+    /// whose offset is the line moved by `offset` along that normal (the
+    /// same all along it): exact. `None` for other generatrices when
+    /// `offset ≠ 0`, and where the transformation (124) is not a rigid
+    /// motion.
+    fn revolved_offset(&self, k: usize, offset: f64) -> Result<Option<Revolved>, IgesError> {
         let e = &self.dir[k];
         let p = self.parameters(k)?;
         let line = p.first().map_or(e.line, |t| t.1);
@@ -1505,6 +1515,9 @@ impl Iges<'_> {
         if !(len > 0.0 && len.is_finite()) {
             return Err(self.entity_error(k, line, "the axis line has no length".into()));
         }
+        if offset != 0.0 && self.dir[gen_k].entity_type != 110 {
+            return Ok(None);
+        }
         let (profile, tmap) = match self.dir[gen_k].entity_type {
             110 | 126 => {
                 let mut generatrix = Vec::new();
@@ -1534,6 +1547,25 @@ impl Iges<'_> {
             }
             _ => return Ok(None),
         };
+        let mut profile = profile;
+        if offset != 0.0 {
+            let z = dir / len;
+            let radial = |q: Vec3| (q - a) - (q - a).dot(z) * z;
+            let [p0, p1] = [profile.points[0], profile.points[profile.points.len() - 1]];
+            let far = if radial(p0).length() >= radial(p1).length() {
+                p0
+            } else {
+                p1
+            };
+            let n = (p1 - p0).cross(z.cross(radial(far)));
+            let l = n.length();
+            if !(l > 0.0 && l.is_finite()) {
+                return Ok(None);
+            }
+            for q in &mut profile.points {
+                *q += offset * n / l;
+            }
+        }
         let map = ArcMap::new(sa, ta, 1.0);
         let (knots_v, pts, w) = revolve(a, dir / len, &profile, &map);
         // revolve lays the net out angle-major; the file's u is the
@@ -1554,6 +1586,14 @@ impl Iges<'_> {
         } else {
             None
         };
+        if offset != 0.0
+            && let Some(m) = &transform
+        {
+            let g = m.matrix3.transpose() * m.matrix3;
+            if !g.abs_diff_eq(DMat3::IDENTITY, 1e-12) {
+                return Ok(None);
+            }
+        }
         let mut points = Vec::with_capacity(nu * nv);
         let mut weights = Vec::with_capacity(nu * nv);
         for i in 0..nu {

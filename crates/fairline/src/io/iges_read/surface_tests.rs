@@ -301,7 +301,7 @@ fn iges_offset_surfaces_of_a_plane_and_a_cylinder() {
     }
 
     // a cylinder of radius 10 (a line revolved 2 rad about z) offset by 2:
-    // fitted, within its tolerance of radius 12, with a warning
+    // the line moved out by 2 and revolved, exact
     let imp = parse_iges(&iges_file(
         GLOBAL,
         &[
@@ -309,6 +309,28 @@ fn iges_offset_surfaces_of_a_plane_and_a_cylinder() {
             (120, 0, 0, "120,5,7,0.,2.;"),
             (110, 0, 0, "110,0.,0.,0.,0.,0.,1.;"),
             (110, 0, 0, "110,10.,0.,5.,10.,0.,0.;"),
+        ],
+    ))
+    .unwrap();
+    assert!(imp.unreadable.is_empty(), "{:?}", imp.unreadable);
+    assert!(imp.warnings.is_empty(), "{:?}", imp.warnings);
+    assert_eq!(imp.surfaces.len(), 1);
+    let s = &imp.surfaces[0].surface;
+    for (_, _, p) in grid(s, 30) {
+        assert!((p.x.hypot(p.y) - 12.0).abs() < 1e-12, "{p}");
+    }
+    let area = trimmed_area(s, 64, 64);
+    assert!((area - 120.0).abs() < 1e-9 * 120.0, "{area}");
+
+    // a cylinder as a tabulated cylinder (122) of a full circle of radius
+    // 3, offset by 1: fitted within its tolerance of radius 4, with a
+    // warning naming the entity
+    let imp = parse_iges(&iges_file(
+        GLOBAL,
+        &[
+            (140, 0, 0, "140,1.,0.,0.,1.,3;"),
+            (122, 0, 0, "122,5,3.,0.,4.;"),
+            (100, 0, 0, "100,0.,0.,0.,3.,0.,3.,0.;"),
         ],
     ))
     .unwrap();
@@ -321,15 +343,16 @@ fn iges_offset_surfaces_of_a_plane_and_a_cylinder() {
         imp.warnings
     );
     let s = &imp.surfaces[0].surface;
-    // 1e-7 of the base's control net diagonal (< 19) plus 2·|d|
-    let tol = 1e-7 * 23.0;
+    // 1e-7 of the base's control net diagonal (√(6² + 6² + 4²)) plus 2·|d|
+    let tol = 1e-7 * (88.0_f64.sqrt() + 2.0);
     let mut worst = 0.0_f64;
     for (_, _, p) in grid(s, 60) {
-        worst = worst.max((p.x.hypot(p.y) - 12.0).abs());
+        worst = worst.max((p.x.hypot(p.y) - 4.0).abs());
     }
     assert!(worst < 2.0 * tol, "{worst} vs {tol}");
     let area = trimmed_area(s, 64, 64);
-    assert!((area - 12.0 * 2.0 * 5.0).abs() < 1e-6 * 120.0, "{area}");
+    let want = 2.0 * PI * 4.0 * 4.0;
+    assert!((area - want).abs() < 1e-6 * want, "{area}");
 
     // an offset of itself: an error naming it, no panic
     let e = parse_iges(&iges_file(GLOBAL, &[(140, 0, 0, "140,0.,0.,1.,1.,1;")])).unwrap_err();

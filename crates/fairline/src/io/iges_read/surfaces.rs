@@ -639,7 +639,8 @@ impl Iges<'_> {
     /// surface `S + D·N` with `N = Su × Sv / |Su × Sv|` of the base surface
     /// `DE` (128, 120, 114, 118, 122 or 140; the offset indicator `(NX, NY,
     /// NZ)` is not needed: the side is the sign of `D`). Exact for a planar
-    /// base; otherwise a bicubic fit within 1e-7 of the base's size
+    /// base and a surface of revolution of a line (cylinder, cone; the line
+    /// moved along the normal and revolved); otherwise a bicubic fit within 1e-7 of the base's size
     /// (control net diagonal plus `2|D|`) ([`offset_surface`]), on the
     /// base's parameters.
     fn offset(
@@ -672,7 +673,19 @@ impl Iges<'_> {
             120 => match self.read_entity_120(b)? {
                 Some(r) => {
                     let u = r.tmap.map_or(Axis::Identity, Axis::Angle);
-                    (r.surface, Some([u, Axis::Angle(r.map)]))
+                    let axes = Some([u, Axis::Angle(r.map)]);
+                    // a cylinder or cone: the offset of the line revolved
+                    if d.is_finite()
+                        && let Some(o) = self.revolved_offset(b, d)?
+                    {
+                        return Ok(Converted {
+                            surface: o.surface,
+                            axes,
+                            fit: None,
+                            transformed: false,
+                        });
+                    }
+                    (r.surface, axes)
                 }
                 None => {
                     return Err(self.unsupported(
