@@ -171,6 +171,47 @@ def extruded_profile():
     return BRepPrimAPI_MakePrism(face, gp_Vec(0, 0, 25)).Shape()
 
 
+def extruded_circle():
+    """One face: a full circle of radius 3 extruded 4 along z as a surface
+    of linear extrusion (OCCT writes a tabulated cylinder 122 over the
+    closed circle), bounded by its two end circles and the seam."""
+    from OCP.GC import GC_MakeCircle
+    from OCP.Geom import Geom_SurfaceOfLinearExtrusion
+
+    c = GC_MakeCircle(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 3.0).Value()
+    s = Geom_SurfaceOfLinearExtrusion(c, gp_Dir(0, 0, 1))
+    return BRepBuilderAPI_MakeFace(s, 0.0, 2 * math.pi, 0.0, 4.0, 1e-7).Face()
+
+
+def offset_cylinder():
+    """One face: the offset by 2 of a cylinder of radius 10 (an offset
+    surface 140 in IGES), 2 rad around and 5 high: radius 12, area 120."""
+    from OCP.Geom import Geom_CylindricalSurface, Geom_OffsetSurface
+
+    cyl = Geom_CylindricalSurface(gp_Ax3(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 10.0)
+    return BRepBuilderAPI_MakeFace(Geom_OffsetSurface(cyl, 2.0), 0.0, 2.0, 0.0, 5.0, 1e-7).Face()
+
+
+def offset_bspline():
+    """One face: the offset by 1.5 of a bicubic B-spline bump (an offset
+    surface 140 of a 128 in IGES, which fairline fits)."""
+    from OCP.Geom import Geom_OffsetSurface
+
+    poles = TColgp_Array2OfPnt(1, 4, 1, 4)
+    for i in range(4):
+        for j in range(4):
+            x, y = 10.0 * i / 3.0, 8.0 * j / 3.0
+            poles.SetValue(i + 1, j + 1, gp_Pnt(x, y, 2.0 * math.sin(0.3 * x) * math.cos(0.25 * y)))
+    knots = TColStd_Array1OfReal(1, 2)
+    knots.SetValue(1, 0.0)
+    knots.SetValue(2, 1.0)
+    mults = TColStd_Array1OfInteger(1, 2)
+    mults.SetValue(1, 4)
+    mults.SetValue(2, 4)
+    bs = Geom_BSplineSurface(poles, knots, knots, mults, mults, 3, 3)
+    return BRepBuilderAPI_MakeFace(Geom_OffsetSurface(bs, 1.5), 1e-7).Face()
+
+
 def half_ellipse_perimeter(a: float, b: float, n: int = 20000) -> float:
     """The length of half an ellipse with semi-axes a, b: the midpoint rule
     on a smooth periodic integrand (converges geometrically; 1e-13 here)."""
@@ -206,6 +247,9 @@ PARTS = {
     "lofted": (lofted, None),
     "nurbs-torus": (nurbs_torus, 4 * math.pi**2 * 20 * 6),
     "pole-patch": (pole_patch, None),
+    "extruded-circle": (extruded_circle, 2 * math.pi * 3 * 4),
+    "offset-cylinder": (offset_cylinder, 12 * 2 * 5),
+    "offset-bspline": (offset_bspline, None),
 }
 
 

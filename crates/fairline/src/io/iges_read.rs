@@ -50,6 +50,13 @@
 //!
 //! B-rep solids, shells and faces (186, 514, 510 with loops 508, edges 504
 //! and vertices 502) are read face by face ([`brep`]).
+//!
+//! Tabulated cylinders (122), ruled surfaces (118), parametric spline
+//! surfaces (114, and curves 112) and offset surfaces (140) are converted
+//! to B-splines ([`surfaces`]; exact except an offset of a surface that is
+//! not a plane, cylinder, cone, sphere or torus, fitted within a stated
+//! tolerance and named in [`IgesImport::warnings`]); bounded surfaces (143
+//! with boundaries 141) are read as trimmed surfaces ([`bounded`]).
 
 use std::path::{Path, PathBuf};
 
@@ -61,9 +68,16 @@ use super::step::{invert_point, polyline};
 use crate::Vec3;
 use crate::bspline::{BSplineError, BSplineSurface, TrimCurve, TrimLoop};
 use crate::io::unreadable::Unreadable;
+use surfaces::Converted;
 
+mod bounded;
 mod brep;
+mod curve_ops;
 mod faces;
+mod offset;
+#[cfg(test)]
+mod surface_tests;
+mod surfaces;
 
 /// Why an IGES file could not be imported; names the file line and entity.
 #[derive(Debug, Error)]
@@ -139,7 +153,8 @@ pub struct IgesSurface {
     /// Directory entry sequence number of the entity (odd, 1-based).
     pub directory_entry: usize,
     /// The entity it was read from: 128 (rational B-spline surface), 120
-    /// (surface of revolution, converted exactly), 108 (trimmed plane), 510
+    /// (surface of revolution, converted exactly), 114, 118, 122, 140
+    /// (converted, [`surfaces`]), 108 (trimmed plane), 510
     /// (B-rep face) or 144 (trimmed surface read through its topology;
     /// for these two, [`Self::form`] is the surface's entity type).
     pub entity_type: i64,
@@ -165,8 +180,10 @@ pub struct IgesSurface {
 /// The result of [`read_iges`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct IgesImport {
-    /// Every entity 128 and every surface of revolution (120) that could be
-    /// converted, in directory order.
+    /// Every entity 128 and every surface of revolution (120), tabulated
+    /// cylinder (122), ruled (118), parametric spline (114) and offset
+    /// (140) surface that could be converted, in directory order (an offset
+    /// surface's base is not a face of its own), then the B-rep faces.
     pub surfaces: Vec<IgesSurface>,
     /// How many of them are referenced by a trimmed (144) or bounded (143)
     /// surface.
@@ -175,8 +192,9 @@ pub struct IgesImport {
     /// 128, a converted 120 nor a plane 108, or a boundary (142) has neither a
     /// parameter-space nor a model-space curve (that face stays untrimmed).
     pub skipped_trimmed: usize,
-    /// Entities 120 not converted: their generatrix is not a single line
-    /// (110), circular arc (100), elliptic arc (104) or B-spline curve (126).
+    /// Surface entities not converted: 120 whose generatrix is not a single
+    /// line (110), circular arc (100), elliptic arc (104) or B-spline curve
+    /// (126), and 114, 118, 122, 140 that cannot be (outside B-rep faces).
     pub skipped_surfaces: usize,
     /// Unit name from the Global section (field 15), if given.
     pub units: Option<String>,
@@ -189,6 +207,10 @@ pub struct IgesImport {
     /// and trimmed surfaces read through their topology whose surface or
     /// edges are of a type not read.
     pub unreadable: Vec<Unreadable>,
+    /// Faces read with a caveat: an offset surface (140) that is not a
+    /// plane is a fitted B-spline (the tolerance and the largest deviation
+    /// found are named).
+    pub warnings: Vec<String>,
 }
 
 /// Reads every rational B-spline surface (entity 128) of an ASCII IGES file.
@@ -731,6 +753,12 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
     // The surfaces (128, and 120 converted to NURBS), by directory entry.
     let mut bsplines: Vec<Option<IgesSurface>> = vec![None; g.dir.len()];
     let mut revolved: Vec<Option<Revolved>> = vec![None; g.dir.len()];
+    // 114, 118, 122 and 140 converted, or why not
+    let mut conv = Conversions {
+        surfaces: vec![None; g.dir.len()],
+        failed: vec![None; g.dir.len()],
+    };
+    let mut offset_bases = vec![false; g.dir.len()];
     for k in 0..g.dir.len() {
         match g.dir[k].entity_type {
             128 => bsplines[k] = Some(read_entity_128(&g, k, trimmed[k])?),
@@ -738,22 +766,59 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
                 revolved[k] = g.read_entity_120(k)?;
                 out.skipped_surfaces += usize::from(revolved[k].is_none());
             }
+            t @ (114 | 118 | 122 | 140) => {
+                if t == 140
+                    && let Some(b) = g
+                        .parameters(k)
+                        .ok()
+                        .and_then(|p| text_of(&p, 5).and_then(parse_int))
+                        .and_then(|de| g.entry(de))
+                {
+                    offset_bases[b] = true;
+                }
+                match g.convert_surface(k, 0) {
+                    Ok(c) => {
+                        if let Some((tolerance, deviation)) = c.fit {
+                            out.warnings.push(format!(
+                                "{}: the offset surface is approximated by a bicubic B-spline within {tolerance:.1e} (largest deviation found {deviation:.1e})",
+                                g.describe_entity(k)
+                            ));
+                        }
+                        conv.surfaces[k] = Some(c);
+                    }
+                    Err(IgesError::Unsupported { message, .. }) => conv.failed[k] = Some(message),
+                    Err(e) => return Err(e),
+                }
+            }
             _ => {}
         }
     }
-    let mut faces = g.trimming_loops(&bsplines, &revolved, &mut out.skipped_trimmed)?;
+    let mut faces = g.trimming_loops(&bsplines, &revolved, &conv, &mut out.skipped_trimmed)?;
+    g.bounded_surfaces(&bsplines, &revolved, &conv, &mut faces)?;
 
     let (mut loops_of, mut planes) = (
         std::mem::take(&mut faces.loops),
         std::mem::take(&mut faces.planes),
     );
     let brep = g.brep_faces(&faces.translated)?;
-    g.untrimmed_faces(&bsplines, &revolved, &trimmed, &brep.bases, &mut faces);
+    g.untrimmed_faces(
+        &bsplines,
+        &revolved,
+        &conv,
+        &trimmed,
+        &brep.bases,
+        &mut faces,
+    );
+    // not converted on their own; those under a B-rep face are that face's
+    out.skipped_surfaces += (0..g.dir.len())
+        .filter(|&k| conv.failed[k].is_some() && !brep.bases[k])
+        .count();
     out.unreadable = std::mem::take(&mut faces.unreadable);
     out.unreadable.extend(brep.unreadable);
     for (k, &is_trimmed) in trimmed.iter().enumerate() {
-        if brep.bases[k] && !is_trimmed {
-            // the surface of a B-rep face: read with the face
+        if (brep.bases[k] || offset_bases[k]) && !is_trimmed {
+            // the surface of a B-rep face (read with the face) or the base
+            // of an offset surface (read as the offset)
             continue;
         }
         let mut s = match (bsplines[k].take(), revolved[k].take(), planes[k].take()) {
@@ -764,7 +829,13 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
                 out.surfaces.push(p);
                 continue;
             }
-            (None, None, None) => continue,
+            // a converted base of a 144 read through the B-rep translation
+            // is that face's
+            (None, None, None) if brep.bases[k] => continue,
+            (None, None, None) => match conv.surfaces[k].take() {
+                Some(c) => c.into_iges_surface(k, &g.dir[k], is_trimmed),
+                None => continue,
+            },
         };
         if let Some((de, loops)) = loops_of[k].take() {
             s.surface.set_trims(loops).map_err(|e| IgesError::Entity {
@@ -781,6 +852,13 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
     out.trimmed += brep.surfaces.len();
     out.surfaces.extend(brep.surfaces);
     Ok(out)
+}
+
+/// The surface entities converted to B-spline surfaces ([`surfaces`]), by
+/// directory entry, and why the others of their types were not.
+struct Conversions {
+    surfaces: Vec<Option<Converted>>,
+    failed: Vec<Option<String>>,
 }
 
 /// The trimming loops of a base surface and the DE of their 144.
@@ -819,6 +897,7 @@ impl Iges<'_> {
         &self,
         bsplines: &[Option<IgesSurface>],
         revolved: &[Option<Revolved>],
+        conv: &Conversions,
         skipped: &mut usize,
     ) -> Result<Faces, IgesError> {
         let n = self.dir.len();
@@ -827,6 +906,7 @@ impl Iges<'_> {
             planes: vec![None; n],
             unreadable: Vec::new(),
             translated: Vec::new(),
+            bounded_failed: vec![None; n],
         };
         for k in 0..n {
             if self.dir[k].entity_type != 144 {
@@ -842,41 +922,62 @@ impl Iges<'_> {
                     format!("surface pointer {base} is not a directory entry"),
                 ));
             };
-            let loops: Result<Option<Vec<TrimLoop>>, IgesError> = match (&bsplines[b], &revolved[b])
-            {
-                (Some(s), _) => {
-                    let s = &s.surface;
-                    read_entity_144(self, k, s, (s.domain_u(), s.domain_v()), &p, line)
-                }
-                (_, Some(r)) => {
-                    let domain = (r.surface.domain_u(), r.angles);
-                    read_entity_144(self, k, &r.surface, domain, &p, line).and_then(|loops| {
-                        loops
-                            .map(|loops| {
-                                loops
-                                    .iter()
-                                    .map(|l| r.map_loop(l))
-                                    .collect::<Result<Vec<_>, String>>()
-                                    .map_err(|m| self.entity_error(k, line, m))
-                            })
-                            .transpose()
-                    })
-                }
-                _ if self.dir[b].entity_type == 108 => match self.plane_face(k, b, &p, line) {
-                    Ok(s) => {
-                        f.planes[b] = Some(s);
+            // a converted surface whose boundaries are all given in its
+            // parameters, mapped exactly
+            let mapped = conv.surfaces[b]
+                .as_ref()
+                .and_then(|c| c.axes.map(|a| (c, a)))
+                .filter(|_| self.boundaries_in_parameter_space(&p, line));
+            let loops: Result<Option<Vec<TrimLoop>>, IgesError> =
+                match (&bsplines[b], &revolved[b], mapped) {
+                    (Some(s), _, _) => {
+                        let s = &s.surface;
+                        read_entity_144(self, k, s, (s.domain_u(), s.domain_v()), &p, line)
+                    }
+                    (_, _, Some((c, axes))) => {
+                        let r = c.file_range();
+                        let domain = ([r[0], r[1]], [r[2], r[3]]);
+                        read_entity_144(self, k, &c.surface, domain, &p, line).and_then(|loops| {
+                            loops
+                                .map(|loops| {
+                                    loops
+                                        .into_iter()
+                                        .map(|l| surfaces::map_loop(l, &axes, &c.surface))
+                                        .collect::<Result<Vec<_>, String>>()
+                                        .map_err(|m| self.entity_error(k, line, m))
+                                })
+                                .transpose()
+                        })
+                    }
+                    (_, Some(r), _) => {
+                        let domain = (r.surface.domain_u(), r.angles);
+                        read_entity_144(self, k, &r.surface, domain, &p, line).and_then(|loops| {
+                            loops
+                                .map(|loops| {
+                                    loops
+                                        .iter()
+                                        .map(|l| r.map_loop(l))
+                                        .collect::<Result<Vec<_>, String>>()
+                                        .map_err(|m| self.entity_error(k, line, m))
+                                })
+                                .transpose()
+                        })
+                    }
+                    _ if self.dir[b].entity_type == 108 => match self.plane_face(k, b, &p, line) {
+                        Ok(s) => {
+                            f.planes[b] = Some(s);
+                            continue;
+                        }
+                        Err(e) => Err(e),
+                    },
+                    // read with its base surface through the STEP reader's
+                    // topology ([`brep`]): any surface that converts exactly
+                    _ if brep::TRANSLATED_SURFACES.contains(&self.dir[b].entity_type) => {
+                        f.translated.push(k);
                         continue;
                     }
-                    Err(e) => Err(e),
-                },
-                // read with its base surface through the STEP reader's
-                // topology ([`brep`]): any surface that converts exactly
-                _ if brep::TRANSLATED_SURFACES.contains(&self.dir[b].entity_type) => {
-                    f.translated.push(k);
-                    continue;
-                }
-                _ => Ok(None),
-            };
+                    _ => Ok(None),
+                };
             match loops {
                 Ok(Some(loops)) => {
                     let loops = loops.into_iter().map(faces::chained).collect();
@@ -891,12 +992,18 @@ impl Iges<'_> {
                             "a boundary (142) has neither a parameter-space nor a model-space curve"
                                 .into()
                         }
-                        _ => self.why_not_read(b),
+                        _ => match &conv.failed[b] {
+                            Some(m) => {
+                                format!("its base surface, {}: {m}", self.describe_entity(b))
+                            }
+                            None => self.why_not_read(b),
+                        },
                     };
                     let estimated_area = bsplines[b]
                         .as_ref()
                         .map(|s| &s.surface)
                         .or(revolved[b].as_ref().map(|r| &r.surface))
+                        .or(conv.surfaces[b].as_ref().map(|c| &c.surface))
                         .map(|s| crate::bspline::trimmed_area(s, 16, 16));
                     f.unreadable.push(Unreadable {
                         entity: self.describe_entity(k),
@@ -921,6 +1028,8 @@ struct Faces {
     unreadable: Vec<Unreadable>,
     /// 144s on other surfaces, read with the B-rep faces ([`brep`]).
     translated: Vec<usize>,
+    /// Why a bounded surface (143) was not read, by its directory entry.
+    bounded_failed: Vec<Option<String>>,
 }
 
 /// Entity 144, trimmed parametric surface (IGES 5.3 §4.34): `PTS N1 N2 PTO
@@ -1107,6 +1216,7 @@ impl Iges<'_> {
                 out.push(arc_piece(c, z, radius, a0, a1));
             }
             126 => out.push(self.read_entity_126(k, &p, line)?),
+            112 => out.push(self.read_entity_112(k, &p, line)?),
             104 => {
                 let (c, _) = self.conic(k, &p, line)?;
                 out.push(Piece {
@@ -1120,7 +1230,7 @@ impl Iges<'_> {
                 return Err(self.unsupported(
                     k,
                     line,
-                    format!("curve entity {t} is not supported in a trimming boundary (126, 110, 104, 100, 102 are)"),
+                    format!("curve entity {t} is not supported in a trimming boundary (126, 112, 110, 104, 100, 102 are)"),
                 ));
             }
         }
@@ -1353,6 +1463,16 @@ impl Iges<'_> {
     /// `None` (counted in [`IgesImport::skipped_surfaces`]). Exact: Piegl &
     /// Tiller A8.1 ([`revolve`]) with arcs of at most 90°.
     fn read_entity_120(&self, k: usize) -> Result<Option<Revolved>, IgesError> {
+        self.revolved_offset(k, 0.0)
+    }
+
+    /// [`Self::read_entity_120`] of the surface offset by `offset` along
+    /// its normal `Su × Sv` (IGES 5.3 §4.20), for a line generatrix (110)
+    /// whose offset is the line moved by `offset` along that normal (the
+    /// same all along it): exact. `None` for other generatrices when
+    /// `offset ≠ 0`, and where the transformation (124) is not a rigid
+    /// motion.
+    fn revolved_offset(&self, k: usize, offset: f64) -> Result<Option<Revolved>, IgesError> {
         let e = &self.dir[k];
         let p = self.parameters(k)?;
         let line = p.first().map_or(e.line, |t| t.1);
@@ -1395,6 +1515,9 @@ impl Iges<'_> {
         if !(len > 0.0 && len.is_finite()) {
             return Err(self.entity_error(k, line, "the axis line has no length".into()));
         }
+        if offset != 0.0 && self.dir[gen_k].entity_type != 110 {
+            return Ok(None);
+        }
         let (profile, tmap) = match self.dir[gen_k].entity_type {
             110 | 126 => {
                 let mut generatrix = Vec::new();
@@ -1424,6 +1547,25 @@ impl Iges<'_> {
             }
             _ => return Ok(None),
         };
+        let mut profile = profile;
+        if offset != 0.0 {
+            let z = dir / len;
+            let radial = |q: Vec3| (q - a) - (q - a).dot(z) * z;
+            let [p0, p1] = [profile.points[0], profile.points[profile.points.len() - 1]];
+            let far = if radial(p0).length() >= radial(p1).length() {
+                p0
+            } else {
+                p1
+            };
+            let n = (p1 - p0).cross(z.cross(radial(far)));
+            let l = n.length();
+            if !(l > 0.0 && l.is_finite()) {
+                return Ok(None);
+            }
+            for q in &mut profile.points {
+                *q += offset * n / l;
+            }
+        }
         let map = ArcMap::new(sa, ta, 1.0);
         let (knots_v, pts, w) = revolve(a, dir / len, &profile, &map);
         // revolve lays the net out angle-major; the file's u is the
@@ -1444,6 +1586,14 @@ impl Iges<'_> {
         } else {
             None
         };
+        if offset != 0.0
+            && let Some(m) = &transform
+        {
+            let g = m.matrix3.transpose() * m.matrix3;
+            if !g.abs_diff_eq(DMat3::IDENTITY, 1e-12) {
+                return Ok(None);
+            }
+        }
         let mut points = Vec::with_capacity(nu * nv);
         let mut weights = Vec::with_capacity(nu * nv);
         for i in 0..nu {

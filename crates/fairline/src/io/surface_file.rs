@@ -181,7 +181,7 @@ pub fn read_surface_file(path: impl AsRef<Path>) -> Result<SurfaceFile, SurfaceF
                     .filter(|s| !(s.trimmed && s.trim_entity.is_none()))
                     .map(|s| s.surface)
                     .collect(),
-                warnings: Vec::new(),
+                warnings: imp.warnings,
                 unreadable: imp.unreadable,
             })
         }

@@ -43,7 +43,8 @@ use crate::io::step::p21::{Exchange, Instance, Value};
 
 /// Surface entities the translation reads (under a 510, or under a 144
 /// where the direct reading does not apply).
-pub(super) const TRANSLATED_SURFACES: [i64; 8] = [120, 122, 128, 190, 192, 194, 196, 198];
+pub(super) const TRANSLATED_SURFACES: [i64; 11] =
+    [114, 118, 120, 122, 128, 140, 190, 192, 194, 196, 198];
 
 /// The faces of an IGES file's B-rep entities.
 #[derive(Default)]
@@ -355,7 +356,7 @@ fn one_piece(pieces: Vec<Piece>) -> Option<Nurbs3> {
 
 impl Iges<'_> {
     /// The transformation matrix (124) of entity `k`, if it has one.
-    fn own_transform(&self, k: usize) -> Result<Option<DAffine3>, IgesError> {
+    pub(super) fn own_transform(&self, k: usize) -> Result<Option<DAffine3>, IgesError> {
         let e = &self.dir[k];
         if e.transform == 0 {
             return Ok(None);
@@ -375,7 +376,7 @@ impl Iges<'_> {
 
     /// The directory index a pointer parameter names, checked to be of one
     /// of `types`.
-    fn pointer(
+    pub(super) fn pointer(
         &self,
         k: usize,
         p: &[(Param, usize)],
@@ -446,23 +447,40 @@ impl Iges<'_> {
     fn model_curve(&self, k: usize) -> Result<Nurbs3, IgesError> {
         let mut pieces = Vec::new();
         self.curve_pieces(k, 0, &mut pieces)?;
-        let n = pieces.len();
-        one_piece(pieces).ok_or_else(|| {
-            self.unsupported(
-                k,
-                self.dir[k].line,
-                format!("a composite curve of {n} members as an edge or profile"),
-            )
-        })
+        if pieces.is_empty() {
+            return Err(self.entity_error(k, self.dir[k].line, "the curve is empty".into()));
+        }
+        self.joined_pieces(k, pieces)
     }
 
     /// Writes the surface of a face into the exchange; errors name the
     /// surface entity.
-    fn brep_surface(
+    fn brep_surface(&self, s: usize, id: u64, b: &mut StepBuilder) -> Result<(), IgesError> {
+        let e = &self.dir[s];
+        let p = self.parameters(s)?;
+        let line = p.first().map_or(e.line, |t| t.1);
+        if e.entity_type == 140 && e.transform == 0 {
+            let base = self.pointer(s, &p, 5, line, &TRANSLATED_SURFACES)?;
+            if (190..=198).contains(&self.dir[base].entity_type) {
+                let d = param(self, s, &p, 4, line, &REAL)?;
+                return self.analytic_surface(base, d, id, b);
+            }
+        }
+        self.analytic_surface(s, 0.0, id, b)
+    }
+
+    /// [`Self::brep_surface`] of surface `s`, offset by `offset` along its
+    /// normal where it is a plane, cylinder, cone, sphere or torus (190–198,
+    /// whose IGES parametrisations have `Su × Sv` pointing out of the solid
+    /// they bound; IGES 5.3 §4.20): the offset is the same kind of surface,
+    /// moved (plane), of radius `r + d` (cylinder, sphere), minor radius
+    /// `r + d` (torus), or moved by `−d·sin θ` along its axis with radius
+    /// `r + d·cos θ` (cone of semi-angle θ): exact.
+    fn analytic_surface(
         &self,
         s: usize,
+        offset: f64,
         id: u64,
-        trimmed: bool,
         b: &mut StepBuilder,
     ) -> Result<(), IgesError> {
         let e = &self.dir[s];
@@ -507,10 +525,22 @@ impl Iges<'_> {
                 Err(self.entity_error(s, line, format!("the {what} {x} is not positive")))
             }
         };
+        let grown = |r: f64, what: &str| -> Result<f64, IgesError> {
+            let x = r + offset;
+            if x > 0.0 && x.is_finite() {
+                Ok(x)
+            } else {
+                Err(self.unsupported(
+                    s,
+                    line,
+                    format!("an offset by {offset} leaves the {what} {x}, not positive"),
+                ))
+            }
+        };
         let parts = match e.entity_type {
             190 => {
-                let o = point(1)?;
                 let n = direction(2)?;
+                let o = point(1)? + offset * n;
                 let x = optional_direction(3)?;
                 let ax = b.placement(o, n, x, line);
                 vec![("PLANE", vec![text(""), Value::Ref(ax)])]
@@ -518,7 +548,7 @@ impl Iges<'_> {
             192 => {
                 let o = point(1)?;
                 let z = direction(2)?;
-                let r = positive(3, "radius")?;
+                let r = grown(positive(3, "radius")?, "radius")?;
                 let x = optional_direction(4)?;
                 let ax = b.placement(o, z, x, line);
                 vec![(
@@ -540,6 +570,16 @@ impl Iges<'_> {
                         ),
                     ));
                 }
+                let (sin, cos) = semi.to_radians().sin_cos();
+                let o = o - offset * sin * z;
+                let r = r + offset * cos;
+                if !(r >= 0.0 && r.is_finite()) {
+                    return Err(self.unsupported(
+                        s,
+                        line,
+                        format!("an offset by {offset} leaves the cone's radius {r}, negative"),
+                    ));
+                }
                 let x = optional_direction(5)?;
                 let ax = b.placement(o, z, x, line);
                 vec![(
@@ -554,7 +594,7 @@ impl Iges<'_> {
             }
             196 => {
                 let o = point(1)?;
-                let r = positive(2, "radius")?;
+                let r = grown(positive(2, "radius")?, "radius")?;
                 let (z, x) = if e.form == 1 {
                     (direction(3)?, optional_direction(4)?)
                 } else {
@@ -570,7 +610,7 @@ impl Iges<'_> {
                 let o = point(1)?;
                 let z = direction(2)?;
                 let big = positive(3, "major radius")?;
-                let small = positive(4, "minor radius")?;
+                let small = grown(positive(4, "minor radius")?, "minor radius")?;
                 let x = optional_direction(5)?;
                 let ax = b.placement(o, z, x, line);
                 vec![(
@@ -612,56 +652,20 @@ impl Iges<'_> {
                     vec![text(""), Value::Ref(c), Value::Ref(ax)],
                 )]
             }
-            122 => {
-                let dk = self.pointer(s, &p, 1, line, &[100, 102, 104, 110, 126])?;
-                let mut directrix = self.model_curve(dk)?;
-                directrix.points.iter_mut().for_each(|q| *q = at(*q));
-                let end = at(Vec3::new(
-                    param(self, s, &p, 2, line, &REAL)?,
-                    param(self, s, &p, 3, line, &REAL)?,
-                    param(self, s, &p, 4, line, &REAL)?,
-                ));
-                let [t0, t1] = directrix.domain();
-                let first = directrix.eval(t0);
-                if trimmed
-                    && first.distance(directrix.eval(t1))
-                        <= 1e-9 * (1.0 + first.abs().max_element())
-                {
-                    // without edges shared with its neighbours, the side of
-                    // a closed profile's seam the face lies on is not
-                    // decided reliably from its boundary curves
-                    return Err(self.unsupported(
-                        s,
-                        line,
-                        "a trimmed tabulated cylinder (122) whose directrix is closed".into(),
-                    ));
-                }
-                let v = end - first;
-                let len = v.length();
-                if !(len > 0.0 && len.is_finite()) {
-                    return Err(self.entity_error(s, line, "the generatrix has no length".into()));
-                }
-                let c = b.curve(&directrix, line);
-                let d = b.direction(v / len, line);
-                let vec = b.simple(
-                    "VECTOR",
-                    vec![text(""), Value::Ref(d), Value::Real(len)],
-                    line,
-                );
-                vec![(
-                    "SURFACE_OF_LINEAR_EXTRUSION",
-                    vec![text(""), Value::Ref(c), Value::Ref(vec)],
-                )]
-            }
             128 => {
                 let surface = super::read_entity_128(self, s, false)?.surface;
+                b.bspline_surface(&surface, line)
+            }
+            // converted with their own transformation: not applied twice
+            114 | 118 | 122 | 140 => {
+                let surface = self.convert_surface(s, 0)?.surface;
                 b.bspline_surface(&surface, line)
             }
             t => {
                 return Err(self.unsupported(
                     s,
                     line,
-                    format!("surface entity {t} under a B-rep face is not read (108 under 144; 120, 122, 128, 190, 192, 194, 196, 198 under 510 are)"),
+                    format!("surface entity {t} under a B-rep face is not read (108 under 144; 114, 118, 120, 122, 128, 140, 190, 192, 194, 196, 198 under 510 are)"),
                 ));
             }
         };
@@ -702,7 +706,7 @@ impl Iges<'_> {
             return Err(self.entity_error(k, line, format!("edge {n} of a list of {count}")));
         }
         let f = 2 + 5 * (n - 1);
-        let ck = self.pointer(k, &p, f, line, &[100, 102, 104, 110, 126])?;
+        let ck = self.pointer(k, &p, f, line, &[100, 102, 104, 110, 112, 126])?;
         let curve = self.model_curve(ck)?;
         let vertex = |i: usize, b: &mut StepBuilder| -> Result<u64, IgesError> {
             let list = self.pointer(k, &p, f + i, line, &[502])?;
@@ -898,7 +902,7 @@ impl Iges<'_> {
                 bounds.push(b.simple(kind, vec![text(""), Value::Ref(lp), flag(true)], line));
             }
         }
-        self.brep_surface(surface, si, false, b)?;
+        self.brep_surface(surface, si, b)?;
         let face = b.simple(
             "ADVANCED_FACE",
             vec![text(""), refs(bounds), Value::Ref(si), flag(same_sense)],
@@ -1023,7 +1027,7 @@ impl Iges<'_> {
             bounds.push(b.simple(kind, vec![text(""), Value::Ref(lp), flag(true)], bl));
         }
         let si = b.reserve();
-        self.brep_surface(surface, si, true, b)?;
+        self.brep_surface(surface, si, b)?;
         let face = b.simple(
             "ADVANCED_FACE",
             vec![text(""), refs(bounds), Value::Ref(si), flag(true)],
@@ -1236,13 +1240,66 @@ mod tests {
     }
 
     #[test]
+    fn iges_brep_edge_on_a_composite_curve_is_read() {
+        // the cylinder face with its bottom circle given as a composite
+        // curve (102) of two half circles
+        for pcurves in [true, false] {
+            let text = cylinder(pcurves, 192);
+            let mut entities: Vec<(i64, i64, i64, String)> = Vec::new();
+            // re-made by hand: the fixture's list with DE 17 replaced
+            let lp = if pcurves {
+                "508,4,0,15,1,1,1,0,25,0,15,3,1,1,0,27,0,15,2,0,1,0,29,0,15,3,0,1,0,31;"
+            } else {
+                "508,4,0,15,1,1,0,0,15,3,1,0,0,15,2,0,0,0,15,3,0,0;"
+            };
+            for (t, tr, form, data) in [
+                (514, 0, 1, "514,1,3,1;"),
+                (510, 0, 1, "510,5,1,1,13;"),
+                (192, 0, 1, "192,7,9,2.,11;"),
+                (116, 0, 0, "116,0.,0.,0.,0;"),
+                (123, 0, 0, "123,0.,0.,1.;"),
+                (123, 0, 0, "123,1.,0.,0.;"),
+                (508, 0, 1, lp),
+                (504, 0, 1, "504,3,17,19,1,19,1,21,19,2,19,2,23,19,1,19,2;"),
+                (102, 0, 0, "102,2,33,35;"),
+                (502, 0, 1, "502,2,2.,0.,0.,2.,0.,3.;"),
+                (100, 0, 0, "100,3.,0.,0.,2.,0.,2.,0.;"),
+                (110, 0, 0, "110,2.,0.,0.,2.,0.,3.;"),
+                (110, 0, 0, "110,0.,0.,0.,360.,0.,0.;"),
+                (110, 0, 0, "110,360.,0.,0.,360.,3.,0.;"),
+                (110, 0, 0, "110,360.,3.,0.,0.,3.,0.;"),
+                (110, 0, 0, "110,0.,3.,0.,0.,0.,0.;"),
+                (100, 0, 0, "100,0.,0.,0.,2.,0.,-2.,0.;"),
+                (100, 0, 0, "100,0.,0.,0.,-2.,0.,2.,0.;"),
+            ] {
+                entities.push((t, tr, form, data.to_string()));
+            }
+            let list: Vec<(i64, i64, i64, &str)> = entities
+                .iter()
+                .map(|(a, b, c, d)| (*a, *b, *c, d.as_str()))
+                .collect();
+            let composite = iges_file(GLOBAL, &list);
+            assert_ne!(composite, text);
+            let imp = parse_iges(&composite).unwrap();
+            assert!(imp.unreadable.is_empty(), "{:?}", imp.unreadable);
+            assert_eq!(imp.surfaces.len(), 1);
+            let area = trimmed_area(&imp.surfaces[0].surface, 64, 64);
+            let want = 2.0 * PI * 2.0 * 3.0;
+            assert!(
+                (area - want).abs() <= 1e-6 * want,
+                "p-curves {pcurves}: {area} vs {want}"
+            );
+        }
+    }
+
+    #[test]
     fn iges_brep_face_on_a_surface_not_read_is_listed_not_dropped() {
-        // the same face on an offset surface (140) of the cylinder
-        let imp = parse_iges(&cylinder(true, 140)).unwrap();
+        // the same face on a plane (108), which is read only under a 144
+        let imp = parse_iges(&cylinder(true, 108)).unwrap();
         assert!(imp.surfaces.is_empty());
         assert_eq!(imp.unreadable.len(), 1, "{:?}", imp.unreadable);
         let u = &imp.unreadable[0];
         assert!(u.entity.starts_with("entity 510 (DE 3"), "{u:?}");
-        assert!(u.reason.contains("surface entity 140"), "{u:?}");
+        assert!(u.reason.contains("surface entity 108"), "{u:?}");
     }
 }

@@ -2,8 +2,8 @@
 //! (entity 108 under a 144) and the census of faces that cannot be read.
 
 use super::{
-    ArcMap, Faces, INT, Iges, IgesError, IgesSurface, Nurbs3, Param, REAL, Revolved, TrimCurve,
-    TrimLoop, Unreadable, Vec3, param,
+    ArcMap, Conversions, Faces, INT, Iges, IgesError, IgesSurface, Nurbs3, Param, REAL, Revolved,
+    TrimCurve, TrimLoop, Unreadable, Vec3, param,
 };
 use crate::bspline::BSplineSurface;
 
@@ -30,7 +30,7 @@ impl Iges<'_> {
                 self.describe_entity(b)
             ),
             t => format!(
-                "its base surface is {}; fairline reads trimmed surfaces on 128, 120 and 108, not on entity {t}",
+                "its base surface is {}; fairline reads trimmed surfaces on 108, 114, 118, 120, 122, 128, 140 and 190–198, not on entity {t}",
                 self.describe_entity(b)
             ),
         }
@@ -45,6 +45,7 @@ impl Iges<'_> {
         &self,
         bsplines: &[Option<IgesSurface>],
         revolved: &[Option<Revolved>],
+        conv: &Conversions,
         trimmed: &[bool],
         brep_bases: &[bool],
         faces: &mut Faces,
@@ -58,6 +59,10 @@ impl Iges<'_> {
             let independent = (e.status / 10_000) % 100 == 0;
             let reason = match e.entity_type {
                 143 => {
+                    let Some(reason) = faces.bounded_failed[k].take() else {
+                        // read ([`Iges::bounded_surfaces`])
+                        continue;
+                    };
                     let base = self
                         .parameters(k)
                         .ok()
@@ -69,11 +74,12 @@ impl Iges<'_> {
                             .as_ref()
                             .map(|s| &s.surface)
                             .or(revolved[b].as_ref().map(|r| &r.surface))
+                            .or(conv.surfaces[b].as_ref().map(|c| &c.surface))
                             .map(|s| crate::bspline::trimmed_area(s, 16, 16));
                     }
                     faces.unreadable.push(Unreadable {
                         entity: self.describe_entity(k),
-                        reason: "a bounded surface (143): its model-space boundaries (141) are not read".into(),
+                        reason: format!("a bounded surface (143): {reason}"),
                         estimated_area: area,
                     });
                     continue;
@@ -85,9 +91,13 @@ impl Iges<'_> {
                     && !trimmed[k]
                     && SURFACE_TYPES.contains(&t)
                     && !matches!(t, 120 | 128)
+                    && conv.surfaces[k].is_none()
                     && !(t == 108 && e.form == 0) =>
                 {
-                    format!("surface entity {t} is not read on its own (only under a trimmed surface 144, for 108)")
+                    match &conv.failed[k] {
+                        Some(m) => m.clone(),
+                        None => format!("surface entity {t} is not read on its own (only under a trimmed surface 144 or a B-rep face 510)"),
+                    }
                 }
                 _ => continue,
             };

@@ -110,7 +110,7 @@ impl Nurbs3 {
     /// at least the degree (Piegl & Tiller A5.1, in homogeneous
     /// coordinates, so exact for rational curves too). `None` when `t` is
     /// not inside the knot vector's usable range.
-    fn with_knot(&self, t: f64) -> Option<Nurbs3> {
+    pub(crate) fn with_knot(&self, t: f64) -> Option<Nurbs3> {
         let p = self.degree;
         let n = self.points.len();
         let s = self.knots.iter().filter(|&&k| k == t).count();
