@@ -112,9 +112,12 @@ def check_read(cli: Path, path: Path, faces: int, area: float, approximated: boo
         rel = abs(info["area"] - area) / area
         assert rel <= READ_AREA_TOL, f"{path.name}: area {info['area']} vs OCCT {area} (rel. {rel:.2e}, exit 0)"
         assert not info.get("warnings"), f"{path.name}: read with warnings {info['warnings']}"
-        # the file's own warnings (an approximated face) go to stderr
+        # the file's own warnings (an approximated face) go to stderr and
+        # into the report's reader_warnings
         named = "approximated" in p.stderr
         assert named == approximated, f"{path.name}: approximated face named: {named}\n{p.stderr}"
+        reported = any("approximated" in w for w in info.get("reader_warnings", []))
+        assert reported == approximated, f"{path.name}: reader_warnings {info.get('reader_warnings')}"
         return "read"
     assert p.returncode == 1, f"{path.name}: exit {p.returncode}\n{p.stderr}"
     assert "cannot read" in p.stderr or "could not read" in p.stderr, f"{path.name}: exit 1 without naming what:\n{p.stderr}"

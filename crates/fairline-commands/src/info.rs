@@ -133,6 +133,11 @@ pub fn surfaces(
     let control_points: usize = surfaces.iter().map(|s| s.control_points().len()).sum();
     let unit = file.unit.as_ref().map(|u| u.name.clone());
     report.set("surfaces", surfaces.len());
+    // what the reader did not take as the file says (an offset surface
+    // fitted within a tolerance, p-curves that disagree with their edges)
+    if !file.warnings.is_empty() {
+        report.set("reader_warnings", &file.warnings);
+    }
     report.set("trimmed", trimmed);
     report.set("rational", rational);
     report.set("max_degree", max_degree);
