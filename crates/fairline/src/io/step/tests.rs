@@ -326,10 +326,10 @@ fn step_units_and_errors_name_the_entity() {
     ));
     let imp = parse_step(&f.text()).unwrap();
     assert_eq!(imp.unit, Some(LengthUnit::from_iges_name("IN").unwrap()));
-    // An unsupported surface type.
+    // An unsupported surface type: the offset of a cone.
     let mut g = File::default();
     let frame = g.frame([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
-    let plane = g.add(&format!("PLANE('',#{frame})"));
+    let plane = g.add(&format!("CONICAL_SURFACE('',#{frame},1.,0.3)"));
     let off = g.add(&format!("OFFSET_SURFACE('',#{plane},1.,.F.)"));
     let v = g.vertex([1.0, 0.0, 0.0]);
     let c = g.circle([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], 1.0, v, v, true);
@@ -338,7 +338,7 @@ fn step_units_and_errors_name_the_entity() {
     let err = parse_step(&g.text()).unwrap_err().to_string();
     assert!(
         err.contains(&format!(
-            "#{off} OFFSET_SURFACE: surface type OFFSET_SURFACE is not supported"
+            "#{off} OFFSET_SURFACE: an offset of a CONICAL_SURFACE is not supported"
         )),
         "{err}"
     );
@@ -1979,4 +1979,52 @@ fn step_tilted_sphere_cap_with_a_raised_pcurve_is_read_from_its_circle() {
         imp.warnings
     );
     assert_close(area(&imp.surfaces[0].surface), want, 1e-3);
+}
+
+/// OFFSET_SURFACE of a sphere, a torus and a plane: the surface of the same
+/// kind grown (or moved) by the distance, exactly; nested offsets add up;
+/// an offset that would turn a radius negative is refused naming it.
+#[test]
+fn step_offsets_of_elementary_surfaces_are_exact() {
+    for (basis, d, want) in [
+        ("SPHERICAL_SURFACE('',#F,1.)", 0.5, 4.0 * PI * 1.5 * 1.5),
+        (
+            "TOROIDAL_SURFACE('',#F,3.,1.)",
+            0.25,
+            4.0 * PI * PI * 3.0 * 1.25,
+        ),
+    ] {
+        let mut g = File::default();
+        let frame = g.frame([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
+        let b = g.add(&basis.replace("#F", &format!("#{frame}")));
+        // half the distance twice: nested offsets
+        let o1 = g.add(&format!("OFFSET_SURFACE('',#{b},{},.F.)", d / 2.0));
+        let o2 = g.add(&format!("OFFSET_SURFACE('',#{o1},{},.F.)", d / 2.0));
+        g.face(&[], o2);
+        let imp = parse_step(&g.text()).unwrap();
+        let a = area(&imp.surfaces[0].surface);
+        assert!((a - want).abs() < 1e-6 * want, "{basis}: {a} vs {want}");
+        let text = g.text().replace(&format!("{},.F.)", d / 2.0), "-0.75,.F.)");
+        let err = parse_step(&text).unwrap_err().to_string();
+        assert!(err.contains("not positive"), "{err}");
+    }
+    // a plane moved along its normal: the square of side 2 at z = 0.3
+    let mut g = File::default();
+    let frame = g.frame([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
+    let plane = g.add(&format!("PLANE('',#{frame})"));
+    let off = g.add(&format!("OFFSET_SURFACE('',#{plane},0.3,.F.)"));
+    let corners = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+    let p: Vec<[f64; 3]> = corners.iter().map(|c| [c[0], c[1], 0.3]).collect();
+    let v: Vec<u64> = p.iter().map(|q| g.vertex(*q)).collect();
+    let edges: Vec<(u64, bool)> = (0..4)
+        .map(|k| (g.line(p[k], p[(k + 1) % 4], v[k], v[(k + 1) % 4]), true))
+        .collect();
+    let b = g.bound(&edges, true);
+    g.face(&[b], off);
+    let imp = parse_step(&g.text()).unwrap();
+    let s = &imp.surfaces[0].surface;
+    assert!((area(s) - 4.0).abs() < 1e-9, "{}", area(s));
+    let (du, dv) = (s.domain_u(), s.domain_v());
+    let mid = s.eval(0.5 * (du[0] + du[1]), 0.5 * (dv[0] + dv[1]));
+    assert!((mid.z - 0.3).abs() < 1e-12, "{mid:?}");
 }

@@ -1,6 +1,9 @@
 //! Analytic faces: `PLANE`, `CYLINDRICAL_SURFACE`, `CONICAL_SURFACE`,
 //! `SPHERICAL_SURFACE`, `TOROIDAL_SURFACE`, `SURFACE_OF_REVOLUTION` and
-//! `SURFACE_OF_LINEAR_EXTRUSION` (ISO 10303-42 §4.4) converted exactly to
+//! `SURFACE_OF_LINEAR_EXTRUSION` (ISO 10303-42 §4.4), and `OFFSET_SURFACE`
+//! (§4.4.14) of a plane, cylinder, sphere or torus (the surface of the same
+//! kind moved or with its radius grown by the distance, on the basis's
+//! parameters), converted exactly to
 //! NURBS over the part of the surface the face's bounds span, the bounds
 //! mapped into the NURBS parameters through the surface's natural
 //! coordinates (see the parent module).
@@ -81,9 +84,17 @@ impl Analytic {
 
     /// See [`Periods`].
     fn periods(&self) -> Periods {
+        // closed: the ends meet to rounding of the profile's size (a full
+        // circle's ends differ by sin 2π)
         let closed_period = |n: &Nurbs3| {
             let [t0, t1] = n.domain();
-            (n.points.first() == n.points.last()).then_some(t1 - t0)
+            let (first, last) = (n.points.first()?, n.points.last()?);
+            let size = n
+                .points
+                .iter()
+                .map(|p| p.distance(*first))
+                .fold(0.0, f64::max);
+            (first.distance(*last) <= 1e-12 * size.max(f64::MIN_POSITIVE)).then_some(t1 - t0)
         };
         match self {
             Analytic::Torus { .. } => [Some(TAU), Some(TAU)],
@@ -221,8 +232,14 @@ fn natural_box(nat: &[NaturalLoop], periods: Periods) -> Option<NaturalBox> {
     })
 }
 
+/// Most nested `OFFSET_SURFACE`s followed to their basis.
+const MAX_OFFSET_DEPTH: usize = 8;
+
 impl<'a> Reader<'a> {
     fn analytic(&self, si: &'a Instance) -> R<(Frame, Analytic)> {
+        if si.is("OFFSET_SURFACE") {
+            return self.offset_analytic(si);
+        }
         let t = si.type_name();
         let p = self.params(
             si,
@@ -323,6 +340,69 @@ impl<'a> Reader<'a> {
                 Ok((frame, kind))
             }
         }
+    }
+
+    /// An `OFFSET_SURFACE` (ISO 10303-42 §4.4.14: the basis moved by the
+    /// distance along its normal, on its parameters) of an elementary
+    /// surface whose offset is of its own kind with the same parameters: a
+    /// plane moved along its normal, a cylinder or sphere with radius
+    /// r + d, a torus with minor radius r + d (the normals of ISO's
+    /// elementary surfaces point away from the axis or centre). Nested
+    /// offsets add up. Other bases (a cone, whose offset moves its height
+    /// parameter; a swept or B-spline surface) and a radius that would not
+    /// stay positive are refused, naming the entity.
+    fn offset_analytic(&self, si: &'a Instance) -> R<(Frame, Analytic)> {
+        let (mut basis, mut d) = (si, 0.0);
+        for _ in 0..MAX_OFFSET_DEPTH {
+            if !basis.is("OFFSET_SURFACE") {
+                break;
+            }
+            let p = self.params(basis, &["OFFSET_SURFACE"])?;
+            d += self.num(basis, p, 2)?;
+            basis = self.refer(basis, p, 1)?;
+        }
+        if basis.is("OFFSET_SURFACE") {
+            return Err(self.err(
+                si,
+                format!("more than {MAX_OFFSET_DEPTH} nested offset surfaces"),
+            ));
+        }
+        let t = basis.type_name();
+        let ((o, x, y, z), kind) = match t {
+            "PLANE" | "CYLINDRICAL_SURFACE" | "SPHERICAL_SURFACE" | "TOROIDAL_SURFACE" => {
+                self.analytic(basis)?
+            }
+            _ => {
+                return Err(self.err(
+                    si,
+                    format!("an offset of a {t} is not supported (offsets of PLANE, CYLINDRICAL_SURFACE, SPHERICAL_SURFACE and TOROIDAL_SURFACE are)"),
+                ));
+            }
+        };
+        let grown = |r: f64| -> R<f64> {
+            let g = r + d;
+            if g > 0.0 && g.is_finite() {
+                Ok(g)
+            } else {
+                Err(self.err(
+                    si,
+                    format!("the offset {d} leaves the radius {r} at {g}, not positive"),
+                ))
+            }
+        };
+        Ok(match kind {
+            Analytic::Plane => ((o + d * z, x, y, z), Analytic::Plane),
+            Analytic::Cylinder { r } => ((o, x, y, z), Analytic::Cylinder { r: grown(r)? }),
+            Analytic::Sphere { r } => ((o, x, y, z), Analytic::Sphere { r: grown(r)? }),
+            Analytic::Torus { big, small } => (
+                (o, x, y, z),
+                Analytic::Torus {
+                    big,
+                    small: grown(small)?,
+                },
+            ),
+            _ => return Err(self.err(si, format!("an offset of a {t} is not supported"))),
+        })
     }
 
     /// The map of a conic profile's angle to the parameter of its NURBS
