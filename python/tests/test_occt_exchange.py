@@ -56,12 +56,12 @@ MUST_READ = {
     f"{n}.{fmt}"
     for n in ("extruded-circle", "offset-cylinder", "offset-bspline")
     for fmt in ("igs", "brep.igs")
-} | {"extruded-circle.step", "offset-cylinder.step"}
+} | {"extruded-circle.step", "offset-cylinder.step", "offset-bspline.step"}
 # Files read with a warning that names an approximated face: an offset
 # surface (140) of a B-spline surface, which fairline fits by a bicubic
 # B-spline within 1e-7 of its size (the offset cylinder, a 140 of a line
 # revolved or of a cylinder 192, is exact).
-APPROXIMATED = {"offset-bspline.igs", "offset-bspline.brep.igs"}
+APPROXIMATED = {"offset-bspline.igs", "offset-bspline.brep.igs", "offset-bspline.step"}
 
 
 @pytest.fixture(scope="session")

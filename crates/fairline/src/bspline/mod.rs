@@ -37,6 +37,7 @@ pub mod basis;
 mod bounds;
 pub mod continuity;
 mod iso;
+pub(crate) mod offset;
 mod project;
 mod surface;
 mod tessellate;

@@ -74,7 +74,6 @@ mod bounded;
 mod brep;
 mod curve_ops;
 mod faces;
-mod offset;
 #[cfg(test)]
 mod surface_tests;
 mod surfaces;

@@ -9,13 +9,13 @@
 //! model-space curves ([`super::brep`]).
 
 use super::curve_ops::{compatible, joined, power_to_bezier, reparametrised};
-use super::offset::offset_surface;
 use super::{
     ArcMap, DirEntry, INT, Iges, IgesError, IgesSurface, Nurbs3, Param, Piece, REAL, TrimLoop,
     Vec3, faces, param, parse_int, read_entity_128, text_of,
 };
 use crate::bspline::BSplineSurface;
 use crate::bspline::basis::MAX_DEGREE;
+use crate::bspline::offset::offset_surface;
 
 /// Deepest chain of offset surfaces (140 of a 140 …) read.
 const MAX_OFFSET_DEPTH: usize = 8;

@@ -292,6 +292,8 @@ struct Reader<'a> {
     sources: std::cell::Cell<TrimSources>,
     /// P-curves not used: (EDGE_CURVE #id, distance, tolerance).
     rejected: std::cell::RefCell<Vec<(u64, f64, f64)>>,
+    /// Offset surfaces read as fitted B-splines, one warning each.
+    fitted: std::cell::RefCell<Vec<String>>,
 }
 
 impl<'a> Reader<'a> {
@@ -812,6 +814,7 @@ pub(super) fn read(ex: &Exchange, collect: bool) -> R<StepImport> {
         uncertainty: distance_uncertainty(ex),
         sources: Default::default(),
         rejected: Default::default(),
+        fitted: Default::default(),
     };
     let mut out = StepImport {
         unit,
@@ -859,7 +862,43 @@ pub(super) fn read(ex: &Exchange, collect: bool) -> R<StepImport> {
     }
     out.trim_sources = rd.sources.get();
     out.warnings = rd.rejected_warning().into_iter().collect();
+    out.warnings.extend(rd.fitted.take());
     Ok(out)
+}
+
+impl<'a> Reader<'a> {
+    /// An `OFFSET_SURFACE` (ISO 10303-42 §4.4.14) whose basis, through
+    /// nested offsets, is a B-spline surface: the exact offset S + d·N on
+    /// the basis's parameters, as a plane moved exactly or a bicubic
+    /// B-spline fitted within 1e-7 of the basis's size
+    /// ([`crate::bspline::offset::offset_surface`]), the fit named in the
+    /// warnings. `None` for any other surface.
+    fn offset_of_bspline(&self, si: &'a Instance) -> R<Option<BSplineSurface>> {
+        let (mut basis, mut d) = (si, 0.0);
+        for _ in 0..8 {
+            if !basis.is("OFFSET_SURFACE") {
+                break;
+            }
+            let p = self.params(basis, &["OFFSET_SURFACE"])?;
+            d += self.num(basis, p, 2)?;
+            basis = self.refer(basis, p, 1)?;
+        }
+        if !si.is("OFFSET_SURFACE") || !basis.is("B_SPLINE_SURFACE_WITH_KNOTS") {
+            return Ok(None);
+        }
+        let s = self.bspline_surface(basis)?;
+        let (lo, hi) = s.control_bounding_box();
+        let tolerance = 1e-7 * ((hi - lo).length() + 2.0 * d.abs());
+        let o = crate::bspline::offset::offset_surface(&s, d, tolerance)
+            .map_err(|m| self.err(si, format!("the offset surface: {m}")))?;
+        if let Some(e) = o.deviation {
+            self.fitted.borrow_mut().push(format!(
+                "#{} OFFSET_SURFACE: the offset surface is approximated by a bicubic B-spline within {tolerance:.1e} (largest deviation found {e:.1e})",
+                si.id
+            ));
+        }
+        Ok(Some(o.surface))
+    }
 }
 
 impl Reader<'_> {
@@ -1081,6 +1120,13 @@ impl<'a> Reader<'a> {
         loops.sort_by_key(|l| !l.0);
         let surface = if si.is("B_SPLINE_SURFACE_WITH_KNOTS") {
             let s = self.bspline_surface(si)?;
+            let trims = loops
+                .iter()
+                .map(|(_, edges)| self.bspline_loop(&s, si.id, edges))
+                .collect::<R<Vec<_>>>()?;
+            self.attach(f, s, trims, loops.first().is_some_and(|l| l.0))?
+        } else if let Some(s) = self.offset_of_bspline(si)? {
+            // on the basis's parameters: its p-curves trim the offset
             let trims = loops
                 .iter()
                 .map(|(_, edges)| self.bspline_loop(&s, si.id, edges))

@@ -2,7 +2,7 @@
 //! plane, otherwise a bicubic interpolation of the exact offset refined
 //! until it is within a tolerance ([`offset_surface`]).
 
-use super::Vec3;
+use crate::Vec3;
 use crate::bspline::BSplineSurface;
 use crate::bspline::basis::{MAX_ORDER, basis_funs, find_span};
 
@@ -10,7 +10,7 @@ use crate::bspline::basis::{MAX_ORDER, basis_funs, find_span};
 const MAX_FIT_POINTS: usize = 400;
 
 /// An offset surface as a B-spline surface.
-pub(super) struct Offset {
+pub(crate) struct Offset {
     /// The surface, on the base surface's parameters.
     pub surface: BSplineSurface,
     /// `None`: exact; `Some(e)`: fitted, farthest from the exact offset by
@@ -42,7 +42,7 @@ fn exact(base: &BSplineSurface, d: f64, u: f64, v: f64) -> Result<Vec3, String> 
 ///   [`MAX_FIT_POINTS`] control points per direction.
 ///
 /// Errors say why: no normal, or the tolerance not reached.
-pub(super) fn offset_surface(
+pub(crate) fn offset_surface(
     base: &BSplineSurface,
     d: f64,
     tolerance: f64,
