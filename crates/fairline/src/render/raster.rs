@@ -764,7 +764,7 @@ impl<'s, 'a> Ctx<'s, 'a> {
             w = [w[0] / t.z[0], w[1] / t.z[1], w[2] / t.z[2]];
         }
         let sum = w[0] + w[1] + w[2];
-        let w = if sum.abs() > 1e-12 && sum.is_finite() {
+        let w = if sum != 0.0 && sum.is_finite() {
             w.map(|v| v / sum)
         } else {
             [1.0 / 3.0; 3]
@@ -817,27 +817,7 @@ impl<'s, 'a> Ctx<'s, 'a> {
 
     /// Linear-light colour of the sample at (`px`, `py`) (sample coordinates) on triangle `t`.
     fn shade(&self, t: &TriShade, px: f64, py: f64) -> [f32; 3] {
-        let [(ax, ay), (bx, by), (cx, cy)] = t.p;
-        let e = [
-            edge_f(bx, by, cx, cy, px, py),
-            edge_f(cx, cy, ax, ay, px, py),
-            edge_f(ax, ay, bx, by, px, py),
-        ];
-        let area = e[0] + e[1] + e[2];
-        let mut w = if area.abs() > 1e-12 {
-            e.map(|v| (v / area).max(0.0))
-        } else {
-            [1.0 / 3.0; 3]
-        };
-        if self.perspective {
-            w = [w[0] / t.z[0], w[1] / t.z[1], w[2] / t.z[2]];
-        }
-        let sum = w[0] + w[1] + w[2];
-        let w = if sum > 0.0 && sum.is_finite() {
-            w.map(|v| v / sum)
-        } else {
-            [1.0 / 3.0; 3]
-        };
+        let (w, e) = self.weights(t, px, py, true);
 
         let ndc_x = px / self.sw as f64 * 2.0 - 1.0;
         let ndc_y = 1.0 - py / self.sh as f64 * 2.0;
