@@ -77,6 +77,85 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// Largest `--zebra-period`, degrees: beyond half a turn fewer than two
+/// stripes are left.
+pub const MAX_ZEBRA_PERIOD_DEG: f64 = 180.0;
+
+/// Parses `--zebra-period DEG`: an angle in (0, [`MAX_ZEBRA_PERIOD_DEG`]].
+fn parse_zebra_period(s: &str) -> Result<f64, String> {
+    let p: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number"))?;
+    if p.is_finite() && p > 0.0 && p <= MAX_ZEBRA_PERIOD_DEG {
+        Ok(p)
+    } else {
+        Err(format!(
+            "give an angle in (0, {MAX_ZEBRA_PERIOD_DEG}] degrees, got {s}"
+        ))
+    }
+}
+
+/// The reflection zebra of a command's `--png` picture (every command whose
+/// picture shades the part without a colour map).
+#[derive(clap::Args, Debug, Clone, Copy, Default)]
+pub struct ZebraArgs {
+    /// Draw a reflection zebra on the part in the --png picture, under its
+    /// lines: stripes of parallel tube lights (along the light array's
+    /// direction, its plane normal the zenith; without light options the
+    /// part's default lights) seen in the surface as in a mirror; where
+    /// they get denser than about three pixels they fade to grey.
+    #[arg(long, requires = "png")]
+    pub zebra: bool,
+    /// With --zebra: the angle of one stripe period, degrees, in (0, 180]
+    /// (default: chosen so that the stripes lie about 20 px apart on the
+    /// picture).
+    #[arg(long, value_name = "DEG", requires = "zebra", value_parser = parse_zebra_period)]
+    pub zebra_period: Option<f64>,
+}
+
+impl ZebraArgs {
+    /// The zebra of a picture of `mesh` drawn with `opts`, `None` without
+    /// --zebra: tubes along `light` (the command's light array), else along
+    /// the part's default lights ([`Lights::light_array`]), one stripe per
+    /// --zebra-period or per [`fairline::picture::zebra_period`].
+    pub fn reflection_zebra(
+        &self,
+        mesh: &SurfaceMesh,
+        light: Option<&LightArray>,
+        opts: &fairline::render::RenderOptions,
+    ) -> Result<Option<fairline::render::ReflectionZebra>> {
+        if !self.zebra {
+            return Ok(None);
+        }
+        let light = match light {
+            Some(l) => *l,
+            None => Lights::default().light_array(mesh)?,
+        };
+        Ok(fairline::picture::reflection_zebra(
+            mesh,
+            &light,
+            opts,
+            self.zebra_period,
+        ))
+    }
+}
+
+/// The words a picture's title adds for its zebra: the period.
+pub fn zebra_title(zebra: &fairline::render::ReflectionZebra) -> String {
+    format!("reflection zebra, {:.3} deg per stripe", zebra.period_deg)
+}
+
+/// The report's account of a picture's zebra: its period, tube axis and
+/// zenith.
+pub fn zebra_json(zebra: &fairline::render::ReflectionZebra) -> Value {
+    serde_json::json!({
+        "period_deg": zebra.period_deg,
+        "axis": zebra.axis.to_array(),
+        "zenith": zebra.zenith.to_array(),
+    })
+}
+
 /// The `--up` choice of the default lights.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Up {
@@ -294,6 +373,8 @@ pub struct HighlightArgs {
     /// Size of the --png picture, WxH.
     #[arg(long, value_parser = parse_size, default_value = "1200x900", requires = "png")]
     pub size: (u32, u32),
+    #[command(flatten)]
+    pub zebra: ZebraArgs,
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,

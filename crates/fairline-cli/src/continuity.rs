@@ -3,7 +3,7 @@
 
 use crate::common::{print_warnings, write_report};
 use crate::output::{Job, say};
-use crate::surface_highlight::surface_picture;
+use crate::surface_highlight::{surface_picture, surface_zebra};
 use anyhow::Result;
 use fairline::Control;
 use fairline::bspline::continuity::{ContinuityOptions, SeamClass};
@@ -48,6 +48,8 @@ pub struct Args {
     /// Picture: the patches with each shared edge coloured by class.
     #[arg(long, value_name = "IMG.png")]
     pub png: Option<PathBuf>,
+    #[command(flatten)]
+    pub zebra: crate::args::ZebraArgs,
 }
 
 /// Linear-light colour of a class in pictures.
@@ -80,7 +82,7 @@ pub fn run(args: Args) -> Result<()> {
     let bar = crate::output::spinner("continuity");
     let out = continuity::run(&surfaces, &settings, &Control::new());
     bar.finish_and_clear();
-    let out = out.map_err(|e| crate::output::name_file(&args.surface_file, e))?;
+    let mut out = out.map_err(|e| crate::output::name_file(&args.surface_file, e))?;
     let result = &out.result;
     let classes = [SeamClass::Gap, SeamClass::G0, SeamClass::G1, SeamClass::G2];
     let summary = format!(
@@ -122,10 +124,15 @@ pub fn run(args: Args) -> Result<()> {
             .collect();
         let mut opts = RenderOptions::with_size(1000, 800);
         (opts.view_dir, opts.up) = crate::surface::camera(&surfaces, None)?;
+        let zebra = surface_zebra(&surfaces, &args.zebra, None, &opts)?;
+        if let Some(z) = &zebra {
+            out.report.set("zebra", crate::args::zebra_json(z));
+        }
         let mut img = surface_picture(
             &surfaces,
             lines,
             "continuity across patch boundaries",
+            zebra,
             &opts,
         )?;
         // legend: one swatch per class with its count

@@ -75,6 +75,8 @@ pub struct Args {
     /// Size of the --png picture, WxH.
     #[arg(long, value_parser = parse_size, default_value = "1200x900", requires = "png")]
     pub size: (u32, u32),
+    #[command(flatten)]
+    pub zebra: crate::args::ZebraArgs,
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
@@ -110,7 +112,7 @@ pub fn run(args: Args) -> Result<()> {
     let bar = spinner("detecting irregularities");
     let out = detect::run(input, &settings, &Control::new());
     bar.finish_and_clear();
-    let out = out?;
+    let mut out = out?;
     let (light, det) = (&out.light, &out.detection);
     if let Some(w) = crate::highlight_png::line_warning(
         &args.mesh,
@@ -124,7 +126,10 @@ pub fn run(args: Args) -> Result<()> {
     print_measure_notes(&args, det, light.spacing());
     write_json(&args.output, &json!({"faces": out.region}))?;
     if let Some(png) = &args.png {
-        write_picture(&args, png, &mesh, &out.shown_light, &out.shown, det)?;
+        let zebra = write_picture(&args, png, &mesh, &out.shown_light, &out.shown, det)?;
+        if let Some(z) = &zebra {
+            out.report.set("zebra", crate::args::zebra_json(z));
+        }
     }
     print_warnings(&out.report);
     write_report(args.report.as_deref(), &out.report)?;
@@ -212,7 +217,8 @@ fn print_measure_notes(args: &Args, det: &Detection, spacing: f64) {
 }
 
 /// The --png picture: the readable lines, the flagged stretches and the
-/// regions, titled with the number of regions and the best score.
+/// regions, titled with the number of regions and the best score; with
+/// --zebra the reflection zebra under them, which is returned.
 fn write_picture(
     args: &Args,
     png: &std::path::Path,
@@ -220,10 +226,10 @@ fn write_picture(
     shown_light: &fairline::highlight::LightArray,
     shown: &fairline::highlight::HighlightLines,
     det: &Detection,
-) -> Result<()> {
+) -> Result<Option<fairline::render::ReflectionZebra>> {
     let stretches = crate::highlight_png::stretches(det);
     let (view, up) = crate::render::camera(mesh, args.view);
-    let title = format!(
+    let mut title = format!(
         "{}: {}{}",
         args.mesh
             .file_name()
@@ -234,6 +240,13 @@ fn write_picture(
             .map(|b| format!(", best {b}"))
             .unwrap_or_default()
     );
+    let opts = crate::highlight_png::render_options(args.size, (view, up));
+    let zebra = args
+        .zebra
+        .reflection_zebra(mesh, Some(shown_light), &opts)?;
+    if let Some(z) = &zebra {
+        title.push_str(&format!("; {}", crate::args::zebra_title(z)));
+    }
     let faces = det.all_faces();
     let unjudged = det.shape_faces(mesh);
     crate::highlight_png::write(
@@ -249,6 +262,8 @@ fn write_picture(
             view: (view, up),
             title,
             spacing: Some(shown_light.spacing()),
+            zebra,
         },
-    )
+    )?;
+    Ok(zebra)
 }

@@ -1,6 +1,6 @@
 //! `fairline enhance`: feature enhancement by vertex flow (Ji et al. 2011).
 
-use crate::args::choice;
+use crate::args::{ZebraArgs, choice};
 use crate::common::{print_warnings, write_report};
 use crate::error::bad_input;
 use crate::output::spinner;
@@ -10,8 +10,8 @@ use fairline::enhance::{EnhanceSolver, Projection};
 use fairline::geom::{CurvatureMethod, principal_curvatures, vertex_normals};
 use fairline::mesh::SurfaceMesh;
 use fairline::render::{
-    Colormap, Image, Legend, MeshLayer, RenderOptions, Scene, clipped, render, scalar_colors,
-    side_by_side,
+    Colormap, Image, Legend, MeshLayer, ReflectionZebra, RenderOptions, Scene, clipped, render,
+    scalar_colors, side_by_side,
 };
 use fairline_commands::enhance::{self, EnhanceSettings};
 use std::path::PathBuf;
@@ -73,9 +73,12 @@ pub struct Args {
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
     /// Picture of input and output side by side, coloured by mean curvature,
-    /// with the mesh edges.
+    /// with the mesh edges; with --zebra shaded grey with the reflection
+    /// zebra instead of the colour map.
     #[arg(long, value_name = "IMG.png")]
     pub png: Option<PathBuf>,
+    #[command(flatten)]
+    pub zebra: ZebraArgs,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -114,12 +117,18 @@ pub fn run(args: Args) -> Result<()> {
     let bar = spinner("vertex flow");
     let result = enhance::run(&mesh, &settings, &Control::new());
     bar.finish_and_clear();
-    let result = result?;
+    let mut result = result?;
     let mut out = mesh.clone();
     out.set_positions(result.positions)?;
     // the picture is made before anything is written
     let image = match &args.png {
-        Some(_) => Some(picture(&mesh, &out, (900, 800))?),
+        Some(_) => {
+            let (image, zebra) = picture(&mesh, &out, (900, 800), &args.zebra)?;
+            if let Some(z) = &zebra {
+                result.report.set("zebra", crate::args::zebra_json(z));
+            }
+            Some(image)
+        }
         None => None,
     };
     fairline::io::write_mesh(&args.output, &out)?;
@@ -141,13 +150,22 @@ pub fn run(args: Args) -> Result<()> {
 /// Input and output side by side, `size` pixels each, smooth shaded,
 /// coloured by mean curvature on a common scale (the input's range), with
 /// wireframe, so that the migration of vertices toward features shows.
-pub fn picture(input: &SurfaceMesh, output: &SurfaceMesh, size: (u32, u32)) -> Result<Image> {
+/// With --zebra the panels are grey with the reflection zebra of the
+/// input's panel (titled with its period) instead of the colour map; the
+/// zebra is returned.
+pub fn picture(
+    input: &SurfaceMesh,
+    output: &SurfaceMesh,
+    size: (u32, u32),
+    zebra: &ZebraArgs,
+) -> Result<(Image, Option<ReflectionZebra>)> {
+    let mut opts = RenderOptions::with_size(size.0, size.1);
+    (opts.view_dir, opts.up) = crate::render::camera(input, None);
+    let zebra = zebra.reflection_zebra(input, None, &opts)?;
     let h_in = principal_curvatures(input, CurvatureMethod::Rusinkiewicz).mean();
     let h_out = principal_curvatures(output, CurvatureMethod::Rusinkiewicz).mean();
     let (c_in, range) = scalar_colors(&h_in, Colormap::Coolwarm, None);
     let (c_out, _) = scalar_colors(&h_out, Colormap::Coolwarm, Some(range));
-    let mut opts = RenderOptions::with_size(size.0, size.1);
-    (opts.view_dir, opts.up) = crate::render::camera(input, None);
     let panel = |mesh: &SurfaceMesh, colors: &[[f32; 3]]| -> Result<Image> {
         let triangles: Vec<[u32; 3]> = mesh
             .faces()
@@ -156,23 +174,29 @@ pub fn picture(input: &SurfaceMesh, output: &SurfaceMesh, size: (u32, u32)) -> R
         let normals = vertex_normals(mesh);
         let layer = MeshLayer::new(mesh.positions(), &triangles)
             .with_normals(&normals)
-            .with_colors(colors)
             .with_wireframe([0.08, 0.08, 0.1])
             .with_two_sided(false);
-        let scene = Scene {
-            meshes: vec![layer],
-            legend: Some(Legend {
-                title: "mean curvature".into(),
-                colormap: Colormap::Coolwarm,
-                min: range.0,
-                max: range.1,
-                clipped: clipped(&h_in, range) || clipped(&h_out, range),
-            }),
-            ..Default::default()
+        let scene = match &zebra {
+            Some(z) => Scene {
+                meshes: vec![layer.with_zebra(Some(*z))],
+                title: Some(crate::args::zebra_title(z)),
+                ..Default::default()
+            },
+            None => Scene {
+                meshes: vec![layer.with_colors(colors)],
+                legend: Some(Legend {
+                    title: "mean curvature".into(),
+                    colormap: Colormap::Coolwarm,
+                    min: range.0,
+                    max: range.1,
+                    clipped: clipped(&h_in, range) || clipped(&h_out, range),
+                }),
+                ..Default::default()
+            },
         };
         Ok(render(&scene, &opts)?)
     };
     let a = panel(input, &c_in)?;
     let b = panel(output, &c_out)?;
-    Ok(side_by_side(&[a, b], &["input", "vertex flow"]))
+    Ok((side_by_side(&[a, b], &["input", "vertex flow"]), zebra))
 }

@@ -12,7 +12,7 @@ use fairline::mesh::FaceId;
 use fairline::picture::{
     FAIRING_DESIRED_COLOR, FAIRING_LINE_COLOR, FAIRING_OUTLINE_COLOR, fairing_picture,
 };
-use fairline::render::RenderOptions;
+use fairline::render::{ReflectionZebra, RenderOptions};
 use fairline::{Control, SurfaceMesh};
 use fairline_commands::fair::{self, FairInput, FairSettings};
 use fairline_commands::{CommandError, FrontEnd, Note, Subject};
@@ -96,6 +96,8 @@ pub struct Args {
     /// desired curves.
     #[arg(long, value_name = "IMG.png")]
     pub png: Option<PathBuf>,
+    #[command(flatten)]
+    pub zebra: crate::args::ZebraArgs,
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
@@ -167,7 +169,7 @@ pub fn run(args: Args) -> Result<()> {
         shown.set_length(p.total);
         shown.set_position(p.done);
     });
-    let out = fair::run(input, &settings, &control).map_err(|e| name_subject(e, &args))?;
+    let mut out = fair::run(input, &settings, &control).map_err(|e| name_subject(e, &args))?;
     bar.finish_and_clear();
     for note in &out.notes {
         if *note == Note::NothingDetected {
@@ -180,14 +182,19 @@ pub fn run(args: Args) -> Result<()> {
     }
     fairline::io::write_mesh(&args.output, &out.mesh)?;
     print_warnings(&out.report);
-    match (&args.png, &out.first) {
+    let zebra = match (&args.png, &out.first) {
         (Some(png), Some((positions, r))) => {
             let mut faired = mesh.clone();
             faired.set_positions(positions.clone())?;
-            write_picture(png, &mesh, out.fairing_light, r, &faired)?;
+            write_picture(png, &mesh, out.fairing_light, r, &faired, &args.zebra)?
         }
-        (Some(png), None) => write_unchanged_picture(png, &args.mesh, &mesh, out.fairing_light)?,
-        _ => {}
+        (Some(png), None) => {
+            write_unchanged_picture(png, &args.mesh, &mesh, out.fairing_light, &args.zebra)?
+        }
+        _ => None,
+    };
+    if let Some(z) = &zebra {
+        out.report.set("zebra", crate::args::zebra_json(z));
     }
     write_report(args.report.as_deref(), &out.report)?;
     if out.nothing_to_fair() {
@@ -246,13 +253,15 @@ pub fn run(args: Args) -> Result<()> {
 
 /// The --png picture when no region was faired: the input's highlight
 /// lines under the fairing lights (drawn readable), titled with why the
-/// output is the input unchanged.
+/// output is the input unchanged; with --zebra the reflection zebra under
+/// them, which is returned.
 fn write_unchanged_picture(
     png: &std::path::Path,
     path: &std::path::Path,
     mesh: &SurfaceMesh,
     light: fairline::highlight::LightArray,
-) -> Result<()> {
+    zebra: &crate::args::ZebraArgs,
+) -> Result<Option<ReflectionZebra>> {
     let model = fairline::highlight::HighlightModel::new(mesh, light, Default::default())?;
     let lines = model.lines(mesh);
     let shown = model.readable_lines(
@@ -260,14 +269,23 @@ fn write_unchanged_picture(
         &lines,
         &fairline::highlight::Readability::for_part(mesh, &light),
     );
-    let title = format!(
+    let mut title = format!(
         "{}: nothing faired, the output is the input unchanged",
         path.file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default()
     );
+    let (size, view) = ((900, 700), crate::render::camera(mesh, None));
+    let zebra = zebra.reflection_zebra(
+        mesh,
+        Some(&light),
+        &crate::highlight_png::render_options(size, view),
+    )?;
+    if let Some(z) = &zebra {
+        title.push_str(&format!("; {}", crate::args::zebra_title(z)));
+    }
     crate::highlight_png::write(
-        (900, 700),
+        size,
         png,
         mesh,
         crate::highlight_png::Overlay {
@@ -276,41 +294,47 @@ fn write_unchanged_picture(
             flagged: &[],
             region: None,
             unjudged: None,
-            view: crate::render::camera(mesh, None),
+            view,
             title,
             spacing: Some(light.spacing()),
+            zebra,
         },
-    )
+    )?;
+    Ok(zebra)
 }
 
 /// The --png before/after picture of the first region with the lines of
 /// the lights it was faired with, `light` (the readable lights: the lines
 /// `highlight` and `detect` show with the same options) and their desired
-/// curves.
+/// curves; with --zebra the reflection zebra of the input's panel under
+/// both panels' lines, which is returned.
 fn write_picture(
     png: &std::path::Path,
     mesh: &SurfaceMesh,
     light: fairline::highlight::LightArray,
     r: &FairReport,
     faired: &SurfaceMesh,
-) -> Result<()> {
+    zebra: &crate::args::ZebraArgs,
+) -> Result<Option<ReflectionZebra>> {
     let mut opts = RenderOptions::with_size(900, 700);
     (opts.view_dir, opts.up) = crate::render::camera(mesh, None);
-    let mut img = fairing_picture(mesh, faired, r, &opts)?;
-    crate::highlight_png::draw_key(
-        &mut img,
-        &[
-            (
-                FAIRING_LINE_COLOR,
-                format!(
-                    "highlight lines, light spacing {}",
-                    crate::highlight_png::fmt_len(light.spacing())
-                ),
+    let zebra = zebra.reflection_zebra(mesh, Some(&light), &opts)?;
+    let mut img = fairing_picture(mesh, faired, r, zebra, &opts)?;
+    let mut key = vec![
+        (
+            FAIRING_LINE_COLOR,
+            format!(
+                "highlight lines, light spacing {}",
+                crate::highlight_png::fmt_len(light.spacing())
             ),
-            (FAIRING_OUTLINE_COLOR, "region outline".into()),
-            (FAIRING_DESIRED_COLOR, "desired lines (before)".into()),
-        ],
-    );
+        ),
+        (FAIRING_OUTLINE_COLOR, "region outline".into()),
+        (FAIRING_DESIRED_COLOR, "desired lines (before)".into()),
+    ];
+    if let Some(z) = &zebra {
+        key.push(([0.02, 0.02, 0.02], crate::args::zebra_title(z)));
+    }
+    crate::highlight_png::draw_key(&mut img, &key);
     img.write_png(png)?;
-    Ok(())
+    Ok(zebra)
 }

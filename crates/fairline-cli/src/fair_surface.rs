@@ -3,7 +3,9 @@
 
 use crate::common::{print_warnings, read_json, write_report};
 use crate::error::bad_input;
-use crate::surface_highlight::{palette_srgb, plot_lines, polylines, surface_picture, uv_plot};
+use crate::surface_highlight::{
+    palette_srgb, plot_lines, polylines, surface_picture, surface_zebra, uv_plot,
+};
 use anyhow::Result;
 use fairline::Control;
 use fairline::bspline::BSplineSurface;
@@ -15,7 +17,7 @@ use fairline::highlight::{
     CircularLight, CircularLights, SurfaceHighlightOptions, SurfaceHighlights, SurfaceLight,
     surface_highlight_lines,
 };
-use fairline::render::{RenderOptions, SvgPlot, side_by_side};
+use fairline::render::{ReflectionZebra, RenderOptions, SvgPlot, side_by_side};
 use fairline_commands::fair_surface::{self, FairSurfaceInput, FairSurfaceSettings};
 use fairline_commands::{CommandError, Subject};
 use std::path::PathBuf;
@@ -138,6 +140,8 @@ pub struct Args {
     /// Picture: highlight lines before | after.
     #[arg(long, value_name = "IMG.png")]
     pub png: Option<PathBuf>,
+    #[command(flatten)]
+    pub zebra: crate::args::ZebraArgs,
     /// SVG of the pre-images before (grey) and after (colour), endpoints and targets.
     #[arg(long, value_name = "UV.svg")]
     pub svg: Option<PathBuf>,
@@ -464,7 +468,7 @@ pub fn run(args: Args) -> Result<()> {
         &Control::new(),
     );
     bar.finish_and_clear();
-    let out = out.map_err(|e| args.name_subject(e))?;
+    let mut out = out.map_err(|e| args.name_subject(e))?;
     if let Some(spec) = &out.derived {
         eprintln!(
             "default circular lights (save as LIGHTS.json to reuse): {}",
@@ -475,7 +479,10 @@ pub fn run(args: Args) -> Result<()> {
     print_summary(rep, settings.boundary);
     // Pictures before the output file, so a failure leaves no output.
     let faired = &out.surfaces[settings.surface];
-    write_pictures(&args, &surfaces[settings.surface], faired, &out.lights, rep)?;
+    let zebra = write_pictures(&args, &surfaces[settings.surface], faired, &out.lights, rep)?;
+    if let Some(z) = &zebra {
+        out.report.set("zebra", crate::args::zebra_json(z));
+    }
     fairline::io::surface_file::write_surface_file(&args.output, &out.surfaces, unit.as_ref())?;
     print_warnings(&out.report);
     write_report(args.report.as_deref(), &out.report)?;
@@ -556,52 +563,63 @@ fn print_summary(rep: &SurfaceFairReport, boundary: BoundaryControl) {
     );
 }
 
-/// The --png (highlight lines before | after) and --svg (pre-images before
-/// and after, targets, endpoints and the knot box) pictures.
+/// The --png (highlight lines before | after; with --zebra on the
+/// reflection zebra of the input's panel, which is returned) and --svg
+/// (pre-images before and after, targets, endpoints and the knot box)
+/// pictures.
 fn write_pictures(
     args: &Args,
     input: &BSplineSurface,
     faired: &BSplineSurface,
     lights: &[CircularLight],
     rep: &SurfaceFairReport,
-) -> Result<()> {
+) -> Result<Option<ReflectionZebra>> {
     if args.png.is_none() && args.svg.is_none() {
-        return Ok(());
+        return Ok(None);
     }
     let slights: Vec<SurfaceLight> = lights.iter().map(|l| SurfaceLight::Circular(*l)).collect();
     let hopts = SurfaceHighlightOptions::default().grid(args.grid);
     let before = surface_highlight_lines(input, &slights, &hopts);
     let after = surface_highlight_lines(faired, &slights, &hopts);
+    let mut zebra = None;
     if let Some(p) = &args.png {
-        before_after_png(input, faired, &before, &after)?.write_png(p)?;
+        let img;
+        (img, zebra) = before_after_png(input, faired, &before, &after, &args.zebra)?;
+        img.write_png(p)?;
     }
     if let Some(p) = &args.svg {
         before_after_svg(input, &before, &after, rep).write(p)?;
     }
-    Ok(())
+    Ok(zebra)
 }
 
-/// The shaded surfaces with their highlight lines, before | after.
+/// The shaded surfaces with their highlight lines, before | after; with
+/// --zebra both on the reflection zebra of the input's panel (the part's
+/// default linear lights), which is returned.
 fn before_after_png(
     input: &BSplineSurface,
     faired: &BSplineSurface,
     before: &SurfaceHighlights,
     after: &SurfaceHighlights,
-) -> Result<fairline::render::Image> {
+    zebra: &crate::args::ZebraArgs,
+) -> Result<(fairline::render::Image, Option<ReflectionZebra>)> {
     let mut opts = RenderOptions::with_size(900, 700);
     (opts.view_dir, opts.up) = crate::surface::camera(std::slice::from_ref(input), None)?;
+    let zebra = surface_zebra(std::slice::from_ref(input), zebra, None, &opts)?;
     let pic = |s: &BSplineSurface, h: &SurfaceHighlights, t: &str| {
         surface_picture(
             std::slice::from_ref(s),
             polylines(&h.lines.iter().collect::<Vec<_>>(), 2.0),
             t,
+            zebra,
             &opts,
         )
     };
-    Ok(side_by_side(
+    let img = side_by_side(
         &[pic(input, before, "input")?, pic(faired, after, "faired")?],
         &["before", "after"],
-    ))
+    );
+    Ok((img, zebra))
 }
 
 /// The pre-images before (grey) and after (colour), the targets (black),

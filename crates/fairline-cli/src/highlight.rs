@@ -11,7 +11,8 @@ use crate::lines_file::{
 };
 use crate::output::spinner;
 use anyhow::Result;
-use fairline::highlight::{CircularLights, HighlightBands, HighlightLines};
+use fairline::highlight::{CircularLights, HighlightBands, HighlightLines, LightArray};
+use fairline::render::ReflectionZebra;
 use fairline::{Control, Vec3};
 use fairline_commands::Subject;
 use fairline_commands::highlight::{self, HighlightLights, HighlightOutcome, HighlightSettings};
@@ -88,7 +89,10 @@ pub fn run(args: HighlightArgs) -> Result<()> {
     if let Some(png) = &args.png {
         let pv = fairline::picture::part_view(&mesh);
         let view = (args.view.unwrap_or(pv.view_dir), pv.up);
-        write_picture(&args, png, &mesh, &MeshLines::of(&out), view)?;
+        let zebra = write_picture(&args, png, &mesh, &MeshLines::of(&out), view)?;
+        if let Some(z) = &zebra {
+            out.report.set("zebra", crate::args::zebra_json(z));
+        }
         out.report.set(
             "view",
             serde_json::json!({"dir": view.0.to_array(), "up": view.1.to_array(), "part": pv}),
@@ -127,6 +131,7 @@ struct MeshLines<'a> {
     bands: Option<&'a HighlightBands>,
     drawn: Option<&'a HighlightLines>,
     spacing: Option<f64>,
+    light: Option<&'a LightArray>,
 }
 
 impl<'a> MeshLines<'a> {
@@ -136,6 +141,7 @@ impl<'a> MeshLines<'a> {
             bands: out.bands.as_ref(),
             drawn: out.drawn.as_ref(),
             spacing: out.light.map(|l| l.spacing()),
+            light: out.light.as_ref(),
         }
     }
 }
@@ -172,14 +178,16 @@ fn mesh_lights(args: &HighlightArgs) -> Result<HighlightLights> {
 }
 
 /// The `--png` picture: the drawn lines (and both bands) on the shaded
-/// mesh, titled with the file name and the number of lines.
+/// mesh, titled with the file name and the number of lines; with --zebra
+/// the reflection zebra (tubes along the linear lights, else the part's
+/// default lights) under them, which is returned.
 fn write_picture(
     args: &HighlightArgs,
     png: &Path,
     mesh: &fairline::SurfaceMesh,
     drawn: &MeshLines<'_>,
     view: (Vec3, Vec3),
-) -> Result<()> {
+) -> Result<Option<ReflectionZebra>> {
     let lines = drawn.lines;
     let band_lines = drawn.bands.map(|b| {
         let mut all = b.lower.clone();
@@ -191,7 +199,7 @@ fn write_picture(
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let title = match drawn.drawn {
+    let mut title = match drawn.drawn {
         Some(d) if d.lines.len() != lines.lines.len() => format!(
             "{name}: {} of {} line pieces drawn",
             d.lines.len(),
@@ -199,6 +207,11 @@ fn write_picture(
         ),
         _ => format!("{name}: {} highlight lines", lines.lines.len()),
     };
+    let opts = crate::highlight_png::render_options(args.size, view);
+    let zebra = args.zebra.reflection_zebra(mesh, drawn.light, &opts)?;
+    if let Some(z) = &zebra {
+        title.push_str(&format!("; {}", crate::args::zebra_title(z)));
+    }
     crate::highlight_png::write(
         args.size,
         png,
@@ -212,6 +225,8 @@ fn write_picture(
             view,
             title,
             spacing: drawn.spacing,
+            zebra,
         },
-    )
+    )?;
+    Ok(zebra)
 }

@@ -8,7 +8,9 @@ use fairline::Vec3;
 use fairline::highlight::{HighlightLines, LightArray, LineStats};
 use fairline::mesh::FaceId;
 use fairline::picture::MeshView;
-use fairline::render::{Image, PolylineLayer, RenderOptions, Scene, linear_to_srgb8, render};
+use fairline::render::{
+    Image, PolylineLayer, ReflectionZebra, RenderOptions, Scene, linear_to_srgb8, render,
+};
 use std::path::Path;
 
 /// Dark ink for highlight lines (linear light).
@@ -65,6 +67,8 @@ pub struct Overlay<'a> {
     /// Light spacing of the drawn lines (for the key; `None` for circular
     /// lights).
     pub spacing: Option<f64>,
+    /// A reflection zebra on the part, under the lines.
+    pub zebra: Option<ReflectionZebra>,
 }
 
 /// The key of a highlight picture: what each colour means, one entry per
@@ -206,7 +210,22 @@ pub fn write(
     Ok(())
 }
 
-/// Renders the mesh with the overlay into an image of `size` (W, H).
+/// The render options of a highlight picture of `size` (W, H) seen along
+/// `view` (direction, up; an up along the direction replaced by one
+/// across it).
+pub fn render_options(size: (u32, u32), (view, up): (Vec3, Vec3)) -> RenderOptions {
+    let mut opts = RenderOptions::with_size(size.0, size.1);
+    opts.view_dir = view;
+    opts.up = if view.normalize_or_zero().cross(up).length() > 1e-3 {
+        up
+    } else {
+        view.any_orthonormal_vector()
+    };
+    opts
+}
+
+/// Renders the mesh with the overlay into an image of `size` (W, H); over
+/// a zebra the lines get light halos ([`fairline::picture::zebra_halos`]).
 pub fn image(mesh: &SurfaceMesh, overlay: Overlay<'_>, size: (u32, u32)) -> Result<Image> {
     let key = key_entries(&overlay);
     let Overlay {
@@ -218,6 +237,7 @@ pub fn image(mesh: &SurfaceMesh, overlay: Overlay<'_>, size: (u32, u32)) -> Resu
         view: (view, up),
         title,
         spacing: _,
+        zebra,
     } = overlay;
     let mv = MeshView::new(mesh);
     let base = [0.55f32, 0.57, 0.60];
@@ -230,7 +250,7 @@ pub fn image(mesh: &SurfaceMesh, overlay: Overlay<'_>, size: (u32, u32)) -> Resu
             }
         }
     }
-    let layer = mv.layer().with_colors(&colors);
+    let layer = mv.layer().with_colors(&colors).with_zebra(zebra);
     let mut polylines = line_layers(lines, flagged);
     if let Some(b) = bands {
         polylines.extend(b.lines.iter().map(|l| PolylineLayer {
@@ -240,13 +260,10 @@ pub fn image(mesh: &SurfaceMesh, overlay: Overlay<'_>, size: (u32, u32)) -> Resu
             width_px: 1.0,
         }));
     }
-    let mut opts = RenderOptions::with_size(size.0, size.1);
-    opts.view_dir = view;
-    opts.up = if view.normalize_or_zero().cross(up).length() > 1e-3 {
-        up
-    } else {
-        view.any_orthonormal_vector()
-    };
+    if zebra.is_some() {
+        polylines = fairline::picture::zebra_halos(&polylines);
+    }
+    let opts = render_options(size, (view, up));
     let scene = Scene {
         meshes: vec![layer],
         polylines,

@@ -1,15 +1,13 @@
 //! `fairline render`: pictures of meshes and surfaces.
 
-use crate::args::{LightArgs, parse_size, parse_vec3, to_input_error};
+use crate::args::{LightArgs, ZebraArgs, parse_size, parse_vec3, to_input_error};
 use crate::common::Report;
 use crate::error::bad_input;
 use anyhow::{Context, Result};
 use fairline::geom::{CurvatureMethod, principal_curvatures};
 use fairline::highlight::{HighlightModel, LightArray};
 use fairline::picture::{Picture, ScalarField, mesh_picture};
-use fairline::render::{
-    Colormap, PartView, PolylineLayer, ReflectionZebra, RegionLabels, RenderOptions,
-};
+use fairline::render::{Colormap, PartView, PolylineLayer, RegionLabels, RenderOptions};
 use fairline::{Control, SurfaceMesh, Vec3};
 use fairline_commands::detect::{self, DetectInput, DetectSettings};
 use std::path::PathBuf;
@@ -70,15 +68,8 @@ pub struct Args {
     /// `detect` finds them) in red.
     #[arg(long)]
     pub highlight: bool,
-    /// Draw a reflection zebra: stripes of parallel tube lights (along the
-    /// light array's direction, its plane normal the zenith) seen in the
-    /// surface as in a mirror; they move with the eye.
-    #[arg(long)]
-    pub zebra: bool,
-    /// With --zebra: the angle of one stripe period, degrees (default:
-    /// chosen so that the stripes lie about 20 px apart on the picture).
-    #[arg(long, value_name = "DEG", requires = "zebra")]
-    pub zebra_period: Option<f64>,
+    #[command(flatten)]
+    pub zebra: ZebraArgs,
     #[command(flatten)]
     pub light: LightArgs,
     /// With --highlight: flag where |κ − κ̄|·s exceeds this (see `detect`).
@@ -151,24 +142,14 @@ pub fn run(args: Args) -> Result<()> {
             .mesh;
         &tri
     };
-    if let Some(p) = args.zebra_period
-        && !(p.is_finite() && p > 0.0 && p <= 180.0)
-    {
-        return Err(bad_input(format!(
-            "--zebra-period {p}: give an angle in (0, 180] degrees"
-        )));
-    }
     let light = if args.highlight {
         Some(args.light.light_array(tri_mesh)?)
     } else {
         None
     };
-    let zebra = if args.zebra {
+    let zebra = if args.zebra.zebra {
         let array = args.light.light_array(tri_mesh)?;
-        let period = args
-            .zebra_period
-            .unwrap_or_else(|| zebra_period(tri_mesh, &array, &opts));
-        ReflectionZebra::new(array.direction(), array.plane_normal(), period)
+        args.zebra.reflection_zebra(tri_mesh, Some(&array), &opts)?
     } else {
         None
     };
@@ -189,10 +170,7 @@ pub fn run(args: Args) -> Result<()> {
         };
         picture.zebra = zebra;
         if let (Some(z), Some(t)) = (&zebra, &mut picture.title) {
-            t.push_str(&format!(
-                ": reflection zebra, {:.3} deg per stripe",
-                z.period_deg
-            ));
+            t.push_str(&format!(": {}", crate::args::zebra_title(z)));
         }
         let mut key = Vec::new();
         if let Some(light) = light {
@@ -228,14 +206,7 @@ pub fn run(args: Args) -> Result<()> {
     report.set("height", args.size.1);
     report.set("view", view_json(&opts, &part_view));
     if let Some(z) = &zebra {
-        report.set(
-            "zebra",
-            serde_json::json!({
-                "period_deg": z.period_deg,
-                "axis": z.axis.to_array(),
-                "zenith": z.zenith.to_array(),
-            }),
-        );
+        report.set("zebra", crate::args::zebra_json(z));
     }
     let mut what = format!(
         "{}x{} picture of {} vertices",
@@ -258,47 +229,11 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// The default period of a reflection zebra: stripes about 20 px apart.
-/// The reflected angle is taken at every vertex, its normal turned towards
-/// the camera (the ray along the view direction); its spread over them (the 5th to 95th
-/// percentile, the shorter way round) over the part's size on the picture
-/// (about 80 % of the shorter side) gives degrees per pixel. Clamped to
-/// 0.5°–45°.
-pub fn zebra_period(mesh: &SurfaceMesh, array: &LightArray, opts: &RenderOptions) -> f64 {
-    let Some(probe) = ReflectionZebra::new(array.direction(), array.plane_normal(), 1.0) else {
-        return 10.0;
-    };
-    let ray = opts.view_dir.try_normalize().unwrap_or(-Vec3::Z);
-    let normals = fairline::geom::vertex_normals(mesh);
-    // every vertex, its normal turned towards the camera (open panels are
-    // seen from either side)
-    let mut angles: Vec<f64> = normals
-        .iter()
-        .filter(|n| n.length_squared() > 0.0)
-        .map(|n| if n.dot(ray) > 0.0 { -*n } else { *n })
-        .map(|n| probe.stripe(ray, n))
-        .filter(|a| a.is_finite())
-        .collect();
-    if angles.len() < 2 {
-        return 10.0;
-    }
-    let spread = |a: &mut Vec<f64>| {
-        a.sort_by(f64::total_cmp);
-        let q = |p: f64| a[((a.len() - 1) as f64 * p).round() as usize];
-        q(0.95) - q(0.05)
-    };
-    let direct = spread(&mut angles);
-    let mut turned: Vec<f64> = angles.iter().map(|a| a.rem_euclid(360.0)).collect();
-    let spread_deg = direct.min(spread(&mut turned)).max(1e-6);
-    let pixels = 0.8 * f64::from(opts.width.min(opts.height)).max(1.0);
-    (20.0 * spread_deg / pixels).clamp(0.5, 45.0)
-}
-
 /// Light options mean nothing without `--highlight` or `--zebra`: refused
 /// (exit 2).
 fn check_light_options_need_highlight(args: &Args) -> Result<()> {
     let l = &args.light;
-    let lights_used = args.highlight || args.zebra;
+    let lights_used = args.highlight || args.zebra.zebra;
     if !lights_used
         && (l.direction.is_some()
             || l.plane_normal.is_some()
@@ -393,6 +328,7 @@ fn highlight_overlay(
         view: (opts.view_dir, opts.up),
         title: String::new(),
         spacing: Some(shown_light.spacing()),
+        zebra: None,
     });
     let summary = serde_json::json!({
         "light": shown_light,

@@ -78,6 +78,8 @@ pub struct Args {
     /// Picture size WxH.
     #[arg(long, value_parser = parse_size, default_value = "1200x900")]
     pub size: (u32, u32),
+    #[command(flatten)]
+    pub zebra: crate::args::ZebraArgs,
     /// Tessellation grid per patch and direction for plane sections of
     /// surface files.
     #[arg(long, default_value_t = 64, value_name = "N")]
@@ -147,7 +149,7 @@ pub fn run(args: Args) -> Result<()> {
     } else {
         crate::input::read_triangles(&args.input)?.0
     };
-    let out = section::run(&mesh, &settings, &Control::new())
+    let mut out = section::run(&mesh, &settings, &Control::new())
         .map_err(|e| crate::output::name_file(&args.input, e))?;
     let scale = args.comb_scale.unwrap_or(1.0);
     if let Some(p) = &args.csv {
@@ -159,7 +161,9 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(p) = &args.png {
         let curves: Vec<&SectionCurve> = out.sections.iter().flatten().collect();
         let what = format!("{} plane sections", args.count);
-        comb_picture(&mesh, &curves, &what, &args)?.write_png(p)?;
+        if let Some(z) = comb_picture(&mesh, &curves, &what, &args, p)? {
+            out.report.set("zebra", crate::args::zebra_json(&z));
+        }
     }
     print_warnings(&out.report);
     write_report(args.report.as_deref(), &out.report)?;
@@ -195,7 +199,7 @@ fn run_iso(args: &Args, count: usize) -> Result<()> {
         .output_opt("--report", args.report.as_deref())
         .check()?;
     let surfaces = crate::surface::load_surfaces(&args.input)?;
-    let out = section::iso(&surfaces, &settings, &Control::new())?;
+    let mut out = section::iso(&surfaces, &settings, &Control::new())?;
     let scale = args.comb_scale.unwrap_or(1.0);
     if let Some(p) = &args.csv {
         write_iso_csv(p, &out.curves, scale)?;
@@ -208,7 +212,9 @@ fn run_iso(args: &Args, count: usize) -> Result<()> {
         let part = crate::surface::tessellated_part(&surfaces, 256)?;
         let curves: Vec<&SectionCurve> = out.curves.iter().map(|(_, c)| &c.curve).collect();
         let what = format!("{} iso-curves", curves.len());
-        comb_picture(&part, &curves, &what, args)?.write_png(p)?;
+        if let Some(z) = comb_picture(&part, &curves, &what, args, p)? {
+            out.report.set("zebra", crate::args::zebra_json(&z));
+        }
     }
     print_warnings(&out.report);
     write_report(args.report.as_deref(), &out.report)?;
@@ -224,13 +230,16 @@ const TOOTH_CAP: f64 = 4.0;
 /// sample of long curves, at most about 80 per curve) and the line through
 /// their tips. The comb scale is `--comb-scale`, else the one that makes
 /// the median curvature's tooth 4 % of the part's diagonal, with teeth
-/// longer than [`TOOTH_CAP`] of it cut (their count is in the title).
+/// longer than [`TOOTH_CAP`] of it cut (their count is in the title);
+/// with --zebra the reflection zebra under them, which is returned. Written
+/// to `png`.
 fn comb_picture(
     mesh: &fairline::SurfaceMesh,
     curves: &[&SectionCurve],
     what: &str,
     args: &Args,
-) -> Result<fairline::render::Image> {
+    png: &Path,
+) -> Result<Option<fairline::render::ReflectionZebra>> {
     use fairline::picture::{Picture, mesh_picture};
     use fairline::render::PolylineLayer;
     let (opts, _) = crate::render::options(mesh, args.view, args.size)?;
@@ -291,6 +300,10 @@ fn comb_picture(
     if cut > 0 {
         title.push_str(&format!("; {cut} teeth cut at {TOOTH_CAP}x"));
     }
+    let zebra = args.zebra.reflection_zebra(mesh, None, &opts)?;
+    if let Some(z) = &zebra {
+        title.push_str(&format!("; {}", crate::args::zebra_title(z)));
+    }
     let picture = Picture {
         polylines: vec![
             layer(teeth, [0.75, 0.2, 0.55], 1.0),
@@ -298,9 +311,11 @@ fn comb_picture(
             layer(lines, [0.02, 0.02, 0.08], 2.0),
         ],
         title: Some(title),
+        zebra,
         ..Default::default()
     };
-    Ok(mesh_picture(mesh, &picture, &opts)?)
+    mesh_picture(mesh, &picture, &opts)?.write_png(png)?;
+    Ok(zebra)
 }
 
 fn write_iso_csv(path: &Path, curves: &[(usize, IsoCurve)], scale: f64) -> Result<()> {

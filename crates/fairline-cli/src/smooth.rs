@@ -1,7 +1,7 @@
 //! `fairline smooth` (the classic smoothing family, Grüner thesis ch. 3) and
 //! `fairline fair-quad` (structure-line fairing of quad meshes, ch. 4).
 
-use crate::args::choice;
+use crate::args::{ZebraArgs, choice};
 use crate::common::{print_warnings, write_report};
 use crate::error::bad_input;
 use crate::output::spinner;
@@ -9,7 +9,7 @@ use anyhow::Result;
 use fairline::Control;
 use fairline::mesh::{SurfaceMesh, VertexId};
 use fairline::picture::{Picture, mesh_picture};
-use fairline::render::{RenderOptions, side_by_side};
+use fairline::render::{ReflectionZebra, RenderOptions, side_by_side};
 use fairline::smooth::SmoothMethod;
 use fairline_commands::Weights;
 use fairline_commands::fair_quad::{self, QuadMethod, QuadSettings};
@@ -85,6 +85,8 @@ pub struct Args {
     /// Write a before/after picture.
     #[arg(long, value_name = "IMG.png")]
     pub png: Option<PathBuf>,
+    #[command(flatten)]
+    pub zebra: ZebraArgs,
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
@@ -96,24 +98,30 @@ pub fn read_fixed(path: &Path, count: usize) -> Result<Vec<VertexId>> {
     fairline::io::read_fixed_vertices(path, count).map_err(|e| bad_input(e.to_string()))
 }
 
-/// Two meshes side by side under one camera framing the input.
+/// Two meshes side by side under one camera framing the input; with
+/// --zebra both with the reflection zebra of the input's panel (titled
+/// with its period), which is returned.
 pub fn before_after(
     before: &SurfaceMesh,
     after: &SurfaceMesh,
     labels: [&str; 2],
     wireframe: bool,
+    zebra: &ZebraArgs,
     path: &Path,
-) -> Result<()> {
+) -> Result<Option<ReflectionZebra>> {
     let mut opts = RenderOptions::with_size(700, 560);
     (opts.view_dir, opts.up) = crate::render::camera(before, None);
+    let zebra = zebra.reflection_zebra(before, None, &opts)?;
     let pic = Picture {
         wireframe,
+        zebra,
+        title: zebra.as_ref().map(crate::args::zebra_title),
         ..Default::default()
     };
     let a = mesh_picture(before, &pic, &opts)?;
     let b = mesh_picture(after, &pic, &opts)?;
     side_by_side(&[a, b], &labels).write_png(path)?;
-    Ok(())
+    Ok(zebra)
 }
 
 impl Args {
@@ -159,7 +167,7 @@ pub fn run(args: Args) -> Result<()> {
     let bar = spinner("smoothing");
     let result = smooth::run(&mesh, &settings, &Control::new());
     bar.finish_and_clear();
-    let out = result?;
+    let mut out = result?;
     let stopped = out.stopped_error(fairline_commands::FrontEnd::Cli);
     let r = &out.result;
     let name = settings.method.name();
@@ -167,8 +175,10 @@ pub fn run(args: Args) -> Result<()> {
     let input = args.png.is_some().then(|| mesh.clone());
     mesh.set_positions(out.positions)?;
     fairline::io::write_mesh(&args.output, &mesh)?;
-    if let (Some(png), Some(input)) = (&args.png, &input) {
-        before_after(input, &mesh, ["input", name], false, png)?;
+    if let (Some(png), Some(input)) = (&args.png, &input)
+        && let Some(z) = before_after(input, &mesh, ["input", name], false, &args.zebra, png)?
+    {
+        out.report.set("zebra", crate::args::zebra_json(&z));
     }
     print_warnings(&out.report);
     write_report(args.report.as_deref(), &out.report)?;
@@ -252,6 +262,8 @@ pub struct QuadArgs {
     /// Write a before/after picture with the structure lines.
     #[arg(long, value_name = "IMG.png")]
     pub png: Option<PathBuf>,
+    #[command(flatten)]
+    pub zebra: ZebraArgs,
     /// Write a JSON report.
     #[arg(long, value_name = "FILE.json")]
     pub report: Option<PathBuf>,
@@ -299,12 +311,12 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
     let bar = spinner("fairing structure lines");
     let out = fair_quad::run(&mesh, &args.settings(fixed), &Control::new());
     bar.finish_and_clear();
-    let out = out?;
+    let mut out = out?;
     mesh.set_positions(out.positions)?;
     let r = out.result;
     fairline::io::write_mesh(&args.output, &mesh)?;
-    if let Some(png) = &args.png {
-        before_after(
+    if let Some(png) = &args.png
+        && let Some(z) = before_after(
             &input,
             &mesh,
             [
@@ -315,8 +327,11 @@ pub fn run_quad(args: QuadArgs) -> Result<()> {
                 },
             ],
             true,
+            &args.zebra,
             png,
-        )?;
+        )?
+    {
+        out.report.set("zebra", crate::args::zebra_json(&z));
     }
     print_warnings(&out.report);
     write_report(args.report.as_deref(), &out.report)?;

@@ -3,18 +3,18 @@
 //! with their (u, v) pre-images and 3D points; PNG of the shaded surface
 //! with the lines, SVG of the pre-images.
 
-use crate::args::{HighlightArgs, Radii};
+use crate::args::{HighlightArgs, Radii, ZebraArgs};
 use crate::common::{print_warnings, write_json, write_report};
 use crate::error::bad_input;
 use crate::output::require_extension;
 use anyhow::Result;
 use fairline::bspline::BSplineSurface;
 use fairline::highlight::{
-    CircularLights, PatchHighlights, Readability, SurfaceHighlightLine, SurfaceLight,
+    CircularLights, LightArray, PatchHighlights, Readability, SurfaceHighlightLine, SurfaceLight,
     readable_surface_lines, readable_surface_lines_in_view,
 };
 use fairline::picture::{Picture, labelled_mesh_picture, mesh_picture};
-use fairline::render::{PolylineLayer, RegionLabels, RenderOptions, SvgPlot};
+use fairline::render::{PolylineLayer, ReflectionZebra, RegionLabels, RenderOptions, SvgPlot};
 use fairline::{Control, Vec3};
 use fairline_commands::Subject;
 use fairline_commands::highlight::HighlightLights;
@@ -51,19 +51,46 @@ pub fn polylines(lines: &[&SurfaceHighlightLine], width: f32) -> Vec<PolylineLay
         .collect()
 }
 
-/// A picture of tessellated surfaces with polylines over them; a part of
+/// Tessellation samples along the diagonal of a part in
+/// [`surface_picture`].
+const PICTURE_SAMPLES: usize = 96;
+
+/// The --zebra of a picture of `surfaces` drawn with `opts` (on the
+/// tessellation [`surface_picture`] draws; tubes along `light`, else the
+/// part's default lights); `None` without --zebra.
+pub fn surface_zebra(
+    surfaces: &[BSplineSurface],
+    zebra: &ZebraArgs,
+    light: Option<&LightArray>,
+    opts: &RenderOptions,
+) -> Result<Option<ReflectionZebra>> {
+    if !zebra.zebra {
+        return Ok(None);
+    }
+    let (mesh, _) = crate::surface::tessellated_part_with_patches(surfaces, PICTURE_SAMPLES)?;
+    zebra.reflection_zebra(&mesh, light, opts)
+}
+
+/// A picture of tessellated surfaces with polylines over them and a
+/// reflection `zebra` under them (its period added to the title); a part of
 /// several patches gets each patch's index (its position in `surfaces`)
 /// written at the patch's visible centre.
 pub fn surface_picture(
     surfaces: &[BSplineSurface],
     polylines: Vec<PolylineLayer>,
     title: &str,
+    zebra: Option<ReflectionZebra>,
     opts: &RenderOptions,
 ) -> Result<fairline::render::Image> {
-    let (mesh, patch) = crate::surface::tessellated_part_with_patches(surfaces, 96)?;
+    let (mesh, patch) = crate::surface::tessellated_part_with_patches(surfaces, PICTURE_SAMPLES)?;
+    let title = match &zebra {
+        Some(z) => format!("{title}; {}", crate::args::zebra_title(z)),
+        None => title.to_string(),
+    };
     let picture = Picture {
         polylines,
-        title: Some(title.to_string()),
+        title: Some(title),
+        zebra,
         ..Default::default()
     };
     if surfaces.len() > 1 && patch.len() == mesh.face_count() {
@@ -262,7 +289,11 @@ pub fn run(args: HighlightArgs) -> Result<()> {
                 .set("view", json!({"dir": dir.to_array(), "up": up.to_array()}));
         }
         out.report.set("drawn", drawn_json(&drawn));
-        write_picture(&args, surfaces, results, &drawn, view, p)?;
+        let light = out.readable.as_ref().map(|(array, _)| array);
+        let zebra = write_picture(&args, surfaces, results, &drawn, (view, light), p)?;
+        if let Some(z) = &zebra {
+            out.report.set("zebra", crate::args::zebra_json(z));
+        }
     }
     if let Some(p) = &args.svg {
         write_svg(&args, surfaces, results, p)?;
@@ -411,15 +442,17 @@ fn drawn_json(drawn: &[SurfaceHighlightLine]) -> Value {
 }
 
 /// The --png picture: the shaded part with the drawn lines, patch indices
-/// and the key, seen from `view` (direction, up) when given.
+/// and the key, seen from `view` (direction, up) when given; with --zebra
+/// the reflection zebra (tubes along the linear `light`, else the part's
+/// default lights) under the lines, which is returned.
 fn write_picture(
     args: &HighlightArgs,
     surfaces: &[BSplineSurface],
     results: &[(usize, PatchHighlights)],
     drawn: &[SurfaceHighlightLine],
-    view: Option<(Vec3, Vec3)>,
+    (view, light): (Option<(Vec3, Vec3)>, Option<&LightArray>),
     path: &std::path::Path,
-) -> Result<()> {
+) -> Result<Option<ReflectionZebra>> {
     let title = format!(
         "{}: highlight lines",
         args.mesh
@@ -433,10 +466,11 @@ fn write_picture(
         ropts.up = up;
     }
     let drawn: Vec<&SurfaceHighlightLine> = drawn.iter().collect();
-    let mut img = surface_picture(surfaces, polylines(&drawn, 2.0), &title, &ropts)?;
+    let zebra = surface_zebra(surfaces, &args.zebra, light, &ropts)?;
+    let mut img = surface_picture(surfaces, polylines(&drawn, 2.0), &title, zebra, &ropts)?;
     crate::highlight_png::draw_key(&mut img, &picture_key(results));
     img.write_png(path)?;
-    Ok(())
+    Ok(zebra)
 }
 
 /// The --svg plot of one surface's pre-images (--surface, else the first)

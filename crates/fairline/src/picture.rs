@@ -5,10 +5,11 @@
 
 use crate::Vec3;
 use crate::geom::vertex_normals;
+use crate::highlight::LightArray;
 use crate::mesh::{SurfaceMesh, triangle_list};
 use crate::render::{
-    Colormap, Image, Legend, MeshLayer, PlacedLabel, PolylineLayer, RegionLabels, RenderError,
-    RenderOptions, Scene, render, render_labelled, scalar_colors,
+    Colormap, Image, Legend, MeshLayer, PlacedLabel, PolylineLayer, ReflectionZebra, RegionLabels,
+    RenderError, RenderOptions, Scene, render, render_labelled, scalar_colors,
 };
 
 /// A mesh prepared for drawing: triangles and smooth vertex normals.
@@ -83,6 +84,80 @@ pub fn part_view(mesh: &SurfaceMesh) -> crate::render::PartView {
     crate::render::part_view(mesh.positions(), &triangles)
 }
 
+/// Stripe spacing on the picture, pixels, that [`zebra_period`] aims at.
+pub const ZEBRA_STRIPE_PX: f64 = 20.0;
+
+/// The reflection zebra of a picture of `mesh` drawn with `opts`: tubes
+/// along the direction of `light`, its plane normal the zenith
+/// ([`ReflectionZebra::new`]), one stripe per `period_deg` degrees, or when
+/// `None` per the [`zebra_period`] of the picture. `None` when the light's
+/// direction lies along its plane normal or the period is not a positive
+/// number.
+pub fn reflection_zebra(
+    mesh: &SurfaceMesh,
+    light: &LightArray,
+    opts: &RenderOptions,
+    period_deg: Option<f64>,
+) -> Option<ReflectionZebra> {
+    let period = period_deg.unwrap_or_else(|| zebra_period(mesh, light, opts));
+    ReflectionZebra::new(light.direction(), light.plane_normal(), period)
+}
+
+/// The default period (degrees) of a reflection zebra under `light` on a
+/// picture of `mesh` drawn with `opts`: stripes about [`ZEBRA_STRIPE_PX`]
+/// apart. The reflected angle ([`ReflectionZebra::stripe`]) is taken at
+/// every vertex, its normal turned towards the camera (the ray along the
+/// view direction; open panels are seen from either side); its spread (the
+/// 5th to 95th percentile, the shorter way round the turn) over the part's
+/// size on the picture (about 80 % of the shorter side) gives degrees per
+/// pixel. Clamped to 0.5°–45°; 10° when fewer than two vertices have a
+/// normal.
+pub fn zebra_period(mesh: &SurfaceMesh, light: &LightArray, opts: &RenderOptions) -> f64 {
+    let Some(probe) = ReflectionZebra::new(light.direction(), light.plane_normal(), 1.0) else {
+        return 10.0;
+    };
+    let ray = opts.view_dir.try_normalize().unwrap_or(-Vec3::Z);
+    let normals = vertex_normals(mesh);
+    let mut angles: Vec<f64> = normals
+        .iter()
+        .filter(|n| n.length_squared() > 0.0)
+        .map(|n| if n.dot(ray) > 0.0 { -*n } else { *n })
+        .map(|n| probe.stripe(ray, n))
+        .filter(|a| a.is_finite())
+        .collect();
+    if angles.len() < 2 {
+        return 10.0;
+    }
+    let spread = |a: &mut Vec<f64>| {
+        a.sort_by(f64::total_cmp);
+        let q = |p: f64| a[((a.len() - 1) as f64 * p).round() as usize];
+        q(0.95) - q(0.05)
+    };
+    let direct = spread(&mut angles);
+    let mut turned: Vec<f64> = angles.iter().map(|a| a.rem_euclid(360.0)).collect();
+    let spread_deg = direct.min(spread(&mut turned)).max(1e-6);
+    let pixels = 0.8 * f64::from(opts.width.min(opts.height)).max(1.0);
+    (ZEBRA_STRIPE_PX * spread_deg / pixels).clamp(0.5, 45.0)
+}
+
+/// Colour of the halo [`zebra_halos`] lays under lines (linear light).
+pub const ZEBRA_HALO_COLOR: [f32; 3] = [0.85, 0.86, 0.88];
+/// How much wider than its line a halo is, pixels (both sides together).
+pub const ZEBRA_HALO_PX: f32 = 2.4;
+
+/// `polylines` as drawn over a reflection zebra: each with a light halo
+/// ([`ZEBRA_HALO_COLOR`], [`ZEBRA_HALO_PX`] wider) under it, every halo
+/// before every line, so that dark lines stay readable across the zebra's
+/// dark stripes and no halo covers another line.
+pub fn zebra_halos(polylines: &[PolylineLayer]) -> Vec<PolylineLayer> {
+    let halos = polylines.iter().map(|l| PolylineLayer {
+        color: ZEBRA_HALO_COLOR,
+        width_px: l.width_px + ZEBRA_HALO_PX,
+        ..l.clone()
+    });
+    halos.chain(polylines.iter().cloned()).collect()
+}
+
 /// A per-vertex scalar field to colour a mesh with.
 #[derive(Clone, Debug)]
 pub struct ScalarField<'a> {
@@ -107,8 +182,8 @@ pub struct Picture<'a> {
     pub wireframe: bool,
     /// Title at the top.
     pub title: Option<String>,
-    /// A reflection zebra over the shading.
-    pub zebra: Option<crate::render::ReflectionZebra>,
+    /// A reflection zebra over the shading, under the polylines.
+    pub zebra: Option<ReflectionZebra>,
 }
 
 /// Renders one mesh with an optional scalar field, polylines and wireframe.
@@ -161,7 +236,11 @@ fn mesh_picture_impl(
     if picture.wireframe {
         polylines.extend(view.edge_polylines([0.08, 0.08, 0.1], 0.8));
     }
-    polylines.extend(picture.polylines.iter().cloned());
+    if picture.zebra.is_some() {
+        polylines.extend(zebra_halos(&picture.polylines));
+    } else {
+        polylines.extend(picture.polylines.iter().cloned());
+    }
     let scene = Scene {
         meshes: vec![layer],
         polylines,
@@ -186,11 +265,12 @@ pub const FAIRING_DESIRED_COLOR: [f32; 3] = [0.05, 0.25, 0.95];
 /// Fig. 7): on the left `before` with its highlight lines (dark), the region
 /// outline (red) and the desired OGH curves (blue) of the report; on the
 /// right `after` (the input with the output's positions) with its highlight
-/// lines and the outline.
+/// lines and the outline. A `zebra` is drawn under both panels' lines.
 pub fn fairing_picture(
     before: &SurfaceMesh,
     after: &SurfaceMesh,
     report: &crate::fair::FairReport,
+    zebra: Option<ReflectionZebra>,
     opts: &RenderOptions,
 ) -> Result<Image, RenderError> {
     use crate::fair::FairMethod;
@@ -233,6 +313,7 @@ pub fn fairing_picture(
         &Picture {
             polylines: left,
             title: Some("before: highlight lines, region, desired lines".into()),
+            zebra,
             ..Default::default()
         },
         opts,
@@ -252,6 +333,7 @@ pub fn fairing_picture(
                 }
                 .into(),
             ),
+            zebra,
             ..Default::default()
         },
         opts,

@@ -79,6 +79,7 @@ pub fn section(demo: &Demo) -> Result<Section> {
             std::slice::from_ref(s),
             polylines(&h.lines.iter().collect::<Vec<_>>(), 2.0),
             t,
+            None,
             &ropts,
         )
     };

@@ -360,6 +360,7 @@ fn highlight_section(demo: &Demo) -> Result<Section> {
                 unjudged: None,
                 view,
                 spacing: Some(light.spacing()),
+                zebra: None,
                 title: format!(
                     "dented panel: {} highlight lines, irregular stretches in red",
                     lines.lines.len()
@@ -380,6 +381,7 @@ fn highlight_section(demo: &Demo) -> Result<Section> {
                 unjudged: None,
                 view,
                 spacing: Some(light.spacing()),
+                zebra: None,
                 title: format!("suggested fairing region: {} faces", faces.len()),
             },
             size,
@@ -397,6 +399,7 @@ fn highlight_section(demo: &Demo) -> Result<Section> {
                 unjudged: None,
                 view,
                 spacing: Some(light.spacing()),
+                zebra: None,
                 title: format!(
                     "same panel without the dent: {} region(s)",
                     clean_det.regions.len()
@@ -511,6 +514,7 @@ fn detect_section(demo: &Demo) -> Result<Section> {
                         view: crate::render::camera(&clean, None),
                         title: title.clone(),
                         spacing: Some(shown_light.spacing()),
+                        zebra: None,
                     },
                     size,
                 )?,
@@ -588,7 +592,13 @@ fn enhance_section(demo: &Demo) -> Result<Section> {
     let (truth_before, truth_after) = (to_truth(&mesh), to_truth(&out));
     let img = demo.save(
         "vertex-flow.png",
-        &crate::enhance::picture(&mesh, &out, (demo.opts.width, demo.opts.height))?,
+        &crate::enhance::picture(
+            &mesh,
+            &out,
+            (demo.opts.width, demo.opts.height),
+            &crate::args::ZebraArgs::default(),
+        )?
+        .0,
     )?;
     fairline::io::write_mesh(demo.out.join("rounded-cube.obj"), &mesh)?;
     fairline::io::write_mesh(demo.out.join("rounded-cube-enhanced.obj"), &out)?;
@@ -663,11 +673,11 @@ fn fair_section(demo: &Demo) -> Result<Section> {
     (opts.view_dir, opts.up) = crate::render::camera(&mesh, None);
     let img = demo.save(
         "fair-before-after.png",
-        &fairing_picture(&mesh, &faired, &r, &opts)?,
+        &fairing_picture(&mesh, &faired, &r, None, &opts)?,
     )?;
     let img_flow = demo.save(
         "fair-diffusion-flow.png",
-        &fairing_picture(&mesh, &flow_mesh, &flow, &opts)?,
+        &fairing_picture(&mesh, &flow_mesh, &flow, None, &opts)?,
     )?;
     let truth = |m: &SurfaceMesh| {
         r.region
