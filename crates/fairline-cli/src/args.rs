@@ -110,7 +110,7 @@ pub struct ZebraArgs {
     /// With --zebra: the angle of one stripe period, degrees, in (0, 180]
     /// (default: chosen so that the stripes lie about 20 px apart on the
     /// picture).
-    #[arg(long, value_name = "DEG", requires = "zebra", value_parser = parse_zebra_period)]
+    #[arg(long, value_name = "DEG", requires = "zebra", value_parser = parse_zebra_period, allow_hyphen_values = true)]
     pub zebra_period: Option<f64>,
 }
 
