@@ -364,47 +364,73 @@ mod tests {
     /// cubic, wavy, saddle-like panels × bump/dent × σ 0.08, 0.11, 0.15)
     /// the default method (the paper's energy with the desired lines' end
     /// tangents from a smooth fit beyond the defect's footprint, module
-    /// `end_tangents`, + ¼ of the diffusion-flow state, module `highlight`)
-    /// ends closer to the defect-free truth than surface diffusion flow in
-    /// all four measures (surface max and RMS, line max and RMS) on every
-    /// case — the widest saddle dent included (with the input's outside
-    /// tangents and 4 refits it is 1.14× flow there in surface max). On
-    /// (geometric) average it is 2× closer in surface max and 2.6× in line
-    /// RMS, and at least 2.5× closer in surface max on every wavy panel
-    /// (whose mean curvature is not harmonic). Nothing outside the movable
-    /// set moves (checked in `against_flow_on`).
+    /// `end_tangents`, + ¼ of the diffusion-flow state, then least change,
+    /// module `highlight`) is never farther from the defect-free truth than
+    /// surface diffusion flow in any of the four measures (surface max and
+    /// RMS, line max and RMS). Least change keeps the highlight result on
+    /// the three wavy bumps (whose mean curvature is not harmonic) and the
+    /// narrowest quadratic and cubic bumps, each strictly closer in all four
+    /// measures and the wavy bumps at least 2.5× closer in surface max; on
+    /// the other 19 cases the result is the flow state. On (geometric)
+    /// average 0.82× flow in surface max and 0.78× in line RMS. Nothing
+    /// outside the movable set moves (checked in `against_flow_on`).
     #[test]
     fn default_fairing_against_diffusion_flow_on_the_generated_family() {
         let rows = against_flow(&FairOptions::default());
         assert_eq!(rows.len(), 24);
+        let kept = kept_highlight(&rows);
         for (c, m, f) in &rows {
             for k in 0..4 {
-                assert!(m[k] < f[k], "{c}: {} vs flow {}", show(m), show(f));
+                assert!(m[k] <= f[k], "{c}: {} vs flow {}", show(m), show(f));
+                if kept.contains(c) {
+                    assert!(m[k] < f[k], "{c}: {} vs flow {}", show(m), show(f));
+                }
             }
-            if c.starts_with("wavy") {
+            if c.starts_with("wavy bump") {
+                assert!(kept.contains(c), "{c}: flow state kept");
                 assert!(2.5 * m[0] < f[0], "{c}: {} vs flow {}", show(m), show(f));
             }
         }
-        assert!(mean_ratio(&rows, 0) < 0.55, "{}", mean_ratio(&rows, 0));
-        assert!(mean_ratio(&rows, 3) < 0.45, "{}", mean_ratio(&rows, 3));
+        assert!(kept.len() >= 5, "{kept:?}");
+        assert!(mean_ratio(&rows, 0) < 0.85, "{}", mean_ratio(&rows, 0));
+        assert!(mean_ratio(&rows, 3) < 0.8, "{}", mean_ratio(&rows, 3));
+    }
+
+    /// The cases where the default kept its highlight result (it differs
+    /// from the flow state); on every other case it is the flow state.
+    fn kept_highlight(rows: &[(String, Measures, Measures)]) -> Vec<String> {
+        rows.iter()
+            .filter(|(_, m, f)| m != f)
+            .map(|(c, _, _)| c.clone())
+            .collect()
     }
 
     /// The same claim on 32 cases held out of the choice of the fit's
     /// footprint and radius and of the flow share (the defect at (−0.15,
     /// 0.2) and (0.25, 0.1), σ 0.09 and 0.13, every panel, bump and dent):
-    /// the default is closer to the truth than diffusion flow in all four
-    /// measures on every case (the paper's energy alone loses the four
+    /// the default is never farther from the truth than diffusion flow in
+    /// any of the four measures, keeps its highlight result on the four
+    /// wavy bumps (strictly closer there), and is 0.91× flow on (geometric)
+    /// average in surface max (the paper's energy alone loses the four
     /// saddle dents, up to 1.46× in surface max).
     #[test]
     fn default_fairing_against_diffusion_flow_on_held_out_cases() {
         let rows = against_flow_on(&Case::held_out(), &FairOptions::default());
         assert_eq!(rows.len(), 32);
+        let kept = kept_highlight(&rows);
         for (c, m, f) in &rows {
             for k in 0..4 {
-                assert!(m[k] < f[k], "{c}: {} vs flow {}", show(m), show(f));
+                assert!(m[k] <= f[k], "{c}: {} vs flow {}", show(m), show(f));
+                if kept.contains(c) {
+                    assert!(m[k] < f[k], "{c}: {} vs flow {}", show(m), show(f));
+                }
             }
         }
-        assert!(mean_ratio(&rows, 0) < 0.6, "{}", mean_ratio(&rows, 0));
+        assert!(
+            kept.iter().filter(|c| c.starts_with("wavy bump")).count() == 4,
+            "{kept:?}"
+        );
+        assert!(mean_ratio(&rows, 0) < 0.95, "{}", mean_ratio(&rows, 0));
     }
 
     /// The paper's method (Yong et al. Eq. (15), [`FairMethod::Paper`]) on
@@ -441,11 +467,12 @@ mod tests {
     /// thin plate, minimum variation) on the held-out cases, against
     /// diffusion flow and beside the default: geometric means of method /
     /// flow over the 32 cases in surface max, surface RMS, line max and
-    /// line RMS. Measured: default 0.52 0.52 0.49 0.42 (never farther than
-    /// flow); thin plate 0.62 0.70 0.46 0.63 (farther than flow on 7 cases
-    /// in some measure); MVS 0.95 0.94 0.64 0.88 (19 cases); membrane
-    /// 49 55 42 51 — ΔX = 0 flattens the crowned panels, whose coordinates
-    /// are not harmonic (every case).
+    /// line RMS. Measured: default 0.91 0.90 0.92 0.89 (never farther than
+    /// flow: least change keeps the flow state unless the highlight result
+    /// dominates it); thin plate 0.62 0.70 0.46 0.63 (closer on average,
+    /// but farther than flow on 7 cases in some measure); MVS 0.95 0.94
+    /// 0.64 0.88 (19 cases); membrane 49 55 42 51 — ΔX = 0 flattens the
+    /// crowned panels, whose coordinates are not harmonic (every case).
     #[test]
     fn energy_fairing_against_diffusion_flow_on_held_out_cases() {
         let cases = Case::held_out();
@@ -470,8 +497,10 @@ mod tests {
             assert!(mvs[k] < 1.0, "mvs {mvs:?}");
             assert!(membrane[k] > 10.0, "membrane {membrane:?}");
         }
-        // the default stays closer than thin plate in surface max and RMS
-        assert!(default[0] < thin_plate[0] && default[1] < thin_plate[1]);
+        // the default is never farther than flow; thin plate is closer on
+        // average but not on every case
+        assert!(default.iter().all(|&r| r <= 1.0), "default {default:?}");
+        assert!(thin_plate[0] < default[0] && thin_plate[1] < default[1]);
     }
 
     /// The highlight method without refits and flow share.

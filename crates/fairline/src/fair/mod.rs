@@ -26,7 +26,8 @@ pub use end_tangents::fitted_surface_tangents;
 pub use energy::{FairEnergy, energy_fairing};
 pub use error::FairError;
 pub use highlight::{
-    FairMethod, FairOptions, FairReport, IterationReport, fair_highlight_lines, grow_region,
+    FairMethod, FairOptions, FairReport, IterationReport, LEAST_CHANGE_MARGIN, LeastChange,
+    fair_highlight_lines, grow_region,
 };
 pub use quad::{
     PolylineNetworkOptions, PolylineNetworkReport, QuadFairError, QuadFairOptions, QuadFairReport,
