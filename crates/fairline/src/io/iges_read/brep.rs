@@ -36,7 +36,8 @@ use std::collections::HashMap;
 use glam::DAffine3;
 
 use super::{
-    INT, Iges, IgesError, IgesSurface, Nurbs3, Param, Piece, REAL, Unreadable, Vec3, param,
+    Iges, IgesError, IgesSurface, Nurbs3, Param, Unreadable, Vec3, boundary::Piece, params::INT,
+    params::REAL, params::param,
 };
 use crate::bspline::BSplineSurface;
 use crate::io::step::p21::{Exchange, Instance, Value};
@@ -653,7 +654,7 @@ impl Iges<'_> {
                 )]
             }
             128 => {
-                let surface = super::read_entity_128(self, s, false)?.surface;
+                let surface = super::bspline_surface::read_entity_128(self, s, false)?.surface;
                 b.bspline_surface(&surface, line)
             }
             // converted with their own transformation: not applied twice
@@ -1059,8 +1060,8 @@ impl Iges<'_> {
         // every face's surface is the face's, whether the face reads or not
         for &k in &faces {
             if let Some(s) = self.parameters(k).ok().and_then(|p| {
-                super::text_of(&p, 1)
-                    .and_then(super::parse_int)
+                super::params::text_of(&p, 1)
+                    .and_then(super::params::parse_int)
                     .and_then(|de| self.entry(de))
             }) {
                 out.bases[s] = true;
