@@ -19,10 +19,10 @@
 use std::io::{self, Write};
 use std::path::Path;
 
-use super::{
-    IoError, Lines, Location, VertexProperties as Extra, capped_capacity, format_err, parse_f64,
-    parse_i64, push_face, show, tokens, trailing_bytes,
+use super::text::{
+    Lines, capped_capacity, parse_f64, parse_i64, push_face, show, tokens, trailing_bytes,
 };
+use super::{IoError, Location, VertexProperties as Extra, format_err};
 use crate::Vec3;
 use crate::mesh::Soup;
 
