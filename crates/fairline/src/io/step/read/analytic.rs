@@ -8,10 +8,13 @@
 //! mapped into the NURBS parameters through the surface's natural
 //! coordinates (see the parent module).
 
+use std::f64::consts::FRAC_PI_2;
+
+use super::curves::{Curve, ToUv, nearest_param};
+use super::edges::EdgeUse;
 use super::pcurve::CoordMap;
 use super::*;
 use crate::bspline::polygon_signed_area2;
-use std::f64::consts::FRAC_PI_2;
 
 /// What an analytic surface is, in its placement frame `(o, x, y, z)`.
 #[derive(Clone, Debug)]
