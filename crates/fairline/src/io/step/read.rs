@@ -57,10 +57,10 @@ use std::collections::HashSet;
 use std::f64::consts::{PI, TAU};
 
 use super::StepError;
-use super::nurbs::{ArcMap, Nurbs3, arc, ellipse_arc, revolve};
+use super::nurbs::{ArcMap, Nurbs3, ellipse_arc};
 use super::p21::{Exchange, Instance, Value};
 use crate::Vec3;
-use crate::bspline::{BSplineSurface, TrimCurve, TrimLoop};
+use crate::bspline::{BSplineSurface, TrimCurve};
 use crate::io::units::LengthUnit;
 use units::{collect_refs, distance_uncertainty};
 
@@ -124,8 +124,6 @@ mod faces;
 mod params;
 mod pcurve;
 mod units;
-
-use pcurve::{PcurveMap, PcurveUse};
 
 type R<T> = Result<T, StepError>;
 
