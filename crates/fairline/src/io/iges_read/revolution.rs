@@ -177,53 +177,11 @@ impl Iges<'_> {
         if offset != 0.0 && self.dir[gen_k].entity_type != 110 {
             return Ok(None);
         }
-        let (profile, tmap) = match self.dir[gen_k].entity_type {
-            110 | 126 => {
-                let mut generatrix = Vec::new();
-                self.curve_pieces(gen_k, 0, &mut generatrix)?;
-                let [profile] = &generatrix[..] else {
-                    return Ok(None);
-                };
-                (profile.nurbs(), None)
-            }
-            100 => {
-                let (c, m) = self.arc_generatrix(gen_k)?;
-                (c, Some(m))
-            }
-            104 => {
-                let p = self.parameters(gen_k)?;
-                let l = p.first().map_or(self.dir[gen_k].line, |t| t.1);
-                match self.conic(gen_k, &p, l) {
-                    // an ellipse's file parameter is its eccentric angle,
-                    // which the arcs' parameter equals at their joints
-                    Ok((mut c, Some(m))) => {
-                        self.transform_nurbs(gen_k, &mut c)?;
-                        (c, Some(m))
-                    }
-                    Ok(_) | Err(IgesError::Unsupported { .. }) => return Ok(None),
-                    Err(e) => return Err(e),
-                }
-            }
-            _ => return Ok(None),
+        let Some((mut profile, tmap)) = self.generatrix(gen_k)? else {
+            return Ok(None);
         };
-        let mut profile = profile;
-        if offset != 0.0 {
-            let z = dir / len;
-            let radial = |q: Vec3| (q - a) - (q - a).dot(z) * z;
-            let [p0, p1] = [profile.points[0], profile.points[profile.points.len() - 1]];
-            let far = if radial(p0).length() >= radial(p1).length() {
-                p0
-            } else {
-                p1
-            };
-            let n = (p1 - p0).cross(z.cross(radial(far)));
-            let l = n.length();
-            if !(l > 0.0 && l.is_finite()) {
-                return Ok(None);
-            }
-            for q in &mut profile.points {
-                *q += offset * n / l;
-            }
+        if offset != 0.0 && !offset_line_profile(&mut profile, a, dir / len, offset) {
+            return Ok(None);
         }
         let map = ArcMap::new(sa, ta, 1.0);
         let (knots_v, pts, w) = revolve(a, dir / len, &profile, &map);
@@ -284,6 +242,66 @@ impl Iges<'_> {
             transformed: transform.is_some(),
         }))
     }
+}
+
+impl Iges<'_> {
+    /// The generatrix `gen_k` of a surface of revolution as one NURBS curve,
+    /// with the map from the file's parameter to the curve's for an arc (100)
+    /// or an elliptic arc (104); `None` for a generatrix that is not one line
+    /// (110), B-spline curve (126), circular arc or elliptic arc.
+    fn generatrix(&self, gen_k: usize) -> Result<Option<(Nurbs3, Option<ArcMap>)>, IgesError> {
+        Ok(Some(match self.dir[gen_k].entity_type {
+            110 | 126 => {
+                let mut generatrix = Vec::new();
+                self.curve_pieces(gen_k, 0, &mut generatrix)?;
+                let [profile] = &generatrix[..] else {
+                    return Ok(None);
+                };
+                (profile.nurbs(), None)
+            }
+            100 => {
+                let (c, m) = self.arc_generatrix(gen_k)?;
+                (c, Some(m))
+            }
+            104 => {
+                let p = self.parameters(gen_k)?;
+                let l = p.first().map_or(self.dir[gen_k].line, |t| t.1);
+                match self.conic(gen_k, &p, l) {
+                    // an ellipse's file parameter is its eccentric angle,
+                    // which the arcs' parameter equals at their joints
+                    Ok((mut c, Some(m))) => {
+                        self.transform_nurbs(gen_k, &mut c)?;
+                        (c, Some(m))
+                    }
+                    Ok(_) | Err(IgesError::Unsupported { .. }) => return Ok(None),
+                    Err(e) => return Err(e),
+                }
+            }
+            _ => return Ok(None),
+        }))
+    }
+}
+
+/// Moves a line generatrix `profile` by `offset` along the normal of the
+/// surface it sweeps about the axis through `a` along the unit `z` (the
+/// same all along a line); false when the line gives no normal.
+fn offset_line_profile(profile: &mut Nurbs3, a: Vec3, z: Vec3, offset: f64) -> bool {
+    let radial = |q: Vec3| (q - a) - (q - a).dot(z) * z;
+    let [p0, p1] = [profile.points[0], profile.points[profile.points.len() - 1]];
+    let far = if radial(p0).length() >= radial(p1).length() {
+        p0
+    } else {
+        p1
+    };
+    let n = (p1 - p0).cross(z.cross(radial(far)));
+    let l = n.length();
+    if !(l > 0.0 && l.is_finite()) {
+        return false;
+    }
+    for q in &mut profile.points {
+        *q += offset * n / l;
+    }
+    true
 }
 
 impl Iges<'_> {

@@ -6,7 +6,7 @@ use super::step_builder::{StepBuilder, text};
 use crate::Vec3;
 use crate::io::iges_read::IgesError;
 use crate::io::iges_read::boundary::Piece;
-use crate::io::iges_read::params::{INT, REAL, param};
+use crate::io::iges_read::params::{INT, Param, REAL, param};
 use crate::io::iges_read::records::Iges;
 use crate::io::step::nurbs::Nurbs3;
 use crate::io::step::p21::Value;
@@ -230,35 +230,7 @@ impl Iges<'_> {
                     ],
                 )]
             }
-            120 => {
-                let axis_k = self.pointer(s, &p, 1, line, &[110])?;
-                let gen_k = self.pointer(s, &p, 2, line, &[100, 102, 104, 110, 126])?;
-                let axis = self.model_curve(axis_k)?;
-                let (a, z) = match axis.points.as_slice() {
-                    [a, c] => (at(*a), at(*c) - at(*a)),
-                    _ => {
-                        return Err(self.entity_error(s, line, "the axis is not a line".into()));
-                    }
-                };
-                let len = z.length();
-                if !(len > 0.0 && len.is_finite()) {
-                    return Err(self.entity_error(s, line, "the axis line has no length".into()));
-                }
-                let mut profile = self.model_curve(gen_k)?;
-                profile.points.iter_mut().for_each(|q| *q = at(*q));
-                let c = b.curve(&profile, line);
-                let o = b.point(a, line);
-                let d = b.direction(z / len, line);
-                let ax = b.simple(
-                    "AXIS1_PLACEMENT",
-                    vec![text(""), Value::Ref(o), Value::Ref(d)],
-                    line,
-                );
-                vec![(
-                    "SURFACE_OF_REVOLUTION",
-                    vec![text(""), Value::Ref(c), Value::Ref(ax)],
-                )]
-            }
+            120 => self.revolution_parts(s, &p, line, at, b)?,
             128 => {
                 let surface =
                     super::super::bspline_surface::read_entity_128(self, s, false)?.surface;
@@ -279,6 +251,48 @@ impl Iges<'_> {
         };
         b.insert(id, parts, line);
         Ok(())
+    }
+}
+
+impl Iges<'_> {
+    /// The `SURFACE_OF_REVOLUTION` a surface of revolution `s` (120) is
+    /// written as: its axis line (110) and generatrix, every point moved by
+    /// `at` (the 120's transformation).
+    fn revolution_parts(
+        &self,
+        s: usize,
+        p: &[(Param, usize)],
+        line: usize,
+        at: impl Fn(Vec3) -> Vec3,
+        b: &mut StepBuilder,
+    ) -> Result<Vec<(&'static str, Vec<Value>)>, IgesError> {
+        let axis_k = self.pointer(s, p, 1, line, &[110])?;
+        let gen_k = self.pointer(s, p, 2, line, &[100, 102, 104, 110, 126])?;
+        let axis = self.model_curve(axis_k)?;
+        let (a, z) = match axis.points.as_slice() {
+            [a, c] => (at(*a), at(*c) - at(*a)),
+            _ => {
+                return Err(self.entity_error(s, line, "the axis is not a line".into()));
+            }
+        };
+        let len = z.length();
+        if !(len > 0.0 && len.is_finite()) {
+            return Err(self.entity_error(s, line, "the axis line has no length".into()));
+        }
+        let mut profile = self.model_curve(gen_k)?;
+        profile.points.iter_mut().for_each(|q| *q = at(*q));
+        let c = b.curve(&profile, line);
+        let o = b.point(a, line);
+        let d = b.direction(z / len, line);
+        let ax = b.simple(
+            "AXIS1_PLACEMENT",
+            vec![text(""), Value::Ref(o), Value::Ref(d)],
+            line,
+        );
+        Ok(vec![(
+            "SURFACE_OF_REVOLUTION",
+            vec![text(""), Value::Ref(c), Value::Ref(ax)],
+        )])
     }
 }
 
