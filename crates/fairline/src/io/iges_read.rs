@@ -24,7 +24,7 @@
 //! B-spline curve), 110 (line), 100 (circular arc, with its 124
 //! transformation) and 102 (composite curve). A boundary given only in
 //! model space (`BPTR = 0`) gets its parameter-space curve by projecting the
-//! model-space curve onto the surface ([`project_boundary`]); a boundary
+//! model-space curve onto the surface ([`project_boundary`](boundary::project_boundary)); a boundary
 //! whose model-space curve is missing (`CPTR = 0`) is read from its
 //! parameter-space curve alone.
 //!

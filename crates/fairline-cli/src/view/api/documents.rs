@@ -1,4 +1,4 @@
-//! The documents' state: the session's JSON, per-vertex scalars, the step
+//! The documents' state as the page reads it, per-vertex scalars, the step
 //! cursor, and the current or a past step's mesh downloaded or saved.
 
 use fairline::geom::{CurvatureMethod, principal_curvatures};

@@ -231,7 +231,7 @@ impl BSplineSurface {
     /// Position and first and second partial derivatives at `(u, v)`
     /// (parameters clamped), analytic: Piegl & Tiller A3.6
     /// (`SurfaceDerivsAlgorithm1`) on the basis derivatives of A2.3 (computed
-    /// by [`basis_funs_ders2`](super::basis::basis_funs_ders2)); for a
+    /// by [`basis_funs_ders2`]); for a
     /// rational surface the homogeneous derivatives `A^{(k,l)}, w^{(k,l)}` are
     /// combined by the quotient rule of A4.4 (`RatSurfaceDerivs`, Eq. 4.20).
     /// At a knot the derivatives are those of the span to the right (the

@@ -9,16 +9,16 @@ use crate::bspline::BSplineSurface;
 
 /// Area of the trimmed surface (model units²): `∫∫ |Su × Sv| du dv`
 /// over the trimmed region of the parameter plane, on the `nu × nv` grid of
-/// [`tessellate`]: a grid cell wholly inside the face is integrated with the
+/// [`tessellate`](super::tessellate): a grid cell wholly inside the face is integrated with the
 /// 3 × 3 Gauss–Legendre rule (degree 5 in each direction) on each piece of
 /// the cell between knots (the integrand is smooth only between knots), its
 /// nodes evaluated together over the whole grid by
 /// [`BSplineSurface::map_grid_first`] (basis functions once per node row and
-/// column); a cell the trimming loops cut is split as in [`tessellate`] and
+/// column); a cell the trimming loops cut is split as in [`tessellate`](super::tessellate) and
 /// its (u, v) triangles integrated with the 6-point degree-4 Gauss rule on
 /// the triangle (Dunavant 1985). Independent of the 3-D triangle areas, it
 /// converges to the exact area as the trim flattening tolerance
-/// ([`super::TRIM_FLATNESS`]) and the curvature of `|Su × Sv|` allow.
+/// ([`crate::bspline::TRIM_FLATNESS`]) and the curvature of `|Su × Sv|` allow.
 /// Deterministic (fixed summation order).
 pub fn trimmed_area(surface: &BSplineSurface, nu: usize, nv: usize) -> f64 {
     let nu = nu.clamp(2, 65535);

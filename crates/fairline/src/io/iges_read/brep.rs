@@ -7,7 +7,7 @@
 //! vertex (an entry of a vertex list, 502) to another. That is exactly
 //! ISO 10303-42's `ADVANCED_FACE` – `FACE_BOUND` – `EDGE_LOOP` –
 //! `ORIENTED_EDGE` – `EDGE_CURVE` – `VERTEX_POINT`, so every face is
-//! written into an in-memory STEP exchange ([`Exchange`]) and read by the
+//! written into an in-memory STEP exchange ([`Exchange`](crate::io::step::p21::Exchange)) and read by the
 //! STEP reader, which converts analytic surfaces exactly to NURBS, handles
 //! seams used twice, poles and faces with holes, and trims from the 3-D
 //! edges ([`crate::io::step`]). The translation:

@@ -115,7 +115,7 @@ impl Iges<'_> {
     /// the generatrix `C(t)` rotated about it by the right-hand rule from
     /// `SA` to `TA` (radians, measured from the generatrix's position). The
     /// generatrix must be one line (110) or B-spline curve (126); otherwise
-    /// `None` (counted in [`IgesImport::skipped_surfaces`]). Exact: Piegl &
+    /// `None` (counted in [`IgesImport::skipped_surfaces`](super::IgesImport::skipped_surfaces)). Exact: Piegl &
     /// Tiller A8.1 ([`revolve`]) with arcs of at most 90°.
     pub(super) fn read_entity_120(&self, k: usize) -> Result<Option<Revolved>, IgesError> {
         self.revolved_offset(k, 0.0)

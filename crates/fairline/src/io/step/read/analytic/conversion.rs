@@ -124,7 +124,7 @@ impl<'a> Reader<'a> {
     }
 
     /// The exact NURBS of an analytic surface over the natural box `span`
-    /// (u along a, v along b; see [`super::super::nurbs`]) and the map of
+    /// (u along a, v along b; see [`crate::io::step::nurbs`]) and the map of
     /// natural coordinates `(a, b)` to its parameters `(u, v)`.
     pub(super) fn analytic_nurbs(
         &self,
