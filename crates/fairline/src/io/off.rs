@@ -10,10 +10,10 @@
 use std::io::{self, Write};
 use std::path::Path;
 
-use super::{
-    IoError, Lines, Location, capped_capacity, format_err, parse_f64, parse_i64, push_face, show,
-    tokens, write_formatted,
+use super::text::{
+    Lines, capped_capacity, parse_f64, parse_i64, push_face, show, tokens, write_formatted,
 };
+use super::{IoError, Location, format_err};
 use crate::Vec3;
 use crate::mesh::Soup;
 

@@ -18,9 +18,8 @@ use std::hash::{BuildHasherDefault, Hasher};
 use std::io::{self, Write};
 use std::path::Path;
 
-use super::{
-    IoError, Lines, Location, format_err, parse_f64, push_face, show, tokens, trailing_bytes,
-};
+use super::text::{Lines, parse_f64, push_face, show, tokens, trailing_bytes};
+use super::{IoError, Location, format_err};
 use crate::Vec3;
 use crate::mesh::Soup;
 

@@ -1,8 +1,8 @@
 //! Bounded surfaces (entity 143) read as trimmed surfaces.
 
 use super::{
-    Conversions, Faces, INT, Iges, IgesError, IgesSurface, Piece, Revolved, TrimLoop, faces, param,
-    project_boundary, surfaces,
+    Conversions, Iges, IgesError, IgesSurface, Revolved, TrimLoop, boundary::Piece,
+    boundary::project_boundary, faces, params::INT, params::param, surfaces, trimmed::Faces,
 };
 use crate::bspline::BSplineSurface;
 

@@ -2,8 +2,8 @@
 //! (entity 108 under a 144) and the census of faces that cannot be read.
 
 use super::{
-    ArcMap, Conversions, Faces, INT, Iges, IgesError, IgesSurface, Nurbs3, Param, REAL, Revolved,
-    TrimCurve, TrimLoop, Unreadable, Vec3, param,
+    ArcMap, Conversions, Iges, IgesError, IgesSurface, Nurbs3, Param, Revolved, TrimCurve,
+    TrimLoop, Unreadable, Vec3, params::INT, params::REAL, params::param, trimmed::Faces,
 };
 use crate::bspline::BSplineSurface;
 
@@ -66,7 +66,7 @@ impl Iges<'_> {
                     let base = self
                         .parameters(k)
                         .ok()
-                        .and_then(|p| super::text_of(&p, 2).and_then(super::parse_int))
+                        .and_then(|p| super::params::text_of(&p, 2).and_then(super::params::parse_int))
                         .and_then(|de| self.entry(de));
                     let mut area = None;
                     if let Some(b) = base {

@@ -10,8 +10,9 @@
 
 use super::curve_ops::{compatible, joined, power_to_bezier, reparametrised};
 use super::{
-    ArcMap, DirEntry, INT, Iges, IgesError, IgesSurface, Nurbs3, Param, Piece, REAL, TrimLoop,
-    Vec3, faces, param, parse_int, read_entity_128, text_of,
+    ArcMap, Iges, IgesError, IgesSurface, Nurbs3, Param, TrimLoop, Vec3, boundary::Piece, faces,
+    params::INT, params::REAL, params::param, parse_int, read_entity_128, records::DirEntry,
+    text_of,
 };
 use crate::bspline::BSplineSurface;
 use crate::bspline::basis::MAX_DEGREE;

@@ -28,6 +28,8 @@
 //! two vertices (a corner of angle `α` lies at most `L·α/4` from the chord
 //! and turns it by at least `α/2` at one end); `L·θ/2` is allowed there.
 
+use super::curves::{Curve, conic_range, nearest_param};
+use super::edges::EdgeUse;
 use super::*;
 use crate::bspline::basis::find_span;
 
