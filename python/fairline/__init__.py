@@ -886,7 +886,10 @@ def fair(
     desired curves. ``method``: ``"highlight"`` (default: the paper's
     energy with the desired curves' end tangents taken from a smooth fit
     beyond the defect's footprint, then ¾ of that result + ¼ of the
-    diffusion-flow result on the same region),
+    diffusion-flow result on the same region, kept only where it dominates
+    the diffusion-flow result — nearer the desired curves and a smaller
+    change of the part — else the diffusion-flow result; the report's
+    ``kept_flow`` and ``least_change`` say which and why),
     ``"paper"`` (Yong et al.'s Algorithm 2 exactly) or
     ``"diffusion-flow"`` (baseline); ``laplacian_weight`` adds a
     surface-diffusion term to ``"highlight"``.

@@ -477,8 +477,8 @@ struct CaseResult {
     false_regions: usize,
     size_ratio: Option<f64>,
     not_judged: f64,
-    /// (method, max, rms, deviation got worse) and the defect's own (max, rms).
-    fair: Vec<(FairMethod, f64, f64, bool)>,
+    /// (fairing, max, rms, deviation got worse) and the defect's own (max, rms).
+    fair: Vec<(&'static str, f64, f64, bool)>,
     before: (f64, f64),
 }
 
@@ -488,22 +488,37 @@ impl CaseResult {
     }
 }
 
-const METHODS: [FairMethod; 3] = [
-    FairMethod::Highlight,
-    FairMethod::Paper,
-    FairMethod::DiffusionFlow,
-];
-
-fn method_name(m: FairMethod) -> &'static str {
-    match m {
-        FairMethod::Highlight => "highlight (default)",
-        FairMethod::Paper => "paper",
-        FairMethod::DiffusionFlow => "diffusion-flow",
-        FairMethod::Membrane => "membrane",
-        FairMethod::ThinPlate => "thin-plate",
-        FairMethod::Mvs => "mvs",
-    }
+/// One way of fairing a found defect.
+#[derive(Clone, Copy)]
+struct Fairing {
+    label: &'static str,
+    method: FairMethod,
+    least_change: bool,
 }
+
+/// The default first, diffusion flow last.
+const METHODS: [Fairing; 4] = [
+    Fairing {
+        label: "highlight (default)",
+        method: FairMethod::Highlight,
+        least_change: true,
+    },
+    Fairing {
+        label: "highlight without least change",
+        method: FairMethod::Highlight,
+        least_change: false,
+    },
+    Fairing {
+        label: "paper",
+        method: FairMethod::Paper,
+        least_change: true,
+    },
+    Fairing {
+        label: "diffusion-flow",
+        method: FairMethod::DiffusionFlow,
+        least_change: true,
+    },
+];
 
 #[allow(clippy::too_many_arguments)]
 fn run_case(
@@ -548,15 +563,16 @@ fn run_case(
             let o = FairOptions::default()
                 .region(faces.clone())
                 .light(fair_light)
-                .method(m);
+                .method(m.method)
+                .least_change(m.least_change);
             match fair_highlight_lines(&mesh, &o) {
                 Ok(out) => {
                     let (mx, rms) = distance(&out.positions, clean.positions(), &defect.positions);
                     let worse = out.report.highlight_deviation_after
                         > out.report.highlight_deviation_before;
-                    fair_out.push((m, mx / diag, rms / diag, worse));
+                    fair_out.push((m.label, mx / diag, rms / diag, worse));
                 }
-                Err(e) => eprintln!("  {part}: fairing with {} failed: {e}", method_name(m)),
+                Err(e) => eprintln!("  {part}: fairing with {} failed: {e}", m.label),
             }
         }
     }
@@ -698,7 +714,7 @@ fn main() {
                         .iter()
                         .map(|(m, mx, rms, w)| format!(
                             "; {} max {:.2e} rms {:.2e}{}",
-                            method_name(*m),
+                            m,
                             mx,
                             rms,
                             if *w { " (deviation worse)" } else { "" }
@@ -751,9 +767,9 @@ fn print_tables(set: &str, seeds: &[u64], cases: &[CaseResult], clean_rows: &[St
     }
     println!("\n### Clean parts\n");
     println!(
-        "| part | kind | vertices | spacing / diagonal | R / diagonal | regions | not judged | threshold | discretisation level | detect time |"
+        "| part | kind | vertices | spacing / diagonal | R / diagonal | light arrays | regions | not judged | threshold | discretisation level | detect time |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
     for r in clean_rows {
         println!("{r}");
     }
@@ -779,7 +795,7 @@ fn print_tables(set: &str, seeds: &[u64], cases: &[CaseResult], clean_rows: &[St
         let worse = faired.iter().filter(|c| c.fair[i].3).count();
         println!(
             "| {} | {} | {} | {} | {} | {} | {} |",
-            method_name(*m),
+            m.label,
             fmt_opt(median(faired.iter().map(|c| c.before.0).collect()), 5),
             fmt_opt(median(after_max), 5),
             fmt_opt(median(faired.iter().map(|c| c.before.1).collect()), 5),
@@ -788,12 +804,14 @@ fn print_tables(set: &str, seeds: &[u64], cases: &[CaseResult], clean_rows: &[St
             pct(worse, faired.len()),
         );
     }
-    // default against diffusion flow, case by case
-    let ratio = |c: &&CaseResult, k: usize| {
+    // the default and the highlight blend without least change against
+    // diffusion flow, case by case
+    let flow = METHODS.len() - 1;
+    let ratio = |c: &&CaseResult, i: usize, k: usize| {
         let (d, f) = if k == 0 {
-            (c.fair[0].1, c.fair[2].1)
+            (c.fair[i].1, c.fair[flow].1)
         } else {
-            (c.fair[0].2, c.fair[2].2)
+            (c.fair[i].2, c.fair[flow].2)
         };
         if f > 0.0 {
             d / f
@@ -803,16 +821,21 @@ fn print_tables(set: &str, seeds: &[u64], cases: &[CaseResult], clean_rows: &[St
             1.0
         }
     };
-    println!("\n| default vs diffusion-flow | at least as close | worst ratio | median ratio |");
-    println!("|---|---|---|---|");
-    for (k, what) in ["max", "rms"].iter().enumerate() {
-        let r: Vec<f64> = faired.iter().map(|c| ratio(c, k)).collect();
-        println!(
-            "| {what} | {} | {:.2} | {} |",
-            pct(r.iter().filter(|&&x| x <= 1.0).count(), r.len()),
-            r.iter().copied().fold(0.0, f64::max),
-            fmt_opt(median(r.clone()), 2),
-        );
+    println!(
+        "\n| against diffusion-flow | measure | at least as close | worst ratio | median ratio |"
+    );
+    println!("|---|---|---|---|---|");
+    for i in [0, 1] {
+        for (k, what) in ["max", "rms"].iter().enumerate() {
+            let r: Vec<f64> = faired.iter().map(|c| ratio(c, i, k)).collect();
+            println!(
+                "| {} | {what} | {} | {:.2} | {} |",
+                METHODS[i].label,
+                pct(r.iter().filter(|&&x| x <= 1.0).count(), r.len()),
+                r.iter().copied().fold(0.0, f64::max),
+                fmt_opt(median(r.clone()), 2),
+            );
+        }
     }
 }
 
