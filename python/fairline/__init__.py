@@ -879,6 +879,7 @@ def fair(
     fair_weight: float = 1.0,
     diff_weight: float = 1.0,
     laplacian_weight: float = 0.0,
+    least_change: bool = True,
 ) -> Tuple[_np.ndarray, Dict[str, Any]]:
     """Highlight-line fairing inside a region (``fairline fair``, Yong et
     al. §3, Algorithm 2): moves only vertices whose motion changes nothing
@@ -889,7 +890,8 @@ def fair(
     diffusion-flow result on the same region, kept only where it dominates
     the diffusion-flow result — nearer the desired curves and a smaller
     change of the part — else the diffusion-flow result; the report's
-    ``kept_flow`` and ``least_change`` say which and why),
+    ``kept_flow`` and ``least_change`` say which and why;
+    ``least_change=False`` keeps the highlight result always),
     ``"paper"`` (Yong et al.'s Algorithm 2 exactly) or
     ``"diffusion-flow"`` (baseline); ``laplacian_weight`` adds a
     surface-diffusion term to ``"highlight"``.
@@ -926,6 +928,7 @@ def fair(
         max_iterations=int(max_iterations), epsilon=float(epsilon), method=method,
         fair_weight=float(fair_weight), diff_weight=float(diff_weight),
         laplacian_weight=float(laplacian_weight),
+        least_change=bool(least_change),
     )
     return out, _report(report)
 

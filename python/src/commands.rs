@@ -1001,7 +1001,8 @@ fn detect<'py>(
 #[pyo3(signature = (v, indices, offsets, region = None, auto = false, grow = 0,
     direction = None, plane_normal = None, up = "auto", plane_point = None, spacing = None,
     lights = None, min_normal_cos = None, max_iterations = None, epsilon = None,
-    method = "highlight", fair_weight = None, diff_weight = None, laplacian_weight = None))]
+    method = "highlight", fair_weight = None, diff_weight = None, laplacian_weight = None,
+    least_change = true))]
 fn fair<'py>(
     py: Python<'py>,
     v: V<'py>,
@@ -1023,6 +1024,7 @@ fn fair<'py>(
     fair_weight: Option<f64>,
     diff_weight: Option<f64>,
     laplacian_weight: Option<f64>,
+    least_change: bool,
 ) -> PyResult<PositionsOut<'py>> {
     let method = FairMethod::parse(method).map_err(Failure::from)?;
     match (&region, auto) {
@@ -1054,6 +1056,7 @@ fn fair<'py>(
         fair_weight: fair_weight.unwrap_or(d.fair_weight),
         diff_weight: diff_weight.unwrap_or(d.diff_weight),
         laplacian_weight: laplacian_weight.unwrap_or(d.laplacian_weight),
+        least_change,
     };
     let soup = soup_from(&v, &indices, &offsets)?;
     let out = crate::compute(py, move |control| -> Res<_> {

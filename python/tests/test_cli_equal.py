@@ -270,7 +270,8 @@ def test_fair_equals_cli(cli, demo, tmp_path):
 
 
 @pytest.mark.parametrize("kwargs,args", [({"method": "paper"}, ["--method", "paper"]),
-                                         ({"laplacian_weight": 0.1}, ["--laplacian-weight", "0.1"])])
+                                         ({"laplacian_weight": 0.1}, ["--laplacian-weight", "0.1"]),
+                                         ({"least_change": False}, ["--no-least-change"])])
 def test_fair_methods_equal_cli(cli, demo, tmp_path, kwargs, args):
     region = demo / "dented-panel-region.json"
     run(cli, "fair", demo / "dented-panel.obj", "--region", region, "--max-iterations", "5", *args, "-o", tmp_path / "f.ply", "--report", tmp_path / "r.json")

@@ -92,6 +92,13 @@ pub struct Args {
     /// D⁴ ∫(Δ_B H)² dA (D the region's diameter); --method highlight only.
     #[arg(long, default_value_t = FairOptions::default().laplacian_weight)]
     pub laplacian_weight: f64,
+    /// Keep the highlight-line result (¾ highlight + ¼ diffusion flow)
+    /// even where it does not dominate the diffusion-flow state; by
+    /// default (least change) the flow state is kept unless the highlight
+    /// result's lines are nearer the desired curves and it moves the
+    /// region at least 1 % less. --method highlight only.
+    #[arg(long)]
+    pub no_least_change: bool,
     /// Before/after picture with highlight lines, region outline and
     /// desired curves.
     #[arg(long, value_name = "IMG.png")]
@@ -116,6 +123,7 @@ impl Args {
             fair_weight: self.fair_weight,
             diff_weight: self.diff_weight,
             laplacian_weight: self.laplacian_weight,
+            least_change: !self.no_least_change,
         }
     }
 }
@@ -228,8 +236,17 @@ pub fn run(args: Args) -> Result<()> {
         String::new()
     };
     let (dev_before, dev_after) = out.deviation();
+    let kept_flow = out.results.iter().filter(|r| r.kept_flow).count();
+    let least_change = if kept_flow > 0 {
+        format!(
+            ", diffusion-flow state kept in {kept_flow} of {} (least change)",
+            out.results.len()
+        )
+    } else {
+        String::new()
+    };
     job.finish(format_args!(
-        "{} region(s) faired, {}, detection score {:.2} → {:.2} (threshold {:.2}){flat_spot}, highlight deviation {dev_before:.3e} → {dev_after:.3e}, largest move {:.3e}",
+        "{} region(s) faired, {}, detection score {:.2} → {:.2} (threshold {:.2}){flat_spot}, highlight deviation {dev_before:.3e} → {dev_after:.3e}, largest move {:.3e}{least_change}",
         out.results.len(),
         if out.converged() { "converged" } else { "not converged" },
         before.score,

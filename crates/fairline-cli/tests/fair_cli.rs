@@ -131,6 +131,33 @@ fn fair_removes_a_bump_and_touches_nothing_outside() {
         bits(&flow_mesh) == bb,
         "the default differs from the flow state"
     );
+
+    // --no-least-change keeps the highlight-line result: a different
+    // surface, with the same four numbers in its report
+    let (out3, rep3) = (d.join("highlight.obj"), d.join("highlight.json"));
+    let o = run(&[
+        "fair",
+        s(&mesh),
+        "--region",
+        s(&region),
+        "-o",
+        s(&out3),
+        "--no-least-change",
+        "--report",
+        s(&rep3),
+    ]);
+    ok(&o);
+    let r3 = json(&rep3);
+    assert_eq!(r3["kept_flow"], false);
+    assert_eq!(r3["flow_share"], 0.25);
+    assert_eq!(r3["least_change"], r["least_change"]);
+    let highlight_mesh = fairline::io::read_mesh(&out3).unwrap();
+    assert!(bits(&highlight_mesh) != bb);
+    assert!(
+        !String::from_utf8_lossy(&o.stderr).contains("least change"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
 }
 
 /// `--method membrane|thin-plate|mvs` (Grüner §3.1.2–3.1.3): the energy

@@ -45,6 +45,9 @@ pub struct FairSettings {
     pub diff_weight: f64,
     /// Weight ω3 of the curvature-Laplacian term.
     pub laplacian_weight: f64,
+    /// Least change ([`FairOptions::least_change`]): the highlight result
+    /// only where it dominates the diffusion-flow state (default true).
+    pub least_change: bool,
 }
 
 impl Default for FairSettings {
@@ -60,6 +63,7 @@ impl Default for FairSettings {
             fair_weight: d.fair_weight,
             diff_weight: d.diff_weight,
             laplacian_weight: d.laplacian_weight,
+            least_change: d.least_change,
         }
     }
 }
@@ -96,6 +100,9 @@ impl FairSettings {
             self.laplacian_weight,
             d.laplacian_weight,
         );
+        if !self.least_change {
+            c.push_str(" --no-least-change");
+        }
         c.push_str(&format!(" -o {output}"));
         c
     }
@@ -109,6 +116,7 @@ impl FairSettings {
             .fair_weight(self.fair_weight)
             .diff_weight(self.diff_weight)
             .laplacian_weight(self.laplacian_weight)
+            .least_change(self.least_change)
             .max_iterations(self.max_iterations)
             .epsilon(self.epsilon)
             .highlight(self.lights.options())

@@ -659,7 +659,12 @@ fn fair_section(demo: &Demo) -> Result<Section> {
         .first()
         .ok_or_else(|| anyhow::anyhow!("detect found no irregular region on the dented panel"))?;
     let faces = grow_region(&mesh, &best.faces, 4);
-    let options = FairOptions::default().region(faces).light(light);
+    // the highlight-line result itself (`fair --no-least-change`); the
+    // report says what the default's least change keeps
+    let options = FairOptions::default()
+        .region(faces)
+        .light(light)
+        .least_change(false);
     let with_positions = |positions: Vec<Vec3>| -> Result<SurfaceMesh> {
         let mut m = mesh.clone();
         m.set_positions(positions)?;
@@ -690,7 +695,7 @@ fn fair_section(demo: &Demo) -> Result<Section> {
     fairline::io::write_mesh(demo.out.join("dented-roof-faired.obj"), &faired)?;
     Ok(Section {
         title: "Highlight-line fairing".into(),
-        text: "A roof-like panel z = 0.25 (1 - 0.4 x²)(1 - 0.3 y²) with a planted dent of depth 0.02. `detect` finds the wobbling highlight lines; its region, grown by four rings of faces, is faired with the default method (Yong et al. Algorithm 2 with the desired curves' end tangents taken from a smooth surface fitted beyond the defect's footprint, then a quarter of the diffusion-flow state mixed in): the blue desired lines are optimized geometric Hermite curves between the nodes just outside the red region. Only vertices whose motion changes nothing outside the region move. Second picture: the surface-diffusion-flow baseline on the same region; the values compare both with the defect-free panel.".into(),
+        text: "A roof-like panel z = 0.25 (1 - 0.4 x²)(1 - 0.3 y²) with a planted dent of depth 0.02. `detect` finds the wobbling highlight lines; its region, grown by four rings of faces, is faired by highlight-line fairing (Yong et al. Algorithm 2 with the desired curves' end tangents taken from a smooth surface fitted beyond the defect's footprint, then a quarter of the diffusion-flow state mixed in; `fair --no-least-change`): the blue desired lines are optimized geometric Hermite curves between the nodes just outside the red region. Only vertices whose motion changes nothing outside the region move. Second picture: the surface-diffusion-flow baseline on the same region; the values compare both with the defect-free panel. The default `fair` keeps the highlight-line result only where it dominates the flow state (lines nearer the desired curves and a change of the part at least 1 % smaller, least change): `default_keeps` says which it keeps here.".into(),
         images: vec![
             (img, "highlight-line fairing: before (with region and desired lines) and after".into()),
             (img_flow, "baseline: surface diffusion flow on the same region".into()),
@@ -709,6 +714,12 @@ fn fair_section(demo: &Demo) -> Result<Section> {
             "distance_to_panel_before": truth(&mesh),
             "distance_to_panel_after": truth(&faired),
             "diffusion_flow_distance_to_panel_after": truth(&flow_mesh),
+            "default_keeps": if r.least_change.keeps_highlight() {
+                "highlight-line result"
+            } else {
+                "diffusion-flow state"
+            },
+            "least_change": r.least_change,
         }),
     })
 }

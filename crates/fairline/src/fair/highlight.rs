@@ -428,7 +428,9 @@ pub struct FairReport {
     /// True when least change ([`FairOptions::least_change`]) kept the
     /// diffusion-flow state whole (then `flow_share` is 1).
     pub kept_flow: bool,
-    /// The four numbers least change compared (all 0 when it did not run).
+    /// The four numbers least change compares (all 0 when no flow state
+    /// was blended in); computed with least change off too, so that the
+    /// report shows what it would have kept.
     pub least_change: LeastChange,
     /// Per-iteration energies.
     pub history: Vec<IterationReport>,
@@ -1024,7 +1026,7 @@ pub fn fair_highlight_lines(
     if let Some(flow) = &flow {
         share = options.flow_share;
         lines = blend_flow(&mut mesh, &mut model, &set, &flow.positions, share)?;
-        if options.least_change {
+        {
             let inside = |n| set.node_inside(&mesh, n);
             choice = LeastChange {
                 displacement_highlight: rms_displacement(mesh.positions(), &start, &set.movable),
@@ -1040,7 +1042,7 @@ pub fn fair_highlight_lines(
                 .deviation()
                 .rms,
             };
-            if !choice.keeps_highlight() {
+            if options.least_change && !choice.keeps_highlight() {
                 share = 1.0;
                 lines = blend_flow(&mut mesh, &mut model, &set, &flow.positions, share)?;
             }

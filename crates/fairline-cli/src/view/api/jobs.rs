@@ -31,6 +31,7 @@ struct RunOptions {
     method: Option<String>,
     max_iterations: Option<usize>,
     epsilon: Option<f64>,
+    least_change: Option<bool>,
     iterations: Option<usize>,
     lambda: Option<f64>,
     mu: Option<f64>,
@@ -314,6 +315,7 @@ impl MeshJob<'_> {
             method,
             max_iterations: o.max_iterations.unwrap_or(d.max_iterations),
             epsilon: o.epsilon.unwrap_or(d.epsilon),
+            least_change: o.least_change.unwrap_or(d.least_change),
             ..d
         };
         let input = FairInput {
