@@ -579,6 +579,7 @@ def fair_quad(
     off_surface: bool = False,
     method: str = "structure-lines",
     tolerance: float = 0.1,
+    deviation_weights: bool = False,
 ) -> Tuple[_np.ndarray, Dict[str, Any]]:
     """Structure-line fairing of a quad mesh (``fairline fair-quad``,
     Grüner thesis ch. 4, Eq. (30)–(34)): zigzagging structure lines are
@@ -588,7 +589,9 @@ def fair_quad(
     ``deviation_factor`` per iteration. Corners never move. By default the
     moved points are put back onto a smooth fit of the input surface after
     every solve (they slide along it while the lines straighten);
-    ``off_surface=True`` gives the thesis' method as printed.
+    ``off_surface=True`` gives the thesis' method as printed;
+    ``deviation_weights=True`` gives every freed point its own weight
+    ω·δ/d by its deviation d (the thesis' suggested extension).
 
     ``method="network"`` fairs the polyline network with tolerance
     cylinders instead (Grüner §3.1.1, after Hofer et al.): only the heights
@@ -608,6 +611,7 @@ def fair_quad(
         deviation_factor=float(deviation_factor), iterations=int(iterations),
         fix_boundary=bool(fix_boundary), fixed=_fixed(fixed), off_surface=bool(off_surface),
         method=str(method), tolerance=float(tolerance),
+        deviation_weights=bool(deviation_weights),
     )
     return out, _report(report)
 

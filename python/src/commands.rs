@@ -565,7 +565,7 @@ fn output_positions(mesh: &SurfaceMesh) -> Vec<Vec3> {
 #[pyfunction]
 #[pyo3(signature = (v, indices, offsets, weight = 0.01, deviation = 0.1, deviation_factor = 0.1,
     iterations = 3, fix_boundary = false, fixed = None, off_surface = false,
-    method = "structure-lines", tolerance = 0.1))]
+    method = "structure-lines", tolerance = 0.1, deviation_weights = false))]
 #[allow(clippy::too_many_arguments)]
 fn fair_quad<'py>(
     py: Python<'py>,
@@ -581,6 +581,7 @@ fn fair_quad<'py>(
     off_surface: bool,
     method: &str,
     tolerance: f64,
+    deviation_weights: bool,
 ) -> PyResult<PositionsOut<'py>> {
     let method = QuadMethod::parse(method).map_err(Failure::from)?;
     let mut settings = QuadSettings {
@@ -593,6 +594,7 @@ fn fair_quad<'py>(
         fix_boundary,
         fixed: Vec::new(),
         off_surface,
+        deviation_weights,
     };
     settings.check().map_err(Failure::from)?;
     let soup = soup_from(&v, &indices, &offsets)?;

@@ -125,7 +125,8 @@ def zigzag_quads(n=13):
 
 @pytest.mark.parametrize("kwargs,args", [({}, []), ({"weight": 0.005, "deviation": 0.05, "iterations": 4, "fix_boundary": True},
                                           ["--weight", "0.005", "--deviation", "0.05", "--iterations", "4", "--fix-boundary"]),
-                                         ({"off_surface": True}, ["--off-surface"])])
+                                         ({"off_surface": True}, ["--off-surface"]),
+                                         ({"deviation_weights": True}, ["--deviation-weights"])])
 def test_fair_quad_equals_cli(cli, tmp_path, kwargs, args):
     V, F = zigzag_quads()
     fairline.write_mesh(tmp_path / "zigzag.obj", V, F)

@@ -256,6 +256,12 @@ pub struct QuadArgs {
     /// surface, so straightening the lines does not deform the surface.
     #[arg(long)]
     pub off_surface: bool,
+    /// Give every freed point its own penalty weight ω·δ/d by its
+    /// deviation d (δ the iteration's --deviation): the worse the zigzag,
+    /// the less the point is held (the thesis' suggested extension;
+    /// measured no better than one weight on generated zigzag grids).
+    #[arg(long)]
+    pub deviation_weights: bool,
     /// JSON file `{"vertices":[...]}` of vertices that never move.
     #[arg(long, value_name = "FILE.json")]
     pub fixed: Option<PathBuf>,
@@ -282,6 +288,7 @@ impl QuadArgs {
             fix_boundary: self.fix_boundary,
             fixed,
             off_surface: self.off_surface,
+            deviation_weights: self.deviation_weights,
         }
     }
 }

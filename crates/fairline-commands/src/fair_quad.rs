@@ -46,6 +46,9 @@ pub struct QuadSettings {
     pub fixed: Vec<VertexId>,
     /// Let the points leave the input surface (Eq. (34) as printed).
     pub off_surface: bool,
+    /// Per-vertex penalty weights by deviation
+    /// ([`fairline::fair::QuadFairOptions::deviation_weights`]).
+    pub deviation_weights: bool,
 }
 
 impl Default for QuadSettings {
@@ -60,6 +63,7 @@ impl Default for QuadSettings {
             fix_boundary: false,
             fixed: Vec::new(),
             off_surface: false,
+            deviation_weights: false,
         }
     }
 }
@@ -115,6 +119,7 @@ impl QuadSettings {
         );
         push_switch(&mut c, "fix-boundary", self.fix_boundary);
         push_switch(&mut c, "off-surface", self.off_surface);
+        push_switch(&mut c, "deviation-weights", self.deviation_weights);
         if !self.fixed.is_empty() {
             c.push_str(" --fixed fixed.json");
         }
@@ -160,6 +165,7 @@ pub fn run(
         .fix_boundary(settings.fix_boundary)
         .fixed(settings.fixed.clone())
         .on_surface(!settings.off_surface)
+        .deviation_weights(settings.deviation_weights)
         .control(control.clone());
     let mut report = Report::new("fair-quad");
     let out = report.time(|| fair_structure_lines(mesh, &options))?;

@@ -106,6 +106,13 @@ pub struct QuadFairOptions {
     /// thesis' method as printed: the points may leave the surface (lines
     /// straighten by cutting across it).
     pub on_surface: bool,
+    /// Per-vertex weights by deviation (Grüner §4.2: "each vertex gets its
+    /// own weight dependent on the value of the deviation of three
+    /// consecutive vectors"): a free point whose largest Eq. (30)
+    /// deviation d_i exceeds the iteration's deviation parameter δ gets
+    /// ω_i = ω·δ / d_i, so the worse a zigzag the less it is held to its
+    /// input; ω elsewhere. Default off (one ω for all, as printed).
+    pub deviation_weights: bool,
     /// Progress (one step per iteration) and cancellation.
     pub control: Control,
 }
@@ -120,6 +127,7 @@ impl Default for QuadFairOptions {
             fix_boundary: false,
             fixed: Vec::new(),
             on_surface: true,
+            deviation_weights: false,
             control: Control::default(),
         }
     }
@@ -159,6 +167,11 @@ impl QuadFairOptions {
     /// Sets whether the points stay on the input surface.
     pub fn on_surface(mut self, on_surface: bool) -> Self {
         self.on_surface = on_surface;
+        self
+    }
+    /// Sets [`QuadFairOptions::deviation_weights`].
+    pub fn deviation_weights(mut self, on: bool) -> Self {
+        self.deviation_weights = on;
         self
     }
     /// Sets the progress callback and cancel flag.
@@ -380,14 +393,18 @@ fn classify(
     deviation: f64,
     initial_deviation: f64,
     boundary: &[bool],
-) -> Vec<bool> {
+) -> (Vec<bool>, Vec<f64>) {
     let deviations: Vec<f64> = runs
         .par_iter()
         .with_min_len(4096)
         .map(|r| run_deviation(cur, r).length())
         .collect();
     let mut free = vec![false; cur.len()];
+    let mut largest = vec![0.0f64; cur.len()];
     for (r, &d) in runs.iter().zip(&deviations) {
+        for &v in &r[1..3] {
+            largest[v as usize] = largest[v as usize].max(d);
+        }
         if d > deviation {
             for &v in &r[1..3] {
                 if d > initial_deviation || !boundary[v as usize] {
@@ -396,7 +413,23 @@ fn classify(
             }
         }
     }
-    free
+    (free, largest)
+}
+
+/// Penalty weight ω_i of every vertex: `omega`, or with
+/// [`QuadFairOptions::deviation_weights`] ω·δ / d_i where the vertex's
+/// largest run deviation d_i exceeds the deviation parameter δ.
+fn vertex_weights(omega: f64, by_deviation: bool, deviation: f64, largest: &[f64]) -> Vec<f64> {
+    largest
+        .iter()
+        .map(|&d| {
+            if by_deviation && d > deviation && deviation > 0.0 {
+                omega * (deviation / d)
+            } else {
+                omega
+            }
+        })
+        .collect()
 }
 
 /// Eq. (32) coefficients of every run from the current polygon.
@@ -470,7 +503,8 @@ pub(crate) fn fair_structure_lines_with(
     for iteration in 0..opts.iterations {
         opts.control.step("iterations", iteration as u64, total)?;
         report.iterations += 1;
-        let free = classify(runs, &cur, deviation, opts.deviation, &boundary);
+        let (free, largest) = classify(runs, &cur, deviation, opts.deviation, &boundary);
+        let weights = vertex_weights(omega, opts.deviation_weights, deviation, &largest);
         let mut index = vec![u32::MAX; n];
         let mut unknowns = Vec::new();
         for i in 0..n {
@@ -492,7 +526,7 @@ pub(crate) fn fair_structure_lines_with(
             inc: &index_of_runs.inc,
             index: &index,
             unknowns: &unknowns,
-            omega,
+            omega: &weights,
             ebar,
             p0: &p0,
             cur: &cur,

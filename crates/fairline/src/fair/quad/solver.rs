@@ -45,7 +45,8 @@ pub(super) struct System<'a> {
     /// vertex → unknown index (u32::MAX when fixed)
     pub(super) index: &'a [u32],
     pub(super) unknowns: &'a [usize],
-    pub(super) omega: f64,
+    /// penalty weight ω_i of Eq. (34) per vertex (scaled by ē⁻²)
+    pub(super) omega: &'a [f64],
     /// mean edge length of the input
     pub(super) ebar: f64,
     pub(super) p0: &'a [Vec3],
@@ -67,8 +68,8 @@ impl System<'_> {
             .par_iter()
             .map(|&j| {
                 let mut e: Vec<(usize, f64)> = Vec::with_capacity(32);
-                let mut rhs = omega * self.p0[j];
-                e.push((index[j] as usize, omega));
+                let mut rhs = omega[j] * self.p0[j];
+                e.push((index[j] as usize, omega[j]));
                 for &(ri, s) in &self.inc[self.off[j] as usize..self.off[j + 1] as usize] {
                     let r = &runs[ri as usize];
                     let c = &coef[ri as usize];
@@ -179,7 +180,7 @@ impl System<'_> {
                     .iter()
                     .map(|&(ri, s)| coef[ri as usize][s as usize] * residual[ri as usize])
                     .sum();
-                b.copy_from_slice(&(omega * (self.p0[j] - cur[j]) - g).to_array());
+                b.copy_from_slice(&(omega[j] * (self.p0[j] - cur[j]) - g).to_array());
             });
         drop(residual);
         // √(ωλ), λ ≈ half the mean Gershgorin bound of K₁ + K₂ over
@@ -199,7 +200,15 @@ impl System<'_> {
             .collect::<Vec<f64>>()
             .iter()
             .sum();
-        let scale = (2.0 * omega * gersh / m as f64 / 4.0).sqrt().max(omega);
+        // the smallest weight over the unknowns: N ⪰ ω_min I
+        let omega_min = self
+            .unknowns
+            .iter()
+            .map(|&j| omega[j])
+            .fold(f64::INFINITY, f64::min);
+        let scale = (2.0 * omega_min * gersh / m as f64 / 4.0)
+            .sqrt()
+            .max(omega_min);
         let (Some(p1), Some(p2)) = (
             line_blocks(self, lines, 0, OUTER_SHIFT * scale),
             line_blocks(self, lines, 1, INNER_SHIFT * scale),
@@ -247,16 +256,16 @@ impl System<'_> {
                     for (&(ri, _), &c) in self.inc[a..b].iter().zip(&inc_coef[a..b]) {
                         g += c * av[ri as usize];
                     }
-                    o[0] = omega * v[0] + g.x;
-                    o[1] = omega * v[1] + g.y;
-                    o[2] = omega * v[2] + g.z;
+                    o[0] = omega[j] * v[0] + g.x;
+                    o[1] = omega[j] * v[1] + g.y;
+                    o[2] = omega[j] * v[2] + g.z;
                 });
         };
-        // stop at ‖c − N d‖ ≤ ω·ε·ē·√(3m): since N ⪰ ωI, the error of d then
+        // stop at ‖c − N d‖ ≤ ω_min·ε·ē·√(3m): since N ⪰ ω_min I, the error of d then
         // has a root mean square of at most ε·ē per coordinate
         let norm_c = rhs.iter().map(|v| v * v).sum::<f64>().sqrt();
         let tolerance = if norm_c > 0.0 {
-            omega * ITERATIVE_ACCURACY * self.ebar * ((3 * m) as f64).sqrt() / norm_c
+            omega_min * ITERATIVE_ACCURACY * self.ebar * ((3 * m) as f64).sqrt() / norm_c
         } else {
             0.0
         };
