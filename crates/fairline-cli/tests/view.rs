@@ -2921,10 +2921,10 @@ fn session_file_saves_and_reopens_files_view_and_history_position() {
     start_fair_job(&srv, json!({}));
     assert_eq!(srv.wait_job()["state"], "done");
     let (_, faired) = srv.get("/api/doc/0/positions");
-    start_fair_job(&srv, json!({"method": "diffusion-flow"}));
+    start_fair_job(&srv, json!({"method": "membrane"}));
     assert_eq!(srv.wait_job()["state"], "done");
     let (_, faired_twice) = srv.get("/api/doc/0/positions");
-    assert_ne!(faired, faired_twice, "the second step moved the mesh");
+    assert!(faired != faired_twice, "the second step moved the mesh");
     let steps_before = srv.json("/api/session", None)["docs"][0]["history"]["steps"].clone();
     assert_eq!(srv.json("/api/doc/0/undo", Some(&json!({})))["cursor"], 1);
     let view = json!({"active": 0, "names": ["panel.obj"], "camera": {"up": "z", "yaw": 0.3, "pitch": 0.2, "distance": 5.0, "target": [0.1, 0.0, 0.0]}, "controls": {"spacing": "0.5"}, "marks": [[1, 2, 3]]});
