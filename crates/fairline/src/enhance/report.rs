@@ -42,7 +42,7 @@ impl QualityStats {
     }
 }
 
-/// Wall-clock seconds spent in the phases of [`enhance_features`], summed
+/// Wall-clock seconds spent in the phases of [`enhance_features`](super::enhance_features), summed
 /// over the iterations.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct EnhanceTimings {
@@ -62,7 +62,7 @@ pub struct EnhanceTimings {
     pub total_s: f64,
 }
 
-/// What [`enhance_features`] did; serialises to the JSON report of
+/// What [`enhance_features`](super::enhance_features) did; serialises to the JSON report of
 /// `fairline enhance` (the CLI adds `histogram_before`/`histogram_after`
 /// and its own timing keys).
 #[derive(Clone, Debug, PartialEq, Serialize)]

@@ -155,7 +155,7 @@ struct Solved {
 ///   (Eq. (3.6)–(3.9)). The unknowns are "the selected components of the
 ///   control points" (§3.3): one per moved control point, the coordinate
 ///   closest to the surface normal (as the Jacobian sizes of the paper's
-///   Table 1 show; see [`control_directions`]). When the targets have
+///   Table 1 show; see [`control_directions`](jacobian::control_directions)). When the targets have
 ///   fewer samples than unknowns, n(i) is raised until the system is
 ///   overdetermined, as §3.3 prescribes. The Jacobian is that of
 ///   Eq. (3.10) (Δw relative to the control net size), solved by the

@@ -101,7 +101,7 @@ pub(super) fn apply(
     Ok(())
 }
 
-/// The paper's solver (Nishiyama et al. §3.3), see [`fair_surface`].
+/// The paper's solver (Nishiyama et al. §3.3), see [`fair_surface`](super::fair_surface).
 pub(super) fn solve_paper(
     surface: &BSplineSurface,
     lights: &[CircularLight],

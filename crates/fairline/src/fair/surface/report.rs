@@ -30,7 +30,7 @@ pub struct JacobianSize {
     pub cols: usize,
 }
 
-/// One Gauss–Newton iteration of [`fair_surface`].
+/// One Gauss–Newton iteration of [`fair_surface`](super::fair_surface).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct FairIteration {
     /// max |d_s| over the samples after the step.
@@ -59,7 +59,7 @@ pub struct FairIteration {
     pub time_s: f64,
 }
 
-/// Why [`fair_surface`] stopped.
+/// Why [`fair_surface`](super::fair_surface) stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FairStop {
@@ -79,7 +79,7 @@ pub enum FairStop {
     NonFiniteStep,
 }
 
-/// What [`fair_surface`] did; its fields are the keys of the JSON report
+/// What [`fair_surface`](super::fair_surface) did; its fields are the keys of the JSON report
 /// of `fairline fair-surface`.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SurfaceFairReport {

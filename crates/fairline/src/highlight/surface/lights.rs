@@ -12,7 +12,7 @@ use rayon::prelude::*;
 /// The lights m of a linear light array whose highlight lines can appear
 /// on the surface (Yong et al. Eq. (1)–(2)): d_P is sampled on an `n × n`
 /// grid and light m is kept when its level m·s crosses at least one grid
-/// cell that [`contour_field`] contours — all four corners defined (|Z·N| ≥
+/// cell that [`contour_field`](super::contour_field) contours — all four corners defined (|Z·N| ≥
 /// `min_cos`), on one side of the light plane, and crossed by at most
 /// [`SurfaceHighlightOptions::max_lines_per_cell`] (default) levels counted
 /// by the mesh model's rule (`contour::too_many_levels`), so that cells
