@@ -16,8 +16,8 @@
 //! features, and the mean triangle quality 2r/R.
 
 use super::*;
-use crate::FaceId;
 use crate::geom::{face_areas, triangle_normal_area};
+use crate::{FaceId, Vec3};
 use glam::DVec2;
 use std::collections::HashMap;
 

@@ -5,7 +5,8 @@
 //! changes one bit of one coordinate of any case fails here.
 
 use super::*;
-use crate::shapes;
+use crate::mesh::VertexId;
+use crate::{Vec3, shapes};
 
 /// FNV-1a over the bits of every coordinate, then the given counts.
 pub(crate) fn checksum(positions: &[Vec3], counts: &[usize]) -> u64 {

@@ -3,8 +3,11 @@
 //! result is invariant to scale and rigid motion, and λ and μ have the
 //! effects reported by Ji et al. (§5, Fig. 4 and 5).
 
+use super::flow::distance_to_input;
 use super::*;
-use crate::geom::face_normals;
+use crate::Vec3;
+use crate::geom::{face_normals, principal_curvatures_rusinkiewicz};
+use crate::mesh::VertexId;
 use crate::shapes;
 
 /// |k1| + |k2| of the torus (R, r) about z at the tube angle of `p`.

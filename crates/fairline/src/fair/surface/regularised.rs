@@ -33,6 +33,9 @@
 //! the relative decrease of Φ of an accepted step is below ε (the analogue
 //! of Eq. (3.14)) — that alone is `converged` — or when Φ vanishes.
 
+use super::jacobian::jacobian_rows;
+use super::paper::{apply, mean_square};
+use super::targets::dist2;
 use super::*;
 use crate::highlight::surface::{contour_field, distance_field};
 use faer::Side;

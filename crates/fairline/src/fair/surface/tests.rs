@@ -6,8 +6,11 @@
 //! control points is bit-identical, and the highlight lines and the surface
 //! move back towards the clean surface's.
 
+use super::targets::{Arc, dist2};
 use super::*;
+use crate::Control;
 use crate::bspline::clamped_uniform_knots;
+use crate::highlight::surface::SurfaceHighlightLine;
 
 /// [`fair_surface`] with `lights` and `endpoints` set on `opts`, as the
 /// pair (faired surface, report).

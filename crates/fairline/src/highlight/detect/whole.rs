@@ -18,9 +18,11 @@
 //! join the result; elsewhere the coarser array's judgement stands (its
 //! noise floors were estimated over the whole part at its own scale).
 
+use super::regions::area_share;
+use super::sites::Scale;
 use super::{
-    DetectOptions, Detection, HighlightError, HighlightLines, IrregularRegion, LightArray, Scale,
-    area_share, detect_irregularities,
+    DetectOptions, Detection, HighlightError, HighlightLines, IrregularRegion, LightArray,
+    detect_irregularities,
 };
 use crate::geom;
 use crate::mesh::{FaceId, SurfaceMesh};

@@ -61,7 +61,11 @@
 //! covers defects up to that size (measured: a dent 2 spacings wide on the
 //! 5k-vertex panel is flagged by the normal measure, not by this one).
 
-use super::{FLAT_SPOT_WAVELENGTH as WAVELENGTH, Grid, Site, median};
+use super::FLAT_SPOT_WAVELENGTH as WAVELENGTH;
+use super::fits::frame;
+use super::grid::Grid;
+use super::noise::median;
+use super::report::Site;
 use crate::Vec3;
 use crate::geom;
 use crate::mesh::SurfaceMesh;
@@ -293,7 +297,7 @@ pub(super) fn most_curved_direction(
     reference: &glam::DMat3,
     tensor: &glam::DMat3,
 ) -> (f64, f64) {
-    let (bx, by) = super::frame(n0);
+    let (bx, by) = frame(n0);
     let k = |m: &glam::DMat3, t: Vec3| t.dot(*m * t);
     let (mut best_t, mut best_k) = (bx, 0.0f64);
     for i in 0..36 {
