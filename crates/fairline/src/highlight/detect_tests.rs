@@ -409,3 +409,20 @@ fn faces_not_judged_are_the_shape_finer_than_the_scale() {
     let clean = field(161, panel);
     assert!(detect(&clean).shape_faces(&clean).is_empty());
 }
+
+/// On a mesh whose faces are larger than the site spacing (a coarse
+/// icosphere: every site turns by more than the measure allows, so none is
+/// judged), the faces far from every site are counted by their corner
+/// sites: the whole part is reported not judged, not < 1 % of it.
+#[test]
+fn a_coarse_part_with_no_site_judged_is_reported_wholly_not_judged() {
+    let ball = shapes::icosphere(1.0, 1);
+    let d = detect(&ball);
+    assert!(d.sites.iter().all(|s| s.score.is_none()), "{}", summary(&d));
+    assert!(
+        d.not_judged_fraction > 0.99,
+        "not judged {} of the part: {}",
+        d.not_judged_fraction,
+        summary(&d)
+    );
+}

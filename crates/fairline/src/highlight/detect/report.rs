@@ -253,11 +253,20 @@ impl Detection {
     }
 
     /// The faces whose centroid's nearest site is not judged and not on the
-    /// border (see [`Self::shape_faces`]).
+    /// border (see [`Self::shape_faces`]). A face with no site within two
+    /// site cells of its centroid (faces larger than the site spacing on a
+    /// coarse mesh) takes the nearest site among its own corners; a face
+    /// with neither was looked at by no site and is not judged either.
     pub(super) fn nearest_unjudged_faces(&self, mesh: &SurfaceMesh) -> Vec<FaceId> {
         let shape = |s: &Site| s.score.is_none() && !mesh.is_boundary_vertex(s.vertex);
         if !self.sites.iter().any(shape) || !(self.site_cell > 0.0) {
             return Vec::new();
+        }
+        let mut site_of = vec![u32::MAX; mesh.vertex_count()];
+        for (i, s) in self.sites.iter().enumerate() {
+            if let Some(slot) = site_of.get_mut(s.vertex.idx()) {
+                *slot = i as u32;
+            }
         }
         let reach = 2.0 * self.site_cell;
         let grid = Grid::new(
@@ -282,9 +291,25 @@ impl Detection {
                         nearest = Some((d, i));
                     }
                 });
-                nearest
-                    .filter(|&(d, i)| d <= reach * reach && shape(&self.sites[i as usize]))
-                    .map(|_| face)
+                let nearest = nearest.filter(|&(d, _)| d <= reach * reach).or_else(|| {
+                    // no site near the centroid: the nearest corner site
+                    [a, b, c]
+                        .iter()
+                        .filter_map(|v| {
+                            let i = site_of[v.idx()];
+                            (i != u32::MAX).then(|| {
+                                (
+                                    (self.sites[i as usize].position - centroid).length_squared(),
+                                    i,
+                                )
+                            })
+                        })
+                        .min_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)))
+                });
+                match nearest {
+                    Some((_, i)) => shape(&self.sites[i as usize]).then_some(face),
+                    None => Some(face),
+                }
             })
             .collect()
     }
