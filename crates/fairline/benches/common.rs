@@ -3,6 +3,8 @@
 
 #![allow(dead_code)]
 
+use fairline::SurfaceMesh;
+use fairline::mesh::bounding_box;
 use std::time::Instant;
 
 /// Median wall time in seconds of `runs` calls of `f` (after one warm-up).
@@ -97,4 +99,86 @@ pub fn median_wall_cpu<T>(runs: usize, mut f: impl FnMut() -> T) -> (f64, f64) {
     wall.sort_by(|a, b| a.total_cmp(b));
     cpu.sort_by(|a, b| a.total_cmp(b));
     (wall[wall.len() / 2], cpu[cpu.len() / 2])
+}
+
+/// Each triangle split into four at its edge midpoints (a shared midpoint
+/// per edge), `times` times: a real scan at a larger vertex count, with
+/// the scan's own shape and irregular sampling.
+pub fn split4(mesh: &SurfaceMesh, times: u32) -> SurfaceMesh {
+    let mut m = mesh.clone();
+    for _ in 0..times {
+        let mut pos = m.positions().to_vec();
+        let mut mid = std::collections::HashMap::new();
+        let mut faces: Vec<[u32; 3]> = Vec::with_capacity(4 * m.face_count());
+        for f in m.faces() {
+            let t = m.triangle(f).map(|v| v.0);
+            let mut e = [0u32; 3];
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                let key = (a.min(b), a.max(b));
+                e[k] = *mid.entry(key).or_insert_with(|| {
+                    pos.push(0.5 * (pos[a as usize] + pos[b as usize]));
+                    (pos.len() - 1) as u32
+                });
+            }
+            faces.push([t[0], e[0], e[2]]);
+            faces.push([t[1], e[1], e[0]]);
+            faces.push([t[2], e[2], e[1]]);
+            faces.push([e[0], e[1], e[2]]);
+        }
+        m = SurfaceMesh::new(pos, &faces).expect("split mesh");
+    }
+    m
+}
+
+/// The part of `mesh` below a plane across its longest bounding-box axis,
+/// placed so that about `target` vertices remain: a real scan cut to a
+/// given size, with the scan's own vertex and face order (kept vertices
+/// and faces in their input order).
+pub fn cut_to(mesh: &SurfaceMesh, target: usize) -> SurfaceMesh {
+    let p = mesh.positions();
+    let (lo, hi) = bounding_box(p).expect("vertices");
+    let ext = hi - lo;
+    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
+    let mut coord: Vec<f64> = p.iter().map(|q| q[axis]).collect();
+    let k = target.min(coord.len() - 1);
+    let (_, &mut cut, _) = coord.select_nth_unstable_by(k, f64::total_cmp);
+    let keep: Vec<bool> = p.iter().map(|q| q[axis] < cut).collect();
+    let mut id = vec![u32::MAX; p.len()];
+    let mut pos = Vec::new();
+    for (i, q) in p.iter().enumerate() {
+        if keep[i] {
+            id[i] = pos.len() as u32;
+            pos.push(*q);
+        }
+    }
+    let faces: Vec<[u32; 3]> = mesh
+        .faces()
+        .map(|f| mesh.triangle(f).map(|v| v.0))
+        .filter(|t| t.iter().all(|&v| keep[v as usize]))
+        .map(|t| t.map(|v| id[v as usize]))
+        .collect();
+    // vertices of no kept face would be isolated: drop them too
+    let mut used = vec![false; pos.len()];
+    for t in &faces {
+        for &v in t {
+            used[v as usize] = true;
+        }
+    }
+    let mut id2 = vec![u32::MAX; pos.len()];
+    let mut pos2 = Vec::new();
+    for (i, q) in pos.iter().enumerate() {
+        if used[i] {
+            id2[i] = pos2.len() as u32;
+            pos2.push(*q);
+        }
+    }
+    let faces: Vec<[u32; 3]> = faces.iter().map(|t| t.map(|v| id2[v as usize])).collect();
+    SurfaceMesh::new(pos2, &faces).expect("cut mesh")
 }

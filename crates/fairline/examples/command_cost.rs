@@ -8,6 +8,9 @@
 //! halfedge mesh, `inspect`, writing PLY/OBJ and curvature (the smoothing
 //! commands report their own computation time in `--report`'s `time_s`).
 //! Compare with the whole command (`scripts/command-cost`).
+//! `... -- split-scan IN OUT N` writes the real scan IN split 4 × 4 twice
+//! and cut to about N vertices (as the highlight benchmarks make it) to OUT
+//! (binary PLY): a real scan at a production size.
 
 #[path = "../benches/common.rs"]
 mod common;
@@ -100,8 +103,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 println!("| {name} | {wall:.4} | {cpu:.4} |");
             }
         }
+        Some("split-scan") if args.len() == 4 => {
+            let scan = fairline::io::read_mesh(&args[1])?;
+            let target: usize = args[3].parse()?;
+            let mesh = common::cut_to(&common::split4(&scan, 2), target);
+            fairline::io::write_mesh(&args[2], &mesh)?;
+            println!(
+                "{}: {} vertices, {} faces",
+                args[2],
+                mesh.vertex_count(),
+                mesh.face_count()
+            );
+        }
         _ => {
-            eprintln!("usage: command_cost write DIR N[,N..] | command_cost time FILE [RUNS]");
+            eprintln!(
+                "usage: command_cost write DIR N[,N..] | command_cost time FILE [RUNS] | command_cost split-scan IN OUT N"
+            );
             std::process::exit(2);
         }
     }
