@@ -1,8 +1,9 @@
 //! Bounded surfaces (entity 143) read as trimmed surfaces.
 
 use super::{
-    Conversions, Iges, IgesError, IgesSurface, Revolved, TrimLoop, boundary::Piece,
-    boundary::project_boundary, faces, params::INT, params::param, surfaces, trimmed::Faces,
+    Conversions, Iges, IgesError, IgesSurface, Param, Revolved, TrimLoop, boundary::Piece,
+    boundary::project_boundary, faces, faces::PlaneLoop, params::INT, params::param, surfaces,
+    trimmed::Faces,
 };
 use crate::bspline::BSplineSurface;
 
@@ -39,6 +40,23 @@ impl Iges<'_> {
                     format!("surface pointer {base} is not a directory entry"),
                 ));
             };
+            if self.dir[b].entity_type == 108 {
+                if f.planes[b].is_some() || f.loops[b].is_some() {
+                    f.bounded_failed[k] = Some(format!(
+                        "its base surface {} is trimmed by another entity",
+                        self.describe_entity(b)
+                    ));
+                    continue;
+                }
+                match self.bounded_plane(k, b, &p, line) {
+                    Ok(s) => f.planes[b] = Some(s),
+                    Err(e @ IgesError::Unsupported { .. }) => {
+                        f.bounded_failed[k] = Some(e.to_string())
+                    }
+                    Err(e) => return Err(e),
+                }
+                continue;
+            }
             type Map<'a> = Box<dyn Fn(TrimLoop) -> Result<TrimLoop, String> + 'a>;
             let (surface, map): (&BSplineSurface, Option<Map<'_>>) = match (
                 &bsplines[b],
@@ -57,7 +75,7 @@ impl Iges<'_> {
                     f.bounded_failed[k] = Some(match &conv.failed[b] {
                         Some(m) => format!("its base surface, {}: {m}", self.describe_entity(b)),
                         None => format!(
-                            "a bounded surface (143) on {}: fairline reads them on 114, 118, 120, 122, 128 and 140",
+                            "a bounded surface (143) on {}: fairline reads them on 108, 114, 118, 120, 122, 128 and 140",
                             self.describe_entity(b)
                         ),
                     });
@@ -112,16 +130,35 @@ impl Iges<'_> {
         with_pcurves: bool,
         map: Option<&dyn Fn(TrimLoop) -> Result<TrimLoop, String>>,
     ) -> Result<TrimLoop, IgesError> {
+        let curves = self.curves_141(k, with_pcurves && map.is_some())?;
+        if let (Some(pieces), Some(map)) = (curves.parameter, map) {
+            let trims = pieces
+                .iter()
+                .map(Piece::to_trim)
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|m| self.entity_error(k, curves.line, m))?;
+            return map(TrimLoop { curves: trims })
+                .map_err(|m| self.entity_error(k, curves.line, m));
+        }
+        project_boundary(surface, &curves.model).map_err(|m| self.entity_error(k, curves.line, m))
+    }
+
+    /// The curves of the boundary entity (141) `k` (IGES 5.3 §4.31: `TYPE
+    /// PREF SPTR N`, then per curve `CRVPT SENSE K PSCPT1..K`), each
+    /// reversed where `SENSE = 2`: the model-space ones, and the
+    /// parameter-space ones when `want_parameter` and the entity has them
+    /// for every curve (`TYPE = 1`, `K ≥ 1`).
+    fn curves_141(&self, k: usize, want_parameter: bool) -> Result<Curves141, IgesError> {
         let p = self.parameters(k)?;
         let line = p.first().map_or(self.dir[k].line, |t| t.1);
-        let pcurves = with_pcurves && param(self, k, &p, 1, line, &INT)? == 1;
+        let pcurves = want_parameter && param(self, k, &p, 1, line, &INT)? == 1;
         let n = param(self, k, &p, 4, line, &INT)?;
         let n = usize::try_from(n)
             .ok()
             .filter(|&n| n >= 1 && n < p.len())
             .ok_or_else(|| self.entity_error(k, line, format!("{n} curves")))?;
         let mut model = Vec::new();
-        let mut params: Option<Vec<Piece>> = map.filter(|_| pcurves).map(|_| Vec::new());
+        let mut params: Option<Vec<Piece>> = pcurves.then(Vec::new);
         let mut at = 5;
         for _ in 0..n {
             let crv = param(self, k, &p, at, line, &INT)?;
@@ -163,16 +200,55 @@ impl Iges<'_> {
             }
             at += 3 + count;
         }
-        if let (Some(pieces), Some(map)) = (params, map) {
-            let curves = pieces
-                .iter()
-                .map(Piece::to_trim)
-                .collect::<Result<Vec<_>, _>>()
-                .map_err(|m| self.entity_error(k, line, m))?;
-            return map(TrimLoop { curves }).map_err(|m| self.entity_error(k, line, m));
-        }
-        project_boundary(surface, &model).map_err(|m| self.entity_error(k, line, m))
+        Ok(Curves141 {
+            line,
+            model,
+            parameter: params,
+        })
     }
+
+    /// A plane (108) bounded by the 143 `k` (parameters `p`): its
+    /// boundaries' model-space curves are its loops ([`Iges::plane_patch`]).
+    fn bounded_plane(
+        &self,
+        k: usize,
+        b: usize,
+        p: &[(Param, usize)],
+        line: usize,
+    ) -> Result<IgesSurface, IgesError> {
+        let n = param(self, k, p, 3, line, &INT)?;
+        let n = usize::try_from(n)
+            .ok()
+            .filter(|&n| n >= 1 && n < p.len())
+            .ok_or_else(|| self.entity_error(k, line, format!("{n} boundaries")))?;
+        let mut loops = Vec::with_capacity(n);
+        for i in 0..n {
+            let de = param(self, k, p, 4 + i, line, &INT)?;
+            let bk = self
+                .entry(de)
+                .filter(|&j| self.dir[j].entity_type == 141)
+                .ok_or_else(|| {
+                    self.entity_error(k, line, format!("boundary {de} is not an entity 141"))
+                })?;
+            let curves = self.curves_141(bk, false)?;
+            loops.push(PlaneLoop {
+                entity: bk,
+                line: curves.line,
+                pieces: curves.model,
+            });
+        }
+        self.plane_patch(k, line, b, &loops)
+    }
+}
+
+/// The curves of a boundary entity (141) along its loop.
+struct Curves141 {
+    /// The entity's line, for messages.
+    line: usize,
+    /// Model-space curves.
+    model: Vec<Piece>,
+    /// Parameter-space curves, where asked for and given for every curve.
+    parameter: Option<Vec<Piece>>,
 }
 
 /// Appends a curve's pieces, in reverse order and each reversed when

@@ -1,5 +1,6 @@
-//! Faces of an IGES file beyond the B-spline surface: trimmed planes
-//! (entity 108 under a 144) and the census of faces that cannot be read.
+//! Faces of an IGES file beyond the B-spline surface: trimmed and bounded
+//! planes (entity 108 under a 144 or a 143) and the census of faces that
+//! cannot be read.
 
 use super::{
     ArcMap, Conversions, Iges, IgesError, IgesSurface, Nurbs3, Param, Revolved, TrimCurve,
@@ -110,20 +111,77 @@ impl Iges<'_> {
     }
 
     /// A plane (entity 108, IGES 5.3 §4.12: `A B C D`, the plane `Ax + By +
-    /// Cz = D`) trimmed by the 144 `k`: a bilinear NURBS patch whose
-    /// parameters are Cartesian coordinates in the plane (origin the foot
-    /// of the perpendicular from the model origin, axes `x̂ × n`-based
-    /// right-handed with the plane's normal `(A, B, C)`), spanning the
-    /// control points of the boundaries. The boundaries are the 142s'
-    /// model-space curves (`CPTR`; a plane has no parameter space in IGES),
-    /// mapped into the plane's coordinates by its affine frame: exact, as
-    /// rational B-splines are invariant under affine maps.
+    /// Cz = D`) trimmed by the 144 `k`: the 142s' model-space curves
+    /// (`CPTR`; a plane has no parameter space in IGES) are its loops
+    /// ([`Iges::plane_patch`]).
     pub(super) fn plane_face(
         &self,
         k: usize,
         b: usize,
         p: &[(Param, usize)],
         line: usize,
+    ) -> Result<IgesSurface, IgesError> {
+        let n1 = param(self, k, p, 2, line, &INT)?;
+        let n2 = param(self, k, p, 3, line, &INT)?;
+        if n1 == 0 {
+            return Err(self.unsupported(
+                k,
+                line,
+                "a plane (108) trimmed without an outer boundary (N1 = 0) has no extent".into(),
+            ));
+        }
+        let holes = usize::try_from(n2)
+            .ok()
+            .filter(|&h| h < p.len())
+            .ok_or_else(|| self.entity_error(k, line, format!("N2 = {n2} inner boundaries")))?;
+        let mut loops = Vec::with_capacity(holes + 1);
+        for slot in 4..5 + holes {
+            let de = param(self, k, p, slot, line, &INT)?;
+            let b142 = self.entry(de).filter(|&j| self.dir[j].entity_type == 142);
+            let Some(j) = b142 else {
+                return Err(self.entity_error(
+                    k,
+                    line,
+                    format!("boundary {de} is not an entity 142"),
+                ));
+            };
+            let pj = self.parameters(j)?;
+            let lj = pj.first().map_or(self.dir[j].line, |t| t.1);
+            let cptr = param(self, j, &pj, 4, lj, &INT)?;
+            let curve = self.entry(cptr).ok_or_else(|| {
+                self.unsupported(
+                    j,
+                    lj,
+                    format!("a boundary of a plane needs its model-space curve (CPTR = {cptr})"),
+                )
+            })?;
+            let mut pieces = Vec::new();
+            self.curve_pieces(curve, 0, &mut pieces)?;
+            loops.push(PlaneLoop {
+                entity: j,
+                line: lj,
+                pieces,
+            });
+        }
+        self.plane_patch(k, line, b, &loops)
+    }
+
+    /// The plane `b` (entity 108) bounded by `loops` (model space; the
+    /// first the outer one) for the trimmed or bounded surface `k`: a
+    /// bilinear NURBS patch whose parameters are Cartesian coordinates in
+    /// the plane (origin the foot of the perpendicular from the model
+    /// origin, axes `x̂ × n`-based right-handed with the plane's normal
+    /// `(A, B, C)`), spanning the control points of the loops, which are
+    /// mapped into the plane's coordinates by its affine frame: exact, as
+    /// rational B-splines are invariant under affine maps. A loop that
+    /// leaves the plane, is empty or encloses no area is an error naming
+    /// its entity.
+    pub(super) fn plane_patch(
+        &self,
+        k: usize,
+        line: usize,
+        b: usize,
+        model: &[PlaneLoop],
     ) -> Result<IgesSurface, IgesError> {
         let pb = self.parameters(b)?;
         let lb = pb.first().map_or(self.dir[b].line, |t| t.1);
@@ -159,50 +217,22 @@ impl Iges<'_> {
             ex = (ex - normal * ex.dot(normal)).normalize();
         }
         let ey = normal.cross(ex);
-        let n1 = param(self, k, p, 2, line, &INT)?;
-        let n2 = param(self, k, p, 3, line, &INT)?;
-        if n1 == 0 {
-            return Err(self.unsupported(
-                k,
-                line,
-                "a plane (108) trimmed without an outer boundary (N1 = 0) has no extent".into(),
-            ));
-        }
-        let holes = usize::try_from(n2)
-            .ok()
-            .filter(|&h| h < p.len())
-            .ok_or_else(|| self.entity_error(k, line, format!("N2 = {n2} inner boundaries")))?;
-        let mut loops = Vec::with_capacity(holes + 1);
+        let mut loops = Vec::with_capacity(model.len());
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for slot in 4..5 + holes {
-            let de = param(self, k, p, slot, line, &INT)?;
-            let b142 = self.entry(de).filter(|&j| self.dir[j].entity_type == 142);
-            let Some(j) = b142 else {
-                return Err(self.entity_error(
-                    k,
-                    line,
-                    format!("boundary {de} is not an entity 142"),
-                ));
-            };
-            let pj = self.parameters(j)?;
-            let lj = pj.first().map_or(self.dir[j].line, |t| t.1);
-            let cptr = param(self, j, &pj, 4, lj, &INT)?;
-            let curve = self.entry(cptr).ok_or_else(|| {
-                self.unsupported(
-                    j,
-                    lj,
-                    format!("a boundary of a plane needs its model-space curve (CPTR = {cptr})"),
-                )
-            })?;
-            let mut pieces = Vec::new();
-            self.curve_pieces(curve, 0, &mut pieces)?;
+        for PlaneLoop {
+            entity: j,
+            line: lj,
+            pieces,
+        } in model
+        {
+            let (j, lj) = (*j, *lj);
             let size = pieces
                 .iter()
                 .flat_map(|q| q.points.iter())
                 .map(|q| (*q - origin).length())
                 .fold(1.0_f64, f64::max);
             let mut curves = Vec::with_capacity(pieces.len());
-            for piece in &pieces {
+            for piece in pieces {
                 let mut uv = Vec::with_capacity(piece.points.len());
                 for q in &piece.points {
                     let d = *q - origin;
@@ -267,6 +297,15 @@ impl Iges<'_> {
             trim_entity: Some(2 * k + 1),
         })
     }
+}
+
+/// One boundary of a plane in model space: the boundary entity (142 or
+/// 141, for messages), its line, and its curves as B-spline pieces in
+/// order along the loop.
+pub(super) struct PlaneLoop {
+    pub(super) entity: usize,
+    pub(super) line: usize,
+    pub(super) pieces: Vec<super::boundary::Piece>,
 }
 
 /// A boundary whose curves do not follow each other end to start (a

@@ -412,12 +412,48 @@ fn iges_bounded_surface_is_read_from_model_or_parameter_space_boundaries() {
         assert!((area - 1.0).abs() < 1e-9, "p-curves {with_pcurves}: {area}");
     }
 
-    // a bounded surface on a surface fairline does not read is listed
+    // a plane (108, z = 0) bounded by the same square (a composite curve)
+    // with a square hole 0.5 wide whose four lines are listed last to
+    // first, each reversed (SENSE = 2)
+    let hole = [
+        "110,1.25,.75,0.,1.75,.75,0.;",
+        "110,1.75,.75,0.,1.75,1.25,0.;",
+        "110,1.75,1.25,0.,1.25,1.25,0.;",
+        "110,1.25,1.25,0.,1.25,.75,0.;",
+    ];
+    let imp = parse_iges(&iges_file(
+        GLOBAL,
+        &[
+            (143, 0, 0, "143,0,3,2,5,7;"),
+            (108, 0, 0, "108,0.,0.,1.,0.,0,0.,0.,0.,0.;"),
+            (141, 0, 0, "141,0,0,3,1,9,1,0;"),
+            (141, 0, 0, "141,0,0,3,4,25,2,0,23,2,0,21,2,0,19,2,0;"),
+            (102, 0, 0, "102,4,11,13,15,17;"),
+            (110, 0, 0, model[0]),
+            (110, 0, 0, model[1]),
+            (110, 0, 0, model[2]),
+            (110, 0, 0, model[3]),
+            (110, 0, 0, hole[0]),
+            (110, 0, 0, hole[1]),
+            (110, 0, 0, hole[2]),
+            (110, 0, 0, hole[3]),
+        ],
+    ))
+    .unwrap();
+    assert!(imp.unreadable.is_empty(), "{:?}", imp.unreadable);
+    assert_eq!(imp.surfaces.len(), 1);
+    let plane = &imp.surfaces[0];
+    assert_eq!((plane.entity_type, plane.trim_entity), (108, Some(1)));
+    assert_eq!(plane.surface.trims().len(), 2);
+    let area = trimmed_area(&plane.surface, 64, 64);
+    assert!((area - 0.75).abs() < 1e-9, "{area}");
+
+    // a bounded surface on what is not a surface is listed
     let imp = parse_iges(&iges_file(
         GLOBAL,
         &[
             (143, 0, 0, "143,0,3,1,5;"),
-            (108, 0, 0, "108,0.,0.,1.,0.,0,0.,0.,0.,0.;"),
+            (110, 0, 0, "110,0.,0.,0.,1.,0.,0.;"),
             (141, 0, 0, "141,0,0,3,1,7,1,0;"),
             (110, 0, 0, "110,0.,0.,0.,1.,0.,0.;"),
         ],
