@@ -90,21 +90,10 @@ impl Iges<'_> {
                 continue;
             }
             let with_pcurves = param(self, k, &p, 1, line, &INT)? == 1;
-            let n = param(self, k, &p, 3, line, &INT)?;
-            let n = usize::try_from(n)
-                .ok()
-                .filter(|&n| n >= 1 && n < p.len())
-                .ok_or_else(|| self.entity_error(k, line, format!("{n} boundaries")))?;
-            let mut loops = Vec::with_capacity(n);
+            let boundaries = self.boundaries_143(k, &p, line)?;
+            let mut loops = Vec::with_capacity(boundaries.len());
             let mut failed = None;
-            for i in 0..n {
-                let de = param(self, k, &p, 4 + i, line, &INT)?;
-                let bk = self
-                    .entry(de)
-                    .filter(|&j| self.dir[j].entity_type == 141)
-                    .ok_or_else(|| {
-                        self.entity_error(k, line, format!("boundary {de} is not an entity 141"))
-                    })?;
+            for bk in boundaries {
                 match self.boundary_141(bk, surface, with_pcurves, map.as_deref()) {
                     Ok(l) => loops.push(faces::chained(l)),
                     Err(e @ IgesError::Unsupported { .. }) => {
@@ -207,6 +196,32 @@ impl Iges<'_> {
         })
     }
 
+    /// The boundary entities (141) of the bounded surface (143) `k`
+    /// (parameters `p`: `TYPE SPTR N BDPT1..N`), by directory index, the
+    /// outer one first.
+    fn boundaries_143(
+        &self,
+        k: usize,
+        p: &[(Param, usize)],
+        line: usize,
+    ) -> Result<Vec<usize>, IgesError> {
+        let n = param(self, k, p, 3, line, &INT)?;
+        let n = usize::try_from(n)
+            .ok()
+            .filter(|&n| n >= 1 && n < p.len())
+            .ok_or_else(|| self.entity_error(k, line, format!("{n} boundaries")))?;
+        (0..n)
+            .map(|i| {
+                let de = param(self, k, p, 4 + i, line, &INT)?;
+                self.entry(de)
+                    .filter(|&j| self.dir[j].entity_type == 141)
+                    .ok_or_else(|| {
+                        self.entity_error(k, line, format!("boundary {de} is not an entity 141"))
+                    })
+            })
+            .collect()
+    }
+
     /// A plane (108) bounded by the 143 `k` (parameters `p`): its
     /// boundaries' model-space curves are its loops ([`Iges::plane_patch`]).
     fn bounded_plane(
@@ -216,20 +231,9 @@ impl Iges<'_> {
         p: &[(Param, usize)],
         line: usize,
     ) -> Result<IgesSurface, IgesError> {
-        let n = param(self, k, p, 3, line, &INT)?;
-        let n = usize::try_from(n)
-            .ok()
-            .filter(|&n| n >= 1 && n < p.len())
-            .ok_or_else(|| self.entity_error(k, line, format!("{n} boundaries")))?;
-        let mut loops = Vec::with_capacity(n);
-        for i in 0..n {
-            let de = param(self, k, p, 4 + i, line, &INT)?;
-            let bk = self
-                .entry(de)
-                .filter(|&j| self.dir[j].entity_type == 141)
-                .ok_or_else(|| {
-                    self.entity_error(k, line, format!("boundary {de} is not an entity 141"))
-                })?;
+        let boundaries = self.boundaries_143(k, p, line)?;
+        let mut loops = Vec::with_capacity(boundaries.len());
+        for bk in boundaries {
             let curves = self.curves_141(bk, false)?;
             loops.push(PlaneLoop {
                 entity: bk,
