@@ -212,6 +212,27 @@ def offset_bspline():
     return BRepBuilderAPI_MakeFace(Geom_OffsetSurface(bs, 1.5), 1e-7).Face()
 
 
+def offset_cone():
+    """One face: the offset by 1.5 of a cone of semi-angle 0.4 and radius
+    5 (OCCT's v runs along the generatrix), 2 rad around and 8 along: the
+    point at v lies at radius 5 + v sin 0.4 + 1.5 cos 0.4."""
+    from OCP.Geom import Geom_ConicalSurface, Geom_OffsetSurface
+
+    cone = Geom_ConicalSurface(gp_Ax3(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 0.4, 5.0)
+    return BRepBuilderAPI_MakeFace(Geom_OffsetSurface(cone, 1.5), 0.0, 2.0, 0.0, 8.0, 1e-7).Face()
+
+
+def offset_revolved():
+    """One face: the offset by 1 of the surface of revolution of an
+    ellipse (semi-axes 8 along z, 5 along x, centred at x = 12) about z,
+    1.5 rad around, half the ellipse (fairline fits it)."""
+    from OCP.Geom import Geom_Ellipse, Geom_OffsetSurface, Geom_SurfaceOfRevolution
+
+    el = Geom_Ellipse(gp_Elips(gp_Ax2(gp_Pnt(12, 0, 0), gp_Dir(0, -1, 0), gp_Dir(0, 0, 1)), 8.0, 5.0))
+    s = Geom_SurfaceOfRevolution(el, _z_axis())
+    return BRepBuilderAPI_MakeFace(Geom_OffsetSurface(s, 1.0), 0.0, 1.5, 0.0, math.pi, 1e-7).Face()
+
+
 def half_ellipse_perimeter(a: float, b: float, n: int = 20000) -> float:
     """The length of half an ellipse with semi-axes a, b: the midpoint rule
     on a smooth periodic integrand (converges geometrically; 1e-13 here)."""
@@ -250,6 +271,8 @@ PARTS = {
     "extruded-circle": (extruded_circle, 2 * math.pi * 3 * 4),
     "offset-cylinder": (offset_cylinder, 12 * 2 * 5),
     "offset-bspline": (offset_bspline, None),
+    "offset-cone": (offset_cone, 2 * (8 * (5 + 1.5 * math.cos(0.4)) + 32 * math.sin(0.4))),
+    "offset-revolved": (offset_revolved, None),
 }
 
 

@@ -172,7 +172,7 @@ def test_a_cad_file_with_no_readable_face_is_refused_naming_it(tmp_path):
     f.write_text(
         "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT('',(0.,0.,0.));\n"
         "#2=DIRECTION('',(0.,0.,1.));\n#3=AXIS2_PLACEMENT_3D('',#1,#2,$);\n"
-        "#4=CONICAL_SURFACE('',#3,1.,0.3);\n#5=OFFSET_SURFACE('',#4,1.,.F.);\n#6=ADVANCED_FACE('',(),#5,.T.);\n"
+        "#4=DEGENERATE_TOROIDAL_SURFACE('',#3,1.,2.,.T.);\n#5=OFFSET_SURFACE('',#4,1.,.F.);\n#6=ADVANCED_FACE('',(),#5,.T.);\n"
         "ENDSEC;\nEND-ISO-10303-21;\n"
     )
     for skip in (False, True):

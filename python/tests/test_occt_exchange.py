@@ -54,14 +54,17 @@ MUST_READ = {
     for fmt in ("step", "brep.igs", "igs")
 } | {
     f"{n}.{fmt}"
-    for n in ("extruded-circle", "offset-cylinder", "offset-bspline")
+    for n in ("extruded-circle", "offset-cylinder", "offset-bspline", "offset-cone", "offset-revolved")
     for fmt in ("igs", "brep.igs")
-} | {"extruded-circle.step", "offset-cylinder.step", "offset-bspline.step"}
+} | {
+    f"{n}.step"
+    for n in ("extruded-circle", "offset-cylinder", "offset-bspline", "offset-cone", "offset-revolved")
+}
 # Files read with a warning that names an approximated face: an offset
-# surface (140) of a B-spline surface, which fairline fits by a bicubic
-# B-spline within 1e-7 of its size (the offset cylinder, a 140 of a line
-# revolved or of a cylinder 192, is exact).
-APPROXIMATED = {"offset-bspline.igs", "offset-bspline.brep.igs", "offset-bspline.step"}
+# surface (140, OFFSET_SURFACE) of a B-spline surface or of a curved
+# surface of revolution, which fairline fits by a bicubic B-spline within
+# 1e-7 of its size (the offsets of a cylinder and of a cone are exact).
+APPROXIMATED = {f"{n}.{fmt}" for n in ("offset-bspline", "offset-revolved") for fmt in FORMATS}
 
 
 @pytest.fixture(scope="session")

@@ -136,7 +136,7 @@ fn bad_step_input_exits_2_naming_the_entity() {
         &f,
         "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT('',(0.,0.,0.));\n\
          #2=DIRECTION('',(0.,0.,1.));\n#3=AXIS2_PLACEMENT_3D('',#1,#2,$);\n\
-         #4=CONICAL_SURFACE('',#3,1.,0.3);\n#5=OFFSET_SURFACE('',#4,1.,.F.);\n#6=ADVANCED_FACE('',(),#5,.T.);\n\
+         #4=DEGENERATE_TOROIDAL_SURFACE('',#3,1.,2.,.T.);\n#5=OFFSET_SURFACE('',#4,1.,.F.);\n#6=ADVANCED_FACE('',(),#5,.T.);\n\
          ENDSEC;\nEND-ISO-10303-21;\n",
     )
     .unwrap();

@@ -409,7 +409,7 @@ fn plant(mesh: &SurfaceMesh, kind: Kind, rng: &mut Rng, diag: f64) -> Option<Def
 
 /// Detection options: the defaults, or for tuning runs (tuning seeds
 /// only) `--margin M`, `--noise-factor K`, `--smooth-radius R`,
-/// `--threshold T`, `--discretisation-factor K`.
+/// `--threshold T`, `--discretisation-factor K`, `--fine-radius F`.
 fn detect_options() -> DetectOptions {
     let args: Vec<String> = std::env::args().collect();
     let value = |f: &str| {
@@ -433,6 +433,9 @@ fn detect_options() -> DetectOptions {
     }
     if let Some(v) = value("--discretisation-factor") {
         o = o.discretisation_factor(v);
+    }
+    if let Some(v) = value("--fine-radius") {
+        o = o.fine_radius(v);
     }
     o
 }

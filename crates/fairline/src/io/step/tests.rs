@@ -326,10 +326,12 @@ fn step_units_and_errors_name_the_entity() {
     ));
     let imp = parse_step(&f.text()).unwrap();
     assert_eq!(imp.unit, Some(LengthUnit::from_iges_name("IN").unwrap()));
-    // An unsupported surface type: the offset of a cone.
+    // An unsupported surface type: the offset of a degenerate torus.
     let mut g = File::default();
     let frame = g.frame([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
-    let plane = g.add(&format!("CONICAL_SURFACE('',#{frame},1.,0.3)"));
+    let plane = g.add(&format!(
+        "DEGENERATE_TOROIDAL_SURFACE('',#{frame},1.,2.,.T.)"
+    ));
     let off = g.add(&format!("OFFSET_SURFACE('',#{plane},1.,.F.)"));
     let v = g.vertex([1.0, 0.0, 0.0]);
     let c = g.circle([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], 1.0, v, v, true);
@@ -338,7 +340,7 @@ fn step_units_and_errors_name_the_entity() {
     let err = parse_step(&g.text()).unwrap_err().to_string();
     assert!(
         err.contains(&format!(
-            "#{off} OFFSET_SURFACE: an offset of a CONICAL_SURFACE is not supported"
+            "#{off} OFFSET_SURFACE: an offset of a DEGENERATE_TOROIDAL_SURFACE is not supported"
         )),
         "{err}"
     );
@@ -2027,4 +2029,152 @@ fn step_offsets_of_elementary_surfaces_are_exact() {
     let (du, dv) = (s.domain_u(), s.domain_v());
     let mid = s.eval(0.5 * (du[0] + du[1]), 0.5 * (dv[0] + dv[1]));
     assert!((mid.z - 0.3).abs() < 1e-12, "{mid:?}");
+}
+
+/// The largest distance of the surface's points on a 9 × 9 parameter grid
+/// from `d` off the surface of revolution about z of the meridian curve
+/// `meridian` (ρ, z) over [0, 1], measured in the meridian plane.
+fn off_revolution_error(s: &BSplineSurface, meridian: impl Fn(f64) -> (f64, f64), d: f64) -> f64 {
+    let (du, dv) = (s.domain_u(), s.domain_v());
+    let mut worst = 0.0f64;
+    for i in 0..9 {
+        for j in 0..9 {
+            let u = du[0] + (du[1] - du[0]) * i as f64 / 8.0;
+            let v = dv[0] + (dv[1] - dv[0]) * j as f64 / 8.0;
+            let p = s.eval(u, v);
+            let (rho, z) = (p.x.hypot(p.y), p.z);
+            let dist = |t: f64| {
+                let (r, h) = meridian(t);
+                (r - rho).hypot(h - z)
+            };
+            let mut best = (0..=2000)
+                .map(|k| k as f64 / 2000.0)
+                .min_by(|a, b| dist(*a).total_cmp(&dist(*b)))
+                .unwrap();
+            let mut step = 1.0 / 2000.0;
+            for _ in 0..60 {
+                for cand in [best - step, best + step] {
+                    if (0.0..=1.0).contains(&cand) && dist(cand) < dist(best) {
+                        best = cand;
+                    }
+                }
+                step *= 0.6;
+            }
+            worst = worst.max((dist(best) - d).abs());
+        }
+    }
+    worst
+}
+
+/// OFFSET_SURFACE of a cone (a cone of the same angle, exactly), of a
+/// surface of revolution of a line (the line moved and revolved, exactly),
+/// of a curved surface of revolution and of an extrusion (the face's NURBS
+/// offset on its parameters, fitted within 1e-7 and warned).
+#[test]
+fn step_offsets_of_cones_and_swept_surfaces() {
+    // Cone r = 1, α = 0.3 rad, height 0 to 1.5, offset by 0.2: radius
+    // 1 + 0.2 cos α at height −0.2 sin α.
+    let (alpha, d, h) = (0.3f64, 0.2, 1.5);
+    let (c, sn, t) = (alpha.cos(), alpha.sin(), alpha.tan());
+    let mut g = File::default();
+    let frame = g.frame([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
+    let cone = g.add(&format!("CONICAL_SURFACE('',#{frame},1.,{alpha:?})"));
+    let off = g.add(&format!("OFFSET_SURFACE('',#{cone},{d:?},.F.)"));
+    let (r0, z0) = (1.0 + d * c, -d * sn);
+    let (r1, z1) = (1.0 + h * t + d * c, h - d * sn);
+    let b = quarter_loop(&mut g, (r0, z0), (r1, z1));
+    g.face(&[b], off);
+    let imp = parse_step(&g.text()).unwrap();
+    assert!(imp.warnings.is_empty(), "{:?}", imp.warnings);
+    let s = &imp.surfaces[0].surface;
+    assert_close(area(s), PI * (r0 + r1) * (h / c) / 4.0, 1e-3);
+    let err = off_revolution_error(s, |x| (1.0 + x * h * t, x * h), d);
+    assert!(err < 1e-12, "cone: {err}");
+
+    // The segment (1, 0, 0)–(2, 0, 2) revolved, offset by 0.1 along
+    // (z × ρ) × P' ∝ (2, 0, −1): the segment moved, exactly.
+    let d = 0.1;
+    let n = [2.0 / 5f64.sqrt(), -1.0 / 5f64.sqrt()];
+    let mut g = File::default();
+    let (p0, p1) = (g.point([1.0, 0.0, 0.0]), g.point([2.0, 0.0, 2.0]));
+    let profile = g.add(&format!(
+        "B_SPLINE_CURVE_WITH_KNOTS('',1,(#{p0},#{p1}),.UNSPECIFIED.,.F.,.F.,(2,2),(0.,1.),.UNSPECIFIED.)"
+    ));
+    let (o, z) = (g.point([0.0; 3]), g.dir([0.0, 0.0, 1.0]));
+    let axis = g.add(&format!("AXIS1_PLACEMENT('',#{o},#{z})"));
+    let rev = g.add(&format!("SURFACE_OF_REVOLUTION('',#{profile},#{axis})"));
+    let off = g.add(&format!("OFFSET_SURFACE('',#{rev},{d:?},.F.)"));
+    let b = quarter_loop(
+        &mut g,
+        (1.0 + d * n[0], d * n[1]),
+        (2.0 + d * n[0], 2.0 + d * n[1]),
+    );
+    g.face(&[b], off);
+    let imp = parse_step(&g.text()).unwrap();
+    assert!(imp.warnings.is_empty(), "{:?}", imp.warnings);
+    let s = &imp.surfaces[0].surface;
+    assert_close(
+        area(s),
+        PI * (3.0 + 2.0 * d * n[0]) * 5f64.sqrt() / 4.0,
+        1e-3,
+    );
+    let err = off_revolution_error(s, |x| (1.0 + x, 2.0 * x), d);
+    assert!(err < 1e-12, "revolved line: {err}");
+
+    // A quadratic bulge (1, 0)–(1.5, 1)–(1, 2) (ρ, z) revolved, offset by
+    // 0.1: fitted, within 1e-7 of the size, warned naming the offset.
+    let mut g = File::default();
+    let q: Vec<u64> = [[1.0, 0.0, 0.0], [1.5, 0.0, 1.0], [1.0, 0.0, 2.0]]
+        .iter()
+        .map(|p| g.point(*p))
+        .collect();
+    let profile = g.add(&format!(
+        "B_SPLINE_CURVE_WITH_KNOTS('',2,(#{},#{},#{}),.UNSPECIFIED.,.F.,.F.,(3,3),(0.,1.),.UNSPECIFIED.)",
+        q[0], q[1], q[2]
+    ));
+    let (o, z) = (g.point([0.0; 3]), g.dir([0.0, 0.0, 1.0]));
+    let axis = g.add(&format!("AXIS1_PLACEMENT('',#{o},#{z})"));
+    let rev = g.add(&format!("SURFACE_OF_REVOLUTION('',#{profile},#{axis})"));
+    let off = g.add(&format!("OFFSET_SURFACE('',#{rev},{d:?},.F.)"));
+    let s5 = 5f64.sqrt();
+    let b = quarter_loop(
+        &mut g,
+        (1.0 + 2.0 * d / s5, -d / s5),
+        (1.0 + 2.0 * d / s5, 2.0 + d / s5),
+    );
+    g.face(&[b], off);
+    let imp = parse_step(&g.text()).unwrap();
+    assert!(
+        imp.warnings.len() == 1 && imp.warnings[0].contains(&format!("#{off} OFFSET_SURFACE")),
+        "{:?}",
+        imp.warnings
+    );
+    let bulge = |x: f64| {
+        let (a, b, c) = ((1.0 - x) * (1.0 - x), 2.0 * x * (1.0 - x), x * x);
+        (a + 1.5 * b + c, b + 2.0 * c)
+    };
+    let err = off_revolution_error(&imp.surfaces[0].surface, bulge, d);
+    assert!(err < 1e-6, "revolved bulge: {err}");
+
+    // The circle of radius 2 extruded along z, offset by 0.25: a quarter
+    // of the cylinder of radius 2.25, fitted and warned.
+    let mut g = File::default();
+    let frame = g.frame([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
+    let circle = g.add(&format!("CIRCLE('',#{frame},2.)"));
+    let z = g.dir([0.0, 0.0, 1.0]);
+    let vec = g.add(&format!("VECTOR('',#{z},1.)"));
+    let ext = g.add(&format!("SURFACE_OF_LINEAR_EXTRUSION('',#{circle},#{vec})"));
+    let off = g.add(&format!("OFFSET_SURFACE('',#{ext},0.25,.F.)"));
+    let b = quarter_loop(&mut g, (2.25, 0.0), (2.25, 3.0));
+    g.face(&[b], off);
+    let imp = parse_step(&g.text()).unwrap();
+    assert!(
+        imp.warnings.len() == 1 && imp.warnings[0].contains(&format!("#{off} OFFSET_SURFACE")),
+        "{:?}",
+        imp.warnings
+    );
+    let s = &imp.surfaces[0].surface;
+    assert_close(area(s), 2.0 * PI * 2.25 * 3.0 / 4.0, 1e-3);
+    let err = off_revolution_error(s, |x| (2.0, 3.0 * x), 0.25);
+    assert!(err < 1e-6, "extruded circle: {err}");
 }

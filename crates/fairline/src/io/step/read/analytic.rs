@@ -29,19 +29,38 @@ enum Analytic {
         big: f64,
         small: f64,
     },
-    /// `profile_angle`: a conic profile's angle → its NURBS parameter.
+    /// `profile_angle`: a conic profile's angle → its NURBS parameter;
+    /// `offset`: the surface is the offset of this one.
     Revolution {
         profile: Nurbs3,
         profile_angle: Option<ArcMap>,
+        offset: Option<SweptOffset>,
     },
     /// `d` the unit direction, `length` the extrusion vector's length
-    /// (ISO's v runs along `length · d`).
+    /// (ISO's v runs along `length · d`); `offset` as for a revolution.
     Extrusion {
         profile: Nurbs3,
         profile_angle: Option<ArcMap>,
         d: Vec3,
         length: f64,
+        offset: Option<SweptOffset>,
     },
+}
+
+/// A swept surface read as the offset of the surface it was swept as
+/// (`OFFSET_SURFACE` over a `SURFACE_OF_REVOLUTION` or
+/// `SURFACE_OF_LINEAR_EXTRUSION`): the natural coordinates stay the
+/// basis's — a point moved along the normal keeps its foot on the basis,
+/// within the basis's radius of curvature — and the NURBS of a face is the
+/// basis's NURBS offset on its parameters
+/// ([`crate::bspline::offset::offset_surface`]).
+#[derive(Clone, Copy, Debug)]
+struct SweptOffset {
+    /// The distance along the basis's normal ISO 10303-42 gives it
+    /// (Su × Sv, u the angle or the profile parameter).
+    distance: f64,
+    /// The outermost `OFFSET_SURFACE`, named in the warning of a fit.
+    entity: u64,
 }
 
 /// A placement frame: origin and the axes x, y, z.
@@ -144,6 +163,45 @@ impl Analytic {
     }
 }
 
+/// Moves a straight `profile` (its control points on one line) of a
+/// surface of revolution about the axis through `o` along the unit `z` by
+/// `d` along the surface's normal — ISO 10303-42's Su × Sv with u the
+/// angle, `(z × r) × P'`, the same all along a line — so that revolving it
+/// gives the offset surface exactly. False (the profile untouched) for a
+/// profile that is not straight or gives no normal (it lies on the axis).
+fn move_straight_profile(profile: &mut Nurbs3, o: Vec3, z: Vec3, d: f64) -> bool {
+    let (Some(&p0), Some(&p1)) = (profile.points.first(), profile.points.last()) else {
+        return false;
+    };
+    let chord = p1 - p0;
+    let size = chord.length();
+    if !(size > 0.0 && size.is_finite()) {
+        return false;
+    }
+    let straight = profile
+        .points
+        .iter()
+        .all(|q| (*q - p0).cross(chord).length() <= 1e-12 * size * size);
+    if !straight {
+        return false;
+    }
+    let radial = |q: Vec3| (q - o) - (q - o).dot(z) * z;
+    let far = if radial(p0).length() >= radial(p1).length() {
+        p0
+    } else {
+        p1
+    };
+    let n = z.cross(radial(far)).cross(chord);
+    let l = n.length();
+    if !(l > 0.0 && l.is_finite()) {
+        return false;
+    }
+    for q in &mut profile.points {
+        *q += d * n / l;
+    }
+    true
+}
+
 /// Most nested `OFFSET_SURFACE`s followed to their basis.
 mod conversion;
 mod face;
@@ -208,6 +266,7 @@ impl<'a> Reader<'a> {
                     Analytic::Revolution {
                         profile,
                         profile_angle: self.profile_angle(&curve),
+                        offset: None,
                     },
                 ))
             }
@@ -226,6 +285,7 @@ impl<'a> Reader<'a> {
                         profile_angle: self.profile_angle(&curve),
                         d,
                         length,
+                        offset: None,
                     },
                 ))
             }
@@ -259,43 +319,78 @@ impl<'a> Reader<'a> {
         }
     }
 
-    /// An `OFFSET_SURFACE` (ISO 10303-42 §4.4.14: the basis moved by the
-    /// distance along its normal, on its parameters) of an elementary
-    /// surface whose offset is of its own kind with the same parameters: a
-    /// plane moved along its normal, a cylinder or sphere with radius
-    /// r + d, a torus with minor radius r + d (the normals of ISO's
-    /// elementary surfaces point away from the axis or centre). Nested
-    /// offsets add up. Other bases (a cone, whose offset moves its height
-    /// parameter; a swept or B-spline surface) and a radius that would not
-    /// stay positive are refused, naming the entity.
-    fn offset_analytic(&self, si: &'a Instance) -> R<(Frame, Analytic)> {
-        let (mut basis, mut d) = (si, 0.0);
+    /// The surface an `OFFSET_SURFACE` `si` moves and the distance along
+    /// that surface's normal: nested offsets add up, and a
+    /// `RECTANGULAR_TRIMMED_SURFACE` between them (OCCT writes the offset
+    /// of a trimmed extrusion so) stands for its basis surface — the face's
+    /// edges bound it, not the rectangle — with the distance negated where
+    /// exactly one of its senses is reversed (its normal Su × Sv is then
+    /// the basis's reversed). Refused beyond [`MAX_OFFSET_DEPTH`] levels.
+    pub(super) fn offset_basis(&self, si: &'a Instance) -> R<(&'a Instance, f64)> {
+        let (mut basis, mut d, mut sign) = (si, 0.0, 1.0);
         for _ in 0..MAX_OFFSET_DEPTH {
-            if !basis.is("OFFSET_SURFACE") {
-                break;
+            if basis.is("OFFSET_SURFACE") {
+                let p = self.params(basis, &["OFFSET_SURFACE"])?;
+                d += sign * self.num(basis, p, 2)?;
+                basis = self.refer(basis, p, 1)?;
+            } else if basis.is("RECTANGULAR_TRIMMED_SURFACE") {
+                let p = self.params(basis, &["RECTANGULAR_TRIMMED_SURFACE"])?;
+                if self.flag(basis, p, 6)? != self.flag(basis, p, 7)? {
+                    sign = -sign;
+                }
+                basis = self.refer(basis, p, 1)?;
+            } else {
+                return Ok((basis, d));
             }
-            let p = self.params(basis, &["OFFSET_SURFACE"])?;
-            d += self.num(basis, p, 2)?;
-            basis = self.refer(basis, p, 1)?;
         }
-        if basis.is("OFFSET_SURFACE") {
-            return Err(self.err(
-                si,
-                format!("more than {MAX_OFFSET_DEPTH} nested offset surfaces"),
-            ));
-        }
+        Err(self.err(
+            si,
+            format!("more than {MAX_OFFSET_DEPTH} nested offset or trimmed surfaces"),
+        ))
+    }
+
+    /// An `OFFSET_SURFACE` (ISO 10303-42 §4.4.14: the basis moved by the
+    /// distance d along its normal, on its parameters). Of an elementary
+    /// surface it is a surface of the same kind on the same parameters,
+    /// exactly: a plane moved along its normal, a cylinder or sphere with
+    /// radius r + d, a torus with minor radius r + d (the normals of ISO's
+    /// elementary surfaces point away from the axis or centre), a cone of
+    /// semi-angle α with radius r + d·cos α and its placement moved by
+    /// −d·sin α along the axis (its normal is cos α·ρ − sin α·z, so the
+    /// point of height v moves to radius r + v·tan α + d·cos α at height
+    /// v − d·sin α). Of a swept surface: a surface of revolution of a
+    /// straight profile (a cone or cylinder swept from a line) is the
+    /// revolution of the line moved along the normal, exactly; any other
+    /// swept surface keeps its natural coordinates and its face's NURBS is
+    /// offset on its parameters ([`SweptOffset`]: exact for a plane,
+    /// otherwise fitted within a tolerance and warned). Nested offsets add
+    /// up. Other bases (B-spline surfaces have their own path) and a radius
+    /// that would not stay positive are refused, naming the entity.
+    fn offset_analytic(&self, si: &'a Instance) -> R<(Frame, Analytic)> {
+        let (basis, d) = self.offset_basis(si)?;
         let t = basis.type_name();
         let ((o, x, y, z), kind) = match t {
-            "PLANE" | "CYLINDRICAL_SURFACE" | "SPHERICAL_SURFACE" | "TOROIDAL_SURFACE" => {
-                self.analytic(basis)?
-            }
+            "PLANE"
+            | "CYLINDRICAL_SURFACE"
+            | "CONICAL_SURFACE"
+            | "SPHERICAL_SURFACE"
+            | "TOROIDAL_SURFACE"
+            | "SURFACE_OF_REVOLUTION"
+            | "SURFACE_OF_LINEAR_EXTRUSION" => self.analytic(basis)?,
             _ => {
                 return Err(self.err(
                     si,
-                    format!("an offset of a {t} is not supported (offsets of PLANE, CYLINDRICAL_SURFACE, SPHERICAL_SURFACE and TOROIDAL_SURFACE are)"),
+                    format!("an offset of a {t} is not supported (offsets of B_SPLINE_SURFACE_WITH_KNOTS, PLANE, CYLINDRICAL_SURFACE, CONICAL_SURFACE, SPHERICAL_SURFACE, TOROIDAL_SURFACE, SURFACE_OF_REVOLUTION and SURFACE_OF_LINEAR_EXTRUSION are)"),
                 ));
             }
         };
+        if !d.is_finite() {
+            return Err(self.err(si, format!("the offset distance {d} is not a number")));
+        }
+        let swept = Some(SweptOffset {
+            distance: d,
+            entity: si.id,
+        });
         let grown = |r: f64| -> R<f64> {
             let g = r + d;
             if g > 0.0 && g.is_finite() {
@@ -318,7 +413,55 @@ impl<'a> Reader<'a> {
                     small: grown(small)?,
                 },
             ),
-            _ => return Err(self.err(si, format!("an offset of a {t} is not supported"))),
+            Analytic::Cone { r, tan } => {
+                let cos = 1.0 / tan.hypot(1.0);
+                let sin = tan * cos;
+                (
+                    (o - d * sin * z, x, y, z),
+                    Analytic::Cone {
+                        r: r + d * cos,
+                        tan,
+                    },
+                )
+            }
+            Analytic::Revolution {
+                mut profile,
+                profile_angle,
+                offset: inner,
+            } => {
+                debug_assert!(inner.is_none(), "nested offsets are added up above");
+                if move_straight_profile(&mut profile, o, z, d) {
+                    let kind = Analytic::Revolution {
+                        profile,
+                        profile_angle,
+                        offset: None,
+                    };
+                    ((o, x, y, z), kind)
+                } else {
+                    let kind = Analytic::Revolution {
+                        profile,
+                        profile_angle,
+                        offset: swept,
+                    };
+                    ((o, x, y, z), kind)
+                }
+            }
+            Analytic::Extrusion {
+                profile,
+                profile_angle,
+                d: dir,
+                length,
+                ..
+            } => (
+                (o, x, y, z),
+                Analytic::Extrusion {
+                    profile,
+                    profile_angle,
+                    d: dir,
+                    length,
+                    offset: swept,
+                },
+            ),
         })
     }
 

@@ -86,7 +86,8 @@ impl<'a> Reader<'a> {
                 if e.closed {
                     if e.forward { [a, b] } else { [b, a] }
                 } else {
-                    [vertex_param(n, e.start), vertex_param(n, e.end)]
+                    let (ts, te) = (vertex_param(n, e.start), vertex_param(n, e.end));
+                    seam_vertex_params(n, ts, te, e.forward)
                 }
             }
         }
@@ -139,4 +140,34 @@ impl<'a> Reader<'a> {
             })
             .collect()
     }
+}
+
+/// The traversal parameters of an edge from `ts` to `te` on the B-spline
+/// curve `n`: as they are, except on a closed curve (its ends meet to
+/// 1e-9 of its size) where a vertex lies at the closure point, whose
+/// parameter is either end of the domain: there the start takes the end
+/// the traversal leaves from and the end the one it arrives at (`forward`:
+/// along the curve's direction), so that the edge is the piece between
+/// its vertices in its own sense and not the rest of the curve (OCCT
+/// writes an arc of an offset circle as a closed B-spline curve with one
+/// vertex at its start).
+fn seam_vertex_params(n: &Nurbs3, ts: f64, te: f64, forward: bool) -> [f64; 2] {
+    let [a, b] = n.domain();
+    let (lo, hi) = n
+        .points
+        .iter()
+        .fold((n.points[0], n.points[0]), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        });
+    let closed = n.eval(a).distance(n.eval(b)) <= 1e-9 * (hi - lo).length();
+    if !closed {
+        return [ts, te];
+    }
+    let tol = 1e-9 * (b - a);
+    let at_end = |t: f64| (t - a).abs() <= tol || (t - b).abs() <= tol;
+    let (leave, arrive) = if forward { (a, b) } else { (b, a) };
+    [
+        if at_end(ts) { leave } else { ts },
+        if at_end(te) { arrive } else { te },
+    ]
 }

@@ -70,16 +70,11 @@ impl<'a> Reader<'a> {
     /// ([`crate::bspline::offset::offset_surface`]), the fit named in the
     /// warnings. `None` for any other surface.
     fn offset_of_bspline(&self, si: &'a Instance) -> R<Option<BSplineSurface>> {
-        let (mut basis, mut d) = (si, 0.0);
-        for _ in 0..8 {
-            if !basis.is("OFFSET_SURFACE") {
-                break;
-            }
-            let p = self.params(basis, &["OFFSET_SURFACE"])?;
-            d += self.num(basis, p, 2)?;
-            basis = self.refer(basis, p, 1)?;
+        if !si.is("OFFSET_SURFACE") {
+            return Ok(None);
         }
-        if !si.is("OFFSET_SURFACE") || !basis.is("B_SPLINE_SURFACE_WITH_KNOTS") {
+        let (basis, d) = self.offset_basis(si)?;
+        if !basis.is("B_SPLINE_SURFACE_WITH_KNOTS") {
             return Ok(None);
         }
         let s = self.bspline_surface(basis)?;

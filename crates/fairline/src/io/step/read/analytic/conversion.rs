@@ -3,13 +3,17 @@
 
 use std::f64::consts::{FRAC_PI_2, PI};
 
-use super::{Analytic, Frame, NaturalBox, NaturalLoop, Periods};
+use super::{Analytic, Frame, NaturalBox, NaturalLoop, Periods, SweptOffset};
 use crate::Vec3;
 use crate::bspline::BSplineSurface;
 use crate::io::step::nurbs::{ArcMap, Nurbs3, arc, revolve};
 use crate::io::step::p21::Instance;
 use crate::io::step::read::curves::ToUv;
 use crate::io::step::read::{R, Reader};
+
+/// How far, as a share of its profile's domain, a face's bound may lie
+/// beyond the profile's ends and still be read as reaching them.
+const SEAM_SLACK: f64 = 1e-6;
 
 impl<'a> Reader<'a> {
     /// Where a face bounded by one winding bound closes, on the face's side
@@ -95,26 +99,33 @@ impl<'a> Reader<'a> {
         };
         if let Some((axis, [t0, t1], period)) = profile_coordinate {
             let (lo, hi) = if axis == 0 { (a0, a1) } else { (b0, b1) };
+            // a bound along the profile's seam may stray past it by the
+            // precision of its edges (an offset surface's edges are
+            // approximations, their natural coordinates projections):
+            // within SEAM_SLACK of the domain it is put back onto it
+            let slack = SEAM_SLACK * (t1 - t0);
             let shift = match period {
-                Some(p) if p > 0.0 && lo < t0 - 1e-9 * p => p * ((t0 - lo) / p).ceil(),
-                Some(p) if p > 0.0 && lo >= t1 => -p * ((lo - t0) / p).floor(),
+                Some(p) if p > 0.0 && lo < t0 - slack => p * ((t0 - lo) / p).ceil(),
+                Some(p) if p > 0.0 && lo >= t1 - slack && hi > t1 + slack => {
+                    -p * ((lo - t0) / p).floor()
+                }
                 _ => 0.0,
             };
-            let tol = 1e-9 * (t1 - t0);
-            if lo + shift < t0 - tol || hi + shift > t1 + tol {
+            if lo + shift < t0 - slack || hi + shift > t1 + slack {
                 return Err(self.err(f, "the face crosses the seam of its swept profile".into()));
             }
+            let onto = |t: f64| (t + shift).clamp(t0, t1);
             for p in nat.iter_mut().flatten() {
                 if axis == 0 {
-                    p.0 += shift;
+                    p.0 = onto(p.0);
                 } else {
-                    p.1 += shift;
+                    p.1 = onto(p.1);
                 }
             }
             if axis == 0 {
-                (a0, a1) = (a0 + shift, a1 + shift);
+                (a0, a1) = (onto(a0), onto(a1));
             } else {
-                (b0, b1) = (b0 + shift, b1 + shift);
+                (b0, b1) = (onto(b0), onto(b1));
             }
         }
         Ok(NaturalBox {
@@ -172,7 +183,9 @@ impl<'a> Reader<'a> {
                     ToUv([Some(amap), Some(bmap)]),
                 )
             }
-            Analytic::Revolution { profile, .. } => {
+            Analytic::Revolution {
+                profile, offset, ..
+            } => {
                 let scale = profile
                     .points
                     .iter()
@@ -180,19 +193,45 @@ impl<'a> Reader<'a> {
                     .fold(0.0, f64::max)
                     .max(1e-300);
                 let map = ArcMap::new(a0, a1, scale);
-                (
-                    self.revolved(f, o, z, profile, &map)?,
-                    ToUv([Some(map), None]),
-                )
+                let basis = self.revolved(f, o, z, profile, &map)?;
+                (self.offset(f, basis, offset)?, ToUv([Some(map), None]))
             }
-            Analytic::Extrusion { profile, d, .. } => {
-                (self.extruded(f, profile, *d, b0, b1)?, ToUv([None, None]))
+            Analytic::Extrusion {
+                profile, d, offset, ..
+            } => {
+                let basis = self.extruded(f, profile, *d, b0, b1)?;
+                (self.offset(f, basis, offset)?, ToUv([None, None]))
             }
             Analytic::Plane => {
                 return Err(self.err(f, "internal: planes are handled by plane_face".into()));
             }
         };
         Ok(nurbs)
+    }
+
+    /// `basis` offset on its parameters by `offset` ([`SweptOffset`]):
+    /// exact for a plane, otherwise a bicubic fitted within 1e-7 of the
+    /// size of the basis's control net (plus twice the distance), the fit
+    /// named in the warnings; `basis` itself without an offset.
+    fn offset(
+        &self,
+        f: &Instance,
+        basis: BSplineSurface,
+        offset: &Option<SweptOffset>,
+    ) -> R<BSplineSurface> {
+        let Some(SweptOffset { distance, entity }) = *offset else {
+            return Ok(basis);
+        };
+        let (lo, hi) = basis.control_bounding_box();
+        let tolerance = 1e-7 * ((hi - lo).length() + 2.0 * distance.abs());
+        let o = crate::bspline::offset::offset_surface(&basis, distance, tolerance)
+            .map_err(|m| self.err(f, format!("#{entity} OFFSET_SURFACE: {m}")))?;
+        if let Some(e) = o.deviation {
+            self.fitted.borrow_mut().push(format!(
+                "#{entity} OFFSET_SURFACE: the offset surface is approximated by a bicubic B-spline within {tolerance:.1e} (largest deviation found {e:.1e})"
+            ));
+        }
+        Ok(o.surface)
     }
 
     /// The ruled surface of `profile` moved by `b0·d` to `b1·d` (Piegl &
