@@ -41,6 +41,7 @@ impl Iges<'_> {
         de: i64,
         line: usize,
         surface: &BSplineSurface,
+        domain: ([f64; 2], [f64; 2]),
     ) -> Result<Option<TrimLoop>, IgesError> {
         let k = self.entry(de).ok_or_else(|| {
             self.entity_error(
@@ -62,8 +63,8 @@ impl Iges<'_> {
         let p = self.parameters(k)?;
         let l142 = p.first().map_or(self.dir[k].line, |t| t.1);
         let bptr = param(self, k, &p, 3, l142, &INT)?;
-        if bptr == 0 {
-            let cptr = param(self, k, &p, 4, l142, &INT)?;
+        let cptr = param(self, k, &p, 4, l142, &INT)?;
+        let model_space = || -> Result<Option<TrimLoop>, IgesError> {
             if cptr == 0 {
                 return Ok(None);
             }
@@ -72,9 +73,12 @@ impl Iges<'_> {
             })?;
             let mut pieces = Vec::new();
             self.curve_pieces(c, 0, &mut pieces)?;
-            return project_boundary(surface, &pieces)
+            project_boundary(surface, &pieces)
                 .map(Some)
-                .map_err(|m| self.entity_error(k, l142, m));
+                .map_err(|m| self.entity_error(k, l142, m))
+        };
+        if bptr == 0 {
+            return model_space();
         }
         let c = self.entry(bptr).ok_or_else(|| {
             self.entity_error(k, l142, format!("BPTR {bptr} is not a directory entry"))
@@ -88,6 +92,24 @@ impl Iges<'_> {
             .map_err(|m| self.entity_error(c, self.dir[c].line, m))?;
         if curves.is_empty() {
             return Err(self.entity_error(k, l142, "the boundary curve is empty".into()));
+        }
+        if let Some(far) = beyond_domain(&curves, domain) {
+            // parameter-space curves in other parameters than the
+            // surface's (OCCT writes those of an offset of a tabulated
+            // cylinder in the directrix's own parameter, not the 0..1 of
+            // IGES 5.3 §4.19): the model-space curves stand for the
+            // boundary; without them it cannot be read
+            if cptr == 0 {
+                return Err(self.unsupported(
+                    k,
+                    l142,
+                    format!(
+                        "its parameter-space curves leave the surface's parameter range {:?} × {:?} (by {far:.3e}) and it has no model-space curve",
+                        domain.0, domain.1
+                    ),
+                ));
+            }
+            return model_space();
         }
         Ok(Some(TrimLoop { curves }))
     }
@@ -326,4 +348,23 @@ fn arc_piece(c: [f64; 2], z: f64, radius: f64, a0: f64, a1: f64) -> Piece {
         points,
         weights: Some(weights),
     }
+}
+
+/// How far the farthest of 32 points along each curve of a boundary lies
+/// outside the parameter range `domain`, where that is more than 1e-6 of
+/// the range's size (rounding of the file's numbers stays within it);
+/// `None` when every point lies within.
+fn beyond_domain(curves: &[TrimCurve], (u, v): ([f64; 2], [f64; 2])) -> Option<f64> {
+    let size = (u[1] - u[0]).abs().max((v[1] - v[0]).abs());
+    let slack = 1e-6 * size;
+    let outside = |x: f64, [a, b]: [f64; 2]| (a.min(b) - x).max(x - a.max(b)).max(0.0);
+    let far = curves
+        .iter()
+        .flat_map(|c| {
+            let [t0, t1] = c.domain();
+            (0..=32).map(move |i| c.eval(t0 + (t1 - t0) * i as f64 / 32.0))
+        })
+        .map(|q| outside(q[0], u).max(outside(q[1], v)))
+        .fold(0.0, f64::max);
+    (far > slack).then_some(far)
 }

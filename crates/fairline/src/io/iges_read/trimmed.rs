@@ -185,8 +185,9 @@ pub(super) struct Faces {
 /// [`Iges::boundary_loop`].
 ///
 /// `surface` is the base surface (for boundaries given only in model space,
-/// which are projected onto it) and `domain` its parameter range as the
-/// file's parameter-space curves see it.
+/// or whose parameter-space curves leave `domain`, which are projected onto
+/// it) and `domain` its parameter range as the file's parameter-space
+/// curves see it.
 fn read_entity_144(
     g: &Iges<'_>,
     k: usize,
@@ -209,13 +210,16 @@ fn read_entity_144(
                 .map_err(|m| g.entity_error(k, line, m))?,
         );
     } else {
-        let Some(outer) = g.boundary_loop(k, param(g, k, p, 4, line, &INT)?, line, surface)? else {
+        let Some(outer) =
+            g.boundary_loop(k, param(g, k, p, 4, line, &INT)?, line, surface, domain)?
+        else {
             return Ok(None);
         };
         loops.push(outer);
     }
     for h in 0..holes {
-        let Some(hole) = g.boundary_loop(k, param(g, k, p, 5 + h, line, &INT)?, line, surface)?
+        let Some(hole) =
+            g.boundary_loop(k, param(g, k, p, 5 + h, line, &INT)?, line, surface, domain)?
         else {
             return Ok(None);
         };
