@@ -36,6 +36,7 @@
 pub mod basis;
 mod bounds;
 pub mod continuity;
+pub(crate) mod fit;
 mod iso;
 pub(crate) mod offset;
 mod project;

@@ -4,10 +4,7 @@
 
 use crate::Vec3;
 use crate::bspline::BSplineSurface;
-use crate::bspline::basis::{MAX_ORDER, basis_funs, find_span};
-
-/// Most control points per direction of a fitted offset.
-const MAX_FIT_POINTS: usize = 400;
+use crate::bspline::fit::{breaks, fit_bicubic};
 
 /// An offset surface as a B-spline surface.
 pub(crate) struct Offset {
@@ -33,13 +30,9 @@ fn exact(base: &BSplineSurface, d: f64, u: f64, v: f64) -> Result<Vec3, String> 
 /// - a plane (every control point within 1e-12 of the net's size of the
 ///   plane through the first, the normal the same at a grid of 9 × 9
 ///   points) is moved by `d·N`: exact;
-/// - any other surface: a polynomial bicubic B-spline interpolating the
-///   exact offset at the Greville points of its knots (the base's distinct
-///   knots, triple where the base is only C0, each span cut into equal
-///   pieces), the pieces doubled until the fit is within `tolerance` of
-///   the exact offset at the midpoints between the interpolation points
-///   (the deviation returned is the largest there), at most
-///   [`MAX_FIT_POINTS`] control points per direction.
+/// - any other surface: the polynomial bicubic B-spline of
+///   [`fit_bicubic`] on the base's distinct knots (triple where the base
+///   is only C0) within `tolerance` of the exact offset.
 ///
 /// Errors say why: no normal, or the tolerance not reached.
 pub(crate) fn offset_surface(
@@ -71,46 +64,11 @@ pub(crate) fn offset_surface(
         breaks(base.knots_u(), base.degree_u(), du),
         breaks(base.knots_v(), base.degree_v(), dv),
     );
-    let mut pieces = 2;
-    loop {
-        let (ku, kv) = (fit_knots(&bu, pieces), fit_knots(&bv, pieces));
-        let (nu, nv) = (ku.len() - 4, kv.len() - 4);
-        if nu > MAX_FIT_POINTS || nv > MAX_FIT_POINTS {
-            return Err(format!(
-                "a bicubic fit of the offset with {MAX_FIT_POINTS} control points per direction is not within {tolerance:.3e}"
-            ));
-        }
-        let (gu, gv) = (greville(&ku), greville(&kv));
-        let mut values = Vec::with_capacity(nu * nv);
-        for &u in &gu {
-            for &v in &gv {
-                values.push(exact(base, d, u, v)?);
-            }
-        }
-        solve_rows(&ku, &gu, &mut values, nv)?;
-        transpose(&mut values, nu, nv);
-        solve_rows(&kv, &gv, &mut values, nu)?;
-        transpose(&mut values, nv, nu);
-        let fit = BSplineSurface::from_flat(3, 3, ku, kv, [nu, nv], values, None)
-            .map_err(|e| e.to_string())?;
-        let mut worst = 0.0_f64;
-        let mids = |g: &[f64]| -> Vec<f64> { g.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect() };
-        for &u in mids(&gu).iter().chain(&gu) {
-            for &v in mids(&gv).iter().chain(&gv) {
-                worst = worst.max(fit.eval(u, v).distance(exact(base, d, u, v)?));
-            }
-        }
-        if !worst.is_finite() {
-            return Err("the fitted offset is not finite".into());
-        }
-        if worst <= tolerance {
-            return Ok(Offset {
-                surface: fit,
-                deviation: Some(worst),
-            });
-        }
-        pieces *= 2;
-    }
+    let (surface, worst) = fit_bicubic(&bu, &bv, |u, v| exact(base, d, u, v), tolerance)?;
+    Ok(Offset {
+        surface,
+        deviation: Some(worst),
+    })
 }
 
 /// The unit normal of a planar surface (all control points on one plane,
@@ -137,118 +95,6 @@ fn plane_normal(s: &BSplineSurface, size: f64) -> Option<Vec3> {
         }
     }
     Some(n)
-}
-
-/// The distinct knots of `[a, b]` and whether the surface is only C0
-/// there (multiplicity at least the degree).
-fn breaks(knots: &[f64], degree: usize, [a, b]: [f64; 2]) -> Vec<(f64, bool)> {
-    let mut out = vec![(a, true)];
-    for &k in knots.iter().filter(|&&k| k > a && k < b) {
-        match out.last_mut() {
-            Some(last) if last.0 == k => {}
-            _ => {
-                let m = knots.iter().filter(|&&x| x == k).count();
-                out.push((k, m >= degree));
-            }
-        }
-    }
-    out.push((b, true));
-    out
-}
-
-/// A clamped cubic knot vector: each span between `breaks` cut into
-/// `pieces` equal pieces, a break where the base is C0 triple.
-fn fit_knots(breaks: &[(f64, bool)], pieces: usize) -> Vec<f64> {
-    let (a, b) = (breaks[0].0, breaks[breaks.len() - 1].0);
-    let mut k = vec![a; 4];
-    for (i, w) in breaks.windows(2).enumerate() {
-        if i > 0 {
-            let (t, c0) = w[0];
-            k.extend(std::iter::repeat_n(t, if c0 { 3 } else { 1 }));
-        }
-        for s in 1..pieces {
-            k.push(w[0].0 + (w[1].0 - w[0].0) * s as f64 / pieces as f64);
-        }
-    }
-    k.extend([b; 4]);
-    k
-}
-
-/// Greville abscissae of a cubic knot vector.
-fn greville(k: &[f64]) -> Vec<f64> {
-    (0..k.len() - 4)
-        .map(|i| (k[i + 1] + k[i + 2] + k[i + 3]) / 3.0)
-        .collect()
-}
-
-/// Transposes a row-major `rows × cols` grid in place.
-fn transpose(values: &mut Vec<Vec3>, rows: usize, cols: usize) {
-    let mut t = Vec::with_capacity(values.len());
-    for j in 0..cols {
-        for i in 0..rows {
-            t.push(values[i * cols + j]);
-        }
-    }
-    *values = t;
-}
-
-/// Replaces the grid's rows (`n = nodes.len()` rows of `cols` values,
-/// row-major) by the control points of the cubic B-splines on `knots`
-/// interpolating each column at `nodes`: the collocation matrix is banded
-/// (half-width 3 at Greville points) and totally positive, so Gaussian
-/// elimination without pivoting is stable (de Boor, 1976).
-fn solve_rows(
-    knots: &[f64],
-    nodes: &[f64],
-    values: &mut [Vec3],
-    cols: usize,
-) -> Result<(), String> {
-    let n = nodes.len();
-    const W: usize = 4;
-    let mut a = vec![0.0; n * n];
-    let mut b = [0.0; MAX_ORDER];
-    for (r, &t) in nodes.iter().enumerate() {
-        let span = find_span(knots, 3, n, t);
-        basis_funs(span, t, 3, knots, &mut b);
-        for (q, &x) in b.iter().enumerate().take(4) {
-            a[r * n + span - 3 + q] = x;
-        }
-    }
-    for c in 0..n {
-        let pivot = a[c * n + c];
-        if !(pivot.abs() > 1e-300) {
-            return Err("the interpolation of the offset is singular".into());
-        }
-        for r in c + 1..(c + W + 1).min(n) {
-            let f = a[r * n + c] / pivot;
-            if f == 0.0 {
-                continue;
-            }
-            for x in c..(c + W + 1).min(n) {
-                a[r * n + x] -= f * a[c * n + x];
-            }
-            for j in 0..cols {
-                let v = values[c * cols + j];
-                values[r * cols + j] -= f * v;
-            }
-        }
-    }
-    for c in (0..n).rev() {
-        for x in c + 1..(c + W + 1).min(n) {
-            let f = a[c * n + x];
-            if f != 0.0 {
-                for j in 0..cols {
-                    let v = values[x * cols + j];
-                    values[c * cols + j] -= f * v;
-                }
-            }
-        }
-        let pivot = a[c * n + c];
-        for j in 0..cols {
-            values[c * cols + j] /= pivot;
-        }
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -295,8 +295,12 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
                 match g.convert_surface(k, 0) {
                     Ok(c) => {
                         if let Some((tolerance, deviation)) = c.fit {
+                            let what = match t {
+                                118 => "the ruled surface of equal arc length",
+                                _ => "the offset surface",
+                            };
                             out.warnings.push(format!(
-                                "{}: the offset surface is approximated by a bicubic B-spline within {tolerance:.1e} (largest deviation found {deviation:.1e})",
+                                "{}: {what} is approximated by a bicubic B-spline within {tolerance:.1e} (largest deviation found {deviation:.1e})",
                                 g.describe_entity(k)
                             ));
                         }

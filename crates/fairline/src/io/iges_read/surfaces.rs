@@ -16,6 +16,7 @@ use super::{
 };
 use crate::bspline::BSplineSurface;
 use crate::bspline::basis::MAX_DEGREE;
+use crate::bspline::fit::fit_bicubic;
 use crate::bspline::offset::offset_surface;
 
 /// Deepest chain of offset surfaces (140 of a 140 …) read.
@@ -373,7 +374,7 @@ impl Iges<'_> {
     /// way when the rails' arc lengths are proportional along their
     /// parameters (to 1e-9 of their lengths at 1024 points: lines, arcs of
     /// one sweep, one curve and its translate); otherwise no NURBS is
-    /// exact and the surface is not read (`Unsupported`).
+    /// exact and the surface is fitted ([`Self::equal_arc_length_fit`]).
     fn ruled_surface(
         &self,
         k: usize,
@@ -409,11 +410,7 @@ impl Iges<'_> {
             (true, true)
         };
         if equal_arc_length && !lengths_agree {
-            return Err(self.unsupported(
-                k,
-                line,
-                "a ruled surface of equal arc length (118 form 0) whose rails' arc lengths are not proportional along their parameters has no exact NURBS form".into(),
-            ));
+            return self.equal_arc_length_fit(k, line, &r1, &r2);
         }
         if !equal_arc_length && !same_map {
             return Err(self.unsupported(
@@ -718,6 +715,111 @@ impl Iges<'_> {
             surface: o.surface,
             axes,
             fit: o.deviation.map(|e| (tolerance, e)),
+            transformed: false,
+        })
+    }
+}
+
+/// A curve by its relative arc length: the point at a fraction `s` of its
+/// length, from 8192 chords (the parameter interpolated linearly between
+/// them, so every point lies on the curve).
+struct ByArcLength<'c> {
+    curve: &'c Nurbs3,
+    /// Parameters and relative arc lengths of the chord ends, ascending.
+    params: Vec<f64>,
+    fractions: Vec<f64>,
+}
+
+impl<'c> ByArcLength<'c> {
+    const CHORDS: usize = 8192;
+
+    /// `None` for a curve of no length.
+    fn new(curve: &'c Nurbs3) -> Option<Self> {
+        let [a, b] = curve.domain();
+        let params: Vec<f64> = (0..=Self::CHORDS)
+            .map(|i| a + (b - a) * i as f64 / Self::CHORDS as f64)
+            .collect();
+        let mut fractions = Vec::with_capacity(params.len());
+        let (mut s, mut prev) = (0.0, curve.eval(a));
+        for &t in &params {
+            let q = curve.eval(t);
+            s += q.distance(prev);
+            prev = q;
+            fractions.push(s);
+        }
+        if !(s > 0.0 && s.is_finite()) {
+            return None;
+        }
+        fractions.iter_mut().for_each(|x| *x /= s);
+        Some(ByArcLength {
+            curve,
+            params,
+            fractions,
+        })
+    }
+
+    fn at(&self, s: f64) -> Vec3 {
+        let s = s.clamp(0.0, 1.0);
+        let i = self
+            .fractions
+            .partition_point(|&f| f < s)
+            .clamp(1, self.fractions.len() - 1);
+        let (f0, f1) = (self.fractions[i - 1], self.fractions[i]);
+        let w = if f1 > f0 { (s - f0) / (f1 - f0) } else { 0.0 };
+        let (t0, t1) = (self.params[i - 1], self.params[i]);
+        self.curve.eval(t0 + w * (t1 - t0))
+    }
+}
+
+impl Iges<'_> {
+    /// A ruled surface of equal relative arc length (118 form 0) between
+    /// rails whose arc lengths are not proportional along their
+    /// parameters: `S(u, v) = (1 − v)·C1(s1⁻¹(u)) + v·C2(s2⁻¹(u))`, u the
+    /// relative arc length along both (IGES 5.3 §4.18), has no exact NURBS
+    /// form; it is fitted by a bicubic B-spline within 1e-7 of the rails'
+    /// size ([`fit_bicubic`]), on the file's parameters, and the fit is
+    /// reported (a warning naming the entity). A rail of no length or a
+    /// fit that does not reach the tolerance is `Unsupported`, saying so.
+    fn equal_arc_length_fit(
+        &self,
+        k: usize,
+        line: usize,
+        r1: &Nurbs3,
+        r2: &Nurbs3,
+    ) -> Result<Converted, IgesError> {
+        let (Some(a1), Some(a2)) = (ByArcLength::new(r1), ByArcLength::new(r2)) else {
+            return Err(self.unsupported(
+                k,
+                line,
+                "a rail of the ruled surface has no length".into(),
+            ));
+        };
+        let (lo, hi) = r1
+            .points
+            .iter()
+            .chain(&r2.points)
+            .fold((r1.points[0], r1.points[0]), |(lo, hi), p| {
+                (lo.min(*p), hi.max(*p))
+            });
+        let tolerance = 1e-7 * (hi - lo).length();
+        let whole = [(0.0, true), (1.0, true)];
+        let (surface, worst) = fit_bicubic(
+            &whole,
+            &whole,
+            |u, v| Ok((1.0 - v) * a1.at(u) + v * a2.at(u)),
+            tolerance,
+        )
+        .map_err(|m| {
+            self.unsupported(
+                k,
+                line,
+                format!("a ruled surface of equal arc length (118 form 0) whose rails' arc lengths are not proportional has no exact NURBS form, and {m}"),
+            )
+        })?;
+        Ok(Converted {
+            surface,
+            axes: Some([Axis::Identity, Axis::Identity]),
+            fit: Some((tolerance, worst)),
             transformed: false,
         })
     }
