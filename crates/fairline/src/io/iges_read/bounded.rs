@@ -57,6 +57,12 @@ impl Iges<'_> {
                 }
                 continue;
             }
+            // on an analytic surface (190–198): read with its base surface
+            // through the STEP reader's topology, as a 144 there
+            if (190..=198).contains(&self.dir[b].entity_type) {
+                f.translated.push(k);
+                continue;
+            }
             type Map<'a> = Box<dyn Fn(TrimLoop) -> Result<TrimLoop, String> + 'a>;
             let (surface, map): (&BSplineSurface, Option<Map<'_>>) = match (
                 &bsplines[b],
@@ -75,7 +81,7 @@ impl Iges<'_> {
                     f.bounded_failed[k] = Some(match &conv.failed[b] {
                         Some(m) => format!("its base surface, {}: {m}", self.describe_entity(b)),
                         None => format!(
-                            "a bounded surface (143) on {}: fairline reads them on 108, 114, 118, 120, 122, 128 and 140",
+                            "a bounded surface (143) on {}: fairline reads them on 108, 114, 118, 120, 122, 128, 140 and 190–198",
                             self.describe_entity(b)
                         ),
                     });
@@ -137,7 +143,11 @@ impl Iges<'_> {
     /// reversed where `SENSE = 2`: the model-space ones, and the
     /// parameter-space ones when `want_parameter` and the entity has them
     /// for every curve (`TYPE = 1`, `K ≥ 1`).
-    fn curves_141(&self, k: usize, want_parameter: bool) -> Result<Curves141, IgesError> {
+    pub(super) fn curves_141(
+        &self,
+        k: usize,
+        want_parameter: bool,
+    ) -> Result<Curves141, IgesError> {
         let p = self.parameters(k)?;
         let line = p.first().map_or(self.dir[k].line, |t| t.1);
         let pcurves = want_parameter && param(self, k, &p, 1, line, &INT)? == 1;
@@ -199,7 +209,7 @@ impl Iges<'_> {
     /// The boundary entities (141) of the bounded surface (143) `k`
     /// (parameters `p`: `TYPE SPTR N BDPT1..N`), by directory index, the
     /// outer one first.
-    fn boundaries_143(
+    pub(super) fn boundaries_143(
         &self,
         k: usize,
         p: &[(Param, usize)],
@@ -246,13 +256,13 @@ impl Iges<'_> {
 }
 
 /// The curves of a boundary entity (141) along its loop.
-struct Curves141 {
+pub(super) struct Curves141 {
     /// The entity's line, for messages.
-    line: usize,
+    pub(super) line: usize,
     /// Model-space curves.
-    model: Vec<Piece>,
+    pub(super) model: Vec<Piece>,
     /// Parameter-space curves, where asked for and given for every curve.
-    parameter: Option<Vec<Piece>>,
+    pub(super) parameter: Option<Vec<Piece>>,
 }
 
 /// Appends a curve's pieces, in reverse order and each reversed when

@@ -35,6 +35,7 @@ use std::collections::HashMap;
 
 use glam::DAffine3;
 
+use super::boundary::Piece;
 use super::{
     Iges, IgesError, IgesSurface, Nurbs3, Param, Unreadable, Vec3, params::INT, params::param,
 };
@@ -207,9 +208,7 @@ impl Iges<'_> {
     }
 
     /// A trimmed surface (144) whose boundaries' model-space curves (142's
-    /// `CPTR`) become the loops: each piece of a boundary curve (a member of
-    /// a composite curve 102) is an edge, its ends vertices shared by
-    /// position.
+    /// `CPTR`) become the loops ([`Self::face_of_loops`]).
     fn face_144(&self, k: usize, b: &mut StepBuilder) -> Result<(usize, u64), IgesError> {
         let p = self.parameters(k)?;
         let line = p.first().map_or(self.dir[k].line, |t| t.1);
@@ -225,9 +224,7 @@ impl Iges<'_> {
         if holes < 0 || holes as usize > p.len() {
             return Err(self.entity_error(k, line, format!("{holes} inner boundaries")));
         }
-        let mut vertices: Vec<(Vec3, u64)> = Vec::new();
-        let mut bounds = Vec::new();
-        let mut boundary = Vec::new();
+        let mut loops = Vec::with_capacity(holes as usize + 1);
         for n in 0..=holes as usize {
             let bk = self.pointer(k, &p, 4 + n, line, &[142])?;
             let bp = self.parameters(bk)?;
@@ -242,6 +239,46 @@ impl Iges<'_> {
             };
             let mut pieces = Vec::new();
             self.curve_pieces(c, 0, &mut pieces)?;
+            loops.push((bl, pieces));
+        }
+        self.face_of_loops(line, surface, loops, b)
+    }
+
+    /// A bounded surface (143) on a surface the B-rep path translates (the
+    /// analytic 190–198): its boundaries' (141) model-space curves, each
+    /// reversed where its `SENSE` is 2, become the loops
+    /// ([`Self::face_of_loops`]), the first the outer one.
+    fn face_143(&self, k: usize, b: &mut StepBuilder) -> Result<(usize, u64), IgesError> {
+        let p = self.parameters(k)?;
+        let line = p.first().map_or(self.dir[k].line, |t| t.1);
+        let surface = self.pointer(k, &p, 2, line, &TRANSLATED_SURFACES)?;
+        let loops = self
+            .boundaries_143(k, &p, line)?
+            .into_iter()
+            .map(|bk| {
+                let c = self.curves_141(bk, false)?;
+                Ok((c.line, c.model))
+            })
+            .collect::<Result<Vec<_>, IgesError>>()?;
+        self.face_of_loops(line, surface, loops, b)
+    }
+
+    /// The face on `surface` bounded by `loops` (each its line, for the
+    /// exchange's messages, and its model-space curve pieces in order along
+    /// it; the first the outer bound): every piece (a member of a
+    /// composite curve 102) is an edge, its ends vertices shared by
+    /// position. Returns the surface and the face's id in `b`.
+    fn face_of_loops(
+        &self,
+        line: usize,
+        surface: usize,
+        loops: Vec<(usize, Vec<Piece>)>,
+        b: &mut StepBuilder,
+    ) -> Result<(usize, u64), IgesError> {
+        let mut vertices: Vec<(Vec3, u64)> = Vec::new();
+        let mut bounds = Vec::new();
+        let mut boundary = Vec::new();
+        for (n, (bl, pieces)) in loops.into_iter().enumerate() {
             let size = pieces
                 .iter()
                 .flat_map(|q| q.points.iter())
@@ -305,8 +342,8 @@ impl Iges<'_> {
         Ok((surface, face))
     }
 
-    /// Reads every B-rep face (510) of the file, and the trimmed surfaces
-    /// (144) `trimmed` through the same translation.
+    /// Reads every B-rep face (510) of the file, and the trimmed (144) and
+    /// bounded (143) surfaces `trimmed` through the same translation.
     pub(super) fn brep_faces(&self, trimmed: &[usize]) -> Result<BrepFaces, IgesError> {
         let mut out = BrepFaces {
             bases: vec![false; self.dir.len()],
@@ -326,8 +363,9 @@ impl Iges<'_> {
         }
         // every face's surface is the face's, whether the face reads or not
         for &k in &faces {
+            let slot = if self.dir[k].entity_type == 143 { 2 } else { 1 };
             if let Some(s) = self.parameters(k).ok().and_then(|p| {
-                super::params::text_of(&p, 1)
+                super::params::text_of(&p, slot)
                     .and_then(super::params::parse_int)
                     .and_then(|de| self.entry(de))
             }) {
@@ -339,10 +377,10 @@ impl Iges<'_> {
         let mut b = StepBuilder::new();
         let mut face_of: HashMap<u64, (usize, usize)> = HashMap::new();
         for &k in &faces {
-            let face = if self.dir[k].entity_type == 144 {
-                self.face_144(k, &mut b)
-            } else {
-                self.brep_face(k, senses.get(&k).copied().unwrap_or(true), &mut b)
+            let face = match self.dir[k].entity_type {
+                144 => self.face_144(k, &mut b),
+                143 => self.face_143(k, &mut b),
+                _ => self.brep_face(k, senses.get(&k).copied().unwrap_or(true), &mut b),
             };
             match face {
                 Ok((surface, id)) => {
@@ -431,10 +469,10 @@ impl Iges<'_> {
 
 /// What a face entity is, for messages.
 fn face_kind(entity_type: i64) -> &'static str {
-    if entity_type == 144 {
-        "a trimmed surface (144)"
-    } else {
-        "a B-rep face (510)"
+    match entity_type {
+        144 => "a trimmed surface (144)",
+        143 => "a bounded surface (143)",
+        _ => "a B-rep face (510)",
     }
 }
 

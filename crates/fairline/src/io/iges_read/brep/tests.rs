@@ -120,3 +120,51 @@ fn iges_brep_face_on_a_surface_not_read_is_listed_not_dropped() {
     assert!(u.entity.starts_with("entity 510 (DE 3"), "{u:?}");
     assert!(u.reason.contains("surface entity 108"), "{u:?}");
 }
+
+/// A bounded surface (143) on a right circular cylinder (192) of radius 2:
+/// half of it between z = 0 and 3, its one boundary (141) made of two half
+/// circles (the top one listed forwards and used reversed, SENSE = 2) and
+/// two lines: read through the B-rep path, area 6π.
+#[test]
+fn iges_bounded_surface_on_an_analytic_cylinder_is_read() {
+    let entities = [
+        (143, 0, 0, "143,0,3,1,11;"),
+        (192, 0, 1, "192,5,7,2.,9;"),
+        (116, 0, 0, "116,0.,0.,0.,0;"),
+        (123, 0, 0, "123,0.,0.,1.;"),
+        (123, 0, 0, "123,1.,0.,0.;"),
+        (141, 0, 0, "141,0,0,3,4,13,1,0,15,1,0,17,2,0,19,1,0;"),
+        (100, 0, 0, "100,0.,0.,0.,2.,0.,-2.,0.;"),
+        (110, 0, 0, "110,-2.,0.,0.,-2.,0.,3.;"),
+        (100, 0, 0, "100,3.,0.,0.,2.,0.,-2.,0.;"),
+        (110, 0, 0, "110,2.,0.,3.,2.,0.,0.;"),
+    ];
+    let imp = parse_iges(&iges_file(GLOBAL, &entities)).unwrap();
+    assert!(imp.unreadable.is_empty(), "{:?}", imp.unreadable);
+    assert_eq!(imp.surfaces.len(), 1);
+    let s = &imp.surfaces[0].surface;
+    let want = 6.0 * PI;
+    let area = trimmed_area(s, 64, 64);
+    assert!((area - want).abs() <= 1e-6 * want, "{area} vs {want}");
+    let (du, dv) = (s.domain_u(), s.domain_v());
+    for i in 0..=8 {
+        for j in 0..=8 {
+            let u = du[0] + (du[1] - du[0]) * i as f64 / 8.0;
+            let v = dv[0] + (dv[1] - dv[0]) * j as f64 / 8.0;
+            let p = s.eval(u, v);
+            assert!((p.x.hypot(p.y) - 2.0).abs() < 1e-12, "{p}");
+        }
+    }
+    // the same boundary with the top circle's SENSE 1: the loop does not
+    // close, and the face is listed with the reason, not dropped
+    let mut broken = entities;
+    broken[5] = (141, 0, 0, "141,0,0,3,4,13,1,0,15,1,0,17,1,0,19,1,0;");
+    let imp = parse_iges(&iges_file(GLOBAL, &broken)).unwrap();
+    assert!(imp.surfaces.is_empty(), "{:?}", imp.surfaces.len());
+    assert_eq!(imp.unreadable.len(), 1, "{:?}", imp.unreadable);
+    assert!(
+        imp.unreadable[0].reason.contains("bounded surface (143)"),
+        "{:?}",
+        imp.unreadable
+    );
+}
