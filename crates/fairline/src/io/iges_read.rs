@@ -81,6 +81,7 @@ mod faces;
 mod params;
 mod records;
 mod revolution;
+mod ruled;
 #[cfg(test)]
 mod surface_tests;
 mod surfaces;
