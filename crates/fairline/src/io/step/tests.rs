@@ -2178,3 +2178,37 @@ fn step_offsets_of_cones_and_swept_surfaces() {
     let err = off_revolution_error(s, |x| (2.0, 3.0 * x), 0.25);
     assert!(err < 1e-6, "extruded circle: {err}");
 }
+
+/// An edge on a closed B-spline curve that ends at the curve's closure
+/// point runs forward to the end of the curve's domain, not back to its
+/// start: the lower triangle (−1, 0), (0, −2), (1, 0) of a closed polygon
+/// (1, 0), (0, 1), (−1, 0), (0, −2), closed by the chord along y = 0 —
+/// area 2 (the way back would be the upper triangle, area 1).
+#[test]
+fn step_edge_ending_at_the_closure_of_a_closed_curve_runs_forward() {
+    let mut f = File::default();
+    let frame = f.frame([0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
+    let plane = f.add(&format!("PLANE('',#{frame})"));
+    let corners = [
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, -2.0, 0.0],
+        [1.0, 0.0, 0.0],
+    ];
+    let pts: Vec<String> = corners
+        .iter()
+        .map(|c| format!("#{}", f.point(*c)))
+        .collect();
+    let polygon = f.add(&format!(
+        "B_SPLINE_CURVE_WITH_KNOTS('',1,({}),.POLYLINE_FORM.,.T.,.F.,(2,1,1,1,2),(0.,0.25,0.5,0.75,1.),.UNSPECIFIED.)",
+        pts.join(",")
+    ));
+    let (left, right) = (f.vertex([-1.0, 0.0, 0.0]), f.vertex([1.0, 0.0, 0.0]));
+    let lower = f.add(&format!("EDGE_CURVE('',#{left},#{right},#{polygon},.T.)"));
+    let chord = f.line([1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], right, left);
+    let b = f.bound(&[(lower, true), (chord, true)], true);
+    f.face(&[b], plane);
+    let imp = parse_step(&f.text()).unwrap();
+    assert_close(area(&imp.surfaces[0].surface), 2.0, 1e-9);
+}
