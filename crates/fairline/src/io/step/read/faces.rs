@@ -78,17 +78,33 @@ impl<'a> Reader<'a> {
             return Ok(None);
         }
         let s = self.bspline_surface(basis)?;
-        let (lo, hi) = s.control_bounding_box();
-        let tolerance = 1e-7 * ((hi - lo).length() + 2.0 * d.abs());
-        let o = crate::bspline::offset::offset_surface(&s, d, tolerance)
+        let o = self
+            .offset_on_parameters(&s, d, si.id)
             .map_err(|m| self.err(si, format!("the offset surface: {m}")))?;
+        Ok(Some(o))
+    }
+
+    /// `basis` offset by `distance` along its normal on its parameters
+    /// ([`crate::bspline::offset::offset_surface`]): exact for a plane,
+    /// otherwise a bicubic fitted within 1e-7 of the size of the basis's
+    /// control net (plus twice the distance), the fit named in the
+    /// warnings as the `OFFSET_SURFACE` `#entity`. Errors say why no fit
+    /// was found.
+    pub(super) fn offset_on_parameters(
+        &self,
+        basis: &BSplineSurface,
+        distance: f64,
+        entity: u64,
+    ) -> Result<BSplineSurface, String> {
+        let (lo, hi) = basis.control_bounding_box();
+        let tolerance = 1e-7 * ((hi - lo).length() + 2.0 * distance.abs());
+        let o = crate::bspline::offset::offset_surface(basis, distance, tolerance)?;
         if let Some(e) = o.deviation {
             self.fitted.borrow_mut().push(format!(
-                "#{} OFFSET_SURFACE: the offset surface is approximated by a bicubic B-spline within {tolerance:.1e} (largest deviation found {e:.1e})",
-                si.id
+                "#{entity} OFFSET_SURFACE: the offset surface is approximated by a bicubic B-spline within {tolerance:.1e} (largest deviation found {e:.1e})"
             ));
         }
-        Ok(Some(o.surface))
+        Ok(o.surface)
     }
 }
 

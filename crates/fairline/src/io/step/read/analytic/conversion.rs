@@ -209,10 +209,9 @@ impl<'a> Reader<'a> {
         Ok(nurbs)
     }
 
-    /// `basis` offset on its parameters by `offset` ([`SweptOffset`]):
-    /// exact for a plane, otherwise a bicubic fitted within 1e-7 of the
-    /// size of the basis's control net (plus twice the distance), the fit
-    /// named in the warnings; `basis` itself without an offset.
+    /// `basis` offset on its parameters by `offset` ([`SweptOffset`],
+    /// [`Reader::offset_on_parameters`]); `basis` itself without an
+    /// offset.
     fn offset(
         &self,
         f: &Instance,
@@ -222,16 +221,8 @@ impl<'a> Reader<'a> {
         let Some(SweptOffset { distance, entity }) = *offset else {
             return Ok(basis);
         };
-        let (lo, hi) = basis.control_bounding_box();
-        let tolerance = 1e-7 * ((hi - lo).length() + 2.0 * distance.abs());
-        let o = crate::bspline::offset::offset_surface(&basis, distance, tolerance)
-            .map_err(|m| self.err(f, format!("#{entity} OFFSET_SURFACE: {m}")))?;
-        if let Some(e) = o.deviation {
-            self.fitted.borrow_mut().push(format!(
-                "#{entity} OFFSET_SURFACE: the offset surface is approximated by a bicubic B-spline within {tolerance:.1e} (largest deviation found {e:.1e})"
-            ));
-        }
-        Ok(o.surface)
+        self.offset_on_parameters(&basis, distance, entity)
+            .map_err(|m| self.err(f, format!("#{entity} OFFSET_SURFACE: {m}")))
     }
 
     /// The ruled surface of `profile` moved by `b0·d` to `b1·d` (Piegl &
