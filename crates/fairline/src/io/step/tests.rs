@@ -86,6 +86,14 @@ impl File {
             b.join(",")
         ))
     }
+    /// A SURFACE_OF_REVOLUTION about the z axis of the B_SPLINE_CURVE
+    /// `profile` (its body after the name: degree, points, …).
+    fn revolution_about_z(&mut self, profile: &str) -> u64 {
+        let profile = self.add(&format!("B_SPLINE_CURVE_WITH_KNOTS('',{profile})"));
+        let (o, z) = (self.point([0.0; 3]), self.dir([0.0, 0.0, 1.0]));
+        let axis = self.add(&format!("AXIS1_PLACEMENT('',#{o},#{z})"));
+        self.add(&format!("SURFACE_OF_REVOLUTION('',#{profile},#{axis})"))
+    }
     fn text(&self) -> String {
         let mut s = String::from(
             "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION(('test'),'2;1');\n\
@@ -632,12 +640,9 @@ fn step_cone_torus_revolution_and_extrusion_faces_have_exact_areas() {
     // frustum, radii 1 and 2, slant √5.
     let mut f = File::default();
     let (p0, p1) = (f.point([1.0, 0.0, 0.0]), f.point([2.0, 0.0, 2.0]));
-    let profile = f.add(&format!(
-        "B_SPLINE_CURVE_WITH_KNOTS('',1,(#{p0},#{p1}),.UNSPECIFIED.,.F.,.F.,(2,2),(0.,1.),.UNSPECIFIED.)"
+    let rev = f.revolution_about_z(&format!(
+        "1,(#{p0},#{p1}),.UNSPECIFIED.,.F.,.F.,(2,2),(0.,1.),.UNSPECIFIED."
     ));
-    let (o, z) = (f.point([0.0; 3]), f.dir([0.0, 0.0, 1.0]));
-    let axis = f.add(&format!("AXIS1_PLACEMENT('',#{o},#{z})"));
-    let rev = f.add(&format!("SURFACE_OF_REVOLUTION('',#{profile},#{axis})"));
     let b = quarter_loop(&mut f, (1.0, 0.0), (2.0, 2.0));
     f.face(&[b], rev);
     let imp = parse_step(&f.text()).unwrap();
@@ -2097,12 +2102,9 @@ fn step_offsets_of_cones_and_swept_surfaces() {
     let n = [2.0 / 5f64.sqrt(), -1.0 / 5f64.sqrt()];
     let mut g = File::default();
     let (p0, p1) = (g.point([1.0, 0.0, 0.0]), g.point([2.0, 0.0, 2.0]));
-    let profile = g.add(&format!(
-        "B_SPLINE_CURVE_WITH_KNOTS('',1,(#{p0},#{p1}),.UNSPECIFIED.,.F.,.F.,(2,2),(0.,1.),.UNSPECIFIED.)"
+    let rev = g.revolution_about_z(&format!(
+        "1,(#{p0},#{p1}),.UNSPECIFIED.,.F.,.F.,(2,2),(0.,1.),.UNSPECIFIED."
     ));
-    let (o, z) = (g.point([0.0; 3]), g.dir([0.0, 0.0, 1.0]));
-    let axis = g.add(&format!("AXIS1_PLACEMENT('',#{o},#{z})"));
-    let rev = g.add(&format!("SURFACE_OF_REVOLUTION('',#{profile},#{axis})"));
     let off = g.add(&format!("OFFSET_SURFACE('',#{rev},{d:?},.F.)"));
     let b = quarter_loop(
         &mut g,
@@ -2128,13 +2130,10 @@ fn step_offsets_of_cones_and_swept_surfaces() {
         .iter()
         .map(|p| g.point(*p))
         .collect();
-    let profile = g.add(&format!(
-        "B_SPLINE_CURVE_WITH_KNOTS('',2,(#{},#{},#{}),.UNSPECIFIED.,.F.,.F.,(3,3),(0.,1.),.UNSPECIFIED.)",
+    let rev = g.revolution_about_z(&format!(
+        "2,(#{},#{},#{}),.UNSPECIFIED.,.F.,.F.,(3,3),(0.,1.),.UNSPECIFIED.",
         q[0], q[1], q[2]
     ));
-    let (o, z) = (g.point([0.0; 3]), g.dir([0.0, 0.0, 1.0]));
-    let axis = g.add(&format!("AXIS1_PLACEMENT('',#{o},#{z})"));
-    let rev = g.add(&format!("SURFACE_OF_REVOLUTION('',#{profile},#{axis})"));
     let off = g.add(&format!("OFFSET_SURFACE('',#{rev},{d:?},.F.)"));
     let s5 = 5f64.sqrt();
     let b = quarter_loop(
