@@ -15,6 +15,7 @@ seconds with the same face count and area.
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -167,6 +168,25 @@ REAL = [
     pytest.param("impeller.igs", "step"),
     pytest.param("impeller.igs", "igs"),
 ]
+
+
+# geomdl's trimmed surfaces (a plate with three holes, a cylinder band, two
+# islands, crates/fairline/tests/data/geomdl/SOURCE.md): their area in closed
+# form, which OCCT must find in what fairline writes of them
+GEOMDL_TRIMMED = REPO / "crates" / "fairline" / "tests" / "data" / "geomdl" / "trimmed.json"
+GEOMDL_TRIMMED_AREA = 6.0 * (1.0 - 0.04 * math.pi - 0.04) + 1.5 * math.pi + 0.36 * math.pi
+
+
+@pytest.mark.parametrize("fmt", ["step", "igs"])
+def test_occt_reads_the_trimmed_faces_fairline_reads_from_geomdl(cli, kernel, tmp_path, fmt):
+    out = tmp_path / f"trimmed.{fmt}"
+    ours = fairline_writes(cli, GEOMDL_TRIMMED, out)
+    assert ours["surfaces"] == 4 and ours["trimmed"] == 4, ours
+    faces, area, _ = occt_import(out, timeout=120)
+    assert faces == 4, f"OCCT reads {faces} faces of {out.name}"
+    for who, a in (("fairline", ours["area"]), ("OCCT", area)):
+        rel = abs(a - GEOMDL_TRIMMED_AREA) / GEOMDL_TRIMMED_AREA
+        assert rel <= 2e-6, f"{who}: area {a}, closed form {GEOMDL_TRIMMED_AREA} (rel. {rel:.2e})"
 
 
 @pytest.mark.parametrize("name,fmt", REAL)

@@ -144,6 +144,23 @@ impl TrimCurve {
         self.weights.as_deref()
     }
 
+    /// The same curve traversed backwards: `c̃(t) = c(a + b − t)` over the
+    /// same knot range `[a, b]` (knots mirrored, control points and weights
+    /// in reverse order). Fails only where mirroring the knots in floating
+    /// point leaves the domain empty (a domain at the rounding level of the
+    /// knots' magnitude).
+    pub fn reversed(&self) -> Result<Self, String> {
+        let (a, b) = (self.knots[0], self.knots[self.knots.len() - 1]);
+        Self::new(
+            self.degree,
+            self.knots.iter().rev().map(|x| a + b - x).collect(),
+            self.points.iter().rev().copied().collect(),
+            self.weights
+                .as_ref()
+                .map(|w| w.iter().rev().copied().collect()),
+        )
+    }
+
     /// Parameter domain `[knots[p], knots[n]]`.
     pub fn domain(&self) -> [f64; 2] {
         [self.knots[self.degree], self.knots[self.points.len()]]

@@ -10,10 +10,14 @@
 //! `weights`, when present, makes the surface rational. Dimension 3 is
 //! read; dimension 2 in the plane z = 0.
 //!
+//! A surface with `trims` is trimmed by them ([`trims`]: holes and kept
+//! areas, geomdl's sense): one face per kept area.
+//!
 //! Not read, and listed in [`GeomdlImport::unreadable`]: shapes that are
 //! not surfaces (`"type": "curve"` or `"volume"`), entries that are not
-//! `"spline"`, and surfaces with `trims` (geomdl's trim curves and their
-//! sense are not read, and the untrimmed surface is not the face).
+//! `"spline"`, and surfaces whose trims do not make faces (a trim that does
+//! not close, kept areas inside one another, a trim curve of a type geomdl
+//! does not define).
 
 use serde_json::{Map, Value};
 use thiserror::Error;
@@ -21,6 +25,8 @@ use thiserror::Error;
 use super::unreadable::Unreadable;
 use crate::Vec3;
 use crate::bspline::{BSplineError, BSplineSurface};
+
+mod trims;
 
 /// Why a geomdl document could not be read (the surface JSON reader wraps
 /// it with the file's name).
@@ -110,21 +116,22 @@ pub fn parse_geomdl(top: &Map<String, Value>) -> Result<GeomdlImport, GeomdlErro
                 continue;
             }
         }
-        let trimmed = match o.get("trims") {
-            None | Some(Value::Null) => false,
-            Some(Value::Object(t)) => match t.get("data") {
-                Some(Value::Array(d)) => !d.is_empty(),
-                _ => true,
-            },
-            Some(_) => true,
-        };
         let surface = surface(k, o)?;
-        if trimmed {
-            out.unreadable.push(unread(
-                "a trimmed surface: geomdl trim curves are not read".into(),
-            ));
-        } else {
-            out.surfaces.push(surface);
+        match trims::face_loops(k, o, &surface)? {
+            Ok(None) => out.surfaces.push(surface),
+            Ok(Some(faces)) => {
+                for loops in faces {
+                    match surface.clone().with_trims(loops) {
+                        Ok(face) => out.surfaces.push(face),
+                        Err(e) => out.unreadable.push(unread(format!(
+                            "a trimmed surface whose trims make no face: {e}"
+                        ))),
+                    }
+                }
+            }
+            Err(reason) => out
+                .unreadable
+                .push(unread(format!("a trimmed surface not read: {reason}"))),
         }
     }
     Ok(out)
@@ -241,6 +248,26 @@ mod tests {
         "size_u": 2, "size_v": 2,
         "control_points": {"points": [[0, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 1]]}}"#;
 
+    /// The bilinear surface with `"trims": {"data": trims}`.
+    fn with_trims(trims: &str) -> String {
+        BILINEAR.replace(
+            "\"size_u\"",
+            &format!("\"trims\": {{\"count\": 1, \"data\": {trims}}}, \"size_u\""),
+        )
+    }
+
+    /// A polyline trim through `points` with geomdl's sense.
+    fn polyline(points: &[[f64; 2]], reversed: u8) -> String {
+        let pts: Vec<String> = points
+            .iter()
+            .map(|p| format!("[{}, {}]", p[0], p[1]))
+            .collect();
+        format!(
+            r#"{{"type": "freeform", "points": [{}], "reversed": {reversed}}}"#,
+            pts.join(", ")
+        )
+    }
+
     fn doc(kind: &str, items: &[&str]) -> String {
         format!(
             r#"{{"shape": {{"type": "{kind}", "count": {}, "data": [{}]}}}}"#,
@@ -260,17 +287,16 @@ mod tests {
 
     #[test]
     fn shapes_not_read_are_listed() {
-        let trimmed = BILINEAR.replace(
-            "\"size_u\"",
-            "\"trims\": {\"count\": 1, \"data\": [{}]}, \"size_u\"",
-        );
+        let trimmed = with_trims(r#"[{"type": "analytic"}]"#);
         let freeform = r#"{"type": "freeform", "points": []}"#;
         let imp = parse_surface_json_any(&doc("surface", &[BILINEAR, &trimmed, freeform])).unwrap();
         assert_eq!(imp.surfaces.len(), 1);
         let listed: Vec<String> = imp.unreadable.iter().map(|u| u.to_string()).collect();
         assert_eq!(listed.len(), 2);
         assert!(
-            listed[0].contains("shape.data[1]: a trimmed surface"),
+            listed[0].contains(
+                "shape.data[1]: a trimmed surface not read: trim 0 is of type \"analytic\""
+            ),
             "{listed:?}"
         );
         assert!(
@@ -346,5 +372,84 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("`shape` (geomdl JSON)"), "{err}");
+    }
+
+    #[test]
+    fn trims_are_fractions_of_the_knot_range() {
+        // knots [0, 0, 10, 10] in u: geomdl reads the trim's 0.5 as u = 5
+        let surface = with_trims(&format!(
+            "[{}]",
+            polyline(
+                &[
+                    [0.25, 0.25],
+                    [0.75, 0.25],
+                    [0.75, 0.75],
+                    [0.25, 0.75],
+                    [0.25, 0.25]
+                ],
+                0
+            )
+        ))
+        .replace(
+            "\"knotvector_u\": [0, 0, 1, 1]",
+            "\"knotvector_u\": [0, 0, 10, 10]",
+        );
+        let imp = parse_surface_json_any(&doc("surface", &[&surface])).unwrap();
+        let trim = imp.surfaces[0].trim().unwrap();
+        assert_eq!(trim.loops().len(), 2, "the domain and one hole");
+        assert!(trim.contains(1.0, 0.5) && !trim.contains(5.0, 0.5));
+        assert!((trim.parameter_area() - (10.0 - 2.5)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn trims_that_make_no_face_are_listed() {
+        let square = [[0.2, 0.2], [0.8, 0.2], [0.8, 0.8], [0.2, 0.8], [0.2, 0.2]];
+        let open = with_trims(&format!("[{}]", polyline(&square[..4], 0)));
+        let nested = with_trims(&format!(
+            "[{}, {}]",
+            polyline(&square, 1),
+            polyline(&[[0.4, 0.4], [0.6, 0.4], [0.6, 0.6], [0.4, 0.4]], 1)
+        ));
+        let imp = parse_surface_json_any(&doc("surface", &[&open, &nested, BILINEAR])).unwrap();
+        assert_eq!(imp.surfaces.len(), 1);
+        let listed: Vec<String> = imp.unreadable.iter().map(|u| u.to_string()).collect();
+        assert!(
+            listed[0].contains("shape.data[0]") && listed[0].contains("trim 0 does not close"),
+            "{listed:?}"
+        );
+        assert!(
+            listed[1].contains("shape.data[1]") && listed[1].contains("overlap"),
+            "{listed:?}"
+        );
+    }
+
+    #[test]
+    fn malformed_trims_name_the_field() {
+        let cases = [
+            (
+                r#"[{"type": "freeform", "points": [[0, 0, 1], [1, 1, 1]]}]"#,
+                "field `trims.data[0].points[0]`: 3 coordinates",
+            ),
+            (
+                r#"[{"type": "freeform", "points": [[0, 0]]}]"#,
+                "field `trims.data[0].points`: 1 points",
+            ),
+            (
+                r#"[{"type": "spline", "degree": 1, "knotvector": [0, 1], "control_points": {"points": [[0, 0], [1, 1]]}}]"#,
+                "field `trims.data[0]`: 2 knots",
+            ),
+            (r#"[{"type": "container"}]"#, "field `trims.data[0].data`"),
+            (
+                r#"[{"type": "freeform", "points": [[0, 0], [1, 0], [0, 0]], "reversed": 2}]"#,
+                "field `trims.data[0].reversed`",
+            ),
+            (r#"[3]"#, "field `trims.data[0]`: not an object"),
+        ];
+        for (trims, want) in cases {
+            let err = parse_surface_json_any(&doc("surface", &[&with_trims(trims)]))
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains(want), "{trims}: {err}");
+        }
     }
 }

@@ -161,7 +161,7 @@ impl<'a> Lexer<'a> {
         Ok(self.s.get(self.pos).copied())
     }
 
-    fn expect(&mut self, c: u8) -> Res<()> {
+    fn expect_byte(&mut self, c: u8) -> Res<()> {
         match self.peek()? {
             Some(x) if x == c => {
                 self.pos += 1;
@@ -290,9 +290,9 @@ impl<'a> Lexer<'a> {
             b'+' | b'-' | b'.' | b'0'..=b'9' => self.number(),
             c if c.is_ascii_alphabetic() || c == b'!' => {
                 let name = self.keyword()?;
-                self.expect(b'(')?;
+                self.expect_byte(b'(')?;
                 let v = self.value(depth + 1)?;
-                self.expect(b')')?;
+                self.expect_byte(b')')?;
                 Ok(Value::Typed(name, Box::new(v)))
             }
             c => self.err(format!("unexpected `{}` in a parameter list", c as char)),
@@ -335,7 +335,7 @@ impl<'a> Lexer<'a> {
 
     /// `( v, v, … )` (possibly empty).
     fn list(&mut self, depth: usize) -> Res<Vec<Value>> {
-        self.expect(b'(')?;
+        self.expect_byte(b'(')?;
         let mut out = Vec::new();
         if self.peek()? == Some(b')') {
             self.pos += 1;
@@ -388,7 +388,7 @@ pub fn parse(bytes: &[u8]) -> Res<Exchange> {
             "not a STEP file: it starts with `{magic}`, not `ISO-10303-21;`"
         ));
     }
-    lx.expect(b';')?;
+    lx.expect_byte(b';')?;
     let mut ex = Exchange::default();
     loop {
         let Some(c) = lx.peek()? else {
@@ -401,11 +401,11 @@ pub fn parse(bytes: &[u8]) -> Res<Exchange> {
         match kw.as_str() {
             "END-ISO-10303-21" => return Ok(ex),
             "HEADER" => {
-                lx.expect(b';')?;
+                lx.expect_byte(b';')?;
                 loop {
                     let k = lx.keyword()?;
                     if k == "ENDSEC" {
-                        lx.expect(b';')?;
+                        lx.expect_byte(b';')?;
                         break;
                     }
                     lx.skip_statement()?;
@@ -415,7 +415,7 @@ pub fn parse(bytes: &[u8]) -> Res<Exchange> {
                 if lx.peek()? == Some(b'(') {
                     lx.list(1)?;
                 }
-                lx.expect(b';')?;
+                lx.expect_byte(b';')?;
                 data_section(&mut lx, &mut ex)?;
             }
             other => return lx.err(format!("unexpected `{other}` between sections")),
@@ -430,7 +430,7 @@ fn data_section(lx: &mut Lexer<'_>, ex: &mut Exchange) -> Res<()> {
             Some(_) => {
                 let k = lx.keyword()?;
                 if k == "ENDSEC" {
-                    return lx.expect(b';');
+                    return lx.expect_byte(b';');
                 }
                 return lx.err(format!("expected `#id =` or `ENDSEC`, found `{k}`"));
             }
@@ -440,7 +440,7 @@ fn data_section(lx: &mut Lexer<'_>, ex: &mut Exchange) -> Res<()> {
         let Value::Ref(id) = lx.value(0)? else {
             return lx.err("expected an entity instance name `#id`");
         };
-        lx.expect(b'=')?;
+        lx.expect_byte(b'=')?;
         let mut parts = Vec::new();
         if lx.peek()? == Some(b'(') {
             lx.pos += 1;
@@ -458,7 +458,7 @@ fn data_section(lx: &mut Lexer<'_>, ex: &mut Exchange) -> Res<()> {
             let params = lx.list(1)?;
             parts.push((name, params));
         }
-        lx.expect(b';')?;
+        lx.expect_byte(b';')?;
         if ex
             .instances
             .insert(id, Instance { id, parts, line })

@@ -41,16 +41,14 @@ pub(super) fn refs(ids: impl IntoIterator<Item = u64>) -> Value {
 
 /// Distinct knot values and their multiplicities.
 fn knot_runs(knots: &[f64]) -> (Value, Value) {
-    let mut values: Vec<f64> = Vec::new();
-    let mut mults: Vec<i64> = Vec::new();
+    let mut runs: Vec<(f64, i64)> = Vec::new();
     for &k in knots {
-        if values.last() == Some(&k) {
-            *mults.last_mut().expect("a value has a count") += 1;
-        } else {
-            values.push(k);
-            mults.push(1);
+        match runs.last_mut() {
+            Some((value, count)) if *value == k => *count += 1,
+            _ => runs.push((k, 1)),
         }
     }
+    let (values, mults): (Vec<f64>, Vec<i64>) = runs.into_iter().unzip();
     (
         Value::List(mults.into_iter().map(Value::Integer).collect()),
         reals(values),

@@ -251,8 +251,9 @@ impl<'a> Reader<'a> {
         let choice = seam_choice(&found);
         for ((e, (use_, others)), pick) in edges.iter().zip(found).zip(choice) {
             let use_ = match (use_, pick) {
-                (PcurveUse::Used(_), Some(k)) if k > 0 => {
-                    PcurveUse::Used(others.into_iter().nth(k - 1).expect("seam choice"))
+                // the choice indexes the alternatives (0: the first p-curve)
+                (PcurveUse::Used(first), Some(k)) if k > 0 => {
+                    PcurveUse::Used(others.into_iter().nth(k - 1).unwrap_or(first))
                 }
                 (u, _) => u,
             };

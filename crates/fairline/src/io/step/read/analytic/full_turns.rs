@@ -308,7 +308,10 @@ impl WindingFace<'_> {
             // The first band towards +s, the second towards −s.
             if b.increasing != (k == 0) {
                 curves.reverse();
-                curves = curves.iter().map(reversed).collect::<Option<_>>()?;
+                curves = curves
+                    .iter()
+                    .map(|c| c.reversed().ok())
+                    .collect::<Option<_>>()?;
             }
             let from = if k == 0 { lo } else { hi };
             let first = curves
@@ -340,18 +343,4 @@ impl WindingFace<'_> {
         }
         Some(out)
     }
-}
-
-/// The same trim curve traversed backwards (knots mirrored, control points
-/// and weights reversed).
-fn reversed(c: &TrimCurve) -> Option<TrimCurve> {
-    let k = c.knots();
-    let (a, b) = (k[0], k[k.len() - 1]);
-    TrimCurve::new(
-        c.degree(),
-        k.iter().rev().map(|x| a + b - x).collect(),
-        c.control_points().iter().rev().copied().collect(),
-        c.weights().map(|w| w.iter().rev().copied().collect()),
-    )
-    .ok()
 }
