@@ -296,8 +296,9 @@ fn parse_iges_bytes(bytes: &[u8]) -> Result<IgesImport, IgesError> {
                 match g.convert_surface(k, 0) {
                     Ok(c) => {
                         if let Some((tolerance, deviation)) = c.fit {
-                            let what = match t {
-                                118 => "the ruled surface of equal arc length",
+                            let what = match (t, g.dir[k].form) {
+                                (118, 0) => "the ruled surface of equal arc length",
+                                (118, _) => "the ruled surface of equal parameter",
                                 _ => "the offset surface",
                             };
                             out.warnings.push(format!(

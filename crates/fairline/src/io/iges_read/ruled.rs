@@ -14,7 +14,8 @@ impl Iges<'_> {
     /// 1`; `DEVFLG` is not needed). Form 1 (equal parametric values): the
     /// rails made compatible ([`compatible`]) span the surface; exact when
     /// both rails have the same parameter map (lines, B-spline curves, or
-    /// arcs of the same sweep). Form 0 (equal arc length): exact the same
+    /// arcs of the same sweep), otherwise fitted ([`Self::ruled_fit`]) on
+    /// the rails' own parameter maps. Form 0 (equal arc length): exact the same
     /// way when the rails' arc lengths are proportional along their
     /// parameters (to 1e-9 of their lengths at 1024 points: lines, arcs of
     /// one sweep, one curve and its translate); otherwise no NURBS is
@@ -33,6 +34,7 @@ impl Iges<'_> {
         let reverse = param(self, k, p, 3, line, &INT)? == 1;
         let (c1, a1) = self.normalized_curve(k1)?;
         let (mut c2, mut a2) = self.normalized_curve(k2)?;
+        let file_rails = (c1.clone(), a1, c2.clone(), a2);
         if reverse {
             c2 = c2.reversed();
             a2 = a2.filter(|a| *a == Axis::Identity);
@@ -57,11 +59,19 @@ impl Iges<'_> {
             return self.equal_arc_length_fit(k, line, &r1, &r2);
         }
         if !equal_arc_length && !same_map {
-            return Err(self.unsupported(
-                k,
-                line,
-                "a ruled surface of equal parameter (118 form 1) whose rails are parametrised differently (a line or spline against an arc) has no exact NURBS form".into(),
-            ));
+            // Each rail at the file's normalised parameter u (the second
+            // at 1 − u when reversed): no NURBS is exact, the fit is.
+            let (c1, a1, c2, a2) = file_rails;
+            let (Some(a1), Some(a2)) = (a1, a2) else {
+                return Err(self.unsupported(
+                    k,
+                    line,
+                    "a ruled surface of equal parameter (118 form 1) over a rail whose file parameter fairline cannot map (a conic other than an ellipse, or a composite curve with arcs)".into(),
+                ));
+            };
+            let at1 = |u: f64| c1.eval(a1.apply(u));
+            let at2 = |u: f64| c2.eval(a2.apply(if reverse { 1.0 - u } else { u }));
+            return self.ruled_fit(k, line, [&c1, &c2], &at1, &at2, "equal parameter (118 form 1) whose rails are parametrised differently (a line or spline against an arc)");
         }
         let rational = r1.weights.is_some() || r2.weights.is_some();
         let n = r1.points.len();
@@ -158,10 +168,8 @@ impl Iges<'_> {
     /// rails whose arc lengths are not proportional along their
     /// parameters: `S(u, v) = (1 − v)·C1(s1⁻¹(u)) + v·C2(s2⁻¹(u))`, u the
     /// relative arc length along both (IGES 5.3 §4.18), has no exact NURBS
-    /// form; it is fitted by a bicubic B-spline within 1e-7 of the rails'
-    /// size ([`fit_bicubic`]), on the file's parameters, and the fit is
-    /// reported (a warning naming the entity). A rail of no length or a
-    /// fit that does not reach the tolerance is `Unsupported`, saying so.
+    /// form; it is fitted ([`Self::ruled_fit`]). A rail of no length is
+    /// `Unsupported`, saying so.
     fn equal_arc_length_fit(
         &self,
         k: usize,
@@ -176,6 +184,32 @@ impl Iges<'_> {
                 "a rail of the ruled surface has no length".into(),
             ));
         };
+        self.ruled_fit(
+            k,
+            line,
+            [r1, r2],
+            &|u| a1.at(u),
+            &|u| a2.at(u),
+            "equal arc length (118 form 0) whose rails' arc lengths are not proportional",
+        )
+    }
+
+    /// `S(u, v) = (1 − v)·at1(u) + v·at2(u)` over the unit square, the
+    /// rails' points at the file's parameter u, fitted by a bicubic
+    /// B-spline within 1e-7 of the rails' size ([`fit_bicubic`]), on the
+    /// file's parameters; the fit is reported (a warning naming the
+    /// entity). A fit that does not reach the tolerance is `Unsupported`,
+    /// naming the surface as `what`.
+    fn ruled_fit(
+        &self,
+        k: usize,
+        line: usize,
+        rails: [&Nurbs3; 2],
+        at1: &dyn Fn(f64) -> Vec3,
+        at2: &dyn Fn(f64) -> Vec3,
+        what: &str,
+    ) -> Result<Converted, IgesError> {
+        let [r1, r2] = rails;
         let (lo, hi) = r1
             .points
             .iter()
@@ -188,14 +222,14 @@ impl Iges<'_> {
         let (surface, worst) = fit_bicubic(
             &whole,
             &whole,
-            |u, v| Ok((1.0 - v) * a1.at(u) + v * a2.at(u)),
+            |u, v| Ok((1.0 - v) * at1(u) + v * at2(u)),
             tolerance,
         )
         .map_err(|m| {
             self.unsupported(
                 k,
                 line,
-                format!("a ruled surface of equal arc length (118 form 0) whose rails' arc lengths are not proportional has no exact NURBS form, and {m}"),
+                format!("a ruled surface of {what} has no exact NURBS form, and {m}"),
             )
         })?;
         Ok(Converted {

@@ -229,6 +229,41 @@ fn iges_ruled_surfaces_are_exact_planes_and_cylinders() {
 }
 
 #[test]
+fn iges_ruled_surface_of_equal_parameter_between_a_line_and_an_arc_is_fitted() {
+    // form 1 between a line (parameter linear in length) and a quarter
+    // circle (parameter the angle): the ruling at file parameter u joins
+    // (2u, 0, 5) to the point at angle πu/2 — no rational parametrisation
+    // of the circle is linear in its angle, so the surface is fitted within
+    // 1e-7 of the size and warned; the same with the arc reversed by DIRFLG
+    for (flag, reversed) in [("118,3,5,0,1;", false), ("118,3,5,1,1;", true)] {
+        let imp = parse_iges(&iges_file(
+            GLOBAL,
+            &[
+                (118, 0, 1, flag),
+                (110, 0, 0, "110,0.,0.,5.,2.,0.,5.;"),
+                (100, 0, 0, "100,0.,0.,0.,2.,0.,0.,2.;"),
+            ],
+        ))
+        .unwrap();
+        assert!(imp.unreadable.is_empty(), "{:?}", imp.unreadable);
+        assert!(
+            imp.warnings.len() == 1
+                && imp.warnings[0].contains("ruled surface of equal parameter is approximated"),
+            "{:?}",
+            imp.warnings
+        );
+        let s = &imp.surfaces[0].surface;
+        let size = Vec3::new(2.0, 2.0, 5.0).length();
+        for (u, v, p) in grid(s, 16) {
+            let a = 0.5 * PI * if reversed { 1.0 - u } else { u };
+            let want = (1.0 - v) * Vec3::new(2.0 * u, 0.0, 5.0)
+                + v * Vec3::new(2.0 * a.cos(), 2.0 * a.sin(), 0.0);
+            assert!(p.distance(want) < 1e-7 * size, "{u} {v}: {p} vs {want}");
+        }
+    }
+}
+
+#[test]
 fn iges_parametric_spline_surface_reproduces_its_polynomials() {
     // 2 × 1 bicubic patches on u ∈ [0, 1, 3], v ∈ [-1, 1]; the surface
     // x = u, y = v, z = u²v − v³ + u³ written per patch in s = u − TU(i),

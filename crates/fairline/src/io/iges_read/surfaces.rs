@@ -36,7 +36,7 @@ pub(super) enum Axis {
 }
 
 impl Axis {
-    fn apply(&self, x: f64) -> f64 {
+    pub(super) fn apply(&self, x: f64) -> f64 {
         match self {
             Axis::Identity => x,
             Axis::Normalized(m) => {
