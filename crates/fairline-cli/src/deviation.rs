@@ -6,6 +6,7 @@ use crate::args::{parse_size, parse_vec3};
 use crate::common::write_report;
 use crate::error::bad_input;
 use anyhow::Result;
+use fairline::bspline::BSplineSurface;
 use fairline::geom::Histogram;
 use fairline::picture::{Picture, ScalarField, mesh_picture};
 use fairline::render::{Colormap, Image, linear_to_srgb8};
@@ -21,7 +22,9 @@ use std::path::{Path, PathBuf};
 /// (.json .igs .step) the distance is to its surfaces themselves (the
 /// closest point by point inversion, started on a --grid tessellation),
 /// exact to rounding; an AFTER surface file is measured at the vertices of
-/// its tessellation (--grid per patch and direction).
+/// its tessellation (--grid per patch and direction), and when both are
+/// surface files the largest deviation is also searched between those
+/// vertices, on the surfaces themselves (report key "peak").
 /// The report gives max/mean/rms/percentiles and a histogram; with
 /// --region, separately inside the region (the intended motion) and
 /// outside it (side effects: 0 for highlight-line fairing); and the
@@ -94,8 +97,8 @@ pub enum Show {
 
 /// Reads a mesh, or tessellates a surface file `grid` × `grid` per patch
 /// (refused, exit 2, when that is more than the command layer's
-/// [`deviation::MAX_GRID_POINTS`]).
-fn read(path: &Path, grid: usize) -> Result<SurfaceMesh> {
+/// [`deviation::MAX_GRID_POINTS`]); the surfaces come with it.
+fn read(path: &Path, grid: usize) -> Result<(SurfaceMesh, Option<Vec<BSplineSurface>>)> {
     if crate::surface::is_surface_path(path) {
         let s = crate::surface::load_surfaces(path)?;
         deviation::check_grid(s.len(), grid).map_err(|e| {
@@ -105,9 +108,9 @@ fn read(path: &Path, grid: usize) -> Result<SurfaceMesh> {
                 e.message(fairline_commands::FrontEnd::Cli)
             ))
         })?;
-        crate::surface::tessellated_mesh(&s, grid)
+        Ok((crate::surface::tessellated_mesh(&s, grid)?, Some(s)))
     } else {
-        crate::input::read_mesh(path)
+        Ok((crate::input::read_mesh(path)?, None))
     }
 }
 
@@ -147,9 +150,9 @@ pub fn run(args: Args) -> Result<()> {
     let before = if crate::surface::is_surface_path(&args.before) {
         Reference::Surfaces(crate::surface::load_surfaces(&args.before)?)
     } else {
-        Reference::Mesh(Box::new(read(&args.before, args.grid)?))
+        Reference::Mesh(Box::new(read(&args.before, args.grid)?.0))
     };
-    let after = read(&args.after, args.grid)?;
+    let (after, after_surfaces) = read(&args.after, args.grid)?;
     let region = match &args.region {
         Some(path) => {
             let spec = fairline::io::read_region(path).map_err(|e| bad_input(e.to_string()))?;
@@ -165,14 +168,25 @@ pub fn run(args: Args) -> Result<()> {
         broad_wavelength: args.broad_wavelength,
     };
     let out = match &before {
-        Reference::Surfaces(surfaces) => deviation::run_on_surfaces(
-            surfaces,
-            args.grid,
-            &after,
-            region.as_deref(),
-            &settings,
-            &Control::new(),
-        ),
+        Reference::Surfaces(surfaces) => match &after_surfaces {
+            Some(measured) => deviation::run_between_surfaces(
+                surfaces,
+                args.grid,
+                measured,
+                &after,
+                region.as_deref(),
+                &settings,
+                &Control::new(),
+            ),
+            None => deviation::run_on_surfaces(
+                surfaces,
+                args.grid,
+                &after,
+                region.as_deref(),
+                &settings,
+                &Control::new(),
+            ),
+        },
         Reference::Mesh(mesh) => {
             deviation::run(mesh, &after, region.as_deref(), &settings, &Control::new())
         }

@@ -214,6 +214,65 @@ const QUARTER_CYLINDER: &str = r#"{"surfaces":[{"degree_u":2,"degree_v":1,
 "control_points":[[[2,0,0],[2,0,1]],[[2,2,0],[2,2,1]],[[0,2,0],[0,2,1]]],
 "weights":[[1,1],[0.7071067811865476,0.7071067811865476],[1,1]]}]}"#;
 
+/// The plane z = 0 over [−1, 2]² and the surface (u, v, 3u(1 − u)²) over
+/// the unit square, whose height peaks at u = 1/3 (4/9): on a grid of 8
+/// points per direction the vertices sit at u = k/7 and miss it.
+const FLOOR: &str = r#"{"surfaces":[{"degree_u":1,"degree_v":1,"knots_u":[0,0,1,1],"knots_v":[0,0,1,1],
+"control_points":[[[-1,-1,0],[-1,2,0]],[[2,-1,0],[2,2,0]]]}]}"#;
+const HUMP: &str = r#"{"surfaces":[{"degree_u":3,"degree_v":1,"knots_u":[0,0,0,0,1,1,1,1],"knots_v":[0,0,1,1],
+"control_points":[[[0,0,0],[0,1,0]],[[0.3333333333333333,0,1],[0.3333333333333333,1,1]],
+[[0.6666666666666666,0,0],[0.6666666666666666,1,0]],[[1,0,0],[1,1,0]]]}]}"#;
+
+#[test]
+fn between_two_surface_files_the_peak_is_searched_between_the_vertices() {
+    let dir = tmp("deviation-peak");
+    let (floor, hump) = (dir.join("floor.json"), dir.join("hump.json"));
+    std::fs::write(&floor, FLOOR).unwrap();
+    std::fs::write(&hump, HUMP).unwrap();
+    let report = dir.join("d.json");
+    let out = run(&[
+        "deviation",
+        s(&floor),
+        s(&hump),
+        "--grid",
+        "8",
+        "--report",
+        s(&report),
+    ]);
+    ok(&out);
+    let r = json(&report);
+    let at = |u: f64| 3.0 * u * (1.0 - u) * (1.0 - u);
+    let vertices = r["all"]["max_abs"].as_f64().unwrap();
+    assert!((vertices - at(2.0 / 7.0)).abs() < 1e-12, "{r}");
+    let peak = &r["peak"];
+    assert!(
+        (peak["abs"].as_f64().unwrap() - 4.0 / 9.0).abs() < 1e-12,
+        "{r}"
+    );
+    assert!(
+        (peak["u"].as_f64().unwrap() - 1.0 / 3.0).abs() < 1e-5,
+        "{r}"
+    );
+    assert_eq!(peak["vertices_max"], r["all"]["max_abs"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("between the vertices the surfaces reach max |d| 4.444e-1"),
+        "{stderr}"
+    );
+    // a mesh measured against surfaces has no peak: its vertices are all
+    let mesh = dir.join("hump.obj");
+    ok(&run(&["convert", s(&hump), s(&mesh)]));
+    ok(&run(&[
+        "deviation",
+        s(&floor),
+        s(&mesh),
+        "--report",
+        s(&report),
+    ]));
+    assert!(json(&report).get("peak").is_none());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn a_surface_reference_is_measured_exactly_not_through_its_tessellation() {
     let dir = tmp("deviation-surface");

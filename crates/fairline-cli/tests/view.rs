@@ -750,6 +750,9 @@ fn real_mesh_and_surface_load_with_curvature_and_patches() {
     let cli = common::json(&rep);
     assert_eq!(h["all"], cli["all"]);
     assert_eq!(h["unrefined"], cli["unrefined"]);
+    // two surface states: the peak between the vertices, as the command's
+    assert!(h["peak"]["abs"].as_f64().unwrap() < 1e-12, "{h}");
+    assert_eq!(h["peak"], cli["peak"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

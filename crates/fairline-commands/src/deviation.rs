@@ -10,7 +10,7 @@
 
 use crate::error::{CommandError, Subject};
 use crate::report::Report;
-use fairline::bspline::{BSplineSurface, surface_deviation};
+use fairline::bspline::{BSplineSurface, DeviationPeak, SurfaceReference, deviation_peak};
 use fairline::geom::{
     Deviation, DeviationError, DeviationStats, WavelengthSplit, deviation, deviation_stats,
     split_by_wavelength,
@@ -91,6 +91,10 @@ pub struct DeviationOutcome {
     pub broad: DeviationStats,
     /// Statistics of the local part.
     pub local: DeviationStats,
+    /// Where measured B-spline surfaces lie farthest from reference
+    /// surfaces, searched between the sample points
+    /// ([`fairline::bspline::deviation_peak`]; [`run_between_surfaces`]).
+    pub peak: Option<DeviationPeak>,
     /// The JSON report.
     pub report: Report,
 }
@@ -150,14 +154,78 @@ pub fn run_on_surfaces(
     settings: &DeviationSettings,
     control: &Control,
 ) -> Result<DeviationOutcome, CommandError> {
+    on_surfaces(reference, grid, measured, None, region, settings, control)
+}
+
+/// [`run_on_surfaces`] where the measured state is B-spline surfaces too
+/// (`measured` their tessellation, whose vertices give the per-vertex
+/// values): adds the largest deviation of the measured surfaces found
+/// between the samples ([`fairline::bspline::deviation_peak`]; report key
+/// `peak`), since a maximum taken at tessellation vertices alone can miss
+/// the true one.
+pub fn run_between_surfaces(
+    reference: &[BSplineSurface],
+    grid: usize,
+    measured_surfaces: &[BSplineSurface],
+    measured: &SurfaceMesh,
+    region: Option<&[FaceId]>,
+    settings: &DeviationSettings,
+    control: &Control,
+) -> Result<DeviationOutcome, CommandError> {
+    check_grid(measured_surfaces.len(), grid)?;
+    on_surfaces(
+        reference,
+        grid,
+        measured,
+        Some(measured_surfaces),
+        region,
+        settings,
+        control,
+    )
+}
+
+fn on_surfaces(
+    reference: &[BSplineSurface],
+    grid: usize,
+    measured: &SurfaceMesh,
+    measured_surfaces: Option<&[BSplineSurface]>,
+    region: Option<&[FaceId]>,
+    settings: &DeviationSettings,
+    control: &Control,
+) -> Result<DeviationOutcome, CommandError> {
     crate::require_faces(measured.face_count(), measured.original_vertex_count())?;
     check(settings, control)?;
     check_grid(reference.len(), grid)?;
     let mut report = Report::new("deviation");
-    let dev = report
-        .time(|| surface_deviation(reference, measured.positions(), grid))
+    let (dev, peak) = report
+        .time(|| -> Result<_, DeviationError> {
+            let target = SurfaceReference::new(reference, grid)?;
+            let dev = target.deviations(measured.positions());
+            let peak = measured_surfaces.and_then(|m| deviation_peak(&target, m, grid));
+            Ok((dev, peak))
+        })
         .map_err(reference_error)?;
-    finish(dev, measured, region, settings, report)
+    if control.is_cancelled() {
+        return Err(CommandError::cancelled());
+    }
+    let mut out = finish(dev, measured, region, settings, report)?;
+    if let Some(p) = peak {
+        out.report.set(
+            "peak",
+            serde_json::json!({
+                "deviation": p.signed,
+                "abs": p.signed.abs(),
+                "face": p.face,
+                "u": p.u,
+                "v": p.v,
+                "point": p.point.to_array(),
+                "sampled_max": p.sampled,
+                "vertices_max": out.all.max_abs,
+            }),
+        );
+    }
+    out.peak = peak;
+    Ok(out)
 }
 
 /// The bins and the cancel flag, checked before any work.
@@ -251,6 +319,7 @@ fn finish(
         split,
         broad,
         local,
+        peak: None,
         report,
     })
 }
@@ -283,6 +352,15 @@ pub fn summary(out: &DeviationOutcome) -> String {
     ));
     if !out.split.converged {
         s.push_str(" (the broad/local split did not converge: its parts are approximate)");
+    }
+    if let Some(p) = &out.peak {
+        s.push_str(&format!(
+            "; between the vertices the surfaces reach max |d| {:.3e} (surface {} at u {:.6}, v {:.6})",
+            p.signed.abs(),
+            p.face,
+            p.u,
+            p.v
+        ));
     }
     s
 }

@@ -72,7 +72,7 @@ pub fn deviation(shared: &Shared, k: usize, body: &[u8]) -> Answer {
     }
     // a surface reference is measured against exactly (its surfaces, the
     // start grid its document's), as the command does
-    let (reference, surfaces, measured, command) = {
+    let (reference, surfaces, measured, measured_surfaces, command) = {
         let st = lock(shared);
         let docs = &st.docs;
         let d = &docs[k];
@@ -117,6 +117,7 @@ pub fn deviation(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             owner.shared_tri_at(step),
             surfaces,
             d.shared_tri_at(None),
+            d.step(None).surfaces.clone(),
             command,
         )
     };
@@ -126,8 +127,18 @@ pub fn deviation(shared: &Shared, k: usize, body: &[u8]) -> Answer {
         .filter(|f| !f.is_empty())
         .map(|f| f.iter().map(|&i| FaceId(i)).collect());
     let settings = DeviationSettings::default();
-    let out = match &surfaces {
-        Some((s, grid)) => deviation::run_on_surfaces(
+    let out = match (&surfaces, &measured_surfaces) {
+        // both states B-spline surfaces: the peak between the vertices too
+        (Some((s, grid)), Some(m)) => deviation::run_between_surfaces(
+            s,
+            *grid,
+            m,
+            &measured,
+            faces.as_deref(),
+            &settings,
+            &Control::new(),
+        ),
+        (Some((s, grid)), None) => deviation::run_on_surfaces(
             s,
             *grid,
             &measured,
@@ -135,7 +146,7 @@ pub fn deviation(shared: &Shared, k: usize, body: &[u8]) -> Answer {
             &settings,
             &Control::new(),
         ),
-        None => deviation::run(
+        (None, _) => deviation::run(
             &reference,
             &measured,
             faces.as_deref(),

@@ -51,7 +51,10 @@ pub(crate) mod trim_tests;
 pub use basis::{MAX_DEGREE, MAX_ORDER, clamped_uniform_knots, find_span};
 pub use bounds::face_bounding_box;
 pub use iso::{IsoCurve, curve_curvature, iso_curve, iso_curves};
-pub use project::{closest_point_on_surface, surface_deviation};
+pub use project::{
+    DeviationPeak, PointDeviation, SurfaceReference, closest_point_on_surface, deviation_peak,
+    surface_deviation,
+};
 pub use surface::{
     BSplineSurface, BasisSupport, Curvature, MIN_WEIGHT_RATIO, SurfaceBasis, SurfaceDerivatives,
     unit_normal,

@@ -19,7 +19,7 @@
 
 use super::{BSplineSurface, tessellate, unit_normal};
 use crate::Vec3;
-use crate::geom::{Deviation, DeviationError, DeviationMethod, TriangleGrid};
+use crate::geom::{ClosestPoint, Deviation, DeviationError, DeviationMethod, TriangleGrid};
 use rayon::prelude::*;
 
 /// Most Newton steps of one point inversion.
@@ -88,100 +88,375 @@ pub fn closest_point_on_surface(
     (u, v, surface.eval(u, v))
 }
 
+/// A part of B-spline surfaces prepared for distance queries: its
+/// tessellation and a grid over the triangles, which give each point's
+/// start for point inversion (module documentation).
+pub struct SurfaceReference<'a> {
+    surfaces: &'a [BSplineSurface],
+    positions: Vec<Vec3>,
+    uv: Vec<[f64; 2]>,
+    triangles: Vec<[u32; 3]>,
+    patch: Vec<usize>,
+    grid: TriangleGrid,
+    /// The largest distance of a triangle's centroid from its surface: a
+    /// surface comes within its distance plus this of the tessellation.
+    sag: f64,
+    /// The diagonal of the tessellation's bounding box.
+    size: f64,
+}
+
+/// One point's distance from a [`SurfaceReference`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointDeviation {
+    /// Signed distance, positive on the side `S_u × S_v` points to.
+    pub signed: f64,
+    /// Unsigned distance.
+    pub distance: f64,
+    /// Whether the foot was refined onto a face (else the tessellation's
+    /// closest point stands).
+    pub refined: bool,
+}
+
+impl<'a> SurfaceReference<'a> {
+    /// Tessellates each surface `grid` × `grid` (inside its trims). Fails
+    /// when the tessellations hold no usable triangle.
+    pub fn new(surfaces: &'a [BSplineSurface], grid: usize) -> Result<Self, DeviationError> {
+        let pieces: Vec<_> = surfaces
+            .par_iter()
+            .map(|s| tessellate(s, grid, grid))
+            .collect();
+        let (mut positions, mut uv, mut triangles, mut patch) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for (k, t) in pieces.into_iter().enumerate() {
+            let base = positions.len() as u32;
+            positions.extend(t.positions);
+            uv.extend(t.uv);
+            for tri in t.triangles {
+                triangles.push(tri.map(|i| i + base));
+                patch.push(k);
+            }
+        }
+        let grid = TriangleGrid::new(&positions, &triangles);
+        if grid.is_empty() {
+            return Err(DeviationError::EmptyReference);
+        }
+        // how far the triangles stand off their surfaces, at their centroids
+        let sag = triangles
+            .par_iter()
+            .zip(&patch)
+            .map(|(t, &k)| {
+                let c = t.map(|i| positions[i as usize]);
+                let centroid = (c[0] + c[1] + c[2]) / 3.0;
+                let [u, v] =
+                    [0, 1].map(|a| t.iter().map(|&i| uv[i as usize][a]).sum::<f64>() / 3.0);
+                let d = surfaces[k].eval(u, v).distance(centroid);
+                if d.is_finite() { d } else { 0.0 }
+            })
+            .reduce(|| 0.0, f64::max);
+        let (lo, hi) = positions.iter().filter(|p| p.is_finite()).fold(
+            (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let size = (hi - lo).length();
+        Ok(Self {
+            surfaces,
+            positions,
+            uv,
+            triangles,
+            patch,
+            grid,
+            sag,
+            size: if size.is_finite() { size } else { 0.0 },
+        })
+    }
+
+    /// The distance of `p` from the part: the tessellation's closest point
+    /// refined by point inversion on its triangle's surface; the refined
+    /// foot is kept when it lies on the face (inside its trims) and within
+    /// the triangle's size of the tessellation's closest point. Where other
+    /// surfaces' triangles also come within that foot's distance plus twice
+    /// the tessellation's largest sag (a centroid's distance from its
+    /// surface) of `p` — near the edges where faces meet or overlap — the
+    /// foot is refined on each of them too and the nearest refined foot is
+    /// kept ([`NEIGHBOUR_CELLS`] bounds that search; a point whose first
+    /// foot lies within 1e-12 of the part's size needs none).
+    /// `None` where no finite value results.
+    pub fn deviation(&self, p: Vec3) -> Option<PointDeviation> {
+        let c = self.grid.closest(p)?;
+        // a surface nearer than the foot on the closest triangle's own has
+        // triangles within that distance plus the sag of the tessellation
+        let first = self.refine(p, &c);
+        let reach = first.map_or(c.distance + self.triangle_size(c.triangle), |f| f.2);
+        let mut candidates = vec![c];
+        // (a point on a surface, to rounding, has no nearer one)
+        let on_surface = first.is_some() && reach <= 1e-12 * self.size;
+        if !on_surface {
+            self.grid
+                .for_each_within(p, reach + 2.0 * self.sag, NEIGHBOUR_CELLS, |t| {
+                    let k = self.patch[t.triangle];
+                    match candidates.iter_mut().find(|x| self.patch[x.triangle] == k) {
+                        Some(x) => {
+                            if t.distance < x.distance {
+                                *x = t;
+                            }
+                        }
+                        None => candidates.push(t),
+                    }
+                });
+        }
+        let best = first
+            .into_iter()
+            .chain(candidates[1..].iter().filter_map(|t| self.refine(p, t)))
+            .min_by(|a, b| a.2.total_cmp(&b.2));
+        let (patch, foot, uv_foot, dist, refined) = match best {
+            Some((patch, (foot, uv), dist)) => (patch, foot, uv, dist, true),
+            None => {
+                let t = self.triangles[c.triangle];
+                let w = c.barycentric;
+                let uv = self.uv_at(t, w);
+                (self.patch[c.triangle], c.point, uv, c.distance, false)
+            }
+        };
+        let s = &self.surfaces[patch];
+        let d = s.derivatives(uv_foot[0], uv_foot[1]);
+        let side = match unit_normal(d.su, d.sv) {
+            Some(n) => (p - foot).dot(n),
+            None => {
+                let q3 = self.triangles[c.triangle].map(|i| self.positions[i as usize]);
+                (p - foot).dot((q3[1] - q3[0]).cross(q3[2] - q3[0]))
+            }
+        };
+        let signed = if side < 0.0 { -dist } else { dist };
+        (signed.is_finite() && dist.is_finite()).then_some(PointDeviation {
+            signed,
+            distance: dist,
+            refined,
+        })
+    }
+
+    /// The longest side of a triangle of the tessellation.
+    fn triangle_size(&self, triangle: usize) -> f64 {
+        let q = self.triangles[triangle].map(|i| self.positions[i as usize]);
+        q[0].distance(q[1])
+            .max(q[1].distance(q[2]))
+            .max(q[2].distance(q[0]))
+    }
+
+    /// The parameters at barycentric `w` of triangle `t`.
+    fn uv_at(&self, t: [u32; 3], w: [f64; 3]) -> [f64; 2] {
+        let uv = &self.uv;
+        [0, 1].map(|i| {
+            w[0] * uv[t[0] as usize][i] + w[1] * uv[t[1] as usize][i] + w[2] * uv[t[2] as usize][i]
+        })
+    }
+
+    /// Point inversion of `p` on the surface of the tessellation's point
+    /// `c`, started there: `(patch, (foot, uv), distance)` when the foot
+    /// lies on the face — or, at a trim boundary the tessellation follows,
+    /// has not moved off its start — and within the triangle's size of the
+    /// tessellation's point (a chord is within it of its arc).
+    fn refine(&self, p: Vec3, c: &ClosestPoint) -> Option<(usize, (Vec3, [f64; 2]), f64)> {
+        let patch = self.patch[c.triangle];
+        let s = &self.surfaces[patch];
+        let start = self.uv_at(self.triangles[c.triangle], c.barycentric);
+        let (u, v, q) = closest_point_on_surface(s, p, start[0], start[1]);
+        let exact = q.distance(p);
+        let [u0, u1] = s.domain_u();
+        let [v0, v1] = s.domain_v();
+        let stayed = (u - start[0]).abs() + (v - start[1]).abs()
+            <= 1e-9 * ((u1 - u0).abs() + (v1 - v0).abs());
+        ((s.contains_uv(u, v) || stayed)
+            && exact <= c.distance + self.triangle_size(c.triangle)
+            && exact.is_finite())
+        .then_some((patch, (q, [u, v]), exact))
+    }
+}
+
+/// Most grid cells searched around a point for other surfaces near its
+/// closest one ([`SurfaceReference::deviation`]).
+const NEIGHBOUR_CELLS: usize = 512;
+
 /// Signed distance of every point of `points` from the part `surfaces`
 /// (module documentation), each surface tessellated `grid` × `grid` for the
-/// start. `unrefined` counts the points whose foot could not be refined on
-/// a face (their value is the tessellation's), `unmatched` those with no
-/// finite value (set to 0). Fails when the tessellations hold no usable
-/// triangle.
+/// start ([`SurfaceReference`]). `unrefined` counts the points whose foot
+/// could not be refined on a face (their value is the tessellation's),
+/// `unmatched` those with no finite value (set to 0). Fails when the
+/// tessellations hold no usable triangle.
 pub fn surface_deviation(
     surfaces: &[BSplineSurface],
     points: &[Vec3],
     grid: usize,
 ) -> Result<Deviation, DeviationError> {
-    let pieces: Vec<_> = surfaces
-        .par_iter()
-        .map(|s| tessellate(s, grid, grid))
-        .collect();
-    let (mut positions, mut uv, mut triangles, mut patch) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for (k, t) in pieces.into_iter().enumerate() {
-        let base = positions.len() as u32;
-        positions.extend(t.positions);
-        uv.extend(t.uv);
-        for tri in t.triangles {
-            triangles.push(tri.map(|i| i + base));
-            patch.push(k);
+    Ok(SurfaceReference::new(surfaces, grid)?.deviations(points))
+}
+
+impl SurfaceReference<'_> {
+    /// [`Self::deviation`] of every point, as a [`Deviation`]
+    /// ([`surface_deviation`]).
+    pub fn deviations(&self, points: &[Vec3]) -> Deviation {
+        let measured: Vec<Option<PointDeviation>> =
+            points.par_iter().map(|&p| self.deviation(p)).collect();
+        let unmatched = measured.iter().filter(|m| m.is_none()).count();
+        let unrefined = measured
+            .iter()
+            .filter(|m| m.is_some_and(|d| !d.refined))
+            .count();
+        let (signed, distance) = measured
+            .into_iter()
+            .map(|m| m.map_or((0.0, 0.0), |d| (d.signed, d.distance)))
+            .unzip();
+        Deviation {
+            method: DeviationMethod::SurfacePoint,
+            signed,
+            distance,
+            unmatched,
+            unrefined,
         }
     }
-    let tgrid = TriangleGrid::new(&positions, &triangles);
-    if tgrid.is_empty() {
-        return Err(DeviationError::EmptyReference);
-    }
-    let measured: Vec<Option<(f64, f64, bool)>> = points
+}
+
+/// Where the part `measured` lies farthest from a reference part, found
+/// on the surfaces themselves rather than at sample points
+/// ([`deviation_peak`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DeviationPeak {
+    /// Index of the measured surface.
+    pub face: usize,
+    /// Its parameters there.
+    pub u: f64,
+    /// Its parameters there.
+    pub v: f64,
+    /// The point `S(u, v)`.
+    pub point: Vec3,
+    /// The signed distance there (its magnitude the peak).
+    pub signed: f64,
+    /// The largest exact |distance| over the `grid` × `grid` samples of
+    /// every measured face, from which the search started.
+    pub sampled: f64,
+}
+
+/// Starts of the peak search: the samples of largest |distance|.
+const PEAK_STARTS: usize = 16;
+
+/// The largest |signed distance| of the surfaces `measured` from
+/// `reference` over the measured faces (inside their trims), found
+/// between sample points: each face is sampled at the vertices of its
+/// `grid` × `grid` tessellation, and from the [`PEAK_STARTS`] samples of
+/// largest |distance| a pattern search over the face's parameters climbs
+/// |d(u, v)| — steps of one grid cell in u, v and the diagonals, halved
+/// where none climbs, down to 1e-10 of the domain — staying on the face.
+/// Every value is an exact distance of [`SurfaceReference::deviation`]:
+/// points whose foot could not be refined onto a face are left out, as
+/// samples and as steps. `None` when no sample has an exact distance.
+pub fn deviation_peak(
+    reference: &SurfaceReference<'_>,
+    measured: &[BSplineSurface],
+    grid: usize,
+) -> Option<DeviationPeak> {
+    let samples: Vec<(usize, [f64; 2], f64)> = measured
         .par_iter()
-        .map(|&p| {
-            let c = tgrid.closest(p)?;
-            let t = triangles[c.triangle];
-            let s = &surfaces[patch[c.triangle]];
-            let w = c.barycentric;
-            let at = |i: usize| {
-                w[0] * uv[t[0] as usize][i]
-                    + w[1] * uv[t[1] as usize][i]
-                    + w[2] * uv[t[2] as usize][i]
-            };
-            let (u, v, q) = closest_point_on_surface(s, p, at(0), at(1));
-            let exact = q.distance(p);
-            // a foot found from this triangle lies within its size of the
-            // triangle's closest point (a chord is within it of its arc)
-            let q3 = t.map(|i| positions[i as usize]);
-            let size = q3[0]
-                .distance(q3[1])
-                .max(q3[1].distance(q3[2]))
-                .max(q3[2].distance(q3[0]));
-            // on the face; or, at a trim boundary the tessellation follows,
-            // where the foot has not moved off its start
-            let start = (at(0), at(1));
-            let [u0, u1] = s.domain_u();
-            let [v0, v1] = s.domain_v();
-            let stayed = (u - start.0).abs() + (v - start.1).abs()
-                <= 1e-9 * ((u1 - u0).abs() + (v1 - v0).abs());
-            let (foot, uv_foot, dist, refined) = if (s.contains_uv(u, v) || stayed)
-                && exact <= c.distance + size
-                && exact.is_finite()
-            {
-                (q, (u, v), exact, true)
-            } else {
-                (c.point, (at(0), at(1)), c.distance, false)
-            };
-            let d = s.derivatives(uv_foot.0, uv_foot.1);
-            let side = match unit_normal(d.su, d.sv) {
-                Some(n) => (p - foot).dot(n),
-                None => {
-                    let q = t.map(|i| positions[i as usize]);
-                    (p - foot).dot((q[1] - q[0]).cross(q[2] - q[0]))
-                }
-            };
-            let signed = if side < 0.0 { -dist } else { dist };
-            (signed.is_finite() && dist.is_finite()).then_some((signed, dist, refined))
+        .enumerate()
+        .flat_map_iter(|(k, s)| {
+            let t = tessellate(s, grid, grid);
+            t.uv.into_iter()
+                .zip(t.positions)
+                .filter_map(|(uv, p)| {
+                    let d = reference.deviation(p)?;
+                    d.refined.then_some((k, uv, d.signed))
+                })
+                .collect::<Vec<_>>()
         })
         .collect();
-    let unmatched = measured.iter().filter(|m| m.is_none()).count();
-    let unrefined = measured
-        .iter()
-        .filter(|m| matches!(m, Some((_, _, false))))
-        .count();
-    let (signed, distance) = measured
+    let sampled = samples.iter().map(|x| x.2.abs()).fold(0.0, f64::max);
+    let mut order: Vec<usize> = (0..samples.len()).collect();
+    order.sort_by(|&a, &b| {
+        samples[b]
+            .2
+            .abs()
+            .total_cmp(&samples[a].2.abs())
+            .then(a.cmp(&b))
+    });
+    order.truncate(PEAK_STARTS);
+    let climbed: Vec<(usize, [f64; 2], f64)> = order
+        .par_iter()
+        .map(|&i| {
+            let (k, uv, d) = samples[i];
+            let (uv, d) = climb(reference, &measured[k], uv, d, grid);
+            (k, uv, d)
+        })
+        .collect();
+    let (face, [u, v], signed) = climbed
         .into_iter()
-        .map(|m| m.map_or((0.0, 0.0), |(s, d, _)| (s, d)))
-        .unzip();
-    Ok(Deviation {
-        method: DeviationMethod::SurfacePoint,
+        .max_by(|a, b| a.2.abs().total_cmp(&b.2.abs()))?;
+    Some(DeviationPeak {
+        face,
+        u,
+        v,
+        point: measured[face].eval(u, v),
         signed,
-        distance,
-        unmatched,
-        unrefined,
+        sampled,
     })
+}
+
+/// Pattern search for a local maximum of |d| on `surface` from `(uv, d)`
+/// ([`deviation_peak`]).
+fn climb(
+    reference: &SurfaceReference<'_>,
+    surface: &BSplineSurface,
+    mut uv: [f64; 2],
+    mut d: f64,
+    grid: usize,
+) -> ([f64; 2], f64) {
+    let [a, b] = surface.domain_u();
+    let [c, e] = surface.domain_v();
+    let cells = grid.max(2) as f64 - 1.0;
+    let (mut hu, mut hv) = ((b - a) / cells, (e - c) / cells);
+    let (stop_u, stop_v) = (1e-10 * (b - a), 1e-10 * (e - c));
+    const DIRECTIONS: [[f64; 2]; 8] = [
+        [1.0, 0.0],
+        [-1.0, 0.0],
+        [0.0, 1.0],
+        [0.0, -1.0],
+        [1.0, 1.0],
+        [-1.0, -1.0],
+        [1.0, -1.0],
+        [-1.0, 1.0],
+    ];
+    // each halving or climb is one step; the budget bounds the work
+    for _ in 0..400 {
+        if hu <= stop_u && hv <= stop_v {
+            break;
+        }
+        let mut best: Option<([f64; 2], f64)> = None;
+        for dir in DIRECTIONS {
+            let (u, v) = (uv[0] + dir[0] * hu, uv[1] + dir[1] * hv);
+            if !surface.contains_uv(u, v) {
+                continue;
+            }
+            // only exact values: a foot not refined onto a face stands at
+            // the tessellation's distance, which is no surface's
+            let Some(q) = reference
+                .deviation(surface.eval(u, v))
+                .filter(|q| q.refined)
+            else {
+                continue;
+            };
+            if q.signed.abs() > best.map_or(d.abs(), |b| b.1.abs()) {
+                best = Some(([u, v], q.signed));
+            }
+        }
+        match best {
+            Some((to, dd)) => {
+                uv = to;
+                d = dd;
+            }
+            None => {
+                hu *= 0.5;
+                hv *= 0.5;
+            }
+        }
+    }
+    (uv, d)
 }
 
 #[cfg(test)]
@@ -263,5 +538,75 @@ mod tests {
         // no NaN from a point on the axis (every foot equally near)
         let (u, v, q) = closest_point_on_surface(&s, Vec3::new(0.0, 0.0, 0.5), 0.5, 0.5);
         assert!(u.is_finite() && v.is_finite() && q.is_finite());
+    }
+
+    /// The plane z = 0 over [−1, 2]², normal +z.
+    fn floor() -> BSplineSurface {
+        let p = |x: f64, y: f64| Vec3::new(x, y, 0.0);
+        BSplineSurface::new(
+            1,
+            1,
+            vec![0.0, 0.0, 1.0, 1.0],
+            vec![0.0, 0.0, 1.0, 1.0],
+            vec![
+                vec![p(-1.0, -1.0), p(-1.0, 2.0)],
+                vec![p(2.0, -1.0), p(2.0, 2.0)],
+            ],
+            None,
+        )
+        .unwrap()
+    }
+
+    /// S(u, v) = (u, v, 3u(1 − u)²): its height peaks at u = 1/3 (4/9),
+    /// between the samples of any grid of 3k + 2 … points.
+    fn hump() -> BSplineSurface {
+        let z = [0.0, 1.0, 0.0, 0.0];
+        BSplineSurface::new(
+            3,
+            1,
+            vec![0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0],
+            vec![0.0, 0.0, 1.0, 1.0],
+            (0..4)
+                .map(|i| {
+                    (0..2)
+                        .map(|j| Vec3::new(i as f64 / 3.0, j as f64, z[i]))
+                        .collect()
+                })
+                .collect(),
+            None,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn the_deviation_peak_is_found_between_the_samples() {
+        let reference = [floor()];
+        let r = SurfaceReference::new(&reference, 16).unwrap();
+        let measured = [hump()];
+        let peak = deviation_peak(&r, &measured, 8).unwrap();
+        // samples at u = k/7: the largest is at 2/7
+        let at = |u: f64| 3.0 * u * (1.0 - u) * (1.0 - u);
+        assert!((peak.sampled - at(2.0 / 7.0)).abs() < 1e-12, "{peak:?}");
+        assert!((peak.signed - 4.0 / 9.0).abs() < 1e-12, "{peak:?}");
+        assert!((peak.u - 1.0 / 3.0).abs() < 1e-5, "{peak:?}");
+        assert_eq!(peak.face, 0);
+        assert!((peak.point - measured[0].eval(peak.u, peak.v)).length() == 0.0);
+    }
+
+    #[test]
+    fn the_deviation_peak_stays_on_the_trimmed_face() {
+        let reference = [floor()];
+        let r = SurfaceReference::new(&reference, 16).unwrap();
+        // kept for u <= 0.25: the height grows up to the trim
+        let outer =
+            crate::bspline::TrimLoop::polygon(&[[0.0, 0.0], [0.25, 0.0], [0.25, 1.0], [0.0, 1.0]])
+                .unwrap();
+        let measured = [hump().with_trims(vec![outer]).unwrap()];
+        let peak = deviation_peak(&r, &measured, 8).unwrap();
+        // on the face or its trim (samples include the trim's points)
+        assert!(peak.u <= 0.25, "{peak:?}");
+        assert!((peak.signed - 0.421875).abs() < 1e-9, "{peak:?}");
+        // nothing to measure against: no peak
+        assert!(deviation_peak(&r, &[], 8).is_none());
     }
 }

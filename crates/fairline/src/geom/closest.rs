@@ -178,6 +178,63 @@ impl TriangleGrid {
         best
     }
 
+    /// Calls `f` with the closest point of every triangle that comes
+    /// within `radius` of `p` (a triangle may be visited more than once,
+    /// from each cell it spans). Does nothing, and returns `false`, when
+    /// the cells within `radius` are more than `max_cells` (the cost of a
+    /// query stays bounded); `true` otherwise.
+    pub fn for_each_within(
+        &self,
+        p: Vec3,
+        radius: f64,
+        max_cells: usize,
+        mut f: impl FnMut(ClosestPoint),
+    ) -> bool {
+        if self.is_empty() || !p.is_finite() || !(radius >= 0.0 && radius.is_finite()) {
+            return false;
+        }
+        let range = |a: usize| {
+            (
+                self.cell_of(p[a] - radius, a),
+                self.cell_of(p[a] + radius, a),
+            )
+        };
+        let ((i0, i1), (j0, j1), (k0, k1)) = (range(0), range(1), range(2));
+        let cells = (i1 - i0 + 1) as f64 * (j1 - j0 + 1) as f64 * (k1 - k0 + 1) as f64;
+        if cells > max_cells as f64 {
+            return false;
+        }
+        for k in k0..=k1 {
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let cell = i + self.dims[0] * (j + self.dims[1] * k);
+                    let (s, e) = (self.start[cell] as usize, self.start[cell + 1] as usize);
+                    for &t in &self.items[s..e] {
+                        let c = self.triangles[t as usize].map(|i| self.positions[i as usize]);
+                        // the triangle's box beyond the radius: skip it
+                        let (a, b) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
+                        let gap = (a - p).max(p - b).max(Vec3::ZERO);
+                        if gap.length_squared() > radius * radius {
+                            continue;
+                        }
+                        let w = closest_point_on_triangle(p, c[0], c[1], c[2]);
+                        let q = w[0] * c[0] + w[1] * c[1] + w[2] * c[2];
+                        let d = p.distance(q);
+                        if d <= radius {
+                            f(ClosestPoint {
+                                triangle: t as usize,
+                                barycentric: w,
+                                point: q,
+                                distance: d,
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        true
+    }
+
     fn search_cell(&self, cell: usize, p: Vec3, best: &mut Option<ClosestPoint>) {
         let (s, e) = (self.start[cell] as usize, self.start[cell + 1] as usize);
         for &k in &self.items[s..e] {
@@ -235,6 +292,36 @@ mod tests {
         // far outside the grid too
         let far = grid.closest(Vec3::new(100.0, 0.0, 0.0)).unwrap();
         assert!((far.distance - 97.5).abs() < 0.05, "{}", far.distance);
+    }
+
+    /// Every triangle within the radius is visited, none beyond it, and a
+    /// radius spanning too many cells visits nothing.
+    #[test]
+    fn triangles_within_a_radius_are_those_a_scan_finds() {
+        let m = shapes::torus(2.0, 0.5, 24, 12);
+        let tris: Vec<[u32; 3]> = m.faces().map(|f| m.triangle(f).map(|v| v.0)).collect();
+        let grid = TriangleGrid::new(m.positions(), &tris);
+        for (p, r) in [
+            (Vec3::new(2.5, 0.0, 0.0), 0.3),
+            (Vec3::new(0.0, 1.9, 0.4), 0.6),
+            (Vec3::new(0.1, 0.1, 0.0), 1.6),
+        ] {
+            let mut seen = vec![false; tris.len()];
+            assert!(grid.for_each_within(p, r, usize::MAX, |c| {
+                assert!(c.distance <= r);
+                seen[c.triangle] = true;
+            }));
+            for (k, t) in tris.iter().enumerate() {
+                let c = t.map(|i| m.positions()[i as usize]);
+                let w = closest_point_on_triangle(p, c[0], c[1], c[2]);
+                let d = p.distance(w[0] * c[0] + w[1] * c[1] + w[2] * c[2]);
+                assert_eq!(seen[k], d <= r, "triangle {k} at {d}, radius {r}");
+            }
+            assert!(seen.iter().any(|&x| x));
+        }
+        let mut any = false;
+        assert!(!grid.for_each_within(Vec3::ZERO, 10.0, 8, |_| any = true));
+        assert!(!any);
     }
 
     #[test]
