@@ -309,6 +309,12 @@ fn summary_title(out: &deviation::DeviationOutcome) -> String {
         "deviation: max |d| {:.3e}, rms {:.3e}",
         out.all.max_abs, out.all.rms
     );
+    if let Some(p) = &out.peak {
+        t.push_str(&format!(
+            "; between the vertices max {:.3e}",
+            p.signed.abs()
+        ));
+    }
     if let (Some(i), Some(o)) = (&out.inside, &out.outside) {
         t.push_str(&format!(
             "; region max {:.2e}, outside max {:.2e}",
