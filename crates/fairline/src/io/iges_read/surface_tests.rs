@@ -202,10 +202,20 @@ fn iges_ruled_surfaces_are_exact_planes_and_cylinders() {
     // equal arc length between a line and a quarter circle: no exact NURBS;
     // fitted within 1e-7 of the size, on the file's parameters (u the
     // relative arc length of both rails), and warned naming the entity
+    ruled_line_to_arc_is_fitted(0, "118,3,5,0,0;", "equal arc length", false);
+}
+
+/// The ruled surface of `form` and parameters `record` between the line
+/// (0, 0, 5)–(2, 0, 5) and the quarter circle of radius 2 about z at z = 0
+/// (from angle 0, or backwards from π/2 when `reversed`): read with one
+/// warning naming `kind`, and within 1e-7 of the size of the surface whose
+/// ruling at u joins (2u, 0, 5) to the arc's point at angle πu/2 (the
+/// arc's relative arc length and its angle are the same).
+fn ruled_line_to_arc_is_fitted(form: i64, record: &'static str, kind: &str, reversed: bool) {
     let imp = parse_iges(&iges_file(
         GLOBAL,
         &[
-            (118, 0, 0, "118,3,5,0,0;"),
+            (118, 0, form, record),
             (110, 0, 0, "110,0.,0.,5.,2.,0.,5.;"),
             (100, 0, 0, "100,0.,0.,0.,2.,0.,0.,2.;"),
         ],
@@ -214,14 +224,14 @@ fn iges_ruled_surfaces_are_exact_planes_and_cylinders() {
     assert!(imp.unreadable.is_empty(), "{:?}", imp.unreadable);
     assert!(
         imp.warnings.len() == 1
-            && imp.warnings[0].contains("ruled surface of equal arc length is approximated"),
+            && imp.warnings[0].contains(&format!("ruled surface of {kind} is approximated")),
         "{:?}",
         imp.warnings
     );
     let s = &imp.surfaces[0].surface;
     let size = Vec3::new(2.0, 2.0, 5.0).length();
     for (u, v, p) in grid(s, 16) {
-        let a = 0.5 * PI * u;
+        let a = 0.5 * PI * if reversed { 1.0 - u } else { u };
         let want = (1.0 - v) * Vec3::new(2.0 * u, 0.0, 5.0)
             + v * Vec3::new(2.0 * a.cos(), 2.0 * a.sin(), 0.0);
         assert!(p.distance(want) < 1e-7 * size, "{u} {v}: {p} vs {want}");
@@ -236,30 +246,7 @@ fn iges_ruled_surface_of_equal_parameter_between_a_line_and_an_arc_is_fitted() {
     // of the circle is linear in its angle, so the surface is fitted within
     // 1e-7 of the size and warned; the same with the arc reversed by DIRFLG
     for (flag, reversed) in [("118,3,5,0,1;", false), ("118,3,5,1,1;", true)] {
-        let imp = parse_iges(&iges_file(
-            GLOBAL,
-            &[
-                (118, 0, 1, flag),
-                (110, 0, 0, "110,0.,0.,5.,2.,0.,5.;"),
-                (100, 0, 0, "100,0.,0.,0.,2.,0.,0.,2.;"),
-            ],
-        ))
-        .unwrap();
-        assert!(imp.unreadable.is_empty(), "{:?}", imp.unreadable);
-        assert!(
-            imp.warnings.len() == 1
-                && imp.warnings[0].contains("ruled surface of equal parameter is approximated"),
-            "{:?}",
-            imp.warnings
-        );
-        let s = &imp.surfaces[0].surface;
-        let size = Vec3::new(2.0, 2.0, 5.0).length();
-        for (u, v, p) in grid(s, 16) {
-            let a = 0.5 * PI * if reversed { 1.0 - u } else { u };
-            let want = (1.0 - v) * Vec3::new(2.0 * u, 0.0, 5.0)
-                + v * Vec3::new(2.0 * a.cos(), 2.0 * a.sin(), 0.0);
-            assert!(p.distance(want) < 1e-7 * size, "{u} {v}: {p} vs {want}");
-        }
+        ruled_line_to_arc_is_fitted(1, flag, "equal parameter", reversed);
     }
 }
 
